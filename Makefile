@@ -1,0 +1,37 @@
+# Every target creates or reuses .venv and installs what it needs: each works as the first command.
+PY ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed-core
+STAMP_RL := $(VENV)/.installed-rl
+
+.PHONY: setup setup-rl demo test bench lint docs clean
+
+$(STAMP): pyproject.toml
+	test -x $(BIN)/python || $(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install -q --upgrade pip
+	$(BIN)/python -m pip install -q -e ".[dev]"
+	touch $@
+
+$(STAMP_RL): $(STAMP)
+	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks]"
+	touch $@
+
+setup: $(STAMP)
+
+setup-rl: $(STAMP_RL)
+
+demo: $(STAMP)
+	MPLBACKEND=Agg $(BIN)/python -m jvl_gym.demo --out demo_out
+
+test: $(STAMP_RL)
+	MPLBACKEND=Agg $(BIN)/python -m pytest -n 2
+
+bench: $(STAMP)
+	$(BIN)/python benchmarks/bench_sim.py
+
+lint: $(STAMP)
+	$(BIN)/ruff check src tuning tests benchmarks
+
+clean:
+	rm -rf $(VENV) demo_out .pytest_cache

@@ -1,0 +1,88 @@
+"""Current regulator at 7812.5 Hz: commutation and three per-phase loops (manual 4.3).
+
+Commutation: ``I_NOM = |VF_OUT|``, ``PHI_SOLL = ELDEG_IST ± 90° + V_ELDEG·PHASE_COMP`` (the sign of
+the torque selects ±90°, 512 units; 3.2.126), and
+
+    IA_SOLL = I_NOM·AMPLITUDE·sin(PHI_SOLL),  IB_SOLL = …sin(PHI_SOLL + 120°),  IC_SOLL = …+ 240°.
+
+Per phase: ``e = I_SOLL − IB(I_IST)`` with ``IB(z) = KIB1 + KIB0 z⁻¹`` (Fixed8, 3.2.110) and
+``U = IF(e)``, ``IF(z) = (KIFX2 + KIFX1 z⁻¹) / (1 − KIFY1 z⁻¹ − KIFY0 z⁻²)`` (Fixed4, 3.2.106),
+rounded and saturated to ±1023 PWM counts; the IF recursion uses the stored (saturated) outputs.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .. import constants as c
+from .. import layout as L
+from . import regs as R
+from .fixed import clamp, fx4, fx8, rnd
+
+_TWO_PI = 2.0 * math.pi
+_THIRD = 2.0 * math.pi / 3.0
+_UNIT = 2.0 * math.pi / c.ELDEG_PER_TURN
+
+
+@njit(cache=True)
+def commutate(r: np.ndarray) -> None:
+    """Compute I_NOM, PHI_SOLL and IA/IB/IC_SOLL from VF_OUT and the rotor angle (4.3.1)."""
+    vf = float(r[R.VF_OUT])
+    i_nom = abs(vf)
+    quarter = 512 if vf >= 0.0 else -512
+    phi = (r[R.ELDEG_IST] + quarter + int(rnd(r[R.V_ELDEG] * fx8(r[R.PHASE_COMP])))) % 2048
+    r[R.I_NOM] = int(i_nom)
+    r[R.PHI_SOLL] = phi
+    set_references(r, i_nom, phi)
+
+
+@njit(cache=True)
+def set_references(r: np.ndarray, i_nom: float, phi: int) -> None:
+    """IA/IB/IC_SOLL = I_NOM·AMPLITUDE·sin(PHI + k·120°), stored in −850..850 (3.2.133)."""
+    amp = i_nom * fx8(r[R.AMPLITUDE])
+    ang = phi * _UNIT
+    r[R.IA_SOLL] = int(clamp(rnd(amp * math.sin(ang)), -850.0, 850.0))
+    r[R.IB_SOLL] = int(clamp(rnd(amp * math.sin(ang + _THIRD)), -850.0, 850.0))
+    r[R.IC_SOLL] = int(clamp(rnd(amp * math.sin(ang + 2.0 * _THIRD)), -850.0, 850.0))
+
+
+@njit(cache=True, inline="always")
+def _phase(r: np.ndarray, s: np.ndarray, i_soll: float, i_ist: float, k: int) -> float:
+    ibf = fx8(r[R.KIB1]) * i_ist + fx8(r[R.KIB0]) * s[L.S_IIST1_A + k]
+    e = i_soll - ibf
+    u = (fx4(r[R.KIFX2]) * e + fx4(r[R.KIFX1]) * s[L.S_IE1_A + k]
+         + fx4(r[R.KIFY1]) * s[L.S_IU1_A + k] + fx4(r[R.KIFY0]) * s[L.S_IU2_A + k])
+    u = clamp(rnd(u), -1023.0, 1023.0)
+    s[L.S_IE1_A + k] = e
+    s[L.S_IU2_A + k] = s[L.S_IU1_A + k]
+    s[L.S_IU1_A + k] = u
+    s[L.S_IIST1_A + k] = i_ist
+    return u
+
+
+@njit(cache=True)
+def regulate(r: np.ndarray, s: np.ndarray) -> None:
+    """Run the three current loops once and store UA/UB/UC_VAL (4.3.1)."""
+    r[R.UA_VAL] = int(_phase(r, s, float(r[R.IA_SOLL]), float(r[R.IA_IST]), 0))
+    r[R.UB_VAL] = int(_phase(r, s, float(r[R.IB_SOLL]), float(r[R.IB_IST]), 1))
+    r[R.UC_VAL] = int(_phase(r, s, float(r[R.IC_SOLL]), float(r[R.IC_IST]), 2))
+
+
+@njit(cache=True)
+def passive(r: np.ndarray, s: np.ndarray, ua: float, ub: float, uc: float) -> None:
+    """Current regulator passive: apply fixed voltages and hold the loops at rest (4.4.1, 4.4.9)."""
+    r[R.UA_VAL] = int(ua)
+    r[R.UB_VAL] = int(ub)
+    r[R.UC_VAL] = int(uc)
+    r[R.I_NOM] = 0
+    r[R.IA_SOLL] = 0
+    r[R.IB_SOLL] = 0
+    r[R.IC_SOLL] = 0
+    for k in range(3):
+        s[L.S_IE1_A + k] = 0.0
+        s[L.S_IU1_A + k] = 0.0
+        s[L.S_IU2_A + k] = 0.0
+        s[L.S_IIST1_A + k] = float(r[R.IA_IST + k])

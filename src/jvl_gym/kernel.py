@@ -1,0 +1,291 @@
+"""The simulation kernel: one outer sample (1.92 ms) = firmware outer step + 15 inner samples.
+
+Order within an outer sample (manual 1.2 sampled-system convention, MODEL.md §1 and §4):
+
+1. read the encoder: ``V_IST = ΔP``, ``P_IST += V_IST``; read the world inputs (ANINP, V_EXT,
+   U_SUPPLY); process REWINDBIT / re-synchronisation bits;
+2. the active mode's function block → FNC_OUT; speed regulator → VF_OUT (with the function
+   correction in the correcting modes); FLWERR / FNCERR;
+3. monitoring (4.5), IN_POS, mode transitions; outer-rate recording;
+4. 15 inner samples, each: ELDEG_IST / V_ELDEG, current measurement, commutation and the three
+   current loops (or the mode's fixed voltages), inner-rate recording, then the PWM voltage
+   (after ``pwm_delay_samples``) drives the coil, mechanics and DC bus for 128 µs.
+   VF_OUT computed in step 2 is used from the first of these inner samples on.
+
+The kernel loops over motors (in parallel threads for large arrays) and, for each motor, over
+time; every motor's arithmetic is independent of the others, so an N-motor array is bit-for-bit
+equal to N one-motor arrays.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from . import constants as c
+from . import layout as L
+from .firmware import regs as R
+from .firmware.blocks import position_block, stop_block, velocity_block
+from .firmware.current_loop import commutate, passive, regulate, set_references
+from .firmware.fixed import clamp, rnd, sat16, wrap32
+from .firmware.modes import CORRECTING, FLWERR_MODES, REGULATED, enter_mode
+from .firmware.monitor import check_errors, in_position, thermal
+from .firmware.noise import gauss
+from .firmware.recorder import record
+from .firmware.speed_loop import speed_regulator
+from .plant.coil import coil_step, phase_to_vector, vector_to_phases
+from .plant.encoder import encoder_count, eldeg
+from .plant.mechanics import end_stop_torque, mech_step
+from .plant.supply import bus_step
+
+_H = c.INNER_DT
+_ANINP_PER_VOLT = c.ANINP_FULL / c.ANINP_VOLTS
+
+
+@njit(cache=True)
+def _finish_pending(r: np.ndarray, s: np.ndarray) -> None:
+    pend = s[L.S_PENDING_MODE]
+    enter_mode(r, s, int(pend) if pend >= 0.0 else c.INIT_MODE)
+
+
+@njit(cache=True)
+def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
+                   buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:
+    """Firmware work at one outer sample (steps 1–3 of the module docstring)."""
+    enc = encoder_count(s[L.S_THETA])
+    if p[L.P_POSITION_NOISE] > 0.0:
+        enc += rnd(p[L.P_POSITION_NOISE] * gauss(key, s[L.S_TICK], 3))
+    v = enc - s[L.S_ENC_PREV]
+    s[L.S_ENC_PREV] = enc
+    v = sat16(v)
+    r[R.V_IST] = int(v)
+    r[R.P_IST] = wrap32(r[R.P_IST] + int(v))
+    r[R.ANINP] = int(clamp(rnd(u[L.I_ANALOG_VOLTS] * _ANINP_PER_VOLT) + r[R.ANINP_OFFSET],
+                           -1023.0, 1023.0))
+    r[R.V_EXT] = int(sat16(u[L.I_PULSE_COUNTS]))
+    r[R.U_SUPPLY] = int(clamp(rnd(s[L.S_UBUS] / c.U_SUPPLY_VOLTS_PER_UNIT), 0.0, 65535.0))
+
+    cb = r[R.CNTRL_BITS]
+    if cb & c.REWINDBIT:
+        r[R.REC_CNT] = 0
+        cb &= ~c.REWINDBIT
+    if cb & c.MAN_RESYNC:  # 3.2.163
+        if cb & c.REL_RESYNC:
+            r[R.P_SOLL] = wrap32(r[R.P_SOLL] + r[R.P_NEW])
+            r[R.P_IST] = wrap32(r[R.P_IST] + r[R.P_NEW])
+            r[R.P_FNC] = wrap32(r[R.P_FNC] + 16 * r[R.P_NEW])
+        else:
+            r[R.P_SOLL] = r[R.P_NEW]
+            r[R.P_IST] = r[R.P_NEW]
+            r[R.P_FNC] = wrap32(16 * r[R.P_NEW])
+        cb &= ~c.MAN_RESYNC
+    r[R.CNTRL_BITS] = cb
+
+    mode = int(r[R.MODE_REG])
+    if mode == c.INIT_MODE and (cb & c.AUTO_RESYNC):
+        r[R.P_FNC] = wrap32(16 * r[R.P_IST])
+
+    if mode < 25 and REGULATED[mode]:
+        t_soll = float(r[R.T_SOLL])
+        if mode == c.V_MODE:
+            f = velocity_block(r, s, float(r[R.V_SOLL]), float(r[R.A_SOLL]))
+        elif mode == c.P_MODE:
+            dp = 16.0 * r[R.P_SOLL] - r[R.P_FNC]
+            f = position_block(r, s, dp, float(r[R.V_SOLL]), float(r[R.A_SOLL]))
+        else:  # STOP_MODE
+            f = stop_block(r, s)
+        f, corr = speed_regulator(r, s, f, CORRECTING[mode], t_soll)
+        if corr != 0.0:
+            s[L.S_V_OLD] = f
+            r[R.P_FNC] = wrap32(r[R.P_FNC] + int(corr))
+            s[L.S_G_FNC] += corr
+            r[R.FNCERR] = int(clamp(r[R.FNCERR] + corr, -134217727.0, 134217727.0))
+        if FLWERR_MODES[mode]:
+            s[L.S_FLW16] += f - 16.0 * v
+            r[R.FLWERR] = int(clamp(rnd(s[L.S_FLW16] / 16.0), -67000000.0, 67000000.0))
+        else:
+            s[L.S_FLW16] = 0.0
+            r[R.FLWERR] = 0
+        if mode == c.STOP_MODE and abs(v) < c.STOP_SPEED_COUNTS:
+            _finish_pending(r, s)
+    elif mode == c.AT_MODE:  # torque function block, 4.1.4 / 4.4.5
+        if s[L.S_AT_EXIT] > 0.5:
+            r[R.VF_OUT] = 0
+            if abs(v) < c.STOP_SPEED_COUNTS:
+                _finish_pending(r, s)
+        else:
+            t_soll = float(r[R.T_SOLL])
+            r[R.VF_OUT] = int(clamp(rnd(r[R.ANINP] * t_soll / 1023.0), -t_soll, t_soll))
+    elif mode == c.TESTA_MODE:  # 4.4.10
+        r[R.VF_OUT] = int(r[R.T_SOLL])
+    elif mode == c.BREAK_MODE:  # 4.4.11: reversed torque until stopped
+        d = s[L.S_BREAK_DIR]
+        if d == 0.0 or v * d <= 0.0:
+            r[R.VF_OUT] = 0
+            _finish_pending(r, s)
+        else:
+            r[R.VF_OUT] = int(-d * r[R.T_SOLL])
+    else:  # INIT, SAFE, MANI, TESTU: no function block, speed regulator passive
+        r[R.VF_OUT] = 0
+        if mode == c.INIT_MODE or mode == c.SAFE_MODE:
+            s[L.S_V_OLD] = 0.0
+            r[R.FLWERR] = 0
+            r[R.FNCERR] = 0
+
+    thermal(r, s, p)
+    check_errors(r, s)
+    in_position(r, s, int(r[R.MODE_REG]))
+
+    cb = r[R.CNTRL_BITS]
+    if (cb & c.RECORDBIT) and not (cb & c.RECINNERBIT):
+        if rec:
+            record(r, buf, fmt)
+        if int(r[R.MODE_REG]) == c.TESTA_MODE:
+            s[L.S_TEST_CNT] += 1.0
+            if s[L.S_TEST_CNT] >= s[L.S_REC_LEN]:
+                r[R.CNTRL_BITS] &= ~c.RECORDBIT
+                enter_mode(r, s, c.BREAK_MODE)
+                s[L.S_PENDING_MODE] = c.INIT_MODE
+    elif int(r[R.MODE_REG]) == c.TESTA_MODE:  # recording switched off by the user
+        s[L.S_TEST_CNT] += 1.0
+        if s[L.S_TEST_CNT] >= s[L.S_REC_LEN]:
+            enter_mode(r, s, c.BREAK_MODE)
+            s[L.S_PENDING_MODE] = c.INIT_MODE
+
+
+@njit(cache=True, inline="always")
+def _measure(r: np.ndarray, i_amp: float, p: np.ndarray, gain: float, key: np.uint64,
+             tick: float, ch: int) -> float:
+    x = i_amp / p[L.P_AMPS_PER_COUNT] * gain / 256.0
+    if p[L.P_CURRENT_NOISE] > 0.0:
+        x += p[L.P_CURRENT_NOISE] * gauss(key, tick, ch)
+    x = rnd(x)
+    if x >= 1023.0 or x <= -1023.0:
+        r[R.ERR_STAT] |= c.IX_ERR
+        x = clamp(x, -1023.0, 1023.0)
+    return x
+
+
+@njit(cache=True)
+def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
+                 buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:
+    """One 128 µs current-loop sample and the plant over it (step 4 of the module docstring)."""
+    theta = s[L.S_THETA]
+    omega = s[L.S_OMEGA]
+    pp = p[L.P_POLE_PAIRS]
+    theta_e = pp * theta + p[L.P_THETA_E0]
+    el = eldeg(theta_e)
+    dv = el - int(s[L.S_ELDEG_PREV])
+    if dv > 1024:
+        dv -= 2048
+    elif dv < -1024:
+        dv += 2048
+    s[L.S_ELDEG_PREV] = el
+    r[R.ELDEG_IST] = el
+    r[R.V_ELDEG] = dv
+
+    tick = s[L.S_TICK]
+    s_i = complex(s[L.S_I_RE], s[L.S_I_IM])
+    ia, ib, ic = vector_to_phases(s_i)
+    r[R.IA_IST] = int(_measure(r, ia, p, float(r[R.KIA]), key, tick, 0))
+    r[R.IB_IST] = int(_measure(r, ib, p, float(r[R.KIB]), key, tick, 1))
+    r[R.IC_IST] = int(_measure(r, ic, p, float(r[R.KIC]), key, tick, 2))
+
+    mode = int(r[R.MODE_REG])
+    if mode == c.INIT_MODE or mode == c.SAFE_MODE:
+        passive(r, s, 0.0, 0.0, 0.0)
+    elif mode == c.TESTU_MODE:  # 4.4.9: UA = UMEAS, UC = −UMEAS
+        um = float(r[R.UMEAS])
+        passive(r, s, um, 0.0, -um)
+    else:
+        if mode == c.MANI_MODE:  # 3.2.128: stator field set by hand
+            set_references(r, float(r[R.MAN_I_NOM]), int(r[R.MAN_ALPHA]))
+        else:
+            commutate(r)
+        regulate(r, s)
+
+    cb = r[R.CNTRL_BITS]
+    if mode == c.TESTU_MODE:
+        if rec and (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
+            record(r, buf, fmt)
+        s[L.S_TEST_CNT] += 1.0
+        if s[L.S_TEST_CNT] >= s[L.S_REC_LEN]:
+            r[R.CNTRL_BITS] &= ~c.RECORDBIT
+            enter_mode(r, s, c.INIT_MODE)
+    elif rec and (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
+        record(r, buf, fmt)
+
+    ua = float(r[R.UA_VAL])
+    ub = float(r[R.UB_VAL])
+    uc = float(r[R.UC_VAL])
+    if p[L.P_PWM_DELAY] > 0.5:
+        pa = s[L.S_UPEND_A]
+        pb = s[L.S_UPEND_B]
+        pc = s[L.S_UPEND_C]
+        s[L.S_UPEND_A] = ua
+        s[L.S_UPEND_B] = ub
+        s[L.S_UPEND_C] = uc
+        ua = pa
+        ub = pb
+        uc = pc
+    kv = s[L.S_UBUS] / (2.0 * c.PWM_FULL)
+    s_u = phase_to_vector(ua * kv, ub * kv, uc * kv)
+    omega_mid = omega + 0.5 * _H * s[L.S_ACC]
+    s1, torque, p_el, p_cu = coil_step(s_i, s_u, theta_e, pp * omega_mid, p[L.P_R], p[L.P_L],
+                                       p[L.P_LAMBDA], pp, _H)
+    t_stop = end_stop_torque(theta, omega, p[L.P_STOP_LO], p[L.P_STOP_HI], p[L.P_STOP_K],
+                             p[L.P_STOP_D])
+    load = u[L.I_LOAD_TORQUE]
+    drive = torque - load + t_stop
+    if p[L.P_TORQUE_NOISE] > 0.0:
+        drive += p[L.P_TORQUE_NOISE] * gauss(key, tick, 4)
+    j = p[L.P_J_MOTOR] + p[L.P_J_LOAD]
+    theta1, omega1, e_fric = mech_step(theta, omega, drive, j, p[L.P_VISCOUS], p[L.P_COULOMB], _H)
+    s[L.S_THETA] = theta1
+    s[L.S_OMEGA] = omega1
+    s[L.S_ACC] = (omega1 - omega) / _H
+    s[L.S_I_RE] = s1.real
+    s[L.S_I_IM] = s1.imag
+    s[L.S_E_ELEC] += p_el * _H
+    s[L.S_E_COPPER] += p_cu * _H
+    s[L.S_E_FRICTION] += e_fric
+    s[L.S_E_LOAD] += load * (theta1 - theta)
+    ubus, dump_on, e_dump, e_sup = bus_step(s[L.S_UBUS], p_el, u[L.I_SUPPLY_VOLTS], p[L.P_C_BUS],
+                                            p[L.P_R_SUPPLY], p[L.P_U_DUMP], p[L.P_R_DUMP],
+                                            s[L.S_DUMP_ON], _H)
+    s[L.S_UBUS] = ubus
+    s[L.S_DUMP_ON] = dump_on
+    s[L.S_E_DUMP] += e_dump
+    s[L.S_E_SUPPLY] += e_sup
+    s[L.S_I2_SUM] += float(r[R.IA_IST] ** 2 + r[R.IB_IST] ** 2 + r[R.IC_IST] ** 2)
+    if p_el < 0.0:
+        s[L.S_PREG_SUM] += -p_el
+    s[L.S_TICK] = tick + 1.0
+
+
+@njit(cache=True)
+def _advance(r, s, p, u, key, buf, rec, fmt, n_outer):
+    for _ in range(n_outer):
+        outer_firmware(r, s, p, u, key, buf, rec, fmt)
+        for _k in range(c.INNER_PER_OUTER):
+            inner_sample(r, s, p, u, key, buf, rec, fmt)
+
+
+@njit(cache=True)
+def run_serial(regs, state, params, inputs, keys, buf, fmt, n_outer):
+    """Advance every motor by ``n_outer`` outer samples in one thread."""
+    n = regs.shape[0]
+    rec = buf.shape[0] == n
+    for i in range(n):
+        b = buf[i] if rec else buf[0]
+        _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer)
+
+
+@njit(cache=True, parallel=True)
+def run_parallel(regs, state, params, inputs, keys, buf, fmt, n_outer):
+    """Advance every motor by ``n_outer`` outer samples, motors spread over threads."""
+    n = regs.shape[0]
+    rec = buf.shape[0] == n
+    for i in prange(n):
+        b = buf[i] if rec else buf[0]
+        _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer)

@@ -1,0 +1,99 @@
+"""Three-phase star-connected coil with floating neutral and sinusoidal back-EMF (MODEL.md §6).
+
+Per phase k ∈ {a, b, c}: ``L di_k/dt = u_k − u_n − R i_k − e_k`` with the neutral ``u_n`` floating
+(Σ i_k = 0) and the magnet flux ``ψ_k = λ sin(θ_e + k·120°)``, so ``e_k = λ ω_e cos(θ_e + k·120°)``.
+With the space vector ``s_x = (2/3) Σ x_k e^{−jk·120°}`` (phase values ``x_k = Re(s_x e^{jk·120°})``,
+zero sequence removed, which is what the floating neutral does) the coil is
+
+    L ds_i/dt = s_u − R s_i − ω_e λ e^{jθ_e},       T = 1.5 p λ Re(s_i e^{−jθ_e}).
+
+Over one inner sample the PWM voltage is constant and the speed is taken constant (the mid-step
+prediction), so the step is integrated *exactly* (closed form of the exponential convolution with
+a rotating vector): the result does not depend on the step size (tests/test_plant.py shows it).
+Torque and powers are averaged over the step with Simpson's rule on the exact trajectory.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+SQRT3 = math.sqrt(3.0)
+
+
+@njit(cache=True, inline="always")
+def phase_to_vector(xa: float, xb: float, xc: float) -> complex:
+    """Space vector of three phase quantities (zero sequence removed)."""
+    return complex((2.0 * xa - xb - xc) / 3.0, (xc - xb) / SQRT3)
+
+
+@njit(cache=True, inline="always")
+def vector_to_phases(s: complex) -> tuple[float, float, float]:
+    """Phase values ``Re(s e^{jk·120°})`` of a space vector, k = 0, 1, 2."""
+    re = s.real
+    im = s.imag
+    return re, -0.5 * re - 0.5 * SQRT3 * im, -0.5 * re + 0.5 * SQRT3 * im
+
+
+@njit(cache=True, inline="always")
+def _current_at(s0: complex, s_u: complex, k_emf: complex, c: complex, r: float, t: float,
+                tau: float, rot: complex) -> complex:
+    a_t = math.exp(-t / tau)
+    return a_t * s0 + (1.0 - a_t) / r * s_u - k_emf * (rot - a_t) / c
+
+
+@njit(cache=True)
+def coil_step(s0: complex, s_u: complex, theta_e: float, omega_e: float, r: float, ell: float,
+              lam: float, pole_pairs: float, h: float):
+    """Advance the coil current by one step of length ``h`` [s].
+
+    Parameters
+    ----------
+    s0 : complex
+        Current space vector at the start of the step [A].
+    s_u : complex
+        Applied phase voltage space vector, constant over the step [V].
+    theta_e, omega_e : float
+        Electrical angle at the start [rad] and electrical speed over the step [rad/s].
+    r, ell, lam : float
+        Phase resistance [Ω], phase inductance [H], flux linkage [V·s].
+    pole_pairs : float
+        Number of pole pairs p.
+    h : float
+        Step length [s].
+
+    Returns
+    -------
+    s1 : complex
+        Current space vector at the end of the step [A].
+    torque : float
+        Mean electromagnetic torque over the step [N·m].
+    p_elec : float
+        Mean electrical power delivered to the windings [W].
+    p_copper : float
+        Mean copper loss [W].
+    """
+    tau = ell / r
+    e0 = complex(math.cos(theta_e), math.sin(theta_e))
+    c = complex(1.0 / tau, omega_e)
+    k_emf = omega_e * lam / ell * e0
+    half = 0.5 * h
+    rot_h = complex(math.cos(omega_e * half), math.sin(omega_e * half))
+    rot_1 = rot_h * rot_h
+    s_m = _current_at(s0, s_u, k_emf, c, r, half, tau, rot_h)
+    s1 = _current_at(s0, s_u, k_emf, c, r, h, tau, rot_1)
+    kt = 1.5 * pole_pairs * lam
+    t0 = (s0 * e0.conjugate()).real
+    tm = (s_m * (e0 * rot_h).conjugate()).real
+    t1 = (s1 * (e0 * rot_1).conjugate()).real
+    torque = kt * (t0 + 4.0 * tm + t1) / 6.0
+    p0 = (s_u * s0.conjugate()).real
+    pm = (s_u * s_m.conjugate()).real
+    p1 = (s_u * s1.conjugate()).real
+    p_elec = 1.5 * (p0 + 4.0 * pm + p1) / 6.0
+    q0 = s0.real * s0.real + s0.imag * s0.imag
+    qm = s_m.real * s_m.real + s_m.imag * s_m.imag
+    q1 = s1.real * s1.real + s1.imag * s1.imag
+    p_copper = 1.5 * r * (q0 + 4.0 * qm + q1) / 6.0
+    return s1, torque, p_elec, p_copper
