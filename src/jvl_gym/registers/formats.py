@@ -1,0 +1,334 @@
+"""Conversions between user units, stored register integers and serial-line words (manual 3.1).
+
+Manual 3.1 defines five data formats:
+
+========  ===========================  ============================
+format    storage                      range (user units)
+========  ===========================  ============================
+Word      16 bit unsigned              0 … 65535
+Integer   16 bit signed                −32767 … +32767
+LongInt   32 bit signed, two numbers   −2.147E9 … +2.147E9
+Fixed4    16 bit signed, unit 1/4096   −7.999756 … +7.999756
+Fixed8    16 bit signed, unit 1/256    −127.996 … +127.996
+========  ===========================  ============================
+
+Three representations are used here:
+
+* *user units*: what the manual's register descriptions talk about (Fixed formats as reals);
+* *raw*: the stored integer, ``raw = value · scale`` (scale 4096 / 256 / 1), a LongInt as its
+  whole signed 32-bit value;
+* *words*: the unsigned 16-bit words on the serial line.
+
+Word order of a LongInt. Manual 3.2 says a LongInt "takes up two register numbers,
+corresponding to two words", e.g. P_SOLL is registers 3 and 4 (3.2.3/3.2.4). The manual does not
+say which word is which; its MacTalk example (chapter 5.1) reads register 7 "as if it is longint
+format" and returns register 7's value 4711h first, then register 8. Together with the low-byte
+first byte examples (MODEL.md §10) this reads as little-endian throughout: register N holds the
+**low** word and N+1 the **high** word, and on the line the low word comes first. So
+0x00054711 is (0x4711, 0x0005) and −1 is (0xFFFF, 0xFFFF). (The manual's text says
+"big-endian"; the examples contradict it and are followed — a real motor is the final judge.)
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .errors import ReadOnlyRegisterError, RegisterRangeError, RegisterShapeError
+from .table import FORMAT_RAW_RANGE, Access, Format, Register
+
+__all__ = [
+    "to_raw",
+    "from_raw",
+    "saturate_raw",
+    "split_longint",
+    "join_longint",
+    "to_word16",
+    "from_word16",
+    "round_half_away",
+]
+
+_FIXED = (Format.FIXED4, Format.FIXED8)
+_SIGNED16 = (Format.INTEGER, Format.FIXED4, Format.FIXED8)
+
+
+def round_half_away(x: Any) -> np.ndarray:
+    """Round to the nearest integer, halves away from zero (float64 array).
+
+    Parameters
+    ----------
+    x : array_like
+        Values.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``sign(x) · floor(|x| + 0.5)``.
+    """
+    a = np.asarray(x, dtype=np.float64)
+    return np.copysign(np.floor(np.abs(a) + 0.5), a)
+
+
+def _user_bounds(reg: Register) -> tuple[float, float]:
+    """Accepted user-unit interval: the table range widened to the exactly representable ends.
+
+    The manual prints Fixed ranges rounded (Fixed8 "127.996" for 32767/256 = 127.99609375), so
+    a value that rounds to the raw limit is accepted.
+    """
+    s = reg.scale
+    return min(reg.minimum, reg.raw_min / s), max(reg.maximum, reg.raw_max / s)
+
+
+def _check_not_reserved(reg: Register) -> None:
+    if reg.access == Access.RESERVED:
+        raise ReadOnlyRegisterError(
+            f"{reg.name} (register {reg.number}) is reserved (manual {reg.section}); it has no "
+            "format and cannot hold a value")
+
+
+def to_raw(reg: Register, value: Any) -> np.ndarray:
+    """Convert user units to the stored integer, validating the range (manual 3.1, 3.2.N).
+
+    ``raw = round_half_away(value · scale)`` with scale 4096 for Fixed4, 256 for Fixed8 and 1
+    otherwise.
+
+    Parameters
+    ----------
+    reg : Register
+        Target register.
+    value : array_like
+        Scalar or array in user units.
+
+    Returns
+    -------
+    numpy.ndarray
+        int64 array of the shape of ``value`` (0-d for a scalar).
+
+    Raises
+    ------
+    RegisterRangeError
+        If any value is NaN, infinite or outside ``[minimum, maximum]``; the message names the
+        register, its number, its range with unit and the manual section.
+    ReadOnlyRegisterError
+        For a reserved register.
+    """
+    _check_not_reserved(reg)
+    try:
+        v = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise RegisterRangeError(
+            f"{reg.name} (register {reg.number}): value {value!r} is not a number "
+            f"(manual {reg.section})") from exc
+    lo, hi = _user_bounds(reg)
+    bad = ~np.isfinite(v) | (v < lo) | (v > hi)
+    if np.any(bad):
+        flat = v[bad] if v.ndim else v.reshape(1)
+        more = f" (and {int(np.count_nonzero(bad)) - 1} more)" if np.count_nonzero(bad) > 1 else ""
+        raise RegisterRangeError(
+            f"{reg.name} (register {reg.number}): value {flat.flat[0]:g}{more} is outside the "
+            f"range {reg.range_text} ({reg.format.value}, manual {reg.section})")
+    raw = round_half_away(v * reg.scale)
+    return np.clip(raw, reg.raw_min, reg.raw_max).astype(np.int64)
+
+
+def from_raw(reg: Register, raw: Any) -> np.ndarray:
+    """Convert stored integers to user units (manual 3.1).
+
+    Parameters
+    ----------
+    reg : Register
+        Source register.
+    raw : array_like
+        Stored integer(s).
+
+    Returns
+    -------
+    numpy.ndarray
+        float64 ``raw / scale`` for Fixed4/Fixed8, int64 otherwise (0-d for a scalar).
+    """
+    r = np.asarray(raw)
+    if reg.format in _FIXED:
+        return r.astype(np.float64) / reg.scale
+    return r.astype(np.int64)
+
+
+def saturate_raw(reg: Register, x: Any) -> np.ndarray:
+    """Round and saturate a firmware result to the register, without raising (MODEL.md §3).
+
+    This is what a store by the firmware does: ``clip(round_half_away(x · scale), raw_min,
+    raw_max)``. ``x`` is in user units (for Word/Integer/LongInt that is the raw unit). NaN is
+    stored as 0, ±inf as the limits.
+
+    Parameters
+    ----------
+    reg : Register
+        Target register.
+    x : array_like
+        Computed value(s) in user units.
+
+    Returns
+    -------
+    numpy.ndarray
+        int64 raw value(s).
+    """
+    v = np.nan_to_num(np.asarray(x, dtype=np.float64), nan=0.0, posinf=np.inf, neginf=-np.inf)
+    scaled = np.clip(v * reg.scale, reg.raw_min, reg.raw_max)
+    return np.clip(round_half_away(scaled), reg.raw_min, reg.raw_max).astype(np.int64)
+
+
+def _as_int_array(x: Any, what: str) -> np.ndarray:
+    a = np.asarray(x)
+    if a.dtype.kind == "f":
+        if not np.all(np.isfinite(a)) or np.any(a != np.round(a)):
+            raise RegisterRangeError(f"{what} must be integers, got {x!r}")
+        return a.astype(np.int64)
+    if a.dtype.kind not in "iub":
+        raise RegisterRangeError(f"{what} must be integers, got {x!r}")
+    return a.astype(np.int64)
+
+
+def _scalar_or_array(a: np.ndarray) -> Any:
+    return int(a) if a.ndim == 0 else a
+
+
+def split_longint(raw: Any) -> tuple[Any, Any]:
+    """Split a signed 32-bit LongInt into its (low, high) unsigned 16-bit words (manual 3.1, 3.2).
+
+    Register N holds the low word and N+1 the high word; on the line the low word is sent first
+    (see the module docstring). Two's complement: −1 → (0xFFFF, 0xFFFF).
+
+    Parameters
+    ----------
+    raw : int or array_like
+        Value(s) in −2**31 … 2**31−1.
+
+    Returns
+    -------
+    (low, high) : tuple
+        Python ints for a scalar input, int64 arrays otherwise.
+
+    Raises
+    ------
+    RegisterRangeError
+        If a value does not fit in 32 signed bits.
+    """
+    a = _as_int_array(raw, "LongInt values")
+    if np.any((a < -(2**31)) | (a > 2**31 - 1)):
+        raise RegisterRangeError(f"LongInt value {raw!r} does not fit in 32 signed bits "
+                                 "(−2147483648 … 2147483647, manual 3.1)")
+    u = a & 0xFFFFFFFF
+    return _scalar_or_array(u & 0xFFFF), _scalar_or_array(u >> 16)
+
+
+def join_longint(low: Any, high: Any) -> Any:
+    """Join (low, high) 16-bit words into a signed 32-bit LongInt (manual 3.1, 3.2).
+
+    Inverse of :func:`split_longint`: (0x4711, 0x0005) → 0x00054711, (0xFFFF, 0xFFFF) → −1.
+
+    Parameters
+    ----------
+    low, high : int or array_like
+        Unsigned words 0 … 65535 (register N and N+1).
+
+    Returns
+    -------
+    int or numpy.ndarray
+        Python int for scalar inputs, int64 array otherwise.
+
+    Raises
+    ------
+    RegisterRangeError
+        If a word is outside 0 … 65535.
+    RegisterShapeError
+        If ``low`` and ``high`` do not broadcast together.
+    """
+    lo = _as_int_array(low, "LongInt words")
+    hi = _as_int_array(high, "LongInt words")
+    for w in (lo, hi):
+        if np.any((w < 0) | (w > 0xFFFF)):
+            raise RegisterRangeError(f"LongInt words must be 0 … 65535, got {low!r}, {high!r}")
+    try:
+        lo, hi = np.broadcast_arrays(lo, hi)
+    except ValueError as exc:
+        raise RegisterShapeError(f"low and high word shapes differ: {lo.shape} vs {hi.shape}"
+                                 ) from exc
+    u = (hi << 16) | lo
+    return _scalar_or_array(np.where(u >= 2**31, u - 2**32, u).astype(np.int64))
+
+
+def to_word16(reg: Register, raw: Any) -> np.ndarray:
+    """Map stored integer(s) to the unsigned 16-bit word(s) on the serial line (manual 3.1, 5).
+
+    Word and LongIntHigh pass through; Integer, Fixed4 and Fixed8 are 16-bit two's complement
+    (−1 → 0xFFFF); a LongInt gives two words, low first.
+
+    Parameters
+    ----------
+    reg : Register
+        Register the value belongs to.
+    raw : array_like
+        Stored integer(s).
+
+    Returns
+    -------
+    numpy.ndarray
+        int64 words 0 … 65535: shape of ``raw`` for one-word formats, ``raw.shape + (2,)``
+        (``[..., 0]`` low, ``[..., 1]`` high) for LongInt.
+
+    Raises
+    ------
+    RegisterRangeError
+        If a raw value does not fit the register's format (manual 3.1).
+    """
+    _check_not_reserved(reg)
+    a = _as_int_array(raw, f"{reg.name} (register {reg.number}) raw values")
+    lo, hi = FORMAT_RAW_RANGE[reg.format]
+    if np.any((a < lo) | (a > hi)):
+        raise RegisterRangeError(
+            f"{reg.name} (register {reg.number}): raw value {raw!r} does not fit the "
+            f"{reg.format.value} format ({lo} … {hi}, manual 3.1)")
+    if reg.format == Format.LONGINT:
+        low, high = split_longint(a)
+        return np.stack([np.asarray(low), np.asarray(high)], axis=-1).astype(np.int64)
+    return (a & 0xFFFF).astype(np.int64)
+
+
+def from_word16(reg: Register, word: Any) -> np.ndarray:
+    """Map serial-line word(s) back to the stored integer(s) (manual 3.1, 5); inverse of
+    :func:`to_word16`.
+
+    Parameters
+    ----------
+    reg : Register
+        Register the words belong to.
+    word : array_like
+        Words 0 … 65535; for a LongInt the last axis must have length 2 (low, high).
+
+    Returns
+    -------
+    numpy.ndarray
+        int64 raw value(s). Integer/Fixed words ≥ 0x8000 are negative (0x8000 → −32768, which
+        no register accepts; range checks are the writer's job).
+
+    Raises
+    ------
+    RegisterRangeError
+        If a word is outside 0 … 65535.
+    RegisterShapeError
+        If a LongInt's words do not have a trailing axis of length 2.
+    """
+    _check_not_reserved(reg)
+    w = _as_int_array(word, f"{reg.name} (register {reg.number}) words")
+    if np.any((w < 0) | (w > 0xFFFF)):
+        raise RegisterRangeError(
+            f"{reg.name} (register {reg.number}): words must be 0 … 65535, got {word!r}")
+    if reg.format == Format.LONGINT:
+        if w.ndim == 0 or w.shape[-1] != 2:
+            raise RegisterShapeError(
+                f"{reg.name} (register {reg.number}) is a LongInt: expected words with a "
+                f"trailing axis of length 2 (low, high), got shape {w.shape}")
+        return np.asarray(join_longint(w[..., 0], w[..., 1]), dtype=np.int64)
+    if reg.format in _SIGNED16:
+        return np.where(w >= 0x8000, w - 0x10000, w).astype(np.int64)
+    return w.astype(np.int64)

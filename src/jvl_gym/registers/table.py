@@ -1,0 +1,401 @@
+"""The register table of one motor family, kept as data (manual 3.2, MODEL.md §3).
+
+The table lives in a CSV file next to this module (``mac050_141.csv`` for the MAC50/95/140/141),
+one row per register number. A LongInt register N (manual 3.1: "registers of the format LongInt
+take up two register numbers, corresponding to two words") is a ``LongInt`` row N holding the
+whole 32-bit value and a ``LongIntHigh`` row N+1 named ``<NAME>_HI`` for the high word, so that
+every number has exactly one row. Numbers the manual leaves undocumented are ``RESERVED_<n>``
+rows with access ``reserved``.
+
+The CSV is loaded once and validated; a malformed table raises :class:`TableError` naming the
+file, row and problem.
+"""
+
+from __future__ import annotations
+
+import csv
+import difflib
+import enum
+import io
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+from importlib import resources
+from os import PathLike
+from pathlib import Path
+
+import numpy as np
+
+from .errors import RegisterError, UnknownRegisterError
+
+__all__ = [
+    "Format",
+    "Access",
+    "Register",
+    "RegisterTable",
+    "TableError",
+    "load_table",
+    "MAC050_141",
+    "FORMAT_CODES",
+    "FORMAT_SCALE",
+]
+
+#: highest register number of the MAC50–141 (index length of the arrays is this + 1)
+MAC050_141_LAST = 164
+
+
+class Format(str, enum.Enum):
+    """Data formats of manual 3.1, plus the high word of a LongInt."""
+
+    WORD = "Word"  #: 16 bit unsigned, 0 … 65535
+    INTEGER = "Integer"  #: 16 bit signed, −32767 … +32767
+    LONGINT = "LongInt"  #: 32 bit signed, takes two register numbers (low word first)
+    LONGINT_HIGH = "LongIntHigh"  #: second register number of a LongInt (high word)
+    FIXED4 = "Fixed4"  #: 16 bit signed, unit 1/4096, ±7.999756
+    FIXED8 = "Fixed8"  #: 16 bit signed, unit 1/256, ±127.996
+
+
+class Access(str, enum.Enum):
+    """Who may write a register."""
+
+    RW = "rw"  #: parameter or data the user may write
+    RO = "ro"  #: computed by the firmware; a user write is refused
+    RESERVED = "reserved"  #: number not documented in the manual
+
+
+#: format → code used by the compiled kernels (0 means reserved)
+FORMAT_CODES: dict[Format, int] = {
+    Format.WORD: 1,
+    Format.INTEGER: 2,
+    Format.LONGINT: 3,
+    Format.LONGINT_HIGH: 4,
+    Format.FIXED4: 5,
+    Format.FIXED8: 6,
+}
+
+#: raw = value · scale (manual 3.1: Fixed4 unit 1/4096, Fixed8 unit 1/256)
+FORMAT_SCALE: dict[Format, int] = {Format.FIXED4: 4096, Format.FIXED8: 256}
+
+#: hard raw range of each format (manual 3.1); LongIntHigh is an unsigned 16-bit word
+FORMAT_RAW_RANGE: dict[Format, tuple[int, int]] = {
+    Format.WORD: (0, 65535),
+    Format.INTEGER: (-32767, 32767),
+    Format.LONGINT: (-(2**31), 2**31 - 1),
+    Format.LONGINT_HIGH: (0, 65535),
+    Format.FIXED4: (-32767, 32767),
+    Format.FIXED8: (-32767, 32767),
+}
+
+_COLUMNS = ("number", "name", "format", "min", "max", "unit", "access", "default", "section",
+            "description")
+
+
+def _round_half_away(x: float) -> int:
+    return int(math.copysign(math.floor(abs(x) + 0.5), x))
+
+
+class TableError(RegisterError):
+    """The register table file is malformed."""
+
+
+@dataclass(frozen=True)
+class Register:
+    """One register of the table (manual 3.2.N).
+
+    Attributes
+    ----------
+    number : int
+        Register number N (manual section 3.2.N).
+    name : str
+        Name as in the manual (``<NAME>_HI`` for a LongInt's high word).
+    format : Format
+        Data format (manual 3.1).
+    minimum, maximum : float
+        Range in user units (Fixed formats as real numbers).
+    unit : str
+        Unit of one user unit, e.g. ``"1/16 count/sample"``; ``""`` if dimensionless.
+    access : Access
+        ``rw``, ``ro`` or ``reserved``.
+    default : float
+        ROM default in user units.
+    section : str
+        Manual section, e.g. ``"3.2.13"``.
+    description : str
+        One line.
+    """
+
+    number: int
+    name: str
+    format: Format
+    minimum: float
+    maximum: float
+    unit: str
+    access: Access
+    default: float
+    section: str
+    description: str
+
+    @property
+    def scale(self) -> int:
+        """Raw units per user unit: 4096 for Fixed4, 256 for Fixed8, 1 otherwise."""
+        return FORMAT_SCALE.get(self.format, 1)
+
+    @property
+    def raw_min(self) -> int:
+        """Smallest stored integer, ``round(minimum · scale)``."""
+        return _round_half_away(self.minimum * self.scale)
+
+    @property
+    def raw_max(self) -> int:
+        """Largest stored integer, ``round(maximum · scale)``."""
+        return _round_half_away(self.maximum * self.scale)
+
+    @property
+    def words(self) -> int:
+        """Number of 16-bit words (register numbers) the register occupies: 2 for LongInt."""
+        return 2 if self.format == Format.LONGINT else 1
+
+    @property
+    def default_raw(self) -> int:
+        """The ROM default as a stored integer."""
+        return _round_half_away(self.default * self.scale)
+
+    @property
+    def fmt_code(self) -> int:
+        """Format code of :data:`FORMAT_CODES` (0 for reserved rows)."""
+        return 0 if self.access == Access.RESERVED else FORMAT_CODES[self.format]
+
+    @property
+    def range_text(self) -> str:
+        """The range with its unit, for messages and documentation."""
+        unit = f" {self.unit}" if self.unit else ""
+        return f"{_num(self.minimum)} … {_num(self.maximum)}{unit}"
+
+
+def _num(x: float) -> str:
+    return str(int(x)) if float(x).is_integer() else f"{x:g}"
+
+
+class RegisterTable:
+    """The register table of one motor family.
+
+    Parameters
+    ----------
+    registers : iterable of Register
+        All rows, one per number 1 … last; validated on construction.
+    source : str
+        Where the rows came from (for error messages).
+
+    Attributes
+    ----------
+    registers : tuple of Register
+        Rows ordered by number.
+    names : tuple of str
+        Register names in number order.
+    raw_min_array, raw_max_array, default_raw_array : numpy.ndarray
+        int64 arrays indexed by register number (index 0 unused = 0; LongIntHigh and reserved
+        rows 0). A LongInt's entry is its whole 32-bit value.
+    fmt_code_array : numpy.ndarray
+        int8 array indexed by register number: 0 reserved, 1 Word, 2 Integer, 3 LongInt,
+        4 LongIntHigh, 5 Fixed4, 6 Fixed8.
+    """
+
+    def __init__(self, registers: tuple[Register, ...] | list[Register], source: str = "<rows>"):
+        regs = tuple(sorted(registers, key=lambda r: r.number))
+        _validate(regs, source)
+        self.source = source
+        self.registers: tuple[Register, ...] = regs
+        self.names: tuple[str, ...] = tuple(r.name for r in regs)
+        self._by_name = {r.name.upper(): r for r in regs}
+        self._by_number = {r.number: r for r in regs}
+        size = regs[-1].number + 1
+        self.raw_min_array = np.zeros(size, dtype=np.int64)
+        self.raw_max_array = np.zeros(size, dtype=np.int64)
+        self.default_raw_array = np.zeros(size, dtype=np.int64)
+        self.fmt_code_array = np.zeros(size, dtype=np.int8)
+        for r in regs:
+            self.fmt_code_array[r.number] = r.fmt_code
+            if r.access == Access.RESERVED or r.format == Format.LONGINT_HIGH:
+                continue
+            self.raw_min_array[r.number] = r.raw_min
+            self.raw_max_array[r.number] = r.raw_max
+            self.default_raw_array[r.number] = r.default_raw
+        for arr in (self.raw_min_array, self.raw_max_array, self.default_raw_array,
+                    self.fmt_code_array):
+            arr.flags.writeable = False
+
+    @property
+    def last(self) -> int:
+        """Highest register number."""
+        return self.registers[-1].number
+
+    def lookup(self, key: str | int) -> Register:
+        """Return a register by name (case-insensitive) or number.
+
+        Parameters
+        ----------
+        key : str or int
+            Register name (``"v_soll"``, ``"V_SOLL"``) or number (``5``).
+
+        Returns
+        -------
+        Register
+
+        Raises
+        ------
+        UnknownRegisterError
+            If no register has that name or number; the message lists up to three close names.
+        """
+        if isinstance(key, (bool, np.bool_)):
+            raise UnknownRegisterError(f"register key must be a name or number, got {key!r}")
+        if isinstance(key, (int, np.integer)):
+            reg = self._by_number.get(int(key))
+            if reg is None:
+                raise UnknownRegisterError(
+                    f"no register number {int(key)} (valid: 1 … {self.last})")
+            return reg
+        if isinstance(key, str):
+            reg = self._by_name.get(key.strip().upper())
+            if reg is None:
+                close = difflib.get_close_matches(key.strip().upper(), list(self._by_name), n=3,
+                                                  cutoff=0.5)
+                hint = f"; did you mean {', '.join(close)}?" if close else ""
+                raise UnknownRegisterError(f"no register named {key!r}{hint}")
+            return reg
+        raise UnknownRegisterError(f"register key must be a name or number, got {key!r}")
+
+    def __iter__(self) -> Iterator[Register]:
+        return iter(self.registers)
+
+    def __len__(self) -> int:
+        return len(self.registers)
+
+    def __contains__(self, key: object) -> bool:
+        if isinstance(key, Register):
+            return self._by_number.get(key.number) == key
+        if isinstance(key, (bool, np.bool_)):
+            return False
+        if isinstance(key, (int, np.integer)):
+            return int(key) in self._by_number
+        if isinstance(key, str):
+            return key.strip().upper() in self._by_name
+        return False
+
+    def __repr__(self) -> str:
+        return f"RegisterTable({len(self)} registers from {self.source})"
+
+
+def _validate(regs: tuple[Register, ...], source: str) -> None:
+    """Check the table invariants, raising :class:`TableError` on the first violation."""
+    if not regs:
+        raise TableError(f"{source}: empty register table")
+    numbers = [r.number for r in regs]
+    dup = sorted({n for n in numbers if numbers.count(n) > 1})
+    if dup:
+        raise TableError(f"{source}: duplicate register numbers {dup}")
+    missing = sorted(set(range(1, numbers[-1] + 1)) - set(numbers))
+    if missing or numbers[0] != 1:
+        raise TableError(f"{source}: register numbers missing: {missing or [1]}")
+    seen: dict[str, int] = {}
+    for r in regs:
+        key = r.name.upper()
+        if not r.name or key in seen:
+            raise TableError(f"{source}: register {r.number}: name {r.name!r} is empty or "
+                             f"already used by register {seen.get(key)}")
+        seen[key] = r.number
+    for i, r in enumerate(regs):
+        where = f"{source}: register {r.number} {r.name}"
+        if r.access == Access.RESERVED:
+            if r.name.upper() != f"RESERVED_{r.number}":
+                raise TableError(f"{where}: reserved rows must be named RESERVED_{r.number}")
+            continue
+        if r.name.upper().startswith("RESERVED_"):
+            raise TableError(f"{where}: a RESERVED_ row must have access 'reserved'")
+        for label, v in (("min", r.minimum), ("max", r.maximum), ("default", r.default)):
+            if not math.isfinite(v):
+                raise TableError(f"{where}: {label} is not a finite number")
+        if r.minimum > r.maximum:
+            raise TableError(f"{where}: min {r.minimum} > max {r.maximum}")
+        lo, hi = FORMAT_RAW_RANGE[r.format]
+        if r.raw_min < lo or r.raw_max > hi:
+            raise TableError(f"{where}: range {r.range_text} exceeds the {r.format.value} "
+                             f"format (raw {lo} … {hi}, manual 3.1)")
+        if r.scale == 1 and not (float(r.minimum).is_integer() and float(r.maximum).is_integer()
+                                 and float(r.default).is_integer()):
+            raise TableError(f"{where}: {r.format.value} min/max/default must be integers")
+        if not (r.minimum <= r.default <= r.maximum):
+            raise TableError(f"{where}: default {r.default} outside {r.range_text}")
+        if r.format == Format.LONGINT:
+            nxt = regs[i + 1] if i + 1 < len(regs) else None
+            if (nxt is None or nxt.format != Format.LONGINT_HIGH
+                    or nxt.name.upper() != f"{r.name.upper()}_HI" or nxt.access != r.access):
+                raise TableError(f"{where}: a LongInt must be followed by its LongIntHigh row "
+                                 f"{r.name}_HI (register {r.number + 1}) with the same access")
+            if nxt.default != (r.default_raw >> 16) & 0xFFFF:
+                raise TableError(f"{where}: default of {nxt.name} must be the high word of the "
+                                 f"default ({(r.default_raw >> 16) & 0xFFFF})")
+        if r.format == Format.LONGINT_HIGH:
+            prev = regs[i - 1] if i > 0 else None
+            if prev is None or prev.format != Format.LONGINT:
+                raise TableError(f"{where}: a LongIntHigh row must follow its LongInt row")
+
+
+def _parse_rows(text: str, source: str) -> list[Register]:
+    reader = csv.DictReader(io.StringIO(text))
+    if tuple(reader.fieldnames or ()) != _COLUMNS:
+        raise TableError(f"{source}: columns must be {','.join(_COLUMNS)}, "
+                         f"got {','.join(reader.fieldnames or ())}")
+    rows: list[Register] = []
+    for line, row in enumerate(reader, start=2):
+        try:
+            fmt = Format(row["format"].strip())
+        except ValueError:
+            raise TableError(f"{source} line {line}: unknown format {row['format']!r} "
+                             f"(known: {', '.join(f.value for f in Format)})") from None
+        try:
+            access = Access(row["access"].strip())
+        except ValueError:
+            raise TableError(f"{source} line {line}: unknown access {row['access']!r} "
+                             f"(known: {', '.join(a.value for a in Access)})") from None
+        try:
+            number = int(row["number"])
+            vals = [float(row[k]) if row[k].strip() else 0.0 for k in ("min", "max", "default")]
+        except ValueError as exc:
+            raise TableError(f"{source} line {line}: {exc}") from None
+        rows.append(Register(
+            number=number, name=row["name"].strip(), format=fmt, minimum=vals[0],
+            maximum=vals[1], unit=row["unit"].strip(), access=access, default=vals[2],
+            section=row["section"].strip(), description=row["description"].strip()))
+    return rows
+
+
+def load_table(path: str | PathLike[str]) -> RegisterTable:
+    """Load and validate a register table CSV.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        CSV with columns ``number,name,format,min,max,unit,access,default,section,description``.
+
+    Returns
+    -------
+    RegisterTable
+
+    Raises
+    ------
+    TableError
+        If a row is malformed or a table invariant is violated (unique names and numbers,
+        every number 1 … last present, each LongInt followed by its ``_HI`` row, defaults within
+        range, known formats).
+    """
+    p = Path(path)
+    return RegisterTable(_parse_rows(p.read_text(encoding="utf-8"), str(p)), source=str(p))
+
+
+def _load_packaged(filename: str) -> RegisterTable:
+    text = resources.files(__package__).joinpath(filename).read_text(encoding="utf-8")
+    return RegisterTable(_parse_rows(text, filename), source=filename)
+
+
+#: the MAC50/95/140/141 register table (manual 3.2, registers 1 … 164)
+MAC050_141: RegisterTable = _load_packaged("mac050_141.csv")
