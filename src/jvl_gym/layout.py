@@ -70,7 +70,7 @@ N_REGS = 165
     # mode-specific memory (home search, analogue hysteresis, coil direction, ...)
     S_AUX0, S_AUX1, S_AUX2, S_AUX3, S_AUX4, S_AUX5, S_AUX6, S_AUX7,
     N_STATE,
-) = range(64)
+) = range(69)
 
 # --- parameters ------------------------------------------------------------------------------
 (

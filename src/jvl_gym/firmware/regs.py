@@ -111,6 +111,8 @@ U_SUPPLY = _n("U_SUPPLY")
 U_MIN_SUP = _n("U_MIN_SUP")
 UV_HANDLE = _n("UV_HANDLE")
 P_NEW = _n("P_NEW")
+MOTOR_TYPE = _n("MOTOR_TYPE")
+PROG_VERSION = _n("PROG_VERSION")
 
 #: raw storage bounds and format codes by register number (int64 / int8 arrays of length 165)
 RAW_MIN = _TABLE.raw_min_array

@@ -1,0 +1,22 @@
+"""jvl_gym: a register-faithful simulator, Gymnasium environments and a tuning toolkit for JVL
+MAC50/95/140/141 integrated servo motors.
+
+>>> from jvl_gym import MotorArray
+>>> m = MotorArray("MAC140", n=4, seed=0)
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+__all__ = ["MotorArray", "ModeError", "__version__"]
+__version__ = "0.1.0"
+
+
+def __getattr__(name: str) -> Any:
+    # Lazy: importing a submodule (plant, protocol codecs, ...) does not compile the kernel.
+    if name in ("MotorArray", "ModeError"):
+        from . import sim
+
+        return getattr(sim, name)
+    raise AttributeError(f"module 'jvl_gym' has no attribute {name!r}")

@@ -1,0 +1,626 @@
+"""MotorArray: N simulated MAC motors, read and written by register name or number.
+
+The array holds the register banks, plant and firmware state of N motors as (N, ·) arrays
+(``jvl_gym.layout``) and advances them with one compiled kernel (``jvl_gym.kernel``). Everything
+else here is the thin Python layer a user talks to: validated register access (manual 3.2),
+mode requests (4.4), world inputs, power-on / partial reset with new per-motor parameters, the
+sample buffer, flash, and the physical truth for plots and tests.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import Any
+
+import numpy as np
+
+from . import constants as c
+from . import layout as L
+from .config import MotorConfig, load_motor, load_setup
+from .firmware import modes as M
+from .firmware import regs as R
+from .firmware.noise import motor_keys
+from .kernel import run_parallel, run_serial
+from .plant.encoder import eldeg, encoder_count
+from .registers import (
+    MAC050_141,
+    Access,
+    Format,
+    ReadOnlyRegisterError,
+    Register,
+    RegisterError,
+    RegisterShapeError,
+)
+from .registers.formats import from_raw, to_raw
+
+__all__ = ["MotorArray", "ModeError", "PARAMETER_KEYWORDS"]
+
+#: per-motor parameter keywords of the constructor and :meth:`MotorArray.reset` (SI units)
+PARAMETER_KEYWORDS: dict[str, int] = {
+    "load_inertia": L.P_J_LOAD,  # kg·m²
+    "viscous_friction": L.P_VISCOUS,  # N·m·s/rad
+    "coulomb_friction": L.P_COULOMB,  # N·m
+    "current_noise": L.P_CURRENT_NOISE,  # ADC counts (std)
+    "position_noise": L.P_POSITION_NOISE,  # encoder counts (std)
+    "torque_noise": L.P_TORQUE_NOISE,  # N·m (std per inner sample)
+    "pwm_delay_samples": L.P_PWM_DELAY,  # 0 or 1
+    "end_stop_low": L.P_STOP_LO,  # rad
+    "end_stop_high": L.P_STOP_HI,  # rad
+    "end_stop_stiffness": L.P_STOP_K,  # N·m/rad
+    "end_stop_damping": L.P_STOP_D,  # N·m·s/rad
+    "home_position": L.P_HOME_POS,  # rad
+    "phase_resistance": L.P_R,  # Ω (overrides the motor config)
+    "phase_inductance": L.P_L,  # H
+    "rotor_inertia": L.P_J_MOTOR,  # kg·m²
+    "flux_linkage": L.P_LAMBDA,  # V·s
+}
+_NONNEGATIVE = {"load_inertia", "viscous_friction", "coulomb_friction", "current_noise",
+                "position_noise", "torque_noise", "end_stop_stiffness", "end_stop_damping"}
+_POSITIVE = {"phase_resistance", "phase_inductance", "rotor_inertia", "flux_linkage"}
+_STATE_KEYWORDS = {"initial_angle", "initial_speed"}
+
+_PARALLEL_MIN_MOTORS = 32
+
+
+class ModeError(RegisterError):
+    """A MODE_REG write or a mode command that the firmware's rules refuse (manual 4.4)."""
+
+
+def _as_index(index: Any, n: int) -> np.ndarray:
+    """Normalise ``index`` (None, int, slice, bool mask, int array) to sorted int64 indices."""
+    if index is None:
+        return np.arange(n, dtype=np.int64)
+    if isinstance(index, slice):
+        return np.arange(n, dtype=np.int64)[index]
+    arr = np.asarray(index)
+    if arr.dtype == np.bool_:
+        if arr.shape != (n,):
+            raise RegisterShapeError(f"boolean index must have shape ({n},), got {arr.shape}")
+        return np.flatnonzero(arr).astype(np.int64)
+    arr = np.atleast_1d(arr).astype(np.int64)
+    if arr.ndim != 1 or (arr.size and (arr.min() < -n or arr.max() >= n)):
+        raise RegisterShapeError(f"index {index!r} out of range for {n} motors")
+    return np.where(arr < 0, arr + n, arr)
+
+
+class MotorArray:
+    """N simulated MAC50–141 motors sharing one compiled kernel.
+
+    Parameters
+    ----------
+    motor : str, path, MotorConfig, or a sequence of those of length ``n``
+        Motor type name (``"MAC140"``), config path, or one per motor (mixed arrays).
+    n : int
+        Number of motors N.
+    seed : int, sequence of int, or None
+        Noise seeding. An int gives motor ``i`` the key ``motor_keys(seed, n)[i]``; a sequence
+        gives the keys directly (so one motor of an array can be reproduced on its own).
+    setup : str, path, dict, or None
+        Register set written over the ROM defaults at power-on; default: the motor type's
+        ``configs/setups/<TYPE>.yaml``.
+    record_length : int
+        Samples recorded by TESTU / TESTA (manual: 11), up to 895.
+    **params
+        Per-motor parameters (scalars or (N,) arrays), see :data:`PARAMETER_KEYWORDS`, plus
+        ``initial_angle`` [rad] and ``initial_speed`` [rad/s].
+
+    Examples
+    --------
+    >>> m = MotorArray("MAC140", n=4, seed=0, load_inertia=0.0)
+    >>> m.write("MODE_REG", 1); m.write("V_SOLL", 1600); m.run(seconds=0.3)
+    >>> m.speed_rpm  # ≈ 762.9 rpm for every motor
+    """
+
+    def __init__(self, motor: Any = "MAC140", n: int = 1, seed: Any = None,
+                 setup: Any = None, record_length: int = c.TEST_RECORD_SAMPLES,
+                 **params: Any) -> None:
+        if int(n) != n or n < 1:
+            raise ValueError(f"n must be a positive integer, got {n!r}")
+        self.n = int(n)
+        self.table = MAC050_141
+        motors = list(motor) if isinstance(motor, (list, tuple)) else [motor] * self.n
+        if len(motors) != self.n:
+            raise ValueError(f"got {len(motors)} motor types for n={self.n}")
+        configs: dict[str, MotorConfig] = {}
+        self._type_of = np.zeros(self.n, dtype=np.int64)
+        for i, mtype in enumerate(motors):
+            cfg = load_motor(mtype)
+            configs.setdefault(cfg.name, cfg)
+            self._type_of[i] = list(configs).index(cfg.name)
+        self._configs = list(configs.values())
+        self._setup_arg = setup
+        self._rom = np.stack([self._rom_image(cfg, setup) for cfg in self._configs])
+        if isinstance(seed, (list, tuple, np.ndarray)):
+            keys = np.asarray(seed, dtype=np.uint64)
+            if keys.shape != (self.n,):
+                raise ValueError(f"seed sequence must have length {self.n}")
+        else:
+            keys = motor_keys(seed, self.n)
+        self.keys = keys
+        self.regs = np.zeros((self.n, L.N_REGS), dtype=np.int64)
+        self.state = np.zeros((self.n, L.N_STATE), dtype=np.float64)
+        self.params = np.zeros((self.n, L.N_PARAM), dtype=np.float64)
+        self.inputs = np.zeros((self.n, L.N_INPUT), dtype=np.float64)
+        self._buf = np.zeros((1, c.REC_CNT_MAX, 4), dtype=np.int64)
+        self._flash: np.ndarray | None = None
+        self._has_flash = np.zeros(self.n, dtype=np.bool_)
+        self._fmt = self.table.fmt_code_array
+        self.set_record_length(record_length)
+        self.reset(**params)
+
+    # ------------------------------------------------------------------ configuration
+    def _rom_image(self, cfg: MotorConfig, setup: Any) -> np.ndarray:
+        """ROM defaults of one motor type: the table defaults with the type's setup applied."""
+        image = self.table.default_raw_array.astype(np.int64).copy()
+        setup_cfg = load_setup(setup if setup is not None else cfg.setup)
+        for name, value in setup_cfg.registers.items():
+            reg = self.table.lookup(name)
+            image[reg.number] = int(to_raw(reg, value))
+        image[R.MOTOR_TYPE] = cfg.motor_type_code
+        return image
+
+    def _config_params(self, cfg: MotorConfig) -> np.ndarray:
+        p = np.zeros(L.N_PARAM)
+        p[L.P_J_MOTOR] = cfg.rotor_inertia
+        p[L.P_R] = cfg.phase_resistance
+        p[L.P_L] = cfg.phase_inductance
+        p[L.P_LAMBDA] = cfg.flux_linkage
+        p[L.P_AMPS_PER_COUNT] = cfg.amps_per_count
+        p[L.P_POLE_PAIRS] = cfg.pole_pairs
+        p[L.P_PWM_DELAY] = cfg.pwm_delay_samples
+        p[L.P_TAU_THERMAL] = cfg.thermal_time_constant
+        p[L.P_TAU_REGEN] = cfg.regen_time_constant
+        p[L.P_C_BUS] = cfg.bus_capacitance
+        p[L.P_R_SUPPLY] = cfg.supply_resistance
+        p[L.P_U_DUMP] = cfg.dump_voltage
+        p[L.P_R_DUMP] = cfg.dump_resistance
+        p[L.P_STOP_LO] = 1.0
+        p[L.P_STOP_HI] = -1.0
+        p[L.P_STOP_K] = 50.0
+        p[L.P_STOP_D] = 0.05
+        p[L.P_HOME_POS] = math.inf
+        return p
+
+    @property
+    def motor_configs(self) -> list[MotorConfig]:
+        """Motor config of each motor (length N)."""
+        return [self._configs[k] for k in self._type_of]
+
+    @property
+    def parameters(self) -> dict[str, np.ndarray]:
+        """Per-motor physical parameters in SI units, as (N,) arrays (copies)."""
+        return {name: self.params[:, col].copy() for name, col in PARAMETER_KEYWORDS.items()}
+
+    def set_record_length(self, n_samples: int, index: Any = None) -> None:
+        """Samples recorded by TESTU/TESTA (manual default 11; up to REC_CNT_MAX = 895)."""
+        if int(n_samples) != n_samples or not 1 <= n_samples <= c.REC_CNT_MAX:
+            raise ValueError(f"record length must be an integer in 1..{c.REC_CNT_MAX}, "
+                             f"got {n_samples!r}")
+        self.state[_as_index(index, self.n), L.S_REC_LEN] = float(n_samples)
+
+    # ------------------------------------------------------------------ reset
+    def reset(self, index: Any = None, **params: Any) -> None:
+        """Power-on reset of the motors in ``index`` with optional new per-motor parameters.
+
+        Registers come from flash (if written) or the ROM defaults; P_IST = 0; the rotor is at
+        ``initial_angle`` [rad] turning at ``initial_speed`` [rad/s] (default 0); all firmware
+        state is cleared; world inputs return to rest. Other motors are untouched.
+        """
+        idx = _as_index(index, self.n)
+        values = self._check_params(params, idx.size)
+        for k in np.unique(self._type_of[idx]):
+            sel = idx[self._type_of[idx] == k]
+            self.params[sel] = self._config_params(self._configs[k])
+            self.inputs[sel] = 0.0
+            self.inputs[sel, L.I_SUPPLY_VOLTS] = self._configs[k].supply_voltage
+            self.inputs[sel, L.I_HOME] = -1.0
+        for name, val in values.items():
+            if name in PARAMETER_KEYWORDS:
+                self.params[idx, PARAMETER_KEYWORDS[name]] = val
+        rec_len = self.state[idx, L.S_REC_LEN].copy()
+        self.state[idx] = 0.0
+        self.state[idx, L.S_REC_LEN] = np.where(rec_len > 0, rec_len, c.TEST_RECORD_SAMPLES)
+        self.state[idx, L.S_THETA] = values.get("initial_angle", 0.0)
+        self.state[idx, L.S_OMEGA] = values.get("initial_speed", 0.0)
+        self.state[idx, L.S_UBUS] = self.inputs[idx, L.I_SUPPLY_VOLTS]
+        self._power_on(idx)
+
+    def _check_params(self, params: dict[str, Any], size: int) -> dict[str, np.ndarray]:
+        out: dict[str, np.ndarray] = {}
+        for name, val in params.items():
+            if name not in PARAMETER_KEYWORDS and name not in _STATE_KEYWORDS:
+                known = ", ".join(sorted([*PARAMETER_KEYWORDS, *_STATE_KEYWORDS]))
+                raise TypeError(f"unknown motor parameter {name!r}; known: {known}")
+            arr = np.asarray(val, dtype=np.float64)
+            if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != size):
+                raise ValueError(f"{name}: expected a scalar or shape ({size},), got {arr.shape}")
+            if not np.all(np.isfinite(arr)) and name not in ("home_position",):
+                raise ValueError(f"{name}: values must be finite, got {val!r}")
+            if name in _NONNEGATIVE and np.any(arr < 0):
+                raise ValueError(f"{name}: values must be >= 0, got {val!r}")
+            if name in _POSITIVE and np.any(arr <= 0):
+                raise ValueError(f"{name}: values must be > 0, got {val!r}")
+            if name == "pwm_delay_samples" and not np.all(np.isin(arr, (0.0, 1.0))):
+                raise ValueError(f"pwm_delay_samples must be 0 or 1, got {val!r}")
+            out[name] = np.broadcast_to(arr, (size,)).copy()
+        return out
+
+    def _power_on(self, idx: np.ndarray) -> None:
+        """Registers from flash or ROM, counters cleared, mode from STARTMODE (3.2.37)."""
+        for k in np.unique(self._type_of[idx]):
+            sel = idx[self._type_of[idx] == k]
+            self.regs[sel] = self._rom[k]
+        if self._flash is not None:
+            fl = idx[self._has_flash[idx]]
+            if fl.size:
+                self.regs[fl] = self._flash[fl]
+        for num in (R.P_IST, R.V_IST, R.P_FNC, R.FLWERR, R.FNCERR, R.I2T, R.UIT, R.REC_CNT,
+                    R.FNC_OUT, R.FF_OUT, R.VB_OUT, R.VF_OUT, R.V_EXT, R.I_NOM, R.PHI_SOLL,
+                    R.IA_SOLL, R.IB_SOLL, R.IC_SOLL, R.IA_IST, R.IB_IST, R.IC_IST, R.UA_VAL,
+                    R.UB_VAL, R.UC_VAL, R.V_ELDEG):
+            self.regs[idx, num] = 0
+        self.regs[idx, R.ERR_STAT] &= (c.RELPOSPSOLL | c.RELPOSPFNC | c.DIS_P_LIM)
+        self.regs[idx, R.CNTRL_BITS] &= ~(c.RECORDBIT | c.REWINDBIT | c.MAN_RESYNC)
+        self.regs[idx, R.MODE_REG] = c.INIT_MODE
+        s = self.state
+        for i in idx:
+            theta = s[i, L.S_THETA]
+            enc = encoder_count(theta)
+            s[i, L.S_ENC0] = enc
+            s[i, L.S_ENC_PREV] = enc
+            el = eldeg(self.params[i, L.P_POLE_PAIRS] * theta + self.params[i, L.P_THETA_E0])
+            s[i, L.S_ELDEG_PREV] = el
+            self.regs[i, R.ELDEG_IST] = el
+        s[idx, L.S_PENDING_MODE] = -1.0
+        self.regs[idx, R.U_SUPPLY] = np.round(s[idx, L.S_UBUS] / c.U_SUPPLY_VOLTS_PER_UNIT)
+        start = self.regs[idx, R.STARTMODE]
+        go = idx[(start > 0) & (start < 25)]
+        if go.size:
+            req = self.regs[go, R.STARTMODE]
+            ok = M.check_requests(self.regs, self.state, go, req) == M.OK
+            M.apply_requests(self.regs, self.state, go[ok], req[ok])
+
+    # ------------------------------------------------------------------ stepping
+    def step(self, n_outer: int = 1) -> None:
+        """Advance all motors by ``n_outer`` outer samples (1.92 ms each, 15 inner samples)."""
+        if int(n_outer) != n_outer or n_outer < 0:
+            raise ValueError(f"n_outer must be a non-negative integer, got {n_outer!r}")
+        if n_outer == 0:
+            return
+        run = run_parallel if self.n >= _PARALLEL_MIN_MOTORS else run_serial
+        run(self.regs, self.state, self.params, self.inputs, self.keys, self._buf, self._fmt,
+            int(n_outer))
+
+    def run(self, seconds: float) -> None:
+        """Advance by ``seconds`` (rounded to whole outer samples of 1.92 ms)."""
+        if not math.isfinite(seconds) or seconds < 0:
+            raise ValueError(f"seconds must be finite and >= 0, got {seconds!r}")
+        self.step(int(round(seconds * c.OUTER_HZ)))
+
+    @property
+    def time(self) -> np.ndarray:
+        """Time since power-on of each motor [s], (N,)."""
+        return self.state[:, L.S_TICK] * c.INNER_DT
+
+    # ------------------------------------------------------------------ registers
+    def _lookup(self, key: str | int) -> Register:
+        if isinstance(key, (bool, np.bool_)) or not isinstance(key, (str, int, np.integer)):
+            raise RegisterError(f"register key must be a name or number, got {key!r}")
+        return self.table.lookup(int(key) if isinstance(key, np.integer) else key)
+
+    def read_raw(self, key: str | int) -> np.ndarray:
+        """Stored integers of a register, (N,) int64 (a LongInt's full 32-bit value)."""
+        reg = self._lookup(key)
+        if reg.format == Format.LONGINT_HIGH:
+            return (self.regs[:, reg.number - 1] >> 16) & 0xFFFF
+        return self.regs[:, reg.number].copy()
+
+    def read(self, key: str | int) -> np.ndarray:
+        """Register value in user units, (N,): Fixed formats as float, others as int64."""
+        reg = self._lookup(key)
+        return from_raw(reg, self.read_raw(reg.number))
+
+    def write(self, key: str | int, value: Any, index: Any = None) -> None:
+        """Write a register by name or number, in user units (manual 3.2).
+
+        ``value`` is a scalar (broadcast) or an array with one value per selected motor. The
+        write is validated completely first: an unknown register, a read-only one, a value out
+        of range or NaN, a wrong shape, or a MODE_REG value the firmware refuses raises a
+        :class:`RegisterError` and changes nothing.
+        """
+        reg = self._lookup(key)
+        idx = _as_index(index, self.n)
+        raw = self._validated_raw(reg, value, idx.size)
+        self._store(reg, idx, raw)
+
+    def write_raw(self, key: str | int, raw: Any, index: Any = None) -> None:
+        """Write stored integers (Fixed4 = value·4096, …) with the same validation as write."""
+        reg = self._lookup(key)
+        idx = _as_index(index, self.n)
+        arr = np.asarray(raw)
+        if not np.issubdtype(arr.dtype, np.integer):
+            raise RegisterError(f"{reg.name} ({reg.number}): raw values must be integers")
+        self._validated_raw(reg, arr / reg.scale, idx.size)
+        self._store(reg, idx, np.broadcast_to(arr.astype(np.int64), (idx.size,)).copy())
+
+    def _validated_raw(self, reg: Register, value: Any, size: int) -> np.ndarray:
+        if reg.access != Access.RW:
+            raise ReadOnlyRegisterError(
+                f"{reg.name} (register {reg.number}) is {reg.access.value} (manual "
+                f"{reg.section}); it cannot be written")
+        arr = np.asarray(value, dtype=np.float64) if not isinstance(value, np.ndarray) else value
+        if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != size):
+            raise RegisterShapeError(
+                f"{reg.name} (register {reg.number}): expected a scalar or shape ({size},), "
+                f"got shape {np.shape(value)}")
+        raw = to_raw(reg, np.broadcast_to(arr, (size,)))
+        return np.asarray(raw, dtype=np.int64).reshape(size)
+
+    def _store(self, reg: Register, idx: np.ndarray, raw: np.ndarray) -> None:
+        num = reg.number
+        if num == R.MODE_REG:
+            self._request_modes(idx, raw)
+            return
+        if reg.format == Format.LONGINT_HIGH:
+            low = self.regs[idx, num - 1] & 0xFFFF
+            full = (raw.astype(np.int64) << 16) | low
+            self.regs[idx, num - 1] = ((full + 2**31) % 2**32) - 2**31
+            return
+        if num == R.CNTRL_BITS and np.any(raw & c.RECORDBIT):
+            self._ensure_buffer()
+        self.regs[idx, num] = raw
+
+    def _request_modes(self, idx: np.ndarray, req: np.ndarray) -> None:
+        codes = M.check_requests(self.regs, self.state, idx, req)
+        bad = np.flatnonzero(codes != M.OK)
+        if bad.size:
+            k = bad[0]
+            name = c.MODE_NAMES.get(int(req[k]), str(int(req[k])))
+            cur = c.MODE_NAMES.get(int(self.regs[idx[k], R.MODE_REG]), "?")
+            raise ModeError(
+                f"MODE_REG = {int(req[k])} ({name}) refused for motor {int(idx[k])} in {cur}: "
+                f"{M.REQUEST_MESSAGES[int(codes[k])]}. Nothing was changed.")
+        special = req >= 256
+        if np.any(special):
+            self._safe_special(idx[special], req[special])
+        normal = ~special
+        if np.any(np.isin(req[normal], (c.TESTU_MODE, c.TESTA_MODE))):
+            self._ensure_buffer()
+        M.apply_requests(self.regs, self.state, idx[normal], req[normal])
+
+    # ------------------------------------------------------------------ safe mode, flash
+    def _safe_special(self, idx: np.ndarray, req: np.ndarray) -> None:
+        """MODE_REG 256/257/258 in SAFE_MODE (manual 4.4.16)."""
+        for i, r in zip(idx, req):
+            if r == c.SAFE_LOAD_FLASH:
+                if self._flash is not None and self._has_flash[i]:
+                    self._load_rw(i, self._flash[i])
+                else:
+                    self._load_rw(i, self._rom[self._type_of[i]])
+            else:
+                self._load_rw(i, self._rom[self._type_of[i]])
+                if r == c.SAFE_LOAD_DEFAULTS_SAVE:
+                    self._save_flash(np.array([i]))
+                    self.software_reset(np.array([i]))
+
+    def _load_rw(self, i: int, image: np.ndarray) -> None:
+        rw = self._rw_numbers()
+        self.regs[i, rw] = image[rw]
+
+    def _rw_numbers(self) -> np.ndarray:
+        return np.array([r.number for r in self.table if r.access == Access.RW
+                         and r.number != R.MODE_REG and r.format != Format.LONGINT_HIGH])
+
+    def _indices_in(self, idx: np.ndarray, modes: tuple[int, ...], what: str) -> None:
+        bad = idx[~np.isin(self.regs[idx, R.MODE_REG], modes)]
+        if bad.size:
+            names = " or ".join(c.MODE_NAMES[m] for m in modes)
+            raise ModeError(f"{what} needs {names} (manual 4.4.16); motor {int(bad[0])} is in "
+                            f"{c.MODE_NAMES.get(int(self.regs[bad[0], R.MODE_REG]), '?')}")
+
+    def go_safe_mode(self, index: Any = None) -> None:
+        """MacTalk 'go safe mode' (5.1): stop if moving, then SAFE_MODE (4.4.16)."""
+        M.go_safe(self.regs, self.state, _as_index(index, self.n))
+
+    def go_init_mode(self, index: Any = None) -> None:
+        """MacTalk 'go init mode' (5.1): the protective path to INIT_MODE."""
+        M.go_init(self.regs, self.state, _as_index(index, self.n))
+
+    def exit_safe_mode(self, index: Any = None) -> None:
+        """Leave SAFE_MODE; the motor always goes to INIT_MODE (manual 2.2)."""
+        idx = _as_index(index, self.n)
+        self._indices_in(idx, (c.SAFE_MODE,), "exit_safe_mode")
+        M.go_init(self.regs, self.state, idx)
+
+    def _save_flash(self, idx: np.ndarray) -> None:
+        if self._flash is None:
+            self._flash = np.zeros((self.n, L.N_REGS), dtype=np.int64)
+        rw = self._rw_numbers()
+        self._flash[np.ix_(idx, rw)] = self.regs[np.ix_(idx, rw)]
+        self._flash[idx, R.PROG_VERSION] = self._rom[self._type_of[idx], R.PROG_VERSION]
+        self._has_flash[idx] = True
+
+    def write_flash(self, index: Any = None) -> None:
+        """Save the register set to flash and reset; only in SAFE_MODE (manual 2.2, 5.1)."""
+        idx = _as_index(index, self.n)
+        self._indices_in(idx, (c.SAFE_MODE,), "write_flash")
+        self._save_flash(idx)
+        self.software_reset(idx)
+
+    def software_reset(self, index: Any = None) -> None:
+        """Reset the electronics (registers from flash/ROM, P_IST = 0); INIT or SAFE only.
+
+        The rotor keeps its physical angle and speed: only the firmware restarts.
+        """
+        idx = _as_index(index, self.n)
+        self._indices_in(idx, (c.INIT_MODE, c.SAFE_MODE), "software_reset")
+        keep = [L.S_THETA, L.S_OMEGA, L.S_I_RE, L.S_I_IM, L.S_ACC, L.S_UBUS, L.S_DUMP_ON,
+                L.S_TICK, L.S_REC_LEN, L.S_E_ELEC, L.S_E_COPPER, L.S_E_FRICTION, L.S_E_LOAD,
+                L.S_E_DUMP, L.S_E_SUPPLY, L.S_I2T_Q, L.S_UIT_Q]
+        saved = self.state[np.ix_(idx, keep)].copy()
+        self.state[idx] = 0.0
+        self.state[np.ix_(idx, keep)] = saved
+        self._power_on(idx)
+
+    def flash_image(self, index: int) -> dict[int, int]:
+        """The flash contents of one motor (register number → raw), or {} if never written."""
+        if self._flash is None or not self._has_flash[index]:
+            return {}
+        return {int(n): int(self._flash[index, n]) for n in self._rw_numbers()}
+
+    def load_flash_image(self, index: int, image: dict[int, int]) -> None:
+        """Restore a flash image saved by :meth:`flash_image` (e.g. from a file)."""
+        if self._flash is None:
+            self._flash = np.zeros((self.n, L.N_REGS), dtype=np.int64)
+        self._flash[index] = self._rom[self._type_of[index]]
+        for num, raw in image.items():
+            reg = self.table.lookup(int(num))
+            self._validated_raw(reg, raw / reg.scale, 1)
+            self._flash[index, int(num)] = int(raw)
+        self._has_flash[index] = True
+
+    def load_setup(self, setup: str | os.PathLike[str] | dict[str, Any], index: Any = None
+                   ) -> None:
+        """Write a register set (name → value) to the selected motors, validated as a whole."""
+        cfg = load_setup(setup)
+        idx = _as_index(index, self.n)
+        staged = []
+        for name, value in cfg.registers.items():
+            reg = self._lookup(name)
+            if reg.number == R.MODE_REG:
+                raise RegisterError("a setup must not contain MODE_REG")
+            staged.append((reg, self._validated_raw(reg, value, idx.size)))
+        for reg, raw in staged:
+            self._store(reg, idx, raw)
+
+    # ------------------------------------------------------------------ sample buffer
+    def _ensure_buffer(self) -> None:
+        if self._buf.shape[0] != self.n:
+            self._buf = np.zeros((self.n, c.REC_CNT_MAX, 4), dtype=np.int64)
+
+    def sample_buffer_raw(self, index: int) -> np.ndarray:
+        """Raw samples of one motor, shape (REC_CNT, 4) for SAMPLE1..SAMPLE4."""
+        count = int(self.regs[index, R.REC_CNT])
+        if self._buf.shape[0] != self.n:
+            return np.zeros((0, 4), dtype=np.int64)
+        return self._buf[index, :count].copy()
+
+    def sample_buffer(self) -> dict[str, np.ndarray]:
+        """The sample buffer in user units: {register name: (N, max REC_CNT) array}.
+
+        Channels are named after SAMPLE1..SAMPLE4 of motor 0 (a channel whose register differs
+        between motors is named ``SAMPLEk``); entries past a motor's REC_CNT are 0.
+        """
+        count = int(self.regs[:, R.REC_CNT].max()) if self._buf.shape[0] == self.n else 0
+        out: dict[str, np.ndarray] = {}
+        for ch, num in enumerate((R.SAMPLE1, R.SAMPLE2, R.SAMPLE3, R.SAMPLE4)):
+            nums = self.regs[:, num]
+            reg = self.table.lookup(int(nums[0])) if 1 <= nums[0] <= 164 else None
+            name = reg.name if reg is not None and np.all(nums == nums[0]) else f"SAMPLE{ch + 1}"
+            raw = self._buf[:, :count, ch] if count else np.zeros((self.n, 0), dtype=np.int64)
+            mask = np.arange(count)[None, :] < self.regs[:, R.REC_CNT][:, None]
+            raw = np.where(mask, raw, 0)
+            out[name] = from_raw(reg, raw) if reg is not None and name != f"SAMPLE{ch+1}" else raw
+        return out
+
+    # ------------------------------------------------------------------ world inputs
+    def set_input(self, index: Any = None, *, load_torque: Any = None, analog_volts: Any = None,
+                  pulse_counts: Any = None, home: Any = None, supply_volts: Any = None) -> None:
+        """Set world inputs, held from the next outer sample on (per motor).
+
+        Parameters
+        ----------
+        load_torque : float or (N,) array
+            External load torque opposing positive rotation [N·m].
+        analog_volts : float or array
+            Analogue input [V], −10..10 (clipped by the ADC).
+        pulse_counts : int or array
+            Pulse/encoder input counts per outer sample (V_EXT).
+        home : bool or array
+            Home sensor level.
+        supply_volts : float or array
+            Supply source voltage [V].
+        """
+        idx = _as_index(index, self.n)
+        staged = []
+        for name, val, col in (("load_torque", load_torque, L.I_LOAD_TORQUE),
+                               ("analog_volts", analog_volts, L.I_ANALOG_VOLTS),
+                               ("pulse_counts", pulse_counts, L.I_PULSE_COUNTS),
+                               ("home", home, L.I_HOME),
+                               ("supply_volts", supply_volts, L.I_SUPPLY_VOLTS)):
+            if val is None:
+                continue
+            arr = np.asarray(val, dtype=np.float64)
+            if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != idx.size):
+                raise ValueError(f"{name}: expected a scalar or shape ({idx.size},), "
+                                 f"got {arr.shape}")
+            if not np.all(np.isfinite(arr)):
+                raise ValueError(f"{name}: values must be finite, got {val!r}")
+            if name == "pulse_counts" and np.any(arr != np.round(arr)):
+                raise ValueError("pulse_counts must be whole counts per outer sample")
+            if name == "supply_volts" and np.any((arr < 0) | (arr > 60)):
+                raise ValueError("supply_volts must be within 0..60 V")
+            staged.append((col, np.broadcast_to(arr, (idx.size,))))
+        for col, arr in staged:
+            self.inputs[idx, col] = arr
+
+    # ------------------------------------------------------------------ physical truth
+    @property
+    def speed_rpm(self) -> np.ndarray:
+        """Shaft speed [rpm], (N,)."""
+        return self.state[:, L.S_OMEGA] * 60.0 / (2.0 * math.pi)
+
+    @property
+    def speed_rad_s(self) -> np.ndarray:
+        """Shaft speed [rad/s], (N,)."""
+        return self.state[:, L.S_OMEGA].copy()
+
+    @property
+    def position_rad(self) -> np.ndarray:
+        """Shaft angle [rad] relative to the world zero, (N,)."""
+        return self.state[:, L.S_THETA].copy()
+
+    @property
+    def phase_currents(self) -> np.ndarray:
+        """Phase currents ia, ib, ic [A], (N, 3)."""
+        s = self.state[:, L.S_I_RE] + 1j * self.state[:, L.S_I_IM]
+        k = np.exp(1j * 2.0 * np.pi / 3.0 * np.arange(3))
+        return np.real(s[:, None] * k[None, :])
+
+    @property
+    def bus_voltage(self) -> np.ndarray:
+        """DC bus voltage [V], (N,)."""
+        return self.state[:, L.S_UBUS].copy()
+
+    @property
+    def torque(self) -> np.ndarray:
+        """Electromagnetic torque at the current instant [N·m], (N,)."""
+        s = self.state[:, L.S_I_RE] + 1j * self.state[:, L.S_I_IM]
+        th = self.params[:, L.P_POLE_PAIRS] * self.state[:, L.S_THETA] + self.params[:,
+                                                                                    L.P_THETA_E0]
+        return 1.5 * self.params[:, L.P_POLE_PAIRS] * self.params[:, L.P_LAMBDA] * np.real(
+            s * np.exp(-1j * th))
+
+    @property
+    def energy(self) -> dict[str, np.ndarray]:
+        """Energy accounts since power-on [J], (N,) each, and the kinetic energy now."""
+        s = self.state
+        j = self.params[:, L.P_J_MOTOR] + self.params[:, L.P_J_LOAD]
+        return {
+            "electrical": s[:, L.S_E_ELEC].copy(),
+            "copper": s[:, L.S_E_COPPER].copy(),
+            "friction": s[:, L.S_E_FRICTION].copy(),
+            "load": s[:, L.S_E_LOAD].copy(),
+            "dump": s[:, L.S_E_DUMP].copy(),
+            "supply": s[:, L.S_E_SUPPLY].copy(),
+            "kinetic": 0.5 * j * s[:, L.S_OMEGA] ** 2,
+        }
+
+    def mode_name(self, index: int = 0) -> str:
+        """Name of the current mode of one motor."""
+        return c.MODE_NAMES.get(int(self.regs[index, R.MODE_REG]), "?")
+
+    def __repr__(self) -> str:
+        types = sorted({cfg.name for cfg in self._configs})
+        return f"MotorArray({'/'.join(types)}, n={self.n})"

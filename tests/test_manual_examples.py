@@ -1,0 +1,43 @@
+"""The manual's worked examples (MODEL.md §2 list) as tests."""
+
+from __future__ import annotations
+
+import pytest
+
+from jvl_gym import constants as c
+from jvl_gym.registers import MAC050_141, RegisterRangeError
+from jvl_gym.registers.formats import from_raw, to_raw
+
+
+def test_v_soll_1600_is_762_9_rpm():  # manual 3.2.5
+    assert c.v_soll_to_rpm(1600) == pytest.approx(762.9, abs=0.05)
+
+
+def test_a_soll_160_is_39731_rpm_per_s():  # manual 3.2.6 (the manual rounds 520.8 Hz)
+    assert c.a_soll_to_rpm_per_s(160) == pytest.approx(39731, rel=2e-4)
+
+
+def test_v_ist_100_is_762_9_rpm():  # manual 3.2.12
+    assert c.v_ist_to_rpm(100) == pytest.approx(762.9, abs=0.05)
+    assert c.v_ist_to_rpm(1) == pytest.approx(7.629, abs=1e-3)  # the register's unit
+
+
+def test_kvout_example_3_9():  # manual 3.2.13
+    kvout = (17.3e-6 + 50e-6) / 17.3e-6
+    reg = MAC050_141.lookup("KVOUT")
+    stored = float(from_raw(reg, to_raw(reg, kvout)))
+    assert stored == pytest.approx(3.9, abs=0.01)
+    assert abs(stored - kvout) <= 0.5 / 256
+
+
+def test_670_relative_moves_before_p_soll_leaves_range():  # manual 4.1.2
+    reg = MAC050_141.lookup("P_SOLL")
+    to_raw(reg, 670 * 100000)  # still inside ±67E6
+    with pytest.raises(RegisterRangeError):
+        to_raw(reg, 671 * 100000)
+    # P_FNC after 670 such moves: 670·1600000 = 1.072E9, inside the LongInt range
+    assert 670 * 100000 * 16 < 2**31 - 1
+
+
+def test_stop_speed_is_300_rpm():  # manual 4.1.8
+    assert c.v_ist_to_rpm(c.STOP_SPEED_COUNTS) == pytest.approx(300.0)

@@ -1,0 +1,148 @@
+"""Register access of MotorArray: validation, no change on error, modes rules, buffer, flash."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from jvl_gym import ModeError, MotorArray
+from jvl_gym import constants as c
+from jvl_gym.registers import (
+    ReadOnlyRegisterError,
+    RegisterError,
+    RegisterRangeError,
+    UnknownRegisterError,
+)
+
+
+@pytest.fixture()
+def m():
+    return MotorArray("MAC140", n=3, seed=0)
+
+
+def test_read_by_name_and_number_agree(m):
+    np.testing.assert_array_equal(m.read("V_IST"), m.read(12))
+    assert m.read("KVOUT").dtype == np.float64
+    assert m.read("KVOUT")[0] == 1.0
+
+
+@pytest.mark.parametrize(
+    ("key", "value", "exc", "needle"),
+    [
+        ("NO_SUCH_REG", 1, UnknownRegisterError, "NO_SUCH_REG"),
+        (999, 1, UnknownRegisterError, "999"),
+        ("V_IST", 5, ReadOnlyRegisterError, "3.2.12"),
+        ("T_SOLL", 2000, RegisterRangeError, "T_SOLL"),
+        ("T_SOLL", float("nan"), RegisterRangeError, "T_SOLL"),
+        ("KVOUT", 200.0, RegisterRangeError, "3.2.13"),
+        ("V_SOLL", [1, 2], RegisterError, "shape"),
+    ],
+)
+def test_bad_writes_raise_and_change_nothing(m, key, value, exc, needle):
+    before = m.regs.copy()
+    with pytest.raises(exc) as info:
+        m.write(key, value)
+    assert needle in str(info.value)
+    np.testing.assert_array_equal(m.regs, before)
+
+
+def test_write_subset_and_vector(m):
+    m.write("V_SOLL", [100, 200], index=[0, 2])
+    np.testing.assert_array_equal(m.read("V_SOLL"), [100, 0, 200])
+    m.write("KVOUT", 3.9, index=np.array([False, True, False]))
+    assert m.read("KVOUT")[1] == pytest.approx(3.8984375)
+
+
+def test_longint_high_word_write(m):
+    m.write("P_SOLL", -1)
+    assert m.read("P_SOLL")[0] == -1
+    m.write(4, 0x0001)  # P_SOLL high word
+    assert m.read("P_SOLL")[0] == 0x1FFFF
+
+
+def test_unimplemented_and_forbidden_modes_raise_and_change_nothing(m):
+    for bad in (3, 5, 12, 19, 24, 10, 15, 256, 25, 300):
+        before = m.regs.copy()
+        with pytest.raises(ModeError if bad <= 258 else RegisterRangeError):
+            m.write("MODE_REG", bad)
+        np.testing.assert_array_equal(m.regs, before)
+
+
+def test_v_mode_to_init_goes_through_stop(m):
+    m.write("V_SOLL", 3000)
+    m.write("MODE_REG", 1)
+    m.run(0.2)
+    m.write("MODE_REG", 0)
+    assert m.mode_name() == "STOP_MODE"
+    m.run(0.5)
+    assert m.mode_name() == "INIT_MODE"
+
+
+def test_error_bits_must_be_cleared_before_leaving_init(m):
+    m.regs[:, 35] |= c.FLW_ERR
+    with pytest.raises(ModeError, match="error bit"):
+        m.write("MODE_REG", 1)
+    m.write("ERR_STAT", 0)
+    m.write("MODE_REG", 1)
+    assert m.mode_name() == "V_MODE"
+
+
+def test_at_mode_only_leaves_to_init():
+    m = MotorArray("MAC140", n=3, seed=0, viscous_friction=2e-5)  # friction slows the coasting rotor
+    m.write("T_SOLL", 200)
+    m.set_input(analog_volts=3.0)
+    m.write("MODE_REG", 4)
+    m.run(0.05)
+    m.write("MODE_REG", 1)  # accepted, but AT goes to INIT (4.4.5)
+    m.run(1.0)
+    assert m.mode_name() == "INIT_MODE"
+
+
+def test_test_modes_need_init(m):
+    m.write("MODE_REG", 1)
+    with pytest.raises(ModeError, match="INIT"):
+        m.write("MODE_REG", 8)
+
+
+def test_sample_buffer_records_until_full(m):
+    m.write("SAMPLE1", 12)
+    m.write("CNTRL_BITS", c.RECORDBIT | c.AUTO_RESYNC)
+    m.step(900)
+    assert int(m.read("REC_CNT")[0]) == c.REC_CNT_MAX
+    assert not int(m.read("CNTRL_BITS")[0]) & c.RECORDBIT
+    assert m.sample_buffer()["V_IST"].shape == (3, c.REC_CNT_MAX)
+    m.write("CNTRL_BITS", c.REWINDBIT)
+    m.step()
+    assert int(m.read("REC_CNT")[0]) == 0
+
+
+def test_safe_mode_flash_and_defaults(m):
+    with pytest.raises(ModeError):
+        m.write_flash()
+    m.write("KVOUT", 4.0)
+    m.go_safe_mode()
+    assert m.mode_name() == "SAFE_MODE"
+    with pytest.raises(ModeError):
+        m.write("MODE_REG", 1)
+    m.write_flash()
+    assert m.read("KVOUT")[0] == 4.0  # reloaded from flash after the reset
+    m.go_safe_mode()
+    m.write("MODE_REG", 257)  # ROM defaults, not saved
+    assert m.read("KVOUT")[0] == 1.0
+    m.write("MODE_REG", 258)  # last saved user parameters
+    assert m.read("KVOUT")[0] == 4.0
+    m.exit_safe_mode()
+    assert m.mode_name() == "INIT_MODE"
+
+
+def test_bad_parameters_and_inputs_raise(m):
+    with pytest.raises(TypeError):
+        MotorArray("MAC140", n=1, bogus=1.0)
+    with pytest.raises(ValueError):
+        MotorArray("MAC140", n=2, load_inertia=[1e-5, -1e-5])
+    with pytest.raises(ValueError):
+        m.set_input(load_torque=float("nan"))
+    with pytest.raises(ValueError):
+        m.set_input(pulse_counts=1.5)
+    with pytest.raises(ValueError):
+        m.step(-1)
