@@ -19,17 +19,35 @@ equal to N one-motor arrays.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit, prange
 
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R
+from .firmware.analog_blocks import (
+    a2pos_update,
+    apos_update,
+    av_target,
+    avz_target,
+    vat_torque_limit,
+)
 from .firmware.blocks import position_block, stop_block, velocity_block
+from .firmware.coil import coil_block
 from .firmware.current_loop import commutate, passive, regulate, set_references
 from .firmware.fixed import clamp, rnd, sat16, wrap32
-from .firmware.modes import CORRECTING, FLWERR_MODES, REGULATED, enter_mode
-from .firmware.monitor import check_errors, in_position, thermal
+from .firmware.gear_blocks import (
+    analog_gear_factor,
+    avg_target,
+    gear_factor,
+    gear_follow_block,
+    gear_position_block,
+)
+from .firmware.homing import home_block, home_check
+from .firmware.modes import CORRECTING, FLWERR_MODES, REGULATED, enter_mode, stop_to
+from .firmware.monitor import check_errors, in_position, thermal, undervoltage
 from .firmware.noise import gauss
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
@@ -40,6 +58,58 @@ from .plant.supply import bus_step
 
 _H = c.INNER_DT
 _ANINP_PER_VOLT = c.ANINP_FULL / c.ANINP_VOLTS
+_TESTTQ_HALF = c.REC_CNT_MAX // 2  #: TESTTQ: samples at +V_SOLL, then the same at −V_SOLL
+
+
+@njit(cache=True, inline="always")
+def _analog_volts(s: np.ndarray, p: np.ndarray, u: np.ndarray) -> float:
+    """Analogue input voltage; a configured home sensor is wired to it (4.4.14: 10 V / 0 V)."""
+    home = u[L.I_HOME]
+    if home < 0.0 and math.isfinite(p[L.P_HOME_POS]):
+        home = 1.0 if s[L.S_THETA] >= p[L.P_HOME_POS] else 0.0
+    if home >= 0.0:
+        return c.ANINP_VOLTS if home > 0.5 else 0.0
+    return u[L.I_ANALOG_VOLTS]
+
+
+@njit(cache=True)
+def _profile(r: np.ndarray, s: np.ndarray, mode: int) -> tuple[float, float]:
+    """Function block of a regulated mode (manual 4.1, 4.4): (FNC_OUT, torque limit)."""
+    t_lim = float(r[R.T_SOLL])
+    a = float(r[R.A_SOLL])
+    if mode == c.V_MODE:
+        f = velocity_block(r, s, float(r[R.V_SOLL]), a)
+    elif mode == c.P_MODE or mode == c.A2POS_MODE or mode == c.APOS_MODE:
+        if mode == c.A2POS_MODE:
+            a2pos_update(r, s, False)
+        elif mode == c.APOS_MODE:
+            apos_update(r)
+        f = position_block(r, s, 16.0 * r[R.P_SOLL] - r[R.P_FNC], float(r[R.V_SOLL]), a)
+    elif mode == c.STOP_MODE:
+        f = stop_block(r, s)
+    elif mode == c.GP_MODE:
+        f = gear_position_block(r, s, gear_factor(r))
+    elif mode == c.AG_MODE:
+        f = gear_position_block(r, s, gear_factor(r) * analog_gear_factor(r))
+    elif mode == c.GF_MODE:
+        f = gear_follow_block(r, s, gear_factor(r))
+    elif mode == c.AVG_MODE:
+        f = velocity_block(r, s, avg_target(r), a)
+    elif mode == c.AV_MODE:
+        f = velocity_block(r, s, av_target(r), a)
+    elif mode == c.AVZ_MODE:
+        f = velocity_block(r, s, avz_target(r), a)
+    elif mode == c.VAT_MODE:
+        f = velocity_block(r, s, float(r[R.V_SOLL]), a)
+        t_lim = vat_torque_limit(r)
+    elif mode == c.COIL_MODE:
+        f = coil_block(r, s)
+    elif mode == c.TESTTQ_MODE:
+        sign = 1.0 if s[L.S_TEST_CNT] < _TESTTQ_HALF else -1.0
+        f = velocity_block(r, s, sign * r[R.V_SOLL], a)
+    else:  # HOME1..3
+        f, t_lim = home_block(r, s, mode)
+    return f, t_lim
 
 
 @njit(cache=True)
@@ -60,7 +130,7 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
     v = sat16(v)
     r[R.V_IST] = int(v)
     r[R.P_IST] = wrap32(r[R.P_IST] + int(v))
-    r[R.ANINP] = int(clamp(rnd(u[L.I_ANALOG_VOLTS] * _ANINP_PER_VOLT) + r[R.ANINP_OFFSET],
+    r[R.ANINP] = int(clamp(rnd(_analog_volts(s, p, u) * _ANINP_PER_VOLT) + r[R.ANINP_OFFSET],
                            -1023.0, 1023.0))
     r[R.V_EXT] = int(sat16(u[L.I_PULSE_COUNTS]))
     r[R.U_SUPPLY] = int(clamp(rnd(s[L.S_UBUS] / c.U_SUPPLY_VOLTS_PER_UNIT), 0.0, 65535.0))
@@ -86,20 +156,16 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
         r[R.P_FNC] = wrap32(16 * r[R.P_IST])
 
     if mode < 25 and REGULATED[mode]:
-        t_soll = float(r[R.T_SOLL])
-        if mode == c.V_MODE:
-            f = velocity_block(r, s, float(r[R.V_SOLL]), float(r[R.A_SOLL]))
-        elif mode == c.P_MODE:
-            dp = 16.0 * r[R.P_SOLL] - r[R.P_FNC]
-            f = position_block(r, s, dp, float(r[R.V_SOLL]), float(r[R.A_SOLL]))
-        else:  # STOP_MODE
-            f = stop_block(r, s)
-        f, corr = speed_regulator(r, s, f, CORRECTING[mode], t_soll)
+        f, t_lim = _profile(r, s, mode)
+        f, corr = speed_regulator(r, s, f, CORRECTING[mode], t_lim)
         if corr != 0.0:
             s[L.S_V_OLD] = f
             r[R.P_FNC] = wrap32(r[R.P_FNC] + int(corr))
             s[L.S_G_FNC] += corr
             r[R.FNCERR] = int(clamp(r[R.FNCERR] + corr, -134217727.0, 134217727.0))
+        if mode == c.GP_MODE or mode == c.GF_MODE or mode == c.AG_MODE or mode == c.COIL_MODE:
+            # gear modes: FNCERR is the positioning error (3.2.24 "GP, GF_MODE")
+            r[R.FNCERR] = int(clamp(rnd(s[L.S_G_FNC]), -134217727.0, 134217727.0))
         if FLWERR_MODES[mode]:
             s[L.S_FLW16] += f - 16.0 * v
             r[R.FLWERR] = int(clamp(rnd(s[L.S_FLW16] / 16.0), -67000000.0, 67000000.0))
@@ -108,6 +174,16 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
             r[R.FLWERR] = 0
         if mode == c.STOP_MODE and abs(v) < c.STOP_SPEED_COUNTS:
             _finish_pending(r, s)
+        elif c.HOME1_MODE <= mode <= c.HOME3_MODE and home_check(r, s, mode):
+            start = int(r[R.STARTMODE])
+            if 0 < start < 25 and REGULATED[start] and not c.HOME1_MODE <= start <= c.HOME3_MODE:
+                enter_mode(r, s, start)
+            else:
+                stop_to(r, s, c.INIT_MODE, False)
+        elif mode == c.TESTTQ_MODE:
+            s[L.S_TEST_CNT] += 1.0
+            if s[L.S_TEST_CNT] >= 2 * _TESTTQ_HALF:
+                stop_to(r, s, c.INIT_MODE, False)
     elif mode == c.AT_MODE:  # torque function block, 4.1.4 / 4.4.5
         if s[L.S_AT_EXIT] > 0.5:
             r[R.VF_OUT] = 0
@@ -133,6 +209,7 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
             r[R.FNCERR] = 0
 
     thermal(r, s, p)
+    undervoltage(r, s)
     check_errors(r, s)
     in_position(r, s, int(r[R.MODE_REG]))
 
@@ -197,6 +274,9 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     elif mode == c.TESTU_MODE:  # 4.4.9: UA = UMEAS, UC = −UMEAS
         um = float(r[R.UMEAS])
         passive(r, s, um, 0.0, -um)
+    elif mode == c.TESTKI_MODE:  # documented measurement: UA = UMEAS, UB = −UMEAS
+        um = float(r[R.UMEAS])
+        passive(r, s, um, -um, 0.0)
     else:
         if mode == c.MANI_MODE:  # 3.2.128: stator field set by hand
             set_references(r, float(r[R.MAN_I_NOM]), int(r[R.MAN_ALPHA]))
@@ -205,7 +285,7 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
         regulate(r, s)
 
     cb = r[R.CNTRL_BITS]
-    if mode == c.TESTU_MODE:
+    if mode == c.TESTU_MODE or mode == c.TESTKI_MODE:
         if rec and (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
             record(r, buf, fmt)
         s[L.S_TEST_CNT] += 1.0
@@ -264,28 +344,36 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
 
 
 @njit(cache=True)
-def _advance(r, s, p, u, key, buf, rec, fmt, n_outer):
-    for _ in range(n_outer):
+def _advance(r, s, p, u, key, buf, rec, fmt, n_outer, input_plan, i):
+    for t in range(n_outer):
+        if input_plan.shape[0] > 0:
+            u[:] = input_plan[t, i]
         outer_firmware(r, s, p, u, key, buf, rec, fmt)
         for _k in range(c.INNER_PER_OUTER):
             inner_sample(r, s, p, u, key, buf, rec, fmt)
 
 
 @njit(cache=True)
-def run_serial(regs, state, params, inputs, keys, buf, fmt, n_outer):
-    """Advance every motor by ``n_outer`` outer samples in one thread."""
+def run_serial(regs, state, params, inputs, keys, buf, fmt, n_outer, input_plan):
+    """Advance every motor by ``n_outer`` outer samples in one thread.
+
+    ``input_plan`` is either empty (shape (0, N, N_INPUT): inputs held) or holds the inputs of every
+    outer sample, shape (n_outer, N, N_INPUT) (world generators).
+    """
     n = regs.shape[0]
     rec = buf.shape[0] == n
     for i in range(n):
         b = buf[i] if rec else buf[0]
-        _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer)
+        _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer, input_plan,
+                 i)
 
 
 @njit(cache=True, parallel=True)
-def run_parallel(regs, state, params, inputs, keys, buf, fmt, n_outer):
+def run_parallel(regs, state, params, inputs, keys, buf, fmt, n_outer, input_plan):
     """Advance every motor by ``n_outer`` outer samples, motors spread over threads."""
     n = regs.shape[0]
     rec = buf.shape[0] == n
     for i in prange(n):
         b = buf[i] if rec else buf[0]
-        _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer)
+        _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer, input_plan,
+                 i)

@@ -20,6 +20,7 @@ from . import layout as L
 from .config import MotorConfig, load_motor, load_setup
 from .firmware import modes as M
 from .firmware import regs as R
+from .firmware import write_rules as W
 from .firmware.noise import motor_keys
 from .kernel import run_parallel, run_serial
 from .plant.encoder import eldeg, encoder_count
@@ -143,6 +144,10 @@ class MotorArray:
         self.params = np.zeros((self.n, L.N_PARAM), dtype=np.float64)
         self.inputs = np.zeros((self.n, L.N_INPUT), dtype=np.float64)
         self._buf = np.zeros((1, c.REC_CNT_MAX, 4), dtype=np.int64)
+        self._no_schedule = np.zeros((0, self.n, L.N_INPUT), dtype=np.float64)
+        self._latched_cntrl = np.zeros(self.n, dtype=np.int64)
+        #: world signal sources (``jvl_gym.world.World``) sampled every outer sample, or None
+        self.world = None
         self._flash: np.ndarray | None = None
         self._has_flash = np.zeros(self.n, dtype=np.bool_)
         self._fmt = self.table.fmt_code_array
@@ -274,12 +279,20 @@ class MotorArray:
             self.regs[i, R.ELDEG_IST] = el
         s[idx, L.S_PENDING_MODE] = -1.0
         self.regs[idx, R.U_SUPPLY] = np.round(s[idx, L.S_UBUS] / c.U_SUPPLY_VOLTS_PER_UNIT)
-        start = self.regs[idx, R.STARTMODE]
+        self._latched_cntrl[idx] = self.regs[idx, R.CNTRL_BITS]
+        home = self.regs[idx, R.HOME_MODE] & 0xFF
+        start = np.where(np.isin(home, (12, 13, 14)), home, self.regs[idx, R.STARTMODE])
         go = idx[(start > 0) & (start < 25)]
         if go.size:
-            req = self.regs[go, R.STARTMODE]
+            req = start[(start > 0) & (start < 25)]
             ok = M.check_requests(self.regs, self.state, go, req) == M.OK
             M.apply_requests(self.regs, self.state, go[ok], req[ok])
+
+    @property
+    def interface_bits(self) -> np.ndarray:
+        """CNTRL_BITS latched at the last power-on (PULSEDIR, INPSIGN, HICLK, USERINTF act
+        only after a reset, manual 3.2.36), (N,)."""
+        return self._latched_cntrl.copy()
 
     # ------------------------------------------------------------------ stepping
     def step(self, n_outer: int = 1) -> None:
@@ -289,8 +302,9 @@ class MotorArray:
         if n_outer == 0:
             return
         run = run_parallel if self.n >= _PARALLEL_MIN_MOTORS else run_serial
+        plan = self._no_schedule if self.world is None else self.world.schedule(self, n_outer)
         run(self.regs, self.state, self.params, self.inputs, self.keys, self._buf, self._fmt,
-            int(n_outer))
+            int(n_outer), plan)
 
     def run(self, seconds: float) -> None:
         """Advance by ``seconds`` (rounded to whole outer samples of 1.92 ms)."""
@@ -362,6 +376,13 @@ class MotorArray:
         if num == R.MODE_REG:
             self._request_modes(idx, raw)
             return
+        problem = W.check_write(self.regs, idx, num, raw)
+        if problem is not None:
+            raise RegisterError(f"{reg.name} (register {reg.number}) = {raw.tolist()[:4]} "
+                                f"refused: {problem}. Nothing was changed.")
+        if num in W.POINTERS:
+            W.apply_pointer(self.regs, idx, num, raw)
+            return
         if reg.format == Format.LONGINT_HIGH:
             low = self.regs[idx, num - 1] & 0xFFFF
             full = (raw.astype(np.int64) << 16) | low
@@ -381,6 +402,9 @@ class MotorArray:
             raise ModeError(
                 f"MODE_REG = {int(req[k])} ({name}) refused for motor {int(idx[k])} in {cur}: "
                 f"{M.REQUEST_MESSAGES[int(codes[k])]}. Nothing was changed.")
+        problem = W.check_mode_request(self.regs, idx, req)
+        if problem is not None:
+            raise ModeError(f"MODE_REG write refused: {problem}. Nothing was changed.")
         special = req >= 256
         if np.any(special):
             self._safe_special(idx[special], req[special])

@@ -23,6 +23,9 @@ from numba import njit
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
+from .analog_blocks import a2pos_update
+from .coil import coil_entry
+from .homing import home_entry
 
 N_MODES = 25
 
@@ -33,14 +36,15 @@ def _table(modes: set[int]) -> np.ndarray:
     return t
 
 
-REGULATED = _table({1, 2, 3, 5, 6, 11, 12, 13, 14, 16, 17, 18, 19, 20, 21, 24})
+REGULATED = _table({1, 2, 3, 5, 6, 11, 12, 13, 14, 16, 17, 18, 19, 20, 21, 23, 24})
 CORRECTING = _table({2, 3, 18, 19, 20, 21, 24})
 FLWERR_MODES = _table({1, 2, 3, 5, 6, 12, 13, 14, 16, 17, 18, 19, 20, 21, 24})
 POSITION_INPOS = _table({2, 20, 21})  #: IN_POS = |P_SOLL − P_FNC/16 + FLWERR| < INPOSWIN
-GEAR_INPOS = _table({3, 24})  #: IN_POS = |P_FNC| < INPOSWIN (4.4.4, 4.4.25)
+GEAR_INPOS = _table({3, 18, 24})  #: IN_POS = |G_FNC|/16 < INPOSWIN (4.4.4, 4.4.25)
 VELOCITY_INPOS = _table({1})  #: IN_POS per INPOSCNT rules of 4.1.1
-IMPLEMENTED = _table({0, 1, 2, 4, 7, 8, 9, 10, 11, 15})
-PASSIVE = _table({0, 15, 8})  #: current regulator passive (equal / test voltages)
+IMPLEMENTED = _table(set(range(25)))
+PASSIVE = _table({0, 15, 8, 22})  #: current regulator passive (equal / test voltages)
+GEAR_MODES = _table({3, 6, 18, 19, 24})  #: modes that divide by GEARF2
 
 # request outcome codes (mode_request); 0 = accepted
 OK = 0
@@ -54,8 +58,7 @@ E_INVALID = 7
 E_SPECIAL_OUTSIDE_SAFE = 8
 
 REQUEST_MESSAGES = {
-    E_NOT_IMPLEMENTED: "is not implemented yet (modes 3, 5, 6, 12–14, 16–24 arrive with the "
-    "'every operating mode' issue)",
+    E_NOT_IMPLEMENTED: "is not implemented",
     E_ERROR_BITS: "cannot leave INIT_MODE while an error bit (ERR_STAT bits 0–3: I2T_ERR, FLW_ERR, "
     "FNC_ERR, UIT_ERR) is set; clear it by writing ERR_STAT first (manual 4.4.1)",
     E_BREAK: "BREAK_MODE (10) is entered automatically after TESTA_MODE (manual 4.4.11)",
@@ -128,6 +131,27 @@ def enter_mode(r: np.ndarray, s: np.ndarray, new: int) -> None:
     elif new == c.BREAK_MODE:
         d = s[L.S_OMEGA]
         s[L.S_BREAK_DIR] = 1.0 if d > 0.0 else (-1.0 if d < 0.0 else 0.0)
+    elif new == c.TESTKI_MODE:  # documented measurement: phase currents of a UA/UB step
+        r[R.SAMPLE1] = R.IA_IST
+        r[R.SAMPLE2] = R.IB_IST
+        r[R.SAMPLE3] = R.IC_IST
+        r[R.REC_CNT] = 0
+        r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] | c.RECINNERBIT | c.RECORDBIT) & ~c.REWINDBIT
+        s[L.S_TEST_CNT] = 0.0
+    elif new == c.TESTTQ_MODE:  # documented measurement: torque at +V_SOLL then -V_SOLL
+        r[R.SAMPLE1] = R.VF_OUT
+        r[R.SAMPLE2] = R.V_IST
+        r[R.REC_CNT] = 0
+        r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] | c.RECORDBIT) & ~(c.RECINNERBIT | c.REWINDBIT)
+        s[L.S_TEST_CNT] = 0.0
+    elif new == c.COIL_MODE:
+        coil_entry(r, s)
+    elif new == c.HOME1_MODE or new == c.HOME2_MODE or new == c.HOME3_MODE:
+        home_entry(r, s)
+    elif new == c.A2POS_MODE:
+        a2pos_update(r, s, True)
+    if new == c.GP_MODE or new == c.GF_MODE or new == c.AG_MODE:
+        s[L.S_G_FNC] = 0.0
 
 
 @njit(cache=True)
@@ -175,7 +199,7 @@ def check_request(r: np.ndarray, s: np.ndarray, req: int) -> int:
         return E_ERROR_BITS
     if mode == c.INIT_MODE:
         return OK
-    if REGULATED[mode] and REGULATED[req]:
+    if REGULATED[mode] and REGULATED[req] and req != c.TESTTQ_MODE and mode != c.TESTTQ_MODE:
         return OK
     return E_NEEDS_INIT
 

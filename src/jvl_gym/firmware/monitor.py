@@ -71,7 +71,8 @@ def in_position(r: np.ndarray, s: np.ndarray, mode: int) -> None:
     """IN_POS bit of ERR_STAT for the mode (4.1.1, 4.4.3, 4.4.4, 3.2.33, 3.2.34).
 
     Position modes: ``|P_SOLL − P_FNC/16 + FLWERR| < INPOSWIN`` for INPOSCNT consecutive samples.
-    Gear modes: ``|P_FNC| < INPOSWIN``. Velocity mode: with INPOSCNT = 0, ``|V_IST| < INPOSWIN``
+    Gear modes: ``|G_FNC|/16 < INPOSWIN`` (4.4.4 writes |P_FNC|, the absolute function position,
+    which cannot be meant: the follow error G_FNC is; docs/model.md). Velocity mode: with INPOSCNT = 0, ``|V_IST| < INPOSWIN``
     (standstill); with INPOSCNT > 0, ``|V_SOLL − 16·V_IST| < INPOSWIN`` for INPOSCNT samples
     (the 4.1.1 formula; 4.4.2 states it with FLWERR, docs/model.md). Other modes: 0.
     """
@@ -81,8 +82,8 @@ def in_position(r: np.ndarray, s: np.ndarray, mode: int) -> None:
     counted = True
     if mode < 25 and POSITION_INPOS[mode]:
         inside = abs(r[R.P_SOLL] - r[R.P_FNC] / 16.0 + r[R.FLWERR]) < win
-    elif mode < 25 and GEAR_INPOS[mode]:
-        inside = abs(float(r[R.P_FNC])) < win
+    elif mode < 25 and GEAR_INPOS[mode]:  # "|P_FNC|" read as the gear follow error G_FNC
+        inside = abs(s[L.S_G_FNC]) / 16.0 < win
     elif mode < 25 and VELOCITY_INPOS[mode]:
         if cnt == 0.0:
             inside = abs(float(r[R.V_IST])) < win
@@ -98,3 +99,44 @@ def in_position(r: np.ndarray, s: np.ndarray, mode: int) -> None:
         r[R.ERR_STAT] |= c.IN_POS
     else:
         r[R.ERR_STAT] &= ~c.IN_POS
+
+
+_UV_TIMER_SAMPLES = round(1.0 * c.OUTER_HZ)  #: 1 s undervoltage timer (4.5.6)
+
+
+@njit(cache=True)
+def undervoltage(r: np.ndarray, s: np.ndarray) -> None:
+    """Undervoltage detection (4.5.6, UV_HANDLE 3.2.160).
+
+    Outside INIT: U_SUPPLY < U_MIN_SUP presets the 1 s timer, sets UV_DETECT, sets UV_ERR if
+    SET_UV_ERR, stops the profile (V_SOLL = 0) if UV_SOLL0 and goes passive if UV_GO_PASSIVE
+    (the manual's pseudo-code writes "IF UV_VSOLL0 = 0", an evident typo for "is set"). Above
+    1.25·U_MIN_SUP with the timer run out, UV_DETECT clears. In INIT the 1.25·U_MIN_SUP threshold
+    is used for detection. U_MIN_SUP = 0 disables the function.
+    """
+    umin = float(r[R.U_MIN_SUP])
+    if umin <= 0.0:
+        return
+    if s[L.S_UV_TIMER] > 0.0:
+        s[L.S_UV_TIMER] -= 1.0
+    u = float(r[R.U_SUPPLY])
+    mode = int(r[R.MODE_REG])
+    if mode == c.INIT_MODE or mode == c.SAFE_MODE:
+        if u < 1.25 * umin:
+            s[L.S_UV_TIMER] = _UV_TIMER_SAMPLES
+            r[R.ERR_STAT] |= c.UV_DETECT
+        elif s[L.S_UV_TIMER] <= 0.0:
+            r[R.ERR_STAT] &= ~c.UV_DETECT
+        return
+    if u < umin:
+        s[L.S_UV_TIMER] = _UV_TIMER_SAMPLES
+        r[R.ERR_STAT] |= c.UV_DETECT
+        h = r[R.UV_HANDLE]
+        if h & c.SET_UV_ERR:
+            r[R.ERR_STAT] |= c.UV_ERR
+        if h & c.UV_SOLL0:
+            r[R.V_SOLL] = 0
+        if h & c.UV_GO_PASSIVE:
+            stop_to(r, s, c.INIT_MODE, True)
+    elif u > 1.25 * umin and s[L.S_UV_TIMER] <= 0.0:
+        r[R.ERR_STAT] &= ~c.UV_DETECT

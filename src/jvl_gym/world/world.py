@@ -1,0 +1,49 @@
+"""World: the open-loop signal sources of a MotorArray, sampled once per outer sample."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .. import constants as c
+from .. import layout as L
+from .analog import AnalogInput
+from .pulse import PulseInput
+from .supply import SupplyEvents
+
+if TYPE_CHECKING:
+    from ..sim import MotorArray
+
+
+class World:
+    """Sources driving the inputs of a :class:`~jvl_gym.MotorArray`.
+
+    Attach with ``m.world = World(pulse=..., analog=..., supply=...)``; each ``m.step(n)`` then
+    asks the world for n samples of every driven input. Inputs without a source keep the value
+    set by ``m.set_input``. ``load_torque`` may be a callable ``f(t) -> (N,)`` [N·m].
+    """
+
+    def __init__(self, pulse: PulseInput | None = None, analog: AnalogInput | None = None,
+                 supply: SupplyEvents | None = None, load_torque=None) -> None:
+        self.pulse = pulse
+        self.analog = analog
+        self.supply = supply
+        self.load_torque = load_torque
+        self.t = 0.0
+
+    def schedule(self, m: MotorArray, n_outer: int) -> np.ndarray:
+        """Inputs for the next ``n_outer`` outer samples, shape (n_outer, N, N_INPUT)."""
+        out = np.repeat(m.inputs[None, :, :], n_outer, axis=0)
+        bits = m.interface_bits
+        for k in range(n_outer):
+            if self.pulse is not None:
+                out[k, :, L.I_PULSE_COUNTS] = self.pulse.advance(bits)
+            if self.analog is not None:
+                out[k, :, L.I_ANALOG_VOLTS] = self.analog.advance()
+            if self.supply is not None:
+                out[k, :, L.I_SUPPLY_VOLTS] = self.supply.advance()
+            if self.load_torque is not None:
+                out[k, :, L.I_LOAD_TORQUE] = self.load_torque(self.t)
+            self.t += c.OUTER_DT
+        return out
