@@ -35,3 +35,4 @@ lint: $(STAMP)
 
 clean:
 	rm -rf $(VENV) demo_out .pytest_cache
+	find src tuning -name "*.nbi" -delete -o -name "*.nbc" -delete  # numba caches

@@ -51,7 +51,8 @@ def test_parallel_kernel_equals_serial_kernel():
     a.step(50)
     from jvl_gym.kernel import run_serial
 
-    run_serial(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, b._fmt, 50, b._no_schedule)
+    run_serial(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, False, b._fmt, 50,
+               b._no_schedule)
     np.testing.assert_array_equal(a.regs, b.regs)
     np.testing.assert_array_equal(a.state, b.state)
 

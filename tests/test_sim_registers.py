@@ -88,7 +88,8 @@ def test_error_bits_must_be_cleared_before_leaving_init(m):
 
 
 def test_at_mode_only_leaves_to_init():
-    m = MotorArray("MAC140", n=3, seed=0, viscous_friction=2e-5)  # friction slows the coasting rotor
+    # friction slows the coasting rotor down to the low speed at which AT_MODE may stop
+    m = MotorArray("MAC140", n=3, seed=0, viscous_friction=2e-5)
     m.write("T_SOLL", 200)
     m.set_input(analog_volts=3.0)
     m.write("MODE_REG", 4)

@@ -91,7 +91,8 @@ class SetupConfig(BaseModel):
     @classmethod
     def _finite(cls, regs: dict[str, float]) -> dict[str, float]:
         for key, val in regs.items():
-            if not isinstance(val, (int, float)) or val != val or val in (float("inf"), -float("inf")):
+            bad = not isinstance(val, (int, float)) or val != val
+            if bad or val in (float("inf"), -float("inf")):
                 raise ValueError(f"register {key!r}: value {val!r} is not a finite number")
         return regs
 

@@ -69,7 +69,8 @@ def run_demo(out: Path) -> str:
     _trace(m, 600, log, "P_MODE")
     err = int(m.read("P_SOLL")[0] - m.read("P_IST")[0])
     lines.append(f"P_MODE 50000-count move: final error {err} counts, IN_POS "
-                 f"{bool(int(m.read('ERR_STAT')[0]) & c.IN_POS)}, FNCERR {int(m.read('FNCERR')[0])}")
+                 f"{bool(int(m.read('ERR_STAT')[0]) & c.IN_POS)}, "
+                 f"FNCERR {int(m.read('FNCERR')[0])}")
 
     # Velocity profile (V_MODE, 4.4.2)
     m.write("A_SOLL", 20)

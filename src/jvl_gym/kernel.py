@@ -52,7 +52,7 @@ from .firmware.noise import gauss
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
 from .plant.coil import coil_step, phase_to_vector, vector_to_phases
-from .plant.encoder import encoder_count, eldeg
+from .plant.encoder import eldeg, encoder_count
 from .plant.mechanics import end_stop_torque, mech_step
 from .plant.supply import bus_step
 
@@ -163,7 +163,7 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
             r[R.P_FNC] = wrap32(r[R.P_FNC] + int(corr))
             s[L.S_G_FNC] += corr
             r[R.FNCERR] = int(clamp(r[R.FNCERR] + corr, -134217727.0, 134217727.0))
-        if mode == c.GP_MODE or mode == c.GF_MODE or mode == c.AG_MODE or mode == c.COIL_MODE:
+        if mode == c.GP_MODE or mode == c.GF_MODE or mode == c.AG_MODE:
             # gear modes: FNCERR is the positioning error (3.2.24 "GP, GF_MODE")
             r[R.FNCERR] = int(clamp(rnd(s[L.S_G_FNC]), -134217727.0, 134217727.0))
         if FLWERR_MODES[mode]:
@@ -215,8 +215,7 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
 
     cb = r[R.CNTRL_BITS]
     if (cb & c.RECORDBIT) and not (cb & c.RECINNERBIT):
-        if rec:
-            record(r, buf, fmt)
+        record(r, buf, fmt, rec)
         if int(r[R.MODE_REG]) == c.TESTA_MODE:
             s[L.S_TEST_CNT] += 1.0
             if s[L.S_TEST_CNT] >= s[L.S_REC_LEN]:
@@ -286,14 +285,14 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
 
     cb = r[R.CNTRL_BITS]
     if mode == c.TESTU_MODE or mode == c.TESTKI_MODE:
-        if rec and (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
-            record(r, buf, fmt)
+        if (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
+            record(r, buf, fmt, rec)
         s[L.S_TEST_CNT] += 1.0
         if s[L.S_TEST_CNT] >= s[L.S_REC_LEN]:
             r[R.CNTRL_BITS] &= ~c.RECORDBIT
             enter_mode(r, s, c.INIT_MODE)
-    elif rec and (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
-        record(r, buf, fmt)
+    elif (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
+        record(r, buf, fmt, rec)
 
     ua = float(r[R.UA_VAL])
     ub = float(r[R.UB_VAL])
@@ -354,14 +353,14 @@ def _advance(r, s, p, u, key, buf, rec, fmt, n_outer, input_plan, i):
 
 
 @njit(cache=True)
-def run_serial(regs, state, params, inputs, keys, buf, fmt, n_outer, input_plan):
+def run_serial(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, input_plan):
     """Advance every motor by ``n_outer`` outer samples in one thread.
 
-    ``input_plan`` is either empty (shape (0, N, N_INPUT): inputs held) or holds the inputs of every
+    ``rec`` says whether ``buf`` is an allocated (N, 895, 4) sample buffer. ``input_plan`` is
+    either empty (shape (0, N, N_INPUT): inputs held) or holds the inputs of every
     outer sample, shape (n_outer, N, N_INPUT) (world generators).
     """
     n = regs.shape[0]
-    rec = buf.shape[0] == n
     for i in range(n):
         b = buf[i] if rec else buf[0]
         _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer, input_plan,
@@ -369,10 +368,9 @@ def run_serial(regs, state, params, inputs, keys, buf, fmt, n_outer, input_plan)
 
 
 @njit(cache=True, parallel=True)
-def run_parallel(regs, state, params, inputs, keys, buf, fmt, n_outer, input_plan):
+def run_parallel(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, input_plan):
     """Advance every motor by ``n_outer`` outer samples, motors spread over threads."""
     n = regs.shape[0]
-    rec = buf.shape[0] == n
     for i in prange(n):
         b = buf[i] if rec else buf[0]
         _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer, input_plan,

@@ -144,6 +144,7 @@ class MotorArray:
         self.params = np.zeros((self.n, L.N_PARAM), dtype=np.float64)
         self.inputs = np.zeros((self.n, L.N_INPUT), dtype=np.float64)
         self._buf = np.zeros((1, c.REC_CNT_MAX, 4), dtype=np.int64)
+        self._buf_allocated = False
         self._no_schedule = np.zeros((0, self.n, L.N_INPUT), dtype=np.float64)
         self._latched_cntrl = np.zeros(self.n, dtype=np.int64)
         #: world signal sources (``jvl_gym.world.World``) sampled every outer sample, or None
@@ -303,8 +304,8 @@ class MotorArray:
             return
         run = run_parallel if self.n >= _PARALLEL_MIN_MOTORS else run_serial
         plan = self._no_schedule if self.world is None else self.world.schedule(self, n_outer)
-        run(self.regs, self.state, self.params, self.inputs, self.keys, self._buf, self._fmt,
-            int(n_outer), plan)
+        run(self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
+            self._buf_allocated, self._fmt, int(n_outer), plan)
 
     def run(self, seconds: float) -> None:
         """Advance by ``seconds`` (rounded to whole outer samples of 1.92 ms)."""
@@ -409,7 +410,8 @@ class MotorArray:
         if np.any(special):
             self._safe_special(idx[special], req[special])
         normal = ~special
-        if np.any(np.isin(req[normal], (c.TESTU_MODE, c.TESTA_MODE))):
+        if np.any(np.isin(req[normal], (c.TESTU_MODE, c.TESTA_MODE, c.TESTKI_MODE,
+                                         c.TESTTQ_MODE))):
             self._ensure_buffer()
         M.apply_requests(self.regs, self.state, idx[normal], req[normal])
 
@@ -520,13 +522,14 @@ class MotorArray:
 
     # ------------------------------------------------------------------ sample buffer
     def _ensure_buffer(self) -> None:
-        if self._buf.shape[0] != self.n:
+        if not self._buf_allocated:
             self._buf = np.zeros((self.n, c.REC_CNT_MAX, 4), dtype=np.int64)
+            self._buf_allocated = True
 
     def sample_buffer_raw(self, index: int) -> np.ndarray:
         """Raw samples of one motor, shape (REC_CNT, 4) for SAMPLE1..SAMPLE4."""
         count = int(self.regs[index, R.REC_CNT])
-        if self._buf.shape[0] != self.n:
+        if not self._buf_allocated:
             return np.zeros((0, 4), dtype=np.int64)
         return self._buf[index, :count].copy()
 
@@ -536,7 +539,7 @@ class MotorArray:
         Channels are named after SAMPLE1..SAMPLE4 of motor 0 (a channel whose register differs
         between motors is named ``SAMPLEk``); entries past a motor's REC_CNT are 0.
         """
-        count = int(self.regs[:, R.REC_CNT].max()) if self._buf.shape[0] == self.n else 0
+        count = int(self.regs[:, R.REC_CNT].max()) if self._buf_allocated else 0
         out: dict[str, np.ndarray] = {}
         for ch, num in enumerate((R.SAMPLE1, R.SAMPLE2, R.SAMPLE3, R.SAMPLE4)):
             nums = self.regs[:, num]

@@ -82,7 +82,8 @@ def a2pos_update(r: np.ndarray, s: np.ndarray, entering: bool) -> None:
 def apos_update(r: np.ndarray) -> None:
     """APOS: ``P_NEW = ANINP·P2/16 + P1`` with a dead band P3 (4.1.11).
 
-    If P_NEW + P3 < P_SOLL then P_SOLL = P_NEW + P3; if P_NEW − P3 > P_SOLL then P_SOLL = P_NEW − P3.
+    If P_NEW + P3 < P_SOLL then P_SOLL = P_NEW + P3;
+    if P_NEW − P3 > P_SOLL then P_SOLL = P_NEW − P3.
     """
     p_new = int(r[R.ANINP] * r[R.P2] / 16.0) + r[R.P1]
     if p_new < r[R.P_SOLL]:

@@ -22,7 +22,7 @@ _AVG_BIAS = c.rpm_to_v_soll(300.0)  #: AVG: ±10 V ↔ ±300 rpm (4.4.7)
 
 @njit(cache=True, inline="always")
 def gear_factor(r: np.ndarray) -> float:
-    """``16·GEARF1/GEARF2`` (0 when GEARF2 = 0; a write that makes it 0 in a gear mode is refused)."""
+    """``16·GEARF1/GEARF2`` (0 when GEARF2 = 0; writes making it 0 in a gear mode are refused)."""
     g2 = float(r[R.GEARF2])
     return 16.0 * r[R.GEARF1] / g2 if g2 != 0.0 else 0.0
 

@@ -10,7 +10,8 @@ The home sensor is wired to the analogue input; its active level is high if T_HO
 otherwise (3.2.41). At the zero: P_IST = P_HOME (rounded to the nearest hall index marker when
 CNTRL_BITS INDEX_HOME is set), P_FNC = 16·P_HOME, P_SOLL = 0, MODE_REG = STARTMODE.
 
-State: S_AUX4 detection counter / phase, S_AUX5 sensor level at the previous sample.
+State: S_AUX4 detection counter / phase, S_AUX5 sensor level at the previous sample (−1 before
+the first sample of the search).
 """
 
 from __future__ import annotations
@@ -39,7 +40,7 @@ def sensor_active(r: np.ndarray) -> bool:
 def home_entry(r: np.ndarray, s: np.ndarray) -> None:
     """Reset the detection counter / search phase."""
     s[L.S_AUX4] = 0.0
-    s[L.S_AUX5] = 1.0 if sensor_active(r) else 0.0
+    s[L.S_AUX5] = -1.0  # sensor level not yet read: the first sample only records it
 
 
 @njit(cache=True)
@@ -56,7 +57,7 @@ def home_block(r: np.ndarray, s: np.ndarray, mode: int) -> tuple[float, float]:
     else:  # HOME3: phase 0 search (away while active, towards while passive), 1 slow away
         if phase < 0.5:
             target = -vh if active else vh
-            if active and s[L.S_AUX5] < 0.5:
+            if active and s[L.S_AUX5] == 0.0:
                 s[L.S_AUX4] = 1.0
                 target = float(int(-vh / 64.0)) + 1.0
         else:
@@ -75,6 +76,8 @@ def home_check(r: np.ndarray, s: np.ndarray, mode: int) -> bool:
     else:
         active = sensor_active(r)
         was = s[L.S_AUX5] > 0.5
+        if s[L.S_AUX5] < 0.0:  # first sample of the search: no edge yet
+            was = active
         if mode == c.HOME2_MODE:
             found = active and not was
         else:

@@ -72,7 +72,8 @@ def in_position(r: np.ndarray, s: np.ndarray, mode: int) -> None:
 
     Position modes: ``|P_SOLL − P_FNC/16 + FLWERR| < INPOSWIN`` for INPOSCNT consecutive samples.
     Gear modes: ``|G_FNC|/16 < INPOSWIN`` (4.4.4 writes |P_FNC|, the absolute function position,
-    which cannot be meant: the follow error G_FNC is; docs/model.md). Velocity mode: with INPOSCNT = 0, ``|V_IST| < INPOSWIN``
+    which cannot be meant: the follow error G_FNC is; docs/model.md).
+    Velocity mode: with INPOSCNT = 0, ``|V_IST| < INPOSWIN``
     (standstill); with INPOSCNT > 0, ``|V_SOLL − 16·V_IST| < INPOSWIN`` for INPOSCNT samples
     (the 4.1.1 formula; 4.4.2 states it with FLWERR, docs/model.md). Other modes: 0.
     """

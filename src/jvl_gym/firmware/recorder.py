@@ -16,7 +16,6 @@ from .. import constants as c
 from . import regs as R
 
 
-
 @njit(cache=True, inline="always")
 def register_value(r: np.ndarray, num: int, fmt: np.ndarray) -> int:
     """Stored value of register ``num`` as the buffer sees it."""
@@ -28,16 +27,21 @@ def register_value(r: np.ndarray, num: int, fmt: np.ndarray) -> int:
 
 
 @njit(cache=True)
-def record(r: np.ndarray, buf: np.ndarray, fmt: np.ndarray) -> None:
-    """Store one sample of SAMPLE1..4 at REC_CNT if recording; stop when full."""
+def record(r: np.ndarray, buf: np.ndarray, fmt: np.ndarray, store: bool) -> None:
+    """Record one sample of SAMPLE1..4 at REC_CNT; stop when full.
+
+    ``store`` is False while the simulator has not allocated the buffer (no recording was ever
+    requested through a write); REC_CNT and RECORDBIT behave the same either way.
+    """
     n = int(r[R.REC_CNT])
-    if n >= c.REC_CNT_MAX or n >= buf.shape[0]:
+    if n >= c.REC_CNT_MAX:
         r[R.CNTRL_BITS] &= ~c.RECORDBIT
         return
-    buf[n, 0] = register_value(r, int(r[R.SAMPLE1]), fmt)
-    buf[n, 1] = register_value(r, int(r[R.SAMPLE2]), fmt)
-    buf[n, 2] = register_value(r, int(r[R.SAMPLE3]), fmt)
-    buf[n, 3] = register_value(r, int(r[R.SAMPLE4]), fmt)
+    if store:
+        buf[n, 0] = register_value(r, int(r[R.SAMPLE1]), fmt)
+        buf[n, 1] = register_value(r, int(r[R.SAMPLE2]), fmt)
+        buf[n, 2] = register_value(r, int(r[R.SAMPLE3]), fmt)
+        buf[n, 3] = register_value(r, int(r[R.SAMPLE4]), fmt)
     r[R.REC_CNT] = n + 1
     if n + 1 >= c.REC_CNT_MAX:
         r[R.CNTRL_BITS] &= ~c.RECORDBIT

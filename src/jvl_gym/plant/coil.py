@@ -2,7 +2,8 @@
 
 Per phase k ∈ {a, b, c}: ``L di_k/dt = u_k − u_n − R i_k − e_k`` with the neutral ``u_n`` floating
 (Σ i_k = 0) and the magnet flux ``ψ_k = λ sin(θ_e + k·120°)``, so ``e_k = λ ω_e cos(θ_e + k·120°)``.
-With the space vector ``s_x = (2/3) Σ x_k e^{−jk·120°}`` (phase values ``x_k = Re(s_x e^{jk·120°})``,
+With the space vector ``s_x = (2/3) Σ x_k e^{−jk·120°}``
+(phase values ``x_k = Re(s_x e^{jk·120°})``,
 zero sequence removed, which is what the floating neutral does) the coil is
 
     L ds_i/dt = s_u − R s_i − ω_e λ e^{jθ_e},       T = 1.5 p λ Re(s_i e^{−jθ_e}).

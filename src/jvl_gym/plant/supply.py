@@ -14,7 +14,7 @@ from numba import njit
 @njit(cache=True)
 def bus_step(u: float, p_motor: float, u_src: float, c_bus: float, r_src: float, u_dump: float,
              r_dump: float, dump_on: float, h: float):
-    """Advance the bus voltage by ``h`` [s]; returns ``(u1, dump_on1, e_dump, e_supply)`` [V, -, J, J]."""
+    """Advance the bus by ``h`` [s]; returns ``(u1, dump_on1, e_dump, e_supply)`` [V, -, J, J]."""
     if dump_on > 0.5:
         if u < u_dump - 1.0:
             dump_on = 0.0

@@ -33,7 +33,8 @@ class AnalogInput:
                  noise_std: float = 0.0, seed: int | None = None) -> None:
         if noise_std < 0:
             raise ValueError("noise_std must be >= 0")
-        self._fn = volts if callable(volts) else (lambda t, v=np.asarray(volts, float): v)
+        const = None if callable(volts) else np.asarray(volts, dtype=np.float64)
+        self._fn = volts if callable(volts) else (lambda t: const)
         self.n = n
         self.noise_std = noise_std
         self._rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(n)]

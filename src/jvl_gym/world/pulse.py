@@ -6,7 +6,7 @@ motor's interface decodes them as configured by CNTRL_BITS at the last power-on:
 
 | source \\ decoder | quadrature (PULSEDIR = 0) | pulse + direction (PULSEDIR = 1) |
 |---|---|---|
-| quadrature | 4 counts per line (every edge of A and B) | 1 count per line (A rising edge, B = direction) |
+| quadrature | 4 counts per line (edges of A and B) | 1 count per line (A rising, B = dir) |
 | pulse + direction | 0 (A toggles, B static: up and down counts cancel) | 1 count per pulse |
 
 INPSIGN reverses the sign. Fractions of a count are carried over, so no count is lost.
