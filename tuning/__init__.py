@@ -1,0 +1,1 @@
+"""jvl_gym tuning toolkit: identification, synthesis, quantisation and verification."""
