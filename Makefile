@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-core
 STAMP_RL := $(VENV)/.installed-rl
 
-.PHONY: setup setup-rl demo test bench lint docs clean
+.PHONY: setup setup-rl demo test bench lint docs notebooks clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -25,10 +25,18 @@ demo: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m jvl_gym.demo --out demo_out
 
 test: $(STAMP_RL)
-	MPLBACKEND=Agg $(BIN)/python -m pytest -n 2
+	JVL_FAST=1 MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 --nbmake tests notebooks
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_sim.py
+
+notebooks: $(STAMP_RL)
+	cd notebooks && for f in *.py; do ../$(BIN)/jupytext --to ipynb "$$f"; done
+
+docs: $(STAMP)
+	$(BIN)/python -m pip install -q -e ".[docs]"
+	$(BIN)/python -m jvl_gym.registers.reference docs/registers.md
+	$(BIN)/mkdocs build --strict -d site
 
 lint: $(STAMP)
 	$(BIN)/ruff check src tuning tests benchmarks
