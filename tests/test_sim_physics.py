@@ -153,3 +153,22 @@ def test_overload_bounded_torque_fncerr_trip_stop_init(case):
     assert m.mode_name() == "INIT_MODE"
     assert seen_stop or case == "blocked"
     assert max(abs(x) for x in fncerr) > 50000
+
+
+def test_hall_synchronisation_of_the_electrical_angle():
+    """hall_start = 1: ELDEG_IST starts at the hall sector centre (30° off at angle 0, torque
+    ·cos 30°) and is exact after the first zero transition (ELDEGP_OFFSET = 0 matches)."""
+    m = MotorArray("MAC140", n=2, seed=0, hall_start=[0, 1], load_inertia=100e-6)
+    assert int(m.read("ELDEG_IST")[1]) == 170  # centre of sector 0: 30° = 170.7 units
+    m.write("T_SOLL", 400)
+    m.set_input(analog_volts=5.0)
+    m.write("MODE_REG", c.AT_MODE)
+    m.step(3)
+    assert m.torque[1] / m.torque[0] == pytest.approx(math.cos(math.radians(30)), abs=0.02)
+    for _ in range(60):  # past θ_mech = π, i.e. θ_e = 2π: the zero transition
+        m.step()
+    theta_e = (2 * m.position_rad[1]) % (2 * math.pi)
+    true_eldeg = theta_e * 2048 / (2 * math.pi)
+    lag = abs(m.read("V_ELDEG")[1])  # ELDEG_IST is sampled at the start of the last inner sample
+    assert abs(int(m.read("ELDEG_IST")[1]) - true_eldeg) <= lag + 1
+    assert (int(m.read("CNTRL_BITS")[1]) >> 13) in (1, 2, 3, 4, 5, 6)

@@ -53,6 +53,7 @@ from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
 from .plant.coil import coil_step, phase_to_vector, vector_to_phases
 from .plant.encoder import eldeg, encoder_count
+from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
 from .plant.mechanics import end_stop_torque, mech_step
 from .plant.supply import bus_step
 
@@ -250,13 +251,24 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     omega = s[L.S_OMEGA]
     pp = p[L.P_POLE_PAIRS]
     theta_e = pp * theta + p[L.P_THETA_E0]
-    el = eldeg(theta_e)
-    dv = el - int(s[L.S_ELDEG_PREV])
-    if dv > 1024:
-        dv -= 2048
-    elif dv < -1024:
-        dv += 2048
-    s[L.S_ELDEG_PREV] = el
+    sec = sector_index(theta_e, p[L.P_HALL_ANGLE])
+    cross = zero_crossing(s[L.S_HALL_SECTOR], sec)
+    s[L.S_HALL_SECTOR] = sec
+    enc_abs = encoder_count(theta)
+    if p[L.P_HALL_START] < 0.5:  # commutation aligned from power-on
+        el = eldeg(theta_e)
+    else:  # hall synchronisation, 3.2.124/125 (the firmware latches the count at the edge)
+        if cross != 0 and (s[L.S_HALL_SYNCED] < 0.5 or (r[R.CNTRL_BITS] & c.HALL_INT)):
+            edge_e = p[L.P_HALL_ANGLE] + (sec if cross > 0 else sec + 1.0) * SECTOR
+            enc_edge = encoder_count((edge_e - p[L.P_THETA_E0]) / pp)
+            target = r[R.ELDEGP_OFFSET] if cross > 0 else r[R.ELDEGN_OFFSET]
+            s[L.S_ELDEG_OFS] = target - enc_edge
+            s[L.S_HALL_SYNCED] = 1.0
+        el = int(enc_abs + s[L.S_ELDEG_OFS]) % c.ELDEG_PER_TURN
+    r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] & 0x1FFF) | (hall_code(sec) << c.HALL_STATUS_SHIFT)
+    # V_ELDEG: encoder counts per inner sample (3.2.144)
+    dv = int(enc_abs - s[L.S_ELDEG_PREV])
+    s[L.S_ELDEG_PREV] = enc_abs
     r[R.ELDEG_IST] = el
     r[R.V_ELDEG] = dv
 

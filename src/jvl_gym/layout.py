@@ -30,8 +30,11 @@ N_REGS = 165
     S_DUMP_ON,  # power dump switch state (0/1)
     S_ENC0,  # encoder count at power-on (P_IST = 0 there)
     S_ENC_PREV,  # encoder count at the previous outer sample
-    S_ELDEG_PREV,  # ELDEG_IST at the previous inner sample
+    S_ELDEG_PREV,  # absolute encoder count at the previous inner sample (V_ELDEG)
     S_TICK,  # inner samples since power-on (noise stream counter)
+    S_ELDEG_OFS,  # ELDEG_IST = (encoder count + offset) mod 2048 when hall-synchronised
+    S_HALL_SYNCED,  # 1 after the first hall zero transition (or when aligned at power-on)
+    S_HALL_SECTOR,  # hall sector index floor((θe − hall angle)/60°) at the last inner sample
     # firmware: profile generator
     S_V_OLD,  # V_OLD of the function blocks [1/16 count/sample]
     S_G_FNC,  # G_FNC of the gear blocks [1/16 count]
@@ -70,7 +73,7 @@ N_REGS = 165
     # mode-specific memory (home search, analogue hysteresis, coil direction, ...)
     S_AUX0, S_AUX1, S_AUX2, S_AUX3, S_AUX4, S_AUX5, S_AUX6, S_AUX7,
     N_STATE,
-) = range(69)
+) = range(72)
 
 # --- parameters ------------------------------------------------------------------------------
 (
@@ -99,8 +102,10 @@ N_REGS = 165
     P_STOP_D,  # end stop damping [N·m·s/rad]
     P_HOME_POS,  # world position of the home sensor edge [rad]
     P_THETA_E0,  # electrical angle at mechanical angle 0 [rad]
+    P_HALL_START,  # 0: commutation aligned at power-on; 1: hall sector estimate until first edge
+    P_HALL_ANGLE,  # electrical angle of the hall zero transition [rad]
     N_PARAM,
-) = range(26)
+) = range(28)
 
 # --- inputs ----------------------------------------------------------------------------------
 (

@@ -24,6 +24,7 @@ from .firmware import write_rules as W
 from .firmware.noise import motor_keys
 from .kernel import run_parallel, run_serial
 from .plant.encoder import eldeg, encoder_count
+from .plant.hall import SECTOR, sector_index
 from .registers import (
     MAC050_141,
     Access,
@@ -51,6 +52,8 @@ PARAMETER_KEYWORDS: dict[str, int] = {
     "end_stop_stiffness": L.P_STOP_K,  # N·m/rad
     "end_stop_damping": L.P_STOP_D,  # N·m·s/rad
     "home_position": L.P_HOME_POS,  # rad
+    "hall_start": L.P_HALL_START,  # 0: commutation aligned at power-on, 1: hall sector estimate
+    "hall_angle": L.P_HALL_ANGLE,  # electrical angle of the hall zero transition [rad]
     "phase_resistance": L.P_R,  # Ω (overrides the motor config)
     "phase_inductance": L.P_L,  # H
     "rotor_inertia": L.P_J_MOTOR,  # kg·m²
@@ -247,8 +250,8 @@ class MotorArray:
                 raise ValueError(f"{name}: values must be >= 0, got {val!r}")
             if name in _POSITIVE and np.any(arr <= 0):
                 raise ValueError(f"{name}: values must be > 0, got {val!r}")
-            if name == "pwm_delay_samples" and not np.all(np.isin(arr, (0.0, 1.0))):
-                raise ValueError(f"pwm_delay_samples must be 0 or 1, got {val!r}")
+            if name in ("pwm_delay_samples", "hall_start") and not np.all(np.isin(arr, (0, 1))):
+                raise ValueError(f"{name} must be 0 or 1, got {val!r}")
             out[name] = np.broadcast_to(arr, (size,)).copy()
         return out
 
@@ -275,8 +278,19 @@ class MotorArray:
             enc = encoder_count(theta)
             s[i, L.S_ENC0] = enc
             s[i, L.S_ENC_PREV] = enc
-            el = eldeg(self.params[i, L.P_POLE_PAIRS] * theta + self.params[i, L.P_THETA_E0])
-            s[i, L.S_ELDEG_PREV] = el
+            p = self.params[i]
+            theta_e = p[L.P_POLE_PAIRS] * theta + p[L.P_THETA_E0]
+            sec = sector_index(theta_e, p[L.P_HALL_ANGLE])
+            s[i, L.S_HALL_SECTOR] = sec
+            if p[L.P_HALL_START] > 0.5:  # only the hall sector is known: start at its centre
+                centre = p[L.P_HALL_ANGLE] + (sec + 0.5) * SECTOR
+                el = int(math.floor(centre * c.ELDEG_PER_TURN / (2 * math.pi))) % 2048
+                s[i, L.S_ELDEG_OFS] = el - enc
+                s[i, L.S_HALL_SYNCED] = 0.0
+            else:
+                el = eldeg(theta_e)
+                s[i, L.S_HALL_SYNCED] = 1.0
+            s[i, L.S_ELDEG_PREV] = enc
             self.regs[i, R.ELDEG_IST] = el
         s[idx, L.S_PENDING_MODE] = -1.0
         self.regs[idx, R.U_SUPPLY] = np.round(s[idx, L.S_UBUS] / c.U_SUPPLY_VOLTS_PER_UNIT)
