@@ -28,9 +28,7 @@
 # %%
 import os
 
-import matplotlib
 
-matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 
