@@ -404,3 +404,15 @@ def test_testtq_measures_friction():
     t_plus, t_minus = vf[half - 150:half].mean(), vf[-150:].mean()
     friction = (t_plus - t_minus) / 2 * m.motor_configs[0].torque_per_vf
     assert friction == pytest.approx(0.05, rel=0.1)
+
+
+def test_mode_table_names_real_registers_and_every_mode():
+    from jvl_gym.firmware.mode_table import MODES, markdown_mode_table
+    from jvl_gym.registers import MAC050_141
+
+    assert [m.number for m in MODES] == list(range(25))
+    assert all(m.name == c.MODE_NAMES[m.number] for m in MODES)
+    for m in MODES:
+        for reg in m.parameters:
+            MAC050_141.lookup(reg)
+    assert "COIL_MODE" in markdown_mode_table()

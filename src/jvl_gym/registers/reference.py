@@ -7,6 +7,7 @@ output is ``docs/registers.md``.
 from __future__ import annotations
 
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 from .table import MAC050_141, Access, Format, RegisterTable
@@ -24,7 +25,8 @@ def _cell(text: str) -> str:
     return text.replace("|", "\\|")
 
 
-def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141") -> str:
+def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
+                       usage: Callable[[str], list[str]] | None = None) -> str:
     """Render a register table as a Markdown document.
 
     Parameters
@@ -33,6 +35,8 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141") ->
         The table to document.
     title : str
         Motor family shown in the heading.
+    usage : callable, optional
+        ``usage(name) -> [mode names]``: adds a column with the modes that read the register.
 
     Returns
     -------
@@ -51,8 +55,9 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141") ->
         "word. Access: `rw` user-writable, `ro` computed by the firmware (writes are refused), "
         "`reserved` undocumented.",
         "",
-        "| no. | name | format | range | unit | access | default | section | description |",
-        "|---:|---|---|---|---|---|---:|---|---|",
+        "| no. | name | format | range | unit | access | default | section | description |"
+        + (" modes |" if usage else ""),
+        "|---:|---|---|---|---|---|---:|---|---|" + ("---|" if usage else ""),
     ]
     for r in table:
         if r.access == Access.RESERVED:
@@ -62,7 +67,8 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141") ->
             default = _fmt_value(r.default, r.format)
         lines.append(
             f"| {r.number} | {r.name} | {r.format.value} | {rng} | {_cell(r.unit)} | "
-            f"{r.access.value} | {default} | {r.section} | {_cell(r.description)} |")
+            f"{r.access.value} | {default} | {r.section} | {_cell(r.description)} |"
+            + (f" {', '.join(usage(r.name))} |" if usage else ""))
     return "\n".join(lines) + "\n"
 
 
@@ -71,7 +77,10 @@ def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else argv
     out = Path(args[0]) if args else Path("docs/registers.md")
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(markdown_reference(MAC050_141), encoding="utf-8")
+    from ..firmware.mode_table import markdown_mode_table, modes_using
+
+    out.write_text(markdown_reference(MAC050_141, usage=modes_using), encoding="utf-8")
+    (out.parent / "modes.md").write_text(markdown_mode_table(), encoding="utf-8")
     print(f"wrote {out} ({len(MAC050_141)} registers)")
     return 0
 
