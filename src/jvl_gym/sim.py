@@ -554,15 +554,17 @@ class MotorArray:
         between motors is named ``SAMPLEk``); entries past a motor's REC_CNT are 0.
         """
         count = int(self.regs[:, R.REC_CNT].max()) if self._buf_allocated else 0
+        valid = np.arange(count)[None, :] < self.regs[:, R.REC_CNT][:, None]
         out: dict[str, np.ndarray] = {}
         for ch, num in enumerate((R.SAMPLE1, R.SAMPLE2, R.SAMPLE3, R.SAMPLE4)):
             nums = self.regs[:, num]
+            raw = np.where(valid, self._buf[:, :count, ch], 0) if count else np.zeros(
+                (self.n, 0), dtype=np.int64)
             reg = self.table.lookup(int(nums[0])) if 1 <= nums[0] <= 164 else None
-            name = reg.name if reg is not None and np.all(nums == nums[0]) else f"SAMPLE{ch + 1}"
-            raw = self._buf[:, :count, ch] if count else np.zeros((self.n, 0), dtype=np.int64)
-            mask = np.arange(count)[None, :] < self.regs[:, R.REC_CNT][:, None]
-            raw = np.where(mask, raw, 0)
-            out[name] = from_raw(reg, raw) if reg is not None and name != f"SAMPLE{ch+1}" else raw
+            if reg is None or np.any(nums != nums[0]) or reg.name in out:
+                out[f"SAMPLE{ch + 1}"] = raw  # raw values: no single register to name them by
+            else:
+                out[reg.name] = from_raw(reg, raw)
         return out
 
     # ------------------------------------------------------------------ world inputs
