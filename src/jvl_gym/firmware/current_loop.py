@@ -22,9 +22,12 @@ from .. import layout as L
 from . import regs as R
 from .fixed import clamp, fx4, fx8, rnd
 
-_TWO_PI = 2.0 * math.pi
-_THIRD = 2.0 * math.pi / 3.0
-_UNIT = 2.0 * math.pi / c.ELDEG_PER_TURN
+_HALF_SQRT3 = 0.5 * math.sqrt(3.0)
+#: sine and cosine of the 2048 electrical angle units (3.2.143)
+SIN_TABLE = np.array([math.sin(2.0 * math.pi * k / c.ELDEG_PER_TURN)
+                      for k in range(c.ELDEG_PER_TURN)])
+COS_TABLE = np.array([math.cos(2.0 * math.pi * k / c.ELDEG_PER_TURN)
+                      for k in range(c.ELDEG_PER_TURN)])
 
 
 @njit(cache=True)
@@ -41,12 +44,18 @@ def commutate(r: np.ndarray) -> None:
 
 @njit(cache=True)
 def set_references(r: np.ndarray, i_nom: float, phi: int) -> None:
-    """IA/IB/IC_SOLL = I_NOM·AMPLITUDE·sin(PHI + k·120°), stored in −850..850 (3.2.133)."""
+    """IA/IB/IC_SOLL = I_NOM·AMPLITUDE·sin(PHI + k·120°), stored in −850..850 (3.2.133).
+
+    The firmware's sine table: sin and cos of the 2048 angle units, with
+    ``sin(φ + 120°) = −sin φ/2 + (√3/2)·cos φ`` and ``sin(φ + 240°) = −sin φ/2 − (√3/2)·cos φ``.
+    """
     amp = i_nom * fx8(r[R.AMPLITUDE])
-    ang = phi * _UNIT
-    r[R.IA_SOLL] = int(clamp(rnd(amp * math.sin(ang)), -850.0, 850.0))
-    r[R.IB_SOLL] = int(clamp(rnd(amp * math.sin(ang + _THIRD)), -850.0, 850.0))
-    r[R.IC_SOLL] = int(clamp(rnd(amp * math.sin(ang + 2.0 * _THIRD)), -850.0, 850.0))
+    k = phi % 2048
+    sa = SIN_TABLE[k]
+    ca = COS_TABLE[k]
+    r[R.IA_SOLL] = int(clamp(rnd(amp * sa), -850.0, 850.0))
+    r[R.IB_SOLL] = int(clamp(rnd(amp * (-0.5 * sa + _HALF_SQRT3 * ca)), -850.0, 850.0))
+    r[R.IC_SOLL] = int(clamp(rnd(amp * (-0.5 * sa - _HALF_SQRT3 * ca)), -850.0, 850.0))
 
 
 @njit(cache=True, inline="always")
