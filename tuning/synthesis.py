@@ -1,0 +1,334 @@
+"""Synthesis of the current-loop (IF, IB) and speed-loop (FF, VB, VF, KVOUT) filters.
+
+Current loop (manual 4.3, 3.2.106–3.2.111). A PI whose zero cancels the coil pole,
+``IF(z) = Kp·z(z − a)/(z(z − 1))`` (KIFX2 = Kp, KIFX1 = −Kp·a, KIFY1 = 1, KIFY0 = 0), IB = 1
+(KIB1 = 1, KIB0 = 0). The loop becomes ``L = k/(z^d (z − 1))`` with ``k = Kp·g(1 − a)``; ``k`` is
+chosen on a grid for the target closed-loop bandwidth subject to the margin constraints, checked
+on the nominal coil *and* on R, L ±30 % (where the zero no longer cancels the pole).
+
+Speed loop (manual 4.2, 3.2.89–3.2.105, 3.2.13). The plant from VF_OUT to V_IST is the exact
+lifted model of :func:`tuning.models.speed_plant` (closed current loop + rigid rotor, J = J_m),
+and KVOUT = J_total/J_m makes the loop gain load-invariant (3.2.13). The controller is a PI on
+the velocity error in 1/16 units, ``16·(kp + ki·z/(z − 1))``, in one of two structures with the
+*same* loop transfer function:
+
+* ``"pi"``: all in VF (KVFX4 = kp + ki, KVFX3 = −kp, KVFY3 = 1), FF = 1, VB = 1;
+* ``"ip"`` (default): integral in VF (KVFX4 = ki, KVFY3 = 1) and the proportional part in the
+  feedback filter VB = 1 + (kp/ki)(1 − z⁻¹) (KVB3 = 1 + kp/ki, KVB2 = −kp/ki). The reference
+  path has no zero, so a velocity step has (almost) no overshoot, and the direct gain
+  ``KVOUT·KVFX4·KFF3 = KVOUT·ki ≠ 0`` keeps the function correction working (MODEL.md §5).
+  ``setpoint_weight`` β puts β·kp back into FF (FF = 1 + β(kp/ki)(1 − z⁻¹)), between I-P (β=0)
+  and PI (β=1).
+
+(kp, ki) are chosen on a grid in normalised units (``kp_n = 16·Kpl·kp`` with
+``Kpl = (4096/2π)·K_vf·TS_O²/(2·J_m)``) for the target loop bandwidth, subject to: nominal PM and
+GM, pole radius, and PM under KVOUT × 0.5 and × 2 and under coil R, L ±30 %.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .models import (
+    COUNTS_PER_RAD,
+    TS_I,
+    TS_O,
+    MotorData,
+    freqresp,
+    speed_plant,
+)
+from .verify import LoopMetrics, frequency_grid, metrics_from_response
+
+__all__ = [
+    "CurrentDesign",
+    "SpeedDesign",
+    "design_current_loop",
+    "design_speed_loop",
+    "current_registers",
+    "speed_registers",
+    "torque_guidance",
+    "rigid_gain",
+]
+
+
+@dataclass
+class CurrentDesign:
+    """Result of :func:`design_current_loop`.
+
+    Attributes
+    ----------
+    registers : dict
+        KIFX2, KIFX1, KIFY1, KIFY0, KIB1, KIB0 (unquantised).
+    loop_gain : float
+        k = Kp·g(1 − a) (dimensionless).
+    metrics : LoopMetrics
+        Nominal metrics of the (unquantised) design.
+    robust_pm_deg : float
+        Worst PM over R, L ±30 %.
+    notes : list of str
+        What the designer had to compromise.
+    """
+
+    registers: dict[str, float]
+    loop_gain: float
+    metrics: LoopMetrics
+    robust_pm_deg: float
+    notes: list[str] = field(default_factory=list)
+
+
+@dataclass
+class SpeedDesign:
+    """Result of :func:`design_speed_loop` (registers unquantised; kp, ki in VF units)."""
+
+    registers: dict[str, float]
+    kp: float
+    ki: float
+    kp_norm: float
+    ki_norm: float
+    metrics: LoopMetrics
+    robust_pm_deg: float
+    structure: str
+    notes: list[str] = field(default_factory=list)
+
+
+# ----------------------------------------------------------------------------- current loop
+def current_registers(motor: MotorData, loop_gain: float) -> dict[str, float]:
+    """IF/IB registers of the pole-cancelling PI with normalised loop gain ``loop_gain``."""
+    a, g = motor.coil_pole, motor.coil_gain
+    kp = loop_gain / (g * (1.0 - a))
+    return {"KIFX2": kp, "KIFX1": -kp * a, "KIFY1": 1.0, "KIFY0": 0.0, "KIB1": 1.0, "KIB0": 0.0}
+
+
+def _current_loop_poly(motor: MotorData, regs: Mapping[str, float]
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    a, g, d = motor.coil_pole, motor.coil_gain, int(motor.pwm_delay)
+    num = np.polymul([regs["KIFX2"], regs["KIFX1"], 0.0], [g * (1 - a)])
+    num = np.polymul(num, [regs["KIB1"], regs["KIB0"]])
+    den = np.polymul([1.0, -regs["KIFY1"], -regs["KIFY0"]], [1.0, -a])
+    den = np.polymul(den, np.r_[1.0, np.zeros(d)])
+    den = np.polymul(den, [1.0, 0.0])
+    return num, den
+
+
+def _metrics_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, dt: float) -> LoopMetrics:
+    z = np.exp(1j * w * dt)
+    lw = np.polyval(num, z) / np.polyval(den, z)
+    return metrics_from_response(lw, w, np.polyadd(den, num))
+
+
+def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
+                        pm_min: float = 50.0, gm_min: float = 8.0,
+                        robust_pm_min: float = 35.0) -> CurrentDesign:
+    """Design IF and IB for a target closed-loop bandwidth.
+
+    Parameters
+    ----------
+    motor : MotorData
+        The (identified) coil: R_phase [Ω], L_phase [H], amps_per_count, pwm_delay.
+    bandwidth_hz : float, optional
+        Target −3 dB bandwidth of the current loop [Hz]; default: the largest that meets the
+        constraints.
+    pm_min, gm_min : float
+        Nominal phase [deg] and gain [dB] margins required (acceptance: 45°, 6 dB; the defaults
+        leave room for quantisation).
+    robust_pm_min : float
+        PM required on every R, L ±30 % corner [deg].
+
+    Returns
+    -------
+    CurrentDesign
+    """
+    w = frequency_grid(TS_I, 1500)
+    best: tuple[float, float, LoopMetrics, float] | None = None
+    feasible = []
+    for k in np.linspace(0.02, 0.8, 157):
+        regs = current_registers(motor, float(k))
+        m = _metrics_poly(*_current_loop_poly(motor, regs), w, TS_I)
+        if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
+            continue
+        rpm = math.inf
+        ok = True
+        for fr in (0.7, 1.3):
+            for fl in (0.7, 1.3):
+                mm = motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
+                r = _metrics_poly(*_current_loop_poly(mm, regs), w, TS_I)
+                ok &= r.stable
+                rpm = min(rpm, r.pm_deg)
+        if ok and rpm >= robust_pm_min:
+            feasible.append((float(k), m.bandwidth_hz, m, rpm))
+    if not feasible:
+        raise ValueError("no current-loop gain meets the margin constraints; relax them")
+    notes: list[str] = []
+    if bandwidth_hz is None:
+        best = max(feasible, key=lambda f: f[1])
+    else:
+        best = min(feasible, key=lambda f: abs(math.log(f[1] / bandwidth_hz)))
+        if abs(best[1] / bandwidth_hz - 1) > 0.1:
+            notes.append(f"current-loop bandwidth target {bandwidth_hz:.0f} Hz not reachable "
+                         f"within the margins; got {best[1]:.0f} Hz")
+    k, _, m, rpm = best
+    return CurrentDesign(current_registers(motor, k), k, m, rpm, notes)
+
+
+# ----------------------------------------------------------------------------- speed loop
+def rigid_gain(motor: MotorData) -> float:
+    """Kpl = (4096/2π)·K_vf·TS_O²/(2·J_m): rigid-body V_IST per VF_OUT gain at KVOUT = 1."""
+    return COUNTS_PER_RAD * motor.torque_per_vf * TS_O**2 / (2.0 * motor.J_m)
+
+
+def speed_registers(kp: float, ki: float, kvout: float, structure: str = "ip",
+                    setpoint_weight: float = 0.0) -> dict[str, float]:
+    """FF, VB (with GEARB = 16), VF and KVOUT registers of a PI / I-P speed loop.
+
+    Parameters
+    ----------
+    kp, ki : float
+        Proportional and integral gains in VF units (VF_OUT/KVOUT per 1/16 count/sample).
+    kvout : float
+        KVOUT = J_total/J_m (manual 3.2.13).
+    structure : {"ip", "pi"}
+        Where the proportional part acts (module docstring).
+    setpoint_weight : float
+        β of the I-P structure: FF = 1 + β·(kp/ki)(1 − z⁻¹).
+    """
+    regs = {"KFF3": 1.0, "KFF2": 0.0, "KFF1": 0.0, "KFF0": 0.0, "GEARB": 16.0,
+            "KVB3": 1.0, "KVB2": 0.0, "KVB1": 0.0, "KVB0": 0.0,
+            "KVFX4": kp + ki, "KVFX3": -kp, "KVFX2": 0.0, "KVFX1": 0.0,
+            "KVFY3": 1.0, "KVFY2": 0.0, "KVFY1": 0.0, "KVFY0": 0.0, "KVOUT": kvout}
+    if structure == "ip":
+        c = kp / ki
+        regs.update({"KVFX4": ki, "KVFX3": 0.0, "KVB3": 1.0 + c, "KVB2": -c,
+                     "KFF3": 1.0 + setpoint_weight * c, "KFF2": -setpoint_weight * c})
+    elif structure != "pi":
+        raise ValueError(f"structure must be 'ip' or 'pi', got {structure!r}")
+    return regs
+
+
+def _speed_candidates(motor: MotorData, current_regs: Mapping[str, float], w: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[np.ndarray]]:
+    plant = speed_plant(motor, current_regs)
+    pn = np.asarray(plant.num[0][0], dtype=float)
+    pd = np.asarray(plant.den[0][0], dtype=float)
+    pw = freqresp(plant, w)
+    rl = []
+    for fr in (0.7, 1.3):
+        for fl in (0.7, 1.3):
+            mm = motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
+            rl.append(freqresp(speed_plant(mm, current_regs), w))
+    return pn, pd, pw, rl
+
+
+def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_total: float,
+                      bandwidth_hz: float | None = None, structure: str = "ip",
+                      setpoint_weight: float = 0.0, pm_min: float = 50.0, gm_min: float = 10.0,
+                      robust_pm_min: float = 35.0) -> SpeedDesign:
+    """Design FF, VB, VF and KVOUT for a target loop bandwidth.
+
+    Parameters
+    ----------
+    motor : MotorData
+        Motor data; ``J_m`` is the reference inertia of KVOUT.
+    current_regs : mapping
+        The current-loop registers (the speed plant includes the closed current loop).
+    J_total : float
+        Identified total inertia [kg·m²]; KVOUT = J_total/J_m.
+    bandwidth_hz : float, optional
+        Target −3 dB bandwidth of ``L/(1+L)`` [Hz]; default: the design with the largest
+        integral gain that meets the constraints.
+    structure, setpoint_weight
+        See :func:`speed_registers`.
+    pm_min, gm_min, robust_pm_min
+        Nominal PM [deg], GM [dB], and PM on the robustness set (KVOUT × 0.5, × 2; R, L ±30 %).
+
+    Returns
+    -------
+    SpeedDesign
+    """
+    w = frequency_grid(TS_O, 1200, lowest=1e-3)
+    z = np.exp(1j * w * TS_O)
+    pn, pd, pw, rl = _speed_candidates(motor, current_regs, w)
+    kpl16 = 16.0 * rigid_gain(motor)
+    feasible = []
+    for kpn in np.geomspace(0.03, 1.2, 48):
+        for kin in np.geomspace(0.002, 0.3, 48):
+            kp, ki = kpn / kpl16, kin / kpl16
+            cw = 16.0 * (kp + ki * z / (z - 1.0))
+            lw = cw * pw
+            cnum = 16.0 * np.array([kp + ki, -kp])
+            char = np.polyadd(np.polymul([1.0, -1.0], pd), np.polymul(cnum, pn))
+            # L = 16(kp + ki z/(z-1)) P = 16((kp+ki) z - kp)/(z-1) · pn/pd
+            m = metrics_from_response(lw, w, char)
+            if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
+                continue
+            rpm = math.inf
+            for scale in (0.5, 2.0):
+                rpm = min(rpm, metrics_from_response(lw * scale, w).pm_deg)
+            if rpm < robust_pm_min:
+                continue
+            for prl in rl:
+                rpm = min(rpm, metrics_from_response(cw * prl, w).pm_deg)
+            if rpm < robust_pm_min:
+                continue
+            # the doubled-gain case must be stable too
+            char2 = np.polyadd(np.polymul([1.0, -1.0], pd),
+                               2.0 * np.polymul(cnum, pn))
+            if np.max(np.abs(np.roots(char2))) >= 0.999:
+                continue
+            feasible.append((kpn, kin, kp, ki, m, rpm))
+    if not feasible:
+        raise ValueError("no speed-loop gains meet the margin constraints; relax them")
+    notes: list[str] = []
+    if bandwidth_hz is None:
+        best = max(feasible, key=lambda f: f[1])
+    else:
+        near = [f for f in feasible if abs(f[4].bandwidth_hz / bandwidth_hz - 1) <= 0.1]
+        if near:
+            best = max(near, key=lambda f: f[1])
+        else:
+            best = min(feasible, key=lambda f: abs(math.log(f[4].bandwidth_hz / bandwidth_hz)))
+            notes.append(f"speed-loop bandwidth target {bandwidth_hz:.1f} Hz not reachable "
+                         f"within the margins; got {best[4].bandwidth_hz:.1f} Hz")
+    kpn, kin, kp, ki, m, rpm = best
+    kvout = J_total / motor.J_m
+    if not 1.0 <= kvout <= 10.0:
+        notes.append(f"KVOUT = {kvout:.2f} is outside the manual's recommended 1..10 (3.2.13)")
+    regs = speed_registers(kp, ki, kvout, structure, setpoint_weight)
+    return SpeedDesign(regs, kp, ki, float(kpn), float(kin), m, rpm, structure, notes)
+
+
+# ----------------------------------------------------------------------------- T_SOLL
+def torque_guidance(motor: MotorData, J_total: float, coulomb: float = 0.0,
+                    t_soll: int = 1023, reserve: float = 0.5) -> dict[str, float]:
+    """How much torque a profile may use: T_SOLL and the A_SOLL it supports.
+
+    Parameters
+    ----------
+    motor : MotorData
+        Torque per VF_OUT unit K_vf [N·m].
+    J_total : float
+        Total inertia [kg·m²].
+    coulomb : float
+        Coulomb friction [N·m] (consumes torque).
+    t_soll : int
+        Torque limit T_SOLL (0..1023 of peak, manual 3.2.7).
+    reserve : float
+        Fraction of T_SOLL kept for the regulator (disturbances, tracking): the profile may
+        use ``(1 − reserve)·T_SOLL``. With the function correction (MODEL.md §5) a profile that
+        needs more than T_SOLL is slowed down and FNCERR grows.
+
+    Returns
+    -------
+    dict
+        ``T_SOLL``; ``torque_Nm`` at T_SOLL; ``A_SOLL_max`` (1/16 count/sample², the profile
+        acceleration using ``1 − reserve`` of T_SOLL); ``accel_rad_s2`` at A_SOLL_max.
+    """
+    torque = motor.torque_per_vf * t_soll
+    usable = max(0.0, (1.0 - reserve) * torque - coulomb)
+    alpha = usable / J_total
+    a_soll = alpha * COUNTS_PER_RAD * 16.0 * TS_O**2
+    return {"T_SOLL": float(t_soll), "torque_Nm": torque, "A_SOLL_max": float(math.floor(a_soll)),
+            "accel_rad_s2": alpha}

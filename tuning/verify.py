@@ -1,0 +1,259 @@
+"""Verification of designed loops: stability, margins, bandwidth, robustness, time simulation.
+
+Stability is decided by the closed-loop pole radius (all roots of ``den(L) + num(L)`` inside
+``POLE_RADIUS_MAX``), never by margins alone: python-control 0.10.2 reports positive margins for
+some unstable type-2 discrete loops. Margins and bandwidths are computed on a dense logarithmic
+frequency grid up to the Nyquist frequency: every gain crossover gives a phase margin (the
+smallest is reported), every −180° phase crossing with ``|L| < 1`` a gain margin (the smallest is
+reported) and every crossing with ``|L| > 1`` a gain-*reduction* margin.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import asdict, dataclass, field
+
+import control as ct
+import numpy as np
+
+from .models import (
+    TS_I,
+    TS_O,
+    MotorData,
+    current_open_loop,
+    freqresp,
+    speed_closed_loop,
+    speed_open_loop,
+    speed_plant,
+)
+
+__all__ = [
+    "POLE_RADIUS_MAX",
+    "LoopMetrics",
+    "loop_metrics",
+    "metrics_from_response",
+    "frequency_grid",
+    "CurrentLoopReport",
+    "SpeedLoopReport",
+    "verify_current_loop",
+    "verify_speed_loop",
+]
+
+POLE_RADIUS_MAX: float = 0.999  #: closed-loop poles must satisfy |z| < this
+
+
+@dataclass
+class LoopMetrics:
+    """Stability margins and bandwidth of one loop.
+
+    Attributes
+    ----------
+    pm_deg : float
+        Smallest phase margin over all gain crossovers [deg] (inf if none).
+    gm_db : float
+        Smallest gain (increase) margin over the −180° crossings with ``|L| < 1`` [dB].
+    gm_low_db : float
+        Gain-reduction margin (−180° crossings with ``|L| > 1``) [dB, ≥ 0], inf if none.
+    crossover_hz : float
+        Lowest gain-crossover frequency [Hz].
+    bandwidth_hz : float
+        −3 dB bandwidth of ``L/(1+L)`` [Hz].
+    pole_radius : float
+        Largest closed-loop pole magnitude.
+    stable : bool
+        ``pole_radius < POLE_RADIUS_MAX``.
+    """
+
+    pm_deg: float
+    gm_db: float
+    gm_low_db: float
+    crossover_hz: float
+    bandwidth_hz: float
+    pole_radius: float
+    stable: bool
+
+    def as_dict(self) -> dict[str, float]:
+        """Plain dict (for tables and YAML)."""
+        return asdict(self)
+
+
+def frequency_grid(dt: float, n: int = 3000, lowest: float = 1e-4) -> np.ndarray:
+    """Log-spaced angular frequencies from ``lowest``·ω_N to 0.9999·ω_N [rad/s], shape (n,)."""
+    wn = math.pi / dt
+    return np.logspace(math.log10(lowest * wn), math.log10(0.9999 * wn), n)
+
+
+def _crossings(x: np.ndarray) -> np.ndarray:
+    """Indices i with a sign change between x[i] and x[i+1]."""
+    s = np.sign(x)
+    return np.flatnonzero(s[:-1] * s[1:] < 0)
+
+
+def metrics_from_response(lw: np.ndarray, w: np.ndarray, char_poly: np.ndarray | None = None
+                          ) -> LoopMetrics:
+    """Margins and bandwidth from a sampled open-loop response.
+
+    Parameters
+    ----------
+    lw : ndarray, shape (n,)
+        ``L(e^{jωT})`` on the grid.
+    w : ndarray, shape (n,)
+        Angular frequencies [rad/s], increasing.
+    char_poly : ndarray, optional
+        Closed-loop characteristic polynomial (descending powers of z) for the pole radius.
+    """
+    mag = np.abs(lw)
+    ph = np.unwrap(np.angle(lw))
+    logm = np.log(np.maximum(mag, 1e-300))
+    pm = math.inf
+    wc = math.nan
+    for i in _crossings(logm):
+        t = logm[i] / (logm[i] - logm[i + 1])
+        p = ph[i] + t * (ph[i + 1] - ph[i])
+        marg = (math.degrees(p) + 180.0 + 180.0) % 360.0 - 180.0
+        pm = min(pm, marg)
+        if math.isnan(wc):
+            wc = w[i] + t * (w[i + 1] - w[i])
+    gm = math.inf
+    gm_low = math.inf
+    k = (ph / math.pi + 1.0) / 2.0  # integer when the phase is an odd multiple of 180°
+    f = k - np.floor(k[0] + 0.5)
+    for j in range(-3, 4):
+        for i in _crossings(f - j):
+            t = (f[i] - j) / (f[i] - f[i + 1])
+            lm = logm[i] + t * (logm[i + 1] - logm[i])
+            db = -20.0 * lm / math.log(10.0)
+            if lm < 0:
+                gm = min(gm, db)
+            else:
+                gm_low = min(gm_low, -db)
+    tw = lw / (1.0 + lw)
+    t0 = abs(tw[0])
+    below = np.flatnonzero(np.abs(tw) < t0 / math.sqrt(2.0))
+    bw = w[below[0]] / (2 * math.pi) if below.size else w[-1] / (2 * math.pi)
+    radius = math.nan
+    if char_poly is not None:
+        roots = np.roots(np.trim_zeros(np.asarray(char_poly, dtype=float), "f"))
+        radius = float(np.max(np.abs(roots))) if roots.size else 0.0
+    wc_hz = wc / (2 * math.pi) if not math.isnan(wc) else math.nan
+    return LoopMetrics(pm_deg=pm, gm_db=gm, gm_low_db=gm_low, crossover_hz=wc_hz,
+                       bandwidth_hz=bw, pole_radius=radius,
+                       stable=bool(radius < POLE_RADIUS_MAX) if not math.isnan(radius) else False)
+
+
+def char_poly(loop: ct.TransferFunction) -> np.ndarray:
+    """Closed-loop characteristic polynomial ``den + num`` of ``1 + L`` (descending z)."""
+    num = np.asarray(loop.num[0][0], dtype=float)
+    den = np.asarray(loop.den[0][0], dtype=float)
+    return np.polyadd(den, num)
+
+
+def loop_metrics(loop: ct.TransferFunction, n: int = 3000) -> LoopMetrics:
+    """Margins, bandwidth and pole radius of a discrete SISO open loop ``L``."""
+    w = frequency_grid(loop.dt, n)
+    return metrics_from_response(freqresp(loop, w), w, char_poly(loop))
+
+
+# ----------------------------------------------------------------------------- reports
+@dataclass
+class CurrentLoopReport:
+    """Verification of a current-loop design (per phase, TS_I)."""
+
+    nominal: LoopMetrics
+    robust: dict[str, LoopMetrics] = field(default_factory=dict)
+
+    @property
+    def worst_robust_pm(self) -> float:
+        """Smallest phase margin over the robustness set [deg]."""
+        return min((m.pm_deg for m in self.robust.values()), default=math.inf)
+
+    @property
+    def all_stable(self) -> bool:
+        """Nominal and every robustness case have all poles inside POLE_RADIUS_MAX."""
+        return self.nominal.stable and all(m.stable for m in self.robust.values())
+
+
+@dataclass
+class SpeedLoopReport:
+    """Verification of a speed-loop design (TS_O), including the closed current loop."""
+
+    nominal: LoopMetrics
+    reference_bandwidth_hz: float
+    step_overshoot: float
+    robust: dict[str, LoopMetrics] = field(default_factory=dict)
+
+    @property
+    def worst_robust_pm(self) -> float:
+        """Smallest phase margin over the robustness set [deg]."""
+        return min((m.pm_deg for m in self.robust.values()), default=math.inf)
+
+    @property
+    def all_stable(self) -> bool:
+        """Nominal and every robustness case have all poles inside POLE_RADIUS_MAX."""
+        return self.nominal.stable and all(m.stable for m in self.robust.values())
+
+
+ROBUST_RL: tuple[float, ...] = (0.7, 1.3)  #: R and L factors of the robustness set (±30 %)
+ROBUST_KVOUT: tuple[float, ...] = (0.5, 0.7, 1.4, 2.0)  #: KVOUT / (J_true/J_m) factors
+
+
+def verify_current_loop(motor: MotorData, regs: Mapping[str, float],
+                        robust: bool = True) -> CurrentLoopReport:
+    """Margins of the current loop on ``motor``, and on R, L × {0.7, 1.3} (all 4 corners).
+
+    Parameters
+    ----------
+    motor : MotorData
+        Coil the loop runs on (the identified or the true one).
+    regs : mapping
+        KIFX2, KIFX1, KIFY1, KIFY0, KIB1, KIB0.
+    """
+    rep = CurrentLoopReport(nominal=loop_metrics(current_open_loop(motor, regs)))
+    if robust:
+        for fr in ROBUST_RL:
+            for fl in ROBUST_RL:
+                m = motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
+                rep.robust[f"R x{fr:g}, L x{fl:g}"] = loop_metrics(current_open_loop(m, regs))
+    assert TS_I > 0
+    return rep
+
+
+def step_overshoot(sys: ct.TransferFunction, n: int = 400) -> float:
+    """Relative overshoot of the unit-step response of a discrete system (0 = none)."""
+    t, y = ct.step_response(sys, T=np.arange(n) * sys.dt)
+    y = np.squeeze(y)
+    final = y[-1]
+    if final == 0:
+        return math.nan
+    return float(max(0.0, (np.max(y) - final) / abs(final)))
+
+
+def verify_speed_loop(motor: MotorData, regs: Mapping[str, float], J_total: float,
+                      robust: bool = True) -> SpeedLoopReport:
+    """Margins of the speed loop for a load of total inertia ``J_total`` [kg·m²].
+
+    The plant includes the closed current loop (``regs``' IF/IB on ``motor``'s coil). The
+    robustness set: the true inertia differing from ``KVOUT·J_m`` by the factors
+    ``ROBUST_KVOUT`` (KVOUT × 0.5–2), and the coil R, L ±30 % under the current loop.
+    """
+    plant = speed_plant(motor, regs, J=J_total)
+    loop = speed_open_loop(plant, regs)
+    nominal = loop_metrics(loop)
+    cl = speed_closed_loop(plant, regs)
+    w = np.logspace(-1, math.log10(0.999 * math.pi / TS_O), 2000)
+    tw = np.abs(freqresp(ct.minreal(cl, verbose=False), w))
+    below = np.flatnonzero(tw < abs(tw[0]) / math.sqrt(2.0))
+    ref_bw = w[below[0]] / (2 * math.pi) if below.size else w[-1] / (2 * math.pi)
+    rep = SpeedLoopReport(nominal=nominal, reference_bandwidth_hz=ref_bw,
+                          step_overshoot=step_overshoot(cl))
+    if robust:
+        for fk in ROBUST_KVOUT:
+            p = speed_plant(motor, regs, J=J_total / fk)
+            rep.robust[f"KVOUT x{fk:g}"] = loop_metrics(speed_open_loop(p, regs))
+        for fr in ROBUST_RL:
+            for fl in ROBUST_RL:
+                m = motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
+                p = speed_plant(m, regs, J=J_total)
+                rep.robust[f"R x{fr:g}, L x{fl:g}"] = loop_metrics(speed_open_loop(p, regs))
+    return rep
