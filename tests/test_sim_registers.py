@@ -147,3 +147,13 @@ def test_bad_parameters_and_inputs_raise(m):
         m.set_input(pulse_counts=1.5)
     with pytest.raises(ValueError):
         m.step(-1)
+
+
+def test_trace_records_registers_and_physics(m):
+    m.write("V_SOLL", 1600)
+    m.write("MODE_REG", 1)
+    tr = m.trace(["V_IST", "speed_rpm", 117], 20)
+    assert tr["t"].shape == (20,) and tr["V_IST"].shape == (20, 3) and tr["117"].shape == (20, 3)
+    assert np.all(np.diff(tr["t"]) == pytest.approx(c.OUTER_DT))
+    with pytest.raises(UnknownRegisterError):
+        m.trace(["NOPE"], 5)

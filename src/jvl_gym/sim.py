@@ -327,6 +327,26 @@ class MotorArray:
             raise ValueError(f"seconds must be finite and >= 0, got {seconds!r}")
         self.step(int(round(seconds * c.OUTER_HZ)))
 
+    def trace(self, keys: list[str | int], n_outer: int) -> dict[str, np.ndarray]:
+        """Step ``n_outer`` outer samples and record registers and physical quantities.
+
+        ``keys`` are register names/numbers or the properties ``speed_rpm``, ``position_rad``,
+        ``torque``, ``bus_voltage``. Returns ``{"t": (T,), key: (T, N)}`` (user units), like a
+        scope attached to every motor at the outer rate.
+        """
+        physical = {"speed_rpm", "speed_rad_s", "position_rad", "torque", "bus_voltage"}
+        regs = [k for k in keys if k not in physical]
+        for k in regs:
+            self._lookup(k)  # unknown names fail before anything runs
+        out: dict[str, list] = {"t": []}
+        out.update({str(k): [] for k in keys})
+        for _ in range(int(n_outer)):
+            self.step()
+            out["t"].append(float(self.time[0]))
+            for k in keys:
+                out[str(k)].append(getattr(self, k) if k in physical else self.read(k))
+        return {k: np.asarray(v) for k, v in out.items()}
+
     @property
     def time(self) -> np.ndarray:
         """Time since power-on of each motor [s], (N,)."""
