@@ -1,0 +1,219 @@
+"""Identify the coil (line-to-line R, L and the PWM delay) from TESTU records (manual 4.4.9).
+
+Model (ZOH-exact, MODEL.md §6): the a–c line current, in ADC counts, obeys
+
+    i(k+1) = a·i(k) + g(1 − a)·u(k − d),    IC_IST(k) = −i(k),    i(0) = i₀,
+
+with u = UA_VAL = UMEAS [PWM counts], ``a = exp(−R·TS_I/L)``, ``g = k_u/(R·A_count)`` (ADC counts
+per PWM count; R, L per phase: the line-to-line circuit has 2R, 2L and sees 2·u·k_u) and
+``d`` ∈ {0, 1, 2} inner samples of PWM/computation delay.
+
+Method: for each d, an ARX least-squares fit gives a start; an output-error fit
+(``scipy.optimize.least_squares`` on the simulated output, parameters a, g, i₀) refines it.
+The delay with the smallest output error wins (it is an integer: the record's first
+non-zero sample fixes it). Confidence intervals: ``s²(JᵀJ)⁻¹`` at the optimum with Student-t
+quantiles, propagated to R and L (delta method). Fit quality: NRMSE fit
+``100·(1 − ‖y − ŷ‖/‖y − ȳ‖)`` %, and a Box–Pierce whiteness test of the residuals.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import control as ct
+import numpy as np
+from scipy import optimize, stats
+
+from .models import TS_I, MotorData
+from .records import Record, RecordError, validate
+
+__all__ = ["CoilEstimate", "identify_coil", "residual_check"]
+
+
+@dataclass
+class CoilEstimate:
+    """Identified coil.
+
+    Attributes
+    ----------
+    pole, gain : float
+        a (dimensionless) and g [ADC counts per PWM count], the register-unit model.
+    delay : int
+        PWM delay d [inner samples].
+    R_phase, L_phase : float
+        Per-phase resistance [Ω] and inductance [H] (through k_u and A_count of the motor type).
+    R_line, L_line : float
+        Line-to-line values 2R [Ω], 2L [H].
+    ci : dict
+        95 % confidence intervals (lo, hi) of "pole", "gain", "R_phase", "L_phase", "R_line",
+        "L_line".
+    nrmse_fit : float
+        NRMSE fit [%] (100 = perfect), over all records.
+    residual : dict
+        Residual check: "sigma" [counts], "box_pierce_p", "max_autocorr", "white" (bool).
+    n_samples : int
+        Samples used.
+    """
+
+    pole: float
+    gain: float
+    delay: int
+    R_phase: float
+    L_phase: float
+    ci: dict[str, tuple[float, float]]
+    nrmse_fit: float
+    residual: dict[str, float]
+    n_samples: int
+    fitted: list[np.ndarray] = field(default_factory=list, repr=False)
+
+    @property
+    def R_line(self) -> float:
+        """Line-to-line resistance 2R [Ω]."""
+        return 2.0 * self.R_phase
+
+    @property
+    def L_line(self) -> float:
+        """Line-to-line inductance 2L [H]."""
+        return 2.0 * self.L_phase
+
+    def model(self) -> ct.TransferFunction:
+        """Per-phase U [PWM counts] → I_IST [ADC counts]: ``g(1−a)/(z^d (z−a))`` at TS_I."""
+        den = np.polymul([1.0, -self.pole], np.r_[1.0, np.zeros(self.delay)])
+        return ct.tf([self.gain * (1 - self.pole)], den, TS_I)
+
+    def motor(self, base: MotorData) -> MotorData:
+        """``base`` with the identified R, L and delay."""
+        return base.with_(R_phase=self.R_phase, L_phase=self.L_phase, pwm_delay=self.delay)
+
+
+def _simulate(a: float, g: float, i0: float, u: np.ndarray, d: int) -> np.ndarray:
+    n = u.size
+    i = np.empty(n)
+    i[0] = i0
+    b = g * (1.0 - a)
+    for k in range(n - 1):
+        i[k + 1] = a * i[k] + b * (u[k - d] if k - d >= 0 else 0.0)
+    return -i
+
+
+def _arx(recs: Sequence[Record], d: int) -> tuple[float, float]:
+    rows, rhs = [], []
+    for r in recs:
+        y, u = r.output, r.input
+        for k in range(max(1, d + 1), r.n):
+            rows.append([y[k - 1], -u[k - 1 - d]])
+            rhs.append(y[k])
+    theta, *_ = np.linalg.lstsq(np.array(rows), np.array(rhs), rcond=None)
+    a = float(np.clip(theta[0], 1e-3, 0.9999))
+    g = float(theta[1] / (1 - a))
+    return a, g
+
+
+def residual_check(res: np.ndarray, n_params: int, max_lag: int | None = None
+                   ) -> dict[str, float]:
+    """Box–Pierce whiteness test of residuals (``p > 0.05`` ⇒ no evidence against whiteness)."""
+    res = np.asarray(res, dtype=float)
+    n = res.size
+    e = res - res.mean()
+    var = float(e @ e) / max(n, 1)
+    lags = max(1, min(max_lag or 10, n // 4))
+    if var == 0.0:
+        return {"sigma": 0.0, "box_pierce_p": 1.0, "max_autocorr": 0.0, "white": True}
+    r = np.array([float(e[:-k] @ e[k:]) / (n * var) for k in range(1, lags + 1)])
+    q = n * float(r @ r)
+    dof = max(1, lags - 0)
+    p = float(stats.chi2.sf(q, dof))
+    return {"sigma": math.sqrt(float(res @ res) / max(n - n_params, 1)), "box_pierce_p": p,
+            "max_autocorr": float(np.max(np.abs(r))), "white": bool(p > 0.05)}
+
+
+def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
+                  delays: Sequence[int] = (0, 1, 2)) -> CoilEstimate:
+    """Estimate R, L and the PWM delay from one or more TESTU records.
+
+    Parameters
+    ----------
+    records : Record or sequence of Record
+        TESTU records (validated here). Several records share a, g, d; each has its own i₀.
+    motor : MotorData or str
+        Motor type (for k_u = U_supply/2/1023 and A_count, MODEL.md §2, §7).
+    delays : sequence of int
+        Candidate PWM delays [inner samples].
+
+    Returns
+    -------
+    CoilEstimate
+
+    Raises
+    ------
+    RecordError
+        A record is not a valid TESTU record (:func:`tuning.records.validate`).
+    """
+    recs = [records] if isinstance(records, Record) else list(records)
+    if not recs:
+        raise RecordError("identify_coil needs at least one TESTU record")
+    for r in recs:
+        validate(r)
+        if r.kind != "TESTU":
+            raise RecordError(f"identify_coil needs TESTU records, got {r.kind}")
+    md = motor if isinstance(motor, MotorData) else MotorData.from_config(motor)
+    y_all = np.concatenate([r.output for r in recs])
+    scale = max(1.0, float(np.max(np.abs(y_all))))
+
+    best = None
+    for d in delays:
+        a0, g0 = _arx(recs, d)
+        if not (0.0 < a0 < 1.0) or g0 <= 0:
+            a0, g0 = 0.9, scale / max(1.0, float(np.max(np.abs(recs[0].input))))
+
+        def resid(x: np.ndarray, d: int = d) -> np.ndarray:
+            a, g = x[0], x[1]
+            return np.concatenate([_simulate(a, g, x[2 + j], r.input, d) - r.output
+                                   for j, r in enumerate(recs)])
+
+        x0 = np.r_[a0, g0, [-r.output[0] for r in recs]]
+        lo = np.r_[1e-6, 1e-9, [-np.inf] * len(recs)]
+        hi = np.r_[1.0 - 1e-12, np.inf, [np.inf] * len(recs)]
+        sol = optimize.least_squares(resid, np.clip(x0, lo + 1e-9, hi - 1e-9), bounds=(lo, hi),
+                                     x_scale="jac", xtol=1e-14, ftol=1e-14, gtol=1e-14)
+        sse = float(sol.fun @ sol.fun)
+        if best is None or sse < best[0] * (1 - 1e-9) - 1e-12:
+            best = (sse, d, sol)
+    assert best is not None
+    sse, d, sol = best
+    n = y_all.size
+    p = sol.x.size
+    a, g = float(sol.x[0]), float(sol.x[1])
+    dof = max(n - p, 1)
+    s2 = sse / dof
+    jac = sol.jac
+    try:
+        cov = s2 * np.linalg.inv(jac.T @ jac)
+    except np.linalg.LinAlgError:
+        cov = np.full((p, p), np.inf)
+    tq = float(stats.t.ppf(0.975, dof))
+
+    k_u, amps = md.volts_per_count, md.amps_per_count
+    R = k_u / (g * amps)
+    ln_a = math.log(a)
+    L = -R * TS_I / ln_a
+    # delta method: x = (a, g) → (R, L)
+    jr = np.array([0.0, -R / g])
+    jl = np.array([R * TS_I / (a * ln_a**2), (L / R) * (-R / g)])
+    c2 = cov[:2, :2]
+    sd = {"pole": math.sqrt(max(c2[0, 0], 0.0)), "gain": math.sqrt(max(c2[1, 1], 0.0)),
+          "R_phase": math.sqrt(max(float(jr @ c2 @ jr), 0.0)),
+          "L_phase": math.sqrt(max(float(jl @ c2 @ jl), 0.0))}
+    val = {"pole": a, "gain": g, "R_phase": R, "L_phase": L}
+    ci = {k: (val[k] - tq * sd[k], val[k] + tq * sd[k]) for k in val}
+    ci["R_line"] = (2 * ci["R_phase"][0], 2 * ci["R_phase"][1])
+    ci["L_line"] = (2 * ci["L_phase"][0], 2 * ci["L_phase"][1])
+    fitted = [_simulate(a, g, sol.x[2 + j], r.input, d) for j, r in enumerate(recs)]
+    yhat = np.concatenate(fitted)
+    den = float(np.linalg.norm(y_all - y_all.mean()))
+    fit = 100.0 * (1.0 - float(np.linalg.norm(y_all - yhat)) / den) if den > 0 else math.nan
+    return CoilEstimate(pole=a, gain=g, delay=int(d), R_phase=R, L_phase=L, ci=ci,
+                        nrmse_fit=fit, residual=residual_check(y_all - yhat, p), n_samples=n,
+                        fitted=fitted)

@@ -1,0 +1,217 @@
+"""Identify inertia, KVOUT and friction from TESTA records (manual 4.4.10, 3.2.13).
+
+Model: from rest, constant torque ``K_vf·T_SOLL`` (K_vf = 1.5·p·λ·A_count·AMPLITUDE, manual 4.3)
+acting from ``t = δ`` (δ: the current loop's onset, in outer samples, shared by all records)::
+
+    J dω/dt = K_vf·T_SOLL − b·ω − T_c      (ω > 0; TESTA torque is positive)
+
+so the encoder position (the running sum of V_IST, which undoes the velocity quantisation
+except for ±1 count) is, with β = b/J and α = (K_vf·T_SOLL − T_c)/J,
+
+    P(t) = C + (4096/2π)·α/β·(t' − (1 − e^{−βt'})/β),   t' = max(t − δ, 0).
+
+One torque level cannot separate J from T_c (only α is observable): the *two-level procedure*
+records TESTA at T₁ and T₂ ≈ T₁/2 and fits J, T_c, b, δ and one offset C per record jointly
+(``scipy.optimize.least_squares``); 95 % intervals from ``s²(JᵀJ)⁻¹`` (Student t). With
+``coulomb=False`` (friction known to be negligible) a single record suffices.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import optimize, stats
+
+from .identify_coil import residual_check
+from .models import COUNTS_PER_RAD, TS_O, MotorData
+from .records import Record, RecordError, validate
+
+__all__ = ["MechanicsEstimate", "identify_mechanics", "position_model", "two_level_torques"]
+
+
+@dataclass
+class MechanicsEstimate:
+    """Identified mechanics.
+
+    Attributes
+    ----------
+    J : float
+        Total inertia [kg·m²].
+    kvout : float
+        KVOUT = J/J_m (manual 3.2.13).
+    viscous : float
+        b [N·m·s/rad].
+    coulomb : float
+        T_c [N·m].
+    delay : float
+        Torque onset δ [outer samples].
+    ci : dict
+        95 % intervals (lo, hi) of "J", "kvout", "viscous", "coulomb".
+    nrmse_fit : float
+        NRMSE fit of V_IST [%] over all records (the fitted position differenced).
+    residual : dict
+        Residual check of the position fit (see :func:`tuning.identify_coil.residual_check`).
+    """
+
+    J: float
+    kvout: float
+    viscous: float
+    coulomb: float
+    delay: float
+    ci: dict[str, tuple[float, float]]
+    nrmse_fit: float
+    residual: dict[str, float]
+    n_samples: int
+    fitted_velocity: list[np.ndarray] = field(default_factory=list, repr=False)
+
+
+def position_model(t: np.ndarray, alpha: float, beta: float, delay: float) -> np.ndarray:
+    """Position [counts] at times ``t`` [s] from rest: module docstring (without C)."""
+    tp = np.maximum(np.asarray(t, dtype=float) - delay * TS_O, 0.0)
+    if abs(beta) * float(np.max(tp, initial=0.0)) < 1e-6:
+        term = 0.5 * tp**2 - beta * tp**3 / 6.0
+    else:
+        term = (tp + np.expm1(-beta * tp) / beta) / beta
+    return COUNTS_PER_RAD * alpha * term
+
+
+def two_level_torques(J_guess: float, motor: MotorData, n_samples: int,
+                      final_speed_counts: float = 60.0, ratio: float = 0.5) -> tuple[int, int]:
+    """T_SOLL levels (T₁, T₂ = ratio·T₁) reaching ``final_speed_counts`` [counts/sample] at the
+    end of the record for inertia ``J_guess`` (e.g. from a short pilot record)."""
+    alpha = final_speed_counts / COUNTS_PER_RAD / TS_O / (n_samples * TS_O)
+    t1 = alpha * J_guess / motor.torque_per_vf
+    t1 = int(np.clip(round(t1), 4, 1023))
+    return t1, int(max(2, round(ratio * t1)))
+
+
+def identify_mechanics(records: Record | Sequence[Record], motor: MotorData | str,
+                       coulomb: bool = True, viscous: bool = True) -> MechanicsEstimate:
+    """Estimate J, KVOUT, viscous and Coulomb friction from TESTA records.
+
+    Parameters
+    ----------
+    records : Record or sequence of Record
+        TESTA records from rest. With ``coulomb=True`` at least two different T_SOLL levels
+        are required (the two-level procedure).
+    motor : MotorData or str
+        Motor type: K_vf and J_m (KVOUT = J/J_m).
+    coulomb, viscous : bool
+        Estimate T_c / b (otherwise fixed at 0).
+
+    Returns
+    -------
+    MechanicsEstimate
+
+    Raises
+    ------
+    RecordError
+        Invalid records, or one torque level with ``coulomb=True``.
+    """
+    recs = [records] if isinstance(records, Record) else list(records)
+    for r in recs:
+        validate(r)
+        if r.kind != "TESTA":
+            raise RecordError(f"identify_mechanics needs TESTA records, got {r.kind}")
+    md = motor if isinstance(motor, MotorData) else MotorData.from_config(motor)
+    levels = sorted({float(np.median(r.input)) for r in recs})
+    if coulomb and len(levels) < 2:
+        raise RecordError(
+            "one torque level cannot separate the inertia J from Coulomb friction (only "
+            "(K·T − T_c)/J is observable): record TESTA at two T_SOLL levels (e.g. T and T/2, "
+            "see two_level_torques) or pass coulomb=False if friction is negligible")
+    k = md.torque_per_vf
+    pos = [np.cumsum(r.output) for r in recs]
+    times = [np.arange(r.n) * TS_O for r in recs]
+    torques = [k * float(np.median(r.input)) for r in recs]
+
+    # start: parabola per record → α_r, δ; then J, T_c from α_r = (K T_r − T_c)/J
+    alphas, delays = [], []
+    for p, t in zip(pos, times):
+        sel = slice(2, None)
+        c = np.polyfit(t[sel], p[sel], 2)
+        a = 2 * c[0] / COUNTS_PER_RAD
+        alphas.append(a)
+        delays.append(float(np.clip(-c[1] / (2 * c[0]) / TS_O, 0.0, 3.0)) if c[0] > 0 else 0.5)
+    if coulomb:
+        A = np.array([[tq, -1.0] for tq in torques])
+        inv_j, tcj = np.linalg.lstsq(A, np.array(alphas), rcond=None)[0]
+        j0 = 1.0 / inv_j if inv_j > 0 else md.J_m
+        tc0 = max(tcj * j0, 0.0)
+    else:
+        j0 = float(np.mean([tq / a for tq, a in zip(torques, alphas) if a > 0] or [md.J_m]))
+        tc0 = 0.0
+    jscale = md.J_m
+    names = ["J", "delay"] + (["coulomb"] if coulomb else []) + (["viscous"] if viscous else [])
+    x0 = [j0 / jscale, float(np.median(delays))]
+    lo, hi = [1e-3, -1.0], [1e4, 5.0]
+    if coulomb:
+        x0.append(tc0 / k)
+        lo.append(-np.inf)
+        hi.append(np.inf)
+    if viscous:
+        x0.append(0.0)
+        lo.append(-np.inf)
+        hi.append(np.inf)
+    nr = len(recs)
+    x0 += [float(p[0]) for p in pos]
+    lo += [-np.inf] * nr
+    hi += [np.inf] * nr
+
+    def unpack(x: np.ndarray) -> tuple[float, float, float, float]:
+        J = x[0] * jscale
+        i = 2
+        tc = 0.0
+        b = 0.0
+        if coulomb:
+            tc = x[i] * k
+            i += 1
+        if viscous:
+            b = x[i] * jscale / TS_O
+        return J, float(x[1]), tc, b
+
+    def predict(x: np.ndarray) -> list[np.ndarray]:
+        J, dl, tc, b = unpack(x)
+        off = len(names)
+        return [x[off + j] + position_model(t, (tq - tc) / J, b / J, dl)
+                for j, (t, tq) in enumerate(zip(times, torques))]
+
+    def resid(x: np.ndarray) -> np.ndarray:
+        return np.concatenate([ph - p for ph, p in zip(predict(x), pos)])
+
+    x0a = np.clip(np.array(x0, dtype=float), np.array(lo) + 1e-9, np.array(hi) - 1e-9)
+    sol = optimize.least_squares(resid, x0a, bounds=(lo, hi), x_scale="jac",
+                                 xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=2000)
+    J, dl, tc, b = unpack(sol.x)
+    n = sum(r.n for r in recs)
+    p = sol.x.size
+    dof = max(n - p, 1)
+    s2 = float(sol.fun @ sol.fun) / dof
+    try:
+        cov = s2 * np.linalg.pinv(sol.jac.T @ sol.jac)
+    except np.linalg.LinAlgError:
+        cov = np.full((p, p), np.inf)
+    tq = float(stats.t.ppf(0.975, dof))
+    sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
+    ci: dict[str, tuple[float, float]] = {}
+    scale = {"J": jscale, "coulomb": k, "viscous": jscale / TS_O, "delay": 1.0}
+    vals = {"J": J, "coulomb": tc, "viscous": b, "delay": dl}
+    for i, nm in enumerate(names):
+        h = tq * sd[i] * scale[nm]
+        ci[nm] = (vals[nm] - h, vals[nm] + h)
+    if not coulomb:
+        ci["coulomb"] = (0.0, 0.0)
+    if not viscous:
+        ci["viscous"] = (0.0, 0.0)
+    ci["kvout"] = (ci["J"][0] / md.J_m, ci["J"][1] / md.J_m)
+    fitted_v = [np.diff(np.r_[0.0, ph - ph[0]]) for ph in predict(sol.x)]
+    v_all = np.concatenate([r.output for r in recs])
+    vh = np.concatenate(fitted_v)
+    den = float(np.linalg.norm(v_all - v_all.mean()))
+    fit = 100.0 * (1 - float(np.linalg.norm(v_all - vh)) / den) if den > 0 else math.nan
+    return MechanicsEstimate(J=J, kvout=J / md.J_m, viscous=b, coulomb=tc, delay=dl, ci=ci,
+                             nrmse_fit=fit, residual=residual_check(sol.fun, p), n_samples=n,
+                             fitted_velocity=fitted_v)
