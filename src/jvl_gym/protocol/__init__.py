@@ -1,0 +1,39 @@
+"""Serial protocols of the MAC50–141 (manual chapter 5): codecs, a client and a digital twin.
+
+* :mod:`.mactalk` — MacTalk (5.1), :mod:`.fastmac` — FastMAC (5.2.1), :mod:`.flexmac` —
+  FlexMAC (5.2.2): pure functions, bytes in / bytes out, streaming decoders that resynchronise.
+* :class:`MacTalkClient` — pyserial client (device path or any pyserial URL such as
+  ``socket://127.0.0.1:5000``), typed read/write by register name.
+* :mod:`.twin` and :mod:`.transport` — a simulated motor (or several on one bus) served over a
+  pseudo-terminal or TCP on localhost (``jvl-gym serve``).
+
+See ``docs/protocol.md`` for the frame formats and the decisions taken where the manual is
+ambiguous.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from . import fastmac, flexmac, mactalk
+from .errors import FrameError, NoAnswerError, ProtocolError, RefusedError, UnexpectedReplyError
+
+__all__ = [
+    "FrameError",
+    "MacTalkClient",
+    "NoAnswerError",
+    "ProtocolError",
+    "RefusedError",
+    "UnexpectedReplyError",
+    "fastmac",
+    "flexmac",
+    "mactalk",
+]
+
+
+def __getattr__(name: str) -> Any:  # the client needs pyserial: import it on first use
+    if name == "MacTalkClient":
+        from .client import MacTalkClient
+
+        return MacTalkClient
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
