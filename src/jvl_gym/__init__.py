@@ -20,3 +20,13 @@ def __getattr__(name: str) -> Any:
 
         return getattr(sim, name)
     raise AttributeError(f"module 'jvl_gym' has no attribute {name!r}")
+
+
+def _register() -> None:
+    # Gymnasium ids (jvl_gym/...-v0); registering imports no kernel code.
+    from .envs.registration import register_envs
+
+    register_envs()
+
+
+_register()

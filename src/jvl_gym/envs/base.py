@@ -1,0 +1,407 @@
+"""The shared vector implementation of every jvl_gym environment.
+
+:class:`MotorVectorEnv` runs ``num_envs`` copies of one task over one batched
+:class:`~jvl_gym.MotorArray` (one motor per copy). It owns what all tasks share: seeding (one
+``numpy.random.Generator`` per copy, so copy ``i`` of a vector env seeded ``s`` equals a single env
+seeded ``s + i``), domain randomisation (ranges as constructor arguments and reset options), the
+motor-type pool, control decimation, counter-based observation noise, normalisation and clipping
+into finite Box spaces, the autoreset modes (NEXT_STEP, SAME_STEP, DISABLED) and the scope
+history for ``render_mode="rgb_array"``. A task subclass supplies the physics around the motor
+through five hooks: :meth:`_task_reset`, :meth:`_apply_action`, :meth:`_advance`,
+:meth:`_reward_termination` and :meth:`_observe`.
+
+Everything in a step is vectorised over the copies (numpy over the batch, raw register columns);
+only resets loop over the copies being reset, to draw from their own generators.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from gymnasium import spaces
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+
+from .. import constants as c
+from ..firmware import regs as R
+from .noise import normals
+
+__all__ = ["MotorVectorEnv", "OBS_BOUND", "ERROR_BITS"]
+
+#: observations are normalised so that typical values lie within ±1 and clipped to ±OBS_BOUND
+OBS_BOUND = 5.0
+#: ERR_STAT bits that end an episode: I2T, FLW, FNC, UIT and position-limit errors (3.2.35)
+ERROR_BITS = c.I2T_ERR | c.FLW_ERR | c.FNC_ERR | c.UIT_ERR | c.PLIM_ERR
+
+
+def _seed_list(seed: int | Sequence[int | None] | None, n: int) -> list[int | None]:
+    if seed is None:
+        return [None] * n
+    if isinstance(seed, (int, np.integer)):
+        return [int(seed) + i for i in range(n)]
+    seeds = list(seed)
+    if len(seeds) != n:
+        raise ValueError(f"expected {n} seeds, got {len(seeds)}")
+    return seeds
+
+
+class MotorVectorEnv(VectorEnv):
+    """Base class: ``num_envs`` copies of a motor task, natively vectorised.
+
+    Parameters
+    ----------
+    num_envs : int
+        Number of copies.
+    motor_type : str or sequence of str
+        Motor type, or types drawn uniformly at every reset (``"MAC050"``, ``"MAC095"``,
+        ``"MAC140"``, ``"MAC141"``).
+    randomization : mapping, optional
+        Overrides of the task's domain-randomisation ranges, ``name -> (low, high)``; see the
+        task's ``default_ranges``. ``(x, x)`` fixes a parameter.
+    decimation : int, optional
+        Outer samples (1.92 ms) per environment step; default: the task's.
+    obs_noise : float
+        Standard deviation of Gaussian noise added to the normalised observation.
+    max_episode_steps : int, optional
+        Truncation horizon in environment steps; default: the task's.
+    render_mode : {"rgb_array", None}
+        ``"rgb_array"`` records a scope history and draws it on :meth:`render`.
+    autoreset_mode : AutoresetMode or str
+        ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``.
+
+    Notes
+    -----
+    Reset options (``reset(options=...)``): ``"randomization"`` (a mapping as above, for this
+    reset only), ``"motor_type"`` (str or sequence, for this reset only) and ``"reset_mask"``
+    (bool array of shape (num_envs,): reset only those copies).
+    """
+
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 25,
+                                "autoreset_mode": AutoresetMode.NEXT_STEP}
+
+    #: names of the observation components (normalised)
+    obs_labels: tuple[str, ...] = ()
+    #: names of the action components (each in [-1, 1])
+    act_labels: tuple[str, ...] = ()
+    #: domain randomisation ranges, name -> (low, high)
+    default_ranges: dict[str, tuple[float, float]] = {}
+    default_decimation: int = 1
+    default_max_episode_steps: int = 1000
+    #: names of the scope traces drawn by render (values from :meth:`_scope_values`)
+    scope_channels: tuple[str, ...] = ()
+    scope_length: int = 400
+
+    def __init__(self, num_envs: int = 1, *, motor_type: str | Sequence[str] = "MAC140",
+                 randomization: Mapping[str, tuple[float, float]] | None = None,
+                 decimation: int | None = None, obs_noise: float = 0.0,
+                 max_episode_steps: int | None = None, render_mode: str | None = None,
+                 autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP) -> None:
+        from ..sim import MotorArray  # lazy: building an env compiles/loads the kernel
+
+        if int(num_envs) != num_envs or num_envs < 1:
+            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        if render_mode not in (None, "rgb_array"):
+            raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
+        self.num_envs = int(num_envs)
+        self.render_mode = render_mode
+        self.autoreset_mode = AutoresetMode(autoreset_mode)
+        self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
+        self.decimation = int(decimation if decimation is not None else self.default_decimation)
+        if self.decimation < 1:
+            raise ValueError(f"decimation must be >= 1, got {decimation!r}")
+        self.max_episode_steps = int(max_episode_steps if max_episode_steps is not None
+                                     else self.default_max_episode_steps)
+        if self.max_episode_steps < 1:
+            raise ValueError("max_episode_steps must be >= 1")
+        if not np.isfinite(obs_noise) or obs_noise < 0:
+            raise ValueError(f"obs_noise must be finite and >= 0, got {obs_noise!r}")
+        self.obs_noise = float(obs_noise)
+        self.motor_types = self._check_types(motor_type)
+        self.ranges = self._check_ranges(randomization or {})
+        self._range_names = tuple(sorted(self.default_ranges))
+
+        n = self.num_envs
+        self.single_observation_space = spaces.Box(-OBS_BOUND, OBS_BOUND,
+                                                   (len(self.obs_labels),), np.float32)
+        self.single_action_space = spaces.Box(-1.0, 1.0, (len(self.act_labels),), np.float32)
+        self.observation_space = batch_space(self.single_observation_space, n)
+        self.action_space = batch_space(self.single_action_space, n)
+
+        self.motors = MotorArray(self.motor_types[0], n=n, seed=0)
+        self._type_names = [cfg.name for cfg in self.motors._configs]
+        for name in self.motor_types[1:]:
+            self._type_code(name)
+        self._rngs: list[np.random.Generator | None] = [None] * n
+        self._noise_key = np.zeros(n, dtype=np.uint64)
+        self._t = np.zeros(n, dtype=np.int64)
+        self._prev_action = np.zeros((n, len(self.act_labels)))
+        self._obs = np.zeros((n, len(self.obs_labels)), dtype=np.float32)
+        self._autoreset = np.zeros(n, dtype=np.bool_)
+        self._has_reset = False
+        self._scope: np.ndarray | None = None
+        self._scope_count = np.zeros(n, dtype=np.int64)
+        self._figures: dict[int, Any] = {}
+        self._build()
+
+    # ------------------------------------------------------------------ configuration
+    def _check_types(self, motor_type: str | Sequence[str]) -> tuple[str, ...]:
+        from ..config import motor_types
+
+        types = (motor_type,) if isinstance(motor_type, str) else tuple(motor_type)
+        known = motor_types()
+        if not types or any(t not in known for t in types):
+            raise ValueError(f"motor_type must be one or more of {known}, got {motor_type!r}")
+        return types
+
+    def _check_ranges(self, overrides: Mapping[str, tuple[float, float]]
+                      ) -> dict[str, tuple[float, float]]:
+        out = dict(self.default_ranges)
+        for name, rng in overrides.items():
+            if name not in self.default_ranges:
+                raise ValueError(f"unknown randomisation parameter {name!r}; known: "
+                                 f"{sorted(self.default_ranges)}")
+            lo, hi = (float(v) for v in rng)
+            if not (np.isfinite(lo) and np.isfinite(hi)) or lo > hi:
+                raise ValueError(f"randomisation range of {name!r} must be finite with "
+                                 f"low <= high, got {rng!r}")
+            out[name] = (lo, hi)
+        return out
+
+    def _type_code(self, name: str) -> int:
+        """Index of a motor type in the array's type pool, adding it on first use.
+
+        The pool lets a copy change motor type at a reset without rebuilding the array: the
+        array keeps one ROM image and config per type and a type index per motor, and
+        ``MotorArray.reset`` powers a motor on from its type's ROM.
+        """
+        from ..config import load_motor
+
+        m = self.motors
+        if name not in self._type_names:
+            cfg = load_motor(name)
+            m._configs.append(cfg)
+            m._rom = np.concatenate([m._rom, m._rom_image(cfg, m._setup_arg)[None]])
+            self._type_names.append(cfg.name)
+        return self._type_names.index(name)
+
+    # ------------------------------------------------------------------ task hooks
+    def _build(self) -> None:
+        """Allocate the task's per-copy state (called once by ``__init__``)."""
+
+    def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
+                      ) -> dict[str, np.ndarray]:
+        """Per-motor parameters (``MotorArray.reset`` keywords) of the copies being reset."""
+        return {}
+
+    def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
+                    rngs: list[np.random.Generator]) -> None:
+        """Reset copies ``idx``: motors (already powered on), process state, registers."""
+        raise NotImplementedError
+
+    def _apply_action(self, action: np.ndarray) -> None:
+        """Apply the (N, A) action in [-1, 1] (inputs, register writes)."""
+        raise NotImplementedError
+
+    def _advance(self) -> None:
+        """Advance the motors and the process by ``self.decimation`` outer samples."""
+        self.motors.step(self.decimation)
+
+    def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Reward (N,) float64 and termination (N,) bool after a step."""
+        raise NotImplementedError
+
+    def _observe(self) -> np.ndarray:
+        """Normalised observation (N, K) before noise and clipping."""
+        raise NotImplementedError
+
+    def _scope_values(self) -> np.ndarray:
+        """Scope traces (N, C) in the units of :attr:`scope_channels`."""
+        return np.zeros((self.num_envs, len(self.scope_channels)))
+
+    # ------------------------------------------------------------------ helpers for tasks
+    def error_bits(self) -> np.ndarray:
+        """ERR_STAT error bits that end an episode, (N,) int64 (0 when none is set)."""
+        return self.motors.regs[:, R.ERR_STAT] & ERROR_BITS
+
+    def rotor_inertia(self, idx: np.ndarray) -> np.ndarray:
+        """Rotor inertia J_m [kg·m²] of the motor types of copies ``idx``."""
+        j = np.array([cfg.rotor_inertia for cfg in self.motors._configs])
+        return j[self.motors._type_of[idx]]
+
+    def rated_torque(self, idx: np.ndarray) -> np.ndarray:
+        """Rated torque [N·m] of the motor types of copies ``idx``."""
+        t = np.array([cfg.rated_torque for cfg in self.motors._configs])
+        return t[self.motors._type_of[idx]]
+
+    def peak_torque(self, idx: np.ndarray) -> np.ndarray:
+        """Peak torque (T_SOLL = 1023) [N·m] of the motor types of copies ``idx``."""
+        t = np.array([cfg.peak_torque for cfg in self.motors._configs])
+        return t[self.motors._type_of[idx]]
+
+    # ------------------------------------------------------------------ reset
+    def _reset_envs(self, idx: np.ndarray, seeds: Sequence[int | None],
+                    options: Mapping[str, Any] | None) -> None:
+        options = dict(options or {})
+        ranges = self._check_ranges({**self.ranges, **options.pop("randomization", {})})
+        types = (self._check_types(options.pop("motor_type")) if "motor_type" in options
+                 else self.motor_types)
+        if options:
+            raise ValueError(f"unknown reset options {sorted(options)}; known: "
+                             "randomization, motor_type, reset_mask")
+        names = self._range_names
+        u = np.empty((idx.size, len(names)))
+        u_type = np.empty(idx.size)
+        keys = np.empty((idx.size, 2), dtype=np.uint64)
+        rngs = []
+        for j, (i, seed) in enumerate(zip(idx, seeds)):
+            if seed is not None or self._rngs[i] is None:
+                self._rngs[i] = np.random.default_rng(seed)
+            rng = self._rngs[i]
+            u[j] = rng.random(len(names))
+            u_type[j] = rng.random()
+            keys[j] = rng.integers(0, 2**64 - 1, size=2, dtype=np.uint64, endpoint=True)
+            rngs.append(rng)
+        draws = {name: ranges[name][0] + u[:, k] * (ranges[name][1] - ranges[name][0])
+                 for k, name in enumerate(names)}
+        codes = np.array([self._type_code(types[min(int(x * len(types)), len(types) - 1)])
+                          for x in u_type], dtype=np.int64)
+        self.motors._type_of[idx] = codes
+        self.motors.keys[idx] = keys[:, 0]
+        self._noise_key[idx] = keys[:, 1]
+        self.motors.reset(index=idx, **self._motor_params(idx, draws))
+        self._t[idx] = 0
+        self._prev_action[idx] = 0.0
+        self._scope_count[idx] = 0
+        self._task_reset(idx, draws, rngs)
+        self._obs[idx] = self._finish_obs(self._observe())[idx]
+
+    def reset(self, *, seed: int | Sequence[int | None] | None = None,
+              options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
+        """Reset all copies (or those in ``options["reset_mask"]``).
+
+        An int ``seed`` seeds copy ``i`` with ``seed + i``; a list gives one seed per copy.
+        """
+        seeds = _seed_list(seed, self.num_envs)
+        options = dict(options or {})
+        mask = options.pop("reset_mask", None)
+        if mask is None:
+            idx = np.arange(self.num_envs)
+        else:
+            mask = np.asarray(mask)
+            if mask.dtype != np.bool_ or mask.shape != (self.num_envs,) or not mask.any():
+                raise ValueError("reset_mask must be a bool array of shape (num_envs,) with at "
+                                 "least one True value")
+            idx = np.flatnonzero(mask)
+            if not self._has_reset and idx.size != self.num_envs:
+                raise ValueError("the first reset must reset every copy")
+        self._reset_envs(idx, [seeds[i] for i in idx], options)
+        self._autoreset[idx] = False
+        self._has_reset = True
+        self._record_scope()
+        return self._obs.copy(), {}
+
+    # ------------------------------------------------------------------ step
+    def _finish_obs(self, obs: np.ndarray) -> np.ndarray:
+        if self.obs_noise > 0.0:
+            obs = obs + self.obs_noise * normals(self._noise_key, self._t, obs.shape[1])
+        return np.clip(obs, -OBS_BOUND, OBS_BOUND).astype(np.float32)
+
+    def _step_batch(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray,
+                                                  np.ndarray]:
+        """One step of every copy, without autoreset."""
+        if not self._has_reset:
+            raise RuntimeError("call reset() before step()")
+        a = np.asarray(actions, dtype=np.float64).reshape(self.num_envs, -1)
+        if a.shape[1] != len(self.act_labels):
+            raise ValueError(f"action must have shape ({self.num_envs}, "
+                             f"{len(self.act_labels)}), got {np.shape(actions)}")
+        if not np.all(np.isfinite(a)):
+            raise ValueError("action must be finite")
+        a = np.clip(a, -1.0, 1.0)
+        self._apply_action(a)
+        self._advance()
+        self._t += 1
+        reward, terminated = self._reward_termination(a)
+        truncated = (self._t >= self.max_episode_steps) & ~terminated
+        self._prev_action[:] = a
+        self._obs[:] = self._finish_obs(self._observe())
+        self._record_scope()
+        return self._obs, reward, terminated, truncated
+
+    def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
+                                          dict[str, Any]]:
+        """Step every copy; finished copies are reset as ``autoreset_mode`` says."""
+        done_before = self._autoreset.copy()
+        if self.autoreset_mode == AutoresetMode.DISABLED and done_before.any():
+            raise RuntimeError("AutoresetMode.DISABLED: reset the finished copies (reset_mask) "
+                               "before stepping")
+        obs, reward, terminated, truncated = self._step_batch(actions)
+        reward = reward.astype(np.float64)
+        infos: dict[str, Any] = {}
+        if self.autoreset_mode == AutoresetMode.NEXT_STEP and done_before.any():
+            idx = np.flatnonzero(done_before)
+            self._reset_envs(idx, [None] * idx.size, None)
+            reward[idx] = 0.0
+            terminated[idx] = False
+            truncated[idx] = False
+        elif self.autoreset_mode == AutoresetMode.SAME_STEP:
+            done = terminated | truncated
+            if done.any():
+                idx = np.flatnonzero(done)
+                final = np.full(self.num_envs, None, dtype=object)
+                for i in idx:
+                    final[i] = obs[i].copy()
+                self._reset_envs(idx, [None] * idx.size, None)
+                infos = {"final_obs": final, "_final_obs": done.copy(),
+                         "final_info": {}, "_final_info": done.copy()}
+        self._autoreset = terminated | truncated
+        return self._obs.copy(), reward, terminated.copy(), truncated.copy(), infos
+
+    # ------------------------------------------------------------------ render
+    def _record_scope(self) -> None:
+        if self.render_mode is None:
+            return
+        if self._scope is None:
+            self._scope = np.zeros((self.num_envs, len(self.scope_channels),
+                                    self.scope_length), dtype=np.float32)
+        k = self._scope_count % self.scope_length
+        self._scope[np.arange(self.num_envs), :, k] = self._scope_values()
+        self._scope_count += 1
+
+    def scope_trace(self, index: int = 0) -> np.ndarray:
+        """The recorded scope history of copy ``index``, (C, T) oldest first."""
+        if self._scope is None:
+            return np.zeros((len(self.scope_channels), 0), dtype=np.float32)
+        count = int(self._scope_count[index])
+        n = min(count, self.scope_length)
+        order = (np.arange(count - n, count)) % self.scope_length
+        return self._scope[index][:, order]
+
+    def render_env(self, index: int = 0) -> np.ndarray | None:
+        """Scope plot of copy ``index``: (H, W, 3) uint8 (``render_mode="rgb_array"``)."""
+        if self.render_mode is None:
+            return None
+        from .scope import draw_scope
+
+        dt = self.decimation * c.OUTER_DT
+        return draw_scope(self._figures, index, self.scope_trace(index), self.scope_channels, dt,
+                          title=f"{type(self).__name__.replace('VectorEnv', '')} #{index}")
+
+    def render(self) -> tuple[np.ndarray, ...] | None:
+        """One scope image per copy (``render_mode="rgb_array"``), else None."""
+        if self.render_mode is None:
+            return None
+        return tuple(self.render_env(i) for i in range(self.num_envs))
+
+    def close_extras(self, **kwargs: Any) -> None:
+        """Release the scope figures."""
+        from .scope import close_figures
+
+        close_figures(self._figures)
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state["_figures"] = {}
+        return state

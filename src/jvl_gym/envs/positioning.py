@@ -1,0 +1,140 @@
+"""Positioning-v0: point-to-point moves by torque control through AT_MODE."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .. import constants as c
+from .. import layout as L
+from ..firmware import regs as R
+from .base import MotorVectorEnv
+from .single import MotorEnv
+
+__all__ = ["PositioningEnv", "PositioningVectorEnv"]
+
+_V_NORM = 3000.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 3000 rpm in counts/sample
+_FINE = 200.0  #: counts: scale of the fine position-error channel
+_BASELINE_RPM = 3000.0
+
+
+class PositioningVectorEnv(MotorVectorEnv):
+    """Vector version of :class:`PositioningEnv` (same arguments plus ``num_envs`` and
+    ``autoreset_mode``)."""
+
+    obs_labels = ("position_error", "position_error_fine", "speed", "previous_action")
+    act_labels = ("torque",)
+    default_ranges = {
+        "inertia_ratio": (0.0, 10.0),
+        "viscous_friction": (0.0, 1e-4),
+        "coulomb_ratio": (0.0, 0.1),
+        "target_turns": (-2.0, 2.0),
+    }
+    default_decimation = 1
+    default_max_episode_steps = 300
+    scope_channels = ("position error [turns]", "speed [rpm]", "torque command [1]")
+
+    def __init__(self, num_envs: int = 1, *, baseline: bool = False, overshoot_weight: float = 2.0,
+                 effort_weight: float = 0.01, **kwargs: Any) -> None:
+        self.baseline = bool(baseline)
+        self.overshoot_weight = float(overshoot_weight)
+        self.effort_weight = float(effort_weight)
+        super().__init__(num_envs, **kwargs)
+
+    def _build(self) -> None:
+        n = self.num_envs
+        self.target = np.zeros(n, dtype=np.int64)  # counts
+        self.direction = np.ones(n)
+
+    def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
+                      ) -> dict[str, np.ndarray]:
+        return {"load_inertia": draws["inertia_ratio"] * self.rotor_inertia(idx),
+                "viscous_friction": draws["viscous_friction"],
+                "coulomb_friction": draws["coulomb_ratio"] * self.rated_torque(idx)}
+
+    def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
+                    rngs: list[np.random.Generator]) -> None:
+        target = np.round(draws["target_turns"] * c.COUNTS_PER_REV).astype(np.int64)
+        self.target[idx] = target
+        self.direction[idx] = np.where(target >= 0, 1.0, -1.0)
+        m = self.motors
+        if self.baseline:
+            m.write("V_SOLL", round(c.rpm_to_v_soll(_BASELINE_RPM)), index=idx)
+            m.write("P_SOLL", target, index=idx)
+            m.write("MODE_REG", c.P_MODE, index=idx)
+        else:
+            m.write("MODE_REG", c.AT_MODE, index=idx)
+
+    def _apply_action(self, action: np.ndarray) -> None:
+        if not self.baseline:
+            self.motors.inputs[:, L.I_ANALOG_VOLTS] = c.ANINP_VOLTS * action[:, 0]
+
+    def _error_counts(self) -> np.ndarray:
+        return (self.target - self.motors.regs[:, R.P_IST]).astype(np.float64)
+
+    def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        e = self._error_counts() / c.COUNTS_PER_REV
+        overshoot = np.maximum(-e * self.direction, 0.0)
+        effort = action[:, 0] ** 2 if not self.baseline else (
+            self.motors.regs[:, R.VF_OUT] / c.VF_FULL) ** 2
+        reward = -np.abs(e) - self.overshoot_weight * overshoot - self.effort_weight * effort
+        return reward, self.error_bits() != 0
+
+    def _observe(self) -> np.ndarray:
+        e = self._error_counts()
+        r = self.motors.regs
+        return np.stack([e / (2.0 * c.COUNTS_PER_REV), e / _FINE, r[:, R.V_IST] / _V_NORM,
+                         self._prev_action[:, 0]], axis=1)
+
+    def _scope_values(self) -> np.ndarray:
+        return np.stack([self._error_counts() / c.COUNTS_PER_REV, self.motors.speed_rpm,
+                         self._prev_action[:, 0]], axis=1)
+
+
+class PositioningEnv(MotorEnv):
+    """Point-to-point moves of a MAC motor commanded in torque (AT_MODE).
+
+    ## Description
+    A MAC motor with a random load (inertia 0–10 × rotor, viscous and Coulomb friction) must
+    move to a random target up to ±2 turns away and stop there. The agent commands the torque
+    directly: the motor runs in AT_MODE (manual 4.4.5), where the analogue input sets
+    ``VF_OUT = ANINP·T_SOLL/1023`` (±10 V ↔ ±peak torque). The firmware's current loops still
+    run at 7812.5 Hz; the agent replaces the velocity and position loops.
+
+    ## Action Space
+    ``Box(-1, 1, (1,), float32)``: torque command as a fraction of the peak torque
+    (analogue input = 10 V × action), held for ``decimation`` outer samples (1.92 ms each).
+
+    ## Observation Space
+    ``Box(-5, 5, (4,), float32)``: position error ``(target − P_IST)`` in units of 2 turns; the
+    same error in units of 200 counts (fine, clipped); the measured speed V_IST in units of
+    3000 rpm; the previous action. Optional Gaussian noise (``obs_noise``) is added before
+    clipping.
+
+    ## Rewards
+    Per step: ``−|e| − overshoot_weight·overshoot − effort_weight·a²`` with the position
+    error ``e`` and the overshoot past the target in turns and the torque command ``a``.
+
+    ## Starting State
+    The motor powers on at rest with P_IST = 0 and the default register set; the target is
+    drawn from ``target_turns``; load from ``inertia_ratio`` (× rotor inertia),
+    ``viscous_friction`` [N·m·s/rad] and ``coulomb_ratio`` (× rated torque).
+
+    ## Episode End
+    Terminated when an error bit (I2T, FLW, FNC, UIT, position limit) is set; truncated after
+    ``max_episode_steps`` steps (default 300 ≈ 0.58 s at decimation 1).
+
+    ## Arguments
+    ``motor_type`` (str or list of types drawn per episode), ``randomization`` (overrides of the
+    ranges above), ``decimation`` (outer samples per step, default 1 = 520.8 Hz),
+    ``obs_noise``, ``max_episode_steps``, ``render_mode`` (``"rgb_array"``: scope plot),
+    ``overshoot_weight`` (2.0), ``effort_weight`` (0.01), ``baseline`` (True: the firmware's
+    P_MODE moves to the target with the default setup, V_SOLL = 3000 rpm and A_SOLL from the
+    setup; the action is ignored). Reset options: ``randomization``, ``motor_type``.
+
+    ## Version History
+    * v0: initial version.
+    """
+
+    vector_class = PositioningVectorEnv

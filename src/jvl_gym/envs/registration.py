@@ -1,0 +1,30 @@
+"""Gymnasium registration of the jvl_gym environments (no kernel compilation at import)."""
+
+from __future__ import annotations
+
+import gymnasium as gym
+
+__all__ = ["ENV_IDS", "register_envs"]
+
+#: env id -> (module, single class, vector class, max_episode_steps)
+_ENVS = {
+    "jvl_gym/Positioning-v0": ("positioning", "PositioningEnv", "PositioningVectorEnv", 300),
+    "jvl_gym/FilterTuning-v0": ("filter_tuning", "FilterTuningEnv", "FilterTuningVectorEnv", 1),
+    "jvl_gym/GearSync-v0": ("gear_sync", "GearSyncEnv", "GearSyncVectorEnv", 1500),
+    "jvl_gym/CoilWinding-v0": ("coil_winding", "CoilWindingEnv", "CoilWindingVectorEnv", 1200),
+}
+ENV_IDS: tuple[str, ...] = tuple(_ENVS)
+
+
+def register_envs() -> None:
+    """Register every env id with ``entry_point``, ``vector_entry_point`` and
+    ``max_episode_steps`` (idempotent)."""
+    for env_id, (module, single, vector, steps) in _ENVS.items():
+        if env_id in gym.registry:
+            continue
+        gym.register(
+            id=env_id,
+            entry_point=f"jvl_gym.envs.{module}:{single}",
+            vector_entry_point=f"jvl_gym.envs.{module}:{vector}",
+            max_episode_steps=steps,
+        )

@@ -1,0 +1,61 @@
+"""The ``gymnasium.Env`` view of a task: a one-copy :class:`~jvl_gym.envs.base.MotorVectorEnv`.
+
+Single and vector envs share one implementation, so a single env seeded ``s`` and copy ``i`` of
+a vector env seeded ``s - i`` produce identical trajectories for the same actions.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.vector import AutoresetMode
+
+from .base import MotorVectorEnv
+
+__all__ = ["MotorEnv"]
+
+
+class MotorEnv(gym.Env):
+    """Single-copy environment over the vector core ``vector_class`` (see subclasses)."""
+
+    vector_class: ClassVar[type[MotorVectorEnv]] = MotorVectorEnv
+    metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 25}
+
+    def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+        if "num_envs" in kwargs or "autoreset_mode" in kwargs:
+            raise TypeError("a single env takes neither num_envs nor autoreset_mode")
+        self.core = self.vector_class(num_envs=1, render_mode=render_mode,
+                                      autoreset_mode=AutoresetMode.DISABLED, **kwargs)
+        self.render_mode = render_mode
+        self.observation_space = self.core.single_observation_space
+        self.action_space = self.core.single_action_space
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
+              ) -> tuple[np.ndarray, dict[str, Any]]:
+        """Start an episode (see the class docstring, "Starting State")."""
+        super().reset(seed=seed)
+        if options and "reset_mask" in options:
+            raise ValueError("reset_mask is a vector-env option")
+        obs, _ = self.core.reset(seed=None if seed is None else [seed], options=options)
+        return obs[0], {}
+
+    def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
+        """Advance by ``decimation`` outer samples with ``action`` (see "Action Space")."""
+        obs, reward, terminated, truncated = self.core._step_batch(
+            np.asarray(action, dtype=np.float64)[None])
+        return obs[0].copy(), float(reward[0]), bool(terminated[0]), bool(truncated[0]), {}
+
+    def render(self) -> np.ndarray | None:
+        """The scope plot as an (H, W, 3) uint8 image when ``render_mode="rgb_array"``."""
+        return self.core.render_env(0)
+
+    def close(self) -> None:
+        """Release the scope figure."""
+        self.core.close()
+
+    @property
+    def motors(self) -> Any:
+        """The one-motor :class:`~jvl_gym.MotorArray` under the env."""
+        return self.core.motors
