@@ -1,0 +1,315 @@
+"""MacTalkClient: talk to a MAC50–141 (or the twin) over a serial port (manual 5.1).
+
+pyserial based: ``port`` is a device path (``/dev/ttyUSB0``, a twin's pty) or any pyserial URL
+(``socket://127.0.0.1:5000`` for the twin's TCP endpoint, ``rfc2217://…``). Reads and writes are
+typed by register name with the register table's formats (manual 3.1, 3.2); raw word access is
+available too. Each request waits ``timeout`` seconds for its reply and is sent again up to
+``retries`` times; a motor that never answers raises :class:`NoAnswerError` with what to check.
+
+Examples
+--------
+>>> with MacTalkClient("socket://127.0.0.1:5000", address=19) as c:  # doctest: +SKIP
+...     c.write("V_SOLL", 1600)
+...     c.read("P_IST")
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any
+
+import numpy as np
+
+from . import mactalk as mt
+from .errors import FrameError, NoAnswerError, RefusedError, UnexpectedReplyError
+
+__all__ = ["MacTalkClient", "DEFAULT_BAUDRATE"]
+
+#: the MAC motors' serial speed (MAC800 quick guide: 19200 baud, 8 data bits, no parity)
+DEFAULT_BAUDRATE = 19200
+
+
+class MacTalkClient:
+    """A MacTalk master for one unit address.
+
+    Parameters
+    ----------
+    port : str
+        Device path or pyserial URL.
+    address : int
+        Unit address (MYADDR, 1..254) or 255 (broadcast, point-to-point links only).
+    timeout : float
+        Seconds to wait for a reply.
+    retries : int
+        Extra attempts after a timeout or a garbled reply.
+    baudrate : int
+        Serial speed (ignored by socket URLs).
+    table : RegisterTable, optional
+        Register table for typed access (default: MAC50–141).
+    serial_kwargs
+        Passed to ``serial.serial_for_url``.
+    """
+
+    def __init__(self, port: str, address: int = 1, *, timeout: float = 0.5, retries: int = 2,
+                 baudrate: int = DEFAULT_BAUDRATE, table: Any = None, **serial_kwargs: Any
+                 ) -> None:
+        import serial
+
+        from ..registers import MAC050_141
+
+        if not 1 <= address <= 255:
+            raise ValueError(f"unit address must be 1..255, got {address}")
+        self.port = port
+        self.address = address
+        self.timeout = timeout
+        self.retries = retries
+        self.table = table if table is not None else MAC050_141
+        self.ser = serial.serial_for_url(port, baudrate=baudrate, timeout=timeout,
+                                         **serial_kwargs)
+        #: counters: requests, retries, bytes
+        self.requests = 0
+        self.retried = 0
+
+    # ------------------------------------------------------------------ plumbing
+    def close(self) -> None:
+        """Close the port."""
+        self.ser.close()
+
+    def __enter__(self) -> MacTalkClient:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def _read_exact(self, n: int, deadline: float) -> bytes:
+        out = bytearray()
+        while len(out) < n:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                break
+            self.ser.timeout = left
+            chunk = self.ser.read(n - len(out))
+            if not chunk:
+                break
+            out += chunk
+        return bytes(out)
+
+    def _read_reply(self, deadline: float) -> bytes:
+        """Read one reply frame: an accept or a data reply (length from its datalength)."""
+        head = self._read_exact(3, deadline)
+        if head == mt.ACCEPT or len(head) < 3:
+            return head
+        head += self._read_exact(4, deadline)
+        if len(head) < 7:
+            return head
+        dl = head[5]
+        return head + self._read_exact(2 * dl + 2, deadline)
+
+    def transact(self, request: bytes, what: str, expect: str = "data") -> mt.Frame | None:
+        """Send ``request`` and return the decoded reply (``expect`` = "data", "accept" or
+        "none"), with retries; raise :class:`NoAnswerError` if nothing valid comes back."""
+        self.requests += 1
+        problems: list[str] = []
+        for attempt in range(self.retries + 1):
+            if attempt:
+                self.retried += 1
+            self.ser.reset_input_buffer()
+            self.ser.write(request)
+            self.ser.flush()
+            if expect == "none":
+                return None
+            raw = self._read_reply(time.monotonic() + self.timeout)
+            if not raw:
+                problems.append("no answer")
+                continue
+            try:
+                frame = mt.decode(raw)
+            except FrameError as err:
+                problems.append(f"garbled reply ({err.reason})")
+                time.sleep(min(0.05, self.timeout))
+                continue
+            if expect == "accept" and isinstance(frame, mt.Accept):
+                return frame
+            if expect == "data" and isinstance(frame, mt.DataReply):
+                return frame
+            wanted = "an accept" if expect == "accept" else "a data reply"
+            raise UnexpectedReplyError(f"{what}: expected {wanted}, got {frame!r}")
+        raise NoAnswerError(
+            f"motor at address {self.address} on {self.port} did not answer {what} "
+            f"({self.retries + 1} attempts, timeout {self.timeout} s; {', '.join(problems)}). "
+            "Check the port and baud rate, the address (MYADDR, register 156), that the motor is "
+            "powered, and whether it refused the request: a write that is out of range or not "
+            "allowed in the present mode gets no accept (manual 5.1).")
+
+    # ------------------------------------------------------------------ raw access
+    def read_words(self, register: int) -> tuple[int, int]:
+        """Words of registers N and N+1 (a read always returns four bytes, manual 5.1)."""
+        rep = self.transact(mt.encode_read(self.address, register), f"READ {register}")
+        assert isinstance(rep, mt.DataReply)
+        if len(rep.data) != 4:
+            raise UnexpectedReplyError(f"READ {register}: expected 4 data bytes, got "
+                                       f"{len(rep.data)}")
+        w = mt.bytes_to_words(rep.data)
+        return w[0], w[1]
+
+    def read_block(self, register: int) -> list[int]:
+        """Words of the block starting at ``register`` (the twin sends 16)."""
+        rep = self.transact(mt.encode_read_block(self.address, register),
+                            f"READ BLOCK {register}")
+        assert isinstance(rep, mt.DataReply)
+        return mt.bytes_to_words(rep.data)
+
+    def write_word(self, register: int, word: int) -> None:
+        """Write one 16-bit word (datalength 2) and wait for the accept."""
+        self.transact(mt.encode_write_word(self.address, register, word),
+                      f"WRITE {register} = {word:#06x}", "accept")
+
+    def write_long(self, register: int, value: int) -> None:
+        """Write a 32-bit value (datalength 4) and wait for the accept."""
+        self.transact(mt.encode_write_long(self.address, register, value),
+                      f"WRITE {register} = {value}", "accept")
+
+    # ------------------------------------------------------------------ typed access
+    def _reg(self, key: str | int) -> Any:
+        return self.table.lookup(key)
+
+    def read_raw(self, key: str | int) -> int:
+        """Stored integer of a register (a LongInt's full 32-bit value; Fixed as integer)."""
+        from ..registers import Format, from_word16, join_longint
+
+        reg = self._reg(key)
+        w0, w1 = self.read_words(reg.number)
+        if reg.format == Format.LONGINT:
+            return int(join_longint(w0, w1))
+        if reg.access.value == "reserved":
+            return w0
+        return int(from_word16(reg, w0))
+
+    def read(self, key: str | int) -> float | int:
+        """Register value in user units (manual 3.1): Fixed formats as float, others int."""
+        from ..registers import from_raw
+
+        reg = self._reg(key)
+        v = from_raw(reg, self.read_raw(reg.number))
+        return float(v) if reg.scale != 1 else int(v)
+
+    def write_raw(self, key: str | int, raw: int) -> None:
+        """Write a stored integer, validated against the table before sending."""
+        reg = self._reg(key)
+        self.write(reg.number, raw / reg.scale)
+
+    def write(self, key: str | int, value: float) -> None:
+        """Write a register in user units; validated against the table first (range,
+        read-only) so that a bad value raises at once instead of timing out."""
+        from ..registers import Format, to_raw, to_word16
+
+        reg = self._reg(key)
+        if reg.access.value != "rw":
+            from ..registers import ReadOnlyRegisterError
+
+            raise ReadOnlyRegisterError(f"{reg.name} (register {reg.number}) is "
+                                        f"{reg.access.value}; it cannot be written")
+        raw = int(to_raw(reg, value))
+        if reg.format == Format.LONGINT:
+            self.write_long(reg.number, raw)
+        else:
+            self.write_word(reg.number, int(to_word16(reg, raw)))
+
+    # ------------------------------------------------------------------ commands
+    def go_safe_mode(self) -> None:
+        """MacTalk 'go safe mode' (5.1, 4.4.16)."""
+        self.transact(mt.encode_go_safe_mode(self.address), "GO SAFE MODE", "accept")
+
+    def go_init_mode(self) -> None:
+        """MacTalk 'go init mode' (5.1); leaves SAFE_MODE."""
+        self.transact(mt.encode_go_init_mode(self.address), "GO INIT MODE", "accept")
+
+    def write_flash(self, settle: float = 0.2) -> None:
+        """Write parameters to flash and reset (only in SAFE_MODE; no accept, 5.1)."""
+        if self.read("MODE_REG") != 15:
+            raise RefusedError("write to flash needs SAFE_MODE (manual 2.2, 4.4.16): call "
+                               "go_safe_mode() first")
+        self.transact(mt.encode_write_flash(self.address), "WRITE FLASH", "none")
+        time.sleep(settle)
+
+    def reset(self, settle: float = 0.2) -> None:
+        """Software reset (only in INIT or SAFE mode; no accept, 5.1)."""
+        self.transact(mt.encode_reset(self.address), "RESET", "none")
+        time.sleep(settle)
+
+    def read_sample(self) -> bytes:
+        """One read-sample-buffer request: 16 bytes of a sample, or b"" at the end."""
+        rep = self.transact(mt.encode_read_sample_buffer(self.address), "READ SAMPLE BUFFER")
+        assert isinstance(rep, mt.DataReply)
+        return rep.data
+
+    def read_sample_buffer_raw(self) -> np.ndarray:
+        """All samples (REC_CNT of them) as raw values, shape (REC_CNT, 4) for SAMPLE1..4.
+
+        The buffer is read sample by sample until the empty reply that marks its end (twin
+        rule, docs/protocol.md); a partial read-out left over from an earlier call is drained
+        first so that the result always starts at sample 0.
+        """
+        count = int(self.read("REC_CNT"))
+        for _ in range(count + 1):  # drain to the end marker, pointer back at 0
+            if self.read_sample() == b"":
+                break
+        rows = []
+        for _ in range(count + 1):
+            d = self.read_sample()
+            if d == b"":
+                break
+            rows.append([mt.bytes_to_long(d[4 * k:4 * k + 4]) for k in range(4)])
+        return np.asarray(rows, dtype=np.int64).reshape(-1, 4)
+
+    def read_sample_buffer(self) -> dict[str, np.ndarray]:
+        """The sample buffer in user units, keyed by the names of SAMPLE1..SAMPLE4."""
+        from ..registers import from_raw
+
+        raw = self.read_sample_buffer_raw()
+        out: dict[str, np.ndarray] = {}
+        for ch in range(4):
+            num = int(self.read(f"SAMPLE{ch + 1}"))
+            reg = self._reg(num)
+            col = raw[:, ch]
+            if reg.format.value not in ("Word", "LongIntHigh", "LongInt"):
+                col = ((col + 2**15) % 2**16) - 2**15
+            name = reg.name if reg.name not in out else f"SAMPLE{ch + 1}"
+            out[name] = np.asarray(from_raw(reg, col))
+        return out
+
+    def wait_mode(self, mode: int, timeout: float = 10.0, poll: float = 0.02) -> None:
+        """Poll MODE_REG until it equals ``mode``."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            if self.read("MODE_REG") == mode:
+                return
+            time.sleep(poll)
+        raise TimeoutError(f"MODE_REG did not become {mode} within {timeout} s")
+
+    def run_test(self, mode: int, setup: dict[str, float], timeout: float = 10.0
+                 ) -> dict[str, np.ndarray]:
+        """Run TESTU (mode 8) or TESTA (mode 9) from INIT_MODE through the protocol and return
+        the sample buffer (manual 4.4.9, 4.4.10): write ``setup`` (e.g. ``{"UMEAS": 100}``),
+        write MODE_REG, wait for the motor to be back in INIT_MODE, read the buffer."""
+        if mode not in (8, 9):
+            raise ValueError("mode must be 8 (TESTU) or 9 (TESTA)")
+        if self.read("MODE_REG") != 0:
+            raise RefusedError("TESTU/TESTA start from INIT_MODE (manual 4.4.9, 4.4.10)")
+        for name, value in setup.items():
+            self.write(name, value)
+        self.write("MODE_REG", mode)
+        self.wait_mode(0, timeout)
+        return self.read_sample_buffer()
+
+    def write_registers(self, values: dict[str, float], verify: bool = True) -> None:
+        """Write several registers (e.g. synthesised filter coefficients) and read them back."""
+        for name, value in values.items():
+            self.write(name, value)
+        if verify:
+            for name, value in values.items():
+                reg = self._reg(name)
+                from ..registers import to_raw
+
+                if self.read_raw(reg.number) != int(to_raw(reg, value)):
+                    raise UnexpectedReplyError(f"{name}: read back differs from {value}")

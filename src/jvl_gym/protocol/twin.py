@@ -1,0 +1,518 @@
+"""Protocol server logic of the digital twin: request bytes → reply bytes + effects on motors.
+
+No I/O here (see :mod:`.transport`): a :class:`Twin` wraps a :class:`~jvl_gym.MotorArray` (or
+anything with the same subset of methods, :class:`MotorBackend`), and sessions turn received
+byte chunks into reply bytes.
+
+What the twin does on each MacTalk command (manual 5.1; decisions in ``docs/protocol.md``):
+
+=====================  ===================================================================
+read (50h)             reply ``52h×3 00h FFh 04h FBh`` + words N, N+1 (LongInt rule)
+read block (51h)       reply with the 16 words N..N+15 (32 bytes; block size is a decision)
+write (52h)            2 bytes: the 16-bit word of register N; 4 bytes: a 32-bit value to N
+                       (a LongInt, or a 16-bit register whose format the value must fit).
+                       Validated by the simulator; accept ``11h×3`` only if it was carried out
+read sample buffer     the next sample: SAMPLE1..4 as four 32-bit values (16 bytes); after
+(53h)                  the last of REC_CNT samples an empty reply (dl = 0), then from the start
+go safe mode (54h)     MotorArray.go_safe_mode (stops first, 4.4.16), accept
+go init mode (55h)     leaves SAFE_MODE (exit_safe_mode) or goes to INIT_MODE, accept
+write flash (56h)      only in SAFE_MODE: save registers to flash (and the flash file), reset;
+                       no accept (5.1)
+reset (57h)            only in INIT or SAFE mode: software reset; no accept (5.1)
+=====================  ===================================================================
+
+A refused request (range, read-only, wrong mode) changes nothing and gets **no reply**, as a
+real unit that does not accept. Frames addressed to another unit, the master's data replies and
+accepts (other units on the bus) are ignored. Broadcast (FFh) requests are carried out by every
+motor; they are answered only when the twin serves a single motor (a point-to-point link), as a
+bus of several units would collide.
+
+The FastMAC/FlexMAC user interface (5.2) of motor *i* is served by :class:`UserInterfaceSession`
+when its CNTRL_BITS USERINTF bits latched at power-on are 11 (manual 3.2.36); in SAFE_MODE it
+accepts no command (4.4.16) but still reports status and answers reads.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import threading
+from collections import Counter
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from . import fastmac as fm
+from . import flexmac as fx
+from . import mactalk as mt
+from .errors import FrameError
+
+__all__ = ["MotorBackend", "Twin", "MacTalkSession", "UserInterfaceSession", "BLOCK_WORDS",
+           "REG"]
+
+log = logging.getLogger(__name__)
+
+#: words returned by a read-block request (twin decision, docs/protocol.md)
+BLOCK_WORDS = 16
+
+
+class REG:
+    """Register numbers used by the twin (manual 3.2)."""
+
+    MODE_REG, P_SOLL, V_SOLL, T_SOLL, P_FNC, P_IST = 2, 3, 5, 7, 8, 10
+    FLWERR, ERR_STAT, CNTRL_BITS, HOME_MODE = 20, 35, 36, 42
+    P_REG_P, V_REG_P, A_REG_P, T_REG_P, L_REG_P, Z_REG_P = 43, 44, 45, 46, 47, 48
+    P1, P7, P8 = 49, 61, 63
+    SAMPLE1, REC_CNT, MYADDR = 112, 116, 156
+
+
+SAFE_MODE, INIT_MODE = 15, 0
+_IN_POS, _ACC, _DEC = 1 << 4, 1 << 5, 1 << 6
+_ERRORS = 0x0F  # I2T_ERR, FLW_ERR, FNC_ERR, UIT_ERR (status bit 0, manual 5.2.1.6)
+_CLEARABLE = 0x0F | (1 << 7) | (1 << 8) | (1 << 11) | (1 << 12)  # errors reset by command 01h
+_RELPOSPSOLL, _RELPOSPFNC = 1 << 9, 1 << 10
+_POINTER = {"P": REG.P_REG_P, "V": REG.V_REG_P, "A": REG.A_REG_P, "T": REG.T_REG_P,
+            "L": REG.L_REG_P, "Z": REG.Z_REG_P}
+
+
+class MotorBackend(Protocol):
+    """The subset of :class:`jvl_gym.MotorArray` the twin uses."""
+
+    n: int
+    table: Any
+
+    def read_raw(self, key: str | int) -> np.ndarray: ...
+    def write_raw(self, key: str | int, raw: Any, index: Any = None) -> None: ...
+    def step(self, n_outer: int = 1) -> None: ...
+    def go_safe_mode(self, index: Any = None) -> None: ...
+    def go_init_mode(self, index: Any = None) -> None: ...
+    def exit_safe_mode(self, index: Any = None) -> None: ...
+    def write_flash(self, index: Any = None) -> None: ...
+    def software_reset(self, index: Any = None) -> None: ...
+    def flash_image(self, index: int) -> dict[int, int]: ...
+    def load_flash_image(self, index: int, image: dict[int, int]) -> None: ...
+    def sample_buffer_raw(self, index: int) -> np.ndarray: ...
+
+    @property
+    def interface_bits(self) -> np.ndarray: ...
+
+
+def _s16(word: int) -> int:
+    return word - 0x10000 if word & 0x8000 else word
+
+
+def _s32(value: int) -> int:
+    value &= 0xFFFFFFFF
+    return value - 2**32 if value & 0x80000000 else value
+
+
+class Twin:
+    """Simulated motors behind the MacTalk / FastMAC / FlexMAC protocols.
+
+    Parameters
+    ----------
+    motors : MotorBackend
+        Usually ``MotorArray(type, n=len(addresses))``.
+    addresses : list of int, optional
+        MYADDR (1..254) of each motor, kept as the motor's factory address: written now and
+        stored in flash unless a flash file provides the registers.
+    flash_dir : path, optional
+        Directory of the flash files ``flash_<i>.json`` (loaded at start, written by 56h).
+    fastmac_code : dict
+        FastMAC register code (:data:`~.fastmac.EXAMPLE_CODE` or ``TABLE_CODE``).
+
+    Attributes
+    ----------
+    lock : threading.RLock
+        Held while a request is carried out or the simulation steps.
+    stats : collections.Counter
+        ``frames``, ``errors``, ``refused``, ``replies``, ``ignored`` …
+    """
+
+    def __init__(self, motors: MotorBackend, addresses: list[int] | None = None,
+                 flash_dir: str | os.PathLike[str] | None = None,
+                 fastmac_code: dict[str, tuple[int, int]] = fm.DEFAULT_CODE) -> None:
+        self.m = motors
+        self.lock = threading.RLock()
+        self.stats: Counter[str] = Counter()
+        self.fastmac_code = fastmac_code
+        self.flash_dir = Path(flash_dir) if flash_dir is not None else None
+        self.last_refusal: str = ""
+        self._sample_ptr = [0] * motors.n
+        self.user = [UserInterfaceSession(self, i) for i in range(motors.n)]
+        if addresses is not None:
+            if len(addresses) != motors.n:
+                raise ValueError(f"{len(addresses)} addresses for {motors.n} motors")
+            for a in addresses:
+                if not 1 <= a <= 254:
+                    raise ValueError(f"a unit address is 1..254 (manual 3.2.156), got {a}")
+        for i in range(motors.n):
+            image = self._load_flash_file(i)
+            if image is not None:
+                motors.load_flash_image(i, image)
+                motors.software_reset(i)
+            elif addresses is not None:
+                motors.load_flash_image(i, {REG.MYADDR: addresses[i]})
+                motors.write_raw(REG.MYADDR, addresses[i], index=i)
+
+    # ------------------------------------------------------------------ helpers
+    def _flash_path(self, i: int) -> Path | None:
+        return None if self.flash_dir is None else self.flash_dir / f"flash_{i}.json"
+
+    def _load_flash_file(self, i: int) -> dict[int, int] | None:
+        path = self._flash_path(i)
+        if path is None or not path.exists():
+            return None
+        return {int(k): int(v) for k, v in json.loads(path.read_text())["registers"].items()}
+
+    def _save_flash_file(self, i: int) -> None:
+        path = self._flash_path(i)
+        if path is None:
+            return
+        path.parent.mkdir(parents=True, exist_ok=True)
+        image = self.m.flash_image(i)
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(json.dumps({"motor": i, "registers": {str(k): v for k, v in
+                                                              sorted(image.items())}}, indent=1))
+        tmp.replace(path)
+
+    def addresses(self) -> list[int]:
+        """MYADDR of every motor now."""
+        return [int(a) for a in self.m.read_raw(REG.MYADDR)]
+
+    def mode(self, i: int) -> int:
+        return int(self.m.read_raw(REG.MODE_REG)[i])
+
+    def word(self, i: int, reg: int) -> int:
+        """The 16-bit word of register number ``reg`` of motor ``i`` (0 where there is none)."""
+        if reg not in self.m.table:
+            return 0
+        r = self.m.table.lookup(reg)
+        if r.access.value == "reserved":
+            return 0
+        return int(self.m.read_raw(reg)[i]) & 0xFFFF
+
+    def words(self, i: int, reg: int, n: int) -> bytes:
+        return mt.words_to_bytes([self.word(i, reg + k) for k in range(n)])
+
+    def refuse(self, why: str) -> None:
+        self.last_refusal = why
+        self.stats["refused"] += 1
+        log.info("refused: %s", why)
+
+    def write_bytes(self, i: int, reg: int, data: bytes) -> bool:
+        """Write 2 bytes (a word to register ``reg``) or 4 bytes (a 32-bit value) to motor ``i``;
+        False (nothing changed) if refused."""
+        from ..registers import Format, RegisterError
+
+        if reg not in self.m.table:
+            self.refuse(f"no register {reg}")
+            return False
+        r = self.m.table.lookup(reg)
+        if len(data) == 2:
+            w = int.from_bytes(data, "little")
+            if r.format == Format.LONGINT:
+                raw = _s32((int(self.m.read_raw(reg)[i]) & ~0xFFFF) | w)
+            elif r.format in (Format.WORD, Format.LONGINT_HIGH):
+                raw = w
+            else:
+                raw = _s16(w)
+        else:
+            v = int.from_bytes(data, "little")
+            if r.format == Format.LONGINT_HIGH:
+                self.refuse(f"a 32-bit write to {r.name}, the high word of a LongInt")
+                return False
+            raw = v if r.format == Format.WORD else _s32(v)
+        try:
+            self.m.write_raw(reg, np.int64(raw), index=i)
+        except (RegisterError, ValueError) as exc:
+            self.refuse(str(exc))
+            return False
+        if reg in (REG.CNTRL_BITS, REG.MODE_REG, REG.REC_CNT):
+            self._sample_ptr[i] = 0
+        return True
+
+    def step(self, n_outer: int) -> None:
+        """Advance the simulation by ``n_outer`` outer samples (under the lock)."""
+        if n_outer > 0:
+            with self.lock:
+                self.m.step(n_outer)
+
+    # ------------------------------------------------------------------ MacTalk
+    def targets(self, address: int) -> list[int]:
+        """Motors addressed by ``address``: MYADDR match, all on broadcast, none for master."""
+        if address == mt.BROADCAST:
+            return list(range(self.m.n))
+        if address == mt.MASTER:
+            return []
+        return [i for i, a in enumerate(self.addresses()) if a == address]
+
+    def handle(self, frame: mt.Frame) -> bytes:
+        """Carry out one decoded MacTalk frame; return the reply bytes (maybe empty)."""
+        if not isinstance(frame, mt.Request):
+            self.stats["ignored"] += 1
+            return b""
+        with self.lock:
+            targets = self.targets(frame.address)
+            if not targets:
+                self.stats["ignored"] += 1
+                return b""
+            replies = [self._one(i, frame) for i in targets]
+        if frame.address == mt.BROADCAST and self.m.n > 1:
+            return b""
+        reply = replies[0]
+        if reply:
+            self.stats["replies"] += 1
+        return reply
+
+    def _one(self, i: int, f: mt.Request) -> bytes:
+        c = mt.Command
+        cmd = f.command
+        self.stats[cmd.name] += 1
+        try:
+            if cmd == c.READ:
+                return mt.encode_data_reply(self.words(i, f.register or 0, 2))
+            if cmd == c.READ_BLOCK:
+                return mt.encode_data_reply(self.words(i, f.register or 0, BLOCK_WORDS))
+            if cmd == c.WRITE:
+                return mt.ACCEPT if self.write_bytes(i, f.register or 0, f.data) else b""
+            if cmd == c.READ_SAMPLE_BUFFER:
+                return mt.encode_data_reply(self._next_sample(i))
+            if cmd == c.GO_SAFE_MODE:
+                self.m.go_safe_mode(i)
+                return mt.ACCEPT
+            if cmd == c.GO_INIT_MODE:
+                if self.mode(i) == SAFE_MODE:
+                    self.m.exit_safe_mode(i)
+                else:
+                    self.m.go_init_mode(i)
+                return mt.ACCEPT
+            if cmd == c.WRITE_FLASH:
+                self.m.write_flash(i)  # refuses unless SAFE_MODE
+                self._save_flash_file(i)
+                self._after_reset(i)
+                return b""
+            if cmd == c.RESET:
+                self.m.software_reset(i)  # refuses unless INIT or SAFE
+                self._after_reset(i)
+                return b""
+        except ValueError as exc:  # RegisterError / ModeError are ValueErrors
+            self.refuse(f"{cmd.name} for motor {i}: {exc}")
+            return b""
+        raise AssertionError(cmd)  # pragma: no cover
+
+    def _after_reset(self, i: int) -> None:
+        self._sample_ptr[i] = 0
+        self.user[i].power_on()
+
+    def _next_sample(self, i: int) -> bytes:
+        buf = self.m.sample_buffer_raw(i)
+        k = self._sample_ptr[i]
+        if k >= len(buf):
+            self._sample_ptr[i] = 0
+            return b""
+        self._sample_ptr[i] = k + 1
+        return b"".join(mt.long_to_bytes(_s32(int(v))) for v in buf[k])
+
+    def session(self) -> MacTalkSession:
+        """A new MacTalk session (one per connection)."""
+        return MacTalkSession(self)
+
+
+class MacTalkSession:
+    """One MacTalk byte stream (a TCP connection, a pty): bytes in → reply bytes out."""
+
+    def __init__(self, twin: Twin) -> None:
+        self.twin = twin
+        self.decoder = mt.MacTalkDecoder()
+
+    def _run(self, items: list[mt.Frame | FrameError]) -> bytes:
+        out = bytearray()
+        for item in items:
+            if isinstance(item, FrameError):
+                self.twin.stats["errors"] += 1
+                log.info("MacTalk frame rejected: %s", item.reason)
+                continue
+            self.twin.stats["frames"] += 1
+            out += self.twin.handle(item)
+        return bytes(out)
+
+    def feed(self, chunk: bytes) -> bytes:
+        """Received bytes → the replies they call for."""
+        return self._run(self.decoder.feed(chunk))
+
+    def flush(self) -> bytes:
+        """Inter-character timeout: a held-back partial frame is truncated."""
+        return self._run(list(self.decoder.flush()))
+
+
+class UserInterfaceSession:
+    """FastMAC / FlexMAC on the user interface of motor ``index`` (manual 5.2).
+
+    Active only when the CNTRL_BITS USERINTF bits latched at power-on are 11 (3.2.36). In FastMAC
+    the motor answers every received byte with a status byte (the real motor sends status bytes
+    continuously, 5.2.1.6); in FlexMAC it answers each write with a status byte and each read with
+    the data (see :mod:`.flexmac`).
+    """
+
+    def __init__(self, twin: Twin, index: int) -> None:
+        self.twin = twin
+        self.i = index
+        self.power_on()
+
+    def power_on(self) -> None:
+        """Protocol state after power-on / reset: FastMAC, rapid, toggle unsynchronised."""
+        self.rx = fm.FastMacReceiver(self.twin.fastmac_code)
+        self.flex = fx.FlexMacDecoder()
+        self.flexmac = False
+        self.toggle = 0
+        self.slow = False
+        self.send_myaddr = False
+
+    @property
+    def active(self) -> bool:
+        """USERINTF = 11 at the last power-on."""
+        return int(self.twin.m.interface_bits[self.i]) & 3 == 3
+
+    def status(self) -> int:
+        """The status byte now (manual 5.2.1.6)."""
+        st = int(self.twin.m.read_raw(REG.ERR_STAT)[self.i])
+        dec, acc = bool(st & _DEC), bool(st & _ACC)
+        return fm.encode_status(fm.Status(self.toggle, dec, acc and not dec, bool(st & _IN_POS),
+                                          self.flexmac, False, bool(st & _ERRORS)))
+
+    def feed(self, chunk: bytes) -> bytes:
+        """Received bytes → status bytes / read replies."""
+        if not self.active:
+            self.twin.stats["user_inactive"] += len(chunk)
+            return b""
+        out = bytearray()
+        with self.twin.lock:
+            for b in chunk:
+                out += self._flex_byte(b) if self.flexmac else self._fast_byte(b)
+        return bytes(out)
+
+    def flush(self) -> bytes:
+        if self.flexmac:
+            self.twin.stats["errors"] += len(self.flex.flush())
+        return b""
+
+    # ------------------------------------------------------------------ FastMAC
+    def _fast_byte(self, b: int) -> bytes:
+        got = self.rx.feed(b)
+        if isinstance(got, FrameError):
+            self.twin.stats["errors"] += 1
+        elif got is not None:
+            self.twin.stats["fastmac"] += 1
+            if self.twin.mode(self.i) == SAFE_MODE:
+                self.twin.refuse("FastMAC command in SAFE_MODE (manual 4.4.16)")
+            else:
+                self.toggle = got.toggle
+                self._fast(got)
+        if self.send_myaddr:
+            self.send_myaddr = False
+            return bytes((self.twin.word(self.i, REG.MYADDR) & 0xFF,))
+        return bytes((self.status(),))
+
+    def _w(self, reg: int, raw: int) -> bool:
+        return self.twin.write_bytes(self.i, reg, mt.long_to_bytes(_s32(raw))
+                                     if reg in (REG.P_SOLL, REG.P_IST, REG.P_FNC)
+                                     else mt.words_to_bytes([raw & 0xFFFF]))
+
+    def _err_stat(self, clear: int = 0, set_: int = 0) -> None:
+        st = int(self.twin.m.read_raw(REG.ERR_STAT)[self.i])
+        self._w(REG.ERR_STAT, (st & ~clear) | set_)
+
+    def _raw(self, reg: int) -> int:
+        return int(self.twin.m.read_raw(reg)[self.i])
+
+    def _fast(self, c: fm.FastMacByte) -> None:
+        """Carry out a FastMAC command (manual 5.2.1.4)."""
+        if c.mode != fm.Mode.COMMAND:
+            assert c.group is not None and c.number is not None
+            self._w(_POINTER[c.group], c.number)
+            if self.twin.mode(self.i) != int(c.mode):
+                self._w(REG.MODE_REG, int(c.mode))
+            return
+        k = fm.FastCommand
+        cmd = c.command
+        if cmd == k.RESET_ERROR:
+            self._err_stat(clear=_CLEARABLE)
+        elif cmd == k.P_SOLL_ZERO:
+            self._w(REG.P_SOLL, 0)
+            self._err_stat(clear=_IN_POS)
+        elif cmd == k.P_IST_ZERO:
+            self._w(REG.P_IST, 0)
+        elif cmd == k.P_FNC_ZERO:
+            self._w(REG.P_FNC, 0)
+            self._err_stat(clear=_IN_POS)
+        elif cmd == k.V_SOLL_ZERO:
+            self._w(REG.V_SOLL, 0)
+        elif cmd == k.T_SOLL_ZERO:
+            self._w(REG.T_SOLL, 0)
+        elif cmd == k.IN_POS_ZERO:
+            self._err_stat(clear=_IN_POS)
+        elif cmd in (k.REL_P7_FNC, k.REL_P8_FNC):
+            p = self._raw(REG.P7 if cmd == k.REL_P7_FNC else REG.P8)
+            self._w(REG.P_FNC, (self._raw(REG.FLWERR) - p) * 16)  # literally as in 5.2.1.4
+            self._err_stat(clear=_IN_POS)
+        elif cmd in (k.SET1, k.SET2, k.SET3, k.SET4):
+            n = int(cmd) - int(k.SET1) + 1
+            for reg in _POINTER.values():
+                self._w(reg, n)
+            self._err_stat(clear=_IN_POS)
+        elif cmd == k.HOME:
+            home = self._raw(REG.HOME_MODE) >> 8
+            if home in (12, 13, 14):
+                self._w(REG.MODE_REG, home)
+        elif cmd in (k.MOVE_REL_P7, k.MOVE_REL_P8):
+            p = self._raw(REG.P7 if cmd == k.MOVE_REL_P7 else REG.P8)
+            self._w(REG.P_SOLL, self._raw(REG.P_IST) + p - self._raw(REG.FLWERR))
+        elif cmd == k.TRANSMIT_SLOWLY:
+            self.slow = True
+        elif cmd == k.ABSOLUTE:
+            self._err_stat(clear=_RELPOSPSOLL | _RELPOSPFNC)
+        elif cmd == k.RELATIVE_P_SOLL:
+            self._err_stat(clear=_RELPOSPFNC, set_=_RELPOSPSOLL)
+        elif cmd == k.RELATIVE_P_FNC:
+            self._err_stat(clear=_RELPOSPSOLL, set_=_RELPOSPFNC)
+        elif cmd == k.TRANSMIT_MYADDR:
+            self.send_myaddr = True
+        elif cmd == k.USE_FLEXMAC:
+            self.flexmac = True
+            self.flex = fx.FlexMacDecoder()
+        # NOP, RAPID_COMM / SAFE_COMM (handled by the receiver), USE_FASTMAC: nothing to do
+
+    # ------------------------------------------------------------------ FlexMAC
+    def _flex_byte(self, b: int) -> bytes:
+        out = bytearray()
+        for item in self.flex.feed(bytes((b,))):
+            if isinstance(item, FrameError):
+                self.twin.stats["errors"] += 1
+                continue
+            self.twin.stats["flexmac"] += 1
+            out += self._flex(item)
+        return bytes(out)
+
+    def _flex(self, msg: fx.FlexWrite | fx.FlexRead) -> bytes:
+        reg = msg.register
+        if isinstance(msg, fx.FlexRead):
+            if msg.use_fastmac:
+                self.flexmac = False
+                self.rx = fm.FastMacReceiver(self.twin.fastmac_code)
+                self.toggle ^= 1
+                return bytes((self.status(),))
+            if reg is None:
+                self.twin.refuse(f"FlexMAC read of {msg}: no register there")
+                return b""
+            return fx.encode_read_reply(msg.header, self.twin.words(self.i, reg,
+                                                                    2 if msg.long else 1))
+        if self.twin.mode(self.i) == SAFE_MODE:
+            self.twin.refuse("FlexMAC write in SAFE_MODE (manual 4.4.16)")
+        elif reg is None:
+            self.twin.refuse(f"FlexMAC write to {msg}: no register there")
+        elif self.twin.write_bytes(self.i, reg, msg.data):
+            self.toggle ^= 1
+        return bytes((self.status(),))
