@@ -45,7 +45,7 @@ def test_gp_follows_500_pulse_master_exactly_and_stops_without_overshoot():
     assert np.mean(vel) == pytest.approx(5 * 4096 * c.OUTER_DT, rel=1e-3)
     # constant lag (the braking distance of the profile), ±1 pulse of the uneven pulse train
     assert np.ptp(lag) < 12
-    assert abs(pos[-1] - final) <= 1
+    assert abs(pos[-1] - final) <= 2  # the gear position is fractional; ±1 count of standstill
     assert m.fnc_trace.max() <= final + 1  # the profile stops without overshoot (4.1.12)
     assert int(m.read("ERR_STAT")[0]) & c.IN_POS
 
