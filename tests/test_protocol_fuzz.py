@@ -167,3 +167,78 @@ def test_fastmac_receiver_never_crashes(data: bytes) -> None:
     for b in data:
         out = rx.feed(b)
         assert out is None or isinstance(out, (fm.FastMacByte, FrameError))
+
+
+# ---------------------------------------------------------------- the twin never changes state
+@pytest.fixture(scope="module")
+def twin():
+    import numpy as np  # noqa: F401
+
+    from jvl_gym import MotorArray
+    from jvl_gym.protocol.twin import Twin
+
+    t = Twin(MotorArray("MAC140", n=2, seed=0), [19, 20])
+    m = t.m
+    m.write("CNTRL_BITS", 3)
+    m.go_safe_mode(0)
+    m.write_flash(0)  # motor 0: FastMAC/FlexMAC user interface active
+    return t
+
+
+def _addressed(items) -> bool:
+    return any(isinstance(x, mt.Request) and x.address in (19, 20, mt.BROADCAST) for x in items)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                    HealthCheck.function_scoped_fixture])
+@given(st.lists(st.one_of(mutated(st.builds(mt.encode_write_word, st.sampled_from([19, 20]),
+                                            st.integers(1, 164), st.integers(0, 0xFFFF))),
+                          mutated(valid_mactalk()), st.binary(max_size=16)), max_size=5))
+def test_twin_mactalk_malformed_frames_change_nothing(twin, parts: list[bytes]) -> None:
+    import numpy as np
+
+    stream = b"".join(parts)
+    TRIED["twin mactalk"] += len(parts)
+    if _addressed(mt.decode_all(stream)):  # a mutation made a valid request: not this test
+        TRIED["twin mactalk (valid, skipped)"] += 1
+        return
+    before = twin.m.regs.copy()
+    s = twin.session()
+    assert s.feed(stream) + s.flush() == b""
+    np.testing.assert_array_equal(twin.m.regs, before)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                    HealthCheck.function_scoped_fixture])
+@given(st.lists(st.one_of(mutated(valid_flexmac()), st.binary(max_size=10)), max_size=5))
+def test_twin_flexmac_malformed_messages_change_nothing(twin, parts: list[bytes]) -> None:
+    import numpy as np
+
+    stream = b"".join(parts)
+    TRIED["twin flexmac"] += len(parts)
+    d = fx.FlexMacDecoder()
+    if any(not isinstance(x, FrameError) for x in d.feed(stream) + d.flush()):
+        TRIED["twin flexmac (valid, skipped)"] += 1
+        return
+    u = twin.user[0]
+    u.power_on()
+    u.flexmac = True  # as after command 1Fh
+    before = twin.m.regs.copy()
+    u.feed(stream)
+    u.flush()
+    np.testing.assert_array_equal(twin.m.regs, before)
+    u.power_on()
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow,
+                                                                    HealthCheck.function_scoped_fixture])
+@given(st.binary(min_size=1, max_size=40))
+def test_twin_any_bytes_never_crash(twin, data: bytes) -> None:
+    TRIED["twin random bytes"] += 1
+    s = twin.session()
+    s.feed(data)
+    s.flush()
+    u = twin.user[0]
+    u.feed(data)  # FastMAC/FlexMAC: valid commands may act, nothing may crash
+    u.flush()
+    twin.m.software_reset(0) if twin.mode(0) in (0, 15) else twin.m.go_init_mode(0)
