@@ -1,0 +1,241 @@
+"""GearSync-v0: a winder on a web line; the MAC follows the master in AG_MODE."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from .. import constants as c
+from .. import layout as L
+from ..firmware import regs as R
+from . import web
+from .base import MotorVectorEnv
+from .noise import normals
+from .profiles import SpeedProfile
+from .single import MotorEnv
+
+__all__ = ["GearSyncEnv", "GearSyncVectorEnv"]
+
+_DT = c.OUTER_DT
+_V_MOTOR_NORM = 3000.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 3000 rpm in counts/sample
+_GEARF2 = 1000  #: GEARF2 of the nominal gear (GEARF1 = round(ratio·1000))
+_AG_CENTRE = 1.01  #: AG factor at 0 V (manual 4.1.9: −10 V ↔ 0.87, +10 V ↔ 1.15)
+
+
+class GearSyncVectorEnv(MotorVectorEnv):
+    """Vector version of :class:`GearSyncEnv` (same arguments plus ``num_envs`` and
+    ``autoreset_mode``)."""
+
+    obs_labels = ("tension_error", "tension_rate", "master_speed", "motor_speed", "flwerr",
+                  "fncerr", "previous_action")
+    act_labels = ("analog_input",)
+    default_ranges = {
+        "ea": (3e3, 8e3),  # E·A [N]
+        "thickness": (50e-6, 300e-6),  # web thickness h [m]
+        "r0": (0.04, 0.06),  # winder core radius [m]
+        "span": (0.5, 2.0),  # span length L [m]
+        "line_speed": (0.5, 1.2),  # master surface speed after run-up [m/s]
+        "ramp_time": (0.3, 1.0),  # run-up time [s]
+        "speed_step": (-0.3, 0.3),  # relative speed change ...
+        "step_time": (1.5, 4.5),  # ... at this time [s]
+        "walk": (0.0, 0.02),  # random-walk amplitude (relative std)
+        "ripple": (0.0, 0.005),  # master roll eccentricity a
+        "tension_ref": (10.0, 25.0),  # reference tension [N]
+        "inertia_ratio": (0.5, 3.0),  # winder roll inertia at the motor / rotor inertia
+    }
+    default_decimation = 2
+    default_max_episode_steps = 1500
+    scope_channels = ("tension [N]", "tension ref [N]", "analogue input [V]", "winder rpm")
+
+    def __init__(self, num_envs: int = 1, *, gear_ratio: float = 10.0, master_radius: float = 0.05,
+                 master_counts_per_rev: int = 8192, loadcell_tau: float = 0.005,
+                 loadcell_noise: float = 0.01, break_ratio: float = 3.0, slack_time: float = 0.01,
+                 action_rate_weight: float = 0.05, tension_tolerance: float = 0.1,
+                 **kwargs: Any) -> None:
+        if gear_ratio <= 0 or master_radius <= 0 or master_counts_per_rev <= 0:
+            raise ValueError("gear_ratio, master_radius and master_counts_per_rev must be > 0")
+        self.gear_ratio = float(gear_ratio)
+        self.master_radius = float(master_radius)
+        self.master_counts_per_rev = int(master_counts_per_rev)
+        self.loadcell_tau = float(loadcell_tau)
+        self.loadcell_noise = float(loadcell_noise)
+        self.break_ratio = float(break_ratio)
+        self.slack_samples = max(1, int(round(slack_time / _DT)))
+        self.action_rate_weight = float(action_rate_weight)
+        self.tension_tolerance = float(tension_tolerance)
+        #: master counts per outer sample at 1 m/s
+        self._counts_per_m = master_counts_per_rev / (2 * math.pi * master_radius)
+        super().__init__(num_envs, **kwargs)
+
+    def _build(self) -> None:
+        n = self.num_envs
+        self.profile = SpeedProfile(n)
+        for name in ("ea", "thickness", "r0", "span", "tension_ref", "strain", "wound",
+                     "radius", "force", "measured", "master_theta", "time", "count_acc",
+                     "prev_measured", "pulses"):
+            setattr(self, name, np.zeros(n))
+        self.slack_count = np.zeros(n, dtype=np.int64)
+        self.gear = np.ones(n)
+
+    def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
+                      ) -> dict[str, np.ndarray]:
+        return {"load_inertia": draws["inertia_ratio"] * self.rotor_inertia(idx)}
+
+    def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
+                    rngs: list[np.random.Generator]) -> None:
+        for name in ("ea", "thickness", "r0", "span", "tension_ref"):
+            getattr(self, name)[idx] = draws[name]
+        self.profile.reset(idx, rngs, draws["line_speed"], draws["ramp_time"],
+                           draws["speed_step"], draws["step_time"], draws["walk"],
+                           draws["ripple"])
+        strain_ref = draws["tension_ref"] / draws["ea"]
+        self.strain[idx] = strain_ref
+        self.wound[idx] = 0.0
+        self.radius[idx] = draws["r0"]
+        self.force[idx] = draws["tension_ref"]
+        self.measured[idx] = draws["tension_ref"]
+        self.prev_measured[idx] = draws["tension_ref"]
+        self.master_theta[idx] = 0.0
+        self.time[idx] = 0.0
+        self.count_acc[idx] = 0.0
+        self.pulses[idx] = 0.0
+        self.slack_count[idx] = 0
+        # nominal gear: at the core radius and 0 V the winder runs at v1/(1 − ε_ref)
+        motor_per_master = (self.master_radius / draws["r0"] * self.gear_ratio
+                            / (1.0 - strain_ref) / _AG_CENTRE)
+        ratio = motor_per_master * c.COUNTS_PER_REV / self.master_counts_per_rev
+        gearf1 = np.round(ratio * _GEARF2)
+        self.gear[idx] = gearf1 / _GEARF2
+        m = self.motors
+        m.write("GEARF1", gearf1, index=idx)
+        m.write("GEARF2", _GEARF2, index=idx)
+        m.write("V_SOLL", round(c.rpm_to_v_soll(4000.0)), index=idx)
+        load = draws["r0"] * draws["tension_ref"] / self.gear_ratio
+        m.inputs[idx, L.I_LOAD_TORQUE] = load
+        m.write("MODE_REG", c.AG_MODE, index=idx)
+        # the motor already holds the pre-tension: the VF integrator carries the load torque
+        kvout = m.regs[idx, R.KVOUT] / 256.0
+        m.state[idx, L.S_Y1] = load / self.peak_torque(idx) * c.VF_FULL / kvout
+
+    def _apply_action(self, action: np.ndarray) -> None:
+        self.motors.inputs[:, L.I_ANALOG_VOLTS] = c.ANINP_VOLTS * action[:, 0]
+
+    def _advance(self) -> None:
+        m = self.motors
+        theta = m.state[:, L.S_THETA]
+        n_gear = self.gear_ratio
+        self.prev_measured[:] = self.measured
+        self.pulses[:] = 0.0
+        for _ in range(self.decimation):
+            v1 = self.profile.speed(self.time, self.master_theta)
+            self.count_acc += v1 * self._counts_per_m * _DT
+            counts = np.floor(self.count_acc)
+            self.count_acc -= counts
+            self.pulses += counts
+            m.inputs[:, L.I_PULSE_COUNTS] = counts
+            theta0 = theta.copy()
+            m.step(1)
+            travel = self.radius * (theta - theta0) / n_gear  # web wound this sample [m]
+            self.strain[:] = web.span_step(self.strain, v1, travel / _DT, self.span, _DT)
+            self.wound += travel
+            self.radius[:] = web.winder_radius(self.r0, self.thickness, self.wound)
+            self.force[:] = web.tension(self.strain, self.ea)
+            m.inputs[:, L.I_LOAD_TORQUE] = self.radius * self.force / n_gear
+            self.measured[:] = web.load_cell_step(self.measured, self.force, _DT,
+                                                  self.loadcell_tau)
+            self.slack_count[:] = np.where(self.strain <= 0.0, self.slack_count + 1, 0)
+            self.master_theta += v1 * _DT / self.master_radius
+            self.time += _DT
+
+    def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        e = (self.force - self.tension_ref) / self.tension_ref
+        da = action[:, 0] - self._prev_action[:, 0]
+        reward = (1.0 - np.minimum(np.abs(e) / self.tension_tolerance, 2.0)
+                  - self.action_rate_weight * da * da)
+        broken = self.force > self.break_ratio * self.tension_ref
+        slack = self.slack_count >= self.slack_samples
+        return reward, broken | slack | (self.error_bits() != 0)
+
+    def measured_tension(self) -> np.ndarray:
+        """Load-cell reading with its noise [N], (N,)."""
+        meas = self.measured
+        if self.loadcell_noise > 0.0:
+            noise = normals(self._noise_key ^ np.uint64(0x5EED), self._t, 1)[:, 0]
+            meas = meas + self.loadcell_noise * self.tension_ref * noise
+        return meas
+
+    def _observe(self) -> np.ndarray:
+        r = self.motors.regs
+        ref = self.tension_ref
+        step_dt = self.decimation * _DT
+        v1_counts = self._counts_per_m * _DT  # master counts per sample at 1 m/s
+        return np.stack([
+            (self.measured_tension() - ref) / ref,
+            (self.measured - self.prev_measured) / ref * (0.1 / step_dt),
+            self.pulses / self.decimation / v1_counts,
+            r[:, R.V_IST] / _V_MOTOR_NORM,
+            r[:, R.FLWERR] / 100.0,
+            r[:, R.FNCERR] / 10000.0,
+            self._prev_action[:, 0],
+        ], axis=1)
+
+    def _scope_values(self) -> np.ndarray:
+        return np.stack([self.force, self.tension_ref, self._prev_action[:, 0] * c.ANINP_VOLTS,
+                         self.motors.speed_rpm / self.gear_ratio], axis=1)
+
+
+class GearSyncEnv(MotorEnv):
+    """A web winder synchronised to a master roll in AG_MODE; hold the web tension.
+
+    ## Description
+    A master roll (radius 5 cm, encoder 8192 counts/rev) feeds an elastic web through a span to
+    a winding roll driven by a MAC motor through a gearbox (ratio 10). The motor runs in AG_MODE
+    (manual 4.1.9, 4.4.19): it follows the master's pulse input with the gear factor
+    GEARF1/GEARF2, scaled by the analogue input (−10 V ↔ 0.87, +10 V ↔ 1.15). GEARF1/GEARF2 is
+    set so that 0 V holds the reference tension at the core radius; as web is wound the winder
+    radius grows (``r² = r0² + h·ℓ/π``) and the ratio that holds tension drifts, unseen. The
+    span follows the standard strain model ``L·dε/dt = v2(1 − ε) − v1`` (``jvl_gym.envs.web``);
+    the tension ``E·A·max(ε, 0)`` loads the motor with ``r·F/n``. The master speed has a run-up,
+    a speed change, a smooth random walk and eccentric-roll ripple (``jvl_gym.envs.profiles``).
+
+    ## Action Space
+    ``Box(-1, 1, (1,), float32)``: the analogue input, 10 V × action.
+
+    ## Observation Space
+    ``Box(-5, 5, (7,), float32)``: load-cell tension error / reference (filtered, τ = 5 ms,
+    noise ``loadcell_noise`` × reference); its change over the step per 0.1 s / reference;
+    master speed (pulse counts per sample / counts at 1 m/s); motor speed V_IST / 3000 rpm;
+    FLWERR / 100 counts; FNCERR / 10000 counts; previous action.
+
+    ## Rewards
+    Per step ``1 − min(|e|/tension_tolerance, 2) − action_rate_weight·Δa²`` with ``e`` the true
+    tension error over the reference (tolerance 0.1) and ``Δa`` the change of action. At most 1
+    per step (positive while within tolerance), so ending early by a break or slack costs.
+
+    ## Starting State
+    The line is at rest, the web pre-tensioned to the reference; the motor powers on with the
+    default setup, GEARF1/GEARF2 nominal, V_SOLL 4000 rpm, in AG_MODE. Web, roll, profile and
+    tension reference are drawn from the ranges ``ea``, ``thickness``, ``r0``, ``span``,
+    ``line_speed``, ``ramp_time``, ``speed_step``, ``step_time``, ``walk``, ``ripple``,
+    ``tension_ref``, ``inertia_ratio``.
+
+    ## Episode End
+    Terminated on a web break (tension > ``break_ratio`` × reference), slack longer than
+    ``slack_time`` (10 ms) or a motor error bit; truncated after ``max_episode_steps`` (1500
+    steps = 5.76 s at the default decimation 2).
+
+    ## Arguments
+    ``motor_type``, ``randomization``, ``decimation`` (2), ``obs_noise``, ``max_episode_steps``,
+    ``render_mode``, ``gear_ratio`` (10), ``master_radius`` (0.05 m),
+    ``master_counts_per_rev`` (8192), ``loadcell_tau`` (5 ms), ``loadcell_noise`` (0.01),
+    ``break_ratio`` (3), ``slack_time`` (0.01 s), ``action_rate_weight`` (0.05),
+    ``tension_tolerance`` (0.1). Reset options:
+    ``randomization``, ``motor_type``. Baseline: :class:`jvl_gym.envs.baselines.PITension`.
+
+    ## Version History
+    * v0: initial version.
+    """
+
+    vector_class = GearSyncVectorEnv

@@ -1,0 +1,57 @@
+"""Web line process model: span strain, winder radius, tension and load cell (pure numpy).
+
+Standard web-span model (Whitworth/Shelton, entering strain ``ε_in``, exit roll = winder)::
+
+    L · dε/dt = v2 · (1 − ε) − v1 · (1 − ε_in)
+
+with the master (entry) surface speed ``v1`` and the winder surface speed ``v2``. For speeds
+held over a sample it is linear in ε and is integrated exactly:
+``ε(t+h) = ε_ss + (ε − ε_ss)·exp(−v2·h/L)`` with the steady state ``ε_ss = 1 − v1(1 − ε_in)/v2``
+(``= (v2 − v1)/v2`` for ``ε_in = 0``). Tension ``F = E·A·max(ε, 0)``; the web is slack for
+``ε ≤ 0``. The winder radius grows with the wound length ℓ as ``r² = r0² + h·ℓ/π`` (web
+thickness h). A load cell measures F through a first-order filter with additive noise.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["span_step", "steady_strain", "tension", "winder_radius", "load_cell_step"]
+
+
+def steady_strain(v1: np.ndarray, v2: np.ndarray, strain_in: float | np.ndarray = 0.0
+                  ) -> np.ndarray:
+    """Steady-state span strain for constant speeds: ``1 − v1·(1 − ε_in)/v2``."""
+    return 1.0 - v1 * (1.0 - strain_in) / v2
+
+
+def span_step(strain: np.ndarray, v1: np.ndarray, v2: np.ndarray, length: np.ndarray,
+              dt: float, strain_in: float | np.ndarray = 0.0) -> np.ndarray:
+    """Strain after ``dt`` with speeds ``v1``, ``v2`` [m/s] held, span ``length`` [m] (exact)."""
+    b = v2 / length
+    a = (v2 - v1 * (1.0 - strain_in)) / length
+    bdt = b * dt
+    small = np.abs(bdt) < 1e-9
+    safe_b = np.where(small, 1.0, b)
+    decay = np.exp(-np.where(small, 0.0, bdt))
+    exact = a / safe_b + (strain - a / safe_b) * decay
+    euler = strain + dt * (a - b * strain)
+    return np.where(small, euler, exact)
+
+
+def tension(strain: np.ndarray, ea: np.ndarray) -> np.ndarray:
+    """Web tension ``E·A·max(ε, 0)`` [N]."""
+    return ea * np.maximum(strain, 0.0)
+
+
+def winder_radius(r0: np.ndarray, thickness: np.ndarray, wound: np.ndarray) -> np.ndarray:
+    """Winder radius ``sqrt(r0² + h·ℓ/π)`` [m] after winding ``wound`` metres."""
+    return np.sqrt(r0 * r0 + thickness * np.maximum(wound, 0.0) / np.pi)
+
+
+def load_cell_step(measured: np.ndarray, force: np.ndarray, dt: float, tau: float,
+                   noise: np.ndarray | float = 0.0) -> np.ndarray:
+    """Load-cell reading after ``dt``: first-order filter (time constant ``tau``) of
+    ``force + noise``."""
+    k = 1.0 - np.exp(-dt / tau) if tau > 0 else 1.0
+    return measured + k * (force + noise - measured)
