@@ -250,11 +250,9 @@ def test_load_concurrent_clients_small(server) -> None:
     sys.modules["bench_protocol"] = bench
     spec.loader.exec_module(bench)
     url = server.endpoint("mactalk", "tcp").url
-    total, wall = bench.run_load(url, [19, 20, 19, 20], 300)
-    # two clients per address: reads of another client's writes are possible only between
-    # a write and its read-back on the same register, so use distinct seeds and accept none
-    assert total.lost == 0
-    assert total.requests == 1200
+    total, wall = bench.run_load(url, [19, 20], 500)  # one client per motor address
+    assert total.requests == 1000 and total.writes > 100
+    assert total.lost == 0 and total.corrupted == 0, total.errors
 
 
 # ---------------------------------------------------------------- FastMAC / FlexMAC user interface
