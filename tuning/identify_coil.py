@@ -111,6 +111,31 @@ def _arx(recs: Sequence[Record], d: int) -> tuple[float, float]:
     return a, g
 
 
+def correlation_inflation(res: np.ndarray, n_records: int = 1) -> float:
+    """Variance inflation ``1 + 2·Σ ρ_k`` for autocorrelated residuals (effective sample size).
+
+    Model errors (quantisation, unmodelled dynamics) make residuals correlated; the plain
+    ``s²(JᵀJ)⁻¹`` then understates the uncertainty. The sum runs over lags until the first
+    non-positive autocorrelation (at most n/4). Returns a factor ≥ 1.
+    """
+    res = np.asarray(res, dtype=float)
+    parts = np.array_split(res, max(n_records, 1))
+    num = 0.0
+    for e in parts:
+        e = e - e.mean()
+        var = float(e @ e)
+        if var == 0.0 or e.size < 8:
+            continue
+        acc = 0.0
+        for k in range(1, e.size // 4):
+            rho = float(e[:-k] @ e[k:]) / var
+            if rho <= 0:
+                break
+            acc += rho
+        num = max(num, acc)
+    return 1.0 + 2.0 * num
+
+
 def residual_check(res: np.ndarray, n_params: int, max_lag: int | None = None
                    ) -> dict[str, float]:
     """Box–Pierce whiteness test of residuals (``p > 0.05`` ⇒ no evidence against whiteness)."""
@@ -190,7 +215,7 @@ def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
     s2 = sse / dof
     jac = sol.jac
     try:
-        cov = s2 * np.linalg.inv(jac.T @ jac)
+        cov = s2 * correlation_inflation(sol.fun, len(recs)) * np.linalg.inv(jac.T @ jac)
     except np.linalg.LinAlgError:
         cov = np.full((p, p), np.inf)
     tq = float(stats.t.ppf(0.975, dof))

@@ -1,10 +1,11 @@
 """Synthesis of the current-loop (IF, IB) and speed-loop (FF, VB, VF, KVOUT) filters.
 
-Current loop (manual 4.3, 3.2.106–3.2.111). A PI whose zero cancels the coil pole,
-``IF(z) = Kp·z(z − a)/(z(z − 1))`` (KIFX2 = Kp, KIFX1 = −Kp·a, KIFY1 = 1, KIFY0 = 0), IB = 1
-(KIB1 = 1, KIB0 = 0). The loop becomes ``L = k/(z^d (z − 1))`` with ``k = Kp·g(1 − a)``; ``k`` is
-chosen on a grid for the target closed-loop bandwidth subject to the margin constraints, checked
-on the nominal coil *and* on R, L ±30 % (where the zero no longer cancels the pole).
+Current loop (manual 4.3, 3.2.106–3.2.111). A PI ``IF(z) = Kp + Ki·z/(z − 1)`` (KIFX2 = Kp + Ki,
+KIFX1 = −Kp, KIFY1 = 1, KIFY0 = 0), IB = 1 (KIB1 = 1, KIB0 = 0). The normalised gains
+``Kp·g(1−a)``, ``Ki·g(1−a)`` are chosen on a grid: the largest integral gain (best rejection of
+the back-EMF, which the per-phase loops see as a sinusoidal disturbance at speed; a pole-
+cancelling PI rejects it poorly and loses several % of torque at a few hundred rpm) that meets
+the margins on the nominal coil and on R, L ±30 %, or the target bandwidth.
 
 Speed loop (manual 4.2, 3.2.89–3.2.105, 3.2.13). The plant from VF_OUT to V_IST is the exact
 lifted model of :func:`tuning.models.speed_plant` (closed current loop + rigid rotor, J = J_m),
@@ -64,7 +65,7 @@ class CurrentDesign:
     registers : dict
         KIFX2, KIFX1, KIFY1, KIFY0, KIB1, KIB0 (unquantised).
     loop_gain : float
-        k = Kp·g(1 − a) (dimensionless).
+        Normalised proportional gain ``Kp·g(1 − a)`` (dimensionless).
     metrics : LoopMetrics
         Nominal metrics of the (unquantised) design.
     robust_pm_deg : float
@@ -78,6 +79,7 @@ class CurrentDesign:
     metrics: LoopMetrics
     robust_pm_deg: float
     notes: list[str] = field(default_factory=list)
+    ki_norm: float = 0.0
 
 
 @dataclass
@@ -96,11 +98,23 @@ class SpeedDesign:
 
 
 # ----------------------------------------------------------------------------- current loop
-def current_registers(motor: MotorData, loop_gain: float) -> dict[str, float]:
-    """IF/IB registers of the pole-cancelling PI with normalised loop gain ``loop_gain``."""
+def current_registers(motor: MotorData, kp_norm: float, ki_norm: float | None = None
+                      ) -> dict[str, float]:
+    """IF/IB registers of a PI with normalised gains (``kp_norm = Kp·g(1−a)``, same for ki).
+
+    ``IF = Kp + Ki·z/(z − 1)``: KIFX2 = Kp + Ki, KIFX1 = −Kp, KIFY1 = 1, KIFY0 = 0; IB = 1.
+    With ``ki_norm`` None the zero cancels the coil pole (Ki = Kp(1 − a)/a).
+    """
     a, g = motor.coil_pole, motor.coil_gain
-    kp = loop_gain / (g * (1.0 - a))
-    return {"KIFX2": kp, "KIFX1": -kp * a, "KIFY1": 1.0, "KIFY0": 0.0, "KIB1": 1.0, "KIB0": 0.0}
+    b = g * (1.0 - a)
+    kp = kp_norm / b
+    if ki_norm is None:  # zero at a: (Kp+Ki) z − Kp  ∝  z − a
+        kp_total = kp
+        return {"KIFX2": kp_total, "KIFX1": -kp_total * a, "KIFY1": 1.0, "KIFY0": 0.0,
+                "KIB1": 1.0, "KIB0": 0.0}
+    ki = ki_norm / b
+    return {"KIFX2": kp + ki, "KIFX1": -kp, "KIFY1": 1.0, "KIFY0": 0.0, "KIB1": 1.0,
+            "KIB0": 0.0}
 
 
 def _current_loop_poly(motor: MotorData, regs: Mapping[str, float]
@@ -122,7 +136,8 @@ def _metrics_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, dt: float) ->
 
 def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
                         pm_min: float = 50.0, gm_min: float = 8.0,
-                        robust_pm_min: float = 35.0) -> CurrentDesign:
+                        robust_pm_min: float = 35.0,
+                        gains: tuple[float, float] | None = None) -> CurrentDesign:
     """Design IF and IB for a target closed-loop bandwidth.
 
     Parameters
@@ -130,48 +145,60 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
     motor : MotorData
         The (identified) coil: R_phase [Ω], L_phase [H], amps_per_count, pwm_delay.
     bandwidth_hz : float, optional
-        Target −3 dB bandwidth of the current loop [Hz]; default: the largest that meets the
-        constraints.
+        Target −3 dB bandwidth of the current loop [Hz] (among the designs within 10 % of it, the
+        largest integral gain); default: the largest integral gain that meets the constraints.
     pm_min, gm_min : float
         Nominal phase [deg] and gain [dB] margins required (acceptance: 45°, 6 dB; the defaults
         leave room for quantisation).
     robust_pm_min : float
         PM required on every R, L ±30 % corner [deg].
+    gains : (float, float), optional
+        Fixed normalised (kp, ki) instead of the search (e.g. the default setups' design point).
 
     Returns
     -------
     CurrentDesign
     """
     w = frequency_grid(TS_I, 1500)
-    best: tuple[float, float, LoopMetrics, float] | None = None
-    feasible = []
-    for k in np.linspace(0.02, 0.8, 157):
-        regs = current_registers(motor, float(k))
+    if gains is not None:
+        regs = current_registers(motor, *gains)
         m = _metrics_poly(*_current_loop_poly(motor, regs), w, TS_I)
-        if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
-            continue
-        rpm = math.inf
-        ok = True
-        for fr in (0.7, 1.3):
-            for fl in (0.7, 1.3):
-                mm = motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
+        rpm = min(_metrics_poly(*_current_loop_poly(
+            motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl), regs), w,
+            TS_I).pm_deg for fr in (0.7, 1.3) for fl in (0.7, 1.3))
+        return CurrentDesign(regs, gains[0], m, rpm, [], gains[1])
+    feasible = []
+    corners = [motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
+               for fr in (0.7, 1.3) for fl in (0.7, 1.3)]
+    for kpn in np.linspace(0.05, 0.8, 31):
+        for kin in np.geomspace(0.005, 0.25, 31):
+            regs = current_registers(motor, float(kpn), float(kin))
+            m = _metrics_poly(*_current_loop_poly(motor, regs), w, TS_I)
+            if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
+                continue
+            rpm = math.inf
+            ok = True
+            for mm in corners:
                 r = _metrics_poly(*_current_loop_poly(mm, regs), w, TS_I)
                 ok &= r.stable
                 rpm = min(rpm, r.pm_deg)
-        if ok and rpm >= robust_pm_min:
-            feasible.append((float(k), m.bandwidth_hz, m, rpm))
+            if ok and rpm >= robust_pm_min:
+                feasible.append((float(kpn), float(kin), m, rpm))
     if not feasible:
-        raise ValueError("no current-loop gain meets the margin constraints; relax them")
+        raise ValueError("no current-loop gains meet the margin constraints; relax them")
     notes: list[str] = []
     if bandwidth_hz is None:
         best = max(feasible, key=lambda f: f[1])
     else:
-        best = min(feasible, key=lambda f: abs(math.log(f[1] / bandwidth_hz)))
-        if abs(best[1] / bandwidth_hz - 1) > 0.1:
+        near = [f for f in feasible if abs(f[2].bandwidth_hz / bandwidth_hz - 1) <= 0.1]
+        if near:
+            best = max(near, key=lambda f: f[1])
+        else:
+            best = min(feasible, key=lambda f: abs(math.log(f[2].bandwidth_hz / bandwidth_hz)))
             notes.append(f"current-loop bandwidth target {bandwidth_hz:.0f} Hz not reachable "
-                         f"within the margins; got {best[1]:.0f} Hz")
-    k, _, m, rpm = best
-    return CurrentDesign(current_registers(motor, k), k, m, rpm, notes)
+                         f"within the margins; got {best[2].bandwidth_hz:.0f} Hz")
+    kpn, kin, m, rpm = best
+    return CurrentDesign(current_registers(motor, kpn, kin), kpn, m, rpm, notes, kin)
 
 
 # ----------------------------------------------------------------------------- speed loop
@@ -225,7 +252,9 @@ def _speed_candidates(motor: MotorData, current_regs: Mapping[str, float], w: np
 def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_total: float,
                       bandwidth_hz: float | None = None, structure: str = "ip",
                       setpoint_weight: float = 0.0, pm_min: float = 50.0, gm_min: float = 10.0,
-                      robust_pm_min: float = 35.0) -> SpeedDesign:
+                      robust_pm_min: float = 35.0,
+                      robust_gains: tuple[float, ...] = (0.5, 2.0),
+                      gains: tuple[float, float] | None = None) -> SpeedDesign:
     """Design FF, VB, VF and KVOUT for a target loop bandwidth.
 
     Parameters
@@ -243,6 +272,11 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
         See :func:`speed_registers`.
     pm_min, gm_min, robust_pm_min
         Nominal PM [deg], GM [dB], and PM on the robustness set (KVOUT × 0.5, × 2; R, L ±30 %).
+    robust_gains : tuple of float
+        Loop-gain factors of the robustness set (KVOUT/(J_true/J_m)); the default setups use
+        (1/11, 2) so that KVOUT = 1 stays usable for any load up to 10·J_m.
+    gains : (float, float), optional
+        Fixed normalised (kp, ki) instead of the search.
 
     Returns
     -------
@@ -253,8 +287,10 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
     pn, pd, pw, rl = _speed_candidates(motor, current_regs, w)
     kpl16 = 16.0 * rigid_gain(motor)
     feasible = []
-    for kpn in np.geomspace(0.03, 1.2, 48):
-        for kin in np.geomspace(0.002, 0.3, 48):
+    grid_p = [gains[0]] if gains else np.geomspace(0.03, 1.2, 64)
+    grid_i = [gains[1]] if gains else np.geomspace(0.002, 0.3, 64)
+    for kpn in grid_p:
+        for kin in grid_i:
             kp, ki = kpn / kpl16, kin / kpl16
             cw = 16.0 * (kp + ki * z / (z - 1.0))
             lw = cw * pw
@@ -265,7 +301,7 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
             if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
                 continue
             rpm = math.inf
-            for scale in (0.5, 2.0):
+            for scale in robust_gains:
                 rpm = min(rpm, metrics_from_response(lw * scale, w).pm_deg)
             if rpm < robust_pm_min:
                 continue
@@ -275,7 +311,7 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
                 continue
             # the doubled-gain case must be stable too
             char2 = np.polyadd(np.polymul([1.0, -1.0], pd),
-                               2.0 * np.polymul(cnum, pn))
+                               max(robust_gains) * np.polymul(cnum, pn))
             if np.max(np.abs(np.roots(char2))) >= 0.999:
                 continue
             feasible.append((kpn, kin, kp, ki, m, rpm))
@@ -283,7 +319,9 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
         raise ValueError("no speed-loop gains meet the margin constraints; relax them")
     notes: list[str] = []
     if bandwidth_hz is None:
-        best = max(feasible, key=lambda f: f[1])
+        # the largest integral gain; among designs within 2 % of it, the most damping (kp)
+        top = max(f[1] for f in feasible)
+        best = max((f for f in feasible if f[1] >= 0.98 * top), key=lambda f: f[0])
     else:
         near = [f for f in feasible if abs(f[4].bandwidth_hz / bandwidth_hz - 1) <= 0.1]
         if near:

@@ -257,3 +257,75 @@ def verify_speed_loop(motor: MotorData, regs: Mapping[str, float], J_total: floa
                 p = speed_plant(m, regs, J=J_total)
                 rep.robust[f"R x{fr:g}, L x{fl:g}"] = loop_metrics(speed_open_loop(p, regs))
     return rep
+
+
+# ----------------------------------------------------------------------------- time simulation
+@dataclass
+class MoveResult:
+    """A position move on the simulator (one entry per motor of the array).
+
+    Attributes
+    ----------
+    settle_s : ndarray, shape (N,)
+        Time from the start until |P_IST − P_SOLL| ≤ ``window`` for good [s] (inf if never).
+    overshoot : ndarray, shape (N,)
+        Largest travel past the target [counts].
+    fncerr : ndarray, shape (N,)
+        Largest |FNCERR| during the move [1/16 counts].
+    errors : ndarray, shape (N,)
+        ERR_STAT error bits (0..3) seen during the move.
+    position : ndarray, shape (n_samples, N)
+        P_IST [counts] per outer sample.
+    """
+
+    settle_s: np.ndarray
+    overshoot: np.ndarray
+    fncerr: np.ndarray
+    errors: np.ndarray
+    position: np.ndarray
+
+
+def position_move(m, distance: int, v_soll: int, a_soll: int, seconds: float = 1.0,
+                  window: int = 10) -> MoveResult:
+    """Run a P_MODE move of ``distance`` counts on every motor of ``m`` (a ``MotorArray``).
+
+    The motors must be in INIT_MODE at rest; they are left in P_MODE at the target.
+    """
+    n_steps = int(round(seconds / TS_O))
+    start = np.asarray(m.read("P_IST")).astype(float)
+    target = start + distance
+    m.write("V_SOLL", v_soll)
+    m.write("A_SOLL", a_soll)
+    m.write("P_SOLL", target)
+    m.write("MODE_REG", 2)
+    pos = np.empty((n_steps, m.n))
+    fnc = np.zeros(m.n)
+    err = np.zeros(m.n, dtype=np.int64)
+    for k in range(n_steps):
+        m.step(1)
+        pos[k] = m.read("P_IST")
+        fnc = np.maximum(fnc, np.abs(np.asarray(m.read("FNCERR"), dtype=float)))
+        err |= np.asarray(m.read("ERR_STAT")).astype(np.int64) & 0xF
+    off = np.abs(pos - target) > window
+    settle = np.full(m.n, math.inf)
+    for i in range(m.n):
+        bad = np.flatnonzero(off[:, i])
+        if bad.size == 0:
+            settle[i] = TS_O
+        elif bad[-1] < n_steps - 1:
+            settle[i] = (bad[-1] + 2) * TS_O
+    over = np.max((pos - target) * np.sign(distance), axis=0).clip(min=0)
+    return MoveResult(settle, over, fnc, err, pos)
+
+
+def velocity_step(m, v_soll: int, a_soll: int = 10000, seconds: float = 0.3) -> np.ndarray:
+    """V_MODE step to ``v_soll`` [1/16 count/sample]; returns V_IST, shape (n_samples, N)."""
+    n_steps = int(round(seconds / TS_O))
+    m.write("A_SOLL", a_soll)
+    m.write("V_SOLL", v_soll)
+    m.write("MODE_REG", 1)
+    out = np.empty((n_steps, m.n))
+    for k in range(n_steps):
+        m.step(1)
+        out[k] = m.read("V_IST")
+    return out

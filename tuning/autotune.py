@@ -1,0 +1,191 @@
+"""Autotune: identify the coil and the mechanics, synthesise, quantise and verify (issue 4).
+
+Procedure on a motor (a ``MotorArray`` here; a real motor through the same register interface,
+:data:`tuning.records.SERIAL_SOURCE_HOOK`):
+
+1. TESTU (manual 4.4.9) with the rotor turned to the zero-torque angle, ``n_coil`` samples
+   → R, L, PWM delay (:func:`tuning.identify_coil.identify_coil`).
+2. Current loop from the identified coil (:func:`tuning.synthesis.design_current_loop`),
+   quantised and written, so TESTA runs on the designed current loop.
+3. TESTA pilot (11 samples, small T_SOLL, raised until the motor moves) → a rough inertia;
+   then the two-level procedure: TESTA at T₁ and T₂ = T₁/2, ``n_mech`` samples each
+   → J, KVOUT, b, T_c (:func:`tuning.identify_mechanics.identify_mechanics`).
+4. Speed loop for the identified J (:func:`tuning.synthesis.design_speed_loop`), quantisation
+   (:func:`tuning.quantize.quantize_registers`) and verification (:mod:`tuning.verify`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .identify_coil import CoilEstimate, identify_coil
+from .identify_mechanics import MechanicsEstimate, identify_mechanics, two_level_torques
+from .models import COUNTS_PER_RAD, TS_O, MotorData
+from .quantize import quantize_registers
+from .records import Record, acquire_testa, acquire_testu
+from .synthesis import (
+    CurrentDesign,
+    SpeedDesign,
+    design_current_loop,
+    design_speed_loop,
+    torque_guidance,
+)
+from .verify import CurrentLoopReport, SpeedLoopReport, verify_current_loop, verify_speed_loop
+
+__all__ = ["RECOMMENDED_COIL_SAMPLES", "RECOMMENDED_MECH_SAMPLES", "Identification",
+           "Design", "identify_motors", "synthesize", "verify_design", "CURRENT_KEYS",
+           "SPEED_KEYS"]
+
+RECOMMENDED_COIL_SAMPLES: int = 64  #: TESTU samples (8.2 ms ≈ 8 coil time constants)
+RECOMMENDED_MECH_SAMPLES: int = 64  #: TESTA samples per level (123 ms)
+CURRENT_KEYS = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
+SPEED_KEYS = ("KFF3", "KFF2", "KFF1", "KFF0", "GEARB", "KVB3", "KVB2", "KVB1", "KVB0",
+              "KVFX4", "KVFX3", "KVFX2", "KVFX1", "KVFY3", "KVFY2", "KVFY1", "KVFY0", "KVOUT")
+
+Progress = Callable[[str], None]
+
+
+def _quiet(_: str) -> None:
+    return None
+
+
+@dataclass
+class Identification:
+    """Identified data of one motor and the records they came from."""
+
+    motor: MotorData
+    coil: CoilEstimate
+    mechanics: MechanicsEstimate
+    records: list[Record] = field(default_factory=list)
+
+
+@dataclass
+class Design:
+    """A complete, quantised design with its verification."""
+
+    registers: dict[str, float]
+    ideal: dict[str, float]
+    current: CurrentDesign
+    speed: SpeedDesign
+    current_report: CurrentLoopReport
+    speed_report: SpeedLoopReport
+    quantization_delta: dict[str, float]
+    guidance: dict[str, float]
+    notes: list[str] = field(default_factory=list)
+
+
+def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,
+                    n_mech: int = RECOMMENDED_MECH_SAMPLES, umeas: int = 100,
+                    final_speed_counts: float = 120.0, progress: Progress = _quiet
+                    ) -> list[Identification]:
+    """Run the identification procedure (module docstring, steps 1–3) on every motor of ``m``.
+
+    Parameters
+    ----------
+    m : MotorArray or compatible
+        Motors in INIT_MODE, at rest.
+    n_coil, n_mech : int
+        TESTU and TESTA record lengths.
+    umeas : int
+        TESTU voltage step [PWM counts].
+    final_speed_counts : float
+        V_IST the higher TESTA level should reach at the end of its record [counts/sample]
+        (120 = 916 rpm; the back-EMF's effect on the current loop is modelled).
+    progress : callable
+        Receives one line of text per stage.
+    """
+    base = [MotorData.from_config(cfg, amplitude=float(m.read("AMPLITUDE")[i]))
+            for i, cfg in enumerate(m.motor_configs)]
+    progress(f"TESTU: aligning rotors and recording {n_coil} samples at 7812.5 Hz")
+    coil_recs = acquire_testu(m, umeas, n_coil)
+    coils = [identify_coil(r, md) for r, md in zip(coil_recs, base)]
+    motors = [c.motor(md) for c, md in zip(coils, base)]
+    progress("current loop: designing from the identified coils")
+    cur_regs = []
+    for i, md in enumerate(motors):
+        regs = quantize_registers(design_current_loop(md).registers)
+        m.load_setup({"registers": regs}, index=[i])
+        cur_regs.append(regs)
+    phase_comp = np.asarray(m.read("PHASE_COMP"), dtype=float)
+    progress("TESTA: pilot records")
+    t_pilot = np.full(m.n, 20.0)
+    for _ in range(8):
+        pilot = acquire_testa(m, t_pilot, 11)
+        moved = np.array([np.count_nonzero(r.output) >= 5 for r in pilot])
+        if np.all(moved):
+            break
+        t_pilot = np.where(moved, t_pilot, np.minimum(2 * t_pilot, 1023))
+    levels = []
+    for r, md, tp in zip(pilot, motors, t_pilot):
+        p = np.cumsum(r.output)
+        t = np.arange(r.n) * TS_O
+        c2 = np.polyfit(t[2:], p[2:], 2)[0] if r.n > 4 else 0.0
+        alpha = max(2 * c2 / COUNTS_PER_RAD, 1e-9)
+        j_guess = md.torque_per_vf * tp / alpha  # includes friction: an upper bound on J
+        t1, t2 = two_level_torques(j_guess, md, n_mech, final_speed_counts)
+        # keep the lower level well above the friction torque seen in the pilot
+        t2 = max(t2, int(tp))
+        t1 = max(t1, 2 * t2)
+        levels.append((min(t1, 1023), t2))
+    progress(f"TESTA: two-level procedure, {n_mech} samples per level at 520.8 Hz")
+    recs_hi = acquire_testa(m, [lv[0] for lv in levels], n_mech)
+    recs_lo = acquire_testa(m, [lv[1] for lv in levels], n_mech)
+    out = []
+    for i, md in enumerate(motors):
+        mech = identify_mechanics([recs_hi[i], recs_lo[i]], md, current_regs=cur_regs[i],
+                                  phase_comp=float(phase_comp[i]))
+        out.append(Identification(md, coils[i], mech, [coil_recs[i], recs_hi[i], recs_lo[i]]))
+    progress("identification done")
+    return out
+
+
+def synthesize(motor: MotorData, J_total: float, coulomb: float = 0.0,
+               current_bandwidth_hz: float | None = None,
+               speed_bandwidth_hz: float | None = None, structure: str = "ip",
+               robust: bool = True, current_gains: tuple[float, float] | None = None,
+               speed_gains: tuple[float, float] | None = None) -> Design:
+    """Design, quantise and verify all filters for an identified motor (steps 2 and 4).
+
+    ``current_gains`` / ``speed_gains`` fix the normalised (kp, ki) instead of searching.
+    """
+    cur = design_current_loop(motor, current_bandwidth_hz, gains=current_gains)
+    spd = design_speed_loop(motor, cur.registers, J_total, speed_bandwidth_hz, structure,
+                            gains=speed_gains)
+    ideal = {**cur.registers, **spd.registers}
+    regs = quantize_registers(ideal)
+    crep = verify_current_loop(motor, regs, robust)
+    srep = verify_speed_loop(motor, regs, J_total, robust)
+    ci = verify_current_loop(motor, ideal, robust=False).nominal
+    si = verify_speed_loop(motor, ideal, J_total, robust=False).nominal
+    delta = {"current_pm_deg": crep.nominal.pm_deg - ci.pm_deg,
+             "current_gm_db": crep.nominal.gm_db - ci.gm_db,
+             "speed_pm_deg": srep.nominal.pm_deg - si.pm_deg,
+             "speed_gm_db": srep.nominal.gm_db - si.gm_db}
+    guide = torque_guidance(motor, J_total, coulomb)
+    return Design(regs, ideal, cur, spd, crep, srep, delta, guide, cur.notes + spd.notes)
+
+
+def verify_design(design: Design) -> list[str]:
+    """The acceptance checks of a design; returns the failures (empty if all pass)."""
+    bad = []
+    c, s = design.current_report.nominal, design.speed_report.nominal
+    if not (c.pm_deg >= 45 and c.gm_db >= 6):
+        bad.append(f"current margins PM {c.pm_deg:.1f} deg, GM {c.gm_db:.1f} dB")
+    if not (s.pm_deg >= 45 and s.gm_db >= 8):
+        bad.append(f"speed margins PM {s.pm_deg:.1f} deg, GM {s.gm_db:.1f} dB")
+    if not (design.current_report.all_stable and design.speed_report.all_stable):
+        bad.append("a closed-loop pole at |z| >= 0.999")
+    for k, v in design.quantization_delta.items():
+        if (k.endswith("deg") and abs(v) > 2) or (k.endswith("db") and abs(v) > 1):
+            bad.append(f"quantisation changed {k} by {v:.2f}")
+    worst = min(design.current_report.worst_robust_pm, design.speed_report.worst_robust_pm)
+    if not worst >= 30:
+        bad.append(f"robust PM {worst:.1f} deg < 30")
+    if math.isnan(worst):
+        bad.append("robust PM not computed")
+    return bad

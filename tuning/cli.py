@@ -1,0 +1,171 @@
+# ruff: noqa: B008  (typer declares options as argument defaults)
+"""``jvl-tune``: identify, synthesize, verify, autotune (and regenerate the default setups).
+
+Every command works against the simulator (``jvl_gym.MotorArray``) or on record CSV files. A
+real motor will join through the serial protocol client (:data:`tuning.records.SERIAL_SOURCE_HOOK`);
+there is deliberately no ``--port`` option yet.
+
+Examples
+--------
+``jvl-tune autotune --motor MAC140 --load-inertia 5e-5 --out DIR``
+``jvl-tune identify --motor MAC140 --testu u.csv --testa a1.csv --testa a2.csv``
+``jvl-tune synthesize --motor MAC140 --inertia 6.7e-5 --out setup.yaml``
+``jvl-tune verify --motor MAC140 --setup setup.yaml --inertia 6.7e-5``
+``jvl-tune defaults``
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import typer
+import yaml
+
+from .autotune import (
+    RECOMMENDED_COIL_SAMPLES,
+    RECOMMENDED_MECH_SAMPLES,
+    identify_motors,
+    synthesize,
+    verify_design,
+)
+from .identify_coil import identify_coil
+from .identify_mechanics import identify_mechanics
+from .models import MotorData
+from .records import load_csv
+from .report import text_table, write_report
+from .verify import verify_current_loop, verify_speed_loop
+
+app = typer.Typer(help="JVL MAC50-141 tuning toolkit (identification, synthesis, verification)",
+                  no_args_is_help=True)
+
+
+def _say(msg: str) -> None:
+    typer.echo(f"[jvl-tune] {msg}", err=True)
+
+
+def _write_setup(path: Path, motor: str, regs: dict[str, float], note: str) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    clean = {k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in regs.items()}
+    text = "".join(f"# {ln}\n" for ln in note.splitlines())
+    text += yaml.safe_dump({"motor": motor, "provenance": "jvl-tune", "registers": clean},
+                           sort_keys=False)
+    path.write_text(text)
+
+
+@app.command()
+def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
+             testu: list[Path] = typer.Option([], help="TESTU record CSV (repeatable)"),
+             testa: list[Path] = typer.Option([], help="TESTA record CSV (repeatable)"),
+             no_coulomb: bool = typer.Option(False, help="assume no Coulomb friction")) -> None:
+    """Identify the coil (TESTU) and the mechanics (TESTA) from record CSV files."""
+    md = MotorData.from_config(motor)
+    if testu:
+        c = identify_coil([load_csv(p) for p in testu], md)
+        typer.echo(f"R_line {c.R_line:.5g} ohm {c.ci['R_line']}, L_line {c.L_line:.5g} H "
+                   f"{c.ci['L_line']}, delay {c.delay}, fit {c.nrmse_fit:.2f} %")
+        md = c.motor(md)
+    if testa:
+        m = identify_mechanics([load_csv(p) for p in testa], md, coulomb=not no_coulomb)
+        typer.echo(f"J {m.J:.5g} kg m^2 {m.ci['J']}, KVOUT {m.kvout:.3f}, b {m.viscous:.3g}, "
+                   f"Tc {m.coulomb:.3g} N m, fit {m.nrmse_fit:.2f} %")
+
+
+@app.command("synthesize")
+def synthesize_cmd(motor: str = typer.Option(...), inertia: float = typer.Option(
+        ..., help="total inertia J [kg m^2]"),
+        resistance: float = typer.Option(None, help="phase R [ohm] (default: motor config)"),
+        inductance: float = typer.Option(None, help="phase L [H] (default: motor config)"),
+        current_bw: float = typer.Option(None, help="current-loop bandwidth [Hz]"),
+        speed_bw: float = typer.Option(None, help="speed-loop bandwidth [Hz]"),
+        structure: str = typer.Option("ip", help="ip or pi"),
+        out: Path = typer.Option(Path("setup.yaml"))) -> None:
+    """Design and quantise all filters for given motor data; write a setup YAML."""
+    md = MotorData.from_config(motor)
+    if resistance:
+        md = md.with_(R_phase=resistance)
+    if inductance:
+        md = md.with_(L_phase=inductance)
+    d = synthesize(md, inertia, 0.0, current_bw, speed_bw, structure)
+    _write_setup(out, motor, d.registers, "jvl-tune synthesize")
+    typer.echo(text_table(None, d))
+    bad = verify_design(d)
+    if bad:
+        typer.echo("FAILED: " + "; ".join(bad))
+        raise typer.Exit(1)
+
+
+@app.command()
+def verify(motor: str = typer.Option(...), setup: Path = typer.Option(...),
+           inertia: float = typer.Option(None, help="total inertia [kg m^2] (default KVOUT*J_m)")
+           ) -> None:
+    """Margins, bandwidths, pole radii and robustness of a setup file's filters."""
+    md = MotorData.from_config(motor)
+    regs = yaml.safe_load(setup.read_text())["registers"]
+    J = inertia if inertia else regs.get("KVOUT", 1.0) * md.J_m
+    cr = verify_current_loop(md, regs)
+    sr = verify_speed_loop(md, regs, J)
+    for name, rep in (("current", cr), ("speed", sr)):
+        n = rep.nominal
+        typer.echo(f"{name}: PM {n.pm_deg:.1f} deg, GM {n.gm_db:.1f} dB, BW "
+                   f"{n.bandwidth_hz:.1f} Hz, |z|max {n.pole_radius:.4f}, worst robust PM "
+                   f"{rep.worst_robust_pm:.1f} deg, all stable {rep.all_stable}")
+    if not (cr.all_stable and sr.all_stable):
+        raise typer.Exit(1)
+
+
+@app.command()
+def autotune(motor: str = typer.Option("MAC140"),
+             load_inertia: float = typer.Option(0.0, help="simulated load inertia [kg m^2]"),
+             viscous: float = typer.Option(0.0, help="simulated viscous friction [N m s/rad]"),
+             coulomb: float = typer.Option(0.0, help="simulated Coulomb friction [N m]"),
+             noise: bool = typer.Option(True, help="1 % measurement noise in the simulator"),
+             seed: int = typer.Option(0),
+             n_coil: int = typer.Option(RECOMMENDED_COIL_SAMPLES, help="TESTU samples"),
+             n_mech: int = typer.Option(RECOMMENDED_MECH_SAMPLES, help="TESTA samples/level"),
+             structure: str = typer.Option("ip", help="speed loop structure: ip or pi"),
+             out: Path = typer.Option(Path("autotune_out"))) -> None:
+    """Identify, synthesise, verify on the simulator; write OUT/setup.yaml and a report."""
+    from jvl_gym import MotorArray
+
+    from .verify import velocity_step
+
+    params = {"load_inertia": load_inertia, "viscous_friction": viscous,
+              "coulomb_friction": coulomb}
+    if noise:
+        params.update(current_noise=2.0, position_noise=0.85)
+    m = MotorArray(motor, n=1, seed=seed, **params)
+    ident = identify_motors(m, n_coil, n_mech, progress=_say)[0]
+    _say("synthesis and verification")
+    d = synthesize(ident.motor, ident.mechanics.J, ident.mechanics.coulomb, structure=structure)
+    setup = out / "setup.yaml"
+    _write_setup(setup, motor, d.registers,
+                 f"jvl-tune autotune: {motor}, identified J = {ident.mechanics.J:.4g} kg m^2")
+    _say("time simulation on the MotorArray")
+    sim = MotorArray(motor, n=1, seed=seed, **params)
+    sim.load_setup(setup)
+    v = velocity_step(sim, 800)
+    truth = {"J": m.motor_configs[0].rotor_inertia + load_inertia,
+             "kvout": 1 + load_inertia / m.motor_configs[0].rotor_inertia,
+             "viscous": viscous, "coulomb": coulomb,
+             "R_line": 2 * m.motor_configs[0].phase_resistance,
+             "L_line_mH": 2e3 * m.motor_configs[0].phase_inductance}
+    files = write_report(out, ident, d, ident.motor, ident.mechanics.J, truth, v, 800)
+    typer.echo(files[0].read_text())
+    bad = verify_design(d)
+    typer.echo(f"wrote {setup} and {', '.join(str(f) for f in files)}")
+    if bad:
+        typer.echo("FAILED: " + "; ".join(bad))
+        raise typer.Exit(1)
+    if not math.isfinite(ident.mechanics.J):
+        raise typer.Exit(1)
+
+
+@app.command()
+def defaults(out: Path = typer.Option(None, help="directory (default: configs/setups)")) -> None:
+    """Regenerate the default setups configs/setups/<TYPE>.yaml from the motor configs."""
+    from .defaults import write_default_setups
+
+    for p in write_default_setups(out):
+        typer.echo(f"wrote {p}")

@@ -1,0 +1,170 @@
+"""Autotune report: PNG plots (matplotlib, Agg backend) and a plain-text table.
+
+Plots: the TESTU and TESTA fits (measured vs model), Bode plots of the current and speed open
+loops, closed-loop step responses (model) and, when given, the simulated step responses.
+The table lists the identified values with their 95 % intervals, the margins, bandwidths,
+pole radii and the robustness results.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+from typing import Any
+
+import matplotlib
+
+matplotlib.use("Agg")
+import control as ct  # noqa: E402
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from .autotune import Design, Identification  # noqa: E402
+from .models import (  # noqa: E402
+    current_open_loop,
+    freqresp,
+    speed_closed_loop,
+    speed_open_loop,
+    speed_plant,
+)
+from .verify import frequency_grid  # noqa: E402
+
+__all__ = ["text_table", "plot_fits", "plot_bode", "plot_steps", "write_report"]
+
+
+def _ci(ci: tuple[float, float], scale: float = 1.0, fmt: str = ".4g") -> str:
+    return f"[{ci[0] * scale:{fmt}}, {ci[1] * scale:{fmt}}]"
+
+
+def text_table(ident: Identification | None, design: Design,
+               truth: dict[str, float] | None = None) -> str:
+    """Identified values (with 95 % intervals and, if known, the true values) and the design's
+    margins, bandwidths and robustness as a fixed-width text table."""
+    lines = []
+    if ident is not None:
+        c, m = ident.coil, ident.mechanics
+        lines += ["Identified values (95 % confidence intervals)",
+                  f"{'quantity':<24}{'estimate':>14}  {'95 % interval':<30}{'true':>12}"]
+        rows = [
+            ("R line-line [ohm]", c.R_line, c.ci["R_line"], "R_line"),
+            ("L line-line [mH]", c.L_line * 1e3, (c.ci["L_line"][0] * 1e3,
+                                                   c.ci["L_line"][1] * 1e3), "L_line_mH"),
+            ("coil pole a", c.pole, c.ci["pole"], "pole"),
+            ("coil gain g [cnt/cnt]", c.gain, c.ci["gain"], "gain"),
+            ("PWM delay [samples]", c.delay, (c.delay, c.delay), "delay"),
+            ("J total [kg m^2]", m.J, m.ci["J"], "J"),
+            ("KVOUT = J/J_m", m.kvout, m.ci["kvout"], "kvout"),
+            ("viscous b [N m s/rad]", m.viscous, m.ci["viscous"], "viscous"),
+            ("Coulomb Tc [N m]", m.coulomb, m.ci["coulomb"], "coulomb"),
+        ]
+        for name, val, ci, key in rows:
+            tv = "" if not truth or key not in truth else f"{truth[key]:.4g}"
+            lines.append(f"{name:<24}{val:>14.5g}  {_ci(ci):<30}{tv:>12}")
+        lines.append(f"TESTU fit {c.nrmse_fit:.2f} % NRMSE, residual white: "
+                     f"{c.residual['white']} (Box-Pierce p = {c.residual['box_pierce_p']:.2f}); "
+                     f"TESTA fit {m.nrmse_fit:.2f} %, residual white: {m.residual['white']}")
+        lines.append("")
+    cr, sr = design.current_report, design.speed_report
+    lines += ["Loop verification (quantised registers)",
+              f"{'loop':<34}{'PM deg':>8}{'GM dB':>8}{'BW Hz':>9}{'|z|max':>8}{'stable':>8}"]
+
+    def row(name: str, mt: Any) -> str:
+        return (f"{name:<34}{mt.pm_deg:>8.1f}{mt.gm_db:>8.1f}{mt.bandwidth_hz:>9.1f}"
+                f"{mt.pole_radius:>8.3f}{mt.stable!s:>8}")
+
+    lines.append(row("current, nominal", cr.nominal))
+    for k, mt in cr.robust.items():
+        lines.append(row(f"current, {k}", mt))
+    lines.append(row("speed, nominal", sr.nominal))
+    for k, mt in sr.robust.items():
+        lines.append(row(f"speed, {k}", mt))
+    lines.append(f"speed reference bandwidth {sr.reference_bandwidth_hz:.1f} Hz, "
+                 f"step overshoot {100 * sr.step_overshoot:.1f} %")
+    lines.append("quantisation changes: " + ", ".join(
+        f"{k} {v:+.3f}" for k, v in design.quantization_delta.items()))
+    g = design.guidance
+    lines.append(f"T_SOLL guidance: T_SOLL {g['T_SOLL']:.0f} = {g['torque_Nm']:.3f} N m; profiles "
+                 f"up to A_SOLL {g['A_SOLL_max']:.0f} keep half of it for regulation")
+    for n in design.notes:
+        lines.append(f"note: {n}")
+    return "\n".join(lines) + "\n"
+
+
+def plot_fits(ident: Identification, path: str | os.PathLike[str]) -> Path:
+    """TESTU and TESTA records with the fitted model outputs."""
+    fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
+    r = ident.records[0]
+    k = np.arange(r.n)
+    ax[0].plot(k, r.output, "o", ms=3, label="IC_IST measured")
+    ax[0].plot(k, ident.coil.fitted[0], "-", label=f"model, d = {ident.coil.delay}")
+    ax[0].set(xlabel="inner sample (128 us)", ylabel="ADC counts", title="TESTU fit")
+    ax[0].legend()
+    for rec, fv in zip(ident.records[1:], ident.mechanics.fitted_velocity):
+        kk = np.arange(rec.n)
+        ax[1].plot(kk, rec.output, "o", ms=3, label=f"V_IST, T_SOLL {rec.input[0]:.0f}")
+        ax[1].plot(kk, fv, "-")
+    ax[1].set(xlabel="outer sample (1.92 ms)", ylabel="counts/sample", title="TESTA fit")
+    ax[1].legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_bode(design: Design, motor: Any, J_total: float, path: str | os.PathLike[str]
+              ) -> Path:
+    """Bode plots of the current and speed open loops."""
+    fig, ax = plt.subplots(2, 2, figsize=(10, 6), sharex="col")
+    loops = [("current loop", current_open_loop(motor, design.registers)),
+             ("speed loop", speed_open_loop(speed_plant(motor, design.registers, J_total),
+                                            design.registers))]
+    for j, (name, lp) in enumerate(loops):
+        w = frequency_grid(lp.dt, 800, lowest=1e-3)
+        resp = freqresp(lp, w)
+        f = w / (2 * math.pi)
+        ax[0, j].semilogx(f, 20 * np.log10(np.abs(resp)))
+        ax[0, j].axhline(0, color="k", lw=0.5)
+        ax[0, j].set(title=name, ylabel="|L| dB")
+        ax[1, j].semilogx(f, np.degrees(np.unwrap(np.angle(resp))))
+        ax[1, j].axhline(-180, color="k", lw=0.5)
+        ax[1, j].set(xlabel="Hz", ylabel="phase deg")
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return Path(path)
+
+
+def plot_steps(design: Design, motor: Any, J_total: float, path: str | os.PathLike[str],
+               simulated: np.ndarray | None = None, v_step: float | None = None) -> Path:
+    """Closed-loop speed step response of the model and, optionally, of the simulator."""
+    cl = speed_closed_loop(speed_plant(motor, design.registers, J_total), design.registers)
+    n = 150
+    t, y = ct.step_response(cl, T=np.arange(n) * cl.dt)
+    fig, ax = plt.subplots(figsize=(6, 3.8))
+    ax.plot(np.arange(n), np.squeeze(y), label="model (unit step, 1/16 units)")
+    if simulated is not None and v_step:
+        ax.plot(np.arange(simulated.shape[0]), 16 * simulated / v_step, ".", ms=3,
+                label="MotorArray V_MODE step")
+    ax.set(xlabel="outer sample (1.92 ms)", ylabel="normalised speed", title="speed step")
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return Path(path)
+
+
+def write_report(out: str | os.PathLike[str], ident: Identification | None, design: Design,
+                 motor: Any, J_total: float, truth: dict[str, float] | None = None,
+                 simulated: np.ndarray | None = None, v_step: float | None = None
+                 ) -> list[Path]:
+    """Write ``report.txt`` and the PNG plots into directory ``out``."""
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    files = [out / "report.txt"]
+    files[0].write_text(text_table(ident, design, truth))
+    if ident is not None:
+        files.append(plot_fits(ident, out / "fits.png"))
+    files.append(plot_bode(design, motor, J_total, out / "bode.png"))
+    files.append(plot_steps(design, motor, J_total, out / "steps.png", simulated, v_step))
+    return files
