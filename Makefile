@@ -29,6 +29,7 @@ test: $(STAMP_RL)
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_sim.py
+	$(BIN)/python benchmarks/bench_protocol.py
 
 notebooks: $(STAMP_RL)
 	cd notebooks && for f in *.py; do ../$(BIN)/jupytext --to ipynb "$$f"; done
