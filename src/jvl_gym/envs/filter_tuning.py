@@ -1,0 +1,233 @@
+"""FilterTuning-v0: one commissioning trial per episode — choose the speed-loop design."""
+
+from __future__ import annotations
+
+import functools
+from typing import Any
+
+import numpy as np
+
+from .. import constants as c
+from .. import layout as L
+from ..firmware import regs as R
+from .base import MotorVectorEnv
+from .single import MotorEnv
+
+__all__ = ["FilterTuningEnv", "FilterTuningVectorEnv", "synthesis_registers"]
+
+_TYPES = ("MAC050", "MAC095", "MAC140", "MAC141")
+_STEP_COUNTS = c.COUNTS_PER_REV  #: position step: one turn
+_POS_SAMPLES = 160  #: 0.31 s
+_VEL_SAMPLES = 120  #: 0.23 s, the load steps in after 40 samples
+_LOAD_AT = 40
+_SETTLE_TOL = 20.0  #: counts
+_IF_NAMES = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
+
+
+@functools.lru_cache(maxsize=8)
+def synthesis_registers(motor_type: str) -> dict[str, float] | None:
+    """Speed-loop registers of the tuning toolkit's synthesis at KVOUT = 1 for a motor type
+    (the design is load-invariant with KVOUT = J_total/J_m), or None without the toolkit."""
+    try:
+        from tuning.models import MotorData
+        from tuning.synthesis import design_speed_loop
+    except ImportError:
+        return None
+    from ..config import load_motor, load_setup
+
+    cfg = load_motor(motor_type)
+    setup = load_setup(cfg.setup).registers
+    current = {k: float(setup[k]) for k in _IF_NAMES}
+    design = design_speed_loop(MotorData.from_config(cfg), current, cfg.rotor_inertia)
+    return {k: float(v) for k, v in design.registers.items() if k != "KVOUT"}
+
+
+class FilterTuningVectorEnv(MotorVectorEnv):
+    """Vector version of :class:`FilterTuningEnv` (same arguments plus ``num_envs`` and
+    ``autoreset_mode``)."""
+
+    obs_labels = (*(f"type_{t}" for t in _TYPES), "inertia_ratio_estimate",
+                  "viscous_estimate", "coulomb_estimate")
+    act_labels = ("proportional_gain", "integral_gain", "kvout")
+    default_ranges = {
+        "inertia_ratio": (0.0, 10.0),
+        "viscous_friction": (0.0, 5e-5),
+        "coulomb_ratio": (0.0, 0.05),
+    }
+    default_decimation = 1
+    default_max_episode_steps = 1
+    scope_channels = ("position error [counts]", "speed [rpm]", "VF_OUT")
+    scope_length = _POS_SAMPLES + _VEL_SAMPLES
+
+    def __init__(self, num_envs: int = 1, *, motor_type: str | tuple[str, ...] = _TYPES,
+                 baseline: bool = False, estimate_error: float = 0.1,
+                 instability_penalty: float = 10.0, **kwargs: Any) -> None:
+        self.baseline = bool(baseline)
+        self.estimate_error = float(estimate_error)
+        self.instability_penalty = float(instability_penalty)
+        super().__init__(num_envs, motor_type=motor_type, **kwargs)
+
+    def _build(self) -> None:
+        n = self.num_envs
+        self.estimates = np.zeros((n, 3))
+        self.truth = np.zeros((n, 3))
+        self.metrics: dict[str, np.ndarray] = {}
+        self._trace = np.zeros((n, 3, self.scope_length), dtype=np.float32)
+        self.baseline_source = ("tuning.synthesis" if synthesis_registers("MAC140") is not None
+                                else "default setup") if self.baseline else "agent"
+
+    def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
+                      ) -> dict[str, np.ndarray]:
+        return {"load_inertia": draws["inertia_ratio"] * self.rotor_inertia(idx),
+                "viscous_friction": draws["viscous_friction"],
+                "coulomb_friction": draws["coulomb_ratio"] * self.rated_torque(idx)}
+
+    def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
+                    rngs: list[np.random.Generator]) -> None:
+        truth = np.stack([draws["inertia_ratio"], draws["viscous_friction"] / 5e-5,
+                          draws["coulomb_ratio"] / 0.05], axis=1)
+        noise = np.array([rng.standard_normal(3) for rng in rngs]).reshape(idx.size, 3)
+        self.truth[idx] = truth
+        self.estimates[idx] = np.maximum(truth * (1.0 + self.estimate_error * noise), 0.0)
+
+    def _apply_action(self, action: np.ndarray) -> None:
+        m = self.motors
+        kvout_est = 1.0 + self.estimates[:, 0]
+        if self.baseline:
+            names = self._type_names
+            for k in np.unique(m._type_of):
+                regs = synthesis_registers(names[k])
+                sel = np.flatnonzero(m._type_of == k)
+                if regs is None:
+                    continue  # default setup
+                for name, value in regs.items():
+                    m.write(name, value, index=sel)
+                m.write("KVOUT", np.round(kvout_est[sel] * 256) / 256, index=sel)
+            return
+        kvfx4 = m.regs[:, R.KVFX4] / 4096.0
+        kvfx3 = m.regs[:, R.KVFX3] / 4096.0
+        p, i = -kvfx3, kvfx4 + kvfx3  # default PI split: KVFX4 = c(kp+ki), KVFX3 = −c·kp
+        sp = 2.0 ** action[:, 0]
+        si = 2.0 ** (1.5 * action[:, 1])
+        m.write("KVFX4", np.round((sp * p + si * i) * 4096) / 4096)
+        m.write("KVFX3", np.round(-sp * p * 4096) / 4096)
+        m.write("KVOUT", np.round(2.0 ** (2.0 * (action[:, 2] + 1.0)) * 256) / 256)
+
+    def _advance(self) -> None:
+        m = self.motors
+        n = self.num_envs
+        r = m.regs
+        m.write("V_SOLL", round(c.rpm_to_v_soll(2000.0)))
+        m.write("P_SOLL", _STEP_COUNTS)
+        m.write("MODE_REG", c.P_MODE)
+        pos = np.zeros((n, _POS_SAMPLES))
+        flw = np.zeros((n, _POS_SAMPLES))
+        fnc_end = np.zeros(n)
+        for k in range(_POS_SAMPLES):
+            m.step(1)
+            pos[:, k] = r[:, R.P_IST]
+            flw[:, k] = r[:, R.FLWERR]
+            self._trace[:, 0, k] = r[:, R.P_IST] - _STEP_COUNTS
+            self._trace[:, 1, k] = m.speed_rpm
+            self._trace[:, 2, k] = r[:, R.VF_OUT]
+        fnc_end[:] = np.abs(r[:, R.FNCERR])
+        errors = self.error_bits() != 0
+        v_ref = c.rpm_to_v_soll(1000.0) / 16.0  # counts/sample
+        ok = np.flatnonzero(~errors)
+        vel = np.zeros((n, _VEL_SAMPLES))
+        if ok.size:
+            m.write("V_SOLL", round(c.rpm_to_v_soll(1000.0)), index=ok)
+            m.write("MODE_REG", c.V_MODE, index=ok)
+        for k in range(_VEL_SAMPLES):
+            if k == _LOAD_AT:
+                m.inputs[:, L.I_LOAD_TORQUE] = 0.3 * self.rated_torque(np.arange(n))
+            m.step(1)
+            vel[:, k] = r[:, R.V_IST]
+            j = _POS_SAMPLES + k
+            self._trace[:, 0, j] = r[:, R.P_IST] - _STEP_COUNTS
+            self._trace[:, 1, j] = m.speed_rpm
+            self._trace[:, 2, j] = r[:, R.VF_OUT]
+        errors |= self.error_bits() != 0
+        err = np.abs(pos - _STEP_COUNTS)
+        outside = err > _SETTLE_TOL
+        last_out = np.where(outside.any(axis=1),
+                            _POS_SAMPLES - 1 - np.argmax(outside[:, ::-1], axis=1), 0)
+        settle = (last_out + 1) * c.OUTER_DT
+        overshoot = np.maximum(pos.max(axis=1) - _STEP_COUNTS, 0.0) / _STEP_COUNTS
+        after = vel[:, _LOAD_AT:]
+        dip = np.max(np.abs(after - v_ref), axis=1) / v_ref
+        ripple = np.std(vel[:, -20:], axis=1) / v_ref
+        unstable = errors | (ripple > 0.05) | (overshoot > 0.25) | (err[:, -10:].max(axis=1)
+                                                                   > 100)
+        self.metrics = {"settling_time": settle, "overshoot": overshoot,
+                        "flwerr_rms": np.sqrt(np.mean(flw * flw, axis=1)), "speed_dip": dip,
+                        "speed_ripple": ripple, "fncerr": fnc_end, "unstable": unstable}
+
+    def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        mt = self.metrics
+        cost = (mt["settling_time"] / 0.1 + 10.0 * mt["overshoot"] + mt["flwerr_rms"] / 200.0
+                + 2.0 * mt["speed_dip"] + 20.0 * mt["speed_ripple"] + mt["fncerr"] / 1000.0)
+        cost = np.minimum(cost, self.instability_penalty)
+        cost = np.where(mt["unstable"], self.instability_penalty, cost)
+        return -cost, np.ones(self.num_envs, dtype=np.bool_)
+
+    def _observe(self) -> np.ndarray:
+        names = self._type_names
+        onehot = np.array([[1.0 if names[k] == t else 0.0 for t in _TYPES]
+                           for k in self.motors._type_of])
+        est = self.estimates
+        return np.concatenate([onehot, np.stack([est[:, 0] / 5.0 - 1.0, est[:, 1] * 2.0 - 1.0,
+                                                 est[:, 2] * 2.0 - 1.0], axis=1)], axis=1)
+
+    def scope_trace(self, index: int = 0) -> np.ndarray:
+        """The last trial of copy ``index``: position step then velocity step, (3, T)."""
+        return self._trace[index].copy()
+
+    def _record_scope(self) -> None:
+        """The trial itself is the scope record (see :meth:`scope_trace`)."""
+
+
+class FilterTuningEnv(MotorEnv):
+    """One commissioning trial per episode: choose the speed-loop design for an unknown load.
+
+    ## Description
+    Each episode draws a motor type and a load (inertia 0–10 × rotor, viscous and Coulomb
+    friction); the agent sees the motor type and noisy estimates of the load (as an
+    identification would give) and answers with a normalised speed-loop design. The env writes
+    it (VF filter KVFX4/KVFX3 around the default PI, and KVOUT) and runs the standard test: a
+    one-turn position step in P_MODE (V_SOLL 2000 rpm, A_SOLL from the setup, 0.31 s), then a
+    1000 rpm velocity step in V_MODE with a load torque step of 30 % rated torque (0.23 s).
+
+    ## Action Space
+    ``Box(-1, 1, (3,), float32)``: proportional gain × 2^a0 and integral gain × 2^(1.5·a1)
+    relative to the default setup's PI, and KVOUT = 2^(2·(a2 + 1)) (1..16).
+
+    ## Observation Space
+    ``Box(-5, 5, (7,), float32)``: motor type one-hot (MAC050, MAC095, MAC140, MAC141); inertia
+    ratio estimate / 5 − 1; viscous friction estimate / 2.5e-5 − 1; Coulomb friction estimate /
+    2.5 % rated − 1 (estimates with relative error ``estimate_error``).
+
+    ## Rewards
+    Minus the cost ``settling/0.1 s + 10·overshoot + FLWERR_rms/200 + 2·speed dip + 20·speed
+    ripple + |FNCERR|/1000``, capped at ``instability_penalty`` (10), which is also the cost of an
+    error bit, an oscillating speed, an overshoot above 25 % or a final error above 100 counts.
+
+    ## Starting State
+    The motor powers on at rest with the default setup of its type.
+
+    ## Episode End
+    Every episode is one step (terminated after the trial).
+
+    ## Arguments
+    ``motor_type`` (default: all four types), ``randomization`` (``inertia_ratio``,
+    ``viscous_friction``, ``coulomb_ratio``), ``obs_noise``, ``render_mode`` (the trial's
+    scope), ``estimate_error`` (0.1), ``instability_penalty`` (10), ``baseline`` (True: the
+    tuning toolkit's synthesis with KVOUT from the inertia estimate when ``tuning.synthesis`` is
+    importable, else the default setup; the action is ignored). ``decimation`` and
+    ``max_episode_steps`` have no effect.
+
+    ## Version History
+    * v0: initial version.
+    """
+
+    vector_class = FilterTuningVectorEnv
