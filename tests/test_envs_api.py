@@ -1,0 +1,172 @@
+"""Gymnasium API of every jvl_gym env: checker, make/make_vec, seeding, autoreset, pickling."""
+
+from __future__ import annotations
+
+import pickle
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from gymnasium.vector import AutoresetMode
+
+import jvl_gym  # noqa: F401
+from jvl_gym.envs import ENV_IDS
+
+SHORT = {"jvl_gym/FilterTuning-v0": 1}
+
+
+def _actions(env_id: str, n_steps: int, n: int, dim: int, seed: int = 7) -> np.ndarray:
+    return np.random.default_rng(seed).uniform(-1, 1, (n_steps, n, dim)).astype(np.float32)
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_check_env_passes_without_warnings(env_id: str) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        env = gym.make(env_id)
+        check_env(env.unwrapped, skip_render_check=False)
+        env.close()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_make_vec_vector_entry_point_without_warnings(env_id: str) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        venv = gym.make_vec(env_id, num_envs=3, vectorization_mode="vector_entry_point")
+        obs, _ = venv.reset(seed=0)
+        assert obs.shape == (3, *venv.single_observation_space.shape)
+        assert venv.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
+        assert venv.unwrapped.max_episode_steps == gym.spec(env_id).max_episode_steps
+        obs, rew, term, trunc, _ = venv.step(venv.action_space.sample())
+        assert obs in venv.observation_space and rew.shape == (3,) and term.dtype == bool
+        venv.close()
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_single_and_vector_trajectories_are_identical(env_id: str) -> None:
+    n, steps = 3, SHORT.get(env_id, 25)
+    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
+                        obs_noise=0.05)
+    dim = venv.single_action_space.shape[0]
+    acts = _actions(env_id, steps, n, dim)
+    vobs = [venv.reset(seed=11)[0]]
+    vrew = []
+    for a in acts:
+        o, r, *_ = venv.step(a)
+        vobs.append(o)
+        vrew.append(r)
+    for i in range(n):
+        env = gym.make(env_id, obs_noise=0.05)
+        o, _ = env.reset(seed=11 + i)
+        np.testing.assert_array_equal(o, vobs[0][i])
+        for k, a in enumerate(acts):
+            o, r, *_ = env.step(a[i])
+            np.testing.assert_array_equal(o, vobs[k + 1][i])
+            assert r == vrew[k][i]
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_pickled_env_continues_identically(env_id: str) -> None:
+    env = gym.make(env_id)
+    env.reset(seed=3)
+    a = env.action_space.sample()
+    if SHORT.get(env_id) != 1:
+        env.step(a)
+    clone = pickle.loads(pickle.dumps(env))
+    o1, r1, *_ = env.step(a)
+    o2, r2, *_ = clone.step(a)
+    np.testing.assert_array_equal(o1, o2)
+    assert r1 == r2
+
+
+def test_next_step_autoreset_returns_reset_observation_with_zero_reward() -> None:
+    venv = gym.make_vec("jvl_gym/Positioning-v0", num_envs=2,
+                        vectorization_mode="vector_entry_point", max_episode_steps=3)
+    venv.reset(seed=0)
+    a = np.full((2, 1), 0.3, dtype=np.float32)
+    for _ in range(2):
+        _, _, _, trunc, _ = venv.step(a)
+        assert not trunc.any()
+    _, _, _, trunc, _ = venv.step(a)
+    assert trunc.all()
+    obs, rew, term, trunc, _ = venv.step(a)
+    assert not (term | trunc).any() and np.all(rew == 0.0)
+    fresh = gym.make("jvl_gym/Positioning-v0")
+    # the reset after an episode continues each copy's own generator: copy 0 of a vector env
+    # seeded 0 equals a single env seeded 0 that was reset twice
+    fresh.reset(seed=0)
+    np.testing.assert_array_equal(obs[0], fresh.reset()[0])
+
+
+def test_same_step_autoreset_reports_final_observation() -> None:
+    venv = gym.make_vec("jvl_gym/Positioning-v0", num_envs=2,
+                        vectorization_mode="vector_entry_point", max_episode_steps=3,
+                        autoreset_mode=AutoresetMode.SAME_STEP)
+    single = gym.make("jvl_gym/Positioning-v0", max_episode_steps=3)
+    venv.reset(seed=5)
+    single.reset(seed=5)
+    a = np.full((2, 1), -0.4, dtype=np.float32)
+    for _ in range(3):
+        obs, rew, term, trunc, info = venv.step(a)
+        s_obs, s_rew, _, s_trunc, _ = single.step(a[0])
+        assert rew[0] == s_rew
+    assert trunc.all() and s_trunc
+    assert info["_final_obs"].all()
+    np.testing.assert_array_equal(info["final_obs"][0], s_obs)
+    np.testing.assert_array_equal(obs[0], single.reset()[0])
+
+
+def test_reset_options_randomization_motor_type_and_mask() -> None:
+    venv = gym.make_vec("jvl_gym/Positioning-v0", num_envs=3,
+                        vectorization_mode="vector_entry_point")
+    core = venv.unwrapped
+    venv.reset(seed=0, options={"randomization": {"target_turns": (1.0, 1.0)},
+                                "motor_type": "MAC095"})
+    assert np.all(core.target == 4096)
+    assert all(cfg.name == "MAC095" for cfg in core.motors.motor_configs)
+    for _ in range(3):
+        venv.step(np.zeros((3, 1), dtype=np.float32))
+    t_before = core._t.copy()
+    venv.reset(options={"reset_mask": np.array([False, True, False])})
+    assert core._t[1] == 0 and core._t[0] == t_before[0] and core._t[2] == t_before[2]
+    with pytest.raises(ValueError):
+        venv.reset(options={"randomization": {"no_such_parameter": (0, 1)}})
+
+
+def test_constructor_ranges_and_decimation() -> None:
+    env = gym.make("jvl_gym/Positioning-v0", decimation=3,
+                   randomization={"target_turns": (-0.5, -0.5)}, motor_type=["MAC140"])
+    env.reset(seed=1)
+    core = env.unwrapped.core
+    assert core.target[0] == -2048
+    env.step(np.zeros(1, dtype=np.float32))
+    assert core.motors.state[0, jvl_gym.layout.S_TICK] == 3 * 15
+    with pytest.raises(ValueError):
+        gym.make("jvl_gym/Positioning-v0", randomization={"target_turns": (1, -1)})
+    with pytest.raises(ValueError):
+        gym.make("jvl_gym/Positioning-v0", motor_type="MAC999")
+
+
+def test_observation_noise_is_seeded_and_bounded() -> None:
+    a = gym.make("jvl_gym/GearSync-v0", obs_noise=0.1)
+    b = gym.make("jvl_gym/GearSync-v0", obs_noise=0.1)
+    c = gym.make("jvl_gym/GearSync-v0")
+    oa, ob, oc = a.reset(seed=4)[0], b.reset(seed=4)[0], c.reset(seed=4)[0]
+    np.testing.assert_array_equal(oa, ob)
+    assert not np.array_equal(oa, oc)
+    assert np.all(np.abs(oa) <= 5.0)
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_render_draws_a_scope_image(env_id: str) -> None:
+    env = gym.make(env_id, render_mode="rgb_array")
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    img = env.render()
+    assert img.dtype == np.uint8 and img.ndim == 3 and img.shape[2] == 3
+    assert img.std() > 0  # something was drawn
+    plain = gym.make(env_id)
+    plain.reset(seed=0)
+    assert plain.render() is None
