@@ -133,8 +133,10 @@ def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,
         t1 = max(t1, 2 * t2)
         levels.append((min(t1, 1023), t2))
     progress(f"TESTA: two-level procedure, {n_mech} samples per level at 520.8 Hz")
-    recs_hi = acquire_testa(m, [lv[0] for lv in levels], n_mech)
-    recs_lo = acquire_testa(m, [lv[1] for lv in levels], n_mech)
+    t_hi = np.array([lv[0] for lv in levels], dtype=float)
+    recs_hi = _adaptive_testa(m, t_hi, n_mech, final_speed_counts)
+    t_lo = np.array([max(2.0, round(r.input[0] / 2)) for r in recs_hi])
+    recs_lo = _adaptive_testa(m, t_lo, n_mech, final_speed_counts / 2)
     out = []
     for i, md in enumerate(motors):
         mech = identify_mechanics([recs_hi[i], recs_lo[i]], md, current_regs=cur_regs[i],
@@ -142,6 +144,24 @@ def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,
         out.append(Identification(md, coils[i], mech, [coil_recs[i], recs_hi[i], recs_lo[i]]))
     progress("identification done")
     return out
+
+
+def _adaptive_testa(m: Any, t_soll: np.ndarray, n: int, target: float) -> list[Record]:
+    """TESTA at ``t_soll``, repeated with a rescaled T_SOLL (up to 4 times) for the motors whose
+    final speed is outside 0.5–2 × ``target`` (friction makes the pilot's guess inexact)."""
+    t = t_soll.astype(float).copy()
+    recs = acquire_testa(m, t, n)
+    for _ in range(4):
+        vmax = np.array([max(float(np.max(r.output)), 0.0) for r in recs])
+        bad = (vmax > 2 * target) | (vmax < 0.5 * target)
+        if not np.any(bad):
+            break
+        # the speed is roughly proportional to (T − T_friction); scale conservatively
+        scale = np.where(vmax > 0, np.sqrt(target / np.maximum(vmax, 1.0)), 2.0)
+        t = np.where(bad, np.clip(np.round(t * scale), 2, 1023), t)
+        again = acquire_testa(m, t, n)
+        recs = [again[i] if bad[i] else recs[i] for i in range(m.n)]
+    return recs
 
 
 def synthesize(motor: MotorData, J_total: float, coulomb: float = 0.0,

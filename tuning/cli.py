@@ -124,7 +124,7 @@ def autotune(motor: str = typer.Option("MAC140"),
              seed: int = typer.Option(0),
              n_coil: int = typer.Option(RECOMMENDED_COIL_SAMPLES, help="TESTU samples"),
              n_mech: int = typer.Option(RECOMMENDED_MECH_SAMPLES, help="TESTA samples/level"),
-             structure: str = typer.Option("ip", help="speed loop structure: ip or pi"),
+             structure: str = typer.Option("pi", help="speed loop structure: pi or ip"),
              out: Path = typer.Option(Path("autotune_out"))) -> None:
     """Identify, synthesise, verify on the simulator; write OUT/setup.yaml and a report."""
     from jvl_gym import MotorArray

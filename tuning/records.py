@@ -270,6 +270,7 @@ def simulate_testa(motor: MotorData, J: float, t_soll: float, n: int = 11, visco
 SERIAL_SOURCE_HOOK: str = "tuning.records.open_serial_source (not implemented: protocol client)"
 
 ALIGN_ELDEG: int = 341  #: ELDEG_IST whose zero-torque axis is the TESTU a–c current (60° el.)
+MANI_CURRENT: int = 400  #: MAN_I_NOM of the final alignment (332 ADC counts at AMPLITUDE 0.83)
 
 
 def _step_until(m: Any, done: Any, max_samples: int, chunk: int = 5) -> None:
@@ -283,8 +284,9 @@ def align_rotor(m: Any, timeout_s: float = 3.0) -> None:
     """Turn the rotor (P_MODE, the motor's present setup) to ELDEG_IST = :data:`ALIGN_ELDEG`.
 
     There the TESTU current (ia = −ic, ib = 0) lies on the rotor's d-axis, produces no torque,
-    and the rotor stays at rest during the record: no back-EMF disturbs it. Restores P_SOLL,
-    V_SOLL, A_SOLL and leaves the motor in INIT_MODE.
+    and the rotor stays at rest during the record: no back-EMF disturbs it. Then 0.3 s of
+    MANI_MODE with the field on that axis (MAN_ALPHA = 341 ≙ 60° el.). Restores P_SOLL, V_SOLL,
+    A_SOLL, MAN_I_NOM and leaves the motor in INIT_MODE.
     """
     saved = {k: np.asarray(m.read(k)).copy() for k in ("P_SOLL", "V_SOLL", "A_SOLL")}
     el = np.asarray(m.read("ELDEG_IST"))
@@ -302,10 +304,26 @@ def align_rotor(m: Any, timeout_s: float = 3.0) -> None:
         return bool(np.all(quiet >= 4))
 
     _step_until(m, settled, int(timeout_s / TS_O))
-    m.write("MODE_REG", 0)
-    _step_until(m, lambda: bool(np.all(np.asarray(m.read("MODE_REG")) == 0)), 2000, 1)
+    _to_init(m)
+    # Friction can stop the position loop short of the angle. Finish with the stator field
+    # itself (MANI_MODE, 3.2.128/129) on the TESTU axis, stronger than the TESTU current: the
+    # rotor turns until the misalignment torque equals the friction, so the weaker TESTU
+    # current cannot move it. Without friction the rotor is already aligned (±1 count).
+    man = np.asarray(m.read("MAN_I_NOM")).copy()
+    m.write("MAN_I_NOM", MANI_CURRENT)
+    m.write("MAN_ALPHA", ALIGN_ELDEG)
+    m.write("MODE_REG", 7)
+    m.step(int(0.3 / TS_O))
+    _to_init(m)
+    m.step(int(0.05 / TS_O))  # let the MANI current decay (L/R ≈ 1 ms) before TESTU
+    m.write("MAN_I_NOM", man)
     for k, v in saved.items():
         m.write(k, v)
+
+
+def _to_init(m: Any) -> None:
+    m.write("MODE_REG", 0)
+    _step_until(m, lambda: bool(np.all(np.asarray(m.read("MODE_REG")) == 0)), 2000, 1)
 
 
 def acquire_testu(m: Any, umeas: int = 100, n_samples: int = 64, align: bool = True

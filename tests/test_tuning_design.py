@@ -1,0 +1,91 @@
+"""Tuning toolkit: models, synthesis, quantisation and verification (issue 4)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from tuning.autotune import synthesize, verify_design
+from tuning.models import (
+    TS_O,
+    MotorData,
+    coil_tf,
+    freqresp,
+    rigid_speed_plant,
+    speed_plant,
+)
+from tuning.quantize import QuantizationError, quantize_registers, quantize_value
+from tuning.verify import loop_metrics
+
+TYPES = ["MAC050", "MAC095", "MAC140", "MAC141"]
+
+
+def test_lifted_speed_plant_tends_to_the_rigid_body_model():
+    md = MotorData.from_config("MAC140")
+    regs = {"KIFX2": 1.6, "KIFX1": -1.35, "KIFY1": 1.0, "KIFY0": 0.0, "KIB1": 1.0, "KIB0": 0.0}
+    w = np.array([0.5, 2.0, 10.0])
+    exact = freqresp(speed_plant(md, regs), w)
+    rigid = freqresp(rigid_speed_plant(md), w)
+    np.testing.assert_allclose(np.abs(exact), np.abs(rigid), rtol=2e-3)
+    assert speed_plant(md, regs).dt == pytest.approx(TS_O)
+    # the velocity plant keeps one integrator only (no spurious pole at z = 1 left over)
+    assert np.sum(np.abs(speed_plant(md, regs).poles() - 1.0) < 1e-6) == 1
+
+
+def test_coil_model_steady_state_gain_is_g():
+    md = MotorData.from_config("MAC140")
+    assert float(np.real(freqresp(coil_tf(md), np.array([1e-3]))[0])) == pytest.approx(
+        md.coil_gain, rel=1e-6)
+
+
+@pytest.mark.parametrize("motor", TYPES)
+@pytest.mark.parametrize("ratio", [1.0, 6.0])
+def test_designed_loops_meet_margins_robustness_and_quantisation(motor, ratio):
+    md = MotorData.from_config(motor)
+    d = synthesize(md, ratio * md.J_m)
+    c, s = d.current_report.nominal, d.speed_report.nominal
+    assert c.pm_deg >= 45 and c.gm_db >= 6
+    assert s.pm_deg >= 45 and s.gm_db >= 8
+    assert c.pole_radius < 0.999 and s.pole_radius < 0.999
+    assert d.current_report.all_stable and d.speed_report.all_stable
+    assert min(d.current_report.worst_robust_pm, d.speed_report.worst_robust_pm) >= 30
+    assert abs(d.quantization_delta["current_pm_deg"]) <= 2
+    assert abs(d.quantization_delta["speed_pm_deg"]) <= 2
+    assert abs(d.quantization_delta["current_gm_db"]) <= 1
+    assert abs(d.quantization_delta["speed_gm_db"]) <= 1
+    assert verify_design(d) == []
+    assert d.registers["KVOUT"] == pytest.approx(ratio, abs=1 / 256)
+    assert d.registers["KIFY1"] + d.registers["KIFY0"] == 1.0  # integrator exact
+    assert d.speed_report.step_overshoot < 0.02  # I-P: no step overshoot
+
+
+def test_pole_radius_decides_stability_not_margins():
+    md = MotorData.from_config("MAC140")
+    d = synthesize(md, md.J_m, structure="pi")
+    regs = dict(d.registers)
+    regs["KVOUT"] = 6.0  # a loop gain six times too high: unstable
+    from tuning.models import speed_open_loop
+
+    m = loop_metrics(speed_open_loop(speed_plant(md, regs), regs))
+    assert not m.stable and m.pole_radius > 1.0
+
+
+def test_quantisation_range_errors_and_exact_sums():
+    with pytest.raises(QuantizationError, match="KVFX4"):
+        quantize_value("KVFX4", 9.0)
+    with pytest.raises(QuantizationError, match="KFF3"):
+        quantize_value("KFF3", 200.0)
+    q = quantize_registers({"KVFX4": 0.123456, "KVFX3": -0.1, "KVFX2": 0.0, "KVFX1": 0.0,
+                            "KVFY3": 0.3333333, "KVFY2": 0.3333333, "KVFY1": 0.3333334,
+                            "KVFY0": 0.0, "KVOUT": 3.9})
+    assert q["KVFY3"] + q["KVFY2"] + q["KVFY1"] + q["KVFY0"] == 1.0
+    assert round((q["KVFX4"] + q["KVFX3"]) * 4096) == round(0.023456 * 4096)
+    assert q["KVOUT"] * 256 == round(3.9 * 256)
+
+
+@pytest.mark.parametrize("motor", TYPES)
+def test_default_setups_are_the_toolkit_output(motor):
+    from tuning.defaults import render_setup
+
+    from jvl_gym.config import configs_dir
+
+    assert (configs_dir() / "setups" / f"{motor}.yaml").read_text() == render_setup(motor)

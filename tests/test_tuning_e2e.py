@@ -1,0 +1,46 @@
+"""Tuning toolkit end to end on the simulator: two motors of the benchmark, and the CLI."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+
+import numpy as np
+import yaml
+from tuning.cli import app
+from typer.testing import CliRunner
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _bench():
+    spec = importlib.util.spec_from_file_location("tuning_e2e", ROOT / "benchmarks/tuning_e2e.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_autotune_two_motors_of_the_benchmark_on_the_simulator():
+    # motors 1 (MAC140, no load) and 2 (MAC140, 8.6 x J_m) of the 20-motor benchmark
+    rows = _bench().run_e2e(n=20, seed=0, subset=[1, 2])
+    for r in rows:
+        assert abs(r["dR"]) < 0.02 and abs(r["dL"]) < 0.05 and abs(r["dJ"]) < 0.05
+        assert r["delay_ok"]
+        assert r["checks"] == "ok"
+        assert r["fncerr_tuned"] == 0 and r["err_tuned"] == 0
+        assert r["settle_tuned"] < r["settle_default"]
+
+
+def test_cli_autotune_writes_setup_and_report(tmp_path):
+    res = CliRunner().invoke(app, ["autotune", "--motor", "MAC140", "--load-inertia", "5e-5",
+                                   "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    regs = yaml.safe_load((tmp_path / "setup.yaml").read_text())["registers"]
+    assert abs(regs["KVOUT"] - (17.3e-6 + 5e-5) / 17.3e-6) < 0.1  # manual 3.2.13: 3.9
+    for f in ("report.txt", "fits.png", "bode.png", "steps.png"):
+        assert (tmp_path / f).stat().st_size > 0
+    res = CliRunner().invoke(app, ["verify", "--motor", "MAC140", "--setup",
+                                   str(tmp_path / "setup.yaml")])
+    assert res.exit_code == 0, res.output
+    assert "all stable True" in res.output
+    assert np.isfinite(regs["KVFX4"])

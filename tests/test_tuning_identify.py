@@ -1,0 +1,96 @@
+"""Tuning toolkit: records, coil and mechanics identification (issue 4)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from tuning.identify_coil import identify_coil
+from tuning.identify_mechanics import identify_mechanics, two_level_torques
+from tuning.models import MotorData
+from tuning.records import (
+    RATES,
+    Record,
+    RecordError,
+    load_csv,
+    save_csv,
+    simulate_testa,
+    simulate_testu,
+    validate,
+)
+
+MD = MotorData.from_config("MAC140")
+
+
+@pytest.mark.parametrize("delay", [0, 1])
+@pytest.mark.parametrize("n", [11, 64])
+def test_noiseless_coil_is_exact(delay, n):
+    true = MD.with_(pwm_delay=delay)
+    est = identify_coil(simulate_testu(true, 100, n, quantize=False), MD)
+    assert est.delay == delay
+    assert est.R_phase == pytest.approx(MD.R_phase, rel=1e-3)
+    assert est.L_phase == pytest.approx(MD.L_phase, rel=1e-3)
+    assert est.R_line == pytest.approx(2 * MD.R_phase, rel=1e-3)
+    assert est.nrmse_fit > 99.9
+
+
+def test_realistic_coil_at_the_recommended_length():
+    errs, inside = [], []
+    for seed in range(40):
+        rec = simulate_testu(MD, 100, 64, quantize=True, noise_std=2.0, rng=seed)
+        est = identify_coil(rec, MD)
+        assert est.delay == 1
+        errs.append((est.R_phase / MD.R_phase - 1, est.L_phase / MD.L_phase - 1))
+        inside.append((est.ci["R_phase"][0] <= MD.R_phase <= est.ci["R_phase"][1])
+                      and (est.ci["L_phase"][0] <= MD.L_phase <= est.ci["L_phase"][1]))
+    errs = np.abs(np.array(errs))
+    assert errs[:, 0].max() < 0.02 and errs[:, 1].max() < 0.05
+    assert np.mean(inside) >= 0.85
+
+
+def test_noiseless_inertia_one_level_without_friction():
+    J = 4.0 * MD.J_m
+    rec = simulate_testa(MD, J, 40, 11, quantize=False)
+    est = identify_mechanics(rec, MD, coulomb=False, viscous=False)
+    assert est.J == pytest.approx(J, rel=1e-6)
+    assert est.kvout == pytest.approx(4.0, rel=1e-6)
+
+
+def test_one_level_cannot_separate_inertia_and_coulomb_friction():
+    rec = simulate_testa(MD, MD.J_m, 40, 32)
+    with pytest.raises(RecordError, match="two T_SOLL levels"):
+        identify_mechanics(rec, MD)
+
+
+def test_two_level_procedure_with_friction_and_noise():
+    errs = []
+    for seed in range(20):
+        rng = np.random.default_rng(seed)
+        J = MD.J_m * (1 + rng.uniform(0, 10))
+        tc, b = rng.uniform(0, 0.02), rng.uniform(0, 1e-5)
+        t1, t2 = two_level_torques(J, MD, 64)
+        t1 += int(tc / MD.torque_per_vf)
+        t2 += int(tc / MD.torque_per_vf)
+        recs = [simulate_testa(MD, J, t, 64, b, tc, position_noise=0.85, rng=rng)
+                for t in (t1, t2)]
+        est = identify_mechanics(recs, MD)
+        errs.append(est.J / J - 1)
+    assert np.max(np.abs(errs)) < 0.05
+
+
+def test_record_validation_errors(tmp_path):
+    good = simulate_testu(MD, 100, 20)
+    with pytest.raises(RecordError, match="too short"):
+        validate(Record("TESTU", RATES["TESTU"], good.input[:5], good.output[:5]))
+    with pytest.raises(RecordError, match="wrong sample rate"):
+        validate(Record("TESTU", RATES["TESTA"], good.input, good.output))
+    with pytest.raises(RecordError, match="saturated"):
+        validate(Record("TESTU", RATES["TESTU"], good.input, good.output * 10))
+    with pytest.raises(RecordError, match="did not move"):
+        validate(Record("TESTA", RATES["TESTA"], np.full(11, 5.0), np.zeros(11)))
+    path = save_csv(good, tmp_path / "u.csv")
+    back = load_csv(path)
+    np.testing.assert_array_equal(back.output, good.output)
+    assert back.kind == "TESTU" and back.motor == "MAC140"
+    (tmp_path / "bad.csv").write_text("# kind: TESTU\nsample,UA_VAL,IC_IST\n0,1,2\n")
+    with pytest.raises(RecordError, match="rate_hz"):
+        load_csv(tmp_path / "bad.csv")
