@@ -72,8 +72,9 @@ def evaluate(env_id: str, model_file: str | Path | None, n_seeds: int | None = N
 
         iterator = tqdm(seeds, desc=f"evaluate {env_id}")
     for seed in iterator:
-        decimation = kwargs.get("decimation", 2)
-        bl = make_baseline(env_id, n_ep, _act_dim(env_id), decimation=decimation)
+        vec_cls = _vector_class(env_id)
+        decimation = int(kwargs.get("decimation", vec_cls.default_decimation))
+        bl = make_baseline(env_id, n_ep, len(vec_cls.act_labels), decimation=decimation)
         rows["baseline"].append(float(episode_returns(
             env_id, bl, seed, n_ep, {**kwargs, **base.env_kwargs}, bl.reset).mean()))
         if model is not None:
@@ -85,15 +86,15 @@ def evaluate(env_id: str, model_file: str | Path | None, n_seeds: int | None = N
     return {k: (float(np.mean(v)), float(np.std(v))) for k, v in rows.items()}
 
 
-def _act_dim(env_id: str) -> int:
+def _vector_class(env_id: str) -> Any:
+    import importlib
+
     import gymnasium as gym
 
     import jvl_gym  # noqa: F401
 
     module, _, cls = gym.spec(env_id).vector_entry_point.partition(":")
-    import importlib
-
-    return len(getattr(importlib.import_module(module), cls).act_labels)
+    return getattr(importlib.import_module(module), cls)
 
 
 def format_table(results: dict[str, dict[str, tuple[float, float]]]) -> str:

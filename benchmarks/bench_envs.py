@@ -1,0 +1,113 @@
+"""Environment speed (``make bench``): prints its figures, asserts nothing.
+
+- single env steps/s of every jvl_gym env (the env class itself, one ``step`` call per step,
+  random actions, reset when an episode ends);
+- vector env-steps/s with 1024 copies (native vector env, NEXT_STEP autoreset);
+- gym-electric-motor's ``Cont-CC-PMSM-v0`` single env steps/s, measured in the same run in a
+  separate venv (``.venv-bench``, created here on first use: its dependencies conflict with
+  ours), for the ×10 comparison of issue 6.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import gymnasium as gym
+import numpy as np
+
+import jvl_gym  # noqa: F401
+from jvl_gym.envs import ENV_IDS
+
+ROOT = Path(__file__).resolve().parents[1]
+BENCH_VENV = ROOT / ".venv-bench"
+GEM_SCRIPT = """
+import time, warnings
+warnings.filterwarnings("ignore")
+import numpy as np
+import gym_electric_motor as gem
+env = gem.make("Cont-CC-PMSM-v0")
+env.reset(seed=0)
+acts = [env.action_space.sample() for _ in range(1000)]
+for a in acts[:100]:
+    env.step(a)
+n, t0 = 0, time.perf_counter()
+while time.perf_counter() - t0 < {seconds}:
+    for a in acts:
+        _, _, term, trunc, _ = env.step(a)
+        n += 1
+        if term or trunc:
+            env.reset()
+print(n / (time.perf_counter() - t0))
+"""
+
+
+def single_steps_per_second(env_id: str, seconds: float = 3.0) -> float:
+    env = gym.make(env_id).unwrapped
+    env.reset(seed=0)
+    acts = np.random.default_rng(0).uniform(-1, 1, (1000, *env.action_space.shape)).astype(
+        np.float32)
+    for a in acts[:50]:
+        env.step(a)
+    n, t0 = 0, time.perf_counter()
+    while time.perf_counter() - t0 < seconds:
+        for a in acts:
+            _, _, term, trunc, _ = env.step(a)
+            n += 1
+            if term or trunc:
+                env.reset()
+    return n / (time.perf_counter() - t0)
+
+
+def vector_steps_per_second(env_id: str, num_envs: int = 1024, seconds: float = 5.0) -> float:
+    venv = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point")
+    venv.reset(seed=0)
+    acts = np.random.default_rng(0).uniform(-1, 1, (16, *venv.action_space.shape)).astype(
+        np.float32)
+    for a in acts[:3]:
+        venv.step(a)
+    n, t0 = 0, time.perf_counter()
+    while time.perf_counter() - t0 < seconds:
+        for a in acts:
+            venv.step(a)
+            n += num_envs
+    return n / (time.perf_counter() - t0)
+
+
+def gem_steps_per_second(seconds: float = 3.0) -> float | None:
+    python = BENCH_VENV / "bin" / "python"
+    if not python.exists():
+        print("creating .venv-bench with gym-electric-motor ...", flush=True)
+        subprocess.run([sys.executable, "-m", "venv", str(BENCH_VENV)], check=True)
+        subprocess.run([str(python), "-m", "pip", "install", "-q", "gym-electric-motor"],
+                       check=True)
+    out = subprocess.run([str(python), "-c", GEM_SCRIPT.format(seconds=seconds)],
+                         capture_output=True, text=True,
+                         env={**os.environ, "MPLBACKEND": "Agg"})
+    if out.returncode != 0:
+        print(out.stderr[-2000:])
+        return None
+    return float(out.stdout.strip().splitlines()[-1])
+
+
+def main() -> None:
+    fast = os.environ.get("JVL_FAST") == "1"
+    seconds = 1.0 if fast else 3.0
+    gem = gem_steps_per_second(seconds)
+    print(f"gym-electric-motor Cont-CC-PMSM-v0 single env: "
+          f"{gem:,.0f} steps/s" if gem else "gym-electric-motor: not measured")
+    print(f"{'env':28s} {'single steps/s':>15s} {'x GEM':>7s} {'vector(1024) env-steps/s':>26s}")
+    for env_id in ENV_IDS:
+        single = single_steps_per_second(env_id, seconds)
+        vector = vector_steps_per_second(env_id, 1024 if env_id != "jvl_gym/FilterTuning-v0"
+                                         else 256, seconds)
+        ratio = f"{single / gem:7.1f}" if gem else "      —"
+        note = " (trials; 256 copies)" if "FilterTuning" in env_id else ""
+        print(f"{env_id:28s} {single:15,.0f} {ratio} {vector:26,.0f}{note}")
+
+
+if __name__ == "__main__":
+    main()
