@@ -1,0 +1,62 @@
+"""Baselines, RL configs and the jvl-gym CLI."""
+
+from __future__ import annotations
+
+import numpy as np
+from typer.testing import CliRunner
+
+import jvl_gym  # noqa: F401
+from jvl_gym.cli import app
+from jvl_gym.envs import ENV_IDS
+from jvl_gym.envs.baselines import BASELINES, PITension, make_baseline
+from jvl_gym.rl.config import load_rl_configs
+from jvl_gym.rl.evaluate import episode_returns, format_table
+
+
+def test_pi_integrates_and_stops_integrating_when_saturated() -> None:
+    pi = PITension(2, kp=1.0, ki=10.0, dt=0.01)
+    obs = np.array([[0.1], [5.0]])
+    for _ in range(100):
+        u = pi(obs)
+    assert u[0, 0] < -0.1  # integral action beyond the proportional part
+    assert u[1, 0] == -1.0
+    assert pi.integral[1] == 0.0  # anti-windup: saturated by kp·e alone, nothing integrated
+    assert pi.integral[0] > 0.0
+    pi.reset(np.array([False, True]))
+    assert pi.integral[0] > 0.0
+    pi.reset()
+    assert pi.integral[0] == 0.0
+
+
+def test_pi_baseline_holds_tension_better_than_a_fixed_ratio() -> None:
+    env_id = "jvl_gym/GearSync-v0"
+    pi = make_baseline(env_id, 4, 1)
+    held = episode_returns(env_id, pi, 123, 4, reset_policy=pi.reset)
+    fixed = episode_returns(env_id, make_baseline("jvl_gym/CoilWinding-v0", 4, 1), 123, 4)
+    assert held.mean() > fixed.mean()
+
+
+def test_firmware_baselines_ignore_the_action() -> None:
+    env_id = "jvl_gym/Positioning-v0"
+    kwargs = BASELINES[env_id].env_kwargs
+    a = episode_returns(env_id, lambda o: np.ones((2, 1), np.float32), 5, 2, kwargs)
+    b = episode_returns(env_id, lambda o: -np.ones((2, 1), np.float32), 5, 2, kwargs)
+    np.testing.assert_array_equal(a, b)
+
+
+def test_every_env_has_an_rl_config_and_a_baseline() -> None:
+    configs = load_rl_configs()
+    for env_id in ENV_IDS:
+        assert env_id in configs and env_id in BASELINES
+        assert configs[env_id]["eval"]["n_seeds"] >= 5
+
+
+def test_format_table_names_the_better_controller() -> None:
+    table = format_table({"x": {"policy": (2.0, 0.1), "baseline": (1.0, 0.2)}})
+    assert "| x | 2.00 ± 0.10 | 1.00 ± 0.20 | policy |" in table
+
+
+def test_cli_lists_train_and_evaluate() -> None:
+    result = CliRunner().invoke(app, ["--help"])
+    assert result.exit_code == 0
+    assert "train" in result.output and "evaluate" in result.output
