@@ -1,13 +1,14 @@
 # ruff: noqa: B008  (typer declares options as argument defaults)
 """``jvl-tune``: identify, synthesize, verify, autotune (and regenerate the default setups).
 
-Every command works against the simulator (``jvl_gym.MotorArray``) or on record CSV files. A
-real motor will join through the serial protocol client (:data:`tuning.records.SERIAL_SOURCE_HOOK`);
-there is deliberately no ``--port`` option yet.
+Every command works against the simulator (``jvl_gym.MotorArray``) or on record CSV files;
+``autotune --port`` runs the same procedure on a motor behind a serial port or a pyserial URL
+(a real MAC motor, or the digital twin ``jvl-gym serve``) through the MacTalk client.
 
 Examples
 --------
 ``jvl-tune autotune --motor MAC140 --load-inertia 5e-5 --out DIR``
+``jvl-tune autotune --motor MAC140 --port socket://127.0.0.1:5000 --address 19 --write``
 ``jvl-tune identify --motor MAC140 --testu u.csv --testa a1.csv --testa a2.csv``
 ``jvl-tune synthesize --motor MAC140 --inertia 6.7e-5 --out setup.yaml``
 ``jvl-tune verify --motor MAC140 --setup setup.yaml --inertia 6.7e-5``
@@ -125,9 +126,32 @@ def autotune(motor: str = typer.Option("MAC140"),
              n_coil: int = typer.Option(RECOMMENDED_COIL_SAMPLES, help="TESTU samples"),
              n_mech: int = typer.Option(RECOMMENDED_MECH_SAMPLES, help="TESTA samples/level"),
              structure: str = typer.Option("pi", help="speed loop structure: pi or ip"),
-             out: Path = typer.Option(Path("autotune_out"))) -> None:
-    """Identify, synthesise, verify on the simulator; write OUT/setup.yaml and a report."""
+             out: Path = typer.Option(Path("autotune_out")),
+             port: str = typer.Option(None, help="serial device or pyserial URL of a real motor "
+                                      "or of `jvl-gym serve` (default: the simulator)"),
+             address: int = typer.Option(1, help="MacTalk unit address (MYADDR) with --port"),
+             time_scale: float = typer.Option(1.0, help="with --port: the twin's --speed"),
+             write: bool = typer.Option(False, help="with --port: write the design to the motor")
+             ) -> None:
+    """Identify, synthesise, verify (simulator or --port); write OUT/setup.yaml and a report."""
     from jvl_gym import MotorArray
+
+    if port is not None:
+        from .serial_source import autotune_over_serial
+
+        ident, d = autotune_over_serial(port, motor, address, time_scale, n_coil, n_mech,
+                                        structure, write, progress=_say)
+        setup = out / "setup.yaml"
+        _write_setup(setup, motor, d.registers,
+                     f"jvl-tune autotune --port {port}: identified J = {ident.mechanics.J:.4g}")
+        files = write_report(out, ident, d, ident.motor, ident.mechanics.J)
+        typer.echo(files[0].read_text())
+        bad = verify_design(d)
+        typer.echo(f"wrote {setup}" + (" and the motor's registers" if write and not bad else ""))
+        if bad:
+            typer.echo("FAILED: " + "; ".join(bad))
+            raise typer.Exit(1)
+        return
 
     from .verify import velocity_step
 

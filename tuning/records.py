@@ -267,7 +267,7 @@ def simulate_testa(motor: MotorData, J: float, t_soll: float, n: int = 11, visco
 #: (``write``, ``read``, ``step``/wait, ``set_record_length``, ``sample_buffer``) can be passed
 #: to :func:`acquire_testu` / :func:`acquire_testa`. The protocol client is not written yet;
 #: this hook names the place where ``jvl-tune`` will open it.
-SERIAL_SOURCE_HOOK: str = "tuning.records.open_serial_source (not implemented: protocol client)"
+SERIAL_SOURCE_HOOK: str = "tuning.serial_source.SerialMotor (MacTalk client, jvl-tune --port)"
 
 ALIGN_ELDEG: int = 341  #: ELDEG_IST whose zero-torque axis is the TESTU a–c current (60° el.)
 MANI_CURRENT: int = 400  #: MAN_I_NOM of the final alignment (332 ADC counts at AMPLITUDE 0.83)
