@@ -57,7 +57,8 @@ print(f"R_line {ident.coil.R_line:.4f} Ω  (true {2 * cfg.phase_resistance:.4f})
       f"95 % CI {np.round(ident.coil.ci['R_line'], 4)}")
 print(f"L_line {ident.coil.L_line * 1e3:.4f} mH (true {2e3 * cfg.phase_inductance:.4f}), "
       f"delay {ident.coil.delay} sample(s)")
-print(f"J      {ident.mechanics.J:.4e} kg·m² (true {J_true:.4e}), KVOUT {ident.mechanics.kvout:.2f}")
+print(f"J      {ident.mechanics.J:.4e} kg·m² (true {J_true:.4e}), "
+      f"KVOUT {ident.mechanics.kvout:.2f}")
 
 # %%
 fits = plot_fits(ident, out / "fits.png")
