@@ -22,14 +22,15 @@ _DT = c.OUTER_DT
 _V_MOTOR_NORM = 3000.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 3000 rpm in counts/sample
 _GEARF2 = 1000  #: GEARF2 of the nominal gear (GEARF1 = round(ratio·1000))
 _AG_CENTRE = 1.01  #: AG factor at 0 V (manual 4.1.9: −10 V ↔ 0.87, +10 V ↔ 1.15)
+_INTEGRAL_TAU = 2.0  #: time constant of the leaky tension-error integral [s]
 
 
 class GearSyncVectorEnv(MotorVectorEnv):
     """Vector version of :class:`GearSyncEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
 
-    obs_labels = ("tension_error", "tension_rate", "master_speed", "motor_speed", "flwerr",
-                  "fncerr", "previous_action")
+    obs_labels = ("tension_error", "tension_rate", "tension_error_integral", "master_speed",
+                  "motor_speed", "flwerr", "fncerr", "previous_action")
     act_labels = ("analog_input",)
     default_ranges = {
         "ea": (3e3, 8e3),  # E·A [N]
@@ -74,7 +75,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
         self.profile = SpeedProfile(n)
         for name in ("ea", "thickness", "r0", "span", "tension_ref", "strain", "wound",
                      "radius", "force", "measured", "master_theta", "time", "count_acc",
-                     "prev_measured", "pulses"):
+                     "prev_measured", "pulses", "error_integral"):
             setattr(self, name, np.zeros(n))
         self.slack_count = np.zeros(n, dtype=np.int64)
         self.gear = np.ones(n)
@@ -101,6 +102,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
         self.time[idx] = 0.0
         self.count_acc[idx] = 0.0
         self.pulses[idx] = 0.0
+        self.error_integral[idx] = 0.0
         self.slack_count[idx] = 0
         # nominal gear: at the core radius and 0 V the winder runs at v1/(1 − ε_ref)
         motor_per_master = (self.master_radius / draws["r0"] * self.gear_ratio
@@ -148,6 +150,9 @@ class GearSyncVectorEnv(MotorVectorEnv):
             self.slack_count[:] = np.where(self.strain <= 0.0, self.slack_count + 1, 0)
             self.master_theta += v1 * _DT / self.master_radius
             self.time += _DT
+        e = (self.measured - self.tension_ref) / self.tension_ref
+        step_dt = self.decimation * _DT
+        self.error_integral += step_dt * (e - self.error_integral / _INTEGRAL_TAU)
 
     def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         e = (self.force - self.tension_ref) / self.tension_ref
@@ -174,6 +179,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
         return np.stack([
             (self.measured_tension() - ref) / ref,
             (self.measured - self.prev_measured) / ref * (0.1 / step_dt),
+            self.error_integral * 10.0,
             self.pulses / self.decimation / v1_counts,
             r[:, R.V_IST] / _V_MOTOR_NORM,
             r[:, R.FLWERR] / 100.0,
@@ -204,10 +210,12 @@ class GearSyncEnv(MotorEnv):
     ``Box(-1, 1, (1,), float32)``: the analogue input, 10 V × action.
 
     ## Observation Space
-    ``Box(-5, 5, (7,), float32)``: load-cell tension error / reference (filtered, τ = 5 ms,
+    ``Box(-5, 5, (8,), float32)``: load-cell tension error / reference (filtered, τ = 5 ms,
     noise ``loadcell_noise`` × reference); its change over the step per 0.1 s / reference;
-    master speed (pulse counts per sample / counts at 1 m/s); motor speed V_IST / 3000 rpm;
-    FLWERR / 100 counts; FNCERR / 10000 counts; previous action.
+    a leaky integral (τ = 2 s) of the filtered tension error / reference × 10 [s] (the state
+    a PI controller keeps, so a memoryless policy can act on it); master speed (pulse counts
+    per sample / counts at 1 m/s); motor speed V_IST / 3000 rpm; FLWERR / 100 counts; FNCERR /
+    10000 counts; previous action.
 
     ## Rewards
     Per step ``1 − min(|e|/tension_tolerance, 2) − action_rate_weight·Δa²`` with ``e`` the true
