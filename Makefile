@@ -27,9 +27,10 @@ demo: $(STAMP)
 test: $(STAMP_RL)
 	JVL_FAST=1 MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 --nbmake tests notebooks
 
-bench: $(STAMP)
+bench: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_sim.py
 	$(BIN)/python benchmarks/bench_protocol.py
+	$(BIN)/python benchmarks/bench_envs.py
 
 notebooks: $(STAMP_RL)
 	cd notebooks && for f in *.py; do ../$(BIN)/jupytext --to ipynb "$$f"; done
