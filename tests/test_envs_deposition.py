@@ -107,3 +107,19 @@ def test_coil_winding_pitch_trim_changes_the_gear_factor() -> None:
     g0 = m.read("GEARF1")[0]
     env.step(np.array([1.0, 0.0, 0.0], dtype=np.float32))
     assert m.read("GEARF1")[0] == round(g0 * 1.05)
+
+
+def test_many_copies_wind_the_same_coil_as_one() -> None:
+    n = 32
+    venv = gym.make_vec("jvl_gym/CoilWinding-v0", num_envs=n,
+                        vectorization_mode="vector_entry_point")
+    acts = np.random.default_rng(3).uniform(-1, 1, (40, n, 3)).astype(np.float32)
+    venv.reset(seed=70)
+    for a in acts:
+        obs, *_ = venv.step(a)
+    single = gym.make("jvl_gym/CoilWinding-v0")
+    single.reset(seed=70 + 9)
+    for a in acts:
+        o, *_ = single.step(a[9])
+    np.testing.assert_array_equal(o, obs[9])
+    np.testing.assert_array_equal(single.unwrapped.core.h[0], venv.unwrapped.h[9])

@@ -4,12 +4,14 @@ from __future__ import annotations
 
 import gymnasium as gym
 import numpy as np
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import jvl_gym  # noqa: F401
 from jvl_gym import layout as L
 from jvl_gym.envs import web
+from jvl_gym.envs.profiles import SpeedProfile, row_speed
 
 
 def test_strain_settles_to_speed_difference_over_winder_speed() -> None:
@@ -95,3 +97,47 @@ def test_slack_web_terminates_the_episode() -> None:
             break
     core = env.unwrapped.core
     assert term and core.strain[0] <= 0.0
+
+
+def test_scalar_twins_equal_the_numpy_model() -> None:
+    rng = np.random.default_rng(0)
+    for _ in range(200):
+        e, v1, v2, length = rng.uniform(-0.01, 0.01), *rng.uniform(0.0, 3.0, 2), rng.uniform(
+            0.2, 3.0)
+        ref = web.span_step(np.array([e]), np.array([v1]), np.array([v2]), np.array([length]),
+                            0.00192)[0]
+        assert web.span_step_s(e, v1, v2, length, 0.00192) == pytest.approx(ref, rel=1e-12,
+                                                                            abs=1e-15)
+        r0, h, wound = rng.uniform(0.01, 0.1), rng.uniform(1e-5, 1e-3), rng.uniform(0, 100)
+        assert web.winder_radius_s(r0, h, wound) == pytest.approx(
+            web.winder_radius(np.array([r0]), np.array([h]), np.array([wound]))[0], rel=1e-14)
+        assert web.tension_s(e, 5000.0) == web.tension(np.array([e]), np.array([5000.0]))[0]
+
+
+def test_profile_row_speed_equals_the_vectorised_profile() -> None:
+    n = 16
+    prof = SpeedProfile(n)
+    rngs = [np.random.default_rng(k) for k in range(n)]
+    u = np.random.default_rng(1).uniform(size=(6, n))
+    prof.reset(np.arange(n), rngs, 0.5 + u[0], 0.2 + u[1], u[2] - 0.5, 1 + u[3], 0.05 * u[4],
+               0.01 * u[5])
+    t = np.linspace(0.0, 5.0, n)
+    theta = np.linspace(0.0, 30.0, n)
+    ref = prof.speed(t, theta)
+    got = [row_speed(prof.params[i], t[i], theta[i], prof.t_change) for i in range(n)]
+    np.testing.assert_allclose(got, ref, rtol=1e-12, atol=1e-15)
+
+
+def test_many_copies_run_the_same_line_as_one() -> None:
+    """From 32 copies the motor kernel runs multi-threaded between compiled line updates."""
+    n = 32
+    venv = gym.make_vec("jvl_gym/GearSync-v0", num_envs=n, vectorization_mode="vector_entry_point")
+    acts = np.random.default_rng(3).uniform(-0.2, 0.2, (20, n, 1)).astype(np.float32)
+    venv.reset(seed=40)
+    for a in acts:
+        obs, *_ = venv.step(a)
+    single = gym.make("jvl_gym/GearSync-v0")
+    single.reset(seed=40 + 5)
+    for a in acts:
+        o, *_ = single.step(a[5])
+    np.testing.assert_array_equal(o, obs[5])

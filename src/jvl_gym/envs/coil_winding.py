@@ -6,13 +6,15 @@ import math
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
+from ..kernel import run_serial
 from . import deposition as dep
 from .base import MotorVectorEnv
-from .profiles import SpeedProfile
+from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
 
 __all__ = ["CoilWindingEnv", "CoilWindingVectorEnv"]
@@ -21,6 +23,63 @@ _DT = c.OUTER_DT
 _GEARF2 = 10000
 _GROUPS = 8  #: groups of bins in the observed profile summary
 _V_TRAVERSE_NORM = 500.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 500 rpm in counts/sample
+_PARALLEL_MIN = 32  #: from this many copies the motor kernel runs multi-threaded (MotorArray)
+
+
+@njit(cache=True)
+def _spindle_pre(inputs, state, prof, t_change, time, spindle_rev, count_acc, pulses,
+                 counts_per_rev, metres_per_rad, x0, rps):  # pragma: no cover - compiled
+    """Before an outer sample: spindle speed and pulses, traverse position."""
+    for i in range(inputs.shape[0]):
+        v = row_speed(prof[i], time[i], spindle_rev[i] * 2.0 * math.pi, t_change)
+        rps[i] = v
+        acc = count_acc[i] + v * counts_per_rev * _DT
+        counts = math.floor(acc)
+        count_acc[i] = acc - counts
+        pulses[i] += counts
+        inputs[i, L.I_PULSE_COUNTS] = counts
+        x0[i] = state[i, L.S_THETA] * metres_per_rad
+
+
+@njit(cache=True)
+def _spindle_post(state, k, time, spindle_rev, metres_per_rad, x0, rps, turn_x,
+                  turn_t):  # pragma: no cover - compiled
+    """After outer sample ``k``: record where a turn is laid when a revolution completes.
+
+    A turn is laid when the spindle completes a revolution; its position is the traverse
+    position interpolated to that instant. ``turn_x[i, k]`` / ``turn_t[i, k]`` get its
+    position and time (NaN when none).
+    """
+    for i in range(state.shape[0]):
+        rev0 = spindle_rev[i]
+        rev1 = rev0 + rps[i] * _DT
+        spindle_rev[i] = rev1
+        turn_x[i, k] = math.nan
+        turn_t[i, k] = math.nan
+        if math.floor(rev1) > math.floor(rev0):
+            frac = min(max((math.floor(rev0) + 1.0 - rev0) / max(rps[i] * _DT, 1e-12), 0.0),
+                       1.0)
+            x1 = state[i, L.S_THETA] * metres_per_rad
+            turn_x[i, k] = x0[i] + frac * (x1 - x0[i])
+            turn_t[i, k] = time[i] + frac * _DT
+        time[i] += _DT
+
+
+@njit(cache=True)
+def _advance_spindle_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, decimation,
+                            prof, t_change, time, spindle_rev, count_acc, pulses,
+                            counts_per_rev, metres_per_rad, turn_x,
+                            turn_t):  # pragma: no cover - compiled
+    """``decimation`` outer samples of spindle and motor in one compiled call (few copies;
+    see ``gear_sync._advance_line_serial`` for why the parallel kernel is not called here)."""
+    n = regs.shape[0]
+    x0 = np.empty(n)
+    rps = np.empty(n)
+    for k in range(decimation):
+        _spindle_pre(inputs, state, prof, t_change, time, spindle_rev, count_acc, pulses,
+                     counts_per_rev, metres_per_rad, x0, rps)
+        run_serial(regs, state, params, inputs, keys, buf, rec, fmt, 1, plan)
+        _spindle_post(state, k, time, spindle_rev, metres_per_rad, x0, rps, turn_x, turn_t)
 
 
 class CoilWindingVectorEnv(MotorVectorEnv):
@@ -82,6 +141,8 @@ class CoilWindingVectorEnv(MotorVectorEnv):
         self.layer = np.zeros(n, dtype=np.int64)
         self.layer_piles = np.zeros(n)
         self.p4 = int(round(self.coil_width * self._counts_per_m))
+        self._turn_x = np.zeros((n, self.decimation))
+        self._turn_t = np.zeros((n, self.decimation))
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
@@ -133,37 +194,42 @@ class CoilWindingVectorEnv(MotorVectorEnv):
         """Traverse position from the lower flange [m], (N,)."""
         return self.motors.state[:, L.S_THETA] / (2 * math.pi) * self.screw_pitch
 
-    def wire_diameter(self) -> np.ndarray:
-        """Present wire diameter [m], (N,)."""
-        return self.d_mean * (1.0 + self.d_var * np.sin(2 * np.pi * self.d_freq * self.time
-                                                        + self.d_phase))
+    def wire_diameter(self, t: np.ndarray | None = None, idx: np.ndarray | None = None
+                      ) -> np.ndarray:
+        """Wire diameter [m] at time ``t`` (default: now) of copies ``idx`` (default: all)."""
+        sel = slice(None) if idx is None else idx
+        t = self.time[sel] if t is None else t
+        return self.d_mean[sel] * (1.0 + self.d_var[sel] * np.sin(
+            2 * np.pi * self.d_freq[sel] * t + self.d_phase[sel]))
 
     def _advance(self) -> None:
         m = self.motors
         self.pulses[:] = 0.0
         self.step_penalty[:] = 0.0
-        for _ in range(self.decimation):
-            rps = self.profile.speed(self.time, self.spindle_rev * 2 * np.pi)
-            self.count_acc += rps * self.spindle_counts_per_rev * _DT
-            counts = np.floor(self.count_acc)
-            self.count_acc -= counts
-            self.pulses += counts
-            m.inputs[:, L.I_PULSE_COUNTS] = counts
-            x0 = self.traverse_position()
-            m.step(1)
-            rev0 = self.spindle_rev.copy()
-            self.spindle_rev += rps * _DT
-            self.time += _DT
-            crossed = np.floor(self.spindle_rev) > np.floor(rev0)
-            if crossed.any():
-                self._lay(np.flatnonzero(crossed), x0, rev0, rps)
-            self._track_layers()
+        prof, tc = self.profile.params, self.profile.t_change
+        cpr, mpr = float(self.spindle_counts_per_rev), self.screw_pitch / (2 * math.pi)
+        if self.num_envs < _PARALLEL_MIN:
+            _advance_spindle_serial(m.regs, m.state, m.params, m.inputs, m.keys, m._buf,
+                                    m._buf_allocated, m._fmt, m._no_schedule, self.decimation,
+                                    prof, tc, self.time, self.spindle_rev, self.count_acc,
+                                    self.pulses, cpr, mpr, self._turn_x, self._turn_t)
+        else:
+            x0 = np.empty(self.num_envs)
+            rps = np.empty(self.num_envs)
+            for k in range(self.decimation):
+                _spindle_pre(m.inputs, m.state, prof, tc, self.time, self.spindle_rev,
+                             self.count_acc, self.pulses, cpr, mpr, x0, rps)
+                m.step(1)
+                _spindle_post(m.state, k, self.time, self.spindle_rev, mpr, x0, rps,
+                              self._turn_x, self._turn_t)
+        for k in range(self.decimation):  # turns in the order they were laid
+            idx = np.flatnonzero(~np.isnan(self._turn_x[:, k]))
+            if idx.size:
+                self._lay(idx, self._turn_x[idx, k], self._turn_t[idx, k])
+        self._track_layers()
 
-    def _lay(self, idx: np.ndarray, x0: np.ndarray, rev0: np.ndarray, rps: np.ndarray) -> None:
-        x1 = self.traverse_position()[idx]
-        frac = (np.floor(rev0[idx]) + 1.0 - rev0[idx]) / np.maximum(rps[idx] * _DT, 1e-12)
-        x = x0[idx] + np.clip(frac, 0.0, 1.0) * (x1 - x0[idx])
-        d = self.wire_diameter()[idx]
+    def _lay(self, idx: np.ndarray, x: np.ndarray, t: np.ndarray) -> None:
+        d = self.wire_diameter(t, idx)
         base, void, _ = dep.lay_turns(self.h, self.centres, idx, x, d, self.coil_width,
                                       nest=self.nest)
         self.layer_void[idx] += void / (d * d)

@@ -6,15 +6,17 @@ import math
 from typing import Any
 
 import numpy as np
+from numba import njit
 
 from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
-from . import web
+from ..kernel import run_serial
 from .base import MotorVectorEnv
 from .noise import normals
-from .profiles import SpeedProfile
+from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
+from .web import load_cell_s, span_step_s, tension_s, winder_radius_s
 
 __all__ = ["GearSyncEnv", "GearSyncVectorEnv"]
 
@@ -23,11 +25,98 @@ _V_MOTOR_NORM = 3000.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 3000 rpm in co
 _GEARF2 = 1000  #: GEARF2 of the nominal gear (GEARF1 = round(ratio·1000))
 _AG_CENTRE = 1.01  #: AG factor at 0 V (manual 4.1.9: −10 V ↔ 0.87, +10 V ↔ 1.15)
 _INTEGRAL_TAU = 2.0  #: time constant of the leaky tension-error integral [s]
+_PARALLEL_MIN = 32  #: from this many copies the motor kernel runs multi-threaded (MotorArray)
+
+
+@njit(cache=True)
+def _line_pre(inputs, state, prof, t_change, w, counts_per_m, theta0):  # pragma: no cover
+    """Before an outer sample: master speed and pulses of this sample."""
+    for i in range(inputs.shape[0]):
+        v1 = row_speed(prof[i], w[i, _W_TIME], w[i, _W_MTHETA], t_change)
+        w[i, _W_V1] = v1
+        acc = w[i, _W_ACC] + v1 * counts_per_m * _DT
+        counts = math.floor(acc)
+        w[i, _W_ACC] = acc - counts
+        w[i, _W_PULSES] += counts
+        inputs[i, L.I_PULSE_COUNTS] = counts
+        theta0[i] = state[i, L.S_THETA]
+
+
+@njit(cache=True)
+def _line_post(inputs, state, w, slack_count, theta0, master_radius, gear_ratio,
+               lc_k):  # pragma: no cover - compiled
+    """After an outer sample: span strain, winder radius, tension, load torque, load cell."""
+    for i in range(inputs.shape[0]):
+        v1 = w[i, _W_V1]
+        travel = w[i, _W_RADIUS] * (state[i, L.S_THETA] - theta0[i]) / gear_ratio
+        strain = span_step_s(w[i, _W_STRAIN], v1, travel / _DT, w[i, _W_SPAN], _DT)
+        w[i, _W_STRAIN] = strain
+        w[i, _W_WOUND] += travel
+        radius = winder_radius_s(w[i, _W_R0], w[i, _W_THICK], w[i, _W_WOUND])
+        w[i, _W_RADIUS] = radius
+        force = tension_s(strain, w[i, _W_EA])
+        w[i, _W_FORCE] = force
+        inputs[i, L.I_LOAD_TORQUE] = radius * force / gear_ratio
+        w[i, _W_MEASURED] = load_cell_s(w[i, _W_MEASURED], force, lc_k)
+        slack_count[i] = slack_count[i] + 1 if strain <= 0.0 else 0
+        w[i, _W_MTHETA] += v1 * _DT / master_radius
+        w[i, _W_TIME] += _DT
+
+
+@njit(cache=True)
+def _advance_line_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, decimation,
+                         prof, t_change, w, slack_count, counts_per_m, master_radius,
+                         gear_ratio, lc_k):  # pragma: no cover - compiled
+    """``decimation`` outer samples of line and motor in one compiled call (few copies).
+
+    The multi-threaded motor kernel is called from Python instead (a cached function calling
+    a parallel one crashes when loaded from numba's cache in a new process).
+    """
+    theta0 = np.empty(regs.shape[0])
+    for _k in range(decimation):
+        _line_pre(inputs, state, prof, t_change, w, counts_per_m, theta0)
+        run_serial(regs, state, params, inputs, keys, buf, rec, fmt, 1, plan)
+        _line_post(inputs, state, w, slack_count, theta0, master_radius, gear_ratio, lc_k)
+
+
+#: columns of the per-copy line state
+(_W_EA, _W_THICK, _W_R0, _W_SPAN, _W_REF, _W_STRAIN, _W_WOUND, _W_RADIUS, _W_FORCE, _W_MEASURED,
+ _W_MTHETA, _W_TIME, _W_ACC, _W_PREV_MEASURED, _W_PULSES, _W_INTEGRAL, _W_V1, _W_COLS) = range(18)
+
+
+class _LineColumn:
+    """A named (N,) view of one column of ``GearSyncVectorEnv.line`` (survives pickling)."""
+
+    def __init__(self, col: int) -> None:
+        self.col = col
+
+    def __get__(self, obj: Any, objtype: Any = None) -> np.ndarray:
+        return obj.line[:, self.col]
+
+    def __set__(self, obj: Any, value: Any) -> None:
+        obj.line[:, self.col] = value
 
 
 class GearSyncVectorEnv(MotorVectorEnv):
     """Vector version of :class:`GearSyncEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
+
+    ea = _LineColumn(_W_EA)  #: E·A [N]
+    thickness = _LineColumn(_W_THICK)  #: web thickness [m]
+    r0 = _LineColumn(_W_R0)  #: core radius [m]
+    span = _LineColumn(_W_SPAN)  #: span length [m]
+    tension_ref = _LineColumn(_W_REF)  #: reference tension [N]
+    strain = _LineColumn(_W_STRAIN)
+    wound = _LineColumn(_W_WOUND)  #: web wound [m]
+    radius = _LineColumn(_W_RADIUS)  #: winder radius [m]
+    force = _LineColumn(_W_FORCE)  #: web tension [N]
+    measured = _LineColumn(_W_MEASURED)  #: load-cell reading without noise [N]
+    master_theta = _LineColumn(_W_MTHETA)  #: master roll angle [rad]
+    time = _LineColumn(_W_TIME)  #: episode time [s]
+    count_acc = _LineColumn(_W_ACC)  #: fractional master counts
+    prev_measured = _LineColumn(_W_PREV_MEASURED)
+    pulses = _LineColumn(_W_PULSES)  #: master counts in the last step
+    error_integral = _LineColumn(_W_INTEGRAL)  #: leaky tension-error integral [s]
 
     obs_labels = ("tension_error", "tension_rate", "tension_error_integral", "master_speed",
                   "motor_speed", "flwerr", "fncerr", "previous_action")
@@ -54,7 +143,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
                  master_counts_per_rev: int = 8192, loadcell_tau: float = 0.005,
                  loadcell_noise: float = 0.01, break_ratio: float = 3.0, slack_time: float = 0.01,
                  action_rate_weight: float = 0.05, tension_tolerance: float = 0.1,
-                 **kwargs: Any) -> None:
+                 failure_penalty: float = 100.0, **kwargs: Any) -> None:
         if gear_ratio <= 0 or master_radius <= 0 or master_counts_per_rev <= 0:
             raise ValueError("gear_ratio, master_radius and master_counts_per_rev must be > 0")
         self.gear_ratio = float(gear_ratio)
@@ -66,6 +155,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
         self.slack_samples = max(1, int(round(slack_time / _DT)))
         self.action_rate_weight = float(action_rate_weight)
         self.tension_tolerance = float(tension_tolerance)
+        self.failure_penalty = float(failure_penalty)
         #: master counts per outer sample at 1 m/s
         self._counts_per_m = master_counts_per_rev / (2 * math.pi * master_radius)
         super().__init__(num_envs, **kwargs)
@@ -73,10 +163,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
     def _build(self) -> None:
         n = self.num_envs
         self.profile = SpeedProfile(n)
-        for name in ("ea", "thickness", "r0", "span", "tension_ref", "strain", "wound",
-                     "radius", "force", "measured", "master_theta", "time", "count_acc",
-                     "prev_measured", "pulses", "error_integral"):
-            setattr(self, name, np.zeros(n))
+        self.line = np.zeros((n, _W_COLS))
         self.slack_count = np.zeros(n, dtype=np.int64)
         self.gear = np.ones(n)
 
@@ -126,30 +213,22 @@ class GearSyncVectorEnv(MotorVectorEnv):
 
     def _advance(self) -> None:
         m = self.motors
-        theta = m.state[:, L.S_THETA]
-        n_gear = self.gear_ratio
         self.prev_measured[:] = self.measured
         self.pulses[:] = 0.0
-        for _ in range(self.decimation):
-            v1 = self.profile.speed(self.time, self.master_theta)
-            self.count_acc += v1 * self._counts_per_m * _DT
-            counts = np.floor(self.count_acc)
-            self.count_acc -= counts
-            self.pulses += counts
-            m.inputs[:, L.I_PULSE_COUNTS] = counts
-            theta0 = theta.copy()
-            m.step(1)
-            travel = self.radius * (theta - theta0) / n_gear  # web wound this sample [m]
-            self.strain[:] = web.span_step(self.strain, v1, travel / _DT, self.span, _DT)
-            self.wound += travel
-            self.radius[:] = web.winder_radius(self.r0, self.thickness, self.wound)
-            self.force[:] = web.tension(self.strain, self.ea)
-            m.inputs[:, L.I_LOAD_TORQUE] = self.radius * self.force / n_gear
-            self.measured[:] = web.load_cell_step(self.measured, self.force, _DT,
-                                                  self.loadcell_tau)
-            self.slack_count[:] = np.where(self.strain <= 0.0, self.slack_count + 1, 0)
-            self.master_theta += v1 * _DT / self.master_radius
-            self.time += _DT
+        lc_k = 1.0 - math.exp(-_DT / self.loadcell_tau) if self.loadcell_tau > 0 else 1.0
+        prof, tc = self.profile.params, self.profile.t_change
+        if self.num_envs < _PARALLEL_MIN:
+            _advance_line_serial(m.regs, m.state, m.params, m.inputs, m.keys, m._buf,
+                                 m._buf_allocated, m._fmt, m._no_schedule, self.decimation,
+                                 prof, tc, self.line, self.slack_count, self._counts_per_m,
+                                 self.master_radius, self.gear_ratio, lc_k)
+        else:
+            theta0 = np.empty(self.num_envs)
+            for _ in range(self.decimation):
+                _line_pre(m.inputs, m.state, prof, tc, self.line, self._counts_per_m, theta0)
+                m.step(1)
+                _line_post(m.inputs, m.state, self.line, self.slack_count, theta0,
+                           self.master_radius, self.gear_ratio, lc_k)
         e = (self.measured - self.tension_ref) / self.tension_ref
         step_dt = self.decimation * _DT
         self.error_integral += step_dt * (e - self.error_integral / _INTEGRAL_TAU)
@@ -161,7 +240,8 @@ class GearSyncVectorEnv(MotorVectorEnv):
                   - self.action_rate_weight * da * da)
         broken = self.force > self.break_ratio * self.tension_ref
         slack = self.slack_count >= self.slack_samples
-        return reward, broken | slack | (self.error_bits() != 0)
+        failed = broken | slack | (self.error_bits() != 0)
+        return reward - self.failure_penalty * failed, failed
 
     def measured_tension(self) -> np.ndarray:
         """Load-cell reading with its noise [N], (N,)."""
@@ -219,8 +299,9 @@ class GearSyncEnv(MotorEnv):
 
     ## Rewards
     Per step ``1 − min(|e|/tension_tolerance, 2) − action_rate_weight·Δa²`` with ``e`` the true
-    tension error over the reference (tolerance 0.1) and ``Δa`` the change of action. At most 1
-    per step (positive while within tolerance), so ending early by a break or slack costs.
+    tension error over the reference (tolerance 0.1) and ``Δa`` the change of action, and
+    ``−failure_penalty`` (100) at a web break, slack or error bit. At most 1 per step
+    (positive while within tolerance), so ending early costs the rest of the episode too.
 
     ## Starting State
     The line is at rest, the web pre-tensioned to the reference; the motor powers on with the
@@ -239,7 +320,7 @@ class GearSyncEnv(MotorEnv):
     ``render_mode``, ``gear_ratio`` (10), ``master_radius`` (0.05 m),
     ``master_counts_per_rev`` (8192), ``loadcell_tau`` (5 ms), ``loadcell_noise`` (0.01),
     ``break_ratio`` (3), ``slack_time`` (0.01 s), ``action_rate_weight`` (0.05),
-    ``tension_tolerance`` (0.1). Reset options:
+    ``tension_tolerance`` (0.1), ``failure_penalty`` (100). Reset options:
     ``randomization``, ``motor_type``. Baseline: :class:`jvl_gym.envs.baselines.PITension`.
 
     ## Version History
