@@ -52,8 +52,9 @@ def test_every_env_has_an_rl_config_and_a_baseline() -> None:
 
 
 def test_format_table_names_the_better_controller() -> None:
-    table = format_table({"x": {"policy": (2.0, 0.1), "baseline": (1.0, 0.2)}})
-    assert "| x | 2.00 ± 0.10 | 1.00 ± 0.20 | policy |" in table
+    table = format_table({"x": {"policy": (2.0, 0.1), "baseline": (1.0, 0.2),
+                                "seeds_won": (4.0, 5.0)}})
+    assert "| x | 2.00 ± 0.10 | 1.00 ± 0.20 | policy | 4/5 |" in table
 
 
 def test_cli_lists_train_and_evaluate() -> None:

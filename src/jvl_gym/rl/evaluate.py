@@ -48,7 +48,8 @@ def episode_returns(env_id: str, policy: Callable[[np.ndarray], np.ndarray], see
 def evaluate(env_id: str, model_file: str | Path | None, n_seeds: int | None = None,
              episodes_per_seed: int | None = None, progress_bar: bool = True,
              config_dir: str | Path | None = None) -> dict[str, tuple[float, float]]:
-    """Mean ± std (over seeds) of the per-seed mean return of the policy and the baseline."""
+    """Mean ± std (over seeds) of the per-seed mean return of the policy and the baseline,
+    and ``seeds_won``: (seeds where the policy's mean beats the baseline's, seeds)."""
     from ..envs.baselines import BASELINES, make_baseline
 
     cfg = rl_config(env_id, config_dir)
@@ -83,7 +84,11 @@ def evaluate(env_id: str, model_file: str | Path | None, n_seeds: int | None = N
 
             rows["policy"].append(float(episode_returns(env_id, policy, seed, n_ep,
                                                         kwargs).mean()))
-    return {k: (float(np.mean(v)), float(np.std(v))) for k, v in rows.items()}
+    out = {k: (float(np.mean(v)), float(np.std(v))) for k, v in rows.items()}
+    if "policy" in rows:
+        wins = sum(p > b for p, b in zip(rows["policy"], rows["baseline"]))
+        out["seeds_won"] = (float(wins), float(n_seeds))
+    return out
 
 
 def _vector_class(env_id: str) -> Any:
@@ -98,12 +103,14 @@ def _vector_class(env_id: str) -> Any:
 
 
 def format_table(results: dict[str, dict[str, tuple[float, float]]]) -> str:
-    """Markdown table: env, policy, baseline (mean ± std over seeds), winner."""
-    lines = ["| env | policy | baseline | better |", "|---|---|---|---|"]
+    """Markdown table: env, policy, baseline (mean ± std over seeds), winner, seeds won."""
+    lines = ["| env | policy | baseline | better | seeds won by the policy |",
+             "|---|---|---|---|---|"]
     for env_id, r in results.items():
         b = r["baseline"]
         p = r.get("policy")
         pol = f"{p[0]:.2f} ± {p[1]:.2f}" if p else "—"
         better = "—" if p is None else ("policy" if p[0] > b[0] else "baseline")
-        lines.append(f"| {env_id} | {pol} | {b[0]:.2f} ± {b[1]:.2f} | {better} |")
+        won = f"{int(r['seeds_won'][0])}/{int(r['seeds_won'][1])}" if "seeds_won" in r else "—"
+        lines.append(f"| {env_id} | {pol} | {b[0]:.2f} ± {b[1]:.2f} | {better} | {won} |")
     return "\n".join(lines)
