@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 from .errors import FrameError
 from .mactalk import protect
+from .stream import Malformed, NeedMore, StreamDecoder
 
 __all__ = [
     "W2",
@@ -248,14 +249,8 @@ def decode_read_reply(data: bytes, long: bool) -> tuple[int, bytes]:
     return h, bytes(out)
 
 
-class _NeedMore(Exception):
-    pass
-
-
-class _Bad(Exception):
-    def __init__(self, reason: str, code: str) -> None:
-        super().__init__(reason)
-        self.reason, self.code = reason, code
+_NeedMore = NeedMore
+_Bad = Malformed
 
 
 def _parse(buf: bytearray) -> tuple[FlexMessage, int]:
@@ -309,7 +304,7 @@ def _parse(buf: bytearray) -> tuple[FlexMessage, int]:
     return FlexWrite(long, data, idx, number, address), pos
 
 
-class FlexMacDecoder:
+class FlexMacDecoder(StreamDecoder):
     """Streaming decoder of FlexMAC messages sent to the motor (manual 5.2.2).
 
     Same contract as :class:`~jvl_gym.protocol.mactalk.MacTalkDecoder`: frames and
@@ -317,53 +312,15 @@ class FlexMacDecoder:
     6,5 = 11 repeated three times, :meth:`flush` reports a truncated message.
     """
 
-    def __init__(self) -> None:
-        self._buf = bytearray()
-        self._offset = 0
-        self.frames = 0
-        self.errors = 0
-
-    def _discard(self, n: int) -> bytes:
-        out = bytes(self._buf[:n])
-        del self._buf[:n]
-        self._offset += n
-        return out
+    def _parse(self, buf: bytearray) -> tuple[FlexMessage, int]:
+        return _parse(buf)
 
     def _is_start(self, k: int) -> bool:
         b = self._buf[k]
         return b & 0x60 == 0x60 and all(x == b for x in self._buf[k:k + 3])
 
-    def feed(self, chunk: bytes) -> list[FlexMessage | FrameError]:
-        """Add bytes; return completed messages and errors."""
-        self._buf += chunk
-        out: list[FlexMessage | FrameError] = []
-        while self._buf:
-            try:
-                msg, n = _parse(self._buf)
-            except _NeedMore:
-                break
-            except _Bad as bad:
-                k = 1
-                while k < len(self._buf) and not self._is_start(k):
-                    k += 1
-                offset = self._offset
-                out.append(FrameError(bad.reason, bad.code, offset, self._discard(k)))
-                self.errors += 1
-                continue
-            self._discard(n)
-            out.append(msg)
-            self.frames += 1
-        return out
-
-    def flush(self) -> list[FrameError]:
-        """Report held-back bytes as a truncated message."""
-        if not self._buf:
-            return []
-        offset = self._offset
-        data = self._discard(len(self._buf))
-        self.errors += 1
-        return [FrameError(f"truncated FlexMAC message: {data.hex(' ').upper()}", "truncated",
-                           offset, data)]
+    def _truncated(self, data: bytes) -> str:
+        return f"truncated FlexMAC message: {data.hex(' ').upper()}"
 
 
 def decode(data: bytes) -> FlexMessage:

@@ -50,6 +50,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 from .errors import FrameError
+from .stream import Malformed, NeedMore, StreamDecoder
 
 __all__ = [
     "Command",
@@ -309,15 +310,8 @@ def encode(frame: Frame) -> bytes:
 
 
 # ----------------------------------------------------------------------------- decoding
-class _NeedMore(Exception):
-    """The buffer ends inside a frame."""
-
-
-class _Bad(Exception):
-    def __init__(self, reason: str, code: str) -> None:
-        super().__init__(reason)
-        self.reason = reason
-        self.code = code
+_NeedMore = NeedMore
+_Bad = Malformed
 
 
 def _is_start(buf: bytes | bytearray, k: int) -> bool:
@@ -409,7 +403,7 @@ def _parse(buf: bytes | bytearray) -> tuple[Frame, int]:
     return Request(cmd, address, register), r.pos
 
 
-class MacTalkDecoder:
+class MacTalkDecoder(StreamDecoder):
     """Streaming MacTalk decoder: feed arbitrary byte chunks, get frames and errors.
 
     Malformed input yields one :class:`FrameError` per bad frame (or run of garbage) with a
@@ -427,55 +421,11 @@ class MacTalkDecoder:
     [Request(command=<Command.READ: 80>, address=19, register=7, data=b'')]
     """
 
-    def __init__(self) -> None:
-        self._buf = bytearray()
-        self._offset = 0  # stream offset of _buf[0]
-        #: number of frames decoded and errors reported so far
-        self.frames = 0
-        self.errors = 0
+    def _parse(self, buf: bytearray) -> tuple[Frame, int]:
+        return _parse(buf)
 
-    @property
-    def pending(self) -> bytes:
-        """Bytes held back because they may start a frame."""
-        return bytes(self._buf)
-
-    def _discard(self, n: int) -> bytes:
-        out = bytes(self._buf[:n])
-        del self._buf[:n]
-        self._offset += n
-        return out
-
-    def feed(self, chunk: bytes) -> list[Frame | FrameError]:
-        """Add bytes; return the frames and errors completed by them, in stream order."""
-        self._buf += chunk
-        out: list[Frame | FrameError] = []
-        while self._buf:
-            try:
-                frame, n = _parse(self._buf)
-            except _NeedMore:
-                break
-            except _Bad as bad:
-                k = 1
-                while k < len(self._buf) and not _is_start(self._buf, k):
-                    k += 1
-                offset = self._offset
-                out.append(FrameError(bad.reason, bad.code, offset, self._discard(k)))
-                self.errors += 1
-                continue
-            self._discard(n)
-            out.append(frame)
-            self.frames += 1
-        return out
-
-    def flush(self) -> list[FrameError]:
-        """Report held-back bytes as a truncated frame and clear them."""
-        if not self._buf:
-            return []
-        offset = self._offset
-        data = self._discard(len(self._buf))
-        self.errors += 1
-        return [FrameError(f"truncated frame: {len(data)} bytes ({data.hex(' ').upper()}) "
-                           "and then no more", "truncated", offset, data)]
+    def _is_start(self, k: int) -> bool:
+        return _is_start(self._buf, k)
 
 
 def decode_all(data: bytes) -> list[Frame | FrameError]:
