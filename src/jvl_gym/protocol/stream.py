@@ -8,6 +8,7 @@ frame could start. :meth:`StreamDecoder.flush` reports held-back bytes as trunca
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from typing import Any
 
 from .errors import FrameError
@@ -26,7 +27,7 @@ class Malformed(Exception):
         self.code = code
 
 
-class StreamDecoder:
+class StreamDecoder(ABC):
     """Base of the streaming decoders: subclasses give ``_parse`` and ``_is_start``."""
 
     def __init__(self) -> None:
@@ -41,13 +42,13 @@ class StreamDecoder:
         """Bytes held back because they may start a frame."""
         return bytes(self._buf)
 
+    @abstractmethod
     def _parse(self, buf: bytearray) -> tuple[Any, int]:
         """Decode one frame at the start of ``buf``: (frame, length) or NeedMore/Malformed."""
-        raise NotImplementedError
 
+    @abstractmethod
     def _is_start(self, k: int) -> bool:
         """Could a frame start at ``_buf[k]``?"""
-        raise NotImplementedError
 
     def _truncated(self, data: bytes) -> str:
         return f"truncated frame: {len(data)} bytes ({data.hex(' ').upper()}) and then no more"
