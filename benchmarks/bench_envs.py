@@ -33,7 +33,9 @@ env = gem.make("Cont-CC-PMSM-v0")
 env.reset(seed=0)
 acts = [env.action_space.sample() for _ in range(1000)]
 for a in acts[:100]:
-    env.step(a)
+    _, _, term, trunc, _ = env.step(a)
+    if term or trunc:
+        env.reset()
 n, t0 = 0, time.perf_counter()
 while time.perf_counter() - t0 < {seconds}:
     for a in acts:

@@ -337,9 +337,16 @@ class MotorVectorEnv(VectorEnv):
         if self.autoreset_mode == AutoresetMode.DISABLED and done_before.any():
             raise RuntimeError("AutoresetMode.DISABLED: reset the finished copies (reset_mask) "
                                "before stepping")
+        infos: dict[str, Any] = {}
+        if self.autoreset_mode == AutoresetMode.NEXT_STEP and done_before.all():
+            # every copy starts a new episode: nothing to step (the actions are ignored)
+            self._reset_envs(np.arange(self.num_envs), [None] * self.num_envs, None)
+            self._autoreset[:] = False
+            self._record_scope()
+            zeros = np.zeros(self.num_envs, dtype=np.bool_)
+            return self._obs.copy(), np.zeros(self.num_envs), zeros, zeros.copy(), infos
         obs, reward, terminated, truncated = self._step_batch(actions)
         reward = reward.astype(np.float64)
-        infos: dict[str, Any] = {}
         if self.autoreset_mode == AutoresetMode.NEXT_STEP and done_before.any():
             idx = np.flatnonzero(done_before)
             self._reset_envs(idx, [None] * idx.size, None)

@@ -72,6 +72,7 @@ class FilterTuningVectorEnv(MotorVectorEnv):
         self.estimates = np.zeros((n, 3))
         self.truth = np.zeros((n, 3))
         self.metrics: dict[str, np.ndarray] = {}
+        self._ok = np.arange(n)
         self._trace = np.zeros((n, 3, self.scope_length), dtype=np.float32)
         self.baseline_source = ("tuning.synthesis" if synthesis_registers("MAC140") is not None
                                 else "default setup") if self.baseline else "agent"
@@ -92,34 +93,39 @@ class FilterTuningVectorEnv(MotorVectorEnv):
 
     def _apply_action(self, action: np.ndarray) -> None:
         m = self.motors
+        # a copy left in an error by its last trial (NEXT_STEP: stepped once more before its
+        # reset) cannot leave INIT; it is skipped and reset afterwards
+        ok = np.flatnonzero((m.regs[:, R.ERR_STAT] & c.BLOCKING_ERRORS) == 0)
+        self._ok = ok
         kvout_est = 1.0 + self.estimates[:, 0]
         if self.baseline:
             names = self._type_names
-            for k in np.unique(m._type_of):
+            for k in np.unique(m._type_of[ok]):
                 regs = synthesis_registers(names[k])
-                sel = np.flatnonzero(m._type_of == k)
+                sel = ok[m._type_of[ok] == k]
                 if regs is None:
                     continue  # default setup
                 for name, value in regs.items():
                     m.write(name, value, index=sel)
                 m.write("KVOUT", np.round(kvout_est[sel] * 256) / 256, index=sel)
             return
-        kvfx4 = m.regs[:, R.KVFX4] / 4096.0
-        kvfx3 = m.regs[:, R.KVFX3] / 4096.0
+        a = action[ok]
+        kvfx4 = m.regs[ok, R.KVFX4] / 4096.0
+        kvfx3 = m.regs[ok, R.KVFX3] / 4096.0
         p, i = -kvfx3, kvfx4 + kvfx3  # default PI split: KVFX4 = c(kp+ki), KVFX3 = −c·kp
-        sp = 2.0 ** action[:, 0]
-        si = 2.0 ** (1.5 * action[:, 1])
-        m.write("KVFX4", np.round((sp * p + si * i) * 4096) / 4096)
-        m.write("KVFX3", np.round(-sp * p * 4096) / 4096)
-        m.write("KVOUT", np.round(2.0 ** (2.0 * (action[:, 2] + 1.0)) * 256) / 256)
+        sp = 2.0 ** a[:, 0]
+        si = 2.0 ** (1.5 * a[:, 1])
+        m.write("KVFX4", np.round((sp * p + si * i) * 4096) / 4096, index=ok)
+        m.write("KVFX3", np.round(-sp * p * 4096) / 4096, index=ok)
+        m.write("KVOUT", np.round(2.0 ** (2.0 * (a[:, 2] + 1.0)) * 256) / 256, index=ok)
 
     def _advance(self) -> None:
         m = self.motors
         n = self.num_envs
         r = m.regs
-        m.write("V_SOLL", round(c.rpm_to_v_soll(2000.0)))
-        m.write("P_SOLL", _STEP_COUNTS)
-        m.write("MODE_REG", c.P_MODE)
+        m.write("V_SOLL", round(c.rpm_to_v_soll(2000.0)), index=self._ok)
+        m.write("P_SOLL", _STEP_COUNTS, index=self._ok)
+        m.write("MODE_REG", c.P_MODE, index=self._ok)
         pos = np.zeros((n, _POS_SAMPLES))
         flw = np.zeros((n, _POS_SAMPLES))
         fnc_end = np.zeros(n)
