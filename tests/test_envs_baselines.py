@@ -61,3 +61,25 @@ def test_cli_lists_train_and_evaluate() -> None:
     result = CliRunner().invoke(app, ["--help"])
     assert result.exit_code == 0
     assert "train" in result.output and "evaluate" in result.output
+
+
+def test_filter_tuning_trial_and_synthesis_baseline() -> None:
+    import gymnasium as gym
+
+    venv = gym.make_vec("jvl_gym/FilterTuning-v0", num_envs=4,
+                        vectorization_mode="vector_entry_point", motor_type="MAC140",
+                        randomization={"inertia_ratio": (8.0, 8.0)})
+    venv.reset(seed=0)
+    low = np.full((4, 3), -1.0, dtype=np.float32)  # default gains, KVOUT = 1 for a 9x load
+    _, r_low, term, _, _ = venv.step(low)
+    assert term.all()
+    _, r_next, term, trunc, _ = venv.step(low)  # NEXT_STEP: only the reset
+    assert np.all(r_next == 0.0) and not (term | trunc).any()
+    matched = np.tile(np.array([0.0, 0.0, np.log2(9.0) / 2 - 1], dtype=np.float32), (4, 1))
+    _, r_matched, *_ = venv.step(matched)  # KVOUT ≈ J_total/J_m
+    assert r_matched.mean() > r_low.mean()
+    base = gym.make("jvl_gym/FilterTuning-v0", baseline=True, motor_type="MAC140")
+    assert base.unwrapped.core.baseline_source == "tuning.synthesis"
+    base.reset(seed=0)
+    _, r_base, *_ = base.step(base.action_space.sample())
+    assert r_base > -base.unwrapped.core.instability_penalty
