@@ -16,6 +16,7 @@ only resets loop over the copies being reset, to draw from their own generators.
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from typing import Any
 
@@ -47,7 +48,7 @@ def _seed_list(seed: int | Sequence[int | None] | None, n: int) -> list[int | No
     return seeds
 
 
-class MotorVectorEnv(VectorEnv):
+class MotorVectorEnv(VectorEnv, ABC):
     """Base class: ``num_envs`` copies of a motor task, natively vectorised.
 
     Parameters
@@ -195,26 +196,26 @@ class MotorVectorEnv(VectorEnv):
         """Per-motor parameters (``MotorArray.reset`` keywords) of the copies being reset."""
         return {}
 
+    @abstractmethod
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
         """Reset copies ``idx``: motors (already powered on), process state, registers."""
-        raise NotImplementedError
 
+    @abstractmethod
     def _apply_action(self, action: np.ndarray) -> None:
         """Apply the (N, A) action in [-1, 1] (inputs, register writes)."""
-        raise NotImplementedError
 
     def _advance(self) -> None:
         """Advance the motors and the process by ``self.decimation`` outer samples."""
         self.motors.step(self.decimation)
 
+    @abstractmethod
     def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Reward (N,) float64 and termination (N,) bool after a step."""
-        raise NotImplementedError
 
+    @abstractmethod
     def _observe(self) -> np.ndarray:
         """Normalised observation (N, K) before noise and clipping."""
-        raise NotImplementedError
 
     def _scope_values(self) -> np.ndarray:
         """Scope traces (N, C) in the units of :attr:`scope_channels`."""
