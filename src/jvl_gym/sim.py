@@ -644,10 +644,14 @@ class MotorArray:
         """Shaft angle [rad] relative to the world zero, (N,)."""
         return self.state[:, L.S_THETA].copy()
 
+    def _current_vector(self) -> np.ndarray:
+        """Stator current space vector [A], (N,) complex (``jvl_gym.plant.coil``)."""
+        return self.state[:, L.S_I_RE] + 1j * self.state[:, L.S_I_IM]
+
     @property
     def phase_currents(self) -> np.ndarray:
         """Phase currents ia, ib, ic [A], (N, 3)."""
-        s = self.state[:, L.S_I_RE] + 1j * self.state[:, L.S_I_IM]
+        s = self._current_vector()
         k = np.exp(1j * 2.0 * np.pi / 3.0 * np.arange(3))
         return np.real(s[:, None] * k[None, :])
 
@@ -659,7 +663,7 @@ class MotorArray:
     @property
     def torque(self) -> np.ndarray:
         """Electromagnetic torque at the current instant [N·m], (N,)."""
-        s = self.state[:, L.S_I_RE] + 1j * self.state[:, L.S_I_IM]
+        s = self._current_vector()
         th = self.params[:, L.P_POLE_PAIRS] * self.state[:, L.S_THETA] + self.params[:,
                                                                                     L.P_THETA_E0]
         return 1.5 * self.params[:, L.P_POLE_PAIRS] * self.params[:, L.P_LAMBDA] * np.real(
