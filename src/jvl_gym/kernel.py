@@ -364,6 +364,14 @@ def _advance(r, s, p, u, key, buf, rec, fmt, n_outer, input_plan, i):
             inner_sample(r, s, p, u, key, buf, rec, fmt)
 
 
+@njit(cache=True, inline="always")
+def advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i, n_outer):
+    """Advance motor ``i`` of the arrays by ``n_outer`` outer samples (compiled callers: the
+    drivers below and the compiled environment steps, ``jvl_gym.envs``)."""
+    b = buf[i] if rec else buf[0]
+    _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer, input_plan, i)
+
+
 @njit(cache=True)
 def run_serial(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, input_plan):
     """Advance every motor by ``n_outer`` outer samples in one thread.
@@ -372,18 +380,12 @@ def run_serial(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, input_
     either empty (shape (0, N, N_INPUT): inputs held) or holds the inputs of every
     outer sample, shape (n_outer, N, N_INPUT) (world generators).
     """
-    n = regs.shape[0]
-    for i in range(n):
-        b = buf[i] if rec else buf[0]
-        _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer, input_plan,
-                 i)
+    for i in range(regs.shape[0]):
+        advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i, n_outer)
 
 
 @njit(cache=True, parallel=True)
 def run_parallel(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, input_plan):
     """Advance every motor by ``n_outer`` outer samples, motors spread over threads."""
-    n = regs.shape[0]
-    for i in prange(n):
-        b = buf[i] if rec else buf[0]
-        _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer, input_plan,
-                 i)
+    for i in prange(regs.shape[0]):
+        advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i, n_outer)

@@ -321,6 +321,17 @@ class MotorArray:
         run(self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
             self._buf_allocated, self._fmt, int(n_outer), plan)
 
+    def kernel_arrays(self) -> tuple:
+        """The arrays the compiled kernel works on, for compiled callers (the env steps):
+        ``(regs, state, params, inputs, keys, buf, rec, fmt, input_plan)`` in the order of
+        :func:`jvl_gym.kernel.advance_motor`'s first arguments, with the held-input plan.
+
+        A caller that advances motors itself bypasses the :attr:`world` schedule (inputs are
+        held): it sets ``inputs`` between samples instead.
+        """
+        return (self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
+                self._buf_allocated, self._fmt, self._no_schedule)
+
     def run(self, seconds: float) -> None:
         """Advance by ``seconds`` (rounded to whole outer samples of 1.92 ms)."""
         if not math.isfinite(seconds) or seconds < 0:

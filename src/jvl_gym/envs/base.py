@@ -6,12 +6,19 @@
 seeded ``s + i``), domain randomisation (ranges as constructor arguments and reset options), the
 motor-type pool, control decimation, counter-based observation noise, normalisation and clipping
 into finite Box spaces, the autoreset modes (NEXT_STEP, SAME_STEP, DISABLED) and the scope
-history for ``render_mode="rgb_array"``. A task subclass supplies the physics around the motor
-through five hooks: :meth:`_task_reset`, :meth:`_apply_action`, :meth:`_advance`,
-:meth:`_reward_termination` and :meth:`_observe`.
+history for ``render_mode="rgb_array"``. A task subclass supplies the physics around the motor:
+:meth:`_task_reset`, and the step of the copies, either
 
-Everything in a step is vectorised over the copies (numpy over the batch, raw register columns);
-only resets loop over the copies being reset, to draw from their own generators.
+- compiled (:class:`MotorVectorEnv` itself): :meth:`_step_copies` runs the whole step of every
+  copy in one numba call (``jvl_gym.envs.compiled``: action, motor kernel, process, reward,
+  termination, noisy clipped observation) and :meth:`_observe_copies` observes at a reset —
+  the fast path of GearSync, CoilWinding and Positioning; or
+- in numpy (:class:`NumpyTaskEnv`): the hooks :meth:`~NumpyTaskEnv._apply_action`,
+  :meth:`~NumpyTaskEnv._advance`, :meth:`~NumpyTaskEnv._reward_termination` and
+  :meth:`~NumpyTaskEnv._observe` vectorised over the copies (FilterTuning, whose step is a
+  whole trial).
+
+Resets loop over the copies being reset, to draw from their own generators.
 """
 
 from __future__ import annotations
@@ -27,12 +34,10 @@ from gymnasium.vector.utils import batch_space
 
 from .. import constants as c
 from ..firmware import regs as R
+from .compiled import OBS_BOUND, all_finite
 from .noise import normals
 
-__all__ = ["MotorVectorEnv", "OBS_BOUND", "ERROR_BITS"]
-
-#: observations are normalised so that typical values lie within ±1 and clipped to ±OBS_BOUND
-OBS_BOUND = 5.0
+__all__ = ["MotorVectorEnv", "NumpyTaskEnv", "OBS_BOUND", "ERROR_BITS"]
 #: ERR_STAT bits that end an episode: I2T, FLW, FNC, UIT and position-limit errors (3.2.35)
 ERROR_BITS = c.I2T_ERR | c.FLW_ERR | c.FNC_ERR | c.UIT_ERR | c.PLIM_ERR
 
@@ -139,6 +144,10 @@ class MotorVectorEnv(VectorEnv, ABC):
         self._t = np.zeros(n, dtype=np.int64)
         self._prev_action = np.zeros((n, len(self.act_labels)))
         self._obs = np.zeros((n, len(self.obs_labels)), dtype=np.float32)
+        self._reward = np.zeros(n)
+        self._terminated = np.zeros(n, dtype=np.bool_)
+        self._truncated = np.zeros(n, dtype=np.bool_)
+        self._action_shape = (n, len(self.act_labels))
         self._autoreset = np.zeros(n, dtype=np.bool_)
         self._has_reset = False
         self._scope: np.ndarray | None = None
@@ -202,20 +211,18 @@ class MotorVectorEnv(VectorEnv, ABC):
         """Reset copies ``idx``: motors (already powered on), process state, registers."""
 
     @abstractmethod
-    def _apply_action(self, action: np.ndarray) -> None:
-        """Apply the (N, A) action in [-1, 1] (inputs, register writes)."""
+    def _step_copies(self, actions: np.ndarray) -> bool:
+        """One step of every copy with the (N, A) float64 ``actions`` (not yet clipped).
 
-    def _advance(self) -> None:
-        """Advance the motors and the process by ``self.decimation`` outer samples."""
-        self.motors.step(self.decimation)
-
-    @abstractmethod
-    def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Reward (N,) float64 and termination (N,) bool after a step."""
+        Returns False, changing nothing, when an action is not finite. Otherwise fills
+        ``self._obs`` (noisy, clipped), ``self._reward``, ``self._terminated`` and
+        ``self._truncated``, counts the step in ``self._t`` and stores the clipped action in
+        ``self._prev_action``.
+        """
 
     @abstractmethod
-    def _observe(self) -> np.ndarray:
-        """Normalised observation (N, K) before noise and clipping."""
+    def _observe_copies(self, idx: np.ndarray) -> None:
+        """Fill ``self._obs[idx]`` (noisy, clipped) after a reset of copies ``idx``."""
 
     def _scope_values(self) -> np.ndarray:
         """Scope traces (N, C) in the units of :attr:`scope_channels`."""
@@ -276,7 +283,7 @@ class MotorVectorEnv(VectorEnv, ABC):
         self._prev_action[idx] = 0.0
         self._scope_count[idx] = 0
         self._task_reset(idx, draws, rngs)
-        self._obs[idx] = self._finish_obs(self._observe())[idx]
+        self._observe_copies(idx)
 
     def reset(self, *, seed: int | Sequence[int | None] | None = None,
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:
@@ -304,32 +311,25 @@ class MotorVectorEnv(VectorEnv, ABC):
         return self._obs.copy(), {}
 
     # ------------------------------------------------------------------ step
-    def _finish_obs(self, obs: np.ndarray) -> np.ndarray:
-        if self.obs_noise > 0.0:
-            obs = obs + self.obs_noise * normals(self._noise_key, self._t, obs.shape[1])
-        return np.clip(obs, -OBS_BOUND, OBS_BOUND).astype(np.float32)
-
     def _step_batch(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray,
                                                   np.ndarray]:
-        """One step of every copy, without autoreset."""
+        """One step of every copy, without autoreset.
+
+        Returns the internal (obs, reward, terminated, truncated) buffers: copy what you keep.
+        """
         if not self._has_reset:
             raise RuntimeError("call reset() before step()")
-        a = np.asarray(actions, dtype=np.float64).reshape(self.num_envs, -1)
-        if a.shape[1] != len(self.act_labels):
-            raise ValueError(f"action must have shape ({self.num_envs}, "
-                             f"{len(self.act_labels)}), got {np.shape(actions)}")
-        if not np.all(np.isfinite(a)):
+        a = np.asarray(actions, dtype=np.float64)
+        if a.shape != self._action_shape:
+            if a.size != self.num_envs * len(self.act_labels):
+                raise ValueError(f"action must have shape {self._action_shape}, got "
+                                 f"{np.shape(actions)}")
+            a = a.reshape(self._action_shape)
+        if not self._step_copies(a):
             raise ValueError("action must be finite")
-        a = np.clip(a, -1.0, 1.0)
-        self._apply_action(a)
-        self._advance()
-        self._t += 1
-        reward, terminated = self._reward_termination(a)
-        truncated = (self._t >= self.max_episode_steps) & ~terminated
-        self._prev_action[:] = a
-        self._obs[:] = self._finish_obs(self._observe())
-        self._record_scope()
-        return self._obs, reward, terminated, truncated
+        if self.render_mode is not None:
+            self._record_scope()
+        return self._obs, self._reward, self._terminated, self._truncated
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                                           dict[str, Any]]:
@@ -347,7 +347,9 @@ class MotorVectorEnv(VectorEnv, ABC):
             zeros = np.zeros(self.num_envs, dtype=np.bool_)
             return self._obs.copy(), np.zeros(self.num_envs), zeros, zeros.copy(), infos
         obs, reward, terminated, truncated = self._step_batch(actions)
-        reward = reward.astype(np.float64)
+        reward = reward.copy()
+        terminated = terminated.copy()
+        truncated = truncated.copy()
         if self.autoreset_mode == AutoresetMode.NEXT_STEP and done_before.any():
             idx = np.flatnonzero(done_before)
             self._reset_envs(idx, [None] * idx.size, None)
@@ -365,7 +367,7 @@ class MotorVectorEnv(VectorEnv, ABC):
                 infos = {"final_obs": final, "_final_obs": done.copy(),
                          "final_info": {}, "_final_info": done.copy()}
         self._autoreset = terminated | truncated
-        return self._obs.copy(), reward, terminated.copy(), truncated.copy(), infos
+        return self._obs.copy(), reward, terminated, truncated, infos
 
     # ------------------------------------------------------------------ render
     def _record_scope(self) -> None:
@@ -413,3 +415,50 @@ class MotorVectorEnv(VectorEnv, ABC):
         state = self.__dict__.copy()
         state["_figures"] = {}
         return state
+
+
+class NumpyTaskEnv(MotorVectorEnv):
+    """A task whose step is written in numpy over the copies, through four hooks.
+
+    For tasks whose step is not dominated by the motor kernel (FilterTuning runs a whole
+    commissioning trial per step); the fast tasks compile their step instead.
+    """
+
+    @abstractmethod
+    def _apply_action(self, action: np.ndarray) -> None:
+        """Apply the (N, A) action in [-1, 1] (inputs, register writes)."""
+
+    def _advance(self) -> None:
+        """Advance the motors and the process by ``self.decimation`` outer samples."""
+        self.motors.step(self.decimation)
+
+    @abstractmethod
+    def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Reward (N,) float64 and termination (N,) bool after a step."""
+
+    @abstractmethod
+    def _observe(self) -> np.ndarray:
+        """Normalised observation (N, K) before noise and clipping."""
+
+    def _finish_obs(self, obs: np.ndarray) -> np.ndarray:
+        if self.obs_noise > 0.0:
+            obs = obs + self.obs_noise * normals(self._noise_key, self._t, obs.shape[1])
+        return np.clip(obs, -OBS_BOUND, OBS_BOUND).astype(np.float32)
+
+    def _observe_copies(self, idx: np.ndarray) -> None:
+        self._obs[idx] = self._finish_obs(self._observe())[idx]
+
+    def _step_copies(self, actions: np.ndarray) -> bool:
+        if not all_finite(actions):
+            return False
+        a = np.clip(actions, -1.0, 1.0)
+        self._apply_action(a)
+        self._advance()
+        self._t += 1
+        reward, terminated = self._reward_termination(a)
+        self._reward[:] = reward
+        self._terminated[:] = terminated
+        self._truncated[:] = (self._t >= self.max_episode_steps) & ~terminated
+        self._prev_action[:] = a
+        self._obs[:] = self._finish_obs(self._observe())
+        return True

@@ -13,7 +13,7 @@ from .. import layout as L
 from ..firmware import regs as R
 from ..kernel import run_serial
 from . import deposition as dep
-from .base import MotorVectorEnv
+from .base import NumpyTaskEnv
 from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
 
@@ -82,7 +82,7 @@ def _advance_spindle_serial(regs, state, params, inputs, keys, buf, rec, fmt, pl
         _spindle_post(state, k, time, spindle_rev, metres_per_rad, x0, rps, turn_x, turn_t)
 
 
-class CoilWindingVectorEnv(MotorVectorEnv):
+class CoilWindingVectorEnv(NumpyTaskEnv):
     """Vector version of :class:`CoilWindingEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
 

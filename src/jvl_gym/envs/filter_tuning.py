@@ -10,7 +10,7 @@ import numpy as np
 from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
-from .base import MotorVectorEnv
+from .base import NumpyTaskEnv
 from .single import MotorEnv
 
 __all__ = ["FilterTuningEnv", "FilterTuningVectorEnv", "synthesis_registers"]
@@ -42,7 +42,7 @@ def synthesis_registers(motor_type: str) -> dict[str, float] | None:
     return {k: float(v) for k, v in design.registers.items() if k != "KVOUT"}
 
 
-class FilterTuningVectorEnv(MotorVectorEnv):
+class FilterTuningVectorEnv(NumpyTaskEnv):
     """Vector version of :class:`FilterTuningEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
 

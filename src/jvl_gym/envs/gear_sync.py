@@ -6,14 +6,14 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
-from ..kernel import run_serial
-from .base import MotorVectorEnv
-from .noise import normals
+from ..kernel import advance_motor
+from .base import ERROR_BITS, MotorVectorEnv
+from .compiled import PARALLEL_MIN, action, all_finite, end_step, normal, put_obs
 from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
 from .web import load_cell_s, span_step_s, tension_s, winder_radius_s
@@ -25,63 +25,121 @@ _V_MOTOR_NORM = 3000.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 3000 rpm in co
 _GEARF2 = 1000  #: GEARF2 of the nominal gear (GEARF1 = round(ratio·1000))
 _AG_CENTRE = 1.01  #: AG factor at 0 V (manual 4.1.9: −10 V ↔ 0.87, +10 V ↔ 1.15)
 _INTEGRAL_TAU = 2.0  #: time constant of the leaky tension-error integral [s]
-_PARALLEL_MIN = 32  #: from this many copies the motor kernel runs multi-threaded (MotorArray)
-
-
-@njit(cache=True)
-def _line_pre(inputs, state, prof, t_change, w, counts_per_m, theta0):  # pragma: no cover
-    """Before an outer sample: master speed and pulses of this sample."""
-    for i in range(inputs.shape[0]):
-        v1 = row_speed(prof[i], w[i, _W_TIME], w[i, _W_MTHETA], t_change)
-        w[i, _W_V1] = v1
-        acc = w[i, _W_ACC] + v1 * counts_per_m * _DT
-        counts = math.floor(acc)
-        w[i, _W_ACC] = acc - counts
-        w[i, _W_PULSES] += counts
-        inputs[i, L.I_PULSE_COUNTS] = counts
-        theta0[i] = state[i, L.S_THETA]
-
-
-@njit(cache=True)
-def _line_post(inputs, state, w, slack_count, theta0, master_radius, gear_ratio,
-               lc_k):  # pragma: no cover - compiled
-    """After an outer sample: span strain, winder radius, tension, load torque, load cell."""
-    for i in range(inputs.shape[0]):
-        v1 = w[i, _W_V1]
-        travel = w[i, _W_RADIUS] * (state[i, L.S_THETA] - theta0[i]) / gear_ratio
-        strain = span_step_s(w[i, _W_STRAIN], v1, travel / _DT, w[i, _W_SPAN], _DT)
-        w[i, _W_STRAIN] = strain
-        w[i, _W_WOUND] += travel
-        radius = winder_radius_s(w[i, _W_R0], w[i, _W_THICK], w[i, _W_WOUND])
-        w[i, _W_RADIUS] = radius
-        force = tension_s(strain, w[i, _W_EA])
-        w[i, _W_FORCE] = force
-        inputs[i, L.I_LOAD_TORQUE] = radius * force / gear_ratio
-        w[i, _W_MEASURED] = load_cell_s(w[i, _W_MEASURED], force, lc_k)
-        slack_count[i] = slack_count[i] + 1 if strain <= 0.0 else 0
-        w[i, _W_MTHETA] += v1 * _DT / master_radius
-        w[i, _W_TIME] += _DT
-
-
-@njit(cache=True)
-def _advance_line_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, decimation,
-                         prof, t_change, w, slack_count, counts_per_m, master_radius,
-                         gear_ratio, lc_k):  # pragma: no cover - compiled
-    """``decimation`` outer samples of line and motor in one compiled call (few copies).
-
-    The multi-threaded motor kernel is called from Python instead (a cached function calling
-    a parallel one crashes when loaded from numba's cache in a new process).
-    """
-    theta0 = np.empty(regs.shape[0])
-    for _k in range(decimation):
-        _line_pre(inputs, state, prof, t_change, w, counts_per_m, theta0)
-        run_serial(regs, state, params, inputs, keys, buf, rec, fmt, 1, plan)
-        _line_post(inputs, state, w, slack_count, theta0, master_radius, gear_ratio, lc_k)
-
+_LOADCELL_STREAM = np.uint64(0x5EED)  #: noise key offset of the load cell
 
 #: columns of the per-copy line state
 (_W_EA, _W_THICK, _W_R0, _W_SPAN, _W_REF, _W_STRAIN, _W_WOUND, _W_RADIUS, _W_FORCE, _W_MEASURED,
- _W_MTHETA, _W_TIME, _W_ACC, _W_PREV_MEASURED, _W_PULSES, _W_INTEGRAL, _W_V1, _W_COLS) = range(18)
+ _W_MTHETA, _W_TIME, _W_ACC, _W_PREV_MEASURED, _W_PULSES, _W_INTEGRAL, _W_SLACK,
+ _W_COLS) = range(18)
+#: entries of the per-env constants array
+(_NOISE, _MAX_STEPS, _DECIMATION, _T_CHANGE, _COUNTS_PER_M, _MASTER_RADIUS, _GEAR_RATIO,
+ _LC_K, _LC_NOISE, _TOLERANCE, _RATE_W, _BREAK, _SLACK_SAMPLES, _PENALTY, _N_CONSTS) = range(15)
+
+
+@njit(cache=True, inline="always")
+def _line_sample(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, prof, w,
+                 k):  # pragma: no cover - compiled
+    """One outer sample of line and motor of copy ``i``: master pulses, motor, span strain,
+    winder radius, tension, load torque, load cell (``jvl_gym.envs.web``)."""
+    v1 = row_speed(prof[i], w[i, _W_TIME], w[i, _W_MTHETA], k[_T_CHANGE])
+    acc = w[i, _W_ACC] + v1 * k[_COUNTS_PER_M] * _DT
+    counts = math.floor(acc)
+    w[i, _W_ACC] = acc - counts
+    w[i, _W_PULSES] += counts
+    inputs[i, L.I_PULSE_COUNTS] = counts
+    theta0 = state[i, L.S_THETA]
+    advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, 1)
+    gear_ratio = k[_GEAR_RATIO]
+    travel = w[i, _W_RADIUS] * (state[i, L.S_THETA] - theta0) / gear_ratio
+    strain = span_step_s(w[i, _W_STRAIN], v1, travel / _DT, w[i, _W_SPAN], _DT)
+    w[i, _W_STRAIN] = strain
+    w[i, _W_WOUND] += travel
+    radius = winder_radius_s(w[i, _W_R0], w[i, _W_THICK], w[i, _W_WOUND])
+    w[i, _W_RADIUS] = radius
+    force = tension_s(strain, w[i, _W_EA])
+    w[i, _W_FORCE] = force
+    inputs[i, L.I_LOAD_TORQUE] = radius * force / gear_ratio
+    w[i, _W_MEASURED] = load_cell_s(w[i, _W_MEASURED], force, k[_LC_K])
+    w[i, _W_SLACK] = w[i, _W_SLACK] + 1.0 if strain <= 0.0 else 0.0
+    w[i, _W_MTHETA] += v1 * _DT / k[_MASTER_RADIUS]
+    w[i, _W_TIME] += _DT
+
+
+@njit(cache=True, inline="always")
+def _observe_row(i, regs, prev, t, noise_key, w, k, obs):  # pragma: no cover - compiled
+    """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
+    ref = w[i, _W_REF]
+    key = noise_key[i]
+    noise = k[_NOISE]
+    meas = w[i, _W_MEASURED]
+    if k[_LC_NOISE] > 0.0:
+        meas += k[_LC_NOISE] * ref * normal(key ^ _LOADCELL_STREAM, t[i], 0, 1)
+    decimation = k[_DECIMATION]
+    v1_counts = k[_COUNTS_PER_M] * _DT  # master counts per sample at 1 m/s
+    put_obs(obs, i, 0, (meas - ref) / ref, key, t[i], noise)
+    put_obs(obs, i, 1, (w[i, _W_MEASURED] - w[i, _W_PREV_MEASURED]) / ref
+            * (0.1 / (decimation * _DT)), key, t[i], noise)
+    put_obs(obs, i, 2, w[i, _W_INTEGRAL] * 10.0, key, t[i], noise)
+    put_obs(obs, i, 3, w[i, _W_PULSES] / decimation / v1_counts, key, t[i], noise)
+    put_obs(obs, i, 4, regs[i, R.V_IST] / _V_MOTOR_NORM, key, t[i], noise)
+    put_obs(obs, i, 5, regs[i, R.FLWERR] / 100.0, key, t[i], noise)
+    put_obs(obs, i, 6, regs[i, R.FNCERR] / 10000.0, key, t[i], noise)
+    put_obs(obs, i, 7, prev[i, 0], key, t[i], noise)
+
+
+@njit(cache=True)
+def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+               noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover - compiled
+    """One env step of copy ``i``: analogue input, ``decimation`` samples of line and motor,
+    leaky error integral, reward, termination, observation."""
+    a = action(actions, i, 0)
+    inputs[i, L.I_ANALOG_VOLTS] = c.ANINP_VOLTS * a
+    w[i, _W_PREV_MEASURED] = w[i, _W_MEASURED]
+    w[i, _W_PULSES] = 0.0
+    decimation = int(k[_DECIMATION])
+    for _ in range(decimation):
+        _line_sample(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, prof, w, k)
+    ref = w[i, _W_REF]
+    e_meas = (w[i, _W_MEASURED] - ref) / ref
+    w[i, _W_INTEGRAL] += decimation * _DT * (e_meas - w[i, _W_INTEGRAL] / _INTEGRAL_TAU)
+    t[i] += 1
+    e = (w[i, _W_FORCE] - ref) / ref
+    da = a - prev[i, 0]
+    r = 1.0 - min(abs(e) / k[_TOLERANCE], 2.0) - k[_RATE_W] * da * da
+    failed = (w[i, _W_FORCE] > k[_BREAK] * ref or w[i, _W_SLACK] >= k[_SLACK_SAMPLES]
+              or (regs[i, R.ERR_STAT] & ERROR_BITS) != 0)
+    reward[i] = r - k[_PENALTY] if failed else r
+    end_step(i, failed, t, int(k[_MAX_STEPS]), term, trunc)
+    prev[i, 0] = a
+    _observe_row(i, regs, prev, t, noise_key, w, k, obs)
+
+
+@njit(cache=True)
+def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+                  noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover
+    if not all_finite(actions):
+        return False
+    for i in range(regs.shape[0]):
+        _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+                   noise_key, k, prof, w, obs, reward, term, trunc)
+    return True
+
+
+@njit(cache=True, parallel=True)
+def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+                    noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover
+    if not all_finite(actions):
+        return False
+    for i in prange(regs.shape[0]):
+        _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+                   noise_key, k, prof, w, obs, reward, term, trunc)
+    return True
+
+
+@njit(cache=True)
+def _observe_rows(idx, regs, prev, t, noise_key, w, k, obs):  # pragma: no cover - compiled
+    for i in idx:
+        _observe_row(i, regs, prev, t, noise_key, w, k, obs)
 
 
 class _LineColumn:
@@ -117,6 +175,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
     prev_measured = _LineColumn(_W_PREV_MEASURED)
     pulses = _LineColumn(_W_PULSES)  #: master counts in the last step
     error_integral = _LineColumn(_W_INTEGRAL)  #: leaky tension-error integral [s]
+    slack_count = _LineColumn(_W_SLACK)  #: outer samples the web has been slack
 
     obs_labels = ("tension_error", "tension_rate", "tension_error_integral", "master_speed",
                   "motor_speed", "flwerr", "fncerr", "previous_action")
@@ -164,8 +223,16 @@ class GearSyncVectorEnv(MotorVectorEnv):
         n = self.num_envs
         self.profile = SpeedProfile(n)
         self.line = np.zeros((n, _W_COLS))
-        self.slack_count = np.zeros(n, dtype=np.int64)
         self.gear = np.ones(n)
+        self._k = np.zeros(_N_CONSTS)  # constants of the compiled step
+        self._k[[_NOISE, _MAX_STEPS, _DECIMATION, _T_CHANGE, _COUNTS_PER_M, _MASTER_RADIUS,
+                 _GEAR_RATIO, _LC_K, _LC_NOISE, _TOLERANCE, _RATE_W, _BREAK, _SLACK_SAMPLES,
+                 _PENALTY]] = (
+            self.obs_noise, self.max_episode_steps, self.decimation, self.profile.t_change,
+            self._counts_per_m, self.master_radius, self.gear_ratio,
+            1.0 - math.exp(-_DT / self.loadcell_tau) if self.loadcell_tau > 0 else 1.0,
+            self.loadcell_noise, self.tension_tolerance, self.action_rate_weight,
+            self.break_ratio, self.slack_samples, self.failure_penalty)
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
@@ -208,64 +275,15 @@ class GearSyncVectorEnv(MotorVectorEnv):
         kvout = m.regs[idx, R.KVOUT] / 256.0
         m.state[idx, L.S_Y1] = load / self.peak_torque(idx) * c.VF_FULL / kvout
 
-    def _apply_action(self, action: np.ndarray) -> None:
-        self.motors.inputs[:, L.I_ANALOG_VOLTS] = c.ANINP_VOLTS * action[:, 0]
+    def _step_copies(self, actions: np.ndarray) -> bool:
+        run = _steps_parallel if self.num_envs >= PARALLEL_MIN else _steps_serial
+        return run(*self.motors.kernel_arrays(), actions, self._prev_action, self._t,
+                   self._noise_key, self._k, self.profile.params, self.line, self._obs,
+                   self._reward, self._terminated, self._truncated)
 
-    def _advance(self) -> None:
-        m = self.motors
-        self.prev_measured[:] = self.measured
-        self.pulses[:] = 0.0
-        lc_k = 1.0 - math.exp(-_DT / self.loadcell_tau) if self.loadcell_tau > 0 else 1.0
-        prof, tc = self.profile.params, self.profile.t_change
-        if self.num_envs < _PARALLEL_MIN:
-            _advance_line_serial(m.regs, m.state, m.params, m.inputs, m.keys, m._buf,
-                                 m._buf_allocated, m._fmt, m._no_schedule, self.decimation,
-                                 prof, tc, self.line, self.slack_count, self._counts_per_m,
-                                 self.master_radius, self.gear_ratio, lc_k)
-        else:
-            theta0 = np.empty(self.num_envs)
-            for _ in range(self.decimation):
-                _line_pre(m.inputs, m.state, prof, tc, self.line, self._counts_per_m, theta0)
-                m.step(1)
-                _line_post(m.inputs, m.state, self.line, self.slack_count, theta0,
-                           self.master_radius, self.gear_ratio, lc_k)
-        e = (self.measured - self.tension_ref) / self.tension_ref
-        step_dt = self.decimation * _DT
-        self.error_integral += step_dt * (e - self.error_integral / _INTEGRAL_TAU)
-
-    def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        e = (self.force - self.tension_ref) / self.tension_ref
-        da = action[:, 0] - self._prev_action[:, 0]
-        reward = (1.0 - np.minimum(np.abs(e) / self.tension_tolerance, 2.0)
-                  - self.action_rate_weight * da * da)
-        broken = self.force > self.break_ratio * self.tension_ref
-        slack = self.slack_count >= self.slack_samples
-        failed = broken | slack | (self.error_bits() != 0)
-        return reward - self.failure_penalty * failed, failed
-
-    def measured_tension(self) -> np.ndarray:
-        """Load-cell reading with its noise [N], (N,)."""
-        meas = self.measured
-        if self.loadcell_noise > 0.0:
-            noise = normals(self._noise_key ^ np.uint64(0x5EED), self._t, 1)[:, 0]
-            meas = meas + self.loadcell_noise * self.tension_ref * noise
-        return meas
-
-    def _observe(self) -> np.ndarray:
-        r = self.motors.regs
-        ref = self.tension_ref
-        step_dt = self.decimation * _DT
-        v1_counts = self._counts_per_m * _DT  # master counts per sample at 1 m/s
-        return np.stack([
-            (self.measured_tension() - ref) / ref,
-            (self.measured - self.prev_measured) / ref * (0.1 / step_dt),
-            self.error_integral * 10.0,
-            self.pulses / self.decimation / v1_counts,
-            r[:, R.V_IST] / _V_MOTOR_NORM,
-            r[:, R.FLWERR] / 100.0,
-            r[:, R.FNCERR] / 10000.0,
-            self._prev_action[:, 0],
-        ], axis=1)
+    def _observe_copies(self, idx: np.ndarray) -> None:
+        _observe_rows(idx, self.motors.regs, self._prev_action, self._t, self._noise_key,
+                      self.line, self._k, self._obs)
 
     def _scope_values(self) -> np.ndarray:
         return np.stack([self.force, self.tension_ref, self._prev_action[:, 0] * c.ANINP_VOLTS,

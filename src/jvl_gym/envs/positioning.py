@@ -5,11 +5,14 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+from numba import njit, prange
 
 from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
-from .base import MotorVectorEnv
+from ..kernel import advance_motor
+from .base import ERROR_BITS, MotorVectorEnv
+from .compiled import PARALLEL_MIN, action, all_finite, end_step, put_obs
 from .single import MotorEnv
 
 __all__ = ["PositioningEnv", "PositioningVectorEnv"]
@@ -17,6 +20,67 @@ __all__ = ["PositioningEnv", "PositioningVectorEnv"]
 _V_NORM = 3000.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 3000 rpm in counts/sample
 _FINE = 200.0  #: counts: scale of the fine position-error channel
 _BASELINE_RPM = 3000.0
+#: entries of the per-env constants array
+_NOISE, _MAX_STEPS, _DECIMATION, _OVERSHOOT_W, _EFFORT_W, _BASELINE, _N_CONSTS = range(7)
+
+
+@njit(cache=True, inline="always")
+def _observe_row(i, regs, prev, t, noise_key, noise, target, obs):  # pragma: no cover
+    """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
+    e = float(target[i] - regs[i, R.P_IST])
+    put_obs(obs, i, 0, e / (2.0 * c.COUNTS_PER_REV), noise_key[i], t[i], noise)
+    put_obs(obs, i, 1, e / _FINE, noise_key[i], t[i], noise)
+    put_obs(obs, i, 2, regs[i, R.V_IST] / _V_NORM, noise_key[i], t[i], noise)
+    put_obs(obs, i, 3, prev[i, 0], noise_key[i], t[i], noise)
+
+
+@njit(cache=True)
+def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+               noise_key, k, target, direction, obs, reward, term, trunc):  # pragma: no cover
+    """One env step of copy ``i``: torque command, motor, reward, termination, observation."""
+    a = action(actions, i, 0)
+    baseline = k[_BASELINE] > 0.5
+    if not baseline:
+        inputs[i, L.I_ANALOG_VOLTS] = c.ANINP_VOLTS * a
+    advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, int(k[_DECIMATION]))
+    t[i] += 1
+    e = (target[i] - regs[i, R.P_IST]) / c.COUNTS_PER_REV
+    overshoot = max(-e * direction[i], 0.0)
+    effort = a * a if not baseline else (regs[i, R.VF_OUT] / c.VF_FULL) ** 2
+    reward[i] = -abs(e) - k[_OVERSHOOT_W] * overshoot - k[_EFFORT_W] * effort
+    end_step(i, (regs[i, R.ERR_STAT] & ERROR_BITS) != 0, t, int(k[_MAX_STEPS]), term, trunc)
+    prev[i, 0] = a
+    _observe_row(i, regs, prev, t, noise_key, k[_NOISE], target, obs)
+
+
+@njit(cache=True)
+def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+                  noise_key, k, target, direction, obs, reward, term,
+                  trunc):  # pragma: no cover - compiled
+    if not all_finite(actions):
+        return False
+    for i in range(regs.shape[0]):
+        _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+                   noise_key, k, target, direction, obs, reward, term, trunc)
+    return True
+
+
+@njit(cache=True, parallel=True)
+def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+                    noise_key, k, target, direction, obs, reward, term,
+                    trunc):  # pragma: no cover - compiled
+    if not all_finite(actions):
+        return False
+    for i in prange(regs.shape[0]):
+        _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+                   noise_key, k, target, direction, obs, reward, term, trunc)
+    return True
+
+
+@njit(cache=True)
+def _observe_rows(idx, regs, prev, t, noise_key, noise, target, obs):  # pragma: no cover
+    for i in idx:
+        _observe_row(i, regs, prev, t, noise_key, noise, target, obs)
 
 
 class PositioningVectorEnv(MotorVectorEnv):
@@ -46,6 +110,10 @@ class PositioningVectorEnv(MotorVectorEnv):
         n = self.num_envs
         self.target = np.zeros(n, dtype=np.int64)  # counts
         self.direction = np.ones(n)
+        self._k = np.zeros(_N_CONSTS)  # constants of the compiled step
+        self._k[[_NOISE, _MAX_STEPS, _DECIMATION, _OVERSHOOT_W, _EFFORT_W, _BASELINE]] = (
+            self.obs_noise, self.max_episode_steps, self.decimation, self.overshoot_weight,
+            self.effort_weight, float(self.baseline))
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
@@ -66,26 +134,18 @@ class PositioningVectorEnv(MotorVectorEnv):
         else:
             m.write("MODE_REG", c.AT_MODE, index=idx)
 
-    def _apply_action(self, action: np.ndarray) -> None:
-        if not self.baseline:
-            self.motors.inputs[:, L.I_ANALOG_VOLTS] = c.ANINP_VOLTS * action[:, 0]
+    def _step_copies(self, actions: np.ndarray) -> bool:
+        run = _steps_parallel if self.num_envs >= PARALLEL_MIN else _steps_serial
+        return run(*self.motors.kernel_arrays(), actions, self._prev_action, self._t,
+                   self._noise_key, self._k, self.target, self.direction, self._obs,
+                   self._reward, self._terminated, self._truncated)
+
+    def _observe_copies(self, idx: np.ndarray) -> None:
+        _observe_rows(idx, self.motors.regs, self._prev_action, self._t, self._noise_key,
+                      self.obs_noise, self.target, self._obs)
 
     def _error_counts(self) -> np.ndarray:
         return (self.target - self.motors.regs[:, R.P_IST]).astype(np.float64)
-
-    def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        e = self._error_counts() / c.COUNTS_PER_REV
-        overshoot = np.maximum(-e * self.direction, 0.0)
-        effort = action[:, 0] ** 2 if not self.baseline else (
-            self.motors.regs[:, R.VF_OUT] / c.VF_FULL) ** 2
-        reward = -np.abs(e) - self.overshoot_weight * overshoot - self.effort_weight * effort
-        return reward, self.error_bits() != 0
-
-    def _observe(self) -> np.ndarray:
-        e = self._error_counts()
-        r = self.motors.regs
-        return np.stack([e / (2.0 * c.COUNTS_PER_REV), e / _FINE, r[:, R.V_IST] / _V_NORM,
-                         self._prev_action[:, 0]], axis=1)
 
     def _scope_values(self) -> np.ndarray:
         return np.stack([self._error_counts() / c.COUNTS_PER_REV, self.motors.speed_rpm,

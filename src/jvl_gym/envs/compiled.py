@@ -1,0 +1,69 @@
+"""Compiled pieces of an environment step shared by the tasks (numba, one copy at a time).
+
+A task with a compiled step (``MotorVectorEnv.compiled``) runs a whole step of a copy in one
+compiled function: action (clipped here, never written back to the caller's array), motor
+kernel, process model, reward, termination, truncation and the observation with its noise and
+clipping. The Python side makes one call per step, for one copy (the single env) or all
+copies (the vector env, multi-threaded from :data:`PARALLEL_MIN` copies), so a single env step
+costs little more than the motor kernel itself. These helpers are the task-independent parts;
+they reproduce :func:`jvl_gym.envs.noise.normals` (same counter-based streams) so noise does not
+depend on the path.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ..firmware.noise import uniform
+
+__all__ = ["PARALLEL_MIN", "OBS_BOUND", "all_finite", "action", "put_obs", "normal",
+           "end_step"]
+
+#: from this many copies a vector env step runs its copies in parallel threads
+PARALLEL_MIN = 32
+#: observations are normalised so that typical values lie within ±1 and clipped to ±OBS_BOUND
+OBS_BOUND = 5.0
+
+
+@njit(cache=True)
+def all_finite(actions: np.ndarray) -> bool:  # pragma: no cover - compiled
+    """True when every entry of the (N, A) action array is finite (checked before any step)."""
+    for i in range(actions.shape[0]):
+        for k in range(actions.shape[1]):
+            if not math.isfinite(actions[i, k]):
+                return False
+    return True
+
+
+@njit(cache=True, inline="always")
+def action(actions: np.ndarray, i: int, k: int) -> float:  # pragma: no cover - compiled
+    """Component ``k`` of copy ``i``'s action clipped to [-1, 1]."""
+    return min(max(actions[i, k], -1.0), 1.0)
+
+
+@njit(cache=True, inline="always")
+def normal(key: np.uint64, counter: int, k: int, n: int) -> float:  # pragma: no cover
+    """Channel ``k`` of ``n`` of :func:`jvl_gym.envs.noise.normals` for one copy."""
+    u1 = uniform(key, counter, k)
+    u2 = uniform(key, counter, n + k)
+    return math.sqrt(-2.0 * math.log(u1)) * math.cos(2.0 * math.pi * u2)
+
+
+@njit(cache=True, inline="always")
+def put_obs(obs: np.ndarray, i: int, k: int, x: float, key: np.uint64, counter: int,
+            noise: float) -> None:  # pragma: no cover - compiled
+    """Store observation component ``k`` of copy ``i``: add noise, clip to ±OBS_BOUND."""
+    if noise > 0.0:
+        x += noise * normal(key, counter, k, obs.shape[1])
+    obs[i, k] = min(max(x, -OBS_BOUND), OBS_BOUND)
+
+
+@njit(cache=True, inline="always")
+def end_step(i: int, terminated: bool, t: np.ndarray, max_steps: int, term: np.ndarray,
+             trunc: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Store termination and truncation of copy ``i`` (``t`` already counts this step)."""
+    term[i] = terminated
+    trunc[i] = (t[i] >= max_steps) and not terminated
