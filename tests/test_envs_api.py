@@ -170,3 +170,66 @@ def test_render_draws_a_scope_image(env_id: str) -> None:
     plain = gym.make(env_id)
     plain.reset(seed=0)
     assert plain.render() is None
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_bad_actions_are_refused_and_change_nothing(env_id: str) -> None:
+    venv = gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point")
+    obs, _ = venv.reset(seed=5)
+    core = venv.unwrapped
+    m = core.motors
+    before = (m.regs.copy(), m.state.copy(), m.inputs.copy(), core._t.copy())
+    bad = np.zeros((2, *venv.single_action_space.shape), dtype=np.float32)
+    bad[1, 0] = np.nan
+    with pytest.raises(ValueError, match="finite"):
+        venv.step(bad)
+    with pytest.raises(ValueError, match="shape"):
+        venv.step(np.zeros((3, 7), dtype=np.float32))
+    after = (m.regs, m.state, m.inputs, core._t)
+    for x, y in zip(before, after):
+        np.testing.assert_array_equal(x, y)
+    np.testing.assert_array_equal(core._obs, obs)
+
+
+@pytest.mark.parametrize("env_id", [e for e in ENV_IDS if e not in SHORT])
+def test_threaded_vector_step_equals_single_envs(env_id: str) -> None:
+    """From PARALLEL_MIN copies the compiled step runs copies in threads: same trajectories."""
+    from jvl_gym.envs.compiled import PARALLEL_MIN
+
+    n, steps = PARALLEL_MIN + 1, 12
+    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
+                        obs_noise=0.05)
+    dim = venv.single_action_space.shape[0]
+    acts = _actions(env_id, steps, n, dim, seed=3)
+    vobs = [venv.reset(seed=20)[0]]
+    vrew = []
+    for a in acts:
+        o, r, *_ = venv.step(a)
+        vobs.append(o)
+        vrew.append(r)
+    for i in (0, n - 1):
+        env = gym.make(env_id, obs_noise=0.05)
+        np.testing.assert_array_equal(env.reset(seed=20 + i)[0], vobs[0][i])
+        for k, a in enumerate(acts):
+            o, r, *_ = env.step(a[i])
+            np.testing.assert_array_equal(o, vobs[k + 1][i])
+            assert r == vrew[k][i]
+
+
+def test_compiled_observation_noise_equals_the_numpy_streams() -> None:
+    from numba import njit
+
+    from jvl_gym.envs.compiled import normal
+    from jvl_gym.envs.noise import normals
+
+    @njit
+    def rows(keys, counters, k):  # pragma: no cover - compiled
+        out = np.empty((keys.size, k))
+        for i in range(keys.size):
+            for j in range(k):
+                out[i, j] = normal(keys[i], counters[i], j, k)
+        return out
+
+    keys = np.array([1, 2**63 + 5, 12345678901234567], dtype=np.uint64)
+    counters = np.array([0, 7, 123456], dtype=np.int64)
+    np.testing.assert_array_equal(rows(keys, counters, 5), normals(keys, counters, 5))

@@ -43,8 +43,7 @@ class MotorEnv(gym.Env):
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Advance by ``decimation`` outer samples with ``action`` (see "Action Space")."""
-        obs, reward, terminated, truncated = self.core._step_batch(
-            np.asarray(action, dtype=np.float64)[None])
+        obs, reward, terminated, truncated = self.core._step_batch(action)
         return obs[0].copy(), float(reward[0]), bool(terminated[0]), bool(truncated[0]), {}
 
     def render(self) -> np.ndarray | None:
