@@ -157,3 +157,25 @@ def test_trace_records_registers_and_physics(m):
     assert np.all(np.diff(tr["t"]) == pytest.approx(c.OUTER_DT))
     with pytest.raises(UnknownRegisterError):
         m.trace(["NOPE"], 5)
+
+
+def test_reset_can_change_the_motor_type_of_some_motors():
+    from jvl_gym import layout as L
+    from jvl_gym.config import load_motor
+
+    m = MotorArray("MAC140", n=3, seed=0)
+    m.write("MODE_REG", c.V_MODE, index=[0])
+    before = (m.regs.copy(), m.state.copy(), m.params.copy())
+    with pytest.raises(ValueError):
+        m.reset(index=[1], motor_type="MAC999")
+    with pytest.raises(ValueError):
+        m.reset(index=[1, 2], motor_type=["MAC050"])
+    for x, y in zip(before, (m.regs, m.state, m.params)):
+        np.testing.assert_array_equal(x, y)
+    m.reset(index=[1, 2], motor_type=["MAC050", "MAC095"])
+    assert [cfg.name for cfg in m.motor_configs] == ["MAC140", "MAC050", "MAC095"]
+    assert m.params[1, L.P_J_MOTOR] == load_motor("MAC050").rotor_inertia
+    assert m.read_raw("MOTOR_TYPE")[2] == load_motor("MAC095").motor_type_code
+    assert m.read("MODE_REG")[0] == c.V_MODE  # motor 0 untouched
+    m.reset(index=[1])  # keeps its new type
+    assert m.motor_configs[1].name == "MAC050"

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -191,6 +192,18 @@ class MotorArray:
         p[L.P_HOME_POS] = math.inf
         return p
 
+    def _type_code(self, name: str) -> int:
+        """Index of motor type ``name`` in the pool of types, adding it on first use."""
+        names = [known.name for known in self._configs]
+        if name in names:
+            return names.index(name)
+        cfg = load_motor(name)  # raises on an unknown type, before any motor changes
+        if cfg.name not in names:
+            self._configs.append(cfg)
+            self._rom = np.concatenate([self._rom, self._rom_image(cfg, self._setup_arg)[None]])
+            names.append(cfg.name)
+        return names.index(cfg.name)
+
     @property
     def motor_configs(self) -> list[MotorConfig]:
         """Motor config of each motor (length N)."""
@@ -209,15 +222,24 @@ class MotorArray:
         self.state[_as_index(index, self.n), L.S_REC_LEN] = float(n_samples)
 
     # ------------------------------------------------------------------ reset
-    def reset(self, index: Any = None, **params: Any) -> None:
+    def reset(self, index: Any = None, motor_type: str | Sequence[str] | None = None,
+              **params: Any) -> None:
         """Power-on reset of the motors in ``index`` with optional new per-motor parameters.
 
         Registers come from flash (if written) or the ROM defaults; P_IST = 0; the rotor is at
         ``initial_angle`` [rad] turning at ``initial_speed`` [rad/s] (default 0); all firmware
         state is cleared; world inputs return to rest. Other motors are untouched.
+        ``motor_type`` (one name, or one per motor of ``index``) first replaces the motors by
+        motors of that type (its parameters and ROM defaults; the type joins the array's pool).
         """
         idx = _as_index(index, self.n)
         values = self._check_params(params, idx.size)
+        if motor_type is not None:
+            names = [motor_type] * idx.size if isinstance(motor_type, str) else list(motor_type)
+            if len(names) != idx.size:
+                raise ValueError(f"got {len(names)} motor types for {idx.size} motors")
+            codes = np.array([self._type_code(name) for name in names], dtype=np.int64)
+            self._type_of[idx] = codes
         for k in np.unique(self._type_of[idx]):
             sel = idx[self._type_of[idx] == k]
             self.params[sel] = self._config_params(self._configs[k])

@@ -136,9 +136,8 @@ class MotorVectorEnv(VectorEnv, ABC):
         self.action_space = batch_space(self.single_action_space, n)
 
         self.motors = MotorArray(self.motor_types[0], n=n, seed=0)
-        self._type_names = [cfg.name for cfg in self.motors._configs]
-        for name in self.motor_types[1:]:
-            self._type_code(name)
+        self._configs: dict[str, Any] = {}
+        self._type_names = np.full(n, self.motor_types[0], dtype=object)
         self._rngs: list[np.random.Generator | None] = [None] * n
         self._noise_key = np.zeros(n, dtype=np.uint64)
         self._t = np.zeros(n, dtype=np.int64)
@@ -179,23 +178,6 @@ class MotorVectorEnv(VectorEnv, ABC):
             out[name] = (lo, hi)
         return out
 
-    def _type_code(self, name: str) -> int:
-        """Index of a motor type in the array's type pool, adding it on first use.
-
-        The pool lets a copy change motor type at a reset without rebuilding the array: the
-        array keeps one ROM image and config per type and a type index per motor, and
-        ``MotorArray.reset`` powers a motor on from its type's ROM.
-        """
-        from ..config import load_motor
-
-        m = self.motors
-        if name not in self._type_names:
-            cfg = load_motor(name)
-            m._configs.append(cfg)
-            m._rom = np.concatenate([m._rom, m._rom_image(cfg, m._setup_arg)[None]])
-            self._type_names.append(cfg.name)
-        return self._type_names.index(name)
-
     # ------------------------------------------------------------------ task hooks
     def _build(self) -> None:
         """Allocate the task's per-copy state (called once by ``__init__``)."""
@@ -233,20 +215,26 @@ class MotorVectorEnv(VectorEnv, ABC):
         """ERR_STAT error bits that end an episode, (N,) int64 (0 when none is set)."""
         return self.motors.regs[:, R.ERR_STAT] & ERROR_BITS
 
+    def _type_configs(self, idx: np.ndarray) -> list[Any]:
+        """Motor configs of the types of copies ``idx`` (set at their reset)."""
+        from ..config import load_motor
+
+        names = self._type_names[idx]
+        for name in set(names) - set(self._configs):
+            self._configs[name] = load_motor(name)
+        return [self._configs[name] for name in names]
+
     def rotor_inertia(self, idx: np.ndarray) -> np.ndarray:
         """Rotor inertia J_m [kg·m²] of the motor types of copies ``idx``."""
-        j = np.array([cfg.rotor_inertia for cfg in self.motors._configs])
-        return j[self.motors._type_of[idx]]
+        return np.array([cfg.rotor_inertia for cfg in self._type_configs(idx)])
 
     def rated_torque(self, idx: np.ndarray) -> np.ndarray:
         """Rated torque [N·m] of the motor types of copies ``idx``."""
-        t = np.array([cfg.rated_torque for cfg in self.motors._configs])
-        return t[self.motors._type_of[idx]]
+        return np.array([cfg.rated_torque for cfg in self._type_configs(idx)])
 
     def peak_torque(self, idx: np.ndarray) -> np.ndarray:
         """Peak torque (T_SOLL = 1023) [N·m] of the motor types of copies ``idx``."""
-        t = np.array([cfg.peak_torque for cfg in self.motors._configs])
-        return t[self.motors._type_of[idx]]
+        return np.array([cfg.peak_torque for cfg in self._type_configs(idx)])
 
     # ------------------------------------------------------------------ reset
     def _reset_envs(self, idx: np.ndarray, seeds: Sequence[int | None],
@@ -273,12 +261,11 @@ class MotorVectorEnv(VectorEnv, ABC):
             rngs.append(rng)
         draws = {name: ranges[name][0] + u[:, k] * (ranges[name][1] - ranges[name][0])
                  for k, name in enumerate(names)}
-        codes = np.array([self._type_code(types[min(int(x * len(types)), len(types) - 1)])
-                          for x in u_type], dtype=np.int64)
-        self.motors._type_of[idx] = codes
+        names = [types[min(int(x * len(types)), len(types) - 1)] for x in u_type]
+        self._type_names[idx] = names
         self.motors.keys[idx] = keys[:, 0]
         self._noise_key[idx] = keys[:, 1]
-        self.motors.reset(index=idx, **self._motor_params(idx, draws))
+        self.motors.reset(index=idx, motor_type=names, **self._motor_params(idx, draws))
         self._t[idx] = 0
         self._prev_action[idx] = 0.0
         self._scope_count[idx] = 0

@@ -99,10 +99,9 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         self._ok = ok
         kvout_est = 1.0 + self.estimates[:, 0]
         if self.baseline:
-            names = self._type_names
-            for k in np.unique(m._type_of[ok]):
-                regs = synthesis_registers(names[k])
-                sel = ok[m._type_of[ok] == k]
+            for name in sorted(set(self._type_names[ok])):
+                regs = synthesis_registers(name)
+                sel = ok[self._type_names[ok] == name]
                 if regs is None:
                     continue  # default setup
                 for name, value in regs.items():
@@ -178,9 +177,8 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         return -cost, np.ones(self.num_envs, dtype=np.bool_)
 
     def _observe(self) -> np.ndarray:
-        names = self._type_names
-        onehot = np.array([[1.0 if names[k] == t else 0.0 for t in _TYPES]
-                           for k in self.motors._type_of])
+        onehot = np.array([[1.0 if name == t else 0.0 for t in _TYPES]
+                           for name in self._type_names])
         est = self.estimates
         return np.concatenate([onehot, np.stack([est[:, 0] / 5.0 - 1.0, est[:, 1] * 2.0 - 1.0,
                                                  est[:, 2] * 2.0 - 1.0], axis=1)], axis=1)
