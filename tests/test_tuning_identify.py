@@ -94,3 +94,40 @@ def test_record_validation_errors(tmp_path):
     (tmp_path / "bad.csv").write_text("# kind: TESTU\nsample,UA_VAL,IC_IST\n0,1,2\n")
     with pytest.raises(RecordError, match="rate_hz"):
         load_csv(tmp_path / "bad.csv")
+
+
+def test_identify_from_csv_gives_the_in_memory_inertia(tmp_path):
+    # records from the simulator carry their current-loop registers (# registers: line), so
+    # the CSV path uses the same electrical TESTA model as the in-memory procedure
+    from tuning.autotune import identify_motors
+    from tuning.cli import app
+    from typer.testing import CliRunner
+
+    from jvl_gym import MotorArray
+
+    m = MotorArray("MAC140", n=1, seed=3, load_inertia=2e-5, coulomb_friction=0.01,
+                   current_noise=2.0, position_noise=0.85)
+    ident = identify_motors(m)[0]
+    assert ident.mechanics.repeats == 4 and len(ident.records) == 9
+    u = save_csv(ident.records[0], tmp_path / "u.csv")
+    files = [save_csv(r, tmp_path / f"a{k}.csv") for k, r in enumerate(ident.records[1:])]
+    assert "# registers: KIFX2=" in files[0].read_text()
+    recs = [load_csv(f) for f in files]
+    assert recs[0].meta["registers"] == ident.records[1].meta["registers"]
+    coil = identify_coil(load_csv(u), MD)
+    est = identify_mechanics(recs, coil.motor(MD))
+    assert est.J == pytest.approx(ident.mechanics.J, rel=1e-9)
+    assert est.ci["J"] == pytest.approx(ident.mechanics.ci["J"], rel=1e-9)
+    args = ["identify", "--motor", "MAC140", "--testu", str(u)]
+    for f in files:
+        args += ["--testa", str(f)]
+    res = CliRunner().invoke(app, args)
+    assert res.exit_code == 0, res.output
+    assert "(electrical model)" in res.output
+    j_cli = float(res.output.split("J ")[1].split()[0])
+    assert j_cli == pytest.approx(ident.mechanics.J, rel=1e-9)
+    # without the registers the rigid model is used and reads the current loop's lag as inertia
+    for r in recs:
+        r.meta.pop("registers")
+    rigid = identify_mechanics(recs, coil.motor(MD))
+    assert abs(rigid.J / ident.mechanics.J - 1) > 1e-3

@@ -34,7 +34,7 @@ from .autotune import (
 from .identify_coil import identify_coil
 from .identify_mechanics import identify_mechanics
 from .models import MotorData
-from .records import load_csv
+from .records import load_csv, record_registers
 from .report import text_table, write_report
 from .verify import verify_current_loop, verify_speed_loop
 
@@ -59,8 +59,17 @@ def _write_setup(path: Path, motor: str, regs: dict[str, float], note: str) -> N
 def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
              testu: list[Path] = typer.Option([], help="TESTU record CSV (repeatable)"),
              testa: list[Path] = typer.Option([], help="TESTA record CSV (repeatable)"),
-             no_coulomb: bool = typer.Option(False, help="assume no Coulomb friction")) -> None:
-    """Identify the coil (TESTU) and the mechanics (TESTA) from record CSV files."""
+             no_coulomb: bool = typer.Option(False, help="assume no Coulomb friction"),
+             setup: Path = typer.Option(None, help="setup YAML with the current-loop registers "
+                                        "(KIFX2..KIB0, PHASE_COMP, AMPLITUDE) the TESTA records "
+                                        "were taken with, for CSVs without a '# registers:' "
+                                        "line")) -> None:
+    """Identify the coil (TESTU) and the mechanics (TESTA) from record CSV files.
+
+    TESTA uses the electrical model (current loop, back-EMF) when the records carry the
+    registers they were taken with (``# registers:``, written by ``acquire_testa``) or
+    ``--setup`` gives them; otherwise the rigid model (docs/tuning.md).
+    """
     md = MotorData.from_config(motor)
     if testu:
         c = identify_coil([load_csv(p) for p in testu], md)
@@ -68,9 +77,23 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
                    f"{c.ci['L_line']}, delay {c.delay}, fit {c.nrmse_fit:.2f} %")
         md = c.motor(md)
     if testa:
-        m = identify_mechanics([load_csv(p) for p in testa], md, coulomb=not no_coulomb)
-        typer.echo(f"J {m.J:.5g} kg m^2 {m.ci['J']}, KVOUT {m.kvout:.3f}, b {m.viscous:.3g}, "
-                   f"Tc {m.coulomb:.3g} N m, fit {m.nrmse_fit:.2f} %")
+        recs = [load_csv(p) for p in testa]
+        cur = pc = None
+        if setup is not None:
+            regs = yaml.safe_load(setup.read_text()).get("registers", {})
+            keys = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
+            missing = [k for k in keys if k not in regs]
+            if missing:
+                raise typer.BadParameter(f"{setup} lacks {', '.join(missing)}", param_hint="setup")
+            cur = {k: float(regs[k]) for k in keys}
+            pc = float(regs.get("PHASE_COMP", 5.0))
+            md = md.with_(amplitude=float(regs.get("AMPLITUDE", md.amplitude)))
+        m = identify_mechanics(recs, md, coulomb=not no_coulomb, current_regs=cur,
+                               phase_comp=pc)
+        carried = record_registers(recs) or {}
+        model = "electrical" if cur is not None or "KIFX2" in carried else "rigid"
+        typer.echo(f"J {m.J!r} kg m^2 {m.ci['J']}, KVOUT {m.kvout:.3f}, b {m.viscous:.3g}, "
+                   f"Tc {m.coulomb:.3g} N m, fit {m.nrmse_fit:.2f} % ({model} model)")
 
 
 @app.command("synthesize")

@@ -9,12 +9,16 @@ A :class:`Record` is one test-mode measurement from the sample buffer:
   (SAMPLE1 = 7), ``output`` = V_IST [counts/sample] (SAMPLE2 = 12); the motor runs at constant
   torque VF_OUT = T_SOLL from rest.
 
-Sample 0 is the first sample of the test mode (the motor at rest, no current). CSV layout::
+Sample 0 is the first sample of the test mode (the motor at rest, no current). A TESTA record
+from a motor (:func:`acquire_testa`) carries the registers the electrical TESTA model needs
+(:data:`TESTA_REGISTERS`: the current loop, PHASE_COMP, AMPLITUDE) in ``meta["registers"]``; the
+CSV keeps them in the ``# registers:`` line. CSV layout::
 
     # jvl_gym record v1
     # kind: TESTU
     # rate_hz: 7812.5
     # motor: MAC140
+    # registers: KIFX2=1.2 KIFX1=-1.0 KIFY1=1 KIFY0=0 KIB1=1 KIB0=0 PHASE_COMP=5 AMPLITUDE=0.828125
     # <any other meta key>: <value>
     sample,UA_VAL,IC_IST
     0,100,0
@@ -57,12 +61,18 @@ __all__ = [
     "acquire_testu",
     "acquire_testa",
     "SERIAL_SOURCE_HOOK",
+    "TESTA_REGISTERS",
+    "record_registers",
 ]
 
 CHANNELS: dict[str, tuple[str, str]] = {"TESTU": ("UA_VAL", "IC_IST"), "TESTA": ("T_SOLL", "V_IST")}
 RATES: dict[str, float] = {"TESTU": 1.0 / TS_I, "TESTA": 1.0 / TS_O}
 MIN_SAMPLES: dict[str, int] = {"TESTU": 8, "TESTA": 6}
 MAX_TESTA_SPEED: int = 400  #: |V_IST| above this (3052 rpm) leaves the constant-torque region
+#: registers a TESTA record is taken with that the electrical model needs (manual 3.2.106–111,
+#: 3.2.126, 3.2.127); :func:`acquire_testa` stores them in ``meta["registers"]``
+TESTA_REGISTERS: tuple[str, ...] = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0",
+                                    "PHASE_COMP", "AMPLITUDE")
 
 
 class RecordError(ValueError):
@@ -160,6 +170,8 @@ def save_csv(rec: Record, path: str | os.PathLike[str]) -> Path:
     if rec.motor:
         lines.append(f"# motor: {rec.motor}")
     for k, v in rec.meta.items():
+        if isinstance(v, dict):  # e.g. registers: NAME=value NAME=value …
+            v = " ".join(f"{n}={float(x)!r}" for n, x in v.items())
         lines.append(f"# {k}: {v}")
     lines.append(f"sample,{a_in},{a_out}")
     for i, (u, y) in enumerate(zip(rec.input, rec.output)):
@@ -204,10 +216,44 @@ def load_csv(path: str | os.PathLike[str]) -> Record:
         rate = float(header["rate_hz"])
     except ValueError as exc:
         raise RecordError(f"{path}: not numeric: {exc}") from exc
-    meta = {k: v for k, v in header.items() if k not in ("kind", "rate_hz", "motor")}
+    meta: dict[str, Any] = {k: v for k, v in header.items()
+                            if k not in ("kind", "rate_hz", "motor")}
+    if "registers" in meta:
+        try:
+            meta["registers"] = {n.strip(): float(x) for n, x in
+                                 (item.split("=", 1) for item in meta["registers"].split())}
+        except ValueError as exc:
+            raise RecordError(f"{path}: '# registers:' must be NAME=value pairs separated by "
+                              f"spaces: {exc}") from exc
     rec = Record(kind, rate, data[:, columns.index(a_in)], data[:, columns.index(a_out)],
                  header.get("motor"), meta)
     return validate(rec)
+
+
+def record_registers(recs: Record | Sequence[Record]) -> dict[str, float] | None:
+    """The registers the records were taken with (``meta["registers"]``), or None.
+
+    Several records must agree (they are one identification); a register missing from one
+    record is dropped. Returns None when no record carries registers.
+
+    Raises
+    ------
+    RecordError
+        Two records were taken with different register values.
+    """
+    recs = [recs] if isinstance(recs, Record) else list(recs)
+    sets = [r.meta.get("registers") for r in recs]
+    if not any(sets):
+        return None
+    common = set.intersection(*(set(x or {}) for x in sets))
+    out: dict[str, float] = {}
+    for name in sorted(common):
+        vals = {float(x[name]) for x in sets if x}
+        if len(vals) > 1:
+            raise RecordError(f"the records were taken with different {name} ({sorted(vals)}); "
+                              "identify them separately")
+        out[name] = vals.pop()
+    return out
 
 
 # ----------------------------------------------------------------------------- generators
@@ -358,7 +404,12 @@ def acquire_testu(m: Any, umeas: int = 100, n_samples: int = 64, align: bool = T
 def acquire_testa(m: Any, t_soll: Sequence[float] | np.ndarray | float, n_samples: int = 64
                   ) -> list[Record]:
     """Run TESTA (manual 4.4.10) once on every motor with per-motor ``t_soll``; wait for
-    BREAK_MODE to stop the motor and INIT_MODE; return one record per motor."""
+    BREAK_MODE to stop the motor and INIT_MODE; return one record per motor.
+
+    Each record's ``meta["registers"]`` holds the :data:`TESTA_REGISTERS` read from the motor
+    (the current loop, PHASE_COMP, AMPLITUDE the record was taken with), so the electrical
+    TESTA model can be used on the record alone (also after :func:`save_csv`/:func:`load_csv`).
+    """
     t = np.broadcast_to(np.asarray(t_soll, dtype=float), (m.n,)).round()
     old = np.asarray(m.read("T_SOLL")).copy()
     m.set_record_length(n_samples)
@@ -370,6 +421,9 @@ def acquire_testa(m: Any, t_soll: Sequence[float] | np.ndarray | float, n_sample
     m.step(20)
     m.write("T_SOLL", old)
     names = [cfg.name for cfg in getattr(m, "motor_configs", [None] * m.n)]
+    regs = {k: np.broadcast_to(np.asarray(m.read(k), dtype=float), (m.n,)) for k in TESTA_REGISTERS}
     return [Record("TESTA", RATES["TESTA"], buf["T_SOLL"][i, :n_samples],
                    buf["V_IST"][i, :n_samples], names[i],
-                   {"source": "MotorArray", "T_SOLL": float(t[i])}) for i in range(m.n)]
+                   {"source": "MotorArray", "T_SOLL": float(t[i]),
+                    "registers": {k: float(v[i]) for k, v in regs.items()}})
+            for i in range(m.n)]
