@@ -1,11 +1,14 @@
 """Environment speed (``make bench``): prints its figures, asserts nothing.
 
 - single env steps/s of every jvl_gym env (the env class itself, one ``step`` call per step,
-  random actions, reset when an episode ends);
-- vector env-steps/s with 1024 copies (native vector env, NEXT_STEP autoreset);
+  random actions, reset when an episode ends), at the env's default decimation and at
+  decimation 1 (one 520.8 Hz firmware sample per step);
+- vector env-steps/s with 1024 copies (native vector env, NEXT_STEP autoreset), and the same
+  in outer samples (1.92 ms of motor time) per second;
 - gym-electric-motor's ``Cont-CC-PMSM-v0`` single env steps/s, measured in the same run in a
   separate venv (``.venv-bench``, created here on first use: its dependencies conflict with
-  ours), for the ×10 comparison of issue 6.
+  ours), for the ×10 comparison of issue 6, also as simulated seconds per second (its step is
+  ``tau`` = 100 µs of motor time, ours ``decimation`` × 1.92 ms).
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ import gymnasium as gym
 import numpy as np
 
 import jvl_gym  # noqa: F401
+from jvl_gym import constants as c
 from jvl_gym.envs import ENV_IDS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -43,12 +47,12 @@ while time.perf_counter() - t0 < {seconds}:
         n += 1
         if term or trunc:
             env.reset()
-print(n / (time.perf_counter() - t0))
+print(n / (time.perf_counter() - t0), env.unwrapped.physical_system.tau)
 """
 
 
-def single_steps_per_second(env_id: str, seconds: float = 3.0) -> float:
-    env = gym.make(env_id).unwrapped
+def single_steps_per_second(env_id: str, seconds: float = 3.0, **kwargs: object) -> float:
+    env = gym.make(env_id, **kwargs).unwrapped
     env.reset(seed=0)
     acts = np.random.default_rng(0).uniform(-1, 1, (1000, *env.action_space.shape)).astype(
         np.float32)
@@ -79,7 +83,7 @@ def vector_steps_per_second(env_id: str, num_envs: int = 1024, seconds: float = 
     return n / (time.perf_counter() - t0)
 
 
-def gem_steps_per_second(seconds: float = 3.0) -> float | None:
+def gem_steps_per_second(seconds: float = 3.0) -> tuple[float, float] | None:
     python = BENCH_VENV / "bin" / "python"
     if not python.exists():
         print("creating .venv-bench with gym-electric-motor ...", flush=True)
@@ -92,23 +96,39 @@ def gem_steps_per_second(seconds: float = 3.0) -> float | None:
     if out.returncode != 0:
         print(out.stderr[-2000:])
         return None
-    return float(out.stdout.strip().splitlines()[-1])
+    rate, tau = out.stdout.strip().splitlines()[-1].split()
+    return float(rate), float(tau)
 
 
 def main() -> None:
     fast = os.environ.get("JVL_FAST") == "1"
     seconds = 1.0 if fast else 3.0
     gem = gem_steps_per_second(seconds)
-    print(f"gym-electric-motor Cont-CC-PMSM-v0 single env: "
-          f"{gem:,.0f} steps/s" if gem else "gym-electric-motor: not measured")
-    print(f"{'env':28s} {'single steps/s':>15s} {'x GEM':>7s} {'vector(1024) env-steps/s':>26s}")
+    if gem:
+        print(f"gym-electric-motor Cont-CC-PMSM-v0 single env: {gem[0]:,.0f} steps/s "
+              f"(step {gem[1] * 1e6:.0f} µs: {gem[0] * gem[1]:.2f} simulated s/s)")
+    else:
+        print("gym-electric-motor: not measured")
+    print(f"{'env':26s} {'dec':>3s} {'single steps/s':>14s} {'x GEM':>6s} {'sim s/s':>8s} "
+          f"{'x GEM':>6s} {'dec 1 steps/s':>13s} {'x GEM':>6s} "
+          f"{'vector(1024) steps/s':>20s} {'outer samples/s':>15s}")
     for env_id in ENV_IDS:
+        trials = "FilterTuning" in env_id
+        dec = gym.make(env_id).unwrapped.core.decimation
         single = single_steps_per_second(env_id, seconds)
-        vector = vector_steps_per_second(env_id, 1024 if env_id != "jvl_gym/FilterTuning-v0"
-                                         else 256, seconds)
-        ratio = f"{single / gem:7.1f}" if gem else "      —"
-        note = " (trials; 256 copies)" if "FilterTuning" in env_id else ""
-        print(f"{env_id:28s} {single:15,.0f} {ratio} {vector:26,.0f}{note}")
+        dec1 = single if dec == 1 or trials else single_steps_per_second(env_id, seconds,
+                                                                         decimation=1)
+        n_vec = 256 if trials else 1024
+        vector = vector_steps_per_second(env_id, n_vec, seconds)
+        sim = single * dec * c.OUTER_DT
+
+        def ratio(x: float, g: float | None) -> str:
+            return f"{x / g:6.1f}" if g else "     —"
+
+        note = " (trials; 256 copies)" if trials else ""
+        print(f"{env_id:26s} {dec:3d} {single:14,.0f} {ratio(single, gem and gem[0])} "
+              f"{sim:8.1f} {ratio(sim, gem and gem[0] * gem[1])} {dec1:13,.0f} "
+              f"{ratio(dec1, gem and gem[0])} {vector:20,.0f} {vector * dec:15,.0f}{note}")
 
 
 if __name__ == "__main__":

@@ -37,9 +37,24 @@ from ..firmware import regs as R
 from .compiled import OBS_BOUND, all_finite
 from .noise import normals
 
-__all__ = ["MotorVectorEnv", "NumpyTaskEnv", "OBS_BOUND", "ERROR_BITS"]
+__all__ = ["MotorVectorEnv", "NumpyTaskEnv", "Column", "OBS_BOUND", "ERROR_BITS"]
 #: ERR_STAT bits that end an episode: I2T, FLW, FNC, UIT and position-limit errors (3.2.35)
 ERROR_BITS = c.I2T_ERR | c.FLW_ERR | c.FNC_ERR | c.UIT_ERR | c.PLIM_ERR
+
+
+class Column:
+    """A named (N,) view of column ``col`` of a task's per-copy state array ``table``
+    (the compiled steps keep a task's state in one (N, K) float64 array; survives pickling)."""
+
+    def __init__(self, table: str, col: int) -> None:
+        self.table = table
+        self.col = col
+
+    def __get__(self, obj: Any, objtype: Any = None) -> np.ndarray:
+        return getattr(obj, self.table)[:, self.col]
+
+    def __set__(self, obj: Any, value: Any) -> None:
+        getattr(obj, self.table)[:, self.col] = value
 
 
 def _seed_list(seed: int | Sequence[int | None] | None, n: int) -> list[int | None]:

@@ -6,14 +6,16 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 
 from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
-from ..kernel import run_serial
+from ..kernel import advance_motor
 from . import deposition as dep
-from .base import NumpyTaskEnv
+from .base import ERROR_BITS, Column, MotorVectorEnv
+from .compiled import PARALLEL_MIN, action, all_finite, end_step, put_obs
+from .deposition import flatness_row, lay_turn_row, profile_summary_row
 from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
 
@@ -23,68 +25,177 @@ _DT = c.OUTER_DT
 _GEARF2 = 10000
 _GROUPS = 8  #: groups of bins in the observed profile summary
 _V_TRAVERSE_NORM = 500.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 500 rpm in counts/sample
-_PARALLEL_MIN = 32  #: from this many copies the motor kernel runs multi-threaded (MotorArray)
+_N_FIXED_OBS = 5  #: observation components before the profile summary
+
+#: columns of the per-copy coil state
+(_C_D0, _C_D_MEAN, _C_D_VAR, _C_D_FREQ, _C_D_PHASE, _C_TIME, _C_SPINDLE_REV, _C_COUNT_ACC,
+ _C_PULSES, _C_FLOOR, _C_LAST_STD, _C_LAYER_VOID, _C_LAYER_PILES, _C_STEP_PENALTY, _C_GEAR0,
+ _C_HALF_D_COUNTS, _C_DIRECTION, _C_LAYER, _C_COLS) = range(19)
+#: entries of the per-env constants array
+(_NOISE, _MAX_STEPS, _DECIMATION, _T_CHANGE, _SPINDLE_CPR, _METRES_PER_RAD, _WIDTH, _NEST,
+ _PITCH_TRIM, _P4, _N_LAYERS, _VOID_W, _FLATNESS_W, _ERROR_PENALTY, _N_CONSTS) = range(15)
+
+
+@njit(cache=True, inline="always")
+def _lay_turn(i, x, t, h, centres, w, k):  # pragma: no cover - compiled
+    """Lay the turn of copy ``i`` at traverse position ``x`` [m] and time ``t`` [s]."""
+    d = w[i, _C_D_MEAN] * (1.0 + w[i, _C_D_VAR] * math.sin(
+        2.0 * math.pi * w[i, _C_D_FREQ] * t + w[i, _C_D_PHASE]))
+    base, void, _ = lay_turn_row(h[i], centres, x, d, k[_WIDTH], k[_NEST] > 0.5)
+    w[i, _C_LAYER_VOID] += void / (d * d)
+    if base > w[i, _C_FLOOR] + 0.5 * d:
+        w[i, _C_LAYER_PILES] += 1.0
+    w[i, _C_STEP_PENALTY] += k[_VOID_W] * void / (d * d)
+
+
+@njit(cache=True, inline="always")
+def _spindle_sample(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, prof, w, h,
+                    centres, k):  # pragma: no cover - compiled
+    """One outer sample of spindle and traverse of copy ``i``; a turn is laid when the
+    spindle completes a revolution, at the traverse position interpolated to that instant."""
+    v = row_speed(prof[i], w[i, _C_TIME], w[i, _C_SPINDLE_REV] * 2.0 * math.pi, k[_T_CHANGE])
+    acc = w[i, _C_COUNT_ACC] + v * k[_SPINDLE_CPR] * _DT
+    counts = math.floor(acc)
+    w[i, _C_COUNT_ACC] = acc - counts
+    w[i, _C_PULSES] += counts
+    inputs[i, L.I_PULSE_COUNTS] = counts
+    x0 = state[i, L.S_THETA] * k[_METRES_PER_RAD]
+    advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, 1)
+    rev0 = w[i, _C_SPINDLE_REV]
+    rev1 = rev0 + v * _DT
+    w[i, _C_SPINDLE_REV] = rev1
+    if math.floor(rev1) > math.floor(rev0):
+        frac = min(max((math.floor(rev0) + 1.0 - rev0) / max(v * _DT, 1e-12), 0.0), 1.0)
+        x1 = state[i, L.S_THETA] * k[_METRES_PER_RAD]
+        _lay_turn(i, x0 + frac * (x1 - x0), w[i, _C_TIME] + frac * _DT, h, centres, w, k)
+    w[i, _C_TIME] += _DT
+
+
+@njit(cache=True, inline="always")
+def _track_layer(i, state, w, h):  # pragma: no cover - compiled
+    """A reversal of the COIL block closes a layer: its flatness is booked and scored."""
+    direction = state[i, L.S_AUX1]
+    if direction == 0.0:
+        return 0.0
+    flipped = direction != w[i, _C_DIRECTION]
+    w[i, _C_DIRECTION] = direction
+    if not flipped:
+        return 0.0
+    std, _, _ = flatness_row(h[i], w[i, _C_D0])
+    w[i, _C_LAST_STD] = std
+    w[i, _C_FLOOR] = h[i].mean()
+    w[i, _C_LAYER] += 1.0
+    w[i, _C_LAYER_VOID] = 0.0
+    w[i, _C_LAYER_PILES] = 0.0
+    return std
+
+
+@njit(cache=True, inline="always")
+def _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary,
+                 obs):  # pragma: no cover - compiled
+    """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
+    key = noise_key[i]
+    noise = k[_NOISE]
+    x = state[i, L.S_THETA] * k[_METRES_PER_RAD]
+    spindle_norm = 2000.0 / 60.0 * k[_SPINDLE_CPR] * _DT
+    put_obs(obs, i, 0, 2.0 * x / k[_WIDTH] - 1.0, key, t[i], noise)
+    put_obs(obs, i, 1, regs[i, R.V_IST] / _V_TRAVERSE_NORM, key, t[i], noise)
+    put_obs(obs, i, 2, w[i, _C_PULSES] / k[_DECIMATION] / spindle_norm, key, t[i], noise)
+    put_obs(obs, i, 3, w[i, _C_LAYER] / k[_N_LAYERS], key, t[i], noise)
+    put_obs(obs, i, 4, w[i, _C_DIRECTION], key, t[i], noise)
+    profile_summary_row(h[i], _GROUPS, w[i, _C_D0], summary[i])
+    for g in range(_GROUPS):
+        put_obs(obs, i, _N_FIXED_OBS + g, summary[i, g], key, t[i], noise)
+    j = _N_FIXED_OBS + _GROUPS
+    put_obs(obs, i, j, w[i, _C_LAST_STD], key, t[i], noise)
+    put_obs(obs, i, j + 1, w[i, _C_LAYER_VOID] / 5.0, key, t[i], noise)
+    put_obs(obs, i, j + 2, w[i, _C_LAYER_PILES] / 5.0, key, t[i], noise)
+    for a in range(prev.shape[1]):
+        put_obs(obs, i, j + 3 + a, prev[i, a], key, t[i], noise)
 
 
 @njit(cache=True)
-def _spindle_pre(inputs, state, prof, t_change, time, spindle_rev, count_acc, pulses,
-                 counts_per_rev, metres_per_rad, x0, rps):  # pragma: no cover - compiled
-    """Before an outer sample: spindle speed and pulses, traverse position."""
-    for i in range(inputs.shape[0]):
-        v = row_speed(prof[i], time[i], spindle_rev[i] * 2.0 * math.pi, t_change)
-        rps[i] = v
-        acc = count_acc[i] + v * counts_per_rev * _DT
-        counts = math.floor(acc)
-        count_acc[i] = acc - counts
-        pulses[i] += counts
-        inputs[i, L.I_PULSE_COUNTS] = counts
-        x0[i] = state[i, L.S_THETA] * metres_per_rad
+def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+               noise_key, k, prof, w, h, centres, summary, obs, reward, term,
+               trunc):  # pragma: no cover - compiled
+    """One env step of copy ``i``: pitch and dwell trims, ``decimation`` samples of spindle,
+    traverse and deposition, layer bookkeeping, reward, termination, observation."""
+    a0 = action(actions, i, 0)
+    a1 = action(actions, i, 1)
+    a2 = action(actions, i, 2)
+    half = w[i, _C_HALF_D_COUNTS]
+    regs[i, R.GEARF1] = round(w[i, _C_GEAR0] * (1.0 + k[_PITCH_TRIM] * a0) * _GEARF2)
+    regs[i, R.P2] = round((1.0 + a1) * half)
+    regs[i, R.P3] = int(k[_P4]) - round((1.0 + a2) * half)
+    w[i, _C_PULSES] = 0.0
+    w[i, _C_STEP_PENALTY] = 0.0
+    for _ in range(int(k[_DECIMATION])):
+        _spindle_sample(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, prof, w, h,
+                        centres, k)
+    w[i, _C_STEP_PENALTY] += k[_FLATNESS_W] * _track_layer(i, state, w, h)
+    t[i] += 1
+    error = (regs[i, R.ERR_STAT] & ERROR_BITS) != 0
+    reward[i] = -w[i, _C_STEP_PENALTY] - (k[_ERROR_PENALTY] if error else 0.0)
+    end_step(i, error or w[i, _C_LAYER] >= k[_N_LAYERS], t, int(k[_MAX_STEPS]), term, trunc)
+    prev[i, 0] = a0
+    prev[i, 1] = a1
+    prev[i, 2] = a2
+    _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary, obs)
 
 
 @njit(cache=True)
-def _spindle_post(state, k, time, spindle_rev, metres_per_rad, x0, rps, turn_x,
-                  turn_t):  # pragma: no cover - compiled
-    """After outer sample ``k``: record where a turn is laid when a revolution completes.
+def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+                  noise_key, k, prof, w, h, centres, summary, obs, reward, term,
+                  trunc):  # pragma: no cover - compiled
+    if not all_finite(actions):
+        return False
+    for i in range(regs.shape[0]):
+        _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+                   noise_key, k, prof, w, h, centres, summary, obs, reward, term, trunc)
+    return True
 
-    A turn is laid when the spindle completes a revolution; its position is the traverse
-    position interpolated to that instant. ``turn_x[i, k]`` / ``turn_t[i, k]`` get its
-    position and time (NaN when none).
-    """
-    for i in range(state.shape[0]):
-        rev0 = spindle_rev[i]
-        rev1 = rev0 + rps[i] * _DT
-        spindle_rev[i] = rev1
-        turn_x[i, k] = math.nan
-        turn_t[i, k] = math.nan
-        if math.floor(rev1) > math.floor(rev0):
-            frac = min(max((math.floor(rev0) + 1.0 - rev0) / max(rps[i] * _DT, 1e-12), 0.0),
-                       1.0)
-            x1 = state[i, L.S_THETA] * metres_per_rad
-            turn_x[i, k] = x0[i] + frac * (x1 - x0[i])
-            turn_t[i, k] = time[i] + frac * _DT
-        time[i] += _DT
+
+@njit(cache=True, parallel=True)
+def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+                    noise_key, k, prof, w, h, centres, summary, obs, reward, term,
+                    trunc):  # pragma: no cover - compiled
+    if not all_finite(actions):
+        return False
+    for i in prange(regs.shape[0]):
+        _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
+                   noise_key, k, prof, w, h, centres, summary, obs, reward, term, trunc)
+    return True
 
 
 @njit(cache=True)
-def _advance_spindle_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, decimation,
-                            prof, t_change, time, spindle_rev, count_acc, pulses,
-                            counts_per_rev, metres_per_rad, turn_x,
-                            turn_t):  # pragma: no cover - compiled
-    """``decimation`` outer samples of spindle and motor in one compiled call (few copies;
-    see ``gear_sync._advance_line_serial`` for why the parallel kernel is not called here)."""
-    n = regs.shape[0]
-    x0 = np.empty(n)
-    rps = np.empty(n)
-    for k in range(decimation):
-        _spindle_pre(inputs, state, prof, t_change, time, spindle_rev, count_acc, pulses,
-                     counts_per_rev, metres_per_rad, x0, rps)
-        run_serial(regs, state, params, inputs, keys, buf, rec, fmt, 1, plan)
-        _spindle_post(state, k, time, spindle_rev, metres_per_rad, x0, rps, turn_x, turn_t)
+def _observe_rows(idx, regs, state, prev, t, noise_key, w, h, k, summary,
+                  obs):  # pragma: no cover - compiled
+    for i in idx:
+        _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary, obs)
 
 
-class CoilWindingVectorEnv(NumpyTaskEnv):
+class CoilWindingVectorEnv(MotorVectorEnv):
     """Vector version of :class:`CoilWindingEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
+
+    d0 = Column("coil", _C_D0)  #: nominal wire diameter [m]
+    d_mean = Column("coil", _C_D_MEAN)  #: true mean wire diameter [m]
+    d_var = Column("coil", _C_D_VAR)  #: relative amplitude of the diameter variation
+    d_freq = Column("coil", _C_D_FREQ)  #: frequency of the diameter variation [Hz]
+    d_phase = Column("coil", _C_D_PHASE)  #: phase of the diameter variation [rad]
+    time = Column("coil", _C_TIME)  #: episode time [s]
+    spindle_rev = Column("coil", _C_SPINDLE_REV)  #: spindle revolutions
+    count_acc = Column("coil", _C_COUNT_ACC)  #: fractional spindle counts
+    pulses = Column("coil", _C_PULSES)  #: spindle counts in the last step
+    floor = Column("coil", _C_FLOOR)  #: mean height at the last reversal [m]
+    last_std = Column("coil", _C_LAST_STD)  #: flatness (std / d0) at the last reversal
+    layer_void = Column("coil", _C_LAYER_VOID)  #: voids of this layer [wire cross-sections]
+    layer_piles = Column("coil", _C_LAYER_PILES)  #: pile-up turns of this layer
+    step_penalty = Column("coil", _C_STEP_PENALTY)  #: penalty of the last step
+    gear0 = Column("coil", _C_GEAR0)  #: nominal gear factor
+    half_d_counts = Column("coil", _C_HALF_D_COUNTS)  #: d0/2 in traverse counts
+    direction = Column("coil", _C_DIRECTION)  #: direction of the COIL block (±1)
+    layer = Column("coil", _C_LAYER)  #: layers completed
 
     obs_labels = ("traverse_position", "traverse_speed", "spindle_speed", "layer",
                   "direction", *(f"profile_{k}" for k in range(_GROUPS)), "last_flatness",
@@ -134,15 +245,17 @@ class CoilWindingVectorEnv(NumpyTaskEnv):
         n = self.num_envs
         self.profile = SpeedProfile(n)
         self.h = np.zeros((n, self.centres.size))
-        for name in ("d0", "d_mean", "d_var", "d_freq", "d_phase", "time", "spindle_rev",
-                     "count_acc", "pulses", "floor", "last_std", "layer_void", "step_penalty",
-                     "gear0", "half_d_counts", "direction"):
-            setattr(self, name, np.zeros(n))
-        self.layer = np.zeros(n, dtype=np.int64)
-        self.layer_piles = np.zeros(n)
+        self.coil = np.zeros((n, _C_COLS))
         self.p4 = int(round(self.coil_width * self._counts_per_m))
-        self._turn_x = np.zeros((n, self.decimation))
-        self._turn_t = np.zeros((n, self.decimation))
+        self._summary = np.zeros((n, _GROUPS))
+        self._k = np.zeros(_N_CONSTS)  # constants of the compiled step
+        self._k[[_NOISE, _MAX_STEPS, _DECIMATION, _T_CHANGE, _SPINDLE_CPR, _METRES_PER_RAD,
+                 _WIDTH, _NEST, _PITCH_TRIM, _P4, _N_LAYERS, _VOID_W, _FLATNESS_W,
+                 _ERROR_PENALTY]] = (
+            self.obs_noise, self.max_episode_steps, self.decimation, self.profile.t_change,
+            self.spindle_counts_per_rev, self.screw_pitch / (2 * math.pi), self.coil_width,
+            float(self.nest), self.pitch_trim, self.p4, self.n_layers, self.void_weight,
+            self.flatness_weight, self.error_penalty)
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
@@ -151,6 +264,8 @@ class CoilWindingVectorEnv(NumpyTaskEnv):
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
         d0 = draws["wire_diameter"]
+        self.coil[idx] = 0.0
+        self.h[idx] = 0.0
         self.d0[idx] = d0
         self.d_mean[idx] = d0 * (1.0 + draws["diameter_bias"])
         self.d_var[idx] = draws["diameter_variation"]
@@ -160,11 +275,6 @@ class CoilWindingVectorEnv(NumpyTaskEnv):
         self.profile.reset(idx, rngs, draws["spindle_rpm"] / 60.0, draws["ramp_time"],
                            draws["speed_step"], draws["step_time"], draws["walk"],
                            np.zeros(idx.size))
-        for name in ("time", "spindle_rev", "count_acc", "pulses", "floor", "last_std",
-                     "layer_void", "layer_piles", "step_penalty"):
-            getattr(self, name)[idx] = 0.0
-        self.h[idx] = 0.0
-        self.layer[idx] = 0
         self.direction[idx] = 1.0
         # nominal registers from d0: the traverse advances d0 per spindle revolution
         gear = d0 * self._counts_per_m / self.spindle_counts_per_rev
@@ -184,11 +294,16 @@ class CoilWindingVectorEnv(NumpyTaskEnv):
         m.write("P6", 1, index=idx)
         m.write("MODE_REG", c.COIL_MODE, index=idx)
 
-    def _apply_action(self, action: np.ndarray) -> None:
-        r = self.motors.regs
-        r[:, R.GEARF1] = np.round(self.gear0 * (1.0 + self.pitch_trim * action[:, 0]) * _GEARF2)
-        r[:, R.P2] = np.round((1.0 + action[:, 1]) * self.half_d_counts)
-        r[:, R.P3] = self.p4 - np.round((1.0 + action[:, 2]) * self.half_d_counts)
+    def _step_copies(self, actions: np.ndarray) -> bool:
+        run = _steps_parallel if self.num_envs >= PARALLEL_MIN else _steps_serial
+        return run(*self.motors.kernel_arrays(), actions, self._prev_action, self._t,
+                   self._noise_key, self._k, self.profile.params, self.coil, self.h,
+                   self.centres, self._summary, self._obs, self._reward, self._terminated,
+                   self._truncated)
+
+    def _observe_copies(self, idx: np.ndarray) -> None:
+        _observe_rows(idx, self.motors.regs, self.motors.state, self._prev_action, self._t,
+                      self._noise_key, self.coil, self.h, self._k, self._summary, self._obs)
 
     def traverse_position(self) -> np.ndarray:
         """Traverse position from the lower flange [m], (N,)."""
@@ -202,75 +317,9 @@ class CoilWindingVectorEnv(NumpyTaskEnv):
         return self.d_mean[sel] * (1.0 + self.d_var[sel] * np.sin(
             2 * np.pi * self.d_freq[sel] * t + self.d_phase[sel]))
 
-    def _advance(self) -> None:
-        m = self.motors
-        self.pulses[:] = 0.0
-        self.step_penalty[:] = 0.0
-        prof, tc = self.profile.params, self.profile.t_change
-        cpr, mpr = float(self.spindle_counts_per_rev), self.screw_pitch / (2 * math.pi)
-        if self.num_envs < _PARALLEL_MIN:
-            _advance_spindle_serial(m.regs, m.state, m.params, m.inputs, m.keys, m._buf,
-                                    m._buf_allocated, m._fmt, m._no_schedule, self.decimation,
-                                    prof, tc, self.time, self.spindle_rev, self.count_acc,
-                                    self.pulses, cpr, mpr, self._turn_x, self._turn_t)
-        else:
-            x0 = np.empty(self.num_envs)
-            rps = np.empty(self.num_envs)
-            for k in range(self.decimation):
-                _spindle_pre(m.inputs, m.state, prof, tc, self.time, self.spindle_rev,
-                             self.count_acc, self.pulses, cpr, mpr, x0, rps)
-                m.step(1)
-                _spindle_post(m.state, k, self.time, self.spindle_rev, mpr, x0, rps,
-                              self._turn_x, self._turn_t)
-        for k in range(self.decimation):  # turns in the order they were laid
-            idx = np.flatnonzero(~np.isnan(self._turn_x[:, k]))
-            if idx.size:
-                self._lay(idx, self._turn_x[idx, k], self._turn_t[idx, k])
-        self._track_layers()
-
-    def _lay(self, idx: np.ndarray, x: np.ndarray, t: np.ndarray) -> None:
-        d = self.wire_diameter(t, idx)
-        base, void, _ = dep.lay_turns(self.h, self.centres, idx, x, d, self.coil_width,
-                                      nest=self.nest)
-        self.layer_void[idx] += void / (d * d)
-        self.layer_piles[idx] += base > self.floor[idx] + 0.5 * d
-        self.step_penalty[idx] += self.void_weight * void / (d * d)
-
-    def _track_layers(self) -> None:
-        direction = self.motors.state[:, L.S_AUX1]
-        flipped = (direction != self.direction) & (direction != 0.0)
-        self.direction[:] = np.where(direction != 0.0, direction, self.direction)
-        if flipped.any():
-            idx = np.flatnonzero(flipped)
-            std, _, _ = dep.layer_flatness(self.h, idx, self.d0[idx])
-            self.last_std[idx] = std
-            self.step_penalty[idx] += self.flatness_weight * std
-            self.floor[idx] = self.h[idx].mean(axis=1)
-            self.layer[idx] += 1
-            self.layer_void[idx] = 0.0
-            self.layer_piles[idx] = 0.0
-
-    def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        error = self.error_bits() != 0
-        reward = -self.step_penalty - self.error_penalty * error
-        return reward, error | (self.layer >= self.n_layers)
-
-    def _observe(self) -> np.ndarray:
-        r = self.motors.regs
-        x = self.traverse_position()
-        spindle_norm = 2000.0 / 60.0 * self.spindle_counts_per_rev * _DT
-        return np.concatenate([
-            np.stack([2.0 * x / self.coil_width - 1.0, r[:, R.V_IST] / _V_TRAVERSE_NORM,
-                      self.pulses / self.decimation / spindle_norm,
-                      self.layer / self.n_layers, self.direction], axis=1),
-            dep.profile_summary(self.h, _GROUPS, self.d0),
-            np.stack([self.last_std, self.layer_void / 5.0, self.layer_piles / 5.0], axis=1),
-            self._prev_action,
-        ], axis=1)
-
     def _scope_values(self) -> np.ndarray:
         return np.stack([self.traverse_position() * 1e3, self.pulses / self.decimation / _DT
-                         / self.spindle_counts_per_rev * 60.0, self.layer.astype(float),
+                         / self.spindle_counts_per_rev * 60.0, self.layer,
                          self.last_std], axis=1)
 
 

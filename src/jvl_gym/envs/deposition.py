@@ -1,4 +1,4 @@
-"""Wire deposition on a coil: the layer height profile across the coil width (pure numpy).
+"""Wire deposition on a coil: the layer height profile across the coil width.
 
 The coil width ``[0, W]`` between the flanges is cut into bins of width δ (finer than the wire
 diameter). A turn of diameter ``d`` laid at traverse position ``x`` occupies the bins under
@@ -14,14 +14,20 @@ slides sideways into the lowest place within ``±d/2`` of where the traverse lay
 base, ties to the nearest), so a slightly wrong pitch shifts turns along the layer until the
 accumulated offset exceeds half a diameter — then the turn climbs onto its neighbour.
 
-All functions work on the rows ``idx`` of (N, B) arrays, vectorised.
+The ``*_row`` functions work on one coil's profile (compiled: the CoilWinding env step calls
+them); :func:`lay_turns`, :func:`profile_summary` and :func:`layer_flatness` apply them to rows
+of an (N, B) array.
 """
 
 from __future__ import annotations
 
-import numpy as np
+import math
 
-__all__ = ["bin_centres", "lay_turns", "profile_summary", "layer_flatness"]
+import numpy as np
+from numba import njit
+
+__all__ = ["bin_centres", "lay_turn_row", "profile_summary_row", "flatness_row", "lay_turns",
+           "profile_summary", "layer_flatness"]
 
 
 def bin_centres(width: float, bin_width: float) -> np.ndarray:
@@ -30,29 +36,39 @@ def bin_centres(width: float, bin_width: float) -> np.ndarray:
     return (np.arange(n) + 0.5) * bin_width
 
 
-def _footprint(centres: np.ndarray, xc: np.ndarray, half: np.ndarray) -> np.ndarray:
-    fp = np.abs(centres[None, :] - xc[:, None]) < half[:, None]
-    empty = ~fp.any(axis=1)
-    if empty.any():  # a turn always covers at least its nearest bin
-        nearest = np.argmin(np.abs(centres[None, :] - xc[empty, None]), axis=1)
-        fp[np.flatnonzero(empty), nearest] = True
-    return fp
+@njit(cache=True, inline="always")
+def _span(centres: np.ndarray, xc: float, half: float) -> tuple[int, int]:  # pragma: no cover
+    """Bins ``[lo, hi)`` whose centre lies within ``half`` of ``xc``; the nearest bin if none."""
+    lo = np.searchsorted(centres, xc - half, side="right")
+    hi = np.searchsorted(centres, xc + half, side="left")
+    if lo < hi:
+        return lo, hi
+    k = np.searchsorted(centres, xc)
+    if k >= centres.size or (k > 0 and xc - centres[k - 1] <= centres[k] - xc):
+        k -= 1
+    return k, k + 1
 
 
-def lay_turns(h: np.ndarray, centres: np.ndarray, idx: np.ndarray, x: np.ndarray,
-              d: np.ndarray, width: float, nest: bool = False
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Lay one turn in each row ``idx`` of the height profile ``h`` (modified in place).
+@njit(cache=True, inline="always")
+def _top(h: np.ndarray, lo: int, hi: int) -> float:  # pragma: no cover - compiled
+    top = -math.inf
+    for b in range(lo, hi):
+        top = max(top, h[b])
+    return top
+
+
+@njit(cache=True)
+def lay_turn_row(h: np.ndarray, centres: np.ndarray, x: float, d: float, width: float,
+                 nest: bool) -> tuple[float, float, float]:  # pragma: no cover - compiled
+    """Lay one turn on the profile ``h`` (B,) (modified in place).
 
     Parameters
     ----------
-    h : (N, B) array
+    h : (B,) array
         Height of the wound surface over each bin [same unit as x].
     centres : (B,) array
-        Bin centres.
-    idx : (k,) int array
-        Rows receiving a turn.
-    x, d : (k,) arrays
+        Bin centres (uniform, :func:`bin_centres`).
+    x, d : float
         Turn centre (traverse position) and wire diameter.
     width : float
         Coil width W (flange to flange).
@@ -61,53 +77,92 @@ def lay_turns(h: np.ndarray, centres: np.ndarray, idx: np.ndarray, x: np.ndarray
 
     Returns
     -------
-    base : (k,) array
+    base : float
         Height the turn rests on.
-    void : (k,) array
+    void : float
         Void area trapped under the turn (gap) [unit²].
-    x_laid : (k,) array
-        Centre where the turn was laid (after the flanges).
+    x_laid : float
+        Centre where the turn was laid (after the flanges and nesting).
     """
     bin_width = centres[1] - centres[0] if centres.size > 1 else width
     half = 0.5 * d
-    xc = np.clip(x, half, width - half)
-    rows = h[idx]
+    xc = min(max(x, half), width - half)
     if nest:
-        k_max = int(np.ceil(np.max(half) / bin_width))
-        best = np.full(xc.shape, np.inf)
-        best_x = xc.copy()
-        for k in sorted(range(-k_max, k_max + 1), key=abs):
+        k_max = int(math.ceil(half / bin_width))
+        best = math.inf
+        best_x = xc
+        for j in range(2 * k_max + 1):  # shifts 0, −1, +1, −2, +2, …: ties to the nearest
+            k = (j + 1) // 2 * (1 if j % 2 == 0 else -1)
             shift = k * bin_width
-            ok = np.abs(shift) <= half + 1e-12
-            cand = np.clip(xc + shift, half, width - half)
-            b = np.max(np.where(_footprint(centres, cand, half), rows, -np.inf), axis=1)
-            better = ok & (b < best - 1e-9 * d)
-            best = np.where(better, b, best)
-            best_x = np.where(better, cand, best_x)
+            if abs(shift) > half + 1e-12:
+                continue
+            cand = min(max(xc + shift, half), width - half)
+            lo, hi = _span(centres, cand, half)
+            b = _top(h, lo, hi)
+            if b < best - 1e-9 * d:
+                best = b
+                best_x = cand
         xc = best_x
-    fp = _footprint(centres, xc, half)
-    base = np.max(np.where(fp, rows, -np.inf), axis=1)
-    void = np.sum(np.where(fp, base[:, None] - rows, 0.0), axis=1) * bin_width
-    h[idx] = np.where(fp, (base + d)[:, None], rows)
-    return base, void, xc
+    lo, hi = _span(centres, xc, half)
+    base = _top(h, lo, hi)
+    void = 0.0
+    for b in range(lo, hi):
+        void += base - h[b]
+        h[b] = base + d
+    return base, void * bin_width, xc
+
+
+@njit(cache=True)
+def profile_summary_row(h: np.ndarray, groups: int, scale: float,
+                        out: np.ndarray) -> None:  # pragma: no cover - compiled
+    """``out[k]``: mean height of group ``k`` of ``groups`` equal groups of bins minus the
+    overall mean, divided by ``scale``."""
+    n = h.size
+    mean = h.mean()
+    step = n / groups
+    for k in range(groups):
+        lo = int(k * step)
+        hi = int((k + 1) * step) if k + 1 < groups else n
+        out[k] = (h[lo:hi].mean() - mean) / scale
+
+
+@njit(cache=True)
+def flatness_row(h: np.ndarray, d: float) -> tuple[float, float, float]:  # pragma: no cover
+    """Flatness of a profile: std of the height / d, and the fractions of the width more than
+    d/2 below (gaps) and above (pile-up) the mean height."""
+    mean = h.mean()
+    var = 0.0
+    gaps = 0
+    piles = 0
+    for b in range(h.size):
+        dev = h[b] - mean
+        var += dev * dev
+        gaps += dev < -0.5 * d
+        piles += dev > 0.5 * d
+    return math.sqrt(var / h.size) / d, gaps / h.size, piles / h.size
+
+
+def lay_turns(h: np.ndarray, centres: np.ndarray, idx: np.ndarray, x: np.ndarray,
+              d: np.ndarray, width: float, nest: bool = False
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Lay one turn in each row ``idx`` of the (N, B) profile ``h``: :func:`lay_turn_row` per
+    row, returning (k,) arrays of ``base``, ``void`` and ``x_laid``."""
+    out = np.array([lay_turn_row(h[i], centres, float(xi), float(di), float(width), bool(nest))
+                    for i, xi, di in zip(idx, x, d)]).reshape(-1, 3)
+    return out[:, 0], out[:, 1], out[:, 2]
 
 
 def profile_summary(h: np.ndarray, groups: int, scale: np.ndarray) -> np.ndarray:
-    """Deviation of the mean height of ``groups`` equal groups of bins from the overall mean,
-    divided by ``scale`` (N,), shape (N, groups)."""
-    n, b = h.shape
-    edges = np.linspace(0, b, groups + 1).astype(int)
-    means = np.add.reduceat(h, edges[:-1], axis=1) / np.diff(edges)[None, :]
-    return (means - h.mean(axis=1, keepdims=True)) / scale[:, None]
+    """:func:`profile_summary_row` of every row of ``h`` (N, B), shape (N, groups)."""
+    out = np.empty((h.shape[0], groups))
+    for i in range(h.shape[0]):
+        profile_summary_row(h[i], groups, float(scale[i]), out[i])
+    return out
 
 
 def layer_flatness(h: np.ndarray, idx: np.ndarray, d: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Flatness of rows ``idx``: std of the height / d, and the fractions of the width more
-    than d/2 below (gaps) and above (pile-up) the mean height."""
-    rows = h[idx]
-    mean = rows.mean(axis=1, keepdims=True)
-    std = rows.std(axis=1) / d
-    gaps = np.mean(rows < mean - 0.5 * d[:, None], axis=1)
-    piles = np.mean(rows > mean + 0.5 * d[:, None], axis=1)
-    return std, gaps, piles
+    """:func:`flatness_row` of rows ``idx``: (k,) arrays of std / d, gap and pile-up
+    fractions."""
+    out = np.array([flatness_row(h[i], float(di)) for i, di in zip(idx, d)]).reshape(-1, 3)
+    return out[:, 0], out[:, 1], out[:, 2]

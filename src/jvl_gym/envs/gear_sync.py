@@ -12,7 +12,7 @@ from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
 from ..kernel import advance_motor
-from .base import ERROR_BITS, MotorVectorEnv
+from .base import ERROR_BITS, Column, MotorVectorEnv
 from .compiled import PARALLEL_MIN, action, all_finite, end_step, normal, put_obs
 from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
@@ -142,40 +142,27 @@ def _observe_rows(idx, regs, prev, t, noise_key, w, k, obs):  # pragma: no cover
         _observe_row(i, regs, prev, t, noise_key, w, k, obs)
 
 
-class _LineColumn:
-    """A named (N,) view of one column of ``GearSyncVectorEnv.line`` (survives pickling)."""
-
-    def __init__(self, col: int) -> None:
-        self.col = col
-
-    def __get__(self, obj: Any, objtype: Any = None) -> np.ndarray:
-        return obj.line[:, self.col]
-
-    def __set__(self, obj: Any, value: Any) -> None:
-        obj.line[:, self.col] = value
-
-
 class GearSyncVectorEnv(MotorVectorEnv):
     """Vector version of :class:`GearSyncEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
 
-    ea = _LineColumn(_W_EA)  #: E·A [N]
-    thickness = _LineColumn(_W_THICK)  #: web thickness [m]
-    r0 = _LineColumn(_W_R0)  #: core radius [m]
-    span = _LineColumn(_W_SPAN)  #: span length [m]
-    tension_ref = _LineColumn(_W_REF)  #: reference tension [N]
-    strain = _LineColumn(_W_STRAIN)
-    wound = _LineColumn(_W_WOUND)  #: web wound [m]
-    radius = _LineColumn(_W_RADIUS)  #: winder radius [m]
-    force = _LineColumn(_W_FORCE)  #: web tension [N]
-    measured = _LineColumn(_W_MEASURED)  #: load-cell reading without noise [N]
-    master_theta = _LineColumn(_W_MTHETA)  #: master roll angle [rad]
-    time = _LineColumn(_W_TIME)  #: episode time [s]
-    count_acc = _LineColumn(_W_ACC)  #: fractional master counts
-    prev_measured = _LineColumn(_W_PREV_MEASURED)
-    pulses = _LineColumn(_W_PULSES)  #: master counts in the last step
-    error_integral = _LineColumn(_W_INTEGRAL)  #: leaky tension-error integral [s]
-    slack_count = _LineColumn(_W_SLACK)  #: outer samples the web has been slack
+    ea = Column("line", _W_EA)  #: E·A [N]
+    thickness = Column("line", _W_THICK)  #: web thickness [m]
+    r0 = Column("line", _W_R0)  #: core radius [m]
+    span = Column("line", _W_SPAN)  #: span length [m]
+    tension_ref = Column("line", _W_REF)  #: reference tension [N]
+    strain = Column("line", _W_STRAIN)
+    wound = Column("line", _W_WOUND)  #: web wound [m]
+    radius = Column("line", _W_RADIUS)  #: winder radius [m]
+    force = Column("line", _W_FORCE)  #: web tension [N]
+    measured = Column("line", _W_MEASURED)  #: load-cell reading without noise [N]
+    master_theta = Column("line", _W_MTHETA)  #: master roll angle [rad]
+    time = Column("line", _W_TIME)  #: episode time [s]
+    count_acc = Column("line", _W_ACC)  #: fractional master counts
+    prev_measured = Column("line", _W_PREV_MEASURED)
+    pulses = Column("line", _W_PULSES)  #: master counts in the last step
+    error_integral = Column("line", _W_INTEGRAL)  #: leaky tension-error integral [s]
+    slack_count = Column("line", _W_SLACK)  #: outer samples the web has been slack
 
     obs_labels = ("tension_error", "tension_rate", "tension_error_integral", "master_speed",
                   "motor_speed", "flwerr", "fncerr", "previous_action")
