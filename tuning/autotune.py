@@ -8,8 +8,9 @@ Procedure on a motor (a ``MotorArray`` here; a real motor through the same regis
 2. Current loop from the identified coil (:func:`tuning.synthesis.design_current_loop`),
    quantised and written, so TESTA runs on the designed current loop.
 3. TESTA pilot (11 samples, small T_SOLL, raised until the motor moves) → a rough inertia;
-   then the two-level procedure: TESTA at T₁ and T₂ = T₁/2, ``n_mech`` samples each
-   → J, KVOUT, b, T_c (:func:`tuning.identify_mechanics.identify_mechanics`).
+   then the two-level procedure: TESTA at T₁ and T₂ = T₁/2, ``n_mech`` samples each, the pair
+   repeated ``repeats`` (4) times → J, KVOUT, b, T_c with intervals from the spread between
+   the repetitions (:func:`tuning.identify_mechanics.identify_mechanics`).
 4. Speed loop for the identified J (:func:`tuning.synthesis.design_speed_loop`), quantisation
    (:func:`tuning.quantize.quantize_registers`) and verification (:mod:`tuning.verify`).
 """
@@ -37,12 +38,14 @@ from .synthesis import (
 )
 from .verify import CurrentLoopReport, SpeedLoopReport, verify_current_loop, verify_speed_loop
 
-__all__ = ["RECOMMENDED_COIL_SAMPLES", "RECOMMENDED_MECH_SAMPLES", "Identification",
+__all__ = ["RECOMMENDED_COIL_SAMPLES", "RECOMMENDED_MECH_SAMPLES", "RECOMMENDED_TESTA_REPEATS",
+           "Identification",
            "Design", "identify_motors", "synthesize", "verify_design", "CURRENT_KEYS",
            "SPEED_KEYS"]
 
 RECOMMENDED_COIL_SAMPLES: int = 64  #: TESTU samples (8.2 ms ≈ 8 coil time constants)
 RECOMMENDED_MECH_SAMPLES: int = 64  #: TESTA samples per level (123 ms)
+RECOMMENDED_TESTA_REPEATS: int = 4  #: repetitions of the two-level TESTA pair (8 records)
 CURRENT_KEYS = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
 SPEED_KEYS = ("KFF3", "KFF2", "KFF1", "KFF0", "GEARB", "KVB3", "KVB2", "KVB1", "KVB0",
               "KVFX4", "KVFX3", "KVFX2", "KVFX1", "KVFY3", "KVFY2", "KVFY1", "KVFY0", "KVOUT")
@@ -81,8 +84,8 @@ class Design:
 
 def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,
                     n_mech: int = RECOMMENDED_MECH_SAMPLES, umeas: int = 100,
-                    final_speed_counts: float = 120.0, progress: Progress = _quiet
-                    ) -> list[Identification]:
+                    final_speed_counts: float = 120.0, progress: Progress = _quiet,
+                    repeats: int = RECOMMENDED_TESTA_REPEATS) -> list[Identification]:
     """Run the identification procedure (module docstring, steps 1–3) on every motor of ``m``.
 
     Parameters
@@ -98,6 +101,9 @@ def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,
         (120 = 916 rpm; the back-EMF's effect on the current loop is modelled).
     progress : callable
         Receives one line of text per stage.
+    repeats : int
+        K, how often the two TESTA levels are recorded; K ≥ 2 gives honest 95 % intervals from
+        the spread between the repetitions (:func:`tuning.identify_mechanics.identify_mechanics`).
     """
     base = [MotorData.from_config(cfg, amplitude=float(m.read("AMPLITUDE")[i]))
             for i, cfg in enumerate(m.motor_configs)]
@@ -137,11 +143,18 @@ def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,
     recs_hi = _adaptive_testa(m, t_hi, n_mech, final_speed_counts)
     t_lo = np.array([max(2.0, round(r.input[0] / 2)) for r in recs_hi])
     recs_lo = _adaptive_testa(m, t_lo, n_mech, final_speed_counts / 2)
+    pairs = [list(zip(recs_hi, recs_lo))]
+    t_hi = np.array([r.input[0] for r in recs_hi])
+    if repeats > 1:
+        progress(f"TESTA: {repeats - 1} more repetitions of the two levels")
+    for _ in range(repeats - 1):
+        pairs.append(list(zip(acquire_testa(m, t_hi, n_mech), acquire_testa(m, t_lo, n_mech))))
     out = []
     for i, md in enumerate(motors):
-        mech = identify_mechanics([recs_hi[i], recs_lo[i]], md, current_regs=cur_regs[i],
+        mech_recs = [r for rep in pairs for r in rep[i]]
+        mech = identify_mechanics(mech_recs, md, current_regs=cur_regs[i],
                                   phase_comp=float(phase_comp[i]))
-        out.append(Identification(md, coils[i], mech, [coil_recs[i], recs_hi[i], recs_lo[i]]))
+        out.append(Identification(md, coils[i], mech, [coil_recs[i], *mech_recs]))
     progress("identification done")
     return out
 
@@ -175,7 +188,7 @@ def synthesize(motor: MotorData, J_total: float, coulomb: float = 0.0,
     """
     cur = design_current_loop(motor, current_bandwidth_hz, gains=current_gains)
     spd = design_speed_loop(motor, cur.registers, J_total, speed_bandwidth_hz, structure,
-                            gains=speed_gains)
+                            gains=speed_gains, coulomb=coulomb)
     ideal = {**cur.registers, **spd.registers}
     regs = quantize_registers(ideal)
     crep = verify_current_loop(motor, regs, robust)

@@ -12,8 +12,14 @@ except for ±1 count) is, with β = b/J and α = (K_vf·T_SOLL − T_c)/J,
 
 One torque level cannot separate J from T_c (only α is observable): the *two-level procedure*
 records TESTA at T₁ and T₂ ≈ T₁/2 and fits J, T_c, b, δ and one offset C per record jointly
-(``scipy.optimize.least_squares``); 95 % intervals from ``s²(JᵀJ)⁻¹`` (Student t). With
-``coulomb=False`` (friction known to be negligible) a single record suffices.
+(``scipy.optimize.least_squares``). With ``coulomb=False`` (friction known to be negligible) a
+single record suffices.
+
+Intervals: the residuals are dominated by model error the electrical model leaves out (current
+and commutation quantisation, which the current noise dithers), strongly correlated within a
+record, so ``s²(JᵀJ)⁻¹`` is far too narrow. The recommended procedure repeats the two levels
+K = 4 times; each set is fitted alone and the interval comes from the spread between the sets
+(batch means, Student t with K − 1 degrees of freedom).
 """
 
 from __future__ import annotations
@@ -28,9 +34,13 @@ from scipy import optimize, stats
 
 from .identify_coil import correlation_inflation, residual_check
 from .models import COUNTS_PER_RAD, INNER_PER_OUTER, TS_I, TS_O, MotorData
-from .records import Record, RecordError, validate
+from .records import Record, RecordError, record_registers, validate
 
-__all__ = ["MechanicsEstimate", "identify_mechanics", "position_model", "two_level_torques"]
+__all__ = ["MechanicsEstimate", "identify_mechanics", "position_model", "two_level_torques",
+           "electrical_position", "repeat_sets"]
+
+
+_CURRENT_KEYS = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
 
 
 @dataclass
@@ -55,6 +65,12 @@ class MechanicsEstimate:
         NRMSE fit of V_IST [%] over all records (the fitted position differenced).
     residual : dict
         Residual check of the position fit (see :func:`tuning.identify_coil.residual_check`).
+    n_samples : int
+        Samples used.
+    repeats : int
+        K, the number of repeated sets the estimate averages (1: one fit).
+    J_repeats : list of float
+        J [kg·m²] of each repeated set (K > 1).
     """
 
     J: float
@@ -67,6 +83,8 @@ class MechanicsEstimate:
     residual: dict[str, float]
     n_samples: int
     fitted_velocity: list[np.ndarray] = field(default_factory=list, repr=False)
+    repeats: int = 1
+    J_repeats: list[float] = field(default_factory=list)
 
 
 def position_model(t: np.ndarray, alpha: float, beta: float, delay: float) -> np.ndarray:
@@ -106,7 +124,7 @@ def electrical_position(n: int, t_soll: float, J: float, b: float, tc: float,
     m_prev = 0j
     e1 = 0j
     u1 = u2 = 0j
-    pend = [0j] * (d + 1)
+    pend = [0j] * d  # the PWM values computed d samples earlier (d = 0: the present one)
     theta = omega = 0.0
     out = np.empty(n)
     for k in range(n):
@@ -119,7 +137,7 @@ def electrical_position(n: int, t_soll: float, J: float, b: float, tc: float,
             u = x2 * e + x1 * e1 + y1 * u1 + y0 * u2
             e1, u2, u1, m_prev = e, u1, u, meas
             pend.append(u)
-            ua = pend.pop(0) if d else pend.pop()
+            ua = pend.pop(0)
             th_mid = th_e + 0.5 * pp * omega * h
             emf = pp * omega * lam * cmath.exp(1j * th_mid)
             s_new = a * s + (1.0 - a) / R * (k_u * ua - emf)
@@ -145,14 +163,19 @@ def two_level_torques(J_guess: float, motor: MotorData, n_samples: int,
 def identify_mechanics(records: Record | Sequence[Record], motor: MotorData | str,
                        coulomb: bool = True, viscous: bool = True,
                        current_regs: Mapping[str, float] | None = None,
-                       phase_comp: float = 0.0) -> MechanicsEstimate:
+                       phase_comp: float | None = None) -> MechanicsEstimate:
     """Estimate J, KVOUT, viscous and Coulomb friction from TESTA records.
 
     Parameters
     ----------
     records : Record or sequence of Record
         TESTA records from rest. With ``coulomb=True`` at least two different T_SOLL levels
-        are required (the two-level procedure).
+        are required (the two-level procedure). When every level was recorded K ≥ 2 times
+        (the recommended procedure, :func:`repeat_sets`), each of the K sets is fitted on its
+        own and the result is their mean with the 95 % interval ``t(K−1)·sd/√K`` from the
+        spread between the sets (batch means). With one record per level the interval is the
+        single fit's ``s²(JᵀJ)⁻¹`` × a correlation inflation, which is too narrow on
+        records whose residuals are dominated by model error (docs/tuning.md).
     motor : MotorData or str
         Motor type: K_vf and J_m (KVOUT = J/J_m).
     coulomb, viscous : bool
@@ -163,9 +186,13 @@ def identify_mechanics(records: Record | Sequence[Record], motor: MotorData | st
         current loop's response to the back-EMF: at speed the per-phase loops lag and the torque
         falls below K_vf·T_SOLL (by 5–20 % at a few hundred rpm for an unloaded motor), which
         the rigid model would read as a larger inertia. ``motor`` must then carry the
-        (identified) R, L, delay and the AMPLITUDE in use.
-    phase_comp : float
-        PHASE_COMP register (3.2.126) in use, for the electrical model.
+        (identified) R, L, delay and the AMPLITUDE in use. Default: the registers the records
+        carry (``meta["registers"]``, written by :func:`tuning.records.acquire_testa` and kept
+        by the CSV files, :func:`tuning.records.record_registers`); the records' AMPLITUDE then
+        replaces ``motor.amplitude``. Records without them get the rigid model.
+    phase_comp : float, optional
+        PHASE_COMP register (3.2.126) in use, for the electrical model; default: the records'
+        PHASE_COMP, else 0.
 
     Returns
     -------
@@ -182,6 +209,65 @@ def identify_mechanics(records: Record | Sequence[Record], motor: MotorData | st
         if r.kind != "TESTA":
             raise RecordError(f"identify_mechanics needs TESTA records, got {r.kind}")
     md = motor if isinstance(motor, MotorData) else MotorData.from_config(motor)
+    carried = record_registers(recs) or {}
+    if current_regs is None and all(k in carried for k in _CURRENT_KEYS):
+        current_regs = {k: carried[k] for k in _CURRENT_KEYS}
+        if "AMPLITUDE" in carried:
+            md = md.with_(amplitude=carried["AMPLITUDE"])
+    if phase_comp is None:
+        phase_comp = carried.get("PHASE_COMP", 0.0)
+    sets = repeat_sets(recs)
+    if len(sets) < 2:
+        return _identify_set(recs, md, coulomb, viscous, current_regs, phase_comp)
+    ests = [_identify_set([recs[i] for i in idx], md, coulomb, viscous, current_regs,
+                          phase_comp) for idx in sets]
+    return _combine(ests, sets, len(recs), md)
+
+
+def repeat_sets(recs: Sequence[Record]) -> list[list[int]]:
+    """Indices of the repeated sets in ``recs``: the k-th record of every T_SOLL level.
+
+    K = the smallest number of records at any level; records beyond K at a level are left out.
+    One set (all records) when some level has a single record.
+    """
+    by_level: dict[float, list[int]] = {}
+    for i, r in enumerate(recs):
+        by_level.setdefault(float(np.median(r.input)), []).append(i)
+    k = min(len(v) for v in by_level.values())
+    if k < 2:
+        return [list(range(len(recs)))]
+    return [sorted(v[j] for v in by_level.values()) for j in range(k)]
+
+
+def _combine(ests: list[MechanicsEstimate], sets: list[list[int]], n_recs: int,
+             md: MotorData) -> MechanicsEstimate:
+    """Batch means over K repeated sets: value = mean, 95 % interval = t(K−1)·sd/√K."""
+    k = len(ests)
+    tq = float(stats.t.ppf(0.975, k - 1))
+    vals = {nm: np.array([getattr(e, nm) for e in ests])
+            for nm in ("J", "viscous", "coulomb", "delay")}
+    mean = {nm: float(v.mean()) for nm, v in vals.items()}
+    ci = {}
+    for nm in ("J", "viscous", "coulomb"):
+        h = tq * float(vals[nm].std(ddof=1)) / math.sqrt(k)
+        ci[nm] = (mean[nm] - h, mean[nm] + h)
+    ci["kvout"] = (ci["J"][0] / md.J_m, ci["J"][1] / md.J_m)
+    fitted: list[np.ndarray] = [np.zeros(0)] * n_recs
+    for e, idx in zip(ests, sets):
+        for i, fv in zip(idx, e.fitted_velocity):
+            fitted[i] = fv
+    return MechanicsEstimate(J=mean["J"], kvout=mean["J"] / md.J_m, viscous=mean["viscous"],
+                             coulomb=mean["coulomb"], delay=mean["delay"], ci=ci,
+                             nrmse_fit=float(np.mean([e.nrmse_fit for e in ests])),
+                             residual=ests[0].residual,
+                             n_samples=sum(e.n_samples for e in ests), fitted_velocity=fitted,
+                             repeats=k, J_repeats=[float(x) for x in vals["J"]])
+
+
+def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: bool,
+                  current_regs: Mapping[str, float] | None, phase_comp: float
+                  ) -> MechanicsEstimate:
+    """One least-squares fit of J, T_c, b over ``recs`` (rigid start, electrical refinement)."""
     levels = sorted({float(np.median(r.input)) for r in recs})
     if coulomb and len(levels) < 2:
         raise RecordError(

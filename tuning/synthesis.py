@@ -53,6 +53,7 @@ __all__ = [
     "speed_registers",
     "torque_guidance",
     "rigid_gain",
+    "friction_dead_band",
 ]
 
 
@@ -95,6 +96,7 @@ class SpeedDesign:
     robust_pm_deg: float
     structure: str
     notes: list[str] = field(default_factory=list)
+    kii: float = 0.0
 
 
 # ----------------------------------------------------------------------------- current loop
@@ -208,7 +210,7 @@ def rigid_gain(motor: MotorData) -> float:
 
 
 def speed_registers(kp: float, ki: float, kvout: float, structure: str = "ip",
-                    setpoint_weight: float = 0.0) -> dict[str, float]:
+                    setpoint_weight: float = 0.0, kii: float = 0.0) -> dict[str, float]:
     """FF, VB (with GEARB = 16), VF and KVOUT registers of a PI / I-P speed loop.
 
     Parameters
@@ -221,6 +223,9 @@ def speed_registers(kp: float, ki: float, kvout: float, structure: str = "ip",
         Where the proportional part acts (module docstring).
     setpoint_weight : float
         β of the I-P structure: FF = 1 + β·(kp/ki)(1 − z⁻¹).
+    kii : float
+        Position-integral gain (``"pi"`` only): VF = kp + ki/(1 − z⁻¹) + kii/(1 − z⁻¹)²
+        (KVFX4 = kp + ki + kii, KVFX3 = −2kp − ki, KVFX2 = kp, KVFY3 = 2, KVFY2 = −1).
     """
     regs = {"KFF3": 1.0, "KFF2": 0.0, "KFF1": 0.0, "KFF0": 0.0, "GEARB": 16.0,
             "KVB3": 1.0, "KVB2": 0.0, "KVB1": 0.0, "KVB0": 0.0,
@@ -232,6 +237,9 @@ def speed_registers(kp: float, ki: float, kvout: float, structure: str = "ip",
                      "KFF3": 1.0 + setpoint_weight * c, "KFF2": -setpoint_weight * c})
     elif structure != "pi":
         raise ValueError(f"structure must be 'ip' or 'pi', got {structure!r}")
+    elif kii > 0.0:
+        regs.update({"KVFX4": kp + ki + kii, "KVFX3": -2.0 * kp - ki, "KVFX2": kp,
+                     "KVFY3": 2.0, "KVFY2": -1.0})
     return regs
 
 
@@ -254,7 +262,8 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
                       setpoint_weight: float = 0.0, pm_min: float = 50.0, gm_min: float = 10.0,
                       robust_pm_min: float = 35.0,
                       robust_gains: tuple[float, ...] = (0.5, 2.0),
-                      gains: tuple[float, float] | None = None) -> SpeedDesign:
+                      gains: tuple[float, float] | None = None, coulomb: float = 0.0,
+                      position_window: int = 10) -> SpeedDesign:
     """Design FF, VB, VF and KVOUT for a target loop bandwidth.
 
     Parameters
@@ -277,6 +286,12 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
         (1/11, 2) so that KVOUT = 1 stays usable for any load up to 10·J_m.
     gains : (float, float), optional
         Fixed normalised (kp, ki) instead of the search.
+    coulomb : float
+        Identified Coulomb friction [N·m]. When the PI loop's friction dead band
+        (:func:`friction_dead_band`) exceeds half of ``position_window``, a position integral
+        is added (``"pi"`` structure): the largest that keeps the acceptance margins.
+    position_window : int
+        In-position window the moves must settle in [counts] (INPOSWIN, 3.2.33).
 
     Returns
     -------
@@ -332,10 +347,57 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
                          f"within the margins; got {best[4].bandwidth_hz:.1f} Hz")
     kpn, kin, kp, ki, m, rpm = best
     kvout = J_total / motor.J_m
+    kii = 0.0
+    if coulomb > 0.0 and structure == "pi":
+        band = friction_dead_band(motor, coulomb, kvout, ki)
+        if band > 0.5 * position_window:
+            kii, m, rpm = _position_integral(pn, pd, pw, rl, z, w, kp, ki, kpl16, robust_gains,
+                                             m, rpm)
+            notes.append(f"friction dead band {band:.0f} counts > half the {position_window}-"
+                         f"count window: position integral KVFX sum {kii:.5f}"
+                         if kii > 0 else f"friction dead band {band:.0f} counts; no position "
+                         "integral meets the margins")
     if not 1.0 <= kvout <= 10.0:
         notes.append(f"KVOUT = {kvout:.2f} is outside the manual's recommended 1..10 (3.2.13)")
-    regs = speed_registers(kp, ki, kvout, structure, setpoint_weight)
-    return SpeedDesign(regs, kp, ki, float(kpn), float(kin), m, rpm, structure, notes)
+    regs = speed_registers(kp, ki, kvout, structure, setpoint_weight, kii)
+    return SpeedDesign(regs, kp, ki, float(kpn), float(kin), m, rpm, structure, notes, kii)
+
+
+def friction_dead_band(motor: MotorData, coulomb: float, kvout: float, ki: float) -> float:
+    """Half-width [counts] of the positions where a PI speed loop holds a motor with Coulomb
+    friction ``coulomb`` [N·m] at rest: VF_OUT = KVOUT·16·ki·(P_SOLL − P_IST) (the VF integral
+    of the velocity error is the position error) must exceed T_c/K_vf to move it."""
+    stiff = kvout * 16.0 * ki * motor.torque_per_vf  # N·m per count of position error
+    return coulomb / stiff if stiff > 0 else math.inf
+
+
+def _position_integral(pn: np.ndarray, pd: np.ndarray, pw: np.ndarray, rl: list[np.ndarray],
+                       z: np.ndarray, w: np.ndarray, kp: float, ki: float, kpl16: float,
+                       robust_gains: tuple[float, ...], m0: LoopMetrics, rpm0: float,
+                       pm_min: float = 45.0, gm_min: float = 10.0, robust_pm_min: float = 30.0
+                       ) -> tuple[float, LoopMetrics, float]:
+    """The largest position-integral gain kii (VF = kp + ki/(1−z⁻¹) + kii/(1−z⁻¹)²) that keeps
+    the acceptance margins (PM ≥ 45°, GM ≥ 10 dB, robust PM ≥ 30°, stable at the largest
+    robust gain); (0, m0, rpm0) if none does. The integral removes the friction dead band of
+    the PD position loop; with static = Coulomb friction PID positioning converges (no
+    hunting limit cycle, Bisoffi et al., IEEE TAC 2018)."""
+    best = (0.0, m0, rpm0)
+    for frac in np.geomspace(1e-3, 0.2, 24):
+        kii = float(frac * ki)
+        cw = 16.0 * (kp + ki * z / (z - 1.0) + kii * z**2 / (z - 1.0) ** 2)
+        lw = cw * pw
+        cnum = 16.0 * np.array([kp + ki + kii, -2.0 * kp - ki, kp])
+        dd = np.polymul([1.0, -2.0, 1.0], pd)
+        m = metrics_from_response(lw, w, np.polyadd(dd, np.polymul(cnum, pn)))
+        if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
+            break
+        rpm = min(metrics_from_response(lw * g, w).pm_deg for g in robust_gains)
+        rpm = min([rpm] + [metrics_from_response(cw * prl, w).pm_deg for prl in rl])
+        char2 = np.polyadd(dd, max(robust_gains) * np.polymul(cnum, pn))
+        if rpm < robust_pm_min or np.max(np.abs(np.roots(char2))) >= 0.999:
+            break
+        best = (kii, m, rpm)
+    return best
 
 
 # ----------------------------------------------------------------------------- T_SOLL
