@@ -272,7 +272,7 @@ class MotorArray:
                 raise ValueError(f"{name}: values must be >= 0, got {val!r}")
             if name in _POSITIVE and np.any(arr <= 0):
                 raise ValueError(f"{name}: values must be > 0, got {val!r}")
-            if name in ("pwm_delay_samples", "hall_start") and not np.all(np.isin(arr, (0, 1))):
+            if name in ("pwm_delay_samples", "hall_start") and not np.all(M.member(arr, (0, 1))):
                 raise ValueError(f"{name} must be 0 or 1, got {val!r}")
             out[name] = np.broadcast_to(arr, (size,)).copy()
         return out
@@ -318,7 +318,7 @@ class MotorArray:
         self.regs[idx, R.U_SUPPLY] = np.round(s[idx, L.S_UBUS] / c.U_SUPPLY_VOLTS_PER_UNIT)
         self._latched_cntrl[idx] = self.regs[idx, R.CNTRL_BITS]
         home = self.regs[idx, R.HOME_MODE] & 0xFF
-        start = np.where(np.isin(home, (12, 13, 14)), home, self.regs[idx, R.STARTMODE])
+        start = np.where(M.member(home, (12, 13, 14)), home, self.regs[idx, R.STARTMODE])
         go = idx[(start > 0) & (start < 25)]
         if go.size:
             req = start[(start > 0) & (start < 25)]
@@ -477,7 +477,7 @@ class MotorArray:
         if np.any(special):
             self._safe_special(idx[special], req[special])
         normal = ~special
-        if np.any(np.isin(req[normal], (c.TESTU_MODE, c.TESTA_MODE, c.TESTKI_MODE,
+        if np.any(M.member(req[normal], (c.TESTU_MODE, c.TESTA_MODE, c.TESTKI_MODE,
                                          c.TESTTQ_MODE))):
             self._ensure_buffer()
         M.apply_requests(self.regs, self.state, idx[normal], req[normal])
@@ -506,7 +506,7 @@ class MotorArray:
                          and r.number != R.MODE_REG and r.format != Format.LONGINT_HIGH])
 
     def _indices_in(self, idx: np.ndarray, modes: tuple[int, ...], what: str) -> None:
-        bad = idx[~np.isin(self.regs[idx, R.MODE_REG], modes)]
+        bad = idx[~M.member(self.regs[idx, R.MODE_REG], modes)]
         if bad.size:
             names = " or ".join(c.MODE_NAMES[m] for m in modes)
             raise ModeError(f"{what} needs {names} (manual 4.4.16); motor {int(bad[0])} is in "

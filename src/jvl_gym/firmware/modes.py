@@ -46,6 +46,21 @@ IMPLEMENTED = _table(set(range(25)))
 PASSIVE = _table({0, 15, 8, 22})  #: current regulator passive (equal / test voltages)
 GEAR_MODES = _table({3, 6, 18, 19, 24})  #: modes that divide by GEARF2
 
+
+def member(x: np.ndarray, values: tuple[int, ...] | np.ndarray) -> np.ndarray:
+    """Elementwise ``x ∈ values`` for a few values (np.isin costs ~30 µs on tiny arrays; this
+    runs in every reset and mode write)."""
+    out = np.zeros(np.shape(x), dtype=np.bool_)
+    for v in values:
+        out |= x == v
+    return out
+
+
+def in_table(x: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """Elementwise membership of mode numbers ``x`` in a mode table (False outside it)."""
+    x = np.asarray(x)
+    return table[np.clip(x, 0, table.size - 1)] & (x >= 0) & (x < table.size)
+
 # request outcome codes (mode_request); 0 = accepted
 OK = 0
 E_NOT_IMPLEMENTED = 1

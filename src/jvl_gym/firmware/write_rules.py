@@ -15,7 +15,7 @@ import numpy as np
 
 from .. import constants as c
 from . import regs as R
-from .modes import GEAR_MODES
+from .modes import GEAR_MODES, in_table, member
 
 POINTERS = {
     R.P_REG_P: (R.P1, 2, R.P_SOLL),
@@ -44,7 +44,7 @@ def coil_violation(p: np.ndarray) -> str | None:
 
 def check_mode_request(regs: np.ndarray, idx: np.ndarray, req: np.ndarray) -> str | None:
     """Refuse gear modes with GEARF2 = 0 and COIL_MODE with broken P1..P6 rules."""
-    gear = np.isin(req, np.flatnonzero(GEAR_MODES)) & (regs[idx, R.GEARF2] == 0)
+    gear = in_table(req, GEAR_MODES) & (regs[idx, R.GEARF2] == 0)
     if np.any(gear):
         return "GEARF2 = 0 is not a usable gear denominator (manual 3.2.15)"
     coil = req == c.COIL_MODE
@@ -56,7 +56,7 @@ def check_mode_request(regs: np.ndarray, idx: np.ndarray, req: np.ndarray) -> st
 def check_write(regs: np.ndarray, idx: np.ndarray, num: int, raw: np.ndarray) -> str | None:
     """Message if writing ``raw`` to register ``num`` of motors ``idx`` must be refused."""
     modes = regs[idx, R.MODE_REG]
-    if num == R.GEARF2 and np.any((raw == 0) & np.isin(modes, np.flatnonzero(GEAR_MODES))):
+    if num == R.GEARF2 and np.any((raw == 0) & in_table(modes, GEAR_MODES)):
         return "GEARF2 = 0 is not a usable gear denominator in a gear mode (manual 3.2.15)"
     if num in COIL_REGS and np.any(modes == c.COIL_MODE):
         sel = modes == c.COIL_MODE
@@ -65,7 +65,7 @@ def check_write(regs: np.ndarray, idx: np.ndarray, num: int, raw: np.ndarray) ->
         return coil_violation(p)
     if num == R.HOME_MODE:
         lo, hi = raw & 0xFF, raw >> 8
-        if not (np.all(np.isin(lo, _LEGAL_HOME)) and np.all(np.isin(hi, _LEGAL_HOME))):
+        if not (np.all(member(lo, _LEGAL_HOME)) and np.all(member(hi, _LEGAL_HOME))):
             return "HOME_MODE bytes must be 0, 12, 13 or 14 (manual 3.2.42)"
     if num == R.P_REG_P:
         sel = raw > 0
