@@ -89,3 +89,31 @@ def test_default_setups_are_the_toolkit_output(motor):
     from jvl_gym.config import configs_dir
 
     assert (configs_dir() / "setups" / f"{motor}.yaml").read_text() == render_setup(motor)
+
+
+def test_friction_dead_band_gets_a_position_integral_that_settles_the_move():
+    # motor 3 of the benchmark (seed 0): MAC095, load 0.34 J_m, T_c 1.4 % of peak torque. The
+    # PI speed loop is a PD position loop: T_c holds it 36 counts off target (window 10).
+    from tuning.synthesis import friction_dead_band
+    from tuning.verify import position_move
+
+    from jvl_gym import MotorArray
+
+    md = MotorData.from_config("MAC095", amplitude=0.828125)
+    J, tc, b = 1.3359 * md.J_m, 0.009546, 5.86e-7
+    plain = synthesize(md, J, 0.0, structure="pi")
+    fric = synthesize(md, J, tc, structure="pi")
+    assert plain.registers["KVFY3"] == 1.0
+    ki = plain.speed.ki
+    assert friction_dead_band(md, tc, J / md.J_m, ki) > 5
+    assert fric.registers["KVFY3"] == 2.0 and fric.registers["KVFY2"] == -1.0
+    assert fric.speed.kii > 0
+    assert verify_design(fric) == []
+    m = MotorArray("MAC095", n=2, seed=1, load_inertia=J - md.J_m, coulomb_friction=tc,
+                   viscous_friction=b, current_noise=2.0, position_noise=0.85)
+    m.load_setup({"registers": plain.registers}, index=[0])
+    m.load_setup({"registers": fric.registers}, index=[1])
+    mv = position_move(m, 20000, 2000, 86, seconds=2.0)
+    assert mv.settle_s[0] == np.inf  # PI: stuck outside the window
+    assert mv.settle_s[1] < 1.0  # with the position integral
+    assert np.abs(mv.position[-100:, 1] - mv.position[0, 1] - 20000).max() <= 10

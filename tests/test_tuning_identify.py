@@ -131,3 +131,28 @@ def test_identify_from_csv_gives_the_in_memory_inertia(tmp_path):
         r.meta.pop("registers")
     rigid = identify_mechanics(recs, coil.motor(MD))
     assert abs(rigid.J / ident.mechanics.J - 1) > 1e-3
+
+
+def test_repeated_two_level_sets_give_intervals_from_their_spread():
+    from scipy import stats
+
+    inside, widths = [], []
+    for seed in range(20):
+        rng = np.random.default_rng(100 + seed)
+        J = MD.J_m * (1 + rng.uniform(0, 10))
+        tc, b = rng.uniform(0, 0.02), rng.uniform(0, 1e-5)
+        t1, t2 = two_level_torques(J, MD, 64)
+        t1 += int(tc / MD.torque_per_vf)
+        t2 += int(tc / MD.torque_per_vf)
+        recs = [simulate_testa(MD, J, t, 64, b, tc, position_noise=0.85, rng=rng)
+                for _ in range(4) for t in (t1, t2)]
+        est = identify_mechanics(recs, MD)
+        assert est.repeats == 4 and len(est.J_repeats) == 4
+        assert est.J == pytest.approx(np.mean(est.J_repeats))
+        h = stats.t.ppf(0.975, 3) * np.std(est.J_repeats, ddof=1) / 2
+        assert est.ci["J"] == pytest.approx((est.J - h, est.J + h))
+        assert est.ci["kvout"][1] == pytest.approx(est.ci["J"][1] / MD.J_m)
+        inside.append(est.ci["J"][0] <= J <= est.ci["J"][1])
+        widths.append(h / est.J)
+    assert np.mean(inside) >= 0.85
+    assert np.median(widths) < 0.02
