@@ -64,6 +64,13 @@ def text_table(ident: Identification | None, design: Design,
         lines.append(f"TESTU fit {c.nrmse_fit:.2f} % NRMSE, residual white: "
                      f"{c.residual['white']} (Box-Pierce p = {c.residual['box_pierce_p']:.2f}); "
                      f"TESTA fit {m.nrmse_fit:.2f} %, residual white: {m.residual['white']}")
+        if m.repeats > 1:
+            lines.append(f"TESTA intervals: spread of {m.repeats} repeated two-level sets "
+                         "(Student t, K-1 dof); J of each set: "
+                         + ", ".join(f"{j:.5g}" for j in m.J_repeats))
+        else:
+            lines.append("TESTA intervals: one fit (statistical only, too narrow under model "
+                         "error; record the two levels repeatedly)")
         lines.append("")
     cr, sr = design.current_report, design.speed_report
     lines += ["Loop verification (quantised registers)",
