@@ -104,6 +104,8 @@ def synthesize_cmd(motor: str = typer.Option(...), inertia: float = typer.Option
         current_bw: float = typer.Option(None, help="current-loop bandwidth [Hz]"),
         speed_bw: float = typer.Option(None, help="speed-loop bandwidth [Hz]"),
         structure: str = typer.Option("ip", help="ip or pi"),
+        coulomb: float = typer.Option(0.0, help="identified Coulomb friction [N m] (pi: adds a "
+                                      "position integral when its dead band exceeds 5 counts)"),
         out: Path = typer.Option(Path("setup.yaml"))) -> None:
     """Design and quantise all filters for given motor data; write a setup YAML."""
     md = MotorData.from_config(motor)
@@ -111,7 +113,7 @@ def synthesize_cmd(motor: str = typer.Option(...), inertia: float = typer.Option
         md = md.with_(R_phase=resistance)
     if inductance:
         md = md.with_(L_phase=inductance)
-    d = synthesize(md, inertia, 0.0, current_bw, speed_bw, structure)
+    d = synthesize(md, inertia, coulomb, current_bw, speed_bw, structure)
     _write_setup(out, motor, d.registers, "jvl-tune synthesize")
     typer.echo(text_table(None, d))
     bad = verify_design(d)
