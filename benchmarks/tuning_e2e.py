@@ -5,7 +5,12 @@ runs the toolkit's identification on a ``MotorArray`` (TESTU + two-level TESTA),
 and verifies the filters, then runs the same position move with the default setup (KVOUT = 1)
 and with the autotuned setup, and prints one table row per motor.
 
-    python benchmarks/tuning_e2e.py [N] [SEED]
+    python benchmarks/tuning_e2e.py [N] [SEED] [pi|ip]
+    python benchmarks/tuning_e2e.py coverage [N] [SEED] [REPEATS] [SAMPLES]
+
+``coverage`` runs the identification only and prints, per identified quantity, how often the
+95 % interval holds the true value, the largest and rms relative error and the median
+half-width (docs/tuning.md, "Measured numbers").
 """
 
 from __future__ import annotations
@@ -93,6 +98,40 @@ def run_e2e(n: int = 20, seed: int = 0, distance: int = 20000, v_soll: int = 200
     return rows
 
 
+def run_coverage(n: int = 40, seed: int = 7, repeats: int = 4, samples: int = 64
+                 ) -> dict[str, dict[str, float]]:
+    """Interval coverage of the identification on ``n`` random motors.
+
+    Returns, for "R", "L", "J", "coulomb", "viscous": "coverage" (fraction of motors whose
+    95 % interval holds the true value), "max_err" and "rms_err" (relative), "median_hw"
+    (median half-width relative to the estimate) and "median_hw_abs" (SI units).
+    """
+    p = draw_motors(n, seed)
+    ids = identify_motors(_array(p, seed), samples, samples, repeats=repeats)
+    rows: dict[str, list[tuple[bool, float, float, float]]] = {
+        k: [] for k in ("R", "L", "J", "coulomb", "viscous")}
+    for i, idn in enumerate(ids):
+        true = MotorData.from_config(p["type"][i])
+        c, mc = idn.coil, idn.mechanics
+        cases = (("R", c.R_phase, c.ci["R_phase"], true.R_phase),
+                 ("L", c.L_phase, c.ci["L_phase"], true.L_phase),
+                 ("J", mc.J, mc.ci["J"], p["J_m"][i] * (1 + p["ratio"][i])),
+                 ("coulomb", mc.coulomb, mc.ci["coulomb"], p["coulomb"][i]),
+                 ("viscous", mc.viscous, mc.ci["viscous"], p["viscous"][i]))
+        for key, val, ci, tv in cases:
+            hw = (ci[1] - ci[0]) / 2
+            rows[key].append((ci[0] <= tv <= ci[1], val / tv - 1, hw / abs(val), hw))
+    out = {}
+    for key, r in rows.items():
+        a = np.array(r, dtype=float)
+        out[key] = {"coverage": float(a[:, 0].mean()),
+                    "max_err": float(np.max(np.abs(a[:, 1]))),
+                    "rms_err": float(np.sqrt(np.mean(a[:, 1] ** 2))),
+                    "median_hw": float(np.median(a[:, 2])),
+                    "median_hw_abs": float(np.median(a[:, 3]))}
+    return out
+
+
 def print_table(rows: list[dict[str, float]]) -> None:
     """Print the per-motor table and the summary against the acceptance items."""
     hdr = (f"{'#':>2} {'type':<6} {'Jl/Jm':>5} {'dR%':>6} {'dL%':>6} {'dJ%':>6} {'CI R/L/J':>8} "
@@ -121,7 +160,15 @@ def print_table(rows: list[dict[str, float]]) -> None:
           f"error bits (tuned) {sum(r['err_tuned'] != 0 for r in rows)}")
 
 
-if __name__ == "__main__":
+if __name__ == "__main__" and len(sys.argv) > 1 and sys.argv[1] == "coverage":
+    a = [int(x) for x in sys.argv[2:]] + [40, 7, 4, 64][len(sys.argv) - 2:]
+    t0 = time.time()
+    for key, v in run_coverage(*a[:4]).items():
+        print(f"{key:<8} coverage {100 * v['coverage']:5.1f} %  "
+              f"max |err| {100 * v['max_err']:7.2f} %  rms {100 * v['rms_err']:7.2f} %  "
+              f"median half-width {100 * v['median_hw']:6.2f} % ({v['median_hw_abs']:.3g})")
+    print(f"({a[0]} motors, seed {a[1]}, {a[2]} repeats, {a[3]} samples; {time.time() - t0:.1f} s)")
+elif __name__ == "__main__":
     n = int(sys.argv[1]) if len(sys.argv) > 1 else 20
     seed = int(sys.argv[2]) if len(sys.argv) > 2 else 0
     structure = sys.argv[3] if len(sys.argv) > 3 else "pi"
