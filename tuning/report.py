@@ -107,10 +107,14 @@ def plot_fits(ident: Identification, path: str | os.PathLike[str]) -> Path:
     ax[0].plot(k, ident.coil.fitted[0], "-", label=f"model, d = {ident.coil.delay}")
     ax[0].set(xlabel="inner sample (128 us)", ylabel="ADC counts", title="TESTU fit")
     ax[0].legend()
+    seen: set[float] = set()
     for rec, fv in zip(ident.records[1:], ident.mechanics.fitted_velocity):
         kk = np.arange(rec.n)
-        ax[1].plot(kk, rec.output, "o", ms=3, label=f"V_IST, T_SOLL {rec.input[0]:.0f}")
-        ax[1].plot(kk, fv, "-")
+        first = rec.input[0] not in seen  # repetitions of a level: unlabelled, lighter
+        seen.add(rec.input[0])
+        ax[1].plot(kk, rec.output, "o", ms=3, alpha=1.0 if first else 0.3,
+                   label=f"V_IST, T_SOLL {rec.input[0]:.0f}" if first else None)
+        ax[1].plot(kk, fv, "-", alpha=1.0 if first else 0.3)
     ax[1].set(xlabel="outer sample (1.92 ms)", ylabel="counts/sample", title="TESTA fit")
     ax[1].legend()
     fig.tight_layout()
