@@ -26,11 +26,14 @@ _GEARF2 = 10000
 _GROUPS = 8  #: groups of bins in the observed profile summary
 _V_TRAVERSE_NORM = 500.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 500 rpm in counts/sample
 _N_FIXED_OBS = 5  #: observation components before the profile summary
+_TURN_EMA = 0.25  #: weight of the newest turn in the laid-pitch averages
+_TURN_OBS_SCALE = 10.0  #: laid pitch and gap (relative to d0) × 10 in the observation
 
 #: columns of the per-copy coil state
 (_C_D0, _C_D_MEAN, _C_D_VAR, _C_D_FREQ, _C_D_PHASE, _C_TIME, _C_SPINDLE_REV, _C_COUNT_ACC,
  _C_PULSES, _C_FLOOR, _C_LAST_STD, _C_LAYER_VOID, _C_LAYER_PILES, _C_STEP_PENALTY, _C_GEAR0,
- _C_HALF_D_COUNTS, _C_DIRECTION, _C_LAYER, _C_COLS) = range(19)
+ _C_HALF_D_COUNTS, _C_DIRECTION, _C_LAYER, _C_PREV_X, _C_LAID_PITCH, _C_LAID_GAP,
+ _C_LAID_SLIDE, _C_COLS) = range(23)
 #: entries of the per-env constants array
 (_NOISE, _MAX_STEPS, _DECIMATION, _T_CHANGE, _SPINDLE_CPR, _METRES_PER_RAD, _WIDTH, _NEST,
  _PITCH_TRIM, _P4, _N_LAYERS, _VOID_W, _FLATNESS_W, _ERROR_PENALTY, _N_CONSTS) = range(15)
@@ -41,7 +44,18 @@ def _lay_turn(i, x, t, h, centres, w, k):  # pragma: no cover - compiled
     """Lay the turn of copy ``i`` at traverse position ``x`` [m] and time ``t`` [s]."""
     d = w[i, _C_D_MEAN] * (1.0 + w[i, _C_D_VAR] * math.sin(
         2.0 * math.pi * w[i, _C_D_FREQ] * t + w[i, _C_D_PHASE]))
-    base, void, _ = lay_turn_row(h[i], centres, x, d, k[_WIDTH], k[_NEST] > 0.5)
+    base, void, x_laid = lay_turn_row(h[i], centres, x, d, k[_WIDTH], k[_NEST] > 0.5)
+    # what a camera at the laying point sees: the sideways slide of the new turn from the wire
+    # guide (pushed ahead by its neighbour when the wire is thicker than the pitch) and, for
+    # regular turns (spacing 0.5..1.5 d0 from the previous turn of the layer), the turn
+    # spacing and the gap between the two turns (spacing − d), averaged
+    d0 = w[i, _C_D0]
+    w[i, _C_LAID_SLIDE] = (x_laid - x) * w[i, _C_DIRECTION] / d0
+    spacing = abs(x_laid - w[i, _C_PREV_X]) / d0  # NaN for the first turn of a layer
+    if 0.5 < spacing < 1.5:
+        w[i, _C_LAID_PITCH] += _TURN_EMA * ((spacing - 1.0) - w[i, _C_LAID_PITCH])
+        w[i, _C_LAID_GAP] += _TURN_EMA * ((spacing - d / d0) - w[i, _C_LAID_GAP])
+    w[i, _C_PREV_X] = x_laid
     w[i, _C_LAYER_VOID] += void / (d * d)
     if base > w[i, _C_FLOOR] + 0.5 * d:
         w[i, _C_LAYER_PILES] += 1.0
@@ -87,6 +101,7 @@ def _track_layer(i, state, w, h):  # pragma: no cover - compiled
     w[i, _C_LAYER] += 1.0
     w[i, _C_LAYER_VOID] = 0.0
     w[i, _C_LAYER_PILES] = 0.0
+    w[i, _C_PREV_X] = math.nan
     return std
 
 
@@ -110,8 +125,11 @@ def _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary,
     put_obs(obs, i, j, w[i, _C_LAST_STD], key, t[i], noise)
     put_obs(obs, i, j + 1, w[i, _C_LAYER_VOID] / 5.0, key, t[i], noise)
     put_obs(obs, i, j + 2, w[i, _C_LAYER_PILES] / 5.0, key, t[i], noise)
+    put_obs(obs, i, j + 3, _TURN_OBS_SCALE * w[i, _C_LAID_PITCH], key, t[i], noise)
+    put_obs(obs, i, j + 4, _TURN_OBS_SCALE * w[i, _C_LAID_GAP], key, t[i], noise)
+    put_obs(obs, i, j + 5, 2.0 * w[i, _C_LAID_SLIDE], key, t[i], noise)
     for a in range(prev.shape[1]):
-        put_obs(obs, i, j + 3 + a, prev[i, a], key, t[i], noise)
+        put_obs(obs, i, j + 6 + a, prev[i, a], key, t[i], noise)
 
 
 @njit(cache=True)
@@ -196,11 +214,15 @@ class CoilWindingVectorEnv(MotorVectorEnv):
     half_d_counts = Column("coil", _C_HALF_D_COUNTS)  #: d0/2 in traverse counts
     direction = Column("coil", _C_DIRECTION)  #: direction of the COIL block (±1)
     layer = Column("coil", _C_LAYER)  #: layers completed
+    prev_x = Column("coil", _C_PREV_X)  #: where the previous turn of this layer lies [m]
+    laid_pitch = Column("coil", _C_LAID_PITCH)  #: average laid turn spacing / d0 − 1
+    laid_gap = Column("coil", _C_LAID_GAP)  #: average gap between laid turns / d0
+    laid_slide = Column("coil", _C_LAID_SLIDE)  #: slide of the last turn from the guide / d0
 
     obs_labels = ("traverse_position", "traverse_speed", "spindle_speed", "layer",
                   "direction", *(f"profile_{k}" for k in range(_GROUPS)), "last_flatness",
-                  "layer_voids", "layer_pileups", "previous_pitch_trim", "previous_p2_trim",
-                  "previous_p3_trim")
+                  "layer_voids", "layer_pileups", "laid_pitch", "laid_gap", "laid_slide",
+                  "previous_pitch_trim", "previous_p2_trim", "previous_p3_trim")
     act_labels = ("pitch_trim", "p2_trim", "p3_trim")
     default_ranges = {
         "wire_diameter": (0.4e-3, 0.6e-3),  # nominal d0 [m]
@@ -276,6 +298,7 @@ class CoilWindingVectorEnv(MotorVectorEnv):
                            draws["speed_step"], draws["step_time"], draws["walk"],
                            np.zeros(idx.size))
         self.direction[idx] = 1.0
+        self.prev_x[idx] = np.nan
         # nominal registers from d0: the traverse advances d0 per spindle revolution
         gear = d0 * self._counts_per_m / self.spindle_counts_per_rev
         self.gear0[idx] = gear
@@ -344,11 +367,22 @@ class CoilWindingEnv(MotorEnv):
     the registers every step.
 
     ## Observation Space
-    ``Box(-5, 5, (19,), float32)``: traverse position (−1..1 across the width), traverse speed
+    ``Box(-5, 5, (22,), float32)``: traverse position (−1..1 across the width), traverse speed
     V_IST / 500 rpm, spindle speed / 2000 rpm, layer / n_layers, direction of the COIL block
     (±1), the mean height of 8 groups across the width minus the overall mean (/ d0), the
     flatness (std / d0) at the last reversal, voids (/ 5 wire cross-sections) and pile-up turns
-    (resting above the layer floor + d/2, / 5) of the present layer, and the previous action.
+    (resting above the layer floor + d/2, / 5) of the present layer, what a camera at the
+    laying point sees of the laid turns (below), and the previous action.
+
+    Laid turns: when a turn of diameter d is laid at ``x_laid`` (after nesting) while the
+    traverse is at ``x``, with ``s = |x_laid − x_prev| / d0`` the spacing from the previous
+    turn of the same layer, and only for regular turns (0.5 < s < 1.5; not the first turn of a
+    layer, dwell turns or climbs), the averages ``pitch ← pitch + 0.25·((s − 1) − pitch)`` and
+    ``gap ← gap + 0.25·((s − d/d0) − gap)`` are updated (both 0 at reset); every turn sets
+    ``slide = (x_laid − x)·direction / d0``. Observed: ``laid_pitch = 10·pitch``,
+    ``laid_gap = 10·gap`` (open gaps between turns > 0) and ``laid_slide = 2·slide`` (turns
+    pushed ahead by their neighbour > 0), held between turns. Their difference
+    ``laid_pitch − laid_gap = 10·(d/d0 − 1)`` reveals the true wire diameter.
 
     ## Rewards
     Per step, minus: ``void_weight`` × void area under the turns laid (gaps, in wire
@@ -376,7 +410,8 @@ class CoilWindingEnv(MotorEnv):
     COIL_MODE, nominal registers).
 
     ## Version History
-    * v0: initial version.
+    * v0: initial version; the laid-turn observations (``laid_pitch``, ``laid_gap``,
+      ``laid_slide``: 19 → 22 observations) were added before the RL results of docs/envs.md.
     """
 
     vector_class = CoilWindingVectorEnv
