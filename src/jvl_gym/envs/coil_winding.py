@@ -24,6 +24,8 @@ _GEARF2 = 10000
 _GROUPS = 8  #: groups of bins in the observed profile summary
 _V_TRAVERSE_NORM = 500.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 500 rpm in counts/sample
 _PARALLEL_MIN = 32  #: from this many copies the motor kernel runs multi-threaded (MotorArray)
+_TURN_EMA = 0.25  #: weight of the newest turn in the laid-pitch averages
+_TURN_OBS_SCALE = 10.0  #: laid pitch and gap (relative to d0) × 10 in the observation
 
 
 @njit(cache=True)
@@ -88,7 +90,8 @@ class CoilWindingVectorEnv(MotorVectorEnv):
 
     obs_labels = ("traverse_position", "traverse_speed", "spindle_speed", "layer",
                   "direction", *(f"profile_{k}" for k in range(_GROUPS)), "last_flatness",
-                  "layer_voids", "layer_pileups", "previous_pitch_trim", "previous_p2_trim",
+                  "layer_voids", "layer_pileups", "laid_pitch", "laid_gap", "laid_slide",
+                  "previous_pitch_trim", "previous_p2_trim",
                   "previous_p3_trim")
     act_labels = ("pitch_trim", "p2_trim", "p3_trim")
     default_ranges = {
@@ -136,7 +139,8 @@ class CoilWindingVectorEnv(MotorVectorEnv):
         self.h = np.zeros((n, self.centres.size))
         for name in ("d0", "d_mean", "d_var", "d_freq", "d_phase", "time", "spindle_rev",
                      "count_acc", "pulses", "floor", "last_std", "layer_void", "step_penalty",
-                     "gear0", "half_d_counts", "direction"):
+                     "gear0", "half_d_counts", "direction", "prev_x", "laid_pitch",
+                     "laid_gap", "laid_slide"):
             setattr(self, name, np.zeros(n))
         self.layer = np.zeros(n, dtype=np.int64)
         self.layer_piles = np.zeros(n)
@@ -161,8 +165,10 @@ class CoilWindingVectorEnv(MotorVectorEnv):
                            draws["speed_step"], draws["step_time"], draws["walk"],
                            np.zeros(idx.size))
         for name in ("time", "spindle_rev", "count_acc", "pulses", "floor", "last_std",
-                     "layer_void", "layer_piles", "step_penalty"):
+                     "layer_void", "layer_piles", "step_penalty", "laid_pitch", "laid_gap",
+                     "laid_slide"):
             getattr(self, name)[idx] = 0.0
+        self.prev_x[idx] = np.nan
         self.h[idx] = 0.0
         self.layer[idx] = 0
         self.direction[idx] = 1.0
@@ -230,8 +236,20 @@ class CoilWindingVectorEnv(MotorVectorEnv):
 
     def _lay(self, idx: np.ndarray, x: np.ndarray, t: np.ndarray) -> None:
         d = self.wire_diameter(t, idx)
-        base, void, _ = dep.lay_turns(self.h, self.centres, idx, x, d, self.coil_width,
-                                      nest=self.nest)
+        base, void, x_laid = dep.lay_turns(self.h, self.centres, idx, x, d, self.coil_width,
+                                           nest=self.nest)
+        d0 = self.d0[idx]
+        # what a camera at the laying point sees: the sideways slide of the new turn from the
+        # wire guide (pushed ahead by its neighbour when the wire is thicker than the pitch)
+        # and, for regular turns (spacing 0.5..1.5 d0 from the previous turn of the layer),
+        # the turn spacing and the gap between the two turns (spacing − d), averaged
+        self.laid_slide[idx] = (x_laid - x) * self.direction[idx] / d0
+        spacing = np.abs(x_laid - self.prev_x[idx]) / d0  # NaN for the first turn of a layer
+        regular = (spacing > 0.5) & (spacing < 1.5)
+        for name, value in (("laid_pitch", spacing - 1.0), ("laid_gap", spacing - d / d0)):
+            avg = getattr(self, name)
+            avg[idx] = np.where(regular, avg[idx] + _TURN_EMA * (value - avg[idx]), avg[idx])
+        self.prev_x[idx] = x_laid
         self.layer_void[idx] += void / (d * d)
         self.layer_piles[idx] += base > self.floor[idx] + 0.5 * d
         self.step_penalty[idx] += self.void_weight * void / (d * d)
@@ -249,6 +267,7 @@ class CoilWindingVectorEnv(MotorVectorEnv):
             self.layer[idx] += 1
             self.layer_void[idx] = 0.0
             self.layer_piles[idx] = 0.0
+            self.prev_x[idx] = np.nan
 
     def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         error = self.error_bits() != 0
@@ -264,7 +283,9 @@ class CoilWindingVectorEnv(MotorVectorEnv):
                       self.pulses / self.decimation / spindle_norm,
                       self.layer / self.n_layers, self.direction], axis=1),
             dep.profile_summary(self.h, _GROUPS, self.d0),
-            np.stack([self.last_std, self.layer_void / 5.0, self.layer_piles / 5.0], axis=1),
+            np.stack([self.last_std, self.layer_void / 5.0, self.layer_piles / 5.0,
+                      _TURN_OBS_SCALE * self.laid_pitch, _TURN_OBS_SCALE * self.laid_gap,
+                      2.0 * self.laid_slide], axis=1),
             self._prev_action,
         ], axis=1)
 
@@ -295,11 +316,22 @@ class CoilWindingEnv(MotorEnv):
     the registers every step.
 
     ## Observation Space
-    ``Box(-5, 5, (19,), float32)``: traverse position (−1..1 across the width), traverse speed
+    ``Box(-5, 5, (22,), float32)``: traverse position (−1..1 across the width), traverse speed
     V_IST / 500 rpm, spindle speed / 2000 rpm, layer / n_layers, direction of the COIL block
     (±1), the mean height of 8 groups across the width minus the overall mean (/ d0), the
     flatness (std / d0) at the last reversal, voids (/ 5 wire cross-sections) and pile-up turns
-    (resting above the layer floor + d/2, / 5) of the present layer, and the previous action.
+    (resting above the layer floor + d/2, / 5) of the present layer, what a camera at the
+    laying point sees of the laid turns (below), and the previous action.
+
+    Laid turns: when a turn of diameter d is laid at ``x_laid`` (after nesting) while the
+    traverse is at ``x``, with ``s = |x_laid − x_prev| / d0`` the spacing from the previous
+    turn of the same layer, and only for regular turns (0.5 < s < 1.5; not the first turn of a
+    layer, dwell turns or climbs), the averages ``pitch ← pitch + 0.25·((s − 1) − pitch)`` and
+    ``gap ← gap + 0.25·((s − d/d0) − gap)`` are updated (both 0 at reset); every turn sets
+    ``slide = (x_laid − x)·direction / d0``. Observed: ``laid_pitch = 10·pitch``,
+    ``laid_gap = 10·gap`` (open gaps between turns > 0) and ``laid_slide = 2·slide`` (turns
+    pushed ahead by their neighbour > 0), held between turns. Their difference
+    ``laid_pitch − laid_gap = 10·(d/d0 − 1)`` reveals the true wire diameter.
 
     ## Rewards
     Per step, minus: ``void_weight`` × void area under the turns laid (gaps, in wire
@@ -327,7 +359,8 @@ class CoilWindingEnv(MotorEnv):
     COIL_MODE, nominal registers).
 
     ## Version History
-    * v0: initial version.
+    * v0: initial version; the laid-turn observations (``laid_pitch``, ``laid_gap``,
+      ``laid_slide``: 19 → 22 observations) were added before the RL results of docs/envs.md.
     """
 
     vector_class = CoilWindingVectorEnv
