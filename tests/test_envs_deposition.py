@@ -123,3 +123,19 @@ def test_many_copies_wind_the_same_coil_as_one() -> None:
         o, *_ = single.step(a[9])
     np.testing.assert_array_equal(o, obs[9])
     np.testing.assert_array_equal(single.unwrapped.core.h[0], venv.unwrapped.h[9])
+
+
+def test_coil_winding_laid_turns_reveal_the_wire_diameter() -> None:
+    labels = gym.make("jvl_gym/CoilWinding-v0").unwrapped.core.obs_labels
+    k = [labels.index(n) for n in ("laid_pitch", "laid_gap", "laid_slide")]
+    for bias in (-0.04, 0.04):
+        env = gym.make("jvl_gym/CoilWinding-v0", randomization={
+            "diameter_bias": (bias, bias), "diameter_variation": (0, 0)})
+        env.reset(seed=1)
+        obs = np.array([env.step(np.zeros(3, dtype=np.float32))[0][k] for _ in range(300)])
+        pitch, gap, slide = obs[-1]
+        np.testing.assert_allclose(pitch - gap, 10 * bias, atol=1e-3)  # 10·(d/d0 − 1)
+        if bias < 0:  # thin wire: open gaps between the turns at the nominal pitch
+            assert gap > 0.2
+        else:  # thick wire: the turns are pushed ahead by their neighbours
+            assert obs[:, 2].max() > 0.2

@@ -32,8 +32,10 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
     progress_bar : bool
         Show SB3's progress bar.
     threads : int
-        torch threads (1 lets two trainings share 2 cores).
+        torch and numba threads (1 lets two trainings share 2 cores; a vector env of 32 or
+        more copies runs the motor kernel on numba's thread pool).
     """
+    import numba
     import torch
     from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.vec_env import VecMonitor
@@ -42,6 +44,7 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
 
     cfg = rl_config(env_id, config_dir)
     torch.set_num_threads(int(threads))
+    numba.set_num_threads(min(int(threads), numba.config.NUMBA_NUM_THREADS))
     seed = int(cfg["seed"] if seed is None else seed)
     steps = int(cfg["total_timesteps"] if total_timesteps is None else total_timesteps)
     venv = VecMonitor(make_sb3_env(env_id, int(cfg["n_envs"]), **cfg["env_kwargs"]))
