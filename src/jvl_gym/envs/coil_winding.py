@@ -332,14 +332,6 @@ class CoilWindingVectorEnv(MotorVectorEnv):
         """Traverse position from the lower flange [m], (N,)."""
         return self.motors.state[:, L.S_THETA] / (2 * math.pi) * self.screw_pitch
 
-    def wire_diameter(self, t: np.ndarray | None = None, idx: np.ndarray | None = None
-                      ) -> np.ndarray:
-        """Wire diameter [m] at time ``t`` (default: now) of copies ``idx`` (default: all)."""
-        sel = slice(None) if idx is None else idx
-        t = self.time[sel] if t is None else t
-        return self.d_mean[sel] * (1.0 + self.d_var[sel] * np.sin(
-            2 * np.pi * self.d_freq[sel] * t + self.d_phase[sel]))
-
     def _scope_values(self) -> np.ndarray:
         return np.stack([self.traverse_position() * 1e3, self.pulses / self.decimation / _DT
                          / self.spindle_counts_per_rev * 60.0, self.layer,
