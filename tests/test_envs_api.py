@@ -44,27 +44,32 @@ def test_make_vec_vector_entry_point_without_warnings(env_id: str) -> None:
         venv.close()
 
 
-@pytest.mark.parametrize("env_id", ENV_IDS)
-def test_single_and_vector_trajectories_are_identical(env_id: str) -> None:
-    n, steps = 3, SHORT.get(env_id, 25)
+def _assert_vector_copies_equal_single_envs(env_id: str, n: int, steps: int, seed: int,
+                                            copies: list[int], action_seed: int = 7) -> None:
+    """Copies ``copies`` of an n-copy vector env seeded ``seed`` equal single envs seeded
+    ``seed + i`` for the same actions (observations with noise, rewards)."""
     venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
                         obs_noise=0.05)
     dim = venv.single_action_space.shape[0]
-    acts = _actions(env_id, steps, n, dim)
-    vobs = [venv.reset(seed=11)[0]]
+    acts = _actions(env_id, steps, n, dim, seed=action_seed)
+    vobs = [venv.reset(seed=seed)[0]]
     vrew = []
     for a in acts:
         o, r, *_ = venv.step(a)
         vobs.append(o)
         vrew.append(r)
-    for i in range(n):
+    for i in copies:
         env = gym.make(env_id, obs_noise=0.05)
-        o, _ = env.reset(seed=11 + i)
-        np.testing.assert_array_equal(o, vobs[0][i])
+        np.testing.assert_array_equal(env.reset(seed=seed + i)[0], vobs[0][i])
         for k, a in enumerate(acts):
             o, r, *_ = env.step(a[i])
             np.testing.assert_array_equal(o, vobs[k + 1][i])
             assert r == vrew[k][i]
+
+
+@pytest.mark.parametrize("env_id", ENV_IDS)
+def test_single_and_vector_trajectories_are_identical(env_id: str) -> None:
+    _assert_vector_copies_equal_single_envs(env_id, 3, SHORT.get(env_id, 25), 11, [0, 1, 2])
 
 
 @pytest.mark.parametrize("env_id", ENV_IDS)
@@ -196,24 +201,8 @@ def test_threaded_vector_step_equals_single_envs(env_id: str) -> None:
     """From PARALLEL_MIN copies the compiled step runs copies in threads: same trajectories."""
     from jvl_gym.envs.compiled import PARALLEL_MIN
 
-    n, steps = PARALLEL_MIN + 1, 12
-    venv = gym.make_vec(env_id, num_envs=n, vectorization_mode="vector_entry_point",
-                        obs_noise=0.05)
-    dim = venv.single_action_space.shape[0]
-    acts = _actions(env_id, steps, n, dim, seed=3)
-    vobs = [venv.reset(seed=20)[0]]
-    vrew = []
-    for a in acts:
-        o, r, *_ = venv.step(a)
-        vobs.append(o)
-        vrew.append(r)
-    for i in (0, n - 1):
-        env = gym.make(env_id, obs_noise=0.05)
-        np.testing.assert_array_equal(env.reset(seed=20 + i)[0], vobs[0][i])
-        for k, a in enumerate(acts):
-            o, r, *_ = env.step(a[i])
-            np.testing.assert_array_equal(o, vobs[k + 1][i])
-            assert r == vrew[k][i]
+    n = PARALLEL_MIN + 1
+    _assert_vector_copies_equal_single_envs(env_id, n, 12, 20, [0, n - 1], action_seed=3)
 
 
 def test_compiled_observation_noise_equals_the_numpy_streams() -> None:

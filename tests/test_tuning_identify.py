@@ -61,15 +61,19 @@ def test_one_level_cannot_separate_inertia_and_coulomb_friction():
         identify_mechanics(rec, MD)
 
 
+def _random_mechanics(rng: np.random.Generator) -> tuple[float, float, float, int, int]:
+    """A random load (J, T_c, b) and its two TESTA levels (raised by the friction torque)."""
+    J = MD.J_m * (1 + rng.uniform(0, 10))
+    tc, b = rng.uniform(0, 0.02), rng.uniform(0, 1e-5)
+    t1, t2 = two_level_torques(J, MD, 64)
+    return J, tc, b, t1 + int(tc / MD.torque_per_vf), t2 + int(tc / MD.torque_per_vf)
+
+
 def test_two_level_procedure_with_friction_and_noise():
     errs = []
     for seed in range(20):
         rng = np.random.default_rng(seed)
-        J = MD.J_m * (1 + rng.uniform(0, 10))
-        tc, b = rng.uniform(0, 0.02), rng.uniform(0, 1e-5)
-        t1, t2 = two_level_torques(J, MD, 64)
-        t1 += int(tc / MD.torque_per_vf)
-        t2 += int(tc / MD.torque_per_vf)
+        J, tc, b, t1, t2 = _random_mechanics(rng)
         recs = [simulate_testa(MD, J, t, 64, b, tc, position_noise=0.85, rng=rng)
                 for t in (t1, t2)]
         est = identify_mechanics(recs, MD)
@@ -139,11 +143,7 @@ def test_repeated_two_level_sets_give_intervals_from_their_spread():
     inside, widths = [], []
     for seed in range(20):
         rng = np.random.default_rng(100 + seed)
-        J = MD.J_m * (1 + rng.uniform(0, 10))
-        tc, b = rng.uniform(0, 0.02), rng.uniform(0, 1e-5)
-        t1, t2 = two_level_torques(J, MD, 64)
-        t1 += int(tc / MD.torque_per_vf)
-        t2 += int(tc / MD.torque_per_vf)
+        J, tc, b, t1, t2 = _random_mechanics(rng)
         recs = [simulate_testa(MD, J, t, 64, b, tc, position_noise=0.85, rng=rng)
                 for _ in range(4) for t in (t1, t2)]
         est = identify_mechanics(recs, MD)
