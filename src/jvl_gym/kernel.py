@@ -51,6 +51,7 @@ from .firmware.monitor import check_errors, in_position, thermal, undervoltage
 from .firmware.noise import gauss
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
+from .jit import KERNEL, KERNEL_PARALLEL
 from .plant.coil import coil_step, phase_to_vector, vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
@@ -73,7 +74,7 @@ def _analog_volts(s: np.ndarray, p: np.ndarray, u: np.ndarray) -> float:
     return u[L.I_ANALOG_VOLTS]
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def _profile(r: np.ndarray, s: np.ndarray, mode: int) -> tuple[float, float]:
     """Function block of a regulated mode (manual 4.1, 4.4): (FNC_OUT, torque limit)."""
     t_lim = float(r[R.T_SOLL])
@@ -113,13 +114,13 @@ def _profile(r: np.ndarray, s: np.ndarray, mode: int) -> tuple[float, float]:
     return f, t_lim
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def _finish_pending(r: np.ndarray, s: np.ndarray) -> None:
     pend = s[L.S_PENDING_MODE]
     enter_mode(r, s, int(pend) if pend >= 0.0 else c.INIT_MODE)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
                    buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:
     """Firmware work at one outer sample (steps 1–3 of the module docstring)."""
@@ -243,7 +244,7 @@ def _measure(r: np.ndarray, i_amp: float, p: np.ndarray, gain: float, key: np.ui
     return x
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
                  buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:
     """One 128 µs current-loop sample and the plant over it (step 4 of the module docstring)."""
@@ -354,11 +355,12 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     s[L.S_TICK] = tick + 1.0
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def _advance(r, s, p, u, key, buf, rec, fmt, n_outer, input_plan, i):
     for t in range(n_outer):
         if input_plan.shape[0] > 0:
-            u[:] = input_plan[t, i]
+            for k in range(u.shape[0]):
+                u[k] = input_plan[t, i, k]
         outer_firmware(r, s, p, u, key, buf, rec, fmt)
         for _k in range(c.INNER_PER_OUTER):
             inner_sample(r, s, p, u, key, buf, rec, fmt)
@@ -372,7 +374,7 @@ def advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, 
     _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer, input_plan, i)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def run_serial(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, input_plan):
     """Advance every motor by ``n_outer`` outer samples in one thread.
 
@@ -384,7 +386,7 @@ def run_serial(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, input_
         advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i, n_outer)
 
 
-@njit(cache=True, parallel=True)
+@njit(**KERNEL_PARALLEL)
 def run_parallel(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, input_plan):
     """Advance every motor by ``n_outer`` outer samples, motors spread over threads."""
     for i in prange(regs.shape[0]):

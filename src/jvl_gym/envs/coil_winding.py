@@ -11,6 +11,7 @@ from numba import njit, prange
 from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
+from ..jit import KERNEL, KERNEL_PARALLEL
 from ..kernel import advance_motor
 from . import deposition as dep
 from .base import ERROR_BITS, Column, MotorVectorEnv
@@ -132,7 +133,7 @@ def _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary,
         put_obs(obs, i, j + 6 + a, prev[i, a], key, t[i], noise)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
                noise_key, k, prof, w, h, centres, summary, obs, reward, term,
                trunc):  # pragma: no cover - compiled
@@ -161,7 +162,7 @@ def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, action
     _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary, obs)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
                   noise_key, k, prof, w, h, centres, summary, obs, reward, term,
                   trunc):  # pragma: no cover - compiled
@@ -173,7 +174,7 @@ def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, action
     return True
 
 
-@njit(cache=True, parallel=True)
+@njit(**KERNEL_PARALLEL)
 def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
                     noise_key, k, prof, w, h, centres, summary, obs, reward, term,
                     trunc):  # pragma: no cover - compiled
@@ -185,7 +186,7 @@ def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, acti
     return True
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def _observe_rows(idx, regs, state, prev, t, noise_key, w, h, k, summary,
                   obs):  # pragma: no cover - compiled
     for i in idx:

@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from ..firmware.noise import uniform
+from ..jit import KERNEL
 
 __all__ = ["PARALLEL_MIN", "OBS_BOUND", "all_finite", "action", "put_obs", "normal",
            "end_step"]
@@ -28,7 +29,7 @@ PARALLEL_MIN = 32
 OBS_BOUND = 5.0
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def all_finite(actions: np.ndarray) -> bool:  # pragma: no cover - compiled
     """True when every entry of the (N, A) action array is finite (checked before any step)."""
     for i in range(actions.shape[0]):

@@ -26,6 +26,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ..jit import KERNEL
+
 __all__ = ["bin_centres", "lay_turn_row", "profile_summary_row", "flatness_row", "lay_turns",
            "profile_summary", "layer_flatness"]
 
@@ -57,7 +59,7 @@ def _top(h: np.ndarray, lo: int, hi: int) -> float:  # pragma: no cover - compil
     return top
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def lay_turn_row(h: np.ndarray, centres: np.ndarray, x: float, d: float, width: float,
                  nest: bool) -> tuple[float, float, float]:  # pragma: no cover - compiled
     """Lay one turn on the profile ``h`` (B,) (modified in place).
@@ -112,7 +114,7 @@ def lay_turn_row(h: np.ndarray, centres: np.ndarray, x: float, d: float, width: 
     return base, void * bin_width, xc
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def profile_summary_row(h: np.ndarray, groups: int, scale: float,
                         out: np.ndarray) -> None:  # pragma: no cover - compiled
     """``out[k]``: mean height of group ``k`` of ``groups`` equal groups of bins minus the
@@ -126,7 +128,7 @@ def profile_summary_row(h: np.ndarray, groups: int, scale: float,
         out[k] = (h[lo:hi].mean() - mean) / scale
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def flatness_row(h: np.ndarray, d: float) -> tuple[float, float, float]:  # pragma: no cover
     """Flatness of a profile: std of the height / d, and the fractions of the width more than
     d/2 below (gaps) and above (pile-up) the mean height."""

@@ -11,6 +11,7 @@ from numba import njit, prange
 from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
+from ..jit import KERNEL, KERNEL_PARALLEL
 from ..kernel import advance_motor
 from .base import ERROR_BITS, Column, MotorVectorEnv
 from .compiled import PARALLEL_MIN, action, all_finite, end_step, normal, put_obs
@@ -87,7 +88,7 @@ def _observe_row(i, regs, prev, t, noise_key, w, k, obs):  # pragma: no cover - 
     put_obs(obs, i, 7, prev[i, 0], key, t[i], noise)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
                noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover - compiled
     """One env step of copy ``i``: analogue input, ``decimation`` samples of line and motor,
@@ -114,7 +115,7 @@ def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, action
     _observe_row(i, regs, prev, t, noise_key, w, k, obs)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
                   noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover
     if not all_finite(actions):
@@ -125,7 +126,7 @@ def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, action
     return True
 
 
-@njit(cache=True, parallel=True)
+@njit(**KERNEL_PARALLEL)
 def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
                     noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover
     if not all_finite(actions):
@@ -136,7 +137,7 @@ def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, acti
     return True
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def _observe_rows(idx, regs, prev, t, noise_key, w, k, obs):  # pragma: no cover - compiled
     for i in idx:
         _observe_row(i, regs, prev, t, noise_key, w, k, obs)

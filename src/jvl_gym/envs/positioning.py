@@ -10,6 +10,7 @@ from numba import njit, prange
 from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
+from ..jit import KERNEL, KERNEL_PARALLEL
 from ..kernel import advance_motor
 from .base import ERROR_BITS, MotorVectorEnv
 from .compiled import PARALLEL_MIN, action, all_finite, end_step, put_obs
@@ -34,7 +35,7 @@ def _observe_row(i, regs, prev, t, noise_key, noise, target, obs):  # pragma: no
     put_obs(obs, i, 3, prev[i, 0], noise_key[i], t[i], noise)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
                noise_key, k, target, direction, obs, reward, term, trunc):  # pragma: no cover
     """One env step of copy ``i``: torque command, motor, reward, termination, observation."""
@@ -53,7 +54,7 @@ def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, action
     _observe_row(i, regs, prev, t, noise_key, k[_NOISE], target, obs)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
                   noise_key, k, target, direction, obs, reward, term,
                   trunc):  # pragma: no cover - compiled
@@ -65,7 +66,7 @@ def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, action
     return True
 
 
-@njit(cache=True, parallel=True)
+@njit(**KERNEL_PARALLEL)
 def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
                     noise_key, k, target, direction, obs, reward, term,
                     trunc):  # pragma: no cover - compiled
@@ -77,7 +78,7 @@ def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, acti
     return True
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def _observe_rows(idx, regs, prev, t, noise_key, noise, target, obs):  # pragma: no cover
     for i in idx:
         _observe_row(i, regs, prev, t, noise_key, noise, target, obs)

@@ -21,6 +21,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ..jit import KERNEL
+
 __all__ = ["SpeedProfile", "row_speed"]
 
 #: columns of the per-copy parameter matrix
@@ -28,7 +30,7 @@ __all__ = ["SpeedProfile", "row_speed"]
 _WALK_SCALE = math.sqrt(2.0 / 3.0)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def row_speed(p: np.ndarray, t: float, theta: float,
               t_change: float) -> float:  # pragma: no cover - compiled
     """Speed of one copy from its parameter row ``p`` (compiled callers)."""

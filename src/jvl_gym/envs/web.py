@@ -22,6 +22,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ..jit import KERNEL
+
 __all__ = ["span_step", "steady_strain", "tension", "winder_radius", "load_cell_step",
            "span_step_s", "tension_s", "winder_radius_s", "load_cell_s"]
 
@@ -63,7 +65,7 @@ def load_cell_step(measured: np.ndarray, force: np.ndarray, dt: float, tau: floa
 
 
 # --- the same model per scalar, for the compiled env step (tested equal to the above) -------
-@njit(cache=True)
+@njit(**KERNEL)
 def span_step_s(strain: float, v1: float, v2: float, length: float,
                 dt: float) -> float:  # pragma: no cover - compiled
     """:func:`span_step` for one copy with ``ε_in = 0``."""
@@ -76,19 +78,19 @@ def span_step_s(strain: float, v1: float, v2: float, length: float,
     return ss + (strain - ss) * math.exp(-bdt)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def tension_s(strain: float, ea: float) -> float:  # pragma: no cover - compiled
     """:func:`tension` for one copy."""
     return ea * max(strain, 0.0)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def winder_radius_s(r0: float, thickness: float, wound: float) -> float:  # pragma: no cover
     """:func:`winder_radius` for one copy."""
     return math.sqrt(r0 * r0 + thickness * max(wound, 0.0) / math.pi)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def load_cell_s(measured: float, force: float, k: float) -> float:  # pragma: no cover
     """One load-cell filter step with gain ``k = 1 − exp(−dt/τ)``."""
     return measured + k * (force - measured)

@@ -11,6 +11,7 @@ from numba import njit
 
 from .. import constants as c
 from .. import layout as L
+from ..jit import KERNEL
 from . import regs as R
 from .fixed import wrap32
 
@@ -43,7 +44,7 @@ def vat_torque_limit(r: np.ndarray) -> float:
     return abs(r[R.ANINP] * float(r[R.T_SOLL]) / 1024.0)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def a2pos_update(r: np.ndarray, s: np.ndarray, entering: bool) -> None:
     """A2POS: analogue input as a logic input with hysteresis 5.4 V / 4.4 V (4.1.10).
 
@@ -78,7 +79,7 @@ def a2pos_update(r: np.ndarray, s: np.ndarray, entering: bool) -> None:
         r[R.P_SOLL] = px
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def apos_update(r: np.ndarray) -> None:
     """APOS: ``P_NEW = ANINP·P2/16 + P1`` with a dead band P3 (4.1.11).
 

@@ -14,6 +14,7 @@ from numba import njit
 
 from .. import constants as c
 from .. import layout as L
+from ..jit import KERNEL
 from . import regs as R
 from .fixed import clamp, wrap32
 
@@ -33,7 +34,7 @@ def _finish(r: np.ndarray, s: np.ndarray, f: float) -> float:
     return f
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def velocity_block(r: np.ndarray, s: np.ndarray, target: float, accel: float) -> float:
     """Velocity function block (4.1.1): ramp V_OLD towards ``target`` by at most ``accel``.
 
@@ -53,7 +54,7 @@ def stopping_distance(v: float, a: float) -> float:
     return (n + 1.0) * v - a * n * (n + 1.0) / 2.0
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def max_landing_speed(dp: float, a: float) -> float:
     """Largest integer speed whose discrete braking profile fits in ``dp`` ≥ 0 [1/16 count].
 
@@ -75,7 +76,7 @@ def max_landing_speed(dp: float, a: float) -> float:
     return v
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def position_block(r: np.ndarray, s: np.ndarray, dp: float, vmax: float, accel: float) -> float:
     """Position function block (4.1.2) towards the remaining distance ``dp`` [1/16 count].
 
@@ -90,7 +91,7 @@ def position_block(r: np.ndarray, s: np.ndarray, dp: float, vmax: float, accel: 
     return _finish(r, s, f)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def stop_block(r: np.ndarray, s: np.ndarray) -> float:
     """Stop function block (4.1.8): decelerate to 0 with A_SOLL, or ACC_EMERG after an error."""
     a = float(r[R.A_SOLL])

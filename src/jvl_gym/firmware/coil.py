@@ -20,6 +20,7 @@ import numpy as np
 from numba import njit
 
 from .. import layout as L
+from ..jit import KERNEL
 from . import regs as R
 from .blocks import _finish, max_landing_speed
 from .fixed import clamp
@@ -28,7 +29,7 @@ from .gear_blocks import gear_factor
 ANALOG_HIGH = 512  #: ANINP above 5 V counts as "high" (start-position command)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def coil_entry(r: np.ndarray, s: np.ndarray) -> None:
     """Start winding from the present function position in the direction P6."""
     s[L.S_AUX0] = float(r[R.P_FNC])
@@ -36,7 +37,7 @@ def coil_entry(r: np.ndarray, s: np.ndarray) -> None:
     s[L.S_AUX2] = 0.0
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def coil_block(r: np.ndarray, s: np.ndarray) -> float:
     """One sample of the COIL profile; returns FNC_OUT [1/16 count/sample]."""
     a = float(r[R.A_SOLL])

@@ -19,6 +19,7 @@ from numba import njit
 
 from .. import constants as c
 from .. import layout as L
+from ..jit import KERNEL
 from . import regs as R
 from .fixed import clamp, fx4, fx8, rnd
 
@@ -30,7 +31,7 @@ COS_TABLE = np.array([math.cos(2.0 * math.pi * k / c.ELDEG_PER_TURN)
                       for k in range(c.ELDEG_PER_TURN)])
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def commutate(r: np.ndarray) -> None:
     """Compute I_NOM, PHI_SOLL and IA/IB/IC_SOLL from VF_OUT and the rotor angle (4.3.1)."""
     vf = float(r[R.VF_OUT])
@@ -42,7 +43,7 @@ def commutate(r: np.ndarray) -> None:
     set_references(r, i_nom, phi)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def set_references(r: np.ndarray, i_nom: float, phi: int) -> None:
     """IA/IB/IC_SOLL = I_NOM·AMPLITUDE·sin(PHI + k·120°), stored in −850..850 (3.2.133).
 
@@ -72,7 +73,7 @@ def _phase(r: np.ndarray, s: np.ndarray, i_soll: float, i_ist: float, k: int) ->
     return u
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def regulate(r: np.ndarray, s: np.ndarray) -> None:
     """Run the three current loops once and store UA/UB/UC_VAL (4.3.1)."""
     r[R.UA_VAL] = int(_phase(r, s, float(r[R.IA_SOLL]), float(r[R.IA_IST]), 0))
@@ -80,7 +81,7 @@ def regulate(r: np.ndarray, s: np.ndarray) -> None:
     r[R.UC_VAL] = int(_phase(r, s, float(r[R.IC_SOLL]), float(r[R.IC_IST]), 2))
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def passive(r: np.ndarray, s: np.ndarray, ua: float, ub: float, uc: float) -> None:
     """Current regulator passive: apply fixed voltages and hold the loops at rest (4.4.1, 4.4.9)."""
     r[R.UA_VAL] = int(ua)

@@ -13,6 +13,7 @@ from numba import njit
 
 from .. import constants as c
 from .. import layout as L
+from ..jit import KERNEL
 from . import regs as R
 from .blocks import _finish, max_landing_speed
 from .fixed import clamp
@@ -33,7 +34,7 @@ def analog_gear_factor(r: np.ndarray) -> float:
     return 1.01 + 0.14 * r[R.ANINP] / 1023.0
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def gear_position_block(r: np.ndarray, s: np.ndarray, factor: float) -> float:
     """Gear position block (4.1.12): stop at the right position without overshooting.
 
@@ -52,7 +53,7 @@ def gear_position_block(r: np.ndarray, s: np.ndarray, factor: float) -> float:
     return f
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def gear_follow_block(r: np.ndarray, s: np.ndarray, factor: float) -> float:
     """Gear follow block (4.1.3): least follow error, overshoots when the pulses stop.
 

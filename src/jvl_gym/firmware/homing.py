@@ -21,6 +21,7 @@ from numba import njit
 
 from .. import constants as c
 from .. import layout as L
+from ..jit import KERNEL
 from . import regs as R
 from .blocks import velocity_block
 from .fixed import wrap32
@@ -36,14 +37,14 @@ def sensor_active(r: np.ndarray) -> bool:
     return high if r[R.T_HOME] >= 0 else not high
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def home_entry(r: np.ndarray, s: np.ndarray) -> None:
     """Reset the detection counter / search phase."""
     s[L.S_AUX4] = 0.0
     s[L.S_AUX5] = -1.0  # sensor level not yet read: the first sample only records it
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def home_block(r: np.ndarray, s: np.ndarray, mode: int) -> tuple[float, float]:
     """Profile of the home search; returns (FNC_OUT, torque limit)."""
     vh = float(r[R.V_HOME])
@@ -65,7 +66,7 @@ def home_block(r: np.ndarray, s: np.ndarray, mode: int) -> tuple[float, float]:
     return velocity_block(r, s, target, a), float(r[R.T_SOLL])
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def home_check(r: np.ndarray, s: np.ndarray, mode: int) -> bool:
     """After the speed regulator: detect the home event; on it, set the zero position."""
     found = False
@@ -88,7 +89,7 @@ def home_check(r: np.ndarray, s: np.ndarray, mode: int) -> bool:
     return found
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def set_home_position(r: np.ndarray, s: np.ndarray) -> None:
     """P_IST = P_HOME (INDEX_HOME: at the nearest index marker), P_FNC = 16·P_HOME, P_SOLL = 0."""
     p_home = int(r[R.P_HOME])

@@ -22,6 +22,7 @@ from numba import njit
 
 from .. import constants as c
 from .. import layout as L
+from ..jit import KERNEL
 from . import regs as R
 from .analog_blocks import a2pos_update
 from .coil import coil_entry
@@ -87,7 +88,7 @@ REQUEST_MESSAGES = {
 }
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def reset_speed_loop(r: np.ndarray, s: np.ndarray) -> None:
     """Clear the FF/VB/VF histories and the profile memory (entry into a regulated mode)."""
     v = float(r[R.V_IST])
@@ -110,7 +111,7 @@ def reset_speed_loop(r: np.ndarray, s: np.ndarray) -> None:
     r[R.FLWERR] = 0
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def enter_mode(r: np.ndarray, s: np.ndarray, new: int) -> None:
     """Set MODE_REG and perform the entry actions of ``new`` (manual 4.4)."""
     old = int(r[R.MODE_REG])
@@ -169,7 +170,7 @@ def enter_mode(r: np.ndarray, s: np.ndarray, new: int) -> None:
         s[L.S_G_FNC] = 0.0
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def stop_to(r: np.ndarray, s: np.ndarray, final: int, emergency: bool) -> None:
     """Bring a motor to ``final`` (INIT or SAFE) the protective way of manual 4.4.1/4.4.5/4.4.12."""
     mode = int(r[R.MODE_REG])
@@ -190,7 +191,7 @@ def stop_to(r: np.ndarray, s: np.ndarray, final: int, emergency: bool) -> None:
         enter_mode(r, s, final)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def check_request(r: np.ndarray, s: np.ndarray, req: int) -> int:
     """Outcome code of writing ``req`` to MODE_REG now (no change is made)."""
     mode = int(r[R.MODE_REG])
@@ -219,7 +220,7 @@ def check_request(r: np.ndarray, s: np.ndarray, req: int) -> int:
     return E_NEEDS_INIT
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def apply_request(r: np.ndarray, s: np.ndarray, req: int) -> None:
     """Carry out an accepted MODE_REG write (``check_request`` returned OK)."""
     mode = int(r[R.MODE_REG])
@@ -231,7 +232,7 @@ def apply_request(r: np.ndarray, s: np.ndarray, req: int) -> None:
     enter_mode(r, s, req)
 
 
-@njit(cache=True)
+@njit(cache=True)  # allocates its result: NRT
 def check_requests(regs: np.ndarray, state: np.ndarray, idx: np.ndarray, req: np.ndarray):
     """Outcome codes for a batch of requests (one per index)."""
     out = np.zeros(idx.shape[0], dtype=np.int64)
@@ -240,14 +241,14 @@ def check_requests(regs: np.ndarray, state: np.ndarray, idx: np.ndarray, req: np
     return out
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def apply_requests(regs: np.ndarray, state: np.ndarray, idx: np.ndarray, req: np.ndarray) -> None:
     """Carry out a batch of accepted requests."""
     for k in range(idx.shape[0]):
         apply_request(regs[idx[k]], state[idx[k]], int(req[k]))
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def go_safe(regs: np.ndarray, state: np.ndarray, idx: np.ndarray) -> None:
     """MacTalk 'go safe mode' (5.1, 4.4.16): via STOP/INIT as needed, then SAFE_MODE."""
     for k in range(idx.shape[0]):
@@ -261,7 +262,7 @@ def go_safe(regs: np.ndarray, state: np.ndarray, idx: np.ndarray) -> None:
             stop_to(r, s, c.SAFE_MODE, False)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def go_init(regs: np.ndarray, state: np.ndarray, idx: np.ndarray) -> None:
     """MacTalk 'go init mode' (5.1) and leaving SAFE_MODE: the protective path to INIT."""
     for k in range(idx.shape[0]):

@@ -20,6 +20,7 @@ from numba import njit
 
 from .. import constants as c
 from .. import layout as L
+from ..jit import KERNEL
 from . import regs as R
 from .fixed import clamp, rnd
 from .modes import GEAR_INPOS, POSITION_INPOS, VELOCITY_INPOS, stop_to
@@ -27,7 +28,7 @@ from .modes import GEAR_INPOS, POSITION_INPOS, VELOCITY_INPOS, stop_to
 _I2T_FULL = 1.5 * (c.ADC_FULL * c.I2T_FULL_SCALE_AMPLITUDE) ** 2
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def thermal(r: np.ndarray, s: np.ndarray, p: np.ndarray) -> None:
     """Update I2T and UIT from the sums collected over the last outer sample."""
     n = float(c.INNER_PER_OUTER)
@@ -41,7 +42,7 @@ def thermal(r: np.ndarray, s: np.ndarray, p: np.ndarray) -> None:
     r[R.UIT] = int(clamp(rnd(s[L.S_UIT_Q] / c.UIT_FULL_SCALE_WATTS * 65535.0), 0.0, 65535.0))
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def trip(r: np.ndarray, s: np.ndarray, bit: int) -> None:
     """Set an error bit and take the motor to INIT_MODE the protective way (4.5)."""
     r[R.ERR_STAT] |= bit
@@ -50,7 +51,7 @@ def trip(r: np.ndarray, s: np.ndarray, bit: int) -> None:
         stop_to(r, s, c.INIT_MODE, True)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def check_errors(r: np.ndarray, s: np.ndarray) -> None:
     """Compare the monitored quantities with their limits (4.5.1–4.5.5)."""
     if r[R.I2T] > r[R.I2TLIM]:
@@ -66,7 +67,7 @@ def check_errors(r: np.ndarray, s: np.ndarray) -> None:
             trip(r, s, c.PLIM_ERR)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def in_position(r: np.ndarray, s: np.ndarray, mode: int) -> None:
     """IN_POS bit of ERR_STAT for the mode (4.1.1, 4.4.3, 4.4.4, 3.2.33, 3.2.34).
 
@@ -105,7 +106,7 @@ def in_position(r: np.ndarray, s: np.ndarray, mode: int) -> None:
 _UV_TIMER_SAMPLES = round(1.0 * c.OUTER_HZ)  #: 1 s undervoltage timer (4.5.6)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def undervoltage(r: np.ndarray, s: np.ndarray) -> None:
     """Undervoltage detection (4.5.6, UV_HANDLE 3.2.160).
 

@@ -13,6 +13,7 @@ import numpy as np
 from numba import njit
 
 from .. import constants as c
+from ..jit import KERNEL
 from . import regs as R
 
 
@@ -26,7 +27,7 @@ def register_value(r: np.ndarray, num: int, fmt: np.ndarray) -> int:
     return int(r[num])
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def record(r: np.ndarray, buf: np.ndarray, fmt: np.ndarray, store: bool) -> None:
     """Record one sample of SAMPLE1..4 at REC_CNT; stop when full.
 

@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from .. import layout as L
+from ..jit import KERNEL
 from . import regs as R
 from .fixed import clamp, fx4, fx8, rnd, sat16
 
@@ -32,7 +33,7 @@ def _ff(r: np.ndarray, s: np.ndarray, f: float) -> float:
                  + fx8(r[R.KFF0]) * s[L.S_F3])
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def speed_regulator(r: np.ndarray, s: np.ndarray, f: float, correcting: bool,
                     t_limit: float) -> tuple[float, float]:
     """Run one sample of the speed regulator.

@@ -20,6 +20,8 @@ import math
 
 from numba import njit
 
+from ..jit import KERNEL
+
 SQRT3 = math.sqrt(3.0)
 
 
@@ -54,7 +56,7 @@ def expi(x: float) -> complex:
     return complex(cos, sin)
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def coil_step(s0: complex, s_u: complex, theta_e: float, omega_e: float, r: float, ell: float,
               lam: float, pole_pairs: float, h: float):
     """Advance the coil current by one step of length ``h`` [s].

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 from numba import njit
 
+from ..jit import KERNEL
+
 
 @njit(cache=True, inline="always")
 def end_stop_torque(theta: float, omega: float, lo: float, hi: float, k: float, d: float) -> float:
@@ -26,7 +28,7 @@ def end_stop_torque(theta: float, omega: float, lo: float, hi: float, k: float, 
     return 0.0
 
 
-@njit(cache=True)
+@njit(**KERNEL)
 def mech_step(theta: float, omega: float, drive: float, j: float, b: float, tc: float, h: float):
     """Advance the mechanics by ``h`` [s] under the net driving torque ``drive`` [N·m].
 

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 from numba import njit
 
+from ..jit import KERNEL
 
-@njit(cache=True)
+
+@njit(**KERNEL)
 def bus_step(u: float, p_motor: float, u_src: float, c_bus: float, r_src: float, u_dump: float,
              r_dump: float, dump_on: float, h: float):
     """Advance the bus by ``h`` [s]; returns ``(u1, dump_on1, e_dump, e_supply)`` [V, -, J, J]."""
