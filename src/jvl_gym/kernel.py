@@ -52,7 +52,7 @@ from .firmware.noise import gauss
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
 from .jit import KERNEL, KERNEL_PARALLEL
-from .plant.coil import coil_step, phase_to_vector, vector_to_phases
+from .plant.coil import coil_step_decayed, half_step_decay, phase_to_vector, vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
 from .plant.mechanics import end_stop_torque, mech_step
@@ -246,8 +246,9 @@ def _measure(r: np.ndarray, i_amp: float, p: np.ndarray, gain: float, key: np.ui
 
 @njit(**KERNEL)
 def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
-                 buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:
-    """One 128 µs current-loop sample and the plant over it (step 4 of the module docstring)."""
+                 buf: np.ndarray, rec: bool, fmt: np.ndarray, decay: float) -> None:
+    """One 128 µs current-loop sample and the plant over it (step 4 of the module docstring);
+    ``decay`` is the coil's ``half_step_decay(R, L, 128 µs)``."""
     theta = s[L.S_THETA]
     omega = s[L.S_OMEGA]
     pp = p[L.P_POLE_PAIRS]
@@ -323,8 +324,8 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     kv = s[L.S_UBUS] / (2.0 * c.PWM_FULL)
     s_u = phase_to_vector(ua * kv, ub * kv, uc * kv)
     omega_mid = omega + 0.5 * _H * s[L.S_ACC]
-    s1, torque, p_el, p_cu = coil_step(s_i, s_u, theta_e, pp * omega_mid, p[L.P_R], p[L.P_L],
-                                       p[L.P_LAMBDA], pp, _H)
+    s1, torque, p_el, p_cu = coil_step_decayed(s_i, s_u, theta_e, pp * omega_mid, p[L.P_R],
+                                               p[L.P_L], p[L.P_LAMBDA], pp, _H, decay)
     t_stop = end_stop_torque(theta, omega, p[L.P_STOP_LO], p[L.P_STOP_HI], p[L.P_STOP_K],
                              p[L.P_STOP_D])
     load = u[L.I_LOAD_TORQUE]
@@ -357,13 +358,14 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
 
 @njit(**KERNEL)
 def _advance(r, s, p, u, key, buf, rec, fmt, n_outer, input_plan, i):
+    decay = half_step_decay(p[L.P_R], p[L.P_L], _H)
     for t in range(n_outer):
         if input_plan.shape[0] > 0:
             for k in range(u.shape[0]):
                 u[k] = input_plan[t, i, k]
         outer_firmware(r, s, p, u, key, buf, rec, fmt)
         for _k in range(c.INNER_PER_OUTER):
-            inner_sample(r, s, p, u, key, buf, rec, fmt)
+            inner_sample(r, s, p, u, key, buf, rec, fmt, decay)
 
 
 @njit(cache=True, inline="always")

@@ -60,11 +60,12 @@ def set_references(r: np.ndarray, i_nom: float, phi: int) -> None:
 
 
 @njit(cache=True, inline="always")
-def _phase(r: np.ndarray, s: np.ndarray, i_soll: float, i_ist: float, k: int) -> float:
-    ibf = fx8(r[R.KIB1]) * i_ist + fx8(r[R.KIB0]) * s[L.S_IIST1_A + k]
+def _phase(s: np.ndarray, i_soll: float, i_ist: float, k: int, kib1: float, kib0: float,
+           kifx2: float, kifx1: float, kify1: float, kify0: float) -> float:
+    ibf = kib1 * i_ist + kib0 * s[L.S_IIST1_A + k]
     e = i_soll - ibf
-    u = (fx4(r[R.KIFX2]) * e + fx4(r[R.KIFX1]) * s[L.S_IE1_A + k]
-         + fx4(r[R.KIFY1]) * s[L.S_IU1_A + k] + fx4(r[R.KIFY0]) * s[L.S_IU2_A + k])
+    u = (kifx2 * e + kifx1 * s[L.S_IE1_A + k] + kify1 * s[L.S_IU1_A + k]
+         + kify0 * s[L.S_IU2_A + k])
     u = clamp(rnd(u), -1023.0, 1023.0)
     s[L.S_IE1_A + k] = e
     s[L.S_IU2_A + k] = s[L.S_IU1_A + k]
@@ -76,9 +77,17 @@ def _phase(r: np.ndarray, s: np.ndarray, i_soll: float, i_ist: float, k: int) ->
 @njit(**KERNEL)
 def regulate(r: np.ndarray, s: np.ndarray) -> None:
     """Run the three current loops once and store UA/UB/UC_VAL (4.3.1)."""
-    r[R.UA_VAL] = int(_phase(r, s, float(r[R.IA_SOLL]), float(r[R.IA_IST]), 0))
-    r[R.UB_VAL] = int(_phase(r, s, float(r[R.IB_SOLL]), float(r[R.IB_IST]), 1))
-    r[R.UC_VAL] = int(_phase(r, s, float(r[R.IC_SOLL]), float(r[R.IC_IST]), 2))
+    # the six filter coefficients are read once for the three phases
+    kib1 = fx8(r[R.KIB1])
+    kib0 = fx8(r[R.KIB0])
+    kifx2 = fx4(r[R.KIFX2])
+    kifx1 = fx4(r[R.KIFX1])
+    kify1 = fx4(r[R.KIFY1])
+    kify0 = fx4(r[R.KIFY0])
+    for k in range(3):
+        u = _phase(s, float(r[R.IA_SOLL + k]), float(r[R.IA_IST + k]), k, kib1, kib0, kifx2,
+                   kifx1, kify1, kify0)
+        r[R.UA_VAL + k] = int(u)
 
 
 @njit(**KERNEL)

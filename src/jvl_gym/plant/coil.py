@@ -56,6 +56,12 @@ def expi(x: float) -> complex:
     return complex(cos, sin)
 
 
+@njit(cache=True, inline="always")
+def half_step_decay(r: float, ell: float, h: float) -> float:
+    """``e^{−h/(2τ)}`` with ``τ = L/R``: the current's decay over half a step of ``h`` [s]."""
+    return math.exp(-0.5 * h * r / ell)
+
+
 @njit(**KERNEL)
 def coil_step(s0: complex, s_u: complex, theta_e: float, omega_e: float, r: float, ell: float,
               lam: float, pole_pairs: float, h: float):
@@ -87,23 +93,36 @@ def coil_step(s0: complex, s_u: complex, theta_e: float, omega_e: float, r: floa
     p_copper : float
         Mean copper loss [W].
     """
-    tau = ell / r
-    e0 = complex(math.cos(theta_e), math.sin(theta_e))
-    k_emf_over_c = omega_e * lam / ell * e0 / complex(1.0 / tau, omega_e)
-    half = 0.5 * h
-    a_h = math.exp(-half / tau)
-    rot_h = expi(omega_e * half)
+    return coil_step_decayed(s0, s_u, theta_e, omega_e, r, ell, lam, pole_pairs, h,
+                             half_step_decay(r, ell, h))
+
+
+@njit(cache=True, inline="always")
+def coil_step_decayed(s0: complex, s_u: complex, theta_e: float, omega_e: float, r: float,
+                      ell: float, lam: float, pole_pairs: float, h: float, a_h: float):
+    """:func:`coil_step` given ``a_h = half_step_decay(r, ell, h)`` (the kernel computes it once
+    per call, not once per 128 µs sample). Same returns as :func:`coil_step`."""
+    inv_tau = r / ell
+    cos_e = math.cos(theta_e)
+    sin_e = math.sin(theta_e)
+    e0 = complex(cos_e, sin_e)
+    # back-EMF term ω λ/L · e^{jθe} / (1/τ + jω), the division written out (1/τ > 0)
+    g = omega_e * lam / ell / (inv_tau * inv_tau + omega_e * omega_e)
+    k_emf_over_c = complex(g * (cos_e * inv_tau + sin_e * omega_e),
+                           g * (sin_e * inv_tau - cos_e * omega_e))
+    rot_h = expi(omega_e * 0.5 * h)
     rot_1 = rot_h * rot_h
     s_m = _current_at(s0, s_u, k_emf_over_c, r, a_h, rot_h)
     s1 = _current_at(s0, s_u, k_emf_over_c, r, a_h * a_h, rot_1)
-    kt = 1.5 * pole_pairs * lam
-    t0 = (s0 * e0.conjugate()).real
-    tm = (s_m * (e0 * rot_h).conjugate()).real
-    t1 = (s1 * (e0 * rot_1).conjugate()).real
-    torque = kt * (t0 + 4.0 * tm + t1) / 6.0
-    p0 = (s_u * s0.conjugate()).real
-    pm = (s_u * s_m.conjugate()).real
-    p1 = (s_u * s1.conjugate()).real
+    e_m = e0 * rot_h
+    e_1 = e0 * rot_1
+    t0 = s0.real * cos_e + s0.imag * sin_e  # Re(s e^{−jθ}) at the start, middle and end
+    tm = s_m.real * e_m.real + s_m.imag * e_m.imag
+    t1 = s1.real * e_1.real + s1.imag * e_1.imag
+    torque = 1.5 * pole_pairs * lam * (t0 + 4.0 * tm + t1) / 6.0
+    p0 = s_u.real * s0.real + s_u.imag * s0.imag
+    pm = s_u.real * s_m.real + s_u.imag * s_m.imag
+    p1 = s_u.real * s1.real + s_u.imag * s1.imag
     p_elec = 1.5 * (p0 + 4.0 * pm + p1) / 6.0
     q0 = s0.real * s0.real + s0.imag * s0.imag
     qm = s_m.real * s_m.real + s_m.imag * s_m.imag
