@@ -4,9 +4,10 @@
 non-inlined call that takes arrays increments and decrements the reference count of each
 array's memory block: atomic operations on a counter that every motor view of the same (N, ·)
 array shares, so two threads stepping different motors fight over one cache line. Kernel code
-therefore never allocates arrays (no NRT) and works on views and scalars. ``fastmath={"arcp"}``
-lets the compiler turn a division by a constant into a multiplication by its reciprocal (a
-last-bit difference; no other fast-math assumption: NaN and infinity keep their meaning).
+therefore never allocates arrays (no NRT) and works on views and scalars. No fast-math flag:
+even ``arcp`` alone (divisions as multiplications by reciprocals) made results depend on where
+the compiler inlined a function: the threaded vector env and the single env then differed in
+the last bit of a reward.
 
 Measured on the 2-core development machine (2026-12-01, ``benchmarks/bench_sim.py`` and
 ``benchmarks/bench_envs.py``): without NRT the simulator runs 1.19e7 instead of 0.94e7
@@ -19,6 +20,6 @@ from __future__ import annotations
 from typing import Any
 
 #: keyword arguments of ``numba.njit`` for kernel functions (``@njit(**KERNEL)``)
-KERNEL: dict[str, Any] = {"cache": True, "_nrt": False, "fastmath": {"arcp"}}
+KERNEL: dict[str, Any] = {"cache": True, "_nrt": False}
 #: the same for the multi-threaded drivers
 KERNEL_PARALLEL: dict[str, Any] = {**KERNEL, "parallel": True}
