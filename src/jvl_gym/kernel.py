@@ -59,6 +59,7 @@ from .plant.mechanics import end_stop_torque, mech_step
 from .plant.supply import bus_step
 
 _H = c.INNER_DT
+_HALF_PWM_PER_VOLT = 1.0 / (2.0 * c.PWM_FULL)  #: bus volts → phase volts per PWM count
 _ANINP_PER_VOLT = c.ANINP_FULL / c.ANINP_VOLTS
 _TESTTQ_HALF = c.REC_CNT_MAX // 2  #: TESTTQ: samples at +V_SOLL, then the same at −V_SOLL
 
@@ -232,9 +233,9 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
 
 
 @njit(cache=True, inline="always")
-def _measure(r: np.ndarray, i_amp: float, p: np.ndarray, gain: float, key: np.uint64,
-             tick: float, ch: int) -> float:
-    x = i_amp / p[L.P_AMPS_PER_COUNT] * gain / 256.0
+def _measure(r: np.ndarray, i_amp: float, p: np.ndarray, counts_per_amp: float, gain: float,
+             key: np.uint64, tick: float, ch: int) -> float:
+    x = i_amp * counts_per_amp * gain / 256.0
     if p[L.P_CURRENT_NOISE] > 0.0:
         x += p[L.P_CURRENT_NOISE] * gauss(key, tick, ch)
     x = rnd(x)
@@ -246,9 +247,14 @@ def _measure(r: np.ndarray, i_amp: float, p: np.ndarray, gain: float, key: np.ui
 
 @njit(**KERNEL)
 def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
-                 buf: np.ndarray, rec: bool, fmt: np.ndarray, decay: float) -> None:
-    """One 128 µs current-loop sample and the plant over it (step 4 of the module docstring);
-    ``decay`` is the coil's ``half_step_decay(R, L, 128 µs)``."""
+                 buf: np.ndarray, rec: bool, fmt: np.ndarray, decay: float,
+                 counts_per_amp: float) -> None:
+    """One 128 µs current-loop sample and the plant over it (step 4 of the module docstring).
+
+    ``decay`` (the coil's ``half_step_decay(R, L, 128 µs)``) and ``counts_per_amp`` (ADC counts
+    per ampere) depend on the motor's parameters only: the caller computes them once per call,
+    not two divisions and an exponential per 128 µs.
+    """
     theta = s[L.S_THETA]
     omega = s[L.S_OMEGA]
     pp = p[L.P_POLE_PAIRS]
@@ -277,9 +283,9 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     tick = s[L.S_TICK]
     s_i = complex(s[L.S_I_RE], s[L.S_I_IM])
     ia, ib, ic = vector_to_phases(s_i)
-    r[R.IA_IST] = int(_measure(r, ia, p, float(r[R.KIA]), key, tick, 0))
-    r[R.IB_IST] = int(_measure(r, ib, p, float(r[R.KIB]), key, tick, 1))
-    r[R.IC_IST] = int(_measure(r, ic, p, float(r[R.KIC]), key, tick, 2))
+    r[R.IA_IST] = int(_measure(r, ia, p, counts_per_amp, float(r[R.KIA]), key, tick, 0))
+    r[R.IB_IST] = int(_measure(r, ib, p, counts_per_amp, float(r[R.KIB]), key, tick, 1))
+    r[R.IC_IST] = int(_measure(r, ic, p, counts_per_amp, float(r[R.KIC]), key, tick, 2))
 
     mode = int(r[R.MODE_REG])
     if mode == c.INIT_MODE or mode == c.SAFE_MODE:
@@ -321,7 +327,7 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
         ua = pa
         ub = pb
         uc = pc
-    kv = s[L.S_UBUS] / (2.0 * c.PWM_FULL)
+    kv = s[L.S_UBUS] * _HALF_PWM_PER_VOLT
     s_u = phase_to_vector(ua * kv, ub * kv, uc * kv)
     omega_mid = omega + 0.5 * _H * s[L.S_ACC]
     s1, torque, p_el, p_cu = coil_step_decayed(s_i, s_u, theta_e, pp * omega_mid, p[L.P_R],
@@ -336,7 +342,7 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     theta1, omega1, e_fric = mech_step(theta, omega, drive, j, p[L.P_VISCOUS], p[L.P_COULOMB], _H)
     s[L.S_THETA] = theta1
     s[L.S_OMEGA] = omega1
-    s[L.S_ACC] = (omega1 - omega) / _H
+    s[L.S_ACC] = (omega1 - omega) * c.INNER_HZ
     s[L.S_I_RE] = s1.real
     s[L.S_I_IM] = s1.imag
     s[L.S_E_ELEC] += p_el * _H
@@ -351,21 +357,21 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     s[L.S_E_DUMP] += e_dump
     s[L.S_E_SUPPLY] += e_sup
     s[L.S_I2_SUM] += float(r[R.IA_IST] ** 2 + r[R.IB_IST] ** 2 + r[R.IC_IST] ** 2)
-    if p_el < 0.0:
-        s[L.S_PREG_SUM] += -p_el
+    s[L.S_PREG_SUM] += max(-p_el, 0.0)  # regenerated power; no branch on its sign
     s[L.S_TICK] = tick + 1.0
 
 
 @njit(**KERNEL)
 def _advance(r, s, p, u, key, buf, rec, fmt, n_outer, input_plan, i):
     decay = half_step_decay(p[L.P_R], p[L.P_L], _H)
+    counts_per_amp = 1.0 / p[L.P_AMPS_PER_COUNT]
     for t in range(n_outer):
         if input_plan.shape[0] > 0:
             for k in range(u.shape[0]):
                 u[k] = input_plan[t, i, k]
         outer_firmware(r, s, p, u, key, buf, rec, fmt)
         for _k in range(c.INNER_PER_OUTER):
-            inner_sample(r, s, p, u, key, buf, rec, fmt, decay)
+            inner_sample(r, s, p, u, key, buf, rec, fmt, decay, counts_per_amp)
 
 
 @njit(cache=True, inline="always")

@@ -19,6 +19,7 @@ import numpy as np
 from numba import njit
 
 SECTOR = math.pi / 3.0
+_PER_SECTOR = 1.0 / SECTOR  #: a multiplication, not a division, in every inner sample
 #: hall code (bits 15..13 of CNTRL_BITS) of sectors 0..5: one sensor changes per sector
 HALL_CODES = np.array([5, 1, 3, 2, 6, 4], dtype=np.int64)
 
@@ -26,7 +27,7 @@ HALL_CODES = np.array([5, 1, 3, 2, 6, 4], dtype=np.int64)
 @njit(cache=True, inline="always")
 def sector_index(theta_e: float, hall_angle: float) -> float:
     """Unwrapped sector index ``floor((θe − hall angle)/60°)`` (its change gives the direction)."""
-    return math.floor((theta_e - hall_angle) / SECTOR)
+    return math.floor((theta_e - hall_angle) * _PER_SECTOR)
 
 
 @njit(cache=True, inline="always")

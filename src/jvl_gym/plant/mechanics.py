@@ -38,7 +38,8 @@ def mech_step(theta: float, omega: float, drive: float, j: float, b: float, tc: 
     if omega == 0.0 and abs(drive) <= tc:
         return theta, 0.0, 0.0
     sgn = 1.0 if omega > 0.0 else (-1.0 if omega < 0.0 else (1.0 if drive > 0.0 else -1.0))
-    omega1 = (omega + h / j * (drive - tc * sgn)) / (1.0 + h * b / j)
+    h_j = h / j
+    omega1 = (omega + h_j * (drive - tc * sgn)) / (1.0 + h_j * b)
     if omega1 * sgn < 0.0 and tc > 0.0:
         omega1 = 0.0
     dtheta = 0.5 * h * (omega + omega1)
