@@ -9,6 +9,8 @@
   separate venv (``.venv-bench``, created here on first use: its dependencies conflict with
   ours), for the ×10 comparison of issue 6, also as simulated seconds per second (its step is
   ``tau`` = 100 µs of motor time, ours ``decimation`` × 1.92 ms).
+
+Every rate, GEM's included, is the best of :data:`WINDOWS` equal windows of its measuring time.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import os
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import gymnasium as gym
@@ -40,15 +43,36 @@ for a in acts[:100]:
     _, _, term, trunc, _ = env.step(a)
     if term or trunc:
         env.reset()
-n, t0 = 0, time.perf_counter()
-while time.perf_counter() - t0 < {seconds}:
-    for a in acts:
-        _, _, term, trunc, _ = env.step(a)
-        n += 1
-        if term or trunc:
-            env.reset()
-print(n / (time.perf_counter() - t0), env.unwrapped.physical_system.tau)
+best = 0.0
+for _ in range({windows}):  # the best window: other load on the machine only slows a window
+    n, t0 = 0, time.perf_counter()
+    while time.perf_counter() - t0 < {seconds} / {windows}:
+        for a in acts:
+            _, _, term, trunc, _ = env.step(a)
+            n += 1
+            if term or trunc:
+                env.reset()
+    best = max(best, n / (time.perf_counter() - t0))
+print(best, env.unwrapped.physical_system.tau)
 """
+
+
+#: each rate is the best of this many equal windows of the measuring time (other load on the
+#: 2-core machine only ever slows a window down; the best window is the code's own speed)
+WINDOWS = 5
+
+
+def best_rate(run: Callable[[int], None], batch: int, seconds: float) -> float:
+    """Best rate [calls of ``run``'s unit per second] over :data:`WINDOWS` windows that share
+    ``seconds``; ``run(batch)`` does ``batch`` units of work."""
+    best = 0.0
+    for _ in range(WINDOWS):
+        n, t0 = 0, time.perf_counter()
+        while time.perf_counter() - t0 < seconds / WINDOWS:
+            run(batch)
+            n += batch
+        best = max(best, n / (time.perf_counter() - t0))
+    return best
 
 
 def single_steps_per_second(env_id: str, seconds: float = 3.0, **kwargs: object) -> float:
@@ -58,14 +82,13 @@ def single_steps_per_second(env_id: str, seconds: float = 3.0, **kwargs: object)
         np.float32)
     for a in acts[:50]:
         env.step(a)
-    n, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds:
-        for a in acts:
+    def run(n_acts: int) -> None:
+        for a in acts[:n_acts]:
             _, _, term, trunc, _ = env.step(a)
-            n += 1
             if term or trunc:
                 env.reset()
-    return n / (time.perf_counter() - t0)
+
+    return best_rate(run, len(acts), seconds)
 
 
 def vector_steps_per_second(env_id: str, num_envs: int = 1024, seconds: float = 5.0) -> float:
@@ -75,12 +98,11 @@ def vector_steps_per_second(env_id: str, num_envs: int = 1024, seconds: float = 
         np.float32)
     for a in acts[:3]:
         venv.step(a)
-    n, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < seconds:
-        for a in acts:
+    def run(n_acts: int) -> None:
+        for a in acts[:n_acts]:
             venv.step(a)
-            n += num_envs
-    return n / (time.perf_counter() - t0)
+
+    return num_envs * best_rate(run, len(acts), seconds)
 
 
 def gem_steps_per_second(seconds: float = 3.0) -> tuple[float, float] | None:
@@ -90,7 +112,8 @@ def gem_steps_per_second(seconds: float = 3.0) -> tuple[float, float] | None:
         subprocess.run([sys.executable, "-m", "venv", str(BENCH_VENV)], check=True)
         subprocess.run([str(python), "-m", "pip", "install", "-q", "gym-electric-motor"],
                        check=True)
-    out = subprocess.run([str(python), "-c", GEM_SCRIPT.format(seconds=seconds)],
+    out = subprocess.run([str(python), "-c", GEM_SCRIPT.format(seconds=seconds,
+                                                                 windows=WINDOWS)],
                          capture_output=True, text=True,
                          env={**os.environ, "MPLBACKEND": "Agg"})
     if out.returncode != 0:
