@@ -3,8 +3,8 @@
 - single env steps/s of every jvl_gym env (the env class itself, one ``step`` call per step,
   random actions, reset when an episode ends), at the env's default decimation and at
   decimation 1 (one 520.8 Hz firmware sample per step);
-- vector env-steps/s with 1024 copies (native vector env, NEXT_STEP autoreset), and the same
-  in outer samples (1.92 ms of motor time) per second;
+- vector env-steps/s with 1024 copies (native vector env, NEXT_STEP autoreset), the same in
+  outer samples (1.92 ms of motor time) per second, and env-steps/s at decimation 1;
 - gym-electric-motor's ``Cont-CC-PMSM-v0`` single env steps/s, measured in the same run in a
   separate venv (``.venv-bench``, created here on first use: its dependencies conflict with
   ours), for the ×10 comparison of issue 6, also as simulated seconds per second (its step is
@@ -91,8 +91,10 @@ def single_steps_per_second(env_id: str, seconds: float = 3.0, **kwargs: object)
     return best_rate(run, len(acts), seconds)
 
 
-def vector_steps_per_second(env_id: str, num_envs: int = 1024, seconds: float = 5.0) -> float:
-    venv = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point")
+def vector_steps_per_second(env_id: str, num_envs: int = 1024, seconds: float = 5.0,
+                            **kwargs: object) -> float:
+    venv = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point",
+                        **kwargs)
     venv.reset(seed=0)
     acts = np.random.default_rng(0).uniform(-1, 1, (16, *venv.action_space.shape)).astype(
         np.float32)
@@ -134,7 +136,7 @@ def main() -> None:
         print("gym-electric-motor: not measured")
     print(f"{'env':26s} {'dec':>3s} {'single steps/s':>14s} {'x GEM':>6s} {'sim s/s':>8s} "
           f"{'x GEM':>6s} {'dec 1 steps/s':>13s} {'x GEM':>6s} "
-          f"{'vector(1024) steps/s':>20s} {'outer samples/s':>15s}")
+          f"{'vector(1024) steps/s':>20s} {'outer samples/s':>15s} {'vector dec 1':>12s}")
     for env_id in ENV_IDS:
         trials = "FilterTuning" in env_id
         dec = gym.make(env_id).unwrapped.core.decimation
@@ -143,6 +145,8 @@ def main() -> None:
                                                                          decimation=1)
         n_vec = 256 if trials else 1024
         vector = vector_steps_per_second(env_id, n_vec, seconds)
+        vec1 = vector if dec == 1 or trials else vector_steps_per_second(
+            env_id, n_vec, seconds, decimation=1)
         sim = single * dec * c.OUTER_DT
 
         def ratio(x: float, g: float | None) -> str:
@@ -151,7 +155,8 @@ def main() -> None:
         note = " (trials; 256 copies)" if trials else ""
         print(f"{env_id:26s} {dec:3d} {single:14,.0f} {ratio(single, gem and gem[0])} "
               f"{sim:8.1f} {ratio(sim, gem and gem[0] * gem[1])} {dec1:13,.0f} "
-              f"{ratio(dec1, gem and gem[0])} {vector:20,.0f} {vector * dec:15,.0f}{note}")
+              f"{ratio(dec1, gem and gem[0])} {vector:20,.0f} {vector * dec:15,.0f} "
+              f"{vec1:12,.0f}{note}")
 
 
 if __name__ == "__main__":
