@@ -77,7 +77,8 @@ def _phase(s: np.ndarray, i_soll: float, i_ist: float, k: int, kib1: float, kib0
 @njit(**KERNEL)
 def regulate(r: np.ndarray, s: np.ndarray) -> None:
     """Run the three current loops once and store UA/UB/UC_VAL (4.3.1)."""
-    # the six filter coefficients are read once for the three phases
+    # the six filter coefficients are read once for the three phases; IA..IC_SOLL, IA..IC_IST
+    # and UA..UC_VAL are consecutive registers (3.2.133–3.2.147)
     kib1 = fx8(r[R.KIB1])
     kib0 = fx8(r[R.KIB0])
     kifx2 = fx4(r[R.KIFX2])
