@@ -10,7 +10,7 @@
   ours), for the ×10 comparison of issue 6, also as simulated seconds per second (its step is
   ``tau`` = 100 µs of motor time, ours ``decimation`` × 1.92 ms).
 
-Every rate, GEM's included, is the best of :data:`WINDOWS` equal windows of its measuring time.
+Every rate, GEM's included, is the best of equal windows of its measuring time (best_rate.py).
 """
 
 from __future__ import annotations
@@ -18,12 +18,11 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import time
-from collections.abc import Callable
 from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
+from best_rate import best_rate  # benchmarks/ is the script's directory
 
 import jvl_gym  # noqa: F401
 from jvl_gym import constants as c
@@ -31,6 +30,7 @@ from jvl_gym.envs import ENV_IDS
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCH_VENV = ROOT / ".venv-bench"
+BEST_RATE_SOURCE = (Path(__file__).parent / "best_rate.py").read_text()
 GEM_SCRIPT = """
 import time, warnings
 warnings.filterwarnings("ignore")
@@ -43,36 +43,16 @@ for a in acts[:100]:
     _, _, term, trunc, _ = env.step(a)
     if term or trunc:
         env.reset()
-best = 0.0
-for _ in range({windows}):  # the best window: other load on the machine only slows a window
-    n, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < {seconds} / {windows}:
-        for a in acts:
-            _, _, term, trunc, _ = env.step(a)
-            n += 1
-            if term or trunc:
-                env.reset()
-    best = max(best, n / (time.perf_counter() - t0))
-print(best, env.unwrapped.physical_system.tau)
+
+def run(n_acts):
+    for a in acts[:n_acts]:
+        _, _, term, trunc, _ = env.step(a)
+        if term or trunc:
+            env.reset()
+
+
+print(best_rate(run, len(acts), SECONDS), env.unwrapped.physical_system.tau)
 """
-
-
-#: each rate is the best of this many equal windows of the measuring time (other load on the
-#: 2-core machine only ever slows a window down; the best window is the code's own speed)
-WINDOWS = 5
-
-
-def best_rate(run: Callable[[int], None], batch: int, seconds: float) -> float:
-    """Best rate [calls of ``run``'s unit per second] over :data:`WINDOWS` windows that share
-    ``seconds``; ``run(batch)`` does ``batch`` units of work."""
-    best = 0.0
-    for _ in range(WINDOWS):
-        n, t0 = 0, time.perf_counter()
-        while time.perf_counter() - t0 < seconds / WINDOWS:
-            run(batch)
-            n += batch
-        best = max(best, n / (time.perf_counter() - t0))
-    return best
 
 
 def single_steps_per_second(env_id: str, seconds: float = 3.0, **kwargs: object) -> float:
@@ -82,6 +62,7 @@ def single_steps_per_second(env_id: str, seconds: float = 3.0, **kwargs: object)
         np.float32)
     for a in acts[:50]:
         env.step(a)
+
     def run(n_acts: int) -> None:
         for a in acts[:n_acts]:
             _, _, term, trunc, _ = env.step(a)
@@ -100,6 +81,7 @@ def vector_steps_per_second(env_id: str, num_envs: int = 1024, seconds: float = 
         np.float32)
     for a in acts[:3]:
         venv.step(a)
+
     def run(n_acts: int) -> None:
         for a in acts[:n_acts]:
             venv.step(a)
@@ -114,8 +96,8 @@ def gem_steps_per_second(seconds: float = 3.0) -> tuple[float, float] | None:
         subprocess.run([sys.executable, "-m", "venv", str(BENCH_VENV)], check=True)
         subprocess.run([str(python), "-m", "pip", "install", "-q", "gym-electric-motor"],
                        check=True)
-    out = subprocess.run([str(python), "-c", GEM_SCRIPT.format(seconds=seconds,
-                                                                 windows=WINDOWS)],
+    script = f"{BEST_RATE_SOURCE}\nSECONDS = {seconds}\n{GEM_SCRIPT}"
+    out = subprocess.run([str(python), "-c", script],
                          capture_output=True, text=True,
                          env={**os.environ, "MPLBACKEND": "Agg"})
     if out.returncode != 0:

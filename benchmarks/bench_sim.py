@@ -13,12 +13,10 @@ from __future__ import annotations
 import time
 
 import numpy as np
+from best_rate import best_rate  # benchmarks/ is the script's directory
 
 from jvl_gym import MotorArray
 from jvl_gym import constants as c
-
-#: rates are the best of this many equal windows of the measuring time
-WINDOWS = 5
 
 
 def _array(n: int) -> MotorArray:
@@ -32,15 +30,7 @@ def _array(n: int) -> MotorArray:
 def inner_steps_per_second(n: int, seconds: float = 2.0) -> float:
     m = _array(n)
     outer = max(1, int(2e5 / (n * c.INNER_PER_OUTER)))
-    best = 0.0
-    for _ in range(WINDOWS):  # the best window: other load on the machine only slows one down
-        done = 0
-        t0 = time.perf_counter()
-        while time.perf_counter() - t0 < seconds / WINDOWS:
-            m.step(outer)
-            done += outer
-        best = max(best, done * c.INNER_PER_OUTER * n / (time.perf_counter() - t0))
-    return best
+    return best_rate(m.step, outer, seconds) * c.INNER_PER_OUTER * n
 
 
 def outer_steps_per_second_single(calls: bool, seconds: float = 2.0) -> float:
