@@ -52,11 +52,11 @@ from .firmware.noise import gauss
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
 from .jit import KERNEL, KERNEL_PARALLEL
-from .plant.coil import coil_step_decayed, half_step_decay, phase_to_vector, vector_to_phases
+from .plant.coil import coil_constants, coil_step_prepared, phase_to_vector, vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
-from .plant.mechanics import end_stop_torque, mech_step
-from .plant.supply import bus_step
+from .plant.mechanics import end_stop_torque, mech_constants, mech_step_prepared
+from .plant.supply import bus_constants, bus_step_prepared
 
 _H = c.INNER_DT
 _HALF_PWM_PER_VOLT = 1.0 / (2.0 * c.PWM_FULL)  #: bus volts → phase volts per PWM count
@@ -247,13 +247,14 @@ def _measure(r: np.ndarray, i_amp: float, p: np.ndarray, counts_per_amp: float, 
 
 @njit(**KERNEL)
 def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
-                 buf: np.ndarray, rec: bool, fmt: np.ndarray, decay: float,
-                 counts_per_amp: float) -> None:
+                 buf: np.ndarray, rec: bool, fmt: np.ndarray, counts_per_amp: float,
+                 k_coil: tuple, k_mech: tuple, k_bus: tuple) -> None:
     """One 128 µs current-loop sample and the plant over it (step 4 of the module docstring).
 
-    ``decay`` (the coil's ``half_step_decay(R, L, 128 µs)``) and ``counts_per_amp`` (ADC counts
-    per ampere) depend on the motor's parameters only: the caller computes them once per call,
-    not two divisions and an exponential per 128 µs.
+    ``counts_per_amp`` (ADC counts per ampere) and the plant factors ``k_coil``, ``k_mech`` and
+    ``k_bus`` (``coil_constants``, ``mech_constants``, ``bus_constants`` of ``jvl_gym.plant``)
+    depend on the motor's parameters only: the caller computes them once per call, not nine
+    divisions and an exponential per 128 µs.
     """
     theta = s[L.S_THETA]
     omega = s[L.S_OMEGA]
@@ -330,16 +331,17 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     kv = s[L.S_UBUS] * _HALF_PWM_PER_VOLT
     s_u = phase_to_vector(ua * kv, ub * kv, uc * kv)
     omega_mid = omega + 0.5 * _H * s[L.S_ACC]
-    s1, torque, p_el, p_cu = coil_step_decayed(s_i, s_u, theta_e, pp * omega_mid, p[L.P_R],
-                                               p[L.P_L], p[L.P_LAMBDA], pp, _H, decay)
+    s1, torque, p_el, p_cu = coil_step_prepared(s_i, s_u, theta_e, pp * omega_mid, p[L.P_R],
+                                                p[L.P_LAMBDA], pp, _H, k_coil)
     t_stop = end_stop_torque(theta, omega, p[L.P_STOP_LO], p[L.P_STOP_HI], p[L.P_STOP_K],
                              p[L.P_STOP_D])
     load = u[L.I_LOAD_TORQUE]
     drive = torque - load + t_stop
     if p[L.P_TORQUE_NOISE] > 0.0:
         drive += p[L.P_TORQUE_NOISE] * gauss(key, tick, 4)
-    j = p[L.P_J_MOTOR] + p[L.P_J_LOAD]
-    theta1, omega1, e_fric = mech_step(theta, omega, drive, j, p[L.P_VISCOUS], p[L.P_COULOMB], _H)
+    theta1, omega1, e_fric = mech_step_prepared(theta, omega, drive,
+                                                p[L.P_J_MOTOR] + p[L.P_J_LOAD],
+                                                p[L.P_COULOMB], _H, k_mech)
     s[L.S_THETA] = theta1
     s[L.S_OMEGA] = omega1
     s[L.S_ACC] = (omega1 - omega) * c.INNER_HZ
@@ -349,9 +351,8 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     s[L.S_E_COPPER] += p_cu * _H
     s[L.S_E_FRICTION] += e_fric
     s[L.S_E_LOAD] += load * (theta1 - theta)
-    ubus, dump_on, e_dump, e_sup = bus_step(s[L.S_UBUS], p_el, u[L.I_SUPPLY_VOLTS], p[L.P_C_BUS],
-                                            p[L.P_R_SUPPLY], p[L.P_U_DUMP], p[L.P_R_DUMP],
-                                            s[L.S_DUMP_ON], _H)
+    ubus, dump_on, e_dump, e_sup = bus_step_prepared(s[L.S_UBUS], p_el, u[L.I_SUPPLY_VOLTS],
+                                                     p[L.P_U_DUMP], s[L.S_DUMP_ON], _H, k_bus)
     s[L.S_UBUS] = ubus
     s[L.S_DUMP_ON] = dump_on
     s[L.S_E_DUMP] += e_dump
@@ -363,15 +364,17 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
 
 @njit(**KERNEL)
 def _advance(r, s, p, u, key, buf, rec, fmt, n_outer, input_plan, i):
-    decay = half_step_decay(p[L.P_R], p[L.P_L], _H)
     counts_per_amp = 1.0 / p[L.P_AMPS_PER_COUNT]
+    k_coil = coil_constants(p[L.P_R], p[L.P_L], p[L.P_LAMBDA], _H)
+    k_mech = mech_constants(p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_VISCOUS], _H)
+    k_bus = bus_constants(p[L.P_C_BUS], p[L.P_R_SUPPLY], p[L.P_R_DUMP], _H)
     for t in range(n_outer):
         if input_plan.shape[0] > 0:
             for k in range(u.shape[0]):
                 u[k] = input_plan[t, i, k]
         outer_firmware(r, s, p, u, key, buf, rec, fmt)
         for _k in range(c.INNER_PER_OUTER):
-            inner_sample(r, s, p, u, key, buf, rec, fmt, decay, counts_per_amp)
+            inner_sample(r, s, p, u, key, buf, rec, fmt, counts_per_amp, k_coil, k_mech, k_bus)
 
 
 @njit(cache=True, inline="always")

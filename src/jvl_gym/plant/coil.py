@@ -47,9 +47,9 @@ def vector_to_phases(s: complex) -> tuple[float, float, float]:
 
 
 @njit(cache=True, inline="always")
-def _current_at(s0: complex, s_u: complex, k_emf_over_c: complex, r: float, a_t: float,
+def _current_at(s0: complex, s_u: complex, k_emf_over_c: complex, inv_r: float, a_t: float,
                 rot: complex) -> complex:
-    return a_t * s0 + (1.0 - a_t) / r * s_u - k_emf_over_c * (rot - a_t)
+    return a_t * s0 + (1.0 - a_t) * inv_r * s_u - k_emf_over_c * (rot - a_t)
 
 
 @njit(cache=True, inline="always")
@@ -64,9 +64,15 @@ def expi(x: float) -> complex:
 
 
 @njit(cache=True, inline="always")
-def half_step_decay(r: float, ell: float, h: float) -> float:
-    """``e^{−h/(2τ)}`` with ``τ = L/R``: the current's decay over half a step of ``h`` [s]."""
-    return math.exp(-0.5 * h * r / ell)
+def coil_constants(r: float, ell: float, lam: float, h: float) -> tuple[float, float, float, float]:
+    """The coil's parameter-only factors for steps of ``h`` [s]: ``(e^{−h/(2τ)}, 1/R, 1/τ, λ/L)``
+    with ``τ = L/R``.
+
+    The kernel computes them once per call for :func:`coil_step_prepared` instead of four
+    divisions and an exponential every 128 µs.
+    """
+    inv_tau = r / ell
+    return math.exp(-0.5 * h * inv_tau), 1.0 / r, inv_tau, lam / ell
 
 
 @njit(**KERNEL)
@@ -100,27 +106,27 @@ def coil_step(s0: complex, s_u: complex, theta_e: float, omega_e: float, r: floa
     p_copper : float
         Mean copper loss [W].
     """
-    return coil_step_decayed(s0, s_u, theta_e, omega_e, r, ell, lam, pole_pairs, h,
-                             half_step_decay(r, ell, h))
+    return coil_step_prepared(s0, s_u, theta_e, omega_e, r, lam, pole_pairs, h,
+                              coil_constants(r, ell, lam, h))
 
 
 @njit(cache=True, inline="always")
-def coil_step_decayed(s0: complex, s_u: complex, theta_e: float, omega_e: float, r: float,
-                      ell: float, lam: float, pole_pairs: float, h: float, a_h: float):
-    """:func:`coil_step` given ``a_h = half_step_decay(r, ell, h)`` (the kernel computes it once
-    per call, not once per 128 µs sample). Same returns as :func:`coil_step`."""
-    inv_tau = r / ell
+def coil_step_prepared(s0: complex, s_u: complex, theta_e: float, omega_e: float, r: float,
+                       lam: float, pole_pairs: float, h: float,
+                       k: tuple[float, float, float, float]):
+    """:func:`coil_step` given ``k = coil_constants(r, ell, lam, h)``; same returns."""
+    a_h, inv_r, inv_tau, lam_over_l = k
     cos_e = math.cos(theta_e)
     sin_e = math.sin(theta_e)
     e0 = complex(cos_e, sin_e)
     # back-EMF term ω λ/L · e^{jθe} / (1/τ + jω), the division written out (1/τ > 0)
-    g = omega_e * lam / (ell * (inv_tau * inv_tau + omega_e * omega_e))
+    g = omega_e * lam_over_l / (inv_tau * inv_tau + omega_e * omega_e)
     k_emf_over_c = complex(g * (cos_e * inv_tau + sin_e * omega_e),
                            g * (sin_e * inv_tau - cos_e * omega_e))
     rot_h = expi(omega_e * 0.5 * h)
     rot_1 = rot_h * rot_h
-    s_m = _current_at(s0, s_u, k_emf_over_c, r, a_h, rot_h)
-    s1 = _current_at(s0, s_u, k_emf_over_c, r, a_h * a_h, rot_1)
+    s_m = _current_at(s0, s_u, k_emf_over_c, inv_r, a_h, rot_h)
+    s1 = _current_at(s0, s_u, k_emf_over_c, inv_r, a_h * a_h, rot_1)
     e_m = e0 * rot_h
     e_1 = e0 * rot_1
     t0 = s0.real * cos_e + s0.imag * sin_e  # Re(s e^{−jθ}) at the start, middle and end

@@ -28,6 +28,14 @@ def end_stop_torque(theta: float, omega: float, lo: float, hi: float, k: float, 
     return 0.0
 
 
+@njit(cache=True, inline="always")
+def mech_constants(j: float, b: float, h: float) -> tuple[float, float]:
+    """The rotor's parameter-only factors for steps of ``h`` [s]: ``(h/J, 1/(1 + h·b/J))``
+    (computed once per kernel call for :func:`mech_step_prepared`, not every 128 µs)."""
+    h_j = h / j
+    return h_j, 1.0 / (1.0 + h_j * b)
+
+
 @njit(**KERNEL)
 def mech_step(theta: float, omega: float, drive: float, j: float, b: float, tc: float, h: float):
     """Advance the mechanics by ``h`` [s] under the net driving torque ``drive`` [N·m].
@@ -35,11 +43,18 @@ def mech_step(theta: float, omega: float, drive: float, j: float, b: float, tc: 
     ``drive`` is the electromagnetic torque minus the load torque plus the end-stop torque,
     before friction. Returns ``(theta1, omega1, friction_energy)``.
     """
+    return mech_step_prepared(theta, omega, drive, j, tc, h, mech_constants(j, b, h))
+
+
+@njit(cache=True, inline="always")
+def mech_step_prepared(theta: float, omega: float, drive: float, j: float, tc: float, h: float,
+                       k: tuple[float, float]):
+    """:func:`mech_step` given ``k = mech_constants(j, b, h)``; same returns."""
     if omega == 0.0 and abs(drive) <= tc:
         return theta, 0.0, 0.0
     sgn = 1.0 if omega > 0.0 else (-1.0 if omega < 0.0 else (1.0 if drive > 0.0 else -1.0))
-    h_j = h / j
-    omega1 = (omega + h_j * (drive - tc * sgn)) / (1.0 + h_j * b)
+    h_j, inv_den = k
+    omega1 = (omega + h_j * (drive - tc * sgn)) * inv_den
     if omega1 * sgn < 0.0 and tc > 0.0:
         omega1 = 0.0
     dtheta = 0.5 * h * (omega + omega1)
