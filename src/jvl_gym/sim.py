@@ -84,9 +84,10 @@ def _as_index(index: Any, n: int) -> np.ndarray:
             raise RegisterShapeError(f"boolean index must have shape ({n},), got {arr.shape}")
         return np.flatnonzero(arr).astype(np.int64)
     arr = np.atleast_1d(arr).astype(np.int64)
-    if arr.ndim != 1 or (arr.size and (arr.min() < -n or arr.max() >= n)):
+    low, high = (arr.min(), arr.max()) if arr.ndim == 1 and arr.size else (0, 0)
+    if arr.ndim != 1 or low < -n or high >= n:
         raise RegisterShapeError(f"index {index!r} out of range for {n} motors")
-    return np.where(arr < 0, arr + n, arr)
+    return np.where(arr < 0, arr + n, arr) if low < 0 else arr
 
 
 class MotorArray:
@@ -436,8 +437,7 @@ class MotorArray:
             raise RegisterShapeError(
                 f"{reg.name} (register {reg.number}): expected a scalar or shape ({size},), "
                 f"got shape {np.shape(value)}")
-        raw = to_raw(reg, np.broadcast_to(arr, (size,)))
-        return np.asarray(raw, dtype=np.int64).reshape(size)
+        return to_raw(reg, arr if arr.ndim else arr.repeat(size))
 
     def _store(self, reg: Register, idx: np.ndarray, raw: np.ndarray) -> None:
         num = reg.number

@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 
 from .errors import ReadOnlyRegisterError, RegisterRangeError, RegisterShapeError
-from .table import FORMAT_RAW_RANGE, Access, Format, Register
+from .table import FORMAT_RAW_RANGE, Access, Format, Register, _round_half_away
 
 __all__ = [
     "to_raw",
@@ -50,6 +50,9 @@ __all__ = [
 ]
 
 _FIXED = (Format.FIXED4, Format.FIXED8)
+#: :func:`to_raw` converts up to this many values one by one as Python floats: the same IEEE
+#: operations as its numpy path, without numpy's fixed cost per call (~20 µs for a few values)
+_SCALAR_MAX = 16
 _SIGNED16 = (Format.INTEGER, Format.FIXED4, Format.FIXED8)
 
 
@@ -121,6 +124,12 @@ def to_raw(reg: Register, value: Any) -> np.ndarray:
             f"{reg.name} (register {reg.number}): value {value!r} is not a number "
             f"(manual {reg.section})") from exc
     lo, hi = _user_bounds(reg)
+    if v.size <= _SCALAR_MAX:
+        values = v.ravel().tolist()
+        if all(lo <= x <= hi for x in values):  # False for NaN and ±inf
+            raw = [min(max(_round_half_away(x * reg.scale), reg.raw_min), reg.raw_max)
+                   for x in values]
+            return np.array(raw, dtype=np.int64).reshape(v.shape)
     bad = ~np.isfinite(v) | (v < lo) | (v > hi)
     if np.any(bad):
         flat = v[bad] if v.ndim else v.reshape(1)
