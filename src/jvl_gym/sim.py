@@ -24,8 +24,7 @@ from .firmware import regs as R
 from .firmware import write_rules as W
 from .firmware.noise import motor_keys
 from .kernel import run_parallel, run_serial
-from .plant.encoder import eldeg, encoder_count
-from .plant.hall import SECTOR, sector_index
+from .power_on import power_on_rows
 from .registers import (
     MAC050_141,
     Access,
@@ -134,9 +133,13 @@ class MotorArray:
             cfg = load_motor(mtype)
             configs.setdefault(cfg.name, cfg)
             self._type_of[i] = list(configs).index(cfg.name)
-        self._configs = list(configs.values())
         self._setup_arg = setup
-        self._rom = np.stack([self._rom_image(cfg, setup) for cfg in self._configs])
+        self._configs: list[MotorConfig] = []
+        self._rom = np.zeros((0, L.N_REGS), dtype=np.int64)
+        self._type_params = np.zeros((0, L.N_PARAM))
+        self._type_inputs = np.zeros((0, L.N_INPUT))
+        for cfg in configs.values():
+            self._add_type(cfg)
         if isinstance(seed, (list, tuple, np.ndarray)):
             keys = np.asarray(seed, dtype=np.uint64)
             if keys.shape != (self.n,):
@@ -171,6 +174,20 @@ class MotorArray:
         image[R.MOTOR_TYPE] = cfg.motor_type_code
         return image
 
+    def _add_type(self, cfg: MotorConfig) -> None:
+        """Join motor type ``cfg`` to the pool: its ROM image, parameters and inputs at rest."""
+        self._configs.append(cfg)
+        self._rom = np.concatenate([self._rom, self._rom_image(cfg, self._setup_arg)[None]])
+        self._type_params = np.concatenate([self._type_params, self._config_params(cfg)[None]])
+        self._type_inputs = np.concatenate([self._type_inputs, self._rest_inputs(cfg)[None]])
+
+    def _rest_inputs(self, cfg: MotorConfig) -> np.ndarray:
+        """World inputs at rest: supply on, home sensor from the position, nothing else."""
+        inputs = np.zeros(L.N_INPUT)
+        inputs[L.I_SUPPLY_VOLTS] = cfg.supply_voltage
+        inputs[L.I_HOME] = -1.0
+        return inputs
+
     def _config_params(self, cfg: MotorConfig) -> np.ndarray:
         p = np.zeros(L.N_PARAM)
         p[L.P_J_MOTOR] = cfg.rotor_inertia
@@ -200,8 +217,7 @@ class MotorArray:
             return names.index(name)
         cfg = load_motor(name)  # raises on an unknown type, before any motor changes
         if cfg.name not in names:
-            self._configs.append(cfg)
-            self._rom = np.concatenate([self._rom, self._rom_image(cfg, self._setup_arg)[None]])
+            self._add_type(cfg)
             names.append(cfg.name)
         return names.index(cfg.name)
 
@@ -241,12 +257,9 @@ class MotorArray:
                 raise ValueError(f"got {len(names)} motor types for {idx.size} motors")
             codes = np.array([self._type_code(name) for name in names], dtype=np.int64)
             self._type_of[idx] = codes
-        for k in np.unique(self._type_of[idx]):
-            sel = idx[self._type_of[idx] == k]
-            self.params[sel] = self._config_params(self._configs[k])
-            self.inputs[sel] = 0.0
-            self.inputs[sel, L.I_SUPPLY_VOLTS] = self._configs[k].supply_voltage
-            self.inputs[sel, L.I_HOME] = -1.0
+        types = self._type_of[idx]
+        self.params[idx] = self._type_params[types]
+        self.inputs[idx] = self._type_inputs[types]
         for name, val in values.items():
             if name in PARAMETER_KEYWORDS:
                 self.params[idx, PARAMETER_KEYWORDS[name]] = val
@@ -267,64 +280,25 @@ class MotorArray:
             arr = np.asarray(val, dtype=np.float64)
             if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != size):
                 raise ValueError(f"{name}: expected a scalar or shape ({size},), got {arr.shape}")
-            if not np.all(np.isfinite(arr)) and name not in ("home_position",):
+            if not np.isfinite(arr).all() and name not in ("home_position",):
                 raise ValueError(f"{name}: values must be finite, got {val!r}")
-            if name in _NONNEGATIVE and np.any(arr < 0):
+            if name in _NONNEGATIVE and (arr < 0).any():
                 raise ValueError(f"{name}: values must be >= 0, got {val!r}")
-            if name in _POSITIVE and np.any(arr <= 0):
+            if name in _POSITIVE and (arr <= 0).any():
                 raise ValueError(f"{name}: values must be > 0, got {val!r}")
             if name in ("pwm_delay_samples", "hall_start") and not np.all(M.member(arr, (0, 1))):
                 raise ValueError(f"{name} must be 0 or 1, got {val!r}")
-            out[name] = np.broadcast_to(arr, (size,)).copy()
+            out[name] = arr.copy() if arr.ndim else arr.repeat(size)
         return out
 
     def _power_on(self, idx: np.ndarray) -> None:
         """Registers from flash or ROM, counters cleared, mode from STARTMODE (3.2.37)."""
-        for k in np.unique(self._type_of[idx]):
-            sel = idx[self._type_of[idx] == k]
-            self.regs[sel] = self._rom[k]
+        self.regs[idx] = self._rom[self._type_of[idx]]
         if self._flash is not None:
             fl = idx[self._has_flash[idx]]
             if fl.size:
                 self.regs[fl] = self._flash[fl]
-        for num in (R.P_IST, R.V_IST, R.P_FNC, R.FLWERR, R.FNCERR, R.I2T, R.UIT, R.REC_CNT,
-                    R.FNC_OUT, R.FF_OUT, R.VB_OUT, R.VF_OUT, R.V_EXT, R.I_NOM, R.PHI_SOLL,
-                    R.IA_SOLL, R.IB_SOLL, R.IC_SOLL, R.IA_IST, R.IB_IST, R.IC_IST, R.UA_VAL,
-                    R.UB_VAL, R.UC_VAL, R.V_ELDEG):
-            self.regs[idx, num] = 0
-        self.regs[idx, R.ERR_STAT] &= (c.RELPOSPSOLL | c.RELPOSPFNC | c.DIS_P_LIM)
-        self.regs[idx, R.CNTRL_BITS] &= ~(c.RECORDBIT | c.REWINDBIT | c.MAN_RESYNC)
-        self.regs[idx, R.MODE_REG] = c.INIT_MODE
-        s = self.state
-        for i in idx:
-            theta = s[i, L.S_THETA]
-            enc = encoder_count(theta)
-            s[i, L.S_ENC0] = enc
-            s[i, L.S_ENC_PREV] = enc
-            p = self.params[i]
-            theta_e = p[L.P_POLE_PAIRS] * theta + p[L.P_THETA_E0]
-            sec = sector_index(theta_e, p[L.P_HALL_ANGLE])
-            s[i, L.S_HALL_SECTOR] = sec
-            if p[L.P_HALL_START] > 0.5:  # only the hall sector is known: start at its centre
-                centre = p[L.P_HALL_ANGLE] + (sec + 0.5) * SECTOR
-                el = int(math.floor(centre * c.ELDEG_PER_TURN / (2 * math.pi))) % 2048
-                s[i, L.S_ELDEG_OFS] = el - enc
-                s[i, L.S_HALL_SYNCED] = 0.0
-            else:
-                el = eldeg(theta_e)
-                s[i, L.S_HALL_SYNCED] = 1.0
-            s[i, L.S_ELDEG_PREV] = enc
-            self.regs[i, R.ELDEG_IST] = el
-        s[idx, L.S_PENDING_MODE] = -1.0
-        self.regs[idx, R.U_SUPPLY] = np.round(s[idx, L.S_UBUS] / c.U_SUPPLY_VOLTS_PER_UNIT)
-        self._latched_cntrl[idx] = self.regs[idx, R.CNTRL_BITS]
-        home = self.regs[idx, R.HOME_MODE] & 0xFF
-        start = np.where(M.member(home, (12, 13, 14)), home, self.regs[idx, R.STARTMODE])
-        go = idx[(start > 0) & (start < 25)]
-        if go.size:
-            req = start[(start > 0) & (start < 25)]
-            ok = M.check_requests(self.regs, self.state, go, req) == M.OK
-            M.apply_requests(self.regs, self.state, go[ok], req[ok])
+        power_on_rows(self.regs, self.state, self.params, self._latched_cntrl, idx)
 
     @property
     def interface_bits(self) -> np.ndarray:
