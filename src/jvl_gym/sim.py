@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -391,6 +391,15 @@ class MotorArray:
         raw = self._validated_raw(reg, value, idx.size)
         self._store(reg, idx, raw)
 
+    def _write_many(self, values: Mapping[str | int, Any], index: Any = None) -> None:
+        """Write several registers (key → value in user units, in this order) to the motors
+        ``index``; every value is validated before the first is stored, as by :meth:`write`."""
+        idx = _as_index(index, self.n)
+        staged = [(reg, self._validated_raw(reg, value, idx.size))
+                  for reg, value in ((self._lookup(key), v) for key, v in values.items())]
+        for reg, raw in staged:
+            self._store(reg, idx, raw)
+
     def write_raw(self, key: str | int, raw: Any, index: Any = None) -> None:
         """Write stored integers (Fixed4 = value·4096, …) with the same validation as write."""
         reg = self._lookup(key)
@@ -551,15 +560,9 @@ class MotorArray:
                    ) -> None:
         """Write a register set (name → value) to the selected motors, validated as a whole."""
         cfg = load_setup(setup)
-        idx = _as_index(index, self.n)
-        staged = []
-        for name, value in cfg.registers.items():
-            reg = self._lookup(name)
-            if reg.number == R.MODE_REG:
-                raise RegisterError("a setup must not contain MODE_REG")
-            staged.append((reg, self._validated_raw(reg, value, idx.size)))
-        for reg, raw in staged:
-            self._store(reg, idx, raw)
+        if any(self._lookup(name).number == R.MODE_REG for name in cfg.registers):
+            raise RegisterError("a setup must not contain MODE_REG")
+        self._write_many(cfg.registers, index)
 
     # ------------------------------------------------------------------ sample buffer
     def _ensure_buffer(self) -> None:

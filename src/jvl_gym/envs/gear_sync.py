@@ -253,12 +253,10 @@ class GearSyncVectorEnv(MotorVectorEnv):
         gearf1 = np.round(ratio * _GEARF2)
         self.gear[idx] = gearf1 / _GEARF2
         m = self.motors
-        m.write("GEARF1", gearf1, index=idx)
-        m.write("GEARF2", _GEARF2, index=idx)
-        m.write("V_SOLL", round(c.rpm_to_v_soll(4000.0)), index=idx)
         load = draws["r0"] * draws["tension_ref"] / self.gear_ratio
         m.inputs[idx, L.I_LOAD_TORQUE] = load
-        m.write("MODE_REG", c.AG_MODE, index=idx)
+        m._write_many({"GEARF1": gearf1, "GEARF2": _GEARF2,
+                       "V_SOLL": round(c.rpm_to_v_soll(4000.0)), "MODE_REG": c.AG_MODE}, idx)
         # the motor already holds the pre-tension: the VF integrator carries the load torque
         kvout = m.regs[idx, R.KVOUT] / 256.0
         m.state[idx, L.S_Y1] = load / self.peak_torque(idx) * c.VF_FULL / kvout
