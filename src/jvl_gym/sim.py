@@ -34,7 +34,7 @@ from .registers import (
     RegisterError,
     RegisterShapeError,
 )
-from .registers.formats import from_raw, to_raw
+from .registers.formats import from_raw, raws_of_floats, to_raw
 
 __all__ = ["MotorArray", "ModeError", "PARAMETER_KEYWORDS"]
 
@@ -65,6 +65,8 @@ _POSITIVE = {"phase_resistance", "phase_inductance", "rotor_inertia", "flux_link
 _STATE_KEYWORDS = {"initial_angle", "initial_speed"}
 
 _PARALLEL_MIN_MOTORS = 32
+#: modes that record into the sample buffer (allocated on first use)
+_RECORDING_MODES = frozenset({c.TESTU_MODE, c.TESTA_MODE, c.TESTKI_MODE, c.TESTTQ_MODE})
 
 
 class ModeError(RegisterError):
@@ -415,6 +417,10 @@ class MotorArray:
             raise ReadOnlyRegisterError(
                 f"{reg.name} (register {reg.number}) is {reg.access.value} (manual "
                 f"{reg.section}); it cannot be written")
+        if type(value) in (int, float):  # a Python scalar: convert it once, then broadcast
+            raw = raws_of_floats(reg, [float(value)])
+            if raw is not None:
+                return np.full(size, raw[0], dtype=np.int64)
         arr = np.asarray(value, dtype=np.float64) if not isinstance(value, np.ndarray) else value
         if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != size):
             raise RegisterShapeError(
@@ -457,13 +463,12 @@ class MotorArray:
         if problem is not None:
             raise ModeError(f"MODE_REG write refused: {problem}. Nothing was changed.")
         special = req >= 256
-        if np.any(special):
+        if special.any():
             self._safe_special(idx[special], req[special])
-        normal = ~special
-        if np.any(M.member(req[normal], (c.TESTU_MODE, c.TESTA_MODE, c.TESTKI_MODE,
-                                         c.TESTTQ_MODE))):
+            idx, req = idx[~special], req[~special]
+        if not _RECORDING_MODES.isdisjoint(req.tolist()):
             self._ensure_buffer()
-        M.apply_requests(self.regs, self.state, idx[normal], req[normal])
+        M.apply_requests(self.regs, self.state, idx, req)
 
     # ------------------------------------------------------------------ safe mode, flash
     def _safe_special(self, idx: np.ndarray, req: np.ndarray) -> None:

@@ -255,7 +255,9 @@ class MotorVectorEnv(VectorEnv, ABC):
     def _reset_envs(self, idx: np.ndarray, seeds: Sequence[int | None],
                     options: Mapping[str, Any] | None) -> None:
         options = dict(options or {})
-        ranges = self._check_ranges({**self.ranges, **options.pop("randomization", {})})
+        randomization = options.pop("randomization", None)
+        ranges = (self.ranges if randomization is None
+                  else self._check_ranges({**self.ranges, **randomization}))
         types = (self._check_types(options.pop("motor_type")) if "motor_type" in options
                  else self.motor_types)
         if options:
@@ -274,8 +276,9 @@ class MotorVectorEnv(VectorEnv, ABC):
             u_type[j] = rng.random()
             keys[j] = rng.integers(0, 2**64 - 1, size=2, dtype=np.uint64, endpoint=True)
             rngs.append(rng)
-        draws = {name: ranges[name][0] + u[:, k] * (ranges[name][1] - ranges[name][0])
-                 for k, name in enumerate(names)}
+        low = np.array([ranges[name][0] for name in names])
+        high = np.array([ranges[name][1] for name in names])
+        draws = dict(zip(names, low[:, None] + u.T * (high - low)[:, None]))
         names = [types[min(int(x * len(types)), len(types) - 1)] for x in u_type]
         self._type_names[idx] = names
         self.motors.keys[idx] = keys[:, 0]

@@ -228,6 +228,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
 
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
+        self.line[idx] = 0.0  # wound, master angle, time, counts, integral, slack
         for name in ("ea", "thickness", "r0", "span", "tension_ref"):
             getattr(self, name)[idx] = draws[name]
         self.profile.reset(idx, rngs, draws["line_speed"], draws["ramp_time"],
@@ -235,17 +236,9 @@ class GearSyncVectorEnv(MotorVectorEnv):
                            draws["ripple"])
         strain_ref = draws["tension_ref"] / draws["ea"]
         self.strain[idx] = strain_ref
-        self.wound[idx] = 0.0
         self.radius[idx] = draws["r0"]
-        self.force[idx] = draws["tension_ref"]
-        self.measured[idx] = draws["tension_ref"]
-        self.prev_measured[idx] = draws["tension_ref"]
-        self.master_theta[idx] = 0.0
-        self.time[idx] = 0.0
-        self.count_acc[idx] = 0.0
-        self.pulses[idx] = 0.0
-        self.error_integral[idx] = 0.0
-        self.slack_count[idx] = 0
+        for name in ("force", "measured", "prev_measured"):
+            getattr(self, name)[idx] = draws["tension_ref"]
         # nominal gear: at the core radius and 0 V the winder runs at v1/(1 − ε_ref)
         motor_per_master = (self.master_radius / draws["r0"] * self.gear_ratio
                             / (1.0 - strain_ref) / _AG_CENTRE)
