@@ -264,24 +264,22 @@ class MotorVectorEnv(VectorEnv, ABC):
             raise ValueError(f"unknown reset options {sorted(options)}; known: "
                              "randomization, motor_type, reset_mask")
         names = self._range_names
-        u = np.empty((idx.size, len(names)))
-        u_type = np.empty(idx.size)
+        u = np.empty((idx.size, len(names) + 1))  # the last column draws the motor type
         keys = np.empty((idx.size, 2), dtype=np.uint64)
         rngs = []
         for j, (i, seed) in enumerate(zip(idx, seeds)):
             if seed is not None or self._rngs[i] is None:
                 self._rngs[i] = np.random.default_rng(seed)
             rng = self._rngs[i]
-            u[j] = rng.random(len(names))
-            u_type[j] = rng.random()
+            u[j] = rng.random(len(names) + 1)
             # two full-range uint64 noise keys: what rng.integers(0, 2**64 - 1, size=2,
             # dtype=np.uint64, endpoint=True) returns (raw draws), a tenth of its cost
             keys[j] = rng.bit_generator.random_raw(2)
             rngs.append(rng)
         low = np.array([ranges[name][0] for name in names])
         high = np.array([ranges[name][1] for name in names])
-        draws = dict(zip(names, low[:, None] + u.T * (high - low)[:, None]))
-        names = [types[min(int(x * len(types)), len(types) - 1)] for x in u_type]
+        draws = dict(zip(names, low[:, None] + u[:, :-1].T * (high - low)[:, None]))
+        names = [types[min(int(x * len(types)), len(types) - 1)] for x in u[:, -1]]
         self._type_names[idx] = names
         self.motors.keys[idx] = keys[:, 0]
         self._noise_key[idx] = keys[:, 1]
