@@ -232,11 +232,13 @@ class MotorVectorEnv(VectorEnv, ABC):
 
     def _type_configs(self, idx: np.ndarray) -> list[Any]:
         """Motor configs of the types of copies ``idx`` (set at their reset)."""
-        from ..config import load_motor
-
         names = self._type_names[idx]
-        for name in set(names) - set(self._configs):
-            self._configs[name] = load_motor(name)
+        missing = set(names).difference(self._configs)
+        if missing:
+            from ..config import load_motor
+
+            for name in missing:
+                self._configs[name] = load_motor(name)
         return [self._configs[name] for name in names]
 
     def rotor_inertia(self, idx: np.ndarray) -> np.ndarray:
