@@ -140,6 +140,25 @@ def test_reset_options_randomization_motor_type_and_mask() -> None:
         venv.reset(options={"randomization": {"no_such_parameter": (0, 1)}})
 
 
+def test_reset_draws_from_each_copy_generator_in_order() -> None:
+    """Copy i seeded s + i draws: the randomised parameters, the motor type, two noise keys."""
+    venv = gym.make_vec("jvl_gym/Positioning-v0", num_envs=3,
+                        vectorization_mode="vector_entry_point",
+                        motor_type=["MAC050", "MAC095", "MAC140", "MAC141"])
+    core = venv.unwrapped
+    venv.reset(seed=7)
+    for i in range(3):
+        rng = np.random.default_rng(7 + i)
+        u = rng.random(len(core._range_names))
+        u_type = rng.random()
+        keys = rng.integers(0, 2**64 - 1, size=2, dtype=np.uint64, endpoint=True)
+        lo, hi = core.ranges["target_turns"]
+        turns = lo + u[core._range_names.index("target_turns")] * (hi - lo)
+        assert core.target[i] == np.round(turns * 4096)
+        assert core.motors.motor_configs[i].name == core.motor_types[int(u_type * 4)]
+        assert core.motors.keys[i] == keys[0] and core._noise_key[i] == keys[1]
+
+
 def test_constructor_ranges_and_decimation() -> None:
     env = gym.make("jvl_gym/Positioning-v0", decimation=3,
                    randomization={"target_turns": (-0.5, -0.5)}, motor_type=["MAC140"])

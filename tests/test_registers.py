@@ -242,6 +242,29 @@ def test_fixed8_quantisation_error_is_half_lsb(x):
     assert abs(float(from_raw(r, to_raw(r, x))) - x) <= 0.5 / 256 + 1e-12
 
 
+def test_small_arrays_convert_like_large_ones():
+    """to_raw converts a few values with Python floats, many with numpy: the same integers."""
+    from jvl_gym.registers.formats import _SCALAR_MAX
+
+    rng = np.random.default_rng(0)
+    for r in T:
+        if r.access == Access.RESERVED:
+            continue
+        lo, hi = min(r.minimum, r.raw_min / r.scale), max(r.maximum, r.raw_max / r.scale)
+        edges = [lo, hi, 0.0, -0.0, (r.raw_min + 0.5) / r.scale, (r.raw_max - 0.5) / r.scale,
+                 np.nextafter(hi, -np.inf), np.nextafter(lo, np.inf)]
+        values = np.clip(np.concatenate([edges, rng.uniform(lo, hi, 4 * _SCALAR_MAX),
+                                         np.round(rng.uniform(lo, hi, 64)) + 0.5]), lo, hi)
+        numpy_path = to_raw(r, values)  # more than _SCALAR_MAX values
+        assert values.size > _SCALAR_MAX
+        for k in range(0, values.size, _SCALAR_MAX):
+            chunk = values[k:k + _SCALAR_MAX]
+            assert np.array_equal(to_raw(r, chunk), numpy_path[k:k + _SCALAR_MAX]), r.name
+        for x, raw in zip(values[:8], numpy_path[:8]):
+            out = to_raw(r, x)
+            assert out.shape == () and out.dtype == np.int64 and int(out) == raw, r.name
+
+
 @pytest.mark.parametrize(
     ("name", "value"),
     [("T_SOLL", 1024), ("T_SOLL", -1), ("KVOUT", 200.0), ("KVFX4", 8.0), ("AMPLITUDE", 0.84),

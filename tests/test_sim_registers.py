@@ -44,6 +44,35 @@ def test_bad_writes_raise_and_change_nothing(m, key, value, exc, needle):
         m.write(key, value)
     assert needle in str(info.value)
     np.testing.assert_array_equal(m.regs, before)
+    with pytest.raises(exc) as info:  # several registers: all validated before any is stored
+        m._write_many({"V_SOLL": 5, key: value, "P_SOLL": 7})
+    assert needle in str(info.value)
+    np.testing.assert_array_equal(m.regs, before)
+
+
+def test_python_scalars_convert_like_arrays(m):
+    rng = np.random.default_rng(1)
+    for reg in m.table:
+        if reg.access.value != "rw":
+            continue
+        lo, hi = reg.raw_min / reg.scale, reg.raw_max / reg.scale
+        for x in [lo, hi, (reg.raw_max - 0.5) / reg.scale, *rng.uniform(lo, hi, 5)]:
+            for value in (float(x), int(x)):
+                np.testing.assert_array_equal(m._validated_raw(reg, value, 3),
+                                              m._validated_raw(reg, np.full(3, value), 3))
+        for bad in (hi + 1.0, float("nan"), float("inf")):
+            with pytest.raises(RegisterRangeError, match=r"\(and 2 more\)"):
+                m._validated_raw(reg, bad, 3)
+
+
+def test_write_many_equals_writes_in_order(m):
+    values = {"GEARF1": [300, 400], "GEARF2": 1000, "V_SOLL": 1600, "MODE_REG": c.AG_MODE}
+    m._write_many(values, index=[0, 2])
+    one_by_one = MotorArray("MAC140", n=3, seed=0)
+    for key, value in values.items():
+        one_by_one.write(key, value, index=[0, 2])
+    np.testing.assert_array_equal(m.regs, one_by_one.regs)
+    np.testing.assert_array_equal(m.state, one_by_one.state)
 
 
 def test_write_subset_and_vector(m):

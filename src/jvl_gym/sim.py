@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -24,8 +24,7 @@ from .firmware import regs as R
 from .firmware import write_rules as W
 from .firmware.noise import motor_keys
 from .kernel import run_parallel, run_serial
-from .plant.encoder import eldeg, encoder_count
-from .plant.hall import SECTOR, sector_index
+from .power_on import power_on_rows
 from .registers import (
     MAC050_141,
     Access,
@@ -35,7 +34,7 @@ from .registers import (
     RegisterError,
     RegisterShapeError,
 )
-from .registers.formats import from_raw, to_raw
+from .registers.formats import from_raw, raws_of_floats, to_raw
 
 __all__ = ["MotorArray", "ModeError", "PARAMETER_KEYWORDS"]
 
@@ -66,6 +65,8 @@ _POSITIVE = {"phase_resistance", "phase_inductance", "rotor_inertia", "flux_link
 _STATE_KEYWORDS = {"initial_angle", "initial_speed"}
 
 _PARALLEL_MIN_MOTORS = 32
+#: modes that record into the sample buffer (allocated on first use)
+_RECORDING_MODES = frozenset({c.TESTU_MODE, c.TESTA_MODE, c.TESTKI_MODE, c.TESTTQ_MODE})
 
 
 class ModeError(RegisterError):
@@ -84,9 +85,10 @@ def _as_index(index: Any, n: int) -> np.ndarray:
             raise RegisterShapeError(f"boolean index must have shape ({n},), got {arr.shape}")
         return np.flatnonzero(arr).astype(np.int64)
     arr = np.atleast_1d(arr).astype(np.int64)
-    if arr.ndim != 1 or (arr.size and (arr.min() < -n or arr.max() >= n)):
+    low, high = (arr.min(), arr.max()) if arr.ndim == 1 and arr.size else (0, 0)
+    if arr.ndim != 1 or low < -n or high >= n:
         raise RegisterShapeError(f"index {index!r} out of range for {n} motors")
-    return np.where(arr < 0, arr + n, arr)
+    return np.where(arr < 0, arr + n, arr) if low < 0 else arr
 
 
 class MotorArray:
@@ -133,9 +135,13 @@ class MotorArray:
             cfg = load_motor(mtype)
             configs.setdefault(cfg.name, cfg)
             self._type_of[i] = list(configs).index(cfg.name)
-        self._configs = list(configs.values())
         self._setup_arg = setup
-        self._rom = np.stack([self._rom_image(cfg, setup) for cfg in self._configs])
+        self._configs: list[MotorConfig] = []
+        self._rom = np.zeros((0, L.N_REGS), dtype=np.int64)
+        self._type_params = np.zeros((0, L.N_PARAM))
+        self._type_inputs = np.zeros((0, L.N_INPUT))
+        for cfg in configs.values():
+            self._add_type(cfg)
         if isinstance(seed, (list, tuple, np.ndarray)):
             keys = np.asarray(seed, dtype=np.uint64)
             if keys.shape != (self.n,):
@@ -170,6 +176,20 @@ class MotorArray:
         image[R.MOTOR_TYPE] = cfg.motor_type_code
         return image
 
+    def _add_type(self, cfg: MotorConfig) -> None:
+        """Join motor type ``cfg`` to the pool: its ROM image, parameters and inputs at rest."""
+        self._configs.append(cfg)
+        self._rom = np.concatenate([self._rom, self._rom_image(cfg, self._setup_arg)[None]])
+        self._type_params = np.concatenate([self._type_params, self._config_params(cfg)[None]])
+        self._type_inputs = np.concatenate([self._type_inputs, self._rest_inputs(cfg)[None]])
+
+    def _rest_inputs(self, cfg: MotorConfig) -> np.ndarray:
+        """World inputs at rest: supply on, home sensor from the position, nothing else."""
+        inputs = np.zeros(L.N_INPUT)
+        inputs[L.I_SUPPLY_VOLTS] = cfg.supply_voltage
+        inputs[L.I_HOME] = -1.0
+        return inputs
+
     def _config_params(self, cfg: MotorConfig) -> np.ndarray:
         p = np.zeros(L.N_PARAM)
         p[L.P_J_MOTOR] = cfg.rotor_inertia
@@ -199,8 +219,7 @@ class MotorArray:
             return names.index(name)
         cfg = load_motor(name)  # raises on an unknown type, before any motor changes
         if cfg.name not in names:
-            self._configs.append(cfg)
-            self._rom = np.concatenate([self._rom, self._rom_image(cfg, self._setup_arg)[None]])
+            self._add_type(cfg)
             names.append(cfg.name)
         return names.index(cfg.name)
 
@@ -240,12 +259,9 @@ class MotorArray:
                 raise ValueError(f"got {len(names)} motor types for {idx.size} motors")
             codes = np.array([self._type_code(name) for name in names], dtype=np.int64)
             self._type_of[idx] = codes
-        for k in np.unique(self._type_of[idx]):
-            sel = idx[self._type_of[idx] == k]
-            self.params[sel] = self._config_params(self._configs[k])
-            self.inputs[sel] = 0.0
-            self.inputs[sel, L.I_SUPPLY_VOLTS] = self._configs[k].supply_voltage
-            self.inputs[sel, L.I_HOME] = -1.0
+        types = self._type_of[idx]
+        self.params[idx] = self._type_params[types]
+        self.inputs[idx] = self._type_inputs[types]
         for name, val in values.items():
             if name in PARAMETER_KEYWORDS:
                 self.params[idx, PARAMETER_KEYWORDS[name]] = val
@@ -266,64 +282,25 @@ class MotorArray:
             arr = np.asarray(val, dtype=np.float64)
             if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != size):
                 raise ValueError(f"{name}: expected a scalar or shape ({size},), got {arr.shape}")
-            if not np.all(np.isfinite(arr)) and name not in ("home_position",):
+            if not np.isfinite(arr).all() and name not in ("home_position",):
                 raise ValueError(f"{name}: values must be finite, got {val!r}")
-            if name in _NONNEGATIVE and np.any(arr < 0):
+            if name in _NONNEGATIVE and (arr < 0).any():
                 raise ValueError(f"{name}: values must be >= 0, got {val!r}")
-            if name in _POSITIVE and np.any(arr <= 0):
+            if name in _POSITIVE and (arr <= 0).any():
                 raise ValueError(f"{name}: values must be > 0, got {val!r}")
             if name in ("pwm_delay_samples", "hall_start") and not np.all(M.member(arr, (0, 1))):
                 raise ValueError(f"{name} must be 0 or 1, got {val!r}")
-            out[name] = np.broadcast_to(arr, (size,)).copy()
+            out[name] = arr.copy() if arr.ndim else arr.repeat(size)
         return out
 
     def _power_on(self, idx: np.ndarray) -> None:
         """Registers from flash or ROM, counters cleared, mode from STARTMODE (3.2.37)."""
-        for k in np.unique(self._type_of[idx]):
-            sel = idx[self._type_of[idx] == k]
-            self.regs[sel] = self._rom[k]
+        self.regs[idx] = self._rom[self._type_of[idx]]
         if self._flash is not None:
             fl = idx[self._has_flash[idx]]
             if fl.size:
                 self.regs[fl] = self._flash[fl]
-        for num in (R.P_IST, R.V_IST, R.P_FNC, R.FLWERR, R.FNCERR, R.I2T, R.UIT, R.REC_CNT,
-                    R.FNC_OUT, R.FF_OUT, R.VB_OUT, R.VF_OUT, R.V_EXT, R.I_NOM, R.PHI_SOLL,
-                    R.IA_SOLL, R.IB_SOLL, R.IC_SOLL, R.IA_IST, R.IB_IST, R.IC_IST, R.UA_VAL,
-                    R.UB_VAL, R.UC_VAL, R.V_ELDEG):
-            self.regs[idx, num] = 0
-        self.regs[idx, R.ERR_STAT] &= (c.RELPOSPSOLL | c.RELPOSPFNC | c.DIS_P_LIM)
-        self.regs[idx, R.CNTRL_BITS] &= ~(c.RECORDBIT | c.REWINDBIT | c.MAN_RESYNC)
-        self.regs[idx, R.MODE_REG] = c.INIT_MODE
-        s = self.state
-        for i in idx:
-            theta = s[i, L.S_THETA]
-            enc = encoder_count(theta)
-            s[i, L.S_ENC0] = enc
-            s[i, L.S_ENC_PREV] = enc
-            p = self.params[i]
-            theta_e = p[L.P_POLE_PAIRS] * theta + p[L.P_THETA_E0]
-            sec = sector_index(theta_e, p[L.P_HALL_ANGLE])
-            s[i, L.S_HALL_SECTOR] = sec
-            if p[L.P_HALL_START] > 0.5:  # only the hall sector is known: start at its centre
-                centre = p[L.P_HALL_ANGLE] + (sec + 0.5) * SECTOR
-                el = int(math.floor(centre * c.ELDEG_PER_TURN / (2 * math.pi))) % 2048
-                s[i, L.S_ELDEG_OFS] = el - enc
-                s[i, L.S_HALL_SYNCED] = 0.0
-            else:
-                el = eldeg(theta_e)
-                s[i, L.S_HALL_SYNCED] = 1.0
-            s[i, L.S_ELDEG_PREV] = enc
-            self.regs[i, R.ELDEG_IST] = el
-        s[idx, L.S_PENDING_MODE] = -1.0
-        self.regs[idx, R.U_SUPPLY] = np.round(s[idx, L.S_UBUS] / c.U_SUPPLY_VOLTS_PER_UNIT)
-        self._latched_cntrl[idx] = self.regs[idx, R.CNTRL_BITS]
-        home = self.regs[idx, R.HOME_MODE] & 0xFF
-        start = np.where(M.member(home, (12, 13, 14)), home, self.regs[idx, R.STARTMODE])
-        go = idx[(start > 0) & (start < 25)]
-        if go.size:
-            req = start[(start > 0) & (start < 25)]
-            ok = M.check_requests(self.regs, self.state, go, req) == M.OK
-            M.apply_requests(self.regs, self.state, go[ok], req[ok])
+        power_on_rows(self.regs, self.state, self.params, self._latched_cntrl, idx)
 
     @property
     def interface_bits(self) -> np.ndarray:
@@ -416,6 +393,15 @@ class MotorArray:
         raw = self._validated_raw(reg, value, idx.size)
         self._store(reg, idx, raw)
 
+    def _write_many(self, values: Mapping[str | int, Any], index: Any = None) -> None:
+        """Write several registers (key → value in user units, in this order) to the motors
+        ``index``; every value is validated before the first is stored, as by :meth:`write`."""
+        idx = _as_index(index, self.n)
+        staged = [(reg, self._validated_raw(reg, value, idx.size))
+                  for reg, value in ((self._lookup(key), v) for key, v in values.items())]
+        for reg, raw in staged:
+            self._store(reg, idx, raw)
+
     def write_raw(self, key: str | int, raw: Any, index: Any = None) -> None:
         """Write stored integers (Fixed4 = value·4096, …) with the same validation as write."""
         reg = self._lookup(key)
@@ -431,13 +417,16 @@ class MotorArray:
             raise ReadOnlyRegisterError(
                 f"{reg.name} (register {reg.number}) is {reg.access.value} (manual "
                 f"{reg.section}); it cannot be written")
+        if type(value) in (int, float):  # a Python scalar: convert it once, then broadcast
+            raw = raws_of_floats(reg, [float(value)])
+            if raw is not None:
+                return np.full(size, raw[0], dtype=np.int64)
         arr = np.asarray(value, dtype=np.float64) if not isinstance(value, np.ndarray) else value
         if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != size):
             raise RegisterShapeError(
                 f"{reg.name} (register {reg.number}): expected a scalar or shape ({size},), "
                 f"got shape {np.shape(value)}")
-        raw = to_raw(reg, np.broadcast_to(arr, (size,)))
-        return np.asarray(raw, dtype=np.int64).reshape(size)
+        return to_raw(reg, arr if arr.ndim else arr.repeat(size))
 
     def _store(self, reg: Register, idx: np.ndarray, raw: np.ndarray) -> None:
         num = reg.number
@@ -474,13 +463,12 @@ class MotorArray:
         if problem is not None:
             raise ModeError(f"MODE_REG write refused: {problem}. Nothing was changed.")
         special = req >= 256
-        if np.any(special):
+        if special.any():
             self._safe_special(idx[special], req[special])
-        normal = ~special
-        if np.any(M.member(req[normal], (c.TESTU_MODE, c.TESTA_MODE, c.TESTKI_MODE,
-                                         c.TESTTQ_MODE))):
+            idx, req = idx[~special], req[~special]
+        if not _RECORDING_MODES.isdisjoint(req.tolist()):
             self._ensure_buffer()
-        M.apply_requests(self.regs, self.state, idx[normal], req[normal])
+        M.apply_requests(self.regs, self.state, idx, req)
 
     # ------------------------------------------------------------------ safe mode, flash
     def _safe_special(self, idx: np.ndarray, req: np.ndarray) -> None:
@@ -577,15 +565,9 @@ class MotorArray:
                    ) -> None:
         """Write a register set (name → value) to the selected motors, validated as a whole."""
         cfg = load_setup(setup)
-        idx = _as_index(index, self.n)
-        staged = []
-        for name, value in cfg.registers.items():
-            reg = self._lookup(name)
-            if reg.number == R.MODE_REG:
-                raise RegisterError("a setup must not contain MODE_REG")
-            staged.append((reg, self._validated_raw(reg, value, idx.size)))
-        for reg, raw in staged:
-            self._store(reg, idx, raw)
+        if any(self._lookup(name).number == R.MODE_REG for name in cfg.registers):
+            raise RegisterError("a setup must not contain MODE_REG")
+        self._write_many(cfg.registers, index)
 
     # ------------------------------------------------------------------ sample buffer
     def _ensure_buffer(self) -> None:

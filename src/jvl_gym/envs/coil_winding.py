@@ -305,18 +305,11 @@ class CoilWindingVectorEnv(MotorVectorEnv):
         self.gear0[idx] = gear
         self.half_d_counts[idx] = 0.5 * d0 * self._counts_per_m
         half = np.round(self.half_d_counts[idx]).astype(np.int64)
-        m = self.motors
-        m.write("GEARF1", np.round(gear * _GEARF2), index=idx)
-        m.write("GEARF2", _GEARF2, index=idx)
-        m.write("V_SOLL", round(c.rpm_to_v_soll(3000.0)), index=idx)
-        m.write("A_SOLL", np.round(draws["a_soll"]), index=idx)
-        m.write("P1", 0, index=idx)
-        m.write("P2", half, index=idx)
-        m.write("P3", self.p4 - half, index=idx)
-        m.write("P4", self.p4, index=idx)
-        m.write("P5", half, index=idx)
-        m.write("P6", 1, index=idx)
-        m.write("MODE_REG", c.COIL_MODE, index=idx)
+        self.motors._write_many({
+            "GEARF1": np.round(gear * _GEARF2), "GEARF2": _GEARF2,
+            "V_SOLL": round(c.rpm_to_v_soll(3000.0)), "A_SOLL": np.round(draws["a_soll"]),
+            "P1": 0, "P2": half, "P3": self.p4 - half, "P4": self.p4, "P5": half, "P6": 1,
+            "MODE_REG": c.COIL_MODE}, idx)
 
     def _step_copies(self, actions: np.ndarray) -> bool:
         run = _steps_parallel if self.num_envs >= PARALLEL_MIN else _steps_serial

@@ -228,6 +228,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
 
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
+        self.line[idx] = 0.0  # wound, master angle, time, counts, integral, slack
         for name in ("ea", "thickness", "r0", "span", "tension_ref"):
             getattr(self, name)[idx] = draws[name]
         self.profile.reset(idx, rngs, draws["line_speed"], draws["ramp_time"],
@@ -235,17 +236,9 @@ class GearSyncVectorEnv(MotorVectorEnv):
                            draws["ripple"])
         strain_ref = draws["tension_ref"] / draws["ea"]
         self.strain[idx] = strain_ref
-        self.wound[idx] = 0.0
         self.radius[idx] = draws["r0"]
-        self.force[idx] = draws["tension_ref"]
-        self.measured[idx] = draws["tension_ref"]
-        self.prev_measured[idx] = draws["tension_ref"]
-        self.master_theta[idx] = 0.0
-        self.time[idx] = 0.0
-        self.count_acc[idx] = 0.0
-        self.pulses[idx] = 0.0
-        self.error_integral[idx] = 0.0
-        self.slack_count[idx] = 0
+        for name in ("force", "measured", "prev_measured"):
+            getattr(self, name)[idx] = draws["tension_ref"]
         # nominal gear: at the core radius and 0 V the winder runs at v1/(1 − ε_ref)
         motor_per_master = (self.master_radius / draws["r0"] * self.gear_ratio
                             / (1.0 - strain_ref) / _AG_CENTRE)
@@ -253,12 +246,10 @@ class GearSyncVectorEnv(MotorVectorEnv):
         gearf1 = np.round(ratio * _GEARF2)
         self.gear[idx] = gearf1 / _GEARF2
         m = self.motors
-        m.write("GEARF1", gearf1, index=idx)
-        m.write("GEARF2", _GEARF2, index=idx)
-        m.write("V_SOLL", round(c.rpm_to_v_soll(4000.0)), index=idx)
         load = draws["r0"] * draws["tension_ref"] / self.gear_ratio
         m.inputs[idx, L.I_LOAD_TORQUE] = load
-        m.write("MODE_REG", c.AG_MODE, index=idx)
+        m._write_many({"GEARF1": gearf1, "GEARF2": _GEARF2,
+                       "V_SOLL": round(c.rpm_to_v_soll(4000.0)), "MODE_REG": c.AG_MODE}, idx)
         # the motor already holds the pre-tension: the VF integrator carries the load torque
         kvout = m.regs[idx, R.KVOUT] / 256.0
         m.state[idx, L.S_Y1] = load / self.peak_torque(idx) * c.VF_FULL / kvout

@@ -127,13 +127,11 @@ class PositioningVectorEnv(MotorVectorEnv):
         target = np.round(draws["target_turns"] * c.COUNTS_PER_REV).astype(np.int64)
         self.target[idx] = target
         self.direction[idx] = np.where(target >= 0, 1.0, -1.0)
-        m = self.motors
         if self.baseline:
-            m.write("V_SOLL", round(c.rpm_to_v_soll(_BASELINE_RPM)), index=idx)
-            m.write("P_SOLL", target, index=idx)
-            m.write("MODE_REG", c.P_MODE, index=idx)
+            self.motors._write_many({"V_SOLL": round(c.rpm_to_v_soll(_BASELINE_RPM)),
+                                     "P_SOLL": target, "MODE_REG": c.P_MODE}, idx)
         else:
-            m.write("MODE_REG", c.AT_MODE, index=idx)
+            self.motors.write("MODE_REG", c.AT_MODE, index=idx)
 
     def _step_copies(self, actions: np.ndarray) -> bool:
         run = _steps_parallel if self.num_envs >= PARALLEL_MIN else _steps_serial

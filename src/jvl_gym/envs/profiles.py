@@ -57,17 +57,18 @@ class SpeedProfile:
               ripple: np.ndarray) -> None:
         """New profiles for copies ``idx``; the sines' frequencies and phases come from
         ``rngs`` (one generator per copy, in the order of ``idx``)."""
-        p = self.params
-        p[idx, V_NOM] = v_nom
-        p[idx, T_RAMP] = np.maximum(t_ramp, 1e-3)
-        p[idx, STEP] = step
-        p[idx, T_STEP] = t_step
-        p[idx, WALK] = walk
-        p[idx, RIPPLE] = ripple
+        p = np.empty((idx.size, N_COLS))
+        p[:, V_NOM] = v_nom
+        p[:, T_RAMP] = np.maximum(t_ramp, 1e-3)
+        p[:, STEP] = step
+        p[:, T_STEP] = t_step
+        p[:, WALK] = walk
+        p[:, RIPPLE] = ripple
         u = np.array([rng.random(7) for rng in rngs]).reshape(idx.size, 7)
-        p[idx, F0:F2 + 1] = 0.1 + 0.9 * u[:, :3]
-        p[idx, Q0:Q2 + 1] = 2 * np.pi * u[:, 3:6]
-        p[idx, PHASE] = 2 * np.pi * u[:, 6]
+        p[:, F0:F2 + 1] = 0.1 + 0.9 * u[:, :3]
+        p[:, Q0:Q2 + 1] = 2 * np.pi * u[:, 3:6]
+        p[:, PHASE] = 2 * np.pi * u[:, 6]
+        self.params[idx] = p
 
     def speed(self, t: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Speed at time ``t`` [s] and roll angle ``theta`` [rad], (n,), never negative."""

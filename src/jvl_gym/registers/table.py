@@ -20,6 +20,7 @@ import io
 import math
 from collections.abc import Iterator
 from dataclasses import dataclass
+from functools import cached_property
 from importlib import resources
 from os import PathLike
 from pathlib import Path
@@ -135,17 +136,17 @@ class Register:
     section: str
     description: str
 
-    @property
+    @cached_property
     def scale(self) -> int:
         """Raw units per user unit: 4096 for Fixed4, 256 for Fixed8, 1 otherwise."""
         return FORMAT_SCALE.get(self.format, 1)
 
-    @property
+    @cached_property
     def raw_min(self) -> int:
         """Smallest stored integer, ``round(minimum · scale)``."""
         return _round_half_away(self.minimum * self.scale)
 
-    @property
+    @cached_property
     def raw_max(self) -> int:
         """Largest stored integer, ``round(maximum · scale)``."""
         return _round_half_away(self.maximum * self.scale)
