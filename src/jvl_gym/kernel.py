@@ -245,12 +245,14 @@ def _measure(r: np.ndarray, i_amp: float, p: np.ndarray, counts_per_amp: float, 
     return x
 
 
-@njit(**KERNEL)
+@njit(cache=True, inline="always")
 def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
                  buf: np.ndarray, rec: bool, fmt: np.ndarray, counts_per_amp: float,
                  k_coil: tuple, k_mech: tuple, k_bus: tuple) -> None:
     """One 128 µs current-loop sample and the plant over it (step 4 of the module docstring).
 
+    Inlined into the time loop of :func:`_advance`: as a call it received its six arrays as
+    ~45 separate machine words (numba passes an array's fields one by one), on every sample.
     ``counts_per_amp`` (ADC counts per ampere) and the plant factors ``k_coil``, ``k_mech`` and
     ``k_bus`` (``coil_constants``, ``mech_constants``, ``bus_constants`` of ``jvl_gym.plant``)
     depend on the motor's parameters only: the caller computes them once per call, not nine
