@@ -2,7 +2,8 @@
 
 - single env steps/s of every jvl_gym env (the env class itself, one ``step`` call per step,
   random actions, reset when an episode ends), at the env's default decimation and at
-  decimation 1 (one 520.8 Hz firmware sample per step);
+  decimation 1 (one 520.8 Hz firmware sample per step), all measured before the first
+  vector env;
 - vector env-steps/s with 1024 copies (native vector env, NEXT_STEP autoreset), the same in
   outer samples (1.92 ms of motor time) per second, and env-steps/s at decimation 1;
 - gym-electric-motor's ``Cont-CC-PMSM-v0`` single env steps/s, measured in the same run in a
@@ -119,12 +120,17 @@ def main() -> None:
     print(f"{'env':26s} {'dec':>3s} {'single steps/s':>14s} {'x GEM':>6s} {'sim s/s':>8s} "
           f"{'x GEM':>6s} {'dec 1 steps/s':>13s} {'x GEM':>6s} "
           f"{'vector(1024) steps/s':>20s} {'outer samples/s':>15s} {'vector dec 1':>12s}")
+    # every single-env figure first: after a vector env, numba's idle worker threads still
+    # compete for the second core and slow a single env measured next by up to 25 %
+    singles = {}
     for env_id in ENV_IDS:
         trials = "FilterTuning" in env_id
         dec = gym.make(env_id).unwrapped.core.decimation
         single = single_steps_per_second(env_id, seconds)
         dec1 = single if dec == 1 or trials else single_steps_per_second(env_id, seconds,
                                                                          decimation=1)
+        singles[env_id] = (trials, dec, single, dec1)
+    for env_id, (trials, dec, single, dec1) in singles.items():
         n_vec = 256 if trials else 1024
         vector = vector_steps_per_second(env_id, n_vec, seconds)
         vec1 = vector if dec == 1 or trials else vector_steps_per_second(
@@ -139,7 +145,6 @@ def main() -> None:
               f"{sim:8.1f} {ratio(sim, gem and gem[0] * gem[1])} {dec1:13,.0f} "
               f"{ratio(dec1, gem and gem[0])} {vector:20,.0f} {vector * dec:15,.0f} "
               f"{vec1:12,.0f}{note}")
-
 
 if __name__ == "__main__":
     main()
