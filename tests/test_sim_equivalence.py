@@ -49,10 +49,10 @@ def test_parallel_kernel_equals_serial_kernel():
         m.write("V_SOLL", np.linspace(-3000, 3000, n).round())
         m.write("MODE_REG", 1)
     a.step(50)
-    from jvl_gym.kernel import run_serial
+    from jvl_gym.lanes import run_serial
 
     run_serial(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, False, b._fmt, 50,
-               b._no_schedule)
+               b._no_schedule, b._scratch)
     np.testing.assert_array_equal(a.regs, b.regs)
     np.testing.assert_array_equal(a.state, b.state)
 

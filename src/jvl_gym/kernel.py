@@ -22,7 +22,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
 from . import constants as c
 from . import layout as L
@@ -362,45 +362,3 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     s[L.S_I2_SUM] += float(r[R.IA_IST] ** 2 + r[R.IB_IST] ** 2 + r[R.IC_IST] ** 2)
     s[L.S_PREG_SUM] += max(-p_el, 0.0)  # regenerated power; no branch on its sign
     s[L.S_TICK] = tick + 1.0
-
-
-@njit(**KERNEL)
-def _advance(r, s, p, u, key, buf, rec, fmt, n_outer, input_plan, i):
-    counts_per_amp = 1.0 / p[L.P_AMPS_PER_COUNT]
-    k_coil = coil_constants(p[L.P_R], p[L.P_L], p[L.P_LAMBDA], _H)
-    k_mech = mech_constants(p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_VISCOUS], _H)
-    k_bus = bus_constants(p[L.P_C_BUS], p[L.P_R_SUPPLY], p[L.P_R_DUMP], _H)
-    for t in range(n_outer):
-        if input_plan.shape[0] > 0:
-            for k in range(u.shape[0]):
-                u[k] = input_plan[t, i, k]
-        outer_firmware(r, s, p, u, key, buf, rec, fmt)
-        for _k in range(c.INNER_PER_OUTER):
-            inner_sample(r, s, p, u, key, buf, rec, fmt, counts_per_amp, k_coil, k_mech, k_bus)
-
-
-@njit(cache=True, inline="always")
-def advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i, n_outer):
-    """Advance motor ``i`` of the arrays by ``n_outer`` outer samples (compiled callers: the
-    drivers below and the compiled environment steps, ``jvl_gym.envs``)."""
-    b = buf[i] if rec else buf[0]
-    _advance(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt, n_outer, input_plan, i)
-
-
-@njit(**KERNEL)
-def run_serial(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, input_plan):
-    """Advance every motor by ``n_outer`` outer samples in one thread.
-
-    ``rec`` says whether ``buf`` is an allocated (N, 895, 4) sample buffer. ``input_plan`` is
-    either empty (shape (0, N, N_INPUT): inputs held) or holds the inputs of every
-    outer sample, shape (n_outer, N, N_INPUT) (world generators).
-    """
-    for i in range(regs.shape[0]):
-        advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i, n_outer)
-
-
-@njit(**KERNEL_PARALLEL)
-def run_parallel(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, input_plan):
-    """Advance every motor by ``n_outer`` outer samples, motors spread over threads."""
-    for i in prange(regs.shape[0]):
-        advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i, n_outer)

@@ -23,7 +23,7 @@ from .firmware import modes as M
 from .firmware import regs as R
 from .firmware import write_rules as W
 from .firmware.noise import motor_keys
-from .kernel import run_parallel, run_serial
+from .lanes import lane_scratch, run_parallel, run_serial
 from .power_on import power_on_rows
 from .registers import (
     MAC050_141,
@@ -156,6 +156,7 @@ class MotorArray:
         self._buf = np.zeros((1, c.REC_CNT_MAX, 4), dtype=np.int64)
         self._buf_allocated = False
         self._no_schedule = np.zeros((0, self.n, L.N_INPUT), dtype=np.float64)
+        self._scratch = lane_scratch(self.n)
         self._latched_cntrl = np.zeros(self.n, dtype=np.int64)
         #: world signal sources (``jvl_gym.world.World``) sampled every outer sample, or None
         self.world = None
@@ -318,18 +319,19 @@ class MotorArray:
         run = run_parallel if self.n >= _PARALLEL_MIN_MOTORS else run_serial
         plan = self._no_schedule if self.world is None else self.world.schedule(self, n_outer)
         run(self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
-            self._buf_allocated, self._fmt, int(n_outer), plan)
+            self._buf_allocated, self._fmt, int(n_outer), plan, self._scratch)
 
     def kernel_arrays(self) -> tuple:
         """The arrays the compiled kernel works on, for compiled callers (the env steps):
-        ``(regs, state, params, inputs, keys, buf, rec, fmt, input_plan)`` in the order of
-        :func:`jvl_gym.kernel.advance_motor`'s first arguments, with the held-input plan.
+        ``(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, scratch)``, the first
+        nine in the order of the first arguments of :func:`jvl_gym.lanes.advance_block`, with
+        the held-input plan, and the blocks' working memory (:func:`jvl_gym.lanes.lane_scratch`).
 
         A caller that advances motors itself bypasses the :attr:`world` schedule (inputs are
         held): it sets ``inputs`` between samples instead.
         """
         return (self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
-                self._buf_allocated, self._fmt, self._no_schedule)
+                self._buf_allocated, self._fmt, self._no_schedule, self._scratch)
 
     def run(self, seconds: float) -> None:
         """Advance by ``seconds`` (rounded to whole outer samples of 1.92 ms)."""
