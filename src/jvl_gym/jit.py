@@ -23,3 +23,9 @@ from typing import Any
 KERNEL: dict[str, Any] = {"cache": True, "_nrt": False}
 #: the same for the multi-threaded drivers
 KERNEL_PARALLEL: dict[str, Any] = {**KERNEL, "parallel": True}
+#: the function that steps motors in SIMD lanes (``jvl_gym.lanes.inner_samples``): numpy's
+#: error model, so that a float division is a plain division, not a test for a zero divisor
+#: with a branch to a ZeroDivisionError that keeps LLVM from vectorising the loop over lanes.
+#: (A lane's divisors are parameters validated on the Python side and the bus voltage, which
+#: the plant only divides by above 1 V.)
+LANE_KERNEL: dict[str, Any] = {**KERNEL, "error_model": "numpy"}

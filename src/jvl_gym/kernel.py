@@ -51,12 +51,12 @@ from .firmware.monitor import check_errors, in_position, thermal, undervoltage
 from .firmware.noise import gauss
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
-from .jit import KERNEL, KERNEL_PARALLEL
-from .plant.coil import coil_constants, coil_step_prepared, phase_to_vector, vector_to_phases
+from .jit import KERNEL
+from .plant.coil import coil_step_prepared, phase_to_vector, vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
-from .plant.mechanics import end_stop_torque, mech_constants, mech_step_prepared
-from .plant.supply import bus_constants, bus_step_prepared
+from .plant.mechanics import end_stop_torque, mech_step_prepared
+from .plant.supply import bus_step_prepared
 
 _H = c.INNER_DT
 _HALF_PWM_PER_VOLT = 1.0 / (2.0 * c.PWM_FULL)  #: bus volts → phase volts per PWM count
@@ -233,16 +233,52 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
 
 
 @njit(cache=True, inline="always")
+def adc_count(x: float) -> tuple[float, bool]:
+    """A phase current reading of ``x`` ADC counts (before rounding): the stored IX_IST value,
+    rounded and limited to ±1023, and whether the converter saturated (IX_ERR, 3.2.147)."""
+    x = rnd(x)
+    return clamp(x, -1023.0, 1023.0), x >= 1023.0 or x <= -1023.0
+
+
+@njit(cache=True, inline="always")
 def _measure(r: np.ndarray, i_amp: float, p: np.ndarray, counts_per_amp: float, gain: float,
              key: np.uint64, tick: float, ch: int) -> float:
     x = i_amp * counts_per_amp * gain / 256.0
     if p[L.P_CURRENT_NOISE] > 0.0:
         x += p[L.P_CURRENT_NOISE] * gauss(key, tick, ch)
-    x = rnd(x)
-    if x >= 1023.0 or x <= -1023.0:
+    x, over = adc_count(x)
+    if over:
         r[R.ERR_STAT] |= c.IX_ERR
-        x = clamp(x, -1023.0, 1023.0)
     return x
+
+
+@njit(cache=True, inline="always")
+def plant_sample(theta: float, omega: float, acc: float, i_re: float, i_im: float, ubus: float,
+                 dump_on: float, ua: float, ub: float, uc: float, theta_e: float, pp: float,
+                 r_phase: float, lam: float, j: float, coulomb: float, stop_lo: float,
+                 stop_hi: float, stop_k: float, stop_d: float, load: float, noise_torque: float,
+                 u_supply: float, u_dump: float, k_coil: tuple, k_mech: tuple, k_bus: tuple):
+    """The plant over one inner sample (MODEL.md §6): PWM counts ``ua, ub, uc`` on the bus
+    drive the coil, the torque the rotor, the coil's power the DC bus.
+
+    Returns ``(theta1, omega1, i_re1, i_im1, ubus1, dump_on1, p_el, p_cu, e_fric, e_dump,
+    e_sup)``: the new state, the mean electrical and copper powers [W] and the energies of the
+    step [J]. Pure arithmetic on scalars: :func:`inner_sample` and the SIMD lanes of
+    :mod:`jvl_gym.lanes` share it.
+    """
+    kv = ubus * _HALF_PWM_PER_VOLT
+    s_u = phase_to_vector(ua * kv, ub * kv, uc * kv)
+    omega_mid = omega + 0.5 * _H * acc
+    s1, torque, p_el, p_cu = coil_step_prepared(complex(i_re, i_im), s_u, theta_e,
+                                                pp * omega_mid, r_phase, lam, pp, _H, k_coil)
+    drive = torque - load + end_stop_torque(theta, omega, stop_lo, stop_hi, stop_k, stop_d)
+    if noise_torque != 0.0:
+        drive += noise_torque
+    theta1, omega1, e_fric = mech_step_prepared(theta, omega, drive, j, coulomb, _H, k_mech)
+    ubus1, dump_on1, e_dump, e_sup = bus_step_prepared(ubus, p_el, u_supply, u_dump, dump_on,
+                                                       _H, k_bus)
+    return (theta1, omega1, s1.real, s1.imag, ubus1, dump_on1, p_el, p_cu, e_fric, e_dump,
+            e_sup)
 
 
 @njit(cache=True, inline="always")
@@ -251,7 +287,10 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
                  k_coil: tuple, k_mech: tuple, k_bus: tuple) -> None:
     """One 128 µs current-loop sample and the plant over it (step 4 of the module docstring).
 
-    Inlined into the time loop of :func:`_advance`: as a call it received its six arrays as
+    The reference form, one motor at a time; :func:`jvl_gym.lanes.inner_samples` runs the
+    same operations for the motors of a block in SIMD lanes when they need none of the
+    per-motor branches (hall synchronisation, noise, inner-rate recording, passive and test
+    modes). Inlined into the drivers' time loop: as a call it received its six arrays as
     ~45 separate machine words (numba passes an array's fields one by one), on every sample.
     ``counts_per_amp`` (ADC counts per ampere) and the plant factors ``k_coil``, ``k_mech`` and
     ``k_bus`` (``coil_constants``, ``mech_constants``, ``bus_constants`` of ``jvl_gym.plant``)
@@ -267,7 +306,7 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     s[L.S_HALL_SECTOR] = sec
     enc_abs = encoder_count(theta)
     if p[L.P_HALL_START] < 0.5:  # commutation aligned from power-on
-        el = eldeg(theta_e)
+        el = int(eldeg(theta_e))
     else:  # hall synchronisation, 3.2.124/125 (the firmware latches the count at the edge)
         if cross != 0 and (s[L.S_HALL_SYNCED] < 0.5 or (r[R.CNTRL_BITS] & c.HALL_INT)):
             edge_e = p[L.P_HALL_ANGLE] + (sec if cross > 0 else sec + 1.0) * SECTOR
@@ -284,8 +323,7 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     r[R.V_ELDEG] = dv
 
     tick = s[L.S_TICK]
-    s_i = complex(s[L.S_I_RE], s[L.S_I_IM])
-    ia, ib, ic = vector_to_phases(s_i)
+    ia, ib, ic = vector_to_phases(complex(s[L.S_I_RE], s[L.S_I_IM]))
     r[R.IA_IST] = int(_measure(r, ia, p, counts_per_amp, float(r[R.KIA]), key, tick, 0))
     r[R.IB_IST] = int(_measure(r, ib, p, counts_per_amp, float(r[R.KIB]), key, tick, 1))
     r[R.IC_IST] = int(_measure(r, ic, p, counts_per_amp, float(r[R.KIC]), key, tick, 2))
@@ -330,31 +368,25 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
         ua = pa
         ub = pb
         uc = pc
-    kv = s[L.S_UBUS] * _HALF_PWM_PER_VOLT
-    s_u = phase_to_vector(ua * kv, ub * kv, uc * kv)
-    omega_mid = omega + 0.5 * _H * s[L.S_ACC]
-    s1, torque, p_el, p_cu = coil_step_prepared(s_i, s_u, theta_e, pp * omega_mid, p[L.P_R],
-                                                p[L.P_LAMBDA], pp, _H, k_coil)
-    t_stop = end_stop_torque(theta, omega, p[L.P_STOP_LO], p[L.P_STOP_HI], p[L.P_STOP_K],
-                             p[L.P_STOP_D])
-    load = u[L.I_LOAD_TORQUE]
-    drive = torque - load + t_stop
+    noise_torque = 0.0
     if p[L.P_TORQUE_NOISE] > 0.0:
-        drive += p[L.P_TORQUE_NOISE] * gauss(key, tick, 4)
-    theta1, omega1, e_fric = mech_step_prepared(theta, omega, drive,
-                                                p[L.P_J_MOTOR] + p[L.P_J_LOAD],
-                                                p[L.P_COULOMB], _H, k_mech)
+        noise_torque = p[L.P_TORQUE_NOISE] * gauss(key, tick, 4)
+    load = u[L.I_LOAD_TORQUE]
+    (theta1, omega1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric, e_dump,
+     e_sup) = plant_sample(theta, omega, s[L.S_ACC], s[L.S_I_RE], s[L.S_I_IM], s[L.S_UBUS],
+                           s[L.S_DUMP_ON], ua, ub, uc, theta_e, pp, p[L.P_R], p[L.P_LAMBDA],
+                           p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_COULOMB], p[L.P_STOP_LO],
+                           p[L.P_STOP_HI], p[L.P_STOP_K], p[L.P_STOP_D], load, noise_torque,
+                           u[L.I_SUPPLY_VOLTS], p[L.P_U_DUMP], k_coil, k_mech, k_bus)
     s[L.S_THETA] = theta1
     s[L.S_OMEGA] = omega1
     s[L.S_ACC] = (omega1 - omega) * c.INNER_HZ
-    s[L.S_I_RE] = s1.real
-    s[L.S_I_IM] = s1.imag
+    s[L.S_I_RE] = i_re1
+    s[L.S_I_IM] = i_im1
     s[L.S_E_ELEC] += p_el * _H
     s[L.S_E_COPPER] += p_cu * _H
     s[L.S_E_FRICTION] += e_fric
     s[L.S_E_LOAD] += load * (theta1 - theta)
-    ubus, dump_on, e_dump, e_sup = bus_step_prepared(s[L.S_UBUS], p_el, u[L.I_SUPPLY_VOLTS],
-                                                     p[L.P_U_DUMP], s[L.S_DUMP_ON], _H, k_bus)
     s[L.S_UBUS] = ubus
     s[L.S_DUMP_ON] = dump_on
     s[L.S_E_DUMP] += e_dump

@@ -15,16 +15,41 @@ from numba import njit, prange
 
 from . import constants as c
 from . import layout as L
-from .jit import KERNEL, KERNEL_PARALLEL
-from .kernel import inner_sample, outer_firmware
-from .plant.coil import coil_constants
+from .firmware import regs as R
+from .firmware.current_loop import phase_step, references
+from .firmware.fixed import fx4, fx8
+from .jit import KERNEL, KERNEL_PARALLEL, LANE_KERNEL
+from .kernel import adc_count, inner_sample, outer_firmware, plant_sample
+from .plant.coil import coil_constants, vector_to_phases
+from .plant.encoder import eldeg, encoder_count
+from .plant.hall import hall_code, sector_index
 from .plant.mechanics import mech_constants
 from .plant.supply import bus_constants
 
 #: motors per block
 LANES = 16
-#: scratch values per lane (see :func:`lane_scratch`)
-N_FIELDS = 1
+
+# --- lane scratch: field f of lane j is scratch[f * LANES + j] -------------------------------
+(
+    # plant state
+    F_THETA, F_OMEGA, F_ACC, F_I_RE, F_I_IM, F_UBUS, F_DUMP_ON, F_ELDEG_PREV, F_HALL_SECTOR,
+    # current loops: histories of phases a, b, c and the PWM values waiting out the delay
+    F_IE1_A, F_IE1_B, F_IE1_C, F_IU1_A, F_IU1_B, F_IU1_C, F_IU2_A, F_IU2_B, F_IU2_C,
+    F_IIST1_A, F_IIST1_B, F_IIST1_C, F_UPEND_A, F_UPEND_B, F_UPEND_C,
+    # accumulators
+    F_E_ELEC, F_E_COPPER, F_E_FRICTION, F_E_LOAD, F_E_DUMP, F_E_SUPPLY, F_I2_SUM, F_PREG_SUM,
+    F_IX_ERR,
+    # register values of the last sample
+    F_ELDEG_IST, F_V_ELDEG, F_IA_IST, F_IB_IST, F_IC_IST, F_I_NOM, F_PHI_SOLL, F_IA_SOLL,
+    F_IB_SOLL, F_IC_SOLL, F_UA_VAL, F_UB_VAL, F_UC_VAL,
+    # registers, parameters and inputs, constant over the 15 samples
+    F_VF_OUT, F_PHASE_COMP, F_AMPLITUDE, F_KIA, F_KIB, F_KIC, F_KIB1, F_KIB0, F_KIFX2, F_KIFX1,
+    F_KIFY1, F_KIFY0, F_POLE_PAIRS, F_THETA_E0, F_HALL_ANGLE, F_PWM_DELAY, F_R, F_LAMBDA, F_J,
+    F_COULOMB, F_STOP_LO, F_STOP_HI, F_STOP_K, F_STOP_D, F_U_DUMP, F_LOAD, F_SUPPLY,
+    F_COUNTS_PER_AMP, F_KC0, F_KC1, F_KC2, F_KC3, F_KM0, F_KM1, F_KB0, F_KB1, F_KB2, F_KB3,
+    F_KB4, F_KB5, F_KB6, F_MOTOR,
+    N_FIELDS,
+) = range(89)
 
 _H = c.INNER_DT
 
@@ -46,14 +71,210 @@ def outer_sample(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i
     outer_firmware(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt)
 
 
-@njit(**KERNEL)
+@njit(cache=True, inline="always")
+def _get(sc: np.ndarray, f: int, j: int) -> float:
+    return sc[f * LANES + j]
+
+
+@njit(cache=True, inline="always")
+def _put(sc: np.ndarray, f: int, j: int, x: float) -> None:
+    sc[f * LANES + j] = x
+
+
+@njit(cache=True, inline="always")
+def in_lanes(r: np.ndarray, p: np.ndarray) -> bool:
+    """True when a motor's next inner samples take none of :func:`jvl_gym.kernel.inner_sample`'s
+    per-motor branches: a mode with commutation and current loops (not INIT, SAFE, TESTU,
+    TESTKI, MANI), commutation aligned (no hall synchronisation), no current or torque noise,
+    no inner-rate recording. Such a motor can run in a SIMD lane."""
+    mode = r[R.MODE_REG]
+    cb = r[R.CNTRL_BITS]
+    return (mode != c.INIT_MODE and mode != c.SAFE_MODE and mode != c.TESTU_MODE
+            and mode != c.TESTKI_MODE and mode != c.MANI_MODE and p[L.P_HALL_START] < 0.5
+            and not p[L.P_CURRENT_NOISE] > 0.0 and not p[L.P_TORQUE_NOISE] > 0.0
+            and not ((cb & c.RECORDBIT) and (cb & c.RECINNERBIT)))
+
+
+@njit(cache=True, inline="always")
+def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.ndarray,
+            u: np.ndarray) -> None:
+    """Copy what the inner samples of motor ``i`` read into lane ``j``."""
+    for f, x in ((F_THETA, s[L.S_THETA]), (F_OMEGA, s[L.S_OMEGA]), (F_ACC, s[L.S_ACC]),
+                 (F_I_RE, s[L.S_I_RE]), (F_I_IM, s[L.S_I_IM]), (F_UBUS, s[L.S_UBUS]),
+                 (F_DUMP_ON, s[L.S_DUMP_ON]), (F_ELDEG_PREV, s[L.S_ELDEG_PREV]),
+                 (F_E_ELEC, s[L.S_E_ELEC]), (F_E_COPPER, s[L.S_E_COPPER]),
+                 (F_E_FRICTION, s[L.S_E_FRICTION]), (F_E_LOAD, s[L.S_E_LOAD]),
+                 (F_E_DUMP, s[L.S_E_DUMP]), (F_E_SUPPLY, s[L.S_E_SUPPLY]),
+                 (F_I2_SUM, s[L.S_I2_SUM]), (F_PREG_SUM, s[L.S_PREG_SUM]), (F_IX_ERR, 0.0),
+                 (F_VF_OUT, float(r[R.VF_OUT])), (F_PHASE_COMP, float(r[R.PHASE_COMP])),
+                 (F_AMPLITUDE, float(r[R.AMPLITUDE])), (F_KIA, float(r[R.KIA])),
+                 (F_KIB, float(r[R.KIB])), (F_KIC, float(r[R.KIC])), (F_KIB1, fx8(r[R.KIB1])),
+                 (F_KIB0, fx8(r[R.KIB0])), (F_KIFX2, fx4(r[R.KIFX2])),
+                 (F_KIFX1, fx4(r[R.KIFX1])), (F_KIFY1, fx4(r[R.KIFY1])),
+                 (F_KIFY0, fx4(r[R.KIFY0])), (F_POLE_PAIRS, p[L.P_POLE_PAIRS]),
+                 (F_THETA_E0, p[L.P_THETA_E0]), (F_HALL_ANGLE, p[L.P_HALL_ANGLE]),
+                 (F_PWM_DELAY, p[L.P_PWM_DELAY]), (F_R, p[L.P_R]), (F_LAMBDA, p[L.P_LAMBDA]),
+                 (F_J, p[L.P_J_MOTOR] + p[L.P_J_LOAD]), (F_COULOMB, p[L.P_COULOMB]),
+                 (F_STOP_LO, p[L.P_STOP_LO]), (F_STOP_HI, p[L.P_STOP_HI]),
+                 (F_STOP_K, p[L.P_STOP_K]), (F_STOP_D, p[L.P_STOP_D]),
+                 (F_U_DUMP, p[L.P_U_DUMP]), (F_LOAD, u[L.I_LOAD_TORQUE]),
+                 (F_SUPPLY, u[L.I_SUPPLY_VOLTS]), (F_COUNTS_PER_AMP, 1.0 / p[L.P_AMPS_PER_COUNT]),
+                 (F_MOTOR, float(i))):
+        _put(sc, f, j, x)
+    for k in range(3):
+        _put(sc, F_IE1_A + k, j, s[L.S_IE1_A + k])
+        _put(sc, F_IU1_A + k, j, s[L.S_IU1_A + k])
+        _put(sc, F_IU2_A + k, j, s[L.S_IU2_A + k])
+        _put(sc, F_IIST1_A + k, j, s[L.S_IIST1_A + k])
+        _put(sc, F_UPEND_A + k, j, s[L.S_UPEND_A + k])
+    k_coil = coil_constants(p[L.P_R], p[L.P_L], p[L.P_LAMBDA], _H)
+    k_mech = mech_constants(p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_VISCOUS], _H)
+    k_bus = bus_constants(p[L.P_C_BUS], p[L.P_R_SUPPLY], p[L.P_R_DUMP], _H)
+    for k in range(4):
+        _put(sc, F_KC0 + k, j, k_coil[k])
+    for k in range(2):
+        _put(sc, F_KM0 + k, j, k_mech[k])
+    for k in range(7):
+        _put(sc, F_KB0 + k, j, k_bus[k])
+
+
+@njit(cache=True, inline="always")
+def _scatter(sc: np.ndarray, j: int, r: np.ndarray, s: np.ndarray) -> None:
+    """Store lane ``j``'s state and last-sample registers back into its motor's rows."""
+    for f, k in ((F_THETA, L.S_THETA), (F_OMEGA, L.S_OMEGA), (F_ACC, L.S_ACC),
+                 (F_I_RE, L.S_I_RE), (F_I_IM, L.S_I_IM), (F_UBUS, L.S_UBUS),
+                 (F_DUMP_ON, L.S_DUMP_ON), (F_ELDEG_PREV, L.S_ELDEG_PREV),
+                 (F_HALL_SECTOR, L.S_HALL_SECTOR), (F_E_ELEC, L.S_E_ELEC),
+                 (F_E_COPPER, L.S_E_COPPER), (F_E_FRICTION, L.S_E_FRICTION),
+                 (F_E_LOAD, L.S_E_LOAD), (F_E_DUMP, L.S_E_DUMP), (F_E_SUPPLY, L.S_E_SUPPLY),
+                 (F_I2_SUM, L.S_I2_SUM), (F_PREG_SUM, L.S_PREG_SUM)):
+        s[k] = _get(sc, f, j)
+    for k in range(3):
+        s[L.S_IE1_A + k] = _get(sc, F_IE1_A + k, j)
+        s[L.S_IU1_A + k] = _get(sc, F_IU1_A + k, j)
+        s[L.S_IU2_A + k] = _get(sc, F_IU2_A + k, j)
+        s[L.S_IIST1_A + k] = _get(sc, F_IIST1_A + k, j)
+        s[L.S_UPEND_A + k] = _get(sc, F_UPEND_A + k, j)
+    s[L.S_TICK] += c.INNER_PER_OUTER
+    for f, k in ((F_ELDEG_IST, R.ELDEG_IST), (F_V_ELDEG, R.V_ELDEG), (F_IA_IST, R.IA_IST),
+                 (F_IB_IST, R.IB_IST), (F_IC_IST, R.IC_IST), (F_I_NOM, R.I_NOM),
+                 (F_PHI_SOLL, R.PHI_SOLL), (F_IA_SOLL, R.IA_SOLL), (F_IB_SOLL, R.IB_SOLL),
+                 (F_IC_SOLL, R.IC_SOLL), (F_UA_VAL, R.UA_VAL), (F_UB_VAL, R.UB_VAL),
+                 (F_UC_VAL, R.UC_VAL)):
+        r[k] = int(_get(sc, f, j))
+    hall = hall_code(_get(sc, F_HALL_SECTOR, j)) << c.HALL_STATUS_SHIFT
+    r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] & 0x1FFF) | hall
+    if _get(sc, F_IX_ERR, j) > 0.0:
+        r[R.ERR_STAT] |= c.IX_ERR
+
+
+@njit(cache=True, inline="always")
+def _phase_lane(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float) -> float:
+    """One phase's current loop in lane ``j`` (:func:`jvl_gym.firmware.current_loop._phase`)."""
+    u1 = _get(sc, F_IU1_A + k, j)
+    u, e = phase_step(i_soll, i_ist, _get(sc, F_IE1_A + k, j), u1, _get(sc, F_IU2_A + k, j),
+                      _get(sc, F_IIST1_A + k, j), _get(sc, F_KIB1, j), _get(sc, F_KIB0, j),
+                      _get(sc, F_KIFX2, j), _get(sc, F_KIFX1, j), _get(sc, F_KIFY1, j),
+                      _get(sc, F_KIFY0, j))
+    _put(sc, F_IE1_A + k, j, e)
+    _put(sc, F_IU2_A + k, j, u1)
+    _put(sc, F_IU1_A + k, j, u)
+    _put(sc, F_IIST1_A + k, j, i_ist)
+    return u
+
+
+@njit(cache=True, inline="always")
+def _pwm_lane(sc: np.ndarray, j: int, k: int, u: float) -> float:
+    """PWM value applied in phase ``k`` of lane ``j``: ``u`` itself, or the value computed one
+    sample earlier when the motor has a PWM delay (``inner_sample``)."""
+    delayed = _get(sc, F_PWM_DELAY, j) > 0.5
+    pending = _get(sc, F_UPEND_A + k, j)
+    _put(sc, F_UPEND_A + k, j, u if delayed else pending)
+    return pending if delayed else u
+
+
+@njit(cache=True, inline="always")
+def _lane_sample(sc: np.ndarray, j: int) -> None:
+    """One inner sample of lane ``j``: the operations of :func:`jvl_gym.kernel.inner_sample`
+    for a motor that :func:`in_lanes` admits, in the same order on the same values (so the
+    result is bit-for-bit the same), written without a branch the compiler cannot turn into
+    a select, so that the loop over lanes runs in SIMD registers."""
+    theta = _get(sc, F_THETA, j)
+    omega = _get(sc, F_OMEGA, j)
+    pp = _get(sc, F_POLE_PAIRS, j)
+    theta_e = pp * theta + _get(sc, F_THETA_E0, j)
+    _put(sc, F_HALL_SECTOR, j, sector_index(theta_e, _get(sc, F_HALL_ANGLE, j)))
+    enc_abs = encoder_count(theta)
+    el = eldeg(theta_e)
+    dv = enc_abs - _get(sc, F_ELDEG_PREV, j)
+    _put(sc, F_ELDEG_PREV, j, enc_abs)
+    i_re = _get(sc, F_I_RE, j)
+    i_im = _get(sc, F_I_IM, j)
+    ia, ib, ic = vector_to_phases(complex(i_re, i_im))
+    cpa = _get(sc, F_COUNTS_PER_AMP, j)
+    xa, over_a = adc_count(ia * cpa * _get(sc, F_KIA, j) / 256.0)
+    xb, over_b = adc_count(ib * cpa * _get(sc, F_KIB, j) / 256.0)
+    xc, over_c = adc_count(ic * cpa * _get(sc, F_KIC, j) / 256.0)
+    over = over_a or over_b or over_c
+    _put(sc, F_IX_ERR, j, 1.0 if over else _get(sc, F_IX_ERR, j))
+    i_nom, phi, isa, isb, isc = references(_get(sc, F_VF_OUT, j), el, dv,
+                                           _get(sc, F_PHASE_COMP, j), _get(sc, F_AMPLITUDE, j))
+    ua = _phase_lane(sc, j, 0, isa, xa)
+    ub = _phase_lane(sc, j, 1, isb, xb)
+    uc = _phase_lane(sc, j, 2, isc, xc)
+    for f, x in ((F_ELDEG_IST, el), (F_V_ELDEG, dv), (F_IA_IST, xa), (F_IB_IST, xb),
+                 (F_IC_IST, xc), (F_I_NOM, i_nom), (F_PHI_SOLL, phi), (F_IA_SOLL, isa),
+                 (F_IB_SOLL, isb), (F_IC_SOLL, isc), (F_UA_VAL, ua), (F_UB_VAL, ub),
+                 (F_UC_VAL, uc)):
+        _put(sc, f, j, x)
+    load = _get(sc, F_LOAD, j)
+    (theta1, omega1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric, e_dump,
+     e_sup) = plant_sample(
+        theta, omega, _get(sc, F_ACC, j), i_re, i_im, _get(sc, F_UBUS, j),
+        _get(sc, F_DUMP_ON, j), _pwm_lane(sc, j, 0, ua), _pwm_lane(sc, j, 1, ub),
+        _pwm_lane(sc, j, 2, uc), theta_e, pp, _get(sc, F_R, j), _get(sc, F_LAMBDA, j),
+        _get(sc, F_J, j), _get(sc, F_COULOMB, j), _get(sc, F_STOP_LO, j),
+        _get(sc, F_STOP_HI, j), _get(sc, F_STOP_K, j), _get(sc, F_STOP_D, j), load, 0.0,
+        _get(sc, F_SUPPLY, j), _get(sc, F_U_DUMP, j),
+        (_get(sc, F_KC0, j), _get(sc, F_KC1, j), _get(sc, F_KC2, j), _get(sc, F_KC3, j)),
+        (_get(sc, F_KM0, j), _get(sc, F_KM1, j)),
+        (_get(sc, F_KB0, j), _get(sc, F_KB1, j), _get(sc, F_KB2, j), _get(sc, F_KB3, j),
+         _get(sc, F_KB4, j), _get(sc, F_KB5, j), _get(sc, F_KB6, j)))
+    _put(sc, F_THETA, j, theta1)
+    _put(sc, F_OMEGA, j, omega1)
+    _put(sc, F_ACC, j, (omega1 - omega) * c.INNER_HZ)
+    _put(sc, F_I_RE, j, i_re1)
+    _put(sc, F_I_IM, j, i_im1)
+    _put(sc, F_E_ELEC, j, _get(sc, F_E_ELEC, j) + p_el * _H)
+    _put(sc, F_E_COPPER, j, _get(sc, F_E_COPPER, j) + p_cu * _H)
+    _put(sc, F_E_FRICTION, j, _get(sc, F_E_FRICTION, j) + e_fric)
+    _put(sc, F_E_LOAD, j, _get(sc, F_E_LOAD, j) + load * (theta1 - theta))
+    _put(sc, F_UBUS, j, ubus)
+    _put(sc, F_DUMP_ON, j, dump_on)
+    _put(sc, F_E_DUMP, j, _get(sc, F_E_DUMP, j) + e_dump)
+    _put(sc, F_E_SUPPLY, j, _get(sc, F_E_SUPPLY, j) + e_sup)
+    _put(sc, F_I2_SUM, j, _get(sc, F_I2_SUM, j) + (xa * xa + xb * xb + xc * xc))
+    _put(sc, F_PREG_SUM, j, _get(sc, F_PREG_SUM, j) + max(-p_el, 0.0))
+
+
+@njit(**LANE_KERNEL)
 def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scratch):
     """The 15 inner samples (step 4, ``jvl_gym.kernel``) of motors ``i0 .. i0 + n - 1``
-    (``n <= LANES``, one block); ``scratch`` is the block's row of :func:`lane_scratch`."""
+    (``n <= LANES``, one block); ``scratch`` is the block's row of :func:`lane_scratch`.
+
+    The motors that :func:`in_lanes` admits are copied into SIMD lanes, stepped together
+    (:func:`_lane_sample`) and copied back; the others run :func:`jvl_gym.kernel.inner_sample`
+    one at a time. Both give the same bits (tests/test_lanes.py).
+    """
+    m = 0
     for i in range(i0, i0 + n):
         r = regs[i]
         s = state[i]
         p = params[i]
+        if in_lanes(r, p):
+            _gather(scratch, m, i, r, s, p, inputs[i])
+            m += 1
+            continue
         u = inputs[i]
         b = buf[i] if rec else buf[0]
         counts_per_amp = 1.0 / p[L.P_AMPS_PER_COUNT]
@@ -63,6 +284,12 @@ def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scrat
         for _k in range(c.INNER_PER_OUTER):
             inner_sample(r, s, p, u, keys[i], b, rec, fmt, counts_per_amp, k_coil, k_mech,
                          k_bus)
+    for _k in range(c.INNER_PER_OUTER):
+        for j in range(m):
+            _lane_sample(scratch, j)
+    for j in range(m):
+        i = int(_get(scratch, F_MOTOR, j))
+        _scatter(scratch, j, regs[i], state[i])
 
 
 @njit(cache=True, inline="always")

@@ -64,7 +64,7 @@ def power_on_rows(regs: np.ndarray, state: np.ndarray, params: np.ndarray, latch
             s[L.S_ELDEG_OFS] = el - enc
             s[L.S_HALL_SYNCED] = 0.0
         else:
-            el = eldeg(theta_e)
+            el = int(eldeg(theta_e))
             s[L.S_HALL_SYNCED] = 1.0
         s[L.S_ELDEG_PREV] = enc
         r[R.ELDEG_IST] = el

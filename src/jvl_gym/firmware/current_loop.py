@@ -24,6 +24,7 @@ from . import regs as R
 from .fixed import clamp, fx4, fx8, rnd
 
 _HALF_SQRT3 = 0.5 * math.sqrt(3.0)
+_PER_TURN = 1.0 / c.ELDEG_PER_TURN  #: exact (a power of two)
 #: sine and cosine of the 2048 electrical angle units (3.2.143)
 SIN_TABLE = np.array([math.sin(2.0 * math.pi * k / c.ELDEG_PER_TURN)
                       for k in range(c.ELDEG_PER_TURN)])
@@ -31,42 +32,84 @@ COS_TABLE = np.array([math.cos(2.0 * math.pi * k / c.ELDEG_PER_TURN)
                       for k in range(c.ELDEG_PER_TURN)])
 
 
-@njit(**KERNEL)
-def commutate(r: np.ndarray) -> None:
-    """Compute I_NOM, PHI_SOLL and IA/IB/IC_SOLL from VF_OUT and the rotor angle (4.3.1)."""
-    vf = float(r[R.VF_OUT])
+@njit(cache=True, inline="always")
+def references(vf: float, eldeg: float, v_eldeg: float, phase_comp: float, amplitude: float
+               ) -> tuple[float, float, float, float, float]:
+    """Commutation (4.3.1, 3.2.126): ``(I_NOM, PHI_SOLL, IA_SOLL, IB_SOLL, IC_SOLL)`` from
+    VF_OUT, ELDEG_IST, V_ELDEG and the raw PHASE_COMP (Fixed8) and AMPLITUDE (Fixed8) registers.
+
+    Pure arithmetic on floats holding the registers' integers (the angle's ``mod 2048`` by
+    ``floor``, exact), so that :mod:`jvl_gym.lanes` can run it for several motors in SIMD lanes.
+    """
     i_nom = abs(vf)
-    quarter = 512 if vf >= 0.0 else -512
-    phi = (r[R.ELDEG_IST] + quarter + int(rnd(r[R.V_ELDEG] * fx8(r[R.PHASE_COMP])))) % 2048
-    r[R.I_NOM] = int(i_nom)
-    r[R.PHI_SOLL] = phi
-    set_references(r, i_nom, phi)
+    quarter = 512.0 if vf >= 0.0 else -512.0
+    phi = eldeg + quarter + rnd(v_eldeg * fx8(phase_comp))
+    phi -= c.ELDEG_PER_TURN * math.floor(phi * _PER_TURN)
+    ia, ib, ic = phase_references(i_nom * fx8(amplitude), phi)
+    return i_nom, phi, ia, ib, ic
 
 
-@njit(**KERNEL)
-def set_references(r: np.ndarray, i_nom: float, phi: int) -> None:
-    """IA/IB/IC_SOLL = I_NOM·AMPLITUDE·sin(PHI + k·120°), stored in −850..850 (3.2.133).
+@njit(cache=True, inline="always")
+def phase_references(amp: float, phi: float) -> tuple[float, float, float]:
+    """IA/IB/IC_SOLL = amp·sin(PHI + k·120°) for ``phi`` in 0..2047, stored in −850..850 (3.2.133).
 
     The firmware's sine table: sin and cos of the 2048 angle units, with
     ``sin(φ + 120°) = −sin φ/2 + (√3/2)·cos φ`` and ``sin(φ + 240°) = −sin φ/2 − (√3/2)·cos φ``.
     """
-    amp = i_nom * fx8(r[R.AMPLITUDE])
-    k = phi % 2048
+    k = int(phi)
     sa = SIN_TABLE[k]
     ca = COS_TABLE[k]
-    r[R.IA_SOLL] = int(clamp(rnd(amp * sa), -850.0, 850.0))
-    r[R.IB_SOLL] = int(clamp(rnd(amp * (-0.5 * sa + _HALF_SQRT3 * ca)), -850.0, 850.0))
-    r[R.IC_SOLL] = int(clamp(rnd(amp * (-0.5 * sa - _HALF_SQRT3 * ca)), -850.0, 850.0))
+    return (clamp(rnd(amp * sa), -850.0, 850.0),
+            clamp(rnd(amp * (-0.5 * sa + _HALF_SQRT3 * ca)), -850.0, 850.0),
+            clamp(rnd(amp * (-0.5 * sa - _HALF_SQRT3 * ca)), -850.0, 850.0))
+
+
+@njit(cache=True, inline="always")
+def store_references(r: np.ndarray, i_nom: float, phi: float, ia: float, ib: float,
+                     ic: float) -> None:
+    """Store I_NOM, PHI_SOLL and IA/IB/IC_SOLL (consecutive registers, 3.2.133)."""
+    r[R.I_NOM] = int(i_nom)
+    r[R.PHI_SOLL] = int(phi)
+    r[R.IA_SOLL] = int(ia)
+    r[R.IB_SOLL] = int(ib)
+    r[R.IC_SOLL] = int(ic)
+
+
+@njit(**KERNEL)
+def commutate(r: np.ndarray) -> None:
+    """Compute I_NOM, PHI_SOLL and IA/IB/IC_SOLL from VF_OUT and the rotor angle (4.3.1)."""
+    i_nom, phi, ia, ib, ic = references(float(r[R.VF_OUT]), float(r[R.ELDEG_IST]),
+                                        float(r[R.V_ELDEG]), float(r[R.PHASE_COMP]),
+                                        float(r[R.AMPLITUDE]))
+    store_references(r, i_nom, phi, ia, ib, ic)
+
+
+@njit(**KERNEL)
+def set_references(r: np.ndarray, i_nom: float, phi: int) -> None:
+    """IA/IB/IC_SOLL for a stator field of ``i_nom`` at angle ``phi`` (MANI_MODE, 3.2.128)."""
+    ia, ib, ic = phase_references(i_nom * fx8(r[R.AMPLITUDE]), float(phi % c.ELDEG_PER_TURN))
+    r[R.IA_SOLL] = int(ia)
+    r[R.IB_SOLL] = int(ib)
+    r[R.IC_SOLL] = int(ic)
+
+
+@njit(cache=True, inline="always")
+def phase_step(i_soll: float, i_ist: float, e1: float, u1: float, u2: float, i_ist1: float,
+               kib1: float, kib0: float, kifx2: float, kifx1: float, kify1: float,
+               kify0: float) -> tuple[float, float]:
+    """One phase's loop (4.3.1): ``(U, e)`` from IX_SOLL, IX_IST, the histories ``e(k−1)``,
+    ``U(k−1)``, ``U(k−2)``, ``I_IST(k−1)`` and the coefficients (Fixed8 KIB, Fixed4 KIF values).
+    """
+    e = i_soll - (kib1 * i_ist + kib0 * i_ist1)
+    u = kifx2 * e + kifx1 * e1 + kify1 * u1 + kify0 * u2
+    return clamp(rnd(u), -1023.0, 1023.0), e
 
 
 @njit(cache=True, inline="always")
 def _phase(s: np.ndarray, i_soll: float, i_ist: float, k: int, kib1: float, kib0: float,
            kifx2: float, kifx1: float, kify1: float, kify0: float) -> float:
-    ibf = kib1 * i_ist + kib0 * s[L.S_IIST1_A + k]
-    e = i_soll - ibf
-    u = (kifx2 * e + kifx1 * s[L.S_IE1_A + k] + kify1 * s[L.S_IU1_A + k]
-         + kify0 * s[L.S_IU2_A + k])
-    u = clamp(rnd(u), -1023.0, 1023.0)
+    u, e = phase_step(i_soll, i_ist, s[L.S_IE1_A + k], s[L.S_IU1_A + k], s[L.S_IU2_A + k],
+                      s[L.S_IIST1_A + k], kib1, kib0, kifx2, kifx1, kify1, kify0)
     s[L.S_IE1_A + k] = e
     s[L.S_IU2_A + k] = s[L.S_IU1_A + k]
     s[L.S_IU1_A + k] = u

@@ -21,6 +21,7 @@ import math
 from numba import njit
 
 from ..jit import KERNEL
+from .trig import sincos
 
 SQRT3 = math.sqrt(3.0)
 # Divisions are the slowest arithmetic of the inner sample (~13 cycles of latency, one divider):
@@ -56,7 +57,8 @@ def _current_at(s0: complex, s_u: complex, k_emf_over_c: complex, inv_r: float, 
 def expi(x: float) -> complex:
     """``e^{jx}``; Taylor series for the small angles of one step (error < 3e-14, |x| < 0.2)."""
     if abs(x) >= 0.2:
-        return complex(math.cos(x), math.sin(x))
+        s, co = sincos(x)
+        return complex(co, s)
     x2 = x * x
     cos = 1.0 - x2 * _R2 * (1.0 - x2 * _R12 * (1.0 - x2 * _R30 * (1.0 - x2 * _R56)))
     sin = x * (1.0 - x2 * _R6 * (1.0 - x2 * _R20 * (1.0 - x2 * _R42 * (1.0 - x2 * _R72))))
@@ -116,8 +118,7 @@ def coil_step_prepared(s0: complex, s_u: complex, theta_e: float, omega_e: float
                        k: tuple[float, float, float, float]):
     """:func:`coil_step` given ``k = coil_constants(r, ell, lam, h)``; same returns."""
     a_h, inv_r, inv_tau, lam_over_l = k
-    cos_e = math.cos(theta_e)
-    sin_e = math.sin(theta_e)
+    sin_e, cos_e = sincos(theta_e)
     e0 = complex(cos_e, sin_e)
     # back-EMF term ω λ/L · e^{jθe} / (1/τ + jω), the division written out (1/τ > 0)
     g = omega_e * lam_over_l / (inv_tau * inv_tau + omega_e * omega_e)

@@ -16,6 +16,7 @@ from ..constants import COUNTS_PER_REV, ELDEG_PER_TURN
 
 _COUNTS_PER_RAD = COUNTS_PER_REV / (2.0 * math.pi)
 _ELDEG_PER_RAD = ELDEG_PER_TURN / (2.0 * math.pi)
+_PER_TURN = 1.0 / ELDEG_PER_TURN  #: exact (a power of two)
 
 
 @njit(cache=True, inline="always")
@@ -25,6 +26,8 @@ def encoder_count(theta: float) -> float:
 
 
 @njit(cache=True, inline="always")
-def eldeg(theta_e: float) -> int:
-    """ELDEG_IST of an electrical angle [rad], in 0..2047."""
-    return int(math.floor(theta_e * _ELDEG_PER_RAD)) % ELDEG_PER_TURN
+def eldeg(theta_e: float) -> float:
+    """ELDEG_IST of an electrical angle [rad], in 0..2047 (a float holding the integer; the
+    ``mod 2048`` by ``floor``, exact, so that it runs in SIMD lanes, ``jvl_gym.lanes``)."""
+    e = float(math.floor(theta_e * _ELDEG_PER_RAD))
+    return e - ELDEG_PER_TURN * float(math.floor(e * _PER_TURN))
