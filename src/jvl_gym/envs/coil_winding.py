@@ -12,7 +12,7 @@ from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
 from ..jit import KERNEL, KERNEL_PARALLEL
-from ..kernel import advance_motor
+from ..lanes import LANES, inner_samples, outer_sample
 from . import deposition as dep
 from .base import ERROR_BITS, Column, MotorVectorEnv
 from .compiled import PARALLEL_MIN, action, all_finite, end_step, put_obs
@@ -30,11 +30,12 @@ _N_FIXED_OBS = 5  #: observation components before the profile summary
 _TURN_EMA = 0.25  #: weight of the newest turn in the laid-pitch averages
 _TURN_OBS_SCALE = 10.0  #: laid pitch and gap (relative to d0) × 10 in the observation
 
-#: columns of the per-copy coil state
+#: columns of the per-copy coil state (the last two carry the spindle speed and the traverse
+#: position of the present outer sample from before to after the block's inner samples)
 (_C_D0, _C_D_MEAN, _C_D_VAR, _C_D_FREQ, _C_D_PHASE, _C_TIME, _C_SPINDLE_REV, _C_COUNT_ACC,
  _C_PULSES, _C_FLOOR, _C_LAST_STD, _C_LAYER_VOID, _C_LAYER_PILES, _C_STEP_PENALTY, _C_GEAR0,
  _C_HALF_D_COUNTS, _C_DIRECTION, _C_LAYER, _C_PREV_X, _C_LAID_PITCH, _C_LAID_GAP,
- _C_LAID_SLIDE, _C_COLS) = range(23)
+ _C_LAID_SLIDE, _C_V, _C_X0, _C_COLS) = range(25)
 #: entries of the per-env constants array
 (_NOISE, _MAX_STEPS, _DECIMATION, _T_CHANGE, _SPINDLE_CPR, _METRES_PER_RAD, _WIDTH, _NEST,
  _PITCH_TRIM, _P4, _N_LAYERS, _VOID_W, _FLATNESS_W, _ERROR_PENALTY, _N_CONSTS) = range(15)
@@ -64,18 +65,25 @@ def _lay_turn(i, x, t, h, centres, w, k):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _spindle_sample(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, prof, w, h,
-                    centres, k):  # pragma: no cover - compiled
-    """One outer sample of spindle and traverse of copy ``i``; a turn is laid when the
-    spindle completes a revolution, at the traverse position interpolated to that instant."""
+def _spindle_before(i, state, inputs, prof, w, k):  # pragma: no cover - compiled
+    """Outer sample of copy ``i``, before the motor: spindle speed and pulses; remembers the
+    speed and the traverse position for :func:`_spindle_after`."""
     v = row_speed(prof[i], w[i, _C_TIME], w[i, _C_SPINDLE_REV] * 2.0 * math.pi, k[_T_CHANGE])
     acc = w[i, _C_COUNT_ACC] + v * k[_SPINDLE_CPR] * _DT
     counts = math.floor(acc)
     w[i, _C_COUNT_ACC] = acc - counts
     w[i, _C_PULSES] += counts
     inputs[i, L.I_PULSE_COUNTS] = counts
-    x0 = state[i, L.S_THETA] * k[_METRES_PER_RAD]
-    advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, 1)
+    w[i, _C_V] = v
+    w[i, _C_X0] = state[i, L.S_THETA] * k[_METRES_PER_RAD]
+
+
+@njit(cache=True, inline="always")
+def _spindle_after(i, state, w, h, centres, k):  # pragma: no cover - compiled
+    """Outer sample of copy ``i``, after the motor: a turn is laid when the spindle completes
+    a revolution, at the traverse position interpolated to that instant."""
+    v = w[i, _C_V]
+    x0 = w[i, _C_X0]
     rev0 = w[i, _C_SPINDLE_REV]
     rev1 = rev0 + v * _DT
     w[i, _C_SPINDLE_REV] = rev1
@@ -133,12 +141,9 @@ def _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary,
         put_obs(obs, i, j + 6 + a, prev[i, a], key, t[i], noise)
 
 
-@njit(**KERNEL)
-def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-               noise_key, k, prof, w, h, centres, summary, obs, reward, term,
-               trunc):  # pragma: no cover - compiled
-    """One env step of copy ``i``: pitch and dwell trims, ``decimation`` samples of spindle,
-    traverse and deposition, layer bookkeeping, reward, termination, observation."""
+@njit(cache=True, inline="always")
+def _step_begin(i, regs, actions, w, k):  # pragma: no cover - compiled
+    """Beginning of an env step of copy ``i``: pitch and dwell trims, step accumulators."""
     a0 = action(actions, i, 0)
     a1 = action(actions, i, 1)
     a2 = action(actions, i, 2)
@@ -148,9 +153,16 @@ def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, action
     regs[i, R.P3] = int(k[_P4]) - round((1.0 + a2) * half)
     w[i, _C_PULSES] = 0.0
     w[i, _C_STEP_PENALTY] = 0.0
-    for _ in range(int(k[_DECIMATION])):
-        _spindle_sample(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, prof, w, h,
-                        centres, k)
+
+
+@njit(cache=True, inline="always")
+def _step_end(i, regs, state, actions, prev, t, noise_key, k, w, h, summary, obs, reward, term,
+              trunc):  # pragma: no cover - compiled
+    """End of an env step of copy ``i``: layer bookkeeping, reward, termination, observation
+    (the actions are clipped again: a pure function of ``actions``)."""
+    a0 = action(actions, i, 0)
+    a1 = action(actions, i, 1)
+    a2 = action(actions, i, 2)
     w[i, _C_STEP_PENALTY] += k[_FLATNESS_W] * _track_layer(i, state, w, h)
     t[i] += 1
     error = (regs[i, R.ERR_STAT] & ERROR_BITS) != 0
@@ -163,26 +175,53 @@ def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, action
 
 
 @njit(**KERNEL)
-def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-                  noise_key, k, prof, w, h, centres, summary, obs, reward, term,
+def _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions,
+                prev, t, noise_key, k, prof, w, h, centres, summary, obs, reward, term,
+                trunc):  # pragma: no cover - compiled
+    """One env step of the copies of block ``blk`` (``jvl_gym.lanes``): pitch and dwell trims,
+    then ``decimation`` outer samples of spindle, traverse and deposition (spindle pulses and
+    the firmware's outer step copy by copy, the block's inner samples in one call, then the
+    turns laid copy by copy), then per copy layer bookkeeping, reward, termination,
+    observation."""
+    i0 = blk * LANES
+    n = min(LANES, regs.shape[0] - i0)
+    for i in range(i0, i0 + n):
+        _step_begin(i, regs, actions, w, k)
+    for _ in range(int(k[_DECIMATION])):
+        for i in range(i0, i0 + n):
+            _spindle_before(i, state, inputs, prof, w, k)
+            outer_sample(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, 0)
+        inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scratch[blk])
+        for i in range(i0, i0 + n):
+            _spindle_after(i, state, w, h, centres, k)
+    for i in range(i0, i0 + n):
+        _step_end(i, regs, state, actions, prev, t, noise_key, k, w, h, summary, obs, reward,
+                  term, trunc)
+
+
+@njit(**KERNEL)
+def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions, prev,
+                  t, noise_key, k, prof, w, h, centres, summary, obs, reward, term,
                   trunc):  # pragma: no cover - compiled
     if not all_finite(actions):
         return False
-    for i in range(regs.shape[0]):
-        _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-                   noise_key, k, prof, w, h, centres, summary, obs, reward, term, trunc)
+    for blk in range(scratch.shape[0]):
+        _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                    actions, prev, t, noise_key, k, prof, w, h, centres, summary, obs, reward,
+                    term, trunc)
     return True
 
 
 @njit(**KERNEL_PARALLEL)
-def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-                    noise_key, k, prof, w, h, centres, summary, obs, reward, term,
+def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions,
+                    prev, t, noise_key, k, prof, w, h, centres, summary, obs, reward, term,
                     trunc):  # pragma: no cover - compiled
     if not all_finite(actions):
         return False
-    for i in prange(regs.shape[0]):
-        _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-                   noise_key, k, prof, w, h, centres, summary, obs, reward, term, trunc)
+    for blk in prange(scratch.shape[0]):
+        _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                    actions, prev, t, noise_key, k, prof, w, h, centres, summary, obs, reward,
+                    term, trunc)
     return True
 
 

@@ -1,13 +1,20 @@
-"""Compiled pieces of an environment step shared by the tasks (numba, one copy at a time).
+"""Compiled pieces of an environment step shared by the tasks (numba, one block of copies at a
+time).
 
-A task with a compiled step (``MotorVectorEnv.compiled``) runs a whole step of a copy in one
-compiled function: action (clipped here, never written back to the caller's array), motor
-kernel, process model, reward, termination, truncation and the observation with its noise and
-clipping. The Python side makes one call per step, for one copy (the single env) or all
-copies (the vector env, multi-threaded from :data:`PARALLEL_MIN` copies), so a single env step
-costs little more than the motor kernel itself. These helpers are the task-independent parts;
-they reproduce :func:`jvl_gym.envs.noise.normals` (same counter-based streams) so noise does not
-depend on the path.
+A task with a compiled step (``MotorVectorEnv.compiled``) runs a whole step of a block of
+:data:`jvl_gym.lanes.LANES` copies in one compiled function (``_step_block`` of the task
+module): action (clipped here, never written back to the caller's array), motor kernel, process
+model, reward, termination, truncation and the observation with its noise and clipping. The
+copies of a block advance in lockstep: each outer sample runs the process model's work before
+the motor and the firmware's outer step copy by copy, then the block's inner samples in one
+call (:func:`jvl_gym.lanes.inner_samples`), then the process model's work after the motor copy
+by copy. The copies' arithmetic stays independent of each other, so a copy's trajectory does
+not depend on its block or the number of copies. The Python side makes one call per step, for
+one copy (the single env: one block of one copy) or all copies (the vector env, blocks spread
+over threads from :data:`PARALLEL_MIN` copies), so a single env step costs little more than the
+motor kernel itself. These helpers are the task-independent parts; they reproduce
+:func:`jvl_gym.envs.noise.normals` (same counter-based streams) so noise does not depend on the
+path.
 """
 
 from __future__ import annotations
@@ -23,7 +30,7 @@ from ..jit import KERNEL
 __all__ = ["PARALLEL_MIN", "OBS_BOUND", "all_finite", "action", "put_obs", "normal",
            "end_step"]
 
-#: from this many copies a vector env step runs its copies in parallel threads
+#: from this many copies a vector env step runs its blocks of copies in parallel threads
 PARALLEL_MIN = 32
 #: observations are normalised so that typical values lie within ±1 and clipped to ±OBS_BOUND
 OBS_BOUND = 5.0

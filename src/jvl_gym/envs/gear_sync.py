@@ -12,7 +12,7 @@ from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
 from ..jit import KERNEL, KERNEL_PARALLEL
-from ..kernel import advance_motor
+from ..lanes import LANES, inner_samples, outer_sample
 from .base import ERROR_BITS, Column, MotorVectorEnv
 from .compiled import PARALLEL_MIN, action, all_finite, end_step, normal, put_obs
 from .profiles import SpeedProfile, row_speed
@@ -28,28 +28,36 @@ _AG_CENTRE = 1.01  #: AG factor at 0 V (manual 4.1.9: −10 V ↔ 0.87, +10 V �
 _INTEGRAL_TAU = 2.0  #: time constant of the leaky tension-error integral [s]
 _LOADCELL_STREAM = np.uint64(0x5EED)  #: noise key offset of the load cell
 
-#: columns of the per-copy line state
+#: columns of the per-copy line state (the last two carry the master speed and the motor angle
+#: of the present outer sample from before to after the block's inner samples)
 (_W_EA, _W_THICK, _W_R0, _W_SPAN, _W_REF, _W_STRAIN, _W_WOUND, _W_RADIUS, _W_FORCE, _W_MEASURED,
- _W_MTHETA, _W_TIME, _W_ACC, _W_PREV_MEASURED, _W_PULSES, _W_INTEGRAL, _W_SLACK,
- _W_COLS) = range(18)
+ _W_MTHETA, _W_TIME, _W_ACC, _W_PREV_MEASURED, _W_PULSES, _W_INTEGRAL, _W_SLACK, _W_V1,
+ _W_THETA0, _W_COLS) = range(20)
 #: entries of the per-env constants array
 (_NOISE, _MAX_STEPS, _DECIMATION, _T_CHANGE, _COUNTS_PER_M, _MASTER_RADIUS, _GEAR_RATIO,
  _LC_K, _LC_NOISE, _TOLERANCE, _RATE_W, _BREAK, _SLACK_SAMPLES, _PENALTY, _N_CONSTS) = range(15)
 
 
 @njit(cache=True, inline="always")
-def _line_sample(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, prof, w,
-                 k):  # pragma: no cover - compiled
-    """One outer sample of line and motor of copy ``i``: master pulses, motor, span strain,
-    winder radius, tension, load torque, load cell (``jvl_gym.envs.web``)."""
+def _line_before(i, state, inputs, prof, w, k):  # pragma: no cover - compiled
+    """Outer sample of copy ``i``, before the motor: master speed and pulses; remembers the
+    speed and the motor angle for :func:`_line_after`."""
     v1 = row_speed(prof[i], w[i, _W_TIME], w[i, _W_MTHETA], k[_T_CHANGE])
     acc = w[i, _W_ACC] + v1 * k[_COUNTS_PER_M] * _DT
     counts = math.floor(acc)
     w[i, _W_ACC] = acc - counts
     w[i, _W_PULSES] += counts
     inputs[i, L.I_PULSE_COUNTS] = counts
-    theta0 = state[i, L.S_THETA]
-    advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, 1)
+    w[i, _W_V1] = v1
+    w[i, _W_THETA0] = state[i, L.S_THETA]
+
+
+@njit(cache=True, inline="always")
+def _line_after(i, state, inputs, w, k):  # pragma: no cover - compiled
+    """Outer sample of copy ``i``, after the motor: span strain, winder radius, tension, load
+    torque (for the next sample), load cell (``jvl_gym.envs.web``), master angle and time."""
+    v1 = w[i, _W_V1]
+    theta0 = w[i, _W_THETA0]
     gear_ratio = k[_GEAR_RATIO]
     travel = w[i, _W_RADIUS] * (state[i, L.S_THETA] - theta0) / gear_ratio
     strain = span_step_s(w[i, _W_STRAIN], v1, travel / _DT, w[i, _W_SPAN], _DT)
@@ -88,18 +96,22 @@ def _observe_row(i, regs, prev, t, noise_key, w, k, obs):  # pragma: no cover - 
     put_obs(obs, i, 7, prev[i, 0], key, t[i], noise)
 
 
-@njit(**KERNEL)
-def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-               noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover - compiled
-    """One env step of copy ``i``: analogue input, ``decimation`` samples of line and motor,
-    leaky error integral, reward, termination, observation."""
+@njit(cache=True, inline="always")
+def _step_begin(i, inputs, actions, w):  # pragma: no cover - compiled
+    """Beginning of an env step of copy ``i``: analogue input, step accumulators."""
     a = action(actions, i, 0)
     inputs[i, L.I_ANALOG_VOLTS] = c.ANINP_VOLTS * a
     w[i, _W_PREV_MEASURED] = w[i, _W_MEASURED]
     w[i, _W_PULSES] = 0.0
+
+
+@njit(cache=True, inline="always")
+def _step_end(i, regs, actions, prev, t, noise_key, k, w, obs, reward, term,
+              trunc):  # pragma: no cover - compiled
+    """End of an env step of copy ``i``: leaky error integral, reward, termination,
+    observation (the action is clipped again: a pure function of ``actions``)."""
+    a = action(actions, i, 0)
     decimation = int(k[_DECIMATION])
-    for _ in range(decimation):
-        _line_sample(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, prof, w, k)
     ref = w[i, _W_REF]
     e_meas = (w[i, _W_MEASURED] - ref) / ref
     w[i, _W_INTEGRAL] += decimation * _DT * (e_meas - w[i, _W_INTEGRAL] / _INTEGRAL_TAU)
@@ -116,24 +128,47 @@ def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, action
 
 
 @njit(**KERNEL)
-def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-                  noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover
+def _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions,
+                prev, t, noise_key, k, prof, w, obs, reward, term,
+                trunc):  # pragma: no cover - compiled
+    """One env step of the copies of block ``blk`` (``jvl_gym.lanes``): analogue inputs, then
+    ``decimation`` outer samples of line and motor (master pulses and the firmware's outer step
+    copy by copy, the block's inner samples in one call, then span, tension, load torque and
+    load cell copy by copy), then per copy error integral, reward, termination, observation."""
+    i0 = blk * LANES
+    n = min(LANES, regs.shape[0] - i0)
+    for i in range(i0, i0 + n):
+        _step_begin(i, inputs, actions, w)
+    for _ in range(int(k[_DECIMATION])):
+        for i in range(i0, i0 + n):
+            _line_before(i, state, inputs, prof, w, k)
+            outer_sample(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, 0)
+        inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scratch[blk])
+        for i in range(i0, i0 + n):
+            _line_after(i, state, inputs, w, k)
+    for i in range(i0, i0 + n):
+        _step_end(i, regs, actions, prev, t, noise_key, k, w, obs, reward, term, trunc)
+
+
+@njit(**KERNEL)
+def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions, prev,
+                  t, noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover
     if not all_finite(actions):
         return False
-    for i in range(regs.shape[0]):
-        _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-                   noise_key, k, prof, w, obs, reward, term, trunc)
+    for blk in range(scratch.shape[0]):
+        _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                    actions, prev, t, noise_key, k, prof, w, obs, reward, term, trunc)
     return True
 
 
 @njit(**KERNEL_PARALLEL)
-def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-                    noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover
+def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions,
+                    prev, t, noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover
     if not all_finite(actions):
         return False
-    for i in prange(regs.shape[0]):
-        _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-                   noise_key, k, prof, w, obs, reward, term, trunc)
+    for blk in prange(scratch.shape[0]):
+        _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                    actions, prev, t, noise_key, k, prof, w, obs, reward, term, trunc)
     return True
 
 

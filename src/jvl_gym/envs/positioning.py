@@ -11,7 +11,7 @@ from .. import constants as c
 from .. import layout as L
 from ..firmware import regs as R
 from ..jit import KERNEL, KERNEL_PARALLEL
-from ..kernel import advance_motor
+from ..lanes import LANES, advance_block
 from .base import ERROR_BITS, MotorVectorEnv
 from .compiled import PARALLEL_MIN, action, all_finite, end_step, put_obs
 from .single import MotorEnv
@@ -35,15 +35,22 @@ def _observe_row(i, regs, prev, t, noise_key, noise, target, obs):  # pragma: no
     put_obs(obs, i, 3, prev[i, 0], noise_key[i], t[i], noise)
 
 
-@njit(**KERNEL)
-def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-               noise_key, k, target, direction, obs, reward, term, trunc):  # pragma: no cover
-    """One env step of copy ``i``: torque command, motor, reward, termination, observation."""
+@njit(cache=True, inline="always")
+def _step_begin(i, inputs, actions, k):  # pragma: no cover - compiled
+    """Beginning of an env step of copy ``i``: the torque command (unless baseline)."""
     a = action(actions, i, 0)
     baseline = k[_BASELINE] > 0.5
     if not baseline:
         inputs[i, L.I_ANALOG_VOLTS] = c.ANINP_VOLTS * a
-    advance_motor(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, int(k[_DECIMATION]))
+
+
+@njit(cache=True, inline="always")
+def _step_end(i, regs, actions, prev, t, noise_key, k, target, direction, obs, reward, term,
+              trunc):  # pragma: no cover - compiled
+    """End of an env step of copy ``i``: reward, termination, observation (the action is
+    clipped again: a pure function of ``actions``)."""
+    a = action(actions, i, 0)
+    baseline = k[_BASELINE] > 0.5
     t[i] += 1
     e = (target[i] - regs[i, R.P_IST]) / c.COUNTS_PER_REV
     overshoot = max(-e * direction[i], 0.0)
@@ -55,26 +62,44 @@ def _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, action
 
 
 @njit(**KERNEL)
-def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-                  noise_key, k, target, direction, obs, reward, term,
+def _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions,
+                prev, t, noise_key, k, target, direction, obs, reward, term,
+                trunc):  # pragma: no cover - compiled
+    """One env step of the copies of block ``blk`` (``jvl_gym.lanes``): torque commands, the
+    block's motors advanced together by ``decimation`` outer samples, then per copy reward,
+    termination and observation."""
+    i0 = blk * LANES
+    n = min(LANES, regs.shape[0] - i0)
+    for i in range(i0, i0 + n):
+        _step_begin(i, inputs, actions, k)
+    advance_block(regs, state, params, inputs, keys, buf, rec, fmt, plan, i0, n,
+                  int(k[_DECIMATION]), scratch[blk])
+    for i in range(i0, i0 + n):
+        _step_end(i, regs, actions, prev, t, noise_key, k, target, direction, obs, reward, term,
+                  trunc)
+
+
+@njit(**KERNEL)
+def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions, prev,
+                  t, noise_key, k, target, direction, obs, reward, term,
                   trunc):  # pragma: no cover - compiled
     if not all_finite(actions):
         return False
-    for i in range(regs.shape[0]):
-        _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-                   noise_key, k, target, direction, obs, reward, term, trunc)
+    for blk in range(scratch.shape[0]):
+        _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                    actions, prev, t, noise_key, k, target, direction, obs, reward, term, trunc)
     return True
 
 
 @njit(**KERNEL_PARALLEL)
-def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-                    noise_key, k, target, direction, obs, reward, term,
+def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions,
+                    prev, t, noise_key, k, target, direction, obs, reward, term,
                     trunc):  # pragma: no cover - compiled
     if not all_finite(actions):
         return False
-    for i in prange(regs.shape[0]):
-        _step_copy(i, regs, state, params, inputs, keys, buf, rec, fmt, plan, actions, prev, t,
-                   noise_key, k, target, direction, obs, reward, term, trunc)
+    for blk in prange(scratch.shape[0]):
+        _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                    actions, prev, t, noise_key, k, target, direction, obs, reward, term, trunc)
     return True
 
 
