@@ -44,7 +44,7 @@ def references(vf: float, eldeg: float, v_eldeg: float, phase_comp: float, ampli
     i_nom = abs(vf)
     quarter = 512.0 if vf >= 0.0 else -512.0
     phi = eldeg + quarter + rnd(v_eldeg * fx8(phase_comp))
-    phi -= c.ELDEG_PER_TURN * math.floor(phi * _PER_TURN)
+    phi -= c.ELDEG_PER_TURN * np.floor(phi * _PER_TURN)
     ia, ib, ic = phase_references(i_nom * fx8(amplitude), phi)
     return i_nom, phi, ia, ib, ic
 

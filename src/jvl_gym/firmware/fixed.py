@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 
@@ -19,7 +20,7 @@ def rnd(x: float) -> float:
     at random when the torque command does, and a mispredicted branch costs more than the
     whole rounding.
     """
-    return math.copysign(math.floor(abs(x) + 0.5), x)
+    return math.copysign(np.floor(abs(x) + 0.5), x)
 
 
 @njit(cache=True, inline="always")

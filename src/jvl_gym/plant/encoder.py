@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from ..constants import COUNTS_PER_REV, ELDEG_PER_TURN
@@ -22,12 +23,12 @@ _PER_TURN = 1.0 / ELDEG_PER_TURN  #: exact (a power of two)
 @njit(cache=True, inline="always")
 def encoder_count(theta: float) -> float:
     """Absolute encoder count of a mechanical angle [rad] (an integer, as float64)."""
-    return math.floor(theta * _COUNTS_PER_RAD)
+    return np.floor(theta * _COUNTS_PER_RAD)
 
 
 @njit(cache=True, inline="always")
 def eldeg(theta_e: float) -> float:
     """ELDEG_IST of an electrical angle [rad], in 0..2047 (a float holding the integer; the
     ``mod 2048`` by ``floor``, exact, so that it runs in SIMD lanes, ``jvl_gym.lanes``)."""
-    e = float(math.floor(theta_e * _ELDEG_PER_RAD))
-    return e - ELDEG_PER_TURN * float(math.floor(e * _PER_TURN))
+    e = np.floor(theta_e * _ELDEG_PER_RAD)
+    return e - ELDEG_PER_TURN * np.floor(e * _PER_TURN)

@@ -27,7 +27,7 @@ HALL_CODES = np.array([5, 1, 3, 2, 6, 4], dtype=np.int64)
 @njit(cache=True, inline="always")
 def sector_index(theta_e: float, hall_angle: float) -> float:
     """Unwrapped sector index ``floor((θe − hall angle)/60°)`` (its change gives the direction)."""
-    return math.floor((theta_e - hall_angle) * _PER_SECTOR)
+    return np.floor((theta_e - hall_angle) * _PER_SECTOR)
 
 
 @njit(cache=True, inline="always")

@@ -18,8 +18,7 @@ resolve (its spacing grows to 2⁻³² rad at 1.6e6): the error stays of the ord
 
 from __future__ import annotations
 
-import math
-
+import numpy as np
 from numba import njit
 
 _TWO_OVER_PI = 6.36619772367581382433e-01
@@ -45,7 +44,7 @@ _C6 = -1.13596475577881948265e-11
 @njit(cache=True, inline="always")
 def sincos(x: float) -> tuple[float, float]:
     """``(sin x, cos x)`` for a finite angle ``x`` [rad] (module docstring: method, error)."""
-    n = math.floor(x * _TWO_OVER_PI + 0.5)
+    n = np.floor(x * _TWO_OVER_PI + 0.5)
     r = ((x - n * _PIO2_1) - n * _PIO2_2) - n * _PIO2_3
     z = r * r
     sin_r = r + r * z * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))))
@@ -53,7 +52,7 @@ def sincos(x: float) -> tuple[float, float]:
     w = 1.0 - hz
     cos_r = w + (((1.0 - w) - hz)
                  + z * z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6))))))
-    q = n - 4.0 * math.floor(n * 0.25)  # quadrant 0..3
+    q = n - 4.0 * np.floor(n * 0.25)  # quadrant 0..3
     s = sin_r if q == 0.0 else (cos_r if q == 1.0 else (-sin_r if q == 2.0 else -cos_r))
     co = cos_r if q == 0.0 else (-sin_r if q == 1.0 else (-cos_r if q == 2.0 else sin_r))
     return s, co
