@@ -99,28 +99,52 @@ def in_lanes(r: np.ndarray, p: np.ndarray) -> bool:
 def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.ndarray,
             u: np.ndarray) -> None:
     """Copy what the inner samples of motor ``i`` read into lane ``j``."""
-    for f, x in ((F_THETA, s[L.S_THETA]), (F_OMEGA, s[L.S_OMEGA]), (F_ACC, s[L.S_ACC]),
-                 (F_I_RE, s[L.S_I_RE]), (F_I_IM, s[L.S_I_IM]), (F_UBUS, s[L.S_UBUS]),
-                 (F_DUMP_ON, s[L.S_DUMP_ON]), (F_ELDEG_PREV, s[L.S_ELDEG_PREV]),
-                 (F_E_ELEC, s[L.S_E_ELEC]), (F_E_COPPER, s[L.S_E_COPPER]),
-                 (F_E_FRICTION, s[L.S_E_FRICTION]), (F_E_LOAD, s[L.S_E_LOAD]),
-                 (F_E_DUMP, s[L.S_E_DUMP]), (F_E_SUPPLY, s[L.S_E_SUPPLY]),
-                 (F_I2_SUM, s[L.S_I2_SUM]), (F_PREG_SUM, s[L.S_PREG_SUM]), (F_IX_ERR, 0.0),
-                 (F_VF_OUT, float(r[R.VF_OUT])), (F_PHASE_COMP, float(r[R.PHASE_COMP])),
-                 (F_AMPLITUDE, float(r[R.AMPLITUDE])), (F_KIA, float(r[R.KIA])),
-                 (F_KIB, float(r[R.KIB])), (F_KIC, float(r[R.KIC])), (F_KIB1, fx8(r[R.KIB1])),
-                 (F_KIB0, fx8(r[R.KIB0])), (F_KIFX2, fx4(r[R.KIFX2])),
-                 (F_KIFX1, fx4(r[R.KIFX1])), (F_KIFY1, fx4(r[R.KIFY1])),
-                 (F_KIFY0, fx4(r[R.KIFY0])), (F_POLE_PAIRS, p[L.P_POLE_PAIRS]),
-                 (F_THETA_E0, p[L.P_THETA_E0]), (F_HALL_ANGLE, p[L.P_HALL_ANGLE]),
-                 (F_PWM_DELAY, p[L.P_PWM_DELAY]), (F_R, p[L.P_R]), (F_LAMBDA, p[L.P_LAMBDA]),
-                 (F_J, p[L.P_J_MOTOR] + p[L.P_J_LOAD]), (F_COULOMB, p[L.P_COULOMB]),
-                 (F_STOP_LO, p[L.P_STOP_LO]), (F_STOP_HI, p[L.P_STOP_HI]),
-                 (F_STOP_K, p[L.P_STOP_K]), (F_STOP_D, p[L.P_STOP_D]),
-                 (F_U_DUMP, p[L.P_U_DUMP]), (F_LOAD, u[L.I_LOAD_TORQUE]),
-                 (F_SUPPLY, u[L.I_SUPPLY_VOLTS]), (F_COUNTS_PER_AMP, 1.0 / p[L.P_AMPS_PER_COUNT]),
-                 (F_MOTOR, float(i))):
-        _put(sc, f, j, x)
+    _put(sc, F_THETA, j, s[L.S_THETA])
+    _put(sc, F_OMEGA, j, s[L.S_OMEGA])
+    _put(sc, F_ACC, j, s[L.S_ACC])
+    _put(sc, F_I_RE, j, s[L.S_I_RE])
+    _put(sc, F_I_IM, j, s[L.S_I_IM])
+    _put(sc, F_UBUS, j, s[L.S_UBUS])
+    _put(sc, F_DUMP_ON, j, s[L.S_DUMP_ON])
+    _put(sc, F_ELDEG_PREV, j, s[L.S_ELDEG_PREV])
+    _put(sc, F_E_ELEC, j, s[L.S_E_ELEC])
+    _put(sc, F_E_COPPER, j, s[L.S_E_COPPER])
+    _put(sc, F_E_FRICTION, j, s[L.S_E_FRICTION])
+    _put(sc, F_E_LOAD, j, s[L.S_E_LOAD])
+    _put(sc, F_E_DUMP, j, s[L.S_E_DUMP])
+    _put(sc, F_E_SUPPLY, j, s[L.S_E_SUPPLY])
+    _put(sc, F_I2_SUM, j, s[L.S_I2_SUM])
+    _put(sc, F_PREG_SUM, j, s[L.S_PREG_SUM])
+    _put(sc, F_IX_ERR, j, 0.0)
+    _put(sc, F_VF_OUT, j, float(r[R.VF_OUT]))
+    _put(sc, F_PHASE_COMP, j, float(r[R.PHASE_COMP]))
+    _put(sc, F_AMPLITUDE, j, float(r[R.AMPLITUDE]))
+    _put(sc, F_KIA, j, float(r[R.KIA]))
+    _put(sc, F_KIB, j, float(r[R.KIB]))
+    _put(sc, F_KIC, j, float(r[R.KIC]))
+    _put(sc, F_KIB1, j, fx8(r[R.KIB1]))
+    _put(sc, F_KIB0, j, fx8(r[R.KIB0]))
+    _put(sc, F_KIFX2, j, fx4(r[R.KIFX2]))
+    _put(sc, F_KIFX1, j, fx4(r[R.KIFX1]))
+    _put(sc, F_KIFY1, j, fx4(r[R.KIFY1]))
+    _put(sc, F_KIFY0, j, fx4(r[R.KIFY0]))
+    _put(sc, F_POLE_PAIRS, j, p[L.P_POLE_PAIRS])
+    _put(sc, F_THETA_E0, j, p[L.P_THETA_E0])
+    _put(sc, F_HALL_ANGLE, j, p[L.P_HALL_ANGLE])
+    _put(sc, F_PWM_DELAY, j, p[L.P_PWM_DELAY])
+    _put(sc, F_R, j, p[L.P_R])
+    _put(sc, F_LAMBDA, j, p[L.P_LAMBDA])
+    _put(sc, F_J, j, p[L.P_J_MOTOR] + p[L.P_J_LOAD])
+    _put(sc, F_COULOMB, j, p[L.P_COULOMB])
+    _put(sc, F_STOP_LO, j, p[L.P_STOP_LO])
+    _put(sc, F_STOP_HI, j, p[L.P_STOP_HI])
+    _put(sc, F_STOP_K, j, p[L.P_STOP_K])
+    _put(sc, F_STOP_D, j, p[L.P_STOP_D])
+    _put(sc, F_U_DUMP, j, p[L.P_U_DUMP])
+    _put(sc, F_LOAD, j, u[L.I_LOAD_TORQUE])
+    _put(sc, F_SUPPLY, j, u[L.I_SUPPLY_VOLTS])
+    _put(sc, F_COUNTS_PER_AMP, j, 1.0 / p[L.P_AMPS_PER_COUNT])
+    _put(sc, F_MOTOR, j, float(i))
     for k in range(3):
         _put(sc, F_IE1_A + k, j, s[L.S_IE1_A + k])
         _put(sc, F_IU1_A + k, j, s[L.S_IU1_A + k])
@@ -141,14 +165,23 @@ def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.
 @njit(cache=True, inline="always")
 def _scatter(sc: np.ndarray, j: int, r: np.ndarray, s: np.ndarray) -> None:
     """Store lane ``j``'s state and last-sample registers back into its motor's rows."""
-    for f, k in ((F_THETA, L.S_THETA), (F_OMEGA, L.S_OMEGA), (F_ACC, L.S_ACC),
-                 (F_I_RE, L.S_I_RE), (F_I_IM, L.S_I_IM), (F_UBUS, L.S_UBUS),
-                 (F_DUMP_ON, L.S_DUMP_ON), (F_ELDEG_PREV, L.S_ELDEG_PREV),
-                 (F_HALL_SECTOR, L.S_HALL_SECTOR), (F_E_ELEC, L.S_E_ELEC),
-                 (F_E_COPPER, L.S_E_COPPER), (F_E_FRICTION, L.S_E_FRICTION),
-                 (F_E_LOAD, L.S_E_LOAD), (F_E_DUMP, L.S_E_DUMP), (F_E_SUPPLY, L.S_E_SUPPLY),
-                 (F_I2_SUM, L.S_I2_SUM), (F_PREG_SUM, L.S_PREG_SUM)):
-        s[k] = _get(sc, f, j)
+    s[L.S_THETA] = _get(sc, F_THETA, j)
+    s[L.S_OMEGA] = _get(sc, F_OMEGA, j)
+    s[L.S_ACC] = _get(sc, F_ACC, j)
+    s[L.S_I_RE] = _get(sc, F_I_RE, j)
+    s[L.S_I_IM] = _get(sc, F_I_IM, j)
+    s[L.S_UBUS] = _get(sc, F_UBUS, j)
+    s[L.S_DUMP_ON] = _get(sc, F_DUMP_ON, j)
+    s[L.S_ELDEG_PREV] = _get(sc, F_ELDEG_PREV, j)
+    s[L.S_HALL_SECTOR] = _get(sc, F_HALL_SECTOR, j)
+    s[L.S_E_ELEC] = _get(sc, F_E_ELEC, j)
+    s[L.S_E_COPPER] = _get(sc, F_E_COPPER, j)
+    s[L.S_E_FRICTION] = _get(sc, F_E_FRICTION, j)
+    s[L.S_E_LOAD] = _get(sc, F_E_LOAD, j)
+    s[L.S_E_DUMP] = _get(sc, F_E_DUMP, j)
+    s[L.S_E_SUPPLY] = _get(sc, F_E_SUPPLY, j)
+    s[L.S_I2_SUM] = _get(sc, F_I2_SUM, j)
+    s[L.S_PREG_SUM] = _get(sc, F_PREG_SUM, j)
     for k in range(3):
         s[L.S_IE1_A + k] = _get(sc, F_IE1_A + k, j)
         s[L.S_IU1_A + k] = _get(sc, F_IU1_A + k, j)
@@ -156,12 +189,19 @@ def _scatter(sc: np.ndarray, j: int, r: np.ndarray, s: np.ndarray) -> None:
         s[L.S_IIST1_A + k] = _get(sc, F_IIST1_A + k, j)
         s[L.S_UPEND_A + k] = _get(sc, F_UPEND_A + k, j)
     s[L.S_TICK] += c.INNER_PER_OUTER
-    for f, k in ((F_ELDEG_IST, R.ELDEG_IST), (F_V_ELDEG, R.V_ELDEG), (F_IA_IST, R.IA_IST),
-                 (F_IB_IST, R.IB_IST), (F_IC_IST, R.IC_IST), (F_I_NOM, R.I_NOM),
-                 (F_PHI_SOLL, R.PHI_SOLL), (F_IA_SOLL, R.IA_SOLL), (F_IB_SOLL, R.IB_SOLL),
-                 (F_IC_SOLL, R.IC_SOLL), (F_UA_VAL, R.UA_VAL), (F_UB_VAL, R.UB_VAL),
-                 (F_UC_VAL, R.UC_VAL)):
-        r[k] = int(_get(sc, f, j))
+    r[R.ELDEG_IST] = int(_get(sc, F_ELDEG_IST, j))
+    r[R.V_ELDEG] = int(_get(sc, F_V_ELDEG, j))
+    r[R.IA_IST] = int(_get(sc, F_IA_IST, j))
+    r[R.IB_IST] = int(_get(sc, F_IB_IST, j))
+    r[R.IC_IST] = int(_get(sc, F_IC_IST, j))
+    r[R.I_NOM] = int(_get(sc, F_I_NOM, j))
+    r[R.PHI_SOLL] = int(_get(sc, F_PHI_SOLL, j))
+    r[R.IA_SOLL] = int(_get(sc, F_IA_SOLL, j))
+    r[R.IB_SOLL] = int(_get(sc, F_IB_SOLL, j))
+    r[R.IC_SOLL] = int(_get(sc, F_IC_SOLL, j))
+    r[R.UA_VAL] = int(_get(sc, F_UA_VAL, j))
+    r[R.UB_VAL] = int(_get(sc, F_UB_VAL, j))
+    r[R.UC_VAL] = int(_get(sc, F_UC_VAL, j))
     hall = hall_code(_get(sc, F_HALL_SECTOR, j)) << c.HALL_STATUS_SHIFT
     r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] & 0x1FFF) | hall
     if _get(sc, F_IX_ERR, j) > 0.0:
@@ -222,11 +262,19 @@ def _lane_sample(sc: np.ndarray, j: int) -> None:
     ua = _phase_lane(sc, j, 0, isa, xa)
     ub = _phase_lane(sc, j, 1, isb, xb)
     uc = _phase_lane(sc, j, 2, isc, xc)
-    for f, x in ((F_ELDEG_IST, el), (F_V_ELDEG, dv), (F_IA_IST, xa), (F_IB_IST, xb),
-                 (F_IC_IST, xc), (F_I_NOM, i_nom), (F_PHI_SOLL, phi), (F_IA_SOLL, isa),
-                 (F_IB_SOLL, isb), (F_IC_SOLL, isc), (F_UA_VAL, ua), (F_UB_VAL, ub),
-                 (F_UC_VAL, uc)):
-        _put(sc, f, j, x)
+    _put(sc, F_ELDEG_IST, j, el)
+    _put(sc, F_V_ELDEG, j, dv)
+    _put(sc, F_IA_IST, j, xa)
+    _put(sc, F_IB_IST, j, xb)
+    _put(sc, F_IC_IST, j, xc)
+    _put(sc, F_I_NOM, j, i_nom)
+    _put(sc, F_PHI_SOLL, j, phi)
+    _put(sc, F_IA_SOLL, j, isa)
+    _put(sc, F_IB_SOLL, j, isb)
+    _put(sc, F_IC_SOLL, j, isc)
+    _put(sc, F_UA_VAL, j, ua)
+    _put(sc, F_UB_VAL, j, ub)
+    _put(sc, F_UC_VAL, j, uc)
     load = _get(sc, F_LOAD, j)
     (theta1, omega1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric, e_dump,
      e_sup) = plant_sample(
