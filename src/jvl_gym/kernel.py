@@ -235,9 +235,13 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
 @njit(cache=True, inline="always")
 def adc_count(x: float) -> tuple[float, bool]:
     """A phase current reading of ``x`` ADC counts (before rounding): the stored IX_IST value,
-    rounded and limited to ±1023, and whether the converter saturated (IX_ERR, 3.2.147)."""
+    rounded and limited to ±1023, and whether the converter saturated (IX_ERR, 3.2.147).
+
+    ``+ 0.0`` turns a rounded −0.0 into +0.0, the zero an integer register holds: the SIMD
+    lanes (``jvl_gym.lanes``) use the value without storing it in a register first.
+    """
     x = rnd(x)
-    return clamp(x, -1023.0, 1023.0), x >= 1023.0 or x <= -1023.0
+    return clamp(x, -1023.0, 1023.0) + 0.0, x >= 1023.0 or x <= -1023.0
 
 
 @njit(cache=True, inline="always")

@@ -55,13 +55,14 @@ def phase_references(amp: float, phi: float) -> tuple[float, float, float]:
 
     The firmware's sine table: sin and cos of the 2048 angle units, with
     ``sin(φ + 120°) = −sin φ/2 + (√3/2)·cos φ`` and ``sin(φ + 240°) = −sin φ/2 − (√3/2)·cos φ``.
+    ``+ 0.0`` makes a zero +0.0, as the integer registers hold it (:func:`phase_step`).
     """
     k = int(phi)
     sa = SIN_TABLE[k]
     ca = COS_TABLE[k]
-    return (clamp(rnd(amp * sa), -850.0, 850.0),
-            clamp(rnd(amp * (-0.5 * sa + _HALF_SQRT3 * ca)), -850.0, 850.0),
-            clamp(rnd(amp * (-0.5 * sa - _HALF_SQRT3 * ca)), -850.0, 850.0))
+    return (clamp(rnd(amp * sa), -850.0, 850.0) + 0.0,
+            clamp(rnd(amp * (-0.5 * sa + _HALF_SQRT3 * ca)), -850.0, 850.0) + 0.0,
+            clamp(rnd(amp * (-0.5 * sa - _HALF_SQRT3 * ca)), -850.0, 850.0) + 0.0)
 
 
 @njit(cache=True, inline="always")
@@ -99,10 +100,14 @@ def phase_step(i_soll: float, i_ist: float, e1: float, u1: float, u2: float, i_i
                kify0: float) -> tuple[float, float]:
     """One phase's loop (4.3.1): ``(U, e)`` from IX_SOLL, IX_IST, the histories ``e(k−1)``,
     ``U(k−1)``, ``U(k−2)``, ``I_IST(k−1)`` and the coefficients (Fixed8 KIB, Fixed4 KIF values).
+
+    ``U`` is an integer; ``+ 0.0`` makes a rounded −0.0 the +0.0 that UX_VAL holds, so that the
+    SIMD lanes (``jvl_gym.lanes``), which apply ``U`` without storing it in the register,
+    compute with the same zero.
     """
     e = i_soll - (kib1 * i_ist + kib0 * i_ist1)
     u = kifx2 * e + kifx1 * e1 + kify1 * u1 + kify0 * u2
-    return clamp(rnd(u), -1023.0, 1023.0), e
+    return clamp(rnd(u), -1023.0, 1023.0) + 0.0, e
 
 
 @njit(cache=True, inline="always")

@@ -29,8 +29,6 @@ SQRT3 = math.sqrt(3.0)
 _THIRD = 1.0 / 3.0
 _INV_SQRT3 = 1.0 / SQRT3
 _SIXTH = 1.0 / 6.0
-#: 1/k of the Taylor coefficients of :func:`expi`
-_R2, _R6, _R12, _R20, _R30, _R42, _R56, _R72 = (1.0 / k for k in (2, 6, 12, 20, 30, 42, 56, 72))
 
 
 @njit(cache=True, inline="always")
@@ -55,14 +53,9 @@ def _current_at(s0: complex, s_u: complex, k_emf_over_c: complex, inv_r: float, 
 
 @njit(cache=True, inline="always")
 def expi(x: float) -> complex:
-    """``e^{jx}``; Taylor series for the small angles of one step (error < 3e-14, |x| < 0.2)."""
-    if abs(x) >= 0.2:
-        s, co = sincos(x)
-        return complex(co, s)
-    x2 = x * x
-    cos = 1.0 - x2 * _R2 * (1.0 - x2 * _R12 * (1.0 - x2 * _R30 * (1.0 - x2 * _R56)))
-    sin = x * (1.0 - x2 * _R6 * (1.0 - x2 * _R20 * (1.0 - x2 * _R42 * (1.0 - x2 * _R72))))
-    return complex(cos, sin)
+    """``e^{jx}`` (:func:`jvl_gym.plant.trig.sincos`)."""
+    s, co = sincos(x)
+    return complex(co, s)
 
 
 @njit(cache=True, inline="always")

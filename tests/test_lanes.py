@@ -1,0 +1,129 @@
+"""The SIMD lanes of jvl_gym.lanes give the bits of the one-motor reference kernel."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from jvl_gym import MotorArray
+from jvl_gym import constants as c
+from jvl_gym import layout as L
+from jvl_gym.firmware import regs as R
+from jvl_gym.jit import KERNEL
+from jvl_gym.kernel import inner_sample
+from jvl_gym.lanes import LANES, in_lanes, lane_scratch, outer_sample, run_parallel, run_serial
+from jvl_gym.plant.coil import coil_constants
+from jvl_gym.plant.mechanics import mech_constants
+from jvl_gym.plant.supply import bus_constants
+from jvl_gym.plant.trig import sincos
+
+_H = c.INNER_DT
+
+
+@njit(**KERNEL)
+def _reference(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, plan):
+    """The kernel without lanes: every motor's inner samples by ``inner_sample``."""
+    for t in range(n_outer):
+        for i in range(regs.shape[0]):
+            outer_sample(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, t)
+        for i in range(regs.shape[0]):
+            p = params[i]
+            counts_per_amp = 1.0 / p[L.P_AMPS_PER_COUNT]
+            k_coil = coil_constants(p[L.P_R], p[L.P_L], p[L.P_LAMBDA], _H)
+            k_mech = mech_constants(p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_VISCOUS], _H)
+            k_bus = bus_constants(p[L.P_C_BUS], p[L.P_R_SUPPLY], p[L.P_R_DUMP], _H)
+            b = buf[i] if rec else buf[0]
+            for _ in range(c.INNER_PER_OUTER):
+                inner_sample(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt,
+                             counts_per_amp, k_coil, k_mech, k_bus)
+
+
+def _mixed(n: int) -> MotorArray:
+    """Motors of every type in lane-eligible and ineligible conditions: speed and position
+    modes, loads, Coulomb friction, end stops, with and without the PWM delay; some with
+    noise, a hall start or no regulation (INIT), which run outside the lanes."""
+    types = ["MAC050", "MAC095", "MAC140", "MAC141"]
+    k = np.arange(n)
+    m = MotorArray([types[i % 4] for i in range(n)], n=n, seed=3,
+                   load_inertia=np.linspace(0.0, 1e-4, n),
+                   coulomb_friction=np.where(k % 3 == 0, 0.02, 0.0),
+                   viscous_friction=np.linspace(0.0, 1e-4, n),
+                   pwm_delay_samples=(k % 2).astype(float),
+                   end_stop_low=np.where(k % 5 == 0, -0.5, 1.0),
+                   end_stop_high=np.where(k % 5 == 0, 0.5, -1.0),
+                   end_stop_stiffness=np.where(k % 5 == 0, 50.0, 0.0),
+                   current_noise=np.where(k % 11 == 1, 0.5, 0.0),
+                   torque_noise=np.where(k % 13 == 2, 1e-4, 0.0),
+                   hall_start=np.where(k % 7 == 3, 1.0, 0.0))
+    m.write("V_SOLL", np.linspace(-4000, 4000, n).round())
+    m.write("P_SOLL", np.where(k % 4 == 1, 20000, -9000))
+    modes = np.where(k % 4 == 1, c.P_MODE, c.V_MODE)
+    modes[k % 9 == 4] = c.INIT_MODE
+    m.write("MODE_REG", modes)
+    m.set_input(load_torque=np.where(k % 6 == 5, 0.05, 0.0))
+    return m
+
+
+def test_lanes_give_the_bits_of_the_one_motor_kernel() -> None:
+    n = 2 * LANES + 5  # two full blocks and a partial one
+    a, b = _mixed(n), _mixed(n)
+    eligible = [in_lanes(a.regs[i], a.params[i]) for i in range(n)]
+    assert 10 < sum(eligible) < n  # both paths are exercised
+    a.step(150)  # lanes (parallel driver: n >= 32)
+    _reference(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, False, b._fmt, 150,
+               b._no_schedule)
+    np.testing.assert_array_equal(a.regs, b.regs)
+    np.testing.assert_array_equal(a.state, b.state)
+    assert np.any(a.state[:, L.S_OMEGA] != 0.0)
+    c_ = _mixed(n)
+    run_serial(c_.regs, c_.state, c_.params, c_.inputs, c_.keys, c_._buf, False, c_._fmt, 150,
+               c_._no_schedule, c_._scratch)
+    np.testing.assert_array_equal(a.state, c_.state)
+
+
+def test_lanes_flag_a_saturated_current_reading() -> None:
+    n = LANES
+    a, b = MotorArray("MAC140", n=n, seed=0), MotorArray("MAC140", n=n, seed=0)
+    for m in (a, b):
+        m.write("KIA", np.where(np.arange(n) < 4, 4 * m.read_raw("KIA"), m.read_raw("KIA")))
+        m.write("V_SOLL", 3000)
+        m.write("MODE_REG", c.V_MODE)
+    assert all(in_lanes(a.regs[i], a.params[i]) for i in range(n))
+    run_parallel(a.regs, a.state, a.params, a.inputs, a.keys, a._buf, False, a._fmt, 40,
+                 a._no_schedule, a._scratch)
+    _reference(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, False, b._fmt, 40,
+               b._no_schedule)
+    np.testing.assert_array_equal(a.regs, b.regs)
+    np.testing.assert_array_equal(a.state, b.state)
+    assert np.any(a.regs[:4, R.ERR_STAT] & c.IX_ERR)
+
+
+def test_lane_scratch_has_a_row_per_block() -> None:
+    assert lane_scratch(1).shape[0] == 1
+    assert lane_scratch(LANES).shape[0] == 1
+    assert lane_scratch(LANES + 1).shape[0] == 2
+
+
+@njit(cache=True)
+def _sincos_all(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    s = np.empty_like(x)
+    co = np.empty_like(x)
+    for i in range(x.size):
+        s[i], co[i] = sincos(x[i])
+    return s, co
+
+
+def test_sincos_is_within_two_units_in_the_last_place() -> None:
+    rng = np.random.default_rng(0)
+    for hi in (1.0, 10.0, 1e3, 1e5, 1.6e6):
+        x = rng.uniform(-hi, hi, 200_000)
+        x[:4] = [0.0, -0.0, np.pi / 4, -np.pi / 2]
+        s, co = _sincos_all(x)
+        for got, ref in ((s, np.sin(x)), (co, np.cos(x))):
+            # two units in the last place; near a zero of the result (cos(-π/2) = 6e-17)
+            # the error of the reduced argument, 1e-21 after the three-part reduction
+            assert np.all(np.abs(got - ref) <= 2.0 * np.spacing(np.abs(ref)) + 1e-21), hi
+    x = rng.uniform(1.6e6, 1e9, 100_000)  # beyond: of the order of the spacing of x itself
+    s, co = _sincos_all(x)
+    assert np.all(np.abs(s - np.sin(x)) <= np.spacing(x))
+    assert np.all(np.abs(co - np.cos(x)) <= np.spacing(x))
