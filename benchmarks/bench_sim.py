@@ -50,7 +50,7 @@ def outer_steps_per_second_single(calls: bool, seconds: float = 2.0) -> float:
 
 def memory_per_motor(n: int = 4096) -> tuple[float, float]:
     m = _array(n)
-    arrays = (m.regs, m.state, m.params, m.inputs, m.keys, m._type_of)
+    arrays = (m.regs, m.state, m.params, m.inputs, m.keys, m._type_of, m._scratch)
     base = sum(a.nbytes for a in arrays) / n
     buffer = c.REC_CNT_MAX * 4 * 8
     return base, buffer

@@ -12,8 +12,9 @@ Order within an outer sample (manual 1.2 sampled-system convention, MODEL.md §1
    (after ``pwm_delay_samples``) drives the coil, mechanics and DC bus for 128 µs.
    VF_OUT computed in step 2 is used from the first of these inner samples on.
 
-The kernel loops over motors (in parallel threads for large arrays) and, for each motor, over
-time; every motor's arithmetic is independent of the others, so an N-motor array is bit-for-bit
+The drivers (:mod:`jvl_gym.lanes`) advance blocks of motors in lockstep, steps 1–3 one motor at
+a time and step 4 for several motors in SIMD lanes where :func:`inner_sample`'s branches allow;
+every motor's arithmetic is independent of the others, so an N-motor array is bit-for-bit
 equal to N one-motor arrays.
 """
 
