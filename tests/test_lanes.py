@@ -10,14 +10,9 @@ from jvl_gym import constants as c
 from jvl_gym import layout as L
 from jvl_gym.firmware import regs as R
 from jvl_gym.jit import KERNEL
-from jvl_gym.kernel import inner_sample
+from jvl_gym.kernel import inner_sample, sample_constants
 from jvl_gym.lanes import LANES, in_lanes, lane_scratch, outer_sample, run_parallel, run_serial
-from jvl_gym.plant.coil import coil_constants
-from jvl_gym.plant.mechanics import mech_constants
-from jvl_gym.plant.supply import bus_constants
 from jvl_gym.plant.trig import sincos
-
-_H = c.INNER_DT
 
 
 @njit(**KERNEL)
@@ -27,11 +22,7 @@ def _reference(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, plan):
         for i in range(regs.shape[0]):
             outer_sample(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, t)
         for i in range(regs.shape[0]):
-            p = params[i]
-            counts_per_amp = 1.0 / p[L.P_AMPS_PER_COUNT]
-            k_coil = coil_constants(p[L.P_R], p[L.P_L], p[L.P_LAMBDA], _H)
-            k_mech = mech_constants(p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_VISCOUS], _H)
-            k_bus = bus_constants(p[L.P_C_BUS], p[L.P_R_SUPPLY], p[L.P_R_DUMP], _H)
+            counts_per_amp, k_coil, k_mech, k_bus = sample_constants(params[i])
             b = buf[i] if rec else buf[0]
             for _ in range(c.INNER_PER_OUTER):
                 inner_sample(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt,

@@ -53,11 +53,11 @@ from .firmware.noise import gauss
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
 from .jit import KERNEL
-from .plant.coil import coil_step_prepared, phase_to_vector, vector_to_phases
+from .plant.coil import coil_constants, coil_step_prepared, phase_to_vector, vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
-from .plant.mechanics import end_stop_torque, mech_step_prepared
-from .plant.supply import bus_step_prepared
+from .plant.mechanics import end_stop_torque, mech_constants, mech_step_prepared
+from .plant.supply import bus_constants, bus_step_prepared
 
 _H = c.INNER_DT
 _HALF_PWM_PER_VOLT = 1.0 / (2.0 * c.PWM_FULL)  #: bus volts → phase volts per PWM count
@@ -284,6 +284,16 @@ def plant_sample(theta: float, omega: float, acc: float, i_re: float, i_im: floa
                                                        _H, k_bus)
     return (theta1, omega1, s1.real, s1.imag, ubus1, dump_on1, p_el, p_cu, e_fric, e_dump,
             e_sup)
+
+
+@njit(cache=True, inline="always")
+def sample_constants(p: np.ndarray) -> tuple:
+    """The parameter-only arguments of :func:`inner_sample` for a motor's parameter row ``p``:
+    ``(counts_per_amp, k_coil, k_mech, k_bus)`` (ADC counts per ampere and the plant factors of
+    ``coil_constants``, ``mech_constants``, ``bus_constants``)."""
+    return (1.0 / p[L.P_AMPS_PER_COUNT], coil_constants(p[L.P_R], p[L.P_L], p[L.P_LAMBDA], _H),
+            mech_constants(p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_VISCOUS], _H),
+            bus_constants(p[L.P_C_BUS], p[L.P_R_SUPPLY], p[L.P_R_DUMP], _H))
 
 
 @njit(cache=True, inline="always")

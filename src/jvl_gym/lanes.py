@@ -19,12 +19,10 @@ from .firmware import regs as R
 from .firmware.current_loop import phase_step, references
 from .firmware.fixed import fx4, fx8
 from .jit import KERNEL, KERNEL_PARALLEL, LANE_KERNEL
-from .kernel import adc_count, inner_sample, outer_firmware, plant_sample
-from .plant.coil import coil_constants, vector_to_phases
+from .kernel import adc_count, inner_sample, outer_firmware, plant_sample, sample_constants
+from .plant.coil import vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import hall_code, sector_index
-from .plant.mechanics import mech_constants
-from .plant.supply import bus_constants
 
 #: motors per block
 LANES = 16
@@ -143,7 +141,6 @@ def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.
     _put(sc, F_U_DUMP, j, p[L.P_U_DUMP])
     _put(sc, F_LOAD, j, u[L.I_LOAD_TORQUE])
     _put(sc, F_SUPPLY, j, u[L.I_SUPPLY_VOLTS])
-    _put(sc, F_COUNTS_PER_AMP, j, 1.0 / p[L.P_AMPS_PER_COUNT])
     _put(sc, F_MOTOR, j, float(i))
     for k in range(3):
         _put(sc, F_IE1_A + k, j, s[L.S_IE1_A + k])
@@ -151,9 +148,8 @@ def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.
         _put(sc, F_IU2_A + k, j, s[L.S_IU2_A + k])
         _put(sc, F_IIST1_A + k, j, s[L.S_IIST1_A + k])
         _put(sc, F_UPEND_A + k, j, s[L.S_UPEND_A + k])
-    k_coil = coil_constants(p[L.P_R], p[L.P_L], p[L.P_LAMBDA], _H)
-    k_mech = mech_constants(p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_VISCOUS], _H)
-    k_bus = bus_constants(p[L.P_C_BUS], p[L.P_R_SUPPLY], p[L.P_R_DUMP], _H)
+    counts_per_amp, k_coil, k_mech, k_bus = sample_constants(p)
+    _put(sc, F_COUNTS_PER_AMP, j, counts_per_amp)
     for k in range(4):
         _put(sc, F_KC0 + k, j, k_coil[k])
     for k in range(2):
@@ -325,10 +321,7 @@ def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scrat
             continue
         u = inputs[i]
         b = buf[i] if rec else buf[0]
-        counts_per_amp = 1.0 / p[L.P_AMPS_PER_COUNT]
-        k_coil = coil_constants(p[L.P_R], p[L.P_L], p[L.P_LAMBDA], _H)
-        k_mech = mech_constants(p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_VISCOUS], _H)
-        k_bus = bus_constants(p[L.P_C_BUS], p[L.P_R_SUPPLY], p[L.P_R_DUMP], _H)
+        counts_per_amp, k_coil, k_mech, k_bus = sample_constants(p)
         for _k in range(c.INNER_PER_OUTER):
             inner_sample(r, s, p, u, keys[i], b, rec, fmt, counts_per_amp, k_coil, k_mech,
                          k_bus)
