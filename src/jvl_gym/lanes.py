@@ -46,8 +46,11 @@ LANES = 16
     F_COULOMB, F_STOP_LO, F_STOP_HI, F_STOP_K, F_STOP_D, F_U_DUMP, F_LOAD, F_SUPPLY,
     F_COUNTS_PER_AMP, F_KC0, F_KC1, F_KC2, F_KC3, F_KM0, F_KM1, F_KB0, F_KB1, F_KB2, F_KB3,
     F_KB4, F_KB5, F_KB6, F_MOTOR,
+    # the parameters F_COUNTS_PER_AMP .. F_KB6 were computed from (see _lane_constants)
+    F_SRC_AMPS, F_SRC_R, F_SRC_L, F_SRC_LAMBDA, F_SRC_J_MOTOR, F_SRC_J_LOAD, F_SRC_VISCOUS,
+    F_SRC_C_BUS, F_SRC_R_SUPPLY, F_SRC_R_DUMP,
     N_FIELDS,
-) = range(89)
+) = range(99)
 
 _H = c.INNER_DT
 
@@ -148,6 +151,26 @@ def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.
         _put(sc, F_IU2_A + k, j, s[L.S_IU2_A + k])
         _put(sc, F_IIST1_A + k, j, s[L.S_IIST1_A + k])
         _put(sc, F_UPEND_A + k, j, s[L.S_UPEND_A + k])
+    _lane_constants(sc, j, p)
+
+
+@njit(cache=True, inline="always")
+def _lane_constants(sc: np.ndarray, j: int, p: np.ndarray) -> None:
+    """Lane ``j``'s :func:`jvl_gym.kernel.sample_constants` of the parameter row ``p``.
+
+    They are a pure function of ten parameters, which the lane keeps beside them: when the
+    parameters are those of the last gather (the same motor, as a rule) the stored constants
+    are reused, which saves an exponential and nine divisions per motor and outer sample.
+    """
+    if (_get(sc, F_SRC_AMPS, j) == p[L.P_AMPS_PER_COUNT] and _get(sc, F_SRC_R, j) == p[L.P_R]
+            and _get(sc, F_SRC_L, j) == p[L.P_L] and _get(sc, F_SRC_LAMBDA, j) == p[L.P_LAMBDA]
+            and _get(sc, F_SRC_J_MOTOR, j) == p[L.P_J_MOTOR]
+            and _get(sc, F_SRC_J_LOAD, j) == p[L.P_J_LOAD]
+            and _get(sc, F_SRC_VISCOUS, j) == p[L.P_VISCOUS]
+            and _get(sc, F_SRC_C_BUS, j) == p[L.P_C_BUS]
+            and _get(sc, F_SRC_R_SUPPLY, j) == p[L.P_R_SUPPLY]
+            and _get(sc, F_SRC_R_DUMP, j) == p[L.P_R_DUMP]):
+        return
     counts_per_amp, k_coil, k_mech, k_bus = sample_constants(p)
     _put(sc, F_COUNTS_PER_AMP, j, counts_per_amp)
     for k in range(4):
@@ -156,6 +179,16 @@ def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.
         _put(sc, F_KM0 + k, j, k_mech[k])
     for k in range(7):
         _put(sc, F_KB0 + k, j, k_bus[k])
+    _put(sc, F_SRC_AMPS, j, p[L.P_AMPS_PER_COUNT])
+    _put(sc, F_SRC_R, j, p[L.P_R])
+    _put(sc, F_SRC_L, j, p[L.P_L])
+    _put(sc, F_SRC_LAMBDA, j, p[L.P_LAMBDA])
+    _put(sc, F_SRC_J_MOTOR, j, p[L.P_J_MOTOR])
+    _put(sc, F_SRC_J_LOAD, j, p[L.P_J_LOAD])
+    _put(sc, F_SRC_VISCOUS, j, p[L.P_VISCOUS])
+    _put(sc, F_SRC_C_BUS, j, p[L.P_C_BUS])
+    _put(sc, F_SRC_R_SUPPLY, j, p[L.P_R_SUPPLY])
+    _put(sc, F_SRC_R_DUMP, j, p[L.P_R_DUMP])
 
 
 @njit(cache=True, inline="always")

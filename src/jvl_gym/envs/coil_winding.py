@@ -30,12 +30,13 @@ _N_FIXED_OBS = 5  #: observation components before the profile summary
 _TURN_EMA = 0.25  #: weight of the newest turn in the laid-pitch averages
 _TURN_OBS_SCALE = 10.0  #: laid pitch and gap (relative to d0) × 10 in the observation
 
-#: columns of the per-copy coil state (the last two carry the spindle speed and the traverse
-#: position of the present outer sample from before to after the block's inner samples)
+#: columns of the per-copy coil state (_C_V and _C_X0 carry the spindle speed and the traverse
+#: position of the present outer sample from before to after the block's inner samples;
+#: _C_PROFILE_CHANGED is 1 when a turn was laid since the profile summary was computed)
 (_C_D0, _C_D_MEAN, _C_D_VAR, _C_D_FREQ, _C_D_PHASE, _C_TIME, _C_SPINDLE_REV, _C_COUNT_ACC,
  _C_PULSES, _C_FLOOR, _C_LAST_STD, _C_LAYER_VOID, _C_LAYER_PILES, _C_STEP_PENALTY, _C_GEAR0,
  _C_HALF_D_COUNTS, _C_DIRECTION, _C_LAYER, _C_PREV_X, _C_LAID_PITCH, _C_LAID_GAP,
- _C_LAID_SLIDE, _C_V, _C_X0, _C_COLS) = range(25)
+ _C_LAID_SLIDE, _C_V, _C_X0, _C_PROFILE_CHANGED, _C_COLS) = range(26)
 #: entries of the per-env constants array
 (_NOISE, _MAX_STEPS, _DECIMATION, _T_CHANGE, _SPINDLE_CPR, _METRES_PER_RAD, _WIDTH, _NEST,
  _PITCH_TRIM, _P4, _N_LAYERS, _VOID_W, _FLATNESS_W, _ERROR_PENALTY, _N_CONSTS) = range(15)
@@ -47,6 +48,7 @@ def _lay_turn(i, x, t, h, centres, w, k):  # pragma: no cover - compiled
     d = w[i, _C_D_MEAN] * (1.0 + w[i, _C_D_VAR] * math.sin(
         2.0 * math.pi * w[i, _C_D_FREQ] * t + w[i, _C_D_PHASE]))
     base, void, x_laid = lay_turn_row(h[i], centres, x, d, k[_WIDTH], k[_NEST] > 0.5)
+    w[i, _C_PROFILE_CHANGED] = 1.0
     # what a camera at the laying point sees: the sideways slide of the new turn from the wire
     # guide (pushed ahead by its neighbour when the wire is thicker than the pitch) and, for
     # regular turns (spacing 0.5..1.5 d0 from the previous turn of the layer), the turn
@@ -127,7 +129,9 @@ def _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary,
     put_obs(obs, i, 2, w[i, _C_PULSES] / k[_DECIMATION] / spindle_norm, key, t[i], noise)
     put_obs(obs, i, 3, w[i, _C_LAYER] / k[_N_LAYERS], key, t[i], noise)
     put_obs(obs, i, 4, w[i, _C_DIRECTION], key, t[i], noise)
-    profile_summary_row(h[i], _GROUPS, w[i, _C_D0], summary[i])
+    if w[i, _C_PROFILE_CHANGED] != 0.0:  # else summary[i] is still that of h[i]
+        profile_summary_row(h[i], _GROUPS, w[i, _C_D0], summary[i])
+        w[i, _C_PROFILE_CHANGED] = 0.0
     for g in range(_GROUPS):
         put_obs(obs, i, _N_FIXED_OBS + g, summary[i, g], key, t[i], noise)
     j = _N_FIXED_OBS + _GROUPS
@@ -339,6 +343,7 @@ class CoilWindingVectorEnv(MotorVectorEnv):
                            np.zeros(idx.size))
         self.direction[idx] = 1.0
         self.prev_x[idx] = np.nan
+        self.coil[idx, _C_PROFILE_CHANGED] = 1.0  # the empty profile is summarised anew
         # nominal registers from d0: the traverse advances d0 per spindle revolution
         gear = d0 * self._counts_per_m / self.spindle_counts_per_rev
         self.gear0[idx] = gear

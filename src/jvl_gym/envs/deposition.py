@@ -39,13 +39,30 @@ def bin_centres(width: float, bin_width: float) -> np.ndarray:
 
 
 @njit(cache=True, inline="always")
+def _count_below(centres: np.ndarray, v: float, or_equal: bool) -> int:  # pragma: no cover
+    """Number of ``centres`` < ``v`` (``<= v`` with ``or_equal``): ``np.searchsorted(centres,
+    v, side="left" / "right")`` for finite ``v``, found from the uniform spacing (a guess,
+    then corrected by comparisons, so the result is exact) instead of a binary search."""
+    n = centres.size
+    if not v == v:
+        return n  # NaN sorts last
+    spacing = centres[1] - centres[0] if n > 1 else 1.0
+    g = int(min(max(np.floor((v - centres[0]) / spacing) + 1.0, 0.0), float(n)))
+    while g > 0 and (centres[g - 1] > v if or_equal else centres[g - 1] >= v):
+        g -= 1
+    while g < n and (centres[g] <= v if or_equal else centres[g] < v):
+        g += 1
+    return g
+
+
+@njit(cache=True, inline="always")
 def _span(centres: np.ndarray, xc: float, half: float) -> tuple[int, int]:  # pragma: no cover
     """Bins ``[lo, hi)`` whose centre lies within ``half`` of ``xc``; the nearest bin if none."""
-    lo = np.searchsorted(centres, xc - half, side="right")
-    hi = np.searchsorted(centres, xc + half, side="left")
+    lo = _count_below(centres, xc - half, True)
+    hi = _count_below(centres, xc + half, False)
     if lo < hi:
         return lo, hi
-    k = np.searchsorted(centres, xc)
+    k = _count_below(centres, xc, False)
     if k >= centres.size or (k > 0 and xc - centres[k - 1] <= centres[k] - xc):
         k -= 1
     return k, k + 1

@@ -36,11 +36,16 @@ def row_speed(p: np.ndarray, t: float, theta: float,
     """Speed of one copy from its parameter row ``p`` (compiled callers)."""
     ramp = min(t / p[T_RAMP], 1.0)
     change = p[STEP] * min(max((t - p[T_STEP]) / t_change, 0.0), 1.0)
-    # sines by jvl_gym.plant.trig (no library call: a C library sine costs ~20 ns here)
-    w = p[WALK] * _WALK_SCALE * (sincos(2.0 * math.pi * p[F0] * t + p[Q0])[0]
-                                 + sincos(2.0 * math.pi * p[F1] * t + p[Q1])[0]
-                                 + sincos(2.0 * math.pi * p[F2] * t + p[Q2])[0])
-    r = p[RIPPLE] * sincos(theta + p[PHASE])[0]
+    # sines by jvl_gym.plant.trig (no library call: a C library sine costs ~20 ns here), and
+    # none for a zero amplitude (the factor 1 + (±0) is 1 either way)
+    w = 0.0
+    if p[WALK] != 0.0:
+        w = p[WALK] * _WALK_SCALE * (sincos(2.0 * math.pi * p[F0] * t + p[Q0])[0]
+                                     + sincos(2.0 * math.pi * p[F1] * t + p[Q1])[0]
+                                     + sincos(2.0 * math.pi * p[F2] * t + p[Q2])[0])
+    r = 0.0
+    if p[RIPPLE] != 0.0:
+        r = p[RIPPLE] * sincos(theta + p[PHASE])[0]
     return max(p[V_NOM] * ramp * (1.0 + change) * (1.0 + w) * (1.0 + r), 0.0)
 
 
