@@ -20,16 +20,14 @@ from numba import njit
 from .. import constants as c
 from .. import layout as L
 from ..jit import KERNEL
+from ..plant.trig import fma, sincos
 from . import regs as R
 from .fixed import clamp, fx4, fx8, rnd
 
 _HALF_SQRT3 = 0.5 * math.sqrt(3.0)
 _PER_TURN = 1.0 / c.ELDEG_PER_TURN  #: exact (a power of two)
-#: sine and cosine of the 2048 electrical angle units (3.2.143)
-SIN_TABLE = np.array([math.sin(2.0 * math.pi * k / c.ELDEG_PER_TURN)
-                      for k in range(c.ELDEG_PER_TURN)])
-COS_TABLE = np.array([math.cos(2.0 * math.pi * k / c.ELDEG_PER_TURN)
-                      for k in range(c.ELDEG_PER_TURN)])
+#: radians per electrical angle unit (2048 per electrical turn, 3.2.143)
+RAD_PER_UNIT = 2.0 * math.pi / c.ELDEG_PER_TURN
 
 
 @njit(cache=True, inline="always")
@@ -53,13 +51,15 @@ def references(vf: float, eldeg: float, v_eldeg: float, phase_comp: float, ampli
 def phase_references(amp: float, phi: float) -> tuple[float, float, float]:
     """IA/IB/IC_SOLL = amp·sin(PHI + k·120°) for ``phi`` in 0..2047, stored in −850..850 (3.2.133).
 
-    The firmware's sine table: sin and cos of the 2048 angle units, with
-    ``sin(φ + 120°) = −sin φ/2 + (√3/2)·cos φ`` and ``sin(φ + 240°) = −sin φ/2 − (√3/2)·cos φ``.
-    ``+ 0.0`` makes a zero +0.0, as the integer registers hold it (:func:`phase_step`).
+    The firmware's sine table holds sin and cos of the 2048 angle units; they are computed
+    here (:func:`jvl_gym.plant.trig.sincos` of ``phi·2π/2048``, within an ulp of the exact
+    values) rather than looked up: a table lookup needs an integer index, which made the
+    compiler step the whole angle computation lane by lane instead of in SIMD registers
+    (``jvl_gym.lanes``). Then ``sin(φ + 120°) = −sin φ/2 + (√3/2)·cos φ`` and
+    ``sin(φ + 240°) = −sin φ/2 − (√3/2)·cos φ``. ``+ 0.0`` makes a zero +0.0, as the integer
+    registers hold it (:func:`phase_step`).
     """
-    k = int(phi)
-    sa = SIN_TABLE[k]
-    ca = COS_TABLE[k]
+    sa, ca = sincos(phi * RAD_PER_UNIT)
     return (clamp(rnd(amp * sa), -850.0, 850.0) + 0.0,
             clamp(rnd(amp * (-0.5 * sa + _HALF_SQRT3 * ca)), -850.0, 850.0) + 0.0,
             clamp(rnd(amp * (-0.5 * sa - _HALF_SQRT3 * ca)), -850.0, 850.0) + 0.0)
@@ -105,8 +105,8 @@ def phase_step(i_soll: float, i_ist: float, e1: float, u1: float, u2: float, i_i
     SIMD lanes (``jvl_gym.lanes``), which apply ``U`` without storing it in the register,
     compute with the same zero.
     """
-    e = i_soll - (kib1 * i_ist + kib0 * i_ist1)
-    u = kifx2 * e + kifx1 * e1 + kify1 * u1 + kify0 * u2
+    e = i_soll - fma(kib1, i_ist, kib0 * i_ist1)
+    u = fma(kifx2, e, fma(kifx1, e1, fma(kify1, u1, kify0 * u2)))
     return clamp(rnd(u), -1023.0, 1023.0) + 0.0, e
 
 

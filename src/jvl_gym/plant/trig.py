@@ -18,8 +18,24 @@ resolve (its spacing grows to 2⁻³² rad at 1.6e6): the error stays of the ord
 
 from __future__ import annotations
 
+import llvmlite.ir as llvm_ir
 import numpy as np
-from numba import njit
+from numba import njit, types
+from numba.extending import intrinsic
+
+
+@intrinsic
+def fma(typingctx, a, b, c):  # pragma: no cover - compiled
+    """``a·b + c`` with one rounding (LLVM's ``llvm.fma.f64``: the FMA instruction)."""
+    sig = types.float64(types.float64, types.float64, types.float64)
+
+    def codegen(context, builder, signature, args):
+        double = llvm_ir.DoubleType()
+        fn = builder.module.declare_intrinsic(
+            "llvm.fma", [double], llvm_ir.FunctionType(double, [double, double, double]))
+        return builder.call(fn, args)
+
+    return sig, codegen
 
 _TWO_OVER_PI = 6.36619772367581382433e-01
 # π/2 = _PIO2_1 + _PIO2_2 + _PIO2_3 (+ 2e-40); _PIO2_1 and _PIO2_2 have 33 significant bits
@@ -47,11 +63,11 @@ def sincos(x: float) -> tuple[float, float]:
     n = np.floor(x * _TWO_OVER_PI + 0.5)
     r = ((x - n * _PIO2_1) - n * _PIO2_2) - n * _PIO2_3
     z = r * r
-    sin_r = r + r * z * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))))
+    sin_r = r + r * z * fma(z, fma(z, fma(z, fma(z, fma(z, _S6, _S5), _S4), _S3), _S2), _S1)
     hz = 0.5 * z
     w = 1.0 - hz
     cos_r = w + (((1.0 - w) - hz)
-                 + z * z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6))))))
+                 + z * z * fma(z, fma(z, fma(z, fma(z, fma(z, _C6, _C5), _C4), _C3), _C2), _C1))
     q = n - 4.0 * np.floor(n * 0.25)  # quadrant 0..3
     s = sin_r if q == 0.0 else (cos_r if q == 1.0 else (-sin_r if q == 2.0 else -cos_r))
     co = cos_r if q == 0.0 else (-sin_r if q == 1.0 else (-cos_r if q == 2.0 else sin_r))
