@@ -139,3 +139,19 @@ def test_coil_winding_laid_turns_reveal_the_wire_diameter() -> None:
             assert gap > 0.2
         else:  # thick wire: the turns are pushed ahead by their neighbours
             assert obs[:, 2].max() > 0.2
+
+
+def test_bin_spans_equal_a_binary_search() -> None:
+    """``_count_below`` finds from the uniform spacing what ``np.searchsorted`` finds."""
+    from numba import njit
+
+    count = njit(lambda c_, v, eq: dep._count_below(c_, v, eq))
+    rng = np.random.default_rng(1)
+    for centres in (dep.bin_centres(20e-3, 0.05e-3), dep.bin_centres(20e-3, 0.07e-3),
+                    dep.bin_centres(1.0, 0.3), np.array([0.5])):
+        values = np.concatenate([rng.uniform(-0.5, 1.5, 3000) * centres[-1], centres,
+                                 np.nextafter(centres, np.inf), np.nextafter(centres, -np.inf),
+                                 [np.inf, -np.inf, np.nan]])
+        for v in values:
+            assert count(centres, v, True) == np.searchsorted(centres, v, side="right")
+            assert count(centres, v, False) == np.searchsorted(centres, v, side="left")

@@ -12,7 +12,7 @@ from jvl_gym.firmware import regs as R
 from jvl_gym.jit import KERNEL
 from jvl_gym.kernel import inner_sample, sample_constants
 from jvl_gym.lanes import LANES, in_lanes, lane_scratch, outer_sample, run_parallel, run_serial
-from jvl_gym.plant.trig import sincos
+from jvl_gym.plant.trig import fma, sincos
 
 
 @njit(**KERNEL)
@@ -118,3 +118,58 @@ def test_sincos_is_within_two_units_in_the_last_place() -> None:
     s, co = _sincos_all(x)
     assert np.all(np.abs(s - np.sin(x)) <= np.spacing(x))
     assert np.all(np.abs(co - np.cos(x)) <= np.spacing(x))
+
+
+def test_lanes_follow_a_parameter_change_between_steps() -> None:
+    """The lanes keep each motor's plant factors while its parameters stay the same: a change
+    of inertia, friction or coil parameters between steps must reach the next sample."""
+    n = LANES + 3
+    a, b = _mixed(n), _mixed(n)
+    for cols, scale in (((),  1.0), ((L.P_J_LOAD, L.P_VISCOUS), 3.0), ((L.P_R, L.P_L), 1.5),
+                        ((L.P_LAMBDA, L.P_C_BUS, L.P_R_DUMP), 0.8)):
+        for m in (a, b):
+            m.params[:, list(cols)] *= scale
+        run_serial(a.regs, a.state, a.params, a.inputs, a.keys, a._buf, False, a._fmt, 40,
+                   a._no_schedule, a._scratch)
+        _reference(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, False, b._fmt, 40,
+                   b._no_schedule)
+        np.testing.assert_array_equal(a.state, b.state)
+
+
+@njit(cache=True)
+def _fma_all(a: np.ndarray, b: np.ndarray, c_: np.ndarray) -> np.ndarray:
+    out = np.empty_like(a)
+    for i in range(a.size):
+        out[i] = fma(a[i], b[i], c_[i])
+    return out
+
+
+def test_fma_rounds_once() -> None:
+    from fractions import Fraction
+
+    rng = np.random.default_rng(1)
+    a, b, c_ = rng.normal(size=(3, 500)) * rng.uniform(0.5, 2.0, (3, 500))
+    got = _fma_all(a, b, c_)
+    for x, y, z, g in zip(a, b, c_, got):
+        assert g == float(Fraction(x) * Fraction(y) + Fraction(z))  # the exact value, rounded
+    assert np.any(got != a * b + c_)  # and not the twice-rounded one
+
+
+def test_commutation_sines_are_the_exact_sines_of_the_angle_units() -> None:
+    """The current references compute sin/cos of the 2048 angle units (3.2.143) instead of
+    looking them up: within one unit in the last place of the exact values (1e-21 near their
+    zeros, the error of the reduced argument), and so the references IA/IB/IC_SOLL =
+    amp·sin(PHI + k·120°) are those of the table."""
+    from jvl_gym.firmware.current_loop import RAD_PER_UNIT, phase_references
+
+    k = np.arange(c.ELDEG_PER_TURN, dtype=np.float64)
+    s, co = _sincos_all(k * RAD_PER_UNIT)
+    exact = 2.0 * np.pi * k / c.ELDEG_PER_TURN
+    for got, ref in ((s, np.sin(exact)), (co, np.cos(exact))):
+        assert np.all(np.abs(got - ref) <= np.spacing(np.abs(ref)) + 1e-21)
+    for phi in range(0, c.ELDEG_PER_TURN, 7):
+        got = phase_references(800.0, float(phi))
+        ref = [np.clip(np.sign(x) * np.floor(abs(x) + 0.5), -850, 850)
+               for x in 800.0 * np.sin(exact[phi] + np.array([0.0, 2.0, 4.0]) * np.pi / 3.0)]
+        assert np.allclose(got, ref, atol=1.0)  # table sines combined by the 120° identities
+        assert got[0] == ref[0]
