@@ -448,3 +448,23 @@ def test_markdown_reference_lists_every_register():
     rows = [ln for ln in md.splitlines() if ln.startswith("| ") and ln[2].isdigit()]
     assert len(rows) == 164
     assert "| 13 | KVOUT | Fixed8 |" in md
+
+
+def test_raws_of_rows_converts_like_to_raw():
+    """The compiled conversion of a batch of registers = to_raw row by row; it reports the
+    first row with a value out of range or NaN."""
+    from jvl_gym.registers.formats import raw_bounds, raws_of_rows
+
+    rng = np.random.default_rng(1)
+    regs = [r for r in T if r.access != Access.RESERVED]
+    bounds = np.array([raw_bounds(r) for r in regs])
+    values = rng.uniform(bounds[:, :1], bounds[:, 1:2], (len(regs), 5))
+    values[:, 0], values[:, 1] = bounds[:, 0], bounds[:, 1]
+    values[:, 2] = (bounds[:, 4] - 0.5) / bounds[:, 2]  # a half LSB below the top: rounds up
+    out = np.empty(values.shape, dtype=np.int64)
+    assert raws_of_rows(values, bounds, out) == -1
+    for reg, row, raw in zip(regs, values, out):
+        np.testing.assert_array_equal(raw, to_raw(reg, row), err_msg=reg.name)
+    values[7, 3] = np.nan
+    values[4, 1] = bounds[4, 1] + 1.0
+    assert raws_of_rows(values, bounds, out) == 4

@@ -208,3 +208,103 @@ def test_reset_can_change_the_motor_type_of_some_motors():
     assert m.read("MODE_REG")[0] == c.V_MODE  # motor 0 untouched
     m.reset(index=[1])  # keeps its new type
     assert m.motor_configs[1].name == "MAC050"
+
+
+def _writable(reg) -> bool:
+    """Registers a batch test writes: read-write, not MODE_REG (its own tests)."""
+    return reg.access.value == "rw" and reg.name != "MODE_REG"
+
+
+def _random_values(m, rng, regs, size):
+    """In-range values (user units) for ``regs``: scalars and (size,) arrays, legal for the
+    write rules (HOME_MODE bytes, register-mode pointers 0) and leaving no error bit set."""
+    values = {}
+    for k, reg in enumerate(regs):
+        lo, hi = reg.raw_min / reg.scale, reg.raw_max / reg.scale
+        if reg.name == "HOME_MODE":
+            value = 13 | (12 << 8)
+        elif reg.name.endswith("_REG_P") or reg.name == "ERR_STAT":
+            value = 0
+        elif k % 2:
+            value = float(rng.uniform(lo, hi))
+        else:
+            value = rng.uniform(lo, hi, size)
+        values[reg.name] = value
+    return values
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+def test_batched_write_equals_writes_one_by_one(compiled):
+    """_write_many (one compiled conversion and store) = write() register by register, for
+    every writable register (without CNTRL_BITS and the register-mode pointers: the compiled
+    store; with them: stored one by one)."""
+    rng = np.random.default_rng(3)
+    regs = [r for r in MotorArray("MAC140", n=1).table if _writable(r)
+            and not (compiled and (r.name == "CNTRL_BITS" or r.name.endswith("_REG_P")))]
+    batch, one_by_one = (MotorArray("MAC140", n=4, seed=0) for _ in range(2))
+    values = _random_values(batch, rng, regs, 2)
+    batch._write_many({**values, "MODE_REG": c.V_MODE}, index=[3, 1])
+    for key, value in {**values, "MODE_REG": c.V_MODE}.items():
+        one_by_one.write(key, value, index=[3, 1])
+    np.testing.assert_array_equal(batch.regs, one_by_one.regs)
+    np.testing.assert_array_equal(batch.state, one_by_one.state)
+
+
+def test_refused_batch_changes_nothing(m):
+    """A batch the rules refuse at a later register (the earlier ones already stored, by the
+    compiled store or one by one) leaves every motor as it was; the message is the one of a
+    write of that register alone."""
+    m.write("MODE_REG", c.V_MODE, index=[2])
+    before_regs, before_state = m.regs.copy(), m.state.copy()
+    with pytest.raises(ModeError, match=r"P1 ≤ P2 .*\(P1=5, P2=1, P3=0"):
+        m._write_many({"GEARF1": 3, "P1": 5, "P2": 1, "MODE_REG": c.COIL_MODE}, index=[0, 1])
+    with pytest.raises(ModeError, match="GEARF2 = 0"):
+        m._write_many({"GEARF1": 3, "GEARF2": 0, "MODE_REG": c.AG_MODE})
+    with pytest.raises(RegisterError, match="HOME_MODE bytes"):
+        m._write_many({"V_SOLL": 5, "HOME_MODE": 11, "P_SOLL": 7})
+    with pytest.raises(ModeError, match="in V_MODE: can only be entered from INIT"):
+        m._write_many({"V_SOLL": 200, "MODE_REG": c.TESTU_MODE})  # stored one by one
+    np.testing.assert_array_equal(m.regs, before_regs)
+    np.testing.assert_array_equal(m.state, before_state)
+
+
+def test_refusal_names_the_first_refused_motor(m):
+    """check_write (compiled rules per motor) words the refusal of the first refused motor."""
+    from jvl_gym.firmware import write_rules as W
+
+    m._write_many({"P1": 0, "P2": 10, "P3": 20, "P4": 30, "P5": 10, "P6": 1, "GEARF2": 1000,
+                   "MODE_REG": c.COIL_MODE})
+    idx = np.array([0, 1, 2])
+    assert W.check_write(m.regs, idx, 51, np.array([15, 25, 40])) == (
+        "COIL_MODE rules P1 ≤ P2 ≤ P3 ≤ P4, P1 ≤ P5 ≤ P4, P6 = ±1 (manual 4.4.20) are violated "
+        "(P1=0, P2=25, P3=20, P4=30, P5=10, P6=1)")
+    assert W.check_write(m.regs, idx, 51, np.array([15, 20, 0])) is None
+    assert W.check_write(m.regs, idx, 15, np.array([1, 0, 1])).startswith("GEARF2 = 0")
+    assert W.check_mode_request(m.regs, idx, np.array([0, 0, 0])) is None
+
+
+def test_reset_checks_keywords_in_order():
+    """MotorArray.reset checks its keywords in the given order (compiled value rules): the
+    first bad one is reported, and a bad call changes nothing."""
+    m = MotorArray("MAC140", n=3, seed=0)
+    before = m.params.copy(), m.state.copy(), m.regs.copy()
+    for params, exc, needle in [
+        ({"load_inertia": -1.0, "foo": 1}, ValueError, "load_inertia: values must be >= 0"),
+        ({"foo": 1, "load_inertia": -1.0}, TypeError, "unknown motor parameter 'foo'"),
+        ({"load_inertia": -1.0, "torque_noise": [1, 2]}, ValueError, "load_inertia"),
+        ({"load_inertia": 1.0, "torque_noise": [1, 2]}, ValueError, "torque_noise: expected"),
+        ({"viscous_friction": [0.0, np.nan, 0.0]}, ValueError, "must be finite"),
+        ({"phase_resistance": [1.0, 0.0, 1.0]}, ValueError, "phase_resistance: values must be > 0"),
+        ({"hall_start": 0.5}, ValueError, "hall_start must be 0 or 1"),
+        ({"initial_angle": np.inf}, ValueError, "initial_angle: values must be finite"),
+    ]:
+        with pytest.raises(exc, match=needle):
+            m.reset(**params)
+    for got, want in zip((m.params, m.state, m.regs), before):
+        np.testing.assert_array_equal(got, want)
+    m.reset(index=[2, 0], home_position=np.inf, initial_angle=[0.5, -0.5], initial_speed=2.0,
+            load_inertia=[1e-4, 2e-4], motor_type=["MAC050", "MAC141"])
+    np.testing.assert_array_equal(m.position_rad, [-0.5, 0.0, 0.5])
+    np.testing.assert_array_equal(m.speed_rad_s, [2.0, 0.0, 2.0])
+    np.testing.assert_array_equal(m.parameters["load_inertia"], [2e-4, 0.0, 1e-4])
+    assert [cfg.name for cfg in m.motor_configs] == ["MAC141", "MAC140", "MAC050"]

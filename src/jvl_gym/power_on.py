@@ -1,9 +1,10 @@
-"""Power-on of motor rows after their registers were loaded from flash or ROM, compiled.
+"""Power-on of motor rows, compiled.
 
-:meth:`jvl_gym.MotorArray.reset` and :meth:`~jvl_gym.MotorArray.software_reset` load each
-motor's register image and then call :func:`power_on_rows`: per motor a few dozen scalar
-operations, which in numpy over a handful of rows cost more in per-call overhead than the work
-(an env resets one or two copies at a time).
+:meth:`jvl_gym.MotorArray.software_reset` loads each motor's register image and then calls
+:func:`power_on_rows`; :meth:`jvl_gym.MotorArray.reset` first sets the motors' parameters,
+world inputs and state (:func:`reset_rows`). Per motor these are a few dozen scalar operations,
+which in numpy over a handful of rows cost more in per-call overhead than the work (an env
+resets one or two copies at a time).
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ from .jit import KERNEL
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, sector_index
 
-__all__ = ["power_on_rows"]
+__all__ = ["power_on_rows", "reset_rows", "first_bad_value", "FINITE", "NONNEGATIVE",
+           "POSITIVE", "BINARY"]
 
 #: registers cleared at power-on (counters, measurements, loop outputs)
 CLEARED = (R.P_IST, R.V_IST, R.P_FNC, R.FLWERR, R.FNCERR, R.I2T, R.UIT, R.REC_CNT, R.FNC_OUT,
@@ -29,6 +31,11 @@ CLEARED = (R.P_IST, R.V_IST, R.P_FNC, R.FLWERR, R.FNCERR, R.I2T, R.UIT, R.REC_CN
            R.IC_SOLL, R.IA_IST, R.IB_IST, R.IC_IST, R.UA_VAL, R.UB_VAL, R.UC_VAL, R.V_ELDEG)
 _ERR_KEPT = c.RELPOSPSOLL | c.RELPOSPFNC | c.DIS_P_LIM  #: ERR_STAT bits that survive a reset
 _CNTRL_CLEARED = c.RECORDBIT | c.REWINDBIT | c.MAN_RESYNC
+#: value rules of the per-motor reset values (bit flags, checked in this order)
+FINITE = 1  #: finite
+NONNEGATIVE = 2  #: >= 0
+POSITIVE = 4  #: > 0
+BINARY = 8  #: 0 or 1
 
 
 @njit(**KERNEL)
@@ -76,3 +83,85 @@ def power_on_rows(regs: np.ndarray, state: np.ndarray, params: np.ndarray, latch
         start = home if home == 12 or home == 13 or home == 14 else regs[i, R.STARTMODE]
         if 0 < start < 25 and check_request(regs[i], state[i], start) == OK:
             apply_request(regs[i], state[i], start)
+
+
+@njit(**KERNEL)
+def _copy_row(dst: np.ndarray, src: np.ndarray) -> None:  # pragma: no cover - compiled
+    """``dst[:] = src`` for two 1-D arrays of one length (a slice copy would need numba's NRT)."""
+    for k in range(dst.shape[0]):
+        dst[k] = src[k]
+
+
+@njit(**KERNEL)
+def reset_rows(regs: np.ndarray, state: np.ndarray, params: np.ndarray, inputs: np.ndarray,
+               latched: np.ndarray, idx: np.ndarray, types: np.ndarray, rom: np.ndarray,
+               type_params: np.ndarray, type_inputs: np.ndarray, flash: np.ndarray,
+               has_flash: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
+               values: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Power-on reset of motors ``idx`` (:meth:`jvl_gym.MotorArray.reset`).
+
+    Per motor: the parameters and world inputs at rest of its type, then the given parameters;
+    the state cleared but for the record length (default TEST_RECORD_SAMPLES, manual 4.4.9),
+    then the given state (rotor angle and speed), the bus at the supply voltage; registers from
+    flash if written, else the type's ROM image; then :func:`power_on_rows`. The values are
+    checked (:func:`first_bad_value`).
+
+    Parameters
+    ----------
+    regs, state, params, inputs : numpy.ndarray
+        The motors' arrays (``jvl_gym.layout``), (N, ·).
+    latched : numpy.ndarray
+        CNTRL_BITS latched at power-on, (N,) int64.
+    idx, types : numpy.ndarray
+        Motors to reset and their type codes, (M,) int64.
+    rom, type_params, type_inputs : numpy.ndarray
+        Per type: ROM register image (T, N_REGS) int64, parameters (T, N_PARAM) and inputs at
+        rest (T, N_INPUT) float64.
+    flash, has_flash : numpy.ndarray
+        Flash images (N, N_REGS) int64 (any array when no motor has one) and (N,) bool.
+    cols, to_state, values : numpy.ndarray
+        Columns (P,) int64 of the given values in ``params``, or in ``state`` where
+        ``to_state`` (P,) bool; the values (P, M) float64 (SI units), set in order.
+    """
+    for j in range(idx.shape[0]):
+        i = idx[j]
+        t = types[j]
+        _copy_row(params[i], type_params[t])
+        _copy_row(inputs[i], type_inputs[t])
+        for q in range(cols.shape[0]):
+            if not to_state[q]:
+                params[i, cols[q]] = values[q, j]
+        rec_len = state[i, L.S_REC_LEN]
+        state[i].fill(0.0)
+        state[i, L.S_REC_LEN] = rec_len if rec_len > 0 else c.TEST_RECORD_SAMPLES
+        for q in range(cols.shape[0]):
+            if to_state[q]:
+                state[i, cols[q]] = values[q, j]
+        state[i, L.S_UBUS] = inputs[i, L.I_SUPPLY_VOLTS]
+        _copy_row(regs[i], flash[i] if has_flash[i] else rom[t])
+    power_on_rows(regs, state, params, latched, idx)
+
+
+@njit(**KERNEL)
+def first_bad_value(values: np.ndarray, rules: np.ndarray) -> int:  # pragma: no cover
+    """The first value that breaks its row's rules, as ``16·row + rule``, or −1.
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        (P, M) float64, one row per keyword of :meth:`jvl_gym.MotorArray.reset`.
+    rules : numpy.ndarray
+        (P,) int64: the rules of each row, an OR of :data:`FINITE`, :data:`NONNEGATIVE`,
+        :data:`POSITIVE` and :data:`BINARY`, checked row by row in this order.
+    """
+    for q in range(values.shape[0]):
+        for rule in (FINITE, NONNEGATIVE, POSITIVE, BINARY):
+            if rules[q] & rule:
+                for j in range(values.shape[1]):
+                    x = values[q, j]
+                    ok = (math.isfinite(x) if rule == FINITE else not x < 0.0
+                          if rule == NONNEGATIVE else not x <= 0.0 if rule == POSITIVE
+                          else x == 0.0 or x == 1.0)
+                    if not ok:
+                        return 16 * q + rule
+    return -1

@@ -9,10 +9,11 @@ sample buffer, flash, and the physical truth for plots and tests.
 
 from __future__ import annotations
 
+import functools
 import math
 import os
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -24,7 +25,15 @@ from .firmware import regs as R
 from .firmware import write_rules as W
 from .firmware.noise import motor_keys
 from .lanes import lane_scratch, run_parallel, run_serial
-from .power_on import power_on_rows
+from .power_on import (
+    BINARY,
+    FINITE,
+    NONNEGATIVE,
+    POSITIVE,
+    first_bad_value,
+    power_on_rows,
+    reset_rows,
+)
 from .registers import (
     MAC050_141,
     Access,
@@ -34,7 +43,8 @@ from .registers import (
     RegisterError,
     RegisterShapeError,
 )
-from .registers.formats import from_raw, raws_of_floats, to_raw
+from .registers.formats import from_raw, raw_bounds, raws_of_floats, raws_of_rows, to_raw
+from .store import store_rows
 
 __all__ = ["MotorArray", "ModeError", "PARAMETER_KEYWORDS"]
 
@@ -62,9 +72,26 @@ PARAMETER_KEYWORDS: dict[str, int] = {
 _NONNEGATIVE = {"load_inertia", "viscous_friction", "coulomb_friction", "current_noise",
                 "position_noise", "torque_noise", "end_stop_stiffness", "end_stop_damping"}
 _POSITIVE = {"phase_resistance", "phase_inductance", "rotor_inertia", "flux_linkage"}
-_STATE_KEYWORDS = {"initial_angle", "initial_speed"}
+_BINARY = {"pwm_delay_samples", "hall_start"}
+#: per-motor initial state keywords of the constructor and :meth:`MotorArray.reset`
+_STATE_KEYWORDS: dict[str, int] = {
+    "initial_angle": L.S_THETA,  # rad
+    "initial_speed": L.S_OMEGA,  # rad/s
+}
+#: value rules of each reset keyword (``jvl_gym.power_on.first_bad_value``): finite but for
+#: the home position (inf: none), then >= 0, > 0 or 0/1
+_VALUE_RULES: dict[str, int] = {
+    name: ((FINITE if name != "home_position" else 0) | (NONNEGATIVE if name in _NONNEGATIVE else 0)
+           | (POSITIVE if name in _POSITIVE else 0) | (BINARY if name in _BINARY else 0))
+    for name in [*PARAMETER_KEYWORDS, *_STATE_KEYWORDS]
+}
+_RULE_TEXT = {FINITE: "finite", NONNEGATIVE: ">= 0", POSITIVE: "> 0"}
 
 _PARALLEL_MIN_MOTORS = 32
+#: up to this many int64 indices are checked with Python ints (``_as_index``)
+_FEW = 8
+#: register-key tuples whose store plan a MotorArray keeps (``MotorArray._key_plan``)
+_PLAN_CACHE_SIZE = 256
 #: modes that record into the sample buffer (allocated on first use)
 _RECORDING_MODES = frozenset({c.TESTU_MODE, c.TESTA_MODE, c.TESTKI_MODE, c.TESTTQ_MODE})
 
@@ -73,8 +100,66 @@ class ModeError(RegisterError):
     """A MODE_REG write or a mode command that the firmware's rules refuse (manual 4.4)."""
 
 
+def _special_modes(req: np.ndarray) -> bool:
+    """A MODE_REG request in ``req`` is a SAFE_MODE command (256..258) or a test mode that
+    records (allocates the sample buffer): stored by ``MotorArray._request_modes``."""
+    return any(r >= 256 or r in _RECORDING_MODES for r in req.tolist())
+
+
+class _StorePlan(NamedTuple):
+    """Registers stored together, with the arrays of :func:`jvl_gym.store.store_rows`."""
+
+    regs: tuple[Register, ...]
+    nums: np.ndarray  #: (K,) int64 register numbers
+    high: np.ndarray  #: (K,) bool: a LongInt's high word
+    mode_rows: tuple[int, ...]  #: positions of MODE_REG
+    one_by_one: bool  #: stored register by register (a register-mode pointer, CNTRL_BITS)
+    writable: bool  #: every register is read-write
+    bounds: np.ndarray  #: (K, 5) conversion constants (``registers.formats.raw_bounds``)
+
+    @classmethod
+    def of(cls, regs: tuple[Register, ...]) -> _StorePlan:
+        """The plan of storing ``regs`` in this order."""
+        nums = [reg.number for reg in regs]
+        writable = all(reg.access == Access.RW for reg in regs)
+        return cls(regs, np.array(nums, dtype=np.int64),
+                   np.array([reg.format == Format.LONGINT_HIGH for reg in regs], dtype=np.bool_),
+                   tuple(k for k, num in enumerate(nums) if num == R.MODE_REG),
+                   any(num in W.POINTERS or num == R.CNTRL_BITS for num in nums), writable,
+                   np.array([raw_bounds(reg) for reg in regs] if writable else [],
+                            dtype=np.float64).reshape(-1, 5))
+
+
+@functools.lru_cache(maxsize=64)
+def _keyword_plan(names: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Columns (P,) int64 of reset keywords ``names`` in ``params`` or, where the (P,) bool
+    is set, in ``state``, and their value rules (P,) int64 (:data:`_VALUE_RULES`)."""
+    cols = [PARAMETER_KEYWORDS.get(name, _STATE_KEYWORDS.get(name)) for name in names]
+    return (np.array(cols, dtype=np.int64),
+            np.array([name in _STATE_KEYWORDS for name in names], dtype=np.bool_),
+            np.array([_VALUE_RULES[name] for name in names], dtype=np.int64))
+
+
+def _raise_bad_value(names: tuple[str, ...], values: np.ndarray, given: list[Any]) -> None:
+    """Raise ValueError for the first of the reset keywords ``names`` whose values (rows of
+    ``values``, as ``given``) break their rules (:data:`_VALUE_RULES`)."""
+    bad = first_bad_value(values, _keyword_plan(names)[2])
+    if bad < 0:
+        return
+    q, rule = divmod(bad, 16)
+    name, val = names[q], given[q]
+    if rule == BINARY:
+        raise ValueError(f"{name} must be 0 or 1, got {val!r}")
+    raise ValueError(f"{name}: values must be {_RULE_TEXT[rule]}, got {val!r}")
+
+
 def _as_index(index: Any, n: int) -> np.ndarray:
     """Normalise ``index`` (None, int, slice, bool mask, int array) to sorted int64 indices."""
+    if (type(index) is np.ndarray and index.dtype == np.int64 and index.ndim == 1
+            and 0 < index.size <= _FEW):  # a few indices (an env's reset): no numpy reductions
+        few = index.tolist()
+        if min(few) >= 0 and max(few) < n:
+            return index
     if index is None:
         return np.arange(n, dtype=np.int64)
     if isinstance(index, slice):
@@ -137,6 +222,7 @@ class MotorArray:
             self._type_of[i] = list(configs).index(cfg.name)
         self._setup_arg = setup
         self._configs: list[MotorConfig] = []
+        self._type_codes: dict[str, int] = {}  #: type name -> index in the pool
         self._rom = np.zeros((0, L.N_REGS), dtype=np.int64)
         self._type_params = np.zeros((0, L.N_PARAM))
         self._type_inputs = np.zeros((0, L.N_INPUT))
@@ -163,6 +249,8 @@ class MotorArray:
         self._flash: np.ndarray | None = None
         self._has_flash = np.zeros(self.n, dtype=np.bool_)
         self._fmt = self.table.fmt_code_array
+        #: store plans by register-name tuple (``_write_many``) and by number (``_store``)
+        self._plans: dict[Any, _StorePlan] = {}
         self.set_record_length(record_length)
         self.reset(**params)
 
@@ -215,9 +303,13 @@ class MotorArray:
 
     def _type_code(self, name: str) -> int:
         """Index of motor type ``name`` in the pool of types, adding it on first use."""
+        code = self._type_codes.get(name)
+        if code is not None:
+            return code
         names = [known.name for known in self._configs]
         if name in names:
-            return names.index(name)
+            code = self._type_codes[name] = names.index(name)  # a type name: kept
+            return code
         cfg = load_motor(name)  # raises on an unknown type, before any motor changes
         if cfg.name not in names:
             self._add_type(cfg)
@@ -253,46 +345,40 @@ class MotorArray:
         motors of that type (its parameters and ROM defaults; the type joins the array's pool).
         """
         idx = _as_index(index, self.n)
-        values = self._check_params(params, idx.size)
+        names, values = self._check_params(params, idx.size)
         if motor_type is not None:
-            names = [motor_type] * idx.size if isinstance(motor_type, str) else list(motor_type)
-            if len(names) != idx.size:
-                raise ValueError(f"got {len(names)} motor types for {idx.size} motors")
-            codes = np.array([self._type_code(name) for name in names], dtype=np.int64)
+            names_of = [motor_type] * idx.size if isinstance(motor_type, str) else list(motor_type)
+            if len(names_of) != idx.size:
+                raise ValueError(f"got {len(names_of)} motor types for {idx.size} motors")
+            codes = np.array([self._type_code(name) for name in names_of], dtype=np.int64)
             self._type_of[idx] = codes
-        types = self._type_of[idx]
-        self.params[idx] = self._type_params[types]
-        self.inputs[idx] = self._type_inputs[types]
-        for name, val in values.items():
-            if name in PARAMETER_KEYWORDS:
-                self.params[idx, PARAMETER_KEYWORDS[name]] = val
-        rec_len = self.state[idx, L.S_REC_LEN].copy()
-        self.state[idx] = 0.0
-        self.state[idx, L.S_REC_LEN] = np.where(rec_len > 0, rec_len, c.TEST_RECORD_SAMPLES)
-        self.state[idx, L.S_THETA] = values.get("initial_angle", 0.0)
-        self.state[idx, L.S_OMEGA] = values.get("initial_speed", 0.0)
-        self.state[idx, L.S_UBUS] = self.inputs[idx, L.I_SUPPLY_VOLTS]
-        self._power_on(idx)
+        cols, to_state, _ = _keyword_plan(names)
+        reset_rows(self.regs, self.state, self.params, self.inputs, self._latched_cntrl, idx,
+                   self._type_of[idx], self._rom, self._type_params, self._type_inputs,
+                   self._rom if self._flash is None else self._flash, self._has_flash,
+                   cols, to_state, values)
 
-    def _check_params(self, params: dict[str, Any], size: int) -> dict[str, np.ndarray]:
-        out: dict[str, np.ndarray] = {}
-        for name, val in params.items():
-            if name not in PARAMETER_KEYWORDS and name not in _STATE_KEYWORDS:
-                known = ", ".join(sorted([*PARAMETER_KEYWORDS, *_STATE_KEYWORDS]))
-                raise TypeError(f"unknown motor parameter {name!r}; known: {known}")
-            arr = np.asarray(val, dtype=np.float64)
-            if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != size):
-                raise ValueError(f"{name}: expected a scalar or shape ({size},), got {arr.shape}")
-            if not np.isfinite(arr).all() and name not in ("home_position",):
-                raise ValueError(f"{name}: values must be finite, got {val!r}")
-            if name in _NONNEGATIVE and (arr < 0).any():
-                raise ValueError(f"{name}: values must be >= 0, got {val!r}")
-            if name in _POSITIVE and (arr <= 0).any():
-                raise ValueError(f"{name}: values must be > 0, got {val!r}")
-            if name in ("pwm_delay_samples", "hall_start") and not np.all(M.member(arr, (0, 1))):
-                raise ValueError(f"{name} must be 0 or 1, got {val!r}")
-            out[name] = arr.copy() if arr.ndim else arr.repeat(size)
-        return out
+    def _check_params(self, params: dict[str, Any], size: int
+                      ) -> tuple[tuple[str, ...], np.ndarray]:
+        """The keywords of ``params`` and their values as rows of a (P, size) float64 array,
+        checked (:data:`_VALUE_RULES`); raises on the first bad keyword, in order."""
+        names = tuple(params)
+        values = np.empty((len(names), size))
+        for q, (name, val) in enumerate(params.items()):
+            try:
+                if name not in PARAMETER_KEYWORDS and name not in _STATE_KEYWORDS:
+                    known = ", ".join(sorted([*PARAMETER_KEYWORDS, *_STATE_KEYWORDS]))
+                    raise TypeError(f"unknown motor parameter {name!r}; known: {known}")
+                arr = np.asarray(val, dtype=np.float64)
+                if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != size):
+                    raise ValueError(f"{name}: expected a scalar or shape ({size},), "
+                                     f"got {arr.shape}")
+            except (TypeError, ValueError):
+                _raise_bad_value(names[:q], values[:q], list(params.values()))
+                raise
+            values[q] = arr
+        _raise_bad_value(names, values, list(params.values()))
+        return names, values
 
     def _power_on(self, idx: np.ndarray) -> None:
         """Registers from flash or ROM, counters cleared, mode from STARTMODE (3.2.37)."""
@@ -390,19 +476,46 @@ class MotorArray:
         of range or NaN, a wrong shape, or a MODE_REG value the firmware refuses raises a
         :class:`RegisterError` and changes nothing.
         """
-        reg = self._lookup(key)
-        idx = _as_index(index, self.n)
-        raw = self._validated_raw(reg, value, idx.size)
-        self._store(reg, idx, raw)
+        plan = self._key_plan((key,))
+        self._write_plan(plan, (value,), _as_index(index, self.n))
 
     def _write_many(self, values: Mapping[str | int, Any], index: Any = None) -> None:
         """Write several registers (key → value in user units, in this order) to the motors
-        ``index``; every value is validated before the first is stored, as by :meth:`write`."""
+        ``index``; every value is validated before the first is stored, as by :meth:`write`,
+        and a store the firmware refuses restores the motors (nothing is changed)."""
         idx = _as_index(index, self.n)
-        staged = [(reg, self._validated_raw(reg, value, idx.size))
-                  for reg, value in ((self._lookup(key), v) for key, v in values.items())]
-        for reg, raw in staged:
-            self._store(reg, idx, raw)
+        self._write_plan(self._key_plan(tuple(values)), tuple(values.values()), idx)
+
+    def _write_plan(self, plan: _StorePlan, values: tuple[Any, ...], idx: np.ndarray) -> None:
+        """Validate ``values`` (user units, one per register of ``plan``) for motors ``idx``,
+        then store them (:meth:`_store_many`)."""
+        raws = self._batch_raws(plan, values, idx.size)
+        if raws is None:  # not plain numbers, or a bad one: validated one by one
+            raws = np.empty((len(plan.regs), idx.size), dtype=np.int64)
+            for k, (reg, value) in enumerate(zip(plan.regs, values)):
+                raws[k] = self._validated_raw(reg, value, idx.size)
+        self._store_many(plan, idx, raws)
+
+    def _batch_raws(self, plan: _StorePlan, values: tuple[Any, ...], size: int
+                    ) -> np.ndarray | None:
+        """Stored integers (K, size) of ``values`` (one per register of ``plan``), converted
+        in one compiled pass (:func:`~jvl_gym.registers.formats.raws_of_rows`); None unless
+        every register is writable and every value a Python int or float or a real numpy array
+        of shape () or (size,) in range (:meth:`_validated_raw` then words the error)."""
+        if not plan.writable:
+            return None
+        floats = np.empty((len(plan.regs), size))
+        try:
+            for k, value in enumerate(values):
+                if type(value) not in (int, float) and not (
+                        type(value) is np.ndarray and value.dtype.kind in "biuf"
+                        and (value.ndim == 0 or value.shape == (size,))):
+                    return None
+                floats[k] = value
+        except (OverflowError, ValueError, TypeError):
+            return None
+        raws = np.empty((len(plan.regs), size), dtype=np.int64)
+        return raws if raws_of_rows(floats, plan.bounds, raws) < 0 else None
 
     def write_raw(self, key: str | int, raw: Any, index: Any = None) -> None:
         """Write stored integers (Fixed4 = value·4096, …) with the same validation as write."""
@@ -430,40 +543,94 @@ class MotorArray:
                 f"got shape {np.shape(value)}")
         return to_raw(reg, arr if arr.ndim else arr.repeat(size))
 
+    def _key_plan(self, keys: tuple[Any, ...]) -> _StorePlan:
+        """The store plan of the registers ``keys`` (names are cached, other keys looked up)."""
+        try:
+            plan = self._plans.get(keys)
+        except TypeError:  # an unhashable key: _lookup words the error
+            plan = None
+        if plan is None:
+            plan = _StorePlan.of(tuple(self._lookup(key) for key in keys))
+            if all(type(key) is str for key in keys) and len(self._plans) < _PLAN_CACHE_SIZE:
+                self._plans[keys] = plan
+        return plan
+
     def _store(self, reg: Register, idx: np.ndarray, raw: np.ndarray) -> None:
+        """Check and store the validated stored integers ``raw`` (one per motor of ``idx``) of
+        one register; a refused write raises and changes nothing."""
         num = reg.number
-        if num == R.MODE_REG:
-            self._request_modes(idx, raw)
+        if num == R.MODE_REG and _special_modes(raw):
+            self._request_modes(reg, idx, raw)
             return
-        problem = W.check_write(self.regs, idx, num, raw)
-        if problem is not None:
-            raise RegisterError(f"{reg.name} (register {reg.number}) = {raw.tolist()[:4]} "
-                                f"refused: {problem}. Nothing was changed.")
         if num in W.POINTERS:
+            self._check_refusal(reg, idx, raw)
             W.apply_pointer(self.regs, idx, num, raw)
-            return
-        if reg.format == Format.LONGINT_HIGH:
-            low = self.regs[idx, num - 1] & 0xFFFF
-            full = (raw.astype(np.int64) << 16) | low
-            self.regs[idx, num - 1] = ((full + 2**31) % 2**32) - 2**31
             return
         if num == R.CNTRL_BITS and np.any(raw & c.RECORDBIT):
             self._ensure_buffer()
-        self.regs[idx, num] = raw
+        plan = self._plans.get(num)
+        if plan is None:
+            plan = self._plans[num] = _StorePlan.of((reg,))
+        self._store_rows(plan, idx, raw.reshape(1, -1))
 
-    def _request_modes(self, idx: np.ndarray, req: np.ndarray) -> None:
-        codes = M.check_requests(self.regs, self.state, idx, req)
+    def _store_many(self, plan: _StorePlan, idx: np.ndarray, raws: np.ndarray) -> None:
+        """Check and store the (K, M) validated stored integers ``raws`` of the registers of
+        ``plan`` (in order) in motors ``idx``; if one is refused, the motors are restored."""
+        saved = (self.regs[idx], self.state[idx]) if len(plan.regs) > 1 else None
+        try:
+            if plan.one_by_one or any(_special_modes(raws[k]) for k in plan.mode_rows):
+                for reg, raw in zip(plan.regs, raws):
+                    self._store(reg, idx, raw)
+            else:
+                self._store_rows(plan, idx, raws)
+        except RegisterError:
+            if saved is not None:  # (one register is checked for every motor before it is stored)
+                self.regs[idx], self.state[idx] = saved
+            raise
+
+    def _store_rows(self, plan: _StorePlan, idx: np.ndarray, raws: np.ndarray) -> None:
+        """Compiled check and store (:func:`jvl_gym.store.store_rows`); a refusal raises with
+        the registers before the refused one stored."""
+        k = store_rows(self.regs, self.state, idx, plan.nums, plan.high, raws)
+        if k >= 0:
+            self._check_refusal(plan.regs[k], idx, raws[k])
+            raise AssertionError(f"{plan.regs[k].name}: compiled store refused a write the "
+                                 "rules accept")  # pragma: no cover - the rules are shared
+
+    def _check_refusal(self, reg: Register, idx: np.ndarray, raw: np.ndarray) -> None:
+        """Raise the firmware's refusal of storing ``raw`` in register ``reg`` of motors
+        ``idx`` (mode-change rules of manual 4.4 and ``jvl_gym.firmware.write_rules``), if any.
+
+        Raises
+        ------
+        ModeError
+            A MODE_REG request the mode rules or the register rules refuse.
+        RegisterError
+            Another register's write the rules refuse.
+        """
+        num = reg.number
+        if num != R.MODE_REG:
+            problem = W.check_write(self.regs, idx, num, raw)
+            if problem is not None:
+                raise RegisterError(f"{reg.name} (register {reg.number}) = {raw.tolist()[:4]} "
+                                    f"refused: {problem}. Nothing was changed.")
+            return
+        codes = M.check_requests(self.regs, self.state, idx, raw)
         bad = np.flatnonzero(codes != M.OK)
         if bad.size:
             k = bad[0]
-            name = c.MODE_NAMES.get(int(req[k]), str(int(req[k])))
+            name = c.MODE_NAMES.get(int(raw[k]), str(int(raw[k])))
             cur = c.MODE_NAMES.get(int(self.regs[idx[k], R.MODE_REG]), "?")
             raise ModeError(
-                f"MODE_REG = {int(req[k])} ({name}) refused for motor {int(idx[k])} in {cur}: "
+                f"MODE_REG = {int(raw[k])} ({name}) refused for motor {int(idx[k])} in {cur}: "
                 f"{M.REQUEST_MESSAGES[int(codes[k])]}. Nothing was changed.")
-        problem = W.check_mode_request(self.regs, idx, req)
+        problem = W.check_mode_request(self.regs, idx, raw)
         if problem is not None:
             raise ModeError(f"MODE_REG write refused: {problem}. Nothing was changed.")
+
+    def _request_modes(self, reg: Register, idx: np.ndarray, req: np.ndarray) -> None:
+        """MODE_REG requests with SAFE_MODE commands (256..258) or test modes that record."""
+        self._check_refusal(reg, idx, req)
         special = req >= 256
         if special.any():
             self._safe_special(idx[special], req[special])

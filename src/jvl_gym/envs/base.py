@@ -34,7 +34,7 @@ from gymnasium.vector.utils import batch_space
 
 from .. import constants as c
 from ..firmware import regs as R
-from .compiled import OBS_BOUND, all_finite
+from .compiled import OBS_BOUND, all_finite, reset_counters
 from .noise import normals
 
 __all__ = ["MotorVectorEnv", "NumpyTaskEnv", "Column", "OBS_BOUND", "ERROR_BITS"]
@@ -142,6 +142,8 @@ class MotorVectorEnv(VectorEnv, ABC):
         self.motor_types = self._check_types(motor_type)
         self.ranges = self._check_ranges(randomization or {})
         self._range_names = tuple(sorted(self.default_ranges))
+        self._range_cache: tuple[dict[str, tuple[float, float]], np.ndarray, np.ndarray] = (
+            {}, np.zeros(0), np.zeros(0))
 
         n = self.num_envs
         self.single_observation_space = spaces.Box(-OBS_BOUND, OBS_BOUND,
@@ -232,8 +234,8 @@ class MotorVectorEnv(VectorEnv, ABC):
 
     def _type_configs(self, idx: np.ndarray) -> list[Any]:
         """Motor configs of the types of copies ``idx`` (set at their reset)."""
-        names = self._type_names[idx]
-        missing = set(names).difference(self._configs)
+        names = self._type_names[idx].tolist()
+        missing = [name for name in names if name not in self._configs]
         if missing:
             from ..config import load_motor
 
@@ -265,32 +267,42 @@ class MotorVectorEnv(VectorEnv, ABC):
         if options:
             raise ValueError(f"unknown reset options {sorted(options)}; known: "
                              "randomization, motor_type, reset_mask")
+        rngs = [self._rng(i, seed) for i, seed in zip(idx.tolist(), seeds)]
         names = self._range_names
-        u = np.empty((idx.size, len(names) + 1))  # the last column draws the motor type
-        keys = np.empty((idx.size, 2), dtype=np.uint64)
-        rngs = []
-        for j, (i, seed) in enumerate(zip(idx, seeds)):
-            if seed is not None or self._rngs[i] is None:
-                self._rngs[i] = np.random.default_rng(seed)
-            rng = self._rngs[i]
-            u[j] = rng.random(len(names) + 1)
-            # two full-range uint64 noise keys: what rng.integers(0, 2**64 - 1, size=2,
-            # dtype=np.uint64, endpoint=True) returns (raw draws), a tenth of its cost
-            keys[j] = rng.bit_generator.random_raw(2)
-            rngs.append(rng)
-        low = np.array([ranges[name][0] for name in names])
-        high = np.array([ranges[name][1] for name in names])
-        draws = dict(zip(names, low[:, None] + u[:, :-1].T * (high - low)[:, None]))
-        names = [types[min(int(x * len(types)), len(types) - 1)] for x in u[:, -1]]
-        self._type_names[idx] = names
-        self.motors.keys[idx] = keys[:, 0]
-        self._noise_key[idx] = keys[:, 1]
-        self.motors.reset(index=idx, motor_type=names, **self._motor_params(idx, draws))
-        self._t[idx] = 0
-        self._prev_action[idx] = 0.0
-        self._scope_count[idx] = 0
+        # per copy: the ranges' uniform numbers and the motor type's (the last column), then
+        # two full-range uint64 noise keys: what rng.integers(0, 2**64 - 1, size=2,
+        # dtype=np.uint64, endpoint=True) returns (raw draws), a tenth of its cost
+        width = len(names) + 1
+        u = np.array([rng.random(width) for rng in rngs]).reshape(idx.size, width)
+        keys = np.array([rng.bit_generator.random_raw(2) for rng in rngs],
+                        dtype=np.uint64).reshape(idx.size, 2)
+        low, span = self._range_arrays(ranges)
+        draws = dict(zip(names, low[:, None] + u[:, :-1].T * span[:, None]))
+        type_names = [types[min(int(x * len(types)), len(types) - 1)] for x in u[:, -1].tolist()]
+        self._type_names[idx] = type_names
+        reset_counters(idx, keys, self.motors.keys, self._noise_key, self._t, self._prev_action,
+                       self._scope_count)
+        self.motors.reset(index=idx, motor_type=type_names, **self._motor_params(idx, draws))
         self._task_reset(idx, draws, rngs)
         self._observe_copies(idx)
+
+    def _rng(self, i: int, seed: int | None) -> np.random.Generator:
+        """Copy ``i``'s generator, new when seeded (or on its first use)."""
+        if seed is not None or self._rngs[i] is None:
+            self._rngs[i] = np.random.default_rng(seed)
+        return self._rngs[i]
+
+    def _range_arrays(self, ranges: Mapping[str, tuple[float, float]]
+                      ) -> tuple[np.ndarray, np.ndarray]:
+        """Lows and widths (high − low) of ``ranges`` in the order of the range names, (R,)
+        each (kept while the ranges are equal)."""
+        cached, low, span = self._range_cache
+        if ranges != cached:
+            low = np.array([ranges[name][0] for name in self._range_names], dtype=np.float64)
+            high = np.array([ranges[name][1] for name in self._range_names], dtype=np.float64)
+            span = high - low
+            self._range_cache = (dict(ranges), low, span)
+        return low, span
 
     def reset(self, *, seed: int | Sequence[int | None] | None = None,
               options: dict[str, Any] | None = None) -> tuple[np.ndarray, dict[str, Any]]:

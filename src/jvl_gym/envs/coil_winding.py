@@ -236,6 +236,38 @@ def _observe_rows(idx, regs, state, prev, t, noise_key, w, h, k, summary,
         _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary, obs)
 
 
+@njit(**KERNEL)
+def _reset_rows(idx: np.ndarray, w: np.ndarray, h: np.ndarray, d0: np.ndarray,
+                bias: np.ndarray, variation: np.ndarray, a_soll: np.ndarray, u: np.ndarray,
+                counts_per_m: float, spindle_cpr: int, gearf1: np.ndarray, half: np.ndarray,
+                a_soll_raw: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Coil state ``w`` (N, _C_COLS) and heights ``h`` (N, bins) of copies ``idx`` empty, from
+    the (M,) draws (wire diameter d0 [m], diameter bias, variation, A_SOLL) and the (M, 2)
+    uniform numbers ``u`` of the diameter variation (frequency 0.05–0.3 Hz, phase); the
+    nominal registers from d0 (the traverse advances d0 per spindle revolution, ``counts_per_m``
+    traverse counts per metre, ``spindle_cpr`` spindle counts per revolution): GEARF1
+    ``gearf1``, half a wire diameter in traverse counts ``half`` and A_SOLL rounded
+    ``a_soll_raw``, (M,) each."""
+    for j in range(idx.shape[0]):
+        i = idx[j]
+        w[i].fill(0.0)
+        h[i].fill(0.0)
+        w[i, _C_D0] = d0[j]
+        w[i, _C_D_MEAN] = d0[j] * (1.0 + bias[j])
+        w[i, _C_D_VAR] = variation[j]
+        w[i, _C_D_FREQ] = 0.05 + 0.25 * u[j, 0]
+        w[i, _C_D_PHASE] = 2 * np.pi * u[j, 1]
+        w[i, _C_DIRECTION] = 1.0
+        w[i, _C_PREV_X] = np.nan
+        w[i, _C_PROFILE_CHANGED] = 1.0  # the empty profile is summarised anew
+        gear = d0[j] * counts_per_m / spindle_cpr
+        w[i, _C_GEAR0] = gear
+        w[i, _C_HALF_D_COUNTS] = 0.5 * d0[j] * counts_per_m
+        gearf1[j] = np.round(gear * _GEARF2)
+        half[j] = int(np.round(w[i, _C_HALF_D_COUNTS]))
+        a_soll_raw[j] = np.round(a_soll[j])
+
+
 class CoilWindingVectorEnv(MotorVectorEnv):
     """Vector version of :class:`CoilWindingEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
@@ -329,31 +361,19 @@ class CoilWindingVectorEnv(MotorVectorEnv):
 
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
-        d0 = draws["wire_diameter"]
-        self.coil[idx] = 0.0
-        self.h[idx] = 0.0
-        self.d0[idx] = d0
-        self.d_mean[idx] = d0 * (1.0 + draws["diameter_bias"])
-        self.d_var[idx] = draws["diameter_variation"]
         u = np.array([rng.random(2) for rng in rngs]).reshape(idx.size, 2)
-        self.d_freq[idx] = 0.05 + 0.25 * u[:, 0]
-        self.d_phase[idx] = 2 * np.pi * u[:, 1]
         self.profile.reset(idx, rngs, draws["spindle_rpm"] / 60.0, draws["ramp_time"],
                            draws["speed_step"], draws["step_time"], draws["walk"],
                            np.zeros(idx.size))
-        self.direction[idx] = 1.0
-        self.prev_x[idx] = np.nan
-        self.coil[idx, _C_PROFILE_CHANGED] = 1.0  # the empty profile is summarised anew
-        # nominal registers from d0: the traverse advances d0 per spindle revolution
-        gear = d0 * self._counts_per_m / self.spindle_counts_per_rev
-        self.gear0[idx] = gear
-        self.half_d_counts[idx] = 0.5 * d0 * self._counts_per_m
-        half = np.round(self.half_d_counts[idx]).astype(np.int64)
+        gearf1, a_soll = np.empty(idx.size), np.empty(idx.size)
+        half = np.empty(idx.size, dtype=np.int64)
+        _reset_rows(idx, self.coil, self.h, draws["wire_diameter"], draws["diameter_bias"],
+                    draws["diameter_variation"], draws["a_soll"], u, self._counts_per_m,
+                    self.spindle_counts_per_rev, gearf1, half, a_soll)
         self.motors._write_many({
-            "GEARF1": np.round(gear * _GEARF2), "GEARF2": _GEARF2,
-            "V_SOLL": round(c.rpm_to_v_soll(3000.0)), "A_SOLL": np.round(draws["a_soll"]),
-            "P1": 0, "P2": half, "P3": self.p4 - half, "P4": self.p4, "P5": half, "P6": 1,
-            "MODE_REG": c.COIL_MODE}, idx)
+            "GEARF1": gearf1, "GEARF2": _GEARF2, "V_SOLL": round(c.rpm_to_v_soll(3000.0)),
+            "A_SOLL": a_soll, "P1": 0, "P2": half, "P3": self.p4 - half, "P4": self.p4,
+            "P5": half, "P6": 1, "MODE_REG": c.COIL_MODE}, idx)
 
     def _step_copies(self, actions: np.ndarray) -> bool:
         run = _steps_parallel if self.num_envs >= PARALLEL_MIN else _steps_serial

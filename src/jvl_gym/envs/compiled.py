@@ -28,7 +28,7 @@ from ..firmware.noise import uniform
 from ..jit import KERNEL
 
 __all__ = ["PARALLEL_MIN", "OBS_BOUND", "all_finite", "action", "put_obs", "normal",
-           "end_step"]
+           "end_step", "reset_counters"]
 
 #: from this many copies a vector env step runs its blocks of copies in parallel threads
 PARALLEL_MIN = 32
@@ -75,3 +75,20 @@ def end_step(i: int, terminated: bool, t: np.ndarray, max_steps: int, term: np.n
     """Store termination and truncation of copy ``i`` (``t`` already counts this step)."""
     term[i] = terminated
     trunc[i] = (t[i] >= max_steps) and not terminated
+
+
+@njit(**KERNEL)
+def reset_counters(idx: np.ndarray, keys: np.ndarray, motor_keys: np.ndarray,
+                   noise_key: np.ndarray, t: np.ndarray, prev: np.ndarray,
+                   scope_count: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Start the episodes of copies ``idx`` (M,): the motors' noise keys and the observation
+    noise keys from ``keys`` (M, 2) uint64, step counters ``t`` and ``scope_count`` 0, the
+    previous action ``prev`` (N, A) 0."""
+    for j in range(idx.shape[0]):
+        i = idx[j]
+        motor_keys[i] = keys[j, 0]
+        noise_key[i] = keys[j, 1]
+        t[i] = 0
+        scope_count[i] = 0
+        for k in range(prev.shape[1]):
+            prev[i, k] = 0.0

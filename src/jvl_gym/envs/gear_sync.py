@@ -178,6 +178,51 @@ def _observe_rows(idx, regs, prev, t, noise_key, w, k, obs):  # pragma: no cover
         _observe_row(i, regs, prev, t, noise_key, w, k, obs)
 
 
+@njit(**KERNEL)
+def _reset_rows(idx: np.ndarray, line: np.ndarray, gear: np.ndarray, inputs: np.ndarray,
+                ea: np.ndarray, thickness: np.ndarray, r0: np.ndarray, span: np.ndarray,
+                tension_ref: np.ndarray, master_radius: float, gear_ratio: float,
+                master_counts_per_rev: int, gearf1: np.ndarray,
+                load: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Line state (N, _W_COLS) of copies ``idx`` at rest, the web pre-tensioned to the
+    reference, from the (M,) draws (E·A [N], thickness [m], core radius [m], span [m],
+    reference tension [N]); the nominal gear ``gear`` (N,) and its GEARF1 ``gearf1`` (M,) (at
+    the core radius and 0 V the winder runs at v1/(1 − ε_ref)); the load torque ``load`` (M,)
+    [N·m] of the pre-tension, also set as the motors' input (``inputs``, (N, N_INPUT))."""
+    for j in range(idx.shape[0]):
+        i = idx[j]
+        w = line[i]
+        w.fill(0.0)  # wound, master angle, time, counts, integral, slack
+        w[_W_EA] = ea[j]
+        w[_W_THICK] = thickness[j]
+        w[_W_R0] = r0[j]
+        w[_W_SPAN] = span[j]
+        w[_W_REF] = tension_ref[j]
+        strain_ref = tension_ref[j] / ea[j]
+        w[_W_STRAIN] = strain_ref
+        w[_W_RADIUS] = r0[j]
+        w[_W_FORCE] = tension_ref[j]
+        w[_W_MEASURED] = tension_ref[j]
+        w[_W_PREV_MEASURED] = tension_ref[j]
+        motor_per_master = (master_radius / r0[j] * gear_ratio / (1.0 - strain_ref)
+                            / _AG_CENTRE)
+        ratio = motor_per_master * c.COUNTS_PER_REV / master_counts_per_rev
+        gearf1[j] = np.round(ratio * _GEARF2)
+        gear[i] = gearf1[j] / _GEARF2
+        load[j] = r0[j] * tension_ref[j] / gear_ratio
+        inputs[i, L.I_LOAD_TORQUE] = load[j]
+
+
+@njit(**KERNEL)
+def _hold_load(idx: np.ndarray, regs: np.ndarray, state: np.ndarray, load: np.ndarray,
+               peak: np.ndarray) -> None:  # pragma: no cover - compiled
+    """The motors of copies ``idx`` already hold the pre-tension: the VF integrator carries
+    the load torque ``load`` (M,) [N·m] (``peak``: the types' peak torques [N·m])."""
+    for j in range(idx.shape[0]):
+        i = idx[j]
+        state[i, L.S_Y1] = load[j] / peak[j] * c.VF_FULL / (regs[i, R.KVOUT] / 256.0)
+
+
 class GearSyncVectorEnv(MotorVectorEnv):
     """Vector version of :class:`GearSyncEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
@@ -263,31 +308,17 @@ class GearSyncVectorEnv(MotorVectorEnv):
 
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
-        self.line[idx] = 0.0  # wound, master angle, time, counts, integral, slack
-        for name in ("ea", "thickness", "r0", "span", "tension_ref"):
-            getattr(self, name)[idx] = draws[name]
         self.profile.reset(idx, rngs, draws["line_speed"], draws["ramp_time"],
                            draws["speed_step"], draws["step_time"], draws["walk"],
                            draws["ripple"])
-        strain_ref = draws["tension_ref"] / draws["ea"]
-        self.strain[idx] = strain_ref
-        self.radius[idx] = draws["r0"]
-        for name in ("force", "measured", "prev_measured"):
-            getattr(self, name)[idx] = draws["tension_ref"]
-        # nominal gear: at the core radius and 0 V the winder runs at v1/(1 − ε_ref)
-        motor_per_master = (self.master_radius / draws["r0"] * self.gear_ratio
-                            / (1.0 - strain_ref) / _AG_CENTRE)
-        ratio = motor_per_master * c.COUNTS_PER_REV / self.master_counts_per_rev
-        gearf1 = np.round(ratio * _GEARF2)
-        self.gear[idx] = gearf1 / _GEARF2
         m = self.motors
-        load = draws["r0"] * draws["tension_ref"] / self.gear_ratio
-        m.inputs[idx, L.I_LOAD_TORQUE] = load
+        gearf1, load = np.empty(idx.size), np.empty(idx.size)
+        _reset_rows(idx, self.line, self.gear, m.inputs, draws["ea"], draws["thickness"],
+                    draws["r0"], draws["span"], draws["tension_ref"], self.master_radius,
+                    self.gear_ratio, self.master_counts_per_rev, gearf1, load)
         m._write_many({"GEARF1": gearf1, "GEARF2": _GEARF2,
                        "V_SOLL": round(c.rpm_to_v_soll(4000.0)), "MODE_REG": c.AG_MODE}, idx)
-        # the motor already holds the pre-tension: the VF integrator carries the load torque
-        kvout = m.regs[idx, R.KVOUT] / 256.0
-        m.state[idx, L.S_Y1] = load / self.peak_torque(idx) * c.VF_FULL / kvout
+        _hold_load(idx, m.regs, m.state, load, self.peak_torque(idx))
 
     def _step_copies(self, actions: np.ndarray) -> bool:
         run = _steps_parallel if self.num_envs >= PARALLEL_MIN else _steps_serial

@@ -109,6 +109,17 @@ def _observe_rows(idx, regs, prev, t, noise_key, noise, target, obs):  # pragma:
         _observe_row(i, regs, prev, t, noise_key, noise, target, obs)
 
 
+@njit(**KERNEL)
+def _reset_rows(idx: np.ndarray, target_turns: np.ndarray, target: np.ndarray,
+                direction: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Targets [counts] (N,) int64 of copies ``idx`` from the (M,) draws [turns], and the
+    direction of the move (N,) (+1 or −1)."""
+    for j in range(idx.shape[0]):
+        i = idx[j]
+        target[i] = int(np.round(target_turns[j] * c.COUNTS_PER_REV))
+        direction[i] = 1.0 if target[i] >= 0 else -1.0
+
+
 class PositioningVectorEnv(MotorVectorEnv):
     """Vector version of :class:`PositioningEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
@@ -149,12 +160,10 @@ class PositioningVectorEnv(MotorVectorEnv):
 
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
-        target = np.round(draws["target_turns"] * c.COUNTS_PER_REV).astype(np.int64)
-        self.target[idx] = target
-        self.direction[idx] = np.where(target >= 0, 1.0, -1.0)
+        _reset_rows(idx, draws["target_turns"], self.target, self.direction)
         if self.baseline:
             self.motors._write_many({"V_SOLL": round(c.rpm_to_v_soll(_BASELINE_RPM)),
-                                     "P_SOLL": target, "MODE_REG": c.P_MODE}, idx)
+                                     "P_SOLL": self.target[idx], "MODE_REG": c.P_MODE}, idx)
         else:
             self.motors.write("MODE_REG", c.AT_MODE, index=idx)
 

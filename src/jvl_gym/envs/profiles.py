@@ -21,6 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ..jit import KERNEL
 from ..plant.trig import sincos
 
 __all__ = ["SpeedProfile", "row_speed"]
@@ -49,6 +50,26 @@ def row_speed(p: np.ndarray, t: float, theta: float,
     return max(p[V_NOM] * ramp * (1.0 + change) * (1.0 + w) * (1.0 + r), 0.0)
 
 
+@njit(**KERNEL)
+def _reset_rows(params: np.ndarray, idx: np.ndarray, v_nom: np.ndarray, t_ramp: np.ndarray,
+                step: np.ndarray, t_step: np.ndarray, walk: np.ndarray, ripple: np.ndarray,
+                u: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Parameter rows ``idx`` of ``params`` from the (M,) draws and (M, 7) uniform numbers
+    ``u`` (the walk's three frequencies 0.1–1 Hz and phases, the ripple phase)."""
+    for j in range(idx.shape[0]):
+        p = params[idx[j]]
+        p[V_NOM] = v_nom[j]
+        p[T_RAMP] = max(t_ramp[j], 1e-3)
+        p[STEP] = step[j]
+        p[T_STEP] = t_step[j]
+        p[WALK] = walk[j]
+        p[RIPPLE] = ripple[j]
+        for q in range(3):
+            p[F0 + q] = 0.1 + 0.9 * u[j, q]
+            p[Q0 + q] = 2 * np.pi * u[j, 3 + q]
+        p[PHASE] = 2 * np.pi * u[j, 6]
+
+
 class SpeedProfile:
     """Per-copy speed profiles for ``n`` copies (parameters as rows of :attr:`params`)."""
 
@@ -63,18 +84,8 @@ class SpeedProfile:
               ripple: np.ndarray) -> None:
         """New profiles for copies ``idx``; the sines' frequencies and phases come from
         ``rngs`` (one generator per copy, in the order of ``idx``)."""
-        p = np.empty((idx.size, N_COLS))
-        p[:, V_NOM] = v_nom
-        p[:, T_RAMP] = np.maximum(t_ramp, 1e-3)
-        p[:, STEP] = step
-        p[:, T_STEP] = t_step
-        p[:, WALK] = walk
-        p[:, RIPPLE] = ripple
         u = np.array([rng.random(7) for rng in rngs]).reshape(idx.size, 7)
-        p[:, F0:F2 + 1] = 0.1 + 0.9 * u[:, :3]
-        p[:, Q0:Q2 + 1] = 2 * np.pi * u[:, 3:6]
-        p[:, PHASE] = 2 * np.pi * u[:, 6]
-        self.params[idx] = p
+        _reset_rows(self.params, idx, v_nom, t_ramp, step, t_step, walk, ripple, u)
 
     def speed(self, t: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """Speed at time ``t`` [s] and roll angle ``theta`` [rad], (n,), never negative."""

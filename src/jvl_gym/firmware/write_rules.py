@@ -1,4 +1,8 @@
-"""Rules the firmware applies to register writes (Python side, vectorised over motors).
+"""Rules the firmware applies to register writes.
+
+The rules are compiled per motor (:func:`write_refusal`, :func:`mode_refusal`: a refusal code)
+for the compiled register stores (``jvl_gym.store``); :func:`check_write` and
+:func:`check_mode_request` apply them to a batch of motors and word the refusal.
 
 - Register mode (manual 3.2.43–3.2.48): writing k to P_REG_P, V_REG_P, A_REG_P, T_REG_P, L_REG_P,
   Z_REG_P copies Pk/Vk/Ak/Tk/Lk/Zk to P_SOLL/V_SOLL/A_SOLL/T_SOLL/KVOUT/INPOSWIN and resets the
@@ -12,10 +16,12 @@
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from .. import constants as c
+from ..jit import KERNEL
 from . import regs as R
-from .modes import GEAR_MODES, in_table, member
+from .modes import GEAR_MODES
 
 POINTERS = {
     R.P_REG_P: (R.P1, 2, R.P_SOLL),
@@ -30,51 +36,139 @@ _LEGAL_HOME = (0, 12, 13, 14)
 _P_SOLL_MAX = 67_000_000
 
 
-def coil_violation(p: np.ndarray) -> str | None:
-    """Message for the first motor whose P1..P6 (columns of ``p``) break the COIL rules."""
-    p1, p2, p3, p4, p5, p6 = (p[:, k] for k in range(6))
-    bad = ~((p1 <= p2) & (p2 <= p3) & (p3 <= p4) & (p1 <= p5) & (p5 <= p4) & (np.abs(p6) == 1))
-    if not np.any(bad):
-        return None
-    k = int(np.flatnonzero(bad)[0])
-    vals = ", ".join(f"P{j + 1}={int(p[k, j])}" for j in range(6))
-    return (f"COIL_MODE rules P1 ≤ P2 ≤ P3 ≤ P4, P1 ≤ P5 ≤ P4, P6 = ±1 (manual 4.4.20) are "
-            f"violated ({vals})")
+#: refusal codes of :func:`write_refusal` and :func:`mode_refusal` (0: accepted)
+OK = 0
+GEARF2_ZERO = 1
+COIL_RULES = 2
+HOME_BYTES = 3
+P_SOLL_RANGE = 4
+REFUSAL_MESSAGES = {
+    HOME_BYTES: "HOME_MODE bytes must be 0, 12, 13 or 14 (manual 3.2.42)",
+    P_SOLL_RANGE: "the relative move would take P_SOLL outside ±67E6 (manual 3.2.3, 4.1.2)",
+}
+
+
+@njit(**KERNEL)
+def _gear_mode(mode: int) -> bool:  # pragma: no cover - compiled
+    """``mode`` divides by GEARF2 (:data:`~jvl_gym.firmware.modes.GEAR_MODES`)."""
+    return 0 <= mode < GEAR_MODES.size and GEAR_MODES[mode]
+
+
+@njit(**KERNEL)
+def coil_rules_hold(r: np.ndarray, num: int, raw: int) -> bool:  # pragma: no cover - compiled
+    """P1 ≤ P2 ≤ P3 ≤ P4, P1 ≤ P5 ≤ P4, P6 = ±1 (manual 4.4.20) for the P1..P6 of register row
+    ``r`` with register ``num`` replaced by ``raw`` (``num`` = 0: as stored)."""
+    p1 = raw if num == R.P1 else r[R.P1]
+    p2 = raw if num == R.P2 else r[R.P2]
+    p3 = raw if num == R.P3 else r[R.P3]
+    p4 = raw if num == R.P4 else r[R.P4]
+    p5 = raw if num == R.P5 else r[R.P5]
+    p6 = raw if num == R.P6 else r[R.P6]
+    return p1 <= p2 <= p3 <= p4 and p1 <= p5 <= p4 and abs(p6) == 1
+
+
+@njit(**KERNEL)
+def write_refusal(r: np.ndarray, num: int, raw: int) -> int:  # pragma: no cover - compiled
+    """Refusal code of storing ``raw`` in register ``num`` of one motor (register row ``r``).
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        The motor's registers, (N_REGS,) int64 (stored integers).
+    num : int
+        Register number (not MODE_REG: see :func:`mode_refusal`).
+    raw : int
+        Stored integer to write, already range-checked (``jvl_gym.registers.formats``).
+
+    Returns
+    -------
+    int
+        :data:`OK`, :data:`GEARF2_ZERO` (3.2.15), :data:`COIL_RULES` (4.4.20, in COIL_MODE),
+        :data:`HOME_BYTES` (3.2.42) or :data:`P_SOLL_RANGE` (3.2.3, a relative P_REG_P move).
+    """
+    mode = int(r[R.MODE_REG])
+    if num == R.GEARF2:
+        return GEARF2_ZERO if raw == 0 and _gear_mode(mode) else OK
+    if num in COIL_REGS:
+        return OK if mode != c.COIL_MODE or coil_rules_hold(r, num, raw) else COIL_RULES
+    if num == R.HOME_MODE:
+        legal = (raw & 0xFF) in _LEGAL_HOME and (raw >> 8) in _LEGAL_HOME
+        return OK if legal else HOME_BYTES
+    if num == R.P_REG_P and raw > 0:
+        relative = (r[R.ERR_STAT] & (c.RELPOSPSOLL | c.RELPOSPFNC)) == c.RELPOSPSOLL
+        if relative and abs(r[R.P_SOLL] + r[R.P1 + 2 * (raw - 1)]) > _P_SOLL_MAX:
+            return P_SOLL_RANGE
+    return OK
+
+
+@njit(**KERNEL)
+def mode_refusal(r: np.ndarray, req: int) -> int:  # pragma: no cover - compiled
+    """Refusal code of the MODE_REG request ``req`` of one motor by the register rules:
+    :data:`GEARF2_ZERO` for a gear mode with GEARF2 = 0 (3.2.15), :data:`COIL_RULES` for
+    COIL_MODE with P1..P6 breaking the rules (4.4.20), else :data:`OK`. (The mode-change rules
+    of manual 4.4 are :func:`jvl_gym.firmware.modes.check_request`.)"""
+    if _gear_mode(req) and r[R.GEARF2] == 0:
+        return GEARF2_ZERO
+    if req == c.COIL_MODE and not coil_rules_hold(r, 0, 0):
+        return COIL_RULES
+    return OK
+
+
+@njit(**KERNEL)
+def first_write_refusal(regs: np.ndarray, idx: np.ndarray, num: int,
+                        raw: np.ndarray) -> int:  # pragma: no cover - compiled
+    """Position in ``idx`` of the first motor whose write of ``raw`` (one per motor of ``idx``)
+    to register ``num`` :func:`write_refusal` refuses, or −1."""
+    for k in range(idx.shape[0]):
+        if write_refusal(regs[idx[k]], num, raw[k]) != OK:
+            return k
+    return -1
+
+
+@njit(**KERNEL)
+def first_mode_refusal(regs: np.ndarray, idx: np.ndarray,
+                       req: np.ndarray) -> int:  # pragma: no cover - compiled
+    """Position in ``idx`` of the motor whose MODE_REG request (one per motor) is reported:
+    the first refused for GEARF2 = 0, else the first refused for the COIL rules, else −1."""
+    for code in (GEARF2_ZERO, COIL_RULES):
+        for k in range(idx.shape[0]):
+            if mode_refusal(regs[idx[k]], req[k]) == code:
+                return k
+    return -1
+
+
+def _refusal_message(r: np.ndarray, code: int, num: int = 0, raw: int = 0) -> str:
+    """Message of refusal ``code`` for the motor with register row ``r`` (P1..P6 with ``num``
+    replaced by ``raw`` in the COIL message)."""
+    if code == GEARF2_ZERO:
+        where = " in a gear mode" if num == R.GEARF2 else ""
+        return f"GEARF2 = 0 is not a usable gear denominator{where} (manual 3.2.15)"
+    if code == COIL_RULES:
+        p = [raw if num == reg else int(r[reg]) for reg in COIL_REGS]
+        vals = ", ".join(f"P{j + 1}={v}" for j, v in enumerate(p))
+        return (f"COIL_MODE rules P1 ≤ P2 ≤ P3 ≤ P4, P1 ≤ P5 ≤ P4, P6 = ±1 (manual 4.4.20) are "
+                f"violated ({vals})")
+    return REFUSAL_MESSAGES[code]
 
 
 def check_mode_request(regs: np.ndarray, idx: np.ndarray, req: np.ndarray) -> str | None:
     """Refuse gear modes with GEARF2 = 0 and COIL_MODE with broken P1..P6 rules."""
-    gear = in_table(req, GEAR_MODES) & (regs[idx, R.GEARF2] == 0)
-    if np.any(gear):
-        return "GEARF2 = 0 is not a usable gear denominator (manual 3.2.15)"
-    coil = req == c.COIL_MODE
-    if np.any(coil):
-        return coil_violation(regs[np.ix_(idx[coil], COIL_REGS)])
-    return None
+    req = np.asarray(req, dtype=np.int64)
+    k = first_mode_refusal(regs, idx, req)
+    if k < 0:
+        return None
+    r = regs[idx[k]]
+    return _refusal_message(r, mode_refusal(r, req[k]))
 
 
 def check_write(regs: np.ndarray, idx: np.ndarray, num: int, raw: np.ndarray) -> str | None:
     """Message if writing ``raw`` to register ``num`` of motors ``idx`` must be refused."""
-    modes = regs[idx, R.MODE_REG]
-    if num == R.GEARF2 and np.any((raw == 0) & in_table(modes, GEAR_MODES)):
-        return "GEARF2 = 0 is not a usable gear denominator in a gear mode (manual 3.2.15)"
-    if num in COIL_REGS and np.any(modes == c.COIL_MODE):
-        sel = modes == c.COIL_MODE
-        p = regs[np.ix_(idx[sel], COIL_REGS)].copy()
-        p[:, COIL_REGS.index(num)] = raw[sel]
-        return coil_violation(p)
-    if num == R.HOME_MODE:
-        lo, hi = raw & 0xFF, raw >> 8
-        if not (np.all(member(lo, _LEGAL_HOME)) and np.all(member(hi, _LEGAL_HOME))):
-            return "HOME_MODE bytes must be 0, 12, 13 or 14 (manual 3.2.42)"
-    if num == R.P_REG_P:
-        sel = raw > 0
-        rows = idx[sel]
-        src = regs[rows, R.P1 + 2 * (raw[sel] - 1)]
-        rel = (regs[rows, R.ERR_STAT] & (c.RELPOSPSOLL | c.RELPOSPFNC)) == c.RELPOSPSOLL
-        if np.any(np.abs(regs[rows[rel], R.P_SOLL] + src[rel]) > _P_SOLL_MAX):
-            return "the relative move would take P_SOLL outside ±67E6 (manual 3.2.3, 4.1.2)"
-    return None
+    raw = np.asarray(raw, dtype=np.int64)
+    k = first_write_refusal(regs, idx, num, raw)
+    if k < 0:
+        return None
+    r = regs[idx[k]]
+    return _refusal_message(r, write_refusal(r, num, raw[k]), num, int(raw[k]))
 
 
 def apply_pointer(regs: np.ndarray, idx: np.ndarray, num: int, raw: np.ndarray) -> None:

@@ -31,16 +31,21 @@ first byte examples (MODEL.md §10) this reads as little-endian throughout: regi
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
+from numba import njit
 
+from ..jit import KERNEL
 from .errors import ReadOnlyRegisterError, RegisterRangeError, RegisterShapeError
-from .table import FORMAT_RAW_RANGE, Access, Format, Register, _round_half_away
+from .table import FORMAT_RAW_RANGE, Access, Format, Register
 
 __all__ = [
     "to_raw",
     "raws_of_floats",
+    "raws_of_rows",
+    "raw_bounds",
     "from_raw",
     "saturate_raw",
     "split_longint",
@@ -140,8 +145,66 @@ def to_raw(reg: Register, value: Any) -> np.ndarray:
     return np.clip(raw, reg.raw_min, reg.raw_max).astype(np.int64)
 
 
+@njit(cache=True, inline="always")
+def _raw(x: float, scale: float, raw_min: float, raw_max: float) -> int:  # pragma: no cover
+    """Stored integer of ``x`` in user units: ``round_half_away(x · scale)`` within the raw
+    range (compiled callers; the same IEEE operations as :func:`to_raw`'s numpy path)."""
+    y = x * scale
+    return int(min(max(math.copysign(math.floor(abs(y) + 0.5), y), raw_min), raw_max))
+
+
+@njit(**KERNEL)
+def _raws_within(v: np.ndarray, lo: float, hi: float, scale: float, raw_min: float,
+                 raw_max: float, out: np.ndarray) -> int:  # pragma: no cover - compiled
+    """``out[j]`` = stored integer of ``v[j]`` (1-D arrays) while ``lo <= v[j] <= hi``.
+
+    Returns the position of the first value outside ``[lo, hi]`` (NaN included), or −1.
+    """
+    for j in range(v.shape[0]):
+        if not lo <= v[j] <= hi:
+            return j
+        out[j] = _raw(v[j], scale, raw_min, raw_max)
+    return -1
+
+
+def raw_bounds(reg: Register) -> tuple[float, float, float, float, float]:
+    """Conversion constants of a register: accepted user-unit interval (lo, hi), scale and raw
+    range (raw_min, raw_max), as floats (a row of the ``bounds`` of :func:`raws_of_rows`)."""
+    lo, hi = _user_bounds(reg)
+    return float(lo), float(hi), float(reg.scale), float(reg.raw_min), float(reg.raw_max)
+
+
+@njit(**KERNEL)
+def raws_of_rows(values: np.ndarray, bounds: np.ndarray,
+                 out: np.ndarray) -> int:  # pragma: no cover - compiled
+    """:func:`to_raw` of several registers at once, compiled (register writes in a batch).
+
+    Parameters
+    ----------
+    values : numpy.ndarray
+        (K, M) float64: row ``k`` in user units of register ``k``.
+    bounds : numpy.ndarray
+        (K, 5) float64: :func:`raw_bounds` of register ``k``.
+    out : numpy.ndarray
+        (K, M) int64, receives the stored integers.
+
+    Returns
+    -------
+    int
+        −1 when every value is in range; else the first row ``k`` with a value that is NaN,
+        infinite or out of range (``out`` then partly written; :func:`to_raw` of that row
+        raises the error).
+    """
+    for k in range(values.shape[0]):
+        b = bounds[k]
+        if _raws_within(values[k], b[0], b[1], b[2], b[3], b[4], out[k]) >= 0:
+            return k
+    return -1
+
+
 def raws_of_floats(reg: Register, values: list[float]) -> list[int] | None:
-    """:func:`to_raw` of a few Python floats without numpy (the same IEEE operations).
+    """:func:`to_raw` of a few Python floats without numpy's fixed cost per call (compiled,
+    the same IEEE operations).
 
     Parameters
     ----------
@@ -156,10 +219,11 @@ def raws_of_floats(reg: Register, values: list[float]) -> list[int] | None:
         The stored integers, or None if a value is NaN, infinite or out of range (then
         :func:`to_raw` raises the error).
     """
-    lo, hi = _user_bounds(reg)
-    if not all(lo <= x <= hi for x in values):  # False for NaN and ±inf
+    v = np.array(values, dtype=np.float64)
+    out = np.empty(v.size, dtype=np.int64)
+    if _raws_within(v, *raw_bounds(reg), out) >= 0:
         return None
-    return [min(max(_round_half_away(x * reg.scale), reg.raw_min), reg.raw_max) for x in values]
+    return out.tolist()
 
 
 def from_raw(reg: Register, raw: Any) -> np.ndarray:
