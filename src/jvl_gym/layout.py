@@ -87,8 +87,8 @@ N_REGS = 165
     P_AMPS_PER_COUNT,  # [A per ADC count]
     P_POLE_PAIRS,
     P_PWM_DELAY,  # 0 or 1 inner samples
-    P_TAU_THERMAL,  # [s]
-    P_TAU_REGEN,  # [s]
+    P_K_THERMAL,  # I2T filter gain per outer sample, monitor.filter_gain(thermal time constant)
+    P_K_REGEN,  # UIT filter gain per outer sample, monitor.filter_gain(regen time constant)
     P_C_BUS,  # [F]
     P_R_SUPPLY,  # [Ω]
     P_U_DUMP,  # [V]

@@ -23,6 +23,7 @@ from .config import MotorConfig, load_motor, load_setup
 from .firmware import modes as M
 from .firmware import regs as R
 from .firmware import write_rules as W
+from .firmware.monitor import filter_gain
 from .firmware.noise import motor_keys
 from .lanes import lane_scratch, run_parallel, run_serial
 from .power_on import (
@@ -288,8 +289,8 @@ class MotorArray:
         p[L.P_AMPS_PER_COUNT] = cfg.amps_per_count
         p[L.P_POLE_PAIRS] = cfg.pole_pairs
         p[L.P_PWM_DELAY] = cfg.pwm_delay_samples
-        p[L.P_TAU_THERMAL] = cfg.thermal_time_constant
-        p[L.P_TAU_REGEN] = cfg.regen_time_constant
+        p[L.P_K_THERMAL] = filter_gain(cfg.thermal_time_constant)
+        p[L.P_K_REGEN] = filter_gain(cfg.regen_time_constant)
         p[L.P_C_BUS] = cfg.bus_capacitance
         p[L.P_R_SUPPLY] = cfg.supply_resistance
         p[L.P_U_DUMP] = cfg.dump_voltage

@@ -28,14 +28,19 @@ from .modes import GEAR_INPOS, POSITION_INPOS, VELOCITY_INPOS, stop_to
 _I2T_FULL = 1.5 * (c.ADC_FULL * c.I2T_FULL_SCALE_AMPLITUDE) ** 2
 
 
+def filter_gain(tau: float) -> float:
+    """Gain per outer sample ``1 − exp(−T/τ)`` of the first-order I2T and UIT filters with
+    time constant ``tau`` [s] (T = 1.92 ms); kept in the motor's parameters (P_K_THERMAL,
+    P_K_REGEN), not computed every outer sample."""
+    return 1.0 - math.exp(-c.OUTER_DT / tau)
+
+
 @njit(**KERNEL)
 def thermal(r: np.ndarray, s: np.ndarray, p: np.ndarray) -> None:
     """Update I2T and UIT from the sums collected over the last outer sample."""
     n = float(c.INNER_PER_OUTER)
-    k_th = 1.0 - math.exp(-c.OUTER_DT / p[L.P_TAU_THERMAL])
-    s[L.S_I2T_Q] += k_th * (s[L.S_I2_SUM] / n - s[L.S_I2T_Q])
-    k_rg = 1.0 - math.exp(-c.OUTER_DT / p[L.P_TAU_REGEN])
-    s[L.S_UIT_Q] += k_rg * (s[L.S_PREG_SUM] / n - s[L.S_UIT_Q])
+    s[L.S_I2T_Q] += p[L.P_K_THERMAL] * (s[L.S_I2_SUM] / n - s[L.S_I2T_Q])
+    s[L.S_UIT_Q] += p[L.P_K_REGEN] * (s[L.S_PREG_SUM] / n - s[L.S_UIT_Q])
     s[L.S_I2_SUM] = 0.0
     s[L.S_PREG_SUM] = 0.0
     r[R.I2T] = int(clamp(rnd(s[L.S_I2T_Q] / _I2T_FULL * 65535.0), 0.0, 65535.0))
