@@ -1,7 +1,7 @@
 """Power-on of motor rows, compiled.
 
-:meth:`jvl_gym.MotorArray.software_reset` loads each motor's register image and then calls
-:func:`power_on_rows`; :meth:`jvl_gym.MotorArray.reset` first sets the motors' parameters,
+:meth:`jvl_gym.MotorArray.software_reset` loads each motor's register image and powers on
+(:func:`power_on_from_memory`); :meth:`jvl_gym.MotorArray.reset` first sets the motors' parameters,
 world inputs and state (:func:`reset_rows`). Per motor these are a few dozen scalar operations,
 which in numpy over a handful of rows cost more in per-call overhead than the work (an env
 resets one or two copies at a time).
@@ -22,8 +22,8 @@ from .jit import KERNEL
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, sector_index
 
-__all__ = ["power_on_rows", "reset_rows", "first_bad_value", "FINITE", "NONNEGATIVE",
-           "POSITIVE", "BINARY"]
+__all__ = ["power_on_rows", "power_on_from_memory", "reset_rows", "first_bad_value", "FINITE",
+           "NONNEGATIVE", "POSITIVE", "BINARY"]
 
 #: registers cleared at power-on (counters, measurements, loop outputs)
 CLEARED = (R.P_IST, R.V_IST, R.P_FNC, R.FLWERR, R.FNCERR, R.I2T, R.UIT, R.REC_CNT, R.FNC_OUT,
@@ -138,7 +138,19 @@ def reset_rows(regs: np.ndarray, state: np.ndarray, params: np.ndarray, inputs: 
             if to_state[q]:
                 state[i, cols[q]] = values[q, j]
         state[i, L.S_UBUS] = inputs[i, L.I_SUPPLY_VOLTS]
-        _copy_row(regs[i], flash[i] if has_flash[i] else rom[t])
+    power_on_from_memory(regs, state, params, latched, idx, types, rom, flash, has_flash)
+
+
+@njit(**KERNEL)
+def power_on_from_memory(regs: np.ndarray, state: np.ndarray, params: np.ndarray,
+                         latched: np.ndarray, idx: np.ndarray, types: np.ndarray,
+                         rom: np.ndarray, flash: np.ndarray,
+                         has_flash: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Registers of motors ``idx`` from flash if written, else their type's ROM image
+    (3.2.37), then :func:`power_on_rows` (arguments as for :func:`reset_rows`)."""
+    for j in range(idx.shape[0]):
+        i = idx[j]
+        _copy_row(regs[i], flash[i] if has_flash[i] else rom[types[j]])
     power_on_rows(regs, state, params, latched, idx)
 
 

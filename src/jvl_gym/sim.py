@@ -32,7 +32,7 @@ from .power_on import (
     NONNEGATIVE,
     POSITIVE,
     first_bad_value,
-    power_on_rows,
+    power_on_from_memory,
     reset_rows,
 )
 from .registers import (
@@ -383,12 +383,9 @@ class MotorArray:
 
     def _power_on(self, idx: np.ndarray) -> None:
         """Registers from flash or ROM, counters cleared, mode from STARTMODE (3.2.37)."""
-        self.regs[idx] = self._rom[self._type_of[idx]]
-        if self._flash is not None:
-            fl = idx[self._has_flash[idx]]
-            if fl.size:
-                self.regs[fl] = self._flash[fl]
-        power_on_rows(self.regs, self.state, self.params, self._latched_cntrl, idx)
+        power_on_from_memory(self.regs, self.state, self.params, self._latched_cntrl, idx,
+                             self._type_of[idx], self._rom,
+                             self._rom if self._flash is None else self._flash, self._has_flash)
 
     @property
     def interface_bits(self) -> np.ndarray:
