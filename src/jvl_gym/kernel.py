@@ -373,13 +373,16 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     ua = float(r[R.UA_VAL])
     ub = float(r[R.UB_VAL])
     uc = float(r[R.UC_VAL])
+    # S_UPEND_* hold the PWM values computed in the last sample, whatever the delay (so
+    # switching the delay on applies the previous sample's values); with the delay they drive
+    # the coil now
+    pa = s[L.S_UPEND_A]
+    pb = s[L.S_UPEND_B]
+    pc = s[L.S_UPEND_C]
+    s[L.S_UPEND_A] = ua
+    s[L.S_UPEND_B] = ub
+    s[L.S_UPEND_C] = uc
     if p[L.P_PWM_DELAY] > 0.5:
-        pa = s[L.S_UPEND_A]
-        pb = s[L.S_UPEND_B]
-        pc = s[L.S_UPEND_C]
-        s[L.S_UPEND_A] = ua
-        s[L.S_UPEND_B] = ub
-        s[L.S_UPEND_C] = uc
         ua = pa
         ub = pb
         uc = pc

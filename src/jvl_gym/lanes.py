@@ -255,24 +255,30 @@ def _phase_lane(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float) -> 
 @njit(cache=True, inline="always")
 def _pwm_lane(sc: np.ndarray, j: int, k: int, u: float) -> float:
     """PWM value applied in phase ``k`` of lane ``j``: ``u`` itself, or the value computed one
-    sample earlier when the motor has a PWM delay (``inner_sample``)."""
-    delayed = _get(sc, F_PWM_DELAY, j) > 0.5
+    sample earlier when the motor has a PWM delay (``inner_sample``). ``u`` is kept either
+    way: a store that depends on the delay became a masked store, slow on AMD cores."""
     pending = _get(sc, F_UPEND_A + k, j)
-    _put(sc, F_UPEND_A + k, j, u if delayed else pending)
-    return pending if delayed else u
+    _put(sc, F_UPEND_A + k, j, u)
+    return pending if _get(sc, F_PWM_DELAY, j) > 0.5 else u
 
 
 @njit(cache=True, inline="always")
-def _lane_sample(sc: np.ndarray, j: int) -> None:
+def _lane_sample(sc: np.ndarray, j: int, last: bool) -> None:
     """One inner sample of lane ``j``: the operations of :func:`jvl_gym.kernel.inner_sample`
     for a motor that :func:`in_lanes` admits, in the same order on the same values (so the
     result is bit-for-bit the same), written without a branch the compiler cannot turn into
-    a select, so that the loop over lanes runs in SIMD registers."""
+    a select, so that the loop over lanes runs in SIMD registers.
+
+    The registers an inner sample writes (ELDEG_IST .. UC_VAL, the hall sector) are
+    overwritten by the next sample: only the ``last`` of the 15 stores them (a constant at
+    each call, so the other samples' loop has no such stores).
+    """
     theta = _get(sc, F_THETA, j)
     omega = _get(sc, F_OMEGA, j)
     pp = _get(sc, F_POLE_PAIRS, j)
     theta_e = pp * theta + _get(sc, F_THETA_E0, j)
-    _put(sc, F_HALL_SECTOR, j, sector_index(theta_e, _get(sc, F_HALL_ANGLE, j)))
+    if last:
+        _put(sc, F_HALL_SECTOR, j, sector_index(theta_e, _get(sc, F_HALL_ANGLE, j)))
     enc_abs = encoder_count(theta)
     el = eldeg(theta_e)
     dv = enc_abs - _get(sc, F_ELDEG_PREV, j)
@@ -284,26 +290,28 @@ def _lane_sample(sc: np.ndarray, j: int) -> None:
     xa, over_a = adc_count(ia * cpa * _get(sc, F_KIA, j) / 256.0)
     xb, over_b = adc_count(ib * cpa * _get(sc, F_KIB, j) / 256.0)
     xc, over_c = adc_count(ic * cpa * _get(sc, F_KIC, j) / 256.0)
-    over = over_a or over_b or over_c
-    _put(sc, F_IX_ERR, j, 1.0 if over else _get(sc, F_IX_ERR, j))
+    # F_IX_ERR counts the samples with a saturated converter (a select between the stored
+    # flag and 1 became a masked, conditional store: slow on AMD cores)
+    _put(sc, F_IX_ERR, j, _get(sc, F_IX_ERR, j) + (1.0 if (over_a or over_b or over_c) else 0.0))
     i_nom, phi, isa, isb, isc = references(_get(sc, F_VF_OUT, j), el, dv,
                                            _get(sc, F_PHASE_COMP, j), _get(sc, F_AMPLITUDE, j))
     ua = _phase_lane(sc, j, 0, isa, xa)
     ub = _phase_lane(sc, j, 1, isb, xb)
     uc = _phase_lane(sc, j, 2, isc, xc)
-    _put(sc, F_ELDEG_IST, j, el)
-    _put(sc, F_V_ELDEG, j, dv)
-    _put(sc, F_IA_IST, j, xa)
-    _put(sc, F_IB_IST, j, xb)
-    _put(sc, F_IC_IST, j, xc)
-    _put(sc, F_I_NOM, j, i_nom)
-    _put(sc, F_PHI_SOLL, j, phi)
-    _put(sc, F_IA_SOLL, j, isa)
-    _put(sc, F_IB_SOLL, j, isb)
-    _put(sc, F_IC_SOLL, j, isc)
-    _put(sc, F_UA_VAL, j, ua)
-    _put(sc, F_UB_VAL, j, ub)
-    _put(sc, F_UC_VAL, j, uc)
+    if last:
+        _put(sc, F_ELDEG_IST, j, el)
+        _put(sc, F_V_ELDEG, j, dv)
+        _put(sc, F_IA_IST, j, xa)
+        _put(sc, F_IB_IST, j, xb)
+        _put(sc, F_IC_IST, j, xc)
+        _put(sc, F_I_NOM, j, i_nom)
+        _put(sc, F_PHI_SOLL, j, phi)
+        _put(sc, F_IA_SOLL, j, isa)
+        _put(sc, F_IB_SOLL, j, isb)
+        _put(sc, F_IC_SOLL, j, isc)
+        _put(sc, F_UA_VAL, j, ua)
+        _put(sc, F_UB_VAL, j, ub)
+        _put(sc, F_UC_VAL, j, uc)
     load = _get(sc, F_LOAD, j)
     (theta1, omega1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric, e_dump,
      e_sup) = plant_sample(
@@ -358,9 +366,11 @@ def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scrat
         for _k in range(c.INNER_PER_OUTER):
             inner_sample(r, s, p, u, keys[i], b, rec, fmt, counts_per_amp, k_coil, k_mech,
                          k_bus)
-    for _k in range(c.INNER_PER_OUTER):
+    for _k in range(c.INNER_PER_OUTER - 1):
         for j in range(m):
-            _lane_sample(scratch, j)
+            _lane_sample(scratch, j, False)
+    for j in range(m):
+        _lane_sample(scratch, j, True)
     for j in range(m):
         i = int(_get(scratch, F_MOTOR, j))
         _scatter(scratch, j, regs[i], state[i])

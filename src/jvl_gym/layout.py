@@ -56,7 +56,7 @@ N_REGS = 165
     S_IU1_A, S_IU1_B, S_IU1_C,  # U(k-1) as stored
     S_IU2_A, S_IU2_B, S_IU2_C,  # U(k-2) as stored
     S_IIST1_A, S_IIST1_B, S_IIST1_C,  # I_IST(k-1) for the IB filter
-    S_UPEND_A, S_UPEND_B, S_UPEND_C,  # PWM value waiting out the computation delay
+    S_UPEND_A, S_UPEND_B, S_UPEND_C,  # PWM values of the last sample (the delayed ones)
     # monitors
     S_I2T_Q,  # filtered sum of squared phase currents [ADC counts²]
     S_UIT_Q,  # filtered regenerative power [W]

@@ -6,27 +6,47 @@ register's format at the moment it is stored (MODEL.md §3); blocks then read th
 
 from __future__ import annotations
 
-import math
+import llvmlite.ir as llvm_ir
+from numba import njit, types
+from numba.extending import intrinsic
 
-import numpy as np
-from numba import njit
+
+@intrinsic
+def _round(typingctx, x):  # pragma: no cover - compiled
+    """LLVM's ``llvm.round.f64``: C's ``round``, half away from zero, exact for every double."""
+    sig = types.float64(types.float64)
+
+    def codegen(context, builder, signature, args):
+        double = llvm_ir.DoubleType()
+        fn = builder.module.declare_intrinsic("llvm.round", [double],
+                                              llvm_ir.FunctionType(double, [double]))
+        return builder.call(fn, args)
+
+    return sig, codegen
 
 
 @njit(cache=True, inline="always")
 def rnd(x: float) -> float:
     """Round half away from zero, returned as float64 holding an integer.
 
-    Written without a branch on the sign: the current loops round signals whose sign changes
-    at random when the torque command does, and a mispredicted branch costs more than the
-    whole rounding.
+    C's ``round`` as an LLVM intrinsic: no library call and no branch on the sign (the
+    current loops round signals whose sign changes at random, and a mispredicted branch costs
+    more than the whole rounding); the compiler emits ``trunc(x + copysign(0.5 − 2⁻⁵⁴, x))``,
+    also in SIMD lanes.
     """
-    return math.copysign(np.floor(abs(x) + 0.5), x)
+    return _round(x)
 
 
 @njit(cache=True, inline="always")
 def clamp(x: float, lo: float, hi: float) -> float:
-    """Limit ``x`` to ``[lo, hi]``."""
-    return lo if x < lo else (hi if x > hi else x)
+    """Limit ``x`` to ``[lo, hi]`` (``lo`` when ``x < lo``, else ``hi`` when ``x > hi``).
+
+    ``hi if hi < x else x`` is the form of the processor's minimum instruction (MINPD
+    returns its second operand when either is NaN), which the compiler then emits instead of
+    a compare and a blend; the result is the same for every ``x``, NaN included.
+    """
+    upper = hi if hi < x else x
+    return lo if x < lo else upper
 
 
 @njit(cache=True, inline="always")

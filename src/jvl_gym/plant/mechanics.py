@@ -16,16 +16,17 @@ from ..jit import KERNEL
 
 @njit(cache=True, inline="always")
 def end_stop_torque(theta: float, omega: float, lo: float, hi: float, k: float, d: float) -> float:
-    """Torque of stiff spring-damper end stops at ``lo`` and ``hi`` [rad]; none if ``lo >= hi``."""
-    if lo >= hi:
-        return 0.0
-    if theta > hi:
-        t = -k * (theta - hi) - d * omega
-        return t if t < 0.0 else 0.0
-    if theta < lo:
-        t = -k * (theta - lo) - d * omega
-        return t if t > 0.0 else 0.0
-    return 0.0
+    """Torque of stiff spring-damper end stops at ``lo`` and ``hi`` [rad]; none if ``lo >= hi``.
+
+    Beyond ``hi`` the stop pushes back with ``min(−k·(θ − hi) − d·ω, 0)``, below ``lo`` with
+    ``max(−k·(θ − lo) − d·ω, 0)``. Written as selects of one spring-damper term (the minimum
+    and maximum in the form of the processor's instructions), not as branches: the SIMD
+    lanes of ``jvl_gym.lanes`` compute every branch otherwise.
+    """
+    above = theta > hi
+    t = -k * (theta - (hi if above else lo)) - d * omega
+    pushed = (t if t < 0.0 else 0.0) if above else (t if t > 0.0 else 0.0)
+    return pushed if (lo < hi and (above or theta < lo)) else 0.0
 
 
 @njit(cache=True, inline="always")
@@ -50,15 +51,16 @@ def mech_step(theta: float, omega: float, drive: float, j: float, b: float, tc: 
 def mech_step_prepared(theta: float, omega: float, drive: float, j: float, tc: float, h: float,
                        k: tuple[float, float]):
     """:func:`mech_step` given ``k = mech_constants(j, b, h)``; same returns."""
-    if omega == 0.0 and abs(drive) <= tc:
-        return theta, 0.0, 0.0
+    # the branches are selects (the SIMD lanes of jvl_gym.lanes compute both sides anyway)
+    stuck = omega == 0.0 and abs(drive) <= tc
     sgn = 1.0 if omega > 0.0 else (-1.0 if omega < 0.0 else (1.0 if drive > 0.0 else -1.0))
     h_j, inv_den = k
     omega1 = (omega + h_j * (drive - tc * sgn)) * inv_den
-    if omega1 * sgn < 0.0 and tc > 0.0:
-        omega1 = 0.0
+    omega1 = 0.0 if (omega1 * sgn < 0.0 and tc > 0.0) else omega1
     dtheta = 0.5 * h * (omega + omega1)
     # friction loss = work of the driving torque minus the kinetic energy gained; with the implicit
     # viscous term this equals (T_c sgn + b ω1)·Δθ, and it stays exact when the rotor is stopped.
     e_fric = drive * dtheta - 0.5 * j * (omega1 * omega1 - omega * omega)
+    if stuck:
+        return theta, 0.0, 0.0
     return theta + dtheta, omega1, e_fric
