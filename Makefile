@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-core
 STAMP_RL := $(VENV)/.installed-rl
 
-.PHONY: setup setup-rl demo test bench lint docs notebooks clean
+.PHONY: setup setup-rl demo test bench bench-compile lint docs notebooks clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -31,6 +31,9 @@ bench: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_sim.py
 	$(BIN)/python benchmarks/bench_protocol.py
 	$(BIN)/python benchmarks/bench_envs.py
+
+bench-compile: $(STAMP_RL)
+	$(BIN)/python benchmarks/bench_compile.py
 
 notebooks: $(STAMP_RL)
 	cd notebooks && for f in *.py; do ../$(BIN)/jupytext --to ipynb "$$f"; done

@@ -52,7 +52,7 @@ from .firmware.monitor import check_errors, in_position, thermal, undervoltage
 from .firmware.noise import gauss
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
-from .jit import KERNEL
+from .jit import KERNEL, LANE_KERNEL
 from .plant.coil import coil_constants, coil_step_prepared, phase_to_vector, vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
@@ -412,3 +412,21 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     s[L.S_I2_SUM] += float(r[R.IA_IST] ** 2 + r[R.IB_IST] ** 2 + r[R.IC_IST] ** 2)
     s[L.S_PREG_SUM] += max(-p_el, 0.0)  # regenerated power; no branch on its sign
     s[L.S_TICK] = tick + 1.0
+
+
+@njit(**LANE_KERNEL)
+def inner_samples_one(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray,
+                      key: np.uint64, buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:
+    """The 15 inner samples of one outer sample (step 4) of one motor by :func:`inner_sample`:
+    the reference form, which :func:`jvl_gym.lanes.inner_samples` runs for the motors it
+    cannot put into SIMD lanes.
+
+    A function of its own, not inlined into ``inner_samples``: numba's inliner copies the
+    whole scope of the caller for every block of an inlined function, so the 15-sample loop
+    inlined there beside the two inlined lane samples cost about 28 of the 48 s that
+    ``inner_samples`` took to compile (2026-12-02). The call costs one argument transfer per
+    motor and outer sample, on the slow path only.
+    """
+    counts_per_amp, k_coil, k_mech, k_bus = sample_constants(p)
+    for _k in range(c.INNER_PER_OUTER):
+        inner_sample(r, s, p, u, key, buf, rec, fmt, counts_per_amp, k_coil, k_mech, k_bus)

@@ -11,7 +11,7 @@ still bit-for-bit equal to N one-motor arrays.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, typeof, types
 
 from . import constants as c
 from . import layout as L
@@ -19,7 +19,7 @@ from .firmware import regs as R
 from .firmware.current_loop import phase_step, references
 from .firmware.fixed import fx4, fx8
 from .jit import KERNEL, KERNEL_PARALLEL, LANE_KERNEL
-from .kernel import adc_count, inner_sample, outer_firmware, plant_sample, sample_constants
+from .kernel import adc_count, inner_samples_one, outer_firmware, plant_sample, sample_constants
 from .plant.coil import vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import hall_code, sector_index
@@ -348,7 +348,7 @@ def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scrat
     (``n <= LANES``, one block); ``scratch`` is the block's row of :func:`lane_scratch`.
 
     The motors that :func:`in_lanes` admits are copied into SIMD lanes, stepped together
-    (:func:`_lane_sample`) and copied back; the others run :func:`jvl_gym.kernel.inner_sample`
+    (:func:`_lane_sample`) and copied back; the others run :func:`jvl_gym.kernel.inner_samples_one`
     one at a time. Both give the same bits (tests/test_lanes.py).
     """
     m = 0
@@ -360,12 +360,7 @@ def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scrat
             _gather(scratch, m, i, r, s, p, inputs[i])
             m += 1
             continue
-        u = inputs[i]
-        b = buf[i] if rec else buf[0]
-        counts_per_amp, k_coil, k_mech, k_bus = sample_constants(p)
-        for _k in range(c.INNER_PER_OUTER):
-            inner_sample(r, s, p, u, keys[i], b, rec, fmt, counts_per_amp, k_coil, k_mech,
-                         k_bus)
+        inner_samples_one(r, s, p, inputs[i], keys[i], buf[i] if rec else buf[0], rec, fmt)
     for _k in range(c.INNER_PER_OUTER - 1):
         for j in range(m):
             _lane_sample(scratch, j, False)
@@ -374,6 +369,34 @@ def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scrat
     for j in range(m):
         i = int(_get(scratch, F_MOTOR, j))
         _scatter(scratch, j, regs[i], state[i])
+
+
+_compiled_first = False
+
+
+def compile_first(regs: np.ndarray, state: np.ndarray, params: np.ndarray, inputs: np.ndarray,
+                  keys: np.ndarray, buf: np.ndarray, fmt: np.ndarray,
+                  scratch: np.ndarray) -> None:
+    """Compile :func:`inner_samples` and :func:`jvl_gym.kernel.inner_samples_one` for these
+    arrays' types (or load them from numba's cache) on their own, once per process, before a
+    driver or an environment step that calls them is compiled.
+
+    Compiled inside the compilation of a caller (as numba does when it types the call), the
+    same function took up to three times as long: ``inner_samples`` 127 s inside the
+    CoilWinding vector env's step against 43 s on its own (2026-12-02, numba 0.68). The first
+    step of that env, with an empty cache, went from 195 s to 115 s.
+    """
+    global _compiled_first
+    if _compiled_first:
+        return
+    rec = types.boolean
+    inner_samples_one.compile((typeof(regs[0]), typeof(state[0]), typeof(params[0]),
+                               typeof(inputs[0]), typeof(keys[0]), typeof(buf[0]), rec,
+                               typeof(fmt)))
+    inner_samples.compile((typeof(regs), typeof(state), typeof(params), typeof(inputs),
+                           typeof(keys), typeof(buf), rec, typeof(fmt), types.int64,
+                           types.int64, typeof(scratch[0])))
+    _compiled_first = True
 
 
 @njit(cache=True, inline="always")

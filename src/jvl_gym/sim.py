@@ -25,7 +25,7 @@ from .firmware import regs as R
 from .firmware import write_rules as W
 from .firmware.monitor import filter_gain
 from .firmware.noise import motor_keys
-from .lanes import lane_scratch, run_parallel, run_serial
+from .lanes import compile_first, lane_scratch, run_parallel, run_serial
 from .power_on import (
     BINARY,
     FINITE,
@@ -400,6 +400,8 @@ class MotorArray:
             raise ValueError(f"n_outer must be a non-negative integer, got {n_outer!r}")
         if n_outer == 0:
             return
+        compile_first(self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
+                      self._fmt, self._scratch)
         run = run_parallel if self.n >= _PARALLEL_MIN_MOTORS else run_serial
         plan = self._no_schedule if self.world is None else self.world.schedule(self, n_outer)
         run(self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
@@ -414,6 +416,8 @@ class MotorArray:
         A caller that advances motors itself bypasses the :attr:`world` schedule (inputs are
         held): it sets ``inputs`` between samples instead.
         """
+        compile_first(self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
+                      self._fmt, self._scratch)
         return (self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
                 self._buf_allocated, self._fmt, self._no_schedule, self._scratch)
 

@@ -15,7 +15,7 @@ from ..jit import KERNEL, KERNEL_PARALLEL
 from ..lanes import LANES, inner_samples, outer_sample
 from . import deposition as dep
 from .base import ERROR_BITS, Column, MotorVectorEnv
-from .compiled import PARALLEL_MIN, action, all_finite, end_step, put_obs
+from .compiled import PARALLEL_MIN, action, all_finite, block_index, end_step, put_obs
 from .deposition import flatness_row, lay_turn_row, profile_summary_row
 from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
@@ -223,9 +223,9 @@ def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scra
     if not all_finite(actions):
         return False
     for blk in prange(scratch.shape[0]):
-        _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
-                    actions, prev, t, noise_key, k, prof, w, h, centres, summary, obs, reward,
-                    term, trunc)
+        _step_block(block_index(blk), regs, state, params, inputs, keys, buf, rec, fmt, plan,
+                    scratch, actions, prev, t, noise_key, k, prof, w, h, centres, summary, obs,
+                    reward, term, trunc)
     return True
 
 

@@ -14,7 +14,7 @@ from ..firmware import regs as R
 from ..jit import KERNEL, KERNEL_PARALLEL
 from ..lanes import LANES, inner_samples, outer_sample
 from .base import ERROR_BITS, Column, MotorVectorEnv
-from .compiled import PARALLEL_MIN, action, all_finite, end_step, normal, put_obs
+from .compiled import PARALLEL_MIN, action, all_finite, block_index, end_step, normal, put_obs
 from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
 from .web import load_cell_s, span_step_s, tension_s, winder_radius_s
@@ -167,8 +167,8 @@ def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scra
     if not all_finite(actions):
         return False
     for blk in prange(scratch.shape[0]):
-        _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
-                    actions, prev, t, noise_key, k, prof, w, obs, reward, term, trunc)
+        _step_block(block_index(blk), regs, state, params, inputs, keys, buf, rec, fmt, plan,
+                    scratch, actions, prev, t, noise_key, k, prof, w, obs, reward, term, trunc)
     return True
 
 

@@ -13,7 +13,7 @@ from ..firmware import regs as R
 from ..jit import KERNEL, KERNEL_PARALLEL
 from ..lanes import LANES, advance_block
 from .base import ERROR_BITS, MotorVectorEnv
-from .compiled import PARALLEL_MIN, action, all_finite, end_step, put_obs
+from .compiled import PARALLEL_MIN, action, all_finite, block_index, end_step, put_obs
 from .single import MotorEnv
 
 __all__ = ["PositioningEnv", "PositioningVectorEnv"]
@@ -98,8 +98,9 @@ def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scra
     if not all_finite(actions):
         return False
     for blk in prange(scratch.shape[0]):
-        _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
-                    actions, prev, t, noise_key, k, target, direction, obs, reward, term, trunc)
+        _step_block(block_index(blk), regs, state, params, inputs, keys, buf, rec, fmt, plan,
+                    scratch, actions, prev, t, noise_key, k, target, direction, obs, reward, term,
+                    trunc)
     return True
 
 
