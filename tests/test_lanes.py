@@ -173,3 +173,42 @@ def test_commutation_sines_are_the_exact_sines_of_the_angle_units() -> None:
                for x in 800.0 * np.sin(exact[phi] + np.array([0.0, 2.0, 4.0]) * np.pi / 3.0)]
         assert np.allclose(got, ref, atol=1.0)  # table sines combined by the 120° identities
         assert got[0] == ref[0]
+
+
+def test_the_inner_samples_are_compiled_once_for_the_drivers_and_the_env_steps() -> None:
+    """``compile_first`` compiles ``inner_samples`` for the types the drivers and the compiled
+    env steps pass: stepping them adds no second compiled version (with an empty numba cache,
+    a mismatch would compile the function again inside its caller)."""
+    import gymnasium as gym
+
+    import jvl_gym  # noqa: F401
+    from jvl_gym.kernel import inner_samples_one
+    from jvl_gym.lanes import inner_samples
+
+    MotorArray("MAC140", n=3, seed=0).step(2)
+    MotorArray("MAC140", n=70, seed=0).step(1)  # threaded driver
+    env = gym.make("jvl_gym/Positioning-v0")
+    env.reset(seed=0)
+    env.step(env.action_space.sample())
+    venv = gym.make_vec("jvl_gym/Positioning-v0", num_envs=40,
+                        vectorization_mode="vector_entry_point")
+    venv.reset(seed=0)
+    venv.step(venv.action_space.sample())
+    assert len(inner_samples.signatures) == 1
+    assert len(inner_samples_one.signatures) == 1
+
+
+def test_block_index_is_int64_for_a_prange_index() -> None:
+    """The threaded env steps call ``_step_block`` with ``block_index(blk)``: int64 whether
+    numba types the loop index as int64 or as uint64, so ``_step_block`` has one version."""
+    from numba import types
+
+    from jvl_gym.envs.compiled import block_index
+
+    @njit
+    def index_of(blk):
+        return block_index(blk)
+
+    assert index_of(np.uint64(5)) == 5
+    assert index_of(np.int64(5)) == 5
+    assert {sig.return_type for sig in index_of.nopython_signatures} == {types.int64}

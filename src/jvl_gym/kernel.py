@@ -305,8 +305,9 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     The reference form, one motor at a time; :func:`jvl_gym.lanes.inner_samples` runs the
     same operations for the motors of a block in SIMD lanes when they need none of the
     per-motor branches (hall synchronisation, noise, inner-rate recording, passive and test
-    modes). Inlined into the drivers' time loop: as a call it received its six arrays as
-    ~45 separate machine words (numba passes an array's fields one by one), on every sample.
+    modes). Inlined into the 15-sample loop of :func:`inner_samples_one`: as a call it
+    received its six arrays as ~45 separate machine words (numba passes an array's fields one
+    by one), on every sample.
     ``counts_per_amp`` (ADC counts per ampere) and the plant factors ``k_coil``, ``k_mech`` and
     ``k_bus`` (``coil_constants``, ``mech_constants``, ``bus_constants`` of ``jvl_gym.plant``)
     depend on the motor's parameters only: the caller computes them once per call, not nine
