@@ -425,8 +425,9 @@ def inner_samples_one(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray
     A function of its own, not inlined into ``inner_samples``: numba's inliner copies the
     whole scope of the caller for every block of an inlined function, so the 15-sample loop
     inlined there beside the two inlined lane samples cost about 28 of the 48 s that
-    ``inner_samples`` took to compile (2026-12-02). The call costs one argument transfer per
-    motor and outer sample, on the slow path only.
+    ``inner_samples`` took to compile (2026-12-02; compile times vary by ±30 % from run to
+    run). The call costs one argument transfer per motor and outer sample, on the slow path
+    only.
     """
     counts_per_amp, k_coil, k_mech, k_bus = sample_constants(p)
     for _k in range(c.INNER_PER_OUTER):
