@@ -1,4 +1,5 @@
-"""``jvl-gym`` command line: ``train``, ``evaluate`` (and ``serve`` when available)."""
+"""``jvl-gym`` command line: ``train``, ``evaluate``, ``compile`` (and ``serve`` when
+available)."""
 
 from __future__ import annotations
 
@@ -44,6 +45,19 @@ def evaluate(env_ids: Annotated[list[str], typer.Argument(help="env ids to evalu
         results[env_id] = run(env_id, path if path.exists() else None, seeds, episodes,
                               config_dir=config_dir)
     typer.echo(format_table(results))
+
+
+@app.command(name="compile")
+def compile_(motors_only: Annotated[bool, typer.Option(
+                 "--motors-only", help="only the motor array, not the environments")] = False,
+             workers: Annotated[int | None, typer.Option(help="worker processes")] = None
+             ) -> None:
+    """Compile the simulator and the environments for this machine now (numba caches the
+    result on disk; otherwise each compiles on first use)."""
+    from .precompile import compile_all
+
+    for job, seconds in compile_all(workers, envs=not motors_only).items():
+        typer.echo(f"{job}: {seconds:.1f} s")
 
 
 def _mount_serve() -> None:

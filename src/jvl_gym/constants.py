@@ -8,6 +8,9 @@ from __future__ import annotations
 
 import math
 
+from .firmware.mode_table import MODE_NAMES as _MODE_NAMES
+from .firmware.mode_table import number as _mode
+
 # --- timing (manual 1.2, MODEL.md §1) --------------------------------------------------------
 INNER_HZ = 7812.5  #: current loops, commutation, electrics [Hz]
 INNER_PER_OUTER = 15  #: one velocity/position sample = 15 current samples
@@ -53,43 +56,37 @@ def a_soll_to_rpm_per_s(a_soll: float) -> float:
     return a_soll / 16.0 * OUTER_HZ**2 / COUNTS_PER_REV * 60.0
 
 
-# --- modes (manual 3.2.2, 4.4) ---------------------------------------------------------------
-INIT_MODE = 0
-V_MODE = 1
-P_MODE = 2
-GP_MODE = 3
-AT_MODE = 4
-AV_MODE = 5
-AVG_MODE = 6
-MANI_MODE = 7
-TESTU_MODE = 8
-TESTA_MODE = 9
-BREAK_MODE = 10
-STOP_MODE = 11
-HOME1_MODE = 12
-HOME2_MODE = 13
-HOME3_MODE = 14
-SAFE_MODE = 15
-AVZ_MODE = 16
-VAT_MODE = 17
-AG_MODE = 18
-COIL_MODE = 19
-A2POS_MODE = 20
-APOS_MODE = 21
-TESTKI_MODE = 22
-TESTTQ_MODE = 23
-GF_MODE = 24
+# --- modes (manual 3.2.2, 4.4): numbers and names from the mode table --------------------
+INIT_MODE = _mode("INIT_MODE")
+V_MODE = _mode("V_MODE")
+P_MODE = _mode("P_MODE")
+GP_MODE = _mode("GP_MODE")
+AT_MODE = _mode("AT_MODE")
+AV_MODE = _mode("AV_MODE")
+AVG_MODE = _mode("AVG_MODE")
+MANI_MODE = _mode("MANI_MODE")
+TESTU_MODE = _mode("TESTU_MODE")
+TESTA_MODE = _mode("TESTA_MODE")
+BREAK_MODE = _mode("BREAK_MODE")
+STOP_MODE = _mode("STOP_MODE")
+HOME1_MODE = _mode("HOME1_MODE")
+HOME2_MODE = _mode("HOME2_MODE")
+HOME3_MODE = _mode("HOME3_MODE")
+SAFE_MODE = _mode("SAFE_MODE")
+AVZ_MODE = _mode("AVZ_MODE")
+VAT_MODE = _mode("VAT_MODE")
+AG_MODE = _mode("AG_MODE")
+COIL_MODE = _mode("COIL_MODE")
+A2POS_MODE = _mode("A2POS_MODE")
+APOS_MODE = _mode("APOS_MODE")
+TESTKI_MODE = _mode("TESTKI_MODE")
+TESTTQ_MODE = _mode("TESTTQ_MODE")
+GF_MODE = _mode("GF_MODE")
 SAFE_LOAD_DEFAULTS_SAVE = 256  #: in SAFE_MODE: ROM defaults → flash, reset (4.4.16)
 SAFE_LOAD_DEFAULTS = 257  #: in SAFE_MODE: ROM defaults, not saved
 SAFE_LOAD_FLASH = 258  #: in SAFE_MODE: last saved user parameters
 
-MODE_NAMES = {
-    0: "INIT_MODE", 1: "V_MODE", 2: "P_MODE", 3: "GP_MODE", 4: "AT_MODE", 5: "AV_MODE",
-    6: "AVG_MODE", 7: "MANI_MODE", 8: "TESTU_MODE", 9: "TESTA_MODE", 10: "BREAK_MODE",
-    11: "STOP_MODE", 12: "HOME1_MODE", 13: "HOME2_MODE", 14: "HOME3_MODE", 15: "SAFE_MODE",
-    16: "AVZ_MODE", 17: "VAT_MODE", 18: "AG_MODE", 19: "COIL_MODE", 20: "A2POS_MODE",
-    21: "APOS_MODE", 22: "TESTKI_MODE", 23: "TESTTQ_MODE", 24: "GF_MODE",
-}
+MODE_NAMES = _MODE_NAMES  #: MODE_REG value → mode name (jvl_gym.firmware.mode_table)
 
 # --- ERR_STAT bits (3.2.35) ------------------------------------------------------------------
 I2T_ERR = 1 << 0

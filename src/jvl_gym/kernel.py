@@ -47,12 +47,13 @@ from .firmware.gear_blocks import (
     gear_position_block,
 )
 from .firmware.homing import home_block, home_check
+from .firmware.mode_table import N_MODES
 from .firmware.modes import CORRECTING, FLWERR_MODES, REGULATED, enter_mode, stop_to
 from .firmware.monitor import check_errors, in_position, thermal, undervoltage
-from .firmware.noise import gauss
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
 from .jit import KERNEL, LANE_KERNEL
+from .noise import gauss
 from .plant.coil import coil_constants, coil_step_prepared, phase_to_vector, vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
@@ -159,7 +160,7 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
     if mode == c.INIT_MODE and (cb & c.AUTO_RESYNC):
         r[R.P_FNC] = wrap32(16 * r[R.P_IST])
 
-    if mode < 25 and REGULATED[mode]:
+    if mode < N_MODES and REGULATED[mode]:
         f, t_lim = _profile(r, s, mode)
         f, corr = speed_regulator(r, s, f, CORRECTING[mode], t_lim)
         if corr != 0.0:
@@ -180,7 +181,8 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
             _finish_pending(r, s)
         elif c.HOME1_MODE <= mode <= c.HOME3_MODE and home_check(r, s, mode):
             start = int(r[R.STARTMODE])
-            if 0 < start < 25 and REGULATED[start] and not c.HOME1_MODE <= start <= c.HOME3_MODE:
+            if (0 < start < N_MODES and REGULATED[start]
+                    and not c.HOME1_MODE <= start <= c.HOME3_MODE):
                 enter_mode(r, s, start)
             else:
                 stop_to(r, s, c.INIT_MODE, False)

@@ -1,25 +1,26 @@
-"""Motors advanced in blocks of :data:`LANES`: the drivers of the kernel (MODEL.md §1, §4).
+"""The inner samples of a block of :data:`LANES` motors in SIMD lanes (MODEL.md §1, §4).
 
-An outer sample of a block is the firmware's outer step of every motor of the block, one motor
-at a time (:func:`outer_sample`), then the block's 15 inner samples (:func:`inner_samples`).
-The drivers of :class:`jvl_gym.MotorArray` (:func:`run_serial`, :func:`run_parallel`) and the
-compiled environment steps (``jvl_gym.envs``) are written over blocks; a block belongs to one
-thread, and its motors' arithmetic stays independent of each other, so an N-motor array is
-still bit-for-bit equal to N one-motor arrays.
+The engine's driver (``jvl_gym.engine.driver``) advances motors in blocks: the firmware's
+outer step of every motor of the block, one motor at a time, then the block's 15 inner samples
+in one call of :func:`inner_samples`, which steps the motors it can in SIMD lanes and the
+others one at a time; both give the same bits, so an N-motor array is still bit-for-bit equal
+to N one-motor arrays.
 """
 
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange, typeof, types
+from numba import njit
 
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R
 from .firmware.current_loop import phase_step, references
 from .firmware.fixed import fx4, fx8
-from .jit import KERNEL, KERNEL_PARALLEL, LANE_KERNEL
-from .kernel import adc_count, inner_samples_one, outer_firmware, plant_sample, sample_constants
+from .firmware.mode_table import N_MODES
+from .firmware.modes import COMMUTATED
+from .jit import LANE_KERNEL
+from .kernel import adc_count, inner_samples_one, plant_sample, sample_constants
 from .plant.coil import vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import hall_code, sector_index
@@ -62,17 +63,6 @@ def lane_scratch(n_motors: int) -> np.ndarray:
 
 
 @njit(cache=True, inline="always")
-def outer_sample(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i, t):
-    """Steps 1–3 of an outer sample (``jvl_gym.kernel``) for motor ``i``; with a non-empty
-    ``input_plan`` (shape (n_outer, N, N_INPUT)) its row ``t`` sets the inputs first."""
-    if input_plan.shape[0] > 0:
-        for k in range(inputs.shape[1]):
-            inputs[i, k] = input_plan[t, i, k]
-    b = buf[i] if rec else buf[0]
-    outer_firmware(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt)
-
-
-@njit(cache=True, inline="always")
 def _get(sc: np.ndarray, f: int, j: int) -> float:
     return sc[f * LANES + j]
 
@@ -90,8 +80,7 @@ def in_lanes(r: np.ndarray, p: np.ndarray) -> bool:
     no inner-rate recording. Such a motor can run in a SIMD lane."""
     mode = r[R.MODE_REG]
     cb = r[R.CNTRL_BITS]
-    return (mode != c.INIT_MODE and mode != c.SAFE_MODE and mode != c.TESTU_MODE
-            and mode != c.TESTKI_MODE and mode != c.MANI_MODE and p[L.P_HALL_START] < 0.5
+    return (0 <= mode < N_MODES and COMMUTATED[mode] and p[L.P_HALL_START] < 0.5
             and not p[L.P_CURRENT_NOISE] > 0.0 and not p[L.P_TORQUE_NOISE] > 0.0
             and not ((cb & c.RECORDBIT) and (cb & c.RECINNERBIT)))
 
@@ -369,67 +358,3 @@ def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scrat
     for j in range(m):
         i = int(_get(scratch, F_MOTOR, j))
         _scatter(scratch, j, regs[i], state[i])
-
-
-_compiled_first = False
-
-
-def compile_first(regs: np.ndarray, state: np.ndarray, params: np.ndarray, inputs: np.ndarray,
-                  keys: np.ndarray, buf: np.ndarray, fmt: np.ndarray,
-                  scratch: np.ndarray) -> None:
-    """Compile :func:`inner_samples` and :func:`jvl_gym.kernel.inner_samples_one` for these
-    arrays' types (or load them from numba's cache) on their own, once per process, before a
-    driver or an environment step that calls them is compiled.
-
-    Compiled inside the compilation of a caller (as numba does when it types the call), the
-    same function took up to three times as long: ``inner_samples`` 127 s inside the
-    CoilWinding vector env's step against 43 s on its own (2026-12-02, numba 0.68). The first
-    step of that env, with an empty cache, went from 195 s to 115 s.
-    """
-    global _compiled_first
-    if _compiled_first:
-        return
-    rec = types.boolean
-    inner_samples_one.compile((typeof(regs[0]), typeof(state[0]), typeof(params[0]),
-                               typeof(inputs[0]), typeof(keys[0]), typeof(buf[0]), rec,
-                               typeof(fmt)))
-    inner_samples.compile((typeof(regs), typeof(state), typeof(params), typeof(inputs),
-                           typeof(keys), typeof(buf), rec, typeof(fmt), types.int64,
-                           types.int64, typeof(scratch[0])))
-    _compiled_first = True
-
-
-@njit(cache=True, inline="always")
-def advance_block(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i0, n, n_outer,
-                  scratch):
-    """Advance motors ``i0 .. i0 + n - 1`` (one block) by ``n_outer`` outer samples."""
-    for t in range(n_outer):
-        for i in range(i0, i0 + n):
-            outer_sample(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i, t)
-        inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scratch)
-
-
-@njit(**KERNEL)
-def run_serial(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, input_plan, scratch):
-    """Advance every motor by ``n_outer`` outer samples in one thread.
-
-    ``rec`` says whether ``buf`` is an allocated (N, 895, 4) sample buffer. ``input_plan`` is
-    either empty (shape (0, N, N_INPUT): inputs held) or holds the inputs of every
-    outer sample, shape (n_outer, N, N_INPUT) (world generators). ``scratch`` is
-    ``lane_scratch(N)``.
-    """
-    n_motors = regs.shape[0]
-    for blk in range(scratch.shape[0]):
-        i0 = blk * LANES
-        advance_block(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i0,
-                      min(LANES, n_motors - i0), n_outer, scratch[blk])
-
-
-@njit(**KERNEL_PARALLEL)
-def run_parallel(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, input_plan, scratch):
-    """:func:`run_serial` with the blocks spread over threads."""
-    n_motors = regs.shape[0]
-    for blk in prange(scratch.shape[0]):
-        i0 = blk * LANES
-        advance_block(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, i0,
-                      min(LANES, n_motors - i0), n_outer, scratch[blk])

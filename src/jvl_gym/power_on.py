@@ -17,6 +17,7 @@ from numba import njit
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R
+from .firmware.mode_table import N_MODES
 from .firmware.modes import OK, apply_request, check_request
 from .jit import KERNEL
 from .plant.encoder import eldeg, encoder_count
@@ -80,8 +81,9 @@ def power_on_rows(regs: np.ndarray, state: np.ndarray, params: np.ndarray, latch
         latched[i] = r[R.CNTRL_BITS]
     for i in idx:
         home = regs[i, R.HOME_MODE] & 0xFF
-        start = home if home == 12 or home == 13 or home == 14 else regs[i, R.STARTMODE]
-        if 0 < start < 25 and check_request(regs[i], state[i], start) == OK:
+        start = (home if c.HOME1_MODE <= home <= c.HOME3_MODE
+                 else regs[i, R.STARTMODE])
+        if 0 < start < N_MODES and check_request(regs[i], state[i], start) == OK:
             apply_request(regs[i], state[i], start)
 
 

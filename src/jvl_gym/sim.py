@@ -20,12 +20,13 @@ import numpy as np
 from . import constants as c
 from . import layout as L
 from .config import MotorConfig, load_motor, load_setup
+from .engine import MotorDriver
+from .families import family as _family
 from .firmware import modes as M
 from .firmware import regs as R
 from .firmware import write_rules as W
 from .firmware.monitor import filter_gain
-from .firmware.noise import motor_keys
-from .lanes import compile_first, lane_scratch, run_parallel, run_serial
+from .noise import motor_keys
 from .power_on import (
     BINARY,
     FINITE,
@@ -47,7 +48,7 @@ from .registers import (
 from .registers.formats import from_raw, raw_bounds, raws_of_floats, raws_of_rows, to_raw
 from .store import store_rows
 
-__all__ = ["MotorArray", "ModeError", "PARAMETER_KEYWORDS"]
+__all__ = ["MotorArray", "ModeError", "PARAMETER_KEYWORDS", "driver"]
 
 #: per-motor parameter keywords of the constructor and :meth:`MotorArray.reset` (SI units)
 PARAMETER_KEYWORDS: dict[str, int] = {
@@ -88,13 +89,18 @@ _VALUE_RULES: dict[str, int] = {
 }
 _RULE_TEXT = {FINITE: "finite", NONNEGATIVE: ">= 0", POSITIVE: "> 0"}
 
-_PARALLEL_MIN_MOTORS = 32
 #: up to this many int64 indices are checked with Python ints (``_as_index``)
 _FEW = 8
 #: register-key tuples whose store plan a MotorArray keeps (``MotorArray._key_plan``)
 _PLAN_CACHE_SIZE = 256
 #: modes that record into the sample buffer (allocated on first use)
 _RECORDING_MODES = frozenset({c.TESTU_MODE, c.TESTA_MODE, c.TESTKI_MODE, c.TESTTQ_MODE})
+
+
+@functools.cache
+def driver(family_key: str) -> MotorDriver:
+    """The stepping driver of a family (specialised and compiled once per process)."""
+    return MotorDriver(_family(family_key))
 
 
 class ModeError(RegisterError):
@@ -243,14 +249,15 @@ class MotorArray:
         self._buf = np.zeros((1, c.REC_CNT_MAX, 4), dtype=np.int64)
         self._buf_allocated = False
         self._no_schedule = np.zeros((0, self.n, L.N_INPUT), dtype=np.float64)
-        self._scratch = lane_scratch(self.n)
+        self.family = _family("mac050_141")
+        self._scratch = self.family.compiled.scratch(self.n)
         self._latched_cntrl = np.zeros(self.n, dtype=np.int64)
         #: world signal sources (``jvl_gym.world.World``) sampled every outer sample, or None
         self.world = None
         self._flash: np.ndarray | None = None
         self._has_flash = np.zeros(self.n, dtype=np.bool_)
         self._fmt = self.table.fmt_code_array
-        #: store plans by register-name tuple (``_write_many``) and by number (``_store``)
+        #: store plans by register-name tuple (``write_many``) and by number (``_store``)
         self._plans: dict[Any, _StorePlan] = {}
         self.set_record_length(record_length)
         self.reset(**params)
@@ -400,26 +407,63 @@ class MotorArray:
             raise ValueError(f"n_outer must be a non-negative integer, got {n_outer!r}")
         if n_outer == 0:
             return
-        compile_first(self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
-                      self._fmt, self._scratch)
-        run = run_parallel if self.n >= _PARALLEL_MIN_MOTORS else run_serial
         plan = self._no_schedule if self.world is None else self.world.schedule(self, n_outer)
-        run(self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
-            self._buf_allocated, self._fmt, int(n_outer), plan, self._scratch)
+        driver(self.family.key).run(self.engine_view(plan), int(n_outer))
 
-    def kernel_arrays(self) -> tuple:
-        """The arrays the compiled kernel works on, for compiled callers (the env steps):
-        ``(regs, state, params, inputs, keys, buf, rec, fmt, input_plan, scratch)``, the first
-        nine in the order of the first arguments of :func:`jvl_gym.lanes.advance_block`, with
-        the held-input plan, and the blocks' working memory (:func:`jvl_gym.lanes.lane_scratch`).
+    def engine_view(self, plan: np.ndarray | None = None) -> tuple:
+        """The arrays of the motors as the engine's compiled drivers take them (the arrays
+        themselves, not copies): the fields of a :class:`~jvl_gym.engine.EngineView` as a
+        plain tuple, the handle a compiled task's driver is given (numba dispatches on a plain
+        tuple without Python; the driver makes the named view of it).
 
-        A caller that advances motors itself bypasses the :attr:`world` schedule (inputs are
-        held): it sets ``inputs`` between samples instead.
+        A task that advances the motors itself (``jvl_gym.engine.TaskDriver``) holds the
+        inputs over each outer sample and sets them between samples; the :attr:`world`
+        schedule applies to :meth:`step` only. ``plan`` (T, N, inputs): world inputs per outer
+        sample, default none (inputs held).
         """
-        compile_first(self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
-                      self._fmt, self._scratch)
         return (self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
-                self._buf_allocated, self._fmt, self._no_schedule, self._scratch)
+                self._buf_allocated, self._fmt, self._no_schedule if plan is None else plan,
+                self._scratch)
+
+    def reseed(self, keys: np.ndarray, index: Any = None) -> None:
+        """Give the motors ``index`` new noise keys (one uint64 per motor, as the ``seed``
+        sequence of the constructor): their noise streams restart from these keys.
+
+        Parameters
+        ----------
+        keys : (M,) array of uint64
+            One key per selected motor.
+        index : int, slice, bool mask or int array, optional
+            The motors (default all).
+        """
+        idx = _as_index(index, self.n)
+        arr = np.asarray(keys)
+        if arr.dtype != np.uint64 or arr.shape != (idx.size,):
+            raise ValueError(f"keys must be a uint64 array of shape ({idx.size},), got "
+                             f"{arr.dtype} {arr.shape}")
+        self.keys[idx] = arr
+
+    def hold_torque(self, torque: float | np.ndarray, index: Any = None) -> None:
+        """Let the motors ``index`` start as motors that already hold ``torque`` [N·m]: the
+        speed regulator's integrating state is set to the output that gives this torque
+        (VF_OUT = torque / peak torque · 1023, manual 3.2.7, through KVOUT, manual 4.2), so
+        a motor powered on under a standing load does not first sag and recover.
+
+        Parameters
+        ----------
+        torque : float or (M,) array
+            Torque per selected motor [N·m], finite.
+        index : int, slice, bool mask or int array, optional
+            The motors (default all).
+        """
+        idx = _as_index(index, self.n)
+        arr = np.asarray(torque, dtype=np.float64)
+        if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != idx.size):
+            raise ValueError(f"torque: expected a scalar or shape ({idx.size},), got {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"torque must be finite, got {torque!r}")
+        peak = np.array([self._configs[k].peak_torque for k in self._type_of[idx].tolist()])
+        self.state[idx, L.S_Y1] = arr / peak * c.VF_FULL / (self.regs[idx, R.KVOUT] / 256.0)
 
     def run(self, seconds: float) -> None:
         """Advance by ``seconds`` (rounded to whole outer samples of 1.92 ms)."""
@@ -481,10 +525,19 @@ class MotorArray:
         plan = self._key_plan((key,))
         self._write_plan(plan, (value,), _as_index(index, self.n))
 
-    def _write_many(self, values: Mapping[str | int, Any], index: Any = None) -> None:
+    def write_many(self, values: Mapping[str | int, Any], index: Any = None) -> None:
         """Write several registers (key → value in user units, in this order) to the motors
-        ``index``; every value is validated before the first is stored, as by :meth:`write`,
-        and a store the firmware refuses restores the motors (nothing is changed)."""
+        ``index`` as one transaction.
+
+        Every value is validated before the first is stored, as by :meth:`write`, and a store
+        the firmware refuses restores the motors: either all registers are written or nothing
+        is changed. Writing in order matters where the manual's rules depend on other
+        registers (a mode request after the registers it uses, manual 4.4).
+
+        Examples
+        --------
+        >>> m.write_many({"V_SOLL": 1600, "P_SOLL": 40960, "MODE_REG": 2}, index=[0, 1])
+        """
         idx = _as_index(index, self.n)
         self._write_plan(self._key_plan(tuple(values)), tuple(values.values()), idx)
 
@@ -738,7 +791,7 @@ class MotorArray:
         cfg = load_setup(setup)
         if any(self._lookup(name).number == R.MODE_REG for name in cfg.registers):
             raise RegisterError("a setup must not contain MODE_REG")
-        self._write_many(cfg.registers, index)
+        self.write_many(cfg.registers, index)
 
     # ------------------------------------------------------------------ sample buffer
     def _ensure_buffer(self) -> None:

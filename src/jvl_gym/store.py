@@ -1,6 +1,6 @@
 """Register stores of motor rows, compiled: the firmware's write rules, then the store.
 
-:meth:`jvl_gym.MotorArray.write` and the batched ``MotorArray._write_many`` validate the values
+:meth:`jvl_gym.MotorArray.write` and the batched ``MotorArray.write_many`` validate the values
 (range, format, shape: ``jvl_gym.registers.formats``) in Python and hand the stored integers of
 one or more registers to :func:`store_rows`, which checks and stores them register by register
 for the selected motors: a plain register after the write rules of

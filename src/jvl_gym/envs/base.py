@@ -33,9 +33,9 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from .. import constants as c
-from ..firmware import regs as R
-from .compiled import OBS_BOUND, all_finite, reset_counters
-from .noise import normals
+from ..engine.driver import all_finite
+from ..noise import normals
+from .compiled import OBS_BOUND, reset_counters
 
 __all__ = ["MotorVectorEnv", "NumpyTaskEnv", "Column", "OBS_BOUND", "ERROR_BITS"]
 #: ERR_STAT bits that end an episode: I2T, FLW, FNC, UIT and position-limit errors (3.2.35)
@@ -163,6 +163,9 @@ class MotorVectorEnv(VectorEnv, ABC):
         self._reward = np.zeros(n)
         self._terminated = np.zeros(n, dtype=np.bool_)
         self._truncated = np.zeros(n, dtype=np.bool_)
+        #: the fields of a ``jvl_gym.engine.Episode`` for the compiled task drivers
+        self._episode = (self._prev_action, self._t, self._noise_key, self._obs, self._reward,
+                         self._terminated, self._truncated)
         self._action_shape = (n, len(self.act_labels))
         self._autoreset = np.zeros(n, dtype=np.bool_)
         self._has_reset = False
@@ -230,7 +233,7 @@ class MotorVectorEnv(VectorEnv, ABC):
     # ------------------------------------------------------------------ helpers for tasks
     def error_bits(self) -> np.ndarray:
         """ERR_STAT error bits that end an episode, (N,) int64 (0 when none is set)."""
-        return self.motors.regs[:, R.ERR_STAT] & ERROR_BITS
+        return self.motors.read_raw("ERR_STAT") & ERROR_BITS
 
     def _type_configs(self, idx: np.ndarray) -> list[Any]:
         """Motor configs of the types of copies ``idx`` (set at their reset)."""
@@ -280,8 +283,9 @@ class MotorVectorEnv(VectorEnv, ABC):
         draws = dict(zip(names, low[:, None] + u[:, :-1].T * span[:, None]))
         type_names = [types[min(int(x * len(types)), len(types) - 1)] for x in u[:, -1].tolist()]
         self._type_names[idx] = type_names
-        reset_counters(idx, keys, self.motors.keys, self._noise_key, self._t, self._prev_action,
+        reset_counters(idx, keys, self._noise_key, self._t, self._prev_action,
                        self._scope_count)
+        self.motors.reseed(keys[:, 0], idx)
         self.motors.reset(index=idx, motor_type=type_names, **self._motor_params(idx, draws))
         self._task_reset(idx, draws, rngs)
         self._observe_copies(idx)

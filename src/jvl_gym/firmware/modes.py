@@ -1,12 +1,12 @@
 """Operating modes: what each mode uses, entry actions, and the mode-change rules (manual 4.4).
 
-Tables (index = MODE_REG value 0..24), from the configuration lists of manual 4.4.1–4.4.25:
+Tables (index = MODE_REG value 0 … N_MODES − 1), derived from the mode table
+(:mod:`jvl_gym.firmware.mode_table`, the configuration lists of manual 4.4.1–4.4.25):
 
 - ``REGULATED``: speed regulator active (the motor is assumed to be moving; a change to INIT goes
   through STOP_MODE, 4.4.2).
 - ``CORRECTING``: "correction of function block: active" (P, GP, AG, COIL, A2POS, APOS, GF).
 - ``FLWERR_MODES``: FLWERR is accumulated (3.2.20; HOME1–3 per 4.4.13–15); zero elsewhere.
-- ``IMPLEMENTED``: modes this build simulates; writing another raises a clear error.
 
 Rules (4.4.1, 4.4.5, 4.4.16, 3.2.35), decided where the manual is silent (docs/model.md):
 INIT → any implemented mode if no blocking error bit (0–3) is set; a regulated mode → INIT goes via
@@ -27,25 +27,20 @@ from . import regs as R
 from .analog_blocks import a2pos_update
 from .coil import coil_entry
 from .homing import home_entry
+from .mode_table import N_MODES, flag_table
 
-N_MODES = 25
-
-
-def _table(modes: set[int]) -> np.ndarray:
-    t = np.zeros(N_MODES, dtype=np.bool_)
-    t[list(modes)] = True
-    return t
-
-
-REGULATED = _table({1, 2, 3, 5, 6, 11, 12, 13, 14, 16, 17, 18, 19, 20, 21, 23, 24})
-CORRECTING = _table({2, 3, 18, 19, 20, 21, 24})
-FLWERR_MODES = _table({1, 2, 3, 5, 6, 12, 13, 14, 16, 17, 18, 19, 20, 21, 24})
-POSITION_INPOS = _table({2, 20, 21})  #: IN_POS = |P_SOLL − P_FNC/16 + FLWERR| < INPOSWIN
-GEAR_INPOS = _table({3, 18, 24})  #: IN_POS = |G_FNC|/16 < INPOSWIN (4.4.4, 4.4.25)
-VELOCITY_INPOS = _table({1})  #: IN_POS per INPOSCNT rules of 4.1.1
-IMPLEMENTED = _table(set(range(25)))
-PASSIVE = _table({0, 15, 8, 22})  #: current regulator passive (equal / test voltages)
-GEAR_MODES = _table({3, 6, 18, 19, 24})  #: modes that divide by GEARF2
+REGULATED = flag_table("regulated")
+CORRECTING = flag_table("correcting")
+FLWERR_MODES = flag_table("flwerr")
+#: IN_POS = |P_SOLL − P_FNC/16 + FLWERR| < INPOSWIN
+POSITION_INPOS = flag_table("in_pos", "position")
+GEAR_INPOS = flag_table("in_pos", "gear")  #: IN_POS = |G_FNC|/16 < INPOSWIN (4.4.4, 4.4.25)
+VELOCITY_INPOS = flag_table("in_pos", "velocity")  #: IN_POS per INPOSCNT rules of 4.1.1
+PASSIVE = flag_table("passive")  #: current regulator passive (equal / test voltages)
+GEAR_MODES = flag_table("gear")  #: modes that divide by GEARF2
+#: current loops on commutated references: not passive, and not MANI_MODE, whose stator field
+#: is set by hand (3.2.128)
+COMMUTATED = ~PASSIVE & (np.arange(N_MODES) != c.MANI_MODE)
 
 
 def member(x: np.ndarray, values: tuple[int, ...] | np.ndarray) -> np.ndarray:
@@ -67,7 +62,6 @@ def in_table(x: np.ndarray, table: np.ndarray) -> np.ndarray:
 
 # request outcome codes (mode_request); 0 = accepted
 OK = 0
-E_NOT_IMPLEMENTED = 1
 E_ERROR_BITS = 2
 E_BREAK = 3
 E_SAFE = 4
@@ -77,7 +71,6 @@ E_INVALID = 7
 E_SPECIAL_OUTSIDE_SAFE = 8
 
 REQUEST_MESSAGES = {
-    E_NOT_IMPLEMENTED: "is not implemented",
     E_ERROR_BITS: "cannot leave INIT_MODE while an error bit (ERR_STAT bits 0–3: I2T_ERR, FLW_ERR, "
     "FNC_ERR, UIT_ERR) is set; clear it by writing ERR_STAT first (manual 4.4.1)",
     E_BREAK: "BREAK_MODE (10) is entered automatically after TESTA_MODE (manual 4.4.11)",
@@ -131,8 +124,8 @@ def enter_mode(r: np.ndarray, s: np.ndarray, new: int) -> None:
         r[R.FNC_OUT] = 0
         r[R.ERR_STAT] &= ~(c.IN_POS | c.ACC_FLAG | c.DEC_FLAG)
         return
-    old_regulated = old < 25 and REGULATED[old]
-    if new < 25 and REGULATED[new] and not old_regulated:
+    old_regulated = old < N_MODES and REGULATED[old]
+    if new < N_MODES and REGULATED[new] and not old_regulated:
         reset_speed_loop(r, s)
         s[L.S_V_OLD] = 0.0
     if new == c.TESTU_MODE:
@@ -177,7 +170,7 @@ def enter_mode(r: np.ndarray, s: np.ndarray, new: int) -> None:
 def stop_to(r: np.ndarray, s: np.ndarray, final: int, emergency: bool) -> None:
     """Bring a motor to ``final`` (INIT or SAFE) the protective way of manual 4.4.1/4.4.5/4.4.12."""
     mode = int(r[R.MODE_REG])
-    if mode < 25 and REGULATED[mode]:
+    if mode < N_MODES and REGULATED[mode]:
         if mode != c.STOP_MODE:
             enter_mode(r, s, c.STOP_MODE)
         s[L.S_PENDING_MODE] = final
@@ -198,7 +191,7 @@ def stop_to(r: np.ndarray, s: np.ndarray, final: int, emergency: bool) -> None:
 def check_request(r: np.ndarray, s: np.ndarray, req: int) -> int:
     """Outcome code of writing ``req`` to MODE_REG now (no change is made)."""
     mode = int(r[R.MODE_REG])
-    if req < 0 or (req > 24 and req < 256) or req > 258:
+    if req < 0 or (N_MODES <= req < c.SAFE_LOAD_DEFAULTS_SAVE) or req > c.SAFE_LOAD_FLASH:
         return E_INVALID
     if mode == c.SAFE_MODE:
         return OK if req >= 256 else E_IN_SAFE
@@ -208,8 +201,6 @@ def check_request(r: np.ndarray, s: np.ndarray, req: int) -> int:
         return E_SAFE
     if req == c.BREAK_MODE:
         return E_BREAK
-    if not IMPLEMENTED[req]:
-        return E_NOT_IMPLEMENTED
     if req == c.INIT_MODE or req == c.STOP_MODE or req == mode:
         return OK
     if mode == c.AT_MODE:

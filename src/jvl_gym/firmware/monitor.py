@@ -23,6 +23,7 @@ from .. import layout as L
 from ..jit import KERNEL
 from . import regs as R
 from .fixed import clamp, rnd
+from .mode_table import N_MODES
 from .modes import GEAR_INPOS, POSITION_INPOS, VELOCITY_INPOS, stop_to
 
 _I2T_FULL = 1.5 * (c.ADC_FULL * c.I2T_FULL_SCALE_AMPLITUDE) ** 2
@@ -87,11 +88,11 @@ def in_position(r: np.ndarray, s: np.ndarray, mode: int) -> None:
     cnt = float(r[R.INPOSCNT])
     inside = False
     counted = True
-    if mode < 25 and POSITION_INPOS[mode]:
+    if mode < N_MODES and POSITION_INPOS[mode]:
         inside = abs(r[R.P_SOLL] - r[R.P_FNC] / 16.0 + r[R.FLWERR]) < win
-    elif mode < 25 and GEAR_INPOS[mode]:  # "|P_FNC|" read as the gear follow error G_FNC
+    elif mode < N_MODES and GEAR_INPOS[mode]:  # "|P_FNC|" read as the gear follow error G_FNC
         inside = abs(s[L.S_G_FNC]) / 16.0 < win
-    elif mode < 25 and VELOCITY_INPOS[mode]:
+    elif mode < N_MODES and VELOCITY_INPOS[mode]:
         if cnt == 0.0:
             inside = abs(float(r[R.V_IST])) < win
             counted = False
