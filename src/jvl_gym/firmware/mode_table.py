@@ -35,7 +35,7 @@ class ModeInfo:
 
     @property
     def correction(self) -> bool:
-        """Function correction active (MODEL.md §5)."""
+        """Function correction active (docs/model.md §8)."""
         return bool(CORRECTING[self.number])
 
 

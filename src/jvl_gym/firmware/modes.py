@@ -8,7 +8,7 @@ Tables (index = MODE_REG value 0..24), from the configuration lists of manual 4.
 - ``FLWERR_MODES``: FLWERR is accumulated (3.2.20; HOME1–3 per 4.4.13–15); zero elsewhere.
 - ``IMPLEMENTED``: modes this build simulates; writing another raises a clear error.
 
-Rules (4.4.1, 4.4.5, 4.4.16, 3.2.35), decided where the manual is silent (docs/model.md):
+Rules (4.4.1, 4.4.5, 4.4.16, 3.2.35), decided where the manual is silent (docs/model.md §9):
 INIT → any implemented mode if no blocking error bit (0–3) is set; a regulated mode → INIT goes via
 STOP_MODE; regulated → regulated switches directly (flying saw, 3.2.9); AT_MODE → anything sets
 torque 0, waits for low speed and goes to INIT; TESTU/TESTA/MANI are entered from INIT only; BREAK

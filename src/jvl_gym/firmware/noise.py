@@ -2,10 +2,9 @@
 
 Each motor owns a 64-bit key. A noise sample is a pure function of (key, inner-sample counter,
 channel), so it does not depend on how many motors share an array, on thread scheduling or on how
-the run is split into calls. Seeding rule (docs/model.md): the key of motor ``i`` of an array made
-with ``seed=s`` is ``motor_keys(s, n)[i]``, i.e. ``SeedSequence(s).spawn(n)[i]``'s first 64-bit
-word;
-a one-motor array given ``seed=[key]`` reproduces it.
+the run is split into calls. Seeding rule (docs/model.md §13): the key of motor ``i`` of an array
+made with ``seed=s`` is ``motor_keys(s, n)[i]``, i.e. ``SeedSequence(s).spawn(n)[i]``'s first
+64-bit word; a one-motor array given ``seed=[key]`` reproduces it.
 """
 
 from __future__ import annotations

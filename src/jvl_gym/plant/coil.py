@@ -1,4 +1,4 @@
-"""Three-phase star-connected coil with floating neutral and sinusoidal back-EMF (MODEL.md §6).
+"""Three-phase star-connected coil, floating neutral, sinusoidal back-EMF (docs/model.md §5.1).
 
 Per phase k ∈ {a, b, c}: ``L di_k/dt = u_k − u_n − R i_k − e_k`` with the neutral ``u_n`` floating
 (Σ i_k = 0) and the magnet flux ``ψ_k = λ sin(θ_e + k·120°)``, so ``e_k = λ ω_e cos(θ_e + k·120°)``.
