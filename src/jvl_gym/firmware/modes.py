@@ -49,8 +49,8 @@ GEAR_MODES = _table({3, 6, 18, 19, 24})  #: modes that divide by GEARF2
 
 
 def member(x: np.ndarray, values: tuple[int, ...] | np.ndarray) -> np.ndarray:
-    """Elementwise ``x ∈ values`` for a few values (np.isin costs ~30 µs on tiny arrays; this
-    runs in every reset and mode write)."""
+    """Elementwise ``x ∈ values`` for a few values (np.isin's fixed overhead dominates on tiny
+    arrays; this runs in every reset and mode write)."""
     out = np.zeros(np.shape(x), dtype=np.bool_)
     for v in values:
         out |= x == v

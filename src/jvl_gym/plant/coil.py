@@ -24,7 +24,7 @@ from ..jit import KERNEL
 from .trig import fma, sincos
 
 SQRT3 = math.sqrt(3.0)
-# Divisions are the slowest arithmetic of the inner sample (~13 cycles of latency, one divider):
+# Divisions are the slowest arithmetic of the inner sample (long latency, one divider per core):
 # constant divisors are multiplications by these reciprocals.
 _THIRD = 1.0 / 3.0
 _INV_SQRT3 = 1.0 / SQRT3

@@ -57,7 +57,7 @@ __all__ = [
 
 _FIXED = (Format.FIXED4, Format.FIXED8)
 #: :func:`to_raw` converts up to this many values one by one as Python floats
-#: (:func:`raws_of_floats`), without numpy's fixed cost per call (~20 µs for a few values)
+#: (:func:`raws_of_floats`), without numpy's fixed cost per call, which dominates for a few values
 _SCALAR_MAX = 16
 _SIGNED16 = (Format.INTEGER, Format.FIXED4, Format.FIXED8)
 
