@@ -131,7 +131,9 @@ def main(argv: list[str] | None = None) -> int:
     from jvl_gym import MotorArray
 
     addresses = list(range(1, args.clients + 1))
-    twin = Twin(MotorArray(args.motor, n=len(addresses), seed=0), addresses)
+    motors = MotorArray(args.motor, n=len(addresses), seed=0)
+    motors.step(1)  # compile (or load) the kernel first: a first compile would outlast timeouts
+    twin = Twin(motors, addresses)
     with TwinServer(twin, tcp=("127.0.0.1", 0)) as server:
         url = server.endpoint("mactalk", "tcp").url
         total, wall = run_load(url, addresses, args.requests)
