@@ -31,6 +31,7 @@ bench: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_sim.py
 	$(BIN)/python benchmarks/bench_protocol.py
 	$(BIN)/python benchmarks/bench_envs.py
+	@echo "figures written to docs/benchmarks.md"
 
 bench-compile: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_compile.py

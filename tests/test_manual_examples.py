@@ -1,4 +1,4 @@
-"""The manual's worked examples (MODEL.md §2 list) as tests."""
+"""The manual's worked examples (docs/model.md §3) as tests."""
 
 from __future__ import annotations
 

@@ -26,7 +26,7 @@ def _run(s0, su, th, w, h, n):
 
 @pytest.mark.parametrize("omega_e", [0.0, 300.0, 2000.0])
 def test_coil_step_is_exact_independent_of_step(omega_e):
-    """One step of 128 µs equals 2, 8, 64 sub-steps to rounding (MODEL.md §6 'show it')."""
+    """One step of 128 µs equals 2, 8, 64 sub-steps to rounding (docs/model.md §5.1)."""
     s0 = complex(3.0, -1.0)
     su = phase_to_vector(10.0, -4.0, -6.0)
     ref, _ = _run(s0, su, 0.3, omega_e, H, 1)

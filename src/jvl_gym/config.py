@@ -1,7 +1,7 @@
 """Motor data and register-set configs: loading and validation.
 
 A *motor config* (``configs/motors/<TYPE>.yaml``) holds the physical data of one motor type
-(MODEL.md §7: representative values, each file carries its ``provenance``). A *setup*
+(docs/model.md §15: representative values, each file carries its ``provenance``). A *setup*
 (``configs/setups/<TYPE>.yaml``) is a register set: register name → value in user units, written
 to the motor after power-on exactly as a user would write it (manual 3, "Parameter and Data
 Description": the default set-up is stored in ROM; a user set-up in flash).
@@ -46,7 +46,7 @@ def configs_dir() -> Path:
 
 
 class MotorConfig(BaseModel):
-    """Physical data of one motor type (SI units). All values are representative (MODEL.md §7)."""
+    """Physical data of one motor type (SI units), representative values (docs/model.md §15)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -74,7 +74,7 @@ class MotorConfig(BaseModel):
 
     @property
     def torque_per_vf(self) -> float:
-        """Motor torque per VF_OUT unit at AMPLITUDE 0.83 [N·m] (manual 4.3, MODEL.md §2)."""
+        """Motor torque per VF_OUT unit at AMPLITUDE 0.83 [N·m] (manual 4.3, docs/model.md §3)."""
         return 1.5 * self.pole_pairs * self.flux_linkage * self.amps_per_count * 1023 * 0.83 / 1023
 
 

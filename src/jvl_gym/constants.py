@@ -1,7 +1,7 @@
 """Fixed facts of the MAC50–141 firmware: rates, units, modes and status bits.
 
 Sources: manual 1.2 (sampled systems), 3.2.2 (MODE_REG), 3.2.35 (ERR_STAT), 3.2.36 (CNTRL_BITS),
-3.2.5/3.2.6/3.2.12 (velocity and acceleration units) and MODEL.md §1–2.
+3.2.5/3.2.6/3.2.12 (velocity and acceleration units) and docs/model.md §2–3.
 """
 
 from __future__ import annotations
@@ -11,20 +11,20 @@ import math
 from .firmware.mode_table import MODE_NAMES as _MODE_NAMES
 from .firmware.mode_table import number as _mode
 
-# --- timing (manual 1.2, MODEL.md §1) --------------------------------------------------------
+# --- timing (manual 1.2, docs/model.md §2) ---------------------------------------------------
 INNER_HZ = 7812.5  #: current loops, commutation, electrics [Hz]
 INNER_PER_OUTER = 15  #: one velocity/position sample = 15 current samples
 OUTER_HZ = INNER_HZ / INNER_PER_OUTER  #: 520.833 Hz
 INNER_DT = 1.0 / INNER_HZ  #: 128 µs
 OUTER_DT = 1.0 / OUTER_HZ  #: 1.92 ms
 
-# --- units (MODEL.md §2) ---------------------------------------------------------------------
+# --- units (docs/model.md §3) ----------------------------------------------------------------
 COUNTS_PER_REV = 4096  #: encoder counts per revolution
 ELDEG_PER_TURN = 2048  #: ELDEG_IST / MAN_ALPHA units per electrical turn (3.2.143)
 RAD_PER_COUNT = 2.0 * math.pi / COUNTS_PER_REV
 VF_FULL = 1023  #: VF_OUT / T_SOLL full scale = peak torque (3.2.7)
 ADC_FULL = 1023  #: IA_IST.. measurement range ±1023 (3.2.139)
-PWM_FULL = 1023  #: UA_VAL.. ±1023 = ±U_SUPPLY/2 phase-to-midpoint (MODEL.md §2 decision)
+PWM_FULL = 1023  #: UA_VAL.. ±1023 = ±U_SUPPLY/2 phase-to-midpoint (docs/model.md §3 decision)
 ANINP_FULL = 1023  #: ±10 V ↔ ±1023 (3.2.122)
 ANINP_VOLTS = 10.0
 U_SUPPLY_VOLTS_PER_UNIT = 0.0537  #: U_SUPPLY register unit (3.2.151)

@@ -3,7 +3,7 @@
 A sample is a pure function of (64-bit key, counter, channel), so noise never depends on how
 many motors or env copies share an array, on thread scheduling, on autoreset order or on how a
 run is split into calls. Motor noise uses the motor's key and its inner-sample counter
-(docs/model.md, "Noise"); observation noise uses an episode key and the env step counter.
+(docs/model.md §13); observation noise uses an episode key and the env step counter.
 
 Seeding rule: the key of motor ``i`` of an array made with ``seed=s`` is
 ``motor_keys(s, n)[i]``, the first 64-bit word of ``SeedSequence(s).spawn(n)[i]``; a one-motor

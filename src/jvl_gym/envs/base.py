@@ -274,7 +274,7 @@ class MotorVectorEnv(VectorEnv, ABC):
         names = self._range_names
         # per copy: the ranges' uniform numbers and the motor type's (the last column), then
         # two full-range uint64 noise keys: what rng.integers(0, 2**64 - 1, size=2,
-        # dtype=np.uint64, endpoint=True) returns (raw draws), a tenth of its cost
+        # dtype=np.uint64, endpoint=True) returns (raw draws), without its per-call overhead
         width = len(names) + 1
         u = np.array([rng.random(width) for rng in rngs]).reshape(idx.size, width)
         keys = np.array([rng.bit_generator.random_raw(2) for rng in rngs],

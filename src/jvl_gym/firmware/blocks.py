@@ -60,7 +60,7 @@ def max_landing_speed(dp: float, a: float) -> float:
 
     This is the manual's ``FNC_OUT = 2·DP/T`` with ``T = V_OLD/A_SOLL`` (4.1.2) made exact for
     the sampled profile, so the block lands on P_SOLL without overshooting its own profile and
-    never divides by zero (MODEL.md §4).
+    never divides by zero (docs/model.md §9).
     """
     if dp <= 0.0:
         return 0.0

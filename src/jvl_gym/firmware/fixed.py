@@ -1,7 +1,7 @@
 """Register arithmetic of the firmware (manual 3.1): rounding, saturation, fixed-point reads.
 
 A value the firmware stores in a register is rounded (half away from zero) and saturated to the
-register's format at the moment it is stored (MODEL.md §3); blocks then read the stored value.
+register's format at the moment it is stored (docs/model.md §4); blocks then read the stored value.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Homing modes HOME1/2/3 (manual 4.4.13–4.4.15, registers 3.2.37–3.2.42).
 
 - HOME1: velocity block at V_HOME with the torque limited to 1.25·|T_HOME| (3.2.41; 4.4.13
-  writes 1.5, which would exceed 1023 for the allowed T_HOME 800 — decision, docs/model.md); a
+  writes 1.5, which would exceed 1023 for the allowed T_HOME 800 — decision, docs/model.md §9); a
   counter counts samples with |VF_OUT| > |T_HOME|; at 50 the mechanical limit is found.
 - HOME2: away from the sensor (−V_HOME) while it is active, towards it (V_HOME) while passive;
   found when it becomes active.

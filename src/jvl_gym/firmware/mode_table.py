@@ -3,7 +3,7 @@
 For every MODE_REG value: its name and section, the function block, the registers the mode reads
 as parameters ("the parameters are interpreted as follows" of 4.4.x), and what its
 configuration list of 4.4.1–4.4.25 says (speed regulator, function correction, current
-regulator), with the model's decisions where the manual is silent (docs/model.md, "Modes").
+regulator), with the model's decisions where the manual is silent (docs/model.md §9).
 The mode numbers of :mod:`jvl_gym.constants`, the boolean tables of
 :mod:`jvl_gym.firmware.modes` used by the compiled firmware, the register reference and the mode
 table of the documentation are all derived from :data:`MODES`.
@@ -31,7 +31,7 @@ class ModeInfo:
         Speed regulator active (4.2): the motor is assumed to be moving; a change to INIT goes
         through STOP_MODE (4.4.2).
     correcting : bool
-        "Correction of function block: active" (docs/model.md, "Function correction").
+        "Correction of function block: active" (docs/model.md §8).
     flwerr : bool
         FLWERR is accumulated (3.2.20; HOME1–3 per 4.4.13–15); zero in the other modes.
     passive : bool
@@ -68,7 +68,7 @@ class ModeInfo:
 
     @property
     def correction(self) -> bool:
-        """Function correction active."""
+        """Function correction active (docs/model.md §8)."""
         return self.correcting
 
 

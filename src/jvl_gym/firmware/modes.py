@@ -8,7 +8,7 @@ Tables (index = MODE_REG value 0 … N_MODES − 1), derived from the mode table
 - ``CORRECTING``: "correction of function block: active" (P, GP, AG, COIL, A2POS, APOS, GF).
 - ``FLWERR_MODES``: FLWERR is accumulated (3.2.20; HOME1–3 per 4.4.13–15); zero elsewhere.
 
-Rules (4.4.1, 4.4.5, 4.4.16, 3.2.35), decided where the manual is silent (docs/model.md):
+Rules (4.4.1, 4.4.5, 4.4.16, 3.2.35), decided where the manual is silent (docs/model.md §9):
 INIT → any implemented mode if no blocking error bit (0–3) is set; a regulated mode → INIT goes via
 STOP_MODE; regulated → regulated switches directly (flying saw, 3.2.9); AT_MODE → anything sets
 torque 0, waits for low speed and goes to INIT; TESTU/TESTA/MANI are entered from INIT only; BREAK
@@ -44,8 +44,8 @@ COMMUTATED = ~PASSIVE & (np.arange(N_MODES) != c.MANI_MODE)
 
 
 def member(x: np.ndarray, values: tuple[int, ...] | np.ndarray) -> np.ndarray:
-    """Elementwise ``x ∈ values`` for a few values (np.isin costs ~30 µs on tiny arrays; this
-    runs in every reset and mode write)."""
+    """Elementwise ``x ∈ values`` for a few values (np.isin's fixed overhead dominates on tiny
+    arrays; this runs in every reset and mode write)."""
     out = np.zeros(np.shape(x), dtype=np.bool_)
     for v in values:
         out |= x == v

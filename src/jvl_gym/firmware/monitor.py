@@ -4,7 +4,7 @@
   with ΣI² = Ia² + Ib² + Ic² averaged over the outer sample [ADC counts²]; I2T = 65535 ↔ the
   three-phase mean square at 1023·0.83 counts amplitude. The default I2TLIM 13107 (0.2 of full
   scale) lets rated current (1/3 of peak → 0.111) run forever and trips at peak after
-  −τ·ln(0.8) = 2.2 s with τ = 10 s (MODEL.md §8; decision, docs/model.md).
+  −τ·ln(0.8) = 2.2 s with τ = 10 s (decision, docs/model.md §10).
 - UIT (3.2.18, 4.5.2): the same filter on the regenerative power ``max(0, −Σ I·U)`` [W];
   UIT = 65535 ↔ 100 W. Trips when UIT > UITLIM *and* the supply is above 52 V.
 - FLWERR / FNCERR (4.5.4, 4.5.5), software limits (4.5.3). Any error goes to INIT_MODE through
@@ -79,10 +79,10 @@ def in_position(r: np.ndarray, s: np.ndarray, mode: int) -> None:
 
     Position modes: ``|P_SOLL − P_FNC/16 + FLWERR| < INPOSWIN`` for INPOSCNT consecutive samples.
     Gear modes: ``|G_FNC|/16 < INPOSWIN`` (4.4.4 writes |P_FNC|, the absolute function position,
-    which cannot be meant: the follow error G_FNC is; docs/model.md).
+    which cannot be meant: the follow error G_FNC is; docs/model.md §10).
     Velocity mode: with INPOSCNT = 0, ``|V_IST| < INPOSWIN``
     (standstill); with INPOSCNT > 0, ``|V_SOLL − 16·V_IST| < INPOSWIN`` for INPOSCNT samples
-    (the 4.1.1 formula; 4.4.2 states it with FLWERR, docs/model.md). Other modes: 0.
+    (the 4.1.1 formula; 4.4.2 states it with FLWERR, docs/model.md §10). Other modes: 0.
     """
     win = float(r[R.INPOSWIN])
     cnt = float(r[R.INPOSCNT])

@@ -10,10 +10,10 @@ Manual 4.2 and the filter registers 3.2.89–3.2.105::
 
 FF_OUT, VB_OUT, VF_OUT are Integer registers: each is rounded and saturated when stored and the
 next block reads the stored value. |VF_OUT| > T_SOLL is limited; in the correcting modes the
-function correction of MODEL.md §5 solves for the FNC_OUT that gives exactly ±T_SOLL
+function correction of docs/model.md §8 solves for the FNC_OUT that gives exactly ±T_SOLL
 (∂VF_OUT/∂FNC_OUT = KVOUT·KVFX4·KFF3), recomputes FF and VF with it so no filter winds up, and
 reports the correction. When limited, the VF output history holds VF_OUT/KVOUT (decision,
-docs/model.md), so the integrator does not wind up in the non-correcting modes either.
+docs/model.md §7), so the integrator does not wind up in the non-correcting modes either.
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ def speed_regulator(r: np.ndarray, s: np.ndarray, f: float, correcting: bool,
     f : float
         FNC_OUT from the function block [1/16 count/sample].
     correcting : bool
-        Function correction active (MODEL.md §5).
+        Function correction active (docs/model.md §8).
     t_limit : float
         Torque limit (T_SOLL, or the mode's own limit) [0..1023].
 

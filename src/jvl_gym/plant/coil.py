@@ -1,4 +1,4 @@
-"""Three-phase star-connected coil with floating neutral and sinusoidal back-EMF (MODEL.md §6).
+"""Three-phase star-connected coil, floating neutral, sinusoidal back-EMF (docs/model.md §5.1).
 
 Per phase k ∈ {a, b, c}: ``L di_k/dt = u_k − u_n − R i_k − e_k`` with the neutral ``u_n`` floating
 (Σ i_k = 0) and the magnet flux ``ψ_k = λ sin(θ_e + k·120°)``, so ``e_k = λ ω_e cos(θ_e + k·120°)``.
@@ -24,7 +24,7 @@ from ..jit import KERNEL
 from .trig import fma, sincos
 
 SQRT3 = math.sqrt(3.0)
-# Divisions are the slowest arithmetic of the inner sample (~13 cycles of latency, one divider):
+# Divisions are the slowest arithmetic of the inner sample (long latency, one divider per core):
 # constant divisors are multiplications by these reciprocals.
 _THIRD = 1.0 / 3.0
 _INV_SQRT3 = 1.0 / SQRT3

@@ -3,7 +3,7 @@
 The encoder count is ``floor(θ·4096/2π)``; P_IST counts from the power-on position. The
 electrical angle ELDEG_IST (2048 per electrical turn) is synchronised to the rotor at power-on:
 the hall-sensor synchronisation of 3.2.124/125 is modelled as already done with offsets that
-match the rotor (docs/model.md).
+match the rotor (docs/model.md §5.3).
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Rigid rotor + load with viscous and Coulomb friction, load torque and end stops (MODEL.md §6).
+"""Rigid rotor + load: viscous and Coulomb friction, load torque, end stops (docs/model.md §5.2).
 
 ``(J_m + J_l) dω/dt = T_em − T_load − b ω − T_c sgn(ω) + T_stop``. The viscous term is integrated
 implicitly, Coulomb friction sticks the rotor when the driving torque is below ``T_c`` (static

@@ -2,7 +2,7 @@
 
 ``C du/dt = i_src − P_motor/u − i_dump``. The source conducts while ``u < U_src`` (it cannot sink
 regenerated energy), the dump resistor switches on above ``U_dump`` and off 1 V below
-(MODEL.md §6, §8: the UIT monitor integrates the regenerative power). Implicit Euler, stable
+(docs/model.md §5.4, §10: the UIT monitor integrates the regenerative power). Implicit Euler, stable
 for any step.
 """
 

@@ -1,8 +1,8 @@
 """Sine and cosine in plain arithmetic (no library call, no branch), for the plant's rotor angle.
 
 The coil needs ``e^{jθe}`` every 128 µs. The C library's ``sincos`` saves and restores the
-floating-point control register on every call (a slow instruction on the development machine's
-AMD cores) and, being a call, keeps the compiler from stepping several motors in SIMD lanes
+floating-point control register on every call (a slow instruction on some x86 cores, AMD's
+among them) and, being a call, keeps the compiler from stepping several motors in SIMD lanes
 (``jvl_gym.lanes``). This is the classic fdlibm method instead:
 
 - reduction to ``r ∈ [−π/4, π/4]``: ``n = round(x·2/π)``, ``r = x − n·π/2`` with π/2 split in

@@ -18,7 +18,7 @@ Grammar (manual 5.1)::
 
 Every field after the sync bytes is *protected*: the byte is followed by its complement.
 
-Decisions where the manual is ambiguous (``docs/protocol.md``, MODEL.md §10):
+Decisions where the manual is ambiguous (``docs/protocol.md``, docs/model.md §16):
 
 * **Byte order.** The text says "big-endian", but both byte examples of 5.1 send the low byte
   first (4711h is sent as 11h, 47h; 3322h as 22h, 33h), as do the MAC800 quick guide ("first
@@ -205,7 +205,7 @@ def encode_write(address: int, register: int, data: bytes) -> bytes:
     """Write ``data`` (2 or 4 bytes, low byte first) to ``register`` (manual 5.1 ``writesync``).
 
     ``<datalength>`` counts data *bytes*, as in the manual's examples (the grammar's "number of
-    dataword" contradicts the examples, which are followed; MODEL.md §10).
+    dataword" contradicts the examples, which are followed; docs/model.md §16).
     """
     if address == MASTER:
         raise ValueError("address 0 is the master; a write to it is a data reply "

@@ -23,7 +23,7 @@ Word order of a LongInt. Manual 3.2 says a LongInt "takes up two register number
 corresponding to two words", e.g. P_SOLL is registers 3 and 4 (3.2.3/3.2.4). The manual does not
 say which word is which; its MacTalk example (chapter 5.1) reads register 7 "as if it is longint
 format" and returns register 7's value 4711h first, then register 8. Together with the low-byte
-first byte examples (MODEL.md §10) this reads as little-endian throughout: register N holds the
+first byte examples (docs/model.md §16) this reads as little-endian throughout: register N holds the
 **low** word and N+1 the **high** word, and on the line the low word comes first. So
 0x00054711 is (0x4711, 0x0005) and −1 is (0xFFFF, 0xFFFF). (The manual's text says
 "big-endian"; the examples contradict it and are followed — a real motor is the final judge.)
@@ -57,7 +57,7 @@ __all__ = [
 
 _FIXED = (Format.FIXED4, Format.FIXED8)
 #: :func:`to_raw` converts up to this many values one by one as Python floats
-#: (:func:`raws_of_floats`), without numpy's fixed cost per call (~20 µs for a few values)
+#: (:func:`raws_of_floats`), without numpy's fixed cost per call, which dominates for a few values
 _SCALAR_MAX = 16
 _SIGNED16 = (Format.INTEGER, Format.FIXED4, Format.FIXED8)
 
@@ -248,7 +248,7 @@ def from_raw(reg: Register, raw: Any) -> np.ndarray:
 
 
 def saturate_raw(reg: Register, x: Any) -> np.ndarray:
-    """Round and saturate a firmware result to the register, without raising (MODEL.md §3).
+    """Round and saturate a firmware result to the register, without raising (docs/model.md §4).
 
     This is what a store by the firmware does: ``clip(round_half_away(x · scale), raw_min,
     raw_max)``. ``x`` is in user units (for Word/Integer/LongInt that is the raw unit). NaN is

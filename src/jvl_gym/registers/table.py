@@ -1,4 +1,4 @@
-"""The register table of one motor family, kept as data (manual 3.2, MODEL.md §3).
+"""The register table of one motor family, kept as data (manual 3.2, docs/model.md §4).
 
 The table lives in a CSV file next to this module (``mac050_141.csv`` for the MAC50/95/140/141),
 one row per register number. A LongInt register N (manual 3.1: "registers of the format LongInt
