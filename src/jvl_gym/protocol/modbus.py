@@ -4,12 +4,12 @@ small state objects, bytes in / bytes out, no I/O and no register names.
 Frames (MIS manual §12.4, §12.5; the CRC-16 and the exception reply are those of the Modbus
 specification the manual refers to, §12.1)::
 
-    read request   <slave> 03h <index hi> <index lo> <count hi> <count lo>           <crc lo> <crc hi>
-    read reply     <slave> 03h <bytes = 2·count> <word hi> <word lo> …               <crc lo> <crc hi>
+    read request   <slave> 03h <index hi> <index lo> <count hi> <count lo>       <crc lo> <crc hi>
+    read reply     <slave> 03h <bytes = 2·count> <word hi> <word lo> …           <crc lo> <crc hi>
     write request  <slave> 10h <index hi> <index lo> <count hi> <count lo> <bytes = 2·count>
-                   <word hi> <word lo> …                                             <crc lo> <crc hi>
-    write reply    <slave> 10h <index hi> <index lo> <count hi> <count lo>           <crc lo> <crc hi>
-    exception      <slave> <function | 80h> <exception code>                         <crc lo> <crc hi>
+                   <word hi> <word lo> …                                         <crc lo> <crc hi>
+    write reply    <slave> 10h <index hi> <index lo> <count hi> <count lo>       <crc lo> <crc hi>
+    exception      <slave> <function | 80h> <exception code>                     <crc lo> <crc hi>
 
 Addressing (MIS manual §12.3): every motor register *n* is 32 bits wide and appears as two 16-bit
 Modbus words, the **low word first** (at index 2n) and the high word at 2n + 1, each word
