@@ -128,6 +128,11 @@ class ExceptionCode(enum.IntEnum):
     ILLEGAL_DATA_ADDRESS = 2  #: no such register, unaligned write, unconfigured PDO entry
     ILLEGAL_DATA_VALUE = 3  #: word count 0 or above 16, byte count ≠ 2·count, bad frame length
     SERVER_DEVICE_FAILURE = 4  #: the register refused the value for another reason
+    ACKNOWLEDGE = 5
+    SERVER_DEVICE_BUSY = 6
+    MEMORY_PARITY_ERROR = 8
+    GATEWAY_PATH_UNAVAILABLE = 10
+    GATEWAY_TARGET_FAILED = 11
 
 
 class ModbusError(Exception):
@@ -217,7 +222,7 @@ class ExceptionResponse:
 
     slave: int
     function: int
-    code: int  #: an :class:`ExceptionCode` when it is one of 1..4
+    code: int  #: an :class:`ExceptionCode` when it is one of the specification's
 
 
 Response = ReadResponse | WriteResponse | ExceptionResponse
