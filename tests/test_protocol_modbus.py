@@ -354,6 +354,17 @@ def test_timeout_event_only_and_disabled():
     assert bus.slaves[0].stats["timeout"] == 0 and dev.values[V_SOLL] == 10000
 
 
+def test_register_numbers_come_from_the_mapping():
+    """Nothing MIS-specific in the slave: another mapping, other registers."""
+    regs = ModbusRegisters(timeout=1000, timeout_action=1001, max_velocity=7)
+    dev = RegisterFile(1, {7: 500, 1000: 20, 1001: 1, 199: 0, 200: 0})
+    bus = ModbusBus(dev, regs)
+    reply(bus, mb.encode_read_request(1, 14, 2), now=0.0)
+    bus.poll(0.05)
+    assert dev.values[7] == 0 and dev.writes == [(7, 0)]
+    assert ModbusSlave(dev).serial_format() == mb.SerialFormat(19200, "N", 1)
+
+
 def test_serial_format_and_reply_delay():
     dev = mis_device(42, r146=4, r121=0b10_1001)  # 115200 baud, even parity, 2 stop bits
     slave = ModbusSlave(dev, MIS_REGISTERS)
