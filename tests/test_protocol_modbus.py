@@ -499,6 +499,34 @@ def test_switching_session_routes_bytes():
     assert s.flush() == b"" and s.feed(b"x") == b"mactalk"
 
 
+def test_switching_session_served_over_tcp():
+    """MacTalk first; after a silence (shortened to 0.2 s here) Modbus on the same stream."""
+    import socket
+
+    dev = mis_device(42, r10=123456789, r121=1)
+    bus = ModbusBus(dev, MIS_REGISTERS)
+
+    def make():
+        switch = ProtocolSwitch.for_device(dev, 121, now=time.monotonic(), quiet=0.2)
+        return SwitchingSession(Recorder("mactalk"), ModbusSession(bus), switch)
+
+    with ModbusServer(bus=bus, tcp=("127.0.0.1", 0), make_session=make) as srv, \
+            socket.create_connection(("127.0.0.1", srv.endpoint("modbus", "tcp").port),
+                                     timeout=2) as conn:
+        conn.sendall(b"\x50\x50\x50")
+        assert conn.recv(64) == b"mactalk"
+        session = srv.sessions[0]
+        deadline = time.monotonic() + 5
+        while session.active != ActiveProtocol.MODBUS and time.monotonic() < deadline:
+            time.sleep(0.05)  # the server's receive timeouts poll the switch
+        assert session.active == ActiveProtocol.MODBUS
+        conn.sendall(mb.append_crc(READ_42))
+        got = b""
+        while len(got) < 9:
+            got += conn.recv(64)
+        assert got == mb.append_crc(READ_42_REPLY)
+
+
 # ----------------------------------------------------------------------------- fuzzing
 def valid_frames() -> st.SearchStrategy[bytes]:
     slave = st.sampled_from([0, 42, 43])

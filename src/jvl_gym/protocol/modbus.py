@@ -759,7 +759,8 @@ class RtuFramer:
             decode_request(data)
         except FrameError as exc:
             return exc
-        return FrameError("frame ended", "truncated", data=data)  # pragma: no cover
+        return FrameError(f"{len(data)} bytes ended by a silence before the length their "
+                          "function needs", "truncated", data=data)
 
     def flush(self) -> list[bytes | FrameError]:
         """A silence of 3.5 characters: whatever is held is a bad frame, reported and dropped."""

@@ -132,11 +132,14 @@ class RegisterFile:
         self.writes: list[tuple[int, int]] = []
 
     def read(self, number: int) -> int:
+        """The value of register ``number``; :class:`UnknownRegisterError` if there is none."""
         if number not in self.values:
             raise UnknownRegisterError(f"no register {number}")
         return self.values[number]
 
     def write(self, number: int, value: int) -> None:
+        """Set register ``number`` to ``value``, or raise a :class:`RegisterError` subclass
+        (unknown, read-only, out of range) and change nothing."""
         if number not in self.values:
             raise UnknownRegisterError(f"no register {number}")
         if number in self.read_only:
@@ -259,6 +262,7 @@ class ModbusSlave:
 
     @property
     def node_id(self) -> int:
+        """The device's slave address now."""
         return int(self.device.node_id)
 
     def power_on(self) -> None:
@@ -632,6 +636,7 @@ class SwitchingSession:
 
     @property
     def active(self) -> ActiveProtocol:
+        """The protocol the channel speaks now."""
         return self.switch.state
 
     def _session(self, state: ActiveProtocol) -> _Stream:
@@ -674,6 +679,9 @@ class ModbusServer(TwinServer):
         silences whatever its value.
     poll_interval : float
         Period of the timeout watchdog [s].
+    make_session : callable or None
+        Factory of the session of each stream (default: a :class:`ModbusSession` on ``bus``);
+        e.g. a :class:`SwitchingSession` to serve MacTalk and Modbus on one channel.
     """
 
     twin: Any = None
@@ -681,7 +689,8 @@ class ModbusServer(TwinServer):
     frame_timeout: float = 0.05
     bus: ModbusBus | None = None
     poll_interval: float = 0.01
-    sessions: list[ModbusSession] = field(default_factory=list)
+    make_session: Callable[[], Any] | None = None
+    sessions: list[Any] = field(default_factory=list)
 
     def start(self) -> ModbusServer:
         """Open the endpoints and start the threads; return self."""
@@ -696,9 +705,9 @@ class ModbusServer(TwinServer):
             self._spawn(self._clock, "twin-clock")
         return self
 
-    def _session(self) -> ModbusSession:
+    def _session(self) -> Any:
         assert self.bus is not None
-        s = ModbusSession(self.bus)
+        s = self.make_session() if self.make_session is not None else ModbusSession(self.bus)
         self.sessions.append(s)
         return s
 
