@@ -29,6 +29,7 @@ from jvl_gym.protocol.modbus_server import (
     RegisterAccess,
     RegisterFile,
     SwitchingSession,
+    exception_code,
 )
 
 EC = mb.ExceptionCode
@@ -279,6 +280,14 @@ def test_refusal_with_own_exception_code():
     dev = Refusing(1, {3: 0})
     out = reply(ModbusBus(dev), mb.encode_write_request(1, 6, [1, 0]))
     assert mb.decode_response(out) == mb.ExceptionResponse(1, 0x10, 6)
+
+
+def test_exception_code_mapping():
+    from jvl_gym.registers import RegisterError
+
+    assert exception_code(KeyError(5)) == EC.ILLEGAL_DATA_ADDRESS
+    assert exception_code(RegisterError("mode")) == EC.SERVER_DEVICE_FAILURE
+    assert exception_code(ValueError("other")) == EC.SERVER_DEVICE_FAILURE
 
 
 # ----------------------------------------------------------------------------- broadcast, bus

@@ -210,14 +210,15 @@ MIS_REGISTERS = ModbusRegisters(setup=121, baud=146, timeout=199, timeout_action
 def exception_code(exc: BaseException) -> mb.ExceptionCode:
     """The exception code that answers a device's refusal.
 
-    An attribute ``modbus_exception`` on the error wins; otherwise unknown and read-only
-    registers give ILLEGAL_DATA_ADDRESS (2), a value out of range ILLEGAL_DATA_VALUE (3), any
-    other refusal (e.g. a mode that forbids the write) SERVER_DEVICE_FAILURE (4).
+    An attribute ``modbus_exception`` on the error wins; otherwise unknown registers
+    (:class:`UnknownRegisterError` or any ``LookupError``) and read-only ones give
+    ILLEGAL_DATA_ADDRESS (2), a value out of range ILLEGAL_DATA_VALUE (3), any other refusal
+    (e.g. a mode that forbids the write) SERVER_DEVICE_FAILURE (4).
     """
     code = getattr(exc, "modbus_exception", None)
     if code is not None:
         return mb.ExceptionCode(code)
-    if isinstance(exc, (UnknownRegisterError, ReadOnlyRegisterError)):
+    if isinstance(exc, (UnknownRegisterError, LookupError, ReadOnlyRegisterError)):
         return mb.ExceptionCode.ILLEGAL_DATA_ADDRESS
     if isinstance(exc, RegisterRangeError):
         return mb.ExceptionCode.ILLEGAL_DATA_VALUE
