@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 	touch $@
 
 $(STAMP_RL): $(STAMP)
-	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks]"
+	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks,test]"
 	touch $@
 
 setup: $(STAMP)
