@@ -22,7 +22,8 @@ def _reference(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, plan):
     for t in range(n_outer):
         for i in range(regs.shape[0]):
             if plan.shape[0] > 0:
-                inputs[i] = plan[t, i]
+                for k in range(inputs.shape[1]):
+                    inputs[i, k] = plan[t, i, k]
             outer_firmware(regs[i], state[i], params[i], inputs[i], keys[i],
                            buf[i] if rec else buf[0], rec, fmt)
         for i in range(regs.shape[0]):

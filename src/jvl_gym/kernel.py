@@ -1,6 +1,6 @@
 """The simulation kernel: one outer sample (1.92 ms) = firmware outer step + 15 inner samples.
 
-Order within an outer sample (manual 1.2 sampled-system convention, MODEL.md §1 and §4):
+Order within an outer sample (manual 1.2 sampled-system convention, docs/model.md §2):
 
 1. read the encoder: ``V_IST = ΔP``, ``P_IST += V_IST``; read the world inputs (ANINP, V_EXT,
    U_SUPPLY); process REWINDBIT / re-synchronisation bits;
@@ -265,7 +265,7 @@ def plant_sample(theta: float, omega: float, acc: float, i_re: float, i_im: floa
                  r_phase: float, lam: float, j: float, coulomb: float, stop_lo: float,
                  stop_hi: float, stop_k: float, stop_d: float, load: float, noise_torque: float,
                  u_supply: float, u_dump: float, k_coil: tuple, k_mech: tuple, k_bus: tuple):
-    """The plant over one inner sample (MODEL.md §6): PWM counts ``ua, ub, uc`` on the bus
+    """The plant over one inner sample (docs/model.md §5): PWM counts ``ua, ub, uc`` on the bus
     drive the coil, the torque the rotor, the coil's power the DC bus.
 
     Returns ``(theta1, omega1, i_re1, i_im1, ubus1, dump_on1, p_el, p_cu, e_fric, e_dump,
@@ -307,9 +307,9 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     The reference form, one motor at a time; :func:`jvl_gym.lanes.inner_samples` runs the
     same operations for the motors of a block in SIMD lanes when they need none of the
     per-motor branches (hall synchronisation, noise, inner-rate recording, passive and test
-    modes). Inlined into the 15-sample loop of :func:`inner_samples_one`: as a call it
-    received its six arrays as ~45 separate machine words (numba passes an array's fields one
-    by one), on every sample.
+    modes). Inlined into the 15-sample loop of :func:`inner_samples_one`: as a call it would
+    receive each of its six arrays field by field (numba passes an array's fields one by one)
+    on every sample (docs/model.md §17).
     ``counts_per_amp`` (ADC counts per ampere) and the plant factors ``k_coil``, ``k_mech`` and
     ``k_bus`` (``coil_constants``, ``mech_constants``, ``bus_constants`` of ``jvl_gym.plant``)
     depend on the motor's parameters only: the caller computes them once per call, not nine
@@ -425,11 +425,9 @@ def inner_samples_one(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray
     cannot put into SIMD lanes.
 
     A function of its own, not inlined into ``inner_samples``: numba's inliner copies the
-    whole scope of the caller for every block of an inlined function, so the 15-sample loop
-    inlined there beside the two inlined lane samples cost about 28 of the 48 s that
-    ``inner_samples`` took to compile (2026-12-02; compile times vary by ±30 % from run to
-    run). The call costs one argument transfer per motor and outer sample, on the slow path
-    only.
+    whole scope of the caller for every block of an inlined function, so inlining this loop
+    beside the two inlined lane samples would multiply ``inner_samples``' compile time. The
+    call costs one argument transfer per motor and outer sample, on the slow path only.
     """
     counts_per_amp, k_coil, k_mech, k_bus = sample_constants(p)
     for _k in range(c.INNER_PER_OUTER):

@@ -1,4 +1,4 @@
-"""The inner samples of a block of :data:`LANES` motors in SIMD lanes (MODEL.md §1, §4).
+"""The inner samples of a block of :data:`LANES` motors in SIMD lanes (docs/model.md §2, §17).
 
 The engine's driver (``jvl_gym.engine.driver``) advances motors in blocks: the firmware's
 outer step of every motor of the block, one motor at a time, then the block's 15 inner samples

@@ -26,15 +26,16 @@ _THREADED = 32
 def compile_motors() -> float:
     """Compile the motor array's paths: stepping (serial and threaded), register writes and a
     test-mode record. Returns the wall time [s]."""
+    from . import constants as c
     from .sim import MotorArray
 
     start = time.perf_counter()
     for n in (1, _THREADED):
         m = MotorArray("MAC140", n=n, seed=0)
-        m.write_many({"V_SOLL": 100, "MODE_REG": 1})
+        m.write("MODE_REG", c.TESTA_MODE)  # records: allocates and fills the sample buffer
         m.step(2)
-        m.write("MODE_REG", 0)
-        m.write("MODE_REG", 15)  # TESTA: allocates and fills the sample buffer
+        m = MotorArray("MAC140", n=n, seed=0)
+        m.write_many({"V_SOLL": 100, "MODE_REG": c.V_MODE})
         m.step(2)
     return time.perf_counter() - start
 
