@@ -172,7 +172,7 @@ def _motor_file(tmp_path, **changes):
     ("pole_pairs", 2.5), ("rotor_inertia", "heavy"), ("thermal_time_constant", 1e-9),
     ("dump_voltage", 30.0), ("peak_torque", 0.1), ("motor_type_code", 1.5),
     ("amps_per_count", [1]), ("name", 5), ("dump_resistance", 1e-9), ("flux_linkage", 1e-12),
-    ("phase_inductance", 1e-12), ("rated_speed_rpm", float("inf")),
+    ("phase_inductance", 1e-12), ("rated_speed_rpm", float("inf")), ("rotor_inertia", 2e-6),
 ])
 def test_motor_config_values_are_checked_at_load(tmp_path, field, value):
     path = _motor_file(tmp_path, **{field: value})

@@ -98,9 +98,11 @@ class MotorConfig(BaseModel):
     Every physical value must be a finite number of its type (a bool, a string or an infinity
     is refused) inside the interval given here: physically plausible for an integrated servo of
     this class and inside the region where the simulation's integration is stable. The DC bus
-    takes the motor power explicitly over an inner sample (``jvl_gym.plant.supply``), so a bus
-    capacitance below 100 µF lets the bus voltage oscillate and diverge; the end stops are
-    explicit springs of 50 N·m/rad, stable for rotor inertias from 1e-6 kg·m².
+    takes the motor power explicitly over an inner sample (``jvl_gym.plant.supply``): a bus
+    capacitance of a few µF lets the bus voltage diverge, so at least 100 µF is required. The
+    end stops' damping (0.05 N·m·s/rad by default, ``jvl_gym.plant.mechanics``) is explicit
+    over an inner sample of 128 µs and diverges for a total inertia below about 3.2e-6 kg·m²,
+    so the rotor inertia is at least 5e-6 kg·m².
     """
 
     model_config = ConfigDict(extra="forbid", frozen=True)
@@ -110,8 +112,8 @@ class MotorConfig(BaseModel):
     rated_torque: Real = Field(gt=0, le=100.0, description="N·m")
     peak_torque: Real = Field(gt=0, le=300.0, description="N·m at T_SOLL = 1023, >= rated")
     rated_speed_rpm: Real = Field(gt=0, le=20000.0)
-    rotor_inertia: Real = Field(ge=1e-6, lt=1.0, description="J_m, kg·m²")
-    flux_linkage: Real = Field(ge=1e-4, lt=1.0, description="λ, V·s")
+    rotor_inertia: Real = Field(ge=5e-6, lt=1.0, description="J_m, kg·m²")
+    flux_linkage: Real = Field(ge=1e-4, le=0.2, description="λ, V·s")
     phase_resistance: Real = Field(ge=1e-3, lt=100.0, description="Ω per phase")
     phase_inductance: Real = Field(ge=1e-6, lt=1.0, description="H per phase")
     amps_per_count: Real = Field(ge=1e-5, lt=1.0, description="A per ADC count")
