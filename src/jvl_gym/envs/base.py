@@ -455,8 +455,8 @@ class MotorVectorEnv(VectorEnv, ABC):
                 for i in idx:
                     final[i] = obs[i].copy()
                 self._reset_envs(idx, [None] * idx.size, None)
-                infos = {"final_obs": final, "_final_obs": done.copy(),
-                         "final_info": {}, "_final_info": done.copy()}
+                infos.update({"final_obs": final, "_final_obs": done.copy(),
+                              "final_info": {}, "_final_info": done.copy()})
         self._autoreset = terminated | truncated
         return self._obs.copy(), reward, terminated, truncated, infos
 

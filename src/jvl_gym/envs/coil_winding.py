@@ -382,6 +382,18 @@ class CoilWindingVectorEnv(MotorVectorEnv):
                    self.centres, self._summary, self._obs, self._reward, self._terminated,
                    self._truncated)
 
+    def _termination_reasons(self, idx: np.ndarray) -> list[str]:
+        """The coil is complete (all layers wound) or a motor error bit is set."""
+        out = []
+        for i in idx.tolist():
+            why = []
+            if self.coil[i, _C_LAYER] >= self._k[_N_LAYERS]:
+                why.append(f"coil complete: {int(self._k[_N_LAYERS])} layers wound")
+            if self._error_reason(i):
+                why.append(self._error_reason(i))
+            out.append("; ".join(why) or "terminated by the task")
+        return out
+
     def _observe_copies(self, idx: np.ndarray) -> None:
         _observe_rows(idx, self.motors.regs, self.motors.state, self._prev_action, self._t,
                       self._noise_key, self.coil, self.h, self._k, self._summary, self._obs)
