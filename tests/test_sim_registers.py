@@ -13,6 +13,7 @@ from jvl_gym.registers import (
     RegisterRangeError,
     UnknownRegisterError,
 )
+from jvl_gym.registers.formats import whole_only
 
 
 @pytest.fixture()
@@ -56,13 +57,19 @@ def test_python_scalars_convert_like_arrays(m):
         if reg.access.value != "rw":
             continue
         lo, hi = reg.raw_min / reg.scale, reg.raw_max / reg.scale
-        for x in [lo, hi, (reg.raw_max - 0.5) / reg.scale, *rng.uniform(lo, hi, 5)]:
+        xs = [lo, hi, (reg.raw_max - 0.5) / reg.scale, *rng.uniform(lo, hi, 5)]
+        if whole_only(reg):  # codes take whole numbers only
+            xs = [float(np.clip(np.round(x), lo, hi)) for x in xs]
+        for x in xs:
             for value in (float(x), int(x)):
                 np.testing.assert_array_equal(m._validated_raw(reg, value, 3),
                                               m._validated_raw(reg, np.full(3, value), 3))
         for bad in (hi + 1.0, float("nan"), float("inf")):
-            with pytest.raises(RegisterRangeError, match=r"\(and 2 more\)"):
+            with pytest.raises(RegisterRangeError) as info:  # one value, broadcast: one error
                 m._validated_raw(reg, bad, 3)
+            assert "more" not in str(info.value)
+            with pytest.raises(RegisterRangeError, match=r"\(and 2 more\)"):
+                m._validated_raw(reg, np.full(3, bad), 3)
 
 
 def testwrite_many_equals_writes_in_order(m):
@@ -229,6 +236,9 @@ def _random_values(m, rng, regs, size):
             value = float(rng.uniform(lo, hi))
         else:
             value = rng.uniform(lo, hi, size)
+        if whole_only(reg):  # codes take whole numbers only
+            value = np.clip(np.round(value), lo, hi)
+            value = float(value) if np.ndim(value) == 0 else value
         values[reg.name] = value
     return values
 

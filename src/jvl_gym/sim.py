@@ -43,9 +43,17 @@ from .registers import (
     ReadOnlyRegisterError,
     Register,
     RegisterError,
+    RegisterRangeError,
     RegisterShapeError,
 )
-from .registers.formats import from_raw, raw_bounds, raws_of_floats, raws_of_rows, to_raw
+from .registers.formats import (
+    from_raw,
+    raw_bounds,
+    raws_of_floats,
+    raws_of_rows,
+    real_values,
+    to_raw,
+)
 from .store import store_rows
 
 __all__ = ["MotorArray", "ModeError", "PARAMETER_KEYWORDS", "driver"]
@@ -122,7 +130,7 @@ class _StorePlan(NamedTuple):
     mode_rows: tuple[int, ...]  #: positions of MODE_REG
     one_by_one: bool  #: stored register by register (a register-mode pointer, CNTRL_BITS)
     writable: bool  #: every register is read-write
-    bounds: np.ndarray  #: (K, 5) conversion constants (``registers.formats.raw_bounds``)
+    bounds: np.ndarray  #: (K, 6) conversion constants (``registers.formats.raw_bounds``)
 
     @classmethod
     def of(cls, regs: tuple[Register, ...]) -> _StorePlan:
@@ -134,7 +142,7 @@ class _StorePlan(NamedTuple):
                    tuple(k for k, num in enumerate(nums) if num == R.MODE_REG),
                    any(num in W.POINTERS or num == R.CNTRL_BITS for num in nums), writable,
                    np.array([raw_bounds(reg) for reg in regs] if writable else [],
-                            dtype=np.float64).reshape(-1, 5))
+                            dtype=np.float64).reshape(-1, 6))
 
 
 @functools.lru_cache(maxsize=64)
@@ -160,27 +168,101 @@ def _raise_bad_value(names: tuple[str, ...], values: np.ndarray, given: list[Any
     raise ValueError(f"{name}: values must be {_RULE_TEXT[rule]}, got {val!r}")
 
 
+def _bad_index(index: Any, n: int, why: str) -> RegisterShapeError:
+    """The error of a motor index ``index`` that is not one (``why``), nothing changed."""
+    return RegisterShapeError(
+        f"index {index!r} {why}: a motor index is None (all motors), an integer in "
+        f"{-n}..{n - 1}, a sequence or integer array of distinct ones, a slice, or a boolean mask "
+        f"of shape ({n},). Nothing was changed.")
+
+
 def _as_index(index: Any, n: int) -> np.ndarray:
-    """Normalise ``index`` (None, int, slice, bool mask, int array) to sorted int64 indices."""
+    """Normalise ``index`` to (M,) int64 indices of distinct motors, in the order given.
+
+    Accepted: None (all motors), a Python or numpy integer in ``-n..n-1`` (negative counts from
+    the end), a slice, a sequence or integer array (0-d or 1-d) of such integers without
+    repeats, a boolean mask of shape (n,).
+
+    Raises
+    ------
+    RegisterShapeError
+        For anything else: a float, bool, str, complex, an integer out of range, a repeated
+        motor, a mask of the wrong shape, a multi-dimensional array.
+    """
     if (type(index) is np.ndarray and index.dtype == np.int64 and index.ndim == 1
             and 0 < index.size <= _FEW):  # a few indices (an env's reset): no numpy reductions
         few = index.tolist()
-        if min(few) >= 0 and max(few) < n:
+        if min(few) >= 0 and max(few) < n and len(set(few)) == len(few):
             return index
     if index is None:
         return np.arange(n, dtype=np.int64)
     if isinstance(index, slice):
-        return np.arange(n, dtype=np.int64)[index]
-    arr = np.asarray(index)
+        try:
+            return np.arange(n, dtype=np.int64)[index]
+        except (TypeError, ValueError, IndexError) as exc:
+            raise _bad_index(index, n, "is not a slice of whole numbers") from exc
+    if isinstance(index, (bool, np.bool_)):
+        raise _bad_index(index, n, "is a truth value, not a motor")
+    if isinstance(index, (int, np.integer)):
+        k = int(index)
+        if not -n <= k < n:
+            raise _bad_index(index, n, f"is out of range for {n} motors")
+        return np.array([k + n if k < 0 else k], dtype=np.int64)
+    if isinstance(index, (str, bytes, bytearray, float, complex, np.floating,
+                          np.complexfloating)):
+        raise _bad_index(index, n, "is not an integer")
+    try:
+        arr = np.asarray(index)
+    except (TypeError, ValueError) as exc:  # a ragged sequence
+        raise _bad_index(index, n, "is not a sequence of integers") from exc
     if arr.dtype == np.bool_:
         if arr.shape != (n,):
-            raise RegisterShapeError(f"boolean index must have shape ({n},), got {arr.shape}")
+            raise RegisterShapeError(f"boolean index must have shape ({n},), got {arr.shape}. "
+                                     "Nothing was changed.")
         return np.flatnonzero(arr).astype(np.int64)
-    arr = np.atleast_1d(arr).astype(np.int64)
-    low, high = (arr.min(), arr.max()) if arr.ndim == 1 and arr.size else (0, 0)
-    if arr.ndim != 1 or low < -n or high >= n:
-        raise RegisterShapeError(f"index {index!r} out of range for {n} motors")
-    return np.where(arr < 0, arr + n, arr) if low < 0 else arr
+    if arr.ndim > 1:
+        raise _bad_index(index, n, f"has shape {arr.shape}, not one dimension")
+    if arr.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    if arr.dtype.kind not in "iu":
+        raise _bad_index(index, n, f"is not made of integers (dtype {arr.dtype})")
+    arr = arr.reshape(-1)
+    low, high = int(arr.min()), int(arr.max())
+    if low < -n or high >= n:
+        raise _bad_index(index, n, f"is out of range for {n} motors")
+    out = arr.astype(np.int64)
+    if low < 0:
+        out = np.where(out < 0, out + n, out)
+    if out.size > 1 and not np.all(out[1:] > out[:-1]) and np.unique(out).size != out.size:
+        raise _bad_index(index, n, "names a motor more than once")
+    return out
+
+
+def _motor_index(index: Any, n: int, what: str) -> int:
+    """The one motor ``index`` (an integer in ``-n..n-1``) as 0..n-1, for method ``what``."""
+    if isinstance(index, (bool, np.bool_)) or not isinstance(index, (int, np.integer)):
+        raise RegisterShapeError(f"{what}: the motor index must be an integer in {-n}..{n - 1}, "
+                                 f"got {index!r}")
+    k = int(index)
+    if not -n <= k < n:
+        raise RegisterShapeError(f"{what}: motor {k} is out of range for {n} motors "
+                                 f"({-n}..{n - 1})")
+    return k % n
+
+
+def _outer_count(n_outer: Any, what: str) -> int:
+    """``n_outer`` as a non-negative whole number of outer samples (ValueError otherwise)."""
+    if type(n_outer) is int and n_outer >= 0:
+        return n_outer
+    try:
+        ok = (not isinstance(n_outer, (bool, np.bool_, str, bytes)) and n_outer >= 0
+              and int(n_outer) == n_outer)
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise ValueError(f"{what}: n_outer must be a non-negative whole number of outer "
+                         f"samples, got {n_outer!r}")
+    return int(n_outer)
 
 
 class MotorArray:
@@ -264,12 +346,36 @@ class MotorArray:
 
     # ------------------------------------------------------------------ configuration
     def _rom_image(self, cfg: MotorConfig, setup: Any) -> np.ndarray:
-        """ROM defaults of one motor type: the table defaults with the type's setup applied."""
+        """ROM defaults of one motor type: the table defaults with the type's setup applied.
+
+        The setup is validated as :meth:`load_setup` validates it (no MODE_REG, no read-only
+        register, values in range, the firmware's write rules in the order given); a refusal
+        raises the :class:`RegisterError` naming the setup.
+        """
         image = self.table.default_raw_array.astype(np.int64).copy()
-        setup_cfg = load_setup(setup if setup is not None else cfg.setup)
-        for name, value in setup_cfg.registers.items():
-            reg = self.table.lookup(name)
-            image[reg.number] = int(to_raw(reg, value))
+        source = setup if setup is not None else cfg.setup
+        setup_cfg = load_setup(source)
+        row = image[None]  # a one-motor register bank over ``image``
+        first = np.zeros(1, dtype=np.int64)
+        try:
+            self._check_setup_keys(setup_cfg.registers)
+            for name, value in setup_cfg.registers.items():
+                reg = self._lookup(name)
+                raw = self._validated_raw(reg, value, 1)
+                problem = W.check_write(row, first, reg.number, raw)
+                if problem is not None:
+                    raise RegisterError(f"{reg.name} (register {reg.number}) = {value!r} "
+                                        f"refused: {problem}")
+                if reg.number in W.POINTERS:
+                    W.apply_pointer(row, first, reg.number, raw)
+                elif reg.format == Format.LONGINT_HIGH:
+                    full = (int(raw[0]) << 16) | (int(image[reg.number - 1]) & 0xFFFF)
+                    image[reg.number - 1] = ((full + 2**31) % 2**32) - 2**31
+                else:
+                    image[reg.number] = raw[0]
+        except RegisterError as exc:
+            where = "setup mapping" if isinstance(source, Mapping) else f"setup {source}"
+            raise type(exc)(f"{where}: {exc}") from exc
         image[R.MOTOR_TYPE] = cfg.motor_type_code
         return image
 
@@ -403,8 +509,7 @@ class MotorArray:
     # ------------------------------------------------------------------ stepping
     def step(self, n_outer: int = 1) -> None:
         """Advance all motors by ``n_outer`` outer samples (1.92 ms each, 15 inner samples)."""
-        if int(n_outer) != n_outer or n_outer < 0:
-            raise ValueError(f"n_outer must be a non-negative integer, got {n_outer!r}")
+        n_outer = _outer_count(n_outer, "step")
         if n_outer == 0:
             return
         plan = self._no_schedule if self.world is None else self.world.schedule(self, n_outer)
@@ -467,8 +572,10 @@ class MotorArray:
 
     def run(self, seconds: float) -> None:
         """Advance by ``seconds`` (rounded to whole outer samples of 1.92 ms)."""
-        if not math.isfinite(seconds) or seconds < 0:
-            raise ValueError(f"seconds must be finite and >= 0, got {seconds!r}")
+        real = (int, float, np.integer, np.floating)
+        if (isinstance(seconds, (bool, np.bool_)) or not isinstance(seconds, real)
+                or not math.isfinite(seconds) or seconds < 0):
+            raise ValueError(f"seconds must be a finite number >= 0, got {seconds!r}")
         self.step(int(round(seconds * c.OUTER_HZ)))
 
     def trace(self, keys: list[str | int], n_outer: int) -> dict[str, np.ndarray]:
@@ -478,6 +585,7 @@ class MotorArray:
         ``torque``, ``bus_voltage``. Returns ``{"t": (T,), key: (T, N)}`` (user units), like a
         scope attached to every motor at the outer rate.
         """
+        n_outer = _outer_count(n_outer, "trace")
         physical = {"speed_rpm", "speed_rad_s", "position_rad", "torque", "bus_voltage"}
         regs = [k for k in keys if k not in physical]
         for k in regs:
@@ -563,7 +671,7 @@ class MotorArray:
         try:
             for k, value in enumerate(values):
                 if type(value) not in (int, float) and not (
-                        type(value) is np.ndarray and value.dtype.kind in "biuf"
+                        type(value) is np.ndarray and value.dtype.kind in "iuf"
                         and (value.ndim == 0 or value.shape == (size,))):
                     return None
                 floats[k] = value
@@ -576,9 +684,11 @@ class MotorArray:
         """Write stored integers (Fixed4 = value·4096, …) with the same validation as write."""
         reg = self._lookup(key)
         idx = _as_index(index, self.n)
-        arr = np.asarray(raw)
-        if not np.issubdtype(arr.dtype, np.integer):
-            raise RegisterError(f"{reg.name} ({reg.number}): raw values must be integers")
+        arr = None if isinstance(raw, (bool, np.bool_, str, bytes)) else np.asarray(raw)
+        if arr is None or arr.dtype.kind not in "iu":
+            raise RegisterRangeError(
+                f"{reg.name} (register {reg.number}): raw values must be integers (the stored "
+                f"integer: Fixed4 = value·4096, Fixed8 = value·256), got {raw!r}")
         self._validated_raw(reg, arr / reg.scale, idx.size)
         self._store(reg, idx, np.broadcast_to(arr.astype(np.int64), (idx.size,)).copy())
 
@@ -588,15 +698,20 @@ class MotorArray:
                 f"{reg.name} (register {reg.number}) is {reg.access.value} (manual "
                 f"{reg.section}); it cannot be written")
         if type(value) in (int, float):  # a Python scalar: convert it once, then broadcast
-            raw = raws_of_floats(reg, [float(value)])
+            try:
+                raw = raws_of_floats(reg, [float(value)])
+            except OverflowError:  # an int beyond float range: to_raw words the error
+                raw = None
             if raw is not None:
                 return np.full(size, raw[0], dtype=np.int64)
-        arr = np.asarray(value, dtype=np.float64) if not isinstance(value, np.ndarray) else value
+        arr = real_values(reg, value)
         if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != size):
             raise RegisterShapeError(
                 f"{reg.name} (register {reg.number}): expected a scalar or shape ({size},), "
-                f"got shape {np.shape(value)}")
-        return to_raw(reg, arr if arr.ndim else arr.repeat(size))
+                f"got shape {arr.shape}")
+        if arr.ndim == 0:  # one value, checked once, then one copy per motor
+            return np.full(size, to_raw(reg, arr), dtype=np.int64)
+        return to_raw(reg, arr)
 
     def _key_plan(self, keys: tuple[Any, ...]) -> _StorePlan:
         """The store plan of the registers ``keys`` (names are cached, other keys looked up)."""
@@ -674,10 +789,11 @@ class MotorArray:
         bad = np.flatnonzero(codes != M.OK)
         if bad.size:
             k = bad[0]
-            name = c.MODE_NAMES.get(int(raw[k]), str(int(raw[k])))
+            name = c.MODE_NAMES.get(int(raw[k]))
+            named = f" ({name})" if name else ""
             cur = c.MODE_NAMES.get(int(self.regs[idx[k], R.MODE_REG]), "?")
             raise ModeError(
-                f"MODE_REG = {int(raw[k])} ({name}) refused for motor {int(idx[k])} in {cur}: "
+                f"MODE_REG = {int(raw[k])}{named} refused for motor {int(idx[k])} in {cur}: "
                 f"{M.REQUEST_MESSAGES[int(codes[k])]}. Nothing was changed.")
         problem = W.check_mode_request(self.regs, idx, raw)
         if problem is not None:
@@ -769,28 +885,88 @@ class MotorArray:
         self._power_on(idx)
 
     def flash_image(self, index: int) -> dict[int, int]:
-        """The flash contents of one motor (register number → raw), or {} if never written."""
-        if self._flash is None or not self._has_flash[index]:
-            return {}
-        return {int(n): int(self._flash[index, n]) for n in self._rw_numbers()}
+        """The flash contents of one motor (register number → raw), or {} if never written.
 
-    def load_flash_image(self, index: int, image: dict[int, int]) -> None:
-        """Restore a flash image saved by :meth:`flash_image` (e.g. from a file)."""
+        Raises
+        ------
+        RegisterShapeError
+            ``index`` is not an integer in ``-N..N-1``.
+        """
+        i = _motor_index(index, self.n, "flash_image")
+        if self._flash is None or not self._has_flash[i]:
+            return {}
+        return {int(n): int(self._flash[i, n]) for n in self._rw_numbers()}
+
+    def load_flash_image(self, index: int, image: Mapping[int, int]) -> None:
+        """Restore a flash image saved by :meth:`flash_image` (e.g. from a file).
+
+        Registers missing from ``image`` get the ROM defaults. The whole image is checked
+        before the flash is touched: a refused image leaves the flash (and the registers) as
+        they were.
+
+        Parameters
+        ----------
+        index : int
+            The motor, ``-N..N-1``.
+        image : mapping of int to int
+            Register number → stored integer (a LongInt as its 32-bit value), for registers
+            the flash holds (read-write, not MODE_REG, not a LongInt's high word).
+
+        Raises
+        ------
+        RegisterShapeError
+            ``index`` is not a motor.
+        RegisterError
+            ``image`` is not a mapping; a key is not a register number the flash holds
+            (:class:`~jvl_gym.registers.UnknownRegisterError`, or
+            :class:`~jvl_gym.registers.ReadOnlyRegisterError` for a read-only one); a value is
+            not an integer or is out of its register's range
+            (:class:`~jvl_gym.registers.RegisterRangeError`).
+        """
+        i = _motor_index(index, self.n, "load_flash_image")
+        if not isinstance(image, Mapping):
+            raise RegisterError(f"load_flash_image: the image must be a mapping register number "
+                                f"→ stored integer (as flash_image returns), got {image!r}. "
+                                "Nothing was changed.")
+        stored = set(self._rw_numbers().tolist())
+        staged = self._rom[self._type_of[i]].copy()
+        for num, raw in image.items():
+            if isinstance(num, (bool, np.bool_)) or not isinstance(num, (int, np.integer)):
+                raise RegisterError(f"load_flash_image: key {num!r} is not a register number. "
+                                    "Nothing was changed.")
+            reg = self.table.lookup(int(num))
+            if reg.access != Access.RW:
+                raise ReadOnlyRegisterError(
+                    f"load_flash_image: {reg.name} (register {reg.number}) is "
+                    f"{reg.access.value} (manual {reg.section}); flash holds read-write "
+                    "registers only. Nothing was changed.")
+            if reg.number not in stored:
+                raise RegisterError(
+                    f"load_flash_image: {reg.name} (register {reg.number}) is not stored in "
+                    "flash (MODE_REG and a LongInt's high word are not; a LongInt is stored as "
+                    "its 32-bit value under its first number). Nothing was changed.")
+            if isinstance(raw, (bool, np.bool_)) or not isinstance(raw, (int, np.integer)):
+                raise RegisterRangeError(
+                    f"load_flash_image: {reg.name} (register {reg.number}) = {raw!r}: a flash "
+                    "image holds stored integers. Nothing was changed.")
+            to_raw(reg, float(np.clip(int(raw), -2.0**63, 2.0**63)) / reg.scale)  # range
+            staged[reg.number] = int(raw)
         if self._flash is None:
             self._flash = np.zeros((self.n, L.N_REGS), dtype=np.int64)
-        self._flash[index] = self._rom[self._type_of[index]]
-        for num, raw in image.items():
-            reg = self.table.lookup(int(num))
-            self._validated_raw(reg, raw / reg.scale, 1)
-            self._flash[index, int(num)] = int(raw)
-        self._has_flash[index] = True
+        self._flash[i] = staged
+        self._has_flash[i] = True
+
+    def _check_setup_keys(self, registers: Mapping[str, Any]) -> None:
+        """Refuse a setup that contains MODE_REG (a setup is parameters, not a command)."""
+        if any(self._lookup(name).number == R.MODE_REG for name in registers):
+            raise RegisterError("a setup must not contain MODE_REG (manual 3.2.2: a mode is "
+                                "requested after the parameters are written)")
 
     def load_setup(self, setup: str | os.PathLike[str] | dict[str, Any], index: Any = None
                    ) -> None:
         """Write a register set (name → value) to the selected motors, validated as a whole."""
         cfg = load_setup(setup)
-        if any(self._lookup(name).number == R.MODE_REG for name in cfg.registers):
-            raise RegisterError("a setup must not contain MODE_REG")
+        self._check_setup_keys(cfg.registers)
         self.write_many(cfg.registers, index)
 
     # ------------------------------------------------------------------ sample buffer
@@ -801,6 +977,7 @@ class MotorArray:
 
     def sample_buffer_raw(self, index: int) -> np.ndarray:
         """Raw samples of one motor, shape (REC_CNT, 4) for SAMPLE1..SAMPLE4."""
+        index = _motor_index(index, self.n, "sample_buffer_raw")
         count = int(self.regs[index, R.REC_CNT])
         if not self._buf_allocated:
             return np.zeros((0, 4), dtype=np.int64)
@@ -925,6 +1102,7 @@ class MotorArray:
 
     def mode_name(self, index: int = 0) -> str:
         """Name of the current mode of one motor."""
+        index = _motor_index(index, self.n, "mode_name")
         return c.MODE_NAMES.get(int(self.regs[index, R.MODE_REG]), "?")
 
     def __repr__(self) -> str:

@@ -23,6 +23,7 @@ Resets loop over the copies being reset, to draw from their own generators.
 
 from __future__ import annotations
 
+import inspect
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -40,6 +41,31 @@ from .compiled import OBS_BOUND, reset_counters
 __all__ = ["MotorVectorEnv", "NumpyTaskEnv", "Column", "OBS_BOUND", "ERROR_BITS"]
 #: ERR_STAT bits that end an episode: I2T, FLW, FNC, UIT and position-limit errors (3.2.35)
 ERROR_BITS = c.I2T_ERR | c.FLW_ERR | c.FNC_ERR | c.UIT_ERR | c.PLIM_ERR
+_ERROR_NAMES = (("I2T_ERR", c.I2T_ERR), ("FLW_ERR", c.FLW_ERR), ("FNC_ERR", c.FNC_ERR),
+                ("UIT_ERR", c.UIT_ERR), ("PLIM_ERR", c.PLIM_ERR))
+#: ``info["termination_reason"]`` of a copy truncated at its horizon
+TIME_LIMIT = "time limit: max_episode_steps reached (truncated)"
+
+
+def _keywords(cls: type) -> list[str]:
+    """The keyword arguments the constructors of ``cls`` and its bases take."""
+    names: set[str] = set()
+    for klass in cls.__mro__:
+        init = klass.__dict__.get("__init__")
+        if init is None or klass is object:
+            continue
+        try:
+            params = inspect.signature(init).parameters.values()
+        except (TypeError, ValueError):  # pragma: no cover - a builtin's __init__
+            continue
+        names.update(p.name for p in params if p.name != "self"
+                     and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY))
+    return sorted(names)
+
+
+def env_name(cls: type) -> str:
+    """The task name of an env class (``GearSyncVectorEnv`` → ``GearSync``)."""
+    return cls.__name__.removesuffix("VectorEnv").removesuffix("Env")
 
 
 class Column:
@@ -118,8 +144,15 @@ class MotorVectorEnv(VectorEnv, ABC):
                  randomization: Mapping[str, tuple[float, float]] | None = None,
                  decimation: int | None = None, obs_noise: float = 0.0,
                  max_episode_steps: int | None = None, render_mode: str | None = None,
-                 autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP) -> None:
+                 autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+                 **unknown: Any) -> None:
         from ..sim import MotorArray  # lazy: building an env compiles/loads the kernel
+
+        if unknown:
+            names = ", ".join(repr(k) for k in sorted(unknown))
+            hint = " (the motor type is motor_type=)" if "motor" in unknown else ""
+            raise TypeError(f"{env_name(type(self))} env: unknown keyword argument {names}"
+                            f"{hint}; known: {', '.join(_keywords(type(self)))}")
 
         if int(num_envs) != num_envs or num_envs < 1:
             raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
@@ -229,6 +262,31 @@ class MotorVectorEnv(VectorEnv, ABC):
     def _scope_values(self) -> np.ndarray:
         """Scope traces (N, C) in the units of :attr:`scope_channels`."""
         return np.zeros((self.num_envs, len(self.scope_channels)))
+
+    def _termination_reasons(self, idx: np.ndarray) -> list[str]:
+        """Why each of the copies ``idx``, terminated by the last step, ended (one text per
+        copy). Here: the motor error bits; a task adds its own reasons."""
+        return [self._error_reason(i) or "terminated by the task" for i in idx.tolist()]
+
+    def _error_reason(self, i: int) -> str:
+        """The ERR_STAT error bits of copy ``i`` that end an episode, as text ('' if none)."""
+        bits = int(self.motors.read_raw("ERR_STAT")[i]) & ERROR_BITS
+        if not bits:
+            return ""
+        names = "+".join(name for name, bit in _ERROR_NAMES if bits & bit)
+        return f"motor error {names} (ERR_STAT, manual 3.2.35)"
+
+    def _end_info(self, ended: np.ndarray, terminated: np.ndarray) -> dict[str, np.ndarray]:
+        """``{"termination_reason": (N,) object array, "_termination_reason": ended}`` for the
+        copies ``ended`` (bool (N,)) whose episode ended with the last step: the task's reason
+        when terminated (:meth:`_termination_reasons`), :data:`TIME_LIMIT` when truncated."""
+        reasons = np.full(self.num_envs, "", dtype=object)
+        idx = np.flatnonzero(ended)
+        term = idx[terminated[idx]]
+        if term.size:
+            reasons[term] = self._termination_reasons(term)
+        reasons[idx[~terminated[idx]]] = TIME_LIMIT
+        return {"termination_reason": reasons, "_termination_reason": ended.copy()}
 
     # ------------------------------------------------------------------ helpers for tasks
     def error_bits(self) -> np.ndarray:
@@ -342,17 +400,28 @@ class MotorVectorEnv(VectorEnv, ABC):
         """
         if not self._has_reset:
             raise RuntimeError("call reset() before step()")
-        a = np.asarray(actions, dtype=np.float64)
-        if a.shape != self._action_shape:
-            if a.size != self.num_envs * len(self.act_labels):
-                raise ValueError(f"action must have shape {self._action_shape}, got "
-                                 f"{np.shape(actions)}")
-            a = a.reshape(self._action_shape)
+        a = actions if type(actions) is np.ndarray else np.asarray(actions)
+        if a.shape != self._action_shape or a.dtype.kind not in "fiu":
+            self._refuse_action(a)
+        if a.dtype != np.float64:
+            a = a.astype(np.float64)
         if not self._step_copies(a):
             raise ValueError("action must be finite")
         if self.render_mode is not None:
             self._record_scope()
         return self._obs, self._reward, self._terminated, self._truncated
+
+    def _refuse_action(self, a: np.ndarray, shape: tuple[int, ...] | None = None) -> None:
+        """Raise the ValueError of an action array ``a`` that is not real numbers of shape
+        ``shape`` (default: (num_envs, actions))."""
+        shape = self._action_shape if shape is None else shape
+        labels = ", ".join(self.act_labels)
+        if a.shape != shape:
+            hint = " (transposed?)" if a.shape == shape[::-1] and len(shape) == 2 else ""
+            raise ValueError(f"{env_name(type(self))}: action must have shape {shape} "
+                             f"({labels}), got {a.shape}{hint}; nothing was stepped")
+        raise ValueError(f"{env_name(type(self))}: action must be real numbers (a float "
+                         f"array), got dtype {a.dtype}; nothing was stepped")
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                                           dict[str, Any]]:
@@ -373,6 +442,9 @@ class MotorVectorEnv(VectorEnv, ABC):
         reward = reward.copy()
         terminated = terminated.copy()
         truncated = truncated.copy()
+        ended = (terminated | truncated) & ~done_before
+        if ended.any():
+            infos.update(self._end_info(ended, terminated))
         if self.autoreset_mode == AutoresetMode.NEXT_STEP and done_before.any():
             idx = np.flatnonzero(done_before)
             self._reset_envs(idx, [None] * idx.size, None)
@@ -387,8 +459,8 @@ class MotorVectorEnv(VectorEnv, ABC):
                 for i in idx:
                     final[i] = obs[i].copy()
                 self._reset_envs(idx, [None] * idx.size, None)
-                infos = {"final_obs": final, "_final_obs": done.copy(),
-                         "final_info": {}, "_final_info": done.copy()}
+                infos.update({"final_obs": final, "_final_obs": done.copy(),
+                              "final_info": {}, "_final_info": done.copy()})
         self._autoreset = terminated | truncated
         return self._obs.copy(), reward, terminated, truncated, infos
 

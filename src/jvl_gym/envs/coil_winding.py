@@ -350,6 +350,18 @@ class CoilWindingVectorEnv(MotorVectorEnv):
         return _DRIVER.step(self.motors.engine_view(), self._episode, self._task, actions,
                             self.decimation)
 
+    def _termination_reasons(self, idx: np.ndarray) -> list[str]:
+        """The coil is complete (all layers wound) or a motor error bit is set."""
+        out = []
+        for i in idx.tolist():
+            why = []
+            if self.coil[i, _C_LAYER] >= self._k[_N_LAYERS]:
+                why.append(f"coil complete: {int(self._k[_N_LAYERS])} layers wound")
+            if self._error_reason(i):
+                why.append(self._error_reason(i))
+            out.append("; ".join(why) or "terminated by the task")
+        return out
+
     def _observe_copies(self, idx: np.ndarray) -> None:
         _observe_rows(idx, self.motors.engine_view(), self._episode, self._task)
 

@@ -165,6 +165,13 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
                         "flwerr_rms": np.sqrt(np.mean(flw * flw, axis=1)), "speed_dip": dip,
                         "speed_ripple": ripple, "fncerr": fnc_end, "unstable": unstable}
 
+    def _termination_reasons(self, idx: np.ndarray) -> list[str]:
+        """Every episode is one commissioning trial; say whether the design was unstable."""
+        unstable = self.metrics["unstable"]
+        return ["trial done" + (": unstable design" if unstable[i] else "")
+                + (f" ({self._error_reason(i)})" if self._error_reason(i) else "")
+                for i in idx.tolist()]
+
     def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         mt = self.metrics
         cost = (mt["settling_time"] / 0.1 + 10.0 * mt["overshoot"] + mt["flwerr_rms"] / 200.0

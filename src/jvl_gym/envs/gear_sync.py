@@ -291,6 +291,24 @@ class GearSyncVectorEnv(MotorVectorEnv):
         return _DRIVER.step(self.motors.engine_view(), self._episode, self._task, actions,
                             self.decimation)
 
+    def _termination_reasons(self, idx: np.ndarray) -> list[str]:
+        """Web break (tension above ``break_ratio`` × reference), slack longer than
+        ``slack_time``, or the motor error bits, as the compiled step decides."""
+        out = []
+        for i in idx.tolist():
+            ref = self.line[i, _W_REF]
+            why = []
+            if self.line[i, _W_FORCE] > self.break_ratio * ref:
+                why.append(f"web break: tension {self.line[i, _W_FORCE]:.1f} N > "
+                           f"{self.break_ratio:g} × reference {ref:.1f} N")
+            if self.line[i, _W_SLACK] >= self.slack_samples:
+                why.append(f"web slack for {int(self.line[i, _W_SLACK])} outer samples "
+                           f"(limit {self.slack_samples})")
+            if self._error_reason(i):
+                why.append(self._error_reason(i))
+            out.append("; ".join(why) or "terminated by the task")
+        return out
+
     def _observe_copies(self, idx: np.ndarray) -> None:
         _observe_rows(idx, self.motors.engine_view(), self._episode, self._task)
 

@@ -43,6 +43,8 @@ from .table import FORMAT_RAW_RANGE, Access, Format, Register
 
 __all__ = [
     "to_raw",
+    "whole_only",
+    "real_values",
     "raws_of_floats",
     "raws_of_rows",
     "raw_bounds",
@@ -89,6 +91,54 @@ def _user_bounds(reg: Register) -> tuple[float, float]:
     return min(reg.minimum, reg.raw_min / s), max(reg.maximum, reg.raw_max / s)
 
 
+def whole_only(reg: Register) -> bool:
+    """The register holds a code, a bit field, a register number or a count without a unit
+    (MODE_REG, CNTRL_BITS, HOME_MODE, the pointers, SAMPLE1..4, MYADDR, GEARF1 …: a Word,
+    Integer or LongInt register whose table unit is empty), so a value must be a whole number;
+    quantities (a unit, or a Fixed format) are rounded half away from zero instead."""
+    return reg.scale == 1 and not reg.unit
+
+
+def _not_a_number(reg: Register, value: Any) -> RegisterRangeError:
+    return RegisterRangeError(
+        f"{reg.name} (register {reg.number}): value {value!r} is not a number; give an int, "
+        f"a float or a real numeric array (manual {reg.section})")
+
+
+def real_values(reg: Register, value: Any) -> np.ndarray:
+    """``value`` as a float64 array if it is a real number or an array of them.
+
+    Parameters
+    ----------
+    reg : Register
+        Register the value is for (named in the error).
+    value : array_like
+        Python int or float, a numpy integer or float scalar, or a sequence or array of them.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64 array of the shape of ``value``.
+
+    Raises
+    ------
+    RegisterRangeError
+        For a str, bytes, bool, complex, None or any other non-numeric value (also inside an
+        array: an array's dtype must be an integer or float type).
+    """
+    if isinstance(value, (str, bytes, bytearray, bool, np.bool_, complex, np.complexfloating)):
+        raise _not_a_number(reg, value)
+    if type(value) is int and abs(value) >= 2**63:  # beyond int64 and maybe float: out of range
+        return np.asarray(math.copysign(math.inf, value))
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # a ragged sequence
+        raise _not_a_number(reg, value) from exc
+    if arr.dtype.kind not in "iuf":
+        raise _not_a_number(reg, value)
+    return arr.astype(np.float64, copy=False)
+
+
 def _check_not_reserved(reg: Register) -> None:
     if reg.access == Access.RESERVED:
         raise ReadOnlyRegisterError(
@@ -100,7 +150,9 @@ def to_raw(reg: Register, value: Any) -> np.ndarray:
     """Convert user units to the stored integer, validating the range (manual 3.1, 3.2.N).
 
     ``raw = round_half_away(value · scale)`` with scale 4096 for Fixed4, 256 for Fixed8 and 1
-    otherwise.
+    otherwise: ``V_SOLL = 1600.7`` stores 1601. A register that holds a code rather than a
+    quantity (:func:`whole_only`: MODE_REG, CNTRL_BITS, HOME_MODE, …) takes whole numbers only:
+    ``MODE_REG = 0.5`` is refused, ``1.0`` is mode 1.
 
     Parameters
     ----------
@@ -117,18 +169,15 @@ def to_raw(reg: Register, value: Any) -> np.ndarray:
     Raises
     ------
     RegisterRangeError
-        If any value is NaN, infinite or outside ``[minimum, maximum]``; the message names the
-        register, its number, its range with unit and the manual section.
+        If any value is NaN, infinite or outside ``[minimum, maximum]``, not a whole number for
+        a :func:`whole_only` register, or not a real number at all (str, bytes, bool, complex:
+        :func:`real_values`); the message names the register, its number, its range with unit
+        and the manual section.
     ReadOnlyRegisterError
         For a reserved register.
     """
     _check_not_reserved(reg)
-    try:
-        v = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise RegisterRangeError(
-            f"{reg.name} (register {reg.number}): value {value!r} is not a number "
-            f"(manual {reg.section})") from exc
+    v = real_values(reg, value)
     if v.size <= _SCALAR_MAX:
         raw = raws_of_floats(reg, v.ravel().tolist())
         if raw is not None:
@@ -141,6 +190,13 @@ def to_raw(reg: Register, value: Any) -> np.ndarray:
         raise RegisterRangeError(
             f"{reg.name} (register {reg.number}): value {flat.flat[0]:g}{more} is outside the "
             f"range {reg.range_text} ({reg.format.value}, manual {reg.section})")
+    if whole_only(reg):
+        frac = v != np.floor(v)
+        if np.any(frac):
+            raise RegisterRangeError(
+                f"{reg.name} (register {reg.number}): value {v[frac].flat[0]:g} "
+                f"is not a whole number; {reg.name} holds a code or a count, not a quantity that "
+                f"could be rounded: give an integer (manual {reg.section})")
     raw = round_half_away(v * reg.scale)
     return np.clip(raw, reg.raw_min, reg.raw_max).astype(np.int64)
 
@@ -155,23 +211,29 @@ def _raw(x: float, scale: float, raw_min: float, raw_max: float) -> int:  # prag
 
 @njit(**KERNEL)
 def _raws_within(v: np.ndarray, lo: float, hi: float, scale: float, raw_min: float,
-                 raw_max: float, out: np.ndarray) -> int:  # pragma: no cover - compiled
-    """``out[j]`` = stored integer of ``v[j]`` (1-D arrays) while ``lo <= v[j] <= hi``.
+                 raw_max: float, whole: float, out: np.ndarray) -> int:  # pragma: no cover
+    """``out[j]`` = stored integer of ``v[j]`` (1-D arrays) while ``lo <= v[j] <= hi`` and,
+    if ``whole`` is 1, ``v[j]`` is a whole number (:func:`whole_only`).
 
-    Returns the position of the first value outside ``[lo, hi]`` (NaN included), or −1.
+    Returns the position of the first value outside ``[lo, hi]`` (NaN included) or not whole,
+    or −1.
     """
     for j in range(v.shape[0]):
         if not lo <= v[j] <= hi:
+            return j
+        if whole > 0.5 and v[j] != math.floor(v[j]):
             return j
         out[j] = _raw(v[j], scale, raw_min, raw_max)
     return -1
 
 
-def raw_bounds(reg: Register) -> tuple[float, float, float, float, float]:
-    """Conversion constants of a register: accepted user-unit interval (lo, hi), scale and raw
-    range (raw_min, raw_max), as floats (a row of the ``bounds`` of :func:`raws_of_rows`)."""
+def raw_bounds(reg: Register) -> tuple[float, float, float, float, float, float]:
+    """Conversion constants of a register: accepted user-unit interval (lo, hi), scale, raw
+    range (raw_min, raw_max) and 1.0 if values must be whole numbers (:func:`whole_only`, else
+    0.0), as floats (a row of the ``bounds`` of :func:`raws_of_rows`)."""
     lo, hi = _user_bounds(reg)
-    return float(lo), float(hi), float(reg.scale), float(reg.raw_min), float(reg.raw_max)
+    return (float(lo), float(hi), float(reg.scale), float(reg.raw_min), float(reg.raw_max),
+            float(whole_only(reg)))
 
 
 @njit(**KERNEL)
@@ -184,7 +246,7 @@ def raws_of_rows(values: np.ndarray, bounds: np.ndarray,
     values : numpy.ndarray
         (K, M) float64: row ``k`` in user units of register ``k``.
     bounds : numpy.ndarray
-        (K, 5) float64: :func:`raw_bounds` of register ``k``.
+        (K, 6) float64: :func:`raw_bounds` of register ``k``.
     out : numpy.ndarray
         (K, M) int64, receives the stored integers.
 
@@ -192,12 +254,12 @@ def raws_of_rows(values: np.ndarray, bounds: np.ndarray,
     -------
     int
         −1 when every value is in range; else the first row ``k`` with a value that is NaN,
-        infinite or out of range (``out`` then partly written; :func:`to_raw` of that row
-        raises the error).
+        infinite, out of range or not whole where it must be (``out`` then partly written;
+        :func:`to_raw` of that row raises the error).
     """
     for k in range(values.shape[0]):
         b = bounds[k]
-        if _raws_within(values[k], b[0], b[1], b[2], b[3], b[4], out[k]) >= 0:
+        if _raws_within(values[k], b[0], b[1], b[2], b[3], b[4], b[5], out[k]) >= 0:
             return k
     return -1
 
@@ -216,8 +278,8 @@ def raws_of_floats(reg: Register, values: list[float]) -> list[int] | None:
     Returns
     -------
     list of int or None
-        The stored integers, or None if a value is NaN, infinite or out of range (then
-        :func:`to_raw` raises the error).
+        The stored integers, or None if a value is NaN, infinite, out of range or not whole
+        where it must be (then :func:`to_raw` raises the error).
     """
     v = np.array(values, dtype=np.float64)
     out = np.empty(v.size, dtype=np.int64)
