@@ -10,13 +10,13 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from .table import MAC050_141, Access, Format, RegisterTable
+from .table import FORMAT_SCALE, MAC050_141, Access, Format, RegisterTable
 
 __all__ = ["markdown_reference"]
 
 
 def _fmt_value(x: float, fmt: Format) -> str:
-    if fmt in (Format.FIXED4, Format.FIXED8):
+    if fmt in FORMAT_SCALE:
         return f"{x:g}"
     return str(int(x))
 
