@@ -115,7 +115,7 @@ def test_packaged_tables_name_their_source():
                                                     "Motor address"),
      (206, "CHKSUM", Format.INT32, "")],
 )
-def test_mac800_numbers_formats_and_macTalk_names(number, name, fmt, alias):
+def test_mac800_numbers_formats_and_mactalk_names(number, name, fmt, alias):
     r = M8.lookup(name)
     assert (r.number, r.format, r.alias) == (number, fmt, alias)
 
