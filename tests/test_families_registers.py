@@ -64,7 +64,10 @@ def test_tables_load_with_every_number_once(table, last):
 @pytest.mark.parametrize("package", ["registers", "families/mac800", "families/mis"])
 def test_all_tables_share_one_schema(package):
     name = "mac050_141.csv" if package == "registers" else "registers.csv"
-    text = resources.files("jvl_gym").joinpath(package, name).read_text(encoding="utf-8")
+    path = resources.files("jvl_gym")
+    for part in (*package.split("/"), name):
+        path = path.joinpath(part)
+    text = path.read_text(encoding="utf-8")
     rows = list(csv.reader(text.splitlines()))
     assert rows[0] == SCHEMA
     assert all(len(r) == len(SCHEMA) for r in rows[1:])

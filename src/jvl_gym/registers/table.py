@@ -56,7 +56,8 @@ MAC050_141_LAST = 164
 
 
 class Format(str, enum.Enum):
-    """Data formats of manual 3.1, plus the high word of a LongInt."""
+    """Data formats of manual 3.1, the high word of a LongInt, and the 32-bit formats at one
+    register number used by tables with 32-bit registers."""
 
     WORD = "Word"  #: 16 bit unsigned, 0 … 65535
     INTEGER = "Integer"  #: 16 bit signed, −32767 … +32767
@@ -133,6 +134,7 @@ def format_value_range(fmt: Format) -> tuple[float, float]:
     lo, hi = FORMAT_RAW_RANGE[fmt]
     scale = FORMAT_SCALE.get(fmt, 1)
     return lo / scale, hi / scale
+
 
 _COLUMNS = ("number", "name", "format", "min", "max", "unit", "access", "default", "section",
             "description")
