@@ -459,3 +459,24 @@ def test_bad_32_bit_rows_raise(tmp_path, row, needle):
     p.write_text(HEADER12 + row)
     with pytest.raises(TableError, match=needle):
         load_table(p)
+
+
+# ----------------------------------------------------------------------------- references
+
+
+def test_family_references_list_every_register_and_are_current():
+    from pathlib import Path
+
+    from jvl_gym.families.reference import family_references
+
+    docs = Path(__file__).resolve().parents[1] / "docs" / "families"
+    refs = family_references()
+    for name, table in (("mac800-registers.md", M8), ("mis-registers.md", MIS)):
+        md = refs[name]
+        rows = [ln for ln in md.splitlines() if ln.startswith("| ") and ln[2].isdigit()]
+        assert len(rows) == len(table)
+        assert (docs / name).read_text(encoding="utf-8") == md, (
+            f"docs/families/{name} is stale: run python -m jvl_gym.families.reference")
+    assert "| 13 | KVOUT | Load | Fixed16 | -32768 … 32767.9999847 |" in refs["mac800-registers.md"]
+    assert "| 5 | V_SOLL | Max velocity | Int32 | -300000 … 300000 | 0.01 RPM | rw | 10000 |" in (
+        refs["mis-registers.md"])
