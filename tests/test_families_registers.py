@@ -220,7 +220,12 @@ def test_mis_access_and_formats():
     for name in ("TICKS", "MOTOR_REV", "TURNTABLE_SIZE", "FW_BUILD", "V_HOME_TIMEOUT"):
         r = MIS.lookup(name)
         assert r.format == Format.WORD32 and (r.minimum, r.maximum) == (0, 2**32 - 1), name
-    assert MIS.lookup("MOTORTYPE").default == 152  # MIS231
+    mt = MIS.lookup("MOTORTYPE")
+    assert mt.default == su.MOTOR_TYPE_CODES["MIS231"] == 152
+    assert all(mt.minimum <= c <= mt.maximum for c in su.MOTOR_TYPE_CODES.values())
+    assert len(set(su.MOTOR_TYPE_CODES.values())) == len(su.MOTOR_TYPE_CODES)
+    enc = MIS.lookup("ENCODER_TYPE")
+    assert all(enc.minimum <= k <= enc.maximum for k in su.ENCODER_TYPES)
 
 
 def test_mis_bitfield_defaults_decode_as_the_manual_describes():

@@ -44,6 +44,8 @@ __all__ = [
     "DIGITAL_INPUT_UNFILTERED_PERIOD_S",
     "LOWBUSCVI_PERIOD_S",
     "ZERO_SEARCH_TIMEOUT_DEFAULT_S",
+    "MOTOR_TYPE_CODES",
+    "ENCODER_TYPES",
     "rpm_to_v_soll",
     "v_soll_to_rpm",
     "counts_to_rev",
@@ -105,6 +107,32 @@ EXT_ENCODER_VEL_WINDOW_S = 16e-3  #: EXT_ENCODER_VEL is counts per 16 ms
 DIGITAL_INPUT_UNFILTERED_PERIOD_S = 100e-6  #: unfiltered digital inputs update every 100 µs
 LOWBUSCVI_PERIOD_S = 50e-6  #: LOWBUSCVI_CNT measurement period (§8.2.130; overview: 100 µs)
 ZERO_SEARCH_TIMEOUT_DEFAULT_S = 60.0  #: V_HOME_TIMEOUT = 0 means 60 000 ms
+
+
+# --- identification (§8.2.89, §8.2.49, §5.8.1) ---------------------------------------------
+#: MOTORTYPE (register 151) code of each stepper type (§8.2.89)
+MOTOR_TYPE_CODES: dict[str, int] = {
+    "SMC85": 80,
+    **{f"MIS34{k}": 81 + k for k in range(6)},
+    **{f"MIS43{k}": 90 + k for k in range(6)},
+    **{f"MIS51{k}": 100 + k - 1 for k in range(1, 6)},
+    **{f"MIS17{k}": 120 + k for k in range(7)},
+    "SMC66": 150,
+    **{f"MIS23{k}": 151 + k for k in range(5)},
+    **{f"MIL23{k}": 200 + k for k in range(5)},
+    **{f"MIL34{k}": 250 + k for k in range(5)},
+}
+
+#: ENCODER_TYPE (register 99) → (option, internal encoder counts per revolution or 0): §8.2.49
+#: lists the options, §5.8.1 gives the H3's internal 1024 cpr; every option reports positions in
+#: 409600 counts/rev
+ENCODER_TYPES: dict[int, tuple[str, int]] = {
+    0: ("none", 0),
+    1: ("H2", 1024),  # absolute single turn, 10 bit
+    2: ("H3", 1024),  # absolute multi turn
+    3: ("H2", 4096),  # absolute single turn, 12 bit
+    4: ("H4", 4096),  # 12-bit single turn + absolute multi turn
+}
 
 
 def rpm_to_v_soll(rpm: float) -> float:
