@@ -228,6 +228,18 @@ def test_mis_access_and_formats():
     assert all(enc.minimum <= k <= enc.maximum for k in su.ENCODER_TYPES)
 
 
+def test_mis_table_holds_the_registers_the_modbus_slave_uses():  # MIS manual §12.1
+    from jvl_gym.protocol.modbus_server import MIS_REGISTERS
+
+    names = {"setup": "MODBUS_SETUP", "baud": "BAUD_RATE", "timeout": "MODBUS_TIMEOUT",
+             "timeout_action": "MODBUS_TIMEOUT_RESPONSE", "frame_delay": "MODBUS_FRAME_DELAY",
+             "max_velocity": "V_SOLL", "mode": "MODE_REG"}
+    for attr, name in names.items():
+        assert MIS.lookup(getattr(MIS_REGISTERS, attr)).name == name
+    assert MIS.lookup("MODBUS_SETUP").maximum == 511  # bit 8: Modbus on RS-422
+    assert (MIS.lookup(200).minimum, MIS.lookup(200).maximum) == (0, 2)
+
+
 def test_mis_bitfield_defaults_decode_as_the_manual_describes():
     led1 = int(MIS.lookup("FLEXLEDSETUP1").default)
     assert (led1 & 0x1FF, (led1 >> 9) & 0x1F) == (25, 4)  # L3 = In position
