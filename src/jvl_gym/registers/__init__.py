@@ -18,9 +18,11 @@ from .formats import (
     from_raw,
     from_word16,
     join_longint,
+    join_word32,
     round_half_away,
     saturate_raw,
     split_longint,
+    split_word32,
     to_raw,
     to_word16,
 )
@@ -32,6 +34,8 @@ from .table import (
     Register,
     RegisterTable,
     TableError,
+    format_value_range,
+    load_packaged_table,
     load_table,
 )
 
@@ -49,12 +53,16 @@ __all__ = [
     "TableError",
     "UnknownRegisterError",
     "from_raw",
+    "format_value_range",
     "from_word16",
     "join_longint",
+    "join_word32",
+    "load_packaged_table",
     "load_table",
     "round_half_away",
     "saturate_raw",
     "split_longint",
+    "split_word32",
     "to_raw",
     "to_word16",
 ]

@@ -12,6 +12,20 @@ Fixed4    16 bit signed, unit 1/4096   −7.999756 … +7.999756
 Fixed8    16 bit signed, unit 1/256    −127.996 … +127.996
 ========  ===========================  ============================
 
+Tables whose registers are 32 bits wide at one register number add four formats:
+
+========  ====================================  =======================================
+format    storage                               range (user units)
+========  ====================================  =======================================
+Int32     32 bit signed                         −2147483648 … 2147483647
+Word32    32 bit unsigned                       0 … 4294967295
+Fixed16   32 bit signed, unit 1/65536           −32768 … 32767.9999847412109375
+Fixed24   32 bit signed, unit 1/16777216        −128 … 127.999999940395355224609375
+========  ====================================  =======================================
+
+On a 16-bit protocol such a value is two words, low word first, like a LongInt
+(:func:`split_word32`, :func:`join_word32`).
+
 Three representations are used here:
 
 * *user units*: what the manual's register descriptions talk about (Fixed formats as reals);
@@ -39,7 +53,7 @@ from numba import njit
 
 from ..jit import KERNEL
 from .errors import ReadOnlyRegisterError, RegisterRangeError, RegisterShapeError
-from .table import FORMAT_RAW_RANGE, Access, Format, Register
+from .table import FORMAT_RAW_RANGE, FORMATS_32_ONE_NUMBER, Access, Format, Register
 
 __all__ = [
     "to_raw",
@@ -55,9 +69,11 @@ __all__ = [
     "to_word16",
     "from_word16",
     "round_half_away",
+    "split_word32",
+    "join_word32",
 ]
 
-_FIXED = (Format.FIXED4, Format.FIXED8)
+_FIXED = (Format.FIXED4, Format.FIXED8, Format.FIXED16, Format.FIXED24)
 #: :func:`to_raw` converts up to this many values one by one as Python floats
 #: (:func:`raws_of_floats`), without numpy's fixed cost per call, which dominates for a few values
 _SCALAR_MAX = 16
@@ -149,10 +165,10 @@ def _check_not_reserved(reg: Register) -> None:
 def to_raw(reg: Register, value: Any) -> np.ndarray:
     """Convert user units to the stored integer, validating the range (manual 3.1, 3.2.N).
 
-    ``raw = round_half_away(value · scale)`` with scale 4096 for Fixed4, 256 for Fixed8 and 1
-    otherwise: ``V_SOLL = 1600.7`` stores 1601. A register that holds a code rather than a
-    quantity (:func:`whole_only`: MODE_REG, CNTRL_BITS, HOME_MODE, …) takes whole numbers only:
-    ``MODE_REG = 0.5`` is refused, ``1.0`` is mode 1.
+    ``raw = round_half_away(value · scale)`` with scale 4096 for Fixed4, 256 for Fixed8, 65536
+    for Fixed16, 16777216 for Fixed24 and 1 otherwise: ``V_SOLL = 1600.7`` stores 1601. A
+    register that holds a code rather than a quantity (:func:`whole_only`: MODE_REG, CNTRL_BITS,
+    HOME_MODE, …) takes whole numbers only: ``MODE_REG = 0.5`` is refused, ``1.0`` is mode 1.
 
     Parameters
     ----------
@@ -301,7 +317,8 @@ def from_raw(reg: Register, raw: Any) -> np.ndarray:
     Returns
     -------
     numpy.ndarray
-        float64 ``raw / scale`` for Fixed4/Fixed8, int64 otherwise (0-d for a scalar).
+        float64 ``raw / scale`` for the Fixed formats (Fixed4, Fixed8, Fixed16, Fixed24), int64
+        otherwise (0-d for a scalar).
     """
     r = np.asarray(raw)
     if reg.format in _FIXED:
@@ -417,7 +434,8 @@ def to_word16(reg: Register, raw: Any) -> np.ndarray:
     """Map stored integer(s) to the unsigned 16-bit word(s) on the serial line (manual 3.1, 5).
 
     Word and LongIntHigh pass through; Integer, Fixed4 and Fixed8 are 16-bit two's complement
-    (−1 → 0xFFFF); a LongInt gives two words, low first.
+    (−1 → 0xFFFF); a LongInt and the 32-bit formats at one number (Int32, Word32, Fixed16,
+    Fixed24) give two words, low first.
 
     Parameters
     ----------
@@ -430,7 +448,7 @@ def to_word16(reg: Register, raw: Any) -> np.ndarray:
     -------
     numpy.ndarray
         int64 words 0 … 65535: shape of ``raw`` for one-word formats, ``raw.shape + (2,)``
-        (``[..., 0]`` low, ``[..., 1]`` high) for LongInt.
+        (``[..., 0]`` low, ``[..., 1]`` high) for LongInt and the 32-bit formats.
 
     Raises
     ------
@@ -447,6 +465,9 @@ def to_word16(reg: Register, raw: Any) -> np.ndarray:
     if reg.format == Format.LONGINT:
         low, high = split_longint(a)
         return np.stack([np.asarray(low), np.asarray(high)], axis=-1).astype(np.int64)
+    if reg.format in FORMATS_32_ONE_NUMBER:
+        low, high = split_word32(a, signed=reg.format != Format.WORD32)
+        return np.stack([np.asarray(low), np.asarray(high)], axis=-1).astype(np.int64)
     return (a & 0xFFFF).astype(np.int64)
 
 
@@ -459,7 +480,8 @@ def from_word16(reg: Register, word: Any) -> np.ndarray:
     reg : Register
         Register the words belong to.
     word : array_like
-        Words 0 … 65535; for a LongInt the last axis must have length 2 (low, high).
+        Words 0 … 65535; for a LongInt or a 32-bit format the last axis must have length 2
+        (low, high).
 
     Returns
     -------
@@ -472,7 +494,7 @@ def from_word16(reg: Register, word: Any) -> np.ndarray:
     RegisterRangeError
         If a word is outside 0 … 65535.
     RegisterShapeError
-        If a LongInt's words do not have a trailing axis of length 2.
+        If a LongInt's or 32-bit format's words do not have a trailing axis of length 2.
     """
     _check_not_reserved(reg)
     w = _as_int_array(word, f"{reg.name} (register {reg.number}) words")
@@ -485,6 +507,84 @@ def from_word16(reg: Register, word: Any) -> np.ndarray:
                 f"{reg.name} (register {reg.number}) is a LongInt: expected words with a "
                 f"trailing axis of length 2 (low, high), got shape {w.shape}")
         return np.asarray(join_longint(w[..., 0], w[..., 1]), dtype=np.int64)
+    if reg.format in FORMATS_32_ONE_NUMBER:
+        if w.ndim == 0 or w.shape[-1] != 2:
+            raise RegisterShapeError(
+                f"{reg.name} (register {reg.number}) is {reg.format.value}: expected words with "
+                f"a trailing axis of length 2 (low, high), got shape {w.shape}")
+        return np.asarray(join_word32(w[..., 0], w[..., 1], signed=reg.format != Format.WORD32),
+                          dtype=np.int64)
     if reg.format in _SIGNED16:
         return np.where(w >= 0x8000, w - 0x10000, w).astype(np.int64)
     return w.astype(np.int64)
+
+
+def split_word32(raw: Any, signed: bool = True) -> tuple[Any, Any]:
+    """Split 32-bit value(s) into (low, high) unsigned 16-bit words, low word first on the line.
+
+    For the 32-bit formats at one register number: Int32, Fixed16 and Fixed24 (raw values
+    signed, two's complement: −1 → (0xFFFF, 0xFFFF)) and Word32 (``signed=False``).
+
+    Parameters
+    ----------
+    raw : int or array_like
+        Raw value(s): −2**31 … 2**31−1 when ``signed``, else 0 … 2**32−1.
+    signed : bool
+        Whether the raw values are signed.
+
+    Returns
+    -------
+    (low, high) : tuple
+        Python ints for a scalar input, int64 arrays otherwise.
+
+    Raises
+    ------
+    RegisterRangeError
+        If a value is not an integer or does not fit in 32 bits of the given signedness.
+    """
+    a = _as_int_array(raw, "32-bit values")
+    lo, hi = (-(2**31), 2**31 - 1) if signed else (0, 2**32 - 1)
+    if np.any((a < lo) | (a > hi)):
+        kind = "signed" if signed else "unsigned"
+        raise RegisterRangeError(f"32-bit value {raw!r} does not fit in 32 {kind} bits "
+                                 f"({lo} … {hi})")
+    u = a & 0xFFFFFFFF
+    return _scalar_or_array(u & 0xFFFF), _scalar_or_array(u >> 16)
+
+
+def join_word32(low: Any, high: Any, signed: bool = True) -> Any:
+    """Join (low, high) 16-bit words into 32-bit value(s); inverse of :func:`split_word32`.
+
+    Parameters
+    ----------
+    low, high : int or array_like
+        Unsigned words 0 … 65535.
+    signed : bool
+        Two's complement result (Int32, Fixed16, Fixed24) if True, unsigned (Word32) if False.
+
+    Returns
+    -------
+    int or numpy.ndarray
+        Python int for scalar inputs, int64 array otherwise.
+
+    Raises
+    ------
+    RegisterRangeError
+        If a word is not an integer in 0 … 65535.
+    RegisterShapeError
+        If ``low`` and ``high`` do not broadcast together.
+    """
+    lo = _as_int_array(low, "32-bit value words")
+    hi = _as_int_array(high, "32-bit value words")
+    for w in (lo, hi):
+        if np.any((w < 0) | (w > 0xFFFF)):
+            raise RegisterRangeError(f"words must be 0 … 65535, got {low!r}, {high!r}")
+    try:
+        lo, hi = np.broadcast_arrays(lo, hi)
+    except ValueError as exc:
+        raise RegisterShapeError(f"low and high word shapes differ: {lo.shape} vs {hi.shape}"
+                                 ) from exc
+    u = (hi << 16) | lo
+    if signed:
+        u = np.where(u >= 2**31, u - 2**32, u)
+    return _scalar_or_array(np.asarray(u).astype(np.int64))
