@@ -23,8 +23,7 @@ from .jit import KERNEL
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, sector_index
 
-__all__ = ["power_on_rows", "power_on_from_memory", "reset_rows", "first_bad_value", "FINITE",
-           "NONNEGATIVE", "POSITIVE", "BINARY"]
+__all__ = ["power_on_rows", "power_on_from_memory", "reset_rows"]
 
 #: registers cleared at power-on (counters, measurements, loop outputs)
 CLEARED = (R.P_IST, R.V_IST, R.P_FNC, R.FLWERR, R.FNCERR, R.I2T, R.UIT, R.REC_CNT, R.FNC_OUT,
@@ -32,11 +31,6 @@ CLEARED = (R.P_IST, R.V_IST, R.P_FNC, R.FLWERR, R.FNCERR, R.I2T, R.UIT, R.REC_CN
            R.IC_SOLL, R.IA_IST, R.IB_IST, R.IC_IST, R.UA_VAL, R.UB_VAL, R.UC_VAL, R.V_ELDEG)
 _ERR_KEPT = c.RELPOSPSOLL | c.RELPOSPFNC | c.DIS_P_LIM  #: ERR_STAT bits that survive a reset
 _CNTRL_CLEARED = c.RECORDBIT | c.REWINDBIT | c.MAN_RESYNC
-#: value rules of the per-motor reset values (bit flags, checked in this order)
-FINITE = 1  #: finite
-NONNEGATIVE = 2  #: >= 0
-POSITIVE = 4  #: > 0
-BINARY = 8  #: 0 or 1
 
 
 @njit(**KERNEL)
@@ -154,28 +148,3 @@ def power_on_from_memory(regs: np.ndarray, state: np.ndarray, params: np.ndarray
         i = idx[j]
         _copy_row(regs[i], flash[i] if has_flash[i] else rom[types[j]])
     power_on_rows(regs, state, params, latched, idx)
-
-
-@njit(**KERNEL)
-def first_bad_value(values: np.ndarray, rules: np.ndarray) -> int:  # pragma: no cover
-    """The first value that breaks its row's rules, as ``16·row + rule``, or −1.
-
-    Parameters
-    ----------
-    values : numpy.ndarray
-        (P, M) float64, one row per keyword of :meth:`jvl_gym.MotorArray.reset`.
-    rules : numpy.ndarray
-        (P,) int64: the rules of each row, an OR of :data:`FINITE`, :data:`NONNEGATIVE`,
-        :data:`POSITIVE` and :data:`BINARY`, checked row by row in this order.
-    """
-    for q in range(values.shape[0]):
-        for rule in (FINITE, NONNEGATIVE, POSITIVE, BINARY):
-            if rules[q] & rule:
-                for j in range(values.shape[1]):
-                    x = values[q, j]
-                    ok = (math.isfinite(x) if rule == FINITE else not x < 0.0
-                          if rule == NONNEGATIVE else not x <= 0.0 if rule == POSITIVE
-                          else x == 0.0 or x == 1.0)
-                    if not ok:
-                        return 16 * q + rule
-    return -1

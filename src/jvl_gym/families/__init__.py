@@ -1,19 +1,30 @@
 """Motor families: each one folder of its own, registered here by key.
 
 A family is its register table, constants and units, firmware, plant, configs and default
-setups, and the compiled step the engine drives (docs/architecture.md, "Adding a motor
-family"). The generic layers reach a family only through its :class:`Family` record.
+setups, the compiled step the engine drives and its motor-array class (docs/architecture.md,
+"Adding a motor family"). The generic layers reach a family only through its :class:`Family`
+record. ``mac800`` and ``mis`` hold register tables and units only so far; they are not
+registered until they can run.
 """
 
 from __future__ import annotations
 
 import functools
 import importlib
+import os
+from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import Path
 from types import ModuleType
 from typing import Any
 
-__all__ = ["Family", "register_family", "family", "families"]
+import yaml
+
+__all__ = ["Family", "DEFAULT_FAMILY", "register_family", "family", "families",
+           "family_of_motor"]
+
+#: the family of a motor type no registered family names
+DEFAULT_FAMILY = "mac050_141"
 
 
 @dataclass(frozen=True)
@@ -29,11 +40,17 @@ class Family:
     compiled : module
         The compiled step: ``outer_sample``, ``inner_block``, ``LANES``, ``prepare``,
         ``scratch`` (see :mod:`jvl_gym.engine.driver`).
+    array_class : type
+        The family's :class:`~jvl_gym.MotorArray` subclass.
+    motor_types : callable
+        Names of the family's motor types (each with a motor config).
     """
 
     key: str
     title: str
     compiled: ModuleType
+    array_class: type
+    motor_types: Callable[[], list[str]]
 
 
 _MODULES: dict[str, str] = {"mac050_141": "jvl_gym.families.mac050_141"}
@@ -59,3 +76,26 @@ def family(key: str) -> Family:
 def families() -> tuple[str, ...]:
     """Keys of the registered families."""
     return tuple(_MODULES)
+
+
+def family_of_motor(motor: Any) -> Family:
+    """The family of ``motor``: a motor config object (its class's ``FAMILY_KEY``), a config
+    file (its top-level ``family`` key) or a motor type name one registered family lists;
+    anything else belongs to :data:`DEFAULT_FAMILY`, whose loader says what is wrong."""
+    key = getattr(type(motor), "FAMILY_KEY", None)
+    if key is None and isinstance(motor, (str, os.PathLike)):
+        path = Path(motor)
+        if path.suffix in (".yaml", ".yml"):
+            key = _family_in_file(path)
+        else:
+            key = next((k for k in _MODULES if str(motor) in family(k).motor_types()), None)
+    return family(key if isinstance(key, str) and key in _MODULES else DEFAULT_FAMILY)
+
+
+def _family_in_file(path: Path) -> str | None:
+    """The ``family`` key of a motor config file, if it is readable and has one."""
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError):
+        return None
+    return data.get("family") if isinstance(data, dict) else None
