@@ -246,6 +246,8 @@ class MotorArray:
     STATE_KEYWORDS: ClassVar[dict[str, int]] = {}
     #: reset keyword → value rules (``jvl_gym.keywords``)
     VALUE_RULES: ClassVar[dict[str, int]] = {}
+    #: world-input name → column of ``inputs`` (``set_input`` keywords, ``jvl_gym.world``)
+    INPUTS: ClassVar[dict[str, int]] = {}
     #: the physical quantities :meth:`trace` records (names of properties)
     PHYSICAL: ClassVar[frozenset[str]] = frozenset()
 
@@ -304,6 +306,11 @@ class MotorArray:
         self._fmt = self.table.fmt_code_array
         self._before_reset()
         self.reset(**params)
+
+    @property
+    def time(self) -> np.ndarray:
+        """Time since power-on of each motor [s], (N,)."""
+        raise NotImplementedError
 
     @property
     def family(self) -> Family:

@@ -33,16 +33,12 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from .. import constants as c
 from ..engine.driver import all_finite
+from ..families import DEFAULT_FAMILY, family
 from ..noise import normals
 from .compiled import OBS_BOUND, reset_counters
 
-__all__ = ["MotorVectorEnv", "NumpyTaskEnv", "Column", "OBS_BOUND", "ERROR_BITS"]
-#: ERR_STAT bits that end an episode: I2T, FLW, FNC, UIT and position-limit errors (3.2.35)
-ERROR_BITS = c.I2T_ERR | c.FLW_ERR | c.FNC_ERR | c.UIT_ERR | c.PLIM_ERR
-_ERROR_NAMES = (("I2T_ERR", c.I2T_ERR), ("FLW_ERR", c.FLW_ERR), ("FNC_ERR", c.FNC_ERR),
-                ("UIT_ERR", c.UIT_ERR), ("PLIM_ERR", c.PLIM_ERR))
+__all__ = ["MotorVectorEnv", "NumpyTaskEnv", "Column", "OBS_BOUND"]
 #: ``info["termination_reason"]`` of a copy truncated at its horizon
 TIME_LIMIT = "time limit: max_episode_steps reached (truncated)"
 
@@ -101,14 +97,16 @@ class MotorVectorEnv(VectorEnv, ABC):
     ----------
     num_envs : int
         Number of copies.
-    motor_type : str or sequence of str
-        Motor type, or types drawn uniformly at every reset (``"MAC050"``, ``"MAC095"``,
-        ``"MAC140"``, ``"MAC141"``).
+    motor_type : str or sequence of str, optional
+        Motor type of the task's family, or types drawn uniformly at every reset (for the MAC
+        tasks ``"MAC050"``, ``"MAC095"``, ``"MAC140"``, ``"MAC141"``); default: the task's
+        :attr:`default_motor_type`.
     randomization : mapping, optional
         Overrides of the task's domain-randomisation ranges, ``name -> (low, high)``; see the
         task's ``default_ranges``. ``(x, x)`` fixes a parameter.
     decimation : int, optional
-        Outer samples (1.92 ms) per environment step; default: the task's.
+        Outer samples (of the family's outer rate) per environment step; default: the
+        task's.
     obs_noise : float
         Standard deviation of Gaussian noise added to the normalised observation.
     max_episode_steps : int, optional
@@ -128,6 +126,13 @@ class MotorVectorEnv(VectorEnv, ABC):
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 25,
                                 "autoreset_mode": AutoresetMode.NEXT_STEP}
 
+    #: the motor family the task runs on (``jvl_gym.families``)
+    family_key: str = DEFAULT_FAMILY
+    #: (name, bit) of the error bits that end an episode, in :attr:`error_register`
+    terminal_errors: tuple[tuple[str, int], ...] = ()
+    error_register: str = "ERR_STAT"
+    #: motor type when none is given
+    default_motor_type: str = ""
     #: names of the observation components (normalised)
     obs_labels: tuple[str, ...] = ()
     #: names of the action components (each in [-1, 1])
@@ -140,7 +145,7 @@ class MotorVectorEnv(VectorEnv, ABC):
     scope_channels: tuple[str, ...] = ()
     scope_length: int = 400
 
-    def __init__(self, num_envs: int = 1, *, motor_type: str | Sequence[str] = "MAC140",
+    def __init__(self, num_envs: int = 1, *, motor_type: str | Sequence[str] | None = None,
                  randomization: Mapping[str, tuple[float, float]] | None = None,
                  decimation: int | None = None, obs_noise: float = 0.0,
                  max_episode_steps: int | None = None, render_mode: str | None = None,
@@ -172,7 +177,8 @@ class MotorVectorEnv(VectorEnv, ABC):
         if not np.isfinite(obs_noise) or obs_noise < 0:
             raise ValueError(f"obs_noise must be finite and >= 0, got {obs_noise!r}")
         self.obs_noise = float(obs_noise)
-        self.motor_types = self._check_types(motor_type)
+        self.motor_types = self._check_types(motor_type if motor_type is not None
+                                             else self.default_motor_type)
         self.ranges = self._check_ranges(randomization or {})
         self._range_names = tuple(sorted(self.default_ranges))
         self._range_cache: tuple[dict[str, tuple[float, float]], np.ndarray, np.ndarray] = (
@@ -209,10 +215,8 @@ class MotorVectorEnv(VectorEnv, ABC):
 
     # ------------------------------------------------------------------ configuration
     def _check_types(self, motor_type: str | Sequence[str]) -> tuple[str, ...]:
-        from ..config import motor_types
-
         types = (motor_type,) if isinstance(motor_type, str) else tuple(motor_type)
-        known = motor_types()
+        known = family(self.family_key).motor_types()
         if not types or any(t not in known for t in types):
             raise ValueError(f"motor_type must be one or more of {known}, got {motor_type!r}")
         return types
@@ -270,11 +274,11 @@ class MotorVectorEnv(VectorEnv, ABC):
 
     def _error_reason(self, i: int) -> str:
         """The ERR_STAT error bits of copy ``i`` that end an episode, as text ('' if none)."""
-        bits = int(self.motors.read_raw("ERR_STAT")[i]) & ERROR_BITS
+        bits = int(self.error_bits()[i])
         if not bits:
             return ""
-        names = "+".join(name for name, bit in _ERROR_NAMES if bits & bit)
-        return f"motor error {names} (ERR_STAT, manual 3.2.35)"
+        names = "+".join(name for name, bit in self.terminal_errors if bits & bit)
+        return f"motor error {names} ({self.error_register})"
 
     def _end_info(self, ended: np.ndarray, terminated: np.ndarray) -> dict[str, np.ndarray]:
         """``{"termination_reason": (N,) object array, "_termination_reason": ended}`` for the
@@ -290,16 +294,21 @@ class MotorVectorEnv(VectorEnv, ABC):
 
     # ------------------------------------------------------------------ helpers for tasks
     def error_bits(self) -> np.ndarray:
-        """ERR_STAT error bits that end an episode, (N,) int64 (0 when none is set)."""
-        return self.motors.read_raw("ERR_STAT") & ERROR_BITS
+        """The error bits that end an episode (:attr:`terminal_errors` of
+        :attr:`error_register`), (N,) int64 (0 when none is set)."""
+        if not self.terminal_errors:
+            return np.zeros(self.num_envs, dtype=np.int64)
+        mask = 0
+        for _, bit in self.terminal_errors:
+            mask |= bit
+        return self.motors.read_raw(self.error_register) & mask
 
     def _type_configs(self, idx: np.ndarray) -> list[Any]:
         """Motor configs of the types of copies ``idx`` (set at their reset)."""
         names = self._type_names[idx].tolist()
         missing = [name for name in names if name not in self._configs]
         if missing:
-            from ..config import load_motor
-
+            load_motor = family(self.family_key).array_class.load_motor
             for name in missing:
                 self._configs[name] = load_motor(name)
         return [self._configs[name] for name in names]
@@ -490,7 +499,7 @@ class MotorVectorEnv(VectorEnv, ABC):
             return None
         from .scope import draw_scope
 
-        dt = self.decimation * c.OUTER_DT
+        dt = self.decimation / self.motors.OUTER_HZ
         return draw_scope(self._figures, index, self.scope_trace(index), self.scope_channels, dt,
                           title=f"{type(self).__name__.replace('VectorEnv', '')} #{index}")
 

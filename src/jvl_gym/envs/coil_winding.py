@@ -12,6 +12,10 @@ from .. import constants as c
 from ..engine import EngineView, Episode, TaskDriver
 from ..families import family
 from ..families.mac050_141.task import (
+    DEFAULT_MOTOR_TYPE,
+    ERROR_BITS,
+    FAMILY_KEY,
+    TERMINAL_ERRORS,
     R,
     coil_direction,
     reg,
@@ -21,7 +25,7 @@ from ..families.mac050_141.task import (
 )
 from ..jit import KERNEL
 from . import deposition as dep
-from .base import ERROR_BITS, Column, MotorVectorEnv
+from .base import Column, MotorVectorEnv
 from .compiled import action, end_step, put_obs
 from .deposition import flatness_row, lay_turn_row, profile_summary_row
 from .profiles import SpeedProfile, row_speed
@@ -191,7 +195,7 @@ def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
     _observe_row(i, view, episode, task)
 
 
-_DRIVER = TaskDriver(family("mac050_141"), __file__, "coil_winding", begin=_step_begin,
+_DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "coil_winding", begin=_step_begin,
                      before=_spindle_before, after=_spindle_after, end=_step_end)
 
 
@@ -238,6 +242,10 @@ def _reset_rows(idx: np.ndarray, w: np.ndarray, h: np.ndarray, d0: np.ndarray,
 class CoilWindingVectorEnv(MotorVectorEnv):
     """Vector version of :class:`CoilWindingEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
+
+    family_key = FAMILY_KEY
+    default_motor_type = DEFAULT_MOTOR_TYPE
+    terminal_errors = TERMINAL_ERRORS
 
     d0 = Column("coil", _C_D0)  #: nominal wire diameter [m]
     d_mean = Column("coil", _C_D_MEAN)  #: true mean wire diameter [m]

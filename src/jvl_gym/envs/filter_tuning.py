@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from .. import constants as c
+from ..families.mac050_141.task import DEFAULT_MOTOR_TYPE, FAMILY_KEY, TERMINAL_ERRORS
 from .base import NumpyTaskEnv
 from .single import MotorEnv
 
@@ -43,6 +44,10 @@ def synthesis_registers(motor_type: str) -> dict[str, float] | None:
 class FilterTuningVectorEnv(NumpyTaskEnv):
     """Vector version of :class:`FilterTuningEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
+
+    family_key = FAMILY_KEY
+    default_motor_type = DEFAULT_MOTOR_TYPE
+    terminal_errors = TERMINAL_ERRORS
 
     obs_labels = (*(f"type_{t}" for t in _TYPES), "inertia_ratio_estimate",
                   "viscous_estimate", "coulomb_estimate")

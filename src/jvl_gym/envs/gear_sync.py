@@ -12,6 +12,10 @@ from .. import constants as c
 from ..engine import EngineView, Episode, TaskDriver
 from ..families import family
 from ..families.mac050_141.task import (
+    DEFAULT_MOTOR_TYPE,
+    ERROR_BITS,
+    FAMILY_KEY,
+    TERMINAL_ERRORS,
     R,
     reg,
     set_analog_volts,
@@ -21,7 +25,7 @@ from ..families.mac050_141.task import (
 )
 from ..jit import KERNEL
 from ..noise import normal
-from .base import ERROR_BITS, Column, MotorVectorEnv
+from .base import Column, MotorVectorEnv
 from .compiled import action, end_step, put_obs
 from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
@@ -141,7 +145,7 @@ def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
     _observe_row(i, view, episode, task)
 
 
-_DRIVER = TaskDriver(family("mac050_141"), __file__, "gear_sync", begin=_step_begin,
+_DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "gear_sync", begin=_step_begin,
                      before=_line_before, after=_line_after, end=_step_end)
 
 
@@ -190,6 +194,10 @@ def _reset_rows(idx: np.ndarray, line: np.ndarray, gear: np.ndarray, ea: np.ndar
 class GearSyncVectorEnv(MotorVectorEnv):
     """Vector version of :class:`GearSyncEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
+
+    family_key = FAMILY_KEY
+    default_motor_type = DEFAULT_MOTOR_TYPE
+    terminal_errors = TERMINAL_ERRORS
 
     ea = Column("line", _W_EA)  #: E·A [N]
     thickness = Column("line", _W_THICK)  #: web thickness [m]

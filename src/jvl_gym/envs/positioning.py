@@ -10,9 +10,17 @@ from numba import njit
 from .. import constants as c
 from ..engine import EngineView, Episode, TaskDriver
 from ..families import family
-from ..families.mac050_141.task import R, reg, set_analog_volts
+from ..families.mac050_141.task import (
+    DEFAULT_MOTOR_TYPE,
+    ERROR_BITS,
+    FAMILY_KEY,
+    TERMINAL_ERRORS,
+    R,
+    reg,
+    set_analog_volts,
+)
 from ..jit import KERNEL
-from .base import ERROR_BITS, MotorVectorEnv
+from .base import MotorVectorEnv
 from .compiled import action, end_step, put_obs
 from .single import MotorEnv
 
@@ -66,7 +74,7 @@ def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
     _observe_row(i, view, episode, task)
 
 
-_DRIVER = TaskDriver(family("mac050_141"), __file__, "positioning", begin=_step_begin,
+_DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "positioning", begin=_step_begin,
                      end=_step_end)
 
 
@@ -92,6 +100,10 @@ def _reset_rows(idx: np.ndarray, target_turns: np.ndarray, target: np.ndarray,
 class PositioningVectorEnv(MotorVectorEnv):
     """Vector version of :class:`PositioningEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
+
+    family_key = FAMILY_KEY
+    default_motor_type = DEFAULT_MOTOR_TYPE
+    terminal_errors = TERMINAL_ERRORS
 
     obs_labels = ("position_error", "position_error_fine", "speed", "previous_action")
     act_labels = ("torque",)

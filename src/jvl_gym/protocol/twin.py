@@ -50,7 +50,7 @@ from . import mactalk as mt
 from .errors import FrameError
 
 __all__ = ["MotorBackend", "Twin", "MacTalkSession", "UserInterfaceSession", "BLOCK_WORDS",
-           "REG"]
+           "RegisterNumbers"]
 
 log = logging.getLogger(__name__)
 
@@ -58,14 +58,33 @@ log = logging.getLogger(__name__)
 BLOCK_WORDS = 16
 
 
-class REG:
-    """Register numbers used by the twin (manual 3.2)."""
+class RegisterNumbers:
+    """Numbers of the registers the twin uses, looked up by name in the motors' register
+    table (manual 3.2 for the MACs); −1 where the table has no such register.
 
-    MODE_REG, P_SOLL, V_SOLL, T_SOLL, P_FNC, P_IST = 2, 3, 5, 7, 8, 10
-    FLWERR, ERR_STAT, CNTRL_BITS, HOME_MODE = 20, 35, 36, 42
-    P_REG_P, V_REG_P, A_REG_P, T_REG_P, L_REG_P, Z_REG_P = 43, 44, 45, 46, 47, 48
-    P1, P7, P8 = 49, 61, 63
-    SAMPLE1, REC_CNT, MYADDR = 112, 116, 156
+    Attributes
+    ----------
+    MODE_REG, P_SOLL, V_SOLL, T_SOLL, P_FNC, P_IST, FLWERR, ERR_STAT, CNTRL_BITS, HOME_MODE,
+    P_REG_P, V_REG_P, A_REG_P, T_REG_P, L_REG_P, Z_REG_P, P1, P7, P8, SAMPLE1, REC_CNT, MYADDR
+        Register numbers.
+    """
+
+    NAMES = ("MODE_REG", "P_SOLL", "V_SOLL", "T_SOLL", "P_FNC", "P_IST", "FLWERR", "ERR_STAT",
+             "CNTRL_BITS", "HOME_MODE", "P_REG_P", "V_REG_P", "A_REG_P", "T_REG_P", "L_REG_P",
+             "Z_REG_P", "P1", "P7", "P8", "SAMPLE1", "REC_CNT", "MYADDR")
+
+    def __init__(self, table: Any) -> None:
+        from ..registers import RegisterError
+
+        for name in self.NAMES:
+            try:
+                number = table.lookup(name).number
+            except RegisterError:
+                number = -1
+            setattr(self, name, number)
+        #: register-set pointer of each FastMAC group letter (manual 5.2.1)
+        self.pointer = {"P": self.P_REG_P, "V": self.V_REG_P, "A": self.A_REG_P,
+                        "T": self.T_REG_P, "L": self.L_REG_P, "Z": self.Z_REG_P}
 
 
 SAFE_MODE, INIT_MODE = 15, 0
@@ -73,8 +92,6 @@ _IN_POS, _ACC, _DEC = 1 << 4, 1 << 5, 1 << 6
 _ERRORS = 0x0F  # I2T_ERR, FLW_ERR, FNC_ERR, UIT_ERR (status bit 0, manual 5.2.1.6)
 _CLEARABLE = 0x0F | (1 << 7) | (1 << 8) | (1 << 11) | (1 << 12)  # errors reset by command 01h
 _RELPOSPSOLL, _RELPOSPFNC = 1 << 9, 1 << 10
-_POINTER = {"P": REG.P_REG_P, "V": REG.V_REG_P, "A": REG.A_REG_P, "T": REG.T_REG_P,
-            "L": REG.L_REG_P, "Z": REG.Z_REG_P}
 
 
 class MotorBackend(Protocol):
@@ -135,6 +152,8 @@ class Twin:
                  flash_dir: str | os.PathLike[str] | None = None,
                  fastmac_code: dict[str, tuple[int, int]] = fm.DEFAULT_CODE) -> None:
         self.m = motors
+        #: numbers of the registers the twin uses, from the motors' register table
+        self.reg = RegisterNumbers(motors.table)
         self.lock = threading.RLock()
         self.stats: Counter[str] = Counter()
         self.fastmac_code = fastmac_code
@@ -154,8 +173,8 @@ class Twin:
                 motors.load_flash_image(i, image)
                 motors.software_reset(i)
             elif addresses is not None:
-                motors.load_flash_image(i, {REG.MYADDR: addresses[i]})
-                motors.write_raw(REG.MYADDR, addresses[i], index=i)
+                motors.load_flash_image(i, {self.reg.MYADDR: addresses[i]})
+                motors.write_raw(self.reg.MYADDR, addresses[i], index=i)
 
     # ------------------------------------------------------------------ helpers
     def _flash_path(self, i: int) -> Path | None:
@@ -180,10 +199,10 @@ class Twin:
 
     def addresses(self) -> list[int]:
         """MYADDR of every motor now."""
-        return [int(a) for a in self.m.read_raw(REG.MYADDR)]
+        return [int(a) for a in self.m.read_raw(self.reg.MYADDR)]
 
     def mode(self, i: int) -> int:
-        return int(self.m.read_raw(REG.MODE_REG)[i])
+        return int(self.m.read_raw(self.reg.MODE_REG)[i])
 
     def word(self, i: int, reg: int) -> int:
         """The 16-bit word of register number ``reg`` of motor ``i`` (0 where there is none)."""
@@ -230,7 +249,7 @@ class Twin:
         except (RegisterError, ValueError) as exc:
             self.refuse(str(exc))
             return False
-        if reg in (REG.CNTRL_BITS, REG.MODE_REG, REG.REC_CNT):
+        if reg in (self.reg.CNTRL_BITS, self.reg.MODE_REG, self.reg.REC_CNT):
             self._sample_ptr[i] = 0
         return True
 
@@ -378,7 +397,7 @@ class UserInterfaceSession:
 
     def status(self) -> int:
         """The status byte now (manual 5.2.1.6)."""
-        st = int(self.twin.m.read_raw(REG.ERR_STAT)[self.i])
+        st = int(self.twin.m.read_raw(self.twin.reg.ERR_STAT)[self.i])
         dec, acc = bool(st & _DEC), bool(st & _ACC)
         return fm.encode_status(fm.Status(self.toggle, dec, acc and not dec, bool(st & _IN_POS),
                                           self.flexmac, False, bool(st & _ERRORS)))
@@ -413,17 +432,18 @@ class UserInterfaceSession:
                 self._fast(got)
         if self.send_myaddr:
             self.send_myaddr = False
-            return bytes((self.twin.word(self.i, REG.MYADDR) & 0xFF,))
+            return bytes((self.twin.word(self.i, self.twin.reg.MYADDR) & 0xFF,))
         return bytes((self.status(),))
 
     def _w(self, reg: int, raw: int) -> bool:
+        r = self.twin.reg
         return self.twin.write_bytes(self.i, reg, mt.long_to_bytes(_s32(raw))
-                                     if reg in (REG.P_SOLL, REG.P_IST, REG.P_FNC)
+                                     if reg in (r.P_SOLL, r.P_IST, r.P_FNC)
                                      else mt.words_to_bytes([raw & 0xFFFF]))
 
     def _err_stat(self, clear: int = 0, set_: int = 0) -> None:
-        st = int(self.twin.m.read_raw(REG.ERR_STAT)[self.i])
-        self._w(REG.ERR_STAT, (st & ~clear) | set_)
+        st = int(self.twin.m.read_raw(self.twin.reg.ERR_STAT)[self.i])
+        self._w(self.twin.reg.ERR_STAT, (st & ~clear) | set_)
 
     def _raw(self, reg: int) -> int:
         return int(self.twin.m.read_raw(reg)[self.i])
@@ -432,44 +452,46 @@ class UserInterfaceSession:
         """Carry out a FastMAC command (manual 5.2.1.4)."""
         if c.mode != fm.Mode.COMMAND:
             assert c.group is not None and c.number is not None
-            self._w(_POINTER[c.group], c.number)
+            self._w(self.twin.reg.pointer[c.group], c.number)
             if self.twin.mode(self.i) != int(c.mode):
-                self._w(REG.MODE_REG, int(c.mode))
+                self._w(self.twin.reg.MODE_REG, int(c.mode))
             return
         k = fm.FastCommand
         cmd = c.command
         if cmd == k.RESET_ERROR:
             self._err_stat(clear=_CLEARABLE)
         elif cmd == k.P_SOLL_ZERO:
-            self._w(REG.P_SOLL, 0)
+            self._w(self.twin.reg.P_SOLL, 0)
             self._err_stat(clear=_IN_POS)
         elif cmd == k.P_IST_ZERO:
-            self._w(REG.P_IST, 0)
+            self._w(self.twin.reg.P_IST, 0)
         elif cmd == k.P_FNC_ZERO:
-            self._w(REG.P_FNC, 0)
+            self._w(self.twin.reg.P_FNC, 0)
             self._err_stat(clear=_IN_POS)
         elif cmd == k.V_SOLL_ZERO:
-            self._w(REG.V_SOLL, 0)
+            self._w(self.twin.reg.V_SOLL, 0)
         elif cmd == k.T_SOLL_ZERO:
-            self._w(REG.T_SOLL, 0)
+            self._w(self.twin.reg.T_SOLL, 0)
         elif cmd == k.IN_POS_ZERO:
             self._err_stat(clear=_IN_POS)
         elif cmd in (k.REL_P7_FNC, k.REL_P8_FNC):
-            p = self._raw(REG.P7 if cmd == k.REL_P7_FNC else REG.P8)
-            self._w(REG.P_FNC, (self._raw(REG.FLWERR) - p) * 16)  # literally as in 5.2.1.4
+            p = self._raw(self.twin.reg.P7 if cmd == k.REL_P7_FNC else self.twin.reg.P8)
+            # literally as in 5.2.1.4
+            self._w(self.twin.reg.P_FNC, (self._raw(self.twin.reg.FLWERR) - p) * 16)
             self._err_stat(clear=_IN_POS)
         elif cmd in (k.SET1, k.SET2, k.SET3, k.SET4):
             n = int(cmd) - int(k.SET1) + 1
-            for reg in _POINTER.values():
+            for reg in self.twin.reg.pointer.values():
                 self._w(reg, n)
             self._err_stat(clear=_IN_POS)
         elif cmd == k.HOME:
-            home = self._raw(REG.HOME_MODE) >> 8
+            home = self._raw(self.twin.reg.HOME_MODE) >> 8
             if home in (12, 13, 14):
-                self._w(REG.MODE_REG, home)
+                self._w(self.twin.reg.MODE_REG, home)
         elif cmd in (k.MOVE_REL_P7, k.MOVE_REL_P8):
-            p = self._raw(REG.P7 if cmd == k.MOVE_REL_P7 else REG.P8)
-            self._w(REG.P_SOLL, self._raw(REG.P_IST) + p - self._raw(REG.FLWERR))
+            p = self._raw(self.twin.reg.P7 if cmd == k.MOVE_REL_P7 else self.twin.reg.P8)
+            r = self.twin.reg
+            self._w(r.P_SOLL, self._raw(r.P_IST) + p - self._raw(r.FLWERR))
         elif cmd == k.TRANSMIT_SLOWLY:
             self.slow = True
         elif cmd == k.ABSOLUTE:

@@ -95,6 +95,9 @@ class MacMotorArray(MotorArray):
                | (POSITIVE if name in _POSITIVE else 0) | (BINARY if name in _BINARY else 0))
         for name in [*_PARAMETERS, *_STATES]
     }
+    INPUTS: ClassVar[dict[str, int]] = {
+        "load_torque": L.I_LOAD_TORQUE, "analog_volts": L.I_ANALOG_VOLTS,
+        "pulse_counts": L.I_PULSE_COUNTS, "home": L.I_HOME, "supply_volts": L.I_SUPPLY_VOLTS}
     PHYSICAL = frozenset({"speed_rpm", "speed_rad_s", "position_rad", "torque", "bus_voltage"})
     ONE_BY_ONE = frozenset(W.POINTERS) | {R.CNTRL_BITS}
 

@@ -12,13 +12,15 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ... import constants as _c
 from ... import layout as _L
 from ...engine.view import EngineView
 from ...firmware import regs as R
 from ...registers import MAC050_141 as _TABLE
 from ...registers import Access as _Access
 
-__all__ = ["R", "reg", "set_reg", "shaft_angle", "coil_direction", "set_analog_volts",
+__all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BITS", "reg",
+           "set_reg", "shaft_angle", "coil_direction", "set_analog_volts",
            "set_load_torque", "set_pulse_counts"]
 
 
@@ -26,6 +28,15 @@ __all__ = ["R", "reg", "set_reg", "shaft_angle", "coil_direction", "set_analog_v
 def reg(view: EngineView, i: int, number: int) -> int:  # pragma: no cover - compiled
     """Stored integer of register ``number`` of motor ``i`` (a LongInt's 32-bit value)."""
     return view.regs[i, number]
+
+
+#: the family's key, and the motor type of a task when none is given
+FAMILY_KEY = "mac050_141"
+DEFAULT_MOTOR_TYPE = "MAC140"
+#: ERR_STAT bits that end an episode: I2T, FLW, FNC, UIT and position-limit errors (3.2.35)
+TERMINAL_ERRORS = (("I2T_ERR", _c.I2T_ERR), ("FLW_ERR", _c.FLW_ERR), ("FNC_ERR", _c.FNC_ERR),
+                   ("UIT_ERR", _c.UIT_ERR), ("PLIM_ERR", _c.PLIM_ERR))
+ERROR_BITS = _c.I2T_ERR | _c.FLW_ERR | _c.FNC_ERR | _c.UIT_ERR | _c.PLIM_ERR
 
 
 def _raw_limits() -> tuple[np.ndarray, np.ndarray]:
