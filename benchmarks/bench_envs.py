@@ -29,8 +29,8 @@ from bench_page import table, update_section  # benchmarks/ is the script's dire
 from best_rate import best_rate
 
 import jvl_gym  # noqa: F401
-from jvl_gym import constants as c
 from jvl_gym.envs import ENV_IDS
+from jvl_gym.families.mac050_141 import constants as c
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCH_VENV = ROOT / ".venv-bench"

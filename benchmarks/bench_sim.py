@@ -20,7 +20,7 @@ from bench_page import table, update_section  # benchmarks/ is the script's dire
 from best_rate import best_rate
 
 from jvl_gym import MotorArray
-from jvl_gym import constants as c
+from jvl_gym.families.mac050_141 import constants as c
 
 
 def _array(n: int) -> MotorArray:

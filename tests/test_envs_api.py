@@ -166,7 +166,7 @@ def test_constructor_ranges_and_decimation() -> None:
     core = env.unwrapped.core
     assert core.target[0] == -2048
     env.step(np.zeros(1, dtype=np.float32))
-    assert core.motors.state[0, jvl_gym.layout.S_TICK] == 3 * 15
+    assert core.motors.state[0, jvl_gym.families.mac050_141.layout.S_TICK] == 3 * 15
     with pytest.raises(ValueError):
         gym.make("jvl_gym/Positioning-v0", randomization={"target_turns": (1, -1)})
     with pytest.raises(ValueError):

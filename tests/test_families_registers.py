@@ -13,10 +13,10 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from jvl_gym.families import mac800, mis
+from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
 from jvl_gym.families.mac800 import units as mu
 from jvl_gym.families.mis import units as su
 from jvl_gym.registers import (
-    MAC050_141,
     Access,
     Format,
     RegisterRangeError,
@@ -61,11 +61,10 @@ def test_tables_load_with_every_number_once(table, last):
             assert r.minimum <= r.default <= r.maximum, r.name
 
 
-@pytest.mark.parametrize("package", ["registers", "families/mac800", "families/mis"])
+@pytest.mark.parametrize("package", ["families/mac050_141", "families/mac800", "families/mis"])
 def test_all_tables_share_one_schema(package):
-    name = "mac050_141.csv" if package == "registers" else "registers.csv"
     path = resources.files("jvl_gym")
-    for part in (*package.split("/"), name):
+    for part in (*package.split("/"), "registers.csv"):
         path = path.joinpath(part)
     text = path.read_text(encoding="utf-8")
     rows = list(csv.reader(text.splitlines()))

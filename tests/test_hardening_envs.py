@@ -9,9 +9,9 @@ import pytest
 from gymnasium.vector import AutoresetMode
 
 import jvl_gym  # noqa: F401
-from jvl_gym import constants as c
 from jvl_gym.envs import ENV_IDS
-from jvl_gym.firmware import regs as R
+from jvl_gym.families.mac050_141 import constants as c
+from jvl_gym.families.mac050_141.firmware import regs as R
 
 
 def _state(core):

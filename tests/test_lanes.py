@@ -1,4 +1,4 @@
-"""The SIMD lanes of jvl_gym.lanes give the bits of the one-motor reference kernel."""
+"""The SIMD lanes of mac050_141.lanes give the bits of the one-motor reference kernel."""
 
 from __future__ import annotations
 
@@ -6,14 +6,14 @@ import numpy as np
 from numba import njit
 
 from jvl_gym import MotorArray
-from jvl_gym import constants as c
-from jvl_gym import layout as L
-from jvl_gym.firmware import regs as R
+from jvl_gym.families.mac050_141 import constants as c
+from jvl_gym.families.mac050_141 import layout as L
+from jvl_gym.families.mac050_141.firmware import regs as R
+from jvl_gym.families.mac050_141.kernel import inner_sample, outer_firmware, sample_constants
+from jvl_gym.families.mac050_141.lanes import LANES, in_lanes, lane_scratch
 from jvl_gym.jit import KERNEL
-from jvl_gym.kernel import inner_sample, outer_firmware, sample_constants
-from jvl_gym.lanes import LANES, in_lanes, lane_scratch
-from jvl_gym.plant.trig import fma, sincos
 from jvl_gym.sim import driver
+from jvl_gym.trig import fma, sincos
 
 
 @njit(**KERNEL)
@@ -162,7 +162,7 @@ def test_commutation_sines_are_the_exact_sines_of_the_angle_units() -> None:
     looking them up: within one unit in the last place of the exact values (1e-21 near their
     zeros, the error of the reduced argument), and so the references IA/IB/IC_SOLL =
     amp·sin(PHI + k·120°) are those of the table."""
-    from jvl_gym.firmware.current_loop import RAD_PER_UNIT, phase_references
+    from jvl_gym.families.mac050_141.firmware.current_loop import RAD_PER_UNIT, phase_references
 
     k = np.arange(c.ELDEG_PER_TURN, dtype=np.float64)
     s, co = _sincos_all(k * RAD_PER_UNIT)
@@ -184,8 +184,8 @@ def test_the_inner_samples_are_compiled_once_for_the_drivers_and_the_env_steps()
     import gymnasium as gym
 
     import jvl_gym  # noqa: F401
-    from jvl_gym.kernel import inner_samples_one
-    from jvl_gym.lanes import inner_samples
+    from jvl_gym.families.mac050_141.kernel import inner_samples_one
+    from jvl_gym.families.mac050_141.lanes import inner_samples
 
     MotorArray("MAC140", n=3, seed=0).step(2)
     MotorArray("MAC140", n=70, seed=0).step(1)  # threaded driver

@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import pytest
 
-from jvl_gym import constants as c
-from jvl_gym.registers import MAC050_141, RegisterRangeError
+from jvl_gym.families.mac050_141 import constants as c
+from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
+from jvl_gym.registers import RegisterRangeError
 from jvl_gym.registers.formats import from_raw, to_raw
 
 

@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
 from jvl_gym.registers import (
-    MAC050_141,
     Access,
     Format,
     ReadOnlyRegisterError,

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from jvl_gym import ModeError, MotorArray
-from jvl_gym import constants as c
+from jvl_gym.families.mac050_141 import constants as c
 from jvl_gym.registers import (
     ReadOnlyRegisterError,
     RegisterError,
@@ -196,8 +196,8 @@ def test_trace_records_registers_and_physics(m):
 
 
 def test_reset_can_change_the_motor_type_of_some_motors():
-    from jvl_gym import layout as L
     from jvl_gym.config import load_motor
+    from jvl_gym.families.mac050_141 import layout as L
 
     m = MotorArray("MAC140", n=3, seed=0)
     m.write("MODE_REG", c.V_MODE, index=[0])
@@ -280,7 +280,7 @@ def test_refused_batch_changes_nothing(m):
 
 def test_refusal_names_the_first_refused_motor(m):
     """check_write (compiled rules per motor) words the refusal of the first refused motor."""
-    from jvl_gym.firmware import write_rules as W
+    from jvl_gym.families.mac050_141.firmware import write_rules as W
 
     m.write_many({"P1": 0, "P2": 10, "P3": 20, "P4": 30, "P5": 10, "P6": 1, "GEARF2": 1000,
                    "MODE_REG": c.COIL_MODE})

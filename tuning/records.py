@@ -183,7 +183,8 @@ def save_csv(rec: Record, path: str | os.PathLike[str]) -> Path:
 def _registers_header(path: Path, ln: int, text: str) -> dict[str, float]:
     """The ``# registers:`` line ``text`` (line ``ln`` of ``path``): NAME=value pairs of
     distinct writable registers of the MAC050–141 table, each value finite and in its range."""
-    from jvl_gym.registers import MAC050_141, Access, RegisterError, to_raw
+    from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
+    from jvl_gym.registers import Access, RegisterError, to_raw
 
     out: dict[str, float] = {}
     for item in text.split():

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import constants as c
+from .families.mac050_141 import constants as c
 from .sim import MotorArray
 
 

@@ -26,7 +26,7 @@ _THREADED = 32
 def compile_motors() -> float:
     """Compile the motor array's paths: stepping (serial and threaded), register writes and a
     test-mode record. Returns the wall time [s]."""
-    from . import constants as c
+    from .families.mac050_141 import constants as c
     from .sim import MotorArray
 
     start = time.perf_counter()

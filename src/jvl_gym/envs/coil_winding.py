@@ -8,9 +8,9 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from .. import constants as c
 from ..engine import EngineView, Episode, TaskDriver
 from ..families import family
+from ..families.mac050_141 import constants as c
 from ..families.mac050_141.task import (
     DEFAULT_MOTOR_TYPE,
     ERROR_BITS,
@@ -389,7 +389,7 @@ class CoilWindingEnv(MotorEnv):
     ## Description
     A spindle (pulse output 1024 counts/rev) winds wire on a coil of width 20 mm between two
     flanges; a MAC motor drives the traverse through a lead screw (2 mm/rev) in COIL_MODE
-    (manual 4.4.20, ``jvl_gym.firmware.coil``): it follows the spindle pulses with the gear
+    (manual 4.4.20, ``mac050_141.firmware.coil``): it follows the spindle pulses with the gear
     factor GEARF1/GEARF2, reverses at the thread positions P1/P4 (the flanges) and dwells at the
     stop positions P2/P3. The nominal registers are computed from the nominal wire diameter d0:
     the traverse advances d0 per spindle revolution and dwells one turn at each flange

@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import constants as c
+from ..families.mac050_141 import constants as c
 from ..families.mac050_141.task import DEFAULT_MOTOR_TYPE, FAMILY_KEY, TERMINAL_ERRORS
 from .base import NumpyTaskEnv
 from .single import MotorEnv

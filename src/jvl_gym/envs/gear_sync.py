@@ -8,9 +8,9 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from .. import constants as c
 from ..engine import EngineView, Episode, TaskDriver
 from ..families import family
+from ..families.mac050_141 import constants as c
 from ..families.mac050_141.task import (
     DEFAULT_MOTOR_TYPE,
     ERROR_BITS,

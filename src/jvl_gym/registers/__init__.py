@@ -1,7 +1,8 @@
 """Register layer of jvl_gym: the register table as data, formats and errors (manual 3.1, 3.2).
 
->>> from jvl_gym.registers import MAC050_141
->>> MAC050_141.lookup("v_soll").number
+>>> from jvl_gym.registers import load_table
+>>> table = load_table("src/jvl_gym/families/mac050_141/registers.csv")
+>>> table.lookup("v_soll").number
 5
 """
 
@@ -28,7 +29,6 @@ from .formats import (
 )
 from .table import (
     FORMAT_CODES,
-    MAC050_141,
     Access,
     Format,
     Register,
@@ -43,7 +43,6 @@ __all__ = [
     "Access",
     "FORMAT_CODES",
     "Format",
-    "MAC050_141",
     "ReadOnlyRegisterError",
     "Register",
     "RegisterError",

@@ -10,7 +10,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from .table import FORMAT_SCALE, MAC050_141, Access, Format, RegisterTable
+from .table import FORMAT_SCALE, Access, Format, RegisterTable
 
 __all__ = ["markdown_reference", "markdown_reference_32"]
 
@@ -132,15 +132,17 @@ def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Write the reference of :data:`MAC050_141` to ``argv[0]`` (default docs/registers.md)."""
+    """Write the reference of the MAC050–141 register table to ``argv[0]`` (default
+    docs/registers.md) and its mode table to ``modes.md`` beside it."""
     args = sys.argv[1:] if argv is None else argv
     out = Path(args[0]) if args else Path("docs/registers.md")
     out.parent.mkdir(parents=True, exist_ok=True)
-    from ..firmware.mode_table import markdown_mode_table, modes_using
+    from ..families.mac050_141.firmware.mode_table import markdown_mode_table, modes_using
+    from ..families.mac050_141.table import TABLE as table
 
-    out.write_text(markdown_reference(MAC050_141, usage=modes_using), encoding="utf-8")
+    out.write_text(markdown_reference(table, usage=modes_using), encoding="utf-8")
     (out.parent / "modes.md").write_text(markdown_mode_table(), encoding="utf-8")
-    print(f"wrote {out} ({len(MAC050_141)} registers)")
+    print(f"wrote {out} ({len(table)} registers)")
     return 0
 
 

@@ -1,10 +1,10 @@
 """The register table of one motor family, kept as data (manual 3.2, docs/model.md §4).
 
-The MAC50/95/140/141 table lives in a CSV file next to this module (``mac050_141.csv``); other
-families keep theirs in their own package (``jvl_gym/families/<family>/registers.csv``, loaded
-with :func:`load_packaged_table`). One row per register number. A LongInt register N (manual
-3.1: "registers of the format LongInt take up two register numbers, corresponding to two words")
-is a ``LongInt`` row N holding the whole 32-bit value and a ``LongIntHigh`` row N+1 named
+Each motor family keeps its table in its own package
+(``jvl_gym/families/<family>/registers.csv``, loaded with :func:`load_table` or
+:func:`load_packaged_table`). One row per register number. A LongInt register N (manual
+3.1: "registers of the format LongInt take up two register numbers, corresponding to two
+words") is a ``LongInt`` row N holding the whole 32-bit value and a ``LongIntHigh`` row N+1 named
 ``<NAME>_HI`` for the high word, so that every number has exactly one row. Numbers the manual
 leaves undocumented are ``RESERVED_<n>`` rows with access ``reserved``.
 
@@ -43,7 +43,6 @@ __all__ = [
     "TableError",
     "load_table",
     "load_packaged_table",
-    "MAC050_141",
     "FORMAT_CODES",
     "FORMAT_SCALE",
     "FORMAT_RAW_RANGE",
@@ -465,11 +464,6 @@ def load_table(path: str | PathLike[str]) -> RegisterTable:
     return RegisterTable(_parse_rows(p.read_text(encoding="utf-8"), str(p)), source=str(p))
 
 
-def _load_packaged(filename: str) -> RegisterTable:
-    text = resources.files(__package__).joinpath(filename).read_text(encoding="utf-8")
-    return RegisterTable(_parse_rows(text, filename), source=filename)
-
-
 def load_packaged_table(package: str, filename: str = "registers.csv") -> RegisterTable:
     """Load and validate a register table shipped inside a package.
 
@@ -493,7 +487,3 @@ def load_packaged_table(package: str, filename: str = "registers.csv") -> Regist
     text = resources.files(package).joinpath(filename).read_text(encoding="utf-8")
     source = f"{package.replace('.', '/')}/{filename}"
     return RegisterTable(_parse_rows(text, source), source=source)
-
-
-#: the MAC50/95/140/141 register table (manual 3.2, registers 1 … 164)
-MAC050_141: RegisterTable = _load_packaged("mac050_141.csv")

@@ -12,15 +12,15 @@ import numpy as np
 from numba import njit, typeof, types
 
 from ...engine.view import EngineView
-from ...kernel import inner_samples_one, outer_firmware
-from ...lanes import LANES, inner_samples, lane_scratch
+from .kernel import inner_samples_one, outer_firmware
+from .lanes import LANES, inner_samples, lane_scratch
 
 __all__ = ["LANES", "outer_sample", "inner_block", "prepare", "scratch"]
 
 
 @njit(cache=True, inline="always")
 def outer_sample(view: EngineView, i: int, t: int) -> None:  # pragma: no cover - compiled
-    """Steps 1–3 of an outer sample (``jvl_gym.kernel``) for motor ``i``; with a non-empty
+    """Steps 1–3 of an outer sample (``mac050_141.kernel``) for motor ``i``; with a non-empty
     world-input plan its row ``t`` sets the motor's inputs first."""
     plan = view.plan
     inputs = view.inputs

@@ -15,19 +15,20 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ... import constants as c
-from ... import layout as L
 from ...config import MotorConfig, load_motor, load_setup
-from ...firmware import modes as M
-from ...firmware import regs as R
-from ...firmware import write_rules as W
-from ...firmware.monitor import filter_gain
 from ...keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
-from ...power_on import power_on_from_memory, reset_rows
-from ...registers import MAC050_141, Format, Register, RegisterError
+from ...registers import Format, Register, RegisterError
 from ...registers.formats import from_raw
 from ...sim import ModeError, MotorArray, _as_index, _motor_index, _StorePlan
-from ...store import store_rows
+from . import constants as c
+from . import layout as L
+from .firmware import modes as M
+from .firmware import regs as R
+from .firmware import write_rules as W
+from .firmware.monitor import filter_gain
+from .power_on import power_on_from_memory, reset_rows
+from .store import store_rows
+from .table import TABLE
 
 __all__ = ["MacMotorArray"]
 
@@ -80,7 +81,7 @@ class MacMotorArray(MotorArray):
     """
 
     FAMILY_KEY = "mac050_141"
-    TABLE = MAC050_141
+    TABLE = TABLE
     N_STATE = L.N_STATE
     N_PARAM = L.N_PARAM
     N_INPUT = L.N_INPUT
@@ -253,7 +254,7 @@ class MacMotorArray(MotorArray):
         return self.state[:, L.S_TICK] * c.INNER_DT
 
     def _store_rows(self, plan: _StorePlan, idx: np.ndarray, raws: np.ndarray) -> None:
-        """Compiled check and store (:func:`jvl_gym.store.store_rows`); a refusal raises with
+        """Compiled check and store (:func:`mac050_141.store.store_rows`); a refusal raises with
         the registers before the refused one stored."""
         k = store_rows(self.regs, self.state, idx, plan.nums, plan.high, raws)
         if k >= 0:
@@ -263,7 +264,7 @@ class MacMotorArray(MotorArray):
 
     def _check_refusal(self, reg: Register, idx: np.ndarray, raw: np.ndarray) -> None:
         """Raise the firmware's refusal of storing ``raw`` in register ``reg`` of motors
-        ``idx`` (mode-change rules of manual 4.4 and ``jvl_gym.firmware.write_rules``), if any.
+        ``idx`` (mode-change rules of manual 4.4 and ``mac050_141.firmware.write_rules``), if any.
 
         Raises
         ------
@@ -458,7 +459,7 @@ class MacMotorArray(MotorArray):
         return self.state[:, L.S_THETA].copy()
 
     def _current_vector(self) -> np.ndarray:
-        """Stator current space vector [A], (N,) complex (``jvl_gym.plant.coil``)."""
+        """Stator current space vector [A], (N,) complex (``mac050_141.plant.coil``)."""
         return self.state[:, L.S_I_RE] + 1j * self.state[:, L.S_I_IM]
 
     @property

@@ -12,12 +12,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ... import constants as _c
-from ... import layout as _L
 from ...engine.view import EngineView
-from ...firmware import regs as R
-from ...registers import MAC050_141 as _TABLE
 from ...registers import Access as _Access
+from . import constants as _c
+from . import layout as _L
+from .firmware import regs as R
+from .table import TABLE as _TABLE
 
 __all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BITS", "reg",
            "set_reg", "shaft_angle", "coil_direction", "set_analog_volts",

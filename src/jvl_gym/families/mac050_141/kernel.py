@@ -12,7 +12,7 @@ Order within an outer sample (manual 1.2 sampled-system convention, docs/model.m
    (after ``pwm_delay_samples``) drives the coil, mechanics and DC bus for 128 µs.
    VF_OUT computed in step 2 is used from the first of these inner samples on.
 
-The drivers (:mod:`jvl_gym.lanes`) advance blocks of motors in lockstep, steps 1–3 one motor at
+The drivers (:mod:`mac050_141.lanes`) advance blocks of motors in lockstep, steps 1–3 one motor at
 a time and step 4 for several motors in SIMD lanes where :func:`inner_sample`'s branches allow;
 every motor's arithmetic is independent of the others, so an N-motor array is bit-for-bit
 equal to N one-motor arrays.
@@ -25,6 +25,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ...jit import KERNEL, LANE_KERNEL
+from ...noise import gauss
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R
@@ -52,8 +54,6 @@ from .firmware.modes import CORRECTING, FLWERR_MODES, REGULATED, enter_mode, sto
 from .firmware.monitor import check_errors, in_position, thermal, undervoltage
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
-from .jit import KERNEL, LANE_KERNEL
-from .noise import gauss
 from .plant.coil import coil_constants, coil_step_prepared, phase_to_vector, vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
@@ -241,7 +241,7 @@ def adc_count(x: float) -> tuple[float, bool]:
     rounded and limited to ±1023, and whether the converter saturated (IX_ERR, 3.2.147).
 
     ``+ 0.0`` turns a rounded −0.0 into +0.0, the zero an integer register holds: the SIMD
-    lanes (``jvl_gym.lanes``) use the value without storing it in a register first.
+    lanes (``mac050_141.lanes``) use the value without storing it in a register first.
     """
     x = rnd(x)
     return clamp(x, -1023.0, 1023.0) + 0.0, x >= 1023.0 or x <= -1023.0
@@ -271,7 +271,7 @@ def plant_sample(theta: float, omega: float, acc: float, i_re: float, i_im: floa
     Returns ``(theta1, omega1, i_re1, i_im1, ubus1, dump_on1, p_el, p_cu, e_fric, e_dump,
     e_sup)``: the new state, the mean electrical and copper powers [W] and the energies of the
     step [J]. Pure arithmetic on scalars: :func:`inner_sample` and the SIMD lanes of
-    :mod:`jvl_gym.lanes` share it.
+    :mod:`jvl_gym.families.mac050_141.lanes` share it.
     """
     kv = ubus * _HALF_PWM_PER_VOLT
     s_u = phase_to_vector(ua * kv, ub * kv, uc * kv)
@@ -304,14 +304,14 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
                  k_coil: tuple, k_mech: tuple, k_bus: tuple) -> None:
     """One 128 µs current-loop sample and the plant over it (step 4 of the module docstring).
 
-    The reference form, one motor at a time; :func:`jvl_gym.lanes.inner_samples` runs the
+    The reference form, one motor at a time; :func:`mac050_141.lanes.inner_samples` runs the
     same operations for the motors of a block in SIMD lanes when they need none of the
     per-motor branches (hall synchronisation, noise, inner-rate recording, passive and test
     modes). Inlined into the 15-sample loop of :func:`inner_samples_one`: as a call it would
     receive each of its six arrays field by field (numba passes an array's fields one by one)
     on every sample (docs/model.md §17).
     ``counts_per_amp`` (ADC counts per ampere) and the plant factors ``k_coil``, ``k_mech`` and
-    ``k_bus`` (``coil_constants``, ``mech_constants``, ``bus_constants`` of ``jvl_gym.plant``)
+    ``k_bus`` (``coil_constants``, ``mech_constants``, ``bus_constants`` of ``mac050_141.plant``)
     depend on the motor's parameters only: the caller computes them once per call, not nine
     divisions and an exponential per 128 µs.
     """
@@ -421,7 +421,7 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
 def inner_samples_one(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray,
                       key: np.uint64, buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:
     """The 15 inner samples of one outer sample (step 4) of one motor by :func:`inner_sample`:
-    the reference form, which :func:`jvl_gym.lanes.inner_samples` runs for the motors it
+    the reference form, which :func:`mac050_141.lanes.inner_samples` runs for the motors it
     cannot put into SIMD lanes.
 
     A function of its own, not inlined into ``inner_samples``: numba's inliner copies the

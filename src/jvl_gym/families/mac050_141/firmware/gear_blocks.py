@@ -11,9 +11,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ....jit import KERNEL
 from .. import constants as c
 from .. import layout as L
-from ..jit import KERNEL
 from . import regs as R
 from .blocks import _finish, max_landing_speed
 from .fixed import clamp

@@ -19,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ....jit import KERNEL
 from .. import constants as c
 from .. import layout as L
-from ..jit import KERNEL
 from . import regs as R
 from .blocks import velocity_block
 from .fixed import wrap32

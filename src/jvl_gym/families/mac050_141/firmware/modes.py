@@ -1,7 +1,7 @@
 """Operating modes: what each mode uses, entry actions, and the mode-change rules (manual 4.4).
 
 Tables (index = MODE_REG value 0 … N_MODES − 1), derived from the mode table
-(:mod:`jvl_gym.firmware.mode_table`, the configuration lists of manual 4.4.1–4.4.25):
+(:mod:`mac050_141.firmware.mode_table`, the configuration lists of manual 4.4.1–4.4.25):
 
 - ``REGULATED``: speed regulator active (the motor is assumed to be moving; a change to INIT goes
   through STOP_MODE, 4.4.2).
@@ -20,9 +20,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ....jit import KERNEL
 from .. import constants as c
 from .. import layout as L
-from ..jit import KERNEL
 from . import regs as R
 from .analog_blocks import a2pos_update
 from .coil import coil_entry

@@ -19,8 +19,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ....jit import KERNEL
 from .. import layout as L
-from ..jit import KERNEL
 from . import regs as R
 from .blocks import _finish, max_landing_speed
 from .fixed import clamp

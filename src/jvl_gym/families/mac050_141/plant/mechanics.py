@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..jit import KERNEL
+from ....jit import KERNEL
 
 
 @njit(cache=True, inline="always")
@@ -21,7 +21,7 @@ def end_stop_torque(theta: float, omega: float, lo: float, hi: float, k: float, 
     Beyond ``hi`` the stop pushes back with ``min(−k·(θ − hi) − d·ω, 0)``, below ``lo`` with
     ``max(−k·(θ − lo) − d·ω, 0)``. Written as selects of one spring-damper term (the minimum
     and maximum in the form of the processor's instructions), not as branches: the SIMD
-    lanes of ``jvl_gym.lanes`` compute every branch otherwise.
+    lanes of ``jvl_gym.families.mac050_141.lanes`` compute every branch otherwise.
     """
     above = theta > hi
     t = -k * (theta - (hi if above else lo)) - d * omega
@@ -51,7 +51,7 @@ def mech_step(theta: float, omega: float, drive: float, j: float, b: float, tc: 
 def mech_step_prepared(theta: float, omega: float, drive: float, j: float, tc: float, h: float,
                        k: tuple[float, float]):
     """:func:`mech_step` given ``k = mech_constants(j, b, h)``; same returns."""
-    # the branches are selects (the SIMD lanes of jvl_gym.lanes compute both sides anyway)
+    # the branches are selects (the SIMD lanes of mac050_141.lanes compute both sides anyway)
     stuck = omega == 0.0 and abs(drive) <= tc
     sgn = 1.0 if omega > 0.0 else (-1.0 if omega < 0.0 else (1.0 if drive > 0.0 else -1.0))
     h_j, inv_den = k

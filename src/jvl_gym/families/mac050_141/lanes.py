@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...jit import LANE_KERNEL
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R
@@ -19,7 +20,6 @@ from .firmware.current_loop import phase_step, references
 from .firmware.fixed import fx4, fx8
 from .firmware.mode_table import N_MODES
 from .firmware.modes import COMMUTATED
-from .jit import LANE_KERNEL
 from .kernel import adc_count, inner_samples_one, plant_sample, sample_constants
 from .plant.coil import vector_to_phases
 from .plant.encoder import eldeg, encoder_count
@@ -74,7 +74,7 @@ def _put(sc: np.ndarray, f: int, j: int, x: float) -> None:
 
 @njit(cache=True, inline="always")
 def in_lanes(r: np.ndarray, p: np.ndarray) -> bool:
-    """True when a motor's next inner samples take none of :func:`jvl_gym.kernel.inner_sample`'s
+    """True when a motor's next inner samples take none of :func:`mac050_141.kernel.inner_sample`'s
     per-motor branches: a mode with commutation and current loops (not INIT, SAFE, TESTU,
     TESTKI, MANI), commutation aligned (no hall synchronisation), no current or torque noise,
     no inner-rate recording. Such a motor can run in a SIMD lane."""
@@ -145,7 +145,7 @@ def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.
 
 @njit(cache=True, inline="always")
 def _lane_constants(sc: np.ndarray, j: int, p: np.ndarray) -> None:
-    """Lane ``j``'s :func:`jvl_gym.kernel.sample_constants` of the parameter row ``p``.
+    """Lane ``j``'s :func:`mac050_141.kernel.sample_constants` of the parameter row ``p``.
 
     They are a pure function of ten parameters, which the lane keeps beside them: when the
     parameters are those of the last gather (the same motor, as a rule) the stored constants
@@ -228,7 +228,7 @@ def _scatter(sc: np.ndarray, j: int, r: np.ndarray, s: np.ndarray) -> None:
 
 @njit(cache=True, inline="always")
 def _phase_lane(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float) -> float:
-    """One phase's current loop in lane ``j`` (:func:`jvl_gym.firmware.current_loop._phase`)."""
+    """One phase's current loop in lane ``j`` (:func:`mac050_141.firmware.current_loop._phase`)."""
     u1 = _get(sc, F_IU1_A + k, j)
     u, e = phase_step(i_soll, i_ist, _get(sc, F_IE1_A + k, j), u1, _get(sc, F_IU2_A + k, j),
                       _get(sc, F_IIST1_A + k, j), _get(sc, F_KIB1, j), _get(sc, F_KIB0, j),
@@ -253,7 +253,7 @@ def _pwm_lane(sc: np.ndarray, j: int, k: int, u: float) -> float:
 
 @njit(cache=True, inline="always")
 def _lane_sample(sc: np.ndarray, j: int, last: bool) -> None:
-    """One inner sample of lane ``j``: the operations of :func:`jvl_gym.kernel.inner_sample`
+    """One inner sample of lane ``j``: the operations of :func:`mac050_141.kernel.inner_sample`
     for a motor that :func:`in_lanes` admits, in the same order on the same values (so the
     result is bit-for-bit the same), written without a branch the compiler cannot turn into
     a select, so that the loop over lanes runs in SIMD registers.
@@ -333,12 +333,13 @@ def _lane_sample(sc: np.ndarray, j: int, last: bool) -> None:
 
 @njit(**LANE_KERNEL)
 def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scratch):
-    """The 15 inner samples (step 4, ``jvl_gym.kernel``) of motors ``i0 .. i0 + n - 1``
+    """The 15 inner samples (step 4, ``mac050_141.kernel``) of motors ``i0 .. i0 + n - 1``
     (``n <= LANES``, one block); ``scratch`` is the block's row of :func:`lane_scratch`.
 
     The motors that :func:`in_lanes` admits are copied into SIMD lanes, stepped together
-    (:func:`_lane_sample`) and copied back; the others run :func:`jvl_gym.kernel.inner_samples_one`
-    one at a time. Both give the same bits (tests/test_lanes.py).
+    (:func:`_lane_sample`) and copied back; the others run
+    :func:`mac050_141.kernel.inner_samples_one` one at a time. Both give the same bits
+    (tests/test_lanes.py).
     """
     m = 0
     for i in range(i0, i0 + n):

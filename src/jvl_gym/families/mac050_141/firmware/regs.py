@@ -6,7 +6,7 @@ kernel sees them as compile-time constants and no number is written twice.
 
 from __future__ import annotations
 
-from ..registers import MAC050_141 as _TABLE
+from ..table import TABLE as _TABLE
 
 
 def _n(name: str) -> int:

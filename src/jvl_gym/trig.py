@@ -3,7 +3,7 @@
 The coil needs ``e^{jθe}`` every 128 µs. The C library's ``sincos`` saves and restores the
 floating-point control register on every call (a slow instruction on some x86 cores, AMD's
 among them) and, being a call, keeps the compiler from stepping several motors in SIMD lanes
-(``jvl_gym.lanes``). This is the classic fdlibm method instead:
+(``jvl_gym.families.mac050_141.lanes``). This is the classic fdlibm method instead:
 
 - reduction to ``r ∈ [−π/4, π/4]``: ``n = round(x·2/π)``, ``r = x − n·π/2`` with π/2 split in
   three parts whose products with ``n`` are exact for ``|n| < 2²⁰`` (Cody–Waite);

@@ -4,8 +4,8 @@ For every MODE_REG value: its name and section, the function block, the register
 as parameters ("the parameters are interpreted as follows" of 4.4.x), and what its
 configuration list of 4.4.1–4.4.25 says (speed regulator, function correction, current
 regulator), with the model's decisions where the manual is silent (docs/model.md §9).
-The mode numbers of :mod:`jvl_gym.constants`, the boolean tables of
-:mod:`jvl_gym.firmware.modes` used by the compiled firmware, the register reference and the mode
+The mode numbers of :mod:`jvl_gym.families.mac050_141.constants`, the boolean tables of
+:mod:`mac050_141.firmware.modes` used by the compiled firmware, the register reference and the mode
 table of the documentation are all derived from :data:`MODES`.
 """
 
@@ -153,7 +153,8 @@ def markdown_mode_table() -> str:
     """The mode table as Markdown (docs/modes.md)."""
     yes = {True: "active", False: "passive"}
     lines = ["# Operating modes", "",
-             "Generated from `jvl_gym.firmware.mode_table` (manual 4.4); do not edit by hand.", "",
+             "Generated from `jvl_gym.families.mac050_141.firmware.mode_table` (manual 4.4); "
+             "do not edit by hand.", "",
              "| MODE_REG | mode | manual | function block | speed reg. | current reg. | "
              "correction | parameters |", "|---:|---|---|---|---|---|---|---|"]
     for m in MODES:

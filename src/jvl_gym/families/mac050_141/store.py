@@ -4,9 +4,9 @@
 (range, format, shape: ``jvl_gym.registers.formats``) in Python and hand the stored integers of
 one or more registers to :func:`store_rows`, which checks and stores them register by register
 for the selected motors: a plain register after the write rules of
-``jvl_gym.firmware.write_rules`` (GEARF2, COIL P1..P6, HOME_MODE, P_REG_P), a LongInt's high
+``mac050_141.firmware.write_rules`` (GEARF2, COIL P1..P6, HOME_MODE, P_REG_P), a LongInt's high
 word into its 32-bit value (manual 3.1), MODE_REG through the mode-change rules of manual 4.4
-(``jvl_gym.firmware.modes``) and the register rules, then the mode's entry actions. An env
+(``mac050_141.firmware.modes``) and the register rules, then the mode's entry actions. An env
 resets one or two copies at a time: per motor these are a few scalar operations, which in numpy
 over a handful of rows cost more in per-call overhead than the work.
 """
@@ -16,10 +16,10 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...jit import KERNEL
 from .firmware import regs as R
 from .firmware.modes import OK, apply_request, check_request
 from .firmware.write_rules import first_mode_refusal, first_write_refusal
-from .jit import KERNEL
 
 __all__ = ["store_rows"]
 
@@ -45,7 +45,7 @@ def store_rows(regs: np.ndarray, state: np.ndarray, idx: np.ndarray, nums: np.nd
     ----------
     regs, state : numpy.ndarray
         Register bank (N, N_REGS) int64 and firmware/plant state (N, N_STATE) float64 of all
-        motors (``jvl_gym.layout``).
+        motors (``jvl_gym.families.mac050_141.layout``).
     idx : numpy.ndarray
         Motor indices, (M,) int64.
     nums : numpy.ndarray

@@ -14,12 +14,12 @@ import math
 import numpy as np
 from numba import njit
 
+from ...jit import KERNEL
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R
 from .firmware.mode_table import N_MODES
 from .firmware.modes import OK, apply_request, check_request
-from .jit import KERNEL
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, sector_index
 
@@ -105,7 +105,7 @@ def reset_rows(regs: np.ndarray, state: np.ndarray, params: np.ndarray, inputs: 
     Parameters
     ----------
     regs, state, params, inputs : numpy.ndarray
-        The motors' arrays (``jvl_gym.layout``), (N, ·).
+        The motors' arrays (``jvl_gym.families.mac050_141.layout``), (N, ·).
     latched : numpy.ndarray
         CNTRL_BITS latched at power-on, (N,) int64.
     idx, types : numpy.ndarray

@@ -29,6 +29,6 @@ def encoder_count(theta: float) -> float:
 @njit(cache=True, inline="always")
 def eldeg(theta_e: float) -> float:
     """ELDEG_IST of an electrical angle [rad], in 0..2047 (a float holding the integer; the
-    ``mod 2048`` by ``floor``, exact, so that it runs in SIMD lanes, ``jvl_gym.lanes``)."""
+    ``mod 2048`` by ``floor``, exact, so that it runs in SIMD lanes, ``mac050_141.lanes``)."""
     e = np.floor(theta_e * _ELDEG_PER_RAD)
     return e - ELDEG_PER_TURN * np.floor(e * _PER_TURN)

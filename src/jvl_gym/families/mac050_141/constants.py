@@ -86,7 +86,7 @@ SAFE_LOAD_DEFAULTS_SAVE = 256  #: in SAFE_MODE: ROM defaults → flash, reset (4
 SAFE_LOAD_DEFAULTS = 257  #: in SAFE_MODE: ROM defaults, not saved
 SAFE_LOAD_FLASH = 258  #: in SAFE_MODE: last saved user parameters
 
-MODE_NAMES = _MODE_NAMES  #: MODE_REG value → mode name (jvl_gym.firmware.mode_table)
+MODE_NAMES = _MODE_NAMES  #: MODE_REG value → mode name (mac050_141.firmware.mode_table)
 
 # --- ERR_STAT bits (3.2.35) ------------------------------------------------------------------
 I2T_ERR = 1 << 0

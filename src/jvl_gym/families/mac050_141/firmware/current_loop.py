@@ -17,10 +17,10 @@ import math
 import numpy as np
 from numba import njit
 
+from ....jit import KERNEL
+from ....trig import fma, sincos
 from .. import constants as c
 from .. import layout as L
-from ..jit import KERNEL
-from ..plant.trig import fma, sincos
 from . import regs as R
 from .fixed import clamp, fx4, fx8, rnd
 
@@ -37,7 +37,7 @@ def references(vf: float, eldeg: float, v_eldeg: float, phase_comp: float, ampli
     VF_OUT, ELDEG_IST, V_ELDEG and the raw PHASE_COMP (Fixed8) and AMPLITUDE (Fixed8) registers.
 
     Pure arithmetic on floats holding the registers' integers (the angle's ``mod 2048`` by
-    ``floor``, exact), so that :mod:`jvl_gym.lanes` can run it for several motors in SIMD lanes.
+    ``floor``, exact), so that :mod:`mac050_141.lanes` can run it for several motors in SIMD lanes.
     """
     i_nom = abs(vf)
     quarter = 512.0 if vf >= 0.0 else -512.0
@@ -52,10 +52,10 @@ def phase_references(amp: float, phi: float) -> tuple[float, float, float]:
     """IA/IB/IC_SOLL = amp·sin(PHI + k·120°) for ``phi`` in 0..2047, stored in −850..850 (3.2.133).
 
     The firmware's sine table holds sin and cos of the 2048 angle units; they are computed
-    here (:func:`jvl_gym.plant.trig.sincos` of ``phi·2π/2048``, within an ulp of the exact
+    here (:func:`jvl_gym.trig.sincos` of ``phi·2π/2048``, within an ulp of the exact
     values) rather than looked up: a table lookup needs an integer index, which made the
     compiler step the whole angle computation lane by lane instead of in SIMD registers
-    (``jvl_gym.lanes``). Then ``sin(φ + 120°) = −sin φ/2 + (√3/2)·cos φ`` and
+    (``jvl_gym.families.mac050_141.lanes``). Then ``sin(φ + 120°) = −sin φ/2 + (√3/2)·cos φ`` and
     ``sin(φ + 240°) = −sin φ/2 − (√3/2)·cos φ``. ``+ 0.0`` makes a zero +0.0, as the integer
     registers hold it (:func:`phase_step`).
     """
@@ -102,7 +102,7 @@ def phase_step(i_soll: float, i_ist: float, e1: float, u1: float, u2: float, i_i
     ``U(k−1)``, ``U(k−2)``, ``I_IST(k−1)`` and the coefficients (Fixed8 KIB, Fixed4 KIF values).
 
     ``U`` is an integer; ``+ 0.0`` makes a rounded −0.0 the +0.0 that UX_VAL holds, so that the
-    SIMD lanes (``jvl_gym.lanes``), which apply ``U`` without storing it in the register,
+    SIMD lanes (``mac050_141.lanes``), which apply ``U`` without storing it in the register,
     compute with the same zero.
     """
     e = i_soll - fma(kib1, i_ist, kib0 * i_ist1)

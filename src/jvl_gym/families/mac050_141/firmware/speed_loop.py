@@ -21,8 +21,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ....jit import KERNEL
 from .. import layout as L
-from ..jit import KERNEL
 from . import regs as R
 from .fixed import clamp, fx4, fx8, rnd, sat16
 

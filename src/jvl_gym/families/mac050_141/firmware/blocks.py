@@ -12,9 +12,9 @@ import math
 import numpy as np
 from numba import njit
 
+from ....jit import KERNEL
 from .. import constants as c
 from .. import layout as L
-from ..jit import KERNEL
 from . import regs as R
 from .fixed import clamp, wrap32
 

@@ -1,4 +1,4 @@
-"""The MAC50–141 firmware: compiled scalar kernels for one motor, composed by ``jvl_gym.kernel``.
+"""The MAC50–141 firmware: compiled scalar kernels for one motor, composed by ``mac050_141.kernel``.
 
 Modules: ``fixed`` (register arithmetic), ``noise`` (per-motor counter-based noise streams),
 ``blocks`` (function blocks, manual 4.1), ``speed_loop`` (manual 4.2 with the function

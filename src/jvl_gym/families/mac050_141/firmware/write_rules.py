@@ -1,7 +1,7 @@
 """Rules the firmware applies to register writes.
 
 The rules are compiled per motor (:func:`write_refusal`, :func:`mode_refusal`: a refusal code)
-for the compiled register stores (``jvl_gym.store``); :func:`check_write` and
+for the compiled register stores (``jvl_gym.families.mac050_141.store``); :func:`check_write` and
 :func:`check_mode_request` apply them to a batch of motors and word the refusal.
 
 - Register mode (manual 3.2.43–3.2.48): writing k to P_REG_P, V_REG_P, A_REG_P, T_REG_P, L_REG_P,
@@ -18,8 +18,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ....jit import KERNEL
 from .. import constants as c
-from ..jit import KERNEL
 from . import regs as R
 from .modes import GEAR_MODES
 
@@ -50,7 +50,7 @@ REFUSAL_MESSAGES = {
 
 @njit(**KERNEL)
 def _gear_mode(mode: int) -> bool:  # pragma: no cover - compiled
-    """``mode`` divides by GEARF2 (:data:`~jvl_gym.firmware.modes.GEAR_MODES`)."""
+    """``mode`` divides by GEARF2 (:data:`~mac050_141.firmware.modes.GEAR_MODES`)."""
     return 0 <= mode < GEAR_MODES.size and GEAR_MODES[mode]
 
 
@@ -106,7 +106,7 @@ def mode_refusal(r: np.ndarray, req: int) -> int:  # pragma: no cover - compiled
     """Refusal code of the MODE_REG request ``req`` of one motor by the register rules:
     :data:`GEARF2_ZERO` for a gear mode with GEARF2 = 0 (3.2.15), :data:`COIL_RULES` for
     COIL_MODE with P1..P6 breaking the rules (4.4.20), else :data:`OK`. (The mode-change rules
-    of manual 4.4 are :func:`jvl_gym.firmware.modes.check_request`.)"""
+    of manual 4.4 are :func:`jvl_gym.families.mac050_141.firmware.modes.check_request`.)"""
     if _gear_mode(req) and r[R.GEARF2] == 0:
         return GEARF2_ZERO
     if req == c.COIL_MODE and not coil_rules_hold(r, 0, 0):

@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ....jit import KERNEL
 from .. import constants as c
-from ..jit import KERNEL
 from . import regs as R
 
 
