@@ -232,6 +232,22 @@ def _as_index(index: Any, n: int) -> np.ndarray:
     return out
 
 
+def _real_array(name: str, val: Any, allow_bool: bool = False) -> np.ndarray:
+    """``val`` as a float64 array if it is a real number or an array of them (bools only if
+    ``allow_bool``); ValueError naming ``name`` for a str, bytes, complex or other value."""
+    kinds = "iufb" if allow_bool else "iuf"
+    arr = None
+    if not isinstance(val, (str, bytes, bytearray)):
+        try:
+            arr = np.asarray(val)
+        except (TypeError, ValueError):  # a ragged sequence
+            arr = None
+    if arr is None or arr.dtype.kind not in kinds:
+        what = "a real number or 0/1/bool" if allow_bool else "a real number"
+        raise ValueError(f"{name}: expected {what} or an array of them, got {val!r}")
+    return arr.astype(np.float64)
+
+
 def _motor_index(index: Any, n: int, what: str) -> int:
     """The one motor ``index`` (an integer in ``-n..n-1``) as 0..n-1, for method ``what``."""
     if isinstance(index, (bool, np.bool_)) or not isinstance(index, (int, np.integer)):
@@ -290,7 +306,7 @@ class MotorArray:
     def __init__(self, motor: Any = "MAC140", n: int = 1, seed: Any = None,
                  setup: Any = None, record_length: int = c.TEST_RECORD_SAMPLES,
                  **params: Any) -> None:
-        if int(n) != n or n < 1:
+        if isinstance(n, (bool, np.bool_)) or int(n) != n or n < 1:
             raise ValueError(f"n must be a positive integer, got {n!r}")
         self.n = int(n)
         self.table = MAC050_141
@@ -312,9 +328,12 @@ class MotorArray:
         for cfg in configs.values():
             self._add_type(cfg)
         if isinstance(seed, (list, tuple, np.ndarray)):
-            keys = np.asarray(seed, dtype=np.uint64)
-            if keys.shape != (self.n,):
-                raise ValueError(f"seed sequence must have length {self.n}")
+            given = np.asarray(seed)
+            if given.shape != (self.n,) or given.dtype.kind not in "iu" or (
+                    given.dtype.kind == "i" and given.size and given.min() < 0):
+                raise ValueError(f"a seed sequence gives {self.n} noise keys: integers "
+                                 f"0..2**64-1, got {seed!r}")
+            keys = given.astype(np.uint64)
         else:
             keys = motor_keys(seed, self.n)
         self.keys = keys
@@ -435,7 +454,12 @@ class MotorArray:
 
     def set_record_length(self, n_samples: int, index: Any = None) -> None:
         """Samples recorded by TESTU/TESTA (manual default 11; up to REC_CNT_MAX = 895)."""
-        if int(n_samples) != n_samples or not 1 <= n_samples <= c.REC_CNT_MAX:
+        try:
+            whole = (not isinstance(n_samples, (bool, np.bool_, str, bytes))
+                     and int(n_samples) == n_samples)
+        except (TypeError, ValueError, OverflowError):
+            whole = False
+        if not whole or not 1 <= n_samples <= c.REC_CNT_MAX:
             raise ValueError(f"record length must be an integer in 1..{c.REC_CNT_MAX}, "
                              f"got {n_samples!r}")
         self.state[_as_index(index, self.n), L.S_REC_LEN] = float(n_samples)
@@ -476,7 +500,7 @@ class MotorArray:
                 if name not in PARAMETER_KEYWORDS and name not in _STATE_KEYWORDS:
                     known = ", ".join(sorted([*PARAMETER_KEYWORDS, *_STATE_KEYWORDS]))
                     raise TypeError(f"unknown motor parameter {name!r}; known: {known}")
-                arr = np.asarray(val, dtype=np.float64)
+                arr = _real_array(name, val, allow_bool=name in _BINARY)
                 if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != size):
                     raise ValueError(f"{name}: expected a scalar or shape ({size},), "
                                      f"got {arr.shape}")
@@ -977,7 +1001,7 @@ class MotorArray:
                                ("supply_volts", supply_volts, L.I_SUPPLY_VOLTS)):
             if val is None:
                 continue
-            arr = np.asarray(val, dtype=np.float64)
+            arr = _real_array(name, val, allow_bool=name == "home")
             if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != idx.size):
                 raise ValueError(f"{name}: expected a scalar or shape ({idx.size},), "
                                  f"got {arr.shape}")
