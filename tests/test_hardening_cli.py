@@ -111,3 +111,43 @@ def test_evaluate_without_a_model_says_so(monkeypatch, tmp_path, capsys):
 def test_unknown_env_is_one_line(capsys):
     code, _, err = _run(gym_cli, ["evaluate", "jvl_gym/NoSuch-v0"], capsys)
     _one_line_error(code, err)
+
+
+def _testa_files(tmp_path, pairs):
+    from tuning.models import MotorData
+    from tuning.records import save_csv, simulate_testa
+
+    md = MotorData.from_config("MAC140")
+    return [str(save_csv(simulate_testa(md, j, t, 30), tmp_path / f"a{k}.csv"))
+            for k, (j, t) in enumerate(pairs)]
+
+
+def test_identify_flags_estimates_that_are_not_credible(tmp_path, capsys):
+    files = _testa_files(tmp_path, [(2e-5, 100), (4e-4, 200)])  # two different loads
+    args = ["identify", "--motor", "MAC140", "--testa", files[0], "--testa", files[1]]
+    code, out, err = _run(tune, args, capsys)
+    assert code == 1
+    assert "NOT CREDIBLE" in err and "KVOUT" in err and "includes zero" in err
+    assert "Tc not detected" in out and "Tc -" not in out
+    code, out, err = _run(tune, [*args, "--accept"], capsys)
+    assert code == 0 and "NOT CREDIBLE" in err
+
+
+def test_identify_of_consistent_records_is_credible(tmp_path, capsys):
+    files = _testa_files(tmp_path, [(1e-4, 20), (1e-4, 40)])
+    code, out, err = _run(tune, ["identify", "--motor", "MAC140", "--testa", files[0],
+                                 "--testa", files[1]], capsys)
+    assert code == 0, err
+    assert "NOT CREDIBLE" not in err
+    assert "b not detected" in out  # the estimate is slightly negative: no viscous friction
+
+
+def test_identify_needs_records_and_a_readable_setup(tmp_path, capsys):
+    code, _, err = _run(tune, ["identify", "--motor", "MAC140"], capsys)
+    assert "--testu" in _one_line_error(code, err)
+    files = _testa_files(tmp_path, [(1e-4, 20), (1e-4, 40)])
+    bad = tmp_path / "list.yaml"
+    bad.write_text("- 1\n")
+    code, _, err = _run(tune, ["identify", "--motor", "MAC140", "--testa", files[0],
+                               "--setup", str(bad)], capsys)
+    assert "list.yaml" in _one_line_error(code, err)

@@ -90,24 +90,39 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
              setup: Path = typer.Option(None, help="setup YAML with the current-loop registers "
                                         "(KIFX2..KIB0, PHASE_COMP, AMPLITUDE) the TESTA records "
                                         "were taken with, for CSVs without a '# registers:' "
-                                        "line")) -> None:
+                                        "line"),
+             accept: bool = typer.Option(False, help="exit 0 even when an estimate is not "
+                                         "credible (tuning.credibility)")) -> None:
     """Identify the coil (TESTU) and the mechanics (TESTA) from record CSV files.
 
     TESTA uses the electrical model (current loop, back-EMF) when the records carry the
     registers they were taken with (``# registers:``, written by ``acquire_testa``) or
     ``--setup`` gives them; otherwise the rigid model (docs/tuning.md).
+
+    Estimates that are not credible (``tuning.credibility``: outside physical bounds or the
+    register format, an interval including zero, a poor fit) are listed on stderr and the exit
+    status is 1 unless ``--accept``.
     """
+    from .credibility import friction_text, problems
+
+    if not testu and not testa:
+        raise typer.BadParameter("give --testu and/or --testa record files",
+                                 param_hint="'--testu' / '--testa'")
     md = MotorData.from_config(motor)
+    bad: list[str] = []
     if testu:
         c = identify_coil([load_csv(p) for p in testu], md)
         typer.echo(f"R_line {c.R_line:.5g} ohm {c.ci['R_line']}, L_line {c.L_line:.5g} H "
                    f"{c.ci['L_line']}, delay {c.delay}, fit {c.nrmse_fit:.2f} %")
+        bad += problems(md, coil=c)
         md = c.motor(md)
     if testa:
         recs = [load_csv(p) for p in testa]
         cur = pc = None
         if setup is not None:
-            regs = yaml.safe_load(setup.read_text()).get("registers", {})
+            from jvl_gym.config import load_setup
+
+            regs = load_setup(setup).registers
             keys = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
             missing = [k for k in keys if k not in regs]
             if missing:
@@ -119,8 +134,16 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
                                phase_comp=pc)
         carried = record_registers(recs) or {}
         model = "electrical" if cur is not None or "KIFX2" in carried else "rigid"
-        typer.echo(f"J {m.J!r} kg m^2 {m.ci['J']}, KVOUT {m.kvout:.3f}, b {m.viscous:.3g}, "
-                   f"Tc {m.coulomb:.3g} N m, fit {m.nrmse_fit:.2f} % ({model} model)")
+        typer.echo(f"J {m.J!r} kg m^2 {m.ci['J']}, KVOUT {m.kvout:.3f}, "
+                   f"{friction_text('b', m.viscous, 'N m s/rad')}, "
+                   f"{friction_text('Tc', m.coulomb, 'N m')}, fit {m.nrmse_fit:.2f} % "
+                   f"({model} model)")
+        bad += problems(md, mech=m)
+    if bad:
+        what = "accepted (--accept)" if accept else "give consistent records, or --accept"
+        _say(f"NOT CREDIBLE: {'; '.join(bad)}: {what}")
+        if not accept:
+            raise typer.Exit(1)
 
 
 @app.command("synthesize")
