@@ -122,3 +122,9 @@ def test_random_garbage_is_skipped_to_the_next_sync():
     errors = [x for x in items if isinstance(x, mt.FrameError)]
     assert sum(len(e.data) for e in errors) == len(junk)
     assert items[-1] == mt.Request(mt.Command.READ, 19, 7)
+
+
+@pytest.mark.parametrize("speed", [float("inf"), float("nan"), 0.0, -1.0])
+def test_server_speed_must_be_finite_and_positive(speed):
+    with pytest.raises(ValueError, match="speed"):
+        TwinServer(_twin(), speed=speed, run_clock=False)

@@ -91,8 +91,8 @@ class TwinServer:
     endpoints: list[Endpoint] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        if not self.speed > 0:
-            raise ValueError(f"speed must be > 0, got {self.speed}")
+        if not 0 < self.speed < float("inf"):
+            raise ValueError(f"speed must be a finite number > 0, got {self.speed}")
         self._stop = threading.Event()
         #: guards _threads and _socks (connection threads remove themselves when they end)
         self._lock = threading.Lock()
