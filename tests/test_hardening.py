@@ -223,3 +223,55 @@ def test_trace_and_step_need_whole_non_negative_counts(m):
 def test_read_only_register_error_is_unchanged(m):
     with pytest.raises(ReadOnlyRegisterError):
         m.write("V_IST", 5)
+
+
+# ------------------------------------------------------------------ the same kind elsewhere
+@pytest.mark.parametrize("kwargs", [
+    {"load_torque": "0.1"}, {"load_torque": 1j}, {"load_torque": True}, {"supply_volts": b"4"},
+    {"analog_volts": [0.1, "x", 0.2]}, {"pulse_counts": [1, None, 2]}, {"home": "yes"},
+])
+def test_set_input_refuses_non_numbers(m, kwargs):
+    before = _snapshot(m)
+    with pytest.raises(ValueError):
+        m.set_input(**kwargs)
+    _assert_unchanged(m, before)
+
+
+def test_set_input_takes_a_boolean_home_level(m):
+    from jvl_gym.families.mac050_141 import layout as L
+
+    m.set_input(home=np.array([True, False, True]))
+    assert m.inputs[:, L.I_HOME].tolist() == [1.0, 0.0, 1.0]
+
+
+@pytest.mark.parametrize("kwargs", [
+    {"load_inertia": "1e-5"}, {"load_inertia": True}, {"viscous_friction": 1j},
+    {"coulomb_friction": None}, {"hall_start": "1"}, {"initial_angle": b"0"},
+])
+def test_reset_keywords_refuse_non_numbers(m, kwargs):
+    before = _snapshot(m)
+    with pytest.raises((ValueError, TypeError)):
+        m.reset(**kwargs)
+    _assert_unchanged(m, before)
+    with pytest.raises((ValueError, TypeError)):
+        MotorArray("MAC140", n=1, **kwargs)
+
+
+@pytest.mark.parametrize("n", [True, 1.5, "2", 0, -1, None])
+def test_motor_count_must_be_a_positive_integer(n):
+    with pytest.raises((ValueError, TypeError)):
+        MotorArray("MAC140", n=n)
+
+
+@pytest.mark.parametrize("length", [True, 1.5, "20", 0, 10_000, None])
+def test_record_length_must_be_a_whole_number_in_range(m, length):
+    before = _snapshot(m)
+    with pytest.raises(ValueError):
+        m.set_record_length(length)
+    _assert_unchanged(m, before)
+
+
+@pytest.mark.parametrize("seed", [[1.5, 2, 3], [-1, 2, 3], ["a", "b", "c"], [True, False, True]])
+def test_seed_sequences_are_integer_keys(seed):
+    with pytest.raises(ValueError, match="seed"):
+        MotorArray("MAC140", n=3, seed=seed)

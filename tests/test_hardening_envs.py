@@ -119,3 +119,24 @@ def test_unknown_keywords_name_the_env_and_the_known_ones(env_id):
     with pytest.raises(TypeError, match=f"{name}.*'colour'.*known:.*decimation"):
         gym.make_vec(env_id, num_envs=2, vectorization_mode="vector_entry_point",
                      colour="red")
+
+
+@pytest.mark.parametrize("kwargs", [{"decimation": 1.5}, {"decimation": True},
+                                    {"max_episode_steps": 2.5}, {"obs_noise": True},
+                                    {"obs_noise": "0.1"}, {"num_envs": 1.5},
+                                    {"randomization": {"target_turns": ("1", 2)}},
+                                    {"randomization": {"target_turns": (1, 2, 3)}},
+                                    {"randomization": {"target_turns": 5}},
+                                    {"motor_type": ["MAC140", 5]}])
+def test_env_constructor_arguments_are_checked(kwargs):
+    from jvl_gym.envs.positioning import PositioningVectorEnv
+
+    with pytest.raises((ValueError, TypeError)):
+        PositioningVectorEnv(**{"num_envs": 2, **kwargs})
+
+
+def test_short_motor_names_work_in_envs():
+    from jvl_gym.envs.positioning import PositioningVectorEnv
+
+    env = PositioningVectorEnv(num_envs=1, motor_type="MAC50")
+    assert env.motor_types == ("MAC050",)

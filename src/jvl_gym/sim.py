@@ -168,6 +168,22 @@ def _as_index(index: Any, n: int) -> np.ndarray:
     return out
 
 
+def _real_array(name: str, val: Any, allow_bool: bool = False) -> np.ndarray:
+    """``val`` as a float64 array if it is a real number or an array of them (bools only if
+    ``allow_bool``); ValueError naming ``name`` for a str, bytes, complex or other value."""
+    kinds = "iufb" if allow_bool else "iuf"
+    arr = None
+    if not isinstance(val, (str, bytes, bytearray)):
+        try:
+            arr = np.asarray(val)
+        except (TypeError, ValueError):  # a ragged sequence
+            arr = None
+    if arr is None or arr.dtype.kind not in kinds:
+        what = "a real number or 0/1/bool" if allow_bool else "a real number"
+        raise ValueError(f"{name}: expected {what} or an array of them, got {val!r}")
+    return arr.astype(np.float64)
+
+
 def _motor_index(index: Any, n: int, what: str) -> int:
     """The one motor ``index`` (an integer in ``-n..n-1``) as 0..n-1, for method ``what``."""
     if isinstance(index, (bool, np.bool_)) or not isinstance(index, (int, np.integer)):
@@ -285,9 +301,12 @@ class MotorArray:
         for cfg in configs.values():
             self._add_type(cfg)
         if isinstance(seed, (list, tuple, np.ndarray)):
-            keys = np.asarray(seed, dtype=np.uint64)
-            if keys.shape != (self.n,):
-                raise ValueError(f"seed sequence must have length {self.n}")
+            given = np.asarray(seed)
+            if given.shape != (self.n,) or given.dtype.kind not in "iu" or (
+                    given.dtype.kind == "i" and given.size and given.min() < 0):
+                raise ValueError(f"a seed sequence gives {self.n} noise keys: integers "
+                                 f"0..2**64-1, got {seed!r}")
+            keys = given.astype(np.uint64)
         else:
             keys = motor_keys(seed, self.n)
         self.keys = keys
@@ -435,7 +454,8 @@ class MotorArray:
                 if name not in self.PARAMETER_KEYWORDS and name not in self.STATE_KEYWORDS:
                     known = ", ".join(sorted([*self.PARAMETER_KEYWORDS, *self.STATE_KEYWORDS]))
                     raise TypeError(f"unknown motor parameter {name!r}; known: {known}")
-                arr = np.asarray(val, dtype=np.float64)
+                arr = _real_array(name, val,
+                                  allow_bool=bool(self.VALUE_RULES[name] & BINARY))
                 if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != size):
                     raise ValueError(f"{name}: expected a scalar or shape ({size},), "
                                      f"got {arr.shape}")

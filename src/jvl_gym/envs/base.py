@@ -59,6 +59,28 @@ def _keywords(cls: type) -> list[str]:
     return sorted(names)
 
 
+def _whole(name: str, value: Any, low: int) -> int:
+    """``value`` as an int if it is a whole number >= ``low`` (not a bool); ValueError."""
+    try:
+        ok = (not isinstance(value, (bool, np.bool_, str, bytes)) and int(value) == value
+              and value >= low)
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise ValueError(f"{name} must be a whole number >= {low}, got {value!r}")
+    return int(value)
+
+
+def _real(name: str, value: Any) -> float:
+    """``value`` as a float if it is a finite real number (not a bool or a str); ValueError."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer,
+                                                                      np.floating)):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    if not np.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    return float(value)
+
+
 def env_name(cls: type) -> str:
     """The task name of an env class (``GearSyncVectorEnv`` → ``GearSync``)."""
     return cls.__name__.removesuffix("VectorEnv").removesuffix("Env")
@@ -159,22 +181,19 @@ class MotorVectorEnv(VectorEnv, ABC):
             raise TypeError(f"{env_name(type(self))} env: unknown keyword argument {names}"
                             f"{hint}; known: {', '.join(_keywords(type(self)))}")
 
-        if int(num_envs) != num_envs or num_envs < 1:
-            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        num_envs = _whole("num_envs", num_envs, 1)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.num_envs = int(num_envs)
         self.render_mode = render_mode
         self.autoreset_mode = AutoresetMode(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
-        self.decimation = int(decimation if decimation is not None else self.default_decimation)
-        if self.decimation < 1:
-            raise ValueError(f"decimation must be >= 1, got {decimation!r}")
-        self.max_episode_steps = int(max_episode_steps if max_episode_steps is not None
-                                     else self.default_max_episode_steps)
-        if self.max_episode_steps < 1:
-            raise ValueError("max_episode_steps must be >= 1")
-        if not np.isfinite(obs_noise) or obs_noise < 0:
+        self.decimation = _whole("decimation", decimation if decimation is not None
+                                 else self.default_decimation, 1)
+        self.max_episode_steps = _whole("max_episode_steps", max_episode_steps
+                                        if max_episode_steps is not None
+                                        else self.default_max_episode_steps, 1)
+        if _real("obs_noise", obs_noise) < 0:
             raise ValueError(f"obs_noise must be finite and >= 0, got {obs_noise!r}")
         self.obs_noise = float(obs_noise)
         self.motor_types = self._check_types(motor_type if motor_type is not None
@@ -215,8 +234,10 @@ class MotorVectorEnv(VectorEnv, ABC):
 
     # ------------------------------------------------------------------ configuration
     def _check_types(self, motor_type: str | Sequence[str]) -> tuple[str, ...]:
+        fam = family(self.family_key)
         types = (motor_type,) if isinstance(motor_type, str) else tuple(motor_type)
-        known = family(self.family_key).motor_types()
+        known = fam.motor_types()
+        types = tuple(fam.canonical_name(t) if isinstance(t, str) else t for t in types)
         if not types or any(t not in known for t in types):
             raise ValueError(f"motor_type must be one or more of {known}, got {motor_type!r}")
         return types
@@ -228,8 +249,12 @@ class MotorVectorEnv(VectorEnv, ABC):
             if name not in self.default_ranges:
                 raise ValueError(f"unknown randomisation parameter {name!r}; known: "
                                  f"{sorted(self.default_ranges)}")
-            lo, hi = (float(v) for v in rng)
-            if not (np.isfinite(lo) and np.isfinite(hi)) or lo > hi:
+            try:
+                lo, hi = (_real(f"randomisation range of {name!r}", v) for v in rng)
+            except (TypeError, ValueError) as exc:  # not two finite numbers
+                raise ValueError(f"randomisation range of {name!r} must be two finite numbers "
+                                 f"(low, high), got {rng!r}") from exc
+            if lo > hi:
                 raise ValueError(f"randomisation range of {name!r} must be finite with "
                                  f"low <= high, got {rng!r}")
             out[name] = (lo, hi)

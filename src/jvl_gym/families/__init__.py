@@ -44,6 +44,8 @@ class Family:
         The family's :class:`~jvl_gym.MotorArray` subclass.
     motor_types : callable
         Names of the family's motor types (each with a motor config).
+    canonical_name : callable
+        The motor-type name a user's spelling stands for (default: unchanged).
     """
 
     key: str
@@ -51,6 +53,7 @@ class Family:
     compiled: ModuleType
     array_class: type
     motor_types: Callable[[], list[str]]
+    canonical_name: Callable[[str], str] = str
 
 
 _MODULES: dict[str, str] = {"mac050_141": "jvl_gym.families.mac050_141"}

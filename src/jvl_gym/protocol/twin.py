@@ -136,7 +136,9 @@ class Twin:
         MYADDR (1..254) of each motor, kept as the motor's factory address: written now and
         stored in flash unless a flash file provides the registers.
     flash_dir : path, optional
-        Directory of the flash files ``flash_<i>.json`` (loaded at start, written by 56h).
+        Directory of the flash files ``flash_<i>.json`` (loaded at start, written by 56h);
+        created if missing. A directory that cannot be created or written, or a flash file
+        that cannot be read as a flash image, raises ValueError naming it.
     fastmac_code : dict
         FastMAC register code (:data:`~.fastmac.EXAMPLE_CODE` or ``TABLE_CODE``).
 
@@ -167,10 +169,10 @@ class Twin:
             for a in addresses:
                 if not 1 <= a <= 254:
                     raise ValueError(f"a unit address is 1..254 (manual 3.2.156), got {a}")
-        for i in range(motors.n):
-            image = self._load_flash_file(i)
+        self._check_flash_dir()
+        images = [self._load_flash_file(i) for i in range(motors.n)]
+        for i, image in enumerate(images):
             if image is not None:
-                motors.load_flash_image(i, image)
                 motors.software_reset(i)
             elif addresses is not None:
                 motors.load_flash_image(i, {self.reg.MYADDR: addresses[i]})
@@ -180,22 +182,63 @@ class Twin:
     def _flash_path(self, i: int) -> Path | None:
         return None if self.flash_dir is None else self.flash_dir / f"flash_{i}.json"
 
+    def _check_flash_dir(self) -> None:
+        """Create the flash directory if needed; ValueError if it cannot hold flash files."""
+        if self.flash_dir is None:
+            return
+        try:
+            self.flash_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ValueError(f"flash directory {self.flash_dir} cannot be created: "
+                             f"{exc.strerror or exc}; give a writable --flash-dir") from exc
+        if not os.access(self.flash_dir, os.W_OK | os.X_OK):
+            raise ValueError(f"flash directory {self.flash_dir} is not writable; give a "
+                             "writable --flash-dir")
+
     def _load_flash_file(self, i: int) -> dict[int, int] | None:
+        """The flash image in motor ``i``'s flash file, loaded into the motor's flash (which
+        checks every register); None if there is no file. ValueError naming the file if it is
+        not a flash image the motor takes (the motor's flash is then unchanged)."""
         path = self._flash_path(i)
         if path is None or not path.exists():
             return None
-        return {int(k): int(v) for k, v in json.loads(path.read_text())["registers"].items()}
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+            regs = data["registers"] if isinstance(data, dict) else None
+            if not isinstance(regs, dict):
+                raise ValueError("expected {\"registers\": {\"<number>\": <raw>, ...}}")
+            image = {}
+            for k, v in regs.items():
+                if not k.isdigit() or type(v) is not int:
+                    raise ValueError(f"entry {k!r}: {v!r} is not register number: integer")
+                image[int(k)] = v
+            self.m.load_flash_image(i, image)
+        except (OSError, UnicodeDecodeError, ValueError, KeyError) as exc:
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise ValueError(f"flash file {path} is not a flash image of motor {i}: {reason}; "
+                             "fix or delete it (the twin writes it on 'write flash', 56h)"
+                             ) from exc
+        return image
 
     def _save_flash_file(self, i: int) -> None:
+        """Write motor ``i``'s flash to its file; a file that cannot be written is logged and
+        counted (``stats["flash_file_errors"]``): the motor's flash holds the registers."""
         path = self._flash_path(i)
         if path is None:
             return
-        path.parent.mkdir(parents=True, exist_ok=True)
         image = self.m.flash_image(i)
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(json.dumps({"motor": i, "registers": {str(k): v for k, v in
-                                                              sorted(image.items())}}, indent=1))
-        tmp.replace(path)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_suffix(".tmp")
+            tmp.write_text(json.dumps({"motor": i, "registers": {str(k): v for k, v in
+                                                                  sorted(image.items())}},
+                                      indent=1))
+            tmp.replace(path)
+        except OSError as exc:
+            self.stats["flash_file_errors"] += 1
+            self.last_refusal = (f"flash file {path} not written ({exc.strerror or exc}); the "
+                                 f"motor's flash holds the registers until the twin stops")
+            log.error("%s", self.last_refusal)
 
     def addresses(self) -> list[int]:
         """MYADDR of every motor now."""

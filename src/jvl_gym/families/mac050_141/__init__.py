@@ -2,10 +2,11 @@
 
 from __future__ import annotations
 
-from ...config import motor_types
+from ...config import canonical_motor_name, motor_types
 from .. import Family
 from . import compiled
 from .motors import MacMotorArray
 
 FAMILY = Family(key="mac050_141", title="MAC050–141 integrated servo motors", compiled=compiled,
-                array_class=MacMotorArray, motor_types=motor_types)
+                array_class=MacMotorArray, motor_types=motor_types,
+                canonical_name=canonical_motor_name)

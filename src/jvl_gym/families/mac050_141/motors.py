@@ -19,7 +19,14 @@ from ...config import MotorConfig, load_motor, load_setup
 from ...keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
 from ...registers import Format, Register, RegisterError
 from ...registers.formats import from_raw
-from ...sim import ModeError, MotorArray, _as_index, _motor_index, _StorePlan
+from ...sim import (
+    ModeError,
+    MotorArray,
+    _as_index,
+    _motor_index,
+    _real_array,
+    _StorePlan,
+)
 from . import constants as c
 from . import layout as L
 from .firmware import modes as M
@@ -209,7 +216,12 @@ class MacMotorArray(MotorArray):
 
     def set_record_length(self, n_samples: int, index: Any = None) -> None:
         """Samples recorded by TESTU/TESTA (manual default 11; up to REC_CNT_MAX = 895)."""
-        if int(n_samples) != n_samples or not 1 <= n_samples <= c.REC_CNT_MAX:
+        try:
+            whole = (not isinstance(n_samples, (bool, np.bool_, str, bytes))
+                     and int(n_samples) == n_samples)
+        except (TypeError, ValueError, OverflowError):
+            whole = False
+        if not whole or not 1 <= n_samples <= c.REC_CNT_MAX:
             raise ValueError(f"record length must be an integer in 1..{c.REC_CNT_MAX}, "
                              f"got {n_samples!r}")
         self.state[_as_index(index, self.n), L.S_REC_LEN] = float(n_samples)
@@ -429,7 +441,7 @@ class MacMotorArray(MotorArray):
                                ("supply_volts", supply_volts, L.I_SUPPLY_VOLTS)):
             if val is None:
                 continue
-            arr = np.asarray(val, dtype=np.float64)
+            arr = _real_array(name, val, allow_bool=name == "home")
             if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != idx.size):
                 raise ValueError(f"{name}: expected a scalar or shape ({idx.size},), "
                                  f"got {arr.shape}")
