@@ -10,23 +10,19 @@ Description"), motor parameters from the motor configs (docs/model.md §15), pow
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+import os
+from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
 
+from ...arguments import MotorIndex, MotorSpec, Seed, as_index, motor_index, real_array
+from ...bank import StorePlan
 from ...config import MotorConfig, load_motor, load_setup
 from ...keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
 from ...registers import Format, Register, RegisterError
 from ...registers.formats import from_raw
-from ...sim import (
-    ModeError,
-    MotorArray,
-    _as_index,
-    _motor_index,
-    _real_array,
-    _StorePlan,
-)
+from ...sim import ModeError, MotorArray
 from . import constants as c
 from . import layout as L
 from .firmware import modes as M
@@ -38,6 +34,9 @@ from .store import store_rows
 from .table import TABLE
 
 __all__ = ["MacMotorArray"]
+
+#: a world input: a real number (every selected motor) or one per selected motor, or None
+InputValue = float | int | bool | np.ndarray | Sequence[float] | None
 
 #: per-motor parameter keywords of the constructor and :meth:`MacMotorArray.reset` (SI units)
 _PARAMETERS: dict[str, int] = {
@@ -109,8 +108,9 @@ class MacMotorArray(MotorArray):
     PHYSICAL = frozenset({"speed_rpm", "speed_rad_s", "position_rad", "torque", "bus_voltage"})
     ONE_BY_ONE = frozenset(W.POINTERS) | {R.CNTRL_BITS}
 
-    def __init__(self, motor: Any = "MAC140", n: int = 1, seed: Any = None,
-                 setup: Any = None, record_length: int = c.TEST_RECORD_SAMPLES,
+    def __init__(self, motor: MotorSpec = "MAC140", n: int = 1, seed: Seed = None,
+                 setup: str | os.PathLike[str] | dict[str, Any] | None = None,
+                 record_length: int = c.TEST_RECORD_SAMPLES,
                  **params: Any) -> None:
         self._record_length = record_length
         super().__init__(motor, n, seed, setup, **params)
@@ -214,7 +214,7 @@ class MacMotorArray(MotorArray):
         p[L.P_HOME_POS] = math.inf
         return p
 
-    def set_record_length(self, n_samples: int, index: Any = None) -> None:
+    def set_record_length(self, n_samples: int, index: MotorIndex = None) -> None:
         """Samples recorded by TESTU/TESTA (manual default 11; up to REC_CNT_MAX = 895)."""
         try:
             whole = (not isinstance(n_samples, (bool, np.bool_, str, bytes))
@@ -224,7 +224,7 @@ class MacMotorArray(MotorArray):
         if not whole or not 1 <= n_samples <= c.REC_CNT_MAX:
             raise ValueError(f"record length must be an integer in 1..{c.REC_CNT_MAX}, "
                              f"got {n_samples!r}")
-        self.state[_as_index(index, self.n), L.S_REC_LEN] = float(n_samples)
+        self.state[as_index(index, self.n), L.S_REC_LEN] = float(n_samples)
 
     def _power_on(self, idx: np.ndarray) -> None:
         """Registers from flash or ROM, counters cleared, mode from STARTMODE (3.2.37)."""
@@ -238,7 +238,7 @@ class MacMotorArray(MotorArray):
         only after a reset, manual 3.2.36), (N,)."""
         return self._latched_cntrl.copy()
 
-    def hold_torque(self, torque: float | np.ndarray, index: Any = None) -> None:
+    def hold_torque(self, torque: float | np.ndarray, index: MotorIndex = None) -> None:
         """Let the motors ``index`` start as motors that already hold ``torque`` [N·m]: the
         speed regulator's integrating state is set to the output that gives this torque
         (VF_OUT = torque / peak torque · 1023, manual 3.2.7, through KVOUT, manual 4.2), so
@@ -251,7 +251,7 @@ class MacMotorArray(MotorArray):
         index : int, slice, bool mask or int array, optional
             The motors (default all).
         """
-        idx = _as_index(index, self.n)
+        idx = as_index(index, self.n)
         arr = np.asarray(torque, dtype=np.float64)
         if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != idx.size):
             raise ValueError(f"torque: expected a scalar or shape ({idx.size},), got {arr.shape}")
@@ -265,7 +265,7 @@ class MacMotorArray(MotorArray):
         """Time since power-on of each motor [s], (N,)."""
         return self.state[:, L.S_TICK] * c.INNER_DT
 
-    def _store_rows(self, plan: _StorePlan, idx: np.ndarray, raws: np.ndarray) -> None:
+    def _store_rows(self, plan: StorePlan, idx: np.ndarray, raws: np.ndarray) -> None:
         """Compiled check and store (:func:`mac050_141.store.store_rows`); a refusal raises with
         the registers before the refused one stored."""
         k = store_rows(self.regs, self.state, idx, plan.nums, plan.high, raws)
@@ -338,17 +338,17 @@ class MacMotorArray(MotorArray):
             raise ModeError(f"{what} needs {names} (manual 4.4.16); motor {int(bad[0])} is in "
                             f"{c.MODE_NAMES.get(int(self.regs[bad[0], R.MODE_REG]), '?')}")
 
-    def go_safe_mode(self, index: Any = None) -> None:
+    def go_safe_mode(self, index: MotorIndex = None) -> None:
         """MacTalk 'go safe mode' (5.1): stop if moving, then SAFE_MODE (4.4.16)."""
-        M.go_safe(self.regs, self.state, _as_index(index, self.n))
+        M.go_safe(self.regs, self.state, as_index(index, self.n))
 
-    def go_init_mode(self, index: Any = None) -> None:
+    def go_init_mode(self, index: MotorIndex = None) -> None:
         """MacTalk 'go init mode' (5.1): the protective path to INIT_MODE."""
-        M.go_init(self.regs, self.state, _as_index(index, self.n))
+        M.go_init(self.regs, self.state, as_index(index, self.n))
 
-    def exit_safe_mode(self, index: Any = None) -> None:
+    def exit_safe_mode(self, index: MotorIndex = None) -> None:
         """Leave SAFE_MODE; the motor always goes to INIT_MODE (manual 2.2)."""
-        idx = _as_index(index, self.n)
+        idx = as_index(index, self.n)
         self._indices_in(idx, (c.SAFE_MODE,), "exit_safe_mode")
         M.go_init(self.regs, self.state, idx)
 
@@ -360,19 +360,19 @@ class MacMotorArray(MotorArray):
         self._flash[idx, R.PROG_VERSION] = self._rom[self._type_of[idx], R.PROG_VERSION]
         self._has_flash[idx] = True
 
-    def write_flash(self, index: Any = None) -> None:
+    def write_flash(self, index: MotorIndex = None) -> None:
         """Save the register set to flash and reset; only in SAFE_MODE (manual 2.2, 5.1)."""
-        idx = _as_index(index, self.n)
+        idx = as_index(index, self.n)
         self._indices_in(idx, (c.SAFE_MODE,), "write_flash")
         self._save_flash(idx)
         self.software_reset(idx)
 
-    def software_reset(self, index: Any = None) -> None:
+    def software_reset(self, index: MotorIndex = None) -> None:
         """Reset the electronics (registers from flash/ROM, P_IST = 0); INIT or SAFE only.
 
         The rotor keeps its physical angle and speed: only the firmware restarts.
         """
-        idx = _as_index(index, self.n)
+        idx = as_index(index, self.n)
         self._indices_in(idx, (c.INIT_MODE, c.SAFE_MODE), "software_reset")
         keep = [L.S_THETA, L.S_OMEGA, L.S_I_RE, L.S_I_IM, L.S_ACC, L.S_UBUS, L.S_DUMP_ON,
                 L.S_TICK, L.S_REC_LEN, L.S_E_ELEC, L.S_E_COPPER, L.S_E_FRICTION, L.S_E_LOAD,
@@ -389,7 +389,7 @@ class MacMotorArray(MotorArray):
 
     def sample_buffer_raw(self, index: int) -> np.ndarray:
         """Raw samples of one motor, shape (REC_CNT, 4) for SAMPLE1..SAMPLE4."""
-        index = _motor_index(index, self.n, "sample_buffer_raw")
+        index = motor_index(index, self.n, "sample_buffer_raw")
         count = int(self.regs[index, R.REC_CNT])
         if not self._buf_allocated:
             return np.zeros((0, 4), dtype=np.int64)
@@ -415,8 +415,9 @@ class MacMotorArray(MotorArray):
                 out[reg.name] = from_raw(reg, raw)
         return out
 
-    def set_input(self, index: Any = None, *, load_torque: Any = None, analog_volts: Any = None,
-                  pulse_counts: Any = None, home: Any = None, supply_volts: Any = None) -> None:
+    def set_input(self, index: MotorIndex = None, *, load_torque: InputValue = None,
+                  analog_volts: InputValue = None, pulse_counts: InputValue = None,
+                  home: InputValue = None, supply_volts: InputValue = None) -> None:
         """Set world inputs, held from the next outer sample on (per motor).
 
         Parameters
@@ -432,7 +433,7 @@ class MacMotorArray(MotorArray):
         supply_volts : float or array
             Supply source voltage [V].
         """
-        idx = _as_index(index, self.n)
+        idx = as_index(index, self.n)
         staged = []
         for name, val, col in (("load_torque", load_torque, L.I_LOAD_TORQUE),
                                ("analog_volts", analog_volts, L.I_ANALOG_VOLTS),
@@ -441,7 +442,7 @@ class MacMotorArray(MotorArray):
                                ("supply_volts", supply_volts, L.I_SUPPLY_VOLTS)):
             if val is None:
                 continue
-            arr = _real_array(name, val, allow_bool=name == "home")
+            arr = real_array(name, val, allow_bool=name == "home")
             if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != idx.size):
                 raise ValueError(f"{name}: expected a scalar or shape ({idx.size},), "
                                  f"got {arr.shape}")
@@ -512,5 +513,5 @@ class MacMotorArray(MotorArray):
 
     def mode_name(self, index: int = 0) -> str:
         """Name of the current mode of one motor."""
-        index = _motor_index(index, self.n, "mode_name")
+        index = motor_index(index, self.n, "mode_name")
         return c.MODE_NAMES.get(int(self.regs[index, R.MODE_REG]), "?")
