@@ -10,6 +10,7 @@ each environment (single and vector with threads) in a pool of worker processes.
 
 from __future__ import annotations
 
+import multiprocessing
 import os
 import sys
 import time
@@ -67,7 +68,9 @@ def compile_all(workers: int | None = None, envs: bool = True) -> dict[str, floa
     times = {"MotorArray": compile_motors()}
     if envs:
         workers = workers or os.cpu_count() or 1
-        with ProcessPoolExecutor(max_workers=min(workers, len(ENV_IDS))) as pool:
+        # spawned, not forked: this process has started numba's worker threads
+        with ProcessPoolExecutor(max_workers=min(workers, len(ENV_IDS)),
+                                 mp_context=multiprocessing.get_context("spawn")) as pool:
             for env_id, seconds in zip(ENV_IDS, pool.map(compile_env, ENV_IDS)):
                 times[env_id] = seconds
     return times
