@@ -23,7 +23,8 @@ and, for a task, its hooks (each inlined, called per copy ``i``; ``view`` is the
 - ``task_before(i, view, episode, task)``: before each outer sample of the motor;
 - ``task_after(i, view, episode, task)``: after each outer sample (after the inner samples);
 - ``task_end(i, view, episode, task, actions)``: once per env step: reward, termination,
-  observation.
+  observation;
+- ``task_observe(i, view, episode, task)``: the observation of a copy after its reset.
 """
 
 from __future__ import annotations
@@ -51,6 +52,7 @@ task_begin: Any = None
 task_before: Any = None
 task_after: Any = None
 task_end: Any = None
+task_observe: Any = None
 
 
 @njit(cache=True, inline="always")
@@ -155,14 +157,22 @@ def _task_parallel(arrays, episode_arrays, task, actions, decimation):  # pragma
     return True
 
 
+def _task_observe(idx, arrays, episode_arrays, task):  # pragma: no cover - compiled
+    """The task's observation hook for copies ``idx`` (after their reset)."""
+    view = EngineView(*arrays)
+    episode = Episode(*episode_arrays)
+    for i in idx:
+        task_observe(i, view, episode, task)
+
+
 _MOTOR_TEMPLATES = {"_advance_block": _advance_block, "_run_serial": _run_serial,
                     "_run_parallel": _run_parallel}
 _MOTOR_OPTIONS = {"_advance_block": {"cache": True, "inline": "always"},
                   "_run_serial": KERNEL, "_run_parallel": KERNEL_PARALLEL}
 _TASK_TEMPLATES = {"_task_block": _task_block, "_task_serial": _task_serial,
-                   "_task_parallel": _task_parallel}
+                   "_task_parallel": _task_parallel, "_task_observe": _task_observe}
 _TASK_OPTIONS = {"_task_block": KERNEL, "_task_serial": KERNEL,
-                 "_task_parallel": KERNEL_PARALLEL}
+                 "_task_parallel": KERNEL_PARALLEL, "_task_observe": KERNEL}
 
 
 def _family_bindings(family: Any) -> dict[str, Any]:
@@ -206,25 +216,27 @@ class TaskDriver:
         The motor family the task runs on.
     source : str
         The task module's file (its edits recompile the step).
-    begin, before, after, end : numba dispatchers
-        The task's hooks (``task_begin`` … ``task_end`` of the module docstring), compiled with
-        ``inline="always"``; :func:`noop_hook` / :func:`noop_step_hook` where a task has none.
+    begin, before, after, end, observe : numba dispatchers
+        The task's hooks (``task_begin`` … ``task_observe`` of the module docstring), compiled
+        with ``inline="always"``; :func:`noop_hook` / :func:`noop_step_hook` where a task has
+        none.
     tag : str
         Identifier of the task in cache file names.
     """
 
     def __init__(self, family: Any, source: str, tag: str, *, begin: Any = noop_step_hook,
-                 before: Any = noop_hook, after: Any = noop_hook, end: Any = noop_step_hook
-                 ) -> None:
+                 before: Any = noop_hook, after: Any = noop_hook, end: Any = noop_step_hook,
+                 observe: Any = noop_hook) -> None:
         self.family = family
         bindings = {**_family_bindings(family), "task_begin": begin, "task_before": before,
-                    "task_after": after, "task_end": end}
+                    "task_after": after, "task_end": end, "task_observe": observe}
         fns = specialise(_TASK_TEMPLATES, bindings, f"{tag}__{family.key}", source,
                          _TASK_OPTIONS)
         #: the compiled steps, ``(arrays, episode, task, actions, decimation)``: one thread,
         #: and blocks over threads
         self.serial = fns["_task_serial"]
         self.parallel = fns["_task_parallel"]
+        self._observe = fns["_task_observe"]
 
     def step(self, arrays: tuple, episode: tuple, task: tuple, actions: np.ndarray,
              decimation: int) -> bool:
@@ -241,3 +253,7 @@ class TaskDriver:
         self.family.compiled.prepare(arrays)
         run = self.parallel if arrays[0].shape[0] >= PARALLEL_MIN else self.serial
         return run(arrays, episode, task, actions, decimation)
+
+    def observe(self, arrays: tuple, episode: tuple, task: tuple, idx: np.ndarray) -> None:
+        """The task's observation of copies ``idx`` (M,) int64 after their reset."""
+        self._observe(idx, arrays, episode, task)

@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from ..engine import EngineView, Episode, TaskDriver
+from ..engine import TaskDriver
 from ..families import family
 from ..families.mac050_141 import constants as c
 from ..families.mac050_141.task import (
@@ -196,15 +196,9 @@ def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
 
 
 _DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "coil_winding", begin=_step_begin,
-                     before=_spindle_before, after=_spindle_after, end=_step_end)
+                     before=_spindle_before, after=_spindle_after, end=_step_end,
+                     observe=_observe_row)
 
-
-@njit(**KERNEL)
-def _observe_rows(idx, arrays, episode_arrays, task):  # pragma: no cover - compiled
-    view = EngineView(*arrays)
-    episode = Episode(*episode_arrays)
-    for i in idx:
-        _observe_row(i, view, episode, task)
 
 
 @njit(**KERNEL)
@@ -371,7 +365,7 @@ class CoilWindingVectorEnv(MotorVectorEnv):
         return out
 
     def _observe_copies(self, idx: np.ndarray) -> None:
-        _observe_rows(idx, self.motors.engine_view(), self._episode, self._task)
+        _DRIVER.observe(self.motors.engine_view(), self._episode, self._task, idx)
 
     def traverse_position(self) -> np.ndarray:
         """Traverse position from the lower flange [m], (N,)."""

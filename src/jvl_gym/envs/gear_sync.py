@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from ..engine import EngineView, Episode, TaskDriver
+from ..engine import TaskDriver
 from ..families import family
 from ..families.mac050_141 import constants as c
 from ..families.mac050_141.task import (
@@ -146,15 +146,9 @@ def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
 
 
 _DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "gear_sync", begin=_step_begin,
-                     before=_line_before, after=_line_after, end=_step_end)
+                     before=_line_before, after=_line_after, end=_step_end,
+                     observe=_observe_row)
 
-
-@njit(**KERNEL)
-def _observe_rows(idx, arrays, episode_arrays, task):  # pragma: no cover - compiled
-    view = EngineView(*arrays)
-    episode = Episode(*episode_arrays)
-    for i in idx:
-        _observe_row(i, view, episode, task)
 
 
 @njit(**KERNEL)
@@ -318,7 +312,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
         return out
 
     def _observe_copies(self, idx: np.ndarray) -> None:
-        _observe_rows(idx, self.motors.engine_view(), self._episode, self._task)
+        _DRIVER.observe(self.motors.engine_view(), self._episode, self._task, idx)
 
     def _scope_values(self) -> np.ndarray:
         return np.stack([self.force, self.tension_ref, self._prev_action[:, 0] * c.ANINP_VOLTS,

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from ..engine import EngineView, Episode, TaskDriver
+from ..engine import TaskDriver
 from ..families import family
 from ..families.mac050_141 import constants as c
 from ..families.mac050_141.task import (
@@ -75,15 +75,8 @@ def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
 
 
 _DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "positioning", begin=_step_begin,
-                     end=_step_end)
+                     end=_step_end, observe=_observe_row)
 
-
-@njit(**KERNEL)
-def _observe_rows(idx, arrays, episode_arrays, task):  # pragma: no cover - compiled
-    view = EngineView(*arrays)
-    episode = Episode(*episode_arrays)
-    for i in idx:
-        _observe_row(i, view, episode, task)
 
 
 @njit(**KERNEL)
@@ -154,7 +147,7 @@ class PositioningVectorEnv(MotorVectorEnv):
                             self.decimation)
 
     def _observe_copies(self, idx: np.ndarray) -> None:
-        _observe_rows(idx, self.motors.engine_view(), self._episode, self._task)
+        _DRIVER.observe(self.motors.engine_view(), self._episode, self._task, idx)
 
     def _error_counts(self) -> np.ndarray:
         return (self.target - self.motors.read_raw("P_IST")).astype(np.float64)
