@@ -15,11 +15,13 @@ records TESTA at T₁ and T₂ ≈ T₁/2 and fits J, T_c, b, δ and one offset 
 (``scipy.optimize.least_squares``). With ``coulomb=False`` (friction known to be negligible) a
 single record suffices.
 
-Intervals: the residuals are dominated by model error the electrical model leaves out (current
-and commutation quantisation, which the current noise dithers), strongly correlated within a
-record, so ``s²(JᵀJ)⁻¹`` is far too narrow. The recommended procedure repeats the two levels
-K = 4 times; each set is fitted alone and the interval comes from the spread between the sets
-(batch means, Student t with K − 1 degrees of freedom).
+Intervals (:mod:`tuning.intervals`, docs/tuning.md "Intervals"): the residuals are dominated by
+model error the electrical model leaves out (current and commutation quantisation, which the
+current noise dithers), strongly correlated within a record, so ``s²(JᵀJ)⁻¹`` is far too
+narrow. The recommended procedure repeats the two levels K times; each set is fitted alone and
+the interval comes from the spread between the sets (batch means, Student t with K − 1 degrees
+of freedom) plus the encoder quantisation floor of one set (which repetitions without noise do
+not average out). Friction whose interval reaches 0 is reported as not detected, value 0.
 """
 
 from __future__ import annotations
@@ -30,9 +32,16 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize
 
 from .identify_coil import correlation_inflation, residual_check
+from .intervals import (
+    QUANTISATION_VARIANCE,
+    batch_means,
+    combined_halfwidth,
+    positive,
+    student_halfwidth,
+)
 from .models import COUNTS_PER_RAD, INNER_PER_OUTER, TS_I, TS_O, MotorData
 from .records import Record, RecordError, record_registers, validate
 
@@ -71,6 +80,15 @@ class MechanicsEstimate:
         K, the number of repeated sets the estimate averages (1: one fit).
     J_repeats : list of float
         J [kg·m²] of each repeated set (K > 1).
+    detected : dict
+        "J", "coulomb", "viscous": the interval lies above 0. A friction that is not detected
+        is reported as 0 with the interval [0, hi] (:func:`tuning.intervals.positive`).
+    raw : dict
+        "J", "coulomb", "viscous" before the detection rule (may be negative) [SI].
+    quantisation_var : dict
+        Variance of "J", "coulomb", "viscous" [SI²] from the encoder's 1-count quantisation
+        (1/12 count² per sample) for this fit (the quantisation floor of
+        :mod:`tuning.intervals`).
     """
 
     J: float
@@ -85,6 +103,9 @@ class MechanicsEstimate:
     fitted_velocity: list[np.ndarray] = field(default_factory=list, repr=False)
     repeats: int = 1
     J_repeats: list[float] = field(default_factory=list)
+    detected: dict[str, bool] = field(default_factory=dict)
+    raw: dict[str, float] = field(default_factory=dict)
+    quantisation_var: dict[str, float] = field(default_factory=dict, repr=False)
 
 
 def position_model(t: np.ndarray, alpha: float, beta: float, delay: float) -> np.ndarray:
@@ -218,7 +239,7 @@ def identify_mechanics(records: Record | Sequence[Record], motor: MotorData | st
         phase_comp = carried.get("PHASE_COMP", 0.0)
     sets = repeat_sets(recs)
     if len(sets) < 2:
-        return _identify_set(recs, md, coulomb, viscous, current_regs, phase_comp)
+        return _detect(_identify_set(recs, md, coulomb, viscous, current_regs, phase_comp), md)
     ests = [_identify_set([recs[i] for i in idx], md, coulomb, viscous, current_regs,
                           phase_comp) for idx in sets]
     return _combine(ests, sets, len(recs), md)
@@ -241,27 +262,51 @@ def repeat_sets(recs: Sequence[Record]) -> list[list[int]]:
 
 def _combine(ests: list[MechanicsEstimate], sets: list[list[int]], n_recs: int,
              md: MotorData) -> MechanicsEstimate:
-    """Batch means over K repeated sets: value = mean, 95 % interval = t(K−1)·sd/√K."""
+    """Batch means over K repeated sets: value = mean, 95 % interval from the spread between
+    the sets (t, K − 1 dof) and one set's quantisation floor (:mod:`tuning.intervals`)."""
     k = len(ests)
-    tq = float(stats.t.ppf(0.975, k - 1))
-    vals = {nm: np.array([getattr(e, nm) for e in ests])
-            for nm in ("J", "viscous", "coulomb", "delay")}
+    vals = {nm: np.array([getattr(e, nm) for e in ests]) for nm in ("J", "viscous", "coulomb")}
+    vals["delay"] = np.array([e.delay for e in ests])
     mean = {nm: float(v.mean()) for nm, v in vals.items()}
     ci = {}
     for nm in ("J", "viscous", "coulomb"):
-        h = tq * float(vals[nm].std(ddof=1)) / math.sqrt(k)
+        _, var_mean, dof = batch_means(vals[nm])
+        floor = float(np.mean([e.quantisation_var.get(nm, 0.0) for e in ests]))
+        h = combined_halfwidth(var_mean, dof, floor)
         ci[nm] = (mean[nm] - h, mean[nm] + h)
-    ci["kvout"] = (ci["J"][0] / md.J_m, ci["J"][1] / md.J_m)
     fitted: list[np.ndarray] = [np.zeros(0)] * n_recs
     for e, idx in zip(ests, sets):
         for i, fv in zip(idx, e.fitted_velocity):
             fitted[i] = fv
-    return MechanicsEstimate(J=mean["J"], kvout=mean["J"] / md.J_m, viscous=mean["viscous"],
-                             coulomb=mean["coulomb"], delay=mean["delay"], ci=ci,
-                             nrmse_fit=float(np.mean([e.nrmse_fit for e in ests])),
-                             residual=ests[0].residual,
-                             n_samples=sum(e.n_samples for e in ests), fitted_velocity=fitted,
-                             repeats=k, J_repeats=[float(x) for x in vals["J"]])
+    out = MechanicsEstimate(J=mean["J"], kvout=mean["J"] / md.J_m, viscous=mean["viscous"],
+                            coulomb=mean["coulomb"], delay=mean["delay"], ci=ci,
+                            nrmse_fit=float(np.mean([e.nrmse_fit for e in ests])),
+                            residual=ests[0].residual,
+                            n_samples=sum(e.n_samples for e in ests), fitted_velocity=fitted,
+                            repeats=k, J_repeats=[float(x) for x in vals["J"]],
+                            quantisation_var={nm: float(np.mean(
+                                [e.quantisation_var.get(nm, 0.0) for e in ests]))
+                                for nm in ("J", "viscous", "coulomb")})
+    return _detect(out, md)
+
+
+def _detect(est: MechanicsEstimate, md: MotorData) -> MechanicsEstimate:
+    """Apply the detection rule to J, T_c and b (:func:`tuning.intervals.positive`)."""
+    for nm in ("J", "coulomb", "viscous"):
+        raw = est.raw.get(nm, getattr(est, nm))
+        lo, hi = est.ci[nm]
+        if lo == hi == 0.0 and raw == 0.0:  # not estimated (coulomb=False / viscous=False)
+            est.detected[nm] = False
+            est.raw[nm] = 0.0
+            continue
+        b = positive(raw, lo, hi)
+        setattr(est, nm, b.value)
+        est.ci[nm] = b.interval
+        est.detected[nm] = b.detected
+        est.raw[nm] = b.raw
+    est.kvout = est.J / md.J_m
+    est.ci["kvout"] = (est.ci["J"][0] / md.J_m, est.ci["J"][1] / md.J_m)
+    return est
 
 
 def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: bool,
@@ -348,14 +393,14 @@ def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: boo
         cov = s2 * correlation_inflation(sol.fun, len(recs)) * np.linalg.pinv(sol.jac.T @ sol.jac)
     except np.linalg.LinAlgError:
         cov = np.full((p, p), np.inf)
-    tq = float(stats.t.ppf(0.975, dof))
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     ci: dict[str, tuple[float, float]] = {}
     scale = {"J": jscale, "coulomb": k, "viscous": jscale / TS_O, "delay": 1.0}
     vals = {"J": J, "coulomb": tc, "viscous": b, "delay": dl}
     for i, nm in enumerate(names):
-        h = tq * sd[i] * scale[nm]
+        h = student_halfwidth(sd[i] * scale[nm], dof)
         ci[nm] = (vals[nm] - h, vals[nm] + h)
+    qv = _quantisation_var(sol.jac, names, scale)
     if not coulomb:
         ci["coulomb"] = (0.0, 0.0)
     if not viscous:
@@ -368,7 +413,7 @@ def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: boo
     fit = 100.0 * (1 - float(np.linalg.norm(v_all - vh)) / den) if den > 0 else math.nan
     return MechanicsEstimate(J=J, kvout=J / md.J_m, viscous=b, coulomb=tc, delay=dl, ci=ci,
                              nrmse_fit=fit, residual=residual_check(sol.fun, p), n_samples=n,
-                             fitted_velocity=fitted_v)
+                             fitted_velocity=fitted_v, quantisation_var=qv)
 
 
 def _refine_electrical(recs: list[Record], md: MotorData, current_regs: Mapping[str, float],
@@ -413,12 +458,14 @@ def _refine_electrical(recs: list[Record], md: MotorData, current_regs: Mapping[
     dof = max(n - p, 1)
     s2 = float(sol.fun @ sol.fun) / dof
     cov = s2 * correlation_inflation(sol.fun, len(recs)) * np.linalg.pinv(sol.jac.T @ sol.jac)
-    tq = float(stats.t.ppf(0.975, dof))
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     scale = {"J": jscale, "coulomb": k, "viscous": bscale}
     vals = {"J": J, "coulomb": tc, "viscous": b}
-    ci = {nm: (vals[nm] - tq * sd[i] * scale[nm], vals[nm] + tq * sd[i] * scale[nm])
-          for i, nm in enumerate(names)}
+    ci = {}
+    for i, nm in enumerate(names):
+        h = student_halfwidth(sd[i] * scale[nm], dof)
+        ci[nm] = (vals[nm] - h, vals[nm] + h)
+    qv = _quantisation_var(sol.jac, names, scale)
     ci.setdefault("coulomb", (0.0, 0.0))
     ci.setdefault("viscous", (0.0, 0.0))
     ci["kvout"] = (ci["J"][0] / md.J_m, ci["J"][1] / md.J_m)
@@ -429,4 +476,16 @@ def _refine_electrical(recs: list[Record], md: MotorData, current_regs: Mapping[
     fit = 100.0 * (1 - float(np.linalg.norm(v_all - vh)) / den) if den > 0 else math.nan
     return MechanicsEstimate(J=J, kvout=J / md.J_m, viscous=b, coulomb=tc, delay=0.0, ci=ci,
                              nrmse_fit=fit, residual=residual_check(sol.fun, p), n_samples=n,
-                             fitted_velocity=fitted_v)
+                             fitted_velocity=fitted_v, quantisation_var=qv)
+
+
+def _quantisation_var(jac: np.ndarray, names: list[str], scale: Mapping[str, float]
+                      ) -> dict[str, float]:
+    """Variance [SI²] of the fitted parameters under white encoder quantisation noise,
+    ``(1/12)·(JᵀJ)⁻¹`` (position residuals in counts; ``jac`` w.r.t. the scaled parameters,
+    shape (n, ≥ len(names)), ``names`` its first columns)."""
+    try:
+        cov = QUANTISATION_VARIANCE * np.linalg.pinv(jac.T @ jac)
+    except np.linalg.LinAlgError:
+        return {}
+    return {nm: float(max(cov[i, i], 0.0)) * scale[nm] ** 2 for i, nm in enumerate(names)}

@@ -59,9 +59,10 @@ __all__ = [
 ]
 
 #: sample times and scales, one source: :mod:`jvl_gym.constants` (manual 1.2, 3.2.12, 3.2.139;
-#: docs/model.md "Timing and order of computation"). TS_I: inner (current-loop) sample time [s]; TS_O = INNER_PER_OUTER·TS_I:
-#: outer (speed-loop) sample time [s]; PWM_FULL: UA_VAL full scale ↔ U_supply/2; ADC_FULL:
-#: IA_IST.. measurement range; COUNTS_PER_REV: encoder counts per revolution.
+#: docs/model.md "Timing and order of computation"). TS_I: inner (current-loop) sample time
+#: [s]; TS_O = INNER_PER_OUTER·TS_I: outer (speed-loop) sample time [s]; PWM_FULL: UA_VAL full
+#: scale ↔ U_supply/2; ADC_FULL: IA_IST.. measurement range; COUNTS_PER_REV: encoder counts
+#: per revolution.
 TS_I: float = _c.INNER_DT
 INNER_PER_OUTER: int = _c.INNER_PER_OUTER
 TS_O: float = _c.OUTER_DT
