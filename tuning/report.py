@@ -101,14 +101,15 @@ def text_table(ident: Identification | None, design: Design,
 def plot_fits(ident: Identification, path: str | os.PathLike[str]) -> Path:
     """TESTU and TESTA records with the fitted model outputs."""
     fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
-    r = ident.records[0]
+    r = next(rec for rec in ident.records if rec.kind == "TESTU")
     k = np.arange(r.n)
     ax[0].plot(k, r.output, "o", ms=3, label="IC_IST measured")
     ax[0].plot(k, ident.coil.fitted[0], "-", label=f"model, d = {ident.coil.delay}")
     ax[0].set(xlabel="inner sample (128 us)", ylabel="ADC counts", title="TESTU fit")
     ax[0].legend()
     seen: set[float] = set()
-    for rec, fv in zip(ident.records[1:], ident.mechanics.fitted_velocity):
+    testa = [rec for rec in ident.records if rec.kind == "TESTA"]
+    for rec, fv in zip(testa, ident.mechanics.fitted_velocity):
         kk = np.arange(rec.n)
         first = rec.input[0] not in seen  # repetitions of a level: unlabelled, lighter
         seen.add(rec.input[0])
