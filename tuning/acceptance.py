@@ -29,7 +29,8 @@ from .verify import position_move
 if TYPE_CHECKING:  # pragma: no cover
     from .autotune import Design, Identification
 
-__all__ = ["Candidate", "Acceptance", "MOVE_DISTANCE", "MOVE_V_SOLL", "default_filters",
+__all__ = ["Candidate", "Acceptance", "MOVE_DISTANCE", "MOVE_V_SOLL", "DEFAULT_NAME",
+           "default_filters", "autotune_designs",
            "simulation_parameters", "move_acceleration", "candidate_designs", "accept"]
 
 MOVE_DISTANCE: int = 20000  #: acceptance move [counts] (4.9 revolutions)
@@ -243,3 +244,20 @@ def _moves(m: Any, a_soll: list[int], distance: int, v_soll: int, seconds: float
     target = np.asarray(m.read("P_SOLL"), dtype=float)
     err = np.max(np.abs(mv.position[-tail:] - target), axis=0)
     return mv.settle_s, err
+
+
+def autotune_designs(idents: Sequence[Identification], structure: str = "pi",
+                     a_soll: Sequence[int] | int | None = None, seed: int = 0,
+                     ) -> list[Acceptance]:
+    """Design the candidates of every motor and keep the best by simulation (:func:`accept`).
+
+    The returned :class:`Acceptance` holds the kept registers (``chosen.registers``; the
+    default setup's filter registers when it wins) and the reason for the report.
+    """
+    cands = [candidate_designs(idn, structure) for idn in idents]
+    res = accept(idents, cands, a_soll=a_soll, seed=seed)
+    for idn, r in zip(idents, res):
+        if r.chosen.name == DEFAULT_NAME:
+            r.chosen = Candidate(DEFAULT_NAME, default_filters(idn.motor.name))
+        r.notes = [f"{k}: {_ms(v)}" for k, v in r.settle_s.items()]
+    return res
