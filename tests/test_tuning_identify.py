@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from tuning.identify_coil import identify_coil
-from tuning.identify_mechanics import identify_mechanics, two_level_torques
+from tuning.identify_mechanics import coil_uncertainty, identify_mechanics, two_level_torques
 from tuning.models import MotorData
 from tuning.records import (
     RATES,
@@ -119,7 +119,7 @@ def test_identify_from_csv_gives_the_in_memory_inertia(tmp_path):
     recs = [load_csv(f) for f in files]
     assert recs[0].meta["registers"] == ident.records[1].meta["registers"]
     coil = identify_coil(load_csv(u), MD)
-    est = identify_mechanics(recs, coil.motor(MD))
+    est = identify_mechanics(recs, coil.motor(MD), coil_sd=coil_uncertainty(coil))
     assert est.J == pytest.approx(ident.mechanics.J, rel=1e-9)
     assert est.ci["J"] == pytest.approx(ident.mechanics.ci["J"], rel=1e-9)
     args = ["identify", "--motor", "MAC140", "--testu", str(u)]

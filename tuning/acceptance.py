@@ -163,7 +163,7 @@ def _name(d: Design) -> str:
 def accept(idents: Sequence[Identification], candidates: Sequence[Sequence[Candidate]],
            a_soll: Sequence[int] | int | None = None, distance: int = MOVE_DISTANCE,
            v_soll: int = MOVE_V_SOLL, seconds: float = 2.0, window: int = 10,
-           seed: int = 0) -> list[Acceptance]:
+           seed: int = 0, default_allowed: Sequence[bool] | None = None) -> list[Acceptance]:
     """Simulate every candidate (and the default setup) on its identified motor; keep the best.
 
     Parameters
@@ -183,6 +183,10 @@ def accept(idents: Sequence[Identification], candidates: Sequence[Sequence[Candi
         In-position window [counts] (INPOSWIN, 3.2.33).
     seed : int
         Noise seed of the simulation.
+    default_allowed : sequence of bool, optional
+        Per motor, whether the default setup may be kept (it is simulated and reported in any
+        case); :func:`autotune_designs` allows it when it passes
+        :func:`tuning.autotune.verify_design` on the identified motor.
 
     Returns
     -------
@@ -215,7 +219,9 @@ def accept(idents: Sequence[Identification], candidates: Sequence[Sequence[Candi
         js = [j for j, (k, _) in enumerate(lanes) if k == i]
         settle = {lanes[j][1].name: float(res[0][j]) for j in js}
         final = {lanes[j][1].name: float(res[1][j]) for j in js}
-        best = min(range(len(js)), key=lambda q: (res[0][js[q]], res[1][js[q]], q))
+        ok = [q for q in range(len(js)) if default_allowed is None or default_allowed[i]
+              or lanes[js[q]][1].name != DEFAULT_NAME]
+        best = min(ok, key=lambda q: (res[0][js[q]], res[1][js[q]], q))
         chosen = lanes[js[best]][1]
         asked = lanes[js[0]][1].name
         d_def, d_ask = settle[DEFAULT_NAME], settle[asked]
@@ -254,10 +260,34 @@ def autotune_designs(idents: Sequence[Identification], structure: str = "pi",
     The returned :class:`Acceptance` holds the kept registers (``chosen.registers``; the
     default setup's filter registers when it wins) and the reason for the report.
     """
+    from .autotune import verify_design
+
     cands = [candidate_designs(idn, structure) for idn in idents]
-    res = accept(idents, cands, a_soll=a_soll, seed=seed)
-    for idn, r in zip(idents, res):
+    defaults = [default_design(idn) for idn in idents]
+    allowed = [not verify_design(d) for d in defaults]
+    res = accept(idents, cands, a_soll=a_soll, seed=seed, default_allowed=allowed)
+    for r, dd in zip(res, defaults):
         if r.chosen.name == DEFAULT_NAME:
-            r.chosen = Candidate(DEFAULT_NAME, default_filters(idn.motor.name))
+            r.chosen = Candidate(DEFAULT_NAME, dd.registers, dd)
         r.notes = [f"{k}: {_ms(v)}" for k, v in r.settle_s.items()]
+        r.chosen.design.acceptance = r
     return res
+
+
+def default_design(ident: Identification) -> Design:
+    """The motor type's default setup as a :class:`tuning.autotune.Design`, verified on the
+    identified motor: the design point of :mod:`tuning.defaults` (fixed normalised gains, PI,
+    KVOUT = 1) with the registers of ``configs/setups/<TYPE>.yaml``."""
+    from .autotune import synthesize
+    from .defaults import DEFAULT_CURRENT_GAINS, DEFAULT_SPEED_GAINS
+    from .verify import verify_current_loop, verify_speed_loop
+
+    md = ident.motor
+    d = synthesize(md, md.J_m, structure="pi", current_gains=DEFAULT_CURRENT_GAINS,
+                   speed_gains=DEFAULT_SPEED_GAINS)
+    regs = default_filters(md.name)
+    d.registers = regs
+    d.current_report = verify_current_loop(md, regs)
+    d.speed_report = verify_speed_loop(md, regs, ident.mechanics.J)
+    d.notes = ["the motor type's default setup (configs/setups), kept by the acceptance step"]
+    return d

@@ -85,6 +85,8 @@ class Design:
     quantization_delta: dict[str, float]
     guidance: dict[str, float]
     notes: list[str] = field(default_factory=list)
+    #: the acceptance step's result (:class:`tuning.acceptance.Acceptance`) when it chose this
+    acceptance: Any = None
 
 
 def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,
