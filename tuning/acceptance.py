@@ -128,7 +128,9 @@ def candidate_designs(ident: Identification, structure: str = "pi") -> list[Cand
     ``"pi"``: the PI with the dead-band rule for the position integral, then the same PI with
     the integral switched the other way, then I-P; ``"ip"``: I-P, then both PI variants.
     Designs that fail :func:`tuning.autotune.verify_design` are left out (the one asked for is
-    kept and flagged by the caller).
+    kept and flagged by the caller). The alternatives share the asked design's current loop
+    and speed-loop gains (kp, ki): PI and I-P have the same loop transfer function
+    (:mod:`tuning.synthesis`), so the gain search runs once.
     """
     from .autotune import synthesize, verify_design
 
@@ -142,9 +144,11 @@ def candidate_designs(ident: Identification, structure: str = "pi") -> list[Cand
     else:
         alts += [dict(structure="pi", position_integral=False),
                  dict(structure="pi", position_integral=True)]
+    same = dict(current_gains=(first.current.loop_gain, first.current.ki_norm),
+                speed_gains=(first.speed.kp_norm, first.speed.ki_norm))
     for kw in alts:
         try:
-            d = synthesize(md, mech.J, mech.coulomb, **kw)
+            d = synthesize(md, mech.J, mech.coulomb, **kw, **same)
         except ValueError:
             continue
         if kw.get("position_integral") and d.speed.kii == 0.0:
