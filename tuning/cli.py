@@ -29,6 +29,7 @@ import yaml
 
 from jvl_gym.cli_app import App
 
+from .acceptance import autotune_designs
 from .autotune import (
     RECOMMENDED_COIL_SAMPLES,
     RECOMMENDED_MECH_SAMPLES,
@@ -37,7 +38,7 @@ from .autotune import (
     verify_design,
 )
 from .identify_coil import identify_coil
-from .identify_mechanics import identify_mechanics
+from .identify_mechanics import coil_uncertainty, identify_mechanics
 from .models import MotorData
 from .records import load_csv, record_registers
 from .report import text_table, write_report
@@ -131,7 +132,7 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
             pc = float(regs.get("PHASE_COMP", 5.0))
             md = md.with_(amplitude=float(regs.get("AMPLITUDE", md.amplitude)))
         m = identify_mechanics(recs, md, coulomb=not no_coulomb, current_regs=cur,
-                               phase_comp=pc)
+                               phase_comp=pc, coil_sd=coil_uncertainty(c) if testu else None)
         carried = record_registers(recs) or {}
         model = "electrical" if cur is not None or "KIFX2" in carried else "rigid"
         typer.echo(f"J {m.J!r} kg m^2 {m.ci['J']}, KVOUT {m.kvout:.3f}, "
@@ -247,8 +248,11 @@ def autotune(motor: str = typer.Option("MAC140"),
                                            callback=_nonnegative),
              noise: bool = typer.Option(True, help="1 % measurement noise in the simulator"),
              seed: int = typer.Option(0),
-             n_coil: int = typer.Option(RECOMMENDED_COIL_SAMPLES, help="TESTU samples"),
-             n_mech: int = typer.Option(RECOMMENDED_MECH_SAMPLES, help="TESTA samples/level"),
+             n_coil: int = typer.Option(None, help="TESTU samples per record (default: "
+                                        f"{RECOMMENDED_COIL_SAMPLES}; with --port the "
+                                        "firmware's 11, several records combined)"),
+             n_mech: int = typer.Option(None, help="TESTA samples per record (default: "
+                                        f"{RECOMMENDED_MECH_SAMPLES}; with --port 11)"),
              structure: str = typer.Option("pi", help="speed loop structure: pi or ip"),
              out: Path = typer.Option(Path("autotune_out")),
              port: str = typer.Option(None, help="serial device or pyserial URL of a real motor "
@@ -262,10 +266,14 @@ def autotune(motor: str = typer.Option("MAC140"),
     from jvl_gym import MotorArray
 
     if port is not None:
+        from jvl_gym.families.mac050_141.constants import TEST_RECORD_SAMPLES
+
         from .serial_source import autotune_over_serial
 
-        ident, d = autotune_over_serial(port, motor, address, time_scale, n_coil, n_mech,
-                                        structure, write, progress=_say)
+        ident, d = autotune_over_serial(port, motor, address, time_scale,
+                                        n_coil or TEST_RECORD_SAMPLES,
+                                        n_mech or TEST_RECORD_SAMPLES, structure, write,
+                                        progress=_say)
         setup = out / "setup.yaml"
         _write_setup(setup, motor, d.registers,
                      f"jvl-tune autotune --port {port}: identified J = {ident.mechanics.J:.4g}")
@@ -285,9 +293,11 @@ def autotune(motor: str = typer.Option("MAC140"),
     if noise:
         params.update(current_noise=2.0, position_noise=0.85)
     m = MotorArray(motor, n=1, seed=seed, **params)
-    ident = identify_motors(m, n_coil, n_mech, progress=_say)[0]
-    _say("synthesis and verification")
-    d = synthesize(ident.motor, ident.mechanics.J, ident.mechanics.coulomb, structure=structure)
+    ident = identify_motors(m, n_coil or RECOMMENDED_COIL_SAMPLES,
+                            n_mech or RECOMMENDED_MECH_SAMPLES, progress=_say)[0]
+    _say("synthesis, verification and the acceptance step (candidates simulated on the "
+         "identified motor)")
+    d = autotune_designs([ident], structure)[0].chosen.design
     setup = out / "setup.yaml"
     _write_setup(setup, motor, d.registers,
                  f"jvl-tune autotune: {motor}, identified J = {ident.mechanics.J:.4g} kg m^2")

@@ -32,6 +32,8 @@ import control as ct
 import numpy as np
 from scipy.linalg import expm
 
+from jvl_gym.families.mac050_141 import constants as _c
+
 __all__ = [
     "TS_I",
     "TS_O",
@@ -55,13 +57,18 @@ __all__ = [
     "freqresp",
 ]
 
-TS_I: float = 128e-6  #: inner (current-loop) sample time [s], docs/model.md §2
-INNER_PER_OUTER: int = 15  #: inner samples per outer sample
-TS_O: float = INNER_PER_OUTER * TS_I  #: outer (speed-loop) sample time [s] = 1.92 ms
-PWM_FULL: int = 1023  #: UA_VAL full scale ↔ U_supply/2 phase-to-midpoint (docs/model.md §3)
-ADC_FULL: int = 1023  #: IA_IST.. measurement range (manual 3.2.139)
-COUNTS_PER_REV: int = 4096  #: encoder counts per revolution (manual 3.2.12)
-COUNTS_PER_RAD: float = COUNTS_PER_REV / (2.0 * math.pi)
+#: sample times and scales, one source: the family's constants
+#: (:mod:`jvl_gym.families.mac050_141.constants`; manual 1.2, 3.2.12, 3.2.139; docs/model.md
+#: §2). TS_I: inner (current-loop) sample time [s]; TS_O = INNER_PER_OUTER·TS_I: outer (speed-loop) sample time [s]; PWM_FULL: UA_VAL full
+#: scale ↔ U_supply/2; ADC_FULL: IA_IST.. measurement range; COUNTS_PER_REV: encoder counts
+#: per revolution.
+TS_I: float = _c.INNER_DT
+INNER_PER_OUTER: int = _c.INNER_PER_OUTER
+TS_O: float = _c.OUTER_DT
+PWM_FULL: int = _c.PWM_FULL
+ADC_FULL: int = _c.ADC_FULL
+COUNTS_PER_REV: int = _c.COUNTS_PER_REV
+COUNTS_PER_RAD: float = COUNTS_PER_REV / (2.0 * math.pi)  #: encoder counts per radian
 
 
 @dataclass(frozen=True)

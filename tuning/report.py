@@ -53,7 +53,7 @@ def text_table(ident: Identification | None, design: Design,
                                                    c.ci["L_line"][1] * 1e3), "L_line_mH"),
             ("coil pole a", c.pole, c.ci["pole"], "pole"),
             ("coil gain g [cnt/cnt]", c.gain, c.ci["gain"], "gain"),
-            ("PWM delay [samples]", c.delay, (c.delay, c.delay), "delay"),
+            ("PWM delay [samples]", c.delay, c.ci.get("delay", (c.delay, c.delay)), "delay"),
             ("J total [kg m^2]", m.J, m.ci["J"], "J"),
             ("KVOUT = J/J_m", m.kvout, m.ci["kvout"], "kvout"),
             ("viscous b [N m s/rad]", m.viscous, m.ci["viscous"], "viscous"),
@@ -61,14 +61,21 @@ def text_table(ident: Identification | None, design: Design,
         ]
         for name, val, ci, key in rows:
             tv = "" if not truth or key not in truth else f"{truth[key]:.4g}"
-            lines.append(f"{name:<24}{val:>14.5g}  {_ci(ci):<30}{tv:>12}")
+            flag = ""
+            if key in ("viscous", "coulomb", "J") and not m.detected.get(key, True):
+                flag = "  not detected (interval reaches 0)"
+            lines.append(f"{name:<24}{val:>14.5g}  {_ci(ci):<30}{tv:>12}{flag}")
         lines.append(f"TESTU fit {c.nrmse_fit:.2f} % NRMSE, residual white: "
                      f"{c.residual['white']} (Box-Pierce p = {c.residual['box_pierce_p']:.2f}); "
                      f"TESTA fit {m.nrmse_fit:.2f} %, residual white: {m.residual['white']}")
+        n_u = sum(r.kind == "TESTU" for r in ident.records)
+        lines.append("TESTU intervals: " + ("whole-record jackknife over "
+                                            f"{n_u} records + quantisation floor" if n_u >= 3
+                                            else "fit covariance x correlation inflation"))
         if m.repeats > 1:
             lines.append(f"TESTA intervals: spread of {m.repeats} repeated two-level sets "
-                         "(Student t, K-1 dof); J of each set: "
-                         + ", ".join(f"{j:.5g}" for j in m.J_repeats))
+                         "(Student t, K-1 dof) + quantisation and coil-uncertainty terms; J of "
+                         "each set: " + ", ".join(f"{j:.5g}" for j in m.J_repeats))
         else:
             lines.append("TESTA intervals: one fit (statistical only, too narrow under model "
                          "error; record the two levels repeatedly)")
@@ -96,20 +103,32 @@ def text_table(ident: Identification | None, design: Design,
                  f"up to A_SOLL {g['A_SOLL_max']:.0f} keep half of it for regulation")
     for n in design.notes:
         lines.append(f"note: {n}")
+    acc = getattr(design, "acceptance", None)
+    if acc is not None:
+        dist, vs, a = acc.move
+        lines += ["", f"Acceptance step (P_MODE move of {dist} counts, V_SOLL {vs}, A_SOLL {a}, "
+                  "simulated on the identified motor; settle = within INPOSWIN for good)"]
+        lines += [f"  {k:<26}{_settle(v)}" for k, v in acc.settle_s.items()]
+        lines.append(f"  {acc.reason}")
     return "\n".join(lines) + "\n"
+
+
+def _settle(t: float) -> str:
+    return "never within 2 s" if not math.isfinite(t) else f"settles in {1e3 * t:.0f} ms"
 
 
 def plot_fits(ident: Identification, path: str | os.PathLike[str]) -> Path:
     """TESTU and TESTA records with the fitted model outputs."""
     fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
-    r = ident.records[0]
+    r = next(rec for rec in ident.records if rec.kind == "TESTU")
     k = np.arange(r.n)
     ax[0].plot(k, r.output, "o", ms=3, label="IC_IST measured")
     ax[0].plot(k, ident.coil.fitted[0], "-", label=f"model, d = {ident.coil.delay}")
     ax[0].set(xlabel="inner sample (128 us)", ylabel="ADC counts", title="TESTU fit")
     ax[0].legend()
     seen: set[float] = set()
-    for rec, fv in zip(ident.records[1:], ident.mechanics.fitted_velocity):
+    testa = [rec for rec in ident.records if rec.kind == "TESTA"]
+    for rec, fv in zip(testa, ident.mechanics.fitted_velocity):
         kk = np.arange(rec.n)
         first = rec.input[0] not in seen  # repetitions of a level: unlabelled, lighter
         seen.add(rec.input[0])
