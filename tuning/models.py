@@ -60,8 +60,8 @@ __all__ = [
 #: sample times and scales, one source: the family's constants
 #: (:mod:`jvl_gym.families.mac050_141.constants`; manual 1.2, 3.2.12, 3.2.139; docs/model.md
 #: §2). TS_I: inner (current-loop) sample time [s]; TS_O = INNER_PER_OUTER·TS_I: outer
-#: (speed-loop) sample time [s]; PWM_FULL: UA_VAL full scale ↔ U_supply/2; ADC_FULL: IA_IST.. measurement range; COUNTS_PER_REV: encoder counts
-#: per revolution.
+#: (speed-loop) sample time [s]; PWM_FULL: UA_VAL full scale ↔ U_supply/2; ADC_FULL: IA_IST..
+#: measurement range; COUNTS_PER_REV: encoder counts per revolution.
 TS_I: float = _c.INNER_DT
 INNER_PER_OUTER: int = _c.INNER_PER_OUTER
 TS_O: float = _c.OUTER_DT
