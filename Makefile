@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-core
 STAMP_RL := $(VENV)/.installed-rl
 
-.PHONY: setup setup-rl demo test bench bench-compile lint docs notebooks clean
+.PHONY: setup setup-rl demo test bench bench-compare bench-compile lint docs notebooks clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -34,6 +34,10 @@ bench: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_protocol.py
 	$(BIN)/python benchmarks/bench_envs.py
 	@echo "figures written to docs/benchmarks.md"
+
+# BASELINE=<git revision>: speed of that revision beside this tree, in one run
+bench-compare: $(STAMP_RL)
+	$(BIN)/python benchmarks/bench_compare.py $(or $(BASELINE),HEAD~1)
 
 # BASELINE=<git revision> measures that revision beside this tree
 bench-compile: $(STAMP_RL)
