@@ -252,7 +252,7 @@ class MacMotorArray(MotorArray):
             The motors (default all).
         """
         idx = as_index(index, self.n)
-        arr = np.asarray(torque, dtype=np.float64)
+        arr = real_array("torque", torque)
         if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != idx.size):
             raise ValueError(f"torque: expected a scalar or shape ({idx.size},), got {arr.shape}")
         if not np.all(np.isfinite(arr)):

@@ -1,0 +1,126 @@
+"""The engine's public pieces: specialised drivers, the compile notice, and the operations a
+task uses instead of kernel arrays (hold_torque, reseed, write_many)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from jvl_gym import MotorArray
+from jvl_gym.families.mac050_141 import constants as c
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _python(code: str, cache_dir: Path, **env: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(code)], capture_output=True,
+                          text=True, check=True, cwd=ROOT,
+                          env={**os.environ, "NUMBA_CACHE_DIR": str(cache_dir), **env})
+
+
+PROBE = """
+import json
+from numba import njit
+from jvl_gym.engine.specialize import specialise
+
+
+def _template(x):
+    return hook(x) + offset
+
+
+@njit(cache=True, inline="always")
+def double(x):
+    return 2 * x
+
+
+@njit(cache=True, inline="always")
+def negate(x):
+    return -x
+
+
+def run():
+    out = {}
+    for tag, hook in (("double", double), ("negate", negate)):
+        f = specialise({"_template": _template}, {"hook": hook, "offset": 1}, tag, __file__,
+                       {"_template": {"cache": True}})["_template"]
+        out[tag] = [f(3), sum(f.stats.cache_hits.values())]
+    return json.dumps(out)
+"""
+
+
+def test_specialised_drivers_bind_their_names_and_are_cached_apart(tmp_path: Path) -> None:
+    """Two specialisations of one template with the same signature compute with their own
+    bindings, and a second process loads both from numba's cache."""
+    (tmp_path / "probe_templates.py").write_text(PROBE)
+    code = f"import sys; sys.path.insert(0, {str(tmp_path)!r}); import probe_templates as t; " \
+           "print(t.run())"
+    first = _python(code, tmp_path / "cache")
+    second = _python(code, tmp_path / "cache")
+    a, b = json.loads(first.stdout), json.loads(second.stdout)
+    assert a["double"][0] == 7 and a["negate"][0] == -2
+    assert b["double"] == [7, 1] and b["negate"] == [-2, 1]  # loaded, not compiled again
+
+
+def test_a_compile_says_so_on_stderr_first_and_a_cached_start_does_not(tmp_path: Path) -> None:
+    code = """
+    import numpy as np
+    import jvl_gym
+    from jvl_gym.keywords import first_bad_value
+    first_bad_value(np.zeros((1, 2)), np.zeros(1, dtype=np.int64))
+    """
+    cold = _python(code, tmp_path)
+    assert "jvl_gym: compiling numba code for this machine" in cold.stderr
+    assert "compiling jvl_gym.keywords.first_bad_value" in cold.stderr
+    warm = _python(code, tmp_path)
+    assert "compiling" not in warm.stderr
+    quiet = _python(code, tmp_path / "other", JVL_QUIET_COMPILE="1")
+    assert quiet.stderr == ""
+
+
+def _loaded(hold: bool) -> MotorArray:
+    m = MotorArray("MAC140", n=2, seed=0, load_inertia=2e-5)
+    m.write_many({"V_SOLL": 0, "MODE_REG": c.V_MODE})
+    torque = np.array([0.1, -0.15])
+    m.set_input(load_torque=torque)
+    if hold:
+        m.hold_torque(torque)
+    return m
+
+
+def test_hold_torque_starts_a_motor_that_already_carries_its_load() -> None:
+    held, free = _loaded(True), _loaded(False)
+    for m in (held, free):
+        m.step(30)
+    # without it the load pulls the shaft until the speed loop's integrator has caught up
+    assert np.all(np.abs(held.position_rad) < 0.2 * np.abs(free.position_rad))
+
+
+@pytest.mark.parametrize("torque", [np.nan, np.inf, [0.1, 0.2, 0.3], "0.1"])
+def test_hold_torque_refuses_bad_values_and_changes_nothing(torque: object) -> None:
+    m = MotorArray("MAC140", n=2, seed=0)
+    state = m.state.copy()
+    with pytest.raises(ValueError):
+        m.hold_torque(torque)
+    np.testing.assert_array_equal(m.state, state)
+
+
+def test_reseed_gives_new_noise_streams_and_refuses_other_types() -> None:
+    a = MotorArray("MAC140", n=2, seed=1, current_noise=0.5)
+    b = MotorArray("MAC140", n=2, seed=2, current_noise=0.5)
+    b.reseed(a.keys.copy())
+    for m in (a, b):
+        m.write_many({"V_SOLL": 800, "MODE_REG": c.V_MODE})
+        m.step(20)
+    np.testing.assert_array_equal(a.state, b.state)
+    keys = b.keys.copy()
+    for bad in (np.array([1.0, 2.0]), np.array([1, 2, 3], dtype=np.uint64), [1, 2]):
+        with pytest.raises(ValueError):
+            b.reseed(bad)
+        np.testing.assert_array_equal(b.keys, keys)
