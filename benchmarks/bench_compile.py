@@ -8,7 +8,10 @@ source tree (``NUMBA_CACHE_DIR``, so the project's own cache is neither used nor
 1. the first ``MotorArray`` step (the kernel compiles);
 2. then, for each environment, the first ``reset`` + ``step`` of the single env, then of a
    64-copy vector env (threaded step), each with what the earlier cases compiled already cached;
-3. the first step again, now from the filled cache (what every later process pays).
+3. the first step again, now from the filled cache (what every later process pays);
+4. in a second empty cache: ``jvl-gym compile`` (what ``make setup`` runs once), then the
+   first step of a motor array and of each single env after it (trees without that command
+   print "—").
 
 ``--baseline REV`` measures the source tree of git revision ``REV`` (checked out into a temporary
 worktree) the same way and prints both side by side.
@@ -17,6 +20,7 @@ worktree) the same way and prints both side by side.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import subprocess
 import sys
@@ -43,6 +47,12 @@ CASES: list[tuple[str, str]] = [
       for name in ENVS for kind in ("single", "vector")],
     ("MotorArray step, cache filled", MOTORS),
 ]
+PRECOMPILE = "from jvl_gym.precompile import compile_all\ncompile_all()"
+AFTER_PRECOMPILE: list[tuple[str, str]] = [
+    ("jvl-gym compile (empty cache)", PRECOMPILE),
+    ("MotorArray first step after it", MOTORS),
+    *[(f"{name} single first step after it", _env_code(name, "single")) for name in ENVS],
+]
 
 TIMED = """
 import time
@@ -63,9 +73,14 @@ def seconds(code: str, tree: Path, cache_dir: str) -> float:
 
 
 def measure(tree: Path) -> list[float]:
-    """Wall times [s] of :data:`CASES` for the source tree ``tree``, in order, one cache."""
+    """Wall times [s] of :data:`CASES`, then of :data:`AFTER_PRECOMPILE` (NaN where the tree
+    has no ``jvl_gym.precompile``), for the source tree ``tree``, each list in one cache."""
     with tempfile.TemporaryDirectory(prefix="jvl-numba-") as cache_dir:
-        return [seconds(code, tree, cache_dir) for _, code in CASES]
+        times = [seconds(code, tree, cache_dir) for _, code in CASES]
+    if not (tree / "src" / "jvl_gym" / "precompile.py").exists():
+        return times + [math.nan] * len(AFTER_PRECOMPILE)
+    with tempfile.TemporaryDirectory(prefix="jvl-numba-") as cache_dir:
+        return times + [seconds(code, tree, cache_dir) for _, code in AFTER_PRECOMPILE]
 
 
 def main() -> None:
@@ -86,8 +101,9 @@ def main() -> None:
                                check=False)
     print(f"{'first use, empty numba cache [s]':40s}"
           + "".join(f"{label:>14s}" for label, _ in columns))
-    for k, (name, _) in enumerate(CASES):
-        print(f"{name:40s}" + "".join(f"{r[k]:14.1f}" for r in results))
+    for k, (name, _) in enumerate([*CASES, *AFTER_PRECOMPILE]):
+        print(f"{name:40s}" + "".join(f"{r[k]:14.1f}" if r[k] == r[k] else f"{'—':>14s}"
+                                      for r in results))
 
 
 if __name__ == "__main__":
