@@ -151,3 +151,12 @@ def test_identify_needs_records_and_a_readable_setup(tmp_path, capsys):
     code, _, err = _run(tune, ["identify", "--motor", "MAC140", "--testa", files[0],
                                "--setup", str(bad)], capsys)
     assert "list.yaml" in _one_line_error(code, err)
+
+
+@pytest.mark.parametrize("args", [["train", "jvl_gym/GearSync-v0", "--timesteps", "0"],
+                                  ["train", "jvl_gym/GearSync-v0", "--threads", "0"],
+                                  ["evaluate", "jvl_gym/GearSync-v0", "--seeds", "0"]])
+def test_counts_must_be_positive(capsys, args):
+    code, _, err = _run(gym_cli, args, capsys)
+    assert code == 2
+    _one_line_error(code, err)

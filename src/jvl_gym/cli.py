@@ -39,9 +39,10 @@ def _need_rl_extra(command: str) -> None:
 @app.command()
 def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")],
           out: Annotated[Path, typer.Option(help="directory for the model")] = Path("runs"),
-          timesteps: Annotated[int | None, typer.Option(help="override total_timesteps")] = None,
+          timesteps: Annotated[int | None, typer.Option(help="override total_timesteps",
+                                                        min=1)] = None,
           seed: Annotated[int | None, typer.Option(help="override the config's seed")] = None,
-          threads: Annotated[int, typer.Option(help="torch threads")] = 1,
+          threads: Annotated[int, typer.Option(help="torch threads", min=1)] = 1,
           config_dir: Annotated[Path | None, typer.Option(help="directory of the RL *.yml")]
           = None) -> None:
     """Train the configured algorithm (configs/rl/*.yml) on ENV_ID and save the model."""
@@ -56,8 +57,10 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
 @app.command()
 def evaluate(env_ids: Annotated[list[str], typer.Argument(help="env ids to evaluate")],
              runs: Annotated[Path, typer.Option(help="directory of the models")] = Path("runs"),
-             seeds: Annotated[int | None, typer.Option(help="held-out seeds (>= 5)")] = None,
-             episodes: Annotated[int | None, typer.Option(help="episodes per seed")] = None,
+             seeds: Annotated[int | None, typer.Option(help="held-out seeds (>= 5)", min=1)]
+             = None,
+             episodes: Annotated[int | None, typer.Option(help="episodes per seed", min=1)]
+             = None,
              config_dir: Annotated[Path | None, typer.Option(help="directory of the RL *.yml")]
              = None) -> None:
     """Print policy vs baseline (mean ± std over held-out seeds) for each ENV_ID.
