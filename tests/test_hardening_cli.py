@@ -160,3 +160,25 @@ def test_counts_must_be_positive(capsys, args):
     code, _, err = _run(gym_cli, args, capsys)
     assert code == 2
     _one_line_error(code, err)
+
+
+def test_evaluate_uses_a_shipped_policy_when_runs_has_none(monkeypatch, tmp_path, capsys):
+    import jvl_gym.rl.evaluate as ev
+    import jvl_gym.rl.train as tr
+
+    shipped = tmp_path / "policies"
+    shipped.mkdir()
+    (shipped / "GearSync-v0.zip").write_bytes(b"model")
+    monkeypatch.setattr(tr, "SHIPPED_DIR", shipped)
+    used = []
+
+    def fake(env_id, path, *a, **k):
+        used.append(path)
+        return {"baseline": (1.0, 0.5), "policy": (2.0, 0.1), "seeds_won": (5.0, 5.0)}
+
+    monkeypatch.setattr(ev, "evaluate", fake)
+    code, out, err = _run(gym_cli, ["evaluate", "jvl_gym/GearSync-v0", "--runs",
+                                    str(tmp_path / "runs")], capsys)
+    assert code == 0
+    assert used == [shipped / "GearSync-v0.zip"]
+    assert "shipped" in err and "2.00 ± 0.10" in out

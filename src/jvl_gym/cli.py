@@ -65,15 +65,22 @@ def evaluate(env_ids: Annotated[list[str], typer.Argument(help="env ids to evalu
              = None) -> None:
     """Print policy vs baseline (mean ± std over held-out seeds) for each ENV_ID.
 
-    A missing model is reported in one line on stderr (exit status 1) after the table, which
-    then shows the baseline only.
+    The model is ``RUNS/<Env>.zip`` (what ``jvl-gym train`` writes), else the policy shipped
+    with the package (named on stderr). A missing model is reported in one line on stderr
+    (exit status 1) after the table, which then shows the baseline only.
     """
     from .rl import evaluate as ev
-    from .rl.train import model_path
+    from .rl.train import model_path, shipped_model
 
     for env_id in env_ids:
         _check_env_id(env_id)
     paths = {env_id: model_path(runs, env_id) for env_id in env_ids}
+    for env_id, path in paths.items():
+        shipped = None if path.exists() else shipped_model(env_id)
+        if shipped is not None:
+            print(f"jvl-gym evaluate: {env_id}: no {path}, using the shipped policy {shipped}",
+                  file=sys.stderr)
+            paths[env_id] = shipped
     if any(path.exists() for path in paths.values()):
         _need_rl_extra("jvl-gym evaluate (with a model)")
     results = {}
