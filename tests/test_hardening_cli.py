@@ -99,6 +99,9 @@ def test_train_without_the_rl_extra_says_how_to_get_it(monkeypatch, capsys):
 
 def test_evaluate_without_a_model_says_so(monkeypatch, tmp_path, capsys):
     import jvl_gym.rl.evaluate as ev
+    import jvl_gym.rl.train as tr
+
+    monkeypatch.setattr(tr, "SHIPPED_DIR", tmp_path / "no_policies")
 
     monkeypatch.setattr(ev, "evaluate", lambda env_id, path, *a, **k: {"baseline": (1.0, 0.5)})
     code, out, err = _run(gym_cli, ["evaluate", "jvl_gym/GearSync-v0", "--runs",
