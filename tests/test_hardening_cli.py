@@ -192,3 +192,38 @@ def test_the_gear_sync_policy_ships_with_the_package():
 
     path = shipped_model("jvl_gym/GearSync-v0")
     assert path is not None and 10_000 < path.stat().st_size < 1_000_000
+
+
+def _inconsistent_identification():
+    from tuning.autotune import Identification
+    from tuning.identify_coil import identify_coil
+    from tuning.identify_mechanics import identify_mechanics
+    from tuning.models import MotorData
+    from tuning.records import simulate_testa, simulate_testu
+
+    md = MotorData.from_config("MAC140")
+    coil = identify_coil(simulate_testu(md, 100, 64), md)
+    recs = [simulate_testa(md, 2e-5, 100, 30), simulate_testa(md, 4e-4, 200, 30)]
+    return Identification(md, coil, identify_mechanics(recs, md), recs)
+
+
+def test_autotune_refuses_an_identification_that_is_not_credible(capsys):
+    import typer
+    from tuning.cli import _check_credible
+
+    ident = _inconsistent_identification()
+    with pytest.raises(typer.Exit):
+        _check_credible(ident, accept=False)
+    assert "NOT CREDIBLE" in capsys.readouterr().err
+    _check_credible(ident, accept=True)
+
+
+def test_report_prints_negative_friction_as_not_detected():
+    from tuning.autotune import synthesize
+    from tuning.report import text_table
+
+    ident = _inconsistent_identification()
+    assert ident.mechanics.coulomb < 0
+    table = text_table(ident, synthesize(ident.motor, 5e-5, 0.0))
+    row = [ln for ln in table.splitlines() if ln.startswith("Coulomb Tc")][0]
+    assert "not detected" in row

@@ -61,7 +61,10 @@ def text_table(ident: Identification | None, design: Design,
         ]
         for name, val, ci, key in rows:
             tv = "" if not truth or key not in truth else f"{truth[key]:.4g}"
-            lines.append(f"{name:<24}{val:>14.5g}  {_ci(ci):<30}{tv:>12}")
+            shown = f"{val:>14.5g}"
+            if key in ("viscous", "coulomb") and not val > 0:  # friction cannot drive
+                shown = f"{'not detected':>14}"
+            lines.append(f"{name:<24}{shown}  {_ci(ci):<30}{tv:>12}")
         lines.append(f"TESTU fit {c.nrmse_fit:.2f} % NRMSE, residual white: "
                      f"{c.residual['white']} (Box-Pierce p = {c.residual['box_pierce_p']:.2f}); "
                      f"TESTA fit {m.nrmse_fit:.2f} %, residual white: {m.residual['white']}")
