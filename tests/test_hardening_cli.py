@@ -187,11 +187,12 @@ def test_evaluate_uses_a_shipped_policy_when_runs_has_none(monkeypatch, tmp_path
     assert "shipped" in err and "2.00 ± 0.10" in out
 
 
-def test_the_gear_sync_policy_ships_with_the_package():
+def test_the_trained_policies_ship_with_the_package():
     from jvl_gym.rl.train import shipped_model
 
-    path = shipped_model("jvl_gym/GearSync-v0")
-    assert path is not None and 10_000 < path.stat().st_size < 1_000_000
+    for env_id in ("jvl_gym/GearSync-v0", "jvl_gym/CoilWinding-v0"):
+        path = shipped_model(env_id)
+        assert path is not None and 10_000 < path.stat().st_size < 1_000_000
 
 
 def _inconsistent_identification():
