@@ -99,6 +99,9 @@ def test_train_without_the_rl_extra_says_how_to_get_it(monkeypatch, capsys):
 
 def test_evaluate_without_a_model_says_so(monkeypatch, tmp_path, capsys):
     import jvl_gym.rl.evaluate as ev
+    import jvl_gym.rl.train as tr
+
+    monkeypatch.setattr(tr, "SHIPPED_DIR", tmp_path / "no_policies")
 
     monkeypatch.setattr(ev, "evaluate", lambda env_id, path, *a, **k: {"baseline": (1.0, 0.5)})
     code, out, err = _run(gym_cli, ["evaluate", "jvl_gym/GearSync-v0", "--runs",
@@ -152,3 +155,77 @@ def test_identify_needs_records_and_a_readable_setup(tmp_path, capsys):
     code, _, err = _run(tune, ["identify", "--motor", "MAC140", "--testa", files[0],
                                "--setup", str(bad)], capsys)
     assert "list.yaml" in _one_line_error(code, err)
+
+
+@pytest.mark.parametrize("args", [["train", "jvl_gym/GearSync-v0", "--timesteps", "0"],
+                                  ["train", "jvl_gym/GearSync-v0", "--threads", "0"],
+                                  ["evaluate", "jvl_gym/GearSync-v0", "--seeds", "0"]])
+def test_counts_must_be_positive(capsys, args):
+    code, _, err = _run(gym_cli, args, capsys)
+    assert code == 2
+    _one_line_error(code, err)
+
+
+def test_evaluate_uses_a_shipped_policy_when_runs_has_none(monkeypatch, tmp_path, capsys):
+    import jvl_gym.rl.evaluate as ev
+    import jvl_gym.rl.train as tr
+
+    shipped = tmp_path / "policies"
+    shipped.mkdir()
+    (shipped / "GearSync-v0.zip").write_bytes(b"model")
+    monkeypatch.setattr(tr, "SHIPPED_DIR", shipped)
+    used = []
+
+    def fake(env_id, path, *a, **k):
+        used.append(path)
+        return {"baseline": (1.0, 0.5), "policy": (2.0, 0.1), "seeds_won": (5.0, 5.0)}
+
+    monkeypatch.setattr(ev, "evaluate", fake)
+    code, out, err = _run(gym_cli, ["evaluate", "jvl_gym/GearSync-v0", "--runs",
+                                    str(tmp_path / "runs")], capsys)
+    assert code == 0
+    assert used == [shipped / "GearSync-v0.zip"]
+    assert "shipped" in err and "2.00 ± 0.10" in out
+
+
+def test_the_trained_policies_ship_with_the_package():
+    from jvl_gym.rl.train import shipped_model
+
+    for env_id in ("jvl_gym/GearSync-v0", "jvl_gym/CoilWinding-v0"):
+        path = shipped_model(env_id)
+        assert path is not None and 10_000 < path.stat().st_size < 1_000_000
+
+
+def _inconsistent_identification():
+    from tuning.autotune import Identification
+    from tuning.identify_coil import identify_coil
+    from tuning.identify_mechanics import identify_mechanics
+    from tuning.models import MotorData
+    from tuning.records import simulate_testa, simulate_testu
+
+    md = MotorData.from_config("MAC140")
+    coil = identify_coil(simulate_testu(md, 100, 64), md)
+    recs = [simulate_testa(md, 2e-5, 100, 30), simulate_testa(md, 4e-4, 200, 30)]
+    return Identification(md, coil, identify_mechanics(recs, md), recs)
+
+
+def test_autotune_refuses_an_identification_that_is_not_credible(capsys):
+    import typer
+    from tuning.cli import _check_credible
+
+    ident = _inconsistent_identification()
+    with pytest.raises(typer.Exit):
+        _check_credible(ident, accept=False)
+    assert "NOT CREDIBLE" in capsys.readouterr().err
+    _check_credible(ident, accept=True)
+
+
+def test_report_prints_negative_friction_as_not_detected():
+    from tuning.autotune import synthesize
+    from tuning.report import text_table
+
+    ident = _inconsistent_identification()
+    assert ident.mechanics.coulomb < 0
+    table = text_table(ident, synthesize(ident.motor, 5e-5, 0.0))
+    row = [ln for ln in table.splitlines() if ln.startswith("Coulomb Tc")][0]
+    assert "not detected" in row

@@ -260,9 +260,15 @@ def autotune(motor: str = typer.Option("MAC140"),
              address: int = typer.Option(1, help="MacTalk unit address (MYADDR) with --port"),
              time_scale: float = typer.Option(1.0, help="with --port: the twin's --speed",
                                               callback=_positive),
-             write: bool = typer.Option(False, help="with --port: write the design to the motor")
+             write: bool = typer.Option(False, help="with --port: write the design to the motor"),
+             accept: bool = typer.Option(False, help="exit 0 even when an identified value is "
+                                         "not credible (tuning.credibility)")
              ) -> None:
-    """Identify, synthesise, verify (simulator or --port); write OUT/setup.yaml and a report."""
+    """Identify, synthesise, verify (simulator or --port); write OUT/setup.yaml and a report.
+
+    Identified values that are not credible (``tuning.credibility``) are listed on stderr and
+    the exit status is 1 unless ``--accept``.
+    """
     from jvl_gym import MotorArray
 
     if port is not None:
@@ -284,6 +290,7 @@ def autotune(motor: str = typer.Option("MAC140"),
         if bad:
             typer.echo("FAILED: " + "; ".join(bad))
             raise typer.Exit(1)
+        _check_credible(ident, accept)
         return
 
     from .verify import velocity_step
@@ -319,6 +326,19 @@ def autotune(motor: str = typer.Option("MAC140"),
         raise typer.Exit(1)
     if not math.isfinite(ident.mechanics.J):
         raise typer.Exit(1)
+    _check_credible(ident, accept)
+
+
+def _check_credible(ident: object, accept: bool) -> None:
+    """Say on stderr what is not credible in an identification; exit 1 unless ``accept``."""
+    from .credibility import problems
+
+    bad = problems(ident.motor, mech=ident.mechanics, coil=ident.coil)  # type: ignore[attr-defined]
+    if bad:
+        what = "accepted (--accept)" if accept else "check the records, or --accept"
+        _say(f"NOT CREDIBLE: {'; '.join(bad)}: {what}")
+        if not accept:
+            raise typer.Exit(1)
 
 
 @app.command()

@@ -104,6 +104,14 @@ class RegisterBank:
         write is validated completely first: an unknown register, a read-only one, a value out
         of range or NaN, a wrong shape, or a MODE_REG value the firmware refuses raises a
         :class:`RegisterError` and changes nothing.
+
+        A value is a real number (an int or float, or an integer or float array): a str,
+        bytes, bool or complex value is refused. A quantity is rounded half away from zero to
+        the register's resolution (``V_SOLL = 1600.7`` stores 1601, ``KVOUT = 3.9`` stores
+        998/256); a register that holds a code (MODE_REG, CNTRL_BITS, HOME_MODE, STARTMODE,
+        the pointers, SAMPLE1..4, MYADDR …: ``registers.formats.whole_only``) takes whole
+        numbers only. ``index`` selects motors (:func:`jvl_gym.arguments.as_index`): None, an
+        integer, a slice, distinct integers, or a boolean mask of shape (N,).
         """
         plan = self._key_plan((key,))
         self._write_plan(plan, (value,), as_index(index, self.n))

@@ -40,9 +40,10 @@ def _need_rl_extra(command: str) -> None:
 @app.command()
 def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")],
           out: Annotated[Path, typer.Option(help="directory for the model")] = Path("runs"),
-          timesteps: Annotated[int | None, typer.Option(help="override total_timesteps")] = None,
+          timesteps: Annotated[int | None, typer.Option(help="override total_timesteps",
+                                                        min=1)] = None,
           seed: Annotated[int | None, typer.Option(help="override the config's seed")] = None,
-          threads: Annotated[int, typer.Option(help="torch threads")] = 1,
+          threads: Annotated[int, typer.Option(help="torch threads", min=1)] = 1,
           config_dir: Annotated[Path | None, typer.Option(help="directory of the RL *.yml")]
           = None) -> None:
     """Train the configured algorithm (configs/rl/*.yml) on ENV_ID and save the model."""
@@ -57,21 +58,30 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
 @app.command()
 def evaluate(env_ids: Annotated[list[str], typer.Argument(help="env ids to evaluate")],
              runs: Annotated[Path, typer.Option(help="directory of the models")] = Path("runs"),
-             seeds: Annotated[int | None, typer.Option(help="held-out seeds (>= 5)")] = None,
-             episodes: Annotated[int | None, typer.Option(help="episodes per seed")] = None,
+             seeds: Annotated[int | None, typer.Option(help="held-out seeds (>= 5)", min=1)]
+             = None,
+             episodes: Annotated[int | None, typer.Option(help="episodes per seed", min=1)]
+             = None,
              config_dir: Annotated[Path | None, typer.Option(help="directory of the RL *.yml")]
              = None) -> None:
     """Print policy vs baseline (mean ± std over held-out seeds) for each ENV_ID.
 
-    A missing model is reported in one line on stderr (exit status 1) after the table, which
-    then shows the baseline only.
+    The model is ``RUNS/<Env>.zip`` (what ``jvl-gym train`` writes), else the policy shipped
+    with the package (named on stderr). A missing model is reported in one line on stderr
+    (exit status 1) after the table, which then shows the baseline only.
     """
     from .rl import evaluate as ev
-    from .rl.train import model_path
+    from .rl.train import model_path, shipped_model
 
     for env_id in env_ids:
         _check_env_id(env_id)
     paths = {env_id: model_path(runs, env_id) for env_id in env_ids}
+    for env_id, path in paths.items():
+        shipped = None if path.exists() else shipped_model(env_id)
+        if shipped is not None:
+            print(f"jvl-gym evaluate: {env_id}: no {path}, using the shipped policy {shipped}",
+                  file=sys.stderr)
+            paths[env_id] = shipped
     if any(path.exists() for path in paths.values()):
         _need_rl_extra("jvl-gym evaluate (with a model)")
     results = {}

@@ -39,6 +39,7 @@ from ..noise import normals
 from .compiled import OBS_BOUND, reset_counters
 
 __all__ = ["MotorVectorEnv", "NumpyTaskEnv", "Column", "OBS_BOUND"]
+_FLOAT64 = np.dtype(np.float64)
 #: ``info["termination_reason"]`` of a copy truncated at its horizon
 TIME_LIMIT = "time limit: max_episode_steps reached (truncated)"
 
@@ -437,7 +438,7 @@ class MotorVectorEnv(VectorEnv, ABC):
         a = actions if type(actions) is np.ndarray else np.asarray(actions)
         if a.shape != self._action_shape or a.dtype.kind not in "fiu":
             self._refuse_action(a)
-        if a.dtype != np.float64:
+        if a.dtype is not _FLOAT64:
             a = a.astype(np.float64)
         if not self._step_copies(a):
             raise ValueError("action must be finite")
@@ -476,18 +477,21 @@ class MotorVectorEnv(VectorEnv, ABC):
         reward = reward.copy()
         terminated = terminated.copy()
         truncated = truncated.copy()
-        ended = (terminated | truncated) & ~done_before
-        if ended.any():
-            infos.update(self._end_info(ended, terminated))
+        done = terminated | truncated
+        any_done = done.any()
+        if any_done:
+            ended = done & ~done_before
+            if ended.any():
+                infos.update(self._end_info(ended, terminated))
         if self.autoreset_mode == AutoresetMode.NEXT_STEP and done_before.any():
             idx = np.flatnonzero(done_before)
             self._reset_envs(idx, [None] * idx.size, None)
             reward[idx] = 0.0
             terminated[idx] = False
             truncated[idx] = False
+            done[idx] = False
         elif self.autoreset_mode == AutoresetMode.SAME_STEP:
-            done = terminated | truncated
-            if done.any():
+            if any_done:
                 idx = np.flatnonzero(done)
                 final = np.full(self.num_envs, None, dtype=object)
                 for i in idx:
@@ -495,7 +499,7 @@ class MotorVectorEnv(VectorEnv, ABC):
                 self._reset_envs(idx, [None] * idx.size, None)
                 infos.update({"final_obs": final, "_final_obs": done.copy(),
                               "final_info": {}, "_final_info": done.copy()})
-        self._autoreset = terminated | truncated
+        self._autoreset = done
         return self._obs.copy(), reward, terminated, truncated, infos
 
     # ------------------------------------------------------------------ render

@@ -8,12 +8,21 @@ from typing import Any
 
 from .config import rl_config
 
-__all__ = ["train", "model_path"]
+__all__ = ["train", "model_path", "shipped_model", "SHIPPED_DIR"]
+
+#: trained policies shipped with the package: the models behind docs/envs.md "Results"
+SHIPPED_DIR = Path(__file__).resolve().parent / "policies"
 
 
 def model_path(out_dir: str | Path, env_id: str) -> Path:
     """Where the model of ``env_id`` is saved (``<out>/<EnvName>.zip``)."""
     return Path(out_dir) / f"{env_id.split('/')[-1]}.zip"
+
+
+def shipped_model(env_id: str) -> Path | None:
+    """The shipped trained policy of ``env_id`` (:data:`SHIPPED_DIR`), or None."""
+    path = model_path(SHIPPED_DIR, env_id)
+    return path if path.is_file() else None
 
 
 def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None = None,
