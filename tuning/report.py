@@ -28,7 +28,7 @@ from .models import (  # noqa: E402
     speed_open_loop,
     speed_plant,
 )
-from .verify import frequency_grid  # noqa: E402
+from .verify import frequency_grid, loop_metrics  # noqa: E402
 
 __all__ = ["text_table", "plot_fits", "plot_bode", "plot_steps", "write_report"]
 
@@ -144,7 +144,8 @@ def plot_fits(ident: Identification, path: str | os.PathLike[str]) -> Path:
 
 def plot_bode(design: Design, motor: Any, J_total: float, path: str | os.PathLike[str]
               ) -> Path:
-    """Bode plots of the current and speed open loops."""
+    """Bode plots of the current and speed open loops, with the gain crossover and the phase
+    and gain margins of :func:`tuning.verify.loop_metrics` marked."""
     fig, ax = plt.subplots(2, 2, figsize=(10, 6), sharex="col")
     loops = [("current loop", current_open_loop(motor, design.registers)),
              ("speed loop", speed_open_loop(speed_plant(motor, design.registers, J_total),
@@ -153,12 +154,19 @@ def plot_bode(design: Design, motor: Any, J_total: float, path: str | os.PathLik
         w = frequency_grid(lp.dt, 800, lowest=1e-3)
         resp = freqresp(lp, w)
         f = w / (2 * math.pi)
+        mt = loop_metrics(lp)
         ax[0, j].semilogx(f, 20 * np.log10(np.abs(resp)))
         ax[0, j].axhline(0, color="k", lw=0.5)
-        ax[0, j].set(title=name, ylabel="|L| dB")
+        ax[0, j].set(title=f"{name}: PM {mt.pm_deg:.1f} deg, GM {mt.gm_db:.1f} dB",
+                     ylabel="|L| dB")
         ax[1, j].semilogx(f, np.degrees(np.unwrap(np.angle(resp))))
         ax[1, j].axhline(-180, color="k", lw=0.5)
         ax[1, j].set(xlabel="Hz", ylabel="phase deg")
+        if math.isfinite(mt.crossover_hz):
+            for a in ax[:, j]:
+                a.axvline(mt.crossover_hz, color="C3", lw=0.8, ls="--",
+                          label=f"crossover {mt.crossover_hz:.0f} Hz")
+            ax[0, j].legend(loc="lower left", fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
