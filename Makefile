@@ -11,10 +11,12 @@ $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e ".[dev]"
+	$(BIN)/jvl-gym compile --motors-only  # numba: the kernel, once per machine (cached)
 	touch $@
 
 $(STAMP_RL): $(STAMP)
-	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks]"
+	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks,test]"
+	$(BIN)/jvl-gym compile  # numba: every environment's step, once per machine (cached)
 	touch $@
 
 setup: $(STAMP)
@@ -31,9 +33,11 @@ bench: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_sim.py
 	$(BIN)/python benchmarks/bench_protocol.py
 	$(BIN)/python benchmarks/bench_envs.py
+	@echo "figures written to docs/benchmarks.md"
 
+# BASELINE=<git revision> measures that revision beside this tree
 bench-compile: $(STAMP_RL)
-	$(BIN)/python benchmarks/bench_compile.py
+	$(BIN)/python benchmarks/bench_compile.py $(if $(BASELINE),--baseline $(BASELINE))
 
 notebooks: $(STAMP_RL)
 	cd notebooks && for f in *.py; do ../$(BIN)/jupytext --to ipynb "$$f"; done
@@ -41,6 +45,7 @@ notebooks: $(STAMP_RL)
 docs: $(STAMP)
 	$(BIN)/python -m pip install -q -e ".[docs]"
 	$(BIN)/python -m jvl_gym.registers.reference docs/registers.md
+	$(BIN)/python -m jvl_gym.families.reference docs/families
 	$(BIN)/mkdocs build --strict -d site
 
 lint: $(STAMP)

@@ -1,4 +1,4 @@
-"""End-to-end benchmark of the tuning toolkit (issues 4 and 22 acceptance).
+"""End-to-end benchmark of the tuning toolkit: identification, design and verification.
 
 Draws N random motors (type, load inertia 0–10·J_m, viscous and Coulomb friction, 1 % noise),
 runs the toolkit's identification on a ``MotorArray`` (TESTU + two-level TESTA), synthesises

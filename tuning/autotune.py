@@ -1,4 +1,4 @@
-"""Autotune: identify the coil and the mechanics, synthesise, quantise and verify (issue 4).
+"""Autotune: identify the coil and the mechanics, synthesise, quantise and verify.
 
 Procedure on a motor (a ``MotorArray`` here; a real motor through the same register interface,
 :data:`tuning.records.SERIAL_SOURCE_HOOK`):

@@ -1,7 +1,6 @@
 """Identify the coil (line-to-line R, L and the PWM delay) from TESTU records (manual 4.4.9).
 
-Model (ZOH-exact, docs/model.md "Plant", docs/tuning.md "Coil"): the a–c line current, in ADC
-counts, obeys
+Model (ZOH-exact, docs/model.md §5.1 and §6): the a–c line current, in ADC counts, obeys
 
     i(k+1) = a·i(k) + g(1 − a)·u(k − d),    IC_IST(k) = −i(k),    i(0) = i₀,
 
@@ -204,8 +203,7 @@ def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
     records : Record or sequence of Record
         TESTU records (validated here). Several records share a, g, d; each has its own i₀.
     motor : MotorData or str
-        Motor type (for k_u = U_supply/2/1023 and A_count; docs/model.md "Plant",
-        configs/motors/*.yaml).
+        Motor type (for k_u = U_supply/2/1023 and A_count, docs/model.md §3, §15).
     delays : sequence of int
         Candidate PWM delays [inner samples].
 

@@ -19,7 +19,8 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from jvl_gym.registers import MAC050_141, Format, round_half_away
+from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
+from jvl_gym.registers import Format, round_half_away
 
 __all__ = [
     "FILTER_REGISTERS",

@@ -30,7 +30,8 @@ from .models import (  # noqa: E402
 )
 from .verify import frequency_grid, loop_metrics  # noqa: E402
 
-__all__ = ["text_table", "plot_fits", "plot_bode", "plot_steps", "write_report"]
+__all__ = ["text_table", "plot_fits", "plot_bode", "plot_steps", "write_report", "bode_figure",
+           "steps_figure"]
 
 
 def _ci(ci: tuple[float, float], scale: float = 1.0, fmt: str = ".4g") -> str:
@@ -142,10 +143,18 @@ def plot_fits(ident: Identification, path: str | os.PathLike[str]) -> Path:
     return Path(path)
 
 
-def plot_bode(design: Design, motor: Any, J_total: float, path: str | os.PathLike[str]
-              ) -> Path:
-    """Bode plots of the current and speed open loops, with the gain crossover and the phase
-    and gain margins of :func:`tuning.verify.loop_metrics` marked."""
+def _phase_crossing_hz(f: np.ndarray, mag_db: np.ndarray, phase_deg: np.ndarray) -> float:
+    """Lowest frequency where the phase falls through −180° (mod 360°) with |L| < 1, or nan."""
+    wrapped = (phase_deg + 180.0) % 360.0 - 180.0  # −180 … 180, −180° crossings are jumps
+    for k in range(1, f.size):
+        if wrapped[k] - wrapped[k - 1] > 180.0 and mag_db[k] < 0:
+            return float(f[k])
+    return math.nan
+
+
+def bode_figure(design: Design, motor: Any, J_total: float) -> Any:
+    """Bode plots of the current and speed open loops with their gain crossover (and the phase
+    margin there) and their −180° crossing (and the gain margin there) marked."""
     fig, ax = plt.subplots(2, 2, figsize=(10, 6), sharex="col")
     loops = [("current loop", current_open_loop(motor, design.registers)),
              ("speed loop", speed_open_loop(speed_plant(motor, design.registers, J_total),
@@ -154,39 +163,66 @@ def plot_bode(design: Design, motor: Any, J_total: float, path: str | os.PathLik
         w = frequency_grid(lp.dt, 800, lowest=1e-3)
         resp = freqresp(lp, w)
         f = w / (2 * math.pi)
-        mt = loop_metrics(lp)
-        ax[0, j].semilogx(f, 20 * np.log10(np.abs(resp)))
+        mag = 20 * np.log10(np.abs(resp))
+        phase = np.degrees(np.unwrap(np.angle(resp)))
+        ax[0, j].semilogx(f, mag)
         ax[0, j].axhline(0, color="k", lw=0.5)
-        ax[0, j].set(title=f"{name}: PM {mt.pm_deg:.1f} deg, GM {mt.gm_db:.1f} dB",
-                     ylabel="|L| dB")
-        ax[1, j].semilogx(f, np.degrees(np.unwrap(np.angle(resp))))
+        ax[0, j].set(title=name, ylabel="|L| dB")
+        ax[1, j].semilogx(f, phase)
         ax[1, j].axhline(-180, color="k", lw=0.5)
         ax[1, j].set(xlabel="Hz", ylabel="phase deg")
-        if math.isfinite(mt.crossover_hz):
+        m = loop_metrics(lp)
+        if math.isfinite(m.crossover_hz) and math.isfinite(m.pm_deg):
+            fc = m.crossover_hz
+            p_c = float(np.interp(math.log(fc), np.log(f), phase))
             for a in ax[:, j]:
-                a.axvline(mt.crossover_hz, color="C3", lw=0.8, ls="--",
-                          label=f"crossover {mt.crossover_hz:.0f} Hz")
+                a.axvline(fc, color="C3", lw=0.8, ls=":", label=f"crossover {fc:.3g} Hz")
+            ax[1, j].vlines(fc, p_c - m.pm_deg, p_c, color="C3", lw=2)
+            ax[1, j].annotate(f"PM {m.pm_deg:.1f}°", (fc, p_c), xytext=(4, 4),
+                              textcoords="offset points", color="C3", fontsize=8)
             ax[0, j].legend(loc="lower left", fontsize=8)
+        f180 = _phase_crossing_hz(f, mag, phase)
+        if math.isfinite(f180) and math.isfinite(m.gm_db):
+            ax[0, j].vlines(f180, -m.gm_db, 0, color="C2", lw=2)
+            ax[0, j].annotate(f"GM {m.gm_db:.1f} dB", (f180, -m.gm_db), xytext=(4, -10),
+                              textcoords="offset points", color="C2", fontsize=8)
     fig.tight_layout()
+    return fig
+
+
+def plot_bode(design: Design, motor: Any, J_total: float, path: str | os.PathLike[str]
+              ) -> Path:
+    """Bode plots of the current and speed open loops (:func:`bode_figure`) as a PNG."""
+    fig = bode_figure(design, motor, J_total)
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return Path(path)
 
 
-def plot_steps(design: Design, motor: Any, J_total: float, path: str | os.PathLike[str],
-               simulated: np.ndarray | None = None, v_step: float | None = None) -> Path:
-    """Closed-loop speed step response of the model and, optionally, of the simulator."""
+def steps_figure(design: Design, motor: Any, J_total: float,
+                 simulated: np.ndarray | None = None, v_step: float | None = None) -> Any:
+    """Closed-loop speed step response of the model and, optionally, of the simulator
+    (V_IST over the V_SOLL step), both as a fraction of the commanded speed."""
     cl = speed_closed_loop(speed_plant(motor, design.registers, J_total), design.registers)
     n = 150
     t, y = ct.step_response(cl, T=np.arange(n) * cl.dt)
     fig, ax = plt.subplots(figsize=(6, 3.8))
-    ax.plot(np.arange(n), np.squeeze(y), label="model (unit step, 1/16 units)")
+    ax.plot(np.arange(n), np.squeeze(y), label="model")
     if simulated is not None and v_step:
         ax.plot(np.arange(simulated.shape[0]), 16 * simulated / v_step, ".", ms=3,
-                label="MotorArray V_MODE step")
-    ax.set(xlabel="outer sample (1.92 ms)", ylabel="normalised speed", title="speed step")
-    ax.legend()
+                label=f"MotorArray V_MODE step (V_SOLL {v_step:g})")
+    ax.axhline(1.0, color="k", lw=0.5)
+    ax.set(xlabel="outer sample (1.92 ms)", ylabel="speed / commanded speed",
+           title="speed step")
+    ax.legend(loc="lower right")
     fig.tight_layout()
+    return fig
+
+
+def plot_steps(design: Design, motor: Any, J_total: float, path: str | os.PathLike[str],
+               simulated: np.ndarray | None = None, v_step: float | None = None) -> Path:
+    """The speed step responses (:func:`steps_figure`) as a PNG."""
+    fig = steps_figure(design, motor, J_total, simulated, v_step)
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return Path(path)

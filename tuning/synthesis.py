@@ -17,8 +17,7 @@ the velocity error in 1/16 units, ``16·(kp + ki·z/(z − 1))``, in one of two 
 * ``"ip"`` (default): integral in VF (KVFX4 = ki, KVFY3 = 1) and the proportional part in the
   feedback filter VB = 1 + (kp/ki)(1 − z⁻¹) (KVB3 = 1 + kp/ki, KVB2 = −kp/ki). The reference
   path has no zero, so a velocity step has (almost) no overshoot, and the direct gain
-  ``KVOUT·KVFX4·KFF3 = KVOUT·ki ≠ 0`` keeps the function correction working (docs/model.md
-  "Firmware", function correction).
+  ``KVOUT·KVFX4·KFF3 = KVOUT·ki ≠ 0`` keeps the function correction working (docs/model.md §8).
   ``setpoint_weight`` β puts β·kp back into FF (FF = 1 + β(kp/ki)(1 − z⁻¹)), between I-P (β=0)
   and PI (β=1).
 
@@ -423,8 +422,8 @@ def torque_guidance(motor: MotorData, J_total: float, coulomb: float = 0.0,
         Torque limit T_SOLL (0..1023 of peak, manual 3.2.7).
     reserve : float
         Fraction of T_SOLL kept for the regulator (disturbances, tracking): the profile may
-        use ``(1 − reserve)·T_SOLL``. With the function correction (docs/model.md "Firmware") a
-        profile that needs more than T_SOLL is slowed down and FNCERR grows.
+        use ``(1 − reserve)·T_SOLL``. With the function correction (docs/model.md §8) a profile that
+        needs more than T_SOLL is slowed down and FNCERR grows.
 
     Returns
     -------
