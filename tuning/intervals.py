@@ -111,8 +111,9 @@ def jackknife(full: np.ndarray, leave_one_out: np.ndarray) -> tuple[np.ndarray, 
     k = loo.shape[0]
     if k < 2:
         raise ValueError("the jackknife needs at least two groups")
+    if np.asarray(full).shape[-1] != loo.shape[1]:
+        raise ValueError("full and leave_one_out need the same number of parameters")
     dev = loo - loo.mean(axis=0)
-    assert np.asarray(full).shape[-1] == loo.shape[1]
     return (k - 1) / k * np.sum(dev**2, axis=0), k - 1
 
 
