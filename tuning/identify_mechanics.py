@@ -82,9 +82,8 @@ class MechanicsEstimate:
     J_repeats : list of float
         J [kg·m²] of each repeated set (K > 1).
     detected : dict
-        "J", "coulomb", "viscous": the interval lies above 0. A friction that is not detected
-        is reported as 0 with the interval [0, hi] (:func:`tuning.intervals.positive`); J keeps
-        its value and interval (:mod:`tuning.credibility` flags an interval reaching 0).
+        "J", "coulomb", "viscous": the interval lies above 0. A quantity that is not detected
+        is reported as 0 with the interval [0, hi] (:func:`tuning.intervals.positive`).
     raw : dict
         "J", "coulomb", "viscous" before the detection rule (may be negative) [SI].
     quantisation_var : dict
@@ -318,13 +317,10 @@ def _combine(ests: list[MechanicsEstimate], sets: list[list[int]], n_recs: int,
 
 
 def _detect(est: MechanicsEstimate, md: MotorData) -> MechanicsEstimate:
-    """Apply the detection rule to T_c and b (:func:`tuning.intervals.positive`); J (the fit
-    keeps it positive) only gets its ``detected`` flag: an inertia interval that reaches 0
-    means the records are inconsistent, which :mod:`tuning.credibility` reports."""
-    lo, hi = est.ci["J"]
-    est.detected["J"] = bool(lo > 0.0 and est.J > 0.0)
-    est.raw["J"] = est.J
-    for nm in ("coulomb", "viscous"):
+    """Apply the detection rule to J, T_c and b (:func:`tuning.intervals.positive`). A J that
+    is not detected (inconsistent records) is reported as 0, which :mod:`tuning.credibility`
+    names ("J = 0 is not positive") and synthesis refuses (KVOUT must be positive)."""
+    for nm in ("J", "coulomb", "viscous"):
         raw = est.raw.get(nm, getattr(est, nm))
         lo, hi = est.ci[nm]
         if lo == hi == 0.0 and raw == 0.0:  # not estimated (coulomb=False / viscous=False)

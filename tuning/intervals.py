@@ -16,10 +16,10 @@ record (docs/tuning.md, "Intervals"). The toolkit therefore takes its intervals 
   :func:`tuning.identify_coil.correlation_inflation`) is added to the spread's variance and is
   not divided by K (:func:`combined_halfwidth`).
 
-A friction (T_c, b) whose interval reaches zero or below is *not detected*: :func:`positive`
-reports it as 0 with the interval ``[0, hi]`` (the truth is ≥ 0, so clipping the interval loses
-no coverage) and ``detected = False``. Friction is never reported negative. R, L and J are
-flagged the same way but keep their value (:mod:`tuning.credibility` reports them).
+A J, T_c or b whose interval reaches zero or below is *not detected*: :func:`positive` reports
+it as 0 with the interval ``[0, hi]`` (the truth is ≥ 0, so clipping the interval loses no
+coverage) and ``detected = False``. Friction is never reported negative. R and L are flagged
+the same way but keep their value (:mod:`tuning.credibility` reports them).
 """
 
 from __future__ import annotations
