@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-core
 STAMP_RL := $(VENV)/.installed-rl
 
-.PHONY: setup setup-rl demo test bench bench-compile lint docs notebooks clean
+.PHONY: setup setup-rl demo test bench bench-compare bench-compile lint docs notebooks clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -35,6 +35,10 @@ bench: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_envs.py
 	@echo "figures written to docs/benchmarks.md"
 
+# BASELINE=<git revision>: speed of that revision beside this tree, in one run
+bench-compare: $(STAMP_RL)
+	$(BIN)/python benchmarks/bench_compare.py $(or $(BASELINE),HEAD~1)
+
 # BASELINE=<git revision> measures that revision beside this tree
 bench-compile: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_compile.py $(if $(BASELINE),--baseline $(BASELINE))
@@ -53,4 +57,4 @@ lint: $(STAMP)
 
 clean:
 	rm -rf $(VENV) demo_out .pytest_cache
-	find src tuning -name "*.nbi" -delete -o -name "*.nbc" -delete  # numba caches
+	find src tuning tests -name "*.nbi" -delete -o -name "*.nbc" -delete  # numba caches

@@ -183,7 +183,7 @@ def test_batched_writes_are_all_or_nothing(keys, data):
     before = _snapshot(m)
     vals = {reg.name: data.draw(values) for reg in keys}
     try:
-        m._write_many(vals)
+        m.write_many(vals)
     except RegisterError:
         _identical(m, before)
         return

@@ -29,14 +29,14 @@ from .plant.hall import hall_code, sector_index
 LANES = 16
 
 # --- lane scratch: field f of lane j is scratch[f * LANES + j] -------------------------------
+#: lane field of each state column the lanes carry (``layout.LANE_STATE``, fields
+#: 0 … N_LANE_STATE − 1 in that order), −1 for the others
+N_LANE_STATE = len(L.LANE_STATE)
+_LANE_OF = np.full(L.N_STATE, -1, dtype=np.int64)
+_LANE_OF[list(L.LANE_STATE)] = np.arange(N_LANE_STATE)
+_LANE_COLS = np.array(L.LANE_STATE, dtype=np.int64)
+#: the other fields, after the state
 (
-    # plant state
-    F_THETA, F_OMEGA, F_ACC, F_I_RE, F_I_IM, F_UBUS, F_DUMP_ON, F_ELDEG_PREV, F_HALL_SECTOR,
-    # current loops: histories of phases a, b, c and the PWM values waiting out the delay
-    F_IE1_A, F_IE1_B, F_IE1_C, F_IU1_A, F_IU1_B, F_IU1_C, F_IU2_A, F_IU2_B, F_IU2_C,
-    F_IIST1_A, F_IIST1_B, F_IIST1_C, F_UPEND_A, F_UPEND_B, F_UPEND_C,
-    # accumulators
-    F_E_ELEC, F_E_COPPER, F_E_FRICTION, F_E_LOAD, F_E_DUMP, F_E_SUPPLY, F_I2_SUM, F_PREG_SUM,
     F_IX_ERR,
     # register values of the last sample
     F_ELDEG_IST, F_V_ELDEG, F_IA_IST, F_IB_IST, F_IC_IST, F_I_NOM, F_PHI_SOLL, F_IA_SOLL,
@@ -51,7 +51,7 @@ LANES = 16
     F_SRC_AMPS, F_SRC_R, F_SRC_L, F_SRC_LAMBDA, F_SRC_J_MOTOR, F_SRC_J_LOAD, F_SRC_VISCOUS,
     F_SRC_C_BUS, F_SRC_R_SUPPLY, F_SRC_R_DUMP,
     N_FIELDS,
-) = range(99)
+) = range(N_LANE_STATE, N_LANE_STATE + 67)
 
 _H = c.INNER_DT
 
@@ -73,6 +73,17 @@ def _put(sc: np.ndarray, f: int, j: int, x: float) -> None:
 
 
 @njit(cache=True, inline="always")
+def _sget(sc: np.ndarray, col: int, j: int) -> float:
+    """Lane ``j``'s value of state column ``col`` (one of ``layout.LANE_STATE``)."""
+    return sc[_LANE_OF[col] * LANES + j]
+
+
+@njit(cache=True, inline="always")
+def _sput(sc: np.ndarray, col: int, j: int, x: float) -> None:
+    sc[_LANE_OF[col] * LANES + j] = x
+
+
+@njit(cache=True, inline="always")
 def in_lanes(r: np.ndarray, p: np.ndarray) -> bool:
     """True when a motor's next inner samples take none of :func:`mac050_141.kernel.inner_sample`'s
     per-motor branches: a mode with commutation and current loops (not INIT, SAFE, TESTU,
@@ -89,22 +100,8 @@ def in_lanes(r: np.ndarray, p: np.ndarray) -> bool:
 def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.ndarray,
             u: np.ndarray) -> None:
     """Copy what the inner samples of motor ``i`` read into lane ``j``."""
-    _put(sc, F_THETA, j, s[L.S_THETA])
-    _put(sc, F_OMEGA, j, s[L.S_OMEGA])
-    _put(sc, F_ACC, j, s[L.S_ACC])
-    _put(sc, F_I_RE, j, s[L.S_I_RE])
-    _put(sc, F_I_IM, j, s[L.S_I_IM])
-    _put(sc, F_UBUS, j, s[L.S_UBUS])
-    _put(sc, F_DUMP_ON, j, s[L.S_DUMP_ON])
-    _put(sc, F_ELDEG_PREV, j, s[L.S_ELDEG_PREV])
-    _put(sc, F_E_ELEC, j, s[L.S_E_ELEC])
-    _put(sc, F_E_COPPER, j, s[L.S_E_COPPER])
-    _put(sc, F_E_FRICTION, j, s[L.S_E_FRICTION])
-    _put(sc, F_E_LOAD, j, s[L.S_E_LOAD])
-    _put(sc, F_E_DUMP, j, s[L.S_E_DUMP])
-    _put(sc, F_E_SUPPLY, j, s[L.S_E_SUPPLY])
-    _put(sc, F_I2_SUM, j, s[L.S_I2_SUM])
-    _put(sc, F_PREG_SUM, j, s[L.S_PREG_SUM])
+    for q in range(N_LANE_STATE):
+        _put(sc, q, j, s[_LANE_COLS[q]])
     _put(sc, F_IX_ERR, j, 0.0)
     _put(sc, F_VF_OUT, j, float(r[R.VF_OUT]))
     _put(sc, F_PHASE_COMP, j, float(r[R.PHASE_COMP]))
@@ -134,12 +131,6 @@ def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.
     _put(sc, F_LOAD, j, u[L.I_LOAD_TORQUE])
     _put(sc, F_SUPPLY, j, u[L.I_SUPPLY_VOLTS])
     _put(sc, F_MOTOR, j, float(i))
-    for k in range(3):
-        _put(sc, F_IE1_A + k, j, s[L.S_IE1_A + k])
-        _put(sc, F_IU1_A + k, j, s[L.S_IU1_A + k])
-        _put(sc, F_IU2_A + k, j, s[L.S_IU2_A + k])
-        _put(sc, F_IIST1_A + k, j, s[L.S_IIST1_A + k])
-        _put(sc, F_UPEND_A + k, j, s[L.S_UPEND_A + k])
     _lane_constants(sc, j, p)
 
 
@@ -183,29 +174,8 @@ def _lane_constants(sc: np.ndarray, j: int, p: np.ndarray) -> None:
 @njit(cache=True, inline="always")
 def _scatter(sc: np.ndarray, j: int, r: np.ndarray, s: np.ndarray) -> None:
     """Store lane ``j``'s state and last-sample registers back into its motor's rows."""
-    s[L.S_THETA] = _get(sc, F_THETA, j)
-    s[L.S_OMEGA] = _get(sc, F_OMEGA, j)
-    s[L.S_ACC] = _get(sc, F_ACC, j)
-    s[L.S_I_RE] = _get(sc, F_I_RE, j)
-    s[L.S_I_IM] = _get(sc, F_I_IM, j)
-    s[L.S_UBUS] = _get(sc, F_UBUS, j)
-    s[L.S_DUMP_ON] = _get(sc, F_DUMP_ON, j)
-    s[L.S_ELDEG_PREV] = _get(sc, F_ELDEG_PREV, j)
-    s[L.S_HALL_SECTOR] = _get(sc, F_HALL_SECTOR, j)
-    s[L.S_E_ELEC] = _get(sc, F_E_ELEC, j)
-    s[L.S_E_COPPER] = _get(sc, F_E_COPPER, j)
-    s[L.S_E_FRICTION] = _get(sc, F_E_FRICTION, j)
-    s[L.S_E_LOAD] = _get(sc, F_E_LOAD, j)
-    s[L.S_E_DUMP] = _get(sc, F_E_DUMP, j)
-    s[L.S_E_SUPPLY] = _get(sc, F_E_SUPPLY, j)
-    s[L.S_I2_SUM] = _get(sc, F_I2_SUM, j)
-    s[L.S_PREG_SUM] = _get(sc, F_PREG_SUM, j)
-    for k in range(3):
-        s[L.S_IE1_A + k] = _get(sc, F_IE1_A + k, j)
-        s[L.S_IU1_A + k] = _get(sc, F_IU1_A + k, j)
-        s[L.S_IU2_A + k] = _get(sc, F_IU2_A + k, j)
-        s[L.S_IIST1_A + k] = _get(sc, F_IIST1_A + k, j)
-        s[L.S_UPEND_A + k] = _get(sc, F_UPEND_A + k, j)
+    for q in range(N_LANE_STATE):
+        s[_LANE_COLS[q]] = _get(sc, q, j)
     s[L.S_TICK] += c.INNER_PER_OUTER
     r[R.ELDEG_IST] = int(_get(sc, F_ELDEG_IST, j))
     r[R.V_ELDEG] = int(_get(sc, F_V_ELDEG, j))
@@ -220,7 +190,7 @@ def _scatter(sc: np.ndarray, j: int, r: np.ndarray, s: np.ndarray) -> None:
     r[R.UA_VAL] = int(_get(sc, F_UA_VAL, j))
     r[R.UB_VAL] = int(_get(sc, F_UB_VAL, j))
     r[R.UC_VAL] = int(_get(sc, F_UC_VAL, j))
-    hall = hall_code(_get(sc, F_HALL_SECTOR, j)) << c.HALL_STATUS_SHIFT
+    hall = hall_code(_sget(sc, L.S_HALL_SECTOR, j)) << c.HALL_STATUS_SHIFT
     r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] & 0x1FFF) | hall
     if _get(sc, F_IX_ERR, j) > 0.0:
         r[R.ERR_STAT] |= c.IX_ERR
@@ -229,15 +199,15 @@ def _scatter(sc: np.ndarray, j: int, r: np.ndarray, s: np.ndarray) -> None:
 @njit(cache=True, inline="always")
 def _phase_lane(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float) -> float:
     """One phase's current loop in lane ``j`` (:func:`mac050_141.firmware.current_loop._phase`)."""
-    u1 = _get(sc, F_IU1_A + k, j)
-    u, e = phase_step(i_soll, i_ist, _get(sc, F_IE1_A + k, j), u1, _get(sc, F_IU2_A + k, j),
-                      _get(sc, F_IIST1_A + k, j), _get(sc, F_KIB1, j), _get(sc, F_KIB0, j),
+    u1 = _sget(sc, L.S_IU1_A + k, j)
+    u, e = phase_step(i_soll, i_ist, _sget(sc, L.S_IE1_A + k, j), u1, _sget(sc, L.S_IU2_A + k, j),
+                      _sget(sc, L.S_IIST1_A + k, j), _get(sc, F_KIB1, j), _get(sc, F_KIB0, j),
                       _get(sc, F_KIFX2, j), _get(sc, F_KIFX1, j), _get(sc, F_KIFY1, j),
                       _get(sc, F_KIFY0, j))
-    _put(sc, F_IE1_A + k, j, e)
-    _put(sc, F_IU2_A + k, j, u1)
-    _put(sc, F_IU1_A + k, j, u)
-    _put(sc, F_IIST1_A + k, j, i_ist)
+    _sput(sc, L.S_IE1_A + k, j, e)
+    _sput(sc, L.S_IU2_A + k, j, u1)
+    _sput(sc, L.S_IU1_A + k, j, u)
+    _sput(sc, L.S_IIST1_A + k, j, i_ist)
     return u
 
 
@@ -246,8 +216,8 @@ def _pwm_lane(sc: np.ndarray, j: int, k: int, u: float) -> float:
     """PWM value applied in phase ``k`` of lane ``j``: ``u`` itself, or the value computed one
     sample earlier when the motor has a PWM delay (``inner_sample``). ``u`` is kept either
     way: a store that depends on the delay became a masked store, slow on AMD cores."""
-    pending = _get(sc, F_UPEND_A + k, j)
-    _put(sc, F_UPEND_A + k, j, u)
+    pending = _sget(sc, L.S_UPEND_A + k, j)
+    _sput(sc, L.S_UPEND_A + k, j, u)
     return pending if _get(sc, F_PWM_DELAY, j) > 0.5 else u
 
 
@@ -262,18 +232,18 @@ def _lane_sample(sc: np.ndarray, j: int, last: bool) -> None:
     overwritten by the next sample: only the ``last`` of the 15 stores them (a constant at
     each call, so the other samples' loop has no such stores).
     """
-    theta = _get(sc, F_THETA, j)
-    omega = _get(sc, F_OMEGA, j)
+    theta = _sget(sc, L.S_THETA, j)
+    omega = _sget(sc, L.S_OMEGA, j)
     pp = _get(sc, F_POLE_PAIRS, j)
     theta_e = pp * theta + _get(sc, F_THETA_E0, j)
     if last:
-        _put(sc, F_HALL_SECTOR, j, sector_index(theta_e, _get(sc, F_HALL_ANGLE, j)))
+        _sput(sc, L.S_HALL_SECTOR, j, sector_index(theta_e, _get(sc, F_HALL_ANGLE, j)))
     enc_abs = encoder_count(theta)
     el = eldeg(theta_e)
-    dv = enc_abs - _get(sc, F_ELDEG_PREV, j)
-    _put(sc, F_ELDEG_PREV, j, enc_abs)
-    i_re = _get(sc, F_I_RE, j)
-    i_im = _get(sc, F_I_IM, j)
+    dv = enc_abs - _sget(sc, L.S_ELDEG_PREV, j)
+    _sput(sc, L.S_ELDEG_PREV, j, enc_abs)
+    i_re = _sget(sc, L.S_I_RE, j)
+    i_im = _sget(sc, L.S_I_IM, j)
     ia, ib, ic = vector_to_phases(complex(i_re, i_im))
     cpa = _get(sc, F_COUNTS_PER_AMP, j)
     xa, over_a = adc_count(ia * cpa * _get(sc, F_KIA, j) / 256.0)
@@ -304,8 +274,8 @@ def _lane_sample(sc: np.ndarray, j: int, last: bool) -> None:
     load = _get(sc, F_LOAD, j)
     (theta1, omega1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric, e_dump,
      e_sup) = plant_sample(
-        theta, omega, _get(sc, F_ACC, j), i_re, i_im, _get(sc, F_UBUS, j),
-        _get(sc, F_DUMP_ON, j), _pwm_lane(sc, j, 0, ua), _pwm_lane(sc, j, 1, ub),
+        theta, omega, _sget(sc, L.S_ACC, j), i_re, i_im, _sget(sc, L.S_UBUS, j),
+        _sget(sc, L.S_DUMP_ON, j), _pwm_lane(sc, j, 0, ua), _pwm_lane(sc, j, 1, ub),
         _pwm_lane(sc, j, 2, uc), theta_e, pp, _get(sc, F_R, j), _get(sc, F_LAMBDA, j),
         _get(sc, F_J, j), _get(sc, F_COULOMB, j), _get(sc, F_STOP_LO, j),
         _get(sc, F_STOP_HI, j), _get(sc, F_STOP_K, j), _get(sc, F_STOP_D, j), load, 0.0,
@@ -314,21 +284,21 @@ def _lane_sample(sc: np.ndarray, j: int, last: bool) -> None:
         (_get(sc, F_KM0, j), _get(sc, F_KM1, j)),
         (_get(sc, F_KB0, j), _get(sc, F_KB1, j), _get(sc, F_KB2, j), _get(sc, F_KB3, j),
          _get(sc, F_KB4, j), _get(sc, F_KB5, j), _get(sc, F_KB6, j)))
-    _put(sc, F_THETA, j, theta1)
-    _put(sc, F_OMEGA, j, omega1)
-    _put(sc, F_ACC, j, (omega1 - omega) * c.INNER_HZ)
-    _put(sc, F_I_RE, j, i_re1)
-    _put(sc, F_I_IM, j, i_im1)
-    _put(sc, F_E_ELEC, j, _get(sc, F_E_ELEC, j) + p_el * _H)
-    _put(sc, F_E_COPPER, j, _get(sc, F_E_COPPER, j) + p_cu * _H)
-    _put(sc, F_E_FRICTION, j, _get(sc, F_E_FRICTION, j) + e_fric)
-    _put(sc, F_E_LOAD, j, _get(sc, F_E_LOAD, j) + load * (theta1 - theta))
-    _put(sc, F_UBUS, j, ubus)
-    _put(sc, F_DUMP_ON, j, dump_on)
-    _put(sc, F_E_DUMP, j, _get(sc, F_E_DUMP, j) + e_dump)
-    _put(sc, F_E_SUPPLY, j, _get(sc, F_E_SUPPLY, j) + e_sup)
-    _put(sc, F_I2_SUM, j, _get(sc, F_I2_SUM, j) + (xa * xa + xb * xb + xc * xc))
-    _put(sc, F_PREG_SUM, j, _get(sc, F_PREG_SUM, j) + max(-p_el, 0.0))
+    _sput(sc, L.S_THETA, j, theta1)
+    _sput(sc, L.S_OMEGA, j, omega1)
+    _sput(sc, L.S_ACC, j, (omega1 - omega) * c.INNER_HZ)
+    _sput(sc, L.S_I_RE, j, i_re1)
+    _sput(sc, L.S_I_IM, j, i_im1)
+    _sput(sc, L.S_E_ELEC, j, _sget(sc, L.S_E_ELEC, j) + p_el * _H)
+    _sput(sc, L.S_E_COPPER, j, _sget(sc, L.S_E_COPPER, j) + p_cu * _H)
+    _sput(sc, L.S_E_FRICTION, j, _sget(sc, L.S_E_FRICTION, j) + e_fric)
+    _sput(sc, L.S_E_LOAD, j, _sget(sc, L.S_E_LOAD, j) + load * (theta1 - theta))
+    _sput(sc, L.S_UBUS, j, ubus)
+    _sput(sc, L.S_DUMP_ON, j, dump_on)
+    _sput(sc, L.S_E_DUMP, j, _sget(sc, L.S_E_DUMP, j) + e_dump)
+    _sput(sc, L.S_E_SUPPLY, j, _sget(sc, L.S_E_SUPPLY, j) + e_sup)
+    _sput(sc, L.S_I2_SUM, j, _sget(sc, L.S_I2_SUM, j) + (xa * xa + xb * xb + xc * xc))
+    _sput(sc, L.S_PREG_SUM, j, _sget(sc, L.S_PREG_SUM, j) + max(-p_el, 0.0))
 
 
 @njit(**LANE_KERNEL)

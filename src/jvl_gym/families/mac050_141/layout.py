@@ -75,6 +75,15 @@ N_REGS = 165
     N_STATE,
 ) = range(72)
 
+#: the state fields the SIMD lanes of the inner samples carry (``lanes.py``): gathered into a
+#: block's scratch before its 15 inner samples and scattered back after them, in this order
+LANE_STATE = (
+    S_THETA, S_OMEGA, S_ACC, S_I_RE, S_I_IM, S_UBUS, S_DUMP_ON, S_ELDEG_PREV, S_HALL_SECTOR,
+    S_IE1_A, S_IE1_B, S_IE1_C, S_IU1_A, S_IU1_B, S_IU1_C, S_IU2_A, S_IU2_B, S_IU2_C, S_IIST1_A,
+    S_IIST1_B, S_IIST1_C, S_UPEND_A, S_UPEND_B, S_UPEND_C, S_E_ELEC, S_E_COPPER, S_E_FRICTION,
+    S_E_LOAD, S_E_DUMP, S_E_SUPPLY, S_I2_SUM, S_PREG_SUM,
+)
+
 # --- parameters ------------------------------------------------------------------------------
 (
     P_J_MOTOR,  # rotor inertia [kg·m²]
