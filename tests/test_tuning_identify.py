@@ -202,3 +202,23 @@ def test_coil_intervals_cover_with_several_short_records_and_the_delay_set():
     assert est.ci["R_phase"][0] <= MD.R_phase <= est.ci["R_phase"][1]
     assert est.ci["R_phase"][1] > est.ci["R_phase"][0]
     assert est.ci["delay"] == (1.0, 1.0)
+
+
+def test_interval_helpers():
+    from tuning.intervals import batch_means, combined_halfwidth, jackknife, positive
+
+    b = positive(-0.2, -0.5, 0.1)
+    assert not b.detected and b.value == 0.0 and b.interval == (0.0, 0.1) and b.raw == -0.2
+    assert positive(1.0, 0.5, 1.5).detected
+    assert positive(0.1, -0.5, -0.1).interval == (0.0, 0.0)
+    mean, var, dof = batch_means([1.0, 2.0, 3.0, 4.0])
+    assert (mean, dof) == (2.5, 3) and var == pytest.approx(np.var([1, 2, 3, 4], ddof=1) / 4)
+    # the jackknife of a mean is the variance of the mean
+    x = np.array([1.0, 4.0, 2.0, 7.0, 5.0])
+    loo = np.array([[np.delete(x, i).mean()] for i in range(x.size)])
+    v, k = jackknife(np.array([x.mean()]), loo)
+    assert k == 4 and v[0] == pytest.approx(np.var(x, ddof=1) / x.size)
+    # never narrower than either part
+    assert combined_halfwidth(1.0, 3, 0.0) == pytest.approx(3.182446, rel=1e-5)
+    assert combined_halfwidth(0.0, 3, 1.0) == pytest.approx(1.959964, rel=1e-5)
+    assert combined_halfwidth(1.0, 3, 1.0) > 3.182446

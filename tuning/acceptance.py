@@ -159,6 +159,7 @@ def candidate_designs(ident: Identification, structure: str = "pi") -> list[Cand
 
 
 def _name(d: Design) -> str:
+    """Candidate name of a design: its speed-loop structure and the position integral."""
     if d.speed.structure == "ip":
         return "ip"
     return "pi + position integral" if d.speed.kii > 0.0 else "pi"
@@ -243,6 +244,7 @@ def accept(idents: Sequence[Identification], candidates: Sequence[Sequence[Candi
 
 
 def _ms(t: float) -> str:
+    """A settle time [s] as text for the report."""
     return "never (2 s)" if not math.isfinite(t) else f"{1e3 * t:.0f} ms"
 
 

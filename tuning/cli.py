@@ -135,9 +135,12 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
                                phase_comp=pc, coil_sd=coil_uncertainty(c) if testu else None)
         carried = record_registers(recs) or {}
         model = "electrical" if cur is not None or "KIFX2" in carried else "rigid"
-        typer.echo(f"J {m.J!r} kg m^2 {m.ci['J']}, KVOUT {m.kvout:.3f}, "
-                   f"{friction_text('b', m.viscous, 'N m s/rad')}, "
-                   f"{friction_text('Tc', m.coulomb, 'N m')}, fit {m.nrmse_fit:.2f} % "
+        b_txt = friction_text("b", m.viscous, "N m s/rad", m.detected.get("viscous"),
+                              m.raw.get("viscous"))
+        tc_txt = friction_text("Tc", m.coulomb, "N m", m.detected.get("coulomb"),
+                               m.raw.get("coulomb"))
+        typer.echo(f"J {m.J!r} kg m^2 {m.ci['J']}, KVOUT {m.kvout:.3f}, {b_txt}, {tc_txt}, "
+                   f"fit {m.nrmse_fit:.2f} % "
                    f"({model} model)")
         bad += problems(md, mech=m)
     if bad:

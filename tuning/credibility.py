@@ -61,9 +61,12 @@ def problems(motor: MotorData, mech: Any = None, coil: Any = None) -> list[str]:
     return out
 
 
-def friction_text(name: str, value: float, unit: str) -> str:
-    """``"b 1.2e-05 N m s/rad"``, or ``"b not detected (estimate -3e-06 <= 0)"`` for an
-    estimate that is not positive."""
-    if math.isfinite(value) and value > 0:
+def friction_text(name: str, value: float, unit: str, detected: bool | None = None,
+                  raw: float | None = None) -> str:
+    """``"b 1.2e-05 N m s/rad"``, or ``"b not detected (estimate -3e-06, 95 % interval reaches
+    0)"`` for an estimate that is not positive or not detected (``detected`` False: the
+    detection rule of :func:`tuning.intervals.positive`; ``raw``: the estimate before it)."""
+    if math.isfinite(value) and value > 0 and detected is not False:
         return f"{name} {value:.3g} {unit}"
-    return f"{name} not detected (estimate {value:.3g} <= 0)"
+    est = value if raw is None else raw
+    return f"{name} not detected (estimate {est:.3g}, 95 % interval reaches 0)"

@@ -82,7 +82,7 @@ class MechanicsEstimate:
     J_repeats : list of float
         J [kg·m²] of each repeated set (K > 1).
     detected : dict
-        "J", "coulomb", "viscous": the interval lies above 0. A friction that is not detected
+        "J", "coulomb", "viscous": the interval lies above 0. A quantity that is not detected
         is reported as 0 with the interval [0, hi] (:func:`tuning.intervals.positive`).
     raw : dict
         "J", "coulomb", "viscous" before the detection rule (may be negative) [SI].
@@ -317,7 +317,9 @@ def _combine(ests: list[MechanicsEstimate], sets: list[list[int]], n_recs: int,
 
 
 def _detect(est: MechanicsEstimate, md: MotorData) -> MechanicsEstimate:
-    """Apply the detection rule to J, T_c and b (:func:`tuning.intervals.positive`)."""
+    """Apply the detection rule to J, T_c and b (:func:`tuning.intervals.positive`). A J that
+    is not detected (inconsistent records) is reported as 0, which :mod:`tuning.credibility`
+    names ("J = 0 is not positive") and synthesis refuses (KVOUT must be positive)."""
     for nm in ("J", "coulomb", "viscous"):
         raw = est.raw.get(nm, getattr(est, nm))
         lo, hi = est.ci[nm]

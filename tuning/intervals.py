@@ -16,10 +16,10 @@ record (docs/tuning.md, "Intervals"). The toolkit therefore takes its intervals 
   :func:`tuning.identify_coil.correlation_inflation`) is added to the spread's variance and is
   not divided by K (:func:`combined_halfwidth`).
 
-A quantity that must be positive (R, L, J, friction) whose interval reaches zero or below is
-*not detected*: :func:`positive` reports it as 0 with the interval ``[0, hi]`` (the truth is
-≥ 0, so clipping the interval loses no coverage) and ``detected = False``. Friction is never
-reported negative.
+A J, T_c or b whose interval reaches zero or below is *not detected*: :func:`positive` reports
+it as 0 with the interval ``[0, hi]`` (the truth is ≥ 0, so clipping the interval loses no
+coverage) and ``detected = False``. Friction is never reported negative. R and L are flagged
+the same way but keep their value (:mod:`tuning.credibility` reports them).
 """
 
 from __future__ import annotations
@@ -111,8 +111,9 @@ def jackknife(full: np.ndarray, leave_one_out: np.ndarray) -> tuple[np.ndarray, 
     k = loo.shape[0]
     if k < 2:
         raise ValueError("the jackknife needs at least two groups")
+    if np.asarray(full).shape[-1] != loo.shape[1]:
+        raise ValueError("full and leave_one_out need the same number of parameters")
     dev = loo - loo.mean(axis=0)
-    assert np.asarray(full).shape[-1] == loo.shape[1]
     return (k - 1) / k * np.sum(dev**2, axis=0), k - 1
 
 

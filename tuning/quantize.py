@@ -1,8 +1,8 @@
 """Quantisation of filter coefficients to their register formats (manual 3.1, 3.2.89–3.2.111,
 3.2.13, 3.2.126, 3.2.127).
 
-Formats, scales, ranges and manual sections come from the register table
-(:data:`jvl_gym.registers.MAC050_141`, docs/registers.md), the one source of these facts:
+Formats, scales, ranges and manual sections come from the family's register table
+(``jvl_gym.families.mac050_141.table.TABLE``, docs/registers.md), the one source of these facts:
 Fixed4 = raw/4096 and Fixed8 = raw/256 with the raw range of the table (±32767, so Fixed4
 ±7.999756, Fixed8 ±127.996; AMPLITUDE 0 … 0.83). A value outside its register's range raises
 :class:`QuantizationError` naming the register and its section (nothing is silently saturated).
