@@ -1,4 +1,4 @@
-"""``jvl-gym`` command line: ``train``, ``evaluate`` (and ``serve`` when available)."""
+"""``jvl-gym`` command line: ``train``, ``evaluate``, ``sweep`` (and ``serve`` when available)."""
 
 from __future__ import annotations
 
@@ -44,6 +44,29 @@ def evaluate(env_ids: Annotated[list[str], typer.Argument(help="env ids to evalu
         results[env_id] = run(env_id, path if path.exists() else None, seeds, episodes,
                               config_dir=config_dir)
     typer.echo(format_table(results))
+
+
+@app.command()
+def sweep(config: Annotated[Path, typer.Argument(help="sweep file (configs/sweeps/*.yml)")],
+          out: Annotated[Path, typer.Option(help="output directory (run again to resume)")]
+          = Path("sweep_out"),
+          address: Annotated[str | None, typer.Option(
+              help="Ray cluster: auto, HOST:PORT or ray://HOST:10001 (default: local Ray)")]
+          = None,
+          num_cpus: Annotated[int | None, typer.Option(help="CPUs of the local Ray")] = None,
+          max_concurrent: Annotated[int | None, typer.Option(help="trials at once")] = None,
+          stop_after: Annotated[int | None, typer.Option(
+              help="stop once this many trials have finished (run again to resume)")] = None,
+          storage: Annotated[str | None, typer.Option(
+              help="Ray Tune storage path or URI (default OUT/ray)")] = None,
+          verbose: Annotated[bool, typer.Option(help="Ray Tune's own output too")] = False,
+          debug: Annotated[bool, typer.Option(help="tracebacks instead of one-line errors")]
+          = False) -> None:
+    """Run a hyper-parameter sweep as Ray Tune trials (needs the scale extra)."""
+    from .scale.commands import sweep_command
+
+    sweep_command(config, out, address, num_cpus, max_concurrent, stop_after, storage,
+                  verbose, debug)
 
 
 def _mount_serve() -> None:
