@@ -71,7 +71,7 @@ def fmt_params(params: dict[str, Any]) -> str:
     return " ".join(parts)
 
 
-def _callbacks(spec: SweepSpec, trials: dict[str, Trial], ledger: Ledger, total: int,
+def _callbacks(spec: SweepSpec, by_id: dict[str, Trial], ledger: Ledger, total: int,
                done_before: int, progress: Progress, outcome: SweepOutcome) -> list[Any]:
     from ray.tune import Callback
 
@@ -82,14 +82,14 @@ def _callbacks(spec: SweepSpec, trials: dict[str, Trial], ledger: Ledger, total:
         def __init__(self) -> None:
             self.points: dict[str, int] = {}
 
-        def on_trial_start(self, iteration: int, trials_: list[Any], trial: Any,
+        def on_trial_start(self, iteration: int, trials: list[Any], trial: Any,
                            **info: Any) -> None:
-            t = trials[tid(trial)]
+            t = by_id[tid(trial)]
             progress(f"start {t.trial_id}: {fmt_params(t.params)} seed={t.seed}")
 
-        def on_trial_result(self, iteration: int, trials_: list[Any], trial: Any,
+        def on_trial_result(self, iteration: int, trials: list[Any], trial: Any,
                             result: dict[str, Any], **info: Any) -> None:
-            t = trials[tid(trial)]
+            t = by_id[tid(trial)]
             if result.get("finished"):
                 entry = {"trial_id": t.trial_id, "params": t.params, "seed": t.seed,
                          "env": spec.env, "metrics": {k: v for k, v in result.items()
@@ -113,9 +113,9 @@ def _callbacks(spec: SweepSpec, trials: dict[str, Trial], ledger: Ledger, total:
                          f"steps, reward/step {result['reward_per_step']:.3f}{ep_text}, "
                          f"{rate:.0f} steps/s")
 
-        def on_trial_complete(self, iteration: int, trials_: list[Any], trial: Any,
+        def on_trial_complete(self, iteration: int, trials: list[Any], trial: Any,
                               **info: Any) -> None:
-            t = trials[tid(trial)]
+            t = by_id[tid(trial)]
             ckpt = trial.checkpoint
             if ckpt is None or ledger.read(t.trial_id) is None:
                 return
@@ -124,9 +124,9 @@ def _callbacks(spec: SweepSpec, trials: dict[str, Trial], ledger: Ledger, total:
                 for f in src.glob("*.zip"):
                     shutil.copy2(f, ledger.path(t.trial_id).parent / f.name)
 
-        def on_trial_error(self, iteration: int, trials_: list[Any], trial: Any,
+        def on_trial_error(self, iteration: int, trials: list[Any], trial: Any,
                            **info: Any) -> None:
-            t = trials[tid(trial)]
+            t = by_id[tid(trial)]
             outcome.failed.append(t.trial_id)
             progress(f"FAILED {t.trial_id}: see {trial.local_path or trial.path}/error.txt")
 
