@@ -1,8 +1,9 @@
 """``jvl-gym sweep``: the trials of a sweep file as Ray Tune trials.
 
 Each Ray Tune trial runs :func:`jvl_gym.scale.trial.tune_trainable` with ``cpus_per_trial``
-CPUs reserved (its torch and numba threads). The driver prints a line when a trial starts, at
-every tenth learning-curve point, and when it finishes; it writes a finished trial's entry to
+CPUs reserved (its torch and numba threads); a worker process that finished a trial takes the
+next one (``reuse_actors``), so torch, SB3 and the compiled env are loaded once per worker.
+The driver prints a line when a trial starts, at every tenth learning-curve point, and when it finishes; it writes a finished trial's entry to
 the :class:`~jvl_gym.scale.ledger.Ledger` and copies its model next to it. A sweep run again
 with the same ``--out`` runs only the trials without an entry. At the end it writes the results
 table and the learning-curve plot (:mod:`jvl_gym.scale.sweep_report`) over every finished trial.
@@ -15,6 +16,7 @@ multi-node cluster).
 from __future__ import annotations
 
 import math
+import os
 import shutil
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -96,6 +98,7 @@ def _callbacks(spec: SweepSpec, by_id: dict[str, Trial], ledger: Ledger, total: 
                                                       if k in _FINAL_KEYS},
                          "curve": result.get("curve", [])}
                 ledger.write(t.trial_id, entry)
+                _copy_models(str(trial.path), ledger.path(t.trial_id).parent)
                 outcome.finished.append(t.trial_id)
                 n = done_before + len(outcome.finished)
                 progress(f"done  {t.trial_id} ({n}/{total}): policy "
@@ -113,17 +116,6 @@ def _callbacks(spec: SweepSpec, by_id: dict[str, Trial], ledger: Ledger, total: 
                          f"steps, reward/step {result['reward_per_step']:.3f}{ep_text}, "
                          f"{rate:.0f} steps/s")
 
-        def on_trial_complete(self, iteration: int, trials: list[Any], trial: Any,
-                              **info: Any) -> None:
-            t = by_id[tid(trial)]
-            ckpt = trial.checkpoint
-            if ckpt is None or ledger.read(t.trial_id) is None:
-                return
-            src = Path(ckpt.path)
-            if src.is_dir():
-                for f in src.glob("*.zip"):
-                    shutil.copy2(f, ledger.path(t.trial_id).parent / f.name)
-
         def on_trial_error(self, iteration: int, trials: list[Any], trial: Any,
                            **info: Any) -> None:
             t = by_id[tid(trial)]
@@ -135,6 +127,16 @@ def _callbacks(spec: SweepSpec, by_id: dict[str, Trial], ledger: Ledger, total: 
 
 _FINAL_KEYS = ("policy_mean", "policy_std", "baseline_mean", "baseline_std", "seeds_won",
                "n_seeds", "train_s", "eval_s", "wall_s", "timesteps", "env_steps_per_s")
+
+
+def _copy_models(trial_path: str, dest: Path) -> None:
+    """Copy the model zip of a trial's checkpoint next to its entry (local storage only: the
+    trial persists its checkpoint before the driver sees the final result)."""
+    if "://" in trial_path:
+        return
+    for f in sorted(Path(trial_path).glob("checkpoint_*/*.zip")):
+        dest.mkdir(parents=True, exist_ok=True)
+        shutil.copy2(f, dest / f.name)
 
 
 def _stopper(n: int | None) -> Any:
@@ -197,6 +199,8 @@ def run_sweep(spec: SweepSpec, out: str | Path, address: str | None = None,
     progress(f"{spec.env}: {len(trials)} trials of {spec.timesteps} steps, "
              f"{len(done)} finished earlier, {len(todo)} to run")
     if todo:
+        if not verbose:  # Ray Tune's legacy reporter honours verbose=0 (no experiment box)
+            os.environ.setdefault("RAY_AIR_NEW_OUTPUT", "0")
         connect(address, num_cpus, log_to_driver=verbose)
         from ray import tune
 
@@ -218,7 +222,7 @@ def run_sweep(spec: SweepSpec, out: str | Path, address: str | None = None,
             param_space={"trial": tune.grid_search(configs)},
             tune_config=tune.TuneConfig(
                 max_concurrent_trials=max_concurrent or spec.max_concurrent,
-                trial_name_creator=name, trial_dirname_creator=name),
+                reuse_actors=True, trial_name_creator=name, trial_dirname_creator=name),
             run_config=tune.RunConfig(
                 name=f"run{k:02d}", storage_path=root, stop=_stopper(stop_after),
                 callbacks=_callbacks(spec, by_id, ledger, len(trials), len(done), progress,
