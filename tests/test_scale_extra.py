@@ -6,12 +6,12 @@ import sys
 from pathlib import Path
 
 import pytest
+from tuning.cli import app as tune_app
 from typer.testing import CliRunner
 
 from jvl_gym.cli import app as gym_app
 from jvl_gym.scale.errors import UserError
 from jvl_gym.scale.sweep_spec import parse_sweep
-from tuning.cli import app as tune_app
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -3,8 +3,9 @@
 Each Ray Tune trial runs :func:`jvl_gym.scale.trial.tune_trainable` with ``cpus_per_trial``
 CPUs reserved (its torch and numba threads); a worker process that finished a trial takes the
 next one (``reuse_actors``), so torch, SB3 and the compiled env are loaded once per worker.
-The driver prints a line when a trial starts, at every tenth learning-curve point, and when it finishes; it writes a finished trial's entry to
-the :class:`~jvl_gym.scale.ledger.Ledger` and copies its model next to it. A sweep run again
+The driver prints a line when a trial starts, at every tenth learning-curve point, and when it
+finishes; it writes a finished trial's entry to the :class:`~jvl_gym.scale.ledger.Ledger` and
+copies its model next to it. A sweep run again
 with the same ``--out`` runs only the trials without an entry. At the end it writes the results
 table and the learning-curve plot (:mod:`jvl_gym.scale.sweep_report`) over every finished trial.
 
