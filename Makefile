@@ -14,7 +14,7 @@ $(STAMP): pyproject.toml
 	touch $@
 
 $(STAMP_RL): $(STAMP)
-	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks]"
+	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks,scale]"
 	touch $@
 
 setup: $(STAMP)
@@ -31,6 +31,7 @@ bench: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_sim.py
 	$(BIN)/python benchmarks/bench_protocol.py
 	$(BIN)/python benchmarks/bench_envs.py
+	$(BIN)/python benchmarks/bench_scale.py
 
 bench-compile: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_compile.py

@@ -3,11 +3,12 @@
 Each Ray Tune trial runs :func:`jvl_gym.scale.trial.tune_trainable` with ``cpus_per_trial``
 CPUs reserved (its torch and numba threads); a worker process that finished a trial takes the
 next one (``reuse_actors``), so torch, SB3 and the compiled env are loaded once per worker.
-The driver prints a line when a trial starts, at every tenth learning-curve point, and when it
-finishes; it writes a finished trial's entry to the :class:`~jvl_gym.scale.ledger.Ledger` and
-copies its model next to it. A sweep run again
-with the same ``--out`` runs only the trials without an entry. At the end it writes the results
-table and the learning-curve plot (:mod:`jvl_gym.scale.sweep_report`) over every finished trial.
+The driver prints a line when a trial starts, its latest learning-curve point every
+:data:`PROGRESS_EVERY_S` seconds, and a line when it finishes; it writes a finished trial's
+entry to the :class:`~jvl_gym.scale.ledger.Ledger` and copies its model next to it. A sweep run
+again with the same ``--out`` runs only the trials without an entry. At the end it writes the
+results table and the learning-curve plot (:mod:`jvl_gym.scale.sweep_report`) over every
+finished trial.
 
 Ray Tune keeps its own experiment directories under ``<out>/ray`` (``run00``, ``run01``, … one
 per invocation; ``storage`` overrides the location, e.g. a shared filesystem or ``s3://`` on a
@@ -19,6 +20,7 @@ from __future__ import annotations
 import math
 import os
 import shutil
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -32,6 +34,9 @@ from .sweep_spec import SweepSpec, Trial, trial_config
 __all__ = ["run_sweep", "SweepOutcome", "fmt_params"]
 
 Progress = Callable[[str], None]
+
+#: Seconds between two progress lines of one trial.
+PROGRESS_EVERY_S = 15.0
 
 
 @dataclass
@@ -83,7 +88,7 @@ def _callbacks(spec: SweepSpec, by_id: dict[str, Trial], ledger: Ledger, total: 
 
     class SweepCallback(Callback):
         def __init__(self) -> None:
-            self.points: dict[str, int] = {}
+            self.printed: dict[str, float] = {}
 
         def on_trial_start(self, iteration: int, trials: list[Any], trial: Any,
                            **info: Any) -> None:
@@ -107,9 +112,9 @@ def _callbacks(spec: SweepSpec, by_id: dict[str, Trial], ledger: Ledger, total: 
                          f"{result['baseline_mean']:.2f} ± {result['baseline_std']:.2f}, "
                          f"{result['wall_s']:.0f} s")
                 return
-            k = self.points.get(t.trial_id, 0) + 1
-            self.points[t.trial_id] = k
-            if k % 10 == 1:
+            now = time.monotonic()
+            if now - self.printed.get(t.trial_id, -math.inf) >= PROGRESS_EVERY_S:
+                self.printed[t.trial_id] = now
                 ep = result.get("ep_return_mean", math.nan)
                 ep_text = "" if ep is None or math.isnan(ep) else f", episode return {ep:.2f}"
                 rate = result["timesteps"] / max(result["elapsed_s"], 1e-9)
