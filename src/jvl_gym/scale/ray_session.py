@@ -3,8 +3,8 @@
 ``address=None`` starts a local Ray with ``num_cpus`` CPUs (default: all of this machine's);
 ``address="auto"`` joins the cluster this machine belongs to (``ray start --head`` /
 ``ray start --address``), ``address="ray://host:10001"`` connects through Ray Client. The
-workers get this process's ``PYTHONPATH`` (so a source checkout on the path is what they
-import) and ``MPLBACKEND=Agg``.
+workers get ``MPLBACKEND=Agg`` and, on a local Ray, this process's ``PYTHONPATH`` (so a source
+checkout on the path is what they import; a cluster's nodes use their own installation).
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ def connect(address: str | None = None, num_cpus: int | None = None,
     if ray.is_initialized():
         return ray
     env_vars = {"MPLBACKEND": "Agg"}
-    if os.environ.get("PYTHONPATH"):
+    if address is None and os.environ.get("PYTHONPATH"):
         env_vars["PYTHONPATH"] = os.environ["PYTHONPATH"]
     kwargs: dict[str, Any] = {"runtime_env": {"env_vars": env_vars},
                               "log_to_driver": log_to_driver, "logging_level": logging.WARNING,
