@@ -9,6 +9,7 @@ per motor; at the end it writes the fleet report (:mod:`jvl_gym.scale.fleet_repo
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -26,6 +27,10 @@ def _task(motor: Any, spec: Any, save_records: bool) -> dict[str, Any]:
     from .fleet_motor import tune_motor
 
     return tune_motor(motor, spec, save_records)
+
+
+def _ms(value: float, spec: FleetSpec) -> str:
+    return f"{1e3 * value:.0f}" if math.isfinite(value) else f">{1e3 * spec.move['seconds']:.0f}"
 
 
 def run_fleet(spec: FleetSpec, out: str | Path, address: str | None = None,
@@ -86,8 +91,8 @@ def run_fleet(spec: FleetSpec, out: str | Path, address: str | None = None,
         err = f", J error {100 * row['J_err']:+.2f} %" if "J_err" in row else ""
         settle = ""
         if "settle_tuned_s" in row:
-            settle = (f", settle {1e3 * row['settle_default_s']:.0f} -> "
-                      f"{1e3 * row['settle_tuned_s']:.0f} ms")
+            settle = (f", settle {_ms(row['settle_default_s'], spec)} -> "
+                      f"{_ms(row['settle_tuned_s'], spec)} ms")
         flag = "" if row.get("credible") else f"  NOT CREDIBLE: {row.get('reasons')}"
         jtext = f"J {row['J']:.4g} kg m^2" if "J" in row else "no J"
         progress(f"[{len(rows)}/{n}] {motor.motor_id}: {jtext}{err}{settle}, checks "

@@ -32,8 +32,15 @@ _COLUMNS = ["motor", "type", "source", "credible", "reasons", "checks", "J", "J_
 
 def _f(value: Any, fmt: str) -> str:
     if value is None or (isinstance(value, float) and not math.isfinite(value)):
-        return "—" if value is None or math.isnan(value) else "never"
+        return "—"
     return f"{value:{fmt}}"
+
+
+def _settle(value: float, spec: FleetSpec) -> str:
+    """Settle time [ms]; ``> T`` when the move did not settle within its ``T`` ms."""
+    if not math.isfinite(value):
+        return f"> {1e3 * spec.move['seconds']:.0f}"
+    return f"{1e3 * value:.0f}"
 
 
 def fleet_markdown(spec: FleetSpec, rows: list[dict[str, Any]]) -> str:
@@ -65,8 +72,8 @@ def fleet_markdown(spec: FleetSpec, rows: list[dict[str, Any]]) -> str:
                if "speed_pm" in r else "—")
         cur = (f"{_f(r.get('current_pm'), '.1f')}° / {_f(r.get('current_gm'), '.1f')} dB"
                if "current_pm" in r else "—")
-        settle = (f"{_f(1e3 * r['settle_default_s'], '.0f')} → "
-                  f"{_f(1e3 * r['settle_tuned_s'], '.0f')}" if "settle_tuned_s" in r else "—")
+        settle = (f"{_settle(r['settle_default_s'], spec)} → "
+                  f"{_settle(r['settle_tuned_s'], spec)}" if "settle_tuned_s" in r else "—")
         lines.append(f"| {r['motor']} | {r['J']:.4g} [{r['J_lo']:.4g}, {r['J_hi']:.4g}] | "
                      f"{jerr} | {r['coulomb']:.3g} | {r['viscous']:.3g} | {spd} | {cur} | "
                      f"{settle} | {'yes' if r.get('credible') else 'no'} | "
@@ -117,7 +124,8 @@ def plot_fleet(rows: list[dict[str, Any]], path: str | Path) -> Path:
     ax.plot([0, lim], [0, lim], "k--", lw=0.8)
     ax.set_xlabel("settle, default setup [ms]")
     ax.set_ylabel("settle, designed [ms]")
-    ax.set_title("settle times (red: not credible)", fontsize=9)
+    ax.set_title("settle times (red: not credible; beyond the\nmove: plotted at 1.1 x the "
+                 "longest)", fontsize=8)
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=100)

@@ -15,13 +15,14 @@ Example (also ``python -m jvl_gym.scale.rllib --iterations 20 --out rllib_out``)
         result = algo.train()
         print(result["env_runners"]["episode_return_mean"])
     algo.save("rllib_out/checkpoint")
+
+:func:`train_ppo` runs the same as one Ray Tune trial (its directory under ``--out``).
 """
 
 from __future__ import annotations
 
 import argparse
 import math
-import time
 from pathlib import Path
 from typing import Any
 
@@ -84,16 +85,17 @@ def train_ppo(env_id: str = "jvl_gym/GearSync-v0", iterations: int = 20,
               out: str | Path | None = None, address: str | None = None,
               num_cpus: int | None = None, progress: Any = print, **config: Any
               ) -> list[dict[str, float]]:
-    """Train PPO with RLlib for ``iterations`` iterations; returns one summary per iteration.
+    """Train PPO with RLlib for ``iterations`` iterations as one Ray Tune trial.
 
     Parameters
     ----------
     env_id : str
         Registered jvl_gym id.
     iterations : int
-        ``algo.train()`` calls.
+        Training iterations (``algo.train()`` calls).
     out : path, optional
-        Save the final checkpoint to ``<out>/checkpoint``.
+        Ray Tune's directory for the run (``<out>/ppo``, with the final checkpoint); a
+        temporary directory, removed afterwards, when not given.
     address : str, optional
         Ray cluster (``None``: local Ray).
     num_cpus : int, optional
@@ -109,33 +111,43 @@ def train_ppo(env_id: str = "jvl_gym/GearSync-v0", iterations: int = 20,
         ``iteration``, ``env_steps`` (sampled in total), ``episode_return_mean`` (NaN before
         the first episode ends) and ``time_s`` per iteration.
     """
+    import tempfile
+
+    from ray import tune
+
     from .ray_session import connect
 
     connect(address, num_cpus)
-    algo = ppo_config(env_id, **config).build_algo()
-    out_rows = []
-    t0 = time.perf_counter()
-    try:
-        for i in range(iterations):
-            res = algo.train()
-            runners = res.get("env_runners", {})
-            ret = runners.get("episode_return_mean", math.nan)
-            steps = runners.get("num_env_steps_sampled_lifetime",
-                                res.get("num_env_steps_sampled_lifetime", math.nan))
-            row = {"iteration": i + 1, "env_steps": float(steps),
-                   "episode_return_mean": float(ret) if ret is not None else math.nan,
-                   "time_s": time.perf_counter() - t0}
-            out_rows.append(row)
-            progress(f"iteration {i + 1}: {row['env_steps']:.0f} env steps, episode return "
-                     f"{row['episode_return_mean']:.2f}, {row['time_s']:.0f} s")
-        if out is not None:
-            path = Path(out).resolve() / "checkpoint"
-            path.mkdir(parents=True, exist_ok=True)
-            algo.save(str(path))
-            progress(f"checkpoint: {path}")
-    finally:
-        algo.stop()
-    return out_rows
+    rows: list[dict[str, float]] = []
+
+    class _Rows(tune.Callback):
+        def on_trial_result(self, iteration: int, trials: list[Any], trial: Any,
+                            result: dict[str, Any], **info: Any) -> None:
+            runners = result.get("env_runners", {})
+            ret = runners.get("episode_return_mean")
+            row = {"iteration": float(result["training_iteration"]),
+                   "env_steps": float(runners.get("num_env_steps_sampled_lifetime", math.nan)),
+                   "episode_return_mean": math.nan if ret is None else float(ret),
+                   "time_s": float(result.get("time_total_s", math.nan))}
+            rows.append(row)
+            progress(f"iteration {row['iteration']:.0f}: {row['env_steps']:.0f} env steps, "
+                     f"episode return {row['episode_return_mean']:.2f}, "
+                     f"{row['time_s']:.0f} s")
+
+    with tempfile.TemporaryDirectory(prefix="jvl-rllib-") as tmp:
+        root = Path(out).resolve() if out is not None else Path(tmp)
+        tuner = tune.Tuner(
+            "PPO", param_space=ppo_config(env_id, **config),
+            run_config=tune.RunConfig(
+                name="ppo", storage_path=str(root), verbose=0, callbacks=[_Rows()],
+                stop={"training_iteration": int(iterations)},
+                checkpoint_config=tune.CheckpointConfig(checkpoint_at_end=out is not None)))
+        result = tuner.fit()[0]
+        if result.error is not None:
+            raise result.error
+        if out is not None and result.checkpoint is not None:
+            progress(f"checkpoint: {result.checkpoint.path}")
+    return rows
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -146,7 +158,7 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--runners", type=int, default=1, help="remote env runners")
     p.add_argument("--envs-per-runner", type=int, default=16)
     p.add_argument("--batch", type=int, default=4096, help="train batch [env steps]")
-    p.add_argument("--out", default=None, help="save the final checkpoint here")
+    p.add_argument("--out", default=None, help="Ray Tune's directory (with the checkpoint)")
     p.add_argument("--address", default=None, help="Ray cluster (default: local Ray)")
     a = p.parse_args(argv)
     train_ppo(a.env, a.iterations, a.out, a.address, num_env_runners=a.runners,
