@@ -3,12 +3,12 @@
 - sweep throughput: the same 4-trial sweep (PPO on GearSync-v0, ``--timesteps`` env steps per
   trial, 16 copies of the native vector env, 1 CPU per trial, evaluation on 2 held-out seeds
   x 2 episodes) run with 1 and with 2 trials at once on a local Ray of 2 CPUs; trials per hour
-  = 4 / wall time (Ray's start excluded), and the training env-steps/s of one trial (PPO
-  updates included, one core);
+  = 4 / wall time (Ray's start excluded; the workers' start, which each run pays, included),
+  and the training env-steps/s of one trial (PPO updates included, one core);
 - fleet throughput (``--motors N``, 0 to skip): N simulated motors autotuned as Ray tasks on
   2 CPUs; motors tuned per hour.
 
-    python benchmarks/bench_scale.py [--timesteps 20000] [--motors 4]
+    python benchmarks/bench_scale.py [--timesteps 100000] [--motors 4]
 """
 
 from __future__ import annotations
@@ -60,7 +60,7 @@ def fleet_rate(n: int, out: Path) -> float:
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--timesteps", type=int, default=20000, help="env steps per trial")
+    p.add_argument("--timesteps", type=int, default=100000, help="env steps per trial")
     p.add_argument("--motors", type=int, default=4, help="fleet size (0: skip)")
     a = p.parse_args()
     connect(num_cpus=2)

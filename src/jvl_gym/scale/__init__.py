@@ -15,7 +15,8 @@ One concept per module:
 - :mod:`.fleet`: the fleet on Ray tasks (``jvl-tune fleet``);
 - :mod:`.fleet_report`: the fleet report (table, histograms, flagged motors);
 - :mod:`.ray_session`: connecting to local Ray or a cluster (``--address``);
-- :mod:`.rllib`: the envs as RLlib environments and a PPO example.
+- :mod:`.rllib`: the envs as RLlib environments and a PPO example;
+- :mod:`.commands`: the bodies of the two CLI commands.
 
 Importing this package does not import Ray.
 """
