@@ -40,6 +40,8 @@ def test_missing_extra_is_one_line(monkeypatch: pytest.MonkeyPatch, tmp_path: Pa
     ("env: jvl_gym/GearSync-v0\nparameters:\n  hyperparams.learnin_rate: [0.1]\n",
      "PPO has no argument 'learnin_rate'"),
     ("env: jvl_gym/GearSync-v0\nparameters:\n  gamma: [0.9]\n", "use n_envs, hyperparams."),
+    ("env: jvl_gym/GearSync-v0\nparameters:\n  env_kwargs.decimaton: [1, 2]\n",
+     "takes no argument 'decimaton'"),
     ("env: jvl_gym/GearSync-v0\nsearch: random\nparameters:\n"
      "  hyperparams.learning_rate: {logunif: [1, 2]}\nsamples: 2\n", "unknown distribution"),
     ("env: jvl_gym/GearSync-v0\nbudget: {steps: 10}\n", "budget: unknown keys ['steps']"),

@@ -13,6 +13,7 @@ import logging
 import os
 from typing import Any
 
+from .errors import UserError
 from .extra import require_ray
 
 __all__ = ["connect", "LOCAL_OBJECT_STORE_BYTES"]
@@ -33,6 +34,12 @@ def connect(address: str | None = None, num_cpus: int | None = None,
         CPUs of the local Ray (ignored with ``address``).
     log_to_driver : bool
         Forward the workers' stdout/stderr to this process.
+
+    Raises
+    ------
+    UserError
+        ``address`` names no reachable cluster (as far as Ray reports it; an address that
+        does not answer makes Ray wait and retry).
     """
     ray = require_ray()
     if ray.is_initialized():
@@ -46,7 +53,13 @@ def connect(address: str | None = None, num_cpus: int | None = None,
     if address is None:
         kwargs.update(num_cpus=num_cpus, include_dashboard=False,
                       object_store_memory=LOCAL_OBJECT_STORE_BYTES)
-    else:
-        kwargs["address"] = address
-    ray.init(**kwargs)
+        ray.init(**kwargs)
+        return ray
+    try:
+        ray.init(address=address, **kwargs)
+    except (ConnectionError, RuntimeError, ValueError) as exc:
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise UserError(f"--address {address}: no Ray cluster reachable ({first}); start one "
+                        "with `ray start --head` or leave out --address for a local Ray") \
+            from None
     return ray

@@ -158,19 +158,45 @@ def _positive_int(value: Any, where: str) -> int:
     return value
 
 
-def _check_param_key(key: str, base: dict[str, Any], where: str) -> None:
+def _check_param_key(key: str, env: str, base: dict[str, Any], where: str) -> None:
     head, _, rest = key.partition(".")
     if key == "n_envs":
         return
     if head not in ("hyperparams", "env_kwargs") or not rest:
         raise UserError(f"{where}: parameter {key!r}: use n_envs, hyperparams.<name> or "
                         "env_kwargs.<name>")
+    name = rest.split(".")[0]
     if head == "hyperparams":
-        name = rest.split(".")[0]
         allowed = _algo_arguments(base["algo"])
         if allowed is not None and name not in allowed:
             raise UserError(f"{where}: parameter {key!r}: {base['algo']} has no argument "
                             f"{name!r}")
+    else:
+        allowed = _env_arguments(env)
+        if allowed is not None and name not in allowed:
+            raise UserError(f"{where}: parameter {key!r}: {env} takes no argument {name!r}; "
+                            f"it takes {', '.join(sorted(allowed))}")
+
+
+def _env_arguments(env: str) -> set[str] | None:
+    import importlib
+
+    import gymnasium as gym
+
+    entry = gym.spec(env).vector_entry_point
+    if not isinstance(entry, str) or ":" not in entry:
+        return None
+    module, _, name = entry.partition(":")
+    names: set[str] = set()
+    for cls in getattr(importlib.import_module(module), name).__mro__:
+        if "__init__" not in vars(cls):
+            continue
+        params = inspect.signature(vars(cls)["__init__"]).parameters
+        names |= {n for n, p in params.items()
+                  if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)}
+        if not any(p.kind is p.VAR_KEYWORD for p in params.values()):
+            return names - {"self", "num_envs"}
+    return None
 
 
 def _algo_arguments(algo: str) -> set[str] | None:
@@ -211,7 +237,7 @@ def parse_sweep(data: Any, path: Path | None = None) -> SweepSpec:
     params: dict[str, Any] = {}
     for key, value in params_raw.items():
         pw = f"{where}: parameters.{key}"
-        _check_param_key(str(key), base, where)
+        _check_param_key(str(key), env, base, where)
         if search == "grid":
             if not isinstance(value, list) or not value:
                 raise UserError(f"{pw}: a grid needs a non-empty list of values")
