@@ -4,9 +4,11 @@
   trial, 16 copies of the native vector env, 1 CPU per trial, evaluation on 2 held-out seeds
   x 2 episodes) run with 1 and with 2 trials at once on a local Ray of 2 CPUs; trials per hour
   = 4 / wall time (Ray's start excluded; the workers' start, which each run pays, included),
-  and the training env-steps/s of one trial (PPO updates included, one core);
+  the training env-steps/s of one trial (PPO updates included, one core) and its CPU time
+  (trials per core-hour: independent of other jobs on the machine, which Ray's workers, at
+  nice 15, yield to);
 - fleet throughput (``--motors N``, 0 to skip): N simulated motors autotuned as Ray tasks on
-  2 CPUs; motors tuned per hour.
+  2 CPUs; motors tuned per hour and per core-hour.
 
     python benchmarks/bench_scale.py [--timesteps 100000] [--motors 4]
 """
@@ -29,8 +31,9 @@ def _quiet(_: str) -> None:
     return None
 
 
-def sweep_rate(timesteps: int, workers: int, out: Path) -> tuple[float, float]:
-    """(trials per hour, mean training env-steps/s of a trial) with ``workers`` at once."""
+def sweep_rate(timesteps: int, workers: int, out: Path) -> tuple[float, float, float]:
+    """(trials per hour, mean training env-steps/s of a trial, mean CPU seconds of a trial)
+    with ``workers`` trials at once."""
     spec = parse_sweep({
         "env": "jvl_gym/GearSync-v0", "search": "grid", "seeds": [0, 1],
         "parameters": {"hyperparams.learning_rate": [0.0003, 0.001]},
@@ -45,17 +48,20 @@ def sweep_rate(timesteps: int, workers: int, out: Path) -> tuple[float, float]:
 
     rows = list(csv.DictReader((out / "results.csv").open()))
     rate = sum(float(r["env_steps_per_s"]) for r in rows) / len(rows)
-    return 4 / wall * 3600, rate
+    cpu = sum(float(r["cpu_s"]) for r in rows) / len(rows)
+    return 4 / wall * 3600, rate, cpu
 
 
-def fleet_rate(n: int, out: Path) -> float:
-    """Motors tuned per hour (``n`` simulated motors on the local Ray)."""
+def fleet_rate(n: int, out: Path) -> tuple[float, float]:
+    """(motors tuned per hour, mean CPU seconds of a motor's task) for ``n`` simulated motors
+    on the local Ray."""
     spec = parse_fleet({"seed": 3, "motors": [
         {"type": "MAC140", "count": n, "load_ratio": {"uniform": [0, 10]},
          "viscous": {"uniform": [0, 1e-5]}, "coulomb": {"uniform": [0, 0.019]}}]})
     t0 = time.perf_counter()
-    run_fleet(spec, out, progress=_quiet)
-    return n / (time.perf_counter() - t0) * 3600
+    rows = run_fleet(spec, out, progress=_quiet)
+    cpu = sum(float(r.get("cpu_s", 0.0)) for r in rows) / n
+    return n / (time.perf_counter() - t0) * 3600, cpu
 
 
 def main() -> None:
@@ -68,12 +74,14 @@ def main() -> None:
         # the first sweep also loads the compiled env into the workers: not timed
         sweep_rate(2048, 2, Path(tmp) / "warm")
         for workers in (1, 2):
-            tph, sps = sweep_rate(a.timesteps, workers, Path(tmp) / f"w{workers}")
+            tph, sps, cpu = sweep_rate(a.timesteps, workers, Path(tmp) / f"w{workers}")
             print(f"sweep GearSync-v0, {a.timesteps} env steps/trial, {workers} worker(s): "
-                  f"{tph:.0f} trials/hour, {sps:.0f} training env-steps/s per trial")
+                  f"{tph:.0f} trials/hour, {sps:.0f} training env-steps/s per trial, "
+                  f"{cpu:.1f} CPU s per trial ({3600 / cpu:.0f} trials per core-hour)")
         if a.motors:
-            mph = fleet_rate(a.motors, Path(tmp) / "fleet")
-            print(f"fleet autotune, {a.motors} MAC140 motors, 2 workers: {mph:.0f} motors/hour")
+            mph, cpu = fleet_rate(a.motors, Path(tmp) / "fleet")
+            print(f"fleet autotune, {a.motors} MAC140 motors, 2 workers: {mph:.0f} motors/hour, "
+                  f"{cpu:.1f} CPU s per motor ({3600 / cpu:.0f} motors per core-hour)")
 
 
 if __name__ == "__main__":

@@ -122,6 +122,7 @@ def tune_motor(motor: FleetMotor, spec: FleetSpec, save_records: bool = False
     from tuning.verify import position_move, velocity_step
 
     t0 = time.perf_counter()
+    c0 = time.process_time()
     row: dict[str, Any] = {"motor": motor.motor_id, "type": motor.type,
                            "source": "simulated" if motor.simulated else "records",
                            **{f"true_{k}": v for k, v in motor.truth.items()}}
@@ -210,4 +211,5 @@ def tune_motor(motor: FleetMotor, spec: FleetSpec, save_records: bool = False
             "load_inertia": float(motor.load_inertia)}
     files["motor.yaml"] = yaml.safe_dump(meta, sort_keys=False).encode()
     row["wall_s"] = time.perf_counter() - t0
+    row["cpu_s"] = time.process_time() - c0
     return {"row": row, "files": files, "registers": d.registers}

@@ -27,7 +27,7 @@ _COLUMNS = ["motor", "type", "source", "credible", "reasons", "checks", "J", "J_
             "R_line", "L_line", "R_err", "L_err", "testu_fit", "testa_fit", "current_pm",
             "current_gm", "speed_pm", "speed_gm", "speed_bw", "robust_pm", "a_soll",
             "settle_default_s", "settle_tuned_s", "overshoot_default", "overshoot_tuned",
-            "move_model", "wall_s"]
+            "move_model", "wall_s", "cpu_s"]
 
 
 def _f(value: Any, fmt: str) -> str:

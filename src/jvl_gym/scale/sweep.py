@@ -132,7 +132,7 @@ def _callbacks(spec: SweepSpec, by_id: dict[str, Trial], ledger: Ledger, total: 
 
 
 _FINAL_KEYS = ("policy_mean", "policy_std", "baseline_mean", "baseline_std", "seeds_won",
-               "n_seeds", "train_s", "eval_s", "wall_s", "timesteps", "env_steps_per_s")
+               "n_seeds", "train_s", "eval_s", "wall_s", "cpu_s", "timesteps", "env_steps_per_s")
 
 
 def _copy_models(trial_path: str, dest: Path) -> None:

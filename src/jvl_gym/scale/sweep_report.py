@@ -101,7 +101,7 @@ def write_results(spec: SweepSpec, rows: list[dict[str, Any]], out: str | Path) 
     out.mkdir(parents=True, exist_ok=True)
     keys = _param_keys(rows)
     metrics = ["policy_mean", "policy_std", "baseline_mean", "baseline_std", "seeds_won",
-               "n_seeds", "timesteps", "train_s", "eval_s", "wall_s", "env_steps_per_s"]
+               "n_seeds", "timesteps", "train_s", "eval_s", "wall_s", "cpu_s", "env_steps_per_s"]
     csv_path = out / "results.csv"
     with csv_path.open("w", newline="") as fh:
         w = csv.writer(fh)

@@ -59,7 +59,8 @@ def train_and_evaluate(env_id: str, cfg: dict[str, Any], work_dir: str | Path,
     dict
         Final metrics: ``policy_mean``, ``policy_std``, ``baseline_mean``, ``baseline_std``
         (returns, mean ± std over held-out seeds), ``seeds_won``, ``n_seeds``, ``train_s``,
-        ``eval_s``, ``wall_s`` [s], ``timesteps``, ``env_steps_per_s`` and ``curve`` (list of
+        ``eval_s``, ``wall_s`` [s], ``cpu_s`` (CPU time of the trial's process, all its
+        threads) [s], ``timesteps``, ``env_steps_per_s`` and ``curve`` (list of
         ``[timesteps, reward_per_step, ep_return_mean]``).
     """
     import numba
@@ -74,6 +75,7 @@ def train_and_evaluate(env_id: str, cfg: dict[str, Any], work_dir: str | Path,
 
     work_dir = Path(work_dir)
     t0 = time.perf_counter()
+    c0 = time.process_time()
     torch.set_num_threads(max(1, int(threads)))
     numba.set_num_threads(max(1, min(int(threads), numba.config.NUMBA_NUM_THREADS)))
     steps = int(cfg["total_timesteps"])
@@ -123,6 +125,7 @@ def train_and_evaluate(env_id: str, cfg: dict[str, Any], work_dir: str | Path,
              "baseline_mean": res["baseline"][0], "baseline_std": res["baseline"][1],
              "seeds_won": int(res["seeds_won"][0]), "n_seeds": int(res["seeds_won"][1]),
              "train_s": t1 - t0, "eval_s": t2 - t1, "wall_s": t2 - t0,
+             "cpu_s": time.process_time() - c0,
              "timesteps": float(trained), "env_steps_per_s": trained / max(t1 - t0, 1e-9),
              "curve": curve, "finished": True}
     report(final, work_dir)
