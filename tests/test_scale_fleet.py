@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import shutil
 from pathlib import Path
 
 import pytest
@@ -40,7 +41,7 @@ def test_example_fleet_is_drawn_as_specified() -> None:
 
 def test_fleet_of_8_motors(tmp_path: Path, local_ray: None) -> None:
     out = tmp_path / "fleet"
-    res = CliRunner().invoke(app, ["fleet", str(EXAMPLE), "--out", str(out)])
+    res = CliRunner().invoke(app, ["fleet", str(EXAMPLE), "--out", str(out), "--save-records"])
     assert res.exit_code == 0, res.output
     spec = load_fleet(EXAMPLE)
     for m in spec.motors:
@@ -58,3 +59,15 @@ def test_fleet_of_8_motors(tmp_path: Path, local_ray: None) -> None:
     report = (out / "fleet.md").read_text()
     assert "credible identifications" in report and report.count("| m00") == 8
     assert (out / "fleet.png").read_bytes()[:4] == b"\x89PNG"
+
+    # the saved records of two motors, as a records folder, identify the same J again
+    folder = tmp_path / "records"
+    for m in (spec.motors[0], spec.motors[-1]):
+        shutil.copytree(out / "motors" / m.motor_id, folder / m.motor_id)
+    res = CliRunner().invoke(app, ["fleet", str(folder), "--out", str(tmp_path / "again")])
+    assert res.exit_code == 0, res.output
+    again = {r["motor"]: r for r in csv.DictReader((tmp_path / "again" / "fleet.csv").open())}
+    for r in (rows[0], rows[-1]):
+        assert again[r["motor"]]["source"] == "records"
+        assert float(again[r["motor"]]["J"]) == pytest.approx(float(r["J"]), rel=1e-9)
+        assert float(again[r["motor"]]["true_J"]) == pytest.approx(float(r["true_J"]))

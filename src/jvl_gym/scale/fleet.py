@@ -1,13 +1,15 @@
 """``jvl-tune fleet``: every motor of a fleet autotuned as a Ray task, then the fleet report.
 
-One Ray task per motor (:func:`jvl_gym.scale.fleet_motor.tune_motor`, one CPU each). The driver
-writes each motor's files under ``<out>/motors/<motor_id>/`` as its task finishes (the tasks
-return the files' bytes, so on a cluster nothing needs a shared filesystem) and prints one line
-per motor; at the end it writes the fleet report (:mod:`jvl_gym.scale.fleet_report`).
+One Ray task per motor (:func:`jvl_gym.scale.fleet_motor.tune_motor`, one CPU each); a recorded
+motor's CSVs are read here and sent with its task. The driver writes each motor's files under
+``<out>/motors/<motor_id>/`` as its task finishes (the tasks return the files' bytes, so on a
+cluster nothing needs a shared filesystem) and prints one line per motor; at the end it writes
+the fleet report (:mod:`jvl_gym.scale.fleet_report`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 from collections.abc import Callable
@@ -15,7 +17,7 @@ from pathlib import Path
 from typing import Any
 
 from .fleet_report import write_fleet_report
-from .fleet_spec import FleetSpec
+from .fleet_spec import FleetMotor, FleetSpec
 from .ray_session import connect
 
 __all__ = ["run_fleet"]
@@ -27,6 +29,15 @@ def _task(motor: Any, spec: Any, save_records: bool) -> dict[str, Any]:
     from .fleet_motor import tune_motor
 
     return tune_motor(motor, spec, save_records)
+
+
+def _with_data(motor: FleetMotor) -> FleetMotor:
+    """A recorded motor with its CSVs' contents (read here, on the driver)."""
+    if not motor.records:
+        return motor
+    data = {f"{k:03d}-{Path(p).name}": Path(p).read_bytes()
+            for k, p in enumerate(motor.records)}
+    return dataclasses.replace(motor, record_data=data)
 
 
 def _ms(value: float, spec: FleetSpec) -> str:
@@ -66,7 +77,7 @@ def run_fleet(spec: FleetSpec, out: str | Path, address: str | None = None,
     ray = connect(address, num_cpus, log_to_driver=verbose)
     remote = ray.remote(num_cpus=1)(_task)
     spec_ref = ray.put(spec)
-    pending = {remote.remote(m, spec_ref, save_records): m for m in spec.motors}
+    pending = {remote.remote(_with_data(m), spec_ref, save_records): m for m in spec.motors}
     n = len(pending)
     progress(f"{n} motors as Ray tasks on {int(ray.cluster_resources().get('CPU', 0))} CPUs")
     rows: dict[str, dict[str, Any]] = {}

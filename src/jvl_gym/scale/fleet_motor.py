@@ -65,7 +65,15 @@ def _identify_records(motor: FleetMotor) -> Any:
     from tuning.models import MotorData
     from tuning.records import load_csv, record_registers
 
-    recs = [load_csv(p) for p in motor.records]
+    if motor.record_data:
+        with tempfile.TemporaryDirectory(prefix="jvl-records-") as tmp:
+            paths = []
+            for name, data in sorted(motor.record_data.items()):
+                paths.append(Path(tmp) / name)
+                paths[-1].write_bytes(data)
+            recs = [load_csv(p) for p in paths]
+    else:
+        recs = [load_csv(p) for p in motor.records]
     testu = [r for r in recs if r.kind == "TESTU"]
     testa = [r for r in recs if r.kind == "TESTA"]
     regs = record_registers(testa) or {}

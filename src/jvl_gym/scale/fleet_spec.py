@@ -62,6 +62,9 @@ class FleetMotor:
         Rotor angle at power-on [rad] (simulated motors).
     records : list of Path
         Record CSVs (records folder); empty for a simulated motor.
+    record_data : dict
+        File name -> contents of the record CSVs, filled by the driver before the motor is
+        sent to a Ray task (so the task needs no access to the folder).
     truth : dict
         Known true values (``J``, ``viscous``, ``coulomb``, ``R_line``, ``L_line_mH``);
         empty when unknown.
@@ -76,6 +79,7 @@ class FleetMotor:
     initial_angle: float = 0.0
     records: list[Path] = field(default_factory=list)
     truth: dict[str, float] = field(default_factory=dict)
+    record_data: dict[str, bytes] = field(default_factory=dict, repr=False)
 
     @property
     def simulated(self) -> bool:
