@@ -9,12 +9,13 @@ default NEXT_STEP autoreset mode, which is the mode RLlib's episode bookkeeping 
 
 Example (also ``python -m jvl_gym.scale.rllib --iterations 20 --out rllib_out``)::
 
+    import os
     from jvl_gym.scale.rllib import ppo_config
     algo = ppo_config("jvl_gym/GearSync-v0", num_env_runners=1).build_algo()
     for _ in range(20):
         result = algo.train()
         print(result["env_runners"]["episode_return_mean"])
-    algo.save("rllib_out/checkpoint")
+    algo.save(os.path.abspath("rllib_out/checkpoint"))  # RLlib wants an absolute path or URI
 
 :func:`train_ppo` runs the same as one Ray Tune trial (its directory under ``--out``).
 """
