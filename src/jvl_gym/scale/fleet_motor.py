@@ -37,8 +37,18 @@ MIN_FIT_PERCENT = 80.0  #: smallest credible NRMSE fit of the TESTU and TESTA mo
 
 
 def credibility(ident: Any) -> list[str]:
-    """Reasons an identification (:class:`tuning.autotune.Identification`) is not credible;
-    empty when it is."""
+    """Reasons an identification is not credible (module docstring); empty when it is.
+
+    Parameters
+    ----------
+    ident : tuning.autotune.Identification
+        The identified coil and mechanics with their 95 % intervals and fits.
+
+    Returns
+    -------
+    list of str
+        One reason per failed criterion.
+    """
     c, m = ident.coil, ident.mechanics
     out = []
     if not (math.isfinite(m.J) and m.J > 0):

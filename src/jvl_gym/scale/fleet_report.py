@@ -44,7 +44,21 @@ def _settle(value: float, spec: FleetSpec) -> str:
 
 
 def fleet_markdown(spec: FleetSpec, rows: list[dict[str, Any]]) -> str:
-    """The markdown report (module docstring)."""
+    """The markdown report (module docstring).
+
+    Parameters
+    ----------
+    spec : FleetSpec
+        The fleet (source, settle-time move).
+    rows : list of dict
+        One row per motor (:func:`jvl_gym.scale.fleet_motor.tune_motor`); J in kg m^2, T_c in
+        N m, b in N m s/rad, settle times in s.
+
+    Returns
+    -------
+    str
+        The report.
+    """
     n = len(rows)
     credible = sum(bool(r.get("credible")) for r in rows)
     ok = sum(r.get("checks") == "ok" for r in rows)
@@ -88,7 +102,20 @@ def fleet_markdown(spec: FleetSpec, rows: list[dict[str, Any]]) -> str:
 
 
 def plot_fleet(rows: list[dict[str, Any]], path: str | Path) -> Path:
-    """Histograms of the identified parameters, their errors, margins and settle times."""
+    """Histograms of the identified parameters, their errors, margins and settle times.
+
+    Parameters
+    ----------
+    rows : list of dict
+        One row per motor.
+    path : path
+        The PNG to write (3 x 3 panels).
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

@@ -70,7 +70,18 @@ class SweepOutcome:
 
 
 def fmt_params(params: dict[str, Any]) -> str:
-    """``lr=0.0003 n_epochs=5``: dotted keys shortened to their last part."""
+    """``learning_rate=0.0003 n_epochs=5``: dotted keys shortened to their last part.
+
+    Parameters
+    ----------
+    params : dict
+        Dotted key -> value.
+
+    Returns
+    -------
+    str
+        Space-separated ``name=value`` pairs (floats with 3 significant digits).
+    """
     parts = []
     for key, value in params.items():
         name = key.split(".")[-1]

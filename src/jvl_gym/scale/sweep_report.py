@@ -33,7 +33,19 @@ def _num(value: Any, fmt: str = ".2f") -> str:
 
 
 def markdown_table(rows: list[dict[str, Any]]) -> str:
-    """The results table in markdown (one row per trial)."""
+    """The results table in markdown (one row per trial).
+
+    Parameters
+    ----------
+    rows : list of dict
+        Ledger entries (``trial_id``, ``params``, ``seed``, ``metrics``), in trial order.
+
+    Returns
+    -------
+    str
+        Header, separator and one line per trial; returns are the env's reward units, wall
+        time in seconds.
+    """
     from .sweep import fmt_params
 
     lines = ["| trial | parameters | seed | policy | baseline | better | seeds won | steps | "
@@ -50,7 +62,23 @@ def markdown_table(rows: list[dict[str, Any]]) -> str:
 
 
 def plot_curves(rows: list[dict[str, Any]], path: str | Path, title: str = "") -> Path:
-    """Learning curves of every trial (module docstring) as a PNG."""
+    """Learning curves of every trial (module docstring) as a PNG.
+
+    Parameters
+    ----------
+    rows : list of dict
+        Ledger entries; ``curve`` holds ``[env steps, reward per env-step, mean episode
+        return]`` points.
+    path : path
+        The PNG to write.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    Path
+        ``path``.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
