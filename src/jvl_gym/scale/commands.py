@@ -34,7 +34,8 @@ def sweep_command(config: Path, out: Path, address: str | None = None,
                   num_cpus: int | None = None, max_concurrent: int | None = None,
                   stop_after: int | None = None, storage: str | None = None,
                   verbose: bool = False, debug: bool = False) -> None:
-    """``jvl-gym sweep``: run (or resume) a sweep file; exit 1 if a trial failed.
+    """``jvl-gym sweep``: run (or resume) a sweep file; exit 1 if a trial failed or the sweep
+    was interrupted before every trial finished (not when ``stop_after`` stopped it).
 
     Parameters
     ----------
@@ -59,8 +60,8 @@ def sweep_command(config: Path, out: Path, address: str | None = None,
                 raise UserError(f"{name} {value}: give a positive integer")
         outcome = run_sweep(spec, _out_dir(out), address, num_cpus, max_concurrent,
                             stop_after, storage, progress=_say("sweep"), verbose=verbose)
-        if outcome.failed:
-            raise typer.Exit(1)
+        if outcome.failed or (stop_after is None and not outcome.complete):
+            raise typer.Exit(1)  # a trial failed, or the sweep was interrupted
 
     run_cli(body, "jvl-gym sweep", debug)
 

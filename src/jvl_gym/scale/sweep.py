@@ -17,6 +17,7 @@ multi-node cluster).
 
 from __future__ import annotations
 
+import logging
 import math
 import os
 import shutil
@@ -246,7 +247,16 @@ def run_sweep(spec: SweepSpec, out: str | Path, address: str | None = None,
                                      outcome),
                 verbose=1 if verbose else 0,
                 failure_config=tune.FailureConfig(max_failures=0, fail_fast=False)))
-        tuner.fit()
+        # Ray Tune's own "resume with Tuner.restore(...)" advice does not apply: running the
+        # command again resumes (the line below says so)
+        tune_log = logging.getLogger("ray.tune.tune")
+        level = tune_log.level
+        if not verbose:
+            tune_log.setLevel(logging.CRITICAL)
+        try:
+            tuner.fit()
+        finally:
+            tune_log.setLevel(level)
     rows = [e for t in trials if (e := ledger.read(t.trial_id)) is not None]
     if rows:
         outcome.files = write_results(spec, rows, out)
