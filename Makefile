@@ -5,16 +5,18 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-core
 STAMP_RL := $(VENV)/.installed-rl
 
-.PHONY: setup setup-rl demo test bench bench-compile lint docs notebooks clean
+.PHONY: setup setup-rl demo test bench bench-compare bench-compile lint docs notebooks clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e ".[dev]"
+	$(BIN)/jvl-gym compile --motors-only  # numba: the kernel, once per machine (cached)
 	touch $@
 
 $(STAMP_RL): $(STAMP)
-	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks,scale]"
+	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks,test,scale]"
+	$(BIN)/jvl-gym compile  # numba: every environment's step, once per machine (cached)
 	touch $@
 
 setup: $(STAMP)
@@ -32,9 +34,15 @@ bench: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_protocol.py
 	$(BIN)/python benchmarks/bench_envs.py
 	$(BIN)/python benchmarks/bench_scale.py
+	@echo "figures written to docs/benchmarks.md"
 
+# BASELINE=<git revision>: speed of that revision beside this tree, in one run
+bench-compare: $(STAMP_RL)
+	$(BIN)/python benchmarks/bench_compare.py $(or $(BASELINE),HEAD~1)
+
+# BASELINE=<git revision> measures that revision beside this tree
 bench-compile: $(STAMP_RL)
-	$(BIN)/python benchmarks/bench_compile.py
+	$(BIN)/python benchmarks/bench_compile.py $(if $(BASELINE),--baseline $(BASELINE))
 
 notebooks: $(STAMP_RL)
 	cd notebooks && for f in *.py; do ../$(BIN)/jupytext --to ipynb "$$f"; done
@@ -42,6 +50,7 @@ notebooks: $(STAMP_RL)
 docs: $(STAMP)
 	$(BIN)/python -m pip install -q -e ".[docs]"
 	$(BIN)/python -m jvl_gym.registers.reference docs/registers.md
+	$(BIN)/python -m jvl_gym.families.reference docs/families
 	$(BIN)/mkdocs build --strict -d site
 
 lint: $(STAMP)

@@ -8,10 +8,12 @@
   outer samples (1.92 ms of motor time) per second, and env-steps/s at decimation 1;
 - gym-electric-motor's ``Cont-CC-PMSM-v0`` single env steps/s, measured in the same run in a
   separate venv (``.venv-bench``, created here on first use: its dependencies conflict with
-  ours), for the ×10 comparison of issue 6, also as simulated seconds per second (its step is
-  ``tau`` = 100 µs of motor time, ours ``decimation`` × 1.92 ms).
+  ours), as a reference point for a single env's speed, also as simulated seconds per second
+  (its step is ``tau`` = 100 µs of motor time, ours ``decimation`` × 1.92 ms).
 
 Every rate, GEM's included, is the best of equal windows of its measuring time (best_rate.py).
+The figures also go to the generated page ``docs/benchmarks.md`` (section "Environments",
+:mod:`bench_page`). ``JVL_FAST=1`` measures for a third of the time.
 """
 
 from __future__ import annotations
@@ -23,11 +25,12 @@ from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
-from best_rate import best_rate  # benchmarks/ is the script's directory
+from bench_page import table, update_section  # benchmarks/ is the script's directory
+from best_rate import best_rate
 
 import jvl_gym  # noqa: F401
-from jvl_gym import constants as c
 from jvl_gym.envs import ENV_IDS
+from jvl_gym.families.mac050_141 import constants as c
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCH_VENV = ROOT / ".venv-bench"
@@ -108,6 +111,39 @@ def gem_steps_per_second(seconds: float = 3.0) -> tuple[float, float] | None:
     return float(rate), float(tau)
 
 
+def _ratio(x: float, g: float | None) -> str:
+    return f"{x / g:.1f}" if g else "—"
+
+
+def section(gem: tuple[float, float] | None, rows: list[dict]) -> str:
+    """The page section (Markdown) of one run: GEM's rate, then one row per env.
+
+    ``rows``: dicts with ``env``, ``trials`` (FilterTuning: one trial per step), ``dec``,
+    ``single``, ``dec1``, ``copies``, ``vector``, ``vec1`` (rates per second)."""
+    if gem:
+        head = (f"gym-electric-motor `Cont-CC-PMSM-v0` single env (separate venv, same run): "
+                f"{gem[0]:,.0f} steps/s, step {gem[1] * 1e6:.0f} µs = "
+                f"{gem[0] * gem[1]:.2f} simulated s/s. × GEM: ratio to it.\n\n")
+    else:
+        head = "gym-electric-motor: not measured in this run.\n\n"
+    g, gs = (gem[0], gem[0] * gem[1]) if gem else (None, None)
+    out = []
+    for r in rows:
+        sim = r["single"] * r["dec"] * c.OUTER_DT
+        if r["trials"]:
+            out.append([f"{r['env']} (trials)", "—", f"{r['single']:,.1f}", "—", "—", "—", "—",
+                        f"{r['vector']:,.0f} ({r['copies']} copies)", "—", "—"])
+            continue
+        out.append([r["env"], r["dec"], f"{r['single']:,.0f}", _ratio(r["single"], g),
+                    f"{sim:.1f}", _ratio(sim, gs), f"{r['dec1']:,.0f}",
+                    f"{r['vector']:,.0f} ({r['copies']} copies)",
+                    f"{r['vector'] * r['dec']:,.0f}", f"{r['vec1']:,.0f}"])
+    headers = ["env", "decimation", "single steps/s", "× GEM", "simulated s/s", "× GEM",
+               "single, decimation 1", "vector env-steps/s", "vector outer samples/s",
+               "vector, decimation 1"]
+    return head + table(headers, out)
+
+
 def main() -> None:
     fast = os.environ.get("JVL_FAST") == "1"
     seconds = 1.0 if fast else 3.0
@@ -121,7 +157,7 @@ def main() -> None:
           f"{'x GEM':>6s} {'dec 1 steps/s':>13s} {'x GEM':>6s} "
           f"{'vector(1024) steps/s':>20s} {'outer samples/s':>15s} {'vector dec 1':>12s}")
     # every single-env figure first: after a vector env, numba's idle worker threads still
-    # compete for the second core and slow a single env measured next by up to 25 %
+    # compete for the cores and would slow a single env measured next
     singles = {}
     for env_id in ENV_IDS:
         trials = "FilterTuning" in env_id
@@ -130,12 +166,15 @@ def main() -> None:
         dec1 = single if dec == 1 or trials else single_steps_per_second(env_id, seconds,
                                                                          decimation=1)
         singles[env_id] = (trials, dec, single, dec1)
+    rows = []
     for env_id, (trials, dec, single, dec1) in singles.items():
         n_vec = 256 if trials else 1024
         vector = vector_steps_per_second(env_id, n_vec, seconds)
         vec1 = vector if dec == 1 or trials else vector_steps_per_second(
             env_id, n_vec, seconds, decimation=1)
         sim = single * dec * c.OUTER_DT
+        rows.append({"env": env_id, "trials": trials, "dec": dec, "single": single,
+                     "dec1": dec1, "copies": n_vec, "vector": vector, "vec1": vec1})
 
         def ratio(x: float, g: float | None) -> str:
             return f"{x / g:6.1f}" if g else "     —"
@@ -145,6 +184,10 @@ def main() -> None:
               f"{sim:8.1f} {ratio(sim, gem and gem[0] * gem[1])} {dec1:13,.0f} "
               f"{ratio(dec1, gem and gem[0])} {vector:20,.0f} {vector * dec:15,.0f} "
               f"{vec1:12,.0f}{note}")
+    page = update_section("envs", section(gem, rows))
+    if page:
+        print(f"written to {page}")
+
 
 if __name__ == "__main__":
     main()

@@ -5,7 +5,9 @@ with 8 MAC140 motors at addresses 1..8, one client per address). Each client mix
 register-mode registers (P1..P8 LongInt, V1..V8 Integer, A1..A4 Word, L1..L4 Fixed8) — each
 followed by a read that must return the written value — reads of live registers (P_IST, V_IST,
 ERR_STAT) and block reads. Prints requests per second, lost (unanswered) and corrupted
-(read-back mismatch) counts.
+(read-back mismatch) counts, and writes them to the generated page ``docs/benchmarks.md``
+(section "Serial protocol", :mod:`bench_page`; ``--page`` or ``$JVL_BENCH_PAGE`` for another
+file, ``none`` for no page).
 """
 
 from __future__ import annotations
@@ -19,6 +21,9 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "src"))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_page import page_path, table, update_section  # noqa: E402
 
 from jvl_gym.protocol import MacTalkClient, NoAnswerError  # noqa: E402
 from jvl_gym.protocol.transport import TwinServer  # noqa: E402
@@ -102,16 +107,33 @@ def run_load(url: str, addresses: list[int], n_requests: int) -> tuple[LoadResul
     return total, wall
 
 
+def section(clients: int, requests: int, motor: str, total: LoadResult, wall: float) -> str:
+    """The page section (Markdown) of one run."""
+    head = (f"{clients} TCP clients × {requests:,} mixed requests against one twin "
+            f"({motor} × {clients}, real-time clock running).\n\n")
+    rows = [["requests/s", f"{total.requests / wall:,.0f}"],
+            ["requests", f"{total.requests:,}"],
+            ["writes read back", f"{total.writes:,}"],
+            ["lost (unanswered)", total.lost],
+            ["corrupted (read-back mismatch)", total.corrupted],
+            ["wall time", f"{wall:.2f} s"]]
+    return head + table(["figure", "value"], rows)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--clients", type=int, default=8)
     ap.add_argument("--requests", type=int, default=10_000, help="requests per client")
     ap.add_argument("--motor", default="MAC140")
+    ap.add_argument("--page", default=None,
+                    help="page to write (default docs/benchmarks.md; 'none': no page)")
     args = ap.parse_args(argv)
     from jvl_gym import MotorArray
 
     addresses = list(range(1, args.clients + 1))
-    twin = Twin(MotorArray(args.motor, n=len(addresses), seed=0), addresses)
+    motors = MotorArray(args.motor, n=len(addresses), seed=0)
+    motors.step(1)  # compile (or load) the kernel first: a first compile would outlast timeouts
+    twin = Twin(motors, addresses)
     with TwinServer(twin, tcp=("127.0.0.1", 0)) as server:
         url = server.endpoint("mactalk", "tcp").url
         total, wall = run_load(url, addresses, args.requests)
@@ -123,6 +145,12 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  wall time {wall:.2f} s, {rate:.0f} requests/s")
     for e in total.errors[:5]:
         print("  ", e)
+    page = (page_path() if args.page is None
+            else None if args.page.lower() == "none" else Path(args.page))
+    if page is not None:
+        update_section("protocol", section(args.clients, args.requests, args.motor, total, wall),
+                       page)
+        print(f"  written to {page}")
     return 0 if total.lost == 0 and total.corrupted == 0 else 1
 
 

@@ -11,6 +11,9 @@
   2 CPUs; motors tuned per hour and per core-hour.
 
     python benchmarks/bench_scale.py [--timesteps 100000] [--motors 4]
+
+The figures also go to the generated page ``docs/benchmarks.md`` (section "scale",
+:mod:`bench_page`).
 """
 
 from __future__ import annotations
@@ -19,6 +22,8 @@ import argparse
 import tempfile
 import time
 from pathlib import Path
+
+from bench_page import table, update_section  # benchmarks/ is the script's directory
 
 from jvl_gym.scale.fleet import run_fleet
 from jvl_gym.scale.fleet_spec import parse_fleet
@@ -70,6 +75,7 @@ def main() -> None:
     p.add_argument("--motors", type=int, default=4, help="fleet size (0: skip)")
     a = p.parse_args()
     connect(num_cpus=2)
+    rows = []
     with tempfile.TemporaryDirectory(prefix="bench-scale-") as tmp:
         # the first sweep also loads the compiled env into the workers: not timed
         sweep_rate(2048, 2, Path(tmp) / "warm")
@@ -78,11 +84,22 @@ def main() -> None:
             print(f"sweep GearSync-v0, {a.timesteps} env steps/trial, {workers} worker(s): "
                   f"{tph:.0f} trials/hour, {sps:.0f} training env-steps/s per trial, "
                   f"{cpu:.1f} CPU s per trial ({3600 / cpu:.0f} trials per core-hour)")
+            rows.append([f"sweep, PPO on GearSync-v0, {a.timesteps} env steps per trial",
+                         workers, f"{tph:.0f} trials", f"{3600 / cpu:.0f} trials",
+                         f"{sps:.0f} training env-steps/s per trial"])
         if a.motors:
             mph, cpu = fleet_rate(a.motors, Path(tmp) / "fleet")
             print(f"fleet autotune, {a.motors} MAC140 motors, 2 workers: {mph:.0f} motors/hour, "
                   f"{cpu:.1f} CPU s per motor ({3600 / cpu:.0f} motors per core-hour)")
-
+            rows.append([f"fleet autotune, {a.motors} simulated MAC140 motors", 2,
+                         f"{mph:.0f} motors", f"{3600 / cpu:.0f} motors",
+                         f"{cpu:.1f} CPU s per motor"])
+    page = update_section("scale", "`benchmarks/bench_scale.py`, local Ray with 2 CPUs "
+                          "(docs/scale.md):\n\n" + table(
+                              ["workload", "workers", "per hour", "per core-hour", "detail"],
+                              rows, ["l", "r", "r", "r", "l"]))
+    if page is not None:
+        print(f"wrote {page}")
 
 if __name__ == "__main__":
     main()

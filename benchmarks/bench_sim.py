@@ -6,6 +6,9 @@
   one long call;
 - memory per motor at N = 4096 (all per-motor arrays; the sample buffer is allocated only when a
   recording is started and is reported separately).
+
+The figures also go to the generated page ``docs/benchmarks.md`` (section "Simulator",
+:mod:`bench_page`).
 """
 
 from __future__ import annotations
@@ -13,10 +16,11 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from best_rate import best_rate  # benchmarks/ is the script's directory
+from bench_page import table, update_section  # benchmarks/ is the script's directory
+from best_rate import best_rate
 
 from jvl_gym import MotorArray
-from jvl_gym import constants as c
+from jvl_gym.families.mac050_141 import constants as c
 
 
 def _array(n: int) -> MotorArray:
@@ -56,18 +60,34 @@ def memory_per_motor(n: int = 4096) -> tuple[float, float]:
     return base, buffer
 
 
+def section(inner: dict[int, float], calls: float, long_call: float, base: float,
+            buf: float) -> str:
+    """The page section (Markdown) of one run's figures."""
+    rows = [[f"motor-inner-steps/s, N = {n}", f"{rate:,.4g}"] for n, rate in inner.items()]
+    rows += [["outer steps/s, N = 1, one `step(1)` call each", f"{calls:,.0f}"],
+             ["outer steps/s, N = 1, one long call", f"{long_call:,.0f}"],
+             ["memory per motor at N = 4096", f"{base:,.0f} B (+{buf:,.0f} B while a sample "
+              "buffer is allocated)"]]
+    return table(["figure", "value"], rows)
+
+
 def main() -> None:
-    print("jvl_gym simulator benchmark (2-core machine; goals from the core issue)")
+    print("jvl_gym simulator benchmark (goals: the project's speed targets)")
+    inner = {}
     for n in (1, 64, 4096):
-        rate = inner_steps_per_second(n)
+        inner[n] = rate = inner_steps_per_second(n)
         goal = "   goal >= 1e7" if n == 4096 else ""
         print(f"  N = {n:5d}: {rate:12.4g} motor-inner-steps/s{goal}")
-    print(f"  N = 1: {outer_steps_per_second_single(True):10.0f} outer steps/s "
-          "(one step(1) call each)   goal >= 50000")
-    print(f"  N = 1: {outer_steps_per_second_single(False):10.0f} outer steps/s (one long call)")
+    calls = outer_steps_per_second_single(True)
+    print(f"  N = 1: {calls:10.0f} outer steps/s (one step(1) call each)   goal >= 50000")
+    long_call = outer_steps_per_second_single(False)
+    print(f"  N = 1: {long_call:10.0f} outer steps/s (one long call)")
     base, buf = memory_per_motor()
     print(f"  memory per motor at N = 4096: {base:.0f} B   goal <= 4096 B"
           f"   (+{buf} B only while a sample buffer is allocated)")
+    page = update_section("sim", section(inner, calls, long_call, base, buf))
+    if page:
+        print(f"  written to {page}")
 
 
 if __name__ == "__main__":

@@ -1,8 +1,8 @@
 """Rate of a piece of work on a shared machine: the best of equal time windows.
 
-Other load on the 2-core development machine only ever slows a window down, so the best window
-is the code's own speed. Plain Python (no project imports): ``bench_envs.py`` also sends this
-file's source to gym-electric-motor's separate venv, so both sides are measured alike.
+Other load on a shared machine only ever slows a window down, so the best window is the
+closest to the code's own speed. Plain Python (no project imports): ``bench_envs.py`` also sends
+this file's source to gym-electric-motor's separate venv, so both sides are measured alike.
 """
 
 from __future__ import annotations

@@ -1,16 +1,21 @@
-"""End-to-end benchmark of the tuning toolkit (issue 4 acceptance).
+"""End-to-end benchmark of the tuning toolkit: identification, design and verification.
 
 Draws N random motors (type, load inertia 0–10·J_m, viscous and Coulomb friction, 1 % noise),
 runs the toolkit's identification on a ``MotorArray`` (TESTU + two-level TESTA), synthesises
-and verifies the filters, then runs the same position move with the default setup (KVOUT = 1)
-and with the autotuned setup, and prints one table row per motor.
+and verifies the filters, keeps the best candidate by the acceptance step
+(:mod:`tuning.acceptance`, simulated on the *identified* motor), then runs the same position
+move on the true motors with the default setup (KVOUT = 1) and with the kept setup, and prints
+one row per motor and a summary: coverage of every 95 % interval (R, L, PWM delay, J, KVOUT,
+T_c, b), negative friction reported, motors settling at least as fast as with the default.
 
-    python benchmarks/tuning_e2e.py [N] [SEED] [pi|ip]
+    python benchmarks/tuning_e2e.py [N] [SEED] [pi|ip]          (default 40 motors, seed 0)
     python benchmarks/tuning_e2e.py coverage [N] [SEED] [REPEATS] [SAMPLES]
+    python benchmarks/tuning_e2e.py port [LOAD ...]
 
 ``coverage`` runs the identification only and prints, per identified quantity, how often the
 95 % interval holds the true value, the largest and rms relative error and the median
-half-width (docs/tuning.md, "Measured numbers").
+half-width; ``port`` runs ``autotune --port`` against the digital twin with the firmware's
+11-sample records and prints the J error (docs/tuning.md, "Measured numbers").
 """
 
 from __future__ import annotations
@@ -19,7 +24,8 @@ import sys
 import time
 
 import numpy as np
-from tuning.autotune import identify_motors, synthesize, verify_design
+from tuning.acceptance import autotune_designs
+from tuning.autotune import identify_motors, verify_design
 from tuning.models import MotorData
 from tuning.synthesis import torque_guidance
 from tuning.verify import position_move
@@ -48,42 +54,74 @@ def _array(p: dict[str, np.ndarray], seed: int) -> MotorArray:
                       initial_angle=p["angle"])
 
 
+def _coverage_cases(idn, true: MotorData, J: float, coulomb: float, viscous: float
+                    ) -> dict[str, tuple[bool, float, float, float]]:
+    """Per quantity: (interval holds the truth, relative error, relative and absolute
+    half-width) of one identified motor."""
+    c, mc = idn.coil, idn.mechanics
+    cases = {"R": (c.R_phase, c.ci["R_phase"], true.R_phase),
+             "L": (c.L_phase, c.ci["L_phase"], true.L_phase),
+             "delay": (float(c.delay), c.ci["delay"], float(true.pwm_delay)),
+             "J": (mc.J, mc.ci["J"], J),
+             "KVOUT": (mc.kvout, mc.ci["kvout"], J / true.J_m),
+             "coulomb": (mc.coulomb, mc.ci["coulomb"], coulomb),
+             "viscous": (mc.viscous, mc.ci["viscous"], viscous)}
+    out = {}
+    for key, (val, ci, tv) in cases.items():
+        hw = (ci[1] - ci[0]) / 2
+        err = val / tv - 1 if tv else val
+        out[key] = (bool(ci[0] <= tv <= ci[1]), err, hw / abs(val) if val else np.inf, hw)
+    return out
+
+
 def run_e2e(n: int = 20, seed: int = 0, distance: int = 20000, v_soll: int = 2000,
             structure: str = "pi", subset: list[int] | None = None) -> list[dict[str, float]]:
-    """Run the benchmark; one dict per motor (identification errors, margins, settle times).
+    """Run the benchmark; one dict per motor (identification errors and interval coverage,
+    margins, the acceptance step's choice, settle times).
 
-    ``subset`` keeps only those motors of the ``n`` drawn (the tests run two of the 20).
+    ``subset`` keeps only those motors of the ``n`` drawn (the tests run a few of them).
     """
     p = draw_motors(n, seed)
     if subset is not None:
         p = {k: v[subset] for k, v in p.items()}
     m = _array(p, seed)
     ids = identify_motors(m)
+    guide = [torque_guidance(i.motor, i.mechanics.J, i.mechanics.coulomb)["A_SOLL_max"]
+             for i in ids]
+    a_soll = int(max(10, min(200, min(guide))))
+    acc = autotune_designs(ids, structure, a_soll=a_soll)
     rows = []
     setups = []
-    for i, idn in enumerate(ids):
+    for i, (idn, ac) in enumerate(zip(ids, acc)):
         true = MotorData.from_config(p["type"][i])
         J = p["J_m"][i] * (1 + p["ratio"][i])
-        d = synthesize(idn.motor, idn.mechanics.J, idn.mechanics.coulomb, structure=structure)
-        setups.append(d.registers)
+        d = ac.chosen.design
+        setups.append(ac.chosen.registers)
         c, mc = idn.coil, idn.mechanics
+        cov = _coverage_cases(idn, true, J, p["coulomb"][i], p["viscous"][i])
         rows.append({
             "type": p["type"][i], "ratio": p["ratio"][i], "coulomb": p["coulomb"][i],
             "viscous": p["viscous"][i],
             "dR": c.R_phase / true.R_phase - 1, "dL": c.L_phase / true.L_phase - 1,
             "delay_ok": c.delay == true.pwm_delay,
-            "R_in": c.ci["R_phase"][0] <= true.R_phase <= c.ci["R_phase"][1],
-            "L_in": c.ci["L_phase"][0] <= true.L_phase <= c.ci["L_phase"][1],
-            "dJ": mc.J / J - 1, "J_in": mc.ci["J"][0] <= J <= mc.ci["J"][1],
-            "cur_pm": d.current_report.nominal.pm_deg, "cur_gm": d.current_report.nominal.gm_db,
-            "spd_pm": d.speed_report.nominal.pm_deg, "spd_gm": d.speed_report.nominal.gm_db,
-            "robust_pm": min(d.current_report.worst_robust_pm, d.speed_report.worst_robust_pm),
+            **{f"{k}_in": v[0] for k, v in cov.items()},
+            "dJ": mc.J / J - 1,
+            "Tc_est": mc.coulomb, "b_est": mc.viscous,
+            "Tc_detected": mc.detected.get("coulomb", False),
+            "negative_friction": bool(mc.coulomb < 0 or mc.viscous < 0
+                                      or mc.ci["coulomb"][0] < 0 or mc.ci["viscous"][0] < 0),
+            "chosen": ac.chosen.name, "reason": ac.reason,
+            "cur_pm": d.current_report.nominal.pm_deg if d else np.nan,
+            "cur_gm": d.current_report.nominal.gm_db if d else np.nan,
+            "spd_pm": d.speed_report.nominal.pm_deg if d else np.nan,
+            "spd_gm": d.speed_report.nominal.gm_db if d else np.nan,
+            "robust_pm": min(d.current_report.worst_robust_pm,
+                             d.speed_report.worst_robust_pm) if d else np.nan,
             "radius": max(d.current_report.nominal.pole_radius,
-                          d.speed_report.nominal.pole_radius),
-            "checks": "; ".join(verify_design(d)) or "ok",
-            "a_soll": torque_guidance(idn.motor, mc.J, mc.coulomb)["A_SOLL_max"],
+                          d.speed_report.nominal.pole_radius) if d else np.nan,
+            "checks": ("; ".join(verify_design(d)) or "ok") if d else "default setup",
+            "a_soll": guide[i],
         })
-    a_soll = int(max(10, min(200, min(r["a_soll"] for r in rows))))
     base = _array(p, seed + 1)
     tuned = _array(p, seed + 1)
     for i, regs in enumerate(setups):
@@ -98,29 +136,26 @@ def run_e2e(n: int = 20, seed: int = 0, distance: int = 20000, v_soll: int = 200
     return rows
 
 
-def run_coverage(n: int = 40, seed: int = 7, repeats: int = 4, samples: int = 64
-                 ) -> dict[str, dict[str, float]]:
+QUANTITIES = ("R", "L", "delay", "J", "KVOUT", "coulomb", "viscous")
+
+
+def run_coverage(n: int = 40, seed: int = 7, repeats: int | None = None,
+                 samples: int = 64) -> dict[str, dict[str, float]]:
     """Interval coverage of the identification on ``n`` random motors.
 
-    Returns, for "R", "L", "J", "coulomb", "viscous": "coverage" (fraction of motors whose
-    95 % interval holds the true value), "max_err" and "rms_err" (relative), "median_hw"
-    (median half-width relative to the estimate) and "median_hw_abs" (SI units).
+    Returns, per quantity of :data:`QUANTITIES`: "coverage" (fraction of motors whose 95 %
+    interval holds the true value), "max_err" and "rms_err" (relative; absolute for a zero
+    truth), "median_hw" (median half-width relative to the estimate) and "median_hw_abs"
+    (SI units).
     """
     p = draw_motors(n, seed)
     ids = identify_motors(_array(p, seed), samples, samples, repeats=repeats)
-    rows: dict[str, list[tuple[bool, float, float, float]]] = {
-        k: [] for k in ("R", "L", "J", "coulomb", "viscous")}
+    rows: dict[str, list[tuple[bool, float, float, float]]] = {k: [] for k in QUANTITIES}
     for i, idn in enumerate(ids):
         true = MotorData.from_config(p["type"][i])
-        c, mc = idn.coil, idn.mechanics
-        cases = (("R", c.R_phase, c.ci["R_phase"], true.R_phase),
-                 ("L", c.L_phase, c.ci["L_phase"], true.L_phase),
-                 ("J", mc.J, mc.ci["J"], p["J_m"][i] * (1 + p["ratio"][i])),
-                 ("coulomb", mc.coulomb, mc.ci["coulomb"], p["coulomb"][i]),
-                 ("viscous", mc.viscous, mc.ci["viscous"], p["viscous"][i]))
-        for key, val, ci, tv in cases:
-            hw = (ci[1] - ci[0]) / 2
-            rows[key].append((ci[0] <= tv <= ci[1], val / tv - 1, hw / abs(val), hw))
+        J = p["J_m"][i] * (1 + p["ratio"][i])
+        for key, v in _coverage_cases(idn, true, J, p["coulomb"][i], p["viscous"][i]).items():
+            rows[key].append(v)
     out = {}
     for key, r in rows.items():
         a = np.array(r, dtype=float)
@@ -132,44 +167,99 @@ def run_coverage(n: int = 40, seed: int = 7, repeats: int = 4, samples: int = 64
     return out
 
 
+def run_port(loads: list[float], record_length: int = 11, speed: float = 25.0,
+             seed: int = 0) -> list[dict[str, float]]:
+    """``jvl-tune autotune --port`` against the digital twin with its default record length.
+
+    For each load inertia [kg·m²] a MAC140 twin (``jvl_gym.protocol.transport.TwinServer``,
+    the server of ``jvl-gym serve``, MacTalk over TCP, ``speed`` × real time) is identified
+    and designed through :func:`tuning.serial_source.autotune_over_serial` with
+    ``record_length``-sample TESTU/TESTA records. Returns the identified values and errors.
+    """
+    from tuning.serial_source import autotune_over_serial
+
+    from jvl_gym.protocol.transport import TwinServer
+    from jvl_gym.protocol.twin import Twin
+
+    out = []
+    for load in loads:
+        m = MotorArray("MAC140", n=1, seed=seed, load_inertia=load, record_length=record_length)
+        server = TwinServer(Twin(m, [19]), speed=speed, tcp=("127.0.0.1", 0)).start()
+        try:
+            url = server.endpoint("mactalk", "tcp").url
+            ident, _design = autotune_over_serial(url, "MAC140", address=19, time_scale=speed,
+                                                  n_coil=record_length, n_mech=record_length)
+        finally:
+            server.stop()
+        cfg = m.motor_configs[0]
+        J = cfg.rotor_inertia + load
+        mc = ident.mechanics
+        out.append({"load": load, "J": mc.J, "dJ": mc.J / J - 1,
+                    "J_in": mc.ci["J"][0] <= J <= mc.ci["J"][1],
+                    "dR": ident.coil.R_phase / cfg.phase_resistance - 1,
+                    "dL": ident.coil.L_phase / cfg.phase_inductance - 1,
+                    "records": len(ident.records), "coulomb": mc.coulomb})
+    return out
+
+
 def print_table(rows: list[dict[str, float]]) -> None:
     """Print the per-motor table and the summary against the acceptance items."""
-    hdr = (f"{'#':>2} {'type':<6} {'Jl/Jm':>5} {'dR%':>6} {'dL%':>6} {'dJ%':>6} {'CI R/L/J':>8} "
-           f"{'cPM':>5} {'cGM':>5} {'sPM':>5} {'sGM':>5} {'rPM':>5} {'|z|':>5} "
-           f"{'t_def ms':>8} {'t_tun ms':>8} {'ovr d/t':>8} {'FNCERR':>6}")
+    hdr = (f"{'#':>2} {'type':<6} {'Jl/Jm':>5} {'dR%':>6} {'dL%':>6} {'dJ%':>6} "
+           f"{'CI R L d J Tc b':>15} {'sPM':>5} {'|z|':>5} {'chosen':<22} "
+           f"{'t_def ms':>8} {'t_tun ms':>8} {'ovr d/t':>8}")
     print(hdr)
+    keys = ("R", "L", "delay", "J", "coulomb", "viscous")
     for i, r in enumerate(rows):
-        ci = "".join("y" if r[k] else "n" for k in ("R_in", "L_in", "J_in"))
+        ci = " ".join("y" if r[f"{k}_in"] else "n" for k in keys)
         print(f"{i:>2} {r['type']:<6} {r['ratio']:>5.2f} {100 * r['dR']:>6.2f} "
-              f"{100 * r['dL']:>6.2f} {100 * r['dJ']:>6.2f} {ci:>8} {r['cur_pm']:>5.1f} "
-              f"{r['cur_gm']:>5.1f} {r['spd_pm']:>5.1f} {r['spd_gm']:>5.1f} "
-              f"{r['robust_pm']:>5.1f} {r['radius']:>5.3f} {1e3 * r['settle_default']:>8.1f} "
+              f"{100 * r['dL']:>6.2f} {100 * r['dJ']:>6.2f} {ci:>15} {r['spd_pm']:>5.1f} "
+              f"{r['radius']:>5.3f} {r['chosen']:<22} {1e3 * r['settle_default']:>8.1f} "
               f"{1e3 * r['settle_tuned']:>8.1f} "
-              f"{r['over_default']:>4.0f}/{r['over_tuned']:<3.0f} {r['fncerr_tuned']:>6.0f}")
+              f"{r['over_default']:>4.0f}/{r['over_tuned']:<3.0f}")
     n = len(rows)
     faster = sum(r["settle_tuned"] < r["settle_default"] for r in rows)
+    not_worse = sum(r["settle_tuned"] <= r["settle_default"] for r in rows)
     print(f"\nmotors: {n}; move: 20000 counts, V_SOLL 2000, A_SOLL {rows[0]['a_soll_move']}")
     print(f"max |dR| {100 * max(abs(r['dR']) for r in rows):.2f} %, max |dL| "
           f"{100 * max(abs(r['dL']) for r in rows):.2f} %, max |dJ| "
           f"{100 * max(abs(r['dJ']) for r in rows):.2f} %, delay exact "
           f"{sum(r['delay_ok'] for r in rows)}/{n}")
-    print(f"95 % intervals hold the truth: R {sum(r['R_in'] for r in rows)}/{n}, "
-          f"L {sum(r['L_in'] for r in rows)}/{n}, J {sum(r['J_in'] for r in rows)}/{n}")
-    print(f"design checks ok {sum(r['checks'] == 'ok' for r in rows)}/{n}; tuned settles faster "
-          f"{faster}/{n}; FNCERR = 0 (tuned) {sum(r['fncerr_tuned'] == 0 for r in rows)}/{n}; "
-          f"error bits (tuned) {sum(r['err_tuned'] != 0 for r in rows)}")
+    print("coverage of the 95 % intervals (target 85-99 %): " + ", ".join(
+        f"{k} {sum(r[f'{k}_in'] for r in rows)}/{n} "
+        f"({100 * sum(r[f'{k}_in'] for r in rows) / n:.0f} %)" for k in QUANTITIES))
+    print(f"negative friction reported: {sum(r['negative_friction'] for r in rows)}/{n}; "
+          f"Coulomb friction not detected: {sum(not r['Tc_detected'] for r in rows)}/{n}")
+    chosen: dict[str, int] = {}
+    for r in rows:
+        chosen[r["chosen"]] = chosen.get(r["chosen"], 0) + 1
+    print("acceptance step kept: " + ", ".join(f"{k} {v}" for k, v in sorted(chosen.items())))
+    print(f"settle at least as fast as the default setup: {not_worse}/{n} (faster {faster}/{n});"
+          f" design checks ok {sum(r['checks'] == 'ok' for r in rows)}/{n}; FNCERR = 0 (tuned) "
+          f"{sum(r['fncerr_tuned'] == 0 for r in rows)}/{n}; error bits (tuned) "
+          f"{sum(r['err_tuned'] != 0 for r in rows)}")
 
 
 if __name__ == "__main__" and len(sys.argv) > 1 and sys.argv[1] == "coverage":
-    a = [int(x) for x in sys.argv[2:]] + [40, 7, 4, 64][len(sys.argv) - 2:]
+    a = [int(x) for x in sys.argv[2:]] + [40, 7, 0, 64][len(sys.argv) - 2:]
     t0 = time.time()
-    for key, v in run_coverage(*a[:4]).items():
+    for key, v in run_coverage(a[0], a[1], a[2] or None, a[3]).items():
         print(f"{key:<8} coverage {100 * v['coverage']:5.1f} %  "
               f"max |err| {100 * v['max_err']:7.2f} %  rms {100 * v['rms_err']:7.2f} %  "
               f"median half-width {100 * v['median_hw']:6.2f} % ({v['median_hw_abs']:.3g})")
-    print(f"({a[0]} motors, seed {a[1]}, {a[2]} repeats, {a[3]} samples; {time.time() - t0:.1f} s)")
+    print(f"({a[0]} motors, seed {a[1]}, {a[2] or 'default'} repeats, {a[3]} samples; "
+          f"{time.time() - t0:.1f} s)")
+elif __name__ == "__main__" and len(sys.argv) > 1 and sys.argv[1] == "port":
+    loads = [float(x) for x in sys.argv[2:]] or [0.0, 30e-6, 100e-6]
+    t0 = time.time()
+    res = run_port(loads)
+    for r in res:
+        print(f"load {r['load']:.3g} kg m^2: J {r['J']:.4g} (error {100 * r['dJ']:+.2f} %, "
+              f"interval holds: {r['J_in']}), R {100 * r['dR']:+.2f} %, L {100 * r['dL']:+.2f} "
+              f"%, {r['records']} records of 11 samples, T_c {r['coulomb']:.3g}")
+    print(f"max |J error| over the port with 11-sample records: "
+          f"{100 * max(abs(r['dJ']) for r in res):.2f} % ({time.time() - t0:.1f} s)")
 elif __name__ == "__main__":
-    n = int(sys.argv[1]) if len(sys.argv) > 1 else 20
+    n = int(sys.argv[1]) if len(sys.argv) > 1 else 40
     seed = int(sys.argv[2]) if len(sys.argv) > 2 else 0
     structure = sys.argv[3] if len(sys.argv) > 3 else "pi"
     t0 = time.time()

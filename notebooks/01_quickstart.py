@@ -33,7 +33,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from jvl_gym import MotorArray
-from jvl_gym import constants as c
+from jvl_gym.families.mac050_141 import constants as c
 
 FAST = os.environ.get("JVL_FAST") == "1"
 SECONDS = 0.4 if FAST else 1.5

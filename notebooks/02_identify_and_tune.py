@@ -34,7 +34,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from jvl_gym import MotorArray
-from jvl_gym import constants as c
+from jvl_gym.families.mac050_141 import constants as c
 from tuning.autotune import identify_motors, synthesize, verify_design
 from tuning.report import plot_bode, plot_fits, text_table
 

@@ -14,7 +14,7 @@ def test_all_motor_types_load_with_provenance():
     assert motor_types() == ["MAC050", "MAC095", "MAC140", "MAC141"]
     for name in motor_types():
         cfg = load_motor(name)
-        assert "representative" in cfg.provenance.lower() or "MODEL.md" in cfg.provenance
+        assert "representative" in cfg.provenance.lower() or "docs/model.md" in cfg.provenance
         # peak torque of the data sheet row and of the electrical model agree within 1 %
         assert cfg.torque_per_vf * 1023 == pytest.approx(cfg.peak_torque, rel=0.01)
 

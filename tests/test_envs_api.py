@@ -166,7 +166,7 @@ def test_constructor_ranges_and_decimation() -> None:
     core = env.unwrapped.core
     assert core.target[0] == -2048
     env.step(np.zeros(1, dtype=np.float32))
-    assert core.motors.state[0, jvl_gym.layout.S_TICK] == 3 * 15
+    assert core.motors.state[0, jvl_gym.families.mac050_141.layout.S_TICK] == 3 * 15
     with pytest.raises(ValueError):
         gym.make("jvl_gym/Positioning-v0", randomization={"target_turns": (1, -1)})
     with pytest.raises(ValueError):
@@ -218,26 +218,33 @@ def test_bad_actions_are_refused_and_change_nothing(env_id: str) -> None:
 @pytest.mark.parametrize("env_id", [e for e in ENV_IDS if e not in SHORT])
 def test_threaded_vector_step_equals_single_envs(env_id: str) -> None:
     """From PARALLEL_MIN copies the compiled step runs copies in threads: same trajectories."""
-    from jvl_gym.envs.compiled import PARALLEL_MIN
+    from jvl_gym.engine import PARALLEL_MIN
 
     n = PARALLEL_MIN + 1
     _assert_vector_copies_equal_single_envs(env_id, n, 12, 20, [0, n - 1], action_seed=3)
 
 
-def test_compiled_observation_noise_equals_the_numpy_streams() -> None:
-    from numba import njit
+def _splitmix_normals(keys: np.ndarray, counters: np.ndarray, k: int) -> np.ndarray:
+    """SplitMix64 uniforms and Box–Muller written out in numpy: the reference of the
+    counter-based generator (jvl_gym.noise)."""
+    golden, m1, m2 = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9),
+                      np.uint64(0x94D049BB133111EB))
 
-    from jvl_gym.envs.compiled import normal
-    from jvl_gym.envs.noise import normals
+    def mix(z: np.ndarray) -> np.ndarray:
+        z = (z ^ (z >> np.uint64(30))) * m1
+        z = (z ^ (z >> np.uint64(27))) * m2
+        return z ^ (z >> np.uint64(31))
 
-    @njit
-    def rows(keys, counters, k):  # pragma: no cover - compiled
-        out = np.empty((keys.size, k))
-        for i in range(keys.size):
-            for j in range(k):
-                out[i, j] = normal(keys[i], counters[i], j, k)
-        return out
+    ch = (np.arange(1, 2 * k + 1, dtype=np.uint64) * np.uint64(0xD1B54A32D192ED03))[None, :]
+    z = keys[:, None] + golden * (counters.astype(np.uint64)[:, None] + np.uint64(1)) + ch
+    u = ((mix(mix(z)) >> np.uint64(11)).astype(np.float64) + 1.0) * (1.0 / 9007199254740993.0)
+    return np.sqrt(-2.0 * np.log(u[:, :k])) * np.cos(2.0 * np.pi * u[:, k:])
+
+
+def test_observation_noise_is_the_splitmix64_stream() -> None:
+    from jvl_gym.noise import normals
 
     keys = np.array([1, 2**63 + 5, 12345678901234567], dtype=np.uint64)
     counters = np.array([0, 7, 123456], dtype=np.int64)
-    np.testing.assert_array_equal(rows(keys, counters, 5), normals(keys, counters, 5))
+    np.testing.assert_array_equal(normals(keys, counters, 5),
+                                  _splitmix_normals(keys, counters, 5))

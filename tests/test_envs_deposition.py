@@ -8,8 +8,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import jvl_gym  # noqa: F401
-from jvl_gym import constants as c
 from jvl_gym.envs import deposition as dep
+from jvl_gym.families.mac050_141 import constants as c
 
 W, DELTA = 10.0, 0.05
 CENTRES = dep.bin_centres(W, DELTA)

@@ -9,9 +9,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import jvl_gym  # noqa: F401
-from jvl_gym import layout as L
 from jvl_gym.envs import web
 from jvl_gym.envs.profiles import SpeedProfile, row_speed
+from jvl_gym.families.mac050_141 import layout as L
 
 
 def test_strain_settles_to_speed_difference_over_winder_speed() -> None:

@@ -1,4 +1,4 @@
-"""The SIMD lanes of jvl_gym.lanes give the bits of the one-motor reference kernel."""
+"""The SIMD lanes of mac050_141.lanes give the bits of the one-motor reference kernel."""
 
 from __future__ import annotations
 
@@ -6,13 +6,14 @@ import numpy as np
 from numba import njit
 
 from jvl_gym import MotorArray
-from jvl_gym import constants as c
-from jvl_gym import layout as L
-from jvl_gym.firmware import regs as R
+from jvl_gym.families.mac050_141 import constants as c
+from jvl_gym.families.mac050_141 import layout as L
+from jvl_gym.families.mac050_141.firmware import regs as R
+from jvl_gym.families.mac050_141.kernel import inner_sample, outer_firmware, sample_constants
+from jvl_gym.families.mac050_141.lanes import LANES, in_lanes, lane_scratch
 from jvl_gym.jit import KERNEL
-from jvl_gym.kernel import inner_sample, sample_constants
-from jvl_gym.lanes import LANES, in_lanes, lane_scratch, outer_sample, run_parallel, run_serial
-from jvl_gym.plant.trig import fma, sincos
+from jvl_gym.sim import driver
+from jvl_gym.trig import fma, sincos
 
 
 @njit(**KERNEL)
@@ -20,7 +21,11 @@ def _reference(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, plan):
     """The kernel without lanes: every motor's inner samples by ``inner_sample``."""
     for t in range(n_outer):
         for i in range(regs.shape[0]):
-            outer_sample(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, t)
+            if plan.shape[0] > 0:
+                for k in range(inputs.shape[1]):
+                    inputs[i, k] = plan[t, i, k]
+            outer_firmware(regs[i], state[i], params[i], inputs[i], keys[i],
+                           buf[i] if rec else buf[0], rec, fmt)
         for i in range(regs.shape[0]):
             counts_per_amp, k_coil, k_mech, k_bus = sample_constants(params[i])
             b = buf[i] if rec else buf[0]
@@ -67,8 +72,7 @@ def test_lanes_give_the_bits_of_the_one_motor_kernel() -> None:
     np.testing.assert_array_equal(a.state, b.state)
     assert np.any(a.state[:, L.S_OMEGA] != 0.0)
     c_ = _mixed(n)
-    run_serial(c_.regs, c_.state, c_.params, c_.inputs, c_.keys, c_._buf, False, c_._fmt, 150,
-               c_._no_schedule, c_._scratch)
+    driver(c_.family.key).serial(c_.engine_view(), 150)
     np.testing.assert_array_equal(a.state, c_.state)
 
 
@@ -80,8 +84,7 @@ def test_lanes_flag_a_saturated_current_reading() -> None:
         m.write("V_SOLL", 3000)
         m.write("MODE_REG", c.V_MODE)
     assert all(in_lanes(a.regs[i], a.params[i]) for i in range(n))
-    run_parallel(a.regs, a.state, a.params, a.inputs, a.keys, a._buf, False, a._fmt, 40,
-                 a._no_schedule, a._scratch)
+    driver(a.family.key).parallel(a.engine_view(), 40)
     _reference(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, False, b._fmt, 40,
                b._no_schedule)
     np.testing.assert_array_equal(a.regs, b.regs)
@@ -129,8 +132,7 @@ def test_lanes_follow_a_parameter_change_between_steps() -> None:
                         ((L.P_LAMBDA, L.P_C_BUS, L.P_R_DUMP), 0.8)):
         for m in (a, b):
             m.params[:, list(cols)] *= scale
-        run_serial(a.regs, a.state, a.params, a.inputs, a.keys, a._buf, False, a._fmt, 40,
-                   a._no_schedule, a._scratch)
+        driver(a.family.key).serial(a.engine_view(), 40)
         _reference(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, False, b._fmt, 40,
                    b._no_schedule)
         np.testing.assert_array_equal(a.state, b.state)
@@ -160,7 +162,7 @@ def test_commutation_sines_are_the_exact_sines_of_the_angle_units() -> None:
     looking them up: within one unit in the last place of the exact values (1e-21 near their
     zeros, the error of the reduced argument), and so the references IA/IB/IC_SOLL =
     amp·sin(PHI + k·120°) are those of the table."""
-    from jvl_gym.firmware.current_loop import RAD_PER_UNIT, phase_references
+    from jvl_gym.families.mac050_141.firmware.current_loop import RAD_PER_UNIT, phase_references
 
     k = np.arange(c.ELDEG_PER_TURN, dtype=np.float64)
     s, co = _sincos_all(k * RAD_PER_UNIT)
@@ -176,14 +178,14 @@ def test_commutation_sines_are_the_exact_sines_of_the_angle_units() -> None:
 
 
 def test_the_inner_samples_are_compiled_once_for_the_drivers_and_the_env_steps() -> None:
-    """``compile_first`` compiles ``inner_samples`` for the types the drivers and the compiled
-    env steps pass: stepping them adds no second compiled version (with an empty numba cache,
-    a mismatch would compile the function again inside its caller)."""
+    """The family's ``prepare`` compiles ``inner_samples`` for the types the drivers and the
+    compiled env steps pass: stepping them adds no second compiled version (with an empty
+    numba cache, a mismatch would compile the function again inside its caller)."""
     import gymnasium as gym
 
     import jvl_gym  # noqa: F401
-    from jvl_gym.kernel import inner_samples_one
-    from jvl_gym.lanes import inner_samples
+    from jvl_gym.families.mac050_141.kernel import inner_samples_one
+    from jvl_gym.families.mac050_141.lanes import inner_samples
 
     MotorArray("MAC140", n=3, seed=0).step(2)
     MotorArray("MAC140", n=70, seed=0).step(1)  # threaded driver
@@ -199,11 +201,11 @@ def test_the_inner_samples_are_compiled_once_for_the_drivers_and_the_env_steps()
 
 
 def test_block_index_is_int64_for_a_prange_index() -> None:
-    """The threaded env steps call ``_step_block`` with ``block_index(blk)``: int64 whether
-    numba types the loop index as int64 or as uint64, so ``_step_block`` has one version."""
+    """The threaded drivers call the block function with ``block_index(blk)``: int64 whether
+    numba types the loop index as int64 or as uint64, so the block function has one version."""
     from numba import types
 
-    from jvl_gym.envs.compiled import block_index
+    from jvl_gym.engine.driver import block_index
 
     @njit
     def index_of(blk):

@@ -1,11 +1,12 @@
-"""The manual's worked examples (MODEL.md §2 list) as tests."""
+"""The manual's worked examples (docs/model.md §3) as tests."""
 
 from __future__ import annotations
 
 import pytest
 
-from jvl_gym import constants as c
-from jvl_gym.registers import MAC050_141, RegisterRangeError
+from jvl_gym.families.mac050_141 import constants as c
+from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
+from jvl_gym.registers import RegisterRangeError
 from jvl_gym.registers.formats import from_raw, to_raw
 
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from jvl_gym import ModeError, MotorArray
-from jvl_gym import constants as c
+from jvl_gym.families.mac050_141 import constants as c
 from jvl_gym.registers import RegisterError
 from jvl_gym.world import AnalogInput, PulseInput, SpeedProfile, SupplyEvents, World
 
@@ -376,7 +376,7 @@ def _setup_for(m: MotorArray, mode: int, index) -> None:
 
 
 def test_every_mode_in_a_mixed_array_equals_separate_runs():
-    from jvl_gym.firmware.noise import motor_keys
+    from jvl_gym.noise import motor_keys
 
     n = len(ALL_MODES)
     keys = motor_keys(3, n)
@@ -407,8 +407,8 @@ def test_testtq_measures_friction():
 
 
 def test_mode_table_names_real_registers_and_every_mode():
-    from jvl_gym.firmware.mode_table import MODES, markdown_mode_table
-    from jvl_gym.registers import MAC050_141
+    from jvl_gym.families.mac050_141.firmware.mode_table import MODES, markdown_mode_table
+    from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
 
     assert [m.number for m in MODES] == list(range(25))
     assert all(m.name == c.MODE_NAMES[m.number] for m in MODES)

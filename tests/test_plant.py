@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from jvl_gym.plant.coil import coil_step, phase_to_vector, vector_to_phases
-from jvl_gym.plant.mechanics import mech_step
-from jvl_gym.plant.supply import bus_step
+from jvl_gym.families.mac050_141.plant.coil import coil_step, phase_to_vector, vector_to_phases
+from jvl_gym.families.mac050_141.plant.mechanics import mech_step
+from jvl_gym.families.mac050_141.plant.supply import bus_step
 
 R, LL, LAM, PP = 0.83, 0.83e-3, 0.0265, 2.0
 H = 128e-6
@@ -26,7 +26,7 @@ def _run(s0, su, th, w, h, n):
 
 @pytest.mark.parametrize("omega_e", [0.0, 300.0, 2000.0])
 def test_coil_step_is_exact_independent_of_step(omega_e):
-    """One step of 128 µs equals 2, 8, 64 sub-steps to rounding (MODEL.md §6 'show it')."""
+    """One step of 128 µs equals 2, 8, 64 sub-steps to rounding (docs/model.md §5.1)."""
     s0 = complex(3.0, -1.0)
     su = phase_to_vector(10.0, -4.0, -6.0)
     ref, _ = _run(s0, su, 0.3, omega_e, H, 1)

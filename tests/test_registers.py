@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
+from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
 from jvl_gym.registers import (
-    MAC050_141,
     Access,
     Format,
     ReadOnlyRegisterError,
@@ -244,7 +244,7 @@ def test_fixed8_quantisation_error_is_half_lsb(x):
 
 def test_small_arrays_convert_like_large_ones():
     """to_raw converts a few values with Python floats, many with numpy: the same integers."""
-    from jvl_gym.registers.formats import _SCALAR_MAX
+    from jvl_gym.registers.formats import _SCALAR_MAX, whole_only
 
     rng = np.random.default_rng(0)
     for r in T:
@@ -255,6 +255,8 @@ def test_small_arrays_convert_like_large_ones():
                  np.nextafter(hi, -np.inf), np.nextafter(lo, np.inf)]
         values = np.clip(np.concatenate([edges, rng.uniform(lo, hi, 4 * _SCALAR_MAX),
                                          np.round(rng.uniform(lo, hi, 64)) + 0.5]), lo, hi)
+        if whole_only(r):  # codes take whole numbers only
+            values = np.clip(np.round(values), lo, hi)
         numpy_path = to_raw(r, values)  # more than _SCALAR_MAX values
         assert values.size > _SCALAR_MAX
         for k in range(0, values.size, _SCALAR_MAX):
@@ -461,6 +463,8 @@ def test_raws_of_rows_converts_like_to_raw():
     values = rng.uniform(bounds[:, :1], bounds[:, 1:2], (len(regs), 5))
     values[:, 0], values[:, 1] = bounds[:, 0], bounds[:, 1]
     values[:, 2] = (bounds[:, 4] - 0.5) / bounds[:, 2]  # a half LSB below the top: rounds up
+    whole = bounds[:, 5] > 0.5  # codes: whole numbers only
+    values[whole] = np.clip(np.round(values[whole]), bounds[whole, :1], bounds[whole, 1:2])
     out = np.empty(values.shape, dtype=np.int64)
     assert raws_of_rows(values, bounds, out) == -1
     for reg, row, raw in zip(regs, values, out):

@@ -7,31 +7,39 @@ from pathlib import Path
 
 import pytest
 from tuning.cli import app as tune_app
-from typer.testing import CliRunner
 
 from jvl_gym.cli import app as gym_app
+from jvl_gym.cli_app import CliError
 from jvl_gym.scale.errors import UserError
 from jvl_gym.scale.sweep_spec import parse_sweep
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _lines(text: str) -> list[str]:
-    return [ln for ln in text.splitlines() if ln.strip()]
+def _run(app, args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str]:
+    """Run a command line as the installed script does; (exit status, stderr)."""
+    with pytest.raises(SystemExit) as info:
+        app(args)
+    return info.value.code, capsys.readouterr().err
+
+
+def _one_line(code: int, err: str) -> str:
+    assert code not in (0, None)
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    return lines[0]
 
 
 @pytest.mark.parametrize("app, args", [
     (gym_app, ["sweep", str(ROOT / "configs/sweeps/example.yml")]),
     (tune_app, ["fleet", str(ROOT / "configs/fleets/example.yml")]),
 ])
-def test_missing_extra_is_one_line(monkeypatch: pytest.MonkeyPatch, tmp_path: Path, app, args
-                                   ) -> None:
+def test_missing_extra_is_one_line(monkeypatch: pytest.MonkeyPatch, tmp_path: Path,
+                                   capsys: pytest.CaptureFixture[str], app, args) -> None:
     monkeypatch.setitem(sys.modules, "ray", None)  # `import ray` raises ImportError
-    res = CliRunner().invoke(app, [*args, "--out", str(tmp_path / "out")])
-    assert res.exit_code != 0
-    lines = _lines(res.output)
-    assert len(lines) == 1, res.output
-    assert "pip install -e '.[scale]'" in lines[0]
+    code, err = _run(app, [*args, "--out", str(tmp_path / "out")], capsys)
+    assert "pip install -e '.[scale]'" in _one_line(code, err)
     assert not (tmp_path / "out").exists()
 
 
@@ -47,13 +55,13 @@ def test_missing_extra_is_one_line(monkeypatch: pytest.MonkeyPatch, tmp_path: Pa
     ("env: jvl_gym/GearSync-v0\nbudget: {steps: 10}\n", "budget: unknown keys ['steps']"),
     ("env: [unclosed\n", "is not valid YAML"),
 ])
-def test_bad_sweep_file_is_one_line(tmp_path: Path, body: str, fragment: str) -> None:
+def test_bad_sweep_file_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                    body: str, fragment: str) -> None:
     path = tmp_path / "bad.yml"
     path.write_text(body)
-    res = CliRunner().invoke(gym_app, ["sweep", str(path), "--out", str(tmp_path / "out")])
-    assert res.exit_code == 2
-    lines = _lines(res.output)
-    assert len(lines) == 1 and fragment in lines[0] and str(path) in lines[0], res.output
+    code, err = _run(gym_app, ["sweep", str(path), "--out", str(tmp_path / "out")], capsys)
+    line = _one_line(code, err)
+    assert line.startswith("jvl-gym sweep: error: ") and fragment in line and str(path) in line
 
 
 @pytest.mark.parametrize("body, fragment", [
@@ -64,29 +72,28 @@ def test_bad_sweep_file_is_one_line(tmp_path: Path, body: str, fragment: str) ->
     ("motors:\n  - {type: MAC140, load_ratio: 1, load_inertia: 1e-5}\n", "not both"),
     ("motor: []\n", "unknown keys ['motor']"),
 ])
-def test_bad_fleet_file_is_one_line(tmp_path: Path, body: str, fragment: str) -> None:
+def test_bad_fleet_file_is_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                    body: str, fragment: str) -> None:
     path = tmp_path / "bad.yml"
     path.write_text(body)
-    res = CliRunner().invoke(tune_app, ["fleet", str(path), "--out", str(tmp_path / "out")])
-    assert res.exit_code == 2
-    lines = _lines(res.output)
-    assert len(lines) == 1 and fragment in lines[0] and str(path) in lines[0], res.output
+    code, err = _run(tune_app, ["fleet", str(path), "--out", str(tmp_path / "out")], capsys)
+    line = _one_line(code, err)
+    assert line.startswith("jvl-tune fleet: error: ") and fragment in line and str(path) in line
 
 
-def test_bad_paths_are_one_line(tmp_path: Path) -> None:
-    res = CliRunner().invoke(gym_app, ["sweep", str(tmp_path / "none.yml")])
-    assert res.exit_code == 2 and len(_lines(res.output)) == 1
-    assert "no such sweep file" in res.output
+def test_bad_paths_are_one_line(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    code, err = _run(gym_app, ["sweep", str(tmp_path / "none.yml")], capsys)
+    assert "no such sweep file" in _one_line(code, err)
     empty = tmp_path / "records"
     empty.mkdir()
-    res = CliRunner().invoke(tune_app, ["fleet", str(empty)])
-    assert res.exit_code == 2 and len(_lines(res.output)) == 1
-    assert "no subfolders with record CSVs" in res.output
+    code, err = _run(tune_app, ["fleet", str(empty)], capsys)
+    assert "no subfolders with record CSVs" in _one_line(code, err)
 
 
 def test_debug_shows_the_exception(tmp_path: Path) -> None:
-    res = CliRunner().invoke(gym_app, ["sweep", str(tmp_path / "none.yml"), "--debug"])
-    assert res.exit_code != 0 and isinstance(res.exception, UserError)
+    with pytest.raises(CliError) as info:
+        gym_app(["--debug", "sweep", str(tmp_path / "none.yml")])
+    assert isinstance(info.value.__cause__, UserError)
 
 
 def test_grid_and_random_trials_are_stable() -> None:

@@ -6,13 +6,14 @@ import numpy as np
 import pytest
 
 from jvl_gym import ModeError, MotorArray
-from jvl_gym import constants as c
+from jvl_gym.families.mac050_141 import constants as c
 from jvl_gym.registers import (
     ReadOnlyRegisterError,
     RegisterError,
     RegisterRangeError,
     UnknownRegisterError,
 )
+from jvl_gym.registers.formats import whole_only
 
 
 @pytest.fixture()
@@ -45,7 +46,7 @@ def test_bad_writes_raise_and_change_nothing(m, key, value, exc, needle):
     assert needle in str(info.value)
     np.testing.assert_array_equal(m.regs, before)
     with pytest.raises(exc) as info:  # several registers: all validated before any is stored
-        m._write_many({"V_SOLL": 5, key: value, "P_SOLL": 7})
+        m.write_many({"V_SOLL": 5, key: value, "P_SOLL": 7})
     assert needle in str(info.value)
     np.testing.assert_array_equal(m.regs, before)
 
@@ -56,18 +57,24 @@ def test_python_scalars_convert_like_arrays(m):
         if reg.access.value != "rw":
             continue
         lo, hi = reg.raw_min / reg.scale, reg.raw_max / reg.scale
-        for x in [lo, hi, (reg.raw_max - 0.5) / reg.scale, *rng.uniform(lo, hi, 5)]:
+        xs = [lo, hi, (reg.raw_max - 0.5) / reg.scale, *rng.uniform(lo, hi, 5)]
+        if whole_only(reg):  # codes take whole numbers only
+            xs = [float(np.clip(np.round(x), lo, hi)) for x in xs]
+        for x in xs:
             for value in (float(x), int(x)):
                 np.testing.assert_array_equal(m._validated_raw(reg, value, 3),
                                               m._validated_raw(reg, np.full(3, value), 3))
         for bad in (hi + 1.0, float("nan"), float("inf")):
-            with pytest.raises(RegisterRangeError, match=r"\(and 2 more\)"):
+            with pytest.raises(RegisterRangeError) as info:  # one value, broadcast: one error
                 m._validated_raw(reg, bad, 3)
+            assert "more" not in str(info.value)
+            with pytest.raises(RegisterRangeError, match=r"\(and 2 more\)"):
+                m._validated_raw(reg, np.full(3, bad), 3)
 
 
-def test_write_many_equals_writes_in_order(m):
+def testwrite_many_equals_writes_in_order(m):
     values = {"GEARF1": [300, 400], "GEARF2": 1000, "V_SOLL": 1600, "MODE_REG": c.AG_MODE}
-    m._write_many(values, index=[0, 2])
+    m.write_many(values, index=[0, 2])
     one_by_one = MotorArray("MAC140", n=3, seed=0)
     for key, value in values.items():
         one_by_one.write(key, value, index=[0, 2])
@@ -189,8 +196,8 @@ def test_trace_records_registers_and_physics(m):
 
 
 def test_reset_can_change_the_motor_type_of_some_motors():
-    from jvl_gym import layout as L
     from jvl_gym.config import load_motor
+    from jvl_gym.families.mac050_141 import layout as L
 
     m = MotorArray("MAC140", n=3, seed=0)
     m.write("MODE_REG", c.V_MODE, index=[0])
@@ -229,13 +236,16 @@ def _random_values(m, rng, regs, size):
             value = float(rng.uniform(lo, hi))
         else:
             value = rng.uniform(lo, hi, size)
+        if whole_only(reg):  # codes take whole numbers only
+            value = np.clip(np.round(value), lo, hi)
+            value = float(value) if np.ndim(value) == 0 else value
         values[reg.name] = value
     return values
 
 
 @pytest.mark.parametrize("compiled", [True, False])
 def test_batched_write_equals_writes_one_by_one(compiled):
-    """_write_many (one compiled conversion and store) = write() register by register, for
+    """write_many (one compiled conversion and store) = write() register by register, for
     every writable register (without CNTRL_BITS and the register-mode pointers: the compiled
     store; with them: stored one by one)."""
     rng = np.random.default_rng(3)
@@ -243,7 +253,7 @@ def test_batched_write_equals_writes_one_by_one(compiled):
             and not (compiled and (r.name == "CNTRL_BITS" or r.name.endswith("_REG_P")))]
     batch, one_by_one = (MotorArray("MAC140", n=4, seed=0) for _ in range(2))
     values = _random_values(batch, rng, regs, 2)
-    batch._write_many({**values, "MODE_REG": c.V_MODE}, index=[3, 1])
+    batch.write_many({**values, "MODE_REG": c.V_MODE}, index=[3, 1])
     for key, value in {**values, "MODE_REG": c.V_MODE}.items():
         one_by_one.write(key, value, index=[3, 1])
     np.testing.assert_array_equal(batch.regs, one_by_one.regs)
@@ -257,22 +267,22 @@ def test_refused_batch_changes_nothing(m):
     m.write("MODE_REG", c.V_MODE, index=[2])
     before_regs, before_state = m.regs.copy(), m.state.copy()
     with pytest.raises(ModeError, match=r"P1 ≤ P2 .*\(P1=5, P2=1, P3=0"):
-        m._write_many({"GEARF1": 3, "P1": 5, "P2": 1, "MODE_REG": c.COIL_MODE}, index=[0, 1])
+        m.write_many({"GEARF1": 3, "P1": 5, "P2": 1, "MODE_REG": c.COIL_MODE}, index=[0, 1])
     with pytest.raises(ModeError, match="GEARF2 = 0"):
-        m._write_many({"GEARF1": 3, "GEARF2": 0, "MODE_REG": c.AG_MODE})
+        m.write_many({"GEARF1": 3, "GEARF2": 0, "MODE_REG": c.AG_MODE})
     with pytest.raises(RegisterError, match="HOME_MODE bytes"):
-        m._write_many({"V_SOLL": 5, "HOME_MODE": 11, "P_SOLL": 7})
+        m.write_many({"V_SOLL": 5, "HOME_MODE": 11, "P_SOLL": 7})
     with pytest.raises(ModeError, match="in V_MODE: can only be entered from INIT"):
-        m._write_many({"V_SOLL": 200, "MODE_REG": c.TESTU_MODE})  # stored one by one
+        m.write_many({"V_SOLL": 200, "MODE_REG": c.TESTU_MODE})  # stored one by one
     np.testing.assert_array_equal(m.regs, before_regs)
     np.testing.assert_array_equal(m.state, before_state)
 
 
 def test_refusal_names_the_first_refused_motor(m):
     """check_write (compiled rules per motor) words the refusal of the first refused motor."""
-    from jvl_gym.firmware import write_rules as W
+    from jvl_gym.families.mac050_141.firmware import write_rules as W
 
-    m._write_many({"P1": 0, "P2": 10, "P3": 20, "P4": 30, "P5": 10, "P6": 1, "GEARF2": 1000,
+    m.write_many({"P1": 0, "P2": 10, "P3": 20, "P4": 30, "P5": 10, "P6": 1, "GEARF2": 1000,
                    "MODE_REG": c.COIL_MODE})
     idx = np.array([0, 1, 2])
     assert W.check_write(m.regs, idx, 51, np.array([15, 25, 40])) == (

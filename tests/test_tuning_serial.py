@@ -34,6 +34,24 @@ def test_autotune_over_the_twin_identifies_and_writes(twin_server):
         assert m.read(name)[0] == pytest.approx(value, abs=1 / 256)
 
 
+def test_autotune_over_the_twin_with_the_firmware_record_length():
+    # `jvl-gym serve` records 11 samples by default (manual 4.4.9/4.4.10): the procedure
+    # combines several short records and still finds the inertia
+    load = 30e-6
+    m = MotorArray("MAC140", n=1, seed=0, load_inertia=load)
+    server = TwinServer(Twin(m, [19]), speed=25.0, tcp=("127.0.0.1", 0)).start()
+    try:
+        ident, design = autotune_over_serial(server.endpoint("mactalk", "tcp").url, "MAC140",
+                                             address=19, time_scale=25.0)
+    finally:
+        server.stop()
+    assert all(r.n == 11 for r in ident.records) and len(ident.records) > 20
+    J = m.motor_configs[0].rotor_inertia + load
+    assert ident.mechanics.J == pytest.approx(J, rel=0.05)
+    assert ident.mechanics.coulomb >= 0.0
+    assert design.acceptance is not None and design.acceptance.reason
+
+
 def test_serial_record_length_is_checked(twin_server):
     from jvl_gym.protocol import MacTalkClient
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from jvl_gym import MotorArray
-from jvl_gym import constants as c
+from jvl_gym.families.mac050_141 import constants as c
 from jvl_gym.world import AnalogInput, PulseInput, SpeedProfile, SupplyEvents, World
 
 

@@ -1,4 +1,4 @@
-"""Autotune: identify the coil and the mechanics, synthesise, quantise and verify (issue 4).
+"""Autotune: identify the coil and the mechanics, synthesise, quantise and verify.
 
 Procedure on a motor (a ``MotorArray`` here; a real motor through the same register interface,
 :data:`tuning.records.SERIAL_SOURCE_HOOK`):
@@ -25,10 +25,15 @@ from typing import Any
 import numpy as np
 
 from .identify_coil import CoilEstimate, identify_coil
-from .identify_mechanics import MechanicsEstimate, identify_mechanics, two_level_torques
+from .identify_mechanics import (
+    MechanicsEstimate,
+    coil_uncertainty,
+    identify_mechanics,
+    two_level_torques,
+)
 from .models import COUNTS_PER_RAD, TS_O, MotorData
 from .quantize import quantize_registers
-from .records import Record, acquire_testa, acquire_testu
+from .records import Record, acquire_testa, acquire_testu, align_rotor
 from .synthesis import (
     CurrentDesign,
     SpeedDesign,
@@ -80,12 +85,15 @@ class Design:
     quantization_delta: dict[str, float]
     guidance: dict[str, float]
     notes: list[str] = field(default_factory=list)
+    #: the acceptance step's result (:class:`tuning.acceptance.Acceptance`) when it chose this
+    acceptance: Any = None
 
 
 def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,
                     n_mech: int = RECOMMENDED_MECH_SAMPLES, umeas: int = 100,
                     final_speed_counts: float = 120.0, progress: Progress = _quiet,
-                    repeats: int = RECOMMENDED_TESTA_REPEATS) -> list[Identification]:
+                    repeats: int | None = None, coil_repeats: int | None = None
+                    ) -> list[Identification]:
     """Run the identification procedure (module docstring, steps 1–3) on every motor of ``m``.
 
     Parameters
@@ -101,15 +109,29 @@ def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,
         (120 = 916 rpm; the back-EMF's effect on the current loop is modelled).
     progress : callable
         Receives one line of text per stage.
-    repeats : int
+    repeats : int, optional
         K, how often the two TESTA levels are recorded; K ≥ 2 gives honest 95 % intervals from
         the spread between the repetitions (:func:`tuning.identify_mechanics.identify_mechanics`).
+        Default :func:`testa_repeats` (4 for 64-sample records, more for shorter ones: the
+        firmware's 11-sample records are combined, 24 pairs).
+    coil_repeats : int, optional
+        TESTU records per motor (one alignment, each record from zero current); default
+        :func:`testu_repeats` (1 for 64 samples, 6 for 11). Several records are fitted jointly
+        with the whole-record jackknife interval (:func:`tuning.identify_coil.identify_coil`).
     """
+    repeats = testa_repeats(n_mech) if repeats is None else int(repeats)
+    coil_repeats = testu_repeats(n_coil) if coil_repeats is None else int(coil_repeats)
     base = [MotorData.from_config(cfg, amplitude=float(m.read("AMPLITUDE")[i]))
             for i, cfg in enumerate(m.motor_configs)]
-    progress(f"TESTU: aligning rotors and recording {n_coil} samples at 7812.5 Hz")
-    coil_recs = acquire_testu(m, umeas, n_coil)
-    coils = [identify_coil(r, md) for r, md in zip(coil_recs, base)]
+    progress(f"TESTU: aligning rotors and recording {coil_repeats} x {n_coil} samples at "
+             "7812.5 Hz")
+    align_rotor(m)
+    per_motor: list[list[Record]] = [[] for _ in range(m.n)]
+    for _ in range(max(coil_repeats, 1)):
+        _wait_current_zero(m)
+        for i, r in enumerate(acquire_testu(m, umeas, n_coil, align=False)):
+            per_motor[i].append(r)
+    coils = [identify_coil(rs, md) for rs, md in zip(per_motor, base)]
     motors = [c.motor(md) for c, md in zip(coils, base)]
     progress("current loop: designing from the identified coils")
     cur_regs = []
@@ -153,10 +175,42 @@ def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,
     for i, md in enumerate(motors):
         mech_recs = [r for rep in pairs for r in rep[i]]
         mech = identify_mechanics(mech_recs, md, current_regs=cur_regs[i],
-                                  phase_comp=float(phase_comp[i]))
-        out.append(Identification(md, coils[i], mech, [coil_recs[i], *mech_recs]))
+                                  phase_comp=float(phase_comp[i]),
+                                  coil_sd=coil_uncertainty(coils[i]))
+        out.append(Identification(md, coils[i], mech, [*per_motor[i], *mech_recs]))
     progress("identification done")
     return out
+
+
+def testa_repeats(n_mech: int) -> int:
+    """Default K of the two-level TESTA pair for ``n_mech``-sample records: as much test motion
+    as :data:`RECOMMENDED_TESTA_REPEATS` pairs of :data:`RECOMMENDED_MECH_SAMPLES` samples,
+    at least that many pairs and at most 24."""
+    need = math.ceil(RECOMMENDED_TESTA_REPEATS * RECOMMENDED_MECH_SAMPLES / max(n_mech, 1))
+    return int(min(max(RECOMMENDED_TESTA_REPEATS, need), 24))
+
+
+def testu_repeats(n_coil: int) -> int:
+    """Default number of TESTU records for ``n_coil``-sample records: 1 from 32 samples on
+    (about 4 coil time constants), else 6 (combined, whole-record jackknife)."""
+    return 1 if n_coil >= 32 else 6
+
+
+def _wait_current_zero(m: Any, max_samples: int = 500) -> None:
+    """Step until every motor's measured currents are back at zero (within 8 ADC counts of
+    noise) and it stands still, for 3 polls in a row: a TESTU record must start from zero
+    current (the model's i₀ is free, but a decaying current of another mode is not in it).
+    The motor's own clock decides (a serial link may lag behind wall-clock time)."""
+    quiet = np.zeros(m.n, dtype=int)
+    for _ in range(0, max_samples, 5):
+        m.step(5)
+        ok = np.ones(m.n, dtype=bool)
+        for key in ("IA_IST", "IC_IST"):
+            ok &= np.abs(np.asarray(m.read(key), dtype=float)) <= 8
+        ok &= np.asarray(m.read("V_IST")) == 0
+        quiet = np.where(ok, quiet + 1, 0)
+        if np.all(quiet >= 3):
+            return
 
 
 def _adaptive_testa(m: Any, t_soll: np.ndarray, n: int, target: float) -> list[Record]:
@@ -181,14 +235,18 @@ def synthesize(motor: MotorData, J_total: float, coulomb: float = 0.0,
                current_bandwidth_hz: float | None = None,
                speed_bandwidth_hz: float | None = None, structure: str = "ip",
                robust: bool = True, current_gains: tuple[float, float] | None = None,
-               speed_gains: tuple[float, float] | None = None) -> Design:
+               speed_gains: tuple[float, float] | None = None,
+               position_integral: bool | None = None) -> Design:
     """Design, quantise and verify all filters for an identified motor (steps 2 and 4).
 
-    ``current_gains`` / ``speed_gains`` fix the normalised (kp, ki) instead of searching.
+    ``current_gains`` / ``speed_gains`` fix the normalised (kp, ki) instead of searching;
+    ``position_integral`` forces the ``"pi"`` structure's position integral on or off
+    (:func:`tuning.synthesis.design_speed_loop`).
     """
     cur = design_current_loop(motor, current_bandwidth_hz, gains=current_gains)
     spd = design_speed_loop(motor, cur.registers, J_total, speed_bandwidth_hz, structure,
-                            gains=speed_gains, coulomb=coulomb)
+                            gains=speed_gains, coulomb=coulomb,
+                            position_integral=position_integral)
     ideal = {**cur.registers, **spd.registers}
     regs = quantize_registers(ideal)
     crep = verify_current_loop(motor, regs, robust)

@@ -11,9 +11,12 @@ Examples
 ``jvl-tune autotune --motor MAC140 --port socket://127.0.0.1:5000 --address 19 --write``
 ``jvl-tune identify --motor MAC140 --testu u.csv --testa a1.csv --testa a2.csv``
 ``jvl-tune synthesize --motor MAC140 --inertia 6.7e-5 --out setup.yaml``
-``jvl-tune verify --motor MAC140 --setup setup.yaml --inertia 6.7e-5``
+``jvl-tune verify --setup setup.yaml --inertia 6.7e-5``  (the motor named in setup.yaml)
 ``jvl-tune defaults``
 ``jvl-tune fleet configs/fleets/example.yml --out DIR``  (Ray: the ``scale`` extra)
+
+Errors are one line on stderr with a non-zero exit status; ``--debug`` shows the traceback
+(:class:`jvl_gym.cli_app.App`).
 """
 
 from __future__ import annotations
@@ -25,6 +28,9 @@ import numpy as np
 import typer
 import yaml
 
+from jvl_gym.cli_app import App
+
+from .acceptance import autotune_designs
 from .autotune import (
     RECOMMENDED_COIL_SAMPLES,
     RECOMMENDED_MECH_SAMPLES,
@@ -33,18 +39,40 @@ from .autotune import (
     verify_design,
 )
 from .identify_coil import identify_coil
-from .identify_mechanics import identify_mechanics
+from .identify_mechanics import coil_uncertainty, identify_mechanics
 from .models import MotorData
 from .records import load_csv, record_registers
 from .report import text_table, write_report
 from .verify import verify_current_loop, verify_speed_loop
 
-app = typer.Typer(help="JVL MAC50-141 tuning toolkit (identification, synthesis, verification)",
-                  no_args_is_help=True)
+app = App(prog="jvl-tune",
+          help="JVL MAC50-141 tuning toolkit (identification, synthesis, verification)",
+          no_args_is_help=True)
 
 
 def _say(msg: str) -> None:
     typer.echo(f"[jvl-tune] {msg}", err=True)
+
+
+def _finite(value: float | None) -> float | None:
+    """Option callback: a finite number (or not given)."""
+    if value is not None and not math.isfinite(value):
+        raise typer.BadParameter(f"must be a finite number, got {value}")
+    return value
+
+
+def _nonnegative(value: float | None) -> float | None:
+    """Option callback: a finite number >= 0 (or not given)."""
+    if _finite(value) is not None and value < 0:
+        raise typer.BadParameter(f"must be >= 0, got {value}")
+    return value
+
+
+def _positive(value: float | None) -> float | None:
+    """Option callback: a finite number > 0 (or not given)."""
+    if _finite(value) is not None and value <= 0:
+        raise typer.BadParameter(f"must be > 0, got {value}")
+    return value
 
 
 def _write_setup(path: Path, motor: str, regs: dict[str, float], note: str) -> None:
@@ -64,24 +92,39 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
              setup: Path = typer.Option(None, help="setup YAML with the current-loop registers "
                                         "(KIFX2..KIB0, PHASE_COMP, AMPLITUDE) the TESTA records "
                                         "were taken with, for CSVs without a '# registers:' "
-                                        "line")) -> None:
+                                        "line"),
+             accept: bool = typer.Option(False, help="exit 0 even when an estimate is not "
+                                         "credible (tuning.credibility)")) -> None:
     """Identify the coil (TESTU) and the mechanics (TESTA) from record CSV files.
 
     TESTA uses the electrical model (current loop, back-EMF) when the records carry the
     registers they were taken with (``# registers:``, written by ``acquire_testa``) or
     ``--setup`` gives them; otherwise the rigid model (docs/tuning.md).
+
+    Estimates that are not credible (``tuning.credibility``: outside physical bounds or the
+    register format, an interval including zero, a poor fit) are listed on stderr and the exit
+    status is 1 unless ``--accept``.
     """
+    from .credibility import friction_text, problems
+
+    if not testu and not testa:
+        raise typer.BadParameter("give --testu and/or --testa record files",
+                                 param_hint="'--testu' / '--testa'")
     md = MotorData.from_config(motor)
+    bad: list[str] = []
     if testu:
         c = identify_coil([load_csv(p) for p in testu], md)
         typer.echo(f"R_line {c.R_line:.5g} ohm {c.ci['R_line']}, L_line {c.L_line:.5g} H "
                    f"{c.ci['L_line']}, delay {c.delay}, fit {c.nrmse_fit:.2f} %")
+        bad += problems(md, coil=c)
         md = c.motor(md)
     if testa:
         recs = [load_csv(p) for p in testa]
         cur = pc = None
         if setup is not None:
-            regs = yaml.safe_load(setup.read_text()).get("registers", {})
+            from jvl_gym.config import load_setup
+
+            regs = load_setup(setup).registers
             keys = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
             missing = [k for k in keys if k not in regs]
             if missing:
@@ -90,23 +133,36 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
             pc = float(regs.get("PHASE_COMP", 5.0))
             md = md.with_(amplitude=float(regs.get("AMPLITUDE", md.amplitude)))
         m = identify_mechanics(recs, md, coulomb=not no_coulomb, current_regs=cur,
-                               phase_comp=pc)
+                               phase_comp=pc, coil_sd=coil_uncertainty(c) if testu else None)
         carried = record_registers(recs) or {}
         model = "electrical" if cur is not None or "KIFX2" in carried else "rigid"
-        typer.echo(f"J {m.J!r} kg m^2 {m.ci['J']}, KVOUT {m.kvout:.3f}, b {m.viscous:.3g}, "
-                   f"Tc {m.coulomb:.3g} N m, fit {m.nrmse_fit:.2f} % ({model} model)")
+        typer.echo(f"J {m.J!r} kg m^2 {m.ci['J']}, KVOUT {m.kvout:.3f}, "
+                   f"{friction_text('b', m.viscous, 'N m s/rad')}, "
+                   f"{friction_text('Tc', m.coulomb, 'N m')}, fit {m.nrmse_fit:.2f} % "
+                   f"({model} model)")
+        bad += problems(md, mech=m)
+    if bad:
+        what = "accepted (--accept)" if accept else "give consistent records, or --accept"
+        _say(f"NOT CREDIBLE: {'; '.join(bad)}: {what}")
+        if not accept:
+            raise typer.Exit(1)
 
 
 @app.command("synthesize")
 def synthesize_cmd(motor: str = typer.Option(...), inertia: float = typer.Option(
-        ..., help="total inertia J [kg m^2]"),
-        resistance: float = typer.Option(None, help="phase R [ohm] (default: motor config)"),
-        inductance: float = typer.Option(None, help="phase L [H] (default: motor config)"),
-        current_bw: float = typer.Option(None, help="current-loop bandwidth [Hz]"),
-        speed_bw: float = typer.Option(None, help="speed-loop bandwidth [Hz]"),
+        ..., help="total inertia J [kg m^2]", callback=_positive),
+        resistance: float = typer.Option(None, help="phase R [ohm] (default: motor config)",
+                                         callback=_positive),
+        inductance: float = typer.Option(None, help="phase L [H] (default: motor config)",
+                                         callback=_positive),
+        current_bw: float = typer.Option(None, help="current-loop bandwidth [Hz]",
+                                         callback=_positive),
+        speed_bw: float = typer.Option(None, help="speed-loop bandwidth [Hz]",
+                                       callback=_positive),
         structure: str = typer.Option("ip", help="ip or pi"),
         coulomb: float = typer.Option(0.0, help="identified Coulomb friction [N m] (pi: adds a "
-                                      "position integral when its dead band exceeds 5 counts)"),
+                                      "position integral when its dead band exceeds 5 counts)",
+                                      callback=_nonnegative),
         out: Path = typer.Option(Path("setup.yaml"))) -> None:
     """Design and quantise all filters for given motor data; write a setup YAML."""
     md = MotorData.from_config(motor)
@@ -123,13 +179,54 @@ def synthesize_cmd(motor: str = typer.Option(...), inertia: float = typer.Option
         raise typer.Exit(1)
 
 
+def _setup_registers(motor: str | None, setup: Path) -> tuple[str, dict[str, float]]:
+    """The motor type and the complete register set a motor runs with after ``setup`` is
+    written to it: the setup validated as the simulator validates it (names, ranges,
+    read-only registers, write rules), registers it does not give from the motor type's
+    defaults (ROM and ``configs/setups``), as a motor keeps them.
+
+    Raises
+    ------
+    typer.BadParameter
+        No motor named (``--motor`` nor the setup's ``motor:``) or the two disagree.
+    """
+    from jvl_gym import MotorArray
+    from jvl_gym.config import canonical_motor_name, load_motor, load_setup
+
+    cfg = load_setup(setup)
+    named = cfg.motor
+    if motor is None and named is None:
+        raise typer.BadParameter(f"{setup} names no motor (no 'motor:' key): give --motor",
+                                 param_hint="'--motor'")
+    if motor is not None and named is not None and (
+            canonical_motor_name(motor) != canonical_motor_name(named)):
+        raise typer.BadParameter(f"{setup} is a setup for {named}, not {motor}",
+                                 param_hint="'--motor'")
+    name = load_motor(motor if motor is not None else named).name
+    m = MotorArray(name, n=1)  # the motor type's defaults
+    defaults = {reg.name: float(m.read(reg.name)[0]) for reg in m.table
+                if reg.access.value == "rw" and reg.format.value != "LongIntHigh"}
+    MotorArray(name, n=1, setup=setup)  # validates the setup, naming it in the error
+    missing = sorted(set(defaults) - set(cfg.registers))
+    regs = {**defaults, **{k: float(v) for k, v in cfg.registers.items()}}
+    loop = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0", "KVFX4", "KVFX3", "KVFX2",
+            "KVFX1", "KVFY3", "KVFY2", "KVFY1", "KVFY0", "KVOUT")
+    from_defaults = [k for k in loop if k in missing]
+    if from_defaults:
+        _say(f"{setup} lacks {', '.join(from_defaults)}: verified with the {name} defaults "
+             "(what the motor keeps when the setup is written)")
+    return name, regs
+
+
 @app.command()
-def verify(motor: str = typer.Option(...), setup: Path = typer.Option(...),
-           inertia: float = typer.Option(None, help="total inertia [kg m^2] (default KVOUT*J_m)")
+def verify(motor: str = typer.Option(None, help="motor type (default: the setup's motor:)"),
+           setup: Path = typer.Option(...),
+           inertia: float = typer.Option(None, help="total inertia [kg m^2] (default KVOUT*J_m)",
+                                         callback=_positive)
            ) -> None:
     """Margins, bandwidths, pole radii and robustness of a setup file's filters."""
+    motor, regs = _setup_registers(motor, setup)
     md = MotorData.from_config(motor)
-    regs = yaml.safe_load(setup.read_text())["registers"]
     J = inertia if inertia else regs.get("KVOUT", 1.0) * md.J_m
     cr = verify_current_loop(md, regs)
     sr = verify_speed_loop(md, regs, J)
@@ -144,29 +241,40 @@ def verify(motor: str = typer.Option(...), setup: Path = typer.Option(...),
 
 @app.command()
 def autotune(motor: str = typer.Option("MAC140"),
-             load_inertia: float = typer.Option(0.0, help="simulated load inertia [kg m^2]"),
-             viscous: float = typer.Option(0.0, help="simulated viscous friction [N m s/rad]"),
-             coulomb: float = typer.Option(0.0, help="simulated Coulomb friction [N m]"),
+             load_inertia: float = typer.Option(0.0, help="simulated load inertia [kg m^2]",
+                                                callback=_nonnegative),
+             viscous: float = typer.Option(0.0, help="simulated viscous friction [N m s/rad]",
+                                           callback=_nonnegative),
+             coulomb: float = typer.Option(0.0, help="simulated Coulomb friction [N m]",
+                                           callback=_nonnegative),
              noise: bool = typer.Option(True, help="1 % measurement noise in the simulator"),
              seed: int = typer.Option(0),
-             n_coil: int = typer.Option(RECOMMENDED_COIL_SAMPLES, help="TESTU samples"),
-             n_mech: int = typer.Option(RECOMMENDED_MECH_SAMPLES, help="TESTA samples/level"),
+             n_coil: int = typer.Option(None, help="TESTU samples per record (default: "
+                                        f"{RECOMMENDED_COIL_SAMPLES}; with --port the "
+                                        "firmware's 11, several records combined)"),
+             n_mech: int = typer.Option(None, help="TESTA samples per record (default: "
+                                        f"{RECOMMENDED_MECH_SAMPLES}; with --port 11)"),
              structure: str = typer.Option("pi", help="speed loop structure: pi or ip"),
              out: Path = typer.Option(Path("autotune_out")),
              port: str = typer.Option(None, help="serial device or pyserial URL of a real motor "
                                       "or of `jvl-gym serve` (default: the simulator)"),
              address: int = typer.Option(1, help="MacTalk unit address (MYADDR) with --port"),
-             time_scale: float = typer.Option(1.0, help="with --port: the twin's --speed"),
+             time_scale: float = typer.Option(1.0, help="with --port: the twin's --speed",
+                                              callback=_positive),
              write: bool = typer.Option(False, help="with --port: write the design to the motor")
              ) -> None:
     """Identify, synthesise, verify (simulator or --port); write OUT/setup.yaml and a report."""
     from jvl_gym import MotorArray
 
     if port is not None:
+        from jvl_gym.families.mac050_141.constants import TEST_RECORD_SAMPLES
+
         from .serial_source import autotune_over_serial
 
-        ident, d = autotune_over_serial(port, motor, address, time_scale, n_coil, n_mech,
-                                        structure, write, progress=_say)
+        ident, d = autotune_over_serial(port, motor, address, time_scale,
+                                        n_coil or TEST_RECORD_SAMPLES,
+                                        n_mech or TEST_RECORD_SAMPLES, structure, write,
+                                        progress=_say)
         setup = out / "setup.yaml"
         _write_setup(setup, motor, d.registers,
                      f"jvl-tune autotune --port {port}: identified J = {ident.mechanics.J:.4g}")
@@ -186,9 +294,11 @@ def autotune(motor: str = typer.Option("MAC140"),
     if noise:
         params.update(current_noise=2.0, position_noise=0.85)
     m = MotorArray(motor, n=1, seed=seed, **params)
-    ident = identify_motors(m, n_coil, n_mech, progress=_say)[0]
-    _say("synthesis and verification")
-    d = synthesize(ident.motor, ident.mechanics.J, ident.mechanics.coulomb, structure=structure)
+    ident = identify_motors(m, n_coil or RECOMMENDED_COIL_SAMPLES,
+                            n_mech or RECOMMENDED_MECH_SAMPLES, progress=_say)[0]
+    _say("synthesis, verification and the acceptance step (candidates simulated on the "
+         "identified motor)")
+    d = autotune_designs([ident], structure)[0].chosen.design
     setup = out / "setup.yaml"
     _write_setup(setup, motor, d.registers,
                  f"jvl-tune autotune: {motor}, identified J = {ident.mechanics.J:.4g} kg m^2")
@@ -222,13 +332,12 @@ def fleet(spec: Path = typer.Argument(..., help="fleet file (configs/fleets/*.ym
           save_records: bool = typer.Option(False, help="also write each motor's records"),
           structure: str = typer.Option(None, help="speed loop structure pi or ip (overrides "
                                         "the file)"),
-          verbose: bool = typer.Option(False, help="forward the Ray workers' logs"),
-          debug: bool = typer.Option(False, help="tracebacks instead of one-line errors")
+          verbose: bool = typer.Option(False, help="forward the Ray workers' logs")
           ) -> None:
     """Autotune a fleet of motors as Ray tasks; per-motor register sets and a fleet report."""
     from jvl_gym.scale.commands import fleet_command
 
-    fleet_command(spec, out, address, num_cpus, save_records, structure, verbose, debug)
+    fleet_command(spec, out, address, num_cpus, save_records, structure, verbose)
 
 
 @app.command()
@@ -238,3 +347,7 @@ def defaults(out: Path = typer.Option(None, help="directory (default: configs/se
 
     for p in write_default_setups(out):
         typer.echo(f"wrote {p}")
+
+
+if __name__ == "__main__":
+    app()

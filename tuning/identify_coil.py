@@ -1,6 +1,6 @@
 """Identify the coil (line-to-line R, L and the PWM delay) from TESTU records (manual 4.4.9).
 
-Model (ZOH-exact, MODEL.md §6): the a–c line current, in ADC counts, obeys
+Model (ZOH-exact, docs/model.md §5.1 and §6): the a–c line current, in ADC counts, obeys
 
     i(k+1) = a·i(k) + g(1 − a)·u(k − d),    IC_IST(k) = −i(k),    i(0) = i₀,
 
@@ -11,9 +11,11 @@ per PWM count; R, L per phase: the line-to-line circuit has 2R, 2L and sees 2·u
 Method: for each d, an ARX least-squares fit gives a start; an output-error fit
 (``scipy.optimize.least_squares`` on the simulated output, parameters a, g, i₀) refines it.
 The delay with the smallest output error wins (it is an integer: the record's first
-non-zero sample fixes it). Confidence intervals: ``s²(JᵀJ)⁻¹`` at the optimum with Student-t
-quantiles, propagated to R and L (delta method). Fit quality: NRMSE fit
-``100·(1 − ‖y − ŷ‖/‖y − ȳ‖)`` %, and a Box–Pierce whiteness test of the residuals.
+non-zero sample fixes it). Confidence intervals (:mod:`tuning.intervals`): one or two records,
+``s²·(1 + 2Σρ)·(JᵀJ)⁻¹`` at the optimum with Student-t quantiles, propagated to R and L (delta
+method); three or more, the delete-one-record jackknife plus the quantisation floor. Fit
+quality: NRMSE fit ``100·(1 − ‖y − ŷ‖/‖y − ȳ‖)`` %, and a Box–Pierce whiteness test of the
+residuals.
 """
 
 from __future__ import annotations
@@ -26,6 +28,14 @@ import control as ct
 import numpy as np
 from scipy import optimize, stats
 
+from .intervals import (
+    LEVEL,
+    QUANTISATION_VARIANCE,
+    combined_halfwidth,
+    jackknife,
+    positive,
+    student_halfwidth,
+)
 from .models import TS_I, MotorData
 from .records import Record, RecordError, validate
 
@@ -48,13 +58,17 @@ class CoilEstimate:
         Line-to-line values 2R [Ω], 2L [H].
     ci : dict
         95 % confidence intervals (lo, hi) of "pole", "gain", "R_phase", "L_phase", "R_line",
-        "L_line".
+        "L_line" and "delay" (the plausible delays, inner samples).
     nrmse_fit : float
         NRMSE fit [%] (100 = perfect), over all records.
     residual : dict
         Residual check: "sigma" [counts], "box_pierce_p", "max_autocorr", "white" (bool).
     n_samples : int
         Samples used.
+    fitted : list of ndarray
+        Model IC_IST [ADC counts] of each record, shape (n_r,).
+    detected : dict
+        "R_phase", "L_phase": whether the interval lies above 0 (:func:`tuning.intervals.positive`).
     """
 
     pole: float
@@ -67,6 +81,7 @@ class CoilEstimate:
     residual: dict[str, float]
     n_samples: int
     fitted: list[np.ndarray] = field(default_factory=list, repr=False)
+    detected: dict[str, bool] = field(default_factory=dict)
 
     @property
     def R_line(self) -> float:
@@ -154,6 +169,31 @@ def residual_check(res: np.ndarray, n_params: int, max_lag: int | None = None
             "max_autocorr": float(np.max(np.abs(r))), "white": bool(p > 0.05)}
 
 
+def _fit(recs: Sequence[Record], d: int, scale: float) -> optimize.OptimizeResult:
+    """Output-error fit of (a, g, i₀ per record) for PWM delay ``d`` (ARX start)."""
+    a0, g0 = _arx(recs, d)
+    if not (0.0 < a0 < 1.0) or g0 <= 0:
+        a0, g0 = 0.9, scale / max(1.0, float(np.max(np.abs(recs[0].input))))
+
+    def resid(x: np.ndarray) -> np.ndarray:
+        a, g = x[0], x[1]
+        return np.concatenate([_simulate(a, g, x[2 + j], r.input, d) - r.output
+                               for j, r in enumerate(recs)])
+
+    x0 = np.r_[a0, g0, [-r.output[0] for r in recs]]
+    lo = np.r_[1e-6, 1e-9, [-np.inf] * len(recs)]
+    hi = np.r_[1.0 - 1e-12, np.inf, [np.inf] * len(recs)]
+    return optimize.least_squares(resid, np.clip(x0, lo + 1e-9, hi - 1e-9), bounds=(lo, hi),
+                                  x_scale="jac", xtol=1e-14, ftol=1e-14, gtol=1e-14)
+
+
+def _phys(a: float, g: float, md: MotorData) -> tuple[float, float]:
+    """(R, L) per phase [Ω, H] from the register-unit model: ``R = k_u/(g·A_count)``,
+    ``L = −R·TS_I/ln a`` (module docstring)."""
+    R = md.volts_per_count / (g * md.amps_per_count)
+    return R, -R * TS_I / math.log(a)
+
+
 def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
                   delays: Sequence[int] = (0, 1, 2)) -> CoilEstimate:
     """Estimate R, L and the PWM delay from one or more TESTU records.
@@ -163,13 +203,19 @@ def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
     records : Record or sequence of Record
         TESTU records (validated here). Several records share a, g, d; each has its own i₀.
     motor : MotorData or str
-        Motor type (for k_u = U_supply/2/1023 and A_count, MODEL.md §2, §7).
+        Motor type (for k_u = U_supply/2/1023 and A_count, docs/model.md §3, §15).
     delays : sequence of int
         Candidate PWM delays [inner samples].
 
     Returns
     -------
     CoilEstimate
+        Intervals (docs/tuning.md, "Intervals"): with one or two records the fit's
+        ``s²·(1 + 2Σρ)·(JᵀJ)⁻¹`` (the residual includes the quantisation); with K ≥ 3 records
+        the delete-one-record jackknife (t, K − 1 dof) plus the quantisation floor of one
+        record (:mod:`tuning.intervals`). The delay's interval is the set of delays whose
+        output error is not significantly larger than the best one's (likelihood ratio,
+        χ²₁ at 95 %, residual variance × the correlation inflation).
 
     Raises
     ------
@@ -187,58 +233,69 @@ def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
     y_all = np.concatenate([r.output for r in recs])
     scale = max(1.0, float(np.max(np.abs(y_all))))
 
-    best = None
-    for d in delays:
-        a0, g0 = _arx(recs, d)
-        if not (0.0 < a0 < 1.0) or g0 <= 0:
-            a0, g0 = 0.9, scale / max(1.0, float(np.max(np.abs(recs[0].input))))
-
-        def resid(x: np.ndarray, d: int = d) -> np.ndarray:
-            a, g = x[0], x[1]
-            return np.concatenate([_simulate(a, g, x[2 + j], r.input, d) - r.output
-                                   for j, r in enumerate(recs)])
-
-        x0 = np.r_[a0, g0, [-r.output[0] for r in recs]]
-        lo = np.r_[1e-6, 1e-9, [-np.inf] * len(recs)]
-        hi = np.r_[1.0 - 1e-12, np.inf, [np.inf] * len(recs)]
-        sol = optimize.least_squares(resid, np.clip(x0, lo + 1e-9, hi - 1e-9), bounds=(lo, hi),
-                                     x_scale="jac", xtol=1e-14, ftol=1e-14, gtol=1e-14)
-        sse = float(sol.fun @ sol.fun)
-        if best is None or sse < best[0] * (1 - 1e-9) - 1e-12:
-            best = (sse, d, sol)
-    assert best is not None
-    sse, d, sol = best
+    fits = {d: _fit(recs, d, scale) for d in delays}
+    sses = {d: float(f.fun @ f.fun) for d, f in fits.items()}
+    d = min(delays, key=lambda k: (sses[k] * (1 - 1e-9), k))
+    sol = fits[d]
+    sse = sses[d]
     n = y_all.size
     p = sol.x.size
     a, g = float(sol.x[0]), float(sol.x[1])
     dof = max(n - p, 1)
     s2 = sse / dof
+    infl = correlation_inflation(sol.fun, len(recs))
     jac = sol.jac
     try:
-        cov = s2 * correlation_inflation(sol.fun, len(recs)) * np.linalg.inv(jac.T @ jac)
+        cov = s2 * infl * np.linalg.inv(jac.T @ jac)
     except np.linalg.LinAlgError:
         cov = np.full((p, p), np.inf)
-    tq = float(stats.t.ppf(0.975, dof))
 
-    k_u, amps = md.volts_per_count, md.amps_per_count
-    R = k_u / (g * amps)
+    R, L = _phys(a, g, md)
     ln_a = math.log(a)
-    L = -R * TS_I / ln_a
     # delta method: x = (a, g) → (R, L)
     jr = np.array([0.0, -R / g])
     jl = np.array([R * TS_I / (a * ln_a**2), (L / R) * (-R / g)])
-    c2 = cov[:2, :2]
-    sd = {"pole": math.sqrt(max(c2[0, 0], 0.0)), "gain": math.sqrt(max(c2[1, 1], 0.0)),
-          "R_phase": math.sqrt(max(float(jr @ c2 @ jr), 0.0)),
-          "L_phase": math.sqrt(max(float(jl @ c2 @ jl), 0.0))}
     val = {"pole": a, "gain": g, "R_phase": R, "L_phase": L}
-    ci = {k: (val[k] - tq * sd[k], val[k] + tq * sd[k]) for k in val}
+    grads = {"pole": np.array([1.0, 0.0]), "gain": np.array([0.0, 1.0]), "R_phase": jr,
+             "L_phase": jl}
+    if len(recs) >= 3:
+        # whole-record jackknife around the joint fit + the quantisation floor of one record
+        loo = []
+        for i in range(len(recs)):
+            x = _fit([r for j, r in enumerate(recs) if j != i], d, scale).x
+            loo.append([x[0], x[1], *_phys(float(x[0]), float(x[1]), md)])
+        var_j, kdof = jackknife(np.array([a, g, R, L]), np.array(loo))
+        rows = slice(0, recs[0].n)
+        j1 = jac[rows][:, [0, 1, 2]]
+        try:
+            cov_q = QUANTISATION_VARIANCE * infl * np.linalg.inv(j1.T @ j1)[:2, :2]
+        except np.linalg.LinAlgError:
+            cov_q = np.zeros((2, 2))
+        hw = {}
+        for k, name in enumerate(("pole", "gain", "R_phase", "L_phase")):
+            gr = grads[name]
+            hw[name] = combined_halfwidth(float(var_j[k]), kdof,
+                                          max(float(gr @ cov_q @ gr), 0.0))
+    else:
+        c2 = cov[:2, :2]
+        hw = {name: student_halfwidth(math.sqrt(max(float(gr @ c2 @ gr), 0.0)), dof)
+              for name, gr in grads.items()}
+    ci = {k: (val[k] - hw[k], val[k] + hw[k]) for k in val}
+    detected = {}
+    for k in ("R_phase", "L_phase"):
+        b = positive(val[k], *ci[k])
+        ci[k] = b.interval
+        detected[k] = b.detected
     ci["R_line"] = (2 * ci["R_phase"][0], 2 * ci["R_phase"][1])
     ci["L_line"] = (2 * ci["L_phase"][0], 2 * ci["L_phase"][1])
+    # delay: every candidate whose extra output error is within χ²₁(95 %) of the best
+    crit = float(stats.chi2.ppf(LEVEL, 1)) * s2 * infl
+    plausible = [k for k in delays if sses[k] - sse <= crit]
+    ci["delay"] = (float(min(plausible)), float(max(plausible)))
     fitted = [_simulate(a, g, sol.x[2 + j], r.input, d) for j, r in enumerate(recs)]
     yhat = np.concatenate(fitted)
     den = float(np.linalg.norm(y_all - y_all.mean()))
     fit = 100.0 * (1.0 - float(np.linalg.norm(y_all - yhat)) / den) if den > 0 else math.nan
     return CoilEstimate(pole=a, gain=g, delay=int(d), R_phase=R, L_phase=L, ci=ci,
                         nrmse_fit=fit, residual=residual_check(y_all - yhat, p), n_samples=n,
-                        fitted=fitted)
+                        fitted=fitted, detected=detected)

@@ -15,11 +15,13 @@ records TESTA at T₁ and T₂ ≈ T₁/2 and fits J, T_c, b, δ and one offset 
 (``scipy.optimize.least_squares``). With ``coulomb=False`` (friction known to be negligible) a
 single record suffices.
 
-Intervals: the residuals are dominated by model error the electrical model leaves out (current
-and commutation quantisation, which the current noise dithers), strongly correlated within a
-record, so ``s²(JᵀJ)⁻¹`` is far too narrow. The recommended procedure repeats the two levels
-K = 4 times; each set is fitted alone and the interval comes from the spread between the sets
-(batch means, Student t with K − 1 degrees of freedom).
+Intervals (:mod:`tuning.intervals`, docs/tuning.md "Intervals"): the residuals are dominated by
+model error the electrical model leaves out (current and commutation quantisation, which the
+current noise dithers), strongly correlated within a record, so ``s²(JᵀJ)⁻¹`` is far too
+narrow. The recommended procedure repeats the two levels K times; each set is fitted alone and
+the interval comes from the spread between the sets (batch means, Student t with K − 1 degrees
+of freedom) plus the encoder quantisation floor of one set (which repetitions without noise do
+not average out). Friction whose interval reaches 0 is reported as not detected, value 0.
 """
 
 from __future__ import annotations
@@ -28,16 +30,24 @@ import cmath
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import optimize
 
 from .identify_coil import correlation_inflation, residual_check
+from .intervals import (
+    QUANTISATION_VARIANCE,
+    batch_means,
+    combined_halfwidth,
+    positive,
+    student_halfwidth,
+)
 from .models import COUNTS_PER_RAD, INNER_PER_OUTER, TS_I, TS_O, MotorData
 from .records import Record, RecordError, record_registers, validate
 
 __all__ = ["MechanicsEstimate", "identify_mechanics", "position_model", "two_level_torques",
-           "electrical_position", "repeat_sets"]
+           "electrical_position", "repeat_sets", "coil_uncertainty"]
 
 
 _CURRENT_KEYS = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
@@ -71,6 +81,18 @@ class MechanicsEstimate:
         K, the number of repeated sets the estimate averages (1: one fit).
     J_repeats : list of float
         J [kg·m²] of each repeated set (K > 1).
+    detected : dict
+        "J", "coulomb", "viscous": the interval lies above 0. A friction that is not detected
+        is reported as 0 with the interval [0, hi] (:func:`tuning.intervals.positive`).
+    raw : dict
+        "J", "coulomb", "viscous" before the detection rule (may be negative) [SI].
+    quantisation_var : dict
+        Variance of "J", "coulomb", "viscous" [SI²] from the encoder's 1-count quantisation
+        (1/12 count² per sample) for this fit (the quantisation floor of
+        :mod:`tuning.intervals`).
+    coil_var : dict
+        Variance of "J", "coulomb", "viscous" [SI²] caused by the coil identification's
+        uncertainty (``coil_sd`` of :func:`identify_mechanics`), shared by all sets.
     """
 
     J: float
@@ -85,6 +107,10 @@ class MechanicsEstimate:
     fitted_velocity: list[np.ndarray] = field(default_factory=list, repr=False)
     repeats: int = 1
     J_repeats: list[float] = field(default_factory=list)
+    detected: dict[str, bool] = field(default_factory=dict)
+    raw: dict[str, float] = field(default_factory=dict)
+    quantisation_var: dict[str, float] = field(default_factory=dict, repr=False)
+    coil_var: dict[str, float] = field(default_factory=dict, repr=False)
 
 
 def position_model(t: np.ndarray, alpha: float, beta: float, delay: float) -> np.ndarray:
@@ -163,7 +189,8 @@ def two_level_torques(J_guess: float, motor: MotorData, n_samples: int,
 def identify_mechanics(records: Record | Sequence[Record], motor: MotorData | str,
                        coulomb: bool = True, viscous: bool = True,
                        current_regs: Mapping[str, float] | None = None,
-                       phase_comp: float | None = None) -> MechanicsEstimate:
+                       phase_comp: float | None = None,
+                       coil_sd: Mapping[str, float] | None = None) -> MechanicsEstimate:
     """Estimate J, KVOUT, viscous and Coulomb friction from TESTA records.
 
     Parameters
@@ -193,6 +220,11 @@ def identify_mechanics(records: Record | Sequence[Record], motor: MotorData | st
     phase_comp : float, optional
         PHASE_COMP register (3.2.126) in use, for the electrical model; default: the records'
         PHASE_COMP, else 0.
+    coil_sd : mapping, optional
+        Relative standard deviations of "R_phase" and "L_phase" of ``motor`` (from the TESTU
+        intervals, :func:`coil_uncertainty`). The electrical model's torque at speed depends
+        on them, the same way in every repeated set, so their effect (first order) is added
+        to the interval as a shared term (docs/tuning.md, "Intervals").
 
     Returns
     -------
@@ -218,10 +250,22 @@ def identify_mechanics(records: Record | Sequence[Record], motor: MotorData | st
         phase_comp = carried.get("PHASE_COMP", 0.0)
     sets = repeat_sets(recs)
     if len(sets) < 2:
-        return _identify_set(recs, md, coulomb, viscous, current_regs, phase_comp)
+        return _detect(_identify_set(recs, md, coulomb, viscous, current_regs, phase_comp,
+                                     coil_sd), md)
     ests = [_identify_set([recs[i] for i in idx], md, coulomb, viscous, current_regs,
-                          phase_comp) for idx in sets]
+                          phase_comp, coil_sd) for idx in sets]
     return _combine(ests, sets, len(recs), md)
+
+
+def coil_uncertainty(coil: Any) -> dict[str, float]:
+    """Relative standard deviations of R_phase and L_phase from a
+    :class:`tuning.identify_coil.CoilEstimate`'s 95 % intervals (half-width / 1.96)."""
+    out = {}
+    for key in ("R_phase", "L_phase"):
+        lo, hi = coil.ci[key]
+        val = getattr(coil, key)
+        out[key] = (hi - lo) / 2.0 / 1.959964 / val if val > 0 else 0.0
+    return out
 
 
 def repeat_sets(recs: Sequence[Record]) -> list[list[int]]:
@@ -241,32 +285,59 @@ def repeat_sets(recs: Sequence[Record]) -> list[list[int]]:
 
 def _combine(ests: list[MechanicsEstimate], sets: list[list[int]], n_recs: int,
              md: MotorData) -> MechanicsEstimate:
-    """Batch means over K repeated sets: value = mean, 95 % interval = t(K−1)·sd/√K."""
+    """Batch means over K repeated sets: value = mean, 95 % interval from the spread between
+    the sets (t, K − 1 dof) and one set's quantisation floor (:mod:`tuning.intervals`)."""
     k = len(ests)
-    tq = float(stats.t.ppf(0.975, k - 1))
-    vals = {nm: np.array([getattr(e, nm) for e in ests])
-            for nm in ("J", "viscous", "coulomb", "delay")}
+    vals = {nm: np.array([getattr(e, nm) for e in ests]) for nm in ("J", "viscous", "coulomb")}
+    vals["delay"] = np.array([e.delay for e in ests])
     mean = {nm: float(v.mean()) for nm, v in vals.items()}
     ci = {}
     for nm in ("J", "viscous", "coulomb"):
-        h = tq * float(vals[nm].std(ddof=1)) / math.sqrt(k)
+        _, var_mean, dof = batch_means(vals[nm])
+        floor = float(np.mean([e.quantisation_var.get(nm, 0.0) + e.coil_var.get(nm, 0.0)
+                               for e in ests]))
+        h = combined_halfwidth(var_mean, dof, floor)
         ci[nm] = (mean[nm] - h, mean[nm] + h)
-    ci["kvout"] = (ci["J"][0] / md.J_m, ci["J"][1] / md.J_m)
     fitted: list[np.ndarray] = [np.zeros(0)] * n_recs
     for e, idx in zip(ests, sets):
         for i, fv in zip(idx, e.fitted_velocity):
             fitted[i] = fv
-    return MechanicsEstimate(J=mean["J"], kvout=mean["J"] / md.J_m, viscous=mean["viscous"],
-                             coulomb=mean["coulomb"], delay=mean["delay"], ci=ci,
-                             nrmse_fit=float(np.mean([e.nrmse_fit for e in ests])),
-                             residual=ests[0].residual,
-                             n_samples=sum(e.n_samples for e in ests), fitted_velocity=fitted,
-                             repeats=k, J_repeats=[float(x) for x in vals["J"]])
+    out = MechanicsEstimate(J=mean["J"], kvout=mean["J"] / md.J_m, viscous=mean["viscous"],
+                            coulomb=mean["coulomb"], delay=mean["delay"], ci=ci,
+                            nrmse_fit=float(np.mean([e.nrmse_fit for e in ests])),
+                            residual=ests[0].residual,
+                            n_samples=sum(e.n_samples for e in ests), fitted_velocity=fitted,
+                            repeats=k, J_repeats=[float(x) for x in vals["J"]],
+                            quantisation_var={nm: float(np.mean(
+                                [e.quantisation_var.get(nm, 0.0) for e in ests]))
+                                for nm in ("J", "viscous", "coulomb")},
+                            coil_var={nm: float(np.mean([e.coil_var.get(nm, 0.0) for e in ests]))
+                                      for nm in ("J", "viscous", "coulomb")})
+    return _detect(out, md)
+
+
+def _detect(est: MechanicsEstimate, md: MotorData) -> MechanicsEstimate:
+    """Apply the detection rule to J, T_c and b (:func:`tuning.intervals.positive`)."""
+    for nm in ("J", "coulomb", "viscous"):
+        raw = est.raw.get(nm, getattr(est, nm))
+        lo, hi = est.ci[nm]
+        if lo == hi == 0.0 and raw == 0.0:  # not estimated (coulomb=False / viscous=False)
+            est.detected[nm] = False
+            est.raw[nm] = 0.0
+            continue
+        b = positive(raw, lo, hi)
+        setattr(est, nm, b.value)
+        est.ci[nm] = b.interval
+        est.detected[nm] = b.detected
+        est.raw[nm] = b.raw
+    est.kvout = est.J / md.J_m
+    est.ci["kvout"] = (est.ci["J"][0] / md.J_m, est.ci["J"][1] / md.J_m)
+    return est
 
 
 def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: bool,
-                  current_regs: Mapping[str, float] | None, phase_comp: float
-                  ) -> MechanicsEstimate:
+                  current_regs: Mapping[str, float] | None, phase_comp: float,
+                  coil_sd: Mapping[str, float] | None = None) -> MechanicsEstimate:
     """One least-squares fit of J, T_c, b over ``recs`` (rigid start, electrical refinement)."""
     levels = sorted({float(np.median(r.input)) for r in recs})
     if coulomb and len(levels) < 2:
@@ -340,7 +411,7 @@ def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: boo
     n = sum(r.n for r in recs)
     if current_regs is not None:
         return _refine_electrical(recs, md, current_regs, phase_comp, J, tc, b, coulomb,
-                                  viscous, pos)
+                                  viscous, pos, coil_sd)
     p = sol.x.size
     dof = max(n - p, 1)
     s2 = float(sol.fun @ sol.fun) / dof
@@ -348,14 +419,14 @@ def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: boo
         cov = s2 * correlation_inflation(sol.fun, len(recs)) * np.linalg.pinv(sol.jac.T @ sol.jac)
     except np.linalg.LinAlgError:
         cov = np.full((p, p), np.inf)
-    tq = float(stats.t.ppf(0.975, dof))
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     ci: dict[str, tuple[float, float]] = {}
     scale = {"J": jscale, "coulomb": k, "viscous": jscale / TS_O, "delay": 1.0}
     vals = {"J": J, "coulomb": tc, "viscous": b, "delay": dl}
     for i, nm in enumerate(names):
-        h = tq * sd[i] * scale[nm]
+        h = student_halfwidth(sd[i] * scale[nm], dof)
         ci[nm] = (vals[nm] - h, vals[nm] + h)
+    qv = _quantisation_var(sol.jac, names, scale)
     if not coulomb:
         ci["coulomb"] = (0.0, 0.0)
     if not viscous:
@@ -368,13 +439,18 @@ def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: boo
     fit = 100.0 * (1 - float(np.linalg.norm(v_all - vh)) / den) if den > 0 else math.nan
     return MechanicsEstimate(J=J, kvout=J / md.J_m, viscous=b, coulomb=tc, delay=dl, ci=ci,
                              nrmse_fit=fit, residual=residual_check(sol.fun, p), n_samples=n,
-                             fitted_velocity=fitted_v)
+                             fitted_velocity=fitted_v, quantisation_var=qv)
 
 
 def _refine_electrical(recs: list[Record], md: MotorData, current_regs: Mapping[str, float],
                        phase_comp: float, J0: float, tc0: float, b0: float, coulomb: bool,
-                       viscous: bool, pos: list[np.ndarray]) -> MechanicsEstimate:
-    """Output-error fit of J (and T_c, b) with :func:`electrical_position`; offsets projected."""
+                       viscous: bool, pos: list[np.ndarray],
+                       coil_sd: Mapping[str, float] | None = None) -> MechanicsEstimate:
+    """Output-error fit of J (and T_c, b) with :func:`electrical_position`; offsets projected.
+
+    ``coil_sd``: relative standard deviations of "R_phase" and "L_phase" (the TESTU
+    identification's); their effect on the estimate is returned in ``coil_var``.
+    """
     k = md.torque_per_vf
     jscale = md.J_m
     bscale = jscale / TS_O
@@ -391,14 +467,14 @@ def _refine_electrical(recs: list[Record], md: MotorData, current_regs: Mapping[
             b = x[i] * bscale
         return x[0] * jscale, tc, b
 
-    def predict(x: np.ndarray) -> list[np.ndarray]:
+    def predict(x: np.ndarray, mdx: MotorData = md) -> list[np.ndarray]:
         J, tc, b = unpack(x)
-        return [electrical_position(r.n, t, J, b, tc, md, current_regs, phase_comp)
+        return [electrical_position(r.n, t, J, b, tc, mdx, current_regs, phase_comp)
                 for r, t in zip(recs, levels)]
 
-    def resid(x: np.ndarray) -> np.ndarray:
+    def resid(x: np.ndarray, mdx: MotorData = md) -> np.ndarray:
         out = []
-        for ph, p in zip(predict(x), pos):
+        for ph, p in zip(predict(x, mdx), pos):
             r = ph - p
             out.append(r - r.mean())
         return np.concatenate(out)
@@ -413,12 +489,32 @@ def _refine_electrical(recs: list[Record], md: MotorData, current_regs: Mapping[
     dof = max(n - p, 1)
     s2 = float(sol.fun @ sol.fun) / dof
     cov = s2 * correlation_inflation(sol.fun, len(recs)) * np.linalg.pinv(sol.jac.T @ sol.jac)
-    tq = float(stats.t.ppf(0.975, dof))
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     scale = {"J": jscale, "coulomb": k, "viscous": bscale}
     vals = {"J": J, "coulomb": tc, "viscous": b}
-    ci = {nm: (vals[nm] - tq * sd[i] * scale[nm], vals[nm] + tq * sd[i] * scale[nm])
-          for i, nm in enumerate(names)}
+    ci = {}
+    for i, nm in enumerate(names):
+        h = student_halfwidth(sd[i] * scale[nm], dof)
+        ci[nm] = (vals[nm] - h, vals[nm] + h)
+    qv = _quantisation_var(sol.jac, names, scale)
+    # the coil's uncertainty moves the model's torque deficit the same way in every set:
+    # first-order sensitivity of the estimate to R and L, δθ = −J⁺·∂r/∂R·δR (Gauss–Newton)
+    cv = dict.fromkeys(names, 0.0)
+    if coil_sd:
+        base = sol.fun
+        jp = np.linalg.pinv(sol.jac)[: len(names)]
+        for key, rel in coil_sd.items():
+            if not rel > 0.0:
+                continue
+            h = 1e-3
+            dr = (resid(sol.x, md.with_(**{key: getattr(md, key) * (1.0 + h)})) - base) / h
+            dth = -(jp @ dr) * rel
+            for i, nm in enumerate(names):
+                cv[nm] += float(dth[i] * scale[nm]) ** 2
+    for nm in names:
+        h2 = student_halfwidth(math.sqrt(cv[nm]), math.inf)
+        c0, w0 = vals[nm], ci[nm][1] - vals[nm]
+        ci[nm] = (c0 - math.hypot(w0, h2), c0 + math.hypot(w0, h2))
     ci.setdefault("coulomb", (0.0, 0.0))
     ci.setdefault("viscous", (0.0, 0.0))
     ci["kvout"] = (ci["J"][0] / md.J_m, ci["J"][1] / md.J_m)
@@ -429,4 +525,16 @@ def _refine_electrical(recs: list[Record], md: MotorData, current_regs: Mapping[
     fit = 100.0 * (1 - float(np.linalg.norm(v_all - vh)) / den) if den > 0 else math.nan
     return MechanicsEstimate(J=J, kvout=J / md.J_m, viscous=b, coulomb=tc, delay=0.0, ci=ci,
                              nrmse_fit=fit, residual=residual_check(sol.fun, p), n_samples=n,
-                             fitted_velocity=fitted_v)
+                             fitted_velocity=fitted_v, quantisation_var=qv, coil_var=cv)
+
+
+def _quantisation_var(jac: np.ndarray, names: list[str], scale: Mapping[str, float]
+                      ) -> dict[str, float]:
+    """Variance [SI²] of the fitted parameters under white encoder quantisation noise,
+    ``(1/12)·(JᵀJ)⁻¹`` (position residuals in counts; ``jac`` w.r.t. the scaled parameters,
+    shape (n, ≥ len(names)), ``names`` its first columns)."""
+    try:
+        cov = QUANTISATION_VARIANCE * np.linalg.pinv(jac.T @ jac)
+    except np.linalg.LinAlgError:
+        return {}
+    return {nm: float(max(cov[i, i], 0.0)) * scale[nm] ** 2 for i, nm in enumerate(names)}

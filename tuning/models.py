@@ -1,7 +1,7 @@
 """Plant and filter models of the MAC50–141 current and speed loops (python-control).
 
 Everything here is the *exact* discrete model the firmware and the simulator implement
-(MODEL.md §1, §2, §4; manual 4.2, 4.3 and the filter registers 3.2.89–3.2.111):
+(docs/model.md §2, §3, §6, §7; manual 4.2, 4.3 and the filter registers 3.2.89–3.2.111):
 
 * inner (current) loop at ``TS_I`` = 128 µs, outer (speed) loop at ``TS_O`` = 15·TS_I = 1.92 ms;
 * per phase, from the PWM value ``U`` [PWM counts] to the measured current ``I_IST`` [ADC counts]::
@@ -32,6 +32,8 @@ import control as ct
 import numpy as np
 from scipy.linalg import expm
 
+from jvl_gym.families.mac050_141 import constants as _c
+
 __all__ = [
     "TS_I",
     "TS_O",
@@ -55,18 +57,23 @@ __all__ = [
     "freqresp",
 ]
 
-TS_I: float = 128e-6  #: inner (current-loop) sample time [s], MODEL.md §1
-INNER_PER_OUTER: int = 15  #: inner samples per outer sample
-TS_O: float = INNER_PER_OUTER * TS_I  #: outer (speed-loop) sample time [s] = 1.92 ms
-PWM_FULL: int = 1023  #: UA_VAL full scale ↔ U_supply/2 phase-to-midpoint (MODEL.md §2)
-ADC_FULL: int = 1023  #: IA_IST.. measurement range (manual 3.2.139)
-COUNTS_PER_REV: int = 4096  #: encoder counts per revolution (manual 3.2.12)
-COUNTS_PER_RAD: float = COUNTS_PER_REV / (2.0 * math.pi)
+#: sample times and scales, one source: the family's constants
+#: (:mod:`jvl_gym.families.mac050_141.constants`; manual 1.2, 3.2.12, 3.2.139; docs/model.md
+#: §2). TS_I: inner (current-loop) sample time [s]; TS_O = INNER_PER_OUTER·TS_I: outer
+#: (speed-loop) sample time [s]; PWM_FULL: UA_VAL full scale ↔ U_supply/2; ADC_FULL: IA_IST..
+#: measurement range; COUNTS_PER_REV: encoder counts per revolution.
+TS_I: float = _c.INNER_DT
+INNER_PER_OUTER: int = _c.INNER_PER_OUTER
+TS_O: float = _c.OUTER_DT
+PWM_FULL: int = _c.PWM_FULL
+ADC_FULL: int = _c.ADC_FULL
+COUNTS_PER_REV: int = _c.COUNTS_PER_REV
+COUNTS_PER_RAD: float = COUNTS_PER_REV / (2.0 * math.pi)  #: encoder counts per radian
 
 
 @dataclass(frozen=True)
 class MotorData:
-    """Physical data of one motor, SI units (MODEL.md §7; representative values).
+    """Physical data of one motor, SI units (docs/model.md §15; representative values).
 
     Parameters
     ----------
@@ -151,7 +158,7 @@ def _tf(num: list[float], den: list[float], dt: float) -> ct.TransferFunction:
 def coil_tf(motor: MotorData) -> ct.TransferFunction:
     """Per-phase coil, ``U`` [PWM counts] → ``I_IST`` [ADC counts], ZOH-exact, at TS_I.
 
-    ``g(1 − a)/(z^d (z − a))`` (MODEL.md §6, one-sample PWM delay for d = 1).
+    ``g(1 − a)/(z^d (z − a))`` (docs/model.md §6, one-sample PWM delay for d = 1).
     """
     a, g, d = motor.coil_pole, motor.coil_gain, int(motor.pwm_delay)
     den = np.polymul([1.0, -a], [1.0] + [0.0] * d)

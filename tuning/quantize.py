@@ -1,12 +1,16 @@
-"""Quantisation of filter coefficients to their register formats (manual 3.2.89–3.2.111, 3.2.13).
+"""Quantisation of filter coefficients to their register formats (manual 3.1, 3.2.89–3.2.111,
+3.2.13, 3.2.126, 3.2.127).
 
-Fixed4 = int16/4096 (±7.999756, resolution 2.44e-4), Fixed8 = int16/256 (±127.996, resolution
-3.91e-3). A value outside its format's range raises :class:`QuantizationError` naming the
-register (nothing is silently saturated). Integrators stay exact: a filter whose denominator
-coefficients sum to 1 (``KIFY1 + KIFY0 = 1``, ``KVFY3 + … + KVFY0 = 1``) is quantised so that the
-stored values still sum to exactly 1 (the largest-remainder rounding of the sum), and the sum of a
-PI numerator (the integral gain ``KVFX4 + KVFX3``, ``KIFX2 + KIFX1``) is rounded first and the
-direct term derived from it, so the integral gain is as exact as the format allows.
+Formats, scales, ranges and manual sections come from the register table
+(:data:`jvl_gym.registers.MAC050_141`, docs/registers.md), the one source of these facts:
+Fixed4 = raw/4096 and Fixed8 = raw/256 with the raw range of the table (±32767, so Fixed4
+±7.999756, Fixed8 ±127.996; AMPLITUDE 0 … 0.83). A value outside its register's range raises
+:class:`QuantizationError` naming the register and its section (nothing is silently saturated).
+Integrators stay exact: a filter whose denominator coefficients sum to 1 (``KIFY1 + KIFY0 = 1``,
+``KVFY3 + … + KVFY0 = 1``) is quantised so that the stored values still sum to exactly 1 (the
+largest-remainder rounding of the sum), and the sum of a PI numerator (the integral gain
+``KVFX4 + KVFX3``, ``KIFX2 + KIFX1``) is rounded first and the direct term derived from it, so the
+integral gain is as exact as the format allows.
 """
 
 from __future__ import annotations
@@ -15,7 +19,11 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
+from jvl_gym.registers import Format, round_half_away
+
 __all__ = [
+    "FILTER_REGISTERS",
     "FORMATS",
     "QuantizationError",
     "register_format",
@@ -23,19 +31,23 @@ __all__ = [
     "quantize_registers",
 ]
 
-#: name → (format, scale, min, max) for every register the toolkit writes
-FIXED4 = ("Fixed4", 4096, -32768, 32767)
-FIXED8 = ("Fixed8", 256, -32768, 32767)
-FORMATS: dict[str, tuple[str, int, int, int]] = {
-    **{n: FIXED4 for n in ("KIFX2", "KIFX1", "KIFY1", "KIFY0")},
-    **{n: FIXED4 for n in ("KVFX4", "KVFX3", "KVFX2", "KVFX1", "KVFY3", "KVFY2", "KVFY1",
-                           "KVFY0")},
-    **{n: FIXED8 for n in ("KIB1", "KIB0", "KFF3", "KFF2", "KFF1", "KFF0", "GEARB", "KVB3",
-                           "KVB2", "KVB1", "KVB0", "KVOUT", "AMPLITUDE", "PHASE_COMP")},
-}
-_SECTIONS = {"KIF": "3.2.106", "KIB": "3.2.110", "KFF": "3.2.89", "KVF": "3.2.93",
-             "KVB": "3.2.101", "GEA": "3.2.101", "KVO": "3.2.13", "AMP": "3.2.127",
-             "PHA": "3.2.126"}
+#: the registers the toolkit designs and quantises (manual 3.2.13, 3.2.89–3.2.111, 3.2.126–127)
+FILTER_REGISTERS: tuple[str, ...] = (
+    "KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0",
+    "KFF3", "KFF2", "KFF1", "KFF0", "GEARB", "KVB3", "KVB2", "KVB1", "KVB0",
+    "KVFX4", "KVFX3", "KVFX2", "KVFX1", "KVFY3", "KVFY2", "KVFY1", "KVFY0",
+    "KVOUT", "AMPLITUDE", "PHASE_COMP")
+
+
+def _table_format(name: str) -> tuple[str, int, int, int]:
+    reg = MAC050_141.lookup(name)
+    if reg.format not in (Format.FIXED4, Format.FIXED8):
+        raise ValueError(f"{name} is {reg.format.value}, not a Fixed filter register")
+    return reg.format.value, reg.scale, reg.raw_min, reg.raw_max
+
+
+#: name → (format, scale, raw min, raw max), read from the register table
+FORMATS: dict[str, tuple[str, int, int, int]] = {n: _table_format(n) for n in FILTER_REGISTERS}
 
 
 class QuantizationError(ValueError):
@@ -43,7 +55,7 @@ class QuantizationError(ValueError):
 
 
 def register_format(name: str) -> tuple[str, int, int, int]:
-    """(format name, scale, raw min, raw max) of a filter register."""
+    """(format name, scale, raw min, raw max) of a filter register (from the register table)."""
     try:
         return FORMATS[name]
     except KeyError:
@@ -51,15 +63,35 @@ def register_format(name: str) -> tuple[str, int, int, int]:
 
 
 def quantize_value(name: str, value: float) -> float:
-    """Round ``value`` to register ``name``'s format; raise if it does not fit."""
+    """Round ``value`` to register ``name``'s format; raise if it does not fit.
+
+    Parameters
+    ----------
+    name : str
+        A register of :data:`FILTER_REGISTERS`.
+    value : float
+        Ideal value in user units.
+
+    Returns
+    -------
+    float
+        ``round(value·scale)/scale``, halves away from zero as the motor stores it (scale
+        4096 or 256, manual 3.1; :func:`jvl_gym.registers.round_half_away`).
+
+    Raises
+    ------
+    QuantizationError
+        The stored integer is outside the register's raw range (message: the range and the
+        manual section from the register table), or KVOUT is not positive (3.2.13).
+    """
     fmt, scale, lo, hi = register_format(name)
-    raw = round(float(value) * scale)
+    raw = int(round_half_away(float(value) * scale))
     if not lo <= raw <= hi:
-        sec = _SECTIONS.get(name[:3], "3.2")
+        sec = MAC050_141.lookup(name).section
         raise QuantizationError(
             f"{name} = {value:.6g} does not fit {fmt} (range {lo / scale:.6g} … {hi / scale:.6g}, "
             f"manual {sec}); reduce the target bandwidth or change the design")
-    if name == "KVOUT" and not 0.0 < raw / scale <= 127.996:
+    if name == "KVOUT" and not raw > 0:
         raise QuantizationError(f"KVOUT = {value:.6g} must be positive (manual 3.2.13)")
     return raw / scale
 
@@ -68,7 +100,7 @@ def _exact_sum(names: list[str], regs: dict[str, float], out: dict[str, float]) 
     """Quantise ``names`` so their stored sum equals the rounded sum of the ideal values."""
     _, scale, _, _ = register_format(names[0])
     ideal = np.array([regs[n] for n in names]) * scale
-    target = round(float(ideal.sum()))
+    target = int(round_half_away(float(ideal.sum())))
     raw = np.floor(ideal)
     rem = ideal - raw
     need = int(target - raw.sum())

@@ -180,29 +180,89 @@ def save_csv(rec: Record, path: str | os.PathLike[str]) -> Path:
     return path
 
 
+def _registers_header(path: Path, ln: int, text: str) -> dict[str, float]:
+    """The ``# registers:`` line ``text`` (line ``ln`` of ``path``): NAME=value pairs of
+    distinct writable registers of the MAC050–141 table, each value finite and in its range."""
+    from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
+    from jvl_gym.registers import Access, RegisterError, to_raw
+
+    out: dict[str, float] = {}
+    for item in text.split():
+        name, eq, value = item.partition("=")
+        where = f"{path}:{ln}: '# registers:' item {item!r}"
+        if not eq:
+            raise RecordError(f"{where} is not NAME=value (pairs separated by spaces)")
+        if name in out:
+            raise RecordError(f"{where}: {name} is given more than once")
+        try:
+            reg = MAC050_141.lookup(name)
+            number = float(value)
+            if reg.access != Access.RW:
+                raise RecordError(f"{where}: {name} is not a parameter register")
+            to_raw(reg, number)
+        except (RegisterError, ValueError) as exc:
+            raise RecordError(f"{where}: {exc}") from exc
+        out[name] = number
+    return out
+
+
 def load_csv(path: str | os.PathLike[str]) -> Record:
-    """Read and validate a record CSV; :class:`RecordError` on any format problem."""
+    """Read and validate a record CSV; :class:`RecordError` on any format problem.
+
+    The error names the file and, for a problem of one line, the line: a file that is not
+    UTF-8 text, a repeated header key or column name, a row with the wrong number of fields or
+    a value that is not a finite number, a ``sample`` column that does not count 0, 1, 2, …,
+    a ``# registers:`` item that is not a writable register with a value in its range.
+    """
     path = Path(path)
     if not path.is_file():
         raise RecordError(f"record file not found: {path}")
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise RecordError(f"{path}: not UTF-8 text ({exc.reason} at byte {exc.start}); save the "
+                          "record as UTF-8 CSV") from exc
+    except OSError as exc:
+        raise RecordError(f"{path}: cannot be read: {exc.strerror or exc}") from exc
     header: dict[str, str] = {}
-    rows: list[list[str]] = []
+    header_line: dict[str, int] = {}
+    rows: list[list[float]] = []
     columns: list[str] | None = None
-    for ln, line in enumerate(path.read_text().splitlines(), 1):
+    for ln, line in enumerate(text.splitlines(), 1):
         line = line.strip()
         if not line:
             continue
         if line.startswith("#"):
             if ":" in line:
                 k, v = line[1:].split(":", 1)
-                header[k.strip()] = v.strip()
+                k = k.strip()
+                if k in header:
+                    raise RecordError(f"{path}:{ln}: header '# {k}:' repeats line "
+                                      f"{header_line[k]}")
+                header[k] = v.strip()
+                header_line[k] = ln
             continue
+        fields = [f.strip() for f in line.split(",")]
         if columns is None:
-            columns = [c.strip() for c in line.split(",")]
+            twice = sorted({f for f in fields if fields.count(f) > 1})
+            if twice:
+                raise RecordError(f"{path}:{ln}: column {', '.join(twice)} appears more than "
+                                  "once; a record has one column per channel")
+            columns = fields
             continue
-        rows.append(line.split(","))
-        if len(rows[-1]) != len(columns):
-            raise RecordError(f"{path}:{ln}: expected {len(columns)} fields")
+        if len(fields) != len(columns):
+            raise RecordError(f"{path}:{ln}: expected {len(columns)} fields "
+                              f"({','.join(columns)}), got {len(fields)}")
+        try:
+            row = [float(f) for f in fields]
+        except ValueError as exc:
+            raise RecordError(f"{path}:{ln}: not numeric: {line!r}") from exc
+        if not all(math.isfinite(x) for x in row):
+            raise RecordError(f"{path}:{ln}: values must be finite numbers, got {line!r}")
+        if "sample" in columns and row[columns.index("sample")] != len(rows):
+            raise RecordError(f"{path}:{ln}: sample {fields[columns.index('sample')]} where "
+                              f"{len(rows)} is due; rows must count 0, 1, 2, … in order")
+        rows.append(row)
     kind = header.get("kind")
     if kind not in CHANNELS:
         raise RecordError(f"{path}: header '# kind:' must be TESTU or TESTA, got {kind!r}")
@@ -211,23 +271,22 @@ def load_csv(path: str | os.PathLike[str]) -> Record:
     a_in, a_out = CHANNELS[kind]
     if columns is None or a_in not in columns or a_out not in columns:
         raise RecordError(f"{path}: a {kind} record needs columns {a_in} and {a_out}")
+    data = np.array(rows, dtype=float).reshape(len(rows), len(columns))
     try:
-        data = np.array(rows, dtype=float).reshape(len(rows), len(columns))
         rate = float(header["rate_hz"])
     except ValueError as exc:
-        raise RecordError(f"{path}: not numeric: {exc}") from exc
+        raise RecordError(f"{path}:{header_line['rate_hz']}: '# rate_hz:' is not a number: "
+                          f"{header['rate_hz']!r}") from exc
     meta: dict[str, Any] = {k: v for k, v in header.items()
                             if k not in ("kind", "rate_hz", "motor")}
     if "registers" in meta:
-        try:
-            meta["registers"] = {n.strip(): float(x) for n, x in
-                                 (item.split("=", 1) for item in meta["registers"].split())}
-        except ValueError as exc:
-            raise RecordError(f"{path}: '# registers:' must be NAME=value pairs separated by "
-                              f"spaces: {exc}") from exc
+        meta["registers"] = _registers_header(path, header_line["registers"], meta["registers"])
     rec = Record(kind, rate, data[:, columns.index(a_in)], data[:, columns.index(a_out)],
                  header.get("motor"), meta)
-    return validate(rec)
+    try:
+        return validate(rec)
+    except RecordError as exc:
+        raise RecordError(f"{path}: {exc}") from exc
 
 
 def record_registers(recs: Record | Sequence[Record]) -> dict[str, float] | None:

@@ -28,9 +28,10 @@ from .models import (  # noqa: E402
     speed_open_loop,
     speed_plant,
 )
-from .verify import frequency_grid  # noqa: E402
+from .verify import frequency_grid, loop_metrics  # noqa: E402
 
-__all__ = ["text_table", "plot_fits", "plot_bode", "plot_steps", "write_report"]
+__all__ = ["text_table", "plot_fits", "plot_bode", "plot_steps", "write_report", "bode_figure",
+           "steps_figure"]
 
 
 def _ci(ci: tuple[float, float], scale: float = 1.0, fmt: str = ".4g") -> str:
@@ -52,7 +53,7 @@ def text_table(ident: Identification | None, design: Design,
                                                    c.ci["L_line"][1] * 1e3), "L_line_mH"),
             ("coil pole a", c.pole, c.ci["pole"], "pole"),
             ("coil gain g [cnt/cnt]", c.gain, c.ci["gain"], "gain"),
-            ("PWM delay [samples]", c.delay, (c.delay, c.delay), "delay"),
+            ("PWM delay [samples]", c.delay, c.ci.get("delay", (c.delay, c.delay)), "delay"),
             ("J total [kg m^2]", m.J, m.ci["J"], "J"),
             ("KVOUT = J/J_m", m.kvout, m.ci["kvout"], "kvout"),
             ("viscous b [N m s/rad]", m.viscous, m.ci["viscous"], "viscous"),
@@ -60,14 +61,21 @@ def text_table(ident: Identification | None, design: Design,
         ]
         for name, val, ci, key in rows:
             tv = "" if not truth or key not in truth else f"{truth[key]:.4g}"
-            lines.append(f"{name:<24}{val:>14.5g}  {_ci(ci):<30}{tv:>12}")
+            flag = ""
+            if key in ("viscous", "coulomb", "J") and not m.detected.get(key, True):
+                flag = "  not detected (interval reaches 0)"
+            lines.append(f"{name:<24}{val:>14.5g}  {_ci(ci):<30}{tv:>12}{flag}")
         lines.append(f"TESTU fit {c.nrmse_fit:.2f} % NRMSE, residual white: "
                      f"{c.residual['white']} (Box-Pierce p = {c.residual['box_pierce_p']:.2f}); "
                      f"TESTA fit {m.nrmse_fit:.2f} %, residual white: {m.residual['white']}")
+        n_u = sum(r.kind == "TESTU" for r in ident.records)
+        lines.append("TESTU intervals: " + ("whole-record jackknife over "
+                                            f"{n_u} records + quantisation floor" if n_u >= 3
+                                            else "fit covariance x correlation inflation"))
         if m.repeats > 1:
             lines.append(f"TESTA intervals: spread of {m.repeats} repeated two-level sets "
-                         "(Student t, K-1 dof); J of each set: "
-                         + ", ".join(f"{j:.5g}" for j in m.J_repeats))
+                         "(Student t, K-1 dof) + quantisation and coil-uncertainty terms; J of "
+                         "each set: " + ", ".join(f"{j:.5g}" for j in m.J_repeats))
         else:
             lines.append("TESTA intervals: one fit (statistical only, too narrow under model "
                          "error; record the two levels repeatedly)")
@@ -95,20 +103,32 @@ def text_table(ident: Identification | None, design: Design,
                  f"up to A_SOLL {g['A_SOLL_max']:.0f} keep half of it for regulation")
     for n in design.notes:
         lines.append(f"note: {n}")
+    acc = getattr(design, "acceptance", None)
+    if acc is not None:
+        dist, vs, a = acc.move
+        lines += ["", f"Acceptance step (P_MODE move of {dist} counts, V_SOLL {vs}, A_SOLL {a}, "
+                  "simulated on the identified motor; settle = within INPOSWIN for good)"]
+        lines += [f"  {k:<26}{_settle(v)}" for k, v in acc.settle_s.items()]
+        lines.append(f"  {acc.reason}")
     return "\n".join(lines) + "\n"
+
+
+def _settle(t: float) -> str:
+    return "never within 2 s" if not math.isfinite(t) else f"settles in {1e3 * t:.0f} ms"
 
 
 def plot_fits(ident: Identification, path: str | os.PathLike[str]) -> Path:
     """TESTU and TESTA records with the fitted model outputs."""
     fig, ax = plt.subplots(1, 2, figsize=(10, 3.8))
-    r = ident.records[0]
+    r = next(rec for rec in ident.records if rec.kind == "TESTU")
     k = np.arange(r.n)
     ax[0].plot(k, r.output, "o", ms=3, label="IC_IST measured")
     ax[0].plot(k, ident.coil.fitted[0], "-", label=f"model, d = {ident.coil.delay}")
     ax[0].set(xlabel="inner sample (128 us)", ylabel="ADC counts", title="TESTU fit")
     ax[0].legend()
     seen: set[float] = set()
-    for rec, fv in zip(ident.records[1:], ident.mechanics.fitted_velocity):
+    testa = [rec for rec in ident.records if rec.kind == "TESTA"]
+    for rec, fv in zip(testa, ident.mechanics.fitted_velocity):
         kk = np.arange(rec.n)
         first = rec.input[0] not in seen  # repetitions of a level: unlabelled, lighter
         seen.add(rec.input[0])
@@ -123,9 +143,18 @@ def plot_fits(ident: Identification, path: str | os.PathLike[str]) -> Path:
     return Path(path)
 
 
-def plot_bode(design: Design, motor: Any, J_total: float, path: str | os.PathLike[str]
-              ) -> Path:
-    """Bode plots of the current and speed open loops."""
+def _phase_crossing_hz(f: np.ndarray, mag_db: np.ndarray, phase_deg: np.ndarray) -> float:
+    """Lowest frequency where the phase falls through −180° (mod 360°) with |L| < 1, or nan."""
+    wrapped = (phase_deg + 180.0) % 360.0 - 180.0  # −180 … 180, −180° crossings are jumps
+    for k in range(1, f.size):
+        if wrapped[k] - wrapped[k - 1] > 180.0 and mag_db[k] < 0:
+            return float(f[k])
+    return math.nan
+
+
+def bode_figure(design: Design, motor: Any, J_total: float) -> Any:
+    """Bode plots of the current and speed open loops with their gain crossover (and the phase
+    margin there) and their −180° crossing (and the gain margin there) marked."""
     fig, ax = plt.subplots(2, 2, figsize=(10, 6), sharex="col")
     loops = [("current loop", current_open_loop(motor, design.registers)),
              ("speed loop", speed_open_loop(speed_plant(motor, design.registers, J_total),
@@ -134,32 +163,66 @@ def plot_bode(design: Design, motor: Any, J_total: float, path: str | os.PathLik
         w = frequency_grid(lp.dt, 800, lowest=1e-3)
         resp = freqresp(lp, w)
         f = w / (2 * math.pi)
-        ax[0, j].semilogx(f, 20 * np.log10(np.abs(resp)))
+        mag = 20 * np.log10(np.abs(resp))
+        phase = np.degrees(np.unwrap(np.angle(resp)))
+        ax[0, j].semilogx(f, mag)
         ax[0, j].axhline(0, color="k", lw=0.5)
         ax[0, j].set(title=name, ylabel="|L| dB")
-        ax[1, j].semilogx(f, np.degrees(np.unwrap(np.angle(resp))))
+        ax[1, j].semilogx(f, phase)
         ax[1, j].axhline(-180, color="k", lw=0.5)
         ax[1, j].set(xlabel="Hz", ylabel="phase deg")
+        m = loop_metrics(lp)
+        if math.isfinite(m.crossover_hz) and math.isfinite(m.pm_deg):
+            fc = m.crossover_hz
+            p_c = float(np.interp(math.log(fc), np.log(f), phase))
+            for a in ax[:, j]:
+                a.axvline(fc, color="C3", lw=0.8, ls=":", label=f"crossover {fc:.3g} Hz")
+            ax[1, j].vlines(fc, p_c - m.pm_deg, p_c, color="C3", lw=2)
+            ax[1, j].annotate(f"PM {m.pm_deg:.1f}°", (fc, p_c), xytext=(4, 4),
+                              textcoords="offset points", color="C3", fontsize=8)
+            ax[0, j].legend(loc="lower left", fontsize=8)
+        f180 = _phase_crossing_hz(f, mag, phase)
+        if math.isfinite(f180) and math.isfinite(m.gm_db):
+            ax[0, j].vlines(f180, -m.gm_db, 0, color="C2", lw=2)
+            ax[0, j].annotate(f"GM {m.gm_db:.1f} dB", (f180, -m.gm_db), xytext=(4, -10),
+                              textcoords="offset points", color="C2", fontsize=8)
     fig.tight_layout()
+    return fig
+
+
+def plot_bode(design: Design, motor: Any, J_total: float, path: str | os.PathLike[str]
+              ) -> Path:
+    """Bode plots of the current and speed open loops (:func:`bode_figure`) as a PNG."""
+    fig = bode_figure(design, motor, J_total)
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return Path(path)
 
 
-def plot_steps(design: Design, motor: Any, J_total: float, path: str | os.PathLike[str],
-               simulated: np.ndarray | None = None, v_step: float | None = None) -> Path:
-    """Closed-loop speed step response of the model and, optionally, of the simulator."""
+def steps_figure(design: Design, motor: Any, J_total: float,
+                 simulated: np.ndarray | None = None, v_step: float | None = None) -> Any:
+    """Closed-loop speed step response of the model and, optionally, of the simulator
+    (V_IST over the V_SOLL step), both as a fraction of the commanded speed."""
     cl = speed_closed_loop(speed_plant(motor, design.registers, J_total), design.registers)
     n = 150
     t, y = ct.step_response(cl, T=np.arange(n) * cl.dt)
     fig, ax = plt.subplots(figsize=(6, 3.8))
-    ax.plot(np.arange(n), np.squeeze(y), label="model (unit step, 1/16 units)")
+    ax.plot(np.arange(n), np.squeeze(y), label="model")
     if simulated is not None and v_step:
         ax.plot(np.arange(simulated.shape[0]), 16 * simulated / v_step, ".", ms=3,
-                label="MotorArray V_MODE step")
-    ax.set(xlabel="outer sample (1.92 ms)", ylabel="normalised speed", title="speed step")
-    ax.legend()
+                label=f"MotorArray V_MODE step (V_SOLL {v_step:g})")
+    ax.axhline(1.0, color="k", lw=0.5)
+    ax.set(xlabel="outer sample (1.92 ms)", ylabel="speed / commanded speed",
+           title="speed step")
+    ax.legend(loc="lower right")
     fig.tight_layout()
+    return fig
+
+
+def plot_steps(design: Design, motor: Any, J_total: float, path: str | os.PathLike[str],
+               simulated: np.ndarray | None = None, v_step: float | None = None) -> Path:
+    """The speed step responses (:func:`steps_figure`) as a PNG."""
+    fig = steps_figure(design, motor, J_total, simulated, v_step)
     fig.savefig(path, dpi=100)
     plt.close(fig)
     return Path(path)

@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from jvl_gym.config import MotorConfig, load_motor
-from jvl_gym.constants import OUTER_DT, RECORDBIT
+from jvl_gym.families.mac050_141.constants import OUTER_DT, RECORDBIT, TEST_RECORD_SAMPLES
 
 from .records import RecordError
 
@@ -104,13 +104,19 @@ class SerialMotor:
 
 
 def autotune_over_serial(port: str, motor: str, address: int = 1, time_scale: float = 1.0,
-                         n_coil: int = 11, n_mech: int = 11, structure: str = "pi",
-                         write: bool = False, progress: Any = None) -> tuple[Any, Any]:
+                         n_coil: int = TEST_RECORD_SAMPLES, n_mech: int = TEST_RECORD_SAMPLES,
+                         structure: str = "pi", write: bool = False, progress: Any = None,
+                         accept: bool = True) -> tuple[Any, Any]:
     """Identify and design on a motor behind ``port`` (device path or pyserial URL).
 
-    Runs TESTU and the two-level TESTA through MacTalk, synthesises and quantises the filters,
-    and, with ``write``, writes them to the motor and reads them back. Returns
-    ``(Identification, Design)``. The motor must be in INIT_MODE and free to turn.
+    Runs TESTU and the two-level TESTA through MacTalk with the firmware's record length
+    (``n_coil``, ``n_mech``: 11 samples, manual 4.4.9/4.4.10; several records are combined,
+    :func:`tuning.autotune.testa_repeats`, :func:`tuning.autotune.testu_repeats`),
+    synthesises and quantises the filters, keeps the best candidate by the acceptance step
+    (``accept``; simulated on the identified motor, :mod:`tuning.acceptance`), and, with
+    ``write``, writes the kept registers to the motor and reads them back. Returns
+    ``(Identification, Design)``; ``Design.acceptance`` holds the acceptance result. The motor
+    must be in INIT_MODE and free to turn.
     """
     from jvl_gym.protocol import MacTalkClient
 
@@ -122,8 +128,14 @@ def autotune_over_serial(port: str, motor: str, address: int = 1, time_scale: fl
         if int(m.read("MODE_REG")[0]) != 0:
             raise RecordError("the motor must be in INIT_MODE (MODE_REG = 0) to be identified")
         ident = identify_motors(m, n_coil, n_mech, progress=say)[0]
-        design = synthesize(ident.motor, ident.mechanics.J, ident.mechanics.coulomb,
-                            structure=structure)
+        if accept:
+            from .acceptance import autotune_designs
+
+            say("acceptance: simulating the candidates on the identified motor")
+            design = autotune_designs([ident], structure)[0].chosen.design
+        else:
+            design = synthesize(ident.motor, ident.mechanics.J, ident.mechanics.coulomb,
+                                structure=structure)
         bad = verify_design(design)
         if write and not bad:
             say("writing the synthesised registers and reading them back")

@@ -17,7 +17,7 @@ the velocity error in 1/16 units, ``16·(kp + ki·z/(z − 1))``, in one of two 
 * ``"ip"`` (default): integral in VF (KVFX4 = ki, KVFY3 = 1) and the proportional part in the
   feedback filter VB = 1 + (kp/ki)(1 − z⁻¹) (KVB3 = 1 + kp/ki, KVB2 = −kp/ki). The reference
   path has no zero, so a velocity step has (almost) no overshoot, and the direct gain
-  ``KVOUT·KVFX4·KFF3 = KVOUT·ki ≠ 0`` keeps the function correction working (MODEL.md §5).
+  ``KVOUT·KVFX4·KFF3 = KVOUT·ki ≠ 0`` keeps the function correction working (docs/model.md §8).
   ``setpoint_weight`` β puts β·kp back into FF (FF = 1 + β(kp/ki)(1 − z⁻¹)), between I-P (β=0)
   and PI (β=1).
 
@@ -263,7 +263,8 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
                       robust_pm_min: float = 35.0,
                       robust_gains: tuple[float, ...] = (0.5, 2.0),
                       gains: tuple[float, float] | None = None, coulomb: float = 0.0,
-                      position_window: int = 10) -> SpeedDesign:
+                      position_window: int = 10,
+                      position_integral: bool | None = None) -> SpeedDesign:
     """Design FF, VB, VF and KVOUT for a target loop bandwidth.
 
     Parameters
@@ -292,6 +293,9 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
         is added (``"pi"`` structure): the largest that keeps the acceptance margins.
     position_window : int
         In-position window the moves must settle in [counts] (INPOSWIN, 3.2.33).
+    position_integral : bool, optional
+        ``"pi"`` only: force the position integral on (True) or off (False); default (None)
+        the dead-band rule above. The acceptance step of :mod:`tuning.acceptance` tries both.
 
     Returns
     -------
@@ -348,15 +352,16 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
     kpn, kin, kp, ki, m, rpm = best
     kvout = J_total / motor.J_m
     kii = 0.0
-    if coulomb > 0.0 and structure == "pi":
-        band = friction_dead_band(motor, coulomb, kvout, ki)
-        if band > 0.5 * position_window:
+    if structure == "pi" and position_integral is not False:
+        band = friction_dead_band(motor, coulomb, kvout, ki) if coulomb > 0.0 else 0.0
+        if position_integral or band > 0.5 * position_window:
             kii, m, rpm = _position_integral(pn, pd, pw, rl, z, w, kp, ki, kpl16, robust_gains,
                                              m, rpm)
-            notes.append(f"friction dead band {band:.0f} counts > half the {position_window}-"
-                         f"count window: position integral KVFX sum {kii:.5f}"
-                         if kii > 0 else f"friction dead band {band:.0f} counts; no position "
-                         "integral meets the margins")
+            why = ("requested" if position_integral else
+                   f"friction dead band {band:.0f} counts > half the {position_window}-count "
+                   "window")
+            notes.append(f"{why}: position integral KVFX sum {kii:.5f}" if kii > 0 else
+                         f"{why}; no position integral meets the margins")
     if not 1.0 <= kvout <= 10.0:
         notes.append(f"KVOUT = {kvout:.2f} is outside the manual's recommended 1..10 (3.2.13)")
     regs = speed_registers(kp, ki, kvout, structure, setpoint_weight, kii)
@@ -417,7 +422,7 @@ def torque_guidance(motor: MotorData, J_total: float, coulomb: float = 0.0,
         Torque limit T_SOLL (0..1023 of peak, manual 3.2.7).
     reserve : float
         Fraction of T_SOLL kept for the regulator (disturbances, tracking): the profile may
-        use ``(1 − reserve)·T_SOLL``. With the function correction (MODEL.md §5) a profile that
+        use ``(1 − reserve)·T_SOLL``. With the function correction (docs/model.md §8) a profile that
         needs more than T_SOLL is slowed down and FNCERR grows.
 
     Returns

@@ -23,9 +23,12 @@ def __getattr__(name: str) -> Any:
 
 
 def _register() -> None:
-    # Gymnasium ids (jvl_gym/...-v0); registering imports no kernel code.
+    # Gymnasium ids (jvl_gym/...-v0); registering imports no kernel code. The compile notice
+    # (jvl_gym.engine.notice) is installed before any jvl_gym function can compile.
+    from .engine.notice import install
     from .envs.registration import register_envs
 
+    install()
     register_envs()
 
 

@@ -1,14 +1,40 @@
-"""``jvl-gym`` command line: ``train``, ``evaluate``, ``sweep`` (and ``serve`` when available)."""
+"""``jvl-gym`` command line: ``train``, ``evaluate``, ``compile``, ``sweep`` (and ``serve`` when
+available).
+
+Errors are one line on stderr with a non-zero exit status; ``--debug`` shows the traceback
+(:class:`jvl_gym.cli_app.App`).
+"""
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 from typing import Annotated
 
 import typer
 
-app = typer.Typer(help="jvl_gym: train and evaluate policies on the MAC motor environments.",
-                  no_args_is_help=True)
+from .cli_app import RL_EXTRA_HINT, App, CliError
+
+app = App(prog="jvl-gym",
+          help="jvl_gym: train and evaluate policies on the MAC motor environments.",
+          no_args_is_help=True)
+
+
+def _check_env_id(env_id: str) -> None:
+    """Refuse an env id that jvl_gym does not register (the message lists the known ones)."""
+    from .envs import ENV_IDS
+
+    if env_id not in ENV_IDS:
+        raise typer.BadParameter(f"unknown env {env_id!r}; known: {', '.join(ENV_IDS)}")
+
+
+def _need_rl_extra(command: str) -> None:
+    """Raise a one-line error unless torch and stable-baselines3 can be imported."""
+    try:
+        import stable_baselines3  # noqa: F401
+        import torch  # noqa: F401
+    except ImportError as exc:
+        raise CliError(f"{command} {RL_EXTRA_HINT}") from exc
 
 
 @app.command()
@@ -20,6 +46,8 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
           config_dir: Annotated[Path | None, typer.Option(help="directory of the RL *.yml")]
           = None) -> None:
     """Train the configured algorithm (configs/rl/*.yml) on ENV_ID and save the model."""
+    _check_env_id(env_id)
+    _need_rl_extra("jvl-gym train")
     from .rl.train import train as run
 
     run(env_id, out, timesteps, seed, progress_bar=True, threads=threads,
@@ -33,17 +61,43 @@ def evaluate(env_ids: Annotated[list[str], typer.Argument(help="env ids to evalu
              episodes: Annotated[int | None, typer.Option(help="episodes per seed")] = None,
              config_dir: Annotated[Path | None, typer.Option(help="directory of the RL *.yml")]
              = None) -> None:
-    """Print policy vs baseline (mean ± std over held-out seeds) for each ENV_ID."""
-    from .rl.evaluate import evaluate as run
-    from .rl.evaluate import format_table
+    """Print policy vs baseline (mean ± std over held-out seeds) for each ENV_ID.
+
+    A missing model is reported in one line on stderr (exit status 1) after the table, which
+    then shows the baseline only.
+    """
+    from .rl import evaluate as ev
     from .rl.train import model_path
 
-    results = {}
     for env_id in env_ids:
-        path = model_path(runs, env_id)
-        results[env_id] = run(env_id, path if path.exists() else None, seeds, episodes,
-                              config_dir=config_dir)
-    typer.echo(format_table(results))
+        _check_env_id(env_id)
+    paths = {env_id: model_path(runs, env_id) for env_id in env_ids}
+    if any(path.exists() for path in paths.values()):
+        _need_rl_extra("jvl-gym evaluate (with a model)")
+    results = {}
+    for env_id, path in paths.items():
+        results[env_id] = ev.evaluate(env_id, path if path.exists() else None, seeds, episodes,
+                                      config_dir=config_dir)
+    typer.echo(ev.format_table(results))
+    missing = [env_id for env_id, path in paths.items() if not path.exists()]
+    if missing:
+        names = ", ".join(f"{env_id} ({paths[env_id]})" for env_id in missing)
+        print(f"jvl-gym evaluate: no model for {names}: train one with `jvl-gym train "
+              f"{missing[0]} --out {runs}`, or pass --runs DIR", file=sys.stderr)
+        raise typer.Exit(1)
+
+
+@app.command(name="compile")
+def compile_(motors_only: Annotated[bool, typer.Option(
+                 "--motors-only", help="only the motor array, not the environments")] = False,
+             workers: Annotated[int | None, typer.Option(help="worker processes")] = None
+             ) -> None:
+    """Compile the simulator and the environments for this machine now (numba caches the
+    result on disk; otherwise each compiles on first use)."""
+    from .precompile import compile_all
+
+    for job, seconds in compile_all(workers, envs=not motors_only).items():
+        typer.echo(f"{job}: {seconds:.1f} s")
 
 
 @app.command()
@@ -59,14 +113,13 @@ def sweep(config: Annotated[Path, typer.Argument(help="sweep file (configs/sweep
               help="stop once this many trials have finished (run again to resume)")] = None,
           storage: Annotated[str | None, typer.Option(
               help="Ray Tune storage path or URI (default OUT/ray)")] = None,
-          verbose: Annotated[bool, typer.Option(help="Ray Tune's own output too")] = False,
-          debug: Annotated[bool, typer.Option(help="tracebacks instead of one-line errors")]
-          = False) -> None:
+          verbose: Annotated[bool, typer.Option(help="Ray Tune's own output too")] = False
+          ) -> None:
     """Run a hyper-parameter sweep as Ray Tune trials (needs the scale extra)."""
     from .scale.commands import sweep_command
 
     sweep_command(config, out, address, num_cpus, max_concurrent, stop_after, storage,
-                  verbose, debug)
+                  verbose)
 
 
 def _mount_serve() -> None:

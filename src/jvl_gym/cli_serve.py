@@ -13,13 +13,28 @@ import logging
 import signal
 import threading
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
-__all__ = ["app", "serve", "parse_tcp"]
+from .cli_app import App
 
-app = typer.Typer(add_completion=False, help="Serve simulated MAC motors over serial protocols.")
+__all__ = ["app", "serve", "parse_tcp", "banner"]
+
+app = App(prog="jvl-gym serve", add_completion=False,
+          help="Serve simulated MAC motors over serial protocols.")
+
+
+def banner(types: list[str], twin: Any, given: list[int] | None = None) -> list[str]:
+    """One line per motor: its type and the address it answers at (MYADDR now, which a flash
+    file may have set; ``given`` are the ``--address`` values, named when they differ)."""
+    lines = []
+    for i, (t, a) in enumerate(zip(types, twin.addresses())):
+        note = ""
+        if given is not None and given[i] != a:
+            note = f" (from the flash file; --address said {given[i]})"
+        lines.append(f"motor {i}: {t} at address {a}{note}")
+    return lines
 
 
 def parse_tcp(text: str) -> tuple[str, int]:
@@ -82,8 +97,8 @@ def serve(
     server = TwinServer(twin, speed=speed, tcp=parse_tcp(tcp) if tcp else None, pty=pty,
                         user_tcp=user_tcp, user_pty=user_pty)
     server.start()
-    for i, (t, a) in enumerate(zip(types, address)):
-        typer.echo(f"motor {i}: {t} at address {a}")
+    for line in banner(types, twin, list(address)):
+        typer.echo(line)
     for e in server.endpoints:
         typer.echo(f"{e.what} {e.kind}: {e.url}", err=False)
     typer.echo(f"running at speed {speed}; Ctrl-C to stop")

@@ -9,10 +9,11 @@ from __future__ import annotations
 import argparse
 import math
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
-from . import constants as c
+from .families.mac050_141 import constants as c
 from .sim import MotorArray
 
 
@@ -25,6 +26,7 @@ def _trace(m: MotorArray, n: int, log: dict[str, list[float]], phase: str) -> No
         log["p_ist"].append(float(m.read("P_IST")[0]))
         log["vf_out"].append(float(m.read("VF_OUT")[0]))
         log["i_a"].append(float(m.phase_currents[0, 0]))
+        log["i_abs"].append(float(abs(m._current_vector()[0])))
         log["phase"].append(phase)
 
 
@@ -36,7 +38,7 @@ def run_demo(out: Path) -> str:
     lines = [f"jvl_gym demo: {m!r}, load inertia 30e-6 kg·m² "
              f"(KVOUT ideal {(cfg.rotor_inertia + 30e-6) / cfg.rotor_inertia:.2f})"]
     log: dict[str, list] = {k: [] for k in ("t", "rpm", "profile_rpm", "p_ist", "vf_out", "i_a",
-                                            "phase")}
+                                            "i_abs", "phase")}
 
     # TESTU: coil step response (manual 4.4.9)
     m.write("UMEAS", 60)
@@ -92,7 +94,9 @@ def run_demo(out: Path) -> str:
     return summary
 
 
-def _plot(log: dict[str, list], path: Path) -> None:
+def _figure(log: dict[str, list]) -> Any:
+    """The scope figure of a demo ``log``: speed, position, VF_OUT and the current magnitude
+    over time, the phases (TESTU, TESTA, …) named on a top axis between dashed boundaries."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -103,22 +107,33 @@ def _plot(log: dict[str, list], path: Path) -> None:
     ax[0].plot(t, log["profile_rpm"], label="profile (FNC_OUT)", lw=1)
     ax[0].plot(t, log["rpm"], label="shaft", lw=1)
     ax[0].set_ylabel("speed [rpm]")
-    ax[0].legend(loc="upper right")
+    ax[0].legend(loc="lower left", fontsize=8)
     ax[1].plot(t, log["p_ist"], lw=1)
     ax[1].set_ylabel("P_IST [counts]")
     ax[2].plot(t, log["vf_out"], lw=1)
     ax[2].set_ylabel("VF_OUT")
-    ax[3].plot(t, log["i_a"], lw=1)
-    ax[3].set_ylabel("i_a [A]")
+    ax[3].plot(t, log["i_abs"], lw=1)  # the phase currents alternate too fast to read here
+    ax[3].set_ylabel("current |i| [A]")
     ax[3].set_xlabel("time [s]")
-    phases = log["phase"]
-    for k in range(1, len(phases)):
-        if phases[k] != phases[k - 1]:
-            for a in ax:
-                a.axvline(t[k], color="grey", lw=0.5, ls="--")
-            ax[0].text(t[k], ax[0].get_ylim()[1], phases[k], fontsize=7, va="top")
+    phases = list(log["phase"])
+    starts = [k for k in range(len(phases)) if k == 0 or phases[k] != phases[k - 1]]
+    ends = [*starts[1:], len(phases)]
+    for k in starts[1:]:
+        for a in ax:
+            a.axvline(t[k], color="grey", lw=0.5, ls="--")
+    top = ax[0].secondary_xaxis("top")
+    top.set_xticks([0.5 * (t[a] + t[b - 1]) for a, b in zip(starts, ends)],
+                   [phases[a] for a in starts], fontsize=8)
+    top.tick_params(length=0)
     fig.suptitle("jvl_gym demo: MAC140 scope")
     fig.tight_layout()
+    return fig
+
+
+def _plot(log: dict[str, list], path: Path) -> None:
+    import matplotlib.pyplot as plt
+
+    fig = _figure(log)
     fig.savefig(path, dpi=110)
     plt.close(fig)
 

@@ -7,12 +7,7 @@ array shares, so two threads stepping different motors fight over one cache line
 therefore never allocates arrays (no NRT) and works on views and scalars. No fast-math flag:
 even ``arcp`` alone (divisions as multiplications by reciprocals) made results depend on where
 the compiler inlined a function: the threaded vector env and the single env then differed in
-the last bit of a reward.
-
-Measured on the 2-core development machine (2026-12-01, ``benchmarks/bench_sim.py`` and
-``benchmarks/bench_envs.py``): without NRT the simulator runs 1.19e7 instead of 0.94e7
-motor-inner-steps/s at N = 4096, and the Positioning vector env with 1024 copies 650 000
-instead of 491 000 env-steps/s (its two threads 1.94× one thread instead of 1.54×).
+the last bit of a reward (docs/model.md §17).
 """
 
 from __future__ import annotations
@@ -23,8 +18,8 @@ from typing import Any
 KERNEL: dict[str, Any] = {"cache": True, "_nrt": False}
 #: the same for the multi-threaded drivers
 KERNEL_PARALLEL: dict[str, Any] = {**KERNEL, "parallel": True}
-#: the functions of the current-loop samples (``jvl_gym.lanes.inner_samples``, which steps
-#: motors in SIMD lanes, and ``jvl_gym.kernel.inner_samples_one``, its one-motor path): numpy's
+#: the functions of the current-loop samples (``mac050_141.lanes.inner_samples``, which steps
+#: motors in SIMD lanes, and ``mac050_141.kernel.inner_samples_one``, its one-motor path): numpy's
 #: error model, so that a float division is a plain division, not a test for a zero divisor
 #: with a branch to a ZeroDivisionError that keeps LLVM from vectorising the loop over lanes.
 #: (A lane's divisors are parameters validated on the Python side and the bus voltage, which

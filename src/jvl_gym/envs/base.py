@@ -23,6 +23,7 @@ Resets loop over the copies being reset, to draw from their own generators.
 
 from __future__ import annotations
 
+import inspect
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -32,14 +33,57 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from .. import constants as c
-from ..firmware import regs as R
-from .compiled import OBS_BOUND, all_finite, reset_counters
-from .noise import normals
+from ..engine.driver import all_finite
+from ..families import DEFAULT_FAMILY, family
+from ..noise import normals
+from .compiled import OBS_BOUND, reset_counters
 
-__all__ = ["MotorVectorEnv", "NumpyTaskEnv", "Column", "OBS_BOUND", "ERROR_BITS"]
-#: ERR_STAT bits that end an episode: I2T, FLW, FNC, UIT and position-limit errors (3.2.35)
-ERROR_BITS = c.I2T_ERR | c.FLW_ERR | c.FNC_ERR | c.UIT_ERR | c.PLIM_ERR
+__all__ = ["MotorVectorEnv", "NumpyTaskEnv", "Column", "OBS_BOUND"]
+#: ``info["termination_reason"]`` of a copy truncated at its horizon
+TIME_LIMIT = "time limit: max_episode_steps reached (truncated)"
+
+
+def _keywords(cls: type) -> list[str]:
+    """The keyword arguments the constructors of ``cls`` and its bases take."""
+    names: set[str] = set()
+    for klass in cls.__mro__:
+        init = klass.__dict__.get("__init__")
+        if init is None or klass is object:
+            continue
+        try:
+            params = inspect.signature(init).parameters.values()
+        except (TypeError, ValueError):  # pragma: no cover - a builtin's __init__
+            continue
+        names.update(p.name for p in params if p.name != "self"
+                     and p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY))
+    return sorted(names)
+
+
+def _whole(name: str, value: Any, low: int) -> int:
+    """``value`` as an int if it is a whole number >= ``low`` (not a bool); ValueError."""
+    try:
+        ok = (not isinstance(value, (bool, np.bool_, str, bytes)) and int(value) == value
+              and value >= low)
+    except (TypeError, ValueError, OverflowError):
+        ok = False
+    if not ok:
+        raise ValueError(f"{name} must be a whole number >= {low}, got {value!r}")
+    return int(value)
+
+
+def _real(name: str, value: Any) -> float:
+    """``value`` as a float if it is a finite real number (not a bool or a str); ValueError."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, float, np.integer,
+                                                                      np.floating)):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    if not np.isfinite(value):
+        raise ValueError(f"{name} must be a finite number, got {value!r}")
+    return float(value)
+
+
+def env_name(cls: type) -> str:
+    """The task name of an env class (``GearSyncVectorEnv`` → ``GearSync``)."""
+    return cls.__name__.removesuffix("VectorEnv").removesuffix("Env")
 
 
 class Column:
@@ -75,14 +119,16 @@ class MotorVectorEnv(VectorEnv, ABC):
     ----------
     num_envs : int
         Number of copies.
-    motor_type : str or sequence of str
-        Motor type, or types drawn uniformly at every reset (``"MAC050"``, ``"MAC095"``,
-        ``"MAC140"``, ``"MAC141"``).
+    motor_type : str or sequence of str, optional
+        Motor type of the task's family, or types drawn uniformly at every reset (for the MAC
+        tasks ``"MAC050"``, ``"MAC095"``, ``"MAC140"``, ``"MAC141"``); default: the task's
+        :attr:`default_motor_type`.
     randomization : mapping, optional
         Overrides of the task's domain-randomisation ranges, ``name -> (low, high)``; see the
         task's ``default_ranges``. ``(x, x)`` fixes a parameter.
     decimation : int, optional
-        Outer samples (1.92 ms) per environment step; default: the task's.
+        Outer samples (of the family's outer rate) per environment step; default: the
+        task's.
     obs_noise : float
         Standard deviation of Gaussian noise added to the normalised observation.
     max_episode_steps : int, optional
@@ -102,6 +148,13 @@ class MotorVectorEnv(VectorEnv, ABC):
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 25,
                                 "autoreset_mode": AutoresetMode.NEXT_STEP}
 
+    #: the motor family the task runs on (``jvl_gym.families``)
+    family_key: str = DEFAULT_FAMILY
+    #: (name, bit) of the error bits that end an episode, in :attr:`error_register`
+    terminal_errors: tuple[tuple[str, int], ...] = ()
+    error_register: str = "ERR_STAT"
+    #: motor type when none is given
+    default_motor_type: str = ""
     #: names of the observation components (normalised)
     obs_labels: tuple[str, ...] = ()
     #: names of the action components (each in [-1, 1])
@@ -114,32 +167,37 @@ class MotorVectorEnv(VectorEnv, ABC):
     scope_channels: tuple[str, ...] = ()
     scope_length: int = 400
 
-    def __init__(self, num_envs: int = 1, *, motor_type: str | Sequence[str] = "MAC140",
+    def __init__(self, num_envs: int = 1, *, motor_type: str | Sequence[str] | None = None,
                  randomization: Mapping[str, tuple[float, float]] | None = None,
                  decimation: int | None = None, obs_noise: float = 0.0,
                  max_episode_steps: int | None = None, render_mode: str | None = None,
-                 autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP) -> None:
+                 autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
+                 **unknown: Any) -> None:
         from ..sim import MotorArray  # lazy: building an env compiles/loads the kernel
 
-        if int(num_envs) != num_envs or num_envs < 1:
-            raise ValueError(f"num_envs must be a positive integer, got {num_envs!r}")
+        if unknown:
+            names = ", ".join(repr(k) for k in sorted(unknown))
+            hint = " (the motor type is motor_type=)" if "motor" in unknown else ""
+            raise TypeError(f"{env_name(type(self))} env: unknown keyword argument {names}"
+                            f"{hint}; known: {', '.join(_keywords(type(self)))}")
+
+        num_envs = _whole("num_envs", num_envs, 1)
         if render_mode not in (None, "rgb_array"):
             raise ValueError(f"render_mode must be None or 'rgb_array', got {render_mode!r}")
         self.num_envs = int(num_envs)
         self.render_mode = render_mode
         self.autoreset_mode = AutoresetMode(autoreset_mode)
         self.metadata = {**type(self).metadata, "autoreset_mode": self.autoreset_mode}
-        self.decimation = int(decimation if decimation is not None else self.default_decimation)
-        if self.decimation < 1:
-            raise ValueError(f"decimation must be >= 1, got {decimation!r}")
-        self.max_episode_steps = int(max_episode_steps if max_episode_steps is not None
-                                     else self.default_max_episode_steps)
-        if self.max_episode_steps < 1:
-            raise ValueError("max_episode_steps must be >= 1")
-        if not np.isfinite(obs_noise) or obs_noise < 0:
+        self.decimation = _whole("decimation", decimation if decimation is not None
+                                 else self.default_decimation, 1)
+        self.max_episode_steps = _whole("max_episode_steps", max_episode_steps
+                                        if max_episode_steps is not None
+                                        else self.default_max_episode_steps, 1)
+        if _real("obs_noise", obs_noise) < 0:
             raise ValueError(f"obs_noise must be finite and >= 0, got {obs_noise!r}")
         self.obs_noise = float(obs_noise)
-        self.motor_types = self._check_types(motor_type)
+        self.motor_types = self._check_types(motor_type if motor_type is not None
+                                             else self.default_motor_type)
         self.ranges = self._check_ranges(randomization or {})
         self._range_names = tuple(sorted(self.default_ranges))
         self._range_cache: tuple[dict[str, tuple[float, float]], np.ndarray, np.ndarray] = (
@@ -163,6 +221,9 @@ class MotorVectorEnv(VectorEnv, ABC):
         self._reward = np.zeros(n)
         self._terminated = np.zeros(n, dtype=np.bool_)
         self._truncated = np.zeros(n, dtype=np.bool_)
+        #: the fields of a ``jvl_gym.engine.Episode`` for the compiled task drivers
+        self._episode = (self._prev_action, self._t, self._noise_key, self._obs, self._reward,
+                         self._terminated, self._truncated)
         self._action_shape = (n, len(self.act_labels))
         self._autoreset = np.zeros(n, dtype=np.bool_)
         self._has_reset = False
@@ -173,10 +234,10 @@ class MotorVectorEnv(VectorEnv, ABC):
 
     # ------------------------------------------------------------------ configuration
     def _check_types(self, motor_type: str | Sequence[str]) -> tuple[str, ...]:
-        from ..config import motor_types
-
+        fam = family(self.family_key)
         types = (motor_type,) if isinstance(motor_type, str) else tuple(motor_type)
-        known = motor_types()
+        known = fam.motor_types()
+        types = tuple(fam.canonical_name(t) if isinstance(t, str) else t for t in types)
         if not types or any(t not in known for t in types):
             raise ValueError(f"motor_type must be one or more of {known}, got {motor_type!r}")
         return types
@@ -188,8 +249,12 @@ class MotorVectorEnv(VectorEnv, ABC):
             if name not in self.default_ranges:
                 raise ValueError(f"unknown randomisation parameter {name!r}; known: "
                                  f"{sorted(self.default_ranges)}")
-            lo, hi = (float(v) for v in rng)
-            if not (np.isfinite(lo) and np.isfinite(hi)) or lo > hi:
+            try:
+                lo, hi = (_real(f"randomisation range of {name!r}", v) for v in rng)
+            except (TypeError, ValueError) as exc:  # not two finite numbers
+                raise ValueError(f"randomisation range of {name!r} must be two finite numbers "
+                                 f"(low, high), got {rng!r}") from exc
+            if lo > hi:
                 raise ValueError(f"randomisation range of {name!r} must be finite with "
                                  f"low <= high, got {rng!r}")
             out[name] = (lo, hi)
@@ -227,18 +292,48 @@ class MotorVectorEnv(VectorEnv, ABC):
         """Scope traces (N, C) in the units of :attr:`scope_channels`."""
         return np.zeros((self.num_envs, len(self.scope_channels)))
 
+    def _termination_reasons(self, idx: np.ndarray) -> list[str]:
+        """Why each of the copies ``idx``, terminated by the last step, ended (one text per
+        copy). Here: the motor error bits; a task adds its own reasons."""
+        return [self._error_reason(i) or "terminated by the task" for i in idx.tolist()]
+
+    def _error_reason(self, i: int) -> str:
+        """The ERR_STAT error bits of copy ``i`` that end an episode, as text ('' if none)."""
+        bits = int(self.error_bits()[i])
+        if not bits:
+            return ""
+        names = "+".join(name for name, bit in self.terminal_errors if bits & bit)
+        return f"motor error {names} ({self.error_register})"
+
+    def _end_info(self, ended: np.ndarray, terminated: np.ndarray) -> dict[str, np.ndarray]:
+        """``{"termination_reason": (N,) object array, "_termination_reason": ended}`` for the
+        copies ``ended`` (bool (N,)) whose episode ended with the last step: the task's reason
+        when terminated (:meth:`_termination_reasons`), :data:`TIME_LIMIT` when truncated."""
+        reasons = np.full(self.num_envs, "", dtype=object)
+        idx = np.flatnonzero(ended)
+        term = idx[terminated[idx]]
+        if term.size:
+            reasons[term] = self._termination_reasons(term)
+        reasons[idx[~terminated[idx]]] = TIME_LIMIT
+        return {"termination_reason": reasons, "_termination_reason": ended.copy()}
+
     # ------------------------------------------------------------------ helpers for tasks
     def error_bits(self) -> np.ndarray:
-        """ERR_STAT error bits that end an episode, (N,) int64 (0 when none is set)."""
-        return self.motors.regs[:, R.ERR_STAT] & ERROR_BITS
+        """The error bits that end an episode (:attr:`terminal_errors` of
+        :attr:`error_register`), (N,) int64 (0 when none is set)."""
+        if not self.terminal_errors:
+            return np.zeros(self.num_envs, dtype=np.int64)
+        mask = 0
+        for _, bit in self.terminal_errors:
+            mask |= bit
+        return self.motors.read_raw(self.error_register) & mask
 
     def _type_configs(self, idx: np.ndarray) -> list[Any]:
         """Motor configs of the types of copies ``idx`` (set at their reset)."""
         names = self._type_names[idx].tolist()
         missing = [name for name in names if name not in self._configs]
         if missing:
-            from ..config import load_motor
-
+            load_motor = family(self.family_key).array_class.load_motor
             for name in missing:
                 self._configs[name] = load_motor(name)
         return [self._configs[name] for name in names]
@@ -271,7 +366,7 @@ class MotorVectorEnv(VectorEnv, ABC):
         names = self._range_names
         # per copy: the ranges' uniform numbers and the motor type's (the last column), then
         # two full-range uint64 noise keys: what rng.integers(0, 2**64 - 1, size=2,
-        # dtype=np.uint64, endpoint=True) returns (raw draws), a tenth of its cost
+        # dtype=np.uint64, endpoint=True) returns (raw draws), without its per-call overhead
         width = len(names) + 1
         u = np.array([rng.random(width) for rng in rngs]).reshape(idx.size, width)
         keys = np.array([rng.bit_generator.random_raw(2) for rng in rngs],
@@ -280,8 +375,9 @@ class MotorVectorEnv(VectorEnv, ABC):
         draws = dict(zip(names, low[:, None] + u[:, :-1].T * span[:, None]))
         type_names = [types[min(int(x * len(types)), len(types) - 1)] for x in u[:, -1].tolist()]
         self._type_names[idx] = type_names
-        reset_counters(idx, keys, self.motors.keys, self._noise_key, self._t, self._prev_action,
+        reset_counters(idx, keys, self._noise_key, self._t, self._prev_action,
                        self._scope_count)
+        self.motors.reseed(keys[:, 0], idx)
         self.motors.reset(index=idx, motor_type=type_names, **self._motor_params(idx, draws))
         self._task_reset(idx, draws, rngs)
         self._observe_copies(idx)
@@ -338,17 +434,28 @@ class MotorVectorEnv(VectorEnv, ABC):
         """
         if not self._has_reset:
             raise RuntimeError("call reset() before step()")
-        a = np.asarray(actions, dtype=np.float64)
-        if a.shape != self._action_shape:
-            if a.size != self.num_envs * len(self.act_labels):
-                raise ValueError(f"action must have shape {self._action_shape}, got "
-                                 f"{np.shape(actions)}")
-            a = a.reshape(self._action_shape)
+        a = actions if type(actions) is np.ndarray else np.asarray(actions)
+        if a.shape != self._action_shape or a.dtype.kind not in "fiu":
+            self._refuse_action(a)
+        if a.dtype != np.float64:
+            a = a.astype(np.float64)
         if not self._step_copies(a):
             raise ValueError("action must be finite")
         if self.render_mode is not None:
             self._record_scope()
         return self._obs, self._reward, self._terminated, self._truncated
+
+    def _refuse_action(self, a: np.ndarray, shape: tuple[int, ...] | None = None) -> None:
+        """Raise the ValueError of an action array ``a`` that is not real numbers of shape
+        ``shape`` (default: (num_envs, actions))."""
+        shape = self._action_shape if shape is None else shape
+        labels = ", ".join(self.act_labels)
+        if a.shape != shape:
+            hint = " (transposed?)" if a.shape == shape[::-1] and len(shape) == 2 else ""
+            raise ValueError(f"{env_name(type(self))}: action must have shape {shape} "
+                             f"({labels}), got {a.shape}{hint}; nothing was stepped")
+        raise ValueError(f"{env_name(type(self))}: action must be real numbers (a float "
+                         f"array), got dtype {a.dtype}; nothing was stepped")
 
     def step(self, actions: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray,
                                           dict[str, Any]]:
@@ -369,6 +476,9 @@ class MotorVectorEnv(VectorEnv, ABC):
         reward = reward.copy()
         terminated = terminated.copy()
         truncated = truncated.copy()
+        ended = (terminated | truncated) & ~done_before
+        if ended.any():
+            infos.update(self._end_info(ended, terminated))
         if self.autoreset_mode == AutoresetMode.NEXT_STEP and done_before.any():
             idx = np.flatnonzero(done_before)
             self._reset_envs(idx, [None] * idx.size, None)
@@ -383,8 +493,8 @@ class MotorVectorEnv(VectorEnv, ABC):
                 for i in idx:
                     final[i] = obs[i].copy()
                 self._reset_envs(idx, [None] * idx.size, None)
-                infos = {"final_obs": final, "_final_obs": done.copy(),
-                         "final_info": {}, "_final_info": done.copy()}
+                infos.update({"final_obs": final, "_final_obs": done.copy(),
+                              "final_info": {}, "_final_info": done.copy()})
         self._autoreset = terminated | truncated
         return self._obs.copy(), reward, terminated, truncated, infos
 
@@ -414,7 +524,7 @@ class MotorVectorEnv(VectorEnv, ABC):
             return None
         from .scope import draw_scope
 
-        dt = self.decimation * c.OUTER_DT
+        dt = self.decimation / self.motors.OUTER_HZ
         return draw_scope(self._figures, index, self.scope_trace(index), self.scope_channels, dt,
                           title=f"{type(self).__name__.replace('VectorEnv', '')} #{index}")
 

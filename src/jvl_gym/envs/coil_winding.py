@@ -6,16 +6,27 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from .. import constants as c
-from .. import layout as L
-from ..firmware import regs as R
-from ..jit import KERNEL, KERNEL_PARALLEL
-from ..lanes import LANES, inner_samples, outer_sample
+from ..engine import TaskDriver
+from ..families import family
+from ..families.mac050_141 import constants as c
+from ..families.mac050_141.task import (
+    DEFAULT_MOTOR_TYPE,
+    ERROR_BITS,
+    FAMILY_KEY,
+    TERMINAL_ERRORS,
+    R,
+    coil_direction,
+    reg,
+    set_pulse_counts,
+    set_reg,
+    shaft_angle,
+)
+from ..jit import KERNEL
 from . import deposition as dep
-from .base import ERROR_BITS, Column, MotorVectorEnv
-from .compiled import PARALLEL_MIN, action, all_finite, block_index, end_step, put_obs
+from .base import Column, MotorVectorEnv
+from .compiled import action, end_step, put_obs
 from .deposition import flatness_row, lay_turn_row, profile_summary_row
 from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
@@ -67,23 +78,25 @@ def _lay_turn(i, x, t, h, centres, w, k):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _spindle_before(i, state, inputs, prof, w, k):  # pragma: no cover - compiled
+def _spindle_before(i, view, episode, task):  # pragma: no cover - compiled
     """Outer sample of copy ``i``, before the motor: spindle speed and pulses; remembers the
     speed and the traverse position for :func:`_spindle_after`."""
+    k, prof, w = task[0], task[1], task[2]
     v = row_speed(prof[i], w[i, _C_TIME], w[i, _C_SPINDLE_REV] * 2.0 * math.pi, k[_T_CHANGE])
     acc = w[i, _C_COUNT_ACC] + v * k[_SPINDLE_CPR] * _DT
     counts = math.floor(acc)
     w[i, _C_COUNT_ACC] = acc - counts
     w[i, _C_PULSES] += counts
-    inputs[i, L.I_PULSE_COUNTS] = counts
+    set_pulse_counts(view, i, counts)
     w[i, _C_V] = v
-    w[i, _C_X0] = state[i, L.S_THETA] * k[_METRES_PER_RAD]
+    w[i, _C_X0] = shaft_angle(view, i) * k[_METRES_PER_RAD]
 
 
 @njit(cache=True, inline="always")
-def _spindle_after(i, state, w, h, centres, k):  # pragma: no cover - compiled
+def _spindle_after(i, view, episode, task):  # pragma: no cover - compiled
     """Outer sample of copy ``i``, after the motor: a turn is laid when the spindle completes
     a revolution, at the traverse position interpolated to that instant."""
+    k, w, h, centres = task[0], task[2], task[3], task[4]
     v = w[i, _C_V]
     x0 = w[i, _C_X0]
     rev0 = w[i, _C_SPINDLE_REV]
@@ -91,15 +104,15 @@ def _spindle_after(i, state, w, h, centres, k):  # pragma: no cover - compiled
     w[i, _C_SPINDLE_REV] = rev1
     if math.floor(rev1) > math.floor(rev0):
         frac = min(max((math.floor(rev0) + 1.0 - rev0) / max(v * _DT, 1e-12), 0.0), 1.0)
-        x1 = state[i, L.S_THETA] * k[_METRES_PER_RAD]
+        x1 = shaft_angle(view, i) * k[_METRES_PER_RAD]
         _lay_turn(i, x0 + frac * (x1 - x0), w[i, _C_TIME] + frac * _DT, h, centres, w, k)
     w[i, _C_TIME] += _DT
 
 
 @njit(cache=True, inline="always")
-def _track_layer(i, state, w, h):  # pragma: no cover - compiled
+def _track_layer(i, view, w, h):  # pragma: no cover - compiled
     """A reversal of the COIL block closes a layer: its flatness is booked and scored."""
-    direction = state[i, L.S_AUX1]
+    direction = coil_direction(view, i)
     if direction == 0.0:
         return 0.0
     flipped = direction != w[i, _C_DIRECTION]
@@ -117,15 +130,16 @@ def _track_layer(i, state, w, h):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary,
-                 obs):  # pragma: no cover - compiled
+def _observe_row(i, view, episode, task):  # pragma: no cover - compiled
     """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
-    key = noise_key[i]
+    k, w, h, summary = task[0], task[2], task[3], task[5]
+    obs, prev, t = episode.obs, episode.prev_action, episode.t
+    key = episode.noise_key[i]
     noise = k[_NOISE]
-    x = state[i, L.S_THETA] * k[_METRES_PER_RAD]
+    x = shaft_angle(view, i) * k[_METRES_PER_RAD]
     spindle_norm = 2000.0 / 60.0 * k[_SPINDLE_CPR] * _DT
     put_obs(obs, i, 0, 2.0 * x / k[_WIDTH] - 1.0, key, t[i], noise)
-    put_obs(obs, i, 1, regs[i, R.V_IST] / _V_TRAVERSE_NORM, key, t[i], noise)
+    put_obs(obs, i, 1, reg(view, i, R.V_IST) / _V_TRAVERSE_NORM, key, t[i], noise)
     put_obs(obs, i, 2, w[i, _C_PULSES] / k[_DECIMATION] / spindle_norm, key, t[i], noise)
     put_obs(obs, i, 3, w[i, _C_LAYER] / k[_N_LAYERS], key, t[i], noise)
     put_obs(obs, i, 4, w[i, _C_DIRECTION], key, t[i], noise)
@@ -146,94 +160,45 @@ def _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary,
 
 
 @njit(cache=True, inline="always")
-def _step_begin(i, regs, actions, w, k):  # pragma: no cover - compiled
+def _step_begin(i, view, episode, task, actions):  # pragma: no cover - compiled
     """Beginning of an env step of copy ``i``: pitch and dwell trims, step accumulators."""
+    k, w = task[0], task[2]
     a0 = action(actions, i, 0)
     a1 = action(actions, i, 1)
     a2 = action(actions, i, 2)
     half = w[i, _C_HALF_D_COUNTS]
-    regs[i, R.GEARF1] = round(w[i, _C_GEAR0] * (1.0 + k[_PITCH_TRIM] * a0) * _GEARF2)
-    regs[i, R.P2] = round((1.0 + a1) * half)
-    regs[i, R.P3] = int(k[_P4]) - round((1.0 + a2) * half)
+    set_reg(view, i, R.GEARF1, round(w[i, _C_GEAR0] * (1.0 + k[_PITCH_TRIM] * a0) * _GEARF2))
+    set_reg(view, i, R.P2, round((1.0 + a1) * half))
+    set_reg(view, i, R.P3, int(k[_P4]) - round((1.0 + a2) * half))
     w[i, _C_PULSES] = 0.0
     w[i, _C_STEP_PENALTY] = 0.0
 
 
 @njit(cache=True, inline="always")
-def _step_end(i, regs, state, actions, prev, t, noise_key, k, w, h, summary, obs, reward, term,
-              trunc):  # pragma: no cover - compiled
+def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
     """End of an env step of copy ``i``: layer bookkeeping, reward, termination, observation
     (the actions are clipped again: a pure function of ``actions``)."""
+    k, w, h = task[0], task[2], task[3]
+    prev, t = episode.prev_action, episode.t
     a0 = action(actions, i, 0)
     a1 = action(actions, i, 1)
     a2 = action(actions, i, 2)
-    w[i, _C_STEP_PENALTY] += k[_FLATNESS_W] * _track_layer(i, state, w, h)
+    w[i, _C_STEP_PENALTY] += k[_FLATNESS_W] * _track_layer(i, view, w, h)
     t[i] += 1
-    error = (regs[i, R.ERR_STAT] & ERROR_BITS) != 0
-    reward[i] = -w[i, _C_STEP_PENALTY] - (k[_ERROR_PENALTY] if error else 0.0)
-    end_step(i, error or w[i, _C_LAYER] >= k[_N_LAYERS], t, int(k[_MAX_STEPS]), term, trunc)
+    error = (reg(view, i, R.ERR_STAT) & ERROR_BITS) != 0
+    episode.reward[i] = -w[i, _C_STEP_PENALTY] - (k[_ERROR_PENALTY] if error else 0.0)
+    end_step(i, error or w[i, _C_LAYER] >= k[_N_LAYERS], t, int(k[_MAX_STEPS]),
+             episode.terminated, episode.truncated)
     prev[i, 0] = a0
     prev[i, 1] = a1
     prev[i, 2] = a2
-    _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary, obs)
+    _observe_row(i, view, episode, task)
 
 
-@njit(**KERNEL)
-def _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions,
-                prev, t, noise_key, k, prof, w, h, centres, summary, obs, reward, term,
-                trunc):  # pragma: no cover - compiled
-    """One env step of the copies of block ``blk`` (``jvl_gym.lanes``): pitch and dwell trims,
-    then ``decimation`` outer samples of spindle, traverse and deposition (spindle pulses and
-    the firmware's outer step copy by copy, the block's inner samples in one call, then the
-    turns laid copy by copy), then per copy layer bookkeeping, reward, termination,
-    observation."""
-    i0 = blk * LANES
-    n = min(LANES, regs.shape[0] - i0)
-    for i in range(i0, i0 + n):
-        _step_begin(i, regs, actions, w, k)
-    for _ in range(int(k[_DECIMATION])):
-        for i in range(i0, i0 + n):
-            _spindle_before(i, state, inputs, prof, w, k)
-            outer_sample(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, 0)
-        inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scratch[blk])
-        for i in range(i0, i0 + n):
-            _spindle_after(i, state, w, h, centres, k)
-    for i in range(i0, i0 + n):
-        _step_end(i, regs, state, actions, prev, t, noise_key, k, w, h, summary, obs, reward,
-                  term, trunc)
+_DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "coil_winding", begin=_step_begin,
+                     before=_spindle_before, after=_spindle_after, end=_step_end,
+                     observe=_observe_row)
 
-
-@njit(**KERNEL)
-def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions, prev,
-                  t, noise_key, k, prof, w, h, centres, summary, obs, reward, term,
-                  trunc):  # pragma: no cover - compiled
-    if not all_finite(actions):
-        return False
-    for blk in range(scratch.shape[0]):
-        _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
-                    actions, prev, t, noise_key, k, prof, w, h, centres, summary, obs, reward,
-                    term, trunc)
-    return True
-
-
-@njit(**KERNEL_PARALLEL)
-def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions,
-                    prev, t, noise_key, k, prof, w, h, centres, summary, obs, reward, term,
-                    trunc):  # pragma: no cover - compiled
-    if not all_finite(actions):
-        return False
-    for blk in prange(scratch.shape[0]):
-        _step_block(block_index(blk), regs, state, params, inputs, keys, buf, rec, fmt, plan,
-                    scratch, actions, prev, t, noise_key, k, prof, w, h, centres, summary, obs,
-                    reward, term, trunc)
-    return True
-
-
-@njit(**KERNEL)
-def _observe_rows(idx, regs, state, prev, t, noise_key, w, h, k, summary,
-                  obs):  # pragma: no cover - compiled
-    for i in idx:
-        _observe_row(i, regs, state, prev, t, noise_key, w, h, k, summary, obs)
 
 
 @njit(**KERNEL)
@@ -271,6 +236,10 @@ def _reset_rows(idx: np.ndarray, w: np.ndarray, h: np.ndarray, d0: np.ndarray,
 class CoilWindingVectorEnv(MotorVectorEnv):
     """Vector version of :class:`CoilWindingEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
+
+    family_key = FAMILY_KEY
+    default_motor_type = DEFAULT_MOTOR_TYPE
+    terminal_errors = TERMINAL_ERRORS
 
     d0 = Column("coil", _C_D0)  #: nominal wire diameter [m]
     d_mean = Column("coil", _C_D_MEAN)  #: true mean wire diameter [m]
@@ -354,6 +323,10 @@ class CoilWindingVectorEnv(MotorVectorEnv):
             self.spindle_counts_per_rev, self.screw_pitch / (2 * math.pi), self.coil_width,
             float(self.nest), self.pitch_trim, self.p4, self.n_layers, self.void_weight,
             self.flatness_weight, self.error_penalty)
+        #: the arrays the compiled hooks unpack: constants, spindle profiles, coil state,
+        #: heights, bin centres, profile summary
+        self._task = (self._k, self.profile.params, self.coil, self.h, self.centres,
+                      self._summary)
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
@@ -370,25 +343,33 @@ class CoilWindingVectorEnv(MotorVectorEnv):
         _reset_rows(idx, self.coil, self.h, draws["wire_diameter"], draws["diameter_bias"],
                     draws["diameter_variation"], draws["a_soll"], u, self._counts_per_m,
                     self.spindle_counts_per_rev, gearf1, half, a_soll)
-        self.motors._write_many({
+        self.motors.write_many({
             "GEARF1": gearf1, "GEARF2": _GEARF2, "V_SOLL": round(c.rpm_to_v_soll(3000.0)),
             "A_SOLL": a_soll, "P1": 0, "P2": half, "P3": self.p4 - half, "P4": self.p4,
             "P5": half, "P6": 1, "MODE_REG": c.COIL_MODE}, idx)
 
     def _step_copies(self, actions: np.ndarray) -> bool:
-        run = _steps_parallel if self.num_envs >= PARALLEL_MIN else _steps_serial
-        return run(*self.motors.kernel_arrays(), actions, self._prev_action, self._t,
-                   self._noise_key, self._k, self.profile.params, self.coil, self.h,
-                   self.centres, self._summary, self._obs, self._reward, self._terminated,
-                   self._truncated)
+        return _DRIVER.step(self.motors.engine_view(), self._episode, self._task, actions,
+                            self.decimation)
+
+    def _termination_reasons(self, idx: np.ndarray) -> list[str]:
+        """The coil is complete (all layers wound) or a motor error bit is set."""
+        out = []
+        for i in idx.tolist():
+            why = []
+            if self.coil[i, _C_LAYER] >= self._k[_N_LAYERS]:
+                why.append(f"coil complete: {int(self._k[_N_LAYERS])} layers wound")
+            if self._error_reason(i):
+                why.append(self._error_reason(i))
+            out.append("; ".join(why) or "terminated by the task")
+        return out
 
     def _observe_copies(self, idx: np.ndarray) -> None:
-        _observe_rows(idx, self.motors.regs, self.motors.state, self._prev_action, self._t,
-                      self._noise_key, self.coil, self.h, self._k, self._summary, self._obs)
+        _DRIVER.observe(self.motors.engine_view(), self._episode, self._task, idx)
 
     def traverse_position(self) -> np.ndarray:
         """Traverse position from the lower flange [m], (N,)."""
-        return self.motors.state[:, L.S_THETA] / (2 * math.pi) * self.screw_pitch
+        return self.motors.position_rad / (2 * math.pi) * self.screw_pitch
 
     def _scope_values(self) -> np.ndarray:
         return np.stack([self.traverse_position() * 1e3, self.pulses / self.decimation / _DT
@@ -402,7 +383,7 @@ class CoilWindingEnv(MotorEnv):
     ## Description
     A spindle (pulse output 1024 counts/rev) winds wire on a coil of width 20 mm between two
     flanges; a MAC motor drives the traverse through a lead screw (2 mm/rev) in COIL_MODE
-    (manual 4.4.20, ``jvl_gym.firmware.coil``): it follows the spindle pulses with the gear
+    (manual 4.4.20, ``mac050_141.firmware.coil``): it follows the spindle pulses with the gear
     factor GEARF1/GEARF2, reverses at the thread positions P1/P4 (the flanges) and dwells at the
     stop positions P2/P3. The nominal registers are computed from the nominal wire diameter d0:
     the traverse advances d0 per spindle revolution and dwells one turn at each flange

@@ -7,9 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import constants as c
-from .. import layout as L
-from ..firmware import regs as R
+from ..families.mac050_141 import constants as c
+from ..families.mac050_141.task import DEFAULT_MOTOR_TYPE, FAMILY_KEY, TERMINAL_ERRORS
 from .base import NumpyTaskEnv
 from .single import MotorEnv
 
@@ -45,6 +44,10 @@ def synthesis_registers(motor_type: str) -> dict[str, float] | None:
 class FilterTuningVectorEnv(NumpyTaskEnv):
     """Vector version of :class:`FilterTuningEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
+
+    family_key = FAMILY_KEY
+    default_motor_type = DEFAULT_MOTOR_TYPE
+    terminal_errors = TERMINAL_ERRORS
 
     obs_labels = (*(f"type_{t}" for t in _TYPES), "inertia_ratio_estimate",
                   "viscous_estimate", "coulomb_estimate")
@@ -95,7 +98,7 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         m = self.motors
         # a copy left in an error by its last trial (NEXT_STEP: stepped once more before its
         # reset) cannot leave INIT; it is skipped and reset afterwards
-        ok = np.flatnonzero((m.regs[:, R.ERR_STAT] & c.BLOCKING_ERRORS) == 0)
+        ok = np.flatnonzero((m.read_raw("ERR_STAT") & c.BLOCKING_ERRORS) == 0)
         self._ok = ok
         kvout_est = 1.0 + self.estimates[:, 0]
         if self.baseline:
@@ -109,8 +112,8 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
                 m.write("KVOUT", np.round(kvout_est[sel] * 256) / 256, index=sel)
             return
         a = action[ok]
-        kvfx4 = m.regs[ok, R.KVFX4] / 4096.0
-        kvfx3 = m.regs[ok, R.KVFX3] / 4096.0
+        kvfx4 = m.read("KVFX4")[ok]
+        kvfx3 = m.read("KVFX3")[ok]
         p, i = -kvfx3, kvfx4 + kvfx3  # default PI split: KVFX4 = c(kp+ki), KVFX3 = −c·kp
         sp = 2.0 ** a[:, 0]
         si = 2.0 ** (1.5 * a[:, 1])
@@ -121,7 +124,6 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
     def _advance(self) -> None:
         m = self.motors
         n = self.num_envs
-        r = m.regs
         m.write("V_SOLL", round(c.rpm_to_v_soll(2000.0)), index=self._ok)
         m.write("P_SOLL", _STEP_COUNTS, index=self._ok)
         m.write("MODE_REG", c.P_MODE, index=self._ok)
@@ -130,12 +132,12 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         fnc_end = np.zeros(n)
         for k in range(_POS_SAMPLES):
             m.step(1)
-            pos[:, k] = r[:, R.P_IST]
-            flw[:, k] = r[:, R.FLWERR]
-            self._trace[:, 0, k] = r[:, R.P_IST] - _STEP_COUNTS
+            pos[:, k] = m.read_raw("P_IST")
+            flw[:, k] = m.read_raw("FLWERR")
+            self._trace[:, 0, k] = pos[:, k] - _STEP_COUNTS
             self._trace[:, 1, k] = m.speed_rpm
-            self._trace[:, 2, k] = r[:, R.VF_OUT]
-        fnc_end[:] = np.abs(r[:, R.FNCERR])
+            self._trace[:, 2, k] = m.read_raw("VF_OUT")
+        fnc_end[:] = np.abs(m.read_raw("FNCERR"))
         errors = self.error_bits() != 0
         v_ref = c.rpm_to_v_soll(1000.0) / 16.0  # counts/sample
         ok = np.flatnonzero(~errors)
@@ -145,13 +147,13 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
             m.write("MODE_REG", c.V_MODE, index=ok)
         for k in range(_VEL_SAMPLES):
             if k == _LOAD_AT:
-                m.inputs[:, L.I_LOAD_TORQUE] = 0.3 * self.rated_torque(np.arange(n))
+                m.set_input(load_torque=0.3 * self.rated_torque(np.arange(n)))
             m.step(1)
-            vel[:, k] = r[:, R.V_IST]
+            vel[:, k] = m.read_raw("V_IST")
             j = _POS_SAMPLES + k
-            self._trace[:, 0, j] = r[:, R.P_IST] - _STEP_COUNTS
+            self._trace[:, 0, j] = m.read_raw("P_IST") - _STEP_COUNTS
             self._trace[:, 1, j] = m.speed_rpm
-            self._trace[:, 2, j] = r[:, R.VF_OUT]
+            self._trace[:, 2, j] = m.read_raw("VF_OUT")
         errors |= self.error_bits() != 0
         err = np.abs(pos - _STEP_COUNTS)
         outside = err > _SETTLE_TOL
@@ -167,6 +169,13 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         self.metrics = {"settling_time": settle, "overshoot": overshoot,
                         "flwerr_rms": np.sqrt(np.mean(flw * flw, axis=1)), "speed_dip": dip,
                         "speed_ripple": ripple, "fncerr": fnc_end, "unstable": unstable}
+
+    def _termination_reasons(self, idx: np.ndarray) -> list[str]:
+        """Every episode is one commissioning trial; say whether the design was unstable."""
+        unstable = self.metrics["unstable"]
+        return ["trial done" + (": unstable design" if unstable[i] else "")
+                + (f" ({self._error_reason(i)})" if self._error_reason(i) else "")
+                for i in idx.tolist()]
 
     def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         mt = self.metrics

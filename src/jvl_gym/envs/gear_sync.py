@@ -6,15 +6,27 @@ import math
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from .. import constants as c
-from .. import layout as L
-from ..firmware import regs as R
-from ..jit import KERNEL, KERNEL_PARALLEL
-from ..lanes import LANES, inner_samples, outer_sample
-from .base import ERROR_BITS, Column, MotorVectorEnv
-from .compiled import PARALLEL_MIN, action, all_finite, block_index, end_step, normal, put_obs
+from ..engine import TaskDriver
+from ..families import family
+from ..families.mac050_141 import constants as c
+from ..families.mac050_141.task import (
+    DEFAULT_MOTOR_TYPE,
+    ERROR_BITS,
+    FAMILY_KEY,
+    TERMINAL_ERRORS,
+    R,
+    reg,
+    set_analog_volts,
+    set_load_torque,
+    set_pulse_counts,
+    shaft_angle,
+)
+from ..jit import KERNEL
+from ..noise import normal
+from .base import Column, MotorVectorEnv
+from .compiled import action, end_step, put_obs
 from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
 from .web import load_cell_s, span_step_s, tension_s, winder_radius_s
@@ -39,27 +51,29 @@ _LOADCELL_STREAM = np.uint64(0x5EED)  #: noise key offset of the load cell
 
 
 @njit(cache=True, inline="always")
-def _line_before(i, state, inputs, prof, w, k):  # pragma: no cover - compiled
+def _line_before(i, view, episode, task):  # pragma: no cover - compiled
     """Outer sample of copy ``i``, before the motor: master speed and pulses; remembers the
     speed and the motor angle for :func:`_line_after`."""
+    k, prof, w = task
     v1 = row_speed(prof[i], w[i, _W_TIME], w[i, _W_MTHETA], k[_T_CHANGE])
     acc = w[i, _W_ACC] + v1 * k[_COUNTS_PER_M] * _DT
     counts = math.floor(acc)
     w[i, _W_ACC] = acc - counts
     w[i, _W_PULSES] += counts
-    inputs[i, L.I_PULSE_COUNTS] = counts
+    set_pulse_counts(view, i, counts)
     w[i, _W_V1] = v1
-    w[i, _W_THETA0] = state[i, L.S_THETA]
+    w[i, _W_THETA0] = shaft_angle(view, i)
 
 
 @njit(cache=True, inline="always")
-def _line_after(i, state, inputs, w, k):  # pragma: no cover - compiled
+def _line_after(i, view, episode, task):  # pragma: no cover - compiled
     """Outer sample of copy ``i``, after the motor: span strain, winder radius, tension, load
     torque (for the next sample), load cell (``jvl_gym.envs.web``), master angle and time."""
+    k, _, w = task
     v1 = w[i, _W_V1]
     theta0 = w[i, _W_THETA0]
     gear_ratio = k[_GEAR_RATIO]
-    travel = w[i, _W_RADIUS] * (state[i, L.S_THETA] - theta0) / gear_ratio
+    travel = w[i, _W_RADIUS] * (shaft_angle(view, i) - theta0) / gear_ratio
     strain = span_step_s(w[i, _W_STRAIN], v1, travel / _DT, w[i, _W_SPAN], _DT)
     w[i, _W_STRAIN] = strain
     w[i, _W_WOUND] += travel
@@ -67,7 +81,7 @@ def _line_after(i, state, inputs, w, k):  # pragma: no cover - compiled
     w[i, _W_RADIUS] = radius
     force = tension_s(strain, w[i, _W_EA])
     w[i, _W_FORCE] = force
-    inputs[i, L.I_LOAD_TORQUE] = radius * force / gear_ratio
+    set_load_torque(view, i, radius * force / gear_ratio)
     w[i, _W_MEASURED] = load_cell_s(w[i, _W_MEASURED], force, k[_LC_K])
     w[i, _W_SLACK] = w[i, _W_SLACK] + 1.0 if strain <= 0.0 else 0.0
     w[i, _W_MTHETA] += v1 * _DT / k[_MASTER_RADIUS]
@@ -75,10 +89,12 @@ def _line_after(i, state, inputs, w, k):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def _observe_row(i, regs, prev, t, noise_key, w, k, obs):  # pragma: no cover - compiled
+def _observe_row(i, view, episode, task):  # pragma: no cover - compiled
     """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
+    k, _, w = task
+    obs, t = episode.obs, episode.t
     ref = w[i, _W_REF]
-    key = noise_key[i]
+    key = episode.noise_key[i]
     noise = k[_NOISE]
     meas = w[i, _W_MEASURED]
     if k[_LC_NOISE] > 0.0:
@@ -90,26 +106,28 @@ def _observe_row(i, regs, prev, t, noise_key, w, k, obs):  # pragma: no cover - 
             * (0.1 / (decimation * _DT)), key, t[i], noise)
     put_obs(obs, i, 2, w[i, _W_INTEGRAL] * 10.0, key, t[i], noise)
     put_obs(obs, i, 3, w[i, _W_PULSES] / decimation / v1_counts, key, t[i], noise)
-    put_obs(obs, i, 4, regs[i, R.V_IST] / _V_MOTOR_NORM, key, t[i], noise)
-    put_obs(obs, i, 5, regs[i, R.FLWERR] / 100.0, key, t[i], noise)
-    put_obs(obs, i, 6, regs[i, R.FNCERR] / 10000.0, key, t[i], noise)
-    put_obs(obs, i, 7, prev[i, 0], key, t[i], noise)
+    put_obs(obs, i, 4, reg(view, i, R.V_IST) / _V_MOTOR_NORM, key, t[i], noise)
+    put_obs(obs, i, 5, reg(view, i, R.FLWERR) / 100.0, key, t[i], noise)
+    put_obs(obs, i, 6, reg(view, i, R.FNCERR) / 10000.0, key, t[i], noise)
+    put_obs(obs, i, 7, episode.prev_action[i, 0], key, t[i], noise)
 
 
 @njit(cache=True, inline="always")
-def _step_begin(i, inputs, actions, w):  # pragma: no cover - compiled
+def _step_begin(i, view, episode, task, actions):  # pragma: no cover - compiled
     """Beginning of an env step of copy ``i``: analogue input, step accumulators."""
+    w = task[2]
     a = action(actions, i, 0)
-    inputs[i, L.I_ANALOG_VOLTS] = c.ANINP_VOLTS * a
+    set_analog_volts(view, i, c.ANINP_VOLTS * a)
     w[i, _W_PREV_MEASURED] = w[i, _W_MEASURED]
     w[i, _W_PULSES] = 0.0
 
 
 @njit(cache=True, inline="always")
-def _step_end(i, regs, actions, prev, t, noise_key, k, w, obs, reward, term,
-              trunc):  # pragma: no cover - compiled
+def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
     """End of an env step of copy ``i``: leaky error integral, reward, termination,
     observation (the action is clipped again: a pure function of ``actions``)."""
+    k, _, w = task
+    prev, t = episode.prev_action, episode.t
     a = action(actions, i, 0)
     decimation = int(k[_DECIMATION])
     ref = w[i, _W_REF]
@@ -120,67 +138,22 @@ def _step_end(i, regs, actions, prev, t, noise_key, k, w, obs, reward, term,
     da = a - prev[i, 0]
     r = 1.0 - min(abs(e) / k[_TOLERANCE], 2.0) - k[_RATE_W] * da * da
     failed = (w[i, _W_FORCE] > k[_BREAK] * ref or w[i, _W_SLACK] >= k[_SLACK_SAMPLES]
-              or (regs[i, R.ERR_STAT] & ERROR_BITS) != 0)
-    reward[i] = r - k[_PENALTY] if failed else r
-    end_step(i, failed, t, int(k[_MAX_STEPS]), term, trunc)
+              or (reg(view, i, R.ERR_STAT) & ERROR_BITS) != 0)
+    episode.reward[i] = r - k[_PENALTY] if failed else r
+    end_step(i, failed, t, int(k[_MAX_STEPS]), episode.terminated, episode.truncated)
     prev[i, 0] = a
-    _observe_row(i, regs, prev, t, noise_key, w, k, obs)
+    _observe_row(i, view, episode, task)
 
 
-@njit(**KERNEL)
-def _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions,
-                prev, t, noise_key, k, prof, w, obs, reward, term,
-                trunc):  # pragma: no cover - compiled
-    """One env step of the copies of block ``blk`` (``jvl_gym.lanes``): analogue inputs, then
-    ``decimation`` outer samples of line and motor (master pulses and the firmware's outer step
-    copy by copy, the block's inner samples in one call, then span, tension, load torque and
-    load cell copy by copy), then per copy error integral, reward, termination, observation."""
-    i0 = blk * LANES
-    n = min(LANES, regs.shape[0] - i0)
-    for i in range(i0, i0 + n):
-        _step_begin(i, inputs, actions, w)
-    for _ in range(int(k[_DECIMATION])):
-        for i in range(i0, i0 + n):
-            _line_before(i, state, inputs, prof, w, k)
-            outer_sample(regs, state, params, inputs, keys, buf, rec, fmt, plan, i, 0)
-        inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scratch[blk])
-        for i in range(i0, i0 + n):
-            _line_after(i, state, inputs, w, k)
-    for i in range(i0, i0 + n):
-        _step_end(i, regs, actions, prev, t, noise_key, k, w, obs, reward, term, trunc)
+_DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "gear_sync", begin=_step_begin,
+                     before=_line_before, after=_line_after, end=_step_end,
+                     observe=_observe_row)
+
 
 
 @njit(**KERNEL)
-def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions, prev,
-                  t, noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover
-    if not all_finite(actions):
-        return False
-    for blk in range(scratch.shape[0]):
-        _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
-                    actions, prev, t, noise_key, k, prof, w, obs, reward, term, trunc)
-    return True
-
-
-@njit(**KERNEL_PARALLEL)
-def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions,
-                    prev, t, noise_key, k, prof, w, obs, reward, term, trunc):  # pragma: no cover
-    if not all_finite(actions):
-        return False
-    for blk in prange(scratch.shape[0]):
-        _step_block(block_index(blk), regs, state, params, inputs, keys, buf, rec, fmt, plan,
-                    scratch, actions, prev, t, noise_key, k, prof, w, obs, reward, term, trunc)
-    return True
-
-
-@njit(**KERNEL)
-def _observe_rows(idx, regs, prev, t, noise_key, w, k, obs):  # pragma: no cover - compiled
-    for i in idx:
-        _observe_row(i, regs, prev, t, noise_key, w, k, obs)
-
-
-@njit(**KERNEL)
-def _reset_rows(idx: np.ndarray, line: np.ndarray, gear: np.ndarray, inputs: np.ndarray,
-                ea: np.ndarray, thickness: np.ndarray, r0: np.ndarray, span: np.ndarray,
+def _reset_rows(idx: np.ndarray, line: np.ndarray, gear: np.ndarray, ea: np.ndarray,
+                thickness: np.ndarray, r0: np.ndarray, span: np.ndarray,
                 tension_ref: np.ndarray, master_radius: float, gear_ratio: float,
                 master_counts_per_rev: int, gearf1: np.ndarray,
                 load: np.ndarray) -> None:  # pragma: no cover - compiled
@@ -188,7 +161,7 @@ def _reset_rows(idx: np.ndarray, line: np.ndarray, gear: np.ndarray, inputs: np.
     reference, from the (M,) draws (E·A [N], thickness [m], core radius [m], span [m],
     reference tension [N]); the nominal gear ``gear`` (N,) and its GEARF1 ``gearf1`` (M,) (at
     the core radius and 0 V the winder runs at v1/(1 − ε_ref)); the load torque ``load`` (M,)
-    [N·m] of the pre-tension, also set as the motors' input (``inputs``, (N, N_INPUT))."""
+    [N·m] of the pre-tension."""
     for j in range(idx.shape[0]):
         i = idx[j]
         w = line[i]
@@ -210,22 +183,15 @@ def _reset_rows(idx: np.ndarray, line: np.ndarray, gear: np.ndarray, inputs: np.
         gearf1[j] = np.round(ratio * _GEARF2)
         gear[i] = gearf1[j] / _GEARF2
         load[j] = r0[j] * tension_ref[j] / gear_ratio
-        inputs[i, L.I_LOAD_TORQUE] = load[j]
-
-
-@njit(**KERNEL)
-def _hold_load(idx: np.ndarray, regs: np.ndarray, state: np.ndarray, load: np.ndarray,
-               peak: np.ndarray) -> None:  # pragma: no cover - compiled
-    """The motors of copies ``idx`` already hold the pre-tension: the VF integrator carries
-    the load torque ``load`` (M,) [N·m] (``peak``: the types' peak torques [N·m])."""
-    for j in range(idx.shape[0]):
-        i = idx[j]
-        state[i, L.S_Y1] = load[j] / peak[j] * c.VF_FULL / (regs[i, R.KVOUT] / 256.0)
 
 
 class GearSyncVectorEnv(MotorVectorEnv):
     """Vector version of :class:`GearSyncEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
+
+    family_key = FAMILY_KEY
+    default_motor_type = DEFAULT_MOTOR_TYPE
+    terminal_errors = TERMINAL_ERRORS
 
     ea = Column("line", _W_EA)  #: E·A [N]
     thickness = Column("line", _W_THICK)  #: web thickness [m]
@@ -301,6 +267,8 @@ class GearSyncVectorEnv(MotorVectorEnv):
             1.0 - math.exp(-_DT / self.loadcell_tau) if self.loadcell_tau > 0 else 1.0,
             self.loadcell_noise, self.tension_tolerance, self.action_rate_weight,
             self.break_ratio, self.slack_samples, self.failure_penalty)
+        #: the arrays the compiled hooks unpack: constants, master profiles, line state
+        self._task = (self._k, self.profile.params, self.line)
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
@@ -313,22 +281,38 @@ class GearSyncVectorEnv(MotorVectorEnv):
                            draws["ripple"])
         m = self.motors
         gearf1, load = np.empty(idx.size), np.empty(idx.size)
-        _reset_rows(idx, self.line, self.gear, m.inputs, draws["ea"], draws["thickness"],
+        _reset_rows(idx, self.line, self.gear, draws["ea"], draws["thickness"],
                     draws["r0"], draws["span"], draws["tension_ref"], self.master_radius,
                     self.gear_ratio, self.master_counts_per_rev, gearf1, load)
-        m._write_many({"GEARF1": gearf1, "GEARF2": _GEARF2,
+        m.write_many({"GEARF1": gearf1, "GEARF2": _GEARF2,
                        "V_SOLL": round(c.rpm_to_v_soll(4000.0)), "MODE_REG": c.AG_MODE}, idx)
-        _hold_load(idx, m.regs, m.state, load, self.peak_torque(idx))
+        m.set_input(idx, load_torque=load)
+        m.hold_torque(load, idx)
 
     def _step_copies(self, actions: np.ndarray) -> bool:
-        run = _steps_parallel if self.num_envs >= PARALLEL_MIN else _steps_serial
-        return run(*self.motors.kernel_arrays(), actions, self._prev_action, self._t,
-                   self._noise_key, self._k, self.profile.params, self.line, self._obs,
-                   self._reward, self._terminated, self._truncated)
+        return _DRIVER.step(self.motors.engine_view(), self._episode, self._task, actions,
+                            self.decimation)
+
+    def _termination_reasons(self, idx: np.ndarray) -> list[str]:
+        """Web break (tension above ``break_ratio`` × reference), slack longer than
+        ``slack_time``, or the motor error bits, as the compiled step decides."""
+        out = []
+        for i in idx.tolist():
+            ref = self.line[i, _W_REF]
+            why = []
+            if self.line[i, _W_FORCE] > self.break_ratio * ref:
+                why.append(f"web break: tension {self.line[i, _W_FORCE]:.1f} N > "
+                           f"{self.break_ratio:g} × reference {ref:.1f} N")
+            if self.line[i, _W_SLACK] >= self.slack_samples:
+                why.append(f"web slack for {int(self.line[i, _W_SLACK])} outer samples "
+                           f"(limit {self.slack_samples})")
+            if self._error_reason(i):
+                why.append(self._error_reason(i))
+            out.append("; ".join(why) or "terminated by the task")
+        return out
 
     def _observe_copies(self, idx: np.ndarray) -> None:
-        _observe_rows(idx, self.motors.regs, self._prev_action, self._t, self._noise_key,
-                      self.line, self._k, self._obs)
+        _DRIVER.observe(self.motors.engine_view(), self._episode, self._task, idx)
 
     def _scope_values(self) -> np.ndarray:
         return np.stack([self.force, self.tension_ref, self._prev_action[:, 0] * c.ANINP_VOLTS,

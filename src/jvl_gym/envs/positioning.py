@@ -5,15 +5,23 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
 
-from .. import constants as c
-from .. import layout as L
-from ..firmware import regs as R
-from ..jit import KERNEL, KERNEL_PARALLEL
-from ..lanes import LANES, advance_block
-from .base import ERROR_BITS, MotorVectorEnv
-from .compiled import PARALLEL_MIN, action, all_finite, block_index, end_step, put_obs
+from ..engine import TaskDriver
+from ..families import family
+from ..families.mac050_141 import constants as c
+from ..families.mac050_141.task import (
+    DEFAULT_MOTOR_TYPE,
+    ERROR_BITS,
+    FAMILY_KEY,
+    TERMINAL_ERRORS,
+    R,
+    reg,
+    set_analog_volts,
+)
+from ..jit import KERNEL
+from .base import MotorVectorEnv
+from .compiled import action, end_step, put_obs
 from .single import MotorEnv
 
 __all__ = ["PositioningEnv", "PositioningVectorEnv"]
@@ -26,88 +34,49 @@ _NOISE, _MAX_STEPS, _DECIMATION, _OVERSHOOT_W, _EFFORT_W, _BASELINE, _N_CONSTS =
 
 
 @njit(cache=True, inline="always")
-def _observe_row(i, regs, prev, t, noise_key, noise, target, obs):  # pragma: no cover
+def _observe_row(i, view, episode, task):  # pragma: no cover - compiled
     """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
-    e = float(target[i] - regs[i, R.P_IST])
-    put_obs(obs, i, 0, e / (2.0 * c.COUNTS_PER_REV), noise_key[i], t[i], noise)
-    put_obs(obs, i, 1, e / _FINE, noise_key[i], t[i], noise)
-    put_obs(obs, i, 2, regs[i, R.V_IST] / _V_NORM, noise_key[i], t[i], noise)
-    put_obs(obs, i, 3, prev[i, 0], noise_key[i], t[i], noise)
+    k, target, _ = task
+    obs, key, count, noise = episode.obs, episode.noise_key[i], episode.t[i], k[_NOISE]
+    e = float(target[i] - reg(view, i, R.P_IST))
+    put_obs(obs, i, 0, e / (2.0 * c.COUNTS_PER_REV), key, count, noise)
+    put_obs(obs, i, 1, e / _FINE, key, count, noise)
+    put_obs(obs, i, 2, reg(view, i, R.V_IST) / _V_NORM, key, count, noise)
+    put_obs(obs, i, 3, episode.prev_action[i, 0], key, count, noise)
 
 
 @njit(cache=True, inline="always")
-def _step_begin(i, inputs, actions, k):  # pragma: no cover - compiled
+def _step_begin(i, view, episode, task, actions):  # pragma: no cover - compiled
     """Beginning of an env step of copy ``i``: the torque command (unless baseline)."""
+    k = task[0]
     a = action(actions, i, 0)
     baseline = k[_BASELINE] > 0.5
     if not baseline:
-        inputs[i, L.I_ANALOG_VOLTS] = c.ANINP_VOLTS * a
+        set_analog_volts(view, i, c.ANINP_VOLTS * a)
 
 
 @njit(cache=True, inline="always")
-def _step_end(i, regs, actions, prev, t, noise_key, k, target, direction, obs, reward, term,
-              trunc):  # pragma: no cover - compiled
+def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
     """End of an env step of copy ``i``: reward, termination, observation (the action is
     clipped again: a pure function of ``actions``)."""
+    k, target, direction = task
+    t = episode.t
     a = action(actions, i, 0)
     baseline = k[_BASELINE] > 0.5
     t[i] += 1
-    e = (target[i] - regs[i, R.P_IST]) / c.COUNTS_PER_REV
+    e = (target[i] - reg(view, i, R.P_IST)) / c.COUNTS_PER_REV
     overshoot = max(-e * direction[i], 0.0)
-    effort = a * a if not baseline else (regs[i, R.VF_OUT] / c.VF_FULL) ** 2
-    reward[i] = -abs(e) - k[_OVERSHOOT_W] * overshoot - k[_EFFORT_W] * effort
-    end_step(i, (regs[i, R.ERR_STAT] & ERROR_BITS) != 0, t, int(k[_MAX_STEPS]), term, trunc)
-    prev[i, 0] = a
-    _observe_row(i, regs, prev, t, noise_key, k[_NOISE], target, obs)
+    effort = a * a if not baseline else (reg(view, i, R.VF_OUT) / c.VF_FULL) ** 2
+    episode.reward[i] = -abs(e) - k[_OVERSHOOT_W] * overshoot - k[_EFFORT_W] * effort
+    end_step(i, (reg(view, i, R.ERR_STAT) & ERROR_BITS) != 0, t, int(k[_MAX_STEPS]),
+             episode.terminated, episode.truncated)
+    episode.prev_action[i, 0] = a
+    _observe_row(i, view, episode, task)
 
 
-@njit(**KERNEL)
-def _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions,
-                prev, t, noise_key, k, target, direction, obs, reward, term,
-                trunc):  # pragma: no cover - compiled
-    """One env step of the copies of block ``blk`` (``jvl_gym.lanes``): torque commands, the
-    block's motors advanced together by ``decimation`` outer samples, then per copy reward,
-    termination and observation."""
-    i0 = blk * LANES
-    n = min(LANES, regs.shape[0] - i0)
-    for i in range(i0, i0 + n):
-        _step_begin(i, inputs, actions, k)
-    advance_block(regs, state, params, inputs, keys, buf, rec, fmt, plan, i0, n,
-                  int(k[_DECIMATION]), scratch[blk])
-    for i in range(i0, i0 + n):
-        _step_end(i, regs, actions, prev, t, noise_key, k, target, direction, obs, reward, term,
-                  trunc)
+_DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "positioning", begin=_step_begin,
+                     end=_step_end, observe=_observe_row)
 
-
-@njit(**KERNEL)
-def _steps_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions, prev,
-                  t, noise_key, k, target, direction, obs, reward, term,
-                  trunc):  # pragma: no cover - compiled
-    if not all_finite(actions):
-        return False
-    for blk in range(scratch.shape[0]):
-        _step_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
-                    actions, prev, t, noise_key, k, target, direction, obs, reward, term, trunc)
-    return True
-
-
-@njit(**KERNEL_PARALLEL)
-def _steps_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, actions,
-                    prev, t, noise_key, k, target, direction, obs, reward, term,
-                    trunc):  # pragma: no cover - compiled
-    if not all_finite(actions):
-        return False
-    for blk in prange(scratch.shape[0]):
-        _step_block(block_index(blk), regs, state, params, inputs, keys, buf, rec, fmt, plan,
-                    scratch, actions, prev, t, noise_key, k, target, direction, obs, reward, term,
-                    trunc)
-    return True
-
-
-@njit(**KERNEL)
-def _observe_rows(idx, regs, prev, t, noise_key, noise, target, obs):  # pragma: no cover
-    for i in idx:
-        _observe_row(i, regs, prev, t, noise_key, noise, target, obs)
 
 
 @njit(**KERNEL)
@@ -124,6 +93,10 @@ def _reset_rows(idx: np.ndarray, target_turns: np.ndarray, target: np.ndarray,
 class PositioningVectorEnv(MotorVectorEnv):
     """Vector version of :class:`PositioningEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
+
+    family_key = FAMILY_KEY
+    default_motor_type = DEFAULT_MOTOR_TYPE
+    terminal_errors = TERMINAL_ERRORS
 
     obs_labels = ("position_error", "position_error_fine", "speed", "previous_action")
     act_labels = ("torque",)
@@ -152,6 +125,7 @@ class PositioningVectorEnv(MotorVectorEnv):
         self._k[[_NOISE, _MAX_STEPS, _DECIMATION, _OVERSHOOT_W, _EFFORT_W, _BASELINE]] = (
             self.obs_noise, self.max_episode_steps, self.decimation, self.overshoot_weight,
             self.effort_weight, float(self.baseline))
+        self._task = (self._k, self.target, self.direction)
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
@@ -163,23 +137,20 @@ class PositioningVectorEnv(MotorVectorEnv):
                     rngs: list[np.random.Generator]) -> None:
         _reset_rows(idx, draws["target_turns"], self.target, self.direction)
         if self.baseline:
-            self.motors._write_many({"V_SOLL": round(c.rpm_to_v_soll(_BASELINE_RPM)),
+            self.motors.write_many({"V_SOLL": round(c.rpm_to_v_soll(_BASELINE_RPM)),
                                      "P_SOLL": self.target[idx], "MODE_REG": c.P_MODE}, idx)
         else:
             self.motors.write("MODE_REG", c.AT_MODE, index=idx)
 
     def _step_copies(self, actions: np.ndarray) -> bool:
-        run = _steps_parallel if self.num_envs >= PARALLEL_MIN else _steps_serial
-        return run(*self.motors.kernel_arrays(), actions, self._prev_action, self._t,
-                   self._noise_key, self._k, self.target, self.direction, self._obs,
-                   self._reward, self._terminated, self._truncated)
+        return _DRIVER.step(self.motors.engine_view(), self._episode, self._task, actions,
+                            self.decimation)
 
     def _observe_copies(self, idx: np.ndarray) -> None:
-        _observe_rows(idx, self.motors.regs, self._prev_action, self._t, self._noise_key,
-                      self.obs_noise, self.target, self._obs)
+        _DRIVER.observe(self.motors.engine_view(), self._episode, self._task, idx)
 
     def _error_counts(self) -> np.ndarray:
-        return (self.target - self.motors.regs[:, R.P_IST]).astype(np.float64)
+        return (self.target - self.motors.read_raw("P_IST")).astype(np.float64)
 
     def _scope_values(self) -> np.ndarray:
         return np.stack([self._error_counts() / c.COUNTS_PER_REV, self.motors.speed_rpm,

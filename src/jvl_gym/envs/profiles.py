@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from ..jit import KERNEL
-from ..plant.trig import sincos
+from ..trig import sincos
 
 __all__ = ["SpeedProfile", "row_speed"]
 
@@ -37,7 +37,7 @@ def row_speed(p: np.ndarray, t: float, theta: float,
     """Speed of one copy from its parameter row ``p`` (compiled callers)."""
     ramp = min(t / p[T_RAMP], 1.0)
     change = p[STEP] * min(max((t - p[T_STEP]) / t_change, 0.0), 1.0)
-    # sines by jvl_gym.plant.trig (no library call: a C library sine costs ~20 ns here), and
+    # sines by jvl_gym.trig (no library call, which the compiled step cannot inline), and
     # none for a zero amplitude (the factor 1 + (±0) is 1 either way)
     w = 0.0
     if p[WALK] != 0.0:

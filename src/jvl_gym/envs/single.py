@@ -31,6 +31,7 @@ class MotorEnv(gym.Env):
         self.render_mode = render_mode
         self.observation_space = self.core.single_observation_space
         self.action_space = self.core.single_action_space
+        self._ended = False
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[np.ndarray, dict[str, Any]]:
@@ -39,12 +40,29 @@ class MotorEnv(gym.Env):
         if options and "reset_mask" in options:
             raise ValueError("reset_mask is a vector-env option")
         obs, _ = self.core.reset(seed=None if seed is None else [seed], options=options)
+        self._ended = False
         return obs[0], {}
 
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
-        """Advance by ``decimation`` outer samples with ``action`` (see "Action Space")."""
-        obs, reward, terminated, truncated = self.core._step_batch(action)
-        return obs[0].copy(), float(reward[0]), bool(terminated[0]), bool(truncated[0]), {}
+        """Advance by ``decimation`` outer samples with ``action`` (see "Action Space").
+
+        When the episode ends, ``info["termination_reason"]`` says why. Stepping an ended
+        episode raises RuntimeError (call :meth:`reset`), as the vector env does.
+        """
+        if self._ended:
+            raise RuntimeError(f"{type(self).__name__}: the episode has ended (terminated or "
+                               "truncated); call reset() before step()")
+        a = action if type(action) is np.ndarray else np.asarray(action)
+        if a.shape != self.action_space.shape or a.dtype.kind not in "fiu":
+            self.core._refuse_action(a, self.action_space.shape)
+        obs, reward, terminated, truncated = self.core._step_batch(a[None])
+        info: dict[str, Any] = {}
+        if terminated[0] or truncated[0]:
+            self._ended = True
+            ended = np.ones(1, dtype=np.bool_)
+            info["termination_reason"] = str(self.core._end_info(ended, terminated)[
+                "termination_reason"][0])
+        return obs[0].copy(), float(reward[0]), bool(terminated[0]), bool(truncated[0]), info
 
     def render(self) -> np.ndarray | None:
         """The scope plot as an (H, W, 3) uint8 image when ``render_mode="rgb_array"``."""

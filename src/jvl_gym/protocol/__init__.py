@@ -6,6 +6,9 @@
   ``socket://127.0.0.1:5000``), typed read/write by register name.
 * :mod:`.twin` and :mod:`.transport` — a simulated motor (or several on one bus) served over a
   pseudo-terminal or TCP on localhost (``jvl-gym serve``).
+* :mod:`.modbus` — Modbus RTU of the MIS/SMC motors (MIS manual §12): codec, addressing, PDO
+  remapping, RTU framing; :mod:`.modbus_server` — a Modbus RTU slave for any device of 32-bit
+  registers over the same transports, with the Modbus timeout and the MacTalk → Modbus switch.
 
 See ``docs/protocol.md`` for the frame formats and the decisions taken where the manual is
 ambiguous.
@@ -15,7 +18,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from . import fastmac, flexmac, mactalk
+from . import fastmac, flexmac, mactalk, modbus
 from .errors import FrameError, NoAnswerError, ProtocolError, RefusedError, UnexpectedReplyError
 
 __all__ = [
@@ -28,6 +31,7 @@ __all__ = [
     "fastmac",
     "flexmac",
     "mactalk",
+    "modbus",
 ]
 
 

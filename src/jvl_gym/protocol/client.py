@@ -20,6 +20,7 @@ from typing import Any
 
 import numpy as np
 
+from ..registers import RegisterTable
 from . import mactalk as mt
 from .errors import FrameError, NoAnswerError, RefusedError, UnexpectedReplyError
 
@@ -28,6 +29,13 @@ __all__ = ["MacTalkClient", "DEFAULT_BAUDRATE"]
 #: the MAC motors' serial speed (MAC800 quick guide: 19200 baud, 8 data bits, no parity)
 DEFAULT_BAUDRATE = 19200
 
+
+
+def _default_table() -> RegisterTable:
+    """The register table of the default motor family (``jvl_gym.families``)."""
+    from ..families import DEFAULT_FAMILY, family
+
+    return family(DEFAULT_FAMILY).array_class.TABLE
 
 class MacTalkClient:
     """A MacTalk master for one unit address.
@@ -55,7 +63,6 @@ class MacTalkClient:
                  ) -> None:
         import serial
 
-        from ..registers import MAC050_141
 
         if not 1 <= address <= 255:
             raise ValueError(f"unit address must be 1..255, got {address}")
@@ -63,7 +70,7 @@ class MacTalkClient:
         self.address = address
         self.timeout = timeout
         self.retries = retries
-        self.table = table if table is not None else MAC050_141
+        self.table = table if table is not None else _default_table()
         self.ser = serial.serial_for_url(port, baudrate=baudrate, timeout=timeout,
                                          **serial_kwargs)
         #: counters: requests, retries, bytes

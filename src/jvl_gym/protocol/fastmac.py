@@ -23,7 +23,7 @@ A ``100XX``, T ``101XX``, L ``110XX``, Z ``111XX``. The byte example of 5.2.1.5 
 ``EXAMPLE_CODE``: P ``11XXX``, V ``10XXX``, A ``000XX`` (and, by the text's order, T ``001XX``,
 L ``010XX``, Z ``011XX``; these three are not pinned down by any example). One byte fits no
 code together with the others: ``081H`` "Activate T2" has ``00001``, which is A2 in the example
-code (T2 would be ``085H``). As for the byte order (MODEL.md §10), the examples are followed:
+code (T2 would be ``085H``). As for the byte order (docs/model.md §16), the examples are followed:
 :data:`EXAMPLE_CODE` is the default and :data:`TABLE_CODE` (the text) is available. Also note
 ``062H``, commented "Set P_IST = 0", is command 02h (P_SOLL = 0) by the command table; P_IST = 0
 is command 03h.

@@ -14,7 +14,7 @@ Decisions, all from the manual's byte examples (``docs/protocol.md``):
 
 * **Byte order.** "Data Format used: Big Endian", but the example writes V_SOLL = 0547H as
   ``47h B8h 05h FAh`` and the address 0412H as ``12h EDh 04h FBh``: low byte first, as in
-  MacTalk (MODEL.md §10).
+  MacTalk (docs/model.md §16).
 * **Register numbers.** The examples give V_SOLL "register number 09H, address 0412H" and
   P_IST "register number 0EH, address 041CH", while the MAC50–141 table (3.2) numbers them 5
   and 10. Both fit ``FlexMAC number = register number + 4`` and ``address = 0400h + 2·number``;

@@ -18,7 +18,7 @@ Grammar (manual 5.1)::
 
 Every field after the sync bytes is *protected*: the byte is followed by its complement.
 
-Decisions where the manual is ambiguous (``docs/protocol.md``, MODEL.md §10):
+Decisions where the manual is ambiguous (``docs/protocol.md``, docs/model.md §16):
 
 * **Byte order.** The text says "big-endian", but both byte examples of 5.1 send the low byte
   first (4711h is sent as 11h, 47h; 3322h as 22h, 33h), as do the MAC800 quick guide ("first
@@ -46,6 +46,7 @@ Request(command=<Command.WRITE: 82>, address=16, register=8, data=b'"3')
 from __future__ import annotations
 
 import enum
+import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
@@ -205,7 +206,7 @@ def encode_write(address: int, register: int, data: bytes) -> bytes:
     """Write ``data`` (2 or 4 bytes, low byte first) to ``register`` (manual 5.1 ``writesync``).
 
     ``<datalength>`` counts data *bytes*, as in the manual's examples (the grammar's "number of
-    dataword" contradicts the examples, which are followed; MODEL.md §10).
+    dataword" contradicts the examples, which are followed; docs/model.md §16).
     """
     if address == MASTER:
         raise ValueError("address 0 is the master; a write to it is a data reply "
@@ -403,6 +404,26 @@ def _parse(buf: bytes | bytearray) -> tuple[Frame, int]:
     return Request(cmd, address, register), r.pos
 
 
+#: a possible frame start: a sync or accept byte twice more, or up to the end of the buffer
+_START = re.compile(rb"([\x11\x50-\x57])(?:\1\1|\1\Z|\Z)")
+#: a run of one byte value at the start of the buffer, by value
+_RUNS = {b: re.compile(re.escape(bytes((b,))) + b"+") for b in range(256)}
+
+
+def _next_start(buf: bytearray) -> int:
+    """Where a frame could start after a malformed one at ``buf[0]`` (``_is_start``), skipping
+    in one step the inside of a run of one sync byte: a frame at ``j`` of a run of ``m`` bytes
+    ``b`` has the address byte and its complement equal (``b``, ``b``) unless ``j >= m − 4``,
+    so it is malformed too. Linear in the bytes skipped."""
+    k = 1
+    if buf[0] in _SYNC_BYTES:
+        run = _RUNS[buf[0]].match(buf)
+        assert run is not None
+        k = max(1, run.end() - 4)
+    found = _START.search(buf, k)
+    return found.start() if found else len(buf)
+
+
 class MacTalkDecoder(StreamDecoder):
     """Streaming MacTalk decoder: feed arbitrary byte chunks, get frames and errors.
 
@@ -426,6 +447,9 @@ class MacTalkDecoder(StreamDecoder):
 
     def _is_start(self, k: int) -> bool:
         return _is_start(self._buf, k)
+
+    def _next_start(self) -> int:
+        return _next_start(self._buf)
 
 
 def decode_all(data: bytes) -> list[Frame | FrameError]:

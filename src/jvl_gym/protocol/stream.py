@@ -50,6 +50,15 @@ class StreamDecoder(ABC):
     def _is_start(self, k: int) -> bool:
         """Could a frame start at ``_buf[k]``?"""
 
+    def _next_start(self) -> int:
+        """Where the next frame could start after a malformed one at ``_buf[0]``: the first
+        ``k >= 1`` with :meth:`_is_start`, or ``len(_buf)``. A subclass may skip positions
+        that cannot start a well-formed frame in fewer steps (one error per run of garbage)."""
+        k = 1
+        while k < len(self._buf) and not self._is_start(k):
+            k += 1
+        return k
+
     def _truncated(self, data: bytes) -> str:
         return f"truncated frame: {len(data)} bytes ({data.hex(' ').upper()}) and then no more"
 
@@ -69,9 +78,7 @@ class StreamDecoder(ABC):
             except NeedMore:
                 break
             except Malformed as bad:
-                k = 1
-                while k < len(self._buf) and not self._is_start(k):
-                    k += 1
+                k = self._next_start()
                 offset = self._offset
                 out.append(FrameError(bad.reason, bad.code, offset, self._discard(k)))
                 self.errors += 1

@@ -91,9 +91,11 @@ class TwinServer:
     endpoints: list[Endpoint] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        if not self.speed > 0:
-            raise ValueError(f"speed must be > 0, got {self.speed}")
+        if not 0 < self.speed < float("inf"):
+            raise ValueError(f"speed must be a finite number > 0, got {self.speed}")
         self._stop = threading.Event()
+        #: guards _threads and _socks (connection threads remove themselves when they end)
+        self._lock = threading.Lock()
         self._threads: list[threading.Thread] = []
         self._fds: list[int] = []
         self._socks: list[socket.socket] = []
@@ -119,10 +121,12 @@ class TwinServer:
     def stop(self) -> None:
         """Stop all threads and close all endpoints (idempotent)."""
         self._stop.set()
-        for s in self._socks:
+        with self._lock:
+            socks, threads = list(self._socks), list(self._threads)
+        for s in socks:
             with contextlib.suppress(OSError):
                 s.close()
-        for t in self._threads:
+        for t in threads:
             t.join(timeout=2.0)
         for fd in self._fds:
             with contextlib.suppress(OSError):
@@ -146,8 +150,9 @@ class TwinServer:
     # ------------------------------------------------------------------ internals
     def _spawn(self, target: Callable[..., None], name: str, *args: object) -> None:
         t = threading.Thread(target=target, args=args, name=name, daemon=True)
+        with self._lock:
+            self._threads.append(t)
         t.start()
-        self._threads.append(t)
 
     def _mactalk(self) -> _Session:
         s = self.twin.session()
@@ -194,10 +199,22 @@ class TwinServer:
             except OSError:
                 return
             conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            self._socks.append(conn)
+            with self._lock:
+                self._socks.append(conn)
             self._spawn(self._serve_conn, "twin-conn", conn, make())
 
     def _serve_conn(self, conn: socket.socket, session: _Session) -> None:
+        """Serve one TCP connection until it closes; then release its socket and thread."""
+        try:
+            self._serve_open_conn(conn, session)
+        finally:
+            with self._lock:
+                with contextlib.suppress(ValueError):
+                    self._socks.remove(conn)
+                with contextlib.suppress(ValueError):
+                    self._threads.remove(threading.current_thread())
+
+    def _serve_open_conn(self, conn: socket.socket, session: _Session) -> None:
         conn.settimeout(self.frame_timeout)
         with conn:
             while not self._stop.is_set():

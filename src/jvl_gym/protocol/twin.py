@@ -50,7 +50,7 @@ from . import mactalk as mt
 from .errors import FrameError
 
 __all__ = ["MotorBackend", "Twin", "MacTalkSession", "UserInterfaceSession", "BLOCK_WORDS",
-           "REG"]
+           "RegisterNumbers"]
 
 log = logging.getLogger(__name__)
 
@@ -58,14 +58,33 @@ log = logging.getLogger(__name__)
 BLOCK_WORDS = 16
 
 
-class REG:
-    """Register numbers used by the twin (manual 3.2)."""
+class RegisterNumbers:
+    """Numbers of the registers the twin uses, looked up by name in the motors' register
+    table (manual 3.2 for the MACs); −1 where the table has no such register.
 
-    MODE_REG, P_SOLL, V_SOLL, T_SOLL, P_FNC, P_IST = 2, 3, 5, 7, 8, 10
-    FLWERR, ERR_STAT, CNTRL_BITS, HOME_MODE = 20, 35, 36, 42
-    P_REG_P, V_REG_P, A_REG_P, T_REG_P, L_REG_P, Z_REG_P = 43, 44, 45, 46, 47, 48
-    P1, P7, P8 = 49, 61, 63
-    SAMPLE1, REC_CNT, MYADDR = 112, 116, 156
+    Attributes
+    ----------
+    MODE_REG, P_SOLL, V_SOLL, T_SOLL, P_FNC, P_IST, FLWERR, ERR_STAT, CNTRL_BITS, HOME_MODE,
+    P_REG_P, V_REG_P, A_REG_P, T_REG_P, L_REG_P, Z_REG_P, P1, P7, P8, SAMPLE1, REC_CNT, MYADDR
+        Register numbers.
+    """
+
+    NAMES = ("MODE_REG", "P_SOLL", "V_SOLL", "T_SOLL", "P_FNC", "P_IST", "FLWERR", "ERR_STAT",
+             "CNTRL_BITS", "HOME_MODE", "P_REG_P", "V_REG_P", "A_REG_P", "T_REG_P", "L_REG_P",
+             "Z_REG_P", "P1", "P7", "P8", "SAMPLE1", "REC_CNT", "MYADDR")
+
+    def __init__(self, table: Any) -> None:
+        from ..registers import RegisterError
+
+        for name in self.NAMES:
+            try:
+                number = table.lookup(name).number
+            except RegisterError:
+                number = -1
+            setattr(self, name, number)
+        #: register-set pointer of each FastMAC group letter (manual 5.2.1)
+        self.pointer = {"P": self.P_REG_P, "V": self.V_REG_P, "A": self.A_REG_P,
+                        "T": self.T_REG_P, "L": self.L_REG_P, "Z": self.Z_REG_P}
 
 
 SAFE_MODE, INIT_MODE = 15, 0
@@ -73,8 +92,6 @@ _IN_POS, _ACC, _DEC = 1 << 4, 1 << 5, 1 << 6
 _ERRORS = 0x0F  # I2T_ERR, FLW_ERR, FNC_ERR, UIT_ERR (status bit 0, manual 5.2.1.6)
 _CLEARABLE = 0x0F | (1 << 7) | (1 << 8) | (1 << 11) | (1 << 12)  # errors reset by command 01h
 _RELPOSPSOLL, _RELPOSPFNC = 1 << 9, 1 << 10
-_POINTER = {"P": REG.P_REG_P, "V": REG.V_REG_P, "A": REG.A_REG_P, "T": REG.T_REG_P,
-            "L": REG.L_REG_P, "Z": REG.Z_REG_P}
 
 
 class MotorBackend(Protocol):
@@ -119,7 +136,9 @@ class Twin:
         MYADDR (1..254) of each motor, kept as the motor's factory address: written now and
         stored in flash unless a flash file provides the registers.
     flash_dir : path, optional
-        Directory of the flash files ``flash_<i>.json`` (loaded at start, written by 56h).
+        Directory of the flash files ``flash_<i>.json`` (loaded at start, written by 56h);
+        created if missing. A directory that cannot be created or written, or a flash file
+        that cannot be read as a flash image, raises ValueError naming it.
     fastmac_code : dict
         FastMAC register code (:data:`~.fastmac.EXAMPLE_CODE` or ``TABLE_CODE``).
 
@@ -135,6 +154,8 @@ class Twin:
                  flash_dir: str | os.PathLike[str] | None = None,
                  fastmac_code: dict[str, tuple[int, int]] = fm.DEFAULT_CODE) -> None:
         self.m = motors
+        #: numbers of the registers the twin uses, from the motors' register table
+        self.reg = RegisterNumbers(motors.table)
         self.lock = threading.RLock()
         self.stats: Counter[str] = Counter()
         self.fastmac_code = fastmac_code
@@ -148,42 +169,83 @@ class Twin:
             for a in addresses:
                 if not 1 <= a <= 254:
                     raise ValueError(f"a unit address is 1..254 (manual 3.2.156), got {a}")
-        for i in range(motors.n):
-            image = self._load_flash_file(i)
+        self._check_flash_dir()
+        images = [self._load_flash_file(i) for i in range(motors.n)]
+        for i, image in enumerate(images):
             if image is not None:
-                motors.load_flash_image(i, image)
                 motors.software_reset(i)
             elif addresses is not None:
-                motors.load_flash_image(i, {REG.MYADDR: addresses[i]})
-                motors.write_raw(REG.MYADDR, addresses[i], index=i)
+                motors.load_flash_image(i, {self.reg.MYADDR: addresses[i]})
+                motors.write_raw(self.reg.MYADDR, addresses[i], index=i)
 
     # ------------------------------------------------------------------ helpers
     def _flash_path(self, i: int) -> Path | None:
         return None if self.flash_dir is None else self.flash_dir / f"flash_{i}.json"
 
+    def _check_flash_dir(self) -> None:
+        """Create the flash directory if needed; ValueError if it cannot hold flash files."""
+        if self.flash_dir is None:
+            return
+        try:
+            self.flash_dir.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise ValueError(f"flash directory {self.flash_dir} cannot be created: "
+                             f"{exc.strerror or exc}; give a writable --flash-dir") from exc
+        if not os.access(self.flash_dir, os.W_OK | os.X_OK):
+            raise ValueError(f"flash directory {self.flash_dir} is not writable; give a "
+                             "writable --flash-dir")
+
     def _load_flash_file(self, i: int) -> dict[int, int] | None:
+        """The flash image in motor ``i``'s flash file, loaded into the motor's flash (which
+        checks every register); None if there is no file. ValueError naming the file if it is
+        not a flash image the motor takes (the motor's flash is then unchanged)."""
         path = self._flash_path(i)
         if path is None or not path.exists():
             return None
-        return {int(k): int(v) for k, v in json.loads(path.read_text())["registers"].items()}
+        try:
+            data = json.loads(path.read_text(encoding="utf-8"))
+            regs = data["registers"] if isinstance(data, dict) else None
+            if not isinstance(regs, dict):
+                raise ValueError("expected {\"registers\": {\"<number>\": <raw>, ...}}")
+            image = {}
+            for k, v in regs.items():
+                if not k.isdigit() or type(v) is not int:
+                    raise ValueError(f"entry {k!r}: {v!r} is not register number: integer")
+                image[int(k)] = v
+            self.m.load_flash_image(i, image)
+        except (OSError, UnicodeDecodeError, ValueError, KeyError) as exc:
+            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise ValueError(f"flash file {path} is not a flash image of motor {i}: {reason}; "
+                             "fix or delete it (the twin writes it on 'write flash', 56h)"
+                             ) from exc
+        return image
 
     def _save_flash_file(self, i: int) -> None:
+        """Write motor ``i``'s flash to its file; a file that cannot be written is logged and
+        counted (``stats["flash_file_errors"]``): the motor's flash holds the registers."""
         path = self._flash_path(i)
         if path is None:
             return
-        path.parent.mkdir(parents=True, exist_ok=True)
         image = self.m.flash_image(i)
-        tmp = path.with_suffix(".tmp")
-        tmp.write_text(json.dumps({"motor": i, "registers": {str(k): v for k, v in
-                                                              sorted(image.items())}}, indent=1))
-        tmp.replace(path)
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            tmp = path.with_suffix(".tmp")
+            tmp.write_text(json.dumps({"motor": i, "registers": {str(k): v for k, v in
+                                                                  sorted(image.items())}},
+                                      indent=1))
+            tmp.replace(path)
+        except OSError as exc:
+            self.stats["flash_file_errors"] += 1
+            self.last_refusal = (f"flash file {path} not written ({exc.strerror or exc}); the "
+                                 f"motor's flash holds the registers until the twin stops")
+            log.error("%s", self.last_refusal)
 
     def addresses(self) -> list[int]:
         """MYADDR of every motor now."""
-        return [int(a) for a in self.m.read_raw(REG.MYADDR)]
+        return [int(a) for a in self.m.read_raw(self.reg.MYADDR)]
 
     def mode(self, i: int) -> int:
-        return int(self.m.read_raw(REG.MODE_REG)[i])
+        return int(self.m.read_raw(self.reg.MODE_REG)[i])
 
     def word(self, i: int, reg: int) -> int:
         """The 16-bit word of register number ``reg`` of motor ``i`` (0 where there is none)."""
@@ -230,7 +292,7 @@ class Twin:
         except (RegisterError, ValueError) as exc:
             self.refuse(str(exc))
             return False
-        if reg in (REG.CNTRL_BITS, REG.MODE_REG, REG.REC_CNT):
+        if reg in (self.reg.CNTRL_BITS, self.reg.MODE_REG, self.reg.REC_CNT):
             self._sample_ptr[i] = 0
         return True
 
@@ -378,7 +440,7 @@ class UserInterfaceSession:
 
     def status(self) -> int:
         """The status byte now (manual 5.2.1.6)."""
-        st = int(self.twin.m.read_raw(REG.ERR_STAT)[self.i])
+        st = int(self.twin.m.read_raw(self.twin.reg.ERR_STAT)[self.i])
         dec, acc = bool(st & _DEC), bool(st & _ACC)
         return fm.encode_status(fm.Status(self.toggle, dec, acc and not dec, bool(st & _IN_POS),
                                           self.flexmac, False, bool(st & _ERRORS)))
@@ -413,17 +475,18 @@ class UserInterfaceSession:
                 self._fast(got)
         if self.send_myaddr:
             self.send_myaddr = False
-            return bytes((self.twin.word(self.i, REG.MYADDR) & 0xFF,))
+            return bytes((self.twin.word(self.i, self.twin.reg.MYADDR) & 0xFF,))
         return bytes((self.status(),))
 
     def _w(self, reg: int, raw: int) -> bool:
+        r = self.twin.reg
         return self.twin.write_bytes(self.i, reg, mt.long_to_bytes(_s32(raw))
-                                     if reg in (REG.P_SOLL, REG.P_IST, REG.P_FNC)
+                                     if reg in (r.P_SOLL, r.P_IST, r.P_FNC)
                                      else mt.words_to_bytes([raw & 0xFFFF]))
 
     def _err_stat(self, clear: int = 0, set_: int = 0) -> None:
-        st = int(self.twin.m.read_raw(REG.ERR_STAT)[self.i])
-        self._w(REG.ERR_STAT, (st & ~clear) | set_)
+        st = int(self.twin.m.read_raw(self.twin.reg.ERR_STAT)[self.i])
+        self._w(self.twin.reg.ERR_STAT, (st & ~clear) | set_)
 
     def _raw(self, reg: int) -> int:
         return int(self.twin.m.read_raw(reg)[self.i])
@@ -432,44 +495,46 @@ class UserInterfaceSession:
         """Carry out a FastMAC command (manual 5.2.1.4)."""
         if c.mode != fm.Mode.COMMAND:
             assert c.group is not None and c.number is not None
-            self._w(_POINTER[c.group], c.number)
+            self._w(self.twin.reg.pointer[c.group], c.number)
             if self.twin.mode(self.i) != int(c.mode):
-                self._w(REG.MODE_REG, int(c.mode))
+                self._w(self.twin.reg.MODE_REG, int(c.mode))
             return
         k = fm.FastCommand
         cmd = c.command
         if cmd == k.RESET_ERROR:
             self._err_stat(clear=_CLEARABLE)
         elif cmd == k.P_SOLL_ZERO:
-            self._w(REG.P_SOLL, 0)
+            self._w(self.twin.reg.P_SOLL, 0)
             self._err_stat(clear=_IN_POS)
         elif cmd == k.P_IST_ZERO:
-            self._w(REG.P_IST, 0)
+            self._w(self.twin.reg.P_IST, 0)
         elif cmd == k.P_FNC_ZERO:
-            self._w(REG.P_FNC, 0)
+            self._w(self.twin.reg.P_FNC, 0)
             self._err_stat(clear=_IN_POS)
         elif cmd == k.V_SOLL_ZERO:
-            self._w(REG.V_SOLL, 0)
+            self._w(self.twin.reg.V_SOLL, 0)
         elif cmd == k.T_SOLL_ZERO:
-            self._w(REG.T_SOLL, 0)
+            self._w(self.twin.reg.T_SOLL, 0)
         elif cmd == k.IN_POS_ZERO:
             self._err_stat(clear=_IN_POS)
         elif cmd in (k.REL_P7_FNC, k.REL_P8_FNC):
-            p = self._raw(REG.P7 if cmd == k.REL_P7_FNC else REG.P8)
-            self._w(REG.P_FNC, (self._raw(REG.FLWERR) - p) * 16)  # literally as in 5.2.1.4
+            p = self._raw(self.twin.reg.P7 if cmd == k.REL_P7_FNC else self.twin.reg.P8)
+            # literally as in 5.2.1.4
+            self._w(self.twin.reg.P_FNC, (self._raw(self.twin.reg.FLWERR) - p) * 16)
             self._err_stat(clear=_IN_POS)
         elif cmd in (k.SET1, k.SET2, k.SET3, k.SET4):
             n = int(cmd) - int(k.SET1) + 1
-            for reg in _POINTER.values():
+            for reg in self.twin.reg.pointer.values():
                 self._w(reg, n)
             self._err_stat(clear=_IN_POS)
         elif cmd == k.HOME:
-            home = self._raw(REG.HOME_MODE) >> 8
+            home = self._raw(self.twin.reg.HOME_MODE) >> 8
             if home in (12, 13, 14):
-                self._w(REG.MODE_REG, home)
+                self._w(self.twin.reg.MODE_REG, home)
         elif cmd in (k.MOVE_REL_P7, k.MOVE_REL_P8):
-            p = self._raw(REG.P7 if cmd == k.MOVE_REL_P7 else REG.P8)
-            self._w(REG.P_SOLL, self._raw(REG.P_IST) + p - self._raw(REG.FLWERR))
+            p = self._raw(self.twin.reg.P7 if cmd == k.MOVE_REL_P7 else self.twin.reg.P8)
+            r = self.twin.reg
+            self._w(r.P_SOLL, self._raw(r.P_IST) + p - self._raw(r.FLWERR))
         elif cmd == k.TRANSMIT_SLOWLY:
             self.slow = True
         elif cmd == k.ABSOLUTE:

@@ -12,6 +12,20 @@ Fixed4    16 bit signed, unit 1/4096   −7.999756 … +7.999756
 Fixed8    16 bit signed, unit 1/256    −127.996 … +127.996
 ========  ===========================  ============================
 
+Tables whose registers are 32 bits wide at one register number add four formats:
+
+========  ====================================  =======================================
+format    storage                               range (user units)
+========  ====================================  =======================================
+Int32     32 bit signed                         −2147483648 … 2147483647
+Word32    32 bit unsigned                       0 … 4294967295
+Fixed16   32 bit signed, unit 1/65536           −32768 … 32767.9999847412109375
+Fixed24   32 bit signed, unit 1/16777216        −128 … 127.999999940395355224609375
+========  ====================================  =======================================
+
+On a 16-bit protocol such a value is two words, low word first, like a LongInt
+(:func:`split_word32`, :func:`join_word32`).
+
 Three representations are used here:
 
 * *user units*: what the manual's register descriptions talk about (Fixed formats as reals);
@@ -23,7 +37,7 @@ Word order of a LongInt. Manual 3.2 says a LongInt "takes up two register number
 corresponding to two words", e.g. P_SOLL is registers 3 and 4 (3.2.3/3.2.4). The manual does not
 say which word is which; its MacTalk example (chapter 5.1) reads register 7 "as if it is longint
 format" and returns register 7's value 4711h first, then register 8. Together with the low-byte
-first byte examples (MODEL.md §10) this reads as little-endian throughout: register N holds the
+first byte examples (docs/model.md §16) this reads as little-endian throughout: register N holds the
 **low** word and N+1 the **high** word, and on the line the low word comes first. So
 0x00054711 is (0x4711, 0x0005) and −1 is (0xFFFF, 0xFFFF). (The manual's text says
 "big-endian"; the examples contradict it and are followed — a real motor is the final judge.)
@@ -39,10 +53,12 @@ from numba import njit
 
 from ..jit import KERNEL
 from .errors import ReadOnlyRegisterError, RegisterRangeError, RegisterShapeError
-from .table import FORMAT_RAW_RANGE, Access, Format, Register
+from .table import FORMAT_RAW_RANGE, FORMATS_32_ONE_NUMBER, Access, Format, Register
 
 __all__ = [
     "to_raw",
+    "whole_only",
+    "real_values",
     "raws_of_floats",
     "raws_of_rows",
     "raw_bounds",
@@ -53,11 +69,13 @@ __all__ = [
     "to_word16",
     "from_word16",
     "round_half_away",
+    "split_word32",
+    "join_word32",
 ]
 
-_FIXED = (Format.FIXED4, Format.FIXED8)
+_FIXED = (Format.FIXED4, Format.FIXED8, Format.FIXED16, Format.FIXED24)
 #: :func:`to_raw` converts up to this many values one by one as Python floats
-#: (:func:`raws_of_floats`), without numpy's fixed cost per call (~20 µs for a few values)
+#: (:func:`raws_of_floats`), without numpy's fixed cost per call, which dominates for a few values
 _SCALAR_MAX = 16
 _SIGNED16 = (Format.INTEGER, Format.FIXED4, Format.FIXED8)
 
@@ -89,6 +107,54 @@ def _user_bounds(reg: Register) -> tuple[float, float]:
     return min(reg.minimum, reg.raw_min / s), max(reg.maximum, reg.raw_max / s)
 
 
+def whole_only(reg: Register) -> bool:
+    """The register holds a code, a bit field, a register number or a count without a unit
+    (MODE_REG, CNTRL_BITS, HOME_MODE, the pointers, SAMPLE1..4, MYADDR, GEARF1 …: a Word,
+    Integer or LongInt register whose table unit is empty), so a value must be a whole number;
+    quantities (a unit, or a Fixed format) are rounded half away from zero instead."""
+    return reg.scale == 1 and not reg.unit
+
+
+def _not_a_number(reg: Register, value: Any) -> RegisterRangeError:
+    return RegisterRangeError(
+        f"{reg.name} (register {reg.number}): value {value!r} is not a number; give an int, "
+        f"a float or a real numeric array (manual {reg.section})")
+
+
+def real_values(reg: Register, value: Any) -> np.ndarray:
+    """``value`` as a float64 array if it is a real number or an array of them.
+
+    Parameters
+    ----------
+    reg : Register
+        Register the value is for (named in the error).
+    value : array_like
+        Python int or float, a numpy integer or float scalar, or a sequence or array of them.
+
+    Returns
+    -------
+    numpy.ndarray
+        float64 array of the shape of ``value``.
+
+    Raises
+    ------
+    RegisterRangeError
+        For a str, bytes, bool, complex, None or any other non-numeric value (also inside an
+        array: an array's dtype must be an integer or float type).
+    """
+    if isinstance(value, (str, bytes, bytearray, bool, np.bool_, complex, np.complexfloating)):
+        raise _not_a_number(reg, value)
+    if type(value) is int and abs(value) >= 2**63:  # beyond int64 and maybe float: out of range
+        return np.asarray(math.copysign(math.inf, value))
+    try:
+        arr = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # a ragged sequence
+        raise _not_a_number(reg, value) from exc
+    if arr.dtype.kind not in "iuf":
+        raise _not_a_number(reg, value)
+    return arr.astype(np.float64, copy=False)
+
+
 def _check_not_reserved(reg: Register) -> None:
     if reg.access == Access.RESERVED:
         raise ReadOnlyRegisterError(
@@ -99,8 +165,10 @@ def _check_not_reserved(reg: Register) -> None:
 def to_raw(reg: Register, value: Any) -> np.ndarray:
     """Convert user units to the stored integer, validating the range (manual 3.1, 3.2.N).
 
-    ``raw = round_half_away(value · scale)`` with scale 4096 for Fixed4, 256 for Fixed8 and 1
-    otherwise.
+    ``raw = round_half_away(value · scale)`` with scale 4096 for Fixed4, 256 for Fixed8, 65536
+    for Fixed16, 16777216 for Fixed24 and 1 otherwise: ``V_SOLL = 1600.7`` stores 1601. A
+    register that holds a code rather than a quantity (:func:`whole_only`: MODE_REG, CNTRL_BITS,
+    HOME_MODE, …) takes whole numbers only: ``MODE_REG = 0.5`` is refused, ``1.0`` is mode 1.
 
     Parameters
     ----------
@@ -117,18 +185,15 @@ def to_raw(reg: Register, value: Any) -> np.ndarray:
     Raises
     ------
     RegisterRangeError
-        If any value is NaN, infinite or outside ``[minimum, maximum]``; the message names the
-        register, its number, its range with unit and the manual section.
+        If any value is NaN, infinite or outside ``[minimum, maximum]``, not a whole number for
+        a :func:`whole_only` register, or not a real number at all (str, bytes, bool, complex:
+        :func:`real_values`); the message names the register, its number, its range with unit
+        and the manual section.
     ReadOnlyRegisterError
         For a reserved register.
     """
     _check_not_reserved(reg)
-    try:
-        v = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise RegisterRangeError(
-            f"{reg.name} (register {reg.number}): value {value!r} is not a number "
-            f"(manual {reg.section})") from exc
+    v = real_values(reg, value)
     if v.size <= _SCALAR_MAX:
         raw = raws_of_floats(reg, v.ravel().tolist())
         if raw is not None:
@@ -141,6 +206,13 @@ def to_raw(reg: Register, value: Any) -> np.ndarray:
         raise RegisterRangeError(
             f"{reg.name} (register {reg.number}): value {flat.flat[0]:g}{more} is outside the "
             f"range {reg.range_text} ({reg.format.value}, manual {reg.section})")
+    if whole_only(reg):
+        frac = v != np.floor(v)
+        if np.any(frac):
+            raise RegisterRangeError(
+                f"{reg.name} (register {reg.number}): value {v[frac].flat[0]:g} "
+                f"is not a whole number; {reg.name} holds a code or a count, not a quantity that "
+                f"could be rounded: give an integer (manual {reg.section})")
     raw = round_half_away(v * reg.scale)
     return np.clip(raw, reg.raw_min, reg.raw_max).astype(np.int64)
 
@@ -155,23 +227,29 @@ def _raw(x: float, scale: float, raw_min: float, raw_max: float) -> int:  # prag
 
 @njit(**KERNEL)
 def _raws_within(v: np.ndarray, lo: float, hi: float, scale: float, raw_min: float,
-                 raw_max: float, out: np.ndarray) -> int:  # pragma: no cover - compiled
-    """``out[j]`` = stored integer of ``v[j]`` (1-D arrays) while ``lo <= v[j] <= hi``.
+                 raw_max: float, whole: float, out: np.ndarray) -> int:  # pragma: no cover
+    """``out[j]`` = stored integer of ``v[j]`` (1-D arrays) while ``lo <= v[j] <= hi`` and,
+    if ``whole`` is 1, ``v[j]`` is a whole number (:func:`whole_only`).
 
-    Returns the position of the first value outside ``[lo, hi]`` (NaN included), or −1.
+    Returns the position of the first value outside ``[lo, hi]`` (NaN included) or not whole,
+    or −1.
     """
     for j in range(v.shape[0]):
         if not lo <= v[j] <= hi:
+            return j
+        if whole > 0.5 and v[j] != math.floor(v[j]):
             return j
         out[j] = _raw(v[j], scale, raw_min, raw_max)
     return -1
 
 
-def raw_bounds(reg: Register) -> tuple[float, float, float, float, float]:
-    """Conversion constants of a register: accepted user-unit interval (lo, hi), scale and raw
-    range (raw_min, raw_max), as floats (a row of the ``bounds`` of :func:`raws_of_rows`)."""
+def raw_bounds(reg: Register) -> tuple[float, float, float, float, float, float]:
+    """Conversion constants of a register: accepted user-unit interval (lo, hi), scale, raw
+    range (raw_min, raw_max) and 1.0 if values must be whole numbers (:func:`whole_only`, else
+    0.0), as floats (a row of the ``bounds`` of :func:`raws_of_rows`)."""
     lo, hi = _user_bounds(reg)
-    return float(lo), float(hi), float(reg.scale), float(reg.raw_min), float(reg.raw_max)
+    return (float(lo), float(hi), float(reg.scale), float(reg.raw_min), float(reg.raw_max),
+            float(whole_only(reg)))
 
 
 @njit(**KERNEL)
@@ -184,7 +262,7 @@ def raws_of_rows(values: np.ndarray, bounds: np.ndarray,
     values : numpy.ndarray
         (K, M) float64: row ``k`` in user units of register ``k``.
     bounds : numpy.ndarray
-        (K, 5) float64: :func:`raw_bounds` of register ``k``.
+        (K, 6) float64: :func:`raw_bounds` of register ``k``.
     out : numpy.ndarray
         (K, M) int64, receives the stored integers.
 
@@ -192,12 +270,12 @@ def raws_of_rows(values: np.ndarray, bounds: np.ndarray,
     -------
     int
         −1 when every value is in range; else the first row ``k`` with a value that is NaN,
-        infinite or out of range (``out`` then partly written; :func:`to_raw` of that row
-        raises the error).
+        infinite, out of range or not whole where it must be (``out`` then partly written;
+        :func:`to_raw` of that row raises the error).
     """
     for k in range(values.shape[0]):
         b = bounds[k]
-        if _raws_within(values[k], b[0], b[1], b[2], b[3], b[4], out[k]) >= 0:
+        if _raws_within(values[k], b[0], b[1], b[2], b[3], b[4], b[5], out[k]) >= 0:
             return k
     return -1
 
@@ -216,8 +294,8 @@ def raws_of_floats(reg: Register, values: list[float]) -> list[int] | None:
     Returns
     -------
     list of int or None
-        The stored integers, or None if a value is NaN, infinite or out of range (then
-        :func:`to_raw` raises the error).
+        The stored integers, or None if a value is NaN, infinite, out of range or not whole
+        where it must be (then :func:`to_raw` raises the error).
     """
     v = np.array(values, dtype=np.float64)
     out = np.empty(v.size, dtype=np.int64)
@@ -239,7 +317,8 @@ def from_raw(reg: Register, raw: Any) -> np.ndarray:
     Returns
     -------
     numpy.ndarray
-        float64 ``raw / scale`` for Fixed4/Fixed8, int64 otherwise (0-d for a scalar).
+        float64 ``raw / scale`` for the Fixed formats (Fixed4, Fixed8, Fixed16, Fixed24), int64
+        otherwise (0-d for a scalar).
     """
     r = np.asarray(raw)
     if reg.format in _FIXED:
@@ -248,7 +327,7 @@ def from_raw(reg: Register, raw: Any) -> np.ndarray:
 
 
 def saturate_raw(reg: Register, x: Any) -> np.ndarray:
-    """Round and saturate a firmware result to the register, without raising (MODEL.md §3).
+    """Round and saturate a firmware result to the register, without raising (docs/model.md §4).
 
     This is what a store by the firmware does: ``clip(round_half_away(x · scale), raw_min,
     raw_max)``. ``x`` is in user units (for Word/Integer/LongInt that is the raw unit). NaN is
@@ -355,7 +434,8 @@ def to_word16(reg: Register, raw: Any) -> np.ndarray:
     """Map stored integer(s) to the unsigned 16-bit word(s) on the serial line (manual 3.1, 5).
 
     Word and LongIntHigh pass through; Integer, Fixed4 and Fixed8 are 16-bit two's complement
-    (−1 → 0xFFFF); a LongInt gives two words, low first.
+    (−1 → 0xFFFF); a LongInt and the 32-bit formats at one number (Int32, Word32, Fixed16,
+    Fixed24) give two words, low first.
 
     Parameters
     ----------
@@ -368,7 +448,7 @@ def to_word16(reg: Register, raw: Any) -> np.ndarray:
     -------
     numpy.ndarray
         int64 words 0 … 65535: shape of ``raw`` for one-word formats, ``raw.shape + (2,)``
-        (``[..., 0]`` low, ``[..., 1]`` high) for LongInt.
+        (``[..., 0]`` low, ``[..., 1]`` high) for LongInt and the 32-bit formats.
 
     Raises
     ------
@@ -385,6 +465,9 @@ def to_word16(reg: Register, raw: Any) -> np.ndarray:
     if reg.format == Format.LONGINT:
         low, high = split_longint(a)
         return np.stack([np.asarray(low), np.asarray(high)], axis=-1).astype(np.int64)
+    if reg.format in FORMATS_32_ONE_NUMBER:
+        low, high = split_word32(a, signed=reg.format != Format.WORD32)
+        return np.stack([np.asarray(low), np.asarray(high)], axis=-1).astype(np.int64)
     return (a & 0xFFFF).astype(np.int64)
 
 
@@ -397,7 +480,8 @@ def from_word16(reg: Register, word: Any) -> np.ndarray:
     reg : Register
         Register the words belong to.
     word : array_like
-        Words 0 … 65535; for a LongInt the last axis must have length 2 (low, high).
+        Words 0 … 65535; for a LongInt or a 32-bit format the last axis must have length 2
+        (low, high).
 
     Returns
     -------
@@ -410,7 +494,7 @@ def from_word16(reg: Register, word: Any) -> np.ndarray:
     RegisterRangeError
         If a word is outside 0 … 65535.
     RegisterShapeError
-        If a LongInt's words do not have a trailing axis of length 2.
+        If a LongInt's or 32-bit format's words do not have a trailing axis of length 2.
     """
     _check_not_reserved(reg)
     w = _as_int_array(word, f"{reg.name} (register {reg.number}) words")
@@ -423,6 +507,84 @@ def from_word16(reg: Register, word: Any) -> np.ndarray:
                 f"{reg.name} (register {reg.number}) is a LongInt: expected words with a "
                 f"trailing axis of length 2 (low, high), got shape {w.shape}")
         return np.asarray(join_longint(w[..., 0], w[..., 1]), dtype=np.int64)
+    if reg.format in FORMATS_32_ONE_NUMBER:
+        if w.ndim == 0 or w.shape[-1] != 2:
+            raise RegisterShapeError(
+                f"{reg.name} (register {reg.number}) is {reg.format.value}: expected words with "
+                f"a trailing axis of length 2 (low, high), got shape {w.shape}")
+        return np.asarray(join_word32(w[..., 0], w[..., 1], signed=reg.format != Format.WORD32),
+                          dtype=np.int64)
     if reg.format in _SIGNED16:
         return np.where(w >= 0x8000, w - 0x10000, w).astype(np.int64)
     return w.astype(np.int64)
+
+
+def split_word32(raw: Any, signed: bool = True) -> tuple[Any, Any]:
+    """Split 32-bit value(s) into (low, high) unsigned 16-bit words, low word first on the line.
+
+    For the 32-bit formats at one register number: Int32, Fixed16 and Fixed24 (raw values
+    signed, two's complement: −1 → (0xFFFF, 0xFFFF)) and Word32 (``signed=False``).
+
+    Parameters
+    ----------
+    raw : int or array_like
+        Raw value(s): −2**31 … 2**31−1 when ``signed``, else 0 … 2**32−1.
+    signed : bool
+        Whether the raw values are signed.
+
+    Returns
+    -------
+    (low, high) : tuple
+        Python ints for a scalar input, int64 arrays otherwise.
+
+    Raises
+    ------
+    RegisterRangeError
+        If a value is not an integer or does not fit in 32 bits of the given signedness.
+    """
+    a = _as_int_array(raw, "32-bit values")
+    lo, hi = (-(2**31), 2**31 - 1) if signed else (0, 2**32 - 1)
+    if np.any((a < lo) | (a > hi)):
+        kind = "signed" if signed else "unsigned"
+        raise RegisterRangeError(f"32-bit value {raw!r} does not fit in 32 {kind} bits "
+                                 f"({lo} … {hi})")
+    u = a & 0xFFFFFFFF
+    return _scalar_or_array(u & 0xFFFF), _scalar_or_array(u >> 16)
+
+
+def join_word32(low: Any, high: Any, signed: bool = True) -> Any:
+    """Join (low, high) 16-bit words into 32-bit value(s); inverse of :func:`split_word32`.
+
+    Parameters
+    ----------
+    low, high : int or array_like
+        Unsigned words 0 … 65535.
+    signed : bool
+        Two's complement result (Int32, Fixed16, Fixed24) if True, unsigned (Word32) if False.
+
+    Returns
+    -------
+    int or numpy.ndarray
+        Python int for scalar inputs, int64 array otherwise.
+
+    Raises
+    ------
+    RegisterRangeError
+        If a word is not an integer in 0 … 65535.
+    RegisterShapeError
+        If ``low`` and ``high`` do not broadcast together.
+    """
+    lo = _as_int_array(low, "32-bit value words")
+    hi = _as_int_array(high, "32-bit value words")
+    for w in (lo, hi):
+        if np.any((w < 0) | (w > 0xFFFF)):
+            raise RegisterRangeError(f"words must be 0 … 65535, got {low!r}, {high!r}")
+    try:
+        lo, hi = np.broadcast_arrays(lo, hi)
+    except ValueError as exc:
+        raise RegisterShapeError(f"low and high word shapes differ: {lo.shape} vs {hi.shape}"
+                                 ) from exc
+    u = (hi << 16) | lo
+    if signed:
+        u = np.where(u >= 2**31, u - 2**32, u)
+    return _scalar_or_array(np.asarray(u).astype(np.int64))

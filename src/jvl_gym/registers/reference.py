@@ -10,14 +10,20 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
-from .table import MAC050_141, Access, Format, RegisterTable
+from .table import FORMAT_SCALE, Access, Format, RegisterTable
 
-__all__ = ["markdown_reference"]
+__all__ = ["markdown_reference", "markdown_reference_32"]
 
 
 def _fmt_value(x: float, fmt: Format) -> str:
-    if fmt in (Format.FIXED4, Format.FIXED8):
+    if fmt in FORMAT_SCALE:
         return f"{x:g}"
+    return str(int(x))
+
+
+def _fmt_value_32(x: float, fmt: Format) -> str:
+    if fmt in FORMAT_SCALE:
+        return f"{x:.12g}"  # Fixed16/Fixed24 ends: 32767.9999847, 127.99999994
     return str(int(x))
 
 
@@ -72,16 +78,71 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
     return "\n".join(lines) + "\n"
 
 
+def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
+                          generator: str) -> str:
+    """Render a table of 32-bit registers (one register number each) as a Markdown document.
+
+    Parameters
+    ----------
+    table : RegisterTable
+        The table to document.
+    title : str
+        Motor family shown in the heading.
+    source_note : str
+        One paragraph naming the source document and where its decisions are recorded.
+    generator : str
+        The command that writes the document (named in its header).
+
+    Returns
+    -------
+    str
+        Markdown with one table row per register number: number, name, MacTalk name, format,
+        range, unit, access, default, whether the register is for the normal user, section and
+        description.
+    """
+    lines = [
+        f"# Register reference: {title}",
+        "",
+        f"Generated from `{table.source}` by `{generator}`; do not edit by hand.",
+        "",
+        source_note,
+        "",
+        "Every register is 32 bits wide at one register number: `Int32` signed, `Word32` "
+        "unsigned, `Fixed16` and `Fixed24` signed fixed point with unit 1/65536 and 1/16777216 "
+        "(values here as real numbers). Access: `rw` user-writable, `ro` computed by the "
+        "firmware (writes are refused), `reserved` undocumented. *user* `no` marks registers "
+        "not meant for the normal user.",
+        "",
+        "| no. | name | MacTalk name | format | range | unit | access | default | user | section "
+        "| description |",
+        "|---:|---|---|---|---|---|---|---:|---|---|---|",
+    ]
+    for r in table:
+        if r.access == Access.RESERVED:
+            rng = default = user = ""
+        else:
+            rng = f"{_fmt_value_32(r.minimum, r.format)} … {_fmt_value_32(r.maximum, r.format)}"
+            default = _fmt_value_32(r.default, r.format)
+            user = "yes" if r.user else "no"
+        lines.append(
+            f"| {r.number} | {r.name} | {_cell(r.alias)} | {r.format.value} | {rng} | "
+            f"{_cell(r.unit)} | {r.access.value} | {default} | {user} | {_cell(r.section)} | "
+            f"{_cell(r.description)} |")
+    return "\n".join(lines) + "\n"
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Write the reference of :data:`MAC050_141` to ``argv[0]`` (default docs/registers.md)."""
+    """Write the reference of the MAC050–141 register table to ``argv[0]`` (default
+    docs/registers.md) and its mode table to ``modes.md`` beside it."""
     args = sys.argv[1:] if argv is None else argv
     out = Path(args[0]) if args else Path("docs/registers.md")
     out.parent.mkdir(parents=True, exist_ok=True)
-    from ..firmware.mode_table import markdown_mode_table, modes_using
+    from ..families.mac050_141.firmware.mode_table import markdown_mode_table, modes_using
+    from ..families.mac050_141.table import TABLE as table
 
-    out.write_text(markdown_reference(MAC050_141, usage=modes_using), encoding="utf-8")
+    out.write_text(markdown_reference(table, usage=modes_using), encoding="utf-8")
     (out.parent / "modes.md").write_text(markdown_mode_table(), encoding="utf-8")
-    print(f"wrote {out} ({len(MAC050_141)} registers)")
+    print(f"wrote {out} ({len(table)} registers)")
     return 0
 
 

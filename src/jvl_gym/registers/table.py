@@ -1,11 +1,17 @@
-"""The register table of one motor family, kept as data (manual 3.2, MODEL.md §3).
+"""The register table of one motor family, kept as data (manual 3.2, docs/model.md §4).
 
-The table lives in a CSV file next to this module (``mac050_141.csv`` for the MAC50/95/140/141),
-one row per register number. A LongInt register N (manual 3.1: "registers of the format LongInt
-take up two register numbers, corresponding to two words") is a ``LongInt`` row N holding the
-whole 32-bit value and a ``LongIntHigh`` row N+1 named ``<NAME>_HI`` for the high word, so that
-every number has exactly one row. Numbers the manual leaves undocumented are ``RESERVED_<n>``
-rows with access ``reserved``.
+Each motor family keeps its table in its own package
+(``jvl_gym/families/<family>/registers.csv``, loaded with :func:`load_table` or
+:func:`load_packaged_table`). One row per register number. A LongInt register N (manual
+3.1: "registers of the format LongInt take up two register numbers, corresponding to two
+words") is a ``LongInt`` row N holding the whole 32-bit value and a ``LongIntHigh`` row N+1 named
+``<NAME>_HI`` for the high word, so that every number has exactly one row. Numbers the manual
+leaves undocumented are ``RESERVED_<n>`` rows with access ``reserved``.
+
+Tables whose registers are 32 bits wide at one register number use the formats ``Int32``,
+``Word32``, ``Fixed16`` and ``Fixed24``: one row per number, no high-word row; on a 16-bit
+protocol such a value travels as two words, low word first
+(:func:`jvl_gym.registers.formats.split_word32`).
 
 The CSV is loaded once and validated; a malformed table raises :class:`TableError` naming the
 file, row and problem.
@@ -36,9 +42,12 @@ __all__ = [
     "RegisterTable",
     "TableError",
     "load_table",
-    "MAC050_141",
+    "load_packaged_table",
     "FORMAT_CODES",
     "FORMAT_SCALE",
+    "FORMAT_RAW_RANGE",
+    "FORMATS_32_ONE_NUMBER",
+    "format_value_range",
 ]
 
 #: highest register number of the MAC50–141 (index length of the arrays is this + 1)
@@ -46,7 +55,8 @@ MAC050_141_LAST = 164
 
 
 class Format(str, enum.Enum):
-    """Data formats of manual 3.1, plus the high word of a LongInt."""
+    """Data formats of manual 3.1, the high word of a LongInt, and the 32-bit formats at one
+    register number used by tables with 32-bit registers."""
 
     WORD = "Word"  #: 16 bit unsigned, 0 … 65535
     INTEGER = "Integer"  #: 16 bit signed, −32767 … +32767
@@ -54,6 +64,10 @@ class Format(str, enum.Enum):
     LONGINT_HIGH = "LongIntHigh"  #: second register number of a LongInt (high word)
     FIXED4 = "Fixed4"  #: 16 bit signed, unit 1/4096, ±7.999756
     FIXED8 = "Fixed8"  #: 16 bit signed, unit 1/256, ±127.996
+    INT32 = "Int32"  #: 32 bit signed at one register number, −2**31 … 2**31−1
+    WORD32 = "Word32"  #: 32 bit unsigned at one register number, 0 … 2**32−1
+    FIXED16 = "Fixed16"  #: 32 bit signed at one number, unit 1/65536, −32768 … 32767.9999847
+    FIXED24 = "Fixed24"  #: 32 bit signed at one number, unit 1/16777216, −128 … 127.99999994
 
 
 class Access(str, enum.Enum):
@@ -72,10 +86,20 @@ FORMAT_CODES: dict[Format, int] = {
     Format.LONGINT_HIGH: 4,
     Format.FIXED4: 5,
     Format.FIXED8: 6,
+    Format.INT32: 7,
+    Format.WORD32: 8,
+    Format.FIXED16: 9,
+    Format.FIXED24: 10,
 }
 
-#: raw = value · scale (manual 3.1: Fixed4 unit 1/4096, Fixed8 unit 1/256)
-FORMAT_SCALE: dict[Format, int] = {Format.FIXED4: 4096, Format.FIXED8: 256}
+#: raw = value · scale (manual 3.1: Fixed4 unit 1/4096, Fixed8 unit 1/256; Fixed16 unit
+#: 1/65536, Fixed24 unit 1/16777216)
+FORMAT_SCALE: dict[Format, int] = {Format.FIXED4: 4096, Format.FIXED8: 256,
+                                   Format.FIXED16: 2**16, Format.FIXED24: 2**24}
+
+#: formats holding a 32-bit value at a single register number (two 16-bit words on the line)
+FORMATS_32_ONE_NUMBER: frozenset[Format] = frozenset(
+    {Format.INT32, Format.WORD32, Format.FIXED16, Format.FIXED24})
 
 #: hard raw range of each format (manual 3.1); LongIntHigh is an unsigned 16-bit word
 FORMAT_RAW_RANGE: dict[Format, tuple[int, int]] = {
@@ -85,10 +109,37 @@ FORMAT_RAW_RANGE: dict[Format, tuple[int, int]] = {
     Format.LONGINT_HIGH: (0, 65535),
     Format.FIXED4: (-32767, 32767),
     Format.FIXED8: (-32767, 32767),
+    Format.INT32: (-(2**31), 2**31 - 1),
+    Format.WORD32: (0, 2**32 - 1),
+    Format.FIXED16: (-(2**31), 2**31 - 1),
+    Format.FIXED24: (-(2**31), 2**31 - 1),
 }
+
+
+def format_value_range(fmt: Format) -> tuple[float, float]:
+    """Exact range of a format in user units: the raw range divided by the scale.
+
+    Parameters
+    ----------
+    fmt : Format
+        A data format.
+
+    Returns
+    -------
+    (float, float)
+        Smallest and largest value, e.g. ``(-32768.0, 32767.9999847412109375)`` for Fixed16 and
+        ``(-128.0, 127.999999940395355224609375)`` for Fixed24 (both exact in float64).
+    """
+    lo, hi = FORMAT_RAW_RANGE[fmt]
+    scale = FORMAT_SCALE.get(fmt, 1)
+    return lo / scale, hi / scale
+
 
 _COLUMNS = ("number", "name", "format", "min", "max", "unit", "access", "default", "section",
             "description")
+#: optional trailing columns: MacTalk name where it differs from ``name``; "yes"/"no" whether the
+#: register is meant for the normal user
+_EXTRA_COLUMNS = ("alias", "user")
 
 
 def _round_half_away(x: float) -> int:
@@ -123,6 +174,11 @@ class Register:
         Manual section, e.g. ``"3.2.13"``.
     description : str
         One line.
+    alias : str
+        MacTalk name where it differs from ``name``, else ``""``.
+    user : bool
+        False for registers the manual marks as not for the normal user (changing them may
+        damage the motor), True otherwise.
     """
 
     number: int
@@ -135,10 +191,13 @@ class Register:
     default: float
     section: str
     description: str
+    alias: str = ""
+    user: bool = True
 
     @cached_property
     def scale(self) -> int:
-        """Raw units per user unit: 4096 for Fixed4, 256 for Fixed8, 1 otherwise."""
+        """Raw units per user unit: 4096 for Fixed4, 256 for Fixed8, 65536 for Fixed16,
+        16777216 for Fixed24, 1 otherwise."""
         return FORMAT_SCALE.get(self.format, 1)
 
     @cached_property
@@ -153,7 +212,13 @@ class Register:
 
     @property
     def words(self) -> int:
-        """Number of 16-bit words (register numbers) the register occupies: 2 for LongInt."""
+        """Number of 16-bit words the value occupies: 2 for LongInt (two register numbers) and
+        for the 32-bit formats at one number (Int32, Word32, Fixed16, Fixed24), 1 otherwise."""
+        return 2 if self.format == Format.LONGINT or self.format in FORMATS_32_ONE_NUMBER else 1
+
+    @property
+    def numbers(self) -> int:
+        """Number of register numbers the register occupies: 2 for LongInt, 1 otherwise."""
         return 2 if self.format == Format.LONGINT else 1
 
     @property
@@ -198,7 +263,7 @@ class RegisterTable:
         rows 0). A LongInt's entry is its whole 32-bit value.
     fmt_code_array : numpy.ndarray
         int8 array indexed by register number: 0 reserved, 1 Word, 2 Integer, 3 LongInt,
-        4 LongIntHigh, 5 Fixed4, 6 Fixed8.
+        4 LongIntHigh, 5 Fixed4, 6 Fixed8, 7 Int32, 8 Word32, 9 Fixed16, 10 Fixed24.
     """
 
     def __init__(self, registers: tuple[Register, ...] | list[Register], source: str = "<rows>"):
@@ -343,9 +408,9 @@ def _validate(regs: tuple[Register, ...], source: str) -> None:
 
 def _parse_rows(text: str, source: str) -> list[Register]:
     reader = csv.DictReader(io.StringIO(text))
-    if tuple(reader.fieldnames or ()) != _COLUMNS:
-        raise TableError(f"{source}: columns must be {','.join(_COLUMNS)}, "
-                         f"got {','.join(reader.fieldnames or ())}")
+    if tuple(reader.fieldnames or ()) not in (_COLUMNS, _COLUMNS + _EXTRA_COLUMNS):
+        raise TableError(f"{source}: columns must be {','.join(_COLUMNS)} "
+                         f"[,{','.join(_EXTRA_COLUMNS)}], got {','.join(reader.fieldnames or ())}")
     rows: list[Register] = []
     for line, row in enumerate(reader, start=2):
         try:
@@ -363,10 +428,15 @@ def _parse_rows(text: str, source: str) -> list[Register]:
             vals = [float(row[k]) if row[k].strip() else 0.0 for k in ("min", "max", "default")]
         except ValueError as exc:
             raise TableError(f"{source} line {line}: {exc}") from None
+        user_text = (row.get("user") or "yes").strip().lower()
+        if user_text not in ("yes", "no"):
+            raise TableError(f"{source} line {line}: column user must be 'yes' or 'no', "
+                             f"got {row.get('user')!r}")
         rows.append(Register(
             number=number, name=row["name"].strip(), format=fmt, minimum=vals[0],
             maximum=vals[1], unit=row["unit"].strip(), access=access, default=vals[2],
-            section=row["section"].strip(), description=row["description"].strip()))
+            section=row["section"].strip(), description=row["description"].strip(),
+            alias=(row.get("alias") or "").strip(), user=user_text == "yes"))
     return rows
 
 
@@ -376,7 +446,8 @@ def load_table(path: str | PathLike[str]) -> RegisterTable:
     Parameters
     ----------
     path : str or os.PathLike
-        CSV with columns ``number,name,format,min,max,unit,access,default,section,description``.
+        CSV with columns ``number,name,format,min,max,unit,access,default,section,description``
+        and optionally ``alias,user``.
 
     Returns
     -------
@@ -393,10 +464,26 @@ def load_table(path: str | PathLike[str]) -> RegisterTable:
     return RegisterTable(_parse_rows(p.read_text(encoding="utf-8"), str(p)), source=str(p))
 
 
-def _load_packaged(filename: str) -> RegisterTable:
-    text = resources.files(__package__).joinpath(filename).read_text(encoding="utf-8")
-    return RegisterTable(_parse_rows(text, filename), source=filename)
+def load_packaged_table(package: str, filename: str = "registers.csv") -> RegisterTable:
+    """Load and validate a register table shipped inside a package.
 
+    Parameters
+    ----------
+    package : str
+        Dotted name of the package holding the CSV, e.g. ``"jvl_gym.families.mac800"``.
+    filename : str
+        CSV file name inside that package.
 
-#: the MAC50/95/140/141 register table (manual 3.2, registers 1 … 164)
-MAC050_141: RegisterTable = _load_packaged("mac050_141.csv")
+    Returns
+    -------
+    RegisterTable
+        Its ``source`` is ``"<package>/<filename>"`` with the package's dots as slashes.
+
+    Raises
+    ------
+    TableError
+        As :func:`load_table`.
+    """
+    text = resources.files(package).joinpath(filename).read_text(encoding="utf-8")
+    source = f"{package.replace('.', '/')}/{filename}"
+    return RegisterTable(_parse_rows(text, source), source=source)

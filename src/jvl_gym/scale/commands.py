@@ -1,7 +1,8 @@
 """The bodies of ``jvl-gym sweep`` and ``jvl-tune fleet`` (the typer commands call these).
 
 Both check for Ray first (without the ``scale`` extra they print one line saying how to
-install it and exit with status 2), then read and validate their file, then run.
+install it and exit with status 1), then read and validate their file, then run. Errors are
+:class:`jvl_gym.cli_app.CliError` (one line, ``--debug`` for the traceback).
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ def _out_dir(out: Path) -> Path:
 def sweep_command(config: Path, out: Path, address: str | None = None,
                   num_cpus: int | None = None, max_concurrent: int | None = None,
                   stop_after: int | None = None, storage: str | None = None,
-                  verbose: bool = False, debug: bool = False) -> None:
+                  verbose: bool = False) -> None:
     """``jvl-gym sweep``: run (or resume) a sweep file; exit 1 if a trial failed or the sweep
     was interrupted before every trial finished (not when ``stop_after`` stopped it).
 
@@ -45,11 +46,16 @@ def sweep_command(config: Path, out: Path, address: str | None = None,
         Output directory (also what a resumed sweep reads).
     address, num_cpus, max_concurrent, stop_after, storage, verbose
         See :func:`jvl_gym.scale.sweep.run_sweep`.
-    debug : bool
-        Tracebacks instead of one-line errors.
     """
     def body() -> None:
         require_ray()
+        try:
+            import stable_baselines3  # noqa: F401
+            import torch  # noqa: F401
+        except ImportError as exc:
+            from ..cli_app import RL_EXTRA_HINT
+
+            raise UserError(f"jvl-gym sweep {RL_EXTRA_HINT}") from exc
         from .sweep import run_sweep
         from .sweep_spec import load_sweep
 
@@ -63,13 +69,12 @@ def sweep_command(config: Path, out: Path, address: str | None = None,
         if outcome.failed or (stop_after is None and not outcome.complete):
             raise typer.Exit(1)  # a trial failed, or the sweep was interrupted
 
-    run_cli(body, "jvl-gym sweep", debug)
+    run_cli(body)
 
 
 def fleet_command(spec_path: Path, out: Path, address: str | None = None,
                   num_cpus: int | None = None, save_records: bool = False,
-                  structure: str | None = None, verbose: bool = False,
-                  debug: bool = False) -> None:
+                  structure: str | None = None, verbose: bool = False) -> None:
     """``jvl-tune fleet``: autotune a fleet file or records folder; exit 1 if a motor has no
     design or its design fails the checks (non-credible identifications are listed in the
     report).
@@ -84,8 +89,6 @@ def fleet_command(spec_path: Path, out: Path, address: str | None = None,
         See :func:`jvl_gym.scale.fleet.run_fleet`.
     structure : str, optional
         Speed-loop structure (overrides the file's).
-    debug : bool
-        Tracebacks instead of one-line errors.
     """
     def body() -> None:
         require_ray()
@@ -104,4 +107,4 @@ def fleet_command(spec_path: Path, out: Path, address: str | None = None,
         if not all(r.get("checks") == "ok" for r in rows):
             raise typer.Exit(1)
 
-    run_cli(body, "jvl-tune fleet", debug)
+    run_cli(body)

@@ -1,17 +1,15 @@
 """User errors of the ``sweep`` and ``fleet`` commands, printed as one line.
 
 A :class:`UserError` says what is wrong, where (file and key), and what to do. :func:`run_cli`
-runs a command body and turns a :class:`UserError` (and the missing ``scale`` extra) into one
-line on stderr and exit status 2; with ``debug=True`` the exception propagates with its
-traceback instead.
+runs a command body and turns a :class:`UserError`, and the missing ``scale`` extra, into a
+:class:`jvl_gym.cli_app.CliError`: the command-line application prints it as one line on stderr
+and exits with status 1 (``--debug`` lets it through with its traceback).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from typing import TypeVar
-
-import typer
 
 from .extra import MissingExtraError
 
@@ -24,22 +22,22 @@ class UserError(ValueError):
     """Bad input: a malformed sweep or fleet file, an unknown env id, a bad path."""
 
 
-def run_cli(body: Callable[[], T], prog: str, debug: bool = False) -> T:
-    """Run ``body``; a :class:`UserError` or a missing extra becomes one line and exit 2.
+def run_cli(body: Callable[[], T]) -> T:
+    """Run ``body``; a :class:`UserError` or a missing extra becomes a ``CliError``.
 
     Parameters
     ----------
     body : callable
         The command's work.
-    prog : str
-        Prefix of the printed line, e.g. ``"jvl-gym sweep"``.
-    debug : bool
-        Re-raise instead (full traceback).
+
+    Returns
+    -------
+    object
+        What ``body`` returns.
     """
+    from ..cli_app import CliError
+
     try:
         return body()
     except (UserError, MissingExtraError) as exc:
-        if debug:
-            raise
-        typer.echo(f"{prog}: error: {exc}", err=True)
-        raise typer.Exit(2) from None
+        raise CliError(str(exc)) from exc

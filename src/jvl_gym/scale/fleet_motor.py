@@ -1,18 +1,21 @@
 """Autotuning one motor of a fleet (the body of one Ray task).
 
 A simulated motor runs the procedure of ``jvl-tune autotune`` on a one-motor ``MotorArray``
-(:func:`tuning.autotune.identify_motors`, :func:`tuning.autotune.synthesize`,
-:func:`tuning.autotune.verify_design`); a recorded motor is identified from its CSVs
-(:func:`tuning.identify_coil.identify_coil`, :func:`tuning.identify_mechanics.
-identify_mechanics`) and synthesised the same way. Then the same position move
-(:func:`tuning.verify.position_move`) runs with the default setup and with the designed one —
+(:func:`tuning.autotune.identify_motors`, then the design with its acceptance step,
+:func:`tuning.acceptance.autotune_designs`, checked by :func:`tuning.autotune.verify_design`); a
+recorded motor is identified from its CSVs (:func:`tuning.identify_coil.identify_coil`,
+:func:`tuning.identify_mechanics.identify_mechanics`) and designed the same way. Then the same
+position move (:func:`tuning.verify.position_move`) runs with the default setup and with the
+designed one —
 on the motor itself when simulated, on a simulated motor with the identified inertia and
 friction when recorded. The result carries the register set, the report files (as bytes, so
 the driver writes them wherever it runs) and one row for the fleet report.
 
-An identification is *credible* when J is finite and positive, its 95 % interval is within
-:data:`MAX_J_HALF_WIDTH` of J, the coil's R and L intervals within :data:`MAX_RL_HALF_WIDTH`,
-and both fits reach :data:`MIN_FIT_PERCENT` NRMSE; otherwise the row lists the reasons.
+An identification is *credible* when :func:`tuning.credibility.problems` finds nothing (J, R, L
+positive with intervals clear of zero, J at least half the rotor's, KVOUT within its format,
+fits of at least ``tuning.credibility.MIN_FIT``) and, for a fleet, J's 95 % interval is within
+:data:`MAX_J_HALF_WIDTH` of J and the coil's R and L intervals within
+:data:`MAX_RL_HALF_WIDTH`; otherwise the row lists the reasons.
 """
 
 from __future__ import annotations
@@ -28,12 +31,10 @@ import yaml
 
 from .fleet_spec import FleetMotor, FleetSpec
 
-__all__ = ["tune_motor", "credibility", "MAX_J_HALF_WIDTH", "MAX_RL_HALF_WIDTH",
-           "MIN_FIT_PERCENT"]
+__all__ = ["tune_motor", "credibility", "MAX_J_HALF_WIDTH", "MAX_RL_HALF_WIDTH"]
 
 MAX_J_HALF_WIDTH = 0.05  #: largest credible half-width of J's 95 % interval, relative to J
 MAX_RL_HALF_WIDTH = 0.10  #: largest credible half-width of R's and L's intervals (relative)
-MIN_FIT_PERCENT = 80.0  #: smallest credible NRMSE fit of the TESTU and TESTA models [%]
 
 
 def credibility(ident: Any) -> list[str]:
@@ -49,10 +50,12 @@ def credibility(ident: Any) -> list[str]:
     list of str
         One reason per failed criterion.
     """
+    from tuning.credibility import problems
+
     c, m = ident.coil, ident.mechanics
-    out = []
+    out = problems(ident.motor, m, c)
     if not (math.isfinite(m.J) and m.J > 0):
-        return [f"J = {m.J!r} is not a positive number"]
+        return out or [f"J = {m.J!r} is not a positive number"]
     hw = (m.ci["J"][1] - m.ci["J"][0]) / 2 / m.J
     if not hw <= MAX_J_HALF_WIDTH:
         out.append(f"J interval ±{100 * hw:.1f} % > ±{100 * MAX_J_HALF_WIDTH:.0f} %")
@@ -62,9 +65,6 @@ def credibility(ident: Any) -> list[str]:
         if not rel <= MAX_RL_HALF_WIDTH:
             out.append(f"{key[0]} interval ±{100 * rel:.1f} % > "
                        f"±{100 * MAX_RL_HALF_WIDTH:.0f} %")
-    for name, fit in (("TESTU", c.nrmse_fit), ("TESTA", m.nrmse_fit)):
-        if not fit >= MIN_FIT_PERCENT:
-            out.append(f"{name} fit {fit:.1f} % < {MIN_FIT_PERCENT:.0f} %")
     return out
 
 
@@ -132,7 +132,8 @@ def tune_motor(motor: FleetMotor, spec: FleetSpec, save_records: bool = False
         ``row`` (the fleet-report row), ``files`` (relative path -> bytes: ``setup.yaml``,
         ``report.txt``, plots, ``motor.yaml``, records) and ``registers``.
     """
-    from tuning.autotune import identify_motors, synthesize, verify_design
+    from tuning.acceptance import autotune_designs
+    from tuning.autotune import identify_motors, verify_design
     from tuning.models import MotorData
     from tuning.records import save_csv
     from tuning.report import write_report
@@ -179,13 +180,14 @@ def tune_motor(motor: FleetMotor, spec: FleetSpec, save_records: bool = False
     if not (math.isfinite(mech.J) and mech.J > 0):
         row.update(checks="no design: J not identified", wall_s=time.perf_counter() - t0)
         return {"row": row, "files": files, "registers": None}
-    d = synthesize(ident.motor, mech.J, mech.coulomb, structure=spec.structure)
+    acc = autotune_designs([ident], spec.structure)[0]
+    d = acc.chosen.design
     bad = verify_design(d)
     cr, sr = d.current_report.nominal, d.speed_report.nominal
     row.update(current_pm=cr.pm_deg, current_gm=cr.gm_db, speed_pm=sr.pm_deg,
                speed_gm=sr.gm_db, speed_bw=sr.bandwidth_hz,
                robust_pm=min(d.current_report.worst_robust_pm, d.speed_report.worst_robust_pm),
-               checks="; ".join(bad) or "ok")
+               checks="; ".join(bad) or "ok", design=acc.chosen.name)
     note = (f"jvl-tune fleet: {motor.motor_id} ({motor.type}), identified J = {mech.J:.4g} "
             "kg m^2")
     files["setup.yaml"] = _setup_text(motor, d.registers, note).encode()

@@ -2,11 +2,11 @@
 
 ``fleet.md``: a summary (motors, credible identifications, designs passing the checks, motors
 settling faster than with the default setup, largest J error when the truth is known), the
-table of every motor (identified J with its 95 % interval, J error, T_c, b, margins, settle
-times with the default and the designed setup) and the list of motors whose identification is
-not credible, with the reasons. ``fleet.png``: histograms of the identified KVOUT = J/J_m, T_c
-and b, of the J, R and L errors (where the truth is known), of the speed-loop phase margins, and
-the settle times designed vs default.
+table of every motor (identified J with its 95 % interval, J error, T_c, b, margins, the design
+the acceptance step kept, settle times with the default setup and with the kept one) and the
+list of motors whose identification is not credible, with the reasons. ``fleet.png``:
+histograms of the identified KVOUT = J/J_m, T_c and b, of the J, R and L errors (where the truth
+is known), of the speed- and current-loop phase margins, and the settle times kept vs default.
 """
 
 from __future__ import annotations
@@ -22,12 +22,12 @@ from .fleet_spec import FleetSpec
 
 __all__ = ["write_fleet_report", "fleet_markdown", "plot_fleet"]
 
-_COLUMNS = ["motor", "type", "source", "credible", "reasons", "checks", "J", "J_lo", "J_hi",
-            "true_J", "J_err", "kvout", "coulomb", "true_coulomb", "viscous", "true_viscous",
-            "R_line", "L_line", "R_err", "L_err", "testu_fit", "testa_fit", "current_pm",
-            "current_gm", "speed_pm", "speed_gm", "speed_bw", "robust_pm", "a_soll",
-            "settle_default_s", "settle_tuned_s", "overshoot_default", "overshoot_tuned",
-            "move_model", "wall_s", "cpu_s"]
+_COLUMNS = ["motor", "type", "source", "credible", "reasons", "design", "checks", "J", "J_lo",
+            "J_hi", "true_J", "J_err", "kvout", "coulomb", "true_coulomb", "viscous",
+            "true_viscous", "R_line", "L_line", "R_err", "L_err", "testu_fit", "testa_fit",
+            "current_pm", "current_gm", "speed_pm", "speed_gm", "speed_bw", "robust_pm",
+            "a_soll", "settle_default_s", "settle_tuned_s", "overshoot_default",
+            "overshoot_tuned", "move_model", "wall_s", "cpu_s"]
 
 
 def _f(value: Any, fmt: str) -> str:
@@ -74,11 +74,11 @@ def fleet_markdown(spec: FleetSpec, rows: list[dict[str, Any]]) -> str:
         lines.append(f"- J error where the truth is known: largest {100 * max(errs):.2f} %, "
                      f"rms {100 * math.sqrt(float(np.mean(np.square(errs)))):.2f} %")
     lines += ["", "| motor | J [kg m²] (95 %) | J error | T_c [N m] | b [N m s/rad] | speed PM/GM "
-              "| current PM/GM | settle default → tuned [ms] | credible | checks |",
-              "|---|---|---|---|---|---|---|---|---|---|"]
+              "| current PM/GM | design kept | settle default → kept [ms] | credible | checks |",
+              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if "J" not in r:
-            lines.append(f"| {r['motor']} | — | — | — | — | — | — | — | no | "
+            lines.append(f"| {r['motor']} | — | — | — | — | — | — | — | — | no | "
                          f"{r.get('reasons', '')} |")
             continue
         jerr = f"{100 * r['J_err']:+.2f} %" if r.get("J_err") is not None else "—"
@@ -90,8 +90,8 @@ def fleet_markdown(spec: FleetSpec, rows: list[dict[str, Any]]) -> str:
                   f"{_settle(r['settle_tuned_s'], spec)}" if "settle_tuned_s" in r else "—")
         lines.append(f"| {r['motor']} | {r['J']:.4g} [{r['J_lo']:.4g}, {r['J_hi']:.4g}] | "
                      f"{jerr} | {r['coulomb']:.3g} | {r['viscous']:.3g} | {spd} | {cur} | "
-                     f"{settle} | {'yes' if r.get('credible') else 'no'} | "
-                     f"{r.get('checks', '—')} |")
+                     f"{r.get('design', '—')} | {settle} | "
+                     f"{'yes' if r.get('credible') else 'no'} | {r.get('checks', '—')} |")
     bad = [r for r in rows if not r.get("credible")]
     lines += ["", "## Identifications that are not credible", ""]
     lines += [f"- {r['motor']}: {r.get('reasons')}" for r in bad] or ["None."]

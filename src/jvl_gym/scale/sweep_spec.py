@@ -179,6 +179,8 @@ def _check_param_key(key: str, env: str, base: dict[str, Any], where: str) -> No
 
 
 def _env_arguments(env: str) -> set[str] | None:
+    """The keyword arguments of the env's vector class: the named parameters of the
+    ``__init__`` of each jvl_gym class in its MRO (the base class refuses any other)."""
     import importlib
 
     import gymnasium as gym
@@ -189,14 +191,11 @@ def _env_arguments(env: str) -> set[str] | None:
     module, _, name = entry.partition(":")
     names: set[str] = set()
     for cls in getattr(importlib.import_module(module), name).__mro__:
-        if "__init__" not in vars(cls):
-            continue
-        params = inspect.signature(vars(cls)["__init__"]).parameters
-        names |= {n for n, p in params.items()
-                  if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)}
-        if not any(p.kind is p.VAR_KEYWORD for p in params.values()):
-            return names - {"self", "num_envs"}
-    return None
+        if "__init__" in vars(cls) and cls.__module__.startswith("jvl_gym."):
+            params = inspect.signature(vars(cls)["__init__"]).parameters
+            names |= {n for n, p in params.items()
+                      if p.kind not in (p.VAR_KEYWORD, p.VAR_POSITIONAL)}
+    return (names - {"self", "num_envs"}) or None
 
 
 def _algo_arguments(algo: str) -> set[str] | None:

@@ -1,4 +1,4 @@
-"""Signals the motor sees from the outside world (MODEL.md §6 "World signals").
+"""Signals the motor sees from the outside world (docs/model.md §14).
 
 Each source is vectorised over the N motors of a :class:`~jvl_gym.MotorArray` and advances with
 the simulation: attach a :class:`World` to ``MotorArray.world`` and every ``step(n)`` feeds the

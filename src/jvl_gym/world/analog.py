@@ -11,7 +11,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from .. import constants as c
+from ..families.mac050_141 import constants as c
 
 
 class AnalogInput:

@@ -11,7 +11,7 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..constants import OUTER_DT
+from ..families.mac050_141.constants import OUTER_DT
 
 
 class SpeedProfile:

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .. import constants as c
+from ..families.mac050_141 import constants as c
 from .profiles import SpeedProfile
 
 

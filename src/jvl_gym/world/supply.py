@@ -6,7 +6,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from .. import constants as c
+from ..families.mac050_141 import constants as c
 
 
 class SupplyEvents:

@@ -6,8 +6,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .. import constants as c
-from .. import layout as L
 from .analog import AnalogInput
 from .pulse import PulseInput
 from .supply import SupplyEvents
@@ -33,17 +31,19 @@ class World:
         self.t = 0.0
 
     def schedule(self, m: MotorArray, n_outer: int) -> np.ndarray:
-        """Inputs for the next ``n_outer`` outer samples, shape (n_outer, N, N_INPUT)."""
+        """Inputs for the next ``n_outer`` outer samples, shape (n_outer, N, inputs) (the
+        columns of the motors' world inputs, ``MotorArray.INPUTS``)."""
         out = np.repeat(m.inputs[None, :, :], n_outer, axis=0)
         bits = m.interface_bits
+        col = m.INPUTS  # world-input name -> column of the motors' inputs
         for k in range(n_outer):
             if self.pulse is not None:
-                out[k, :, L.I_PULSE_COUNTS] = self.pulse.advance(bits)
+                out[k, :, col["pulse_counts"]] = self.pulse.advance(bits)
             if self.analog is not None:
-                out[k, :, L.I_ANALOG_VOLTS] = self.analog.advance()
+                out[k, :, col["analog_volts"]] = self.analog.advance()
             if self.supply is not None:
-                out[k, :, L.I_SUPPLY_VOLTS] = self.supply.advance()
+                out[k, :, col["supply_volts"]] = self.supply.advance()
             if self.load_torque is not None:
-                out[k, :, L.I_LOAD_TORQUE] = self.load_torque(self.t)
-            self.t += c.OUTER_DT
+                out[k, :, col["load_torque"]] = self.load_torque(self.t)
+            self.t += 1.0 / m.OUTER_HZ
         return out

@@ -1,0 +1,82 @@
+"""The Typer application class of ``jvl-gym`` and ``jvl-tune``: errors as one line.
+
+Every error a command meets (a bad option, an unknown motor, a malformed file, a refused
+register write, a missing extra) is printed as one line on stderr, ``<prog>: error: <what>``,
+and the process exits non-zero (2 for a usage error, 1 otherwise). ``--debug`` anywhere on the
+command line, or ``JVL_DEBUG=1``, lets the exception through with its traceback.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from typing import Any
+
+import typer
+from typer.exceptions import TyperException
+
+__all__ = ["App", "CliError", "one_line", "RL_EXTRA_HINT"]
+
+#: what to do when the RL extra (torch, stable-baselines3) is missing
+RL_EXTRA_HINT = ("needs the RL extra (torch, stable-baselines3): run `make setup-rl` or "
+                 "`.venv/bin/pip install -e '.[rl]'`")
+
+
+class CliError(TyperException):
+    """An error a command words completely (what, where, what to do): printed as it is."""
+
+
+def one_line(exc: BaseException | str) -> str:
+    """The message of ``exc`` on one line (the lines of a multi-line message joined by '; ')."""
+    lines = [ln.strip() for ln in str(exc).splitlines() if ln.strip()]
+    text = "; ".join(lines).replace(":;", ":")
+    if not text or isinstance(exc, (OSError, KeyError, TypeError, AttributeError)):
+        text = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
+    return text
+
+
+class App(typer.Typer):
+    """A :class:`typer.Typer` whose errors are one line on stderr with a non-zero exit status.
+
+    Parameters
+    ----------
+    prog : str
+        Program name used in the messages (``"jvl-tune"``).
+    **kwargs
+        Passed to :class:`typer.Typer`.
+    """
+
+    def __init__(self, *, prog: str, **kwargs: Any) -> None:
+        super().__init__(pretty_exceptions_enable=False, **kwargs)
+        self.prog = prog
+
+    def __call__(self, args: list[str] | None = None, prog_name: str | None = None,
+                 **extra: Any) -> Any:
+        """Run the command line ``args`` (default ``sys.argv[1:]``) and exit."""
+        argv = list(sys.argv[1:] if args is None else args)
+        debug = "--debug" in argv or os.environ.get("JVL_DEBUG", "") not in ("", "0")
+        argv = [a for a in argv if a != "--debug"]
+        if not argv:
+            argv = ["--help"]
+        command = " ".join([self.prog, *[a for a in argv[:1] if not a.startswith("-")]])
+        try:
+            code = super().__call__(args=argv, prog_name=prog_name or self.prog,
+                                    standalone_mode=False, **extra)
+        except typer.Abort:
+            print(f"{self.prog}: aborted", file=sys.stderr)
+            sys.exit(130)
+        except TyperException as exc:  # usage errors (exit status 2) and CliError
+            if debug:
+                raise
+            usage = f" (see {command} --help)" if exc.exit_code == 2 else ""
+            print(f"{command}: error: {one_line(exc.format_message())}{usage}", file=sys.stderr)
+            sys.exit(exc.exit_code)
+        except KeyboardInterrupt:
+            sys.exit(130)
+        except Exception as exc:
+            if debug:
+                raise
+            print(f"{command}: error: {one_line(exc)} (--debug shows the traceback)",
+                  file=sys.stderr)
+            sys.exit(1)
+        sys.exit(code if isinstance(code, int) else 0)

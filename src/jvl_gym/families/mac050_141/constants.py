@@ -1,0 +1,127 @@
+"""Fixed facts of the MAC50–141 firmware: rates, units, modes and status bits.
+
+Sources: manual 1.2 (sampled systems), 3.2.2 (MODE_REG), 3.2.35 (ERR_STAT), 3.2.36 (CNTRL_BITS),
+3.2.5/3.2.6/3.2.12 (velocity and acceleration units) and docs/model.md §2–3.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .firmware.mode_table import MODE_NAMES as _MODE_NAMES
+from .firmware.mode_table import number as _mode
+
+# --- timing (manual 1.2, docs/model.md §2) ---------------------------------------------------
+INNER_HZ = 7812.5  #: current loops, commutation, electrics [Hz]
+INNER_PER_OUTER = 15  #: one velocity/position sample = 15 current samples
+OUTER_HZ = INNER_HZ / INNER_PER_OUTER  #: 520.833 Hz
+INNER_DT = 1.0 / INNER_HZ  #: 128 µs
+OUTER_DT = 1.0 / OUTER_HZ  #: 1.92 ms
+
+# --- units (docs/model.md §3) ----------------------------------------------------------------
+COUNTS_PER_REV = 4096  #: encoder counts per revolution
+ELDEG_PER_TURN = 2048  #: ELDEG_IST / MAN_ALPHA units per electrical turn (3.2.143)
+RAD_PER_COUNT = 2.0 * math.pi / COUNTS_PER_REV
+VF_FULL = 1023  #: VF_OUT / T_SOLL full scale = peak torque (3.2.7)
+ADC_FULL = 1023  #: IA_IST.. measurement range ±1023 (3.2.139)
+PWM_FULL = 1023  #: UA_VAL.. ±1023 = ±U_SUPPLY/2 phase-to-midpoint (docs/model.md §3 decision)
+ANINP_FULL = 1023  #: ±10 V ↔ ±1023 (3.2.122)
+ANINP_VOLTS = 10.0
+U_SUPPLY_VOLTS_PER_UNIT = 0.0537  #: U_SUPPLY register unit (3.2.151)
+STOP_SPEED_COUNTS = 300.0 / 60.0 * COUNTS_PER_REV / OUTER_HZ  #: 300 rpm in counts/sample (4.1.8)
+REC_CNT_MAX = 895  #: sample buffer depth (3.2.116)
+TEST_RECORD_SAMPLES = 11  #: TESTU / TESTA record length (4.4.9, 4.4.10)
+UIT_SUPPLY_THRESHOLD = 52.0  #: UIT trips only above this supply voltage [V] (3.2.18)
+I2T_FULL_SCALE_AMPLITUDE = 0.83  #: I2T = 65535 ↔ three-phase mean square at 1023·0.83 counts
+UIT_FULL_SCALE_WATTS = 100.0  #: UIT = 65535 ↔ 100 W filtered regenerative power (decision)
+
+
+def v_soll_to_rpm(v_soll: float) -> float:
+    """Velocity in 1/16 count/sample → rpm (manual 3.2.5: 1600 ↔ 762.9 rpm)."""
+    return v_soll / 16.0 * OUTER_HZ / COUNTS_PER_REV * 60.0
+
+
+def rpm_to_v_soll(rpm: float) -> float:
+    """rpm → velocity in 1/16 count/sample (inverse of :func:`v_soll_to_rpm`)."""
+    return rpm / 60.0 * COUNTS_PER_REV / OUTER_HZ * 16.0
+
+
+def v_ist_to_rpm(v_ist: float) -> float:
+    """Measured velocity in counts/sample → rpm (manual 3.2.12: 100 ↔ 762.9 rpm)."""
+    return v_ist * OUTER_HZ / COUNTS_PER_REV * 60.0
+
+
+def a_soll_to_rpm_per_s(a_soll: float) -> float:
+    """Acceleration in 1/16 count/sample² → rpm/s (manual 3.2.6: 160 ↔ 39731 rpm/s)."""
+    return a_soll / 16.0 * OUTER_HZ**2 / COUNTS_PER_REV * 60.0
+
+
+# --- modes (manual 3.2.2, 4.4): numbers and names from the mode table --------------------
+INIT_MODE = _mode("INIT_MODE")
+V_MODE = _mode("V_MODE")
+P_MODE = _mode("P_MODE")
+GP_MODE = _mode("GP_MODE")
+AT_MODE = _mode("AT_MODE")
+AV_MODE = _mode("AV_MODE")
+AVG_MODE = _mode("AVG_MODE")
+MANI_MODE = _mode("MANI_MODE")
+TESTU_MODE = _mode("TESTU_MODE")
+TESTA_MODE = _mode("TESTA_MODE")
+BREAK_MODE = _mode("BREAK_MODE")
+STOP_MODE = _mode("STOP_MODE")
+HOME1_MODE = _mode("HOME1_MODE")
+HOME2_MODE = _mode("HOME2_MODE")
+HOME3_MODE = _mode("HOME3_MODE")
+SAFE_MODE = _mode("SAFE_MODE")
+AVZ_MODE = _mode("AVZ_MODE")
+VAT_MODE = _mode("VAT_MODE")
+AG_MODE = _mode("AG_MODE")
+COIL_MODE = _mode("COIL_MODE")
+A2POS_MODE = _mode("A2POS_MODE")
+APOS_MODE = _mode("APOS_MODE")
+TESTKI_MODE = _mode("TESTKI_MODE")
+TESTTQ_MODE = _mode("TESTTQ_MODE")
+GF_MODE = _mode("GF_MODE")
+SAFE_LOAD_DEFAULTS_SAVE = 256  #: in SAFE_MODE: ROM defaults → flash, reset (4.4.16)
+SAFE_LOAD_DEFAULTS = 257  #: in SAFE_MODE: ROM defaults, not saved
+SAFE_LOAD_FLASH = 258  #: in SAFE_MODE: last saved user parameters
+
+MODE_NAMES = _MODE_NAMES  #: MODE_REG value → mode name (mac050_141.firmware.mode_table)
+
+# --- ERR_STAT bits (3.2.35) ------------------------------------------------------------------
+I2T_ERR = 1 << 0
+FLW_ERR = 1 << 1
+FNC_ERR = 1 << 2
+UIT_ERR = 1 << 3
+IN_POS = 1 << 4
+ACC_FLAG = 1 << 5
+DEC_FLAG = 1 << 6
+PLIM_ERR = 1 << 7
+FRAME_ERR_TX = 1 << 8
+RELPOSPSOLL = 1 << 9
+RELPOSPFNC = 1 << 10
+IX_ERR = 1 << 11
+UV_ERR = 1 << 12
+UV_DETECT = 1 << 13
+DIS_P_LIM = 1 << 14
+BLOCKING_ERRORS = I2T_ERR | FLW_ERR | FNC_ERR | UIT_ERR  #: must be cleared in INIT (4.4.1)
+
+# --- CNTRL_BITS (3.2.36) ---------------------------------------------------------------------
+USERINTF_MASK = 0b11
+PULSEDIR = 1 << 2
+INPSIGN = 1 << 3
+HICLK = 1 << 4
+HALL_INT = 1 << 5
+RECORDBIT = 1 << 6
+REWINDBIT = 1 << 7
+RECINNERBIT = 1 << 8
+AUTO_RESYNC = 1 << 9
+MAN_RESYNC = 1 << 10
+INDEX_HOME = 1 << 11
+REL_RESYNC = 1 << 12
+HALL_STATUS_SHIFT = 13
+
+# --- UV_HANDLE (3.2.160) ---------------------------------------------------------------------
+SET_UV_ERR = 1 << 0
+UV_GO_PASSIVE = 1 << 1
+UV_SOLL0 = 1 << 3

@@ -1,0 +1,434 @@
+"""The simulation kernel: one outer sample (1.92 ms) = firmware outer step + 15 inner samples.
+
+Order within an outer sample (manual 1.2 sampled-system convention, docs/model.md §2):
+
+1. read the encoder: ``V_IST = ΔP``, ``P_IST += V_IST``; read the world inputs (ANINP, V_EXT,
+   U_SUPPLY); process REWINDBIT / re-synchronisation bits;
+2. the active mode's function block → FNC_OUT; speed regulator → VF_OUT (with the function
+   correction in the correcting modes); FLWERR / FNCERR;
+3. monitoring (4.5), IN_POS, mode transitions; outer-rate recording;
+4. 15 inner samples, each: ELDEG_IST / V_ELDEG, current measurement, commutation and the three
+   current loops (or the mode's fixed voltages), inner-rate recording, then the PWM voltage
+   (after ``pwm_delay_samples``) drives the coil, mechanics and DC bus for 128 µs.
+   VF_OUT computed in step 2 is used from the first of these inner samples on.
+
+The drivers (:mod:`mac050_141.lanes`) advance blocks of motors in lockstep, steps 1–3 one motor at
+a time and step 4 for several motors in SIMD lanes where :func:`inner_sample`'s branches allow;
+every motor's arithmetic is independent of the others, so an N-motor array is bit-for-bit
+equal to N one-motor arrays.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ...jit import KERNEL, LANE_KERNEL
+from ...noise import gauss
+from . import constants as c
+from . import layout as L
+from .firmware import regs as R
+from .firmware.analog_blocks import (
+    a2pos_update,
+    apos_update,
+    av_target,
+    avz_target,
+    vat_torque_limit,
+)
+from .firmware.blocks import position_block, stop_block, velocity_block
+from .firmware.coil import coil_block
+from .firmware.current_loop import commutate, passive, regulate, set_references
+from .firmware.fixed import clamp, rnd, sat16, wrap32
+from .firmware.gear_blocks import (
+    analog_gear_factor,
+    avg_target,
+    gear_factor,
+    gear_follow_block,
+    gear_position_block,
+)
+from .firmware.homing import home_block, home_check
+from .firmware.mode_table import N_MODES
+from .firmware.modes import CORRECTING, FLWERR_MODES, REGULATED, enter_mode, stop_to
+from .firmware.monitor import check_errors, in_position, thermal, undervoltage
+from .firmware.recorder import record
+from .firmware.speed_loop import speed_regulator
+from .plant.coil import coil_constants, coil_step_prepared, phase_to_vector, vector_to_phases
+from .plant.encoder import eldeg, encoder_count
+from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
+from .plant.mechanics import end_stop_torque, mech_constants, mech_step_prepared
+from .plant.supply import bus_constants, bus_step_prepared
+
+_H = c.INNER_DT
+_HALF_PWM_PER_VOLT = 1.0 / (2.0 * c.PWM_FULL)  #: bus volts → phase volts per PWM count
+_ANINP_PER_VOLT = c.ANINP_FULL / c.ANINP_VOLTS
+_TESTTQ_HALF = c.REC_CNT_MAX // 2  #: TESTTQ: samples at +V_SOLL, then the same at −V_SOLL
+
+
+@njit(cache=True, inline="always")
+def _analog_volts(s: np.ndarray, p: np.ndarray, u: np.ndarray) -> float:
+    """Analogue input voltage; a configured home sensor is wired to it (4.4.14: 10 V / 0 V)."""
+    home = u[L.I_HOME]
+    if home < 0.0 and math.isfinite(p[L.P_HOME_POS]):
+        home = 1.0 if s[L.S_THETA] >= p[L.P_HOME_POS] else 0.0
+    if home >= 0.0:
+        return c.ANINP_VOLTS if home > 0.5 else 0.0
+    return u[L.I_ANALOG_VOLTS]
+
+
+@njit(**KERNEL)
+def _profile(r: np.ndarray, s: np.ndarray, mode: int) -> tuple[float, float]:
+    """Function block of a regulated mode (manual 4.1, 4.4): (FNC_OUT, torque limit)."""
+    t_lim = float(r[R.T_SOLL])
+    a = float(r[R.A_SOLL])
+    if mode == c.V_MODE:
+        f = velocity_block(r, s, float(r[R.V_SOLL]), a)
+    elif mode == c.P_MODE or mode == c.A2POS_MODE or mode == c.APOS_MODE:
+        if mode == c.A2POS_MODE:
+            a2pos_update(r, s, False)
+        elif mode == c.APOS_MODE:
+            apos_update(r)
+        f = position_block(r, s, 16.0 * r[R.P_SOLL] - r[R.P_FNC], float(r[R.V_SOLL]), a)
+    elif mode == c.STOP_MODE:
+        f = stop_block(r, s)
+    elif mode == c.GP_MODE:
+        f = gear_position_block(r, s, gear_factor(r))
+    elif mode == c.AG_MODE:
+        f = gear_position_block(r, s, gear_factor(r) * analog_gear_factor(r))
+    elif mode == c.GF_MODE:
+        f = gear_follow_block(r, s, gear_factor(r))
+    elif mode == c.AVG_MODE:
+        f = velocity_block(r, s, avg_target(r), a)
+    elif mode == c.AV_MODE:
+        f = velocity_block(r, s, av_target(r), a)
+    elif mode == c.AVZ_MODE:
+        f = velocity_block(r, s, avz_target(r), a)
+    elif mode == c.VAT_MODE:
+        f = velocity_block(r, s, float(r[R.V_SOLL]), a)
+        t_lim = vat_torque_limit(r)
+    elif mode == c.COIL_MODE:
+        f = coil_block(r, s)
+    elif mode == c.TESTTQ_MODE:
+        sign = 1.0 if s[L.S_TEST_CNT] < _TESTTQ_HALF else -1.0
+        f = velocity_block(r, s, sign * r[R.V_SOLL], a)
+    else:  # HOME1..3
+        f, t_lim = home_block(r, s, mode)
+    return f, t_lim
+
+
+@njit(**KERNEL)
+def _finish_pending(r: np.ndarray, s: np.ndarray) -> None:
+    pend = s[L.S_PENDING_MODE]
+    enter_mode(r, s, int(pend) if pend >= 0.0 else c.INIT_MODE)
+
+
+@njit(**KERNEL)
+def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
+                   buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:
+    """Firmware work at one outer sample (steps 1–3 of the module docstring)."""
+    enc = encoder_count(s[L.S_THETA])
+    if p[L.P_POSITION_NOISE] > 0.0:
+        enc += rnd(p[L.P_POSITION_NOISE] * gauss(key, s[L.S_TICK], 3))
+    v = enc - s[L.S_ENC_PREV]
+    s[L.S_ENC_PREV] = enc
+    v = sat16(v)
+    r[R.V_IST] = int(v)
+    r[R.P_IST] = wrap32(r[R.P_IST] + int(v))
+    r[R.ANINP] = int(clamp(rnd(_analog_volts(s, p, u) * _ANINP_PER_VOLT) + r[R.ANINP_OFFSET],
+                           -1023.0, 1023.0))
+    r[R.V_EXT] = int(sat16(u[L.I_PULSE_COUNTS]))
+    r[R.U_SUPPLY] = int(clamp(rnd(s[L.S_UBUS] / c.U_SUPPLY_VOLTS_PER_UNIT), 0.0, 65535.0))
+
+    cb = r[R.CNTRL_BITS]
+    if cb & c.REWINDBIT:
+        r[R.REC_CNT] = 0
+        cb &= ~c.REWINDBIT
+    if cb & c.MAN_RESYNC:  # 3.2.163
+        if cb & c.REL_RESYNC:
+            r[R.P_SOLL] = wrap32(r[R.P_SOLL] + r[R.P_NEW])
+            r[R.P_IST] = wrap32(r[R.P_IST] + r[R.P_NEW])
+            r[R.P_FNC] = wrap32(r[R.P_FNC] + 16 * r[R.P_NEW])
+        else:
+            r[R.P_SOLL] = r[R.P_NEW]
+            r[R.P_IST] = r[R.P_NEW]
+            r[R.P_FNC] = wrap32(16 * r[R.P_NEW])
+        cb &= ~c.MAN_RESYNC
+    r[R.CNTRL_BITS] = cb
+
+    mode = int(r[R.MODE_REG])
+    if mode == c.INIT_MODE and (cb & c.AUTO_RESYNC):
+        r[R.P_FNC] = wrap32(16 * r[R.P_IST])
+
+    if mode < N_MODES and REGULATED[mode]:
+        f, t_lim = _profile(r, s, mode)
+        f, corr = speed_regulator(r, s, f, CORRECTING[mode], t_lim)
+        if corr != 0.0:
+            s[L.S_V_OLD] = f
+            r[R.P_FNC] = wrap32(r[R.P_FNC] + int(corr))
+            s[L.S_G_FNC] += corr
+            r[R.FNCERR] = int(clamp(r[R.FNCERR] + corr, -134217727.0, 134217727.0))
+        if mode == c.GP_MODE or mode == c.GF_MODE or mode == c.AG_MODE:
+            # gear modes: FNCERR is the positioning error (3.2.24 "GP, GF_MODE")
+            r[R.FNCERR] = int(clamp(rnd(s[L.S_G_FNC]), -134217727.0, 134217727.0))
+        if FLWERR_MODES[mode]:
+            s[L.S_FLW16] += f - 16.0 * v
+            r[R.FLWERR] = int(clamp(rnd(s[L.S_FLW16] / 16.0), -67000000.0, 67000000.0))
+        else:
+            s[L.S_FLW16] = 0.0
+            r[R.FLWERR] = 0
+        if mode == c.STOP_MODE and abs(v) < c.STOP_SPEED_COUNTS:
+            _finish_pending(r, s)
+        elif c.HOME1_MODE <= mode <= c.HOME3_MODE and home_check(r, s, mode):
+            start = int(r[R.STARTMODE])
+            if (0 < start < N_MODES and REGULATED[start]
+                    and not c.HOME1_MODE <= start <= c.HOME3_MODE):
+                enter_mode(r, s, start)
+            else:
+                stop_to(r, s, c.INIT_MODE, False)
+        elif mode == c.TESTTQ_MODE:
+            s[L.S_TEST_CNT] += 1.0
+            if s[L.S_TEST_CNT] >= 2 * _TESTTQ_HALF:
+                stop_to(r, s, c.INIT_MODE, False)
+    elif mode == c.AT_MODE:  # torque function block, 4.1.4 / 4.4.5
+        if s[L.S_AT_EXIT] > 0.5:
+            r[R.VF_OUT] = 0
+            if abs(v) < c.STOP_SPEED_COUNTS:
+                _finish_pending(r, s)
+        else:
+            t_soll = float(r[R.T_SOLL])
+            r[R.VF_OUT] = int(clamp(rnd(r[R.ANINP] * t_soll / 1023.0), -t_soll, t_soll))
+    elif mode == c.TESTA_MODE:  # 4.4.10
+        r[R.VF_OUT] = int(r[R.T_SOLL])
+    elif mode == c.BREAK_MODE:  # 4.4.11: reversed torque until stopped
+        d = s[L.S_BREAK_DIR]
+        if d == 0.0 or v * d <= 0.0:
+            r[R.VF_OUT] = 0
+            _finish_pending(r, s)
+        else:
+            r[R.VF_OUT] = int(-d * r[R.T_SOLL])
+    else:  # INIT, SAFE, MANI, TESTU: no function block, speed regulator passive
+        r[R.VF_OUT] = 0
+        if mode == c.INIT_MODE or mode == c.SAFE_MODE:
+            s[L.S_V_OLD] = 0.0
+            r[R.FLWERR] = 0
+            r[R.FNCERR] = 0
+
+    thermal(r, s, p)
+    undervoltage(r, s)
+    check_errors(r, s)
+    in_position(r, s, int(r[R.MODE_REG]))
+
+    cb = r[R.CNTRL_BITS]
+    if (cb & c.RECORDBIT) and not (cb & c.RECINNERBIT):
+        record(r, buf, fmt, rec)
+        if int(r[R.MODE_REG]) == c.TESTA_MODE:
+            s[L.S_TEST_CNT] += 1.0
+            if s[L.S_TEST_CNT] >= s[L.S_REC_LEN]:
+                r[R.CNTRL_BITS] &= ~c.RECORDBIT
+                enter_mode(r, s, c.BREAK_MODE)
+                s[L.S_PENDING_MODE] = c.INIT_MODE
+    elif int(r[R.MODE_REG]) == c.TESTA_MODE:  # recording switched off by the user
+        s[L.S_TEST_CNT] += 1.0
+        if s[L.S_TEST_CNT] >= s[L.S_REC_LEN]:
+            enter_mode(r, s, c.BREAK_MODE)
+            s[L.S_PENDING_MODE] = c.INIT_MODE
+
+
+@njit(cache=True, inline="always")
+def adc_count(x: float) -> tuple[float, bool]:
+    """A phase current reading of ``x`` ADC counts (before rounding): the stored IX_IST value,
+    rounded and limited to ±1023, and whether the converter saturated (IX_ERR, 3.2.147).
+
+    ``+ 0.0`` turns a rounded −0.0 into +0.0, the zero an integer register holds: the SIMD
+    lanes (``mac050_141.lanes``) use the value without storing it in a register first.
+    """
+    x = rnd(x)
+    return clamp(x, -1023.0, 1023.0) + 0.0, x >= 1023.0 or x <= -1023.0
+
+
+@njit(cache=True, inline="always")
+def _measure(r: np.ndarray, i_amp: float, p: np.ndarray, counts_per_amp: float, gain: float,
+             key: np.uint64, tick: float, ch: int) -> float:
+    x = i_amp * counts_per_amp * gain / 256.0
+    if p[L.P_CURRENT_NOISE] > 0.0:
+        x += p[L.P_CURRENT_NOISE] * gauss(key, tick, ch)
+    x, over = adc_count(x)
+    if over:
+        r[R.ERR_STAT] |= c.IX_ERR
+    return x
+
+
+@njit(cache=True, inline="always")
+def plant_sample(theta: float, omega: float, acc: float, i_re: float, i_im: float, ubus: float,
+                 dump_on: float, ua: float, ub: float, uc: float, theta_e: float, pp: float,
+                 r_phase: float, lam: float, j: float, coulomb: float, stop_lo: float,
+                 stop_hi: float, stop_k: float, stop_d: float, load: float, noise_torque: float,
+                 u_supply: float, u_dump: float, k_coil: tuple, k_mech: tuple, k_bus: tuple):
+    """The plant over one inner sample (docs/model.md §5): PWM counts ``ua, ub, uc`` on the bus
+    drive the coil, the torque the rotor, the coil's power the DC bus.
+
+    Returns ``(theta1, omega1, i_re1, i_im1, ubus1, dump_on1, p_el, p_cu, e_fric, e_dump,
+    e_sup)``: the new state, the mean electrical and copper powers [W] and the energies of the
+    step [J]. Pure arithmetic on scalars: :func:`inner_sample` and the SIMD lanes of
+    :mod:`jvl_gym.families.mac050_141.lanes` share it.
+    """
+    kv = ubus * _HALF_PWM_PER_VOLT
+    s_u = phase_to_vector(ua * kv, ub * kv, uc * kv)
+    omega_mid = omega + 0.5 * _H * acc
+    s1, torque, p_el, p_cu = coil_step_prepared(complex(i_re, i_im), s_u, theta_e,
+                                                pp * omega_mid, r_phase, lam, pp, _H, k_coil)
+    drive = torque - load + end_stop_torque(theta, omega, stop_lo, stop_hi, stop_k, stop_d)
+    if noise_torque != 0.0:
+        drive += noise_torque
+    theta1, omega1, e_fric = mech_step_prepared(theta, omega, drive, j, coulomb, _H, k_mech)
+    ubus1, dump_on1, e_dump, e_sup = bus_step_prepared(ubus, p_el, u_supply, u_dump, dump_on,
+                                                       _H, k_bus)
+    return (theta1, omega1, s1.real, s1.imag, ubus1, dump_on1, p_el, p_cu, e_fric, e_dump,
+            e_sup)
+
+
+@njit(cache=True, inline="always")
+def sample_constants(p: np.ndarray) -> tuple:
+    """The parameter-only arguments of :func:`inner_sample` for a motor's parameter row ``p``:
+    ``(counts_per_amp, k_coil, k_mech, k_bus)`` (ADC counts per ampere and the plant factors of
+    ``coil_constants``, ``mech_constants``, ``bus_constants``)."""
+    return (1.0 / p[L.P_AMPS_PER_COUNT], coil_constants(p[L.P_R], p[L.P_L], p[L.P_LAMBDA], _H),
+            mech_constants(p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_VISCOUS], _H),
+            bus_constants(p[L.P_C_BUS], p[L.P_R_SUPPLY], p[L.P_R_DUMP], _H))
+
+
+@njit(cache=True, inline="always")
+def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
+                 buf: np.ndarray, rec: bool, fmt: np.ndarray, counts_per_amp: float,
+                 k_coil: tuple, k_mech: tuple, k_bus: tuple) -> None:
+    """One 128 µs current-loop sample and the plant over it (step 4 of the module docstring).
+
+    The reference form, one motor at a time; :func:`mac050_141.lanes.inner_samples` runs the
+    same operations for the motors of a block in SIMD lanes when they need none of the
+    per-motor branches (hall synchronisation, noise, inner-rate recording, passive and test
+    modes). Inlined into the 15-sample loop of :func:`inner_samples_one`: as a call it would
+    receive each of its six arrays field by field (numba passes an array's fields one by one)
+    on every sample (docs/model.md §17).
+    ``counts_per_amp`` (ADC counts per ampere) and the plant factors ``k_coil``, ``k_mech`` and
+    ``k_bus`` (``coil_constants``, ``mech_constants``, ``bus_constants`` of ``mac050_141.plant``)
+    depend on the motor's parameters only: the caller computes them once per call, not nine
+    divisions and an exponential per 128 µs.
+    """
+    theta = s[L.S_THETA]
+    omega = s[L.S_OMEGA]
+    pp = p[L.P_POLE_PAIRS]
+    theta_e = pp * theta + p[L.P_THETA_E0]
+    sec = sector_index(theta_e, p[L.P_HALL_ANGLE])
+    cross = zero_crossing(s[L.S_HALL_SECTOR], sec)
+    s[L.S_HALL_SECTOR] = sec
+    enc_abs = encoder_count(theta)
+    if p[L.P_HALL_START] < 0.5:  # commutation aligned from power-on
+        el = int(eldeg(theta_e))
+    else:  # hall synchronisation, 3.2.124/125 (the firmware latches the count at the edge)
+        if cross != 0 and (s[L.S_HALL_SYNCED] < 0.5 or (r[R.CNTRL_BITS] & c.HALL_INT)):
+            edge_e = p[L.P_HALL_ANGLE] + (sec if cross > 0 else sec + 1.0) * SECTOR
+            enc_edge = encoder_count((edge_e - p[L.P_THETA_E0]) / pp)
+            target = r[R.ELDEGP_OFFSET] if cross > 0 else r[R.ELDEGN_OFFSET]
+            s[L.S_ELDEG_OFS] = target - enc_edge
+            s[L.S_HALL_SYNCED] = 1.0
+        el = int(enc_abs + s[L.S_ELDEG_OFS]) % c.ELDEG_PER_TURN
+    r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] & 0x1FFF) | (hall_code(sec) << c.HALL_STATUS_SHIFT)
+    # V_ELDEG: encoder counts per inner sample (3.2.144)
+    dv = int(enc_abs - s[L.S_ELDEG_PREV])
+    s[L.S_ELDEG_PREV] = enc_abs
+    r[R.ELDEG_IST] = el
+    r[R.V_ELDEG] = dv
+
+    tick = s[L.S_TICK]
+    ia, ib, ic = vector_to_phases(complex(s[L.S_I_RE], s[L.S_I_IM]))
+    r[R.IA_IST] = int(_measure(r, ia, p, counts_per_amp, float(r[R.KIA]), key, tick, 0))
+    r[R.IB_IST] = int(_measure(r, ib, p, counts_per_amp, float(r[R.KIB]), key, tick, 1))
+    r[R.IC_IST] = int(_measure(r, ic, p, counts_per_amp, float(r[R.KIC]), key, tick, 2))
+
+    mode = int(r[R.MODE_REG])
+    if mode == c.INIT_MODE or mode == c.SAFE_MODE:
+        passive(r, s, 0.0, 0.0, 0.0)
+    elif mode == c.TESTU_MODE:  # 4.4.9: UA = UMEAS, UC = −UMEAS
+        um = float(r[R.UMEAS])
+        passive(r, s, um, 0.0, -um)
+    elif mode == c.TESTKI_MODE:  # documented measurement: UA = UMEAS, UB = −UMEAS
+        um = float(r[R.UMEAS])
+        passive(r, s, um, -um, 0.0)
+    else:
+        if mode == c.MANI_MODE:  # 3.2.128: stator field set by hand
+            set_references(r, float(r[R.MAN_I_NOM]), int(r[R.MAN_ALPHA]))
+        else:
+            commutate(r)
+        regulate(r, s)
+
+    cb = r[R.CNTRL_BITS]
+    if mode == c.TESTU_MODE or mode == c.TESTKI_MODE:
+        if (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
+            record(r, buf, fmt, rec)
+        s[L.S_TEST_CNT] += 1.0
+        if s[L.S_TEST_CNT] >= s[L.S_REC_LEN]:
+            r[R.CNTRL_BITS] &= ~c.RECORDBIT
+            enter_mode(r, s, c.INIT_MODE)
+    elif (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
+        record(r, buf, fmt, rec)
+
+    ua = float(r[R.UA_VAL])
+    ub = float(r[R.UB_VAL])
+    uc = float(r[R.UC_VAL])
+    # S_UPEND_* hold the PWM values computed in the last sample, whatever the delay (so
+    # switching the delay on applies the previous sample's values); with the delay they drive
+    # the coil now
+    pa = s[L.S_UPEND_A]
+    pb = s[L.S_UPEND_B]
+    pc = s[L.S_UPEND_C]
+    s[L.S_UPEND_A] = ua
+    s[L.S_UPEND_B] = ub
+    s[L.S_UPEND_C] = uc
+    if p[L.P_PWM_DELAY] > 0.5:
+        ua = pa
+        ub = pb
+        uc = pc
+    noise_torque = 0.0
+    if p[L.P_TORQUE_NOISE] > 0.0:
+        noise_torque = p[L.P_TORQUE_NOISE] * gauss(key, tick, 4)
+    load = u[L.I_LOAD_TORQUE]
+    (theta1, omega1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric, e_dump,
+     e_sup) = plant_sample(theta, omega, s[L.S_ACC], s[L.S_I_RE], s[L.S_I_IM], s[L.S_UBUS],
+                           s[L.S_DUMP_ON], ua, ub, uc, theta_e, pp, p[L.P_R], p[L.P_LAMBDA],
+                           p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_COULOMB], p[L.P_STOP_LO],
+                           p[L.P_STOP_HI], p[L.P_STOP_K], p[L.P_STOP_D], load, noise_torque,
+                           u[L.I_SUPPLY_VOLTS], p[L.P_U_DUMP], k_coil, k_mech, k_bus)
+    s[L.S_THETA] = theta1
+    s[L.S_OMEGA] = omega1
+    s[L.S_ACC] = (omega1 - omega) * c.INNER_HZ
+    s[L.S_I_RE] = i_re1
+    s[L.S_I_IM] = i_im1
+    s[L.S_E_ELEC] += p_el * _H
+    s[L.S_E_COPPER] += p_cu * _H
+    s[L.S_E_FRICTION] += e_fric
+    s[L.S_E_LOAD] += load * (theta1 - theta)
+    s[L.S_UBUS] = ubus
+    s[L.S_DUMP_ON] = dump_on
+    s[L.S_E_DUMP] += e_dump
+    s[L.S_E_SUPPLY] += e_sup
+    s[L.S_I2_SUM] += float(r[R.IA_IST] ** 2 + r[R.IB_IST] ** 2 + r[R.IC_IST] ** 2)
+    s[L.S_PREG_SUM] += max(-p_el, 0.0)  # regenerated power; no branch on its sign
+    s[L.S_TICK] = tick + 1.0
+
+
+@njit(**LANE_KERNEL)
+def inner_samples_one(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray,
+                      key: np.uint64, buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:
+    """The 15 inner samples of one outer sample (step 4) of one motor by :func:`inner_sample`:
+    the reference form, which :func:`mac050_141.lanes.inner_samples` runs for the motors it
+    cannot put into SIMD lanes.
+
+    A function of its own, not inlined into ``inner_samples``: numba's inliner copies the
+    whole scope of the caller for every block of an inlined function, so inlining this loop
+    beside the two inlined lane samples would multiply ``inner_samples``' compile time. The
+    call costs one argument transfer per motor and outer sample, on the slow path only.
+    """
+    counts_per_amp, k_coil, k_mech, k_bus = sample_constants(p)
+    for _k in range(c.INNER_PER_OUTER):
+        inner_sample(r, s, p, u, key, buf, rec, fmt, counts_per_amp, k_coil, k_mech, k_bus)

@@ -1,0 +1,16 @@
+"""The MAC050–141 register table (``registers.csv`` beside this module, manual 3.2).
+
+One row per register number (a LongInt as a ``LongInt`` row and its ``_HI`` row, numbers the
+manual leaves undocumented as ``RESERVED_<n>``), loaded and validated once.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ...registers.table import RegisterTable, load_table
+
+__all__ = ["TABLE"]
+
+#: the register table of the MAC50, MAC95, MAC140 and MAC141
+TABLE: RegisterTable = load_table(Path(__file__).with_name("registers.csv"))

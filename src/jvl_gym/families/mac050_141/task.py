@@ -1,0 +1,91 @@
+"""What a compiled task may read and set of a MAC050–141 motor during an env step.
+
+A task's hooks (``jvl_gym.engine.driver``) receive the engine's
+:class:`~jvl_gym.engine.view.EngineView` and reach the motors only through these inlined
+accessors: register values by number (``R``, taken from the register table), the world inputs
+the motor's connectors and shaft see, and the physical truth a process model around the motor
+needs (the shaft angle, the COIL block's direction).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ...engine.view import EngineView
+from ...registers import Access as _Access
+from . import constants as _c
+from . import layout as _L
+from .firmware import regs as R
+from .table import TABLE as _TABLE
+
+__all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BITS", "reg",
+           "set_reg", "shaft_angle", "coil_direction", "set_analog_volts",
+           "set_load_torque", "set_pulse_counts"]
+
+
+@njit(cache=True, inline="always")
+def reg(view: EngineView, i: int, number: int) -> int:  # pragma: no cover - compiled
+    """Stored integer of register ``number`` of motor ``i`` (a LongInt's 32-bit value)."""
+    return view.regs[i, number]
+
+
+#: the family's key, and the motor type of a task when none is given
+FAMILY_KEY = "mac050_141"
+DEFAULT_MOTOR_TYPE = "MAC140"
+#: ERR_STAT bits that end an episode: I2T, FLW, FNC, UIT and position-limit errors (3.2.35)
+TERMINAL_ERRORS = (("I2T_ERR", _c.I2T_ERR), ("FLW_ERR", _c.FLW_ERR), ("FNC_ERR", _c.FNC_ERR),
+                   ("UIT_ERR", _c.UIT_ERR), ("PLIM_ERR", _c.PLIM_ERR))
+ERROR_BITS = _c.I2T_ERR | _c.FLW_ERR | _c.FNC_ERR | _c.UIT_ERR | _c.PLIM_ERR
+
+
+def _raw_limits() -> tuple[np.ndarray, np.ndarray]:
+    """Raw range of every register a task may set (read-write), by number; empty elsewhere."""
+    low = np.zeros(_TABLE.last + 1, dtype=np.int64)
+    high = np.zeros(_TABLE.last + 1, dtype=np.int64)
+    for r in _TABLE:
+        if r.access == _Access.RW and r.number != R.MODE_REG:
+            low[r.number], high[r.number] = r.raw_min, r.raw_max
+    return low, high
+
+
+_RAW_MIN, _RAW_MAX = _raw_limits()
+
+
+@njit(cache=True, inline="always")
+def set_reg(view: EngineView, i: int, number: int, raw: int) -> None:  # pragma: no cover
+    """Store ``raw`` in the read-write data register ``number`` of motor ``i``, saturated to
+    the register's range (register table); the firmware uses it from the next outer sample.
+    Mode requests and registers with write rules go through ``MotorArray.write``."""
+    view.regs[i, number] = min(max(raw, _RAW_MIN[number]), _RAW_MAX[number])
+
+
+@njit(cache=True, inline="always")
+def shaft_angle(view: EngineView, i: int) -> float:  # pragma: no cover - compiled
+    """Shaft angle of motor ``i`` relative to the world zero [rad]."""
+    return view.state[i, _L.S_THETA]
+
+
+@njit(cache=True, inline="always")
+def coil_direction(view: EngineView, i: int) -> float:  # pragma: no cover - compiled
+    """Direction of the COIL block's traverse of motor ``i`` (+1, −1; 0 before COIL_MODE ran,
+    manual 4.4.18)."""
+    return view.state[i, _L.S_AUX1]
+
+
+@njit(cache=True, inline="always")
+def set_analog_volts(view: EngineView, i: int, volts: float) -> None:  # pragma: no cover
+    """Analogue input of motor ``i`` [V] from the next outer sample on (manual 3.2.122)."""
+    view.inputs[i, _L.I_ANALOG_VOLTS] = volts
+
+
+@njit(cache=True, inline="always")
+def set_load_torque(view: EngineView, i: int, torque: float) -> None:  # pragma: no cover
+    """External load torque on the shaft of motor ``i``, opposing positive rotation [N·m]."""
+    view.inputs[i, _L.I_LOAD_TORQUE] = torque
+
+
+@njit(cache=True, inline="always")
+def set_pulse_counts(view: EngineView, i: int, counts: float) -> None:  # pragma: no cover
+    """Pulse input counts of motor ``i`` during the next outer sample (V_EXT, manual 3.2.120)."""
+    view.inputs[i, _L.I_PULSE_COUNTS] = counts

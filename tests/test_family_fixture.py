@@ -1,0 +1,95 @@
+"""A second motor family from a fixture folder (tests/fixtures/toy_family) runs through the
+generic layers — MotorArray, the MacTalk twin and a task env — with no edit outside it."""
+
+from __future__ import annotations
+
+import sys
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+from jvl_gym import MotorArray
+from jvl_gym.families import family_of_motor, register_family
+from jvl_gym.protocol import mactalk as mt
+from jvl_gym.protocol.twin import Twin
+
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
+
+
+@pytest.fixture(scope="module", autouse=True)
+def toy() -> None:
+    sys.path.insert(0, str(FIXTURES))
+    register_family("toy", "toy_family")
+    yield
+    sys.path.remove(str(FIXTURES))
+
+
+def test_a_motor_type_of_the_fixture_makes_a_toy_array() -> None:
+    m = MotorArray("TOY1", n=3, seed=0, inertia=[1e-4, 2e-4, 4e-4])
+    assert type(m).__name__ == "ToyMotorArray"
+    assert family_of_motor("TOY1").key == "toy"
+    assert m.read("KP").tolist() == [2.0, 2.0, 2.0]
+    m.write_many({"V_SOLL": 400, "MODE_REG": 1})
+    m.step(300)
+    speed = m.read("V_IST")
+    assert np.all(np.abs(speed - 400) < 40)
+    assert speed[0] != speed[2] or m.speed[0] != m.speed[2]  # the inertias differ
+    with pytest.raises(Exception, match="MODE_REG"):
+        m.write("MODE_REG", 5)  # out of the toy table's range: nothing changes
+    assert m.read("MODE_REG").tolist() == [1, 1, 1]
+
+
+def test_one_toy_motor_equals_its_row_of_an_array() -> None:
+    big = MotorArray("TOY1", n=5, seed=1, inertia=np.linspace(1e-4, 3e-4, 5))
+    big.write_many({"V_SOLL": 300, "MODE_REG": 1})
+    big.step(50)
+    one = MotorArray("TOY1", n=1, seed=1, inertia=np.linspace(1e-4, 3e-4, 5)[3])
+    one.write_many({"V_SOLL": 300, "MODE_REG": 1})
+    one.step(50)
+    np.testing.assert_array_equal(one.state[0], big.state[3])
+
+
+def test_the_twin_reads_and_writes_toy_registers_over_mactalk() -> None:
+    m = MotorArray("TOY1", n=2, seed=0)
+    twin = Twin(m, addresses=[5, 6])
+    session = twin.session()
+    reply = session.feed(mt.encode_write(6, 3, mt.words_to_bytes([250]))) + session.flush()
+    assert reply == mt.ACCEPT
+    assert m.read("V_SOLL").tolist() == [0, 250]
+    reply = mt.decode(session.feed(mt.encode_read(6, 3)) + session.flush())
+    assert isinstance(reply, mt.DataReply)
+    assert mt.bytes_to_words(reply.data)[0] == 250
+    # a write the table refuses (MODE_REG above 1) changes nothing
+    session.feed(mt.encode_write(5, 2, mt.words_to_bytes([7])))
+    session.flush()
+    assert m.read("MODE_REG").tolist() == [0, 0]
+
+
+def test_a_task_env_on_the_toy_family() -> None:
+    from toy_family.task import ToySpeedVectorEnv
+
+    vec = ToySpeedVectorEnv(num_envs=3)
+    obs, _ = vec.reset(seed=4)
+    rng = np.random.default_rng(0)
+    actions = rng.uniform(-1, 1, (20, 3, 1))
+    for a in actions:
+        obs, reward, term, trunc, _ = vec.step(a)
+    single = ToySpeedVectorEnv(num_envs=1)
+    single.reset(seed=6)
+    for a in actions:
+        obs1, reward1, *_ = single.step(a[2:3])
+    np.testing.assert_array_equal(obs1[0], obs[2])  # copy 2 of the vector env = a single env
+    assert np.all(np.isfinite(reward))
+
+    from jvl_gym.envs.single import MotorEnv
+
+    class ToySpeedEnv(MotorEnv):
+        vector_class = ToySpeedVectorEnv
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(ToySpeedEnv(), skip_render_check=True)
+    assert not caught, [str(w.message) for w in caught]

@@ -1,0 +1,130 @@
+"""Issue 20, the digital twin: flash files named in errors, an unwritable flash directory
+neither loses state nor drops the client, the banner shows the addresses the motors answer at,
+closed connections are released, and garbage is skipped a run at a time."""
+
+from __future__ import annotations
+
+import json
+import socket
+import time
+from pathlib import Path
+
+import pytest
+
+from jvl_gym import MotorArray
+from jvl_gym.protocol import mactalk as mt
+from jvl_gym.protocol.transport import TwinServer
+from jvl_gym.protocol.twin import Twin
+
+
+def _twin(tmp_path: Path | None = None, addresses=(19,)) -> Twin:
+    return Twin(MotorArray("MAC140", n=len(addresses), seed=0), list(addresses),
+                flash_dir=tmp_path)
+
+
+@pytest.mark.parametrize("text", ["{not json", "[1, 2]", '{"registers": {"13": 1.5}}',
+                                  '{"registers": {"12": 5}}', '{"registers": {"x": 1}}',
+                                  '{"motor": 0}', '{"registers": []}'])
+def test_corrupt_flash_file_is_named(tmp_path, text):
+    (tmp_path / "flash_0.json").write_text(text)
+    with pytest.raises(ValueError, match="flash_0.json"):
+        _twin(tmp_path)
+
+
+def test_non_utf8_flash_file_is_named(tmp_path):
+    (tmp_path / "flash_0.json").write_bytes(b"\xff\xfe{")
+    with pytest.raises(ValueError, match="flash_0.json"):
+        _twin(tmp_path)
+
+
+def test_flash_dir_that_is_a_file_is_refused_at_start(tmp_path):
+    path = tmp_path / "plain"
+    path.write_text("")
+    with pytest.raises(ValueError, match="plain"):
+        _twin(path)
+
+
+def test_serve_with_a_corrupt_flash_file_is_one_line(tmp_path, capsys):
+    from jvl_gym.cli import app
+
+    (tmp_path / "flash_0.json").write_text("{not json")
+    with pytest.raises(SystemExit) as info:
+        app(["serve", "--tcp", "127.0.0.1:0", "--flash-dir", str(tmp_path)])
+    assert info.value.code == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "flash_0.json" in err[0]
+
+
+def test_unwritable_flash_dir_keeps_state_and_session(tmp_path):
+    twin = _twin(tmp_path)
+    twin.m.write("KVOUT", 2.5)
+    session = twin.session()
+    assert session.feed(mt.encode_go_safe_mode(19)) == mt.ACCEPT
+    twin.m.step(300)
+    blocked = tmp_path / "blocked"
+    blocked.write_text("")
+    twin.flash_dir = blocked  # mkdir fails: the file cannot be written
+    assert session.feed(mt.encode_write_flash(19)) == b""
+    assert twin.stats["flash_file_errors"] == 1
+    assert "blocked" in twin.last_refusal
+    assert twin.m.flash_image(0)[13] == 640  # the motor's flash holds KVOUT 2.5
+    reply = mt.decode(session.feed(mt.encode_read(19, 13)))  # the session still answers
+    assert mt.bytes_to_words(reply.data)[0] == 640
+
+
+def test_banner_shows_the_flashed_address(tmp_path):
+    from jvl_gym.cli_serve import banner
+
+    (tmp_path / "flash_0.json").write_text(json.dumps({"motor": 0, "registers": {"156": 33}}))
+    twin = _twin(tmp_path)
+    lines = banner(["MAC140"], twin)
+    assert lines == ["motor 0: MAC140 at address 33 (flash; --address said 19)"] or \
+        lines[0].startswith("motor 0: MAC140 at address 33")
+
+
+def test_server_releases_closed_connections():
+    twin = _twin()
+    with TwinServer(twin, tcp=("127.0.0.1", 0), run_clock=False) as server:
+        port = server.endpoint("mactalk", "tcp").port
+        for _ in range(20):
+            with socket.create_connection(("127.0.0.1", port), timeout=2) as s:
+                s.sendall(mt.encode_read(19, 13))
+                s.recv(64)
+        deadline = time.monotonic() + 5
+        while time.monotonic() < deadline and (len(server._socks) > 1
+                                               or len(server._threads) > 1):
+            time.sleep(0.05)
+        assert len(server._socks) == 1  # the listener
+        assert len(server._threads) == 1  # the accept loop
+
+
+def test_a_run_of_sync_bytes_is_one_error_and_the_next_frame_decodes():
+    d = mt.MacTalkDecoder()
+    garbage = b"\x50" * 300_000
+    items = []
+    for k in range(0, len(garbage), 4096):
+        items += d.feed(garbage[k:k + 4096])
+    items += d.feed(mt.encode_read(19, 7))
+    errors = [x for x in items if isinstance(x, mt.FrameError)]
+    frames = [x for x in items if not isinstance(x, mt.FrameError)]
+    assert sum(len(e.data) for e in errors) == len(garbage)
+    assert len(errors) <= 2 * (len(garbage) // 4096 + 1)
+    assert frames == [mt.Request(mt.Command.READ, 19, 7)]
+
+
+def test_random_garbage_is_skipped_to_the_next_sync():
+    import numpy as np
+
+    rng = np.random.default_rng(0)
+    junk = bytes(rng.integers(0, 256, 50_000, dtype=np.uint8))
+    junk = junk.replace(b"\x11", b"\x12")
+    items = mt.MacTalkDecoder().feed(junk + mt.encode_read(19, 7))
+    errors = [x for x in items if isinstance(x, mt.FrameError)]
+    assert sum(len(e.data) for e in errors) == len(junk)
+    assert items[-1] == mt.Request(mt.Command.READ, 19, 7)
+
+
+@pytest.mark.parametrize("speed", [float("inf"), float("nan"), 0.0, -1.0])
+def test_server_speed_must_be_finite_and_positive(speed):
+    with pytest.raises(ValueError, match="speed"):
+        TwinServer(_twin(), speed=speed, run_clock=False)
