@@ -58,4 +58,4 @@ lint: $(STAMP)
 
 clean:
 	rm -rf $(VENV) demo_out .pytest_cache
-	find src tuning -name "*.nbi" -delete -o -name "*.nbc" -delete  # numba caches
+	find src tuning tests -name "*.nbi" -delete -o -name "*.nbc" -delete  # numba caches

@@ -5,7 +5,8 @@ N = 4096, outer steps/s at N = 1 (one ``step(1)`` call each), and each compiled 
 steps/s and 1024-copy env-steps/s — for both trees, alternating them ``--rounds`` times so that
 a drift of the machine affects both alike, and prints the best of each with the ratio new/old.
 Each measurement runs in a fresh process of its tree (``PYTHONPATH``) after a warm-up that
-compiles what it needs (numba's cache of each tree is its own).
+compiles what it needs (numba's cache of each tree is its own). The revision is checked out
+once into ``.bench/<revision>`` (git worktree) and kept, so that its compiled cache is reused.
 """
 
 from __future__ import annotations
@@ -15,7 +16,6 @@ import json
 import os
 import subprocess
 import sys
-import tempfile
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -47,18 +47,15 @@ def main() -> None:
     parser.add_argument("baseline", help="git revision to compare with")
     parser.add_argument("--rounds", type=int, default=2, help="alternations (best of each)")
     args = parser.parse_args()
-    with tempfile.TemporaryDirectory(prefix="jvl-baseline-") as base:
-        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", base,
+    base = ROOT / ".bench" / args.baseline.replace("/", "_")
+    if not base.exists():
+        subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(base),
                         args.baseline], check=True)
-        try:
-            best: dict[str, dict[str, float]] = {"old": {}, "new": {}}
-            for _ in range(args.rounds):
-                for label, tree in (("old", Path(base)), ("new", ROOT)):
-                    for key, value in figures(tree).items():
-                        best[label][key] = max(value, best[label].get(key, 0.0))
-        finally:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", base],
-                           check=False)
+    best: dict[str, dict[str, float]] = {"old": {}, "new": {}}
+    for _ in range(args.rounds):
+        for label, tree in (("old", base), ("new", ROOT)):
+            for key, value in figures(tree).items():
+                best[label][key] = max(value, best[label].get(key, 0.0))
     print(f"{'figure':36s} {args.baseline[:10]:>14s} {'this tree':>14s} {'new/old':>8s}")
     for key, old in best["old"].items():
         new = best["new"][key]
