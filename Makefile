@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 	touch $@
 
 $(STAMP_RL): $(STAMP)
-	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks,test]"
+	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks,test,scale]"
 	$(BIN)/jvl-gym compile  # numba: every environment's step, once per machine (cached)
 	touch $@
 
@@ -33,6 +33,7 @@ bench: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_sim.py
 	$(BIN)/python benchmarks/bench_protocol.py
 	$(BIN)/python benchmarks/bench_envs.py
+	$(BIN)/python benchmarks/bench_scale.py
 	@echo "figures written to docs/benchmarks.md"
 
 # BASELINE=<git revision>: speed of that revision beside this tree, in one run

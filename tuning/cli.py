@@ -13,6 +13,7 @@ Examples
 ``jvl-tune synthesize --motor MAC140 --inertia 6.7e-5 --out setup.yaml``
 ``jvl-tune verify --setup setup.yaml --inertia 6.7e-5``  (the motor named in setup.yaml)
 ``jvl-tune defaults``
+``jvl-tune fleet configs/fleets/example.yml --out DIR``  (Ray: the ``scale`` extra)
 
 Errors are one line on stderr with a non-zero exit status; ``--debug`` shows the traceback
 (:class:`jvl_gym.cli_app.App`).
@@ -342,6 +343,24 @@ def _check_credible(ident: object, accept: bool) -> None:
         _say(f"NOT CREDIBLE: {'; '.join(bad)}: {what}")
         if not accept:
             raise typer.Exit(1)
+
+
+@app.command()
+def fleet(spec: Path = typer.Argument(..., help="fleet file (configs/fleets/*.yml) or a folder "
+                                      "with one subfolder of record CSVs per motor"),
+          out: Path = typer.Option(Path("fleet_out"), help="output directory"),
+          address: str = typer.Option(None, help="Ray cluster: auto, HOST:PORT or "
+                                      "ray://HOST:10001 (default: local Ray)"),
+          num_cpus: int = typer.Option(None, help="CPUs of the local Ray"),
+          save_records: bool = typer.Option(False, help="also write each motor's records"),
+          structure: str = typer.Option(None, help="speed loop structure pi or ip (overrides "
+                                        "the file)"),
+          verbose: bool = typer.Option(False, help="forward the Ray workers' logs")
+          ) -> None:
+    """Autotune a fleet of motors as Ray tasks; per-motor register sets and a fleet report."""
+    from jvl_gym.scale.commands import fleet_command
+
+    fleet_command(spec, out, address, num_cpus, save_records, structure, verbose)
 
 
 @app.command()

@@ -1,4 +1,4 @@
-"""``jvl-gym`` command line: ``train``, ``evaluate``, ``compile`` (and ``serve`` when
+"""``jvl-gym`` command line: ``train``, ``evaluate``, ``compile``, ``sweep`` (and ``serve`` when
 available).
 
 Errors are one line on stderr with a non-zero exit status; ``--debug`` shows the traceback
@@ -108,6 +108,28 @@ def compile_(motors_only: Annotated[bool, typer.Option(
 
     for job, seconds in compile_all(workers, envs=not motors_only).items():
         typer.echo(f"{job}: {seconds:.1f} s")
+
+
+@app.command()
+def sweep(config: Annotated[Path, typer.Argument(help="sweep file (configs/sweeps/*.yml)")],
+          out: Annotated[Path, typer.Option(help="output directory (run again to resume)")]
+          = Path("sweep_out"),
+          address: Annotated[str | None, typer.Option(
+              help="Ray cluster: auto, HOST:PORT or ray://HOST:10001 (default: local Ray)")]
+          = None,
+          num_cpus: Annotated[int | None, typer.Option(help="CPUs of the local Ray")] = None,
+          max_concurrent: Annotated[int | None, typer.Option(help="trials at once")] = None,
+          stop_after: Annotated[int | None, typer.Option(
+              help="stop once this many trials have finished (run again to resume)")] = None,
+          storage: Annotated[str | None, typer.Option(
+              help="Ray Tune storage path or URI (default OUT/ray)")] = None,
+          verbose: Annotated[bool, typer.Option(help="Ray Tune's own output too")] = False
+          ) -> None:
+    """Run a hyper-parameter sweep as Ray Tune trials (needs the scale extra)."""
+    from .scale.commands import sweep_command
+
+    sweep_command(config, out, address, num_cpus, max_concurrent, stop_after, storage,
+                  verbose)
 
 
 def _mount_serve() -> None:
