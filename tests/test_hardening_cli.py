@@ -225,7 +225,9 @@ def test_report_prints_negative_friction_as_not_detected():
     from tuning.report import text_table
 
     ident = _inconsistent_identification()
-    assert ident.mechanics.coulomb < 0
+    # the fit's Coulomb friction is negative; the identification reports it as 0, not detected
+    assert ident.mechanics.raw["coulomb"] < 0 and ident.mechanics.coulomb == 0.0
+    assert not ident.mechanics.detected["coulomb"]
     table = text_table(ident, synthesize(ident.motor, 5e-5, 0.0))
     row = [ln for ln in table.splitlines() if ln.startswith("Coulomb Tc")][0]
     assert "not detected" in row
