@@ -72,7 +72,7 @@ def test_lanes_give_the_bits_of_the_one_motor_kernel() -> None:
     np.testing.assert_array_equal(a.state, b.state)
     assert np.any(a.state[:, L.S_OMEGA] != 0.0)
     c_ = _mixed(n)
-    driver(c_.family.key).serial(c_.engine_view(), 150)
+    driver(c_.family.key).serial(*c_.engine_view(), 150)
     np.testing.assert_array_equal(a.state, c_.state)
 
 
@@ -84,7 +84,7 @@ def test_lanes_flag_a_saturated_current_reading() -> None:
         m.write("V_SOLL", 3000)
         m.write("MODE_REG", c.V_MODE)
     assert all(in_lanes(a.regs[i], a.params[i]) for i in range(n))
-    driver(a.family.key).parallel(a.engine_view(), 40)
+    driver(a.family.key).parallel(*a.engine_view(), 40)
     _reference(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, False, b._fmt, 40,
                b._no_schedule)
     np.testing.assert_array_equal(a.regs, b.regs)
@@ -132,7 +132,7 @@ def test_lanes_follow_a_parameter_change_between_steps() -> None:
                         ((L.P_LAMBDA, L.P_C_BUS, L.P_R_DUMP), 0.8)):
         for m in (a, b):
             m.params[:, list(cols)] *= scale
-        driver(a.family.key).serial(a.engine_view(), 40)
+        driver(a.family.key).serial(*a.engine_view(), 40)
         _reference(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, False, b._fmt, 40,
                    b._no_schedule)
         np.testing.assert_array_equal(a.state, b.state)

@@ -51,7 +51,7 @@ def test_parallel_kernel_equals_serial_kernel():
     a.step(50)
     from jvl_gym.sim import driver
 
-    driver(b.family.key).serial(b.engine_view(), 50)
+    driver(b.family.key).serial(*b.engine_view(), 50)
     np.testing.assert_array_equal(a.regs, b.regs)
     np.testing.assert_array_equal(a.state, b.state)
 

@@ -85,41 +85,52 @@ def all_finite(actions: np.ndarray) -> bool:  # pragma: no cover - compiled
 
 
 # --- motors alone (MotorArray.step) ------------------------------------------------------------
-def _advance_block(view, i0, n, n_outer, blk):  # pragma: no cover - compiled
+# The entry points take the arrays one by one (numba dispatches on plain array arguments
+# fastest) and each block builds its named views itself (so a threaded loop captures plain
+# arrays, not tuples).
+def _advance_block(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                   i0, n, n_outer, blk):  # pragma: no cover - compiled
     """Advance motors ``i0 .. i0 + n - 1`` (block ``blk``) by ``n_outer`` outer samples."""
+    view = EngineView(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch)
     for t in range(n_outer):
         for i in range(i0, i0 + n):
             outer_sample(view, i, t)
         inner_block(view, i0, n, blk)
 
 
-def _run_serial(arrays, n_outer):  # pragma: no cover - compiled
-    """Advance every motor by ``n_outer`` outer samples in one thread (``arrays``: the fields
-    of an :class:`EngineView` as a plain tuple, which numba dispatches on without Python)."""
-    view = EngineView(*arrays)
-    n_motors = view.regs.shape[0]
-    for blk in range(view.scratch.shape[0]):
+def _run_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                n_outer):  # pragma: no cover - compiled
+    """Advance every motor by ``n_outer`` outer samples in one thread (the fields of an
+    :class:`EngineView`, then the count)."""
+    n_motors = regs.shape[0]
+    for blk in range(scratch.shape[0]):
         i0 = blk * lanes
-        _advance_block(view, i0, min(lanes, n_motors - i0), n_outer, blk)
+        _advance_block(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                       i0, min(lanes, n_motors - i0), n_outer, blk)
 
 
-def _run_parallel(arrays, n_outer):  # pragma: no cover - compiled
+def _run_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                  n_outer):  # pragma: no cover - compiled
     """:func:`_run_serial` with the blocks spread over threads."""
-    view = EngineView(*arrays)
-    n_motors = view.regs.shape[0]
-    for blk in prange(view.scratch.shape[0]):
+    n_motors = regs.shape[0]
+    for blk in prange(scratch.shape[0]):
         b = block_index(blk)
         i0 = b * lanes
-        _advance_block(view, i0, min(lanes, n_motors - i0), n_outer, b)
+        _advance_block(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                       i0, min(lanes, n_motors - i0), n_outer, b)
 
 
 # --- a task's env step -------------------------------------------------------------------------
-def _task_block(blk, view, episode, task, actions, decimation):  # pragma: no cover - compiled
+def _task_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                prev_action, t, noise_key, obs, reward, terminated, truncated, task,
+                actions, decimation):  # pragma: no cover - compiled
     """One env step of the copies of block ``blk``: the task's begin hook per copy,
     ``decimation`` outer samples (before hook, family outer sample per copy; the block's inner
     samples; after hook per copy), then the task's end hook per copy."""
+    view = EngineView(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch)
+    episode = Episode(prev_action, t, noise_key, obs, reward, terminated, truncated)
     i0 = blk * lanes
-    n = min(lanes, view.regs.shape[0] - i0)
+    n = min(lanes, regs.shape[0] - i0)
     for i in range(i0, i0 + n):
         task_begin(i, view, episode, task, actions)
     for t in range(decimation):
@@ -133,41 +144,47 @@ def _task_block(blk, view, episode, task, actions, decimation):  # pragma: no co
         task_end(i, view, episode, task, actions)
 
 
-def _task_serial(arrays, episode_arrays, task, actions, decimation):  # pragma: no cover
-    """One env step of every copy in one thread; False (nothing changed) if an action is not
-    finite. ``arrays`` and ``episode_arrays`` are the fields of an :class:`EngineView` and an
-    :class:`Episode` as plain tuples (numba dispatches on plain tuples without Python)."""
+def _task_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                 prev_action, t, noise_key, obs, reward, terminated, truncated, task,
+                 actions, decimation):  # pragma: no cover - compiled
+    """One env step of every copy in one thread (the fields of an :class:`EngineView` and of
+    an :class:`Episode`, the task's tuple, the actions, the decimation); False (nothing
+    changed) if an action is not finite."""
     if not all_finite(actions):
         return False
-    view = EngineView(*arrays)
-    episode = Episode(*episode_arrays)
-    for blk in range(view.scratch.shape[0]):
-        _task_block(blk, view, episode, task, actions, decimation)
+    for blk in range(scratch.shape[0]):
+        _task_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                    prev_action, t, noise_key, obs, reward, terminated, truncated, task,
+                    actions, decimation)
     return True
 
 
-def _task_parallel(arrays, episode_arrays, task, actions, decimation):  # pragma: no cover
+def _task_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                   prev_action, t, noise_key, obs, reward, terminated, truncated, task,
+                   actions, decimation):  # pragma: no cover - compiled
     """:func:`_task_serial` with the blocks spread over threads."""
     if not all_finite(actions):
         return False
-    view = EngineView(*arrays)
-    episode = Episode(*episode_arrays)
-    for blk in prange(view.scratch.shape[0]):
-        _task_block(block_index(blk), view, episode, task, actions, decimation)
+    for blk in prange(scratch.shape[0]):
+        _task_block(block_index(blk), regs, state, params, inputs, keys, buf, rec, fmt, plan,
+                    scratch, prev_action, t, noise_key, obs, reward, terminated, truncated,
+                    task, actions, decimation)
     return True
 
 
-def _task_observe(idx, arrays, episode_arrays, task):  # pragma: no cover - compiled
+def _task_observe(idx, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
+                  prev_action, t, noise_key, obs, reward, terminated, truncated,
+                  task):  # pragma: no cover - compiled
     """The task's observation hook for copies ``idx`` (after their reset)."""
-    view = EngineView(*arrays)
-    episode = Episode(*episode_arrays)
+    view = EngineView(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch)
+    episode = Episode(prev_action, t, noise_key, obs, reward, terminated, truncated)
     for i in idx:
         task_observe(i, view, episode, task)
 
 
 _MOTOR_TEMPLATES = {"_advance_block": _advance_block, "_run_serial": _run_serial,
                     "_run_parallel": _run_parallel}
-_MOTOR_OPTIONS = {"_advance_block": {"cache": True, "inline": "always"},
+_MOTOR_OPTIONS = {"_advance_block": KERNEL,
                   "_run_serial": KERNEL, "_run_parallel": KERNEL_PARALLEL}
 _TASK_TEMPLATES = {"_task_block": _task_block, "_task_serial": _task_serial,
                    "_task_parallel": _task_parallel, "_task_observe": _task_observe}
@@ -194,16 +211,19 @@ class MotorDriver:
         self.family = family
         fns = specialise(_MOTOR_TEMPLATES, _family_bindings(family), f"{family.key}",
                          family.compiled.__file__, _MOTOR_OPTIONS)
-        #: the compiled drivers, ``(arrays, n_outer)``: one thread, and blocks over threads
+        self._prepared = False
+        #: the compiled drivers, ``(*arrays, n_outer)``: one thread, and blocks over threads
         self.serial = fns["_run_serial"]
         self.parallel = fns["_run_parallel"]
 
     def run(self, arrays: tuple, n_outer: int) -> None:
         """Advance every motor by ``n_outer`` outer samples (``arrays``: the fields of an
         :class:`EngineView` as a plain tuple, ``MotorArray.engine_view()``)."""
-        self.family.compiled.prepare(arrays)
+        if not self._prepared:
+            self.family.compiled.prepare(arrays)
+            self._prepared = True
         run = self.parallel if arrays[0].shape[0] >= PARALLEL_MIN else self.serial
-        run(arrays, int(n_outer))
+        run(*arrays, n_outer)
 
 
 class TaskDriver:
@@ -232,7 +252,8 @@ class TaskDriver:
                     "task_after": after, "task_end": end, "task_observe": observe}
         fns = specialise(_TASK_TEMPLATES, bindings, f"{tag}__{family.key}", source,
                          _TASK_OPTIONS)
-        #: the compiled steps, ``(arrays, episode, task, actions, decimation)``: one thread,
+        self._prepared = False
+        #: the compiled steps, ``(*arrays, *episode, task, actions, decimation)``: one thread,
         #: and blocks over threads
         self.serial = fns["_task_serial"]
         self.parallel = fns["_task_parallel"]
@@ -250,10 +271,12 @@ class TaskDriver:
         bool
             False, with nothing changed, when an action is not finite.
         """
-        self.family.compiled.prepare(arrays)
+        if not self._prepared:
+            self.family.compiled.prepare(arrays)
+            self._prepared = True
         run = self.parallel if arrays[0].shape[0] >= PARALLEL_MIN else self.serial
-        return run(arrays, episode, task, actions, decimation)
+        return run(*arrays, *episode, task, actions, decimation)
 
     def observe(self, arrays: tuple, episode: tuple, task: tuple, idx: np.ndarray) -> None:
         """The task's observation of copies ``idx`` (M,) int64 after their reset."""
-        self._observe(idx, arrays, episode, task)
+        self._observe(idx, *arrays, *episode, task)

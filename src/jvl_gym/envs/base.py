@@ -296,15 +296,21 @@ class MotorVectorEnv(VectorEnv, ABC):
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
         """Why each of the copies ``idx``, terminated by the last step, ended (one text per
         copy). Here: the motor error bits; a task adds its own reasons."""
-        return [self._error_reason(i) or "terminated by the task" for i in idx.tolist()]
+        return [text or "terminated by the task" for text in self._error_reasons(idx)]
 
-    def _error_reason(self, i: int) -> str:
-        """The ERR_STAT error bits of copy ``i`` that end an episode, as text ('' if none)."""
-        bits = int(self.error_bits()[i])
-        if not bits:
-            return ""
-        names = "+".join(name for name, bit in self.terminal_errors if bits & bit)
-        return f"motor error {names} ({self.error_register})"
+    def _error_reasons(self, idx: np.ndarray) -> list[str]:
+        """The error bits that end an episode of each copy of ``idx``, as text ('' if none)."""
+        return [self._error_text(bits) for bits in self.error_bits()[idx].tolist()]
+
+    def _error_text(self, bits: int) -> str:
+        """``bits`` of :attr:`error_register` as text (kept per value: a step may end many
+        copies)."""
+        texts = self.__dict__.setdefault("_error_texts", {})
+        text = texts.get(bits)
+        if text is None:
+            names = "+".join(name for name, bit in self.terminal_errors if bits & bit)
+            text = texts[bits] = f"motor error {names} ({self.error_register})" if bits else ""
+        return text
 
     def _end_info(self, ended: np.ndarray, terminated: np.ndarray) -> dict[str, np.ndarray]:
         """``{"termination_reason": (N,) object array, "_termination_reason": ended}`` for the

@@ -354,15 +354,10 @@ class CoilWindingVectorEnv(MotorVectorEnv):
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
         """The coil is complete (all layers wound) or a motor error bit is set."""
-        out = []
-        for i in idx.tolist():
-            why = []
-            if self.coil[i, _C_LAYER] >= self._k[_N_LAYERS]:
-                why.append(f"coil complete: {int(self._k[_N_LAYERS])} layers wound")
-            if self._error_reason(i):
-                why.append(self._error_reason(i))
-            out.append("; ".join(why) or "terminated by the task")
-        return out
+        complete = (self.coil[idx, _C_LAYER] >= self._k[_N_LAYERS]).tolist()
+        done = f"coil complete: {int(self._k[_N_LAYERS])} layers wound"
+        return ["; ".join(t for t in ((done if c else ""), error) if t) or "terminated by the task"
+                for c, error in zip(complete, self._error_reasons(idx))]
 
     def _observe_copies(self, idx: np.ndarray) -> None:
         _DRIVER.observe(self.motors.engine_view(), self._episode, self._task, idx)

@@ -172,10 +172,9 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
         """Every episode is one commissioning trial; say whether the design was unstable."""
-        unstable = self.metrics["unstable"]
-        return ["trial done" + (": unstable design" if unstable[i] else "")
-                + (f" ({self._error_reason(i)})" if self._error_reason(i) else "")
-                for i in idx.tolist()]
+        unstable = self.metrics["unstable"][idx].tolist()
+        return ["trial done" + (": unstable design" if u else "") + (f" ({e})" if e else "")
+                for u, e in zip(unstable, self._error_reasons(idx))]
 
     def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         mt = self.metrics

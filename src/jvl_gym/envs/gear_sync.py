@@ -296,18 +296,15 @@ class GearSyncVectorEnv(MotorVectorEnv):
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
         """Web break (tension above ``break_ratio`` × reference), slack longer than
         ``slack_time``, or the motor error bits, as the compiled step decides."""
+        ref = self.line[idx, _W_REF]
+        broke = (self.line[idx, _W_FORCE] > self.break_ratio * ref).tolist()
+        slack = (self.line[idx, _W_SLACK] >= self.slack_samples).tolist()
+        web_break = f"web break: tension above {self.break_ratio:g} × the reference"
+        web_slack = f"web slack for {self.slack_samples} outer samples"
         out = []
-        for i in idx.tolist():
-            ref = self.line[i, _W_REF]
-            why = []
-            if self.line[i, _W_FORCE] > self.break_ratio * ref:
-                why.append(f"web break: tension {self.line[i, _W_FORCE]:.1f} N > "
-                           f"{self.break_ratio:g} × reference {ref:.1f} N")
-            if self.line[i, _W_SLACK] >= self.slack_samples:
-                why.append(f"web slack for {int(self.line[i, _W_SLACK])} outer samples "
-                           f"(limit {self.slack_samples})")
-            if self._error_reason(i):
-                why.append(self._error_reason(i))
+        for b, s, error in zip(broke, slack, self._error_reasons(idx)):
+            why = [text for flag, text in ((b, web_break), (s, web_slack), (error, error))
+                   if flag]
             out.append("; ".join(why) or "terminated by the task")
         return out
 
