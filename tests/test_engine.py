@@ -1,5 +1,5 @@
 """The engine's public pieces: specialised drivers, the compile notice, and the operations a
-task uses instead of kernel arrays (hold_torque, reseed, write_many)."""
+task uses instead of kernel arrays (start_under_load, reseed, write_many)."""
 
 from __future__ import annotations
 
@@ -88,13 +88,15 @@ def _loaded(hold: bool) -> MotorArray:
     m = MotorArray("MAC140", n=2, seed=0, load_inertia=2e-5)
     m.write_many({"V_SOLL": 0, "MODE_REG": c.V_MODE})
     torque = np.array([0.1, -0.15])
-    m.set_input(load_torque=torque)
     if hold:
-        m.hold_torque(torque)
+        m.start_under_load(torque)
+        np.testing.assert_array_equal(m.inputs[:, m.INPUTS["load_torque"]], torque)  # the load too
+    else:
+        m.set_input(load_torque=torque)
     return m
 
 
-def test_hold_torque_starts_a_motor_that_already_carries_its_load() -> None:
+def test_start_under_load_starts_a_motor_that_already_carries_its_load() -> None:
     held, free = _loaded(True), _loaded(False)
     for m in (held, free):
         m.step(30)
@@ -103,11 +105,11 @@ def test_hold_torque_starts_a_motor_that_already_carries_its_load() -> None:
 
 
 @pytest.mark.parametrize("torque", [np.nan, np.inf, [0.1, 0.2, 0.3], "0.1"])
-def test_hold_torque_refuses_bad_values_and_changes_nothing(torque: object) -> None:
+def test_start_under_load_refuses_bad_values_and_changes_nothing(torque: object) -> None:
     m = MotorArray("MAC140", n=2, seed=0)
     state = m.state.copy()
     with pytest.raises(ValueError):
-        m.hold_torque(torque)
+        m.start_under_load(torque)
     np.testing.assert_array_equal(m.state, state)
 
 

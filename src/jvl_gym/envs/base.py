@@ -316,7 +316,8 @@ class MotorVectorEnv(VectorEnv, ABC):
         """``{"termination_reason": (N,) object array, "_termination_reason": ended}`` for the
         copies ``ended`` (bool (N,)) whose episode ended with the last step: the task's reason
         when terminated (:meth:`_termination_reasons`), :data:`TIME_LIMIT` when truncated."""
-        reasons = np.full(self.num_envs, "", dtype=object)
+        reasons = np.empty(self.num_envs, dtype=object)
+        reasons.fill("")
         idx = np.flatnonzero(ended)
         term = idx[terminated[idx]]
         if term.size:

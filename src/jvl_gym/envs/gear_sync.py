@@ -286,8 +286,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
                     self.gear_ratio, self.master_counts_per_rev, gearf1, load)
         m.write_many({"GEARF1": gearf1, "GEARF2": _GEARF2,
                        "V_SOLL": round(c.rpm_to_v_soll(4000.0)), "MODE_REG": c.AG_MODE}, idx)
-        m.set_input(idx, load_torque=load)
-        m.hold_torque(load, idx)
+        m.start_under_load(load, idx)
 
     def _step_copies(self, actions: np.ndarray) -> bool:
         return _DRIVER.step(self.motors.engine_view(), self._episode, self._task, actions,

@@ -29,7 +29,7 @@ from .firmware import modes as M
 from .firmware import regs as R
 from .firmware import write_rules as W
 from .firmware.monitor import filter_gain
-from .power_on import power_on_from_memory, reset_rows
+from .power_on import power_on_from_memory, reset_rows, start_loaded_rows
 from .store import store_rows
 from .table import TABLE
 
@@ -238,16 +238,17 @@ class MacMotorArray(MotorArray):
         only after a reset, manual 3.2.36), (N,)."""
         return self._latched_cntrl.copy()
 
-    def hold_torque(self, torque: float | np.ndarray, index: MotorIndex = None) -> None:
-        """Let the motors ``index`` start as motors that already hold ``torque`` [N·m]: the
-        speed regulator's integrating state is set to the output that gives this torque
-        (VF_OUT = torque / peak torque · 1023, manual 3.2.7, through KVOUT, manual 4.2), so
-        a motor powered on under a standing load does not first sag and recover.
+    def start_under_load(self, torque: float | np.ndarray, index: MotorIndex = None) -> None:
+        """Let the motors ``index`` start under a standing load of ``torque`` [N·m], as motors
+        that already hold it: the load torque input is set (as
+        ``set_input(load_torque=torque)``) and the speed regulator's integrating state is set
+        to the output that gives this torque (VF_OUT = torque / peak torque · 1023, manual
+        3.2.7, through KVOUT, manual 4.2), so that the motor does not first sag and recover.
 
         Parameters
         ----------
         torque : float or (M,) array
-            Torque per selected motor [N·m], finite.
+            Load torque per selected motor [N·m], finite.
         index : int, slice, bool mask or int array, optional
             The motors (default all).
         """
@@ -257,8 +258,13 @@ class MacMotorArray(MotorArray):
             raise ValueError(f"torque: expected a scalar or shape ({idx.size},), got {arr.shape}")
         if not np.all(np.isfinite(arr)):
             raise ValueError(f"torque must be finite, got {torque!r}")
-        peak = np.array([self._configs[k].peak_torque for k in self._type_of[idx].tolist()])
-        self.state[idx, L.S_Y1] = arr / peak * c.VF_FULL / (self.regs[idx, R.KVOUT] / 256.0)
+        start_loaded_rows(self.regs, self.state, self.inputs, idx,
+                          np.broadcast_to(arr, (idx.size,)), self._type_peak[self._type_of[idx]])
+
+    def _add_type(self, cfg: MotorConfig) -> None:
+        super()._add_type(cfg)
+        #: peak torque of each type of the pool [N·m]
+        self._type_peak = np.append(getattr(self, "_type_peak", np.zeros(0)), cfg.peak_torque)
 
     @property
     def time(self) -> np.ndarray:

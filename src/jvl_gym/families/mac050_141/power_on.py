@@ -23,7 +23,7 @@ from .firmware.modes import OK, apply_request, check_request
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, sector_index
 
-__all__ = ["power_on_rows", "power_on_from_memory", "reset_rows"]
+__all__ = ["power_on_rows", "power_on_from_memory", "reset_rows", "start_loaded_rows"]
 
 #: registers cleared at power-on (counters, measurements, loop outputs)
 CLEARED = (R.P_IST, R.V_IST, R.P_FNC, R.FLWERR, R.FNCERR, R.I2T, R.UIT, R.REC_CNT, R.FNC_OUT,
@@ -148,3 +148,15 @@ def power_on_from_memory(regs: np.ndarray, state: np.ndarray, params: np.ndarray
         i = idx[j]
         _copy_row(regs[i], flash[i] if has_flash[i] else rom[types[j]])
     power_on_rows(regs, state, params, latched, idx)
+
+
+@njit(**KERNEL)
+def start_loaded_rows(regs: np.ndarray, state: np.ndarray, inputs: np.ndarray, idx: np.ndarray,
+                      torque: np.ndarray, peak: np.ndarray) -> None:  # pragma: no cover
+    """Motors ``idx`` (M,) under a standing load ``torque`` (M,) [N·m]: the load torque input
+    and the speed regulator's integrator holding it (VF_OUT = torque / peak · 1023 through
+    KVOUT, manual 3.2.7 and 4.2; ``peak`` (M,) the types' peak torques [N·m])."""
+    for j in range(idx.shape[0]):
+        i = idx[j]
+        inputs[i, L.I_LOAD_TORQUE] = torque[j]
+        state[i, L.S_Y1] = torque[j] / peak[j] * c.VF_FULL / (regs[i, R.KVOUT] / 256.0)
