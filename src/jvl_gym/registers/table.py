@@ -440,7 +440,7 @@ def _parse_rows(text: str, source: str) -> list[Register]:
     return rows
 
 
-def load_table(path: str | PathLike[str]) -> RegisterTable:
+def load_table(path: str | PathLike[str], source: str | None = None) -> RegisterTable:
     """Load and validate a register table CSV.
 
     Parameters
@@ -448,6 +448,8 @@ def load_table(path: str | PathLike[str]) -> RegisterTable:
     path : str or os.PathLike
         CSV with columns ``number,name,format,min,max,unit,access,default,section,description``
         and optionally ``alias,user``.
+    source : str, optional
+        How errors and the reference page name the table (default: ``path``).
 
     Returns
     -------
@@ -461,7 +463,8 @@ def load_table(path: str | PathLike[str]) -> RegisterTable:
         range, known formats).
     """
     p = Path(path)
-    return RegisterTable(_parse_rows(p.read_text(encoding="utf-8"), str(p)), source=str(p))
+    name = source if source is not None else str(p)
+    return RegisterTable(_parse_rows(p.read_text(encoding="utf-8"), name), source=name)
 
 
 def load_packaged_table(package: str, filename: str = "registers.csv") -> RegisterTable:

@@ -13,4 +13,5 @@ from ...registers.table import RegisterTable, load_table
 __all__ = ["TABLE"]
 
 #: the register table of the MAC50, MAC95, MAC140 and MAC141
-TABLE: RegisterTable = load_table(Path(__file__).with_name("registers.csv"))
+TABLE: RegisterTable = load_table(Path(__file__).with_name("registers.csv"),
+                                  source="jvl_gym/families/mac050_141/registers.csv")
