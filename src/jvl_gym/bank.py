@@ -9,6 +9,7 @@ decide in its hooks (:meth:`RegisterBank._store_rows`, :meth:`RegisterBank._stor
 from __future__ import annotations
 
 import os
+from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from typing import Any, ClassVar, NamedTuple
 
@@ -67,7 +68,7 @@ class StorePlan(NamedTuple):
                             dtype=np.float64).reshape(-1, 6))
 
 
-class RegisterBank:
+class RegisterBank(ABC):
     """The register access of :class:`~jvl_gym.MotorArray` (a mixin over its ``regs``,
     ``state``, ``table`` and ``n``)."""
 
@@ -237,11 +238,11 @@ class RegisterBank:
                 self.regs[idx], self.state[idx] = saved
             raise
 
+    @abstractmethod
     def _store_rows(self, plan: StorePlan, idx: np.ndarray, raws: np.ndarray) -> None:
         """Check the firmware's write rules and store the (K, M) stored integers ``raws`` of
         ``plan``'s registers in motors ``idx``; a refusal raises with the registers before
         the refused one stored (the caller restores the motors)."""
-        raise NotImplementedError
 
     def _store_special(self, reg: Register, idx: np.ndarray, raw: np.ndarray) -> bool:
         """Store a write the family handles itself (a mode command, a register-set pointer);

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import functools
 import os
+from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from typing import Any, ClassVar
 
@@ -44,7 +45,7 @@ class ModeError(RegisterError):
     """A MODE_REG write or a mode command that the firmware's rules refuse (manual 4.4)."""
 
 
-class MotorArray(RegisterBank, FlashStorage, Stepping):
+class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
     """N simulated motors of one family sharing one compiled kernel.
 
     ``MotorArray(motor, ...)`` returns an array of the family the motor type belongs to (the
@@ -161,9 +162,9 @@ class MotorArray(RegisterBank, FlashStorage, Stepping):
         self.reset(**params)
 
     @property
+    @abstractmethod
     def time(self) -> np.ndarray:
         """Time since power-on of each motor [s], (N,)."""
-        raise NotImplementedError
 
     @property
     def family(self) -> Family:
@@ -172,38 +173,31 @@ class MotorArray(RegisterBank, FlashStorage, Stepping):
 
     # ------------------------------------------------------------------ family hooks
     @staticmethod
+    @abstractmethod
     def load_motor(motor: Any) -> Any:
         """The validated motor config of ``motor`` (a type name, path or config object)."""
-        raise NotImplementedError
 
+    @abstractmethod
     def _rom_image(self, cfg: Any, setup: Any) -> np.ndarray:
         """ROM defaults (number of registers,) int64 of one motor type with ``setup``."""
-        raise NotImplementedError
 
+    @abstractmethod
     def _config_params(self, cfg: Any) -> np.ndarray:
         """Parameters (N_PARAM,) of a motor of type ``cfg`` before reset keywords."""
-        raise NotImplementedError
 
+    @abstractmethod
     def _rest_inputs(self, cfg: Any) -> np.ndarray:
         """World inputs (N_INPUT,) of a motor of type ``cfg`` at rest."""
-        raise NotImplementedError
 
     def _before_reset(self) -> None:
         """Family set-up after the arrays exist, before the first power-on."""
 
+    @abstractmethod
     def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
                     values: np.ndarray) -> None:
         """Power on motors ``idx`` from flash or ROM with the type pool's parameters and
         inputs, then the reset keywords' ``values`` (P, M) into columns ``cols`` (P,) of
         ``params`` or, where ``to_state``, of ``state``."""
-        raise NotImplementedError
-
-    def _power_on(self, idx: np.ndarray) -> None:
-        """Registers of motors ``idx`` from flash or ROM and the firmware's power-on."""
-        raise NotImplementedError
-
-    #: registers stored one at a time through :meth:`_store_special` (numbers)
-    ONE_BY_ONE: ClassVar[frozenset[int]] = frozenset()
 
     # ------------------------------------------------------------------ configuration
     def _add_type(self, cfg: Any) -> None:
