@@ -54,9 +54,9 @@ class Stepping:
 
     def engine_view(self, plan: np.ndarray | None = None) -> tuple:
         """The arrays of the motors as the engine's compiled drivers take them (the arrays
-        themselves, not copies): the fields of a :class:`~jvl_gym.engine.EngineView` as a
-        plain tuple, the handle a compiled task's driver is given (numba dispatches on a plain
-        tuple without Python; the driver makes the named view of it).
+        themselves, not copies): the fields of a :class:`~jvl_gym.engine.EngineView`, in its
+        order, as a plain tuple. A driver passes them as separate arguments (numba dispatches
+        fastest on plain arrays) and builds the named view of them per block.
 
         A task that advances the motors itself (``jvl_gym.engine.TaskDriver``) holds the
         inputs over each outer sample and sets them between samples; the :attr:`world`
