@@ -1,4 +1,4 @@
-"""The arrays a compiled driver works on, handed over as two named tuples.
+"""The two named tuples a compiled driver builds of the arrays it is given, for the hooks.
 
 :class:`EngineView` is what a motor array is to compiled code: the register banks and the
 family's state, parameters and inputs of N motors, one row per motor, with the sample buffer,
