@@ -9,11 +9,14 @@ and exits with status 1 (``--debug`` lets it through with its traceback).
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import TypeVar
+from pathlib import Path
+from typing import Any, TypeVar
+
+import yaml
 
 from .extra import MissingExtraError
 
-__all__ = ["UserError", "run_cli"]
+__all__ = ["UserError", "run_cli", "read_yaml"]
 
 T = TypeVar("T")
 
@@ -41,3 +44,15 @@ def run_cli(body: Callable[[], T]) -> T:
         return body()
     except (UserError, MissingExtraError) as exc:
         raise CliError(str(exc)) from exc
+
+
+def read_yaml(path: Path) -> Any:
+    """The YAML document of the file ``path``; a syntax error is a :class:`UserError` naming
+    the file and line."""
+    try:
+        return yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        line = f" line {mark.line + 1}" if mark is not None else ""
+        raise UserError(f"{path}:{line} is not valid YAML ({getattr(exc, 'problem', exc)}); "
+                        "fix the syntax") from None

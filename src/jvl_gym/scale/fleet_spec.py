@@ -35,7 +35,7 @@ import numpy as np
 import yaml
 
 from .distributions import parse_distribution
-from .errors import UserError
+from .errors import UserError, read_yaml
 
 __all__ = ["FleetMotor", "FleetSpec", "load_fleet", "parse_fleet", "fleet_from_records"]
 
@@ -266,11 +266,5 @@ def load_fleet(path: str | Path) -> FleetSpec:
     if not path.is_file():
         raise UserError(f"{path}: no such fleet file or records folder; give a YAML file such "
                         "as configs/fleets/example.yml or a folder with one subfolder per motor")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = f" line {mark.line + 1}" if mark is not None else ""
-        raise UserError(f"{path}:{line} is not valid YAML ({getattr(exc, 'problem', exc)}); "
-                        "fix the syntax") from None
+    data = read_yaml(path)
     return parse_fleet(data, path)

@@ -33,10 +33,9 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from .distributions import Distribution, parse_distribution
-from .errors import UserError
+from .errors import UserError, read_yaml
 
 __all__ = ["SweepSpec", "Trial", "load_sweep", "parse_sweep", "trial_config"]
 
@@ -316,13 +315,7 @@ def load_sweep(path: str | Path) -> SweepSpec:
     if not path.is_file():
         raise UserError(f"{path}: no such sweep file; give a YAML file such as "
                         "configs/sweeps/example.yml")
-    try:
-        data = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        line = f" line {mark.line + 1}" if mark is not None else ""
-        raise UserError(f"{path}:{line} is not valid YAML ({getattr(exc, 'problem', exc)}); "
-                        "fix the syntax") from None
+    data = read_yaml(path)
     return parse_sweep(data, path)
 
 
