@@ -197,6 +197,24 @@ def test_home1_finds_mechanical_stop():
     assert int(m.read("P_FNC")[0]) == -16000 + 16 * (int(m.read("P_IST")[0]) + 1000)
 
 
+def test_home1_hands_over_to_p_mode_which_reaches_p_soll():
+    """At the zero the function position is the motor position and STARTMODE starts (manual
+    4.4.13): the follow error and the speed loop's history from pushing against the stop do
+    not carry into P_MODE, which moves to P_SOLL = 0 and reports IN_POS."""
+    m = MotorArray("MAC140", n=1, seed=0, end_stop_low=-3.0, end_stop_high=3.0)
+    m.write_many({"V_HOME": -800, "T_HOME": 300, "P_HOME": -1000, "STARTMODE": c.P_MODE,
+                  "V_SOLL": 1000, "INPOSWIN": 10, "INPOSCNT": 5})
+    m.write("MODE_REG", c.HOME1_MODE)
+    for _ in range(3000):
+        m.step()
+        if m.mode_name() != "HOME1_MODE":
+            break
+    assert m.mode_name() == "P_MODE"
+    m.run(1.5)
+    assert abs(int(m.read("P_IST")[0])) <= 10
+    assert int(m.read("ERR_STAT")[0]) & c.IN_POS
+
+
 @pytest.mark.parametrize("mode", [c.HOME2_MODE, c.HOME3_MODE])
 @pytest.mark.parametrize("start", [0.0, 2.0])
 def test_home2_home3_find_the_sensor_edge(mode, start):

@@ -50,7 +50,14 @@ from .firmware.gear_blocks import (
 )
 from .firmware.homing import home_block, home_check
 from .firmware.mode_table import N_MODES
-from .firmware.modes import CORRECTING, FLWERR_MODES, REGULATED, enter_mode, stop_to
+from .firmware.modes import (
+    CORRECTING,
+    FLWERR_MODES,
+    REGULATED,
+    enter_mode,
+    reset_speed_loop,
+    stop_to,
+)
 from .firmware.monitor import check_errors, in_position, thermal, undervoltage
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
@@ -180,6 +187,13 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
         if mode == c.STOP_MODE and abs(v) < c.STOP_SPEED_COUNTS:
             _finish_pending(r, s)
         elif c.HOME1_MODE <= mode <= c.HOME3_MODE and home_check(r, s, mode):
+            # the zero (4.4.13–15): the function position is now the motor position
+            # (set_home_position), so the follow error and the speed loop's history of the
+            # search do not carry into STARTMODE (docs/model.md §9)
+            s[L.S_FLW16] = 0.0
+            r[R.FLWERR] = 0
+            s[L.S_V_OLD] = 0.0
+            reset_speed_loop(r, s)
             start = int(r[R.STARTMODE])
             if (0 < start < N_MODES and REGULATED[start]
                     and not c.HOME1_MODE <= start <= c.HOME3_MODE):
