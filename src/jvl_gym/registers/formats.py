@@ -386,12 +386,7 @@ def split_longint(raw: Any) -> tuple[Any, Any]:
     RegisterRangeError
         If a value does not fit in 32 signed bits.
     """
-    a = _as_int_array(raw, "LongInt values")
-    if np.any((a < -(2**31)) | (a > 2**31 - 1)):
-        raise RegisterRangeError(f"LongInt value {raw!r} does not fit in 32 signed bits "
-                                 "(−2147483648 … 2147483647, manual 3.1)")
-    u = a & 0xFFFFFFFF
-    return _scalar_or_array(u & 0xFFFF), _scalar_or_array(u >> 16)
+    return split_word32(raw, signed=True)
 
 
 def join_longint(low: Any, high: Any) -> Any:
@@ -416,18 +411,7 @@ def join_longint(low: Any, high: Any) -> Any:
     RegisterShapeError
         If ``low`` and ``high`` do not broadcast together.
     """
-    lo = _as_int_array(low, "LongInt words")
-    hi = _as_int_array(high, "LongInt words")
-    for w in (lo, hi):
-        if np.any((w < 0) | (w > 0xFFFF)):
-            raise RegisterRangeError(f"LongInt words must be 0 … 65535, got {low!r}, {high!r}")
-    try:
-        lo, hi = np.broadcast_arrays(lo, hi)
-    except ValueError as exc:
-        raise RegisterShapeError(f"low and high word shapes differ: {lo.shape} vs {hi.shape}"
-                                 ) from exc
-    u = (hi << 16) | lo
-    return _scalar_or_array(np.where(u >= 2**31, u - 2**32, u).astype(np.int64))
+    return join_word32(low, high, signed=True)
 
 
 def to_word16(reg: Register, raw: Any) -> np.ndarray:
