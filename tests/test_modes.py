@@ -434,3 +434,27 @@ def test_mode_table_names_real_registers_and_every_mode():
         for reg in m.parameters:
             MAC050_141.lookup(reg)
     assert "COIL_MODE" in markdown_mode_table()
+
+
+@pytest.mark.parametrize("gear_mode", [c.GP_MODE, c.GF_MODE])
+def test_gear_to_p_mode_hand_over_starts_fncerr_from_zero(gear_mode):
+    """Manual 3.2.24: in GP/GF FNCERR is the gear position error, in P_MODE the sum of the
+    profile corrections. A motor switched from following pulses to P_MODE starts its FNCERR
+    at 0, so an FNCERRMAX below the gear error does not trip in P_MODE, which reaches P_SOLL."""
+    m = MotorArray("MAC140")
+    m.write_many({"V_SOLL": 1000, "A_SOLL": 20, "T_SOLL": 200, "GEARF1": 1, "GEARF2": 1})
+    m.write("MODE_REG", gear_mode)
+    m.set_input(pulse_counts=20)
+    m.step(200)
+    gear_error = int(m.read("FNCERR")[0])
+    assert abs(gear_error) > 100  # the follow lag of a 20 counts/sample pulse train
+    m.set_input(pulse_counts=0)
+    target = int(m.read("P_IST")[0]) + 5000
+    m.write_many({"FNCERRMAX": abs(gear_error) // 2, "P_SOLL": target})
+    m.write("MODE_REG", c.P_MODE)
+    m.step(1)
+    assert int(m.read("FNCERR")[0]) == 0
+    m.step(1500)
+    assert int(m.read("MODE_REG")[0]) == c.P_MODE
+    assert int(m.read("ERR_STAT")[0]) & c.FNC_ERR == 0
+    assert abs(int(m.read("P_IST")[0]) - target) <= 10
