@@ -346,12 +346,12 @@ def test_pulse_input_decoding_semantics():
     quad = PulseInput(prof, lines=500, signal="quadrature")
     pdir = PulseInput(SpeedProfile.constant(2.0, n=1), lines=500, signal="pulse_dir")
     n = 521
-    q = sum(quad.advance(np.array([0]))[0] for _ in range(n))
-    p = sum(pdir.advance(np.array([c.PULSEDIR]))[0] for _ in range(n))
+    q = sum(quad.advance(c.OUTER_DT, np.array([False]), np.array([False]))[0] for _ in range(n))
+    p = sum(pdir.advance(c.OUTER_DT, np.array([True]), np.array([False]))[0] for _ in range(n))
     assert q == pytest.approx(4 * 500 * 2.0 * n * c.OUTER_DT, abs=1)
     assert p == pytest.approx(500 * 2.0 * n * c.OUTER_DT, abs=1)
     neg = PulseInput(SpeedProfile.constant(2.0, n=1), lines=500, signal="pulse_dir")
-    assert neg.advance(np.array([c.PULSEDIR | c.INPSIGN]))[0] <= 0
+    assert neg.advance(c.OUTER_DT, np.array([True]), np.array([True]))[0] <= 0
 
 
 def test_world_drives_gear_mode_through_the_kernel():

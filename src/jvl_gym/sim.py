@@ -192,6 +192,12 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
     def _before_reset(self) -> None:
         """Family set-up after the arrays exist, before the first power-on."""
 
+    def pulse_decoding(self) -> tuple[np.ndarray, np.ndarray]:
+        """How each motor decodes its pulse input: ``(pulse_dir, inverted)``, (N,) bool
+        arrays (pulse + direction rather than quadrature; count reversed). Families with a
+        pulse input define it (:class:`jvl_gym.world.PulseInput` uses it)."""
+        raise NotImplementedError(f"{self.family.title} motors have no pulse input")
+
     @abstractmethod
     def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
                     values: np.ndarray) -> None:

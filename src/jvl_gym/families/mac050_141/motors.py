@@ -238,6 +238,12 @@ class MacMotorArray(MotorArray):
         only after a reset, manual 3.2.36), (N,)."""
         return self._latched_cntrl.copy()
 
+    def pulse_decoding(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(pulse_dir, inverted)`` per motor from the CNTRL_BITS PULSEDIR and INPSIGN latched
+        at the last power-on (manual 3.2.36), (N,) bool arrays."""
+        bits = self._latched_cntrl
+        return (bits & c.PULSEDIR) != 0, (bits & c.INPSIGN) != 0
+
     def start_under_load(self, torque: float | np.ndarray, index: MotorIndex = None) -> None:
         """Let the motors ``index`` start under a standing load of ``torque`` [N·m], as motors
         that already hold it: the load torque input is set (as
