@@ -458,3 +458,33 @@ def test_gear_to_p_mode_hand_over_starts_fncerr_from_zero(gear_mode):
     assert int(m.read("MODE_REG")[0]) == c.P_MODE
     assert int(m.read("ERR_STAT")[0]) & c.FNC_ERR == 0
     assert abs(int(m.read("P_IST")[0]) - target) <= 10
+
+
+#: regulated modes a user switches between while the motor moves (manual 4.4)
+_MOVING_MODES = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.AVZ_MODE, c.VAT_MODE,
+                 c.AG_MODE, c.A2POS_MODE, c.APOS_MODE, c.GF_MODE]
+
+
+@pytest.mark.parametrize("first", _MOVING_MODES)
+def test_every_hand_over_between_moving_modes_is_bumpless_and_error_free(first):
+    """Switching from one regulated mode to another while moving (docs/model.md §9): the
+    profile continues from the present velocity (FNC_OUT moves by at most one A_SOLL step at
+    the switch), no error bit is set and the new mode stays active."""
+    for second in _MOVING_MODES:
+        if second == first:
+            continue
+        m = MotorArray("MAC140")
+        m.write_many({"V_SOLL": 800, "A_SOLL": 20, "T_SOLL": 600, "GEARF1": 1, "GEARF2": 1,
+                      "P_SOLL": 30000})
+        m.set_input(pulse_counts=10, analog_volts=3.0)
+        m.write("MODE_REG", first)
+        m.step(200)
+        before = int(m.read("FNC_OUT")[0])
+        m.write("MODE_REG", second)
+        m.step(1)
+        after = int(m.read("FNC_OUT")[0])
+        assert abs(after - before) <= 20 + 1, (first, second, before, after)
+        m.step(1000)
+        errors = c.I2T_ERR | c.FLW_ERR | c.FNC_ERR | c.UIT_ERR | c.PLIM_ERR
+        assert int(m.read("ERR_STAT")[0]) & errors == 0, (first, second)
+        assert int(m.read("MODE_REG")[0]) == second, (first, second)
