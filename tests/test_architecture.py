@@ -17,7 +17,7 @@ GENERIC = [SRC / "jvl_gym" / "envs", SRC / "jvl_gym" / "protocol", SRC / "jvl_gy
            ROOT / "tuning"]
 #: what a family shows the other layers: its package, units and constants, register table,
 #: task interface
-PUBLIC = {"constants", "table", "task"}
+PUBLIC = {"constants", "table", "task", "config"}
 #: names under which the generic layers hold a MotorArray
 ARRAY_NAMES = re.compile(r"\b(?:motors|m|sim|array)\._[a-z]\w*\b")
 

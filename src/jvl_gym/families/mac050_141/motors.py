@@ -18,13 +18,13 @@ import numpy as np
 
 from ...arguments import MotorIndex, MotorSpec, Seed, as_index, motor_index, real_array
 from ...bank import StorePlan
-from ...config import MotorConfig, load_motor, load_setup
 from ...keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
 from ...registers import Format, Register, RegisterError
 from ...registers.formats import from_raw
 from ...sim import ModeError, MotorArray
 from . import constants as c
 from . import layout as L
+from .config import SETUPS_DIR, MotorConfig, load_motor, load_setup
 from .firmware import modes as M
 from .firmware import regs as R
 from .firmware import write_rules as W
@@ -93,6 +93,7 @@ class MacMotorArray(MotorArray):
     N_INPUT = L.N_INPUT
     BUFFER_SHAPE = (c.REC_CNT_MAX, 4)
     OUTER_HZ = c.OUTER_HZ
+    SETUPS_DIR = SETUPS_DIR
     PARAMETER_KEYWORDS: ClassVar[dict[str, int]] = _PARAMETERS
     STATE_KEYWORDS: ClassVar[dict[str, int]] = _STATES
     #: finite but for the home position (inf: none), then >= 0, > 0 or 0/1
@@ -117,7 +118,7 @@ class MacMotorArray(MotorArray):
 
     @staticmethod
     def load_motor(motor: Any) -> MotorConfig:
-        """The validated motor config (``jvl_gym.config.load_motor``)."""
+        """The validated motor config (:func:`.config.load_motor`)."""
         return load_motor(motor)
 
     def _before_reset(self) -> None:
