@@ -28,6 +28,7 @@ from . import regs as R
 from .config import MisMotorConfig, load_motor
 from .firmware.arith import wrap32
 from .table import TABLE
+from .torque_curve import pull_out_torque
 from .units import COUNTS_PER_REV, CURRENT_AMPS_PER_UNIT
 
 __all__ = ["MisMotorArray"]
@@ -423,6 +424,15 @@ class MisMotorArray(MotorArray):
         """Energy since power-on [J], (N,) each: copper loss and work against the load."""
         return {"copper": self.state[:, L.S_E_COPPER].copy(),
                 "load": self.state[:, L.S_E_LOAD].copy()}
+
+    def pull_out_torque(self, rpm: float) -> np.ndarray:
+        """Steady-state pull-out torque [N·m] of each motor at ``rpm`` with its RUN_CURRENT
+        and supply (:func:`.torque_curve.pull_out_torque`), (N,)."""
+        p, u = self.params, self.inputs
+        amps = np.sqrt(2.0) * np.minimum(self.regs[:, R.RUN_CURRENT], p[:, L.P_RUN_MAX]) * p[
+            :, L.P_AMPS_PER_UNIT]
+        return np.array([pull_out_torque(rpm, amps[i], p[i, L.P_KT], p[i, L.P_R], p[i, L.P_L],
+                                         u[i, L.I_SUPPLY_VOLTS]) for i in range(self.n)])
 
     def mode_name(self, index: int = 0) -> str:
         """Name of the current mode of one motor."""
