@@ -5,7 +5,7 @@ encoder: the plant keeps the commanded electrical angle within one full step (90
 2048 counts) of the rotor, so the torque never falls past its peak and no step is lost
 (``plant``). With current control (bit 25) the current is ACTUAL_TORQUE/2047 of RUN_CURRENT;
 ACTUAL_TORQUE follows the follow error — 2047 at a follow error of one full step or more,
-proportionally less below ("when the position error becomes below 2048 counts (1 full step) the
+proportionally less below (rounded down to whole steps) ("when the position error becomes below 2048 counts (1 full step) the
 current is also proportionally decreased", §5.3.3) — inside CUR_SCALE_MIN … CUR_SCALE_MAX, by one
 step per ``T_INC = CUR_SCALE_INC / 36 MHz`` up and per ``T_DEC = DEC_CNT / 36 MHz`` down with
 ``DEC_CNT = |RPM|·100/4096·CUR_SCALE_FACTOR + CUR_SCALE_DEC`` (§5.3.7: 55.56 µs up, 111 µs down
@@ -34,8 +34,8 @@ def scale_current(regs, s, follow_error: float, rpm: float) -> None:  # pragma: 
     error's current (module docstring)."""
     lo = float(regs[R.CUR_SCALE_MIN])
     hi = float(max(regs[R.CUR_SCALE_MAX], regs[R.CUR_SCALE_MIN]))
-    goal = min(max(CUR_SCALE_FULL * min(abs(follow_error) / c.COUNTS_PER_FULL_STEP, 1.0), lo),
-               hi)
+    share = min(abs(follow_error) / c.COUNTS_PER_FULL_STEP, 1.0)
+    goal = min(max(math.floor(CUR_SCALE_FULL * share), lo), hi)
     now = s[L.S_CUR_SCALE]
     ticks = s[L.S_SCALE_CLOCK] + TICKS_PER_OUTER
     if goal > now:

@@ -153,8 +153,7 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
         if mode == c.GEAR:
             _gear_input(regs, s, u)
         v, arrive = _move(regs, s, has_encoder, tt, v_prev)
-        target_v = v if arrive else math.copysign(abs(regs[R.V_SOLL]) * c.VEL_UNIT_TO_COUNTS,
-                                                  v)
+        target_v = math.copysign(abs(regs[R.V_SOLL]) * c.VEL_UNIT_TO_COUNTS, v)
     elif mode == c.STOP:
         v = velocity_step(regs, s, 0.0, s[L.S_DEC])
         if v == 0.0:
