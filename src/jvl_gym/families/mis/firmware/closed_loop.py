@@ -3,14 +3,15 @@
 With closed loop (SETUP_BITS bit 24) and an H2/H4 encoder, the drive commutates from the
 encoder: the plant keeps the commanded electrical angle within one full step (90° electrical,
 2048 counts) of the rotor, so the torque never falls past its peak and no step is lost
-(``plant``). With current control (bit 25) the current is ACTUAL_TORQUE/2047 of RUN_CURRENT;
-ACTUAL_TORQUE follows the follow error — 2047 at a follow error of one full step or more,
-proportionally less below (rounded down to whole steps) ("when the position error becomes below 2048 counts (1 full step) the
-current is also proportionally decreased", §5.3.3) — inside CUR_SCALE_MIN … CUR_SCALE_MAX, by one
-step per ``T_INC = CUR_SCALE_INC / 36 MHz`` up and per ``T_DEC = DEC_CNT / 36 MHz`` down with
-``DEC_CNT = |RPM|·100/4096·CUR_SCALE_FACTOR + CUR_SCALE_DEC`` (§5.3.7: 55.56 µs up, 111 µs down
-at 0 RPM, 0 → 100 % in 113 ms). The 36 MHz ticks of a 1 ms outer sample left over from whole
-steps are carried to the next sample.
+(``plant``). With current control (bit 25) the current is ACTUAL_TORQUE/2047 of RUN_CURRENT.
+ACTUAL_TORQUE follows the follow error: 2047 at a follow error of one full step or more,
+proportionally less below, rounded down to whole steps ("when the position error becomes
+below 2048 counts (1 full step) the current is also proportionally decreased", §5.3.3), and
+inside CUR_SCALE_MIN … CUR_SCALE_MAX. It moves by one step per
+``T_INC = CUR_SCALE_INC / 36 MHz`` up and per ``T_DEC = DEC_CNT / 36 MHz`` down, with
+``DEC_CNT = |RPM|·100/4096·CUR_SCALE_FACTOR + CUR_SCALE_DEC`` (§5.3.7: 55.56 µs up, 111 µs
+down at 0 RPM, 0 → 100 % in 113 ms). The 36 MHz ticks of a 1 ms outer sample left over from
+whole steps are carried to the next sample.
 """
 
 from __future__ import annotations
