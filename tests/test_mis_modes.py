@@ -240,3 +240,53 @@ def test_bad_writes_change_nothing() -> None:
     with pytest.raises(ValueError, match="digital_inputs"):
         m.set_input(digital_inputs=300)
     assert m.read("V_SOLL")[0] == 1000
+
+
+# --- power-on, safe mode, flash (§8.2.3, §8.2.33, §8.2.37) --------------------------------
+def test_startmode_from_a_setup_and_flash_in_safe_mode() -> None:
+    m = MotorArray("MIS232", n=1, setup={"STARTMODE": 1, "V_SOLL": 5000, "V_START": 10000})
+    assert m.read("MODE_REG")[0] == 1
+    m.step(10)
+    assert m.read("V_IST")[0] == 5000
+    with pytest.raises(RegisterError, match="STARTMODE"):
+        MotorArray("MIS232", n=1, setup={"STARTMODE": 11})
+    m.write("V_SOLL", 7000)
+    with pytest.raises(ModeError, match="safe mode"):
+        m.write_flash()
+    m.enter_safe_mode()
+    with pytest.raises(ModeError, match="by command only"):
+        m.write("MODE_REG", 1)
+    m.write_flash()  # saved, then reset: STARTMODE 1 at V_SOLL 70 RPM
+    assert m.read("MODE_REG")[0] == 1 and m.read("V_SOLL")[0] == 7000
+    assert m.read("P_IST")[0] == 0
+
+
+def test_homemode_starts_a_zero_search_at_power_on() -> None:
+    m = MotorArray("MIS232", n=1, setup={"HOMEMODE": 13, "STARTMODE": 2})
+    assert m.read("MODE_REG")[0] == 13
+
+
+def test_hardware_limit_input_and_its_warning_bits() -> None:
+    m = _motor(PL_MASK=0b100, V_SOLL=5000, V_START=10000, SETUP_BITS=1 << 17)
+    m.write("MODE_REG", 1)
+    m.step(20)
+    m.set_input(digital_inputs=0b100)
+    m.step(5)
+    warn = m.read("WARN_BITS")[0]
+    assert warn & c.WARN_POS_LIMIT and warn & c.WARN_POS_LIMIT_SEEN
+    assert m.read("ERR_BITS")[0] == 0  # SETUP_BITS bit 17: no error, the motor stops
+    assert m.read("V_IST")[0] == 0 and m.read("MODE_REG")[0] == 1
+    m.set_input(digital_inputs=0)
+    m.step(2)
+    warn = m.read("WARN_BITS")[0]
+    assert not warn & c.WARN_POS_LIMIT and warn & c.WARN_POS_LIMIT_SEEN
+
+
+def test_absolute_encoder_register() -> None:
+    m = MotorArray("MIS232", n=2, encoder_type=np.array([3, 4]))
+    m.write_many({"V_SOLL": 100000, "A_SOLL": 10000, "MODE_REG": 1})
+    m.run(0.6)  # beyond one revolution
+    absolute = m.read("ABSENCODER")
+    assert 0 <= absolute[0] < 409600 < absolute[1]
+    assert absolute[1] - absolute[0] == pytest.approx(409600 * (absolute[1] // 409600), abs=100)
+    assert m.read("ENCODER_TYPE").tolist() == [3, 4]

@@ -60,6 +60,12 @@ _INPUT_COLUMNS: dict[str, int] = {"load_torque": L.I_LOAD_TORQUE,
 #: registers whose writes the firmware's rules handle one by one
 _SPECIAL = frozenset({R.MODE_REG, R.P_SOLL, R.COMMAND, R.ENCODER_POS, R.S_CONTROL,
                       R.STARTMODE, R.HOMEMODE, R.TURNTABLE_MODE})
+#: registers a setup (a register set) may not hold: commands and mode requests
+_NOT_IN_SETUP = frozenset({R.MODE_REG, R.COMMAND, R.S_CONTROL, R.ENCODER_POS})
+#: registers that hold one of a set of codes: (allowed, where the manual says so)
+_MEMBERS: dict[int, tuple[frozenset[int], str]] = {
+    R.STARTMODE: (c.START_MODES, "§8.2.33"), R.HOMEMODE: (c.HOME_MODES, "§8.2.37"),
+    R.TURNTABLE_MODE: (frozenset(range(6)), "§5.12.3: >5 is illegal")}
 BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
 
 
@@ -117,10 +123,14 @@ class MisMotorArray(MotorArray):
             row = image[None]
             for name, value in load_setup(setup).registers.items():
                 reg = self._lookup(name)
-                if reg.number in _SPECIAL:
-                    raise RegisterError(f"setup: {reg.name} is a command or has write rules; "
+                if reg.number in _NOT_IN_SETUP:
+                    raise RegisterError(f"setup: {reg.name} is a command or a mode request; "
                                         "write it after power-on")
-                row[0, reg.number] = self._validated_raw(reg, value, 1)[0]
+                raw = self._validated_raw(reg, value, 1)
+                rule = _MEMBERS.get(reg.number)
+                if rule is not None:
+                    self._check_member(reg, raw, *rule)
+                row[0, reg.number] = raw[0]
         return image
 
     def _config_params(self, cfg: MisMotorConfig) -> np.ndarray:
@@ -164,8 +174,14 @@ class MisMotorArray(MotorArray):
         self._power_on(idx)
 
     def _power_on(self, idx: np.ndarray) -> None:
-        """Firmware start: counters cleared, positions 0, mode from HOMEMODE or STARTMODE."""
+        """Firmware start: positions, counters and error bits cleared (P_IST = P_SOLL = 0, so
+        a saved P_SOLL makes no move at power-on; the position back-up of §5.4 is not
+        modelled), the mode from HOMEMODE or else STARTMODE (§8.2.33, §8.2.37)."""
         s, regs = self.state, self.regs
+        for num in (R.P_IST, R.P_SOLL, R.V_IST, R.ENCODER_POS, R.FLWERR, R.ERR_BITS,
+                    R.WARN_BITS, R.STATUSBITS, R.TURNTAB_COUNT, R.EXT_ENCODER, R.COMMAND,
+                    R.S_CONTROL, R.ACTUAL_TORQUE, R.TICKS):
+            regs[idx, num] = 0
         s[idx, L.S_CUR_SCALE] = 2047.0
         s[idx, L.S_SEEN_PSOLL] = regs[idx, R.P_SOLL]
         code = self.params[idx, L.P_ENCODER].astype(np.int64)
@@ -214,14 +230,8 @@ class MisMotorArray(MotorArray):
             s[idx[off], L.S_VEL] = 0.0
             s[idx[off], L.S_EMERGENCY] = 0.0
             regs[idx, R.MODE_REG] = raw
-        elif num == R.STARTMODE:
-            self._check_member(reg, raw, c.START_MODES, "§8.2.33")
-            regs[idx, num] = raw
-        elif num == R.HOMEMODE:
-            self._check_member(reg, raw, c.HOME_MODES, "§8.2.37")
-            regs[idx, num] = raw
-        elif num == R.TURNTABLE_MODE:
-            self._check_member(reg, raw, frozenset(range(6)), "§5.12.3: >5 is illegal")
+        elif num in _MEMBERS:
+            self._check_member(reg, raw, *_MEMBERS[num])
             regs[idx, num] = raw
         elif num == R.P_SOLL:
             self._store_p_soll(idx, raw)
@@ -246,9 +256,45 @@ class MisMotorArray(MotorArray):
                                      f"allowed {sorted(allowed)} ({where}). Nothing was "
                                      "changed.")
 
+    # ------------------------------------------------------------------ safe mode, flash
+    def enter_safe_mode(self, index: MotorIndex = None) -> None:
+        """The serial command ENTER SAFEMODE: the bridge off, flash and reset allowed
+        (§8.2.3: safe mode is entered and left by command only)."""
+        idx = as_index(index, self.n)
+        self.regs[idx, R.MODE_REG] = c.SAFE
+        self.state[idx, L.S_VEL] = 0.0
+
+    def exit_safe_mode(self, index: MotorIndex = None) -> None:
+        """The serial command EXIT SAFEMODE: back to passive."""
+        idx = as_index(index, self.n)
+        self._in_safe(idx, "exit_safe_mode")
+        self.regs[idx, R.MODE_REG] = c.PASSIVE
+
+    def write_flash(self, index: MotorIndex = None) -> None:
+        """Save the register set in flash and reset the motors (safe mode only, §8.2.3; user
+        command 268, §8.2.22)."""
+        idx = as_index(index, self.n)
+        self._in_safe(idx, "write_flash")
+        if self._flash is None:
+            self._flash = np.zeros_like(self.regs)
+        rw = self._rw_numbers()
+        self._flash[np.ix_(idx, rw)] = self.regs[np.ix_(idx, rw)]
+        self._has_flash[idx] = True
+        self.reset(idx)
+
+    def _in_safe(self, idx: np.ndarray, what: str) -> None:
+        bad = idx[self.regs[idx, R.MODE_REG] != c.SAFE]
+        if bad.size:
+            raise ModeError(f"{what} needs safe mode (§8.2.3); motor {int(bad[0])} is in "
+                            f"{c.MODE_NAMES.get(int(self.regs[bad[0], R.MODE_REG]), '?')}")
+
     def _check_modes(self, idx: np.ndarray, raw: np.ndarray) -> None:
         for i, value in zip(idx.tolist(), raw.tolist()):
-            if value not in c.WRITABLE_MODES:
+            if self.regs[i, R.MODE_REG] == c.SAFE and value != c.SAFE:
+                raise ModeError(f"MODE_REG = {value} refused for motor {i}: safe mode is left "
+                                "by command only (exit_safe_mode, §8.2.3). Nothing was changed.")
+            if value not in c.WRITABLE_MODES and not (
+                    value == c.SAFE and self.regs[i, R.MODE_REG] == c.SAFE):
                 why = ("safe mode is entered by command only" if value == c.SAFE
                        else f"allowed {sorted(c.WRITABLE_MODES)}")
                 raise ModeError(f"MODE_REG = {value} refused for motor {i}: {why} (MIS manual "
