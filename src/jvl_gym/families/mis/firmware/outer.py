@@ -88,8 +88,9 @@ def _auto_correction(regs, s, has_encoder: bool, v_prev: float) -> bool:  # prag
 
 
 @njit(cache=True)
-def _move(regs, s, has_encoder: bool, tt: bool, v_prev: float) -> tuple[float, bool]:
-    """Position-mode profile velocity of this sample and whether it lands on P_SOLL."""  # noqa
+def _move(regs, s, has_encoder: bool, tt: bool,
+          v_prev: float) -> tuple[float, bool]:  # pragma: no cover - compiled
+    """Position-mode profile velocity of this sample and whether it lands on P_SOLL."""
     retry = _auto_correction(regs, s, has_encoder, v_prev) if has_encoder else False
     vmax = abs(regs[R.V_SOLL])
     if retry and regs[R.V_SOLL_AUTO] != 0:

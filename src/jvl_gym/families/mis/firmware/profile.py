@@ -65,13 +65,15 @@ def velocity_step(regs, s, target: float, dec: float) -> float:  # pragma: no co
 
 
 @njit(cache=True)
-def position_step(regs, s, remaining: float, vmax: float) -> tuple[float, bool]:
+def position_step(regs, s, remaining: float,
+                  vmax: float) -> tuple[float, bool]:  # pragma: no cover - compiled
     """The profile velocity of the next outer sample of a move ``remaining`` counts long
     (signed) at up to ``vmax`` counts per outer sample; True when it lands on the target.
 
     The move brakes so that it reaches the start velocity at the target
-    (``v ≤ sqrt(vs² + 2·dec·|remaining|)``) and lands exactly on it (§8.2.3, position mode).
-    """  # pragma: no cover - compiled
+    (``v ≤ sqrt(vs² + 2·dec·|remaining|)``) and lands exactly on it (§8.2.3, position mode);
+    a target behind the motion stops the motor first.
+    """
     v = s[L.S_VEL]
     if remaining == 0.0:
         return 0.0, v == 0.0
