@@ -53,17 +53,30 @@ def test_closed_loop_current_follows_the_load_in_a_running_motor() -> None:
 
 
 def test_closed_loop_keeps_its_position_through_an_overload() -> None:
-    m = MotorArray("MIS232", n=2, seed=0)
-    m.write_many({"SETUP_BITS": np.array([c.SETUP_CLOSED_LOOP, 0]), "V_SOLL": 20000,
+    """§5.3.1: in closed loop an overload does not stall the motor; §8.2.128: without
+    CL_CATCH_UP's overspeed the rotor keeps its lag at V_SOLL, with it the rotor catches up;
+    a position move ends on its target either way. Open loop loses the steps for good."""
+    catch = (1000 << 8) | 50  # 50 % overspeed beyond 1000 counts of follow error
+    m = MotorArray("MIS232", n=3, seed=0)
+    m.write_many({"SETUP_BITS": np.array([c.SETUP_CLOSED_LOOP, c.SETUP_CLOSED_LOOP, 0]),
+                  "CL_CATCH_UP": np.array([catch, 5000 << 8, catch]), "V_SOLL": 20000,
                   "A_SOLL": 2000, "MODE_REG": 1})
     m.run(1.0)
     m.set_input(load_torque=1.3 * m.pull_out_torque(200.0)[0])
-    m.run(0.03)
+    m.run(0.04)
     m.set_input(load_torque=0.0)
-    m.run(1.5)
-    lost = m.lost_steps
-    assert lost[1] > 0  # open loop: steps lost for good
-    assert lost[0] == 0 and abs(m.read("FLWERR")[0]) < c.COUNTS_PER_FULL_STEP
+    m.run(0.5)
+    lagging = m.read("FLWERR")[1]
+    m.run(1.0)
+    flw = m.read("FLWERR")
+    assert abs(flw[0]) < c.COUNTS_PER_FULL_STEP  # caught up to within the 1000 counts
+    assert flw[1] > 5000 and flw[1] == pytest.approx(lagging, abs=c.COUNTS_PER_FULL_STEP)
+    assert m.lost_steps[2] > 0 and flw[2] == pytest.approx(
+        m.lost_steps[2] * c.COUNTS_PER_FULL_STEP, abs=c.COUNTS_PER_FULL_STEP)
+    target = int(m.read("P_IST")[1]) + 409600
+    m.write_many({"P_SOLL": target, "MODE_REG": 2}, index=1)
+    m.run(3.0)
+    assert abs(m.read("ENCODER_POS")[1] - target) < c.COUNTS_PER_FULL_STEP
 
 
 def test_auto_correction_retries_a_blocked_move() -> None:

@@ -43,8 +43,10 @@ from __future__ import annotations
     S_TT_TRAVEL,  # turn table: counts of a multiturn move still to go (0: none)
     S_REC_N,  # samples taken by the sample buffer
     S_DIN_STATE,  # filtered digital inputs (bits 0-7)
-) = range(34)
-S_AF0 = 34  #: analogue filtered values of IO1 … IO8 (units of 1.221 mV, fractional)
+    S_FIELD,  # closed loop: the position the currents are commutated to [counts]
+    S_FIELD_STEP,  # closed loop: its largest advance per inner sample [counts]
+) = range(36)
+S_AF0 = 36  #: analogue filtered values of IO1 … IO8 (units of 1.221 mV, fractional)
 S_DIN0 = S_AF0 + 8  #: input filter: ms the raw level of IO1 … IO8 has differed from the state
 N_STATE = S_DIN0 + 8
 

@@ -42,9 +42,11 @@ the present current amplitude ``I`` and total inertia ``J``. Without it the dead
 a viscous friction on the absolute speed of that size would take most of the torque at speed.
 It is integrated implicitly with the viscous friction.
 
-**Closed loop** (§5.3): the commanded position the currents follow is kept within one full
-step (2048 counts, 90° electrical) of the encoder's rotor position, so the current never
-leads the rotor by more than the torque peak.
+**Closed loop** (§5.3): the currents are commutated to a field position that follows the
+commanded position at no more than the speed the firmware allows (V_SOLL, or more by
+CL_CATCH_UP's overspeed, ``firmware.closed_loop``) and is kept within one full step (2048
+counts, 90° electrical) of the encoder's rotor position, so the current never leads the rotor
+by more than the torque peak and a lagging rotor is pulled at full torque up to that speed.
 
 Lanes: field ``f`` of lane ``j`` is ``scratch[f·LANES + j]``; the outer sample writes the
 sample's constants (:func:`prepare_lane`), :func:`inner_block` steps the block's motors in lanes
@@ -68,11 +70,11 @@ from .units import COUNTS_PER_REV
 LANES = 8
 
 (
-    F_THETA, F_OMEGA, F_ID, F_IQ, F_ECOP, F_ELOAD,  # state copied in and out
+    F_THETA, F_OMEGA, F_ID, F_IQ, F_ECOP, F_ELOAD, F_FIELD,  # state copied in and out
     F_CMD0, F_DCMD, F_IREF, F_BRIDGE, F_ARE, F_AIM, F_BRE, F_BIM, F_GRE, F_GIM, F_VMAX,
     F_KT, F_TD, F_JINV, F_VISC, F_COUL, F_LOAD, F_R, F_CL, F_QUANT, F_DAMP, F_WC,
-    N_FIELDS,
-) = range(29)
+    F_FSTEP, N_FIELDS,
+) = range(31)
 
 _H = c.INNER_DT
 _N = c.INNER_PER_OUTER
@@ -129,6 +131,7 @@ def prepare_lane(sc, j: int, s, p, u) -> None:  # pragma: no cover - compiled
     sc[F_CL * k + j] = 1.0 if s[L.S_BRIDGE] == BRIDGE_CLOSED_LOOP else 0.0
     cpr = _CPR[int(p[L.P_ENCODER])]
     sc[F_QUANT * k + j] = COUNTS_PER_REV // cpr if cpr > 0 else 1.0
+    sc[F_FSTEP * k + j] = s[L.S_FIELD_STEP]
 
 
 @njit(**LANE_KERNEL)
@@ -142,6 +145,7 @@ def inner_samples(state, i0: int, n: int, sc) -> None:  # pragma: no cover - com
         sc[F_IQ * k + j] = state[i0 + j, L.S_IQ]
         sc[F_ECOP * k + j] = state[i0 + j, L.S_E_COPPER]
         sc[F_ELOAD * k + j] = state[i0 + j, L.S_E_LOAD]
+        sc[F_FIELD * k + j] = state[i0 + j, L.S_FIELD]
     for step in range(_N):
         for j in range(n):
             _inner(sc, j, step)
@@ -152,6 +156,7 @@ def inner_samples(state, i0: int, n: int, sc) -> None:  # pragma: no cover - com
         state[i0 + j, L.S_IQ] = sc[F_IQ * k + j]
         state[i0 + j, L.S_E_COPPER] = sc[F_ECOP * k + j]
         state[i0 + j, L.S_E_LOAD] = sc[F_ELOAD * k + j]
+        state[i0 + j, L.S_FIELD] = sc[F_FIELD * k + j]
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -168,8 +173,12 @@ def _inner(sc, j: int, step: int) -> None:  # pragma: no cover - compiled
     quant = sc[F_QUANT * k + j]
     enc = np.floor(rotor / quant) * quant
     cl = sc[F_CL * k + j]
-    cmd_cl = min(max(cmd, enc - c.COUNTS_PER_FULL_STEP), enc + c.COUNTS_PER_FULL_STEP)
-    cmd = cl * cmd_cl + (1.0 - cl) * cmd
+    field = sc[F_FIELD * k + j]
+    fstep = sc[F_FSTEP * k + j]
+    field_cl = min(max(field + min(max(cmd - field, -fstep), fstep),
+                       enc - c.COUNTS_PER_FULL_STEP), enc + c.COUNTS_PER_FULL_STEP)
+    cmd = cl * field_cl + (1.0 - cl) * cmd
+    sc[F_FIELD * k + j] = cmd
     lag = rotor - cmd
     lag -= c.COUNTS_PER_ELECTRICAL_TURN * np.floor(lag / c.COUNTS_PER_ELECTRICAL_TURN + 0.5)
     sd, cd = sincos(lag * _ELEC_PER_COUNT)

@@ -12,6 +12,12 @@ inside CUR_SCALE_MIN … CUR_SCALE_MAX. It moves by one step per
 ``DEC_CNT = |RPM|·100/4096·CUR_SCALE_FACTOR + CUR_SCALE_DEC`` (§5.3.7: 55.56 µs up, 111 µs
 down at 0 RPM, 0 → 100 % in 113 ms). The 36 MHz ticks of a 1 ms outer sample left over from
 whole steps are carried to the next sample.
+
+Catch-up (CL_CATCH_UP, §8.2.128; §5.3.4): the field the currents are commutated to moves at no
+more than V_SOLL (or the profile's speed, if higher), so a rotor that has fallen behind does not
+exceed V_SOLL to catch up — unless the follow error is above bits 8–31 of CL_CATCH_UP, when the
+limit is V_SOLL raised by bits 0–7 percent. A position move that has ended still brings the
+rotor to the target at up to that speed.
 """
 
 from __future__ import annotations
@@ -51,3 +57,14 @@ def scale_current(regs, s, follow_error: float, rpm: float) -> None:  # pragma: 
     s[L.S_CUR_SCALE] = min(now + n, goal) if goal > now else max(now - n, goal)
     if s[L.S_CUR_SCALE] == goal:
         s[L.S_SCALE_CLOCK] = 0.0
+
+
+@njit(cache=True)
+def field_step(regs, s, v: float) -> float:  # pragma: no cover - compiled
+    """Largest advance of the commutation field per inner sample [counts] (module docstring):
+    ``v`` is this outer sample's profile velocity [counts per outer sample]."""
+    catch = regs[R.CL_CATCH_UP]
+    limit = max(abs(regs[R.V_SOLL]) * c.VEL_UNIT_TO_COUNTS, abs(v))
+    if abs(regs[R.FLWERR]) > (catch >> 8):
+        limit *= 1.0 + min(catch & 0xFF, 100) / 100.0
+    return limit / c.INNER_PER_OUTER

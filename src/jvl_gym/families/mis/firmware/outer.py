@@ -34,7 +34,7 @@ from .. import constants as c
 from .. import layout as L
 from .. import regs as R
 from .arith import wrap32
-from .closed_loop import scale_current
+from .closed_loop import field_step, scale_current
 from .homing import zero_search
 from .inputs import update_inputs
 from .monitor import check_errors, read_encoder, status_bits
@@ -180,6 +180,7 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
         s[L.S_CUR_SCALE] = 2047.0
         units = regs[R.STANDBY_CURRENT] if standby else regs[R.RUN_CURRENT]
     regs[R.ACTUAL_TORQUE] = int(s[L.S_CUR_SCALE])
+    s[L.S_FIELD_STEP] = field_step(regs, s, v) if closed_loop else 0.0
     s[L.S_I_AMP] = _SQRT2 * min(units, p[L.P_RUN_MAX]) * p[L.P_AMPS_PER_UNIT]
     s[L.S_BRIDGE] = (2.0 if closed_loop else 1.0) if active else 0.0
     if rec:
