@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from jvl_gym import MotorArray
 from jvl_gym.families.mis import constants as c
@@ -135,3 +137,34 @@ def test_stop_mode_decelerates_then_goes_passive() -> None:
     stop = int(np.flatnonzero(v == 0)[0])
     assert 180 < stop < 200 and np.all(np.diff(v[:stop - 1]) == -100)
     assert mode[stop] == 0 and mode[stop - 2] == 11
+
+
+@given(st.integers(-500_000, 500_000), st.integers(5000, 300000), st.integers(1, 300000),
+       st.integers(100, 50000), st.integers(0, 50000))
+@settings(max_examples=30, deadline=None)
+def test_position_moves_land_exactly_without_overshoot(target: int, v_soll: int, v_start: int,
+                                                       a_soll: int, d_soll: int) -> None:
+    """Any move ends exactly on P_SOLL, P_IST never passes it, the speed never exceeds
+    max(|V_SOLL|, V_START), starts with a jump to at most the start velocity and changes by
+    about A_SOLL/D_SOLL per ms while moving (§8.2.3–§8.2.12)."""
+    m = _motor(V_SOLL=v_soll, V_START=v_start, A_SOLL=a_soll, D_SOLL=d_soll, P_SOLL=target,
+               IN_POSITION_COUNT=0)
+    m.write("MODE_REG", 2)
+    p, v = [], []
+    for _ in range(100):
+        tr = m.trace(["P_IST", "V_IST"], 100)
+        p.extend(tr["P_IST"][:, 0])
+        v.extend(tr["V_IST"][:, 0])
+        if p[-1] == target and v[-1] == 0:
+            break
+    p, v = np.array(p), np.concatenate([[0], v])
+    assert p[-1] == target
+    assert np.all(np.sign(target) * np.diff(np.concatenate([[0], p])) >= 0)
+    vs = min(v_start, v_soll)
+    assert np.abs(v).max() <= max(v_soll, vs)
+    moving = np.flatnonzero(v != 0)
+    if moving.size:
+        assert abs(v[moving[0]]) <= vs + 1  # the start: a jump to the start velocity
+        ramp = max(a_soll, d_soll or a_soll) * 0.1  # RPM/s → 0.01 RPM per ms
+        both = (v[1:] != 0) & (v[:-1] != 0)
+        assert np.all(np.abs(np.diff(v))[both] <= 1.5 * ramp + 2)
