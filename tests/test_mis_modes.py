@@ -290,3 +290,25 @@ def test_absolute_encoder_register() -> None:
     assert 0 <= absolute[0] < 409600 < absolute[1]
     assert absolute[1] - absolute[0] == pytest.approx(409600 * (absolute[1] // 409600), abs=100)
     assert m.read("ENCODER_TYPE").tolist() == [3, 4]
+
+
+def test_torque_zero_search_against_an_end_stop() -> None:
+    """§6.5.7: with closed loop and current control the search runs into a mechanical stop
+    until the current reaches T_HOME; that point is P_HOME; then to position 0 and STARTMODE
+    (the simulator's reading: a search 13 with HOME_MASK = 0, module ``firmware.homing``)."""
+    wall = -1.0  # rad
+    m = MotorArray("MIS232", n=1, seed=0, end_stop_low=wall)
+    m.write_many({"SETUP_BITS": c.SETUP_CLOSED_LOOP | c.SETUP_CURRENT_CONTROL,
+                  "V_HOME": -3000, "T_HOME": 1024, "P_HOME": -20000, "STARTMODE": 2,
+                  "IN_POSITION_COUNT": 0})
+    m.write("MODE_REG", 13)
+    for _ in range(100):
+        m.step(100)
+        if m.read("MODE_REG")[0] != 13:
+            break
+    m.step(500)
+    assert m.read("MODE_REG")[0] == 2 and m.read("STATUSBITS")[0] & c.ST_ZERO_SEARCH_DONE
+    assert m.read("P_IST")[0] == 0
+    wall_counts = wall * 409600 / (2 * np.pi)
+    assert m.rotor_counts[0] == pytest.approx(wall_counts + 20000, abs=1000)
+    assert m.read("ERR_BITS")[0] == 0

@@ -15,6 +15,7 @@ from .units import (
     ACCEL_MAX_RPM_PER_S,
     COUNTS_PER_FULL_STEP,
     COUNTS_PER_REV,
+    CUR_SCALE_FULL,
     ENCODER_TYPES,
     FULL_STEPS_PER_REV,
     OUTER_DT,
@@ -114,4 +115,4 @@ CMD_ADD_ACTUAL = 121  #: P_IST, encoder += P_NEW
 ENCODER_CPR = {code: cpr for code, (_, cpr) in ENCODER_TYPES.items()}
 
 __all__ = [name for name in dir() if name.isupper() and not name.startswith("_")] + [
-    "COUNTS_PER_FULL_STEP", "ACCEL_MAX_RPM_PER_S"]
+    "COUNTS_PER_FULL_STEP", "ACCEL_MAX_RPM_PER_S", "CUR_SCALE_FULL"]

@@ -65,8 +65,10 @@ N_STATE = S_DIN0 + 8
     P_AMPS_PER_UNIT,  # RUN_CURRENT unit [A RMS]
     P_RUN_MAX,  # largest RUN_CURRENT of the type
     P_ZETA,  # damping ratio of the rotor against the stator field
+    P_STOP_LO,  # mechanical end stop below this rotor angle [rad] (−inf: none)
+    P_STOP_HI,  # mechanical end stop above this rotor angle [rad] (inf: none)
     N_PARAM,
-) = range(14)
+) = range(16)
 
 # --- inputs ---------------------------------------------------------------------------------
 (

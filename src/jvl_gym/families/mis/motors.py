@@ -47,11 +47,14 @@ _PARAMETERS: dict[str, int] = {
     "encoder_type": L.P_ENCODER,  # ENCODER_TYPE code 0 … 4 (§8.2.49)
     "home_position": L.P_HOME_POS,  # rad; the home input is active at or below it
     "damping_ratio": L.P_ZETA,  # rotor against the stator field (``plant``)
+    "end_stop_low": L.P_STOP_LO,  # rad (−inf: none)
+    "end_stop_high": L.P_STOP_HI,  # rad (inf: none)
 }
 _STATES: dict[str, int] = {"initial_angle": L.S_THETA}  # rad
 _NONNEGATIVE = {"load_inertia", "detent_torque", "viscous_friction", "coulomb_friction",
                 "encoder_type", "damping_ratio"}
 _POSITIVE = {"rotor_inertia", "phase_resistance", "phase_inductance", "torque_constant"}
+_MAY_BE_INFINITE = {"home_position", "end_stop_low", "end_stop_high"}
 _INPUT_COLUMNS: dict[str, int] = {"load_torque": L.I_LOAD_TORQUE,
                                   "supply_volts": L.I_SUPPLY_VOLTS,
                                   "pulse_counts": L.I_PULSE_COUNTS,
@@ -99,7 +102,7 @@ class MisMotorArray(MotorArray):
     PARAMETER_KEYWORDS: ClassVar[dict[str, int]] = _PARAMETERS
     STATE_KEYWORDS: ClassVar[dict[str, int]] = _STATES
     VALUE_RULES: ClassVar[dict[str, int]] = {
-        name: ((FINITE if name != "home_position" else 0)
+        name: ((FINITE if name not in _MAY_BE_INFINITE else 0)
                | (NONNEGATIVE if name in _NONNEGATIVE else 0)
                | (POSITIVE if name in _POSITIVE else 0))
         for name in [*_PARAMETERS, *_STATES]}
@@ -147,6 +150,8 @@ class MisMotorArray(MotorArray):
         p[L.P_AMPS_PER_UNIT] = CURRENT_AMPS_PER_UNIT
         p[L.P_RUN_MAX] = cfg.run_current_max
         p[L.P_ZETA] = cfg.damping_ratio
+        p[L.P_STOP_LO] = -math.inf
+        p[L.P_STOP_HI] = math.inf
         return p
 
     def _rest_inputs(self, cfg: MisMotorConfig) -> np.ndarray:

@@ -42,6 +42,10 @@ the present current amplitude ``I`` and total inertia ``J``. Without it the dead
 a viscous friction on the absolute speed of that size would take most of the torque at speed.
 It is integrated implicitly with the viscous friction.
 
+**End stops** (for the torque zero search, §6.5.7): optional hard stops below and above
+given rotor angles, a spring–damper whose stiffness makes ``ω·h = √0.1`` against the rotor
+inertia (stiff, and stable in the explicit step) with a damping ratio of 0.7.
+
 **Closed loop** (§5.3): the currents are commutated to a field position that follows the
 commanded position at no more than the speed the firmware allows (V_SOLL, or more by
 CL_CATCH_UP's overspeed, ``firmware.closed_loop``) and is kept within one full step (2048
@@ -73,8 +77,8 @@ LANES = 8
     F_THETA, F_OMEGA, F_ID, F_IQ, F_ECOP, F_ELOAD, F_FIELD,  # state copied in and out
     F_CMD0, F_DCMD, F_IREF, F_BRIDGE, F_ARE, F_AIM, F_BRE, F_BIM, F_GRE, F_GIM, F_VMAX,
     F_KT, F_TD, F_JINV, F_VISC, F_COUL, F_LOAD, F_R, F_CL, F_QUANT, F_DAMP, F_WC,
-    F_FSTEP, N_FIELDS,
-) = range(31)
+    F_FSTEP, F_STOP_LO, F_STOP_HI, F_STOP_K, F_STOP_D, N_FIELDS,
+) = range(35)
 
 _H = c.INNER_DT
 _N = c.INNER_PER_OUTER
@@ -84,6 +88,9 @@ _DETENT_PER_COUNT = 2.0 * math.pi / c.COUNTS_PER_FULL_STEP
 _DETENT_PER_RAD = 4.0 * c.POLE_PAIRS  # detent angle per rotor radian
 #: encoder counts per revolution by ENCODER_TYPE code (0: none)
 _CPR = np.array([c.ENCODER_CPR.get(code, 0) for code in range(11)], dtype=np.int64)
+#: end stops: stiffness as ``(ω·h)²`` of the rotor against the stop, and its damping ratio
+STOP_STIFFNESS = 0.1
+STOP_DAMPING = 0.7
 #: ``S_BRIDGE`` values: off (passive), on, on with closed-loop commutation
 BRIDGE_OFF, BRIDGE_ON, BRIDGE_CLOSED_LOOP = 0.0, 1.0, 2.0
 
@@ -132,6 +139,10 @@ def prepare_lane(sc, j: int, s, p, u) -> None:  # pragma: no cover - compiled
     cpr = _CPR[int(p[L.P_ENCODER])]
     sc[F_QUANT * k + j] = COUNTS_PER_REV // cpr if cpr > 0 else 1.0
     sc[F_FSTEP * k + j] = s[L.S_FIELD_STEP]
+    sc[F_STOP_LO * k + j] = p[L.P_STOP_LO]
+    sc[F_STOP_HI * k + j] = p[L.P_STOP_HI]
+    sc[F_STOP_K * k + j] = STOP_STIFFNESS * inertia / (_H * _H)
+    sc[F_STOP_D * k + j] = 2.0 * STOP_DAMPING * STOP_STIFFNESS ** 0.5 * inertia / _H
 
 
 @njit(**LANE_KERNEL)
@@ -209,6 +220,10 @@ def _inner(sc, j: int, step: int) -> None:  # pragma: no cover - compiled
     sh, _ = sincos(half)
     sinc = sh / half if half != 0.0 else 1.0
     torque -= sc[F_TD * k + j] * sp * sinc
+    below = max(sc[F_STOP_LO * k + j] - theta, 0.0)
+    above = max(theta - sc[F_STOP_HI * k + j], 0.0)
+    touch = 1.0 if below + above > 0.0 else 0.0
+    torque += sc[F_STOP_K * k + j] * (below - above) - touch * sc[F_STOP_D * k + j] * omega
     load = sc[F_LOAD * k + j]
     jinv = sc[F_JINV * k + j]
     damp = sc[F_DAMP * k + j]
