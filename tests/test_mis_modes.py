@@ -109,11 +109,9 @@ def test_zero_search_finds_the_sensor_and_goes_to_startmode(mode: int) -> None:
     m = MotorArray("MIS232", n=1, seed=0, home_position=home)
     m.write_many({"HOME_MASK": 1, "V_HOME": -3000, "P_HOME": 0, "STARTMODE": 2,
                   "IN_POSITION_COUNT": 0})
-    m.set_input(digital_inputs=0)
     m.write("MODE_REG", mode)
-    for _ in range(8000):
-        m.set_input(digital_inputs=int(m.position_rad[0] <= home))
-        m.step(1)
+    for _ in range(80):  # the home_position sensor drives the HOME_MASK input
+        m.step(100)
         if m.read("MODE_REG")[0] != mode:
             break
     assert m.read("MODE_REG")[0] == 2
@@ -121,6 +119,16 @@ def test_zero_search_finds_the_sensor_and_goes_to_startmode(mode: int) -> None:
     zero = m.rotor_counts[0] - m.read("P_IST")[0]  # where P_IST = 0 is on the shaft
     assert zero == pytest.approx(home * 409600 / (2 * np.pi), abs=600)
     assert m.read("ERR_BITS")[0] == 0
+
+
+def test_zero_search_on_an_external_input() -> None:
+    m = _motor(HOME_MASK=0b100, V_HOME=3000, STARTMODE=1, V_SOLL=0, IN_POSITION_COUNT=0)
+    m.write("MODE_REG", 13)
+    m.step(300)
+    assert m.read("MODE_REG")[0] == 13
+    m.set_input(digital_inputs=0b100)
+    m.step(300)
+    assert m.read("MODE_REG")[0] == 1 and m.read("STATUSBITS")[0] & c.ST_ZERO_SEARCH_DONE
 
 
 def test_zero_search_times_out() -> None:

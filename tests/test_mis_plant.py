@@ -144,3 +144,16 @@ def test_threads_equal_serial_and_a_seed_repeats() -> None:
     again = _mixed(64, 7)
     again.step(200)
     np.testing.assert_array_equal(again.state, a.state)
+
+
+def test_without_an_encoder_steps_are_lost_unseen() -> None:
+    """§8.2.18: FLWERR needs the encoder option; without it the lost steps are invisible to
+    the firmware (no follow error, no error bit) but not to the truth."""
+    m = _running(300.0, 0.0, encoder_type=0)
+    m.run(1.0)
+    m.set_input(load_torque=1.3 * m.pull_out_torque(300.0)[0])
+    m.run(0.2)
+    assert m.lost_steps[0] > 0
+    assert m.read("FLWERR")[0] == 0 and m.read("ERR_BITS")[0] == 0
+    assert m.read("ENCODER_TYPE")[0] == 0
+    assert not m.read("STATUSBITS")[0] & c.ST_ENCODER_OK

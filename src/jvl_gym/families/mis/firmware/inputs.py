@@ -55,10 +55,13 @@ def analogue_filter_step(old: float, raw: float, conf_min: float, conf_max: floa
 
 
 @njit(cache=True)
-def update_inputs(regs, s, u) -> None:  # pragma: no cover - compiled
+def update_inputs(regs, s, p, u) -> None:  # pragma: no cover - compiled
     """Digital inputs → INPUTS, analogue inputs → ANALOGUE_INPUT1..8 and (every 10 ms)
-    ANALOGUE_FILTERED1..8."""
+    ANALOGUE_FILTERED1..8. The home sensor model (``home_position``) drives the HOME_MASK
+    inputs while the rotor is at or below its angle."""
     raw_bits = int(u[L.I_DIGITAL]) ^ (regs[R.IOSETUP] & 0xFF)
+    if s[L.S_THETA] <= p[L.P_HOME_POS]:
+        raw_bits |= regs[R.HOME_MASK] & 0xFF
     state = int(s[L.S_DIN_STATE])
     mask = regs[R.INPUT_FILTER_MASK]
     need = regs[R.INPUT_FILTER_CNT]

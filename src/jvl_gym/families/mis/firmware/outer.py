@@ -127,7 +127,7 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
     """One outer sample of one motor (module docstring); rows of the engine's arrays."""
     s[L.S_TICK] += 1.0
     regs[R.TICKS] = int(s[L.S_TICK]) & 0xFFFFFFFF
-    update_inputs(regs, s, u)
+    update_inputs(regs, s, p, u)
     has_encoder = read_encoder(regs, s, p)
     mode = regs[R.MODE_REG]
     active = mode != c.PASSIVE and mode != c.SAFE
