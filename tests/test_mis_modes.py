@@ -283,7 +283,13 @@ def test_hardware_limit_input_and_its_warning_bits() -> None:
     warn = m.read("WARN_BITS")[0]
     assert warn & c.WARN_POS_LIMIT and warn & c.WARN_POS_LIMIT_SEEN
     assert m.read("ERR_BITS")[0] == 0  # SETUP_BITS bit 17: no error, the motor stops
+    held = m.read("P_IST")[0]
+    m.step(20)  # and does not move on into the limit
     assert m.read("V_IST")[0] == 0 and m.read("MODE_REG")[0] == 1
+    assert m.read("P_IST")[0] == held
+    m.write("V_SOLL", -5000)  # away from it
+    m.step(5)
+    assert m.read("V_IST")[0] == -5000
     m.set_input(digital_inputs=0)
     m.step(2)
     warn = m.read("WARN_BITS")[0]

@@ -14,7 +14,8 @@ status bits (MIS manual §8.2.15, §8.2.18–19, §8.2.24, §8.2.31–32, §5.9,
 - Position limits (§5.9): software limits when MIN_P_IST or MAX_P_IST ≠ 0 and no turn table;
   hardware limits on the inputs of PL_MASK / NL_MASK. Moving into a limit sets WARN_BITS 0/1
   (active) and 2/3 (has been active) and ERR_BITS bit 3, unless SETUP_BITS bit 17 disables the
-  error; either way the motor stops.
+  error; either way the motor stops, and while a limit is active the profile does not move
+  towards it.
 - An error (ERR_BITS ≠ 0) in an active mode stops the motor with ACC_EMERG and then makes it
   passive (§8.2.28, §8.2.31: "will not move until all the errors have been cleared").
 """
@@ -81,8 +82,10 @@ def set_encoder(regs, s, p, value: int) -> None:  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def check_errors(regs, s, u, active: bool, has_encoder: bool, tt: bool) -> None:  # pragma: no cover
-    """Follow error, bus voltage and limits (module docstring)."""
+def check_errors(regs, s, u, active: bool, has_encoder: bool,
+                 tt: bool) -> int:  # pragma: no cover - compiled
+    """Follow error, bus voltage and limits (module docstring); returns the active limits
+    (1: positive, 2: negative), which block motion towards them."""
     err = regs[R.ERR_BITS]
     warn = regs[R.WARN_BITS]
     setup = regs[R.SETUP_BITS]
@@ -122,6 +125,7 @@ def check_errors(regs, s, u, active: bool, has_encoder: bool, tt: bool) -> None:
         err |= c.ERR_GENERAL
     regs[R.ERR_BITS] = err
     regs[R.WARN_BITS] = warn
+    return (1 if pos_hit else 0) | (2 if neg_hit else 0)
 
 
 @njit(cache=True)

@@ -99,6 +99,12 @@ def _move(regs, s, has_encoder: bool, tt: bool,
     return position_step(regs, s, dist - s[L.S_FRAC], vmax * c.VEL_UNIT_TO_COUNTS)
 
 
+@njit(cache=True, inline="always")
+def _unblocked(v: float, limits: int) -> float:  # pragma: no cover - compiled
+    """``v``, or 0 if it moves towards an active limit (1: positive, 2: negative)."""
+    return 0.0 if (v > 0.0 and limits & 1) or (v < 0.0 and limits & 2) else v
+
+
 @njit(cache=True)
 def _advance(regs, s, v: float, arrive: bool, tt: bool) -> None:  # pragma: no cover
     """Move the commanded position by ``v`` counts (exactly onto the target when
@@ -132,7 +138,7 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
     mode = regs[R.MODE_REG]
     active = mode != c.PASSIVE and mode != c.SAFE
     tt = tt_active(regs)
-    check_errors(regs, s, u, active, has_encoder, tt)
+    limits = check_errors(regs, s, u, active, has_encoder, tt)
     mode = regs[R.MODE_REG]
     v_prev = s[L.S_VEL]
     target_v = 0.0
@@ -148,12 +154,14 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
             s[L.S_EMERGENCY] = 0.0
             s[L.S_HOME_PHASE] = 0.0
     elif mode == c.VELOCITY:
-        target_v = regs[R.V_SOLL] * c.VEL_UNIT_TO_COUNTS
+        target_v = _unblocked(regs[R.V_SOLL] * c.VEL_UNIT_TO_COUNTS, limits)
         v = velocity_step(regs, s, target_v, s[L.S_DEC])
     elif mode == c.POSITION or mode == c.GEAR:
         if mode == c.GEAR:
             _gear_input(regs, s, u)
         v, arrive = _move(regs, s, has_encoder, tt, v_prev)
+        if _unblocked(v, limits) != v:
+            v, arrive = velocity_step(regs, s, 0.0, s[L.S_DEC]), False
         target_v = math.copysign(abs(regs[R.V_SOLL]) * c.VEL_UNIT_TO_COUNTS, v)
     elif mode == c.STOP:
         v = velocity_step(regs, s, 0.0, s[L.S_DEC])
