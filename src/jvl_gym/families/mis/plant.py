@@ -27,7 +27,7 @@ to the supply).
 
 **Step.** 10 inner samples per 1 ms outer sample (100 µs). In the commanded frame the currents
 need no finer step; the finer limit is the rotor: the stiffness ``50·Kt·I`` with the rotor
-inertia gives natural frequencies of 150–350 Hz for the configured types, ``ω_n·h ≤ 0.25``,
+inertia gives natural frequencies of 120–310 Hz for the configured types, ``ω_n·h ≤ 0.2``,
 integrated by semi-implicit (symplectic) Euler with viscous friction implicit and Coulomb
 friction as a clamp towards standstill (stable and without chatter). The detent torque varies
 four times per electrical turn, up to 10 kHz at 3000 RPM — the inner rate itself; it is applied
