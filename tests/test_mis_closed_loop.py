@@ -84,12 +84,16 @@ def test_auto_correction_retries_a_blocked_move() -> None:
     reloaded from the encoder and the move repeated, up to IN_POSITION_COUNT times."""
     m = MotorArray("MIS232", n=2, seed=0)
     m.write_many({"IN_POSITION_COUNT": np.array([2, 0]), "IN_POSITION_WINDOW": 1000,
-                  "SETTLINGTIME": 20, "V_SOLL": 20000, "A_SOLL": 3000, "MODE_REG": 2})
+                  "SETTLINGTIME": 20, "V_SOLL": 20000, "A_SOLL": 3000, "V_SOLL_AUTO": 5000,
+                  "V_START": 10000, "MODE_REG": 2})
     m.set_input(load_torque=1.3 * m.pull_out_torque(200.0)[0])
     m.write("P_SOLL", 409600)
     m.run(0.06)
     m.set_input(load_torque=0.0)
-    m.run(4.0)
+    v = m.trace(["V_IST"], 4000)["V_IST"][:, 0]
+    first_stop = int(np.flatnonzero(v == 0)[0])
+    retry = np.abs(v[first_stop:])
+    assert retry.max() == 5000  # the retry runs at V_SOLL_AUTO (§8.2.120)
     status = m.read("STATUSBITS")
     assert abs(m.read("ENCODER_POS")[0] - 409600) <= 1000
     assert status[0] & c.ST_IN_PHYSICAL_POSITION and not status[0] & c.ST_AUTOCORRECTION

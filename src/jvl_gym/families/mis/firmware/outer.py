@@ -172,6 +172,7 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
     s[L.S_VEL] = 0.0 if arrive else v
     _advance(regs, s, v, arrive, tt)
     regs[R.V_IST] = int(np.floor(s[L.S_VEL] / c.VEL_UNIT_TO_COUNTS + 0.5))
+    regs[R.V_IST_CALC] = regs[R.V_IST]  # "the theoretical actual velocity" (§8.2.121)
     mode = regs[R.MODE_REG]
     active = mode != c.PASSIVE and mode != c.SAFE
     setup = regs[R.SETUP_BITS]
