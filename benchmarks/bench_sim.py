@@ -5,7 +5,9 @@
 - outer steps per second at N = 1, one ``step(1)`` call per outer sample (the RL pattern) and in
   one long call;
 - memory per motor at N = 4096 (all per-motor arrays; the sample buffer is allocated only when a
-  recording is started and is reported separately).
+  recording is started and is reported separately);
+- MIS/SMC step motors (``families/mis``): motor-outer-steps per second (1 ms firmware sample
+  with its 10 plant samples) at N = 1, 64, 4096, MIS232s at speeds spread over ±3000 RPM.
 
 The figures also go to the generated page ``docs/benchmarks.md`` (section "Simulator",
 :mod:`bench_page`).
@@ -71,6 +73,22 @@ def section(inner: dict[int, float], calls: float, long_call: float, base: float
     return table(["figure", "value"], rows)
 
 
+def mis_outer_steps_per_second(n: int, seconds: float = 2.0) -> float:
+    """Motor-outer-steps per second of ``n`` MIS232s in velocity mode."""
+    m = MotorArray("MIS232", n=n, seed=0, load_inertia=np.linspace(0, 1e-4, n))
+    m.write_many({"V_SOLL": np.linspace(-300000, 300000, n).round(), "A_SOLL": 5000,
+                  "MODE_REG": 1})
+    m.step(2)  # compile / warm up
+    return best_rate(m.step, max(1, int(2e5 / n)), seconds) * n
+
+
+def mis_section(rates: dict[int, float]) -> str:
+    """The MIS rows (Markdown) of one run's figures."""
+    rows = [[f"MIS/SMC motor-outer-steps/s (1 ms + 10 plant samples), N = {n}",
+             f"{rate:,.4g}"] for n, rate in rates.items()]
+    return table(["figure", "value"], rows)
+
+
 def main() -> None:
     print("jvl_gym simulator benchmark (goals: the project's speed targets)")
     inner = {}
@@ -85,7 +103,13 @@ def main() -> None:
     base, buf = memory_per_motor()
     print(f"  memory per motor at N = 4096: {base:.0f} B   goal <= 4096 B"
           f"   (+{buf} B only while a sample buffer is allocated)")
-    page = update_section("sim", section(inner, calls, long_call, base, buf))
+    mis = {}
+    for n in (1, 64, 4096):
+        mis[n] = rate = mis_outer_steps_per_second(n)
+        goal = "   goal >= 1e6" if n == 4096 else ""
+        print(f"  MIS N = {n:5d}: {rate:12.4g} motor-outer-steps/s{goal}")
+    page = update_section("sim", section(inner, calls, long_call, base, buf) + "\n\n"
+                          + mis_section(mis))
     if page:
         print(f"  written to {page}")
 

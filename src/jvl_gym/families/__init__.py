@@ -3,8 +3,8 @@
 A family is its register table, constants and units, firmware, plant, configs and default
 setups, the compiled step the engine drives and its motor-array class (docs/architecture.md,
 "Adding a motor family"). The generic layers reach a family only through its :class:`Family`
-record. ``mac800`` and ``mis`` hold register tables and units only so far; they are not
-registered until they can run.
+record. ``mis`` (the MIS/SMC step motors) is registered beside ``mac050_141``; ``mac800`` holds
+a register table and units only so far and is not registered until it can run.
 """
 
 from __future__ import annotations
@@ -56,7 +56,8 @@ class Family:
     canonical_name: Callable[[str], str] = str
 
 
-_MODULES: dict[str, str] = {"mac050_141": "jvl_gym.families.mac050_141"}
+_MODULES: dict[str, str] = {"mac050_141": "jvl_gym.families.mac050_141",
+                            "mis": "jvl_gym.families.mis"}
 
 
 def register_family(key: str, module: str) -> None:

@@ -1,0 +1,120 @@
+"""Motor configs of the MIS/SMC types (``configs/<TYPE>.yaml`` beside this module).
+
+Each file holds one type's representative motor data with its ``provenance`` (the MIS manual
+§5.1 gives holding torques and currents; the electrical and inertia figures are representative
+values of the frame size, see each file). A file is validated on load: every value a finite
+number of its type inside the range given here (physically plausible and where the plant's
+integration is stable), no unknown field; an error names the file and the field.
+
+Stability (``plant`` docstring): the rotor's magnetic stiffness ``50·Kt·I`` (= 50 × the holding
+torque) with the rotor inertia gives the natural frequency ``ω_n``; the semi-implicit Euler step
+of 100 µs is stable for ``ω_n·h < 2`` and accurate well below; the configs must keep
+``ω_n·h ≤ 0.5`` (a load inertia only lowers it).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from pathlib import Path
+from typing import Any, ClassVar
+
+import yaml
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+
+from ...config import ConfigError, Real, Text, Whole
+from . import constants as c
+from .units import CURRENT_AMPS_PER_UNIT, ENCODER_TYPES, MOTOR_TYPE_CODES
+
+__all__ = ["MisMotorConfig", "CONFIGS_DIR", "motor_types", "load_motor"]
+
+CONFIGS_DIR = Path(__file__).resolve().with_name("configs")
+#: largest ``ω_n·h`` a config may give (module docstring)
+MAX_STIFFNESS_STEP = 0.5
+
+
+class MisMotorConfig(BaseModel):
+    """Motor data of one MIS/SMC type (SI units unless stated)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+    FAMILY_KEY: ClassVar[str] = "mis"
+
+    family: Text = "mis"
+    name: Text
+    run_current_max: Whole = Field(ge=1, le=1533, description="RUN_CURRENT units (§8.2.7)")
+    holding_torque: Real = Field(gt=0.01, le=50.0, description="N·m at run_current_max")
+    rotor_inertia: Real = Field(ge=1e-6, le=0.05, description="kg·m²")
+    phase_resistance: Real = Field(ge=0.01, le=50.0, description="Ω")
+    phase_inductance: Real = Field(ge=1e-5, le=0.5, description="H")
+    detent_torque: Real = Field(ge=0.0, le=5.0, description="N·m")
+    viscous_friction: Real = Field(ge=0.0, le=1.0, description="N·m·s/rad")
+    coulomb_friction: Real = Field(ge=0.0, le=10.0, description="N·m")
+    damping_ratio: Real = Field(ge=0.0, le=1.0, description="rotor against the field (plant)")
+    supply_voltage: Real = Field(ge=12.0, le=80.0, description="V")
+    encoder_type: Whole = Field(ge=0, le=4, description="ENCODER_TYPE code (§8.2.49)")
+    provenance: Text = Field(min_length=10)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> MisMotorConfig:
+        if self.family != "mis":
+            raise ValueError(f"family must be 'mis', got {self.family!r}")
+        if self.encoder_type not in ENCODER_TYPES:
+            raise ValueError(f"encoder_type must be one of {sorted(ENCODER_TYPES)}")
+        if self.detent_torque > 0.2 * self.holding_torque:
+            raise ValueError("detent_torque must be at most 20 % of holding_torque")
+        if self.coulomb_friction > 0.5 * self.holding_torque:
+            raise ValueError("coulomb_friction must be at most half the holding_torque")
+        step = math.sqrt(c.POLE_PAIRS * self.holding_torque / self.rotor_inertia) * c.INNER_DT
+        if step > MAX_STIFFNESS_STEP:
+            raise ValueError(f"rotor_inertia too small for holding_torque: ω_n·h = {step:.2f} "
+                             f"> {MAX_STIFFNESS_STEP} (unstable plant step)")
+        return self
+
+    @property
+    def rated_current(self) -> float:
+        """Largest phase current [A RMS]."""
+        return self.run_current_max * CURRENT_AMPS_PER_UNIT
+
+    @property
+    def torque_constant(self) -> float:
+        """Torque per ampere of current amplitude [N·m/A] (= back-EMF constant [V·s/rad]):
+        the holding torque at the rated RMS current, whose amplitude is √2 times it."""
+        return self.holding_torque / (math.sqrt(2.0) * self.rated_current)
+
+    @property
+    def motor_type_code(self) -> int:
+        """MOTORTYPE register value (§8.2.89); unknown names read as MIS232's."""
+        return MOTOR_TYPE_CODES.get(self.name, MOTOR_TYPE_CODES["MIS232"])
+
+
+def motor_types() -> list[str]:
+    """Names of the MIS/SMC types with a config."""
+    return sorted(p.stem for p in CONFIGS_DIR.glob("*.yaml"))
+
+
+@functools.lru_cache(maxsize=64)
+def _load_file(path: Path) -> MisMotorConfig:
+    try:
+        data = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError) as exc:
+        raise ConfigError(f"{path}: cannot read motor config: {exc}") from exc
+    if not isinstance(data, dict):
+        raise ConfigError(f"{path}: a motor config is a mapping of fields")
+    try:
+        return MisMotorConfig.model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        field = ".".join(str(x) for x in err["loc"]) or "(file)"
+        raise ConfigError(f"{path}: field {field}: {err['msg']}") from None
+
+
+def load_motor(motor: Any) -> MisMotorConfig:
+    """The validated config of ``motor``: a type name, a YAML path or a config object."""
+    if isinstance(motor, MisMotorConfig):
+        return motor
+    text = str(motor)
+    path = Path(text) if text.endswith((".yaml", ".yml")) else CONFIGS_DIR / f"{text}.yaml"
+    if not path.is_file():
+        raise ConfigError(f"unknown MIS/SMC motor type {text!r}; known: "
+                          f"{', '.join(motor_types())}")
+    return _load_file(path.resolve())

@@ -1,0 +1,118 @@
+"""Mode numbers, status and error bits and the profile units of the MIS/SMC firmware.
+
+The public constants a task or a tool may use (``constants``, ``table`` and ``task`` are what the
+family shows the other layers). Resolution, timing and register scalings are in :mod:`.units`;
+this module derives the firmware's internal units from them.
+
+Sources (MIS manual): §8.2.3 (MODE_REG), §8.2.24 (STATUSBITS), §8.2.31 (ERR_BITS), §8.2.32
+(WARN_BITS), §8.2.21 (FastMac commands), §5.12.3 (TURNTABLE_MODE), §5.3.6 (SETUP_BITS closed
+loop bits), §8.2.49 (ENCODER_TYPE).
+"""
+
+from __future__ import annotations
+
+from .units import (
+    ACCEL_MAX_RPM_PER_S,
+    COUNTS_PER_FULL_STEP,
+    COUNTS_PER_REV,
+    CUR_SCALE_FULL,
+    ENCODER_TYPES,
+    FULL_STEPS_PER_REV,
+    OUTER_DT,
+    VELOCITY_RPM_PER_UNIT,
+)
+
+# --- timing -------------------------------------------------------------------------------
+OUTER_HZ = 1.0 / OUTER_DT  #: firmware (profile) samples per second
+#: plant samples per outer sample (``plant`` docstring: why 10 kHz is enough in the frame of the
+#: commanded electrical angle)
+INNER_PER_OUTER = 10
+INNER_DT = OUTER_DT / INNER_PER_OUTER  #: 100 µs
+
+# --- motor geometry -------------------------------------------------------------------------
+#: rotor teeth of a 200-step two-phase hybrid stepper: electrical turns per revolution
+POLE_PAIRS = FULL_STEPS_PER_REV // 4
+COUNTS_PER_ELECTRICAL_TURN = COUNTS_PER_REV // POLE_PAIRS  #: 8192 counts = 4 full steps
+
+# --- profile units ---------------------------------------------------------------------------
+#: 0.01 RPM (V_SOLL …) → counts per outer sample: 25000 → 1706.67 counts/ms
+VEL_UNIT_TO_COUNTS = VELOCITY_RPM_PER_UNIT / 60.0 * COUNTS_PER_REV * OUTER_DT
+#: RPM/s (A_SOLL, D_SOLL, ACC_EMERG) → counts per outer sample²: 1000 → 6.827 counts/ms²
+ACC_UNIT_TO_COUNTS = 1.0 / 60.0 * COUNTS_PER_REV * OUTER_DT * OUTER_DT
+
+# --- MODE_REG (§8.2.3) ------------------------------------------------------------------
+PASSIVE = 0
+VELOCITY = 1
+POSITION = 2
+GEAR = 3
+STOP = 11
+ZERO_SEARCH_1 = 13
+ZERO_SEARCH_2 = 14
+SAFE = 15
+MODE_NAMES: dict[int, str] = {PASSIVE: "passive", VELOCITY: "velocity", POSITION: "position",
+                              GEAR: "gear", STOP: "stop", ZERO_SEARCH_1: "zero search type 1",
+                              ZERO_SEARCH_2: "zero search type 2", SAFE: "safe"}
+#: MODE_REG values a write may request (safe mode only by command, §8.2.3)
+WRITABLE_MODES = frozenset({PASSIVE, VELOCITY, POSITION, GEAR, STOP, ZERO_SEARCH_1,
+                            ZERO_SEARCH_2})
+#: STARTMODE / HOMEMODE values (§8.2.33, §8.2.37)
+START_MODES = frozenset({PASSIVE, VELOCITY, POSITION, GEAR})
+HOME_MODES = frozenset({0, ZERO_SEARCH_1, ZERO_SEARCH_2})
+
+# --- STATUSBITS (§8.2.24) ----------------------------------------------------------------
+ST_AUTOCORRECTION = 1 << 1
+ST_IN_PHYSICAL_POSITION = 1 << 2
+ST_AT_VELOCITY = 1 << 3
+ST_IN_POSITION = 1 << 4
+ST_ACCELERATING = 1 << 5
+ST_DECELERATING = 1 << 6
+ST_ZERO_SEARCH_DONE = 1 << 7
+ST_GENERAL_ERROR = 1 << 12
+ST_CLOSED_LOOP_LAG = 1 << 15
+ST_CLOSED_LOOP = 1 << 16
+ST_ENCODER_CALIBRATED = 1 << 17
+ST_STANDBY_CURRENT = 1 << 18
+ST_ENCODER_OK = 1 << 20
+ST_IN_TARGET_POSITION = 1 << 22
+
+# --- ERR_BITS (§8.2.31) --------------------------------------------------------------------
+ERR_GENERAL = 1 << 0
+ERR_FOLLOW = 1 << 1
+ERR_POSITION_LIMIT = 1 << 3
+ERR_LOW_BUS = 1 << 4
+ERR_OVER_VOLTAGE = 1 << 5
+ERR_CLOSED_LOOP = 1 << 12
+ERR_ZERO_SEARCH_TIMEOUT = 1 << 16
+
+# --- WARN_BITS (§8.2.32) -------------------------------------------------------------------
+WARN_POS_LIMIT = 1 << 0
+WARN_NEG_LIMIT = 1 << 1
+WARN_POS_LIMIT_SEEN = 1 << 2
+WARN_NEG_LIMIT_SEEN = 1 << 3
+WARN_LOW_BUS = 1 << 4
+
+# --- SETUP_BITS (§5.3.6, §8.2.68) ------------------------------------------------------------
+SETUP_CLOSED_LOOP = 1 << 24
+SETUP_CURRENT_CONTROL = 1 << 25
+
+# --- TURNTABLE_MODE (§5.12.3) -------------------------------------------------------------
+TT_OFF, TT_CW, TT_CCW, TT_SHORTEST, TT_MULTI_CW, TT_MULTI_CCW = range(6)
+
+# --- COMMAND: FastMac commands (§8.2.21) --------------------------------------------------
+CMD_CLEAR_ERRORS = 97
+CMD_P_SOLL_ZERO = 98
+CMD_P_IST_ZERO = 99
+CMD_V_SOLL_ZERO = 101
+CMD_CLEAR_FLAGS = 103
+CMD_REGISTER_SET = (108, 109, 110, 111)  #: P_SOLL/V_SOLL/A_SOLL/RUN_CURRENT = Pn/Vn/An/Tn
+CMD_RELATIVE = (113, 114)  #: P_SOLL = P_IST + P7 / P8
+CMD_SET_POSITION = 119  #: P_IST = P_SOLL = encoder = P_NEW
+CMD_ADD_POSITION = 120  #: P_IST, P_SOLL, encoder += P_NEW
+CMD_ADD_ACTUAL = 121  #: P_IST, encoder += P_NEW
+
+# --- encoders (§8.2.49, units.ENCODER_TYPES) ----------------------------------------------
+#: encoder counts per revolution of each ENCODER_TYPE code (0: no encoder)
+ENCODER_CPR = {code: cpr for code, (_, cpr) in ENCODER_TYPES.items()}
+
+__all__ = [name for name in dir() if name.isupper() and not name.startswith("_")] + [
+    "COUNTS_PER_FULL_STEP", "ACCEL_MAX_RPM_PER_S", "CUR_SCALE_FULL"]

@@ -1,0 +1,112 @@
+"""Zero search types 1 and 2 (MODE_REG 13, 14; MIS manual §6.5, §8.2.34–37, §8.2.125–126).
+
+Type 1 runs at V_HOME until the home input (INPUTS & HOME_MASK) becomes active; that point is
+the zero: P_IST := P_HOME there. Type 2 then reverses at the crawl velocity (V_HOME_CRAWL, or
+V_HOME/64 when it is 0, §6.5.9) until the input is released, and that point is the zero. The
+motor stops (D_SOLL / A_SOLL), moves to position 0 if P_HOME ≠ 0 (§6.5.8 steps 2–3), sets
+STATUSBITS bit 7 and changes to STARTMODE (§8.2.3). ENCODER_POS is set with P_IST at the zero
+(§8.2.15). After V_HOME_TIMEOUT ms (0: 60 s; none with ZERO_SEARCH_BITS bit 5) the search ends
+with ERR_BITS bit 16 and the motor returns to STARTMODE (§6.5.9), where the error stop makes it
+passive. Phases (``S_HOME_PHASE``): 0 start, 1 seek, 2 leave the sensor, 3 stop, 4 move to 0.
+
+Torque zero search (§6.5.7, "only available with H2/H4 encoder … Closed loop and Current
+control enabled"): the register list gives it no MODE_REG or HOMEMODE number (HOMEMODE takes
+0, 13, 14), so the simulator runs it as a search 13 or 14 with closed loop and current control
+on and no home input selected (HOME_MASK = 0): the trigger is ACTUAL_TORQUE reaching T_HOME
+(0 … 2047 = 0 … 100 % of RUN_CURRENT, §8.2.36) while the follow error asks for that current
+(``firmware.closed_loop``; not merely the full current the closed loop starts with) — the
+mechanical collision — and that rotor
+position is the zero (P_IST and ENCODER_POS := P_HOME, the commanded position moved onto the
+rotor, so the motor stops pressing). A decision, not the manual's wording.
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from .. import constants as c
+from .. import layout as L
+from .. import regs as R
+from ..units import ZERO_SEARCH_TIMEOUT_DEFAULT_S
+from .arith import wrap32
+from .monitor import COUNTS_PER_RAD, set_encoder
+from .profile import position_step, velocity_step
+
+
+@njit(cache=True)
+def _set_zero(regs, s, p, at_rotor: bool) -> None:  # pragma: no cover - compiled
+    """P_IST and ENCODER_POS := P_HOME here; ``at_rotor``: the commanded position (and the
+    closed-loop field) moved onto the rotor first."""
+    if at_rotor:
+        rotor = s[L.S_THETA] * COUNTS_PER_RAD
+        s[L.S_CMD] = rotor
+        s[L.S_FIELD] = rotor
+    regs[R.P_IST] = regs[R.P_HOME]
+    s[L.S_FRAC] = 0.0
+    set_encoder(regs, s, p, regs[R.P_HOME])
+
+
+@njit(cache=True)
+def zero_search(regs, s, p, mode: int) -> tuple[float, bool]:  # pragma: no cover - compiled
+    """The profile velocity of this sample of a zero search, and whether it lands exactly."""
+    phase = s[L.S_HOME_PHASE]
+    s[L.S_HOME_MS] += 1.0
+    limit = regs[R.V_HOME_TIMEOUT]
+    limit_ms = limit if limit > 0 else ZERO_SEARCH_TIMEOUT_DEFAULT_S * 1000.0
+    if not regs[R.ZERO_SEARCH_BITS] & (1 << 5) and s[L.S_HOME_MS] > limit_ms:
+        regs[R.ERR_BITS] |= c.ERR_ZERO_SEARCH_TIMEOUT | c.ERR_GENERAL
+        s[L.S_HOME_PHASE] = 0.0
+        regs[R.MODE_REG] = regs[R.STARTMODE]
+        return velocity_step(regs, s, 0.0, s[L.S_DEC]), False
+    setup = regs[R.SETUP_BITS]
+    torque_search = (regs[R.HOME_MASK] == 0 and (setup & c.SETUP_CLOSED_LOOP) != 0
+                     and (setup & c.SETUP_CURRENT_CONTROL) != 0)
+    if torque_search:
+        demand = c.CUR_SCALE_FULL * min(abs(regs[R.FLWERR]) / c.COUNTS_PER_FULL_STEP, 1.0)
+        home = regs[R.ACTUAL_TORQUE] >= regs[R.T_HOME] and demand >= regs[R.T_HOME]
+    else:
+        home = (regs[R.INPUTS] & regs[R.HOME_MASK]) != 0
+    vh = regs[R.V_HOME] * c.VEL_UNIT_TO_COUNTS
+    if phase == 0.0:
+        regs[R.STATUSBITS] &= ~c.ST_ZERO_SEARCH_DONE
+        s[L.S_HOME_PHASE] = phase = 1.0
+    if phase == 1.0:
+        if home:
+            if mode == c.ZERO_SEARCH_1 or torque_search:
+                _set_zero(regs, s, p, torque_search)
+                s[L.S_VEL] = 0.0 if torque_search else s[L.S_VEL]
+                s[L.S_HOME_PHASE] = 3.0
+            else:
+                s[L.S_HOME_PHASE] = 2.0
+        else:
+            return velocity_step(regs, s, vh, s[L.S_DEC]), False
+    if s[L.S_HOME_PHASE] == 2.0:
+        crawl = regs[R.V_HOME_CRAWL] * c.VEL_UNIT_TO_COUNTS
+        crawl = crawl if crawl > 0.0 else abs(vh) / 64.0
+        if not home and (s[L.S_VEL] == 0.0 or (s[L.S_VEL] > 0.0) != (vh > 0.0)):
+            _set_zero(regs, s, p, False)
+            s[L.S_HOME_PHASE] = 3.0
+        else:
+            return velocity_step(regs, s, -math.copysign(crawl, vh), s[L.S_DEC]), False
+    if s[L.S_HOME_PHASE] == 3.0:
+        v = velocity_step(regs, s, 0.0, s[L.S_DEC])
+        if v != 0.0:
+            return v, False
+        s[L.S_HOME_PHASE] = 4.0 if regs[R.P_HOME] != 0 else 5.0
+        return 0.0, False
+    if s[L.S_HOME_PHASE] == 4.0:
+        remaining = float(wrap32(0 - regs[R.P_IST])) - s[L.S_FRAC]
+        v, arrive = position_step(regs, s, remaining,
+                                  abs(regs[R.V_SOLL]) * c.VEL_UNIT_TO_COUNTS)
+        if not (arrive or (remaining == 0.0 and v == 0.0)):
+            return v, arrive
+        s[L.S_HOME_PHASE] = 5.0
+        return v, arrive
+    regs[R.STATUSBITS] |= c.ST_ZERO_SEARCH_DONE
+    regs[R.P_SOLL] = regs[R.P_IST]
+    s[L.S_HOME_PHASE] = 0.0
+    s[L.S_HOME_MS] = 0.0
+    regs[R.MODE_REG] = regs[R.STARTMODE]
+    return 0.0, False

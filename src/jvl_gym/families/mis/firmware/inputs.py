@@ -1,0 +1,94 @@
+"""The I/O inputs: digital input filter (MIS manual §2.2.6–2.2.7, §8.2.75–76) and the analogue
+input filter (§2.3.5, §8.2.45–55).
+
+Digital inputs: an input whose bit is set in INPUT_FILTER_MASK changes its state only after its
+raw level has differed from the state for INPUT_FILTER_CNT ms; the others follow the raw level
+at once (their 100 µs update is faster than the 1 ms outer sample). IOSETUP bits 0–7 set each
+input's active level; the simulator reads a set bit as "active low" (decision: the manual does
+not say which level a set bit selects).
+
+Analogue filter, every 10 ms (§2.3.5): a raw sample outside AFZUP_CONFMIN … AFZUP_CONFMAX is
+discarded; else it is limited to the last filtered value ± AFZUP_MAXSLOPE; the result is
+``new·F/64 + old·(64 − F)/64`` with F = AFZUP_FILTER, kept with a fractional part inside and
+rounded in the ANALOGUE_FILTERED registers. The manual selects per-input settings through
+AFZUP_WRITEBITS / AFZUP_READINDEX; the simulator applies the registers' current values to all
+eight inputs (a simplification).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .. import layout as L
+from .. import regs as R
+from ..units import ANALOGUE_FULL, ANALOGUE_VOLTS_PER_UNIT
+
+#: outer samples (ms) between two analogue filter samples (§2.3.5: "fixed intervals of 10 mS")
+AF_PERIOD = 10
+
+
+@njit(cache=True)
+def analogue_filter_step(old: float, raw: float, conf_min: float, conf_max: float,
+                         max_slope: float, filt: float) -> float:  # pragma: no cover
+    """One 10 ms step of the analogue filter of §2.3.5 (values in 1.221 mV units).
+
+    Parameters
+    ----------
+    old : float
+        The last filtered value.
+    raw : float
+        The new raw sample.
+    conf_min, conf_max : float
+        Confidence limits; a sample outside them is discarded (the result is ``old``).
+    max_slope : float
+        Largest change of the sample against ``old``.
+    filt : float
+        AFZUP_FILTER: the new sample's weight in 64ths.
+    """
+    if raw < conf_min or raw > conf_max:
+        return old
+    limited = min(max(raw, old - max_slope), old + max_slope)
+    return limited * (filt / 64.0) + old * ((64.0 - filt) / 64.0)
+
+
+@njit(cache=True)
+def update_inputs(regs, s, p, u) -> None:  # pragma: no cover - compiled
+    """Digital inputs → INPUTS, analogue inputs → ANALOGUE_INPUT1..8 and (every 10 ms)
+    ANALOGUE_FILTERED1..8. The home sensor model (``home_position``) drives the HOME_MASK
+    inputs while the rotor is at or below its angle."""
+    raw_bits = int(u[L.I_DIGITAL]) ^ (regs[R.IOSETUP] & 0xFF)
+    if s[L.S_THETA] <= p[L.P_HOME_POS]:
+        raw_bits |= regs[R.HOME_MASK] & 0xFF
+    state = int(s[L.S_DIN_STATE])
+    mask = regs[R.INPUT_FILTER_MASK]
+    need = regs[R.INPUT_FILTER_CNT]
+    for k in range(8):
+        bit = 1 << k
+        if not mask & bit:
+            state = (state & ~bit) | (raw_bits & bit)
+            s[L.S_DIN0 + k] = 0.0
+        elif (raw_bits ^ state) & bit:
+            s[L.S_DIN0 + k] += 1.0
+            if s[L.S_DIN0 + k] >= need:
+                state ^= bit
+                s[L.S_DIN0 + k] = 0.0
+        else:
+            s[L.S_DIN0 + k] = 0.0
+    s[L.S_DIN_STATE] = state
+    regs[R.INPUTS] = state
+    s[L.S_AF_MS] += 1.0
+    sample = s[L.S_AF_MS] >= AF_PERIOD
+    if sample:
+        s[L.S_AF_MS] = 0.0
+    for k in range(8):
+        raw = min(max(np.floor(u[L.I_ANALOG0 + k] / ANALOGUE_VOLTS_PER_UNIT + 0.5), 0.0),
+                  float(ANALOGUE_FULL))
+        regs[R.ANALOGUE_INPUT1 + k] = int(raw)
+        if sample:
+            s[L.S_AF0 + k] = analogue_filter_step(
+                s[L.S_AF0 + k], raw, regs[R.AFZUP_CONFMIN], regs[R.AFZUP_CONFMAX],
+                regs[R.AFZUP_MAXSLOPE], regs[R.AFZUP_FILTER])
+            regs[R.ANALOGUE_FILTERED1 + k] = int(math.floor(s[L.S_AF0 + k] + 0.5))

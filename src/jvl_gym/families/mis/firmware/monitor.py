@@ -1,0 +1,163 @@
+"""Monitoring: encoder position, follow error, bus voltage, position limits, error stop and the
+status bits (MIS manual §8.2.15, §8.2.18–19, §8.2.24, §8.2.31–32, §5.9, §5.10, §7.2).
+
+- ENCODER_POS: the rotor angle quantised to the encoder option's resolution (ENCODER_TYPE,
+  §8.2.49), reported in 409 600 counts/rev, plus an offset the firmware moves when it sets the
+  position (zero search, FastMac 119–121). Without an encoder it keeps its value.
+- ABSENCODER: the rotor angle from power-on as the encoder reads it, single turn
+  (0 … 409599) for H2, multiturn for H3/H4 (§8.2.38, §5.12.5); not moved by zeroing.
+- FLWERR = P_IST − ENCODER_POS (positive when the rotor lags behind a positive move; §8.2.18
+  names no sign); 0 without an encoder. In an active mode |FLWERR| > FLWERRMAX > 0 sets ERR_BITS
+  bits 1 and 0 (§8.2.19, §7.2.4).
+- BUSVOL from the supply; below MIN_BUSVOL: WARN_BITS bit 4 always, and by SETUP_BITS 21/22/23
+  the error bit, a controlled stop to passive, or V_SOLL = 0 (§5.10.2).
+- Position limits (§5.9): software limits when MIN_P_IST or MAX_P_IST ≠ 0 and no turn table;
+  hardware limits on the inputs of PL_MASK / NL_MASK. Moving into a limit sets WARN_BITS 0/1
+  (active) and 2/3 (has been active) and ERR_BITS bit 3, unless SETUP_BITS bit 17 disables the
+  error; either way the motor stops, and while a limit is active the profile does not move
+  towards it.
+- An error (ERR_BITS ≠ 0) in an active mode stops the motor with ACC_EMERG and then makes it
+  passive (§8.2.28, §8.2.31: "will not move until all the errors have been cleared").
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .. import constants as c
+from .. import layout as L
+from .. import regs as R
+from ..units import BUSVOL_VOLTS_PER_UNIT, COUNTS_PER_REV
+from .arith import wrap32
+
+#: encoder counts per revolution by ENCODER_TYPE code (0: none)
+_CPR = np.array([c.ENCODER_CPR.get(k, 0) for k in range(11)], dtype=np.int64)
+COUNTS_PER_RAD = COUNTS_PER_REV / (2.0 * math.pi)
+
+
+@njit(cache=True, inline="always")
+def encoder_cpr(p) -> int:  # pragma: no cover - compiled
+    """Encoder counts per revolution of the motor's encoder option (0: none)."""
+    return _CPR[int(p[L.P_ENCODER])]
+
+
+@njit(cache=True, inline="always")
+def rotor_counts_quantised(theta: float, cpr: int) -> float:  # pragma: no cover - compiled
+    """The rotor angle [rad] as the encoder reports it, in motor counts (a multiple of
+    409600/cpr)."""
+    per = COUNTS_PER_REV // cpr
+    return np.floor(theta * COUNTS_PER_RAD / per) * per
+
+
+@njit(cache=True)
+def read_encoder(regs, s, p) -> bool:  # pragma: no cover - compiled
+    """ENCODER_POS, V_ENCODER and FLWERR of this sample; True if the motor has an encoder."""
+    cpr = encoder_cpr(p)
+    if cpr == 0:
+        regs[R.FLWERR] = 0
+        return False
+    absolute = int(rotor_counts_quantised(s[L.S_THETA], cpr))
+    single_turn = int(p[L.P_ENCODER]) in (1, 3)  # H2 (§5.12.5: 0 … 409599, §8.2.38)
+    regs[R.ABSENCODER] = absolute % COUNTS_PER_REV if single_turn else wrap32(absolute)
+    pos = wrap32(int(absolute + s[L.S_ENC_OFFSET]))
+    regs[R.V_ENCODER] = int(np.floor(wrap32(pos - int(s[L.S_ENC_PREV]))
+                                     / c.VEL_UNIT_TO_COUNTS + 0.5))
+    s[L.S_ENC_PREV] = pos
+    regs[R.ENCODER_POS] = pos
+    regs[R.FLWERR] = wrap32(regs[R.P_IST] - pos)
+    return True
+
+
+@njit(cache=True)
+def set_encoder(regs, s, p, value: int) -> None:  # pragma: no cover - compiled
+    """Make ENCODER_POS read ``value`` at the present rotor angle."""
+    cpr = encoder_cpr(p)
+    if cpr > 0:
+        s[L.S_ENC_OFFSET] = value - rotor_counts_quantised(s[L.S_THETA], cpr)
+        s[L.S_ENC_PREV] = value
+    regs[R.ENCODER_POS] = value
+
+
+@njit(cache=True)
+def check_errors(regs, s, u, active: bool, has_encoder: bool,
+                 tt: bool) -> int:  # pragma: no cover - compiled
+    """Follow error, bus voltage and limits (module docstring); returns the active limits
+    (1: positive, 2: negative), which block motion towards them."""
+    err = regs[R.ERR_BITS]
+    warn = regs[R.WARN_BITS]
+    setup = regs[R.SETUP_BITS]
+    maxerr = regs[R.FLWERRMAX]
+    if active and has_encoder and maxerr > 0 and abs(regs[R.FLWERR]) > maxerr:
+        err |= c.ERR_FOLLOW
+    busvol = int(min(max(np.floor(u[L.I_SUPPLY_VOLTS] / BUSVOL_VOLTS_PER_UNIT + 0.5), 0.0),
+                     4095.0))
+    regs[R.BUSVOL] = busvol
+    if busvol < regs[R.MIN_BUSVOL]:
+        warn |= c.WARN_LOW_BUS
+        if setup & (1 << 21):
+            err |= c.ERR_LOW_BUS
+        if setup & (1 << 22) and active:
+            regs[R.MODE_REG] = c.STOP
+        if setup & (1 << 23):
+            regs[R.V_SOLL] = 0
+    else:
+        warn &= ~c.WARN_LOW_BUS
+    v = s[L.S_VEL]
+    lo, hi = regs[R.MIN_P_IST], regs[R.MAX_P_IST]
+    soft = (lo != 0 or hi != 0) and not tt
+    inputs = regs[R.INPUTS]
+    pos_hit = (inputs & regs[R.PL_MASK]) != 0 or (soft and regs[R.P_IST] >= hi)
+    neg_hit = (inputs & regs[R.NL_MASK]) != 0 or (soft and regs[R.P_IST] <= lo)
+    warn = (warn & ~(c.WARN_POS_LIMIT | c.WARN_NEG_LIMIT))
+    if pos_hit:
+        warn |= c.WARN_POS_LIMIT | c.WARN_POS_LIMIT_SEEN
+    if neg_hit:
+        warn |= c.WARN_NEG_LIMIT | c.WARN_NEG_LIMIT_SEEN
+    if active and ((pos_hit and v > 0.0) or (neg_hit and v < 0.0)):
+        if setup & (1 << 17):
+            s[L.S_EMERGENCY] = 2.0  # stop, stay active
+        else:
+            err |= c.ERR_POSITION_LIMIT
+    if err & ~c.ERR_GENERAL:
+        err |= c.ERR_GENERAL
+    regs[R.ERR_BITS] = err
+    regs[R.WARN_BITS] = warn
+    return (1 if pos_hit else 0) | (2 if neg_hit else 0)
+
+
+@njit(cache=True)
+def status_bits(regs, s, v: float, prev_v: float, target_v: float, mode: int,
+                has_encoder: bool, closed_loop: bool, standby: bool) -> None:  # pragma: no cover
+    """STATUSBITS of this sample (§8.2.24)."""
+    st = regs[R.STATUSBITS] & (c.ST_ZERO_SEARCH_DONE | c.ST_AUTOCORRECTION)
+    moving_mode = mode == c.VELOCITY or mode == c.POSITION or mode == c.GEAR
+    if moving_mode and v == target_v:
+        st |= c.ST_AT_VELOCITY
+    if abs(v) > abs(prev_v) and (prev_v == 0.0 or (v > 0.0) == (prev_v > 0.0)):
+        st |= c.ST_ACCELERATING
+    elif abs(v) < abs(prev_v) or (v != 0.0 and prev_v != 0.0 and (v > 0.0) != (prev_v > 0.0)):
+        st |= c.ST_DECELERATING
+    in_target = has_encoder and abs(wrap32(regs[R.ENCODER_POS] - regs[R.P_SOLL])) <= regs[
+        R.IN_POSITION_WINDOW]
+    if (mode == c.POSITION or mode == c.GEAR) and v == 0.0:
+        if closed_loop:
+            if in_target:
+                st |= c.ST_IN_POSITION
+        elif regs[R.P_IST] == regs[R.P_SOLL]:
+            st |= c.ST_IN_POSITION
+        if in_target:
+            st |= c.ST_IN_PHYSICAL_POSITION
+    if in_target:
+        st |= c.ST_IN_TARGET_POSITION
+    if regs[R.ERR_BITS] != 0:
+        st |= c.ST_GENERAL_ERROR
+    if closed_loop:
+        st |= c.ST_CLOSED_LOOP
+    if has_encoder:
+        st |= c.ST_ENCODER_OK | c.ST_ENCODER_CALIBRATED
+    if standby:
+        st |= c.ST_STANDBY_CURRENT
+    regs[R.STATUSBITS] = st

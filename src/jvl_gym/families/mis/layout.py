@@ -1,0 +1,81 @@
+"""Columns of the MIS family's ``state``, ``params`` and ``inputs`` arrays (one row per motor).
+
+Plant state is in SI units (rotor angle [rad], speed [rad/s], currents [A] in the frame of the
+commanded electrical angle); firmware state is in motor counts and counts per outer sample
+(1 ms), the units of :mod:`.constants`.
+"""
+
+from __future__ import annotations
+
+# --- state ----------------------------------------------------------------------------------
+(
+    S_THETA,  # rotor angle from power-on [rad], unwrapped
+    S_OMEGA,  # rotor speed [rad/s]
+    S_ID,  # phase current along the commanded electrical angle [A]
+    S_IQ,  # phase current 90° ahead of it [A]
+    S_CMD,  # commanded (microstep) position at the end of the last outer sample [counts]
+    S_CMD_PREV,  # the same at its start [counts]
+    S_VEL,  # profile velocity [counts/outer sample], signed
+    S_VS,  # active start/stop velocity [counts/outer sample] (latched at standstill)
+    S_ACC,  # active acceleration [counts/outer sample²] (latched at standstill)
+    S_DEC,  # active deceleration [counts/outer sample²] (latched at standstill)
+    S_SEEN_PIST,  # P_IST as the firmware left it (a different value: the user wrote it)
+    S_FRAC,  # commanded position's fraction of a count carried to the next sample
+    S_STILL_MS,  # outer samples since the last step (standby current)
+    S_I_AMP,  # phase current amplitude the chopper aims at [A peak]
+    S_BRIDGE,  # 0 bridge off (passive), 1 chopper on, 2 on with closed-loop commutation
+    S_CUR_SCALE,  # closed-loop current scale, 0 … 2047 (ACTUAL_TORQUE)
+    S_SCALE_CLOCK,  # 36 MHz ticks carried to the next current-scale step
+    S_GEAR_REM,  # gear remainder (§8.2.3, gear mode), units of GEAR2
+    S_ENC_OFFSET,  # ENCODER_POS minus the quantised rotor position [counts]
+    S_ENC_PREV,  # ENCODER_POS of the last sample (V_ENCODER)
+    S_EMERGENCY,  # 1 while the error stop decelerates
+    S_HOME_PHASE,  # zero search: 0 idle, 1 seek, 2 leave sensor, 3 move to 0
+    S_HOME_MS,  # zero search time [outer samples]
+    S_AC_LEFT,  # auto-correction retries left
+    S_AC_WAIT,  # auto-correction settling time left [outer samples]
+    S_SEEN_PSOLL,  # P_SOLL as the firmware last saw it (a change reloads auto-correction)
+    S_AF_MS,  # outer samples since the last analogue filter update
+    S_REC_MS,  # outer samples since the last sample-buffer sample
+    S_TICK,  # outer samples since power-on
+    S_E_COPPER,  # copper loss energy since power-on [J]
+    S_E_LOAD,  # work done against the load torque since power-on [J]
+    S_TT_TRAVEL,  # turn table: counts of a multiturn move still to go (0: none)
+    S_REC_N,  # samples taken by the sample buffer
+    S_DIN_STATE,  # filtered digital inputs (bits 0-7)
+    S_FIELD,  # closed loop: the position the currents are commutated to [counts]
+    S_FIELD_STEP,  # closed loop: its largest advance per inner sample [counts]
+) = range(36)
+S_AF0 = 36  #: analogue filtered values of IO1 … IO8 (units of 1.221 mV, fractional)
+S_DIN0 = S_AF0 + 8  #: input filter: ms the raw level of IO1 … IO8 has differed from the state
+N_STATE = S_DIN0 + 8
+
+# --- params ---------------------------------------------------------------------------------
+(
+    P_J_MOTOR,  # rotor inertia [kg·m²]
+    P_J_LOAD,  # load inertia [kg·m²]
+    P_R,  # phase resistance [Ω]
+    P_L,  # phase inductance [H]
+    P_KT,  # torque per ampere of phase current amplitude [N·m/A] (= back-EMF [V·s/rad])
+    P_DETENT,  # detent torque amplitude [N·m]
+    P_VISCOUS,  # viscous friction [N·m·s/rad]
+    P_COULOMB,  # Coulomb friction [N·m]
+    P_ENCODER,  # ENCODER_TYPE code (units.ENCODER_TYPES)
+    P_HOME_POS,  # home sensor: active while the rotor angle is at or below this [rad]
+    P_AMPS_PER_UNIT,  # RUN_CURRENT unit [A RMS]
+    P_RUN_MAX,  # largest RUN_CURRENT of the type
+    P_ZETA,  # damping ratio of the rotor against the stator field
+    P_STOP_LO,  # mechanical end stop below this rotor angle [rad] (−inf: none)
+    P_STOP_HI,  # mechanical end stop above this rotor angle [rad] (inf: none)
+    N_PARAM,
+) = range(16)
+
+# --- inputs ---------------------------------------------------------------------------------
+(
+    I_LOAD_TORQUE,  # external torque opposing positive rotation [N·m]
+    I_SUPPLY_VOLTS,  # P+ supply [V]
+    I_PULSE_COUNTS,  # gear input counts during the next outer sample
+    I_DIGITAL,  # IO1-IO8 levels (bits 0-7)
+    I_ANALOG0,  # IO1 … IO8 analogue levels [V] (8 columns)
+) = range(5)
+N_INPUT = I_ANALOG0 + 8

@@ -1,0 +1,497 @@
+"""The MIS/SMC motor array: the family's rules on top of the generic :class:`MotorArray`.
+
+ROM images from the register table (MIS manual §8.2) with the type's MOTORTYPE; motor data
+from the type's config (``config.py``); power-on (STARTMODE or HOMEMODE, §8.2.33, §8.2.37);
+the firmware's write rules — MODE_REG values (§8.2.3; safe mode only by command, active modes
+refused while ERR_BITS ≠ 0, §8.2.31), P_SOLL in a turn-table mode (§5.12), ENCODER_POS, the
+COMMAND register's FastMac commands (§8.2.21), the sample buffer's S_CONTROL (§8.2.63) —,
+world inputs and the physical truth of the plant.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ...arguments import MotorIndex, as_index, motor_index, real_array
+from ...bank import StorePlan
+from ...keywords import FINITE, NONNEGATIVE, POSITIVE
+from ...registers import Register, RegisterError, RegisterRangeError
+from ...registers.formats import from_raw
+from ...sim import ModeError, MotorArray
+from . import constants as c
+from . import layout as L
+from . import regs as R
+from .config import MisMotorConfig, load_motor
+from .firmware.arith import wrap32
+from .modbus_device import MisModbusDevice
+from .table import TABLE
+from .torque_curve import pull_out_torque
+from .units import COUNTS_PER_REV, CURRENT_AMPS_PER_UNIT
+
+__all__ = ["MisMotorArray"]
+
+InputValue = float | int | bool | np.ndarray | Sequence[float] | None
+
+_PARAMETERS: dict[str, int] = {
+    "load_inertia": L.P_J_LOAD,  # kg·m²
+    "rotor_inertia": L.P_J_MOTOR,  # kg·m²
+    "phase_resistance": L.P_R,  # Ω
+    "phase_inductance": L.P_L,  # H
+    "torque_constant": L.P_KT,  # N·m/A of current amplitude
+    "detent_torque": L.P_DETENT,  # N·m
+    "viscous_friction": L.P_VISCOUS,  # N·m·s/rad
+    "coulomb_friction": L.P_COULOMB,  # N·m
+    "encoder_type": L.P_ENCODER,  # ENCODER_TYPE code 0 … 4 (§8.2.49)
+    "home_position": L.P_HOME_POS,  # rad; the home input is active at or below it
+    "damping_ratio": L.P_ZETA,  # rotor against the stator field (``plant``)
+    "end_stop_low": L.P_STOP_LO,  # rad (−inf: none)
+    "end_stop_high": L.P_STOP_HI,  # rad (inf: none)
+}
+_STATES: dict[str, int] = {"initial_angle": L.S_THETA}  # rad
+_NONNEGATIVE = {"load_inertia", "detent_torque", "viscous_friction", "coulomb_friction",
+                "encoder_type", "damping_ratio"}
+_POSITIVE = {"rotor_inertia", "phase_resistance", "phase_inductance", "torque_constant"}
+_MAY_BE_INFINITE = {"home_position", "end_stop_low", "end_stop_high"}
+_INPUT_COLUMNS: dict[str, int] = {"load_torque": L.I_LOAD_TORQUE,
+                                  "supply_volts": L.I_SUPPLY_VOLTS,
+                                  "pulse_counts": L.I_PULSE_COUNTS,
+                                  "digital_inputs": L.I_DIGITAL,
+                                  **{f"analog{k + 1}": L.I_ANALOG0 + k for k in range(8)}}
+#: registers whose writes the firmware's rules handle one by one
+_SPECIAL = frozenset({R.MODE_REG, R.P_SOLL, R.COMMAND, R.ENCODER_POS, R.S_CONTROL,
+                      R.STARTMODE, R.HOMEMODE, R.TURNTABLE_MODE})
+#: registers a setup (a register set) may not hold: commands and mode requests
+_NOT_IN_SETUP = frozenset({R.MODE_REG, R.COMMAND, R.S_CONTROL, R.ENCODER_POS})
+#: registers that hold one of a set of codes: (allowed, where the manual says so)
+_MEMBERS: dict[int, tuple[frozenset[int], str]] = {
+    R.STARTMODE: (c.START_MODES, "§8.2.33"), R.HOMEMODE: (c.HOME_MODES, "§8.2.37"),
+    R.TURNTABLE_MODE: (frozenset(range(6)), "§5.12.3: >5 is illegal")}
+BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
+
+
+class MisMotorArray(MotorArray):
+    """N simulated MIS/SMC integrated step motors (:class:`~jvl_gym.MotorArray` of the
+    ``mis`` family).
+
+    Parameters
+    ----------
+    motor, n, seed, setup
+        As for :class:`~jvl_gym.MotorArray` (``setup``: a register set written after the ROM
+        defaults, like the MACs').
+    **params
+        Per-motor parameters (scalars or (N,) arrays): :attr:`PARAMETER_KEYWORDS` (SI units)
+        and ``initial_angle`` [rad].
+
+    Examples
+    --------
+    >>> m = MotorArray("MIS231", n=2)
+    >>> m.write_many({"V_SOLL": 25000, "MODE_REG": 1})  # 250 RPM
+    >>> m.run(0.5)
+    """
+
+    FAMILY_KEY = "mis"
+    TABLE = TABLE
+    N_STATE = L.N_STATE
+    N_PARAM = L.N_PARAM
+    N_INPUT = L.N_INPUT
+    BUFFER_SHAPE = (BUFFER_DEPTH, 4)
+    OUTER_HZ = c.OUTER_HZ
+    PARAMETER_KEYWORDS: ClassVar[dict[str, int]] = _PARAMETERS
+    STATE_KEYWORDS: ClassVar[dict[str, int]] = _STATES
+    VALUE_RULES: ClassVar[dict[str, int]] = {
+        name: ((FINITE if name not in _MAY_BE_INFINITE else 0)
+               | (NONNEGATIVE if name in _NONNEGATIVE else 0)
+               | (POSITIVE if name in _POSITIVE else 0))
+        for name in [*_PARAMETERS, *_STATES]}
+    INPUTS: ClassVar[dict[str, int]] = _INPUT_COLUMNS
+    PHYSICAL = frozenset({"speed_rpm", "position_rad", "torque", "current_amplitude",
+                          "lost_steps"})
+    ONE_BY_ONE = _SPECIAL
+
+    @staticmethod
+    def load_motor(motor: Any) -> MisMotorConfig:
+        """The validated motor config (``mis.config.load_motor``)."""
+        return load_motor(motor)
+
+    # ------------------------------------------------------------------ type pool
+    def _rom_image(self, cfg: MisMotorConfig, setup: Any) -> np.ndarray:
+        image = self.table.default_raw_array.astype(np.int64).copy()
+        image[R.MOTORTYPE] = cfg.motor_type_code
+        if setup is not None:
+            from ...config import load_setup
+
+            row = image[None]
+            for name, value in load_setup(setup).registers.items():
+                reg = self._lookup(name)
+                if reg.number in _NOT_IN_SETUP:
+                    raise RegisterError(f"setup: {reg.name} is a command or a mode request; "
+                                        "write it after power-on")
+                raw = self._validated_raw(reg, value, 1)
+                rule = _MEMBERS.get(reg.number)
+                if rule is not None:
+                    self._check_member(reg, raw, *rule)
+                row[0, reg.number] = raw[0]
+        return image
+
+    def _config_params(self, cfg: MisMotorConfig) -> np.ndarray:
+        p = np.zeros(L.N_PARAM)
+        p[L.P_J_MOTOR] = cfg.rotor_inertia
+        p[L.P_R] = cfg.phase_resistance
+        p[L.P_L] = cfg.phase_inductance
+        p[L.P_KT] = cfg.torque_constant
+        p[L.P_DETENT] = cfg.detent_torque
+        p[L.P_VISCOUS] = cfg.viscous_friction
+        p[L.P_COULOMB] = cfg.coulomb_friction
+        p[L.P_ENCODER] = cfg.encoder_type
+        p[L.P_HOME_POS] = -math.inf
+        p[L.P_AMPS_PER_UNIT] = CURRENT_AMPS_PER_UNIT
+        p[L.P_RUN_MAX] = cfg.run_current_max
+        p[L.P_ZETA] = cfg.damping_ratio
+        p[L.P_STOP_LO] = -math.inf
+        p[L.P_STOP_HI] = math.inf
+        return p
+
+    def _rest_inputs(self, cfg: MisMotorConfig) -> np.ndarray:
+        u = np.zeros(L.N_INPUT)
+        u[L.I_SUPPLY_VOLTS] = cfg.supply_voltage
+        return u
+
+    def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
+                    values: np.ndarray) -> None:
+        codes = set(c.ENCODER_CPR)
+        for q in range(cols.size):
+            if not to_state[q] and cols[q] == L.P_ENCODER and not set(
+                    values[q].tolist()) <= codes:
+                raise ValueError(f"encoder_type must be one of {sorted(codes)} (§8.2.49), got "
+                                 f"{values[q].tolist()}")
+        memory = self._rom if self._flash is None else self._flash
+        for j, i in enumerate(idx.tolist()):
+            t = self._type_of[i]
+            self.regs[i] = memory[i] if self._has_flash[i] else self._rom[t]
+            self.state[i] = 0.0
+            self.params[i] = self._type_params[t]
+            self.inputs[i] = self._type_inputs[t]
+            for q in range(cols.size):
+                (self.state if to_state[q] else self.params)[i, cols[q]] = values[q, j]
+        self._power_on(idx)
+
+    def _power_on(self, idx: np.ndarray) -> None:
+        """Firmware start: positions, counters and error bits cleared (P_IST = P_SOLL = 0, so
+        a saved P_SOLL makes no move at power-on; the position back-up of §5.4 is not
+        modelled), the mode from HOMEMODE or else STARTMODE (§8.2.33, §8.2.37)."""
+        s, regs = self.state, self.regs
+        for num in (R.P_IST, R.P_SOLL, R.V_IST, R.ENCODER_POS, R.FLWERR, R.ERR_BITS,
+                    R.WARN_BITS, R.STATUSBITS, R.TURNTAB_COUNT, R.EXT_ENCODER, R.COMMAND,
+                    R.S_CONTROL, R.ACTUAL_TORQUE, R.TICKS):
+            regs[idx, num] = 0
+        s[idx, L.S_CUR_SCALE] = 2047.0
+        s[idx, L.S_SEEN_PSOLL] = regs[idx, R.P_SOLL]
+        code = self.params[idx, L.P_ENCODER].astype(np.int64)
+        regs[idx, R.ENCODER_TYPE] = code
+        cpr = np.array([c.ENCODER_CPR[k] for k in code.tolist()], dtype=np.int64)
+        per = np.where(cpr > 0, COUNTS_PER_REV // np.maximum(cpr, 1), 1)
+        q = np.floor(s[idx, L.S_THETA] * COUNTS_PER_REV / (2 * math.pi) / per) * per
+        s[idx, L.S_ENC_OFFSET] = np.where(cpr > 0, -q, 0.0)
+        s[idx, L.S_CMD] = s[idx, L.S_CMD_PREV] = 0.0
+        home = regs[idx, R.HOMEMODE]
+        start = regs[idx, R.STARTMODE]
+        regs[idx, R.MODE_REG] = np.where(np.isin(home, (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2)),
+                                         home, np.where(np.isin(start, list(c.START_MODES)),
+                                                        start, c.PASSIVE))
+
+    @property
+    def time(self) -> np.ndarray:
+        """Time since power-on of each motor [s], (N,)."""
+        return self.state[:, L.S_TICK] * (1.0 / c.OUTER_HZ)
+
+    # ------------------------------------------------------------------ write rules
+    def _store_rows(self, plan: StorePlan, idx: np.ndarray, raws: np.ndarray) -> None:
+        for k, reg in enumerate(plan.regs):
+            if reg.number in _SPECIAL:
+                self._store_one(reg, idx, raws[k])
+            else:
+                self.regs[idx, reg.number] = raws[k]
+
+    def _store_special(self, reg: Register, idx: np.ndarray, raw: np.ndarray) -> bool:
+        if reg.number in _SPECIAL:
+            self._store_one(reg, idx, raw)
+            return True
+        return False
+
+    def _store_one(self, reg: Register, idx: np.ndarray, raw: np.ndarray) -> None:
+        """One register with write rules (module docstring); a refusal raises first."""
+        num = reg.number
+        regs, s = self.regs, self.state
+        if num == R.MODE_REG:
+            self._check_modes(idx, raw)
+            changed = regs[idx, R.MODE_REG] != raw
+            enter_home = changed & np.isin(raw, (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2))
+            s[idx[enter_home], L.S_HOME_PHASE] = 0.0
+            s[idx[enter_home], L.S_HOME_MS] = 0.0
+            off = np.isin(raw, (c.PASSIVE,))
+            s[idx[off], L.S_VEL] = 0.0
+            s[idx[off], L.S_EMERGENCY] = 0.0
+            regs[idx, R.MODE_REG] = raw
+        elif num in _MEMBERS:
+            self._check_member(reg, raw, *_MEMBERS[num])
+            regs[idx, num] = raw
+        elif num == R.P_SOLL:
+            self._store_p_soll(idx, raw)
+        elif num == R.ENCODER_POS:
+            for i, value in zip(idx.tolist(), raw.tolist()):
+                self._set_encoder(i, value)
+        elif num == R.S_CONTROL:
+            if np.any(raw == 2):
+                self._ensure_buffer()
+            start = raw != 0
+            s[idx[start], L.S_REC_N] = 0.0
+            s[idx[start], L.S_REC_MS] = 0.0
+            regs[idx, num] = raw
+        elif num == R.COMMAND:
+            self._commands(idx, raw)
+
+    def _check_member(self, reg: Register, raw: np.ndarray, allowed: frozenset[int],
+                      where: str) -> None:
+        bad = [v for v in raw.tolist() if v not in allowed]
+        if bad:
+            raise RegisterRangeError(f"{reg.name} (register {reg.number}) = {bad[0]} refused: "
+                                     f"allowed {sorted(allowed)} ({where}). Nothing was "
+                                     "changed.")
+
+    # ------------------------------------------------------------------ safe mode, flash
+    def enter_safe_mode(self, index: MotorIndex = None) -> None:
+        """The serial command ENTER SAFEMODE: the bridge off, flash and reset allowed
+        (§8.2.3: safe mode is entered and left by command only)."""
+        idx = as_index(index, self.n)
+        self.regs[idx, R.MODE_REG] = c.SAFE
+        self.state[idx, L.S_VEL] = 0.0
+
+    def exit_safe_mode(self, index: MotorIndex = None) -> None:
+        """The serial command EXIT SAFEMODE: back to passive."""
+        idx = as_index(index, self.n)
+        self._in_safe(idx, "exit_safe_mode")
+        self.regs[idx, R.MODE_REG] = c.PASSIVE
+
+    def write_flash(self, index: MotorIndex = None) -> None:
+        """Save the register set in flash and reset the motors (safe mode only, §8.2.3; user
+        command 268, §8.2.22)."""
+        idx = as_index(index, self.n)
+        self._in_safe(idx, "write_flash")
+        if self._flash is None:
+            self._flash = np.zeros_like(self.regs)
+        rw = self._rw_numbers()
+        self._flash[np.ix_(idx, rw)] = self.regs[np.ix_(idx, rw)]
+        self._has_flash[idx] = True
+        self.reset(idx)
+
+    def _in_safe(self, idx: np.ndarray, what: str) -> None:
+        bad = idx[self.regs[idx, R.MODE_REG] != c.SAFE]
+        if bad.size:
+            raise ModeError(f"{what} needs safe mode (§8.2.3); motor {int(bad[0])} is in "
+                            f"{c.MODE_NAMES.get(int(self.regs[bad[0], R.MODE_REG]), '?')}")
+
+    def _check_modes(self, idx: np.ndarray, raw: np.ndarray) -> None:
+        for i, value in zip(idx.tolist(), raw.tolist()):
+            if self.regs[i, R.MODE_REG] == c.SAFE and value != c.SAFE:
+                raise ModeError(f"MODE_REG = {value} refused for motor {i}: safe mode is left "
+                                "by command only (exit_safe_mode, §8.2.3). Nothing was changed.")
+            if value not in c.WRITABLE_MODES and not (
+                    value == c.SAFE and self.regs[i, R.MODE_REG] == c.SAFE):
+                why = ("safe mode is entered by command only" if value == c.SAFE
+                       else f"allowed {sorted(c.WRITABLE_MODES)}")
+                raise ModeError(f"MODE_REG = {value} refused for motor {i}: {why} (MIS manual "
+                                "§8.2.3). Nothing was changed.")
+            if value != c.PASSIVE and self.regs[i, R.ERR_BITS] != 0:
+                raise ModeError(f"MODE_REG = {value} refused for motor {i}: ERR_BITS = "
+                                f"{int(self.regs[i, R.ERR_BITS])}; clear the errors first "
+                                "(§8.2.31). Nothing was changed.")
+
+    def _store_p_soll(self, idx: np.ndarray, raw: np.ndarray) -> None:
+        """P_SOLL, limited or reduced into a turn table's range (§5.12.1)."""
+        regs, s = self.regs, self.state
+        for i, value in zip(idx.tolist(), raw.tolist()):
+            mode = int(regs[i, R.TURNTABLE_MODE])
+            lo, hi = sorted((int(regs[i, R.MIN_P_IST]), int(regs[i, R.MAX_P_IST])))
+            s[i, L.S_TT_TRAVEL] = 0.0
+            if mode == c.TT_OFF or hi <= lo:
+                regs[i, R.P_SOLL] = value
+                continue
+            size = hi - lo + 1
+            if lo <= value <= hi:
+                regs[i, R.P_SOLL] = value
+            elif (mode == c.TT_MULTI_CW and value > hi) or (
+                    mode == c.TT_MULTI_CCW and value < lo):
+                regs[i, R.P_SOLL] = lo + (value - lo) % size
+                s[i, L.S_TT_TRAVEL] = float(value - int(regs[i, R.P_IST]))
+            else:
+                regs[i, R.P_SOLL] = min(max(value, lo), hi)
+
+    def _set_encoder(self, i: int, value: int) -> None:
+        """ENCODER_POS := ``value`` at the present rotor angle."""
+        cpr = c.ENCODER_CPR[int(self.params[i, L.P_ENCODER])]
+        if cpr > 0:
+            per = COUNTS_PER_REV // cpr
+            q = math.floor(self.state[i, L.S_THETA] * COUNTS_PER_REV / (2 * math.pi) / per) * per
+            self.state[i, L.S_ENC_OFFSET] = value - q
+            self.state[i, L.S_ENC_PREV] = value
+        self.regs[i, R.ENCODER_POS] = value
+
+    def _commands(self, idx: np.ndarray, raw: np.ndarray) -> None:
+        """FastMac commands (§8.2.21); other numbers are stored and do nothing."""
+        regs = self.regs
+        for i, cmd in zip(idx.tolist(), raw.tolist()):
+            if cmd == c.CMD_CLEAR_ERRORS:
+                regs[i, R.ERR_BITS] = 0
+                regs[i, R.WARN_BITS] = 0
+            elif cmd == c.CMD_P_SOLL_ZERO:
+                self._store_p_soll(np.array([i]), np.array([0]))
+            elif cmd == c.CMD_P_IST_ZERO:
+                regs[i, R.P_IST] = 0
+                self.state[i, L.S_FRAC] = 0.0
+            elif cmd == c.CMD_V_SOLL_ZERO:
+                regs[i, R.V_SOLL] = 0
+            elif cmd == c.CMD_CLEAR_FLAGS:
+                regs[i, R.STATUSBITS] &= ~(c.ST_IN_POSITION | c.ST_ACCELERATING
+                                           | c.ST_DECELERATING)
+            elif cmd in c.CMD_REGISTER_SET:
+                k = c.CMD_REGISTER_SET.index(cmd)
+                pn = TABLE.lookup(f"P{k + 1}").number
+                self._store_p_soll(np.array([i]), np.array([regs[i, pn]]))
+                regs[i, R.V_SOLL] = regs[i, TABLE.lookup(f"V{k + 1}").number]
+                regs[i, R.A_SOLL] = regs[i, TABLE.lookup(f"A{k + 1}").number]
+                regs[i, R.RUN_CURRENT] = regs[i, TABLE.lookup(f"T{k + 1}").number]
+            elif cmd in c.CMD_RELATIVE:
+                pn = TABLE.lookup(f"P{7 + c.CMD_RELATIVE.index(cmd)}").number
+                self._store_p_soll(np.array([i]),
+                                   np.array([wrap32(int(regs[i, R.P_IST] + regs[i, pn]))]))
+            elif cmd in (c.CMD_SET_POSITION, c.CMD_ADD_POSITION, c.CMD_ADD_ACTUAL):
+                new = int(regs[i, R.P_NEW])
+                add = cmd != c.CMD_SET_POSITION
+                regs[i, R.P_IST] = wrap32(int(regs[i, R.P_IST]) * add + new)
+                if cmd != c.CMD_ADD_ACTUAL:
+                    regs[i, R.P_SOLL] = wrap32(int(regs[i, R.P_SOLL]) * add + new)
+                self._set_encoder(i, wrap32(int(regs[i, R.ENCODER_POS]) * add + new))
+            regs[i, R.COMMAND] = 0
+
+    def _ensure_buffer(self) -> None:
+        if not self._buf_allocated:
+            self._buf = np.zeros((self.n, BUFFER_DEPTH, 4), dtype=np.int64)
+            self._buf_allocated = True
+
+    # ------------------------------------------------------------------ sample buffer
+    def sample_buffer(self) -> dict[str, np.ndarray]:
+        """The samples taken (§8.2.60–63), by SAMPLE1..4's register names of motor 0 (raw
+        ``SAMPLEk`` where the motors differ): {name: (N, samples)} in user units; entries past
+        a motor's count are 0."""
+        count = int(self.state[:, L.S_REC_N].max()) if self._buf_allocated else 0
+        valid = np.arange(count)[None, :] < self.state[:, L.S_REC_N][:, None]
+        out: dict[str, np.ndarray] = {}
+        for ch in range(4):
+            nums = self.regs[:, R.SAMPLE1 + ch]
+            raw = (np.where(valid, self._buf[:, :count, ch], 0) if count
+                   else np.zeros((self.n, 0), dtype=np.int64))
+            reg = (self.table.lookup(int(nums[0])) if 0 < nums[0] <= self.table.last
+                   else None)
+            if reg is None or np.any(nums != nums[0]) or reg.name in out or reg.access.value \
+                    == "reserved":
+                out[f"SAMPLE{ch + 1}"] = raw
+            else:
+                out[reg.name] = from_raw(reg, raw)
+        return out
+
+    # ------------------------------------------------------------------ world inputs
+    def set_input(self, index: MotorIndex = None, **inputs: InputValue) -> None:
+        """Set world inputs, held from the next outer sample on (per motor).
+
+        Keywords: ``load_torque`` [N·m, opposing positive rotation], ``supply_volts`` [V,
+        0 … 80], ``pulse_counts`` (whole gear-input counts per outer sample),
+        ``digital_inputs`` (IO1–IO8 levels as bits 0–7, 0 … 255), ``analog1`` … ``analog8``
+        [V] (the ADC reads 0 … 5 V, §2.3.5). All are checked before any is set.
+        """
+        idx = as_index(index, self.n)
+        staged = []
+        for name, val in inputs.items():
+            if name not in _INPUT_COLUMNS:
+                raise TypeError(f"unknown input {name!r}; known: {', '.join(_INPUT_COLUMNS)}")
+            if val is None:
+                continue
+            arr = real_array(name, val)
+            if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != idx.size):
+                raise ValueError(f"{name}: expected a scalar or shape ({idx.size},), "
+                                 f"got {arr.shape}")
+            if not np.all(np.isfinite(arr)):
+                raise ValueError(f"{name}: values must be finite, got {val!r}")
+            if name in ("pulse_counts", "digital_inputs") and np.any(arr != np.round(arr)):
+                raise ValueError(f"{name} must be whole numbers")
+            if name == "digital_inputs" and np.any((arr < 0) | (arr > 255)):
+                raise ValueError("digital_inputs must be within 0..255 (bits of IO1-IO8)")
+            if name == "supply_volts" and np.any((arr < 0) | (arr > 80)):
+                raise ValueError("supply_volts must be within 0..80 V")
+            staged.append((_INPUT_COLUMNS[name], np.broadcast_to(arr, (idx.size,))))
+        for col, arr in staged:
+            self.inputs[idx, col] = arr
+
+    # ------------------------------------------------------------------ physical truth
+    @property
+    def speed_rpm(self) -> np.ndarray:
+        """Rotor speed [RPM], (N,)."""
+        return self.state[:, L.S_OMEGA] * 60.0 / (2.0 * math.pi)
+
+    @property
+    def position_rad(self) -> np.ndarray:
+        """Rotor angle from power-on [rad], (N,)."""
+        return self.state[:, L.S_THETA].copy()
+
+    @property
+    def rotor_counts(self) -> np.ndarray:
+        """Rotor angle from power-on in motor counts (409 600 per revolution), (N,)."""
+        return self.state[:, L.S_THETA] * COUNTS_PER_REV / (2.0 * math.pi)
+
+    @property
+    def lost_steps(self) -> np.ndarray:
+        """Full steps the rotor has lost against the commanded position (positive: behind),
+        whole electrical turns of 4 full steps, (N,) int64."""
+        lag = (self.state[:, L.S_CMD] - self.rotor_counts) / c.COUNTS_PER_ELECTRICAL_TURN
+        return 4 * np.round(lag).astype(np.int64)
+
+    @property
+    def current_amplitude(self) -> np.ndarray:
+        """Phase current amplitude [A], (N,)."""
+        return np.hypot(self.state[:, L.S_ID], self.state[:, L.S_IQ])
+
+    @property
+    def torque(self) -> np.ndarray:
+        """Electromagnetic torque at the end of the last inner sample [N·m], (N,)."""
+        lag = (self.rotor_counts - self.state[:, L.S_CMD]) * (
+            2 * math.pi / c.COUNTS_PER_ELECTRICAL_TURN)
+        return self.params[:, L.P_KT] * (self.state[:, L.S_IQ] * np.cos(lag)
+                                         - self.state[:, L.S_ID] * np.sin(lag))
+
+    @property
+    def energy(self) -> dict[str, np.ndarray]:
+        """Energy since power-on [J], (N,) each: copper loss and work against the load."""
+        return {"copper": self.state[:, L.S_E_COPPER].copy(),
+                "load": self.state[:, L.S_E_LOAD].copy()}
+
+    def modbus_device(self, index: int) -> MisModbusDevice:
+        """Motor ``index`` as a device for :class:`jvl_gym.protocol.modbus_server.ModbusBus`
+        (MIS manual §12): the slave address MY_ADDR, validated register writes."""
+        return MisModbusDevice(self, motor_index(index, self.n, "modbus_device"))
+
+    def pull_out_torque(self, rpm: float) -> np.ndarray:
+        """Steady-state pull-out torque [N·m] of each motor at ``rpm`` with its RUN_CURRENT
+        and supply (:func:`.torque_curve.pull_out_torque`), (N,)."""
+        p, u = self.params, self.inputs
+        amps = np.sqrt(2.0) * np.minimum(self.regs[:, R.RUN_CURRENT], p[:, L.P_RUN_MAX]) * p[
+            :, L.P_AMPS_PER_UNIT]
+        return np.array([pull_out_torque(rpm, amps[i], p[i, L.P_KT], p[i, L.P_R], p[i, L.P_L],
+                                         u[i, L.I_SUPPLY_VOLTS]) for i in range(self.n)])
+
+    def mode_name(self, index: int = 0) -> str:
+        """Name of the current mode of one motor."""
+        i = motor_index(index, self.n, "mode_name")
+        return c.MODE_NAMES.get(int(self.regs[i, R.MODE_REG]), "?")

@@ -1,0 +1,11 @@
+"""The MIS/SMC register table (``registers.csv`` beside this module, MIS manual §8.2).
+
+One row per register number 1 … 253, every register 32 bits wide; numbers the manual leaves
+undocumented are ``RESERVED_<n>`` rows. Loaded and validated once (the package's ``REGISTERS``).
+"""
+
+from __future__ import annotations
+
+from . import REGISTERS as TABLE
+
+__all__ = ["TABLE"]

@@ -1,0 +1,128 @@
+"""What a compiled task may read and set of an MIS/SMC step motor during an env step.
+
+A task's hooks (``jvl_gym.engine.driver``) receive the engine's
+:class:`~jvl_gym.engine.view.EngineView` and reach the motors only through these inlined
+accessors: register values by number (``R``, from the register table), the world inputs (load
+torque and inertia, supply, gear pulses, I/O), and the physical truth an indexing process needs
+(rotor angle and speed, steps lost against the command, copper loss).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from ...engine.view import EngineView
+from ...registers import Access as _Access
+from . import constants as _c
+from . import layout as _L
+from . import regs as R
+from .table import TABLE as _TABLE
+from .units import COUNTS_PER_REV as _CPR
+
+__all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BITS", "reg",
+           "set_reg", "rotor_angle", "rotor_speed", "lost_steps", "copper_energy",
+           "load_energy", "set_load_torque", "set_load_inertia", "set_supply_volts",
+           "set_pulse_counts", "set_digital_inputs"]
+
+#: the family's key, and the motor type of a task when none is given
+FAMILY_KEY = "mis"
+DEFAULT_MOTOR_TYPE = "MIS232"
+#: ERR_BITS that end an episode: follow error, position limit, low bus voltage (§8.2.31)
+TERMINAL_ERRORS = (("FOLLOW", _c.ERR_FOLLOW), ("POSITION_LIMIT", _c.ERR_POSITION_LIMIT),
+                   ("LOW_BUS", _c.ERR_LOW_BUS))
+ERROR_BITS = _c.ERR_FOLLOW | _c.ERR_POSITION_LIMIT | _c.ERR_LOW_BUS
+
+
+def _raw_limits() -> tuple[np.ndarray, np.ndarray]:
+    """Raw range of every register a task may set (read-write), by number; empty elsewhere."""
+    low = np.zeros(_TABLE.last + 1, dtype=np.int64)
+    high = np.zeros(_TABLE.last + 1, dtype=np.int64)
+    for r in _TABLE:
+        if r.access == _Access.RW and r.number != R.MODE_REG:
+            low[r.number], high[r.number] = r.raw_min, r.raw_max
+    return low, high
+
+
+_RAW_MIN, _RAW_MAX = _raw_limits()
+_COUNTS_PER_RAD = _CPR / (2.0 * math.pi)
+
+
+@njit(cache=True, inline="always")
+def reg(view: EngineView, i: int, number: int) -> int:  # pragma: no cover - compiled
+    """Stored integer of register ``number`` of motor ``i``."""
+    return view.regs[i, number]
+
+
+@njit(cache=True, inline="always")
+def set_reg(view: EngineView, i: int, number: int, raw: int) -> None:  # pragma: no cover
+    """Store ``raw`` in the read-write data register ``number`` of motor ``i``, saturated to
+    the register's range; the firmware uses it from the next outer sample. Mode requests and
+    registers with write rules (P_SOLL in a turn-table mode, COMMAND …) go through
+    ``MotorArray.write``."""
+    view.regs[i, number] = min(max(raw, _RAW_MIN[number]), _RAW_MAX[number])
+
+
+@njit(cache=True, inline="always")
+def rotor_angle(view: EngineView, i: int) -> float:  # pragma: no cover - compiled
+    """Rotor angle of motor ``i`` from power-on [rad]."""
+    return view.state[i, _L.S_THETA]
+
+
+@njit(cache=True, inline="always")
+def rotor_speed(view: EngineView, i: int) -> float:  # pragma: no cover - compiled
+    """Rotor speed of motor ``i`` [rad/s]."""
+    return view.state[i, _L.S_OMEGA]
+
+
+@njit(cache=True, inline="always")
+def lost_steps(view: EngineView, i: int) -> int:  # pragma: no cover - compiled
+    """Full steps motor ``i``'s rotor has lost against its commanded position (positive:
+    behind), in whole electrical turns of 4 full steps."""
+    lag = (view.state[i, _L.S_CMD] - view.state[i, _L.S_THETA] * _COUNTS_PER_RAD) / (
+        _c.COUNTS_PER_ELECTRICAL_TURN)
+    return 4 * int(np.floor(lag + 0.5))
+
+
+@njit(cache=True, inline="always")
+def copper_energy(view: EngineView, i: int) -> float:  # pragma: no cover - compiled
+    """Copper loss of motor ``i`` since power-on [J]."""
+    return view.state[i, _L.S_E_COPPER]
+
+
+@njit(cache=True, inline="always")
+def load_energy(view: EngineView, i: int) -> float:  # pragma: no cover - compiled
+    """Work done against the load torque by motor ``i`` since power-on [J]."""
+    return view.state[i, _L.S_E_LOAD]
+
+
+@njit(cache=True, inline="always")
+def set_load_torque(view: EngineView, i: int, torque: float) -> None:  # pragma: no cover
+    """External load torque on motor ``i``'s shaft, opposing positive rotation [N·m]."""
+    view.inputs[i, _L.I_LOAD_TORQUE] = torque
+
+
+@njit(cache=True, inline="always")
+def set_load_inertia(view: EngineView, i: int, inertia: float) -> None:  # pragma: no cover
+    """Load inertia on motor ``i``'s shaft [kg·m²] (≥ 0), from the next outer sample on."""
+    view.params[i, _L.P_J_LOAD] = max(inertia, 0.0)
+
+
+@njit(cache=True, inline="always")
+def set_supply_volts(view: EngineView, i: int, volts: float) -> None:  # pragma: no cover
+    """P+ supply of motor ``i`` [V]."""
+    view.inputs[i, _L.I_SUPPLY_VOLTS] = volts
+
+
+@njit(cache=True, inline="always")
+def set_pulse_counts(view: EngineView, i: int, counts: float) -> None:  # pragma: no cover
+    """Gear input counts of motor ``i`` during the next outer sample (§8.2.3 gear mode)."""
+    view.inputs[i, _L.I_PULSE_COUNTS] = counts
+
+
+@njit(cache=True, inline="always")
+def set_digital_inputs(view: EngineView, i: int, bits: int) -> None:  # pragma: no cover
+    """IO1–IO8 levels of motor ``i`` (bits 0–7)."""
+    view.inputs[i, _L.I_DIGITAL] = bits
