@@ -16,13 +16,21 @@ from __future__ import annotations
 
 import functools
 import math
+import os
 from pathlib import Path
 from typing import Any, ClassVar
 
-import yaml
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from ...config import ConfigError, Real, Text, Whole
+from ...config import (
+    ConfigError,
+    Real,
+    Text,
+    Whole,
+    read_config_file,
+    resolve_config,
+    validate_config,
+)
 from . import constants as c
 from .units import CURRENT_AMPS_PER_UNIT, ENCODER_TYPES, MOTOR_TYPE_CODES
 
@@ -94,27 +102,14 @@ def motor_types() -> list[str]:
 
 @functools.lru_cache(maxsize=64)
 def _load_file(path: Path) -> MisMotorConfig:
-    try:
-        data = yaml.safe_load(path.read_text())
-    except (OSError, yaml.YAMLError) as exc:
-        raise ConfigError(f"{path}: cannot read motor config: {exc}") from exc
-    if not isinstance(data, dict):
-        raise ConfigError(f"{path}: a motor config is a mapping of fields")
-    try:
-        return MisMotorConfig.model_validate(data)
-    except ValidationError as exc:
-        err = exc.errors()[0]
-        field = ".".join(str(x) for x in err["loc"]) or "(file)"
-        raise ConfigError(f"{path}: field {field}: {err['msg']}") from None
+    return validate_config(MisMotorConfig, read_config_file(path), str(path))
 
 
 def load_motor(motor: Any) -> MisMotorConfig:
     """The validated config of ``motor``: a type name, a YAML path or a config object."""
     if isinstance(motor, MisMotorConfig):
         return motor
-    text = str(motor)
-    path = Path(text) if text.endswith((".yaml", ".yml")) else CONFIGS_DIR / f"{text}.yaml"
-    if not path.is_file():
-        raise ConfigError(f"unknown MIS/SMC motor type {text!r}; known: "
-                          f"{', '.join(motor_types())}")
-    return _load_file(path.resolve())
+    if not isinstance(motor, (str, os.PathLike)):
+        raise ConfigError(f"an MIS/SMC motor is a type name, a config path or a "
+                          f"MisMotorConfig, got {motor!r}")
+    return _load_file(resolve_config(CONFIGS_DIR, motor, "MIS/SMC motor type").resolve())
