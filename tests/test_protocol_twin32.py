@@ -329,3 +329,36 @@ def test_mixed_bus_over_a_pty() -> None:
         finally:
             os.close(fd)
     assert out == READ_EXAMPLES[3][1]  # quick guide §1.3.4: P_IST = 245,000
+
+
+@pytest.fixture
+def toy_family():
+    import sys
+    from pathlib import Path
+
+    from jvl_gym.families import register_family
+
+    fixtures = str(Path(__file__).resolve().parent / "fixtures")
+    sys.path.insert(0, fixtures)
+    register_family("toy", "toy_family")
+    yield
+    sys.path.remove(fixtures)
+
+
+def test_serve_builds_one_twin_per_family_on_one_line(toy_family, tmp_path) -> None:
+    from jvl_gym.cli_serve import banner, build_line
+
+    types, addresses = ["MAC140", "TOY1", "MAC140"], [19, 5, 20]
+    line, order = build_line(types, addresses, seed=0, flash_dir=tmp_path)
+    assert isinstance(line, Bus) and order == [0, 2, 1]
+    assert line.addresses() == [19, 20, 5]
+    assert [t.flash_dir for t in line.twins] == [tmp_path / "mac050_141", tmp_path / "toy"]
+    assert banner([types[k] for k in order], line) == [
+        "motor 0: MAC140 at address 19", "motor 1: MAC140 at address 20",
+        "motor 2: TOY1 at address 5"]
+    # the toy family declares no dialect: it speaks the MAC050–141 MacTalk
+    assert [t.dialect for t in line.twins] == [MACTALK16, MACTALK16]
+    assert ask(line, mt.encode_write(5, 3, mt.words_to_bytes([250]))) == mt.ACCEPT
+    assert line.twins[1].m.read("V_SOLL").tolist() == [250]
+    one, order = build_line(["MAC140"], [19])
+    assert isinstance(one, Twin) and order == [0]
