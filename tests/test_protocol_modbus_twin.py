@@ -285,3 +285,49 @@ def test_modbus_server_refuses_addresses_modbus_has_not() -> None:
 
     with pytest.raises(typer.BadParameter, match="1..247"):
         _modbus_server(mis_twin((42, 250)), ("127.0.0.1", 0), False, 1.0)
+
+
+def _recv(sock, n: int, timeout: float = 2.0) -> bytes:
+
+    sock.settimeout(timeout)
+    out = b""
+    try:
+        while len(out) < n:
+            chunk = sock.recv(256)
+            if not chunk:
+                break
+            out += chunk
+    except TimeoutError:
+        pass
+    return out
+
+
+@pytest.mark.parametrize("enable", [1, 0])
+def test_serve_modbus_switch_follows_register_121(enable: int) -> None:
+    """MIS manual §12.2.1: MacTalk after power-on; Modbus after 1 s of silence if bit 0 of
+    register 121 is set then, else MacTalk goes on."""
+    import socket
+
+    from jvl_gym.cli_serve import _modbus_server
+    from jvl_gym.protocol import mactalk32 as m32
+
+    twin = mis_twin()
+    twin.m.write_raw(P_IST, 123456789, index=0)
+    server = _modbus_server(twin, ("127.0.0.1", 0), False, 1.0, switch=True)
+    server.run_clock = False
+    with server, socket.create_connection(
+            ("127.0.0.1", server.endpoint("modbus", "tcp").port), timeout=2) as s:
+        s.sendall(m32.encode_write_value(42, 121, enable))  # in the first second: MacTalk
+        assert _recv(s, 3) == m32.ACCEPT
+        time.sleep(1.2)
+        s.sendall(mb.append_crc(READ_42))
+        if enable:
+            assert _recv(s, 9) == mb.append_crc(READ_42_REPLY)
+            s.sendall(m32.encode_read(42, P_IST))  # MacTalk cannot switch it back
+            assert _recv(s, 19, timeout=0.5) == b""
+        else:
+            assert _recv(s, 9, timeout=0.5) == b""
+            time.sleep(0.1)
+            s.sendall(m32.encode_read(42, P_IST))
+            reply = m32.decode(_recv(s, 19))
+            assert m32.data_value(reply.data) == 123456789

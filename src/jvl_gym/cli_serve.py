@@ -99,6 +99,10 @@ def serve(
     modbus: Annotated[bool, typer.Option(
         "--modbus", help="Serve Modbus RTU (MIS manual §12) instead of MacTalk: motors of one "
         "32-bit family (MIS) at addresses 1..247.")] = False,
+    modbus_switch: Annotated[bool, typer.Option(
+        "--modbus-switch", help="Serve the MIS main channel as the motor does: MacTalk after "
+        "power-on, Modbus RTU after 1 s of silence if bit 0 of register 121 is set (MIS manual "
+        "§12.2.1).")] = False,
     user_tcp: Annotated[int | None, typer.Option(
         help="FastMAC/FlexMAC user interface of motor i on TCP port BASE+i.")] = None,
     user_pty: Annotated[bool, typer.Option(
@@ -129,6 +133,7 @@ def serve(
     code = {"example": fm.EXAMPLE_CODE, "table": fm.TABLE_CODE}.get(fastmac_code)
     if code is None:
         raise typer.BadParameter("--fastmac-code is 'example' or 'table'")
+    modbus = modbus or modbus_switch
     if modbus and (user_tcp is not None or user_pty):
         raise typer.BadParameter("--modbus serves the main channel only (no --user-tcp/-pty)")
     array_kw = {} if record_length is None else {"record_length": record_length}
@@ -136,7 +141,7 @@ def serve(
                              fastmac_code=code, **array_kw)
     endpoint = parse_tcp(tcp) if tcp else None
     if modbus:
-        server = _modbus_server(line, endpoint, pty, speed)
+        server = _modbus_server(line, endpoint, pty, speed, switch=modbus_switch)
     else:
         server = TwinServer(line, speed=speed, tcp=endpoint, pty=pty, user_tcp=user_tcp,
                             user_pty=user_pty)
@@ -156,9 +161,19 @@ def serve(
         typer.echo(f"stopped; {dict(line.stats)}")
 
 
-def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float) -> Any:
-    """A Modbus RTU server of the motors of ``line`` (one twin of a 32-bit family)."""
-    from .protocol.modbus_server import ModbusServer
+def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
+                   switch: bool = False) -> Any:
+    """A Modbus RTU server of the motors of ``line`` (one twin of a 32-bit family); with
+    ``switch``, every stream starts in MacTalk and goes to Modbus as the first motor's register
+    121 says (MIS manual §12.2.1), the silence counted from now (power-on)."""
+    import time
+
+    from .protocol.modbus_server import (
+        ModbusServer,
+        ModbusSession,
+        ProtocolSwitch,
+        SwitchingSession,
+    )
     from .protocol.modbus_twin import modbus_bus
     from .protocol.twin import Twin
 
@@ -172,7 +187,18 @@ def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: flo
         if not 1 <= a <= 247:
             raise typer.BadParameter(f"--modbus: address {a} is no Modbus slave address "
                                      "(1..247; MIS manual §12.1)")
-    return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=True)
+    if not switch:
+        return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=True)
+    setup = bus.slaves[0].registers.setup
+    if setup is None:
+        raise typer.BadParameter("--modbus-switch: the family has no Modbus set-up register")
+    line_switch = ProtocolSwitch.for_device(bus.slaves[0].device, setup, time.monotonic())
+
+    def switching() -> SwitchingSession:
+        return SwitchingSession(line.session(), ModbusSession(bus), line_switch)
+
+    return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=True,
+                        make_session=switching)
 
 
 if __name__ == "__main__":

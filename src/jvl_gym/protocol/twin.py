@@ -487,8 +487,12 @@ class UserInterfaceSession:
 
     @property
     def active(self) -> bool:
-        """USERINTF = 11 at the last power-on."""
-        return int(self.twin.m.interface_bits[self.i]) & 3 == 3
+        """USERINTF = 11 at the last power-on (a family without these bits, or of 32-bit
+        registers, has no FastMAC/FlexMAC user interface)."""
+        bits = getattr(self.twin.m, "interface_bits", None)
+        if bits is None or self.twin.unit32 is not None:
+            return False
+        return int(bits[self.i]) & 3 == 3
 
     def status(self) -> int:
         """The status byte now (manual 5.2.1.6)."""
