@@ -110,7 +110,7 @@ plt.show()
 # %% [markdown]
 # ## Writing the register set
 # `design.registers` maps register names to values in the register formats; written as a setup
-# file it is exactly what `configs/setups/*.yaml` and `MotorArray.load_setup` take.
+# file it is exactly what `families/mac050_141/configs/setups/*.yaml` and `MotorArray.load_setup` take.
 
 # %%
 import yaml  # noqa: E402

@@ -17,7 +17,7 @@ GENERIC = [SRC / "jvl_gym" / "envs", SRC / "jvl_gym" / "protocol", SRC / "jvl_gy
            ROOT / "tuning"]
 #: what a family shows the other layers: its package, units and constants, register table,
 #: task interface
-PUBLIC = {"constants", "table", "task"}
+PUBLIC = {"constants", "table", "task", "config"}
 #: names under which the generic layers hold a MotorArray
 ARRAY_NAMES = re.compile(r"\b(?:motors|m|sim|array)\._[a-z]\w*\b")
 
@@ -73,3 +73,17 @@ def test_the_rule_sees_a_violation(tmp_path: Path) -> None:
     assert any(m.split(".")[3] not in PUBLIC for m in _imported_modules(bad, "jvl_gym.envs")
                if m.startswith("jvl_gym.families.mac050_141."))
     assert ARRAY_NAMES.findall(bad.read_text())
+
+
+#: layers that serve every family alike and so name no family at all
+FAMILY_BLIND = [SRC / "jvl_gym" / "world", SRC / "jvl_gym" / "engine"]
+
+
+@pytest.mark.parametrize("path", sorted(p for f in FAMILY_BLIND for p in f.rglob("*.py")),
+                         ids=lambda p: str(p.relative_to(ROOT)))
+def test_family_blind_layers_import_no_family(path: Path) -> None:
+    for module in _imported_modules(path):
+        parts = module.split(".")
+        assert not (parts[:2] == ["jvl_gym", "families"] and len(parts) > 2
+                    and parts[2] not in ("Family", "family", "families")), (
+            f"{path.name} imports {module}: a family-blind layer names a family")

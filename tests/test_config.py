@@ -6,7 +6,8 @@ import pytest
 import yaml
 
 from jvl_gym import MotorArray
-from jvl_gym.config import ConfigError, configs_dir, load_motor, load_setup, motor_types
+from jvl_gym.config import ConfigError
+from jvl_gym.families.mac050_141.config import MOTORS_DIR, load_motor, load_setup, motor_types
 from jvl_gym.registers import RegisterError
 
 
@@ -26,7 +27,7 @@ def _write(tmp_path, data, name="bad.yaml"):
 
 
 def test_malformed_motor_configs_raise_config_error(tmp_path):
-    good = yaml.safe_load((configs_dir() / "motors" / "MAC140.yaml").read_text())
+    good = yaml.safe_load((MOTORS_DIR / "MAC140.yaml").read_text())
     with pytest.raises(ConfigError, match="not found"):
         load_motor(tmp_path / "missing.yaml")
     with pytest.raises(ConfigError, match="YAML"):

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from jvl_gym import MotorArray
-from jvl_gym.config import load_setup, motor_types
 from jvl_gym.families.mac050_141 import constants as c
+from jvl_gym.families.mac050_141.config import load_setup, motor_types
 
 RATIOS = np.array([1.0, 2.0, 5.0, 10.0])
 

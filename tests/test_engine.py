@@ -126,3 +126,52 @@ def test_reseed_gives_new_noise_streams_and_refuses_other_types() -> None:
         with pytest.raises(ValueError):
             b.reseed(bad)
         np.testing.assert_array_equal(b.keys, keys)
+
+
+def test_compile_caches_are_dropped_when_compiled_sources_change(tmp_path):
+    """An edit of any file with compiled code removes every cache file of the package (numba
+    alone would keep a caller's cache with the old callee inlined); other edits remove none."""
+    from jvl_gym.engine.cache import drop_stale_caches
+
+    pkg = tmp_path / "pkg"
+    (pkg / "sub" / "__pycache__").mkdir(parents=True)
+    kernel = pkg / "sub" / "kernel.py"
+    kernel.write_text("from numba import njit\n")
+    plain = pkg / "cli.py"
+    plain.write_text("x = 1\n")
+    cache = pkg / "sub" / "__pycache__" / "caller.f-1.py311.nbi"
+
+    def make_cache():
+        cache.write_bytes(b"x")
+        cache.with_suffix(".nbc").write_bytes(b"x")
+
+    make_cache()
+    assert drop_stale_caches(pkg) == 2  # no stamp yet: caches of unknown sources go
+    make_cache()
+    assert drop_stale_caches(pkg) == 0 and cache.exists()  # unchanged sources
+    plain.write_text("x = 2\n")
+    assert drop_stale_caches(pkg) == 0 and cache.exists()  # no compiled code changed
+    kernel.write_text("from numba import njit\n# edited\n")
+    assert drop_stale_caches(pkg) == 2 and not cache.exists()
+    make_cache()
+    assert drop_stale_caches(pkg) == 0 and cache.exists()
+
+
+def test_stale_caches_under_numba_cache_dir_are_dropped_too(tmp_path, monkeypatch):
+    from jvl_gym.engine.cache import drop_stale_caches
+
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "kernel.py").write_text("from numba import njit\n")
+    user = tmp_path / "numba-cache"
+    import hashlib
+    import os
+
+    mirrored = user / f"pkg_{hashlib.sha1(os.path.abspath(pkg).encode()).hexdigest()}"
+    mirrored.mkdir(parents=True)
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(user))
+    drop_stale_caches(pkg)
+    (mirrored / "kernel.f-1.py311.nbi").write_bytes(b"x")
+    (pkg / "kernel.py").write_text("from numba import njit\n# edited\n")
+    assert drop_stale_caches(pkg) == 1
+    assert not (mirrored / "kernel.f-1.py311.nbi").exists()

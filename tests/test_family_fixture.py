@@ -93,3 +93,18 @@ def test_a_task_env_on_the_toy_family() -> None:
         warnings.simplefilter("always")
         check_env(ToySpeedEnv(), skip_render_check=True)
     assert not caught, [str(w.message) for w in caught]
+
+
+def test_a_world_source_for_an_input_the_family_lacks_is_refused() -> None:
+    """The toy drive has no pulse input: a world that drives one is refused before the step,
+    and nothing moves."""
+    from jvl_gym.world import PulseInput, SpeedProfile, World
+
+    m = MotorArray("TOY1")
+    m.write_many({"V_SOLL": 500, "MODE_REG": 1})
+    before = m.regs.copy(), m.state.copy()
+    m.world = World(pulse=PulseInput(SpeedProfile.constant(1.0, n=1), lines=1000))
+    with pytest.raises(ValueError, match="pulse_counts"):
+        m.step(1)
+    np.testing.assert_array_equal(m.regs, before[0])
+    np.testing.assert_array_equal(m.state, before[1])

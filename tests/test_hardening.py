@@ -8,7 +8,8 @@ import pytest
 import yaml
 
 from jvl_gym import ModeError, MotorArray
-from jvl_gym.config import ConfigError, configs_dir, load_motor
+from jvl_gym.config import ConfigError
+from jvl_gym.families.mac050_141.config import MOTORS_DIR, load_motor
 from jvl_gym.registers import (
     ReadOnlyRegisterError,
     RegisterError,
@@ -159,7 +160,7 @@ def test_constructor_setup_error_names_the_file(tmp_path):
 
 # ------------------------------------------------------------------ motor configs
 def _motor_file(tmp_path, **changes):
-    data = yaml.safe_load((configs_dir() / "motors" / "MAC140.yaml").read_text())
+    data = yaml.safe_load((MOTORS_DIR / "MAC140.yaml").read_text())
     data.update(changes)
     path = tmp_path / "motor.yaml"
     path.write_text(yaml.safe_dump(data))

@@ -11,7 +11,8 @@ import yaml
 from tuning.cli import app as tune
 
 from jvl_gym.cli import app as gym_cli
-from jvl_gym.config import ConfigError, configs_dir
+from jvl_gym.config import ConfigError
+from jvl_gym.families.mac050_141.config import SETUPS_DIR
 
 
 def _run(app, args, capsys):
@@ -75,7 +76,7 @@ def test_list_shaped_and_partial_setups(tmp_path, capsys):
 
 def test_verify_reads_the_motor_from_the_setup(tmp_path, capsys):
     setup = tmp_path / "setup.yaml"
-    data = yaml.safe_load((configs_dir() / "setups" / "MAC095.yaml").read_text())
+    data = yaml.safe_load((SETUPS_DIR / "MAC095.yaml").read_text())
     data["motor"] = "MAC095"
     setup.write_text(yaml.safe_dump(data))
     code, out, err = _run(tune, ["verify", "--setup", str(setup)], capsys)

@@ -19,7 +19,8 @@ from tuning.models import MotorData
 from tuning.records import Record, RecordError, load_csv, save_csv, simulate_testu
 
 from jvl_gym import MotorArray
-from jvl_gym.config import ConfigError, MotorConfig, configs_dir, load_motor, load_setup
+from jvl_gym.config import ConfigError
+from jvl_gym.families.mac050_141.config import MOTORS_DIR, MotorConfig, load_motor, load_setup
 from jvl_gym.families.mac050_141.firmware import write_rules as W
 from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
 from jvl_gym.registers import Access, Format, RegisterError
@@ -243,7 +244,7 @@ def test_flash_image_loads_whole_or_not_at_all(index, image, preload):
 
 
 # ------------------------------------------------------------------ configs and setups
-_BASE = yaml.safe_load((configs_dir() / "motors" / "MAC140.yaml").read_text())
+_BASE = yaml.safe_load((MOTORS_DIR / "MAC140.yaml").read_text())
 _FIELDS = [k for k in MotorConfig.model_fields if k not in ("provenance",)]
 config_values = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.booleans(),
                           st.integers(-10**6, 10**6), st.text(max_size=5), st.none(),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from jvl_gym.families.mac050_141 import constants as c
@@ -42,3 +43,27 @@ def test_670_relative_moves_before_p_soll_leaves_range():  # manual 4.1.2
 
 def test_stop_speed_is_300_rpm():  # manual 4.1.8
     assert c.v_ist_to_rpm(c.STOP_SPEED_COUNTS) == pytest.approx(300.0)
+
+
+@pytest.mark.parametrize(("a_soll", "direction"), [(10, 1), (10, -1), (25, 1)])
+def test_held_motor_fncerr_grows_by_the_profile_velocity_each_sample(a_soll, direction):
+    """Manual 3.2.24: a motor held away from its position in P_MODE while the function
+    generator asks for a velocity of 10 has its profile corrected by −10 at each sample, so
+    |FNCERR| grows by 10 per sample although the position error stays constant.
+
+    The shaft is held by a Coulomb friction far above the torque limit T_SOLL; from standstill
+    the function block asks for one A_SOLL step of velocity per sample, and the speed
+    regulator's correction (docs/model.md §8) takes exactly that back."""
+    from jvl_gym import MotorArray
+
+    motor = MotorArray("MAC140", coulomb_friction=50.0)
+    motor.write_many({"T_SOLL": 300, "V_SOLL": 1000, "A_SOLL": a_soll,
+                      "P_SOLL": direction * 200000})
+    motor.write("MODE_REG", c.P_MODE)
+    motor.step(300)
+    fncerr = []
+    for _ in range(20):
+        motor.step(1)
+        fncerr.append(int(motor.read("FNCERR")[0]))
+    assert int(motor.read("P_IST")[0]) == 0  # held: the position error is constant
+    assert set(map(int, (fncerr[1:] - np.asarray(fncerr[:-1])))) == {-direction * a_soll}

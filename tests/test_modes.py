@@ -346,12 +346,12 @@ def test_pulse_input_decoding_semantics():
     quad = PulseInput(prof, lines=500, signal="quadrature")
     pdir = PulseInput(SpeedProfile.constant(2.0, n=1), lines=500, signal="pulse_dir")
     n = 521
-    q = sum(quad.advance(np.array([0]))[0] for _ in range(n))
-    p = sum(pdir.advance(np.array([c.PULSEDIR]))[0] for _ in range(n))
+    q = sum(quad.advance(c.OUTER_DT, np.array([False]), np.array([False]))[0] for _ in range(n))
+    p = sum(pdir.advance(c.OUTER_DT, np.array([True]), np.array([False]))[0] for _ in range(n))
     assert q == pytest.approx(4 * 500 * 2.0 * n * c.OUTER_DT, abs=1)
     assert p == pytest.approx(500 * 2.0 * n * c.OUTER_DT, abs=1)
     neg = PulseInput(SpeedProfile.constant(2.0, n=1), lines=500, signal="pulse_dir")
-    assert neg.advance(np.array([c.PULSEDIR | c.INPSIGN]))[0] <= 0
+    assert neg.advance(c.OUTER_DT, np.array([True]), np.array([True]))[0] <= 0
 
 
 def test_world_drives_gear_mode_through_the_kernel():
@@ -434,3 +434,57 @@ def test_mode_table_names_real_registers_and_every_mode():
         for reg in m.parameters:
             MAC050_141.lookup(reg)
     assert "COIL_MODE" in markdown_mode_table()
+
+
+@pytest.mark.parametrize("gear_mode", [c.GP_MODE, c.GF_MODE])
+def test_gear_to_p_mode_hand_over_starts_fncerr_from_zero(gear_mode):
+    """Manual 3.2.24: in GP/GF FNCERR is the gear position error, in P_MODE the sum of the
+    profile corrections. A motor switched from following pulses to P_MODE starts its FNCERR
+    at 0, so an FNCERRMAX below the gear error does not trip in P_MODE, which reaches P_SOLL."""
+    m = MotorArray("MAC140")
+    m.write_many({"V_SOLL": 1000, "A_SOLL": 20, "T_SOLL": 200, "GEARF1": 1, "GEARF2": 1})
+    m.write("MODE_REG", gear_mode)
+    m.set_input(pulse_counts=20)
+    m.step(200)
+    gear_error = int(m.read("FNCERR")[0])
+    assert abs(gear_error) > 100  # the follow lag of a 20 counts/sample pulse train
+    m.set_input(pulse_counts=0)
+    target = int(m.read("P_IST")[0]) + 5000
+    m.write_many({"FNCERRMAX": abs(gear_error) // 2, "P_SOLL": target})
+    m.write("MODE_REG", c.P_MODE)
+    m.step(1)
+    assert int(m.read("FNCERR")[0]) == 0
+    m.step(1500)
+    assert int(m.read("MODE_REG")[0]) == c.P_MODE
+    assert int(m.read("ERR_STAT")[0]) & c.FNC_ERR == 0
+    assert abs(int(m.read("P_IST")[0]) - target) <= 10
+
+
+#: regulated modes a user switches between while the motor moves (manual 4.4)
+_MOVING_MODES = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.AVZ_MODE, c.VAT_MODE,
+                 c.AG_MODE, c.A2POS_MODE, c.APOS_MODE, c.GF_MODE]
+
+
+@pytest.mark.parametrize("first", _MOVING_MODES)
+def test_every_hand_over_between_moving_modes_is_bumpless_and_error_free(first):
+    """Switching from one regulated mode to another while moving (docs/model.md §9): the
+    profile continues from the present velocity (FNC_OUT moves by at most one A_SOLL step at
+    the switch), no error bit is set and the new mode stays active."""
+    for second in _MOVING_MODES:
+        if second == first:
+            continue
+        m = MotorArray("MAC140")
+        m.write_many({"V_SOLL": 800, "A_SOLL": 20, "T_SOLL": 600, "GEARF1": 1, "GEARF2": 1,
+                      "P_SOLL": 30000})
+        m.set_input(pulse_counts=10, analog_volts=3.0)
+        m.write("MODE_REG", first)
+        m.step(200)
+        before = int(m.read("FNC_OUT")[0])
+        m.write("MODE_REG", second)
+        m.step(1)
+        after = int(m.read("FNC_OUT")[0])
+        assert abs(after - before) <= 20 + 1, (first, second, before, after)
+        m.step(1000)
+        errors = c.I2T_ERR | c.FLW_ERR | c.FNC_ERR | c.UIT_ERR | c.PLIM_ERR
+        assert int(m.read("ERR_STAT")[0]) & errors == 0, (first, second)
+        assert int(m.read("MODE_REG")[0]) == second, (first, second)

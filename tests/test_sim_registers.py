@@ -196,8 +196,8 @@ def test_trace_records_registers_and_physics(m):
 
 
 def test_reset_can_change_the_motor_type_of_some_motors():
-    from jvl_gym.config import load_motor
     from jvl_gym.families.mac050_141 import layout as L
+    from jvl_gym.families.mac050_141.config import load_motor
 
     m = MotorArray("MAC140", n=3, seed=0)
     m.write("MODE_REG", c.V_MODE, index=[0])

@@ -86,9 +86,9 @@ def test_quantisation_range_errors_and_exact_sums():
 def test_default_setups_are_the_toolkit_output(motor):
     from tuning.defaults import render_setup
 
-    from jvl_gym.config import configs_dir
+    from jvl_gym.families.mac050_141.config import SETUPS_DIR
 
-    assert (configs_dir() / "setups" / f"{motor}.yaml").read_text() == render_setup(motor)
+    assert (SETUPS_DIR / f"{motor}.yaml").read_text() == render_setup(motor)
 
 
 def test_friction_dead_band_gets_a_position_integral_that_settles_the_move():

@@ -43,22 +43,27 @@ def test_random_walk_statistics_and_seed():
 def test_pulse_counts_are_never_lost():
     prof = SpeedProfile.constant(0.37, n=1)
     src = PulseInput(prof, lines=1000, signal="quadrature")
-    total = sum(src.advance(np.array([0]))[0] for _ in range(1000))
+    quadrature = np.array([False]), np.array([False])
+    total = sum(src.advance(c.OUTER_DT, *quadrature)[0] for _ in range(1000))
     assert total == np.floor(0.37 * 4000 * 1000 * c.OUTER_DT)
 
 
-def test_analog_noise_is_per_motor_and_clipped():
+def test_analog_noise_is_per_motor_and_the_adc_clips():
     src = AnalogInput(9.9, n=3, noise_std=0.5, seed=4)
-    v = np.array([src.advance() for _ in range(500)])
-    assert v.max() <= 10.0
+    v = np.array([src.advance(c.OUTER_DT) for _ in range(500)])
+    assert v.max() > 10.0  # the terminal voltage: the motor's ADC clips (3.2.122)
     assert not np.array_equal(v[:, 0], v[:, 1])
     with pytest.raises(ValueError):
         AnalogInput(0.0, n=1, noise_std=-1.0)
+    m = MotorArray("MAC140", n=2, seed=0)
+    m.world = World(analog=AnalogInput(np.array([12.0, -12.0]), n=2))
+    m.step(1)
+    np.testing.assert_array_equal(m.read("ANINP"), [1023, -1023])  # ±10 V full scale
 
 
 def test_supply_events_and_bad_events():
     ev = SupplyEvents([(0.01, 0.02, 0.0)], nominal=48.0, n=2)
-    v = np.array([ev.advance()[0] for _ in range(20)])
+    v = np.array([ev.advance(c.OUTER_DT)[0] for _ in range(20)])
     assert v[0] == 48.0 and 0.0 in v
     with pytest.raises(ValueError):
         SupplyEvents([(0.2, 0.1, 24.0)], nominal=48.0, n=1)
@@ -71,3 +76,21 @@ def test_world_and_held_inputs_combine():
     m.step(3)
     assert m.read("ANINP")[0] == 512  # 5 V → 511.5 → 512 (half away from zero)
     assert m.inputs[0, 0] == 0.01  # the held load torque is kept
+
+
+def test_world_takes_the_sample_time_and_pulse_decoding_from_the_motors():
+    """The sources advance by the array's own sample time; the pulse decoding is the motors'
+    latched configuration (PULSEDIR, INPSIGN on the MAC050–141, manual 3.2.36)."""
+    m = MotorArray("MAC140", n=2, seed=0)
+    m.write("CNTRL_BITS", [0, c.PULSEDIR | c.INPSIGN])
+    m.go_safe_mode()
+    m.write_flash()  # saved, then a reset: latched at power-on
+    np.testing.assert_array_equal(m.pulse_decoding()[0], [False, True])
+    np.testing.assert_array_equal(m.pulse_decoding()[1], [False, True])
+    world = World(pulse=PulseInput(SpeedProfile.constant(1.0, n=2), lines=1000))
+    out = world.schedule(m, 100)
+    counts = out[:, :, m.INPUTS["pulse_counts"]].sum(axis=0)
+    np.testing.assert_allclose(counts, [4000 * 100 / m.OUTER_HZ, -1000 * 100 / m.OUTER_HZ],
+                               atol=1)  # whole counts: a fraction is carried to the next
+    assert world.t == pytest.approx(100 / m.OUTER_HZ)
+

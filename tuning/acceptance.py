@@ -6,9 +6,10 @@ friction a PI speed loop is a PD position loop that stops anywhere within its fr
 band (:func:`tuning.synthesis.friction_dead_band`), and the default setup may be faster for a
 light load. So before a setup is returned, every candidate — the design asked for, the same
 speed loop with and without the position integral, the I-P structure (manual 4.2: the
-proportional part in VB), and the motor type's default setup (``configs/setups/<TYPE>.yaml``)
-— runs the same P_MODE move (:func:`tuning.verify.position_move`) on a ``MotorArray`` built
-from the *identified* values (R, L, PWM delay, J, b, T_c, the current noise seen in TESTU).
+proportional part in VB), and the motor type's default setup
+(``families/mac050_141/configs/setups/<TYPE>.yaml``) — runs the same P_MODE move
+(:func:`tuning.verify.position_move`) on a ``MotorArray`` built from the *identified* values
+(R, L, PWM delay, J, b, T_c, the current noise seen in TESTU).
 The candidate that settles first in the in-position window (INPOSWIN, 3.2.33) wins; ties and
 moves that never settle are decided by the final position error, then by the order above
 (the design asked for first). The reason goes into the report.
@@ -85,8 +86,9 @@ class Acceptance:
 
 
 def default_filters(motor_type: str) -> dict[str, float]:
-    """The filter registers of the motor type's default setup (``configs/setups``)."""
-    from jvl_gym.config import load_setup
+    """The filter registers of the motor type's default setup
+    (``families/mac050_141/configs/setups``)."""
+    from jvl_gym.families.mac050_141.config import load_setup
 
     from .autotune import CURRENT_KEYS, SPEED_KEYS
 
@@ -283,7 +285,7 @@ def autotune_designs(idents: Sequence[Identification], structure: str = "pi",
 def default_design(ident: Identification) -> Design:
     """The motor type's default setup as a :class:`tuning.autotune.Design`, verified on the
     identified motor: the design point of :mod:`tuning.defaults` (fixed normalised gains, PI,
-    KVOUT = 1) with the registers of ``configs/setups/<TYPE>.yaml``."""
+    KVOUT = 1) with the registers of ``families/mac050_141/configs/setups/<TYPE>.yaml``."""
     from .autotune import synthesize
     from .defaults import DEFAULT_CURRENT_GAINS, DEFAULT_SPEED_GAINS
     from .verify import verify_current_loop, verify_speed_loop
@@ -295,5 +297,6 @@ def default_design(ident: Identification) -> Design:
     d.registers = regs
     d.current_report = verify_current_loop(md, regs)
     d.speed_report = verify_speed_loop(md, regs, ident.mechanics.J)
-    d.notes = ["the motor type's default setup (configs/setups), kept by the acceptance step"]
+    d.notes = ["the motor type's default setup (the family's configs/setups), kept by the "
+               "acceptance step"]
     return d

@@ -122,7 +122,7 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
         recs = [load_csv(p) for p in testa]
         cur = pc = None
         if setup is not None:
-            from jvl_gym.config import load_setup
+            from jvl_gym.families.mac050_141.config import load_setup
 
             regs = load_setup(setup).registers
             keys = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
@@ -186,7 +186,7 @@ def _setup_registers(motor: str | None, setup: Path) -> tuple[str, dict[str, flo
     """The motor type and the complete register set a motor runs with after ``setup`` is
     written to it: the setup validated as the simulator validates it (names, ranges,
     read-only registers, write rules), registers it does not give from the motor type's
-    defaults (ROM and ``configs/setups``), as a motor keeps them.
+    defaults (ROM and the family's ``configs/setups``), as a motor keeps them.
 
     Raises
     ------
@@ -194,7 +194,7 @@ def _setup_registers(motor: str | None, setup: Path) -> tuple[str, dict[str, flo
         No motor named (``--motor`` nor the setup's ``motor:``) or the two disagree.
     """
     from jvl_gym import MotorArray
-    from jvl_gym.config import canonical_motor_name, load_motor, load_setup
+    from jvl_gym.families.mac050_141.config import canonical_motor_name, load_motor, load_setup
 
     cfg = load_setup(setup)
     named = cfg.motor
@@ -364,8 +364,10 @@ def fleet(spec: Path = typer.Argument(..., help="fleet file (configs/fleets/*.ym
 
 
 @app.command()
-def defaults(out: Path = typer.Option(None, help="directory (default: configs/setups)")) -> None:
-    """Regenerate the default setups configs/setups/<TYPE>.yaml from the motor configs."""
+def defaults(out: Path = typer.Option(
+        None, help="directory (default: the family's configs/setups)")) -> None:
+    """Regenerate the default setups (the family's configs/setups/<TYPE>.yaml) from the motor
+    configs."""
     from .defaults import write_default_setups
 
     for p in write_default_setups(out):

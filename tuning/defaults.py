@@ -1,4 +1,5 @@
-"""Regenerate the default register sets ``configs/setups/<TYPE>.yaml`` from the motor configs.
+"""Regenerate the default register sets ``families/mac050_141/configs/setups/<TYPE>.yaml`` from
+the motor configs.
 
 The filters come from the toolkit's synthesis (:func:`tuning.autotune.synthesize`) on the
 motor config's (representative) data with no load (J = J_m, KVOUT = 1) at the fixed normalised
@@ -81,10 +82,10 @@ def render_setup(motor_type: str) -> str:
 def write_default_setups(directory: str | os.PathLike[str] | None = None,
                          motor_types: list[str] | None = None) -> list[Path]:
     """Write ``<directory>/<TYPE>.yaml`` for every motor type (default: ``configs/setups``)."""
-    from jvl_gym.config import configs_dir
-    from jvl_gym.config import motor_types as all_types
+    from jvl_gym.families.mac050_141.config import SETUPS_DIR
+    from jvl_gym.families.mac050_141.config import motor_types as all_types
 
-    out_dir = Path(directory) if directory is not None else configs_dir() / "setups"
+    out_dir = Path(directory) if directory is not None else SETUPS_DIR
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
     for t in motor_types or all_types():

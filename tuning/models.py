@@ -18,7 +18,7 @@ Everything here is the *exact* discrete model the firmware and the simulator imp
   ``(4096/2π)·K_vf·TS_O²/(2J)·(z+1)/(z(z−1))``.
 
 Register values are passed as plain ``dict[str, float]`` (register name → value in user units),
-the same mapping a ``configs/setups/*.yaml`` file holds.
+the same mapping a ``families/mac050_141/configs/setups/*.yaml`` file holds.
 """
 
 from __future__ import annotations
@@ -110,8 +110,9 @@ class MotorData:
 
     @classmethod
     def from_config(cls, motor: Any, amplitude: float = 0.83) -> MotorData:
-        """Build from a motor type name, a config path or a ``jvl_gym.config.MotorConfig``."""
-        from jvl_gym.config import MotorConfig, load_motor
+        """Build from a motor type name, a config path or a motor config
+        (``jvl_gym.families.mac050_141.config.MotorConfig``)."""
+        from jvl_gym.families.mac050_141.config import MotorConfig, load_motor
 
         cfg = motor if isinstance(motor, MotorConfig) else load_motor(motor)
         return cls(name=cfg.name, J_m=cfg.rotor_inertia, flux_linkage=cfg.flux_linkage,

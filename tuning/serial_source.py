@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from jvl_gym.config import MotorConfig, load_motor
+from jvl_gym.families.mac050_141.config import MotorConfig, load_motor
 from jvl_gym.families.mac050_141.constants import OUTER_DT, RECORDBIT, TEST_RECORD_SAMPLES
 
 from .records import RecordError

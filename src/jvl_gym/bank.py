@@ -262,6 +262,6 @@ class RegisterBank(ABC):
     def load_setup(self, setup: str | os.PathLike[str] | dict[str, Any],
                    index: MotorIndex = None) -> None:
         """Write a register set (name → value) to the selected motors, validated as a whole."""
-        cfg = load_setup(setup)
+        cfg = load_setup(setup, self.SETUPS_DIR)
         self._check_setup_keys(cfg.registers)
         self.write_many(cfg.registers, index)

@@ -1,13 +1,16 @@
-"""Motor data and register-set configs: loading and validation.
+"""Config files: the validators and loaders every motor family and the project's configs share.
 
-A *motor config* (``configs/motors/<TYPE>.yaml``) holds the physical data of one motor type
-(docs/model.md §15: representative values, each file carries its ``provenance``). A *setup*
-(``configs/setups/<TYPE>.yaml``) is a register set: register name → value in user units, written
-to the motor after power-on exactly as a user would write it (manual 3, "Parameter and Data
-Description": the default set-up is stored in ROM; a user set-up in flash).
+A motor family keeps its *motor configs* (the physical data of each motor type, with their
+provenance) and its *setups* in its own folder (``families/<key>/config.py`` and
+``families/<key>/configs``) and loads them with :func:`resolve_config`,
+:func:`read_config_file` and :func:`validate_config`, in the field types :data:`Real`,
+:data:`Whole` and :data:`Text`. A *setup* (:class:`SetupConfig`) is a register set: register
+name → value in user units, written to the motor after power-on exactly as a user would write it
+(MAC050–141 manual 3, "Parameter and Data Description": the default set-up is stored in ROM; a
+user set-up in flash).
 
-Both are validated on load; a malformed file raises :class:`ConfigError` naming the file and the
-offending field, and nothing is loaded.
+Every file is validated on load; a malformed file raises :class:`ConfigError` naming the file
+and the offending field, and nothing is loaded.
 """
 
 from __future__ import annotations
@@ -23,21 +26,21 @@ from pydantic import (
     BaseModel,
     BeforeValidator,
     ConfigDict,
-    Field,
     ValidationError,
-    ValidationInfo,
     field_validator,
 )
 
 __all__ = [
     "ConfigError",
-    "canonical_motor_name",
-    "MotorConfig",
+    "Real",
+    "Whole",
+    "Text",
     "SetupConfig",
     "configs_dir",
-    "load_motor",
+    "resolve_config",
+    "read_config_file",
+    "validate_config",
     "load_setup",
-    "motor_types",
 ]
 
 
@@ -46,9 +49,10 @@ class ConfigError(ValueError):
 
 
 def configs_dir() -> Path:
-    """Directory holding ``motors/`` and ``setups/``.
+    """Directory of the project's configs: ``rl/`` (training), ``sweeps/``, ``fleets/``.
 
-    ``$JVL_GYM_CONFIGS`` if set, else the repository's ``configs/`` next to ``src/``.
+    ``$JVL_GYM_CONFIGS`` if set, else the repository's ``configs/`` next to ``src/``. Motor data
+    and default setups belong to their motor family (``families/<key>/configs``).
     """
     env = os.environ.get("JVL_GYM_CONFIGS")
     if env:
@@ -92,66 +96,6 @@ Whole = Annotated[int, BeforeValidator(_whole)]
 Text = Annotated[str, BeforeValidator(_text)]
 
 
-class MotorConfig(BaseModel):
-    """Physical data of one motor type (SI units), representative values (docs/model.md §15).
-
-    Every physical value must be a finite number of its type (a bool, a string or an infinity
-    is refused) inside the interval given here: physically plausible for an integrated servo of
-    this class and inside the region where the simulation's integration is stable. The DC bus
-    takes the motor power explicitly over an inner sample (``mac050_141.plant.supply``): a bus
-    capacitance of a few µF lets the bus voltage diverge, so at least 100 µF is required. The
-    end stops' damping (0.05 N·m·s/rad by default, ``mac050_141.plant.mechanics``) is explicit
-    over an inner sample of 128 µs and diverges for a total inertia below about 3.2e-6 kg·m²,
-    so the rotor inertia is at least 5e-6 kg·m².
-    """
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
-
-    name: Text
-    motor_type_code: Whole = Field(ge=0, le=65535, description="MOTOR_TYPE register (3.2.153)")
-    rated_torque: Real = Field(gt=0, le=100.0, description="N·m")
-    peak_torque: Real = Field(gt=0, le=300.0, description="N·m at T_SOLL = 1023, >= rated")
-    rated_speed_rpm: Real = Field(gt=0, le=20000.0)
-    rotor_inertia: Real = Field(ge=5e-6, lt=1.0, description="J_m, kg·m²")
-    flux_linkage: Real = Field(ge=1e-4, le=0.2, description="λ, V·s")
-    phase_resistance: Real = Field(ge=1e-3, lt=100.0, description="Ω per phase")
-    phase_inductance: Real = Field(ge=1e-6, lt=1.0, description="H per phase")
-    amps_per_count: Real = Field(ge=1e-5, lt=1.0, description="A per ADC count")
-    pole_pairs: Whole = Field(2, ge=1, le=16)
-    supply_voltage: Real = Field(48.0, ge=12.0, le=60.0, description="V, nominal")
-    pwm_delay_samples: Whole = Field(1, ge=0, le=1)
-    thermal_time_constant: Real = Field(10.0, ge=0.01, le=1e5, description="s")
-    regen_time_constant: Real = Field(2.0, ge=0.01, le=1e5, description="s")
-    bus_capacitance: Real = Field(2.0e-3, ge=1e-4, le=10.0, description="F")
-    supply_resistance: Real = Field(0.05, ge=1e-3, le=100.0, description="Ω")
-    dump_voltage: Real = Field(52.0, le=100.0, description="V, above supply_voltage")
-    dump_resistance: Real = Field(3.0, ge=0.1, le=1e4, description="Ω")
-    setup: Text
-    provenance: Text = Field(min_length=10)
-
-    @field_validator("peak_torque")
-    @classmethod
-    def _peak_at_least_rated(cls, value: float, info: ValidationInfo) -> float:
-        rated = info.data.get("rated_torque")
-        if rated is not None and value < rated:
-            raise ValueError(f"must be >= rated_torque ({rated}), got {value}")
-        return value
-
-    @field_validator("dump_voltage")
-    @classmethod
-    def _dump_above_supply(cls, value: float, info: ValidationInfo) -> float:
-        supply = info.data.get("supply_voltage")
-        if supply is not None and value <= supply:
-            raise ValueError(f"must be above supply_voltage ({supply} V), got {value} V: the "
-                             "power dump would burn the supply's power")
-        return value
-
-    @property
-    def torque_per_vf(self) -> float:
-        """Motor torque per VF_OUT unit at AMPLITUDE 0.83 [N·m] (manual 4.3, docs/model.md §3)."""
-        return 1.5 * self.pole_pairs * self.flux_linkage * self.amps_per_count * 1023 * 0.83 / 1023
-
-
 class SetupConfig(BaseModel):
     """A register set: register name → value in user units (Fixed formats as real numbers)."""
 
@@ -175,28 +119,41 @@ class SetupConfig(BaseModel):
         return out
 
 
-def canonical_motor_name(name: str) -> str:
-    """The config name of a motor type as users write it: ``"MAC50"`` and ``"mac050"`` are
-    ``"MAC050"``, ``"MAC95"`` is ``"MAC095"``; other names are returned unchanged."""
-    match = re.fullmatch(r"(?i)mac0*(\d{2,3})", name.strip())
-    return f"MAC{int(match.group(1)):03d}" if match else name
+def resolve_config(directory: Path | None, name_or_path: str | os.PathLike[str],
+                   what: str) -> Path:
+    """The file a config name or path stands for.
 
+    Parameters
+    ----------
+    directory : Path or None
+        Folder of the named configs (``<name>.yaml``); None: only paths are accepted.
+    name_or_path : str or path-like
+        A name (no ``.yaml``/``.yml`` suffix, no folder) or the path of a YAML file.
+    what : str
+        What a config of this kind is called in messages (``"motor type"``, ``"setup"``).
 
-def _resolve(kind: str, name_or_path: str | os.PathLike[str]) -> Path:
+    Raises
+    ------
+    ConfigError
+        An unknown name (the message lists the known ones and the folder looked in).
+    """
     path = Path(name_or_path)
     if path.suffix in (".yaml", ".yml") or path.exists():
         return path
-    name = canonical_motor_name(str(name_or_path)) if kind == "motors" else str(name_or_path)
-    found = configs_dir() / kind / f"{name}.yaml"
+    name = str(name_or_path)
+    if directory is None:
+        raise ConfigError(f"unknown {what} {name!r}: give the path of a .yaml file")
+    found = directory / f"{name}.yaml"
     if not found.is_file() and os.sep not in name and "/" not in name:
-        known = ", ".join(sorted(p.stem for p in (configs_dir() / kind).glob("*.yaml")))
-        what = "motor type" if kind == "motors" else "setup"
-        raise ConfigError(f"unknown {what} {str(name_or_path)!r}; known: {known} (or give the "
-                          f"path of a .yaml file; looked in {configs_dir() / kind})")
+        known = ", ".join(sorted(p.stem for p in directory.glob("*.yaml")))
+        raise ConfigError(f"unknown {what} {name!r}; known: {known} (or give the path of a "
+                          f".yaml file; looked in {directory})")
     return found
 
 
-def _read_yaml(path: Path) -> dict[str, Any]:
+def read_config_file(path: Path) -> dict[str, Any]:
+    """The top-level mapping of a YAML config file; :class:`ConfigError` naming the file if it
+    is missing, unreadable, not YAML or not a mapping."""
     if not path.is_file():
         raise ConfigError(f"config file not found: {path}")
     try:
@@ -209,7 +166,9 @@ def _read_yaml(path: Path) -> dict[str, Any]:
     return data
 
 
-def _validate(model: type[BaseModel], data: dict[str, Any], origin: str) -> Any:
+def validate_config(model: type[BaseModel], data: dict[str, Any], origin: str) -> Any:
+    """``model`` validated from ``data``; :class:`ConfigError` naming ``origin`` (the file) and
+    every failing field."""
     try:
         return model.model_validate(data)
     except ValidationError as exc:
@@ -217,40 +176,18 @@ def _validate(model: type[BaseModel], data: dict[str, Any], origin: str) -> Any:
         raise ConfigError(f"{origin}: invalid {model.__name__}:\n  " + "\n  ".join(lines)) from exc
 
 
-def load_motor(name_or_path: str | os.PathLike[str] | MotorConfig) -> MotorConfig:
-    """Load and validate a motor config by type name (``"MAC140"``, also ``"MAC50"`` for
-    ``"MAC050"``: :func:`canonical_motor_name`) or path.
-
-    Raises
-    ------
-    ConfigError
-        Unknown type (the message lists the known ones), missing or unreadable file, or a
-        field that fails validation (named with the file).
-    """
-    if isinstance(name_or_path, MotorConfig):
-        return name_or_path
-    if not isinstance(name_or_path, (str, os.PathLike)):
-        raise ConfigError(f"a motor is a type name, a config path or a MotorConfig, got "
-                          f"{name_or_path!r}")
-    path = _resolve("motors", name_or_path)
-    return _validate(MotorConfig, _read_yaml(path), str(path))
-
-
-def load_setup(name_or_path: str | os.PathLike[str] | dict[str, Any]) -> SetupConfig:
-    """Load and validate a register set by name, path, or an in-memory mapping.
+def load_setup(name_or_path: str | os.PathLike[str] | dict[str, Any],
+               directory: Path | None = None) -> SetupConfig:
+    """Load and validate a register set by name (a file in ``directory``, a motor family's
+    setups folder), path, or an in-memory mapping.
 
     A mapping may be a full setup (with a ``registers`` key) or a bare name → value mapping.
     Register names are checked against the register table when the set is written.
     """
     if isinstance(name_or_path, dict):
         data = name_or_path if "registers" in name_or_path else {"registers": name_or_path}
-        return _validate(SetupConfig, data, "setup mapping")
+        return validate_config(SetupConfig, data, "setup mapping")
     if not isinstance(name_or_path, (str, os.PathLike)):
         raise ConfigError(f"a setup is a name, a path or a mapping, got {name_or_path!r}")
-    path = _resolve("setups", name_or_path)
-    return _validate(SetupConfig, _read_yaml(path), str(path))
-
-
-def motor_types() -> list[str]:
-    """Names of the motor types that have a config in :func:`configs_dir`."""
-    return sorted(p.stem for p in (configs_dir() / "motors").glob("*.yaml"))
+    path = resolve_config(directory, name_or_path, "setup")
+    return validate_config(SetupConfig, read_config_file(path), str(path))

@@ -15,6 +15,7 @@ import functools
 import os
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
@@ -63,7 +64,7 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         gives the keys directly (so one motor of an array can be reproduced on its own).
     setup : str, path, dict, or None
         Register set written over the ROM defaults at power-on; default: the motor type's
-        setup (``configs/setups/<TYPE>.yaml``).
+        setup (``families/mac050_141/configs/setups/<TYPE>.yaml``).
     **params
         Per-motor parameters (scalars or (N,) arrays): the family's
         :attr:`PARAMETER_KEYWORDS` and :attr:`STATE_KEYWORDS`, and the family's own keyword
@@ -91,6 +92,8 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
     OUTER_HZ: ClassVar[float] = 1.0
     #: the register that holds the operating mode
     MODE_REGISTER: ClassVar[str] = "MODE_REG"
+    #: the folder of the family's named setups (``load_setup("<name>")``), or None
+    SETUPS_DIR: ClassVar[Path | None] = None
     #: reset keyword → column of ``params`` (SI units), and → column of ``state``
     PARAMETER_KEYWORDS: ClassVar[dict[str, int]] = {}
     STATE_KEYWORDS: ClassVar[dict[str, int]] = {}
@@ -191,6 +194,12 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
 
     def _before_reset(self) -> None:
         """Family set-up after the arrays exist, before the first power-on."""
+
+    def pulse_decoding(self) -> tuple[np.ndarray, np.ndarray]:
+        """How each motor decodes its pulse input: ``(pulse_dir, inverted)``, (N,) bool
+        arrays (pulse + direction rather than quadrature; count reversed). Families with a
+        pulse input define it (:class:`jvl_gym.world.PulseInput` uses it)."""
+        raise NotImplementedError(f"{self.family.title} motors have no pulse input")
 
     @abstractmethod
     def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,

@@ -32,7 +32,7 @@ def synthesis_registers(motor_type: str) -> dict[str, float] | None:
         from tuning.synthesis import design_speed_loop
     except ImportError:
         return None
-    from ..config import load_motor, load_setup
+    from ..families.mac050_141.config import load_motor, load_setup
 
     cfg = load_motor(motor_type)
     setup = load_setup(cfg.setup).registers

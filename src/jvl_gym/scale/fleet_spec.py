@@ -118,9 +118,9 @@ class FleetSpec:
 
 
 def _motor_types() -> list[str]:
-    from jvl_gym.config import configs_dir
+    from jvl_gym.families.mac050_141.config import motor_types
 
-    return sorted(p.stem for p in (configs_dir() / "motors").glob("*.yaml"))
+    return motor_types()
 
 
 def _int(value: Any, where: str, low: int = 1) -> int:

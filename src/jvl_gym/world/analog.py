@@ -1,7 +1,8 @@
-"""Analogue input ±10 V (manual 3.2.122): a voltage profile with optional noise.
+"""Analogue input: a voltage profile at the motor's analogue terminal, with optional noise.
 
-The ADC (±10 V ↔ ±1023, ANINP_OFFSET added, quantised) is in the firmware; this source gives
-the voltage at the terminal. Noise is drawn per motor from its own generator (``seed`` + motor
+The input's range and its ADC (on the MAC050–141: ±10 V ↔ ±1023, ANINP_OFFSET added,
+quantised, manual 3.2.122) belong to the motor's firmware, which clips; this source gives the
+voltage at the terminal. Noise is drawn per motor from its own generator (``seed`` + motor
 index), so motors do not share a stream.
 """
 
@@ -10,8 +11,6 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
-
-from ..families.mac050_141 import constants as c
 
 
 class AnalogInput:
@@ -40,10 +39,10 @@ class AnalogInput:
         self._rngs = [np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(n)]
         self.t = 0.0
 
-    def advance(self) -> np.ndarray:
-        """Voltage during the next outer sample, clipped to ±10 V, (N,)."""
+    def advance(self, dt: float) -> np.ndarray:
+        """Voltage during the next sample of ``dt`` seconds, (N,) [V]."""
         v = np.broadcast_to(np.asarray(self._fn(self.t), dtype=np.float64), (self.n,)).copy()
         if self.noise_std > 0:
             v += self.noise_std * np.array([g.standard_normal() for g in self._rngs])
-        self.t += c.OUTER_DT
-        return np.clip(v, -c.ANINP_VOLTS, c.ANINP_VOLTS)
+        self.t += dt
+        return v

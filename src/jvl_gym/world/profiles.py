@@ -11,7 +11,9 @@ from collections.abc import Callable, Sequence
 
 import numpy as np
 
-from ..families.mac050_141.constants import OUTER_DT
+#: time step [s] of the grid on which :meth:`SpeedProfile.ripple` integrates the roll angle and
+#: :meth:`SpeedProfile.random_walk` draws its path (a property of the profile, not of a motor)
+GRID_DT = 1e-3
 
 
 class SpeedProfile:
@@ -84,15 +86,15 @@ class SpeedProfile:
                per_rev: float = 1.0) -> SpeedProfile:
         """Eccentric-roll ripple: ``v(t)·(1 + a·sin θ(t))`` with θ the roll angle (TASKS.md).
 
-        The angle is integrated from ``base`` on the outer-sample grid.
+        The angle is integrated from ``base`` on a grid of :data:`GRID_DT`.
         """
         a = np.broadcast_to(np.asarray(amplitude, dtype=np.float64), (base.n,)).copy()
         state = {"t": 0.0, "theta": np.zeros(base.n)}
 
         def fn(t: float) -> np.ndarray:
-            while state["t"] + 0.5 * OUTER_DT < t:
-                state["theta"] = state["theta"] + 2 * np.pi * per_rev * base(state["t"]) * OUTER_DT
-                state["t"] += OUTER_DT
+            while state["t"] + 0.5 * GRID_DT < t:
+                state["theta"] = state["theta"] + 2 * np.pi * per_rev * base(state["t"]) * GRID_DT
+                state["t"] += GRID_DT
             return base(t) * (1.0 + a * np.sin(state["theta"]))
 
         return SpeedProfile(fn, base.n)
@@ -103,20 +105,20 @@ class SpeedProfile:
         """Mean-reverting random walk (Ornstein–Uhlenbeck) around ``mean`` [rev/s].
 
         ``sigma`` is the stationary standard deviation [rev/s], ``tau`` the correlation time [s].
-        The path is drawn once per motor on the outer-sample grid up to ``horizon`` seconds.
+        The path is drawn once per motor on a grid of :data:`GRID_DT` up to ``horizon`` seconds.
         """
         mu = np.broadcast_to(np.asarray(mean, dtype=np.float64), (n,)).copy()
-        steps = int(horizon / OUTER_DT) + 2
+        steps = int(horizon / GRID_DT) + 2
         rng = np.random.default_rng(seed)
         x = np.zeros((steps, n))
-        k = np.exp(-OUTER_DT / tau)
+        k = np.exp(-GRID_DT / tau)
         noise = rng.standard_normal((steps, n)) * sigma * np.sqrt(1 - k * k)
         for j in range(1, steps):
             x[j] = k * x[j - 1] + noise[j]
         path = mu + x
 
         def fn(t: float) -> np.ndarray:
-            j = min(int(t / OUTER_DT), steps - 1)
+            j = min(int(t / GRID_DT), steps - 1)
             return path[j]
 
         return SpeedProfile(fn, n)

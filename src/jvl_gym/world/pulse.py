@@ -1,22 +1,23 @@
-"""Pulse / encoder input (manual 3.2.36 PULSEDIR, INPSIGN; 3.2.120 V_EXT).
+"""Pulse / encoder input of a motor's gear interface.
 
 The source is a master axis turning at a :class:`SpeedProfile` [rev/s] with an encoder of
 ``lines`` lines per revolution emitting either quadrature signals or pulse + direction. The
-motor's interface decodes them as configured by CNTRL_BITS at the last power-on:
+motor's interface decodes them as its configuration says (``MotorArray.pulse_decoding()``; on
+the MAC050–141 the CNTRL_BITS PULSEDIR and INPSIGN latched at the last power-on, manual 3.2.36,
+3.2.120):
 
-| source \\ decoder | quadrature (PULSEDIR = 0) | pulse + direction (PULSEDIR = 1) |
+| source \\ decoder | quadrature | pulse + direction |
 |---|---|---|
 | quadrature | 4 counts per line (edges of A and B) | 1 count per line (A rising, B = dir) |
 | pulse + direction | 0 (A toggles, B static: up and down counts cancel) | 1 count per pulse |
 
-INPSIGN reverses the sign. Fractions of a count are carried over, so no count is lost.
+An inverted input reverses the sign. Fractions of a count are carried over, so no count is lost.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..families.mac050_141 import constants as c
 from .profiles import SpeedProfile
 
 
@@ -46,23 +47,28 @@ class PulseInput:
         self._emitted = np.zeros(profile.n)  # counts emitted so far (decoded, before INPSIGN)
         self.t = 0.0
 
-    def counts_per_rev(self, cntrl_bits: np.ndarray) -> np.ndarray:
-        """Decoded counts per master revolution for the latched CNTRL_BITS of each motor."""
-        pulsedir = (cntrl_bits & c.PULSEDIR) != 0
-        if self.signal == "quadrature":
-            k = np.where(pulsedir, 1.0, 4.0)
-        else:
-            k = np.where(pulsedir, 1.0, 0.0)
-        sign = np.where((cntrl_bits & c.INPSIGN) != 0, -1.0, 1.0)
-        return k * sign * self.lines
+    def counts_per_rev(self, pulse_dir: np.ndarray, inverted: np.ndarray) -> np.ndarray:
+        """Decoded counts per master revolution of each motor.
 
-    def advance(self, cntrl_bits: np.ndarray) -> np.ndarray:
-        """Counts received during the next outer sample, (N,) integers as float64."""
+        Parameters
+        ----------
+        pulse_dir, inverted : (N,) bool arrays
+            The motor decodes pulse + direction (else quadrature); it reverses the count.
+        """
+        if self.signal == "quadrature":
+            k = np.where(pulse_dir, 1.0, 4.0)
+        else:
+            k = np.where(pulse_dir, 1.0, 0.0)
+        return k * np.where(inverted, -1.0, 1.0) * self.lines
+
+    def advance(self, dt: float, pulse_dir: np.ndarray, inverted: np.ndarray) -> np.ndarray:
+        """Counts received during the next sample of ``dt`` seconds, (N,) integers as float64;
+        ``pulse_dir`` and ``inverted`` as in :meth:`counts_per_rev`."""
         v0 = self.profile(self.t)
-        self.t += c.OUTER_DT
+        self.t += dt
         v1 = self.profile(self.t)
-        self.position = self.position + 0.5 * (v0 + v1) * c.OUTER_DT
-        total = np.floor(self.position * self.counts_per_rev(cntrl_bits))
+        self.position = self.position + 0.5 * (v0 + v1) * dt
+        total = np.floor(self.position * self.counts_per_rev(pulse_dir, inverted))
         counts = total - self._emitted
         self._emitted = total
         return counts

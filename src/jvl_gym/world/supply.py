@@ -1,12 +1,11 @@
-"""Supply voltage events: sags and dropouts of the source (manual 4.5.6 undervoltage)."""
+"""Supply voltage events: sags and dropouts of the source (on the MAC050–141: the undervoltage
+handling of manual 4.5.6)."""
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
 import numpy as np
-
-from ..families.mac050_141 import constants as c
 
 
 class SupplyEvents:
@@ -25,17 +24,17 @@ class SupplyEvents:
     def __init__(self, events: Sequence[tuple[float, float, float]], nominal: float | np.ndarray,
                  n: int) -> None:
         for start, end, volts in events:
-            if not (0 <= start < end) or not 0 <= volts <= 60:
+            if not (0 <= start < end < np.inf) or not 0 <= volts < np.inf:
                 raise ValueError(f"bad supply event {(start, end, volts)!r}")
         self.events = list(events)
         self.nominal = np.broadcast_to(np.asarray(nominal, dtype=np.float64), (n,)).copy()
         self.t = 0.0
 
-    def advance(self) -> np.ndarray:
-        """Source voltage during the next outer sample, (N,)."""
+    def advance(self, dt: float) -> np.ndarray:
+        """Source voltage during the next sample of ``dt`` seconds, (N,) [V]."""
         v = self.nominal.copy()
         for start, end, volts in self.events:
             if start <= self.t < end:
                 v[:] = volts
-        self.t += c.OUTER_DT
+        self.t += dt
         return v

@@ -33,17 +33,23 @@ class World:
     def schedule(self, m: MotorArray, n_outer: int) -> np.ndarray:
         """Inputs for the next ``n_outer`` outer samples, shape (n_outer, N, inputs) (the
         columns of the motors' world inputs, ``MotorArray.INPUTS``)."""
-        out = np.repeat(m.inputs[None, :, :], n_outer, axis=0)
-        bits = m.interface_bits
         col = m.INPUTS  # world-input name -> column of the motors' inputs
+        for name, source in (("pulse_counts", self.pulse), ("analog_volts", self.analog),
+                             ("supply_volts", self.supply), ("load_torque", self.load_torque)):
+            if source is not None and name not in col:
+                raise ValueError(f"this world drives {name!r}, which {m.family.title} motors "
+                                 f"do not have; their inputs: {', '.join(col)}")
+        out = np.repeat(m.inputs[None, :, :], n_outer, axis=0)
+        dt = 1.0 / m.OUTER_HZ
+        decoding = m.pulse_decoding() if self.pulse is not None else None
         for k in range(n_outer):
             if self.pulse is not None:
-                out[k, :, col["pulse_counts"]] = self.pulse.advance(bits)
+                out[k, :, col["pulse_counts"]] = self.pulse.advance(dt, *decoding)
             if self.analog is not None:
-                out[k, :, col["analog_volts"]] = self.analog.advance()
+                out[k, :, col["analog_volts"]] = self.analog.advance(dt)
             if self.supply is not None:
-                out[k, :, col["supply_volts"]] = self.supply.advance()
+                out[k, :, col["supply_volts"]] = self.supply.advance(dt)
             if self.load_torque is not None:
                 out[k, :, col["load_torque"]] = self.load_torque(self.t)
-            self.t += 1.0 / m.OUTER_HZ
+            self.t += dt
         return out

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from ...config import canonical_motor_name, motor_types
 from .. import Family
 from . import compiled
+from .config import canonical_motor_name, motor_types
 from .motors import MacMotorArray
 
 FAMILY = Family(key="mac050_141", title="MAC050–141 integrated servo motors", compiled=compiled,

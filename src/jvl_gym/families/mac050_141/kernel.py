@@ -55,6 +55,7 @@ from .firmware.modes import (
     FLWERR_MODES,
     REGULATED,
     enter_mode,
+    fncerr_is_position,
     reset_speed_loop,
     stop_to,
 )
@@ -175,8 +176,7 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
             r[R.P_FNC] = wrap32(r[R.P_FNC] + int(corr))
             s[L.S_G_FNC] += corr
             r[R.FNCERR] = int(clamp(r[R.FNCERR] + corr, -134217727.0, 134217727.0))
-        if mode == c.GP_MODE or mode == c.GF_MODE or mode == c.AG_MODE:
-            # gear modes: FNCERR is the positioning error (3.2.24 "GP, GF_MODE")
+        if fncerr_is_position(mode):
             r[R.FNCERR] = int(clamp(rnd(s[L.S_G_FNC]), -134217727.0, 134217727.0))
         if FLWERR_MODES[mode]:
             s[L.S_FLW16] += f - 16.0 * v

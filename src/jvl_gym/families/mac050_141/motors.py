@@ -18,13 +18,13 @@ import numpy as np
 
 from ...arguments import MotorIndex, MotorSpec, Seed, as_index, motor_index, real_array
 from ...bank import StorePlan
-from ...config import MotorConfig, load_motor, load_setup
 from ...keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
 from ...registers import Format, Register, RegisterError
 from ...registers.formats import from_raw
 from ...sim import ModeError, MotorArray
 from . import constants as c
 from . import layout as L
+from .config import SETUPS_DIR, MotorConfig, load_motor, load_setup
 from .firmware import modes as M
 from .firmware import regs as R
 from .firmware import write_rules as W
@@ -93,6 +93,7 @@ class MacMotorArray(MotorArray):
     N_INPUT = L.N_INPUT
     BUFFER_SHAPE = (c.REC_CNT_MAX, 4)
     OUTER_HZ = c.OUTER_HZ
+    SETUPS_DIR = SETUPS_DIR
     PARAMETER_KEYWORDS: ClassVar[dict[str, int]] = _PARAMETERS
     STATE_KEYWORDS: ClassVar[dict[str, int]] = _STATES
     #: finite but for the home position (inf: none), then >= 0, > 0 or 0/1
@@ -117,7 +118,7 @@ class MacMotorArray(MotorArray):
 
     @staticmethod
     def load_motor(motor: Any) -> MotorConfig:
-        """The validated motor config (``jvl_gym.config.load_motor``)."""
+        """The validated motor config (:func:`.config.load_motor`)."""
         return load_motor(motor)
 
     def _before_reset(self) -> None:
@@ -237,6 +238,12 @@ class MacMotorArray(MotorArray):
         """CNTRL_BITS latched at the last power-on (PULSEDIR, INPSIGN, HICLK, USERINTF act
         only after a reset, manual 3.2.36), (N,)."""
         return self._latched_cntrl.copy()
+
+    def pulse_decoding(self) -> tuple[np.ndarray, np.ndarray]:
+        """``(pulse_dir, inverted)`` per motor from the CNTRL_BITS PULSEDIR and INPSIGN latched
+        at the last power-on (manual 3.2.36), (N,) bool arrays."""
+        bits = self._latched_cntrl
+        return (bits & c.PULSEDIR) != 0, (bits & c.INPSIGN) != 0
 
     def start_under_load(self, torque: float | np.ndarray, index: MotorIndex = None) -> None:
         """Let the motors ``index`` start under a standing load of ``torque`` [N·m], as motors

@@ -85,6 +85,13 @@ REQUEST_MESSAGES = {
 
 
 @njit(**KERNEL)
+def fncerr_is_position(mode: int) -> bool:
+    """FNCERR is the gear position error in ``mode`` (GP, GF, AG; manual 3.2.24 "GP, GF_MODE"),
+    not the sum of the profile corrections as in the other regulated modes."""
+    return mode == c.GP_MODE or mode == c.GF_MODE or mode == c.AG_MODE
+
+
+@njit(**KERNEL)
 def reset_speed_loop(r: np.ndarray, s: np.ndarray) -> None:
     """Clear the FF/VB/VF histories and the profile memory (entry into a regulated mode)."""
     v = float(r[R.V_IST])
@@ -162,8 +169,11 @@ def enter_mode(r: np.ndarray, s: np.ndarray, new: int) -> None:
         home_entry(r, s)
     elif new == c.A2POS_MODE:
         a2pos_update(r, s, True)
-    if new == c.GP_MODE or new == c.GF_MODE or new == c.AG_MODE:
+    if fncerr_is_position(new):
         s[L.S_G_FNC] = 0.0
+    elif fncerr_is_position(old):
+        # FNCERR changes meaning from a position error to a correction sum (3.2.24)
+        r[R.FNCERR] = 0
 
 
 @njit(**KERNEL)
