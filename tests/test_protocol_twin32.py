@@ -362,3 +362,24 @@ def test_serve_builds_one_twin_per_family_on_one_line(toy_family, tmp_path) -> N
     assert line.twins[1].m.read("V_SOLL").tolist() == [250]
     one, order = build_line(["MAC140"], [19])
     assert isinstance(one, Twin) and order == [0]
+
+
+@pytest.fixture(scope="module")
+def fuzz_bus():
+    return mixed_bus()
+
+
+@SLOW
+@given(chunks=st.lists(st.binary(max_size=60), max_size=6))
+def test_fuzz_random_bytes_on_a_mixed_line_change_nothing(fuzz_bus, chunks: list[bytes]) -> None:
+    """Random bytes (no valid write among them) change no register of any family's motor."""
+    bus, mac, mis_m, m800 = fuzz_bus
+    before = (mac.regs.copy(), mis_m.regs.copy(), m800.regs.copy())
+    s = bus.session()
+    for c in chunks:
+        s.feed(c)
+    s.flush()
+    np.testing.assert_array_equal(mac.regs, before[0])
+    np.testing.assert_array_equal(mis_m.regs, before[1])
+    np.testing.assert_array_equal(m800.regs, before[2])
+
