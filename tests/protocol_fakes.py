@@ -1,6 +1,7 @@
 """A MotorArray-like backend on any register table, for the protocol tests of families whose
 simulator is not runnable yet: registers with the table's validation, safe mode, flash and reset,
-no physics. It offers what the twin and the Modbus adapter use (``protocol.twin.MotorBackend``).
+no physics. It offers what the twin and the Modbus adapter use, with the method names of the MIS
+array (``enter_safe_mode``, ``exit_safe_mode``, ``write_flash``, the power-on ``reset``).
 """
 
 from __future__ import annotations
@@ -64,11 +65,8 @@ class RegisterArray:
     def step(self, n_outer: int = 1) -> None:
         self.steps += n_outer
 
-    def go_safe_mode(self, index: int) -> None:
+    def enter_safe_mode(self, index: int) -> None:
         self.regs[index, self.mode_number] = SAFE_MODE
-
-    def go_init_mode(self, index: int) -> None:
-        self.regs[index, self.mode_number] = 0
 
     def exit_safe_mode(self, index: int) -> None:
         self.regs[index, self.mode_number] = 0
@@ -77,9 +75,9 @@ class RegisterArray:
         if self.regs[index, self.mode_number] != SAFE_MODE:
             raise ModeError("write flash in SAFE_MODE only")
         self.flash[index] = self.flash_image(index)
-        self.software_reset(index)
+        self.reset(index)
 
-    def software_reset(self, index: int) -> None:
+    def reset(self, index: int) -> None:
         self.regs[index] = self.rom
         for number, raw in self.flash[index].items():
             self.regs[index, number] = raw

@@ -123,6 +123,7 @@ class MotorBackend(Protocol):
     def exit_safe_mode(self, index: Any = None) -> None: ...
     def write_flash(self, index: Any = None) -> None: ...
     def software_reset(self, index: Any = None) -> None: ...
+    def reset(self, index: Any = None) -> None: ...
     def flash_image(self, index: int) -> dict[int, int]: ...
     def load_flash_image(self, index: int, image: dict[int, int]) -> None: ...
     def sample_buffer_raw(self, index: int) -> np.ndarray: ...
@@ -205,12 +206,18 @@ class Twin:
         images = [self._load_flash_file(i) for i in range(motors.n)]
         for i, image in enumerate(images):
             if image is not None:
-                motors.software_reset(i)
+                self._power_on(i)
             elif addresses is not None:
                 motors.load_flash_image(i, {self.reg.MYADDR: addresses[i]})
                 motors.write_raw(self.reg.MYADDR, addresses[i], index=i)
 
     # ------------------------------------------------------------------ helpers
+    def _power_on(self, i: int) -> None:
+        """Motor ``i`` restarts from its flash: the family's ``software_reset`` if it has one,
+        else the power-on ``reset`` of every motor array."""
+        reset = getattr(self.m, "software_reset", None) or self.m.reset
+        reset(i)
+
     def _flash_path(self, i: int) -> Path | None:
         return None if self.flash_dir is None else self.flash_dir / f"flash_{i}.json"
 

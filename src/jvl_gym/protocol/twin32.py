@@ -7,20 +7,22 @@ read block (51h)       reply with the 32 registers N … N+31 (128 bytes)
 write (52h)            4 bytes: the 32-bit value; 2 bytes: extended as the register's format
                        (sign for signed, zero for Word32; :mod:`.mactalk32`). Validated by the
                        simulator; accept only if carried out
-enter safe mode (54h)  ``go_safe_mode``, accept (MIS §18.2.5)
+enter safe mode (54h)  ``enter_safe_mode`` (or ``go_safe_mode``), accept (MIS §18.2.5)
 exit safe mode (55h)   ``exit_safe_mode`` when in SAFE_MODE (else nothing to do), accept
                        (MIS §18.2.6)
 write flash (56h)      only in SAFE_MODE: save registers to flash (and the flash file), reset;
                        no reply; an accept when it fails (MIS §18.2.7: "The response will only
                        be transmitted if the command failed")
-reset (57h)            ``software_reset``; no reply (MIS §18.2.8)
+reset (57h)            ``software_reset`` if the family has one, else the power-on
+                       ``reset``; no reply (MIS §18.2.8)
 group write (59h)      every motor whose GROUP_ID is the group writes the register, unless the
                        sequence is that of the last group write it received; the sequence is
                        then held in GROUP_SEQ; never answered (MIS §18.2.9, §8.2.86–87)
 =====================  ===================================================================
 
 A register number the table does not have, or a reserved one, reads as 0 and refuses writes.
-Any other refusal (range, read-only, mode) changes nothing and gets no reply.
+Any other refusal (range, read-only, mode) changes nothing and gets no reply; so does a command
+whose method the motors' family does not have.
 """
 
 from __future__ import annotations
@@ -98,12 +100,15 @@ class MacTalk32Unit:
             return False
         return True
 
-    def _call(self, name: str, i: int) -> None:
-        """Motor ``i``'s ``name`` method (go_safe_mode …); ValueError if the family has none."""
-        method = getattr(self.twin.m, name, None)
-        if method is None:
-            raise ValueError(f"the motor family has no {name}")
-        method(i)
+    def _call(self, names: tuple[str, ...], i: int) -> None:
+        """The first of the motors' methods ``names`` the family has, for motor ``i``;
+        ValueError if it has none of them."""
+        for name in names:
+            method = getattr(self.twin.m, name, None)
+            if method is not None:
+                method(i)
+                return
+        raise ValueError(f"the motor family has no {' or '.join(names)}")
 
     # ------------------------------------------------------------------ frames
     def handle(self, frame: m32.Frame) -> bytes:
@@ -155,15 +160,15 @@ class MacTalk32Unit:
             if cmd == c.WRITE:
                 return m32.ACCEPT if self.write(i, f.register or 0, f.data) else b""
             if cmd == c.ENTER_SAFE_MODE:
-                self._call("go_safe_mode", i)
+                self._call(("enter_safe_mode", "go_safe_mode"), i)
                 return m32.ACCEPT
             if cmd == c.EXIT_SAFE_MODE:
                 if t.mode(i) == SAFE_MODE:
-                    self._call("exit_safe_mode", i)
+                    self._call(("exit_safe_mode",), i)
                 return m32.ACCEPT
             if cmd == c.WRITE_FLASH:
                 try:
-                    self._call("write_flash", i)  # refuses unless SAFE_MODE
+                    self._call(("write_flash",), i)  # refuses unless SAFE_MODE
                 except ValueError as exc:
                     t.refuse(f"WRITE_FLASH for motor {i}: {exc}")
                     return m32.ACCEPT  # MIS §18.2.7: a response only if the command failed
@@ -171,7 +176,7 @@ class MacTalk32Unit:
                 self.power_on(i)
                 return b""
             if cmd == c.RESET:
-                self._call("software_reset", i)
+                self._call(("software_reset", "reset"), i)
                 self.power_on(i)
                 return b""
         except ValueError as exc:  # RegisterError / ModeError are ValueErrors
