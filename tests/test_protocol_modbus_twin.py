@@ -331,3 +331,34 @@ def test_serve_modbus_switch_follows_register_121(enable: int) -> None:
             s.sendall(m32.encode_read(42, P_IST))
             reply = m32.decode(_recv(s, 19))
             assert m32.data_value(reply.data) == 123456789
+
+
+@pytest.mark.skipif("mis" not in families(), reason="the MIS family is not registered")
+def test_jvl_gym_serve_modbus_end_to_end() -> None:
+    """``jvl-gym serve --motor MIS231 --address 42 --modbus --tcp``: pymodbus writes MODE_REG and
+    P_IST and reads P_IST back at 40 000 + n; Ctrl-C stops the server."""
+    import signal
+    import subprocess
+    import sys
+
+    pytest.importorskip("pymodbus")
+    from pymodbus.client import ModbusTcpClient
+
+    proc = subprocess.Popen([sys.executable, "-m", "jvl_gym.cli_serve", "--motor", "MIS231",
+                             "--address", "42", "--modbus", "--tcp", "127.0.0.1:0"],
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        lines = [proc.stdout.readline() for _ in range(2)]
+        assert lines[0].strip() == "motor 0: MIS231 at address 42"
+        port = int(lines[1].strip().rsplit(":", 1)[1])
+        client = ModbusTcpClient("127.0.0.1", port=port, framer=_framer_rtu(), timeout=5)
+        assert client.connect()
+        u = _unit(client.read_holding_registers)
+        assert not client.write_registers(2 * P_IST, _words(client, -4711), **{u: 42}).isError()
+        r = client.read_holding_registers(40000 + P_IST, count=2, **{u: 42})
+        assert _int32(client, r.registers) == -4711  # passive: the position stays
+        client.close()
+    finally:
+        proc.send_signal(signal.SIGINT)
+        out, _ = proc.communicate(timeout=20)
+    assert proc.returncode == 0 and "stopped" in out

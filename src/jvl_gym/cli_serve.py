@@ -158,7 +158,8 @@ def serve(
         done.wait()
     finally:
         server.stop()
-        typer.echo(f"stopped; {dict(line.stats)}")
+        stats = server.bus.stats if modbus else line.stats
+        typer.echo(f"stopped; {dict(stats)}")
 
 
 def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
