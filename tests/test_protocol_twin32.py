@@ -206,9 +206,24 @@ def test_fuzz_corrupted_writes_never_change_a_register(register: int, value: int
 
 
 # ------------------------------------------------------------ dialects of the families
-def test_each_family_declares_its_dialect() -> None:
-    assert dialect_of(MotorArray("MAC140", n=1, seed=0)) == MACTALK16
-    assert dialect_of(RegisterArray(mis.REGISTERS)) == MACTALK16  # no family: the default
+#: the MacTalk each family speaks (MAC050–141 manual 5.1; MAC800 quick guide §1.3; MIS §18.2)
+FAMILY_DIALECTS = {"mac050_141": ("MAC140", MACTALK16), "mis": ("MIS231", MACTALK32),
+                   "mac800": ("MAC800", MACTALK32)}
+
+
+@pytest.mark.parametrize("key", sorted(FAMILY_DIALECTS))
+def test_each_family_declares_its_dialect(key: str) -> None:
+    """``MACTALK_DIALECT`` in the family's constants (checked for the registered families)."""
+    from jvl_gym.families import families
+
+    if key not in families():
+        pytest.skip(f"the {key} family is not registered")
+    motor, dialect = FAMILY_DIALECTS[key]
+    assert dialect_of(MotorArray(motor, n=1, seed=0)) == dialect
+
+
+def test_a_backend_of_no_family_speaks_the_default_dialect() -> None:
+    assert dialect_of(RegisterArray(mis.REGISTERS)) == MACTALK16
     with pytest.raises(ValueError, match="unknown MacTalk dialect"):
         Twin(RegisterArray(mis.REGISTERS), [7], dialect="mactalk64")
 
