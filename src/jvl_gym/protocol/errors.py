@@ -30,7 +30,7 @@ class FrameError(ProtocolError, ValueError):
     code : str
         Short machine-readable class: ``unknown_sync``, ``bad_sync``, ``bad_complement``,
         ``wrong_length``, ``bad_end``, ``truncated``, ``bad_register``, ``bad_header``,
-        ``bad_format``, ``bad_safe_pair``, ``trailing``.
+        ``bad_format``, ``bad_safe_pair``, ``bad_address``, ``trailing``.
     offset : int
         Stream offset of the first discarded byte (0 for one-shot decoding).
     data : bytes

@@ -3,7 +3,7 @@
 A :class:`TwinServer` runs, in daemon threads,
 
 * a clock that advances the simulation in real time (``speed`` × wall-clock time, whole outer
-  samples of 1.92 ms, catching up at most ``max_lag`` seconds at once);
+  samples of each twin's motors, catching up at most ``max_lag`` seconds at once);
 * a MacTalk endpoint per pseudo-terminal (``os.openpty``, raw mode; the slave's device path is
   usable by any serial program) and/or a TCP listener on 127.0.0.1 (one MacTalk session per
   connection — pyserial reaches it as ``socket://127.0.0.1:PORT``);
@@ -27,10 +27,8 @@ from dataclasses import dataclass, field
 
 from .twin import Twin
 
-__all__ = ["TwinServer", "Endpoint", "OUTER_DT", "LOCALHOSTS"]
+__all__ = ["TwinServer", "Endpoint", "LOCALHOSTS"]
 
-#: one outer sample [s] (manual 1.2: 7812.5/15 Hz)
-OUTER_DT = 15 / 7812.5
 LOCALHOSTS = ("127.0.0.1", "localhost", "::1")
 
 
@@ -62,7 +60,8 @@ class TwinServer:
 
     Parameters
     ----------
-    twin : Twin
+    twin : Twin or Bus
+        The motors served (a :class:`~.bus.Bus`: twins of several families on one line).
     speed : float
         Simulated seconds per wall-clock second (> 0); 1 is real time.
     tcp : tuple (host, port) or None
@@ -108,7 +107,7 @@ class TwinServer:
             self._listen(self.tcp[0], self.tcp[1], "mactalk", lambda: self._mactalk())
         if self.pty:
             self._open_pty("mactalk", self._mactalk())
-        for i in range(self.twin.m.n):
+        for i in range(len(self.twin.user)):
             if self.user_tcp is not None:
                 port = self.user_tcp + i if self.user_tcp else 0
                 self._listen("127.0.0.1", port, f"user{i}", lambda i=i: self._user(i))
@@ -163,19 +162,16 @@ class TwinServer:
         return _Session(u.feed, u.flush)
 
     def _clock(self) -> None:
-        t0 = time.monotonic()
-        done = 0  # outer samples simulated
+        last = time.monotonic()
+        cap = self.max_lag * self.speed  # simulated seconds caught up at most at once
         while not self._stop.wait(0.004):
-            due = int((time.monotonic() - t0) * self.speed / OUTER_DT)
-            n = due - done
-            cap = max(1, int(self.max_lag * self.speed / OUTER_DT))
-            if n > cap:  # the host cannot keep up: drop the backlog rather than spiral
+            now = time.monotonic()
+            seconds = (now - last) * self.speed
+            last = now
+            if seconds > cap:  # the host cannot keep up: drop the backlog rather than spiral
                 self.lag_events += 1
-                done += n - cap
-                n = cap
-            if n > 0:
-                self.twin.step(n)
-                done += n
+                seconds = cap
+            self.twin.advance(seconds)
 
     def _listen(self, host: str, port: int, what: str, make: Callable[[], _Session]) -> None:
         if host not in LOCALHOSTS:

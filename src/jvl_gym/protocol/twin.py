@@ -1,5 +1,9 @@
 """Protocol server logic of the digital twin: request bytes → reply bytes + effects on motors.
 
+Each twin speaks its motor family's MacTalk dialect (:mod:`.dialect`): the MAC050–141 MacTalk
+described below, or the 32-bit MacTalk of the MAC800 and MIS families (:mod:`.twin32`). A
+:class:`~.bus.Bus` puts twins of several families on one line.
+
 No I/O here (see :mod:`.transport`): a :class:`Twin` wraps a :class:`~jvl_gym.MotorArray` (or
 anything with the same subset of methods, :class:`MotorBackend`), and sessions turn received
 byte chunks into reply bytes.
@@ -47,7 +51,10 @@ import numpy as np
 from . import fastmac as fm
 from . import flexmac as fx
 from . import mactalk as mt
+from . import mactalk32 as m32
+from .dialect import MACTALK32, check_dialect, dialect_of
 from .errors import FrameError
+from .twin32 import MacTalk32Unit
 
 __all__ = ["MotorBackend", "Twin", "MacTalkSession", "UserInterfaceSession", "BLOCK_WORDS",
            "RegisterNumbers"]
@@ -65,22 +72,29 @@ class RegisterNumbers:
     Attributes
     ----------
     MODE_REG, P_SOLL, V_SOLL, T_SOLL, P_FNC, P_IST, FLWERR, ERR_STAT, CNTRL_BITS, HOME_MODE,
-    P_REG_P, V_REG_P, A_REG_P, T_REG_P, L_REG_P, Z_REG_P, P1, P7, P8, SAMPLE1, REC_CNT, MYADDR
+    P_REG_P, V_REG_P, A_REG_P, T_REG_P, L_REG_P, Z_REG_P, P1, P7, P8, SAMPLE1, REC_CNT, MYADDR,
+    GROUP_ID, GROUP_SEQ
         Register numbers.
     """
 
     NAMES = ("MODE_REG", "P_SOLL", "V_SOLL", "T_SOLL", "P_FNC", "P_IST", "FLWERR", "ERR_STAT",
              "CNTRL_BITS", "HOME_MODE", "P_REG_P", "V_REG_P", "A_REG_P", "T_REG_P", "L_REG_P",
-             "Z_REG_P", "P1", "P7", "P8", "SAMPLE1", "REC_CNT", "MYADDR")
+             "Z_REG_P", "P1", "P7", "P8", "SAMPLE1", "REC_CNT", "MYADDR", "GROUP_ID",
+             "GROUP_SEQ")
+    #: other names of a register in other families' tables (MIS §8.2.88, MAC800: MY_ADDR)
+    ALIASES = {"MYADDR": ("MY_ADDR",)}
 
     def __init__(self, table: Any) -> None:
         from ..registers import RegisterError
 
         for name in self.NAMES:
-            try:
-                number = table.lookup(name).number
-            except RegisterError:
-                number = -1
+            number = -1
+            for spelling in (name, *self.ALIASES.get(name, ())):
+                try:
+                    number = table.lookup(spelling).number
+                    break
+                except RegisterError:
+                    continue
             setattr(self, name, number)
         #: register-set pointer of each FastMAC group letter (manual 5.2.1)
         self.pointer = {"P": self.P_REG_P, "V": self.V_REG_P, "A": self.A_REG_P,
@@ -99,6 +113,7 @@ class MotorBackend(Protocol):
 
     n: int
     table: Any
+    OUTER_HZ: float
 
     def read_raw(self, key: str | int) -> np.ndarray: ...
     def write_raw(self, key: str | int, raw: Any, index: Any = None) -> None: ...
@@ -108,6 +123,7 @@ class MotorBackend(Protocol):
     def exit_safe_mode(self, index: Any = None) -> None: ...
     def write_flash(self, index: Any = None) -> None: ...
     def software_reset(self, index: Any = None) -> None: ...
+    def reset(self, index: Any = None) -> None: ...
     def flash_image(self, index: int) -> dict[int, int]: ...
     def load_flash_image(self, index: int, image: dict[int, int]) -> None: ...
     def sample_buffer_raw(self, index: int) -> np.ndarray: ...
@@ -141,9 +157,16 @@ class Twin:
         that cannot be read as a flash image, raises ValueError naming it.
     fastmac_code : dict
         FastMAC register code (:data:`~.fastmac.EXAMPLE_CODE` or ``TABLE_CODE``).
+    dialect : str, optional
+        MacTalk dialect (:data:`~.dialect.DIALECTS`); default: the one the motors' family
+        declares (:func:`~.dialect.dialect_of`).
 
     Attributes
     ----------
+    dialect : str
+        The MacTalk dialect the twin speaks.
+    outer_dt : float
+        Seconds per outer sample of the motors (``1 / OUTER_HZ``).
     lock : threading.RLock
         Held while a request is carried out or the simulation steps.
     stats : collections.Counter
@@ -152,8 +175,13 @@ class Twin:
 
     def __init__(self, motors: MotorBackend, addresses: list[int] | None = None,
                  flash_dir: str | os.PathLike[str] | None = None,
-                 fastmac_code: dict[str, tuple[int, int]] = fm.DEFAULT_CODE) -> None:
+                 fastmac_code: dict[str, tuple[int, int]] = fm.DEFAULT_CODE,
+                 dialect: str | None = None) -> None:
         self.m = motors
+        self.dialect = check_dialect(dialect) if dialect is not None else dialect_of(motors)
+        self.outer_dt = 1.0 / float(motors.OUTER_HZ)
+        self._sim_time = 0.0
+        self._stepped = 0
         #: numbers of the registers the twin uses, from the motors' register table
         self.reg = RegisterNumbers(motors.table)
         self.lock = threading.RLock()
@@ -163,6 +191,11 @@ class Twin:
         self.last_refusal: str = ""
         self._sample_ptr = [0] * motors.n
         self.user = [UserInterfaceSession(self, i) for i in range(motors.n)]
+        #: the only units on their line: a broadcast is answered when there is one motor
+        #: (a :class:`~.bus.Bus` of several twins clears it)
+        self.alone = True
+        #: the 32-bit MacTalk commands (None when the twin speaks the 16-bit MacTalk)
+        self.unit32 = MacTalk32Unit(self) if self.dialect == MACTALK32 else None
         if addresses is not None:
             if len(addresses) != motors.n:
                 raise ValueError(f"{len(addresses)} addresses for {motors.n} motors")
@@ -173,12 +206,18 @@ class Twin:
         images = [self._load_flash_file(i) for i in range(motors.n)]
         for i, image in enumerate(images):
             if image is not None:
-                motors.software_reset(i)
+                self._power_on(i)
             elif addresses is not None:
                 motors.load_flash_image(i, {self.reg.MYADDR: addresses[i]})
                 motors.write_raw(self.reg.MYADDR, addresses[i], index=i)
 
     # ------------------------------------------------------------------ helpers
+    def _power_on(self, i: int) -> None:
+        """Motor ``i`` restarts from its flash: the family's ``software_reset`` if it has one,
+        else the power-on ``reset`` of every motor array."""
+        reset = getattr(self.m, "software_reset", None) or self.m.reset
+        reset(i)
+
     def _flash_path(self, i: int) -> Path | None:
         return None if self.flash_dir is None else self.flash_dir / f"flash_{i}.json"
 
@@ -302,6 +341,21 @@ class Twin:
             with self.lock:
                 self.m.step(n_outer)
 
+    @property
+    def answers_broadcast(self) -> bool:
+        """A broadcast is answered only on a point-to-point link: one motor alone on its line
+        (several answering units would collide on a bus)."""
+        return self.alone and self.m.n == 1
+
+    def advance(self, seconds: float) -> None:
+        """Advance the simulation by ``seconds`` of simulated time, in whole outer samples of
+        the motors' own rate (the part of a sample left over is carried to the next call)."""
+        self._sim_time += seconds
+        due = int(self._sim_time / self.outer_dt) - self._stepped
+        if due > 0:
+            self.step(due)
+            self._stepped += due
+
     # ------------------------------------------------------------------ MacTalk
     def targets(self, address: int) -> list[int]:
         """Motors addressed by ``address``: MYADDR match, all on broadcast, none for master."""
@@ -311,8 +365,11 @@ class Twin:
             return []
         return [i for i, a in enumerate(self.addresses()) if a == address]
 
-    def handle(self, frame: mt.Frame) -> bytes:
-        """Carry out one decoded MacTalk frame; return the reply bytes (maybe empty)."""
+    def handle(self, frame: mt.Frame | m32.Frame) -> bytes:
+        """Carry out one decoded MacTalk frame of the twin's dialect; return the reply bytes
+        (maybe empty)."""
+        if self.unit32 is not None:
+            return self.unit32.handle(frame)  # type: ignore[arg-type]
         if not isinstance(frame, mt.Request):
             self.stats["ignored"] += 1
             return b""
@@ -322,7 +379,7 @@ class Twin:
                 self.stats["ignored"] += 1
                 return b""
             replies = [self._one(i, frame) for i in targets]
-        if frame.address == mt.BROADCAST and self.m.n > 1:
+        if frame.address == mt.BROADCAST and not self.answers_broadcast:
             return b""
         reply = replies[0]
         if reply:
@@ -384,13 +441,15 @@ class Twin:
 
 
 class MacTalkSession:
-    """One MacTalk byte stream (a TCP connection, a pty): bytes in → reply bytes out."""
+    """One MacTalk byte stream (a TCP connection, a pty) in the twin's dialect: bytes in →
+    reply bytes out."""
 
     def __init__(self, twin: Twin) -> None:
         self.twin = twin
-        self.decoder = mt.MacTalkDecoder()
+        self.decoder = (m32.MacTalk32Decoder() if twin.dialect == MACTALK32
+                        else mt.MacTalkDecoder())
 
-    def _run(self, items: list[mt.Frame | FrameError]) -> bytes:
+    def _run(self, items: list[Any]) -> bytes:
         out = bytearray()
         for item in items:
             if isinstance(item, FrameError):
@@ -435,8 +494,12 @@ class UserInterfaceSession:
 
     @property
     def active(self) -> bool:
-        """USERINTF = 11 at the last power-on."""
-        return int(self.twin.m.interface_bits[self.i]) & 3 == 3
+        """USERINTF = 11 at the last power-on (a family without these bits, or of 32-bit
+        registers, has no FastMAC/FlexMAC user interface)."""
+        bits = getattr(self.twin.m, "interface_bits", None)
+        if bits is None or self.twin.unit32 is not None:
+            return False
+        return int(bits[self.i]) & 3 == 3
 
     def status(self) -> int:
         """The status byte now (manual 5.2.1.6)."""

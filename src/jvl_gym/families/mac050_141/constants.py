@@ -125,3 +125,4 @@ HALL_STATUS_SHIFT = 13
 SET_UV_ERR = 1 << 0
 UV_GO_PASSIVE = 1 << 1
 UV_SOLL0 = 1 << 3
+MACTALK_DIALECT = "mactalk16"  #: MacTalk of manual 5.1, 16-bit registers (protocol.dialect)

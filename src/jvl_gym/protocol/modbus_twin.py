@@ -1,0 +1,118 @@
+"""Modbus RTU of the twin's motors (MIS manual §12): each motor of a 32-bit register family as a
+Modbus slave.
+
+:class:`MotorRegisters` is the :class:`~.modbus_server.RegisterAccess` of one motor of a
+:class:`~.twin.Twin`: register read and write by number through the simulator (refusals are the
+simulator's :class:`~jvl_gym.registers.RegisterError`, which the slave answers with an exception
+reply, :func:`~.modbus_server.exception_code`), the slave address is the motor's MacTalk address
+(MY_ADDR, MIS manual §12.1: "This address is the same as the MacTalk motor address"; its
+default 254 is no valid Modbus address, so serve the motor at an address 1 … 247).
+:func:`modbus_registers` finds the registers the slave itself uses (set-up, baud rate, time-out,
+time-out response, frame delay; MIS manual §12.1) by name in the family's table, and
+:func:`modbus_bus` puts all motors of a twin on one :class:`~.modbus_server.ModbusBus`.
+
+Everything else (function codes 03h/10h only, the 2n and 40 000 + n windows with the low word
+first, at most 16 words, whole registers only, broadcast, PDO1/PDO2, the time-out and its
+action, the MacTalk → Modbus switch) is :mod:`.modbus` and :mod:`.modbus_server`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ..registers import RegisterError, UnknownRegisterError
+from .dialect import MACTALK32
+from .modbus_server import ModbusBus, ModbusRegisters
+from .twin import Twin
+from .twin32 import is_signed
+
+__all__ = ["MotorRegisters", "modbus_registers", "modbus_bus", "REGISTER_NAMES"]
+
+#: the names of the registers :class:`~.modbus_server.ModbusRegisters` holds, in the 32-bit
+#: families' tables (MIS manual §12.1 and §8.2: MODBUS_SETUP 121, BAUD_RATE 146, time-out 199,
+#: time-out response 200, frame delay 201; the time-out actions write V_SOLL and MODE_REG)
+REGISTER_NAMES = {"setup": "MODBUS_SETUP", "baud": "BAUD_RATE", "timeout": "MODBUS_TIMEOUT",
+                  "timeout_action": "MODBUS_TIMEOUT_RESPONSE",
+                  "frame_delay": "MODBUS_FRAME_DELAY", "max_velocity": "V_SOLL",
+                  "mode": "MODE_REG"}
+
+
+def modbus_registers(table: Any) -> ModbusRegisters:
+    """The Modbus slave's registers of ``table`` by name (:data:`REGISTER_NAMES`; None where
+    the table has none); passive mode is MODE_REG 0 (MIS manual §8.2.3)."""
+    numbers: dict[str, int | None] = {}
+    for field, name in REGISTER_NAMES.items():
+        try:
+            numbers[field] = table.lookup(name).number
+        except RegisterError:
+            numbers[field] = None
+    return ModbusRegisters(**numbers, passive_mode=0)
+
+
+class MotorRegisters:
+    """Motor ``index`` of ``twin`` as a device of 32-bit registers (a
+    :class:`~.modbus_server.RegisterAccess`).
+
+    Parameters
+    ----------
+    twin : Twin
+        A twin that speaks the 32-bit MacTalk (its registers are 32 bits at one number).
+    index : int
+        The motor.
+    """
+
+    def __init__(self, twin: Twin, index: int) -> None:
+        if twin.unit32 is None:
+            raise ValueError("Modbus RTU serves motors of 32-bit registers at one number (MIS "
+                             f"manual §12.3); these motors speak {twin.dialect}")
+        self.twin = twin
+        self.index = index
+
+    @property
+    def node_id(self) -> int:
+        """The slave address: the motor's MacTalk address (MY_ADDR) now (MIS manual §12.1)."""
+        return int(self.twin.m.read_raw(self.twin.reg.MYADDR)[self.index])
+
+    def _register(self, number: int) -> Any:
+        if number not in self.twin.m.table:
+            raise UnknownRegisterError(f"no register {number}")
+        return self.twin.m.table.lookup(number)
+
+    def read(self, number: int) -> int:
+        """Register ``number``'s value (a reserved one reads 0).
+
+        Raises
+        ------
+        UnknownRegisterError
+            The table has no such register.
+        """
+        self._register(number)
+        assert self.twin.unit32 is not None
+        with self.twin.lock:
+            return self.twin.unit32.value(self.index, number)
+
+    def write(self, number: int, value: int) -> None:
+        """Write the 32-bit ``value`` (the two Modbus words, MIS manual §12.3) to register
+        ``number``: as a signed number, or for an unsigned register (Word32) as the same 32
+        bits unsigned.
+
+        Raises
+        ------
+        RegisterError
+            Unknown, read-only or reserved register, value out of range, or a mode that
+            forbids it: nothing has changed.
+        """
+        reg = self._register(number)
+        raw = int(value) if is_signed(reg.format) else int(value) & 0xFFFFFFFF
+        with self.twin.lock:
+            self.twin.m.write_raw(number, raw, index=self.index)
+
+
+def modbus_bus(twin: Twin) -> ModbusBus:
+    """All motors of ``twin`` as Modbus slaves on one line, with the family's Modbus registers
+    (:func:`modbus_registers`)."""
+    if twin.dialect != MACTALK32:
+        raise ValueError("Modbus RTU serves motors of 32-bit registers at one number (MIS "
+                         f"manual §12.3); these motors speak {twin.dialect}")
+    regs = modbus_registers(twin.m.table)
+    return ModbusBus([MotorRegisters(twin, i) for i in range(twin.m.n)], regs)

@@ -1,0 +1,189 @@
+"""The twin's side of the 32-bit MacTalk (MAC800 serial quick guide §1.3, MIS manual §18.2):
+what a motor of 32-bit registers does on each command.
+
+=====================  ===================================================================
+read (50h)             reply ``52h×3 00h FFh <regnum> 04h FBh`` + the register's 4 bytes
+read block (51h)       reply with the 32 registers N … N+31 (128 bytes)
+write (52h)            4 bytes: the 32-bit value; 2 bytes: extended as the register's format
+                       (sign for signed, zero for Word32; :mod:`.mactalk32`). Validated by the
+                       simulator; accept only if carried out
+enter safe mode (54h)  ``enter_safe_mode`` (or ``go_safe_mode``), accept (MIS §18.2.5)
+exit safe mode (55h)   ``exit_safe_mode`` when in SAFE_MODE (else nothing to do), accept
+                       (MIS §18.2.6)
+write flash (56h)      only in SAFE_MODE: save registers to flash (and the flash file), reset;
+                       no reply; an accept when it fails (MIS §18.2.7: "The response will only
+                       be transmitted if the command failed")
+reset (57h)            ``software_reset`` if the family has one, else the power-on
+                       ``reset``; no reply (MIS §18.2.8)
+group write (59h)      every motor whose GROUP_ID is the group writes the register, unless the
+                       sequence is that of the last group write it received; the sequence is
+                       then held in GROUP_SEQ; never answered (MIS §18.2.9, §8.2.86–87)
+=====================  ===================================================================
+
+A register number the table does not have, or a reserved one, reads as 0 and refuses writes.
+Any other refusal (range, read-only, mode) changes nothing and gets no reply; so does a command
+whose method the motors' family does not have.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from . import mactalk32 as m32
+
+if TYPE_CHECKING:
+    from .twin import Twin
+
+__all__ = ["MacTalk32Unit", "is_signed"]
+
+#: the SAFE_MODE value of MODE_REG (MAC800 and MIS: 15; MIS §8.2.3)
+SAFE_MODE = 15
+
+
+def is_signed(fmt: object) -> bool:
+    """Whether a register of format ``fmt`` holds a signed number (all but Word and Word32)."""
+    from ..registers import Format
+
+    return fmt not in (Format.WORD32, Format.WORD)
+
+
+class MacTalk32Unit:
+    """The motors of one :class:`~.twin.Twin` behind the 32-bit MacTalk.
+
+    Parameters
+    ----------
+    twin : Twin
+        Its motors, register numbers, lock, flash files and statistics.
+
+    Attributes
+    ----------
+    group_seq : list of int or None
+        Sequence of the last group write each motor received (None: none since power-on);
+        read back as GROUP_SEQ (0 before the first).
+    """
+
+    def __init__(self, twin: Twin) -> None:
+        self.twin = twin
+        self.group_seq: list[int | None] = [None] * twin.m.n
+
+    # ------------------------------------------------------------------ registers
+    def value(self, i: int, reg: int) -> int:
+        """The 32-bit value of register ``reg`` of motor ``i`` (0 where there is none)."""
+        t = self.twin
+        if reg == t.reg.GROUP_SEQ:
+            return self.group_seq[i] or 0
+        if reg not in t.m.table or t.m.table.lookup(reg).access.value == "reserved":
+            return 0
+        return int(t.m.read_raw(reg)[i])
+
+    def data(self, i: int, reg: int, count: int) -> bytes:
+        """``count`` registers from ``reg`` on, 4 bytes each, low byte first."""
+        return b"".join((self.value(i, reg + k) & 0xFFFFFFFF).to_bytes(4, "little")
+                        for k in range(count))
+
+    def write(self, i: int, reg: int, data: bytes) -> bool:
+        """Write 2 or 4 data bytes to register ``reg`` of motor ``i``, extended as the register's
+        format (:func:`is_signed`); False (nothing changed) if refused."""
+        from ..registers import RegisterError
+
+        t = self.twin
+        if reg not in t.m.table:
+            t.refuse(f"no register {reg}")
+            return False
+        value = m32.data_value(data, signed=is_signed(t.m.table.lookup(reg).format))
+        try:
+            t.m.write_raw(reg, np.int64(value), index=i)
+        except (RegisterError, ValueError) as exc:
+            t.refuse(str(exc))
+            return False
+        return True
+
+    def _call(self, names: tuple[str, ...], i: int) -> None:
+        """The first of the motors' methods ``names`` the family has, for motor ``i``;
+        ValueError if it has none of them."""
+        for name in names:
+            method = getattr(self.twin.m, name, None)
+            if method is not None:
+                method(i)
+                return
+        raise ValueError(f"the motor family has no {' or '.join(names)}")
+
+    # ------------------------------------------------------------------ frames
+    def handle(self, frame: m32.Frame) -> bytes:
+        """Carry out one decoded frame; the reply bytes (maybe empty)."""
+        t = self.twin
+        if isinstance(frame, m32.GroupWrite):
+            with t.lock:
+                self._group_write(frame)
+            return b""
+        if not isinstance(frame, m32.Request):
+            t.stats["ignored"] += 1
+            return b""
+        with t.lock:
+            targets = t.targets(frame.address)
+            if not targets:
+                t.stats["ignored"] += 1
+                return b""
+            replies = [self._one(i, frame) for i in targets]
+        if frame.address == m32.BROADCAST and not t.answers_broadcast:
+            return b""
+        if replies[0]:
+            t.stats["replies"] += 1
+        return replies[0]
+
+    def _group_write(self, f: m32.GroupWrite) -> None:
+        t = self.twin
+        t.stats["GROUP_WRITE"] += 1
+        if t.reg.GROUP_ID < 0:
+            t.stats["ignored"] += 1
+            return
+        groups = t.m.read_raw(t.reg.GROUP_ID)
+        for i in range(t.m.n):
+            if int(groups[i]) != f.group or self.group_seq[i] == f.sequence:
+                continue
+            self.group_seq[i] = f.sequence
+            self.write(i, f.register, f.data)
+
+    def _one(self, i: int, f: m32.Request) -> bytes:
+        t = self.twin
+        c = m32.Command
+        cmd = f.command
+        t.stats[cmd.name] += 1
+        try:
+            if cmd == c.READ:
+                return m32.encode_reply(f.register or 0, self.data(i, f.register or 0, 1))
+            if cmd == c.READ_BLOCK:
+                return m32.encode_reply(f.register or 0,
+                                        self.data(i, f.register or 0, m32.BLOCK_REGISTERS))
+            if cmd == c.WRITE:
+                return m32.ACCEPT if self.write(i, f.register or 0, f.data) else b""
+            if cmd == c.ENTER_SAFE_MODE:
+                self._call(("enter_safe_mode", "go_safe_mode"), i)
+                return m32.ACCEPT
+            if cmd == c.EXIT_SAFE_MODE:
+                if t.mode(i) == SAFE_MODE:
+                    self._call(("exit_safe_mode",), i)
+                return m32.ACCEPT
+            if cmd == c.WRITE_FLASH:
+                try:
+                    self._call(("write_flash",), i)  # refuses unless SAFE_MODE
+                except ValueError as exc:
+                    t.refuse(f"WRITE_FLASH for motor {i}: {exc}")
+                    return m32.ACCEPT  # MIS §18.2.7: a response only if the command failed
+                t._save_flash_file(i)
+                self.power_on(i)
+                return b""
+            if cmd == c.RESET:
+                self._call(("software_reset", "reset"), i)
+                self.power_on(i)
+                return b""
+        except ValueError as exc:  # RegisterError / ModeError are ValueErrors
+            t.refuse(f"{cmd.name} for motor {i}: {exc}")
+            return b""
+        raise AssertionError(cmd)  # pragma: no cover
+
+    def power_on(self, i: int) -> None:
+        """Protocol state of motor ``i`` after a reset: no group write received."""
+        self.group_seq[i] = None

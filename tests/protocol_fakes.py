@@ -1,0 +1,100 @@
+"""A MotorArray-like backend on any register table, for the protocol tests of families whose
+simulator is not runnable yet: registers with the table's validation, safe mode, flash and reset,
+no physics. It offers what the twin and the Modbus adapter use, with the method names of the MIS
+array (``enter_safe_mode``, ``exit_safe_mode``, ``write_flash``, the power-on ``reset``).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from jvl_gym.registers import Access, ReadOnlyRegisterError, RegisterError
+from jvl_gym.registers.formats import to_raw
+
+SAFE_MODE = 15
+
+
+class ModeError(RegisterError):
+    """A command the mode forbids."""
+
+
+class RegisterArray:
+    """``n`` motors of ``table``: ROM defaults from the table, writes validated by it.
+
+    ``family_dialect``, if given, is the MacTalk dialect the twin should speak for it.
+    """
+
+    OUTER_HZ = 1000.0
+
+    def __init__(self, table: Any, n: int = 1, mode_register: str = "MODE_REG") -> None:
+        self.table = table
+        self.n = n
+        self.mode_number = table.lookup(mode_register).number
+        rom = np.zeros(table.last + 1, dtype=np.int64)
+        for reg in table:
+            if reg.access != Access.RESERVED:
+                rom[reg.number] = int(to_raw(reg, reg.default))
+        self.rom = rom
+        self.regs = np.tile(rom, (n, 1))
+        self.flash: list[dict[int, int]] = [{} for _ in range(n)]
+        self.steps = 0
+        self.resets = [0] * n
+
+    # ------------------------------------------------------------------ registers
+    def read_raw(self, key: str | int) -> np.ndarray:
+        return self.regs[:, self.table.lookup(key).number].copy()
+
+    def _check(self, number: int, raw: int) -> None:
+        reg = self.table.lookup(number)
+        if reg.access != Access.RW:
+            raise ReadOnlyRegisterError(f"{reg.name} (register {reg.number}) is "
+                                        f"{reg.access.value}")
+        to_raw(reg, raw / reg.scale)
+        if number == self.mode_number and raw == SAFE_MODE:
+            raise ModeError("SAFE_MODE is entered by the safe-mode command only")
+
+    def write_raw(self, key: str | int, raw: Any, index: Any = None) -> None:
+        number = self.table.lookup(key).number
+        self._check(number, int(raw))
+        rows = slice(None) if index is None else index
+        self.regs[rows, number] = int(raw)
+
+    # ------------------------------------------------------------------ modes, flash, reset
+    def step(self, n_outer: int = 1) -> None:
+        self.steps += n_outer
+
+    def enter_safe_mode(self, index: int) -> None:
+        self.regs[index, self.mode_number] = SAFE_MODE
+
+    def exit_safe_mode(self, index: int) -> None:
+        self.regs[index, self.mode_number] = 0
+
+    def write_flash(self, index: int) -> None:
+        if self.regs[index, self.mode_number] != SAFE_MODE:
+            raise ModeError("write flash in SAFE_MODE only")
+        self.flash[index] = self.flash_image(index)
+        self.reset(index)
+
+    def reset(self, index: int) -> None:
+        self.regs[index] = self.rom
+        for number, raw in self.flash[index].items():
+            self.regs[index, number] = raw
+        self.resets[index] += 1
+
+    def flash_image(self, index: int) -> dict[int, int]:
+        return {reg.number: int(self.regs[index, reg.number]) for reg in self.table
+                if reg.access == Access.RW and reg.number != self.mode_number}
+
+    def load_flash_image(self, index: int, image: dict[int, int]) -> None:
+        for number, raw in image.items():
+            self._check(number, raw)
+        self.flash[index] = {**self.flash[index], **image}
+
+    @property
+    def interface_bits(self) -> np.ndarray:
+        return np.zeros(self.n, dtype=np.int64)
+
+    def sample_buffer_raw(self, index: int) -> np.ndarray:
+        return np.zeros((0, 4), dtype=np.int64)
