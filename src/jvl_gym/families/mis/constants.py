@@ -114,5 +114,9 @@ CMD_ADD_ACTUAL = 121  #: P_IST, encoder += P_NEW
 #: encoder counts per revolution of each ENCODER_TYPE code (0: no encoder)
 ENCODER_CPR = {code: cpr for code, (_, cpr) in ENCODER_TYPES.items()}
 
+# --- serial line (§18.2) ---------------------------------------------------------------------
+#: MacTalk of the 32-bit register families: registers 1–255, data always 4 bytes (protocol.dialect)
+MACTALK_DIALECT = "mactalk32"
+
 __all__ = [name for name in dir() if name.isupper() and not name.startswith("_")] + [
     "COUNTS_PER_FULL_STEP", "ACCEL_MAX_RPM_PER_S", "CUR_SCALE_FULL"]
