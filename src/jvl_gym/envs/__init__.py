@@ -1,9 +1,10 @@
-"""Gymnasium environments over the batched MAC motor simulator.
+"""Gymnasium environments over the batched motor simulators.
 
 Every env is a ``gymnasium.Env`` (``*Env``) and a native ``gymnasium.vector.VectorEnv``
 (``*VectorEnv``) sharing one implementation (:mod:`jvl_gym.envs.base`). Ids:
 ``jvl_gym/Positioning-v0``, ``jvl_gym/FilterTuning-v0``, ``jvl_gym/GearSync-v0``,
-``jvl_gym/CoilWinding-v0`` (registered when ``jvl_gym`` is imported). See ``docs/envs.md``.
+``jvl_gym/CoilWinding-v0`` on the MAC050–141 servos, ``jvl_gym/StepperIndexing-v0`` on the
+MIS step motors (registered when ``jvl_gym`` is imported). See ``docs/envs.md``.
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ _CLASSES = {
     "FilterTuningEnv": "filter_tuning", "FilterTuningVectorEnv": "filter_tuning",
     "GearSyncEnv": "gear_sync", "GearSyncVectorEnv": "gear_sync",
     "CoilWindingEnv": "coil_winding", "CoilWindingVectorEnv": "coil_winding",
+    "StepperIndexingEnv": "stepper_indexing", "StepperIndexingVectorEnv": "stepper_indexing",
 }
 
 

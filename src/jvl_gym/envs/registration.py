@@ -12,6 +12,8 @@ _ENVS = {
     "jvl_gym/FilterTuning-v0": ("filter_tuning", "FilterTuningEnv", "FilterTuningVectorEnv", 1),
     "jvl_gym/GearSync-v0": ("gear_sync", "GearSyncEnv", "GearSyncVectorEnv", 1500),
     "jvl_gym/CoilWinding-v0": ("coil_winding", "CoilWindingEnv", "CoilWindingVectorEnv", 1200),
+    "jvl_gym/StepperIndexing-v0": ("stepper_indexing", "StepperIndexingEnv",
+                                   "StepperIndexingVectorEnv", 1000),
 }
 ENV_IDS: tuple[str, ...] = tuple(_ENVS)
 

@@ -1,0 +1,267 @@
+"""StepperIndexing-v0: a sequence of indexing moves of an MIS step motor, fast and without
+losing steps."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numba import njit
+
+from ..engine import TaskDriver
+from ..families import family
+from ..families.mis import constants as c
+from ..families.mis.task import (
+    DEFAULT_MOTOR_TYPE,
+    ERROR_BITS,
+    FAMILY_KEY,
+    TERMINAL_ERRORS,
+    R,
+    copper_energy,
+    lost_steps,
+    reg,
+    rotor_speed,
+    set_reg,
+)
+from ..jit import KERNEL
+from .base import MotorVectorEnv
+from .compiled import action, end_step, put_obs
+from .single import MotorEnv
+
+__all__ = ["StepperIndexingEnv", "StepperIndexingVectorEnv"]
+
+#: V_SOLL range of the action [RPM]: a0 = −1 … 1 maps linearly onto it
+_RPM_LOW, _RPM_HIGH = 30.0, 1500.0
+#: A_SOLL range of the action [RPM/s]: a1 = −1 … 1 maps log-linearly onto it
+_ACC_LOW, _ACC_HIGH = 500.0, 100000.0
+#: RUN_CURRENT range of the action as a fraction of the type's largest setting
+_CUR_LOW, _CUR_HIGH = 0.1, 1.0
+#: speed scale of the observation: 1500 RPM in V_IST units (0.01 RPM)
+_V_NORM = _RPM_HIGH / c.VELOCITY_RPM_PER_UNIT
+#: rotor speed below which a finished profile counts as settled [rad/s]
+_SETTLED_RAD_S = 0.5
+#: entries of the per-env constants array
+(_NOISE, _MAX_STEPS, _TIME_W, _COPPER_W, _MOVE_BONUS, _LOST_PENALTY, _BASELINE, _N_MOVES,
+ _N_CONSTS) = range(9)
+
+
+@njit(cache=True, inline="always")
+def _observe_row(i, view, episode, task):  # pragma: no cover - compiled
+    """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
+    k, target, move, left, _, _ = task
+    obs, key, count, noise = episode.obs, episode.noise_key[i], episode.t[i], k[_NOISE]
+    put_obs(obs, i, 0, (target[i] - reg(view, i, R.P_IST)) / move[i], key, count, noise)
+    put_obs(obs, i, 1, move[i] / c.COUNTS_PER_REV, key, count, noise)
+    put_obs(obs, i, 2, reg(view, i, R.V_IST) / _V_NORM, key, count, noise)
+    put_obs(obs, i, 3, reg(view, i, R.FLWERR) / c.COUNTS_PER_FULL_STEP, key, count, noise)
+    put_obs(obs, i, 4, left[i] / k[_N_MOVES], key, count, noise)
+    for a in range(3):
+        put_obs(obs, i, 5 + a, episode.prev_action[i, a], key, count, noise)
+
+
+@njit(cache=True, inline="always")
+def _step_begin(i, view, episode, task, actions):  # pragma: no cover - compiled
+    """Beginning of an env step of copy ``i``: the profile registers (unless baseline)."""
+    k, _, _, _, i_max, _ = task
+    if k[_BASELINE] > 0.5:
+        return
+    rpm = _RPM_LOW + 0.5 * (action(actions, i, 0) + 1.0) * (_RPM_HIGH - _RPM_LOW)
+    acc = _ACC_LOW * (_ACC_HIGH / _ACC_LOW) ** (0.5 * (action(actions, i, 1) + 1.0))
+    cur = _CUR_LOW + 0.5 * (action(actions, i, 2) + 1.0) * (_CUR_HIGH - _CUR_LOW)
+    set_reg(view, i, R.V_SOLL, int(round(rpm / c.VELOCITY_RPM_PER_UNIT)))
+    set_reg(view, i, R.A_SOLL, int(round(acc)))
+    set_reg(view, i, R.RUN_CURRENT, int(round(cur * i_max[i])))
+
+
+@njit(cache=True, inline="always")
+def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
+    """End of an env step of copy ``i``: the next move when this one has settled, reward,
+    termination, observation."""
+    k, target, move, left, _, energy = task
+    t = episode.t
+    t[i] += 1
+    reward = -k[_TIME_W]
+    settled = (reg(view, i, R.P_IST) == target[i]
+               and abs(rotor_speed(view, i)) < _SETTLED_RAD_S)
+    if settled and left[i] > 0:
+        left[i] -= 1
+        reward += k[_MOVE_BONUS]
+        if left[i] > 0:
+            target[i] += move[i]
+            set_reg(view, i, R.P_SOLL, target[i])
+    e_cu = copper_energy(view, i)
+    reward -= k[_COPPER_W] * (e_cu - energy[i])
+    energy[i] = e_cu
+    lost = lost_steps(view, i) != 0
+    if lost:
+        reward -= k[_LOST_PENALTY]
+    error = (reg(view, i, R.ERR_BITS) & ERROR_BITS) != 0
+    episode.reward[i] = reward
+    end_step(i, lost or error or left[i] == 0, t, int(k[_MAX_STEPS]), episode.terminated,
+             episode.truncated)
+    for a in range(3):
+        episode.prev_action[i, a] = action(actions, i, a)
+    _observe_row(i, view, episode, task)
+
+
+_DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "stepper_indexing", begin=_step_begin,
+                     end=_step_end, observe=_observe_row)
+
+
+@njit(**KERNEL)
+def _reset_rows(idx: np.ndarray, move_turns: np.ndarray, n_moves: int, target: np.ndarray,
+                move: np.ndarray, left: np.ndarray, energy: np.ndarray
+                ) -> None:  # pragma: no cover - compiled
+    """Moves [counts] of copies ``idx`` from the (M,) draws [turns]: the first target, the
+    moves left, the copper energy counted from power-on (0)."""
+    for j in range(idx.shape[0]):
+        i = idx[j]
+        move[i] = max(int(np.round(move_turns[j] * c.COUNTS_PER_REV)), 1)
+        target[i] = move[i]
+        left[i] = n_moves
+        energy[i] = 0.0
+
+
+class StepperIndexingVectorEnv(MotorVectorEnv):
+    """Vector version of :class:`StepperIndexingEnv` (same arguments plus ``num_envs`` and
+    ``autoreset_mode``)."""
+
+    family_key = FAMILY_KEY
+    default_motor_type = DEFAULT_MOTOR_TYPE
+    terminal_errors = TERMINAL_ERRORS
+    error_register = "ERR_BITS"
+
+    obs_labels = ("distance_to_go", "move_length", "profile_speed", "rotor_lag",
+                  "moves_left", "previous_speed", "previous_acceleration", "previous_current")
+    act_labels = ("speed", "acceleration", "current")
+    default_ranges = {
+        "inertia_ratio": (0.0, 20.0),
+        "coulomb_ratio": (0.0, 0.1),
+        "load_torque_ratio": (0.0, 0.6),
+        "move_turns": (0.1, 0.5),
+    }
+    default_decimation = 2
+    default_max_episode_steps = 1000
+    scope_channels = ("distance to go [turns]", "speed [rpm]", "lag [full steps]")
+
+    def __init__(self, num_envs: int = 1, *, baseline: bool = False, n_moves: int = 3,
+                 time_weight: float = 0.01, copper_weight: float = 0.1, move_bonus: float = 1.0,
+                 lost_penalty: float = 10.0, **kwargs: Any) -> None:
+        self.baseline = bool(baseline)
+        if isinstance(n_moves, bool) or not isinstance(n_moves, (int, np.integer)) or n_moves < 1:
+            raise ValueError(f"n_moves must be an integer >= 1, got {n_moves!r}")
+        self.n_moves = int(n_moves)
+        weights = {"time_weight": time_weight, "copper_weight": copper_weight,
+                   "move_bonus": move_bonus, "lost_penalty": lost_penalty}
+        for name, value in weights.items():
+            if isinstance(value, bool) or not np.isfinite(value) or value < 0:
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        self.weights = {name: float(v) for name, v in weights.items()}
+        super().__init__(num_envs, **kwargs)
+
+    def _build(self) -> None:
+        n = self.num_envs
+        self.target = np.zeros(n, dtype=np.int64)  # counts: P_SOLL of the present move
+        self.move = np.ones(n, dtype=np.int64)  # counts per move
+        self.moves_left = np.zeros(n, dtype=np.int64)
+        self._i_max = np.zeros(n)  # RUN_CURRENT units: the type's largest setting
+        self._energy = np.zeros(n)  # J: copper energy at the end of the last step
+        self._k = np.zeros(_N_CONSTS)
+        w = self.weights
+        self._k[[_NOISE, _MAX_STEPS, _TIME_W, _COPPER_W, _MOVE_BONUS, _LOST_PENALTY, _BASELINE,
+                 _N_MOVES]] = (self.obs_noise, self.max_episode_steps, w["time_weight"],
+                               w["copper_weight"], w["move_bonus"], w["lost_penalty"],
+                               float(self.baseline), self.n_moves)
+        self._task = (self._k, self.target, self.move, self.moves_left, self._i_max,
+                      self._energy)
+
+    def _holding_torque(self, idx: np.ndarray) -> np.ndarray:
+        return np.array([cfg.holding_torque for cfg in self._type_configs(idx)])
+
+    def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
+                      ) -> dict[str, np.ndarray]:
+        return {"load_inertia": draws["inertia_ratio"] * self.rotor_inertia(idx),
+                "coulomb_friction": draws["coulomb_ratio"] * self._holding_torque(idx)}
+
+    def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
+                    rngs: list[np.random.Generator]) -> None:
+        _reset_rows(idx, draws["move_turns"], self.n_moves, self.target, self.move,
+                    self.moves_left, self._energy)
+        self._i_max[idx] = [cfg.run_current_max for cfg in self._type_configs(idx)]
+        self.motors.set_input(idx, load_torque=draws["load_torque_ratio"]
+                              * self._holding_torque(idx))
+        self.motors.write_many({"P_SOLL": self.target[idx], "MODE_REG": c.POSITION}, idx)
+
+    def _step_copies(self, actions: np.ndarray) -> bool:
+        return _DRIVER.step(self.motors.engine_view(), self._episode, self._task, actions,
+                            self.decimation)
+
+    def _observe_copies(self, idx: np.ndarray) -> None:
+        _DRIVER.observe(self.motors.engine_view(), self._episode, self._task, idx)
+
+    def _termination_reasons(self, idx: np.ndarray) -> list[str]:
+        lost = self.motors.lost_steps[idx]
+        errors = self._error_reasons(idx)
+        return ["all moves done" if self.moves_left[i] == 0 and not lost[j] and not errors[j]
+                else (f"lost {abs(int(lost[j]))} full steps" if lost[j] else errors[j])
+                for j, i in enumerate(idx.tolist())]
+
+    def _scope_values(self) -> np.ndarray:
+        togo = (self.target - self.motors.read_raw("P_IST")) / c.COUNTS_PER_REV
+        lag = self.motors.read_raw("FLWERR") / c.COUNTS_PER_FULL_STEP
+        return np.stack([togo, self.motors.speed_rpm, lag], axis=1)
+
+
+class StepperIndexingEnv(MotorEnv):
+    """A sequence of indexing moves of an MIS integrated step motor, fast and without losing
+    steps.
+
+    ## Description
+    An MIS step motor (MIS232 by default) drives an indexing axis: a load inertia of 0–20 ×
+    the rotor's, Coulomb friction and a constant load torque of up to 60 % of the holding
+    torque at full current. The firmware runs in position mode (MIS manual §8.2.3) and moves
+    ``n_moves`` times by the same random distance (0.1–0.5 turns); a move ends when the
+    commanded position P_IST has reached P_SOLL and the rotor has settled, and the next starts
+    at once. Every few milliseconds the agent sets the profile's maximum speed V_SOLL, its
+    acceleration A_SOLL and the phase current RUN_CURRENT. The firmware's profile rules hold
+    (§8.2.5, §8.2.6): a new A_SOLL takes effect at standstill or a direction change only. Too
+    much speed or acceleration for the load, or too little current, and the rotor slips poles:
+    steps are lost (the open-loop P_IST keeps counting, the encoder sees the rotor). More
+    current costs copper loss.
+
+    ## Action Space
+    ``Box(-1, 1, (3,), float32)``: V_SOLL from 30 to 1500 RPM (linear), A_SOLL from 500 to
+    100 000 RPM/s (log-linear), RUN_CURRENT from 10 to 100 % of the type's largest setting
+    (§8.2.7), written before each step of ``decimation`` firmware samples of 1 ms.
+
+    ## Observation Space
+    ``Box(-5, 5, (8,), float32)``: the distance to go of the present move as a fraction of the
+    move; the move length in turns; the profile speed V_IST in units of 1500 RPM; the rotor lag
+    FLWERR (P_IST − encoder, §8.2.18) in full steps; the fraction of moves left; the previous
+    action. Optional Gaussian noise (``obs_noise``) is added before clipping.
+
+    ## Rewards
+    Per step: ``−time_weight − copper_weight·ΔE_cu`` with the copper loss ΔE_cu [J] of the
+    step; ``+move_bonus`` for each move finished; ``−lost_penalty`` when steps are lost.
+
+    ## Starting State
+    The motor powers on at rest with its default registers (V_SOLL 100 RPM, A_SOLL 1000 RPM/s,
+    RUN_CURRENT 50 %), the load from ``inertia_ratio`` (× rotor inertia), ``coulomb_ratio`` and
+    ``load_torque_ratio`` (× holding torque at the largest current), and the first move
+    requested (P_SOLL, position mode).
+
+    ## Episode End
+    Terminated when every move is done, when the rotor has lost steps, or on an ERR_BITS error
+    (follow error, position limit, low bus voltage); truncated after ``max_episode_steps``
+    steps (default 1000 = 2 s at decimation 2). ``info["termination_reason"]`` says which.
+
+    ## Arguments
+    ``motor_type`` (an MIS/SMC type or a list drawn per episode), ``randomization`` (overrides
+    of the ranges above), ``decimation`` (1 ms firmware samples per step, default 2),
+    ``obs_noise``, ``max_episode_steps``, ``render_mode`` (``"rgb_array"``: scope plot),
+    ``n_moves`` (3), ``time_weight`` (0.01), ``copper_weight`` (0.1 per J), ``move_bonus`` (1),
+    ``lost_penalty`` (10), ``baseline`` (True: the firmware's trapezoid with the default
+    registers; the action is ignored). Reset options: ``randomization``, ``motor_type``.
+    """
+
+    vector_class = StepperIndexingVectorEnv
