@@ -326,3 +326,24 @@ def test_torque_zero_search_against_an_end_stop() -> None:
     wall_counts = wall * 409600 / (2 * np.pi)
     assert m.rotor_counts[0] == pytest.approx(wall_counts + 20000, abs=1000)
     assert m.read("ERR_BITS")[0] == 0
+
+
+@given(st.dictionaries(st.sampled_from(["V_SOLL", "A_SOLL", "P_SOLL", "V_START", "D_SOLL",
+                                        "RUN_CURRENT", "STARTMODE", "TURNTABLE_MODE",
+                                        "MODE_REG", "COMMAND", "GEAR2"]),
+                       st.integers(-(2**33), 2**33), min_size=1, max_size=6))
+@settings(max_examples=60, deadline=None)
+def test_a_write_is_all_or_nothing(values: dict[str, int]) -> None:
+    """Any set of register values: either every one is stored (as the rules store it) or a
+    RegisterError leaves every register and the state as they were."""
+    m = _motor(V_SOLL=1234)
+    regs, state = m.regs.copy(), m.state.copy()
+    try:
+        m.write_many(values)
+    except RegisterError:
+        np.testing.assert_array_equal(m.regs, regs)
+        np.testing.assert_array_equal(m.state, state)
+        return
+    for name, value in values.items():
+        if name not in ("COMMAND", "MODE_REG"):
+            assert m.read(name)[0] == value or name == "P_SOLL"
