@@ -326,3 +326,47 @@ def test_torque_zero_search_against_an_end_stop() -> None:
     wall_counts = wall * 409600 / (2 * np.pi)
     assert m.rotor_counts[0] == pytest.approx(wall_counts + 20000, abs=1000)
     assert m.read("ERR_BITS")[0] == 0
+
+
+@given(st.dictionaries(st.sampled_from(["V_SOLL", "A_SOLL", "P_SOLL", "V_START", "D_SOLL",
+                                        "RUN_CURRENT", "STARTMODE", "TURNTABLE_MODE",
+                                        "MODE_REG", "COMMAND", "GEAR2"]),
+                       st.integers(-(2**33), 2**33), min_size=1, max_size=6))
+@settings(max_examples=60, deadline=None)
+def test_a_write_is_all_or_nothing(values: dict[str, int]) -> None:
+    """Any set of register values: either every one is stored (as the rules store it) or a
+    RegisterError leaves every register and the state as they were."""
+    m = _motor(V_SOLL=1234)
+    regs, state = m.regs.copy(), m.state.copy()
+    try:
+        m.write_many(values)
+    except RegisterError:
+        np.testing.assert_array_equal(m.regs, regs)
+        np.testing.assert_array_equal(m.state, state)
+        return
+    for name, value in values.items():
+        if name not in ("COMMAND", "MODE_REG"):
+            assert m.read(name)[0] == value or name == "P_SOLL"
+
+
+def test_user_commands_reset_save_and_emergency_stops() -> None:
+    m = _motor(V_SOLL=20000, V_START=1000, A_SOLL=1000, ACC_EMERG=2000)
+    m.write("MODE_REG", 1)
+    m.step(300)
+    with pytest.raises(RegisterError, match="passive or safe"):
+        m.write("COMMAND", 268)
+    m.write("COMMAND", 398)  # emergency stop with ACC_EMERG, then passive
+    v = m.trace(["V_IST", "MODE_REG"], 150)
+    assert np.diff(v["V_IST"][:50, 0]).tolist() == [-200] * 49
+    assert v["MODE_REG"][-1, 0] == 0
+    m.write_many({"MODE_REG": 1, "V_SOLL": 5000})
+    m.step(50)
+    m.write("COMMAND", 399)  # without deceleration
+    assert m.read("MODE_REG")[0] == 0
+    angle = m.position_rad[0]
+    m.write("STARTMODE", 2)
+    m.write("COMMAND", 268)  # save, reset: registers from flash, the rotor where it was
+    assert m.read("MODE_REG")[0] == 2 and m.read("V_SOLL")[0] == 5000
+    assert m.read("P_IST")[0] == 0 and m.position_rad[0] == angle
+    m.step(200)
+    assert abs(m.position_rad[0] - angle) < 0.01  # no jump of the field at the reset

@@ -109,6 +109,15 @@ CMD_RELATIVE = (113, 114)  #: P_SOLL = P_IST + P7 / P8
 CMD_SET_POSITION = 119  #: P_IST = P_SOLL = encoder = P_NEW
 CMD_ADD_POSITION = 120  #: P_IST, P_SOLL, encoder += P_NEW
 CMD_ADD_ACTUAL = 121  #: P_IST, encoder += P_NEW
+# --- COMMAND: user commands (§8.2.22) ---------------------------------------------------------
+CMD_RESYNC = 257  #: P_IST := encoder position
+CMD_RESET = 267  #: reset the CPU
+CMD_SAVE_RESET = 268  #: save to flash, then reset
+CMD_SAVE = 269  #: save to flash, continue
+CMD_EMERGENCY_STOP = 398  #: emergency stop with deceleration (ACC_EMERG)
+CMD_EMERGENCY_HALT = 399  #: emergency stop without deceleration
+#: user commands only a passive or safe motor takes
+CMD_PASSIVE_ONLY = (CMD_RESET, CMD_SAVE_RESET, CMD_SAVE)
 
 # --- encoders (§8.2.49, units.ENCODER_TYPES) ----------------------------------------------
 #: encoder counts per revolution of each ENCODER_TYPE code (0: no encoder)

@@ -71,6 +71,8 @@ _MEMBERS: dict[int, tuple[frozenset[int], str]] = {
     R.STARTMODE: (c.START_MODES, "§8.2.33"), R.HOMEMODE: (c.HOME_MODES, "§8.2.37"),
     R.TURNTABLE_MODE: (frozenset(range(6)), "§5.12.3: >5 is illegal")}
 BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
+#: the plant's state, which a reset of the electronics leaves alone
+_PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD]
 
 
 class MisMotorArray(MotorArray):
@@ -281,12 +283,31 @@ class MisMotorArray(MotorArray):
         command 268, §8.2.22)."""
         idx = as_index(index, self.n)
         self._in_safe(idx, "write_flash")
+        self._save_flash(idx)
+        self.software_reset(idx)
+
+    def _save_flash(self, idx: np.ndarray) -> None:
         if self._flash is None:
             self._flash = np.zeros_like(self.regs)
         rw = self._rw_numbers()
         self._flash[np.ix_(idx, rw)] = self.regs[np.ix_(idx, rw)]
         self._has_flash[idx] = True
-        self.reset(idx)
+
+    def software_reset(self, index: MotorIndex = None) -> None:
+        """Reset the electronics (user command 267, §8.2.22): registers from flash or ROM and
+        the power-on of the firmware (:meth:`_power_on`); the rotor keeps its angle and speed,
+        and the drive restarts with its commanded position at the rotor (no jump)."""
+        idx = as_index(index, self.n)
+        keep = self.state[np.ix_(idx, _PLANT_STATE)].copy()
+        memory = self._rom if self._flash is None else self._flash
+        for i in idx.tolist():
+            self.regs[i] = memory[i] if self._has_flash[i] else self._rom[self._type_of[i]]
+        self.state[idx] = 0.0
+        self.state[np.ix_(idx, _PLANT_STATE)] = keep
+        self._power_on(idx)
+        rotor = self.state[idx, L.S_THETA] * COUNTS_PER_REV / (2.0 * math.pi)
+        for col in (L.S_CMD, L.S_CMD_PREV, L.S_FIELD):
+            self.state[idx, col] = rotor
 
     def _in_safe(self, idx: np.ndarray, what: str) -> None:
         bad = idx[self.regs[idx, R.MODE_REG] != c.SAFE]
@@ -341,8 +362,14 @@ class MisMotorArray(MotorArray):
         self.regs[i, R.ENCODER_POS] = value
 
     def _commands(self, idx: np.ndarray, raw: np.ndarray) -> None:
-        """FastMac commands (§8.2.21); other numbers are stored and do nothing."""
+        """FastMac commands (§8.2.21) and the user commands 257, 267–269, 398, 399
+        (§8.2.22; reset and save only in passive or safe mode, which "allows the save in flash
+        and reset commands", §8.2.3); other numbers do nothing. COMMAND reads 0 afterwards."""
         regs = self.regs
+        for i, cmd in zip(idx.tolist(), raw.tolist()):
+            if cmd in c.CMD_PASSIVE_ONLY and regs[i, R.MODE_REG] not in (c.PASSIVE, c.SAFE):
+                raise RegisterError(f"COMMAND = {cmd} refused for motor {i}: reset and save "
+                                    "need passive or safe mode (§8.2.3). Nothing was changed.")
         for i, cmd in zip(idx.tolist(), raw.tolist()):
             if cmd == c.CMD_CLEAR_ERRORS:
                 regs[i, R.ERR_BITS] = 0
@@ -375,7 +402,20 @@ class MisMotorArray(MotorArray):
                 if cmd != c.CMD_ADD_ACTUAL:
                     regs[i, R.P_SOLL] = wrap32(int(regs[i, R.P_SOLL]) * add + new)
                 self._set_encoder(i, wrap32(int(regs[i, R.ENCODER_POS]) * add + new))
+            elif cmd == c.CMD_RESYNC and self.params[i, L.P_ENCODER] > 0:
+                regs[i, R.P_IST] = regs[i, R.ENCODER_POS]
+                self.state[i, L.S_FRAC] = 0.0
+            elif cmd in (c.CMD_SAVE, c.CMD_SAVE_RESET):
+                self._save_flash(np.array([i]))
+            elif cmd == c.CMD_EMERGENCY_STOP and regs[i, R.MODE_REG] not in (c.PASSIVE,
+                                                                              c.SAFE):
+                self.state[i, L.S_EMERGENCY] = 1.0
+            elif cmd == c.CMD_EMERGENCY_HALT:
+                regs[i, R.MODE_REG] = c.PASSIVE
+                self.state[i, L.S_VEL] = 0.0
             regs[i, R.COMMAND] = 0
+            if cmd in (c.CMD_RESET, c.CMD_SAVE_RESET):
+                self.software_reset(np.array([i]))
 
     def _ensure_buffer(self) -> None:
         if not self._buf_allocated:
