@@ -6,6 +6,8 @@ from __future__ import annotations
 from jvl_gym import MotorArray
 from jvl_gym.protocol import modbus as mb
 from jvl_gym.protocol.modbus_server import ModbusBus
+from jvl_gym.protocol.modbus_twin import modbus_bus
+from jvl_gym.protocol.twin import Twin
 
 
 def _exchange(bus: ModbusBus, frame: bytes) -> mb.Response:
@@ -16,7 +18,7 @@ def _exchange(bus: ModbusBus, frame: bytes) -> mb.Response:
 def test_modbus_writes_and_reads_a_simulated_motor() -> None:
     m = MotorArray("MIS232", n=2, seed=0)
     m.write("MY_ADDR", 7, index=1)
-    bus = ModbusBus([m.modbus_device(0), m.modbus_device(1)])
+    bus = modbus_bus(Twin(m))
     v_soll = mb.words_of(25000)
     _exchange(bus, mb.encode_write_request(7, 2 * 5, list(v_soll)))  # V_SOLL, register 5
     _exchange(bus, mb.encode_write_request(7, 2 * 13, list(mb.words_of(30000))))  # V_START

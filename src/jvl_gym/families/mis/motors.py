@@ -27,7 +27,6 @@ from . import layout as L
 from . import regs as R
 from .config import MisMotorConfig, load_motor
 from .firmware.arith import wrap32
-from .modbus_device import MisModbusDevice
 from .table import TABLE
 from .torque_curve import pull_out_torque
 from .units import COUNTS_PER_REV, CURRENT_AMPS_PER_UNIT
@@ -517,10 +516,6 @@ class MisMotorArray(MotorArray):
         return {"copper": self.state[:, L.S_E_COPPER].copy(),
                 "load": self.state[:, L.S_E_LOAD].copy()}
 
-    def modbus_device(self, index: int) -> MisModbusDevice:
-        """Motor ``index`` as a device for :class:`jvl_gym.protocol.modbus_server.ModbusBus`
-        (MIS manual §12): the slave address MY_ADDR, validated register writes."""
-        return MisModbusDevice(self, motor_index(index, self.n, "modbus_device"))
 
     def pull_out_torque(self, rpm: float) -> np.ndarray:
         """Steady-state pull-out torque [N·m] of each motor at ``rpm`` with its RUN_CURRENT
