@@ -3,9 +3,9 @@
 A fresh install compiles the simulator's kernel on the first step of a motor array and each
 environment's step on its first step; together several minutes on a 2-core machine. Running
 this once after installing (``make setup`` does) fills numba's on-disk cache, so that every
-later process starts in about a second. Jobs: the motor array (serial and threaded drivers,
-register writes, the sample buffer) first, since every environment inlines its kernel, then
-each environment (single and vector with threads) in a pool of worker processes.
+later process starts in about a second. Jobs: the motor arrays of every family (serial and
+threaded drivers, register writes) first, since every environment inlines its family's kernel,
+then each environment (single and vector with threads) in a pool of worker processes.
 """
 
 from __future__ import annotations
@@ -25,19 +25,18 @@ _THREADED = 32
 
 
 def compile_motors() -> float:
-    """Compile the motor array's paths: stepping (serial and threaded), register writes and a
-    test-mode record. Returns the wall time [s]."""
-    from .families.mac050_141 import constants as c
+    """Compile the motor arrays' paths of every registered family: stepping (serial and
+    threaded) and register writes. Returns the wall time [s]."""
+    from .families import families, family
     from .sim import MotorArray
 
     start = time.perf_counter()
-    for n in (1, _THREADED):
-        m = MotorArray("MAC140", n=n, seed=0)
-        m.write("MODE_REG", c.TESTA_MODE)  # records: allocates and fills the sample buffer
-        m.step(2)
-        m = MotorArray("MAC140", n=n, seed=0)
-        m.write_many({"V_SOLL": 100, "MODE_REG": c.V_MODE})
-        m.step(2)
+    for key in families():
+        motor_type = family(key).motor_types()[0]
+        for n in (1, _THREADED):
+            m = MotorArray(motor_type, n=n, seed=0)
+            m.write(m.MODE_REGISTER, m.read_raw(m.MODE_REGISTER))  # the write path
+            m.step(2)
     return time.perf_counter() - start
 
 

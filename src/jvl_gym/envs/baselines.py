@@ -8,6 +8,8 @@
   the action is ignored).
 - FilterTuning-v0: the tuning toolkit's synthesis if it is importable, else the default setup
   (env argument ``baseline=True``; the action is ignored).
+- StepperIndexing-v0: the MIS firmware's trapezoid with the default registers (V_SOLL,
+  A_SOLL, RUN_CURRENT; env argument ``baseline=True``; the action is ignored).
 
 A baseline is used like a policy: ``actions = baseline(obs)``, with
 ``baseline.reset(done_mask)`` after each step so stateful controllers restart with episodes.
@@ -91,6 +93,8 @@ BASELINES: dict[str, Baseline] = {
                                        "firmware P_MODE, default setup"),
     "jvl_gym/FilterTuning-v0": Baseline({"baseline": True}, "zero",
                                         "tuning toolkit synthesis (else default setup)"),
+    "jvl_gym/StepperIndexing-v0": Baseline({"baseline": True}, "zero",
+                                           "firmware trapezoid, default registers"),
 }
 
 #: PI gains found by the grid search of docs/envs.md (decimation 2)
