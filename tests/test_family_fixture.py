@@ -108,3 +108,16 @@ def test_a_world_source_for_an_input_the_family_lacks_is_refused() -> None:
         m.step(1)
     np.testing.assert_array_equal(m.regs, before[0])
     np.testing.assert_array_equal(m.state, before[1])
+
+
+def test_world_inputs_of_a_family_go_through_the_generic_checks() -> None:
+    """``set_input`` is the engine's: the toy family only declares its inputs; a bad value or
+    an unknown input changes nothing."""
+    m = MotorArray("TOY1", n=2)
+    m.set_input(load_torque=[0.5, -0.5])
+    np.testing.assert_array_equal(m.inputs[:, 0], [0.5, -0.5])
+    for bad, error in (({"load_torque": np.nan}, ValueError), ({"load_torque": [1.0]}, ValueError),
+                       ({"load_torque": "1"}, TypeError), ({"pulse_counts": 1}, TypeError)):
+        with pytest.raises(error):
+            m.set_input(**bad)
+        np.testing.assert_array_equal(m.inputs[:, 0], [0.5, -0.5])

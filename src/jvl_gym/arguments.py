@@ -14,8 +14,8 @@ import numpy as np
 
 from .registers import RegisterShapeError
 
-__all__ = ["MotorIndex", "RegisterKey", "RegisterValue", "Seed", "MotorSpec", "as_index",
-           "motor_index", "real_array", "outer_count"]
+__all__ = ["MotorIndex", "RegisterKey", "RegisterValue", "Seed", "MotorSpec", "InputValue",
+           "as_index", "motor_index", "real_array", "outer_count"]
 
 #: which motors: None (all), an integer, a slice, a sequence or integer array of distinct
 #: integers, or a boolean mask of shape (N,)
@@ -28,6 +28,8 @@ RegisterValue: TypeAlias = "float | int | np.floating | np.integer | Sequence[fl
 Seed: TypeAlias = "int | Sequence[int] | np.ndarray | None"
 #: a motor type name, a config path, a config object, or one of those per motor
 MotorSpec: TypeAlias = "str | os.PathLike[str] | Any | Sequence[str | os.PathLike[str] | Any]"
+#: a world input's value: a real number (broadcast), one per selected motor, or None (unchanged)
+InputValue: TypeAlias = "float | int | bool | np.ndarray | Sequence[float] | None"
 
 #: up to this many int64 indices are checked with Python ints (``as_index``)
 _FEW = 8

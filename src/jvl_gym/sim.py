@@ -20,10 +20,11 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .arguments import MotorIndex, MotorSpec, Seed, as_index, real_array
+from .arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, real_array
 from .bank import RegisterBank, StorePlan
 from .families import Family, family, family_of_motor
 from .flash import FlashStorage
+from .inputs import InputRule, staged_inputs
 from .keywords import BINARY, RULE_TEXT, first_bad_value
 from .noise import motor_keys
 from .registers import RegisterError, RegisterTable
@@ -101,6 +102,8 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
     VALUE_RULES: ClassVar[dict[str, int]] = {}
     #: world-input name → column of ``inputs`` (``set_input`` keywords, ``jvl_gym.world``)
     INPUTS: ClassVar[dict[str, int]] = {}
+    #: world-input name → what it accepts beyond a finite real number (``jvl_gym.inputs``)
+    INPUT_RULES: ClassVar[dict[str, InputRule]] = {}
     #: the physical quantities :meth:`trace` records (names of properties)
     PHYSICAL: ClassVar[frozenset[str]] = frozenset()
 
@@ -194,6 +197,21 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
 
     def _before_reset(self) -> None:
         """Family set-up after the arrays exist, before the first power-on."""
+
+    def set_input(self, index: MotorIndex = None, **inputs: InputValue) -> None:
+        """Set world inputs (:attr:`INPUTS` by name), held from the next outer sample on, per
+        motor of ``index``. Every value is checked (:attr:`INPUT_RULES`) before any is set.
+
+        Raises
+        ------
+        TypeError
+            An input the family does not have, or a value that is not a real number.
+        ValueError
+            A wrong shape, or a value that is not finite, not whole or out of range.
+        """
+        idx = as_index(index, self.n)
+        for col, values in staged_inputs(inputs, self.INPUTS, self.INPUT_RULES, idx.size):
+            self.inputs[idx, col] = values
 
     def pulse_decoding(self) -> tuple[np.ndarray, np.ndarray]:
         """How each motor decodes its pulse input: ``(pulse_dir, inverted)``, (N,) bool

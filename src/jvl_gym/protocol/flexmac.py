@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 from .errors import FrameError
 from .mactalk import protect
-from .stream import Malformed, NeedMore, StreamDecoder
+from .stream import Malformed, NeedMore, StreamDecoder, decode_one_with
 
 __all__ = [
     "W2",
@@ -325,12 +325,5 @@ class FlexMacDecoder(StreamDecoder):
 
 def decode(data: bytes) -> FlexMessage:
     """Decode exactly one FlexMAC message; raise :class:`FrameError` otherwise."""
-    d = FlexMacDecoder()
-    items = d.feed(bytes(data)) + d.flush()
-    for item in items:
-        if isinstance(item, FrameError):
-            raise item
-    if len(items) != 1:
-        raise FrameError(f"expected exactly one message, got {len(items)}", "trailing", 0,
-                         bytes(data))
-    return items[0]  # type: ignore[return-value]
+    message: FlexMessage = decode_one_with(FlexMacDecoder(), data, "message")
+    return message

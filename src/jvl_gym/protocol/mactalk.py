@@ -51,7 +51,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
 from .errors import FrameError
-from .stream import Malformed, NeedMore, StreamDecoder
+from .stream import Malformed, NeedMore, StreamDecoder, decode_all_with, decode_one_with
 
 __all__ = [
     "Command",
@@ -455,17 +455,10 @@ class MacTalkDecoder(StreamDecoder):
 def decode_all(data: bytes) -> list[Frame | FrameError]:
     """Decode a complete byte string: all frames and errors, a trailing partial frame reported
     as truncated."""
-    d = MacTalkDecoder()
-    return d.feed(data) + d.flush()
+    return decode_all_with(MacTalkDecoder(), data)
 
 
 def decode(data: bytes) -> Frame:
     """Decode exactly one frame; raise :class:`FrameError` with the reason otherwise."""
-    items = decode_all(bytes(data))
-    for item in items:
-        if isinstance(item, FrameError):
-            raise item
-    if len(items) != 1:
-        raise FrameError(f"expected exactly one frame, got {len(items)}", "trailing", 0,
-                         bytes(data))
-    return items[0]  # type: ignore[return-value]
+    frame: Frame = decode_one_with(MacTalkDecoder(), data)
+    return frame

@@ -67,7 +67,7 @@ from dataclasses import dataclass
 
 from .errors import FrameError
 from .mactalk import ACCEPT, END, MASTER, Accept, _Reader, protect
-from .stream import Malformed, StreamDecoder
+from .stream import Malformed, StreamDecoder, decode_all_with, decode_one_with
 
 __all__ = [
     "Command",
@@ -445,18 +445,11 @@ class MacTalk32Decoder(StreamDecoder):
 
 def decode_all(data: bytes) -> list[Frame | FrameError]:
     """All frames and errors of a complete byte string (a trailing partial frame: truncated)."""
-    d = MacTalk32Decoder()
-    return d.feed(bytes(data)) + d.flush()
+    return decode_all_with(MacTalk32Decoder(), data)
 
 
 def decode(data: bytes) -> Frame:
     """Decode exactly one frame; raise :class:`~.errors.FrameError` with the reason otherwise."""
-    items = decode_all(data)
-    for item in items:
-        if isinstance(item, FrameError):
-            raise item
-    if len(items) != 1:
-        raise FrameError(f"expected exactly one frame, got {len(items)}", "trailing", 0,
-                         bytes(data))
-    return items[0]  # type: ignore[return-value]
+    frame: Frame = decode_one_with(MacTalk32Decoder(), data)
+    return frame
 

@@ -96,3 +96,22 @@ class StreamDecoder(ABC):
         data = self._discard(len(self._buf))
         self.errors += 1
         return [FrameError(self._truncated(data), "truncated", offset, data)]
+
+
+def decode_all_with(decoder: StreamDecoder, data: bytes) -> list[Any]:
+    """All frames and errors of a complete byte string through a fresh ``decoder``, a trailing
+    partial frame reported as truncated."""
+    return decoder.feed(bytes(data)) + decoder.flush()
+
+
+def decode_one_with(decoder: StreamDecoder, data: bytes, what: str = "frame") -> Any:
+    """Exactly one ``what`` of ``data`` through a fresh ``decoder``; the first
+    :class:`FrameError` of the bytes, or one saying how many there were, otherwise."""
+    items = decode_all_with(decoder, data)
+    for item in items:
+        if isinstance(item, FrameError):
+            raise item
+    if len(items) != 1:
+        raise FrameError(f"expected exactly one {what}, got {len(items)}", "trailing", 0,
+                         bytes(data))
+    return items[0]

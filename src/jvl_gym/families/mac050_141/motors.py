@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 
-from ...arguments import MotorIndex, MotorSpec, Seed, as_index, motor_index, real_array
+from ...arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, motor_index, real_array
 from ...bank import StorePlan
+from ...inputs import InputRule
 from ...keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
 from ...registers import Format, Register, RegisterError
 from ...registers.formats import from_raw
@@ -36,7 +37,6 @@ from .table import TABLE
 __all__ = ["MacMotorArray"]
 
 #: a world input: a real number (every selected motor) or one per selected motor, or None
-InputValue = float | int | bool | np.ndarray | Sequence[float] | None
 
 #: per-motor parameter keywords of the constructor and :meth:`MacMotorArray.reset` (SI units)
 _PARAMETERS: dict[str, int] = {
@@ -106,6 +106,10 @@ class MacMotorArray(MotorArray):
     INPUTS: ClassVar[dict[str, int]] = {
         "load_torque": L.I_LOAD_TORQUE, "analog_volts": L.I_ANALOG_VOLTS,
         "pulse_counts": L.I_PULSE_COUNTS, "home": L.I_HOME, "supply_volts": L.I_SUPPLY_VOLTS}
+    INPUT_RULES: ClassVar[dict[str, InputRule]] = {
+        "pulse_counts": InputRule(whole=True, unit="counts per outer sample"),
+        "home": InputRule(allow_bool=True),
+        "supply_volts": InputRule(0.0, 60.0, unit="V")}
     PHYSICAL = frozenset({"speed_rpm", "speed_rad_s", "position_rad", "torque", "bus_voltage"})
     ONE_BY_ONE = frozenset(W.POINTERS) | {R.CNTRL_BITS}
 
@@ -446,28 +450,8 @@ class MacMotorArray(MotorArray):
         supply_volts : float or array
             Supply source voltage [V].
         """
-        idx = as_index(index, self.n)
-        staged = []
-        for name, val, col in (("load_torque", load_torque, L.I_LOAD_TORQUE),
-                               ("analog_volts", analog_volts, L.I_ANALOG_VOLTS),
-                               ("pulse_counts", pulse_counts, L.I_PULSE_COUNTS),
-                               ("home", home, L.I_HOME),
-                               ("supply_volts", supply_volts, L.I_SUPPLY_VOLTS)):
-            if val is None:
-                continue
-            arr = real_array(name, val, allow_bool=name == "home")
-            if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != idx.size):
-                raise ValueError(f"{name}: expected a scalar or shape ({idx.size},), "
-                                 f"got {arr.shape}")
-            if not np.all(np.isfinite(arr)):
-                raise ValueError(f"{name}: values must be finite, got {val!r}")
-            if name == "pulse_counts" and np.any(arr != np.round(arr)):
-                raise ValueError("pulse_counts must be whole counts per outer sample")
-            if name == "supply_volts" and np.any((arr < 0) | (arr > 60)):
-                raise ValueError("supply_volts must be within 0..60 V")
-            staged.append((col, np.broadcast_to(arr, (idx.size,))))
-        for col, arr in staged:
-            self.inputs[idx, col] = arr
+        super().set_input(index, load_torque=load_torque, analog_volts=analog_volts,
+                          pulse_counts=pulse_counts, home=home, supply_volts=supply_volts)
 
     @property
     def speed_rpm(self) -> np.ndarray:

@@ -11,13 +11,13 @@ world inputs and the physical truth of the plant.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
 
-from ...arguments import MotorIndex, as_index, motor_index, real_array
+from ...arguments import InputValue, MotorIndex, as_index, motor_index
 from ...bank import StorePlan
+from ...inputs import InputRule
 from ...keywords import FINITE, NONNEGATIVE, POSITIVE
 from ...registers import Register, RegisterError, RegisterRangeError
 from ...registers.formats import from_raw
@@ -33,7 +33,6 @@ from .units import COUNTS_PER_REV, CURRENT_AMPS_PER_UNIT
 
 __all__ = ["MisMotorArray"]
 
-InputValue = float | int | bool | np.ndarray | Sequence[float] | None
 
 _PARAMETERS: dict[str, int] = {
     "load_inertia": L.P_J_LOAD,  # kg·m²
@@ -109,6 +108,10 @@ class MisMotorArray(MotorArray):
                | (POSITIVE if name in _POSITIVE else 0))
         for name in [*_PARAMETERS, *_STATES]}
     INPUTS: ClassVar[dict[str, int]] = _INPUT_COLUMNS
+    INPUT_RULES: ClassVar[dict[str, InputRule]] = {
+        "supply_volts": InputRule(0.0, 80.0, unit="V"),
+        "pulse_counts": InputRule(whole=True, unit="counts per outer sample"),
+        "digital_inputs": InputRule(0.0, 255.0, whole=True, unit="(bits of IO1-IO8)")}
     PHYSICAL = frozenset({"speed_rpm", "position_rad", "torque", "current_amplitude",
                           "lost_steps"})
     ONE_BY_ONE = _SPECIAL
@@ -451,28 +454,7 @@ class MisMotorArray(MotorArray):
         ``digital_inputs`` (IO1–IO8 levels as bits 0–7, 0 … 255), ``analog1`` … ``analog8``
         [V] (the ADC reads 0 … 5 V, §2.3.5). All are checked before any is set.
         """
-        idx = as_index(index, self.n)
-        staged = []
-        for name, val in inputs.items():
-            if name not in _INPUT_COLUMNS:
-                raise TypeError(f"unknown input {name!r}; known: {', '.join(_INPUT_COLUMNS)}")
-            if val is None:
-                continue
-            arr = real_array(name, val)
-            if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != idx.size):
-                raise ValueError(f"{name}: expected a scalar or shape ({idx.size},), "
-                                 f"got {arr.shape}")
-            if not np.all(np.isfinite(arr)):
-                raise ValueError(f"{name}: values must be finite, got {val!r}")
-            if name in ("pulse_counts", "digital_inputs") and np.any(arr != np.round(arr)):
-                raise ValueError(f"{name} must be whole numbers")
-            if name == "digital_inputs" and np.any((arr < 0) | (arr > 255)):
-                raise ValueError("digital_inputs must be within 0..255 (bits of IO1-IO8)")
-            if name == "supply_volts" and np.any((arr < 0) | (arr > 80)):
-                raise ValueError("supply_volts must be within 0..80 V")
-            staged.append((_INPUT_COLUMNS[name], np.broadcast_to(arr, (idx.size,))))
-        for col, arr in staged:
-            self.inputs[idx, col] = arr
+        super().set_input(index, **inputs)
 
     # ------------------------------------------------------------------ physical truth
     @property

@@ -1,0 +1,75 @@
+"""World inputs of a motor array: what each input accepts, checked before any is set.
+
+A family declares its inputs (``MotorArray.INPUTS``: name → column of ``inputs``) and, where an
+input accepts less than any finite real number, an :class:`InputRule` for it
+(``MotorArray.INPUT_RULES``). :meth:`MotorArray.set_inputs` checks every value given against
+its rule and sets none if one fails.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from .arguments import InputValue, real_array
+
+__all__ = ["InputRule", "staged_inputs"]
+
+
+@dataclass(frozen=True)
+class InputRule:
+    """What one world input accepts.
+
+    Attributes
+    ----------
+    low, high : float
+        Closed range of the values.
+    whole : bool
+        Only whole numbers (counts, bit patterns).
+    allow_bool : bool
+        ``True``/``False`` are accepted as 1/0 (levels).
+    unit : str
+        Unit or meaning, for messages (``"V"``, ``"counts per outer sample"``).
+    """
+
+    low: float = -math.inf
+    high: float = math.inf
+    whole: bool = False
+    allow_bool: bool = False
+    unit: str = ""
+
+
+def staged_inputs(values: Mapping[str, InputValue], columns: Mapping[str, int],
+                  rules: Mapping[str, InputRule], count: int) -> list[tuple[int, np.ndarray]]:
+    """The checked ``(column, (count,) values)`` of every input given (None: not given).
+
+    Raises
+    ------
+    TypeError
+        An input the family does not have, or a value that is not a real number.
+    ValueError
+        A wrong shape, a value that is not finite, not whole where it must be, or outside
+        the input's range.
+    """
+    staged = []
+    for name, value in values.items():
+        if name not in columns:
+            raise TypeError(f"unknown input {name!r}; known: {', '.join(columns)}")
+        if value is None:
+            continue
+        rule = rules.get(name, InputRule())
+        arr = real_array(name, value, allow_bool=rule.allow_bool)
+        if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != count):
+            raise ValueError(f"{name}: expected a scalar or shape ({count},), got {arr.shape}")
+        if not np.all(np.isfinite(arr)):
+            raise ValueError(f"{name}: values must be finite, got {value!r}")
+        unit = f" {rule.unit}" if rule.unit else ""
+        if rule.whole and np.any(arr != np.round(arr)):
+            raise ValueError(f"{name} must be whole{unit}")
+        if np.any((arr < rule.low) | (arr > rule.high)):
+            raise ValueError(f"{name} must be within {rule.low:g}..{rule.high:g}{unit}")
+        staged.append((columns[name], np.broadcast_to(arr, (count,))))
+    return staged
