@@ -117,7 +117,7 @@ def test_world_inputs_of_a_family_go_through_the_generic_checks() -> None:
     m.set_input(load_torque=[0.5, -0.5])
     np.testing.assert_array_equal(m.inputs[:, 0], [0.5, -0.5])
     for bad, error in (({"load_torque": np.nan}, ValueError), ({"load_torque": [1.0]}, ValueError),
-                       ({"load_torque": "1"}, TypeError), ({"pulse_counts": 1}, TypeError)):
+                       ({"load_torque": "1"}, ValueError), ({"pulse_counts": 1}, TypeError)):
         with pytest.raises(error):
             m.set_input(**bad)
         np.testing.assert_array_equal(m.inputs[:, 0], [0.5, -0.5])

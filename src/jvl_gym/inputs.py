@@ -49,10 +49,10 @@ def staged_inputs(values: Mapping[str, InputValue], columns: Mapping[str, int],
     Raises
     ------
     TypeError
-        An input the family does not have, or a value that is not a real number.
+        An input the family does not have.
     ValueError
-        A wrong shape, a value that is not finite, not whole where it must be, or outside
-        the input's range.
+        A value that is not a real number, a wrong shape, a value that is not finite, not
+        whole where it must be, or outside the input's range.
     """
     staged = []
     for name, value in values.items():

@@ -205,9 +205,10 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         Raises
         ------
         TypeError
-            An input the family does not have, or a value that is not a real number.
+            An input the family does not have.
         ValueError
-            A wrong shape, or a value that is not finite, not whole or out of range.
+            A value that is not a real number, a wrong shape, or a value that is not finite,
+            not whole or out of range.
         """
         idx = as_index(index, self.n)
         for col, values in staged_inputs(inputs, self.INPUTS, self.INPUT_RULES, idx.size):
