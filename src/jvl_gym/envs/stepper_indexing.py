@@ -145,7 +145,7 @@ class StepperIndexingVectorEnv(MotorVectorEnv):
     scope_channels = ("distance to go [turns]", "speed [rpm]", "lag [full steps]")
 
     def __init__(self, num_envs: int = 1, *, baseline: bool = False, n_moves: int = 3,
-                 time_weight: float = 0.01, copper_weight: float = 0.1, move_bonus: float = 1.0,
+                 time_weight: float = 0.05, copper_weight: float = 0.1, move_bonus: float = 1.0,
                  lost_penalty: float = 10.0, **kwargs: Any) -> None:
         self.baseline = bool(baseline)
         if isinstance(n_moves, bool) or not isinstance(n_moves, (int, np.integer)) or n_moves < 1:
@@ -259,7 +259,7 @@ class StepperIndexingEnv(MotorEnv):
     ``motor_type`` (an MIS/SMC type or a list drawn per episode), ``randomization`` (overrides
     of the ranges above), ``decimation`` (1 ms firmware samples per step, default 2),
     ``obs_noise``, ``max_episode_steps``, ``render_mode`` (``"rgb_array"``: scope plot),
-    ``n_moves`` (3), ``time_weight`` (0.01), ``copper_weight`` (0.1 per J), ``move_bonus`` (1),
+    ``n_moves`` (3), ``time_weight`` (0.05), ``copper_weight`` (0.1 per J), ``move_bonus`` (1),
     ``lost_penalty`` (10), ``baseline`` (True: the firmware's trapezoid with the default
     registers; the action is ignored). Reset options: ``randomization``, ``motor_type``.
     """
