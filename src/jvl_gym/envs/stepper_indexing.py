@@ -190,7 +190,10 @@ class StepperIndexingVectorEnv(MotorVectorEnv):
         self._i_max[idx] = [cfg.run_current_max for cfg in self._type_configs(idx)]
         self.motors.set_input(idx, load_torque=draws["load_torque_ratio"]
                               * self._holding_torque(idx))
-        self.motors.write_many({"P_SOLL": self.target[idx], "MODE_REG": c.POSITION}, idx)
+        # D_SOLL = 0: the profile decelerates with A_SOLL too (MIS manual §8.2.1, D_SOLL), so
+        # the agent's acceleration shapes the whole trapezoid
+        self.motors.write_many({"D_SOLL": 0, "P_SOLL": self.target[idx],
+                                "MODE_REG": c.POSITION}, idx)
 
     def _step_copies(self, actions: np.ndarray) -> bool:
         return _DRIVER.step(self.motors.engine_view(), self._episode, self._task, actions,
@@ -246,7 +249,7 @@ class StepperIndexingEnv(MotorEnv):
 
     ## Starting State
     The motor powers on at rest with its default registers (V_SOLL 100 RPM, A_SOLL 1000 RPM/s,
-    RUN_CURRENT 50 %), the load from ``inertia_ratio`` (× rotor inertia), ``coulomb_ratio`` and
+    RUN_CURRENT 50 %) but D_SOLL = 0 (the deceleration is A_SOLL), the load from ``inertia_ratio`` (× rotor inertia), ``coulomb_ratio`` and
     ``load_torque_ratio`` (× holding torque at the largest current), and the first move
     requested (P_SOLL, position mode).
 
