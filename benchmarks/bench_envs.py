@@ -2,14 +2,14 @@
 
 - single env steps/s of every jvl_gym env (the env class itself, one ``step`` call per step,
   random actions, reset when an episode ends), at the env's default decimation and at
-  decimation 1 (one 520.8 Hz firmware sample per step), all measured before the first
-  vector env;
+  decimation 1 (one firmware sample per step: 1.92 ms on the MAC050–141, 1 ms on the MIS),
+  all measured before the first vector env;
 - vector env-steps/s with 1024 copies (native vector env, NEXT_STEP autoreset), the same in
-  outer samples (1.92 ms of motor time) per second, and env-steps/s at decimation 1;
+  outer samples (firmware samples of motor time) per second, and env-steps/s at decimation 1;
 - gym-electric-motor's ``Cont-CC-PMSM-v0`` single env steps/s, measured in the same run in a
   separate venv (``.venv-bench``, created here on first use: its dependencies conflict with
   ours), as a reference point for a single env's speed, also as simulated seconds per second
-  (its step is ``tau`` = 100 µs of motor time, ours ``decimation`` × 1.92 ms).
+  (its step is ``tau`` = 100 µs of motor time, ours ``decimation`` firmware samples).
 
 Every rate, GEM's included, is the best of equal windows of its measuring time (best_rate.py).
 The figures also go to the generated page ``docs/benchmarks.md`` (section "Environments",
@@ -30,7 +30,6 @@ from best_rate import best_rate
 
 import jvl_gym  # noqa: F401
 from jvl_gym.envs import ENV_IDS
-from jvl_gym.families.mac050_141 import constants as c
 
 ROOT = Path(__file__).resolve().parents[1]
 BENCH_VENV = ROOT / ".venv-bench"
@@ -117,8 +116,9 @@ def _ratio(x: float, g: float | None) -> str:
 def section(gem: tuple[float, float] | None, rows: list[dict]) -> str:
     """The page section (Markdown) of one run: GEM's rate, then one row per env.
 
-    ``rows``: dicts with ``env``, ``trials`` (FilterTuning: one trial per step), ``dec``,
-    ``single``, ``dec1``, ``copies``, ``vector``, ``vec1`` (rates per second)."""
+    ``rows``: dicts with ``env``, ``trials`` (FilterTuning: one trial per step), ``dec``, ``dt``
+    (the family's outer sample time [s]), ``single``, ``dec1``, ``copies``, ``vector``,
+    ``vec1`` (rates per second)."""
     if gem:
         head = (f"gym-electric-motor `Cont-CC-PMSM-v0` single env (separate venv, same run): "
                 f"{gem[0]:,.0f} steps/s, step {gem[1] * 1e6:.0f} µs = "
@@ -128,7 +128,7 @@ def section(gem: tuple[float, float] | None, rows: list[dict]) -> str:
     g, gs = (gem[0], gem[0] * gem[1]) if gem else (None, None)
     out = []
     for r in rows:
-        sim = r["single"] * r["dec"] * c.OUTER_DT
+        sim = r["single"] * r["dec"] * r["dt"]
         if r["trials"]:
             out.append([f"{r['env']} (trials)", "—", f"{r['single']:,.1f}", "—", "—", "—", "—",
                         f"{r['vector']:,.0f} ({r['copies']} copies)", "—", "—"])
@@ -160,19 +160,20 @@ def main() -> None:
     singles = {}
     for env_id in ENV_IDS:
         trials = "FilterTuning" in env_id
-        dec = gym.make(env_id).unwrapped.core.decimation
+        core = gym.make(env_id).unwrapped.core
+        dec, dt = core.decimation, 1.0 / core.motors.OUTER_HZ
         single = single_steps_per_second(env_id, seconds)
         dec1 = single if dec == 1 or trials else single_steps_per_second(env_id, seconds,
                                                                          decimation=1)
-        singles[env_id] = (trials, dec, single, dec1)
+        singles[env_id] = (trials, dec, dt, single, dec1)
     rows = []
-    for env_id, (trials, dec, single, dec1) in singles.items():
+    for env_id, (trials, dec, dt, single, dec1) in singles.items():
         n_vec = 256 if trials else 1024
         vector = vector_steps_per_second(env_id, n_vec, seconds)
         vec1 = vector if dec == 1 or trials else vector_steps_per_second(
             env_id, n_vec, seconds, decimation=1)
-        sim = single * dec * c.OUTER_DT
-        rows.append({"env": env_id, "trials": trials, "dec": dec, "single": single,
+        sim = single * dec * dt
+        rows.append({"env": env_id, "trials": trials, "dec": dec, "dt": dt, "single": single,
                      "dec1": dec1, "copies": n_vec, "vector": vector, "vec1": vec1})
 
         def ratio(x: float, g: float | None) -> str:
