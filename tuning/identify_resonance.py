@@ -157,8 +157,9 @@ def acquire_step_windows(m: Any, t_soll: np.ndarray | float, n_windows: int,
     (VF_OUT units, per motor) on every motor of ``m`` (module docstring).
 
     Returns one (n_windows, 64) int array per motor, ELDEG_IST relative to its value at rest
-    before the step (modulo 2048); window ``w`` starts ``60·w`` inner samples after the step. The motors end in INIT_MODE at rest; T_SOLL, ANINP_OFFSET, SAMPLE1/2 and
-    CNTRL_BITS are restored.
+    before the step (modulo 2048); window ``w`` starts ``60·w`` inner samples after the step.
+    The motors end in INIT_MODE at rest; T_SOLL, ANINP_OFFSET, SAMPLE1/2 and CNTRL_BITS are
+    restored.
     """
     t = np.broadcast_to(np.abs(np.asarray(t_soll, dtype=float)), (m.n,)).round()
     saved = {k: np.asarray(m.read(k)).copy()
@@ -264,7 +265,8 @@ def fit_resonance(x: np.ndarray, dt: float = TS_I, skip_s: float = SKIP_S,
     g = np.array([ca, cb]) / amp if amp > 0 else np.zeros(2)
     amp_sd = math.sqrt(max(float(g @ cov[-4:-2, -4:-2] @ g), 0.0))
     dof = max(int(n / infl) - npar, 1)
-    return ResonanceFit(f_hz=w / (2 * math.pi), f_sd=math.sqrt(max(cov[-2, -2], 0.0)) / (2 * math.pi),
+    f_sd = math.sqrt(max(cov[-2, -2], 0.0)) / (2 * math.pi)
+    return ResonanceFit(f_hz=w / (2 * math.pi), f_sd=f_sd,
                         sigma=sigma, amplitude=amp, amplitude_sd=amp_sd,
                         periods=w / (2 * math.pi) * ts[-1], rms=math.sqrt(float(r @ r) / n),
                         dof=dof)
