@@ -119,3 +119,20 @@ def test_notch_design_has_the_margins_after_quantisation_and_the_plain_one_not()
     assert (ch.oscillation["plain design"] > 20
             or ch.settle_s["plain design"] > ch.settle_s[ch.chosen.name])
     assert "PM" in ch.reason
+
+
+def test_two_mass_bode_marks_crossover_margins_and_resonance() -> None:
+    from tuning.report import two_mass_bode_figure
+
+    t, f, r, z = LOADS[1]
+    md = MotorData.from_config(t)
+    plain = synthesize(md, md.J_m * (1 + r), structure="pi", position_integral=False)
+    cp = coupling_of(md.J_m, r, f, z)
+    notch = with_section(plain.registers, notch_section(f, 0.5))
+    fig = two_mass_bode_figure(md, [("plain", plain.registers), ("notch", notch)], cp, f,
+                               f / math.sqrt(1 + r))
+    labels = [t.get_text() for t in fig.axes[1].get_legend().get_texts()]
+    assert any("resonance 310 Hz" in s for s in labels)
+    assert any("alias 211 Hz" in s for s in labels)
+    assert any("anti-resonance" in s for s in labels)
+    assert all("PM" in t.get_text() for t in fig.axes[0].get_legend().get_texts()[:2])

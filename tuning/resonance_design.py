@@ -16,10 +16,12 @@ them: ``VF·N`` has a numerator of order 3 (KVFX4..KVFX1) and a denominator ``(1
 With a position integral (VF of order 2 over 2) the section does not fit and only the plain
 design is offered. Each candidate scales the design's crossover by a factor g (kp × g,
 ki × g², :func:`scaled_gains`) and is quantised to the registers' Fixed4 format
-(:mod:`tuning.quantize`); on the identified two-mass plant (:func:`tuning.models.speed_plant` with the coupling, lifted exactly to
-the outer rate, so the aliasing is in it) the fastest candidate of each kind that is stable
-with PM ≥ 45° and GM ≥ 6 dB is kept: one without a section, one with a notch, one with a
-low-pass. The acceptance step (:mod:`tuning.acceptance`) then simulates them.
+(:mod:`tuning.quantize`). On the identified two-mass plant (:func:`tuning.models.speed_plant`
+with the coupling, lifted exactly to the outer rate, so the aliasing is in it), with the
+resonance where identified and ±:data:`F_SPREAD` (or its interval) away, the fastest candidate
+of each kind that is stable with PM ≥ 45° and GM ≥ 6 dB is kept: one without a section, one
+with a notch, one with a low-pass. :func:`choose` then simulates them and the plain design on
+the identified motor and keeps the one that settles first without a sustained oscillation.
 """
 
 from __future__ import annotations
@@ -40,7 +42,11 @@ __all__ = ["FilteredDesign", "TwoMassChoice", "choose", "move_on", "scaled_gains
 
 PM_MIN: float = 45.0  #: phase margin every kept candidate has after quantisation [deg]
 GM_MIN: float = 6.0  #: gain margin [dB]
-GAIN_FACTORS = tuple(float(g) for g in np.geomspace(1.0, 0.08, 16))
+GAIN_FACTORS = tuple(float(g) for g in np.geomspace(1.0, 0.04, 20))
+#: relative spread of the resonance the candidates must also keep their margins at: the
+#: identified resonance is that of the motor with its current loop, a few % below the
+#: coupling's own (docs/tuning.md, "Two-mass loads")
+F_SPREAD: float = 0.06
 NOTCH_RADII = (0.3, 0.5, 0.65, 0.8)
 LOWPASS_POLES = (0.2, 0.35, 0.5, 0.65)
 
@@ -159,15 +165,20 @@ def _ok(m: LoopMetrics) -> bool:
 
 
 def resonance_designs(motor: MotorData, regs: Mapping[str, float], f_res: float,
-                      load_ratio: float, zeta: float = 0.02, b: float = 0.0
-                      ) -> list[FilteredDesign]:
+                      load_ratio: float, zeta: float = 0.02, b: float = 0.0,
+                      f_interval: tuple[float, float] | None = None) -> list[FilteredDesign]:
     """The fastest acceptable candidate of each kind (no filter, notch, low-pass) for the
     registers ``regs`` of a design (current and speed loop) on the identified two-mass load.
 
-    Returns the candidates found, in that order; a kind none of whose candidates meets the
-    margins is left out.
+    A candidate is acceptable when it has the margins (:data:`PM_MIN`, :data:`GM_MIN`, stable)
+    on the plant with the identified resonance and on the plants with the resonance at both
+    ends of ``f_interval`` [Hz] widened to at least ±:data:`F_SPREAD`; the metrics kept are
+    the worst of the three. Returns the candidates found, in that order; a kind none of whose
+    candidates meets the margins is left out.
     """
-    coupling = coupling_of(motor.J_m, load_ratio, f_res, zeta)
+    lo, hi = f_interval if f_interval is not None else (f_res, f_res)
+    freqs = (f_res, min(lo, f_res * (1 - F_SPREAD)), max(hi, f_res * (1 + F_SPREAD)))
+    plants = [coupling_of(motor.J_m, load_ratio, f, zeta) for f in freqs]
     sections: list[tuple[str, str, tuple[np.ndarray, np.ndarray]]] = [
         ("none", "no filter", (np.array([1.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0])))]
     sections += [("notch", f"notch {alias_hz(f_res):.0f} Hz r={r}", notch_section(f_res, r))
@@ -182,8 +193,13 @@ def resonance_designs(motor: MotorData, regs: Mapping[str, float], f_res: float,
                 q = quantize_registers(with_section(scaled_gains(regs, g), sec))
             except ValueError:
                 break
-            m = two_mass_metrics(motor, q, coupling, b)
-            if _ok(m):
+            ms = []
+            for cp in plants:
+                ms.append(two_mass_metrics(motor, q, cp, b))
+                if not _ok(ms[-1]):
+                    break
+            m = min(ms, key=lambda x: (_ok(x), x.pm_deg))
+            if _ok(m) and len(ms) == len(plants):
                 best[kind] = FilteredDesign(f"{name}, gain × {g:g}", kind, q, m, g, sec)
                 break
     return [best[k] for k in ("none", "notch", "lowpass") if k in best]
