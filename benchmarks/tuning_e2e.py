@@ -309,6 +309,8 @@ def print_two_mass(rows: list[dict[str, float]]) -> None:
           f"{sum(r['f_in'] for r in rows)}/{n}")
     print(f"kept design stable with PM >= 45 deg on the true plant and no sustained oscillation: "
           f"{len(ok)}/{n}; of those the plain design oscillates or is slower: {len(better)}/{n}")
+    for i, r in enumerate(rows):
+        print(f"{i:>2} {r['reason']}")
     kept: dict[str, int] = {}
     for r in rows:
         key = r["chosen"].split(",")[0].split(" ")[0]
