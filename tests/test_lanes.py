@@ -36,8 +36,9 @@ def _reference(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, plan):
 
 def _mixed(n: int) -> MotorArray:
     """Motors of every type in lane-eligible and ineligible conditions: speed and position
-    modes, loads, Coulomb friction, end stops, with and without the PWM delay; some with
-    noise, a hall start or no regulation (INIT), which run outside the lanes."""
+    modes, loads (some behind an elastic coupling), Coulomb friction, end stops, with and
+    without the PWM delay; some with noise, a hall start or no regulation (INIT), which run
+    outside the lanes."""
     types = ["MAC050", "MAC095", "MAC140", "MAC141"]
     k = np.arange(n)
     m = MotorArray([types[i % 4] for i in range(n)], n=n, seed=3,
@@ -50,7 +51,9 @@ def _mixed(n: int) -> MotorArray:
                    end_stop_stiffness=np.where(k % 5 == 0, 50.0, 0.0),
                    current_noise=np.where(k % 11 == 1, 0.5, 0.0),
                    torque_noise=np.where(k % 13 == 2, 1e-4, 0.0),
-                   hall_start=np.where(k % 7 == 3, 1.0, 0.0))
+                   hall_start=np.where(k % 7 == 3, 1.0, 0.0),
+                   coupling_stiffness=np.where((k % 3 == 2) & (k > 0), 2.0, 0.0),
+                   coupling_damping=np.where(k % 2 == 0, 2e-4, 0.0))
     m.write("V_SOLL", np.linspace(-4000, 4000, n).round())
     m.write("P_SOLL", np.where(k % 4 == 1, 20000, -9000))
     modes = np.where(k % 4 == 1, c.P_MODE, c.V_MODE)
@@ -71,6 +74,8 @@ def test_lanes_give_the_bits_of_the_one_motor_kernel() -> None:
     np.testing.assert_array_equal(a.regs, b.regs)
     np.testing.assert_array_equal(a.state, b.state)
     assert np.any(a.state[:, L.S_OMEGA] != 0.0)
+    twist = a.state[:, L.S_THETA] - a.state[:, L.S_LOAD_THETA]
+    assert np.any(twist[np.array(eligible)] != 0.0)  # two-mass motors ran in the lanes
     c_ = _mixed(n)
     driver(c_.family.key).serial(*c_.engine_view(), 150)
     np.testing.assert_array_equal(a.state, c_.state)

@@ -53,3 +53,22 @@ def test_cli_autotune_writes_setup_and_report(tmp_path):
     assert res.exit_code == 0, res.output
     assert "all stable True" in res.output
     assert np.isfinite(regs["KVFX4"])
+
+
+def test_cli_autotune_two_mass_keeps_a_notch_with_the_reason(tmp_path):
+    # MAC140 with 4·J_m behind a coupling resonating at 90 Hz (damping ratio 2 %)
+    jm, jl = 17.3e-6, 4 * 17.3e-6
+    w = 2 * np.pi * 90.0
+    k = w * w / (1 / jm + 1 / jl)
+    d = 2 * 0.02 * w * jm * jl / (jm + jl)
+    res = CliRunner().invoke(app, ["autotune", "--motor", "MAC140", "--load-inertia", str(jl),
+                                   "--coupling-stiffness", str(k), "--coupling-damping", str(d),
+                                   "--resonance", "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    report = (tmp_path / "report.txt").read_text()
+    assert "Two-mass load" in report and "kept notch" in report
+    f_res = float(report.split("resonance ")[1].split(" Hz")[0])
+    assert abs(f_res / 90.0 - 1) < 0.05
+    assert (tmp_path / "bode_two_mass.png").stat().st_size > 0
+    regs = yaml.safe_load((tmp_path / "setup.yaml").read_text())["registers"]
+    assert regs["KVFY2"] != 0.0  # the section fills VF's free order

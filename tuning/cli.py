@@ -250,6 +250,15 @@ def autotune(motor: str = typer.Option("MAC140"),
                                            callback=_nonnegative),
              coulomb: float = typer.Option(0.0, help="simulated Coulomb friction [N m]",
                                            callback=_nonnegative),
+             coupling_stiffness: float = typer.Option(
+                 0.0, help="simulated: the load behind an elastic coupling of this stiffness "
+                 "[N m/rad] (0: rigid)", callback=_nonnegative),
+             coupling_damping: float = typer.Option(
+                 0.0, help="simulated: the coupling's damping [N m s/rad]",
+                 callback=_nonnegative),
+             resonance: bool = typer.Option(False, help="identify a two-mass resonance and "
+                                            "offer a notch/low-pass design (tuning."
+                                            "resonance_design)"),
              noise: bool = typer.Option(True, help="1 % measurement noise in the simulator"),
              seed: int = typer.Option(0),
              n_coil: int = typer.Option(None, help="TESTU samples per record (default: "
@@ -300,7 +309,8 @@ def autotune(motor: str = typer.Option("MAC140"),
     from .verify import velocity_step
 
     params = {"load_inertia": load_inertia, "viscous_friction": viscous,
-              "coulomb_friction": coulomb}
+              "coulomb_friction": coulomb, "coupling_stiffness": coupling_stiffness,
+              "coupling_damping": coupling_damping}
     if noise:
         params.update(current_noise=2.0, position_noise=0.85)
     m = MotorArray(motor, n=1, seed=seed, **params)
@@ -309,6 +319,7 @@ def autotune(motor: str = typer.Option("MAC140"),
     _say("synthesis, verification and the acceptance step (candidates simulated on the "
          "identified motor)")
     d = autotune_designs([ident], structure)[0].chosen.design
+    two_mass = _two_mass_step(m, ident, d, out) if resonance else None
     setup = out / "setup.yaml"
     _write_setup(setup, motor, d.registers,
                  f"jvl-tune autotune: {motor}, identified J = {ident.mechanics.J:.4g} kg m^2")
@@ -322,6 +333,10 @@ def autotune(motor: str = typer.Option("MAC140"),
              "R_line": 2 * m.motor_configs[0].phase_resistance,
              "L_line_mH": 2e3 * m.motor_configs[0].phase_inductance}
     files = write_report(out, ident, d, ident.motor, ident.mechanics.J, truth, v, 800)
+    if two_mass is not None:
+        with files[0].open("a") as fh:
+            fh.write("\n" + two_mass[0])
+        files.append(two_mass[1])
     typer.echo(files[0].read_text())
     bad = verify_design(d)
     typer.echo(f"wrote {setup} and {', '.join(str(f) for f in files)}")
@@ -331,6 +346,58 @@ def autotune(motor: str = typer.Option("MAC140"),
     if not math.isfinite(ident.mechanics.J):
         raise typer.Exit(1)
     _check_credible(ident, accept)
+
+
+def _two_mass_step(m: object, ident: object, d: object, out: Path) -> tuple[str, Path]:
+    """The two-mass step of ``autotune --resonance``: the resonance from AT_MODE step records
+    on ``m``, the notch/low-pass candidates of the plain PI, the choice by simulation on the
+    identified two-mass motor (``d.registers`` becomes the kept candidate's), and the Bode
+    plot ``out/bode_two_mass.png``. Returns the report's section and the plot's path."""
+    import matplotlib.pyplot as plt
+
+    from .acceptance import move_acceleration, simulation_parameters
+    from .autotune import synthesize
+    from .identify_resonance import identify_resonance
+    from .report import two_mass_bode_figure
+    from .resonance_design import choose, coupling_of, resonance_designs
+
+    _say("two-mass load: AT_MODE torque steps recorded at 7812.5 Hz, the resonance, the "
+         "notch/low-pass candidates and their simulation")
+    est = identify_resonance(m, [ident])[0]
+    md, mech = ident.motor, ident.mechanics  # type: ignore[attr-defined]
+    lines = ["Two-mass load (tuning.identify_resonance, tuning.resonance_design)",
+             f"  resonance {est.f_res:.1f} Hz (95 % {est.ci['f_res'][0]:.1f} .. "
+             f"{est.ci['f_res'][1]:.1f}), anti-resonance {est.f_anti:.1f} Hz, load ratio "
+             f"J_l/J_m {est.load_ratio:.2f}, damping ratio {est.zeta:.3f}, "
+             f"detected {est.detected}"]
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / "bode_two_mass.png"
+    if not est.detected or est.load_ratio <= 0.0:
+        lines.append("  no resonance detected: the rigid design is kept")
+        return "\n".join(lines) + "\n", path
+    plain = synthesize(md, mech.J, mech.coulomb, structure="pi", position_integral=False)
+    zeta = max(est.zeta, 0.005)
+    cands = resonance_designs(md, plain.registers, est.f_res, est.load_ratio, zeta,
+                              max(mech.viscous, 0.0), est.ci["f_res"])
+    coupling = coupling_of(md.J_m, est.load_ratio, est.f_res, zeta)
+    params = simulation_parameters(ident)  # type: ignore[arg-type]
+    params.update(rotor_inertia=md.J_m, load_inertia=coupling[0],
+                  coupling_stiffness=coupling[1], coupling_damping=coupling[2])
+    ch = choose(md.name, params, plain.registers, cands, move_acceleration(ident))
+    lines.append("  " + ch.reason)
+    for name, t in ch.settle_s.items():
+        when = f"{1e3 * t:.0f} ms" if math.isfinite(t) else "never"
+        lines.append(f"    {name}: settles {when}, oscillation {ch.oscillation[name]:.0f} "
+                     "counts p-p")
+    loops = [("plain design", plain.registers)]
+    if ch.chosen is not None:
+        d.registers = ch.chosen.registers  # type: ignore[attr-defined]
+        d.notes.append(ch.reason)  # type: ignore[attr-defined]
+        loops.append((ch.chosen.name, ch.chosen.registers))
+    fig = two_mass_bode_figure(md, loops, coupling, est.f_res, est.f_anti)
+    fig.savefig(path, dpi=100)
+    plt.close(fig)
+    return "\n".join(lines) + "\n", path
 
 
 def _check_credible(ident: object, accept: bool) -> None:

@@ -212,23 +212,42 @@ def current_closed_loop(motor: MotorData, regs: Mapping[str, float]) -> ct.Trans
     return ct.feedback(fwd, ib_tf(regs))
 
 
-def _inner_position_ss(motor: MotorData, regs: Mapping[str, float], J: float,
-                       b: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _inner_position_ss(motor: MotorData, regs: Mapping[str, float], J: float, b: float,
+                       coupling: tuple[float, float, float] | None = None
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Inner-rate state space, input I_SOLL [counts], output encoder position [counts].
 
-    States: continuous plant (i [A], ω [rad/s], θ [counts]) sampled at TS_I, the PWM delay
+    States: continuous plant (i [A], ω [rad/s], θ [counts], and with ``coupling = (J_l, k,
+    d)`` the load speed ω_l [rad/s] and the twist θ − θ_l [rad] of the two-mass plant of
+    docs/model.md §5.2, ``J`` then being the rotor's inertia) sampled at TS_I, the PWM delay
     line, IF and IB states. The back-EMF is left out (it is a disturbance the PI rejects).
     """
     k_u, R, L, A = motor.volts_per_count, motor.R_phase, motor.L_phase, motor.amps_per_count
     kt = motor.torque_constant
     ac = np.array([[-R / L, 0.0, 0.0], [kt / J, -b / J, 0.0], [0.0, COUNTS_PER_RAD, 0.0]])
-    bc = np.array([[k_u / L], [0.0], [0.0]])
-    m = np.zeros((4, 4))
-    m[:3, :3] = ac * TS_I
-    m[:3, 3:] = bc * TS_I
+    if coupling is not None:
+        j_l, k, d = coupling
+        ac = np.pad(ac, ((0, 2), (0, 2)))
+        ac[1, 1] -= d / J
+        ac[1, 3] = d / J
+        ac[1, 4] = -k / J
+        ac[3, 1] = d / j_l
+        ac[3, 3] = -d / j_l
+        ac[3, 4] = k / j_l
+        ac[4, 1] = 1.0
+        ac[4, 3] = -1.0
+    ns = ac.shape[0]
+    bc = np.zeros((ns, 1))
+    bc[0, 0] = k_u / L
+    m = np.zeros((ns + 1, ns + 1))
+    m[:ns, :ns] = ac * TS_I
+    m[:ns, ns:] = bc * TS_I
     e = expm(m)
-    ad, bd = e[:3, :3], e[:3, 3:]
-    plant = ct.ss(ad, bd, np.array([[1.0 / A, 0, 0], [0, 0, 1.0]]), np.zeros((2, 1)), TS_I)
+    ad, bd = e[:ns, :ns], e[:ns, ns:]
+    cc = np.zeros((2, ns))
+    cc[0, 0] = 1.0 / A
+    cc[1, 2] = 1.0
+    plant = ct.ss(ad, bd, cc, np.zeros((2, 1)), TS_I)
     d = int(motor.pwm_delay)
     delay = ct.tf([1.0], [1.0] + [0.0] * d, TS_I) if d else ct.tf([1.0], [1.0], TS_I)
     p_u = plant * ct.ss(delay)
@@ -243,7 +262,8 @@ def _inner_position_ss(motor: MotorData, regs: Mapping[str, float], J: float,
 
 
 def speed_plant(motor: MotorData, regs: Mapping[str, float], J: float | None = None,
-                b: float = 0.0) -> ct.TransferFunction:
+                b: float = 0.0, coupling: tuple[float, float, float] | None = None
+                ) -> ct.TransferFunction:
     """VF_OUT → V_IST [counts/sample] at TS_O, including the closed current loop.
 
     Parameters
@@ -256,6 +276,10 @@ def speed_plant(motor: MotorData, regs: Mapping[str, float], J: float | None = N
         Total inertia [kg·m²]; default ``motor.J_m``.
     b : float
         Viscous friction [N·m·s/rad].
+    coupling : (float, float, float), optional
+        ``(J_l, k, d)``: a load of inertia J_l [kg·m²] behind an elastic coupling of stiffness
+        k [N·m/rad] and damping d [N·m·s/rad] (docs/model.md §5.2); ``J`` is then the rotor's
+        inertia alone.
 
     Returns
     -------
@@ -265,7 +289,7 @@ def speed_plant(motor: MotorData, regs: Mapping[str, float], J: float | None = N
         outer sample, V_IST = (1 − z⁻¹)·P.
     """
     J = motor.J_m if J is None else J
-    a, bb, c = _inner_position_ss(motor, regs, J, b)
+    a, bb, c = _inner_position_ss(motor, regs, J, b, coupling)
     n = INNER_PER_OUTER
     a_o = np.linalg.matrix_power(a, n)
     acc = np.zeros_like(a)

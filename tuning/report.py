@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -31,7 +32,7 @@ from .models import (  # noqa: E402
 from .verify import frequency_grid, loop_metrics  # noqa: E402
 
 __all__ = ["text_table", "plot_fits", "plot_bode", "plot_steps", "write_report", "bode_figure",
-           "steps_figure"]
+           "two_mass_bode_figure", "steps_figure"]
 
 
 def _ci(ci: tuple[float, float], scale: float = 1.0, fmt: str = ".4g") -> str:
@@ -186,6 +187,57 @@ def bode_figure(design: Design, motor: Any, J_total: float) -> Any:
             ax[0, j].vlines(f180, -m.gm_db, 0, color="C2", lw=2)
             ax[0, j].annotate(f"GM {m.gm_db:.1f} dB", (f180, -m.gm_db), xytext=(4, -10),
                               textcoords="offset points", color="C2", fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def two_mass_bode_figure(motor: Any, loops: Sequence[tuple[str, Mapping[str, float]]],
+                        coupling: tuple[float, float, float], f_res: float,
+                        f_anti: float | None = None) -> Any:
+    """Bode plots of speed open loops on a two-mass plant (:mod:`tuning.resonance_design`):
+    one curve per ``(name, registers)`` of ``loops`` with its gain crossover, phase margin and
+    gain margin marked, and the resonance ``f_res`` [Hz] (with its alias at the outer rate
+    when above 260 Hz) and anti-resonance ``f_anti`` marked. ``coupling = (J_l, k, d)``."""
+    from .resonance_design import alias_hz, two_mass_metrics
+
+    fig, ax = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    for q, (name, regs) in enumerate(loops):
+        lp = speed_open_loop(speed_plant(motor, regs, motor.J_m, 0.0, tuple(coupling)), regs)
+        w = frequency_grid(lp.dt, 1500, lowest=1e-3)
+        resp = freqresp(lp, w)
+        f = w / (2 * math.pi)
+        mag = 20 * np.log10(np.abs(resp))
+        phase = np.degrees(np.unwrap(np.angle(resp)))
+        m = two_mass_metrics(motor, regs, tuple(coupling))
+        color = f"C{q}"
+        ax[0].semilogx(f, mag, color=color,
+                       label=f"{name}: PM {m.pm_deg:.0f}°, GM {m.gm_db:.1f} dB")
+        ax[1].semilogx(f, phase, color=color)
+        if math.isfinite(m.crossover_hz):
+            fc = m.crossover_hz
+            p_c = float(np.interp(math.log(fc), np.log(f), phase))
+            ax[0].plot([fc], [0.0], "o", color=color, ms=4)
+            ax[1].vlines(fc, p_c - m.pm_deg, p_c, color=color, lw=2)
+            ax[1].annotate(f"PM {m.pm_deg:.0f}°", (fc, p_c), xytext=(4, 4),
+                           textcoords="offset points", color=color, fontsize=8)
+        f180 = _phase_crossing_hz(f, mag, phase)
+        if math.isfinite(f180) and math.isfinite(m.gm_db):
+            ax[0].vlines(f180, -m.gm_db, 0, color=color, lw=2)
+    marks = [(f_res, "resonance"), (alias_hz(f_res), "resonance alias")]
+    if f_anti is not None:
+        marks.append((f_anti, "anti-resonance"))
+    for k, (fm, label) in enumerate(marks):
+        if label == "resonance alias" and abs(fm - f_res) < 1e-9:
+            continue
+        for a in ax:
+            a.axvline(fm, color="k", lw=0.8, ls=("--", ":", "-.")[k],
+                      label=f"{label} {fm:.0f} Hz" if a is ax[1] else None)
+    ax[0].axhline(0, color="k", lw=0.5)
+    ax[1].axhline(-180, color="k", lw=0.5)
+    ax[0].set(title="speed loop on the two-mass plant", ylabel="|L| dB")
+    ax[1].set(xlabel="Hz", ylabel="phase deg")
+    ax[0].legend(loc="lower left", fontsize=7)
+    ax[1].legend(loc="lower left", fontsize=7)
     fig.tight_layout()
     return fig
 

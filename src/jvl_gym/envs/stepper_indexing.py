@@ -249,9 +249,9 @@ class StepperIndexingEnv(MotorEnv):
 
     ## Starting State
     The motor powers on at rest with its default registers (V_SOLL 100 RPM, A_SOLL 1000 RPM/s,
-    RUN_CURRENT 50 %) but D_SOLL = 0 (the deceleration is A_SOLL), the load from ``inertia_ratio`` (× rotor inertia), ``coulomb_ratio`` and
-    ``load_torque_ratio`` (× holding torque at the largest current), and the first move
-    requested (P_SOLL, position mode).
+    RUN_CURRENT 50 %) but D_SOLL = 0 (the deceleration is A_SOLL), the load from
+    ``inertia_ratio`` (× rotor inertia), ``coulomb_ratio`` and ``load_torque_ratio`` (× holding
+    torque at the largest current), and the first move requested (P_SOLL, position mode).
 
     ## Episode End
     Terminated when every move is done, when the rotor has lost steps, or on an ERR_BITS error

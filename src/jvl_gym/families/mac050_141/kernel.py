@@ -65,7 +65,7 @@ from .firmware.speed_loop import speed_regulator
 from .plant.coil import coil_constants, coil_step_prepared, phase_to_vector, vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
-from .plant.mechanics import end_stop_torque, mech_constants, mech_step_prepared
+from .plant.mechanics import end_stop_torque, mech_constants, mech_step_prepared, shaft_inertia
 from .plant.supply import bus_constants, bus_step_prepared
 
 _H = c.INNER_DT
@@ -274,32 +274,40 @@ def _measure(r: np.ndarray, i_amp: float, p: np.ndarray, counts_per_amp: float, 
 
 
 @njit(cache=True, inline="always")
-def plant_sample(theta: float, omega: float, acc: float, i_re: float, i_im: float, ubus: float,
-                 dump_on: float, ua: float, ub: float, uc: float, theta_e: float, pp: float,
-                 r_phase: float, lam: float, j: float, coulomb: float, stop_lo: float,
-                 stop_hi: float, stop_k: float, stop_d: float, load: float, noise_torque: float,
-                 u_supply: float, u_dump: float, k_coil: tuple, k_mech: tuple, k_bus: tuple):
+def plant_sample(theta: float, omega: float, theta_l: float, omega_l: float, acc: float,
+                 i_re: float, i_im: float, ubus: float, dump_on: float, ua: float, ub: float,
+                 uc: float, theta_e: float, pp: float, r_phase: float, lam: float, j: float,
+                 coulomb: float, stop_lo: float, stop_hi: float, stop_k: float, stop_d: float,
+                 load: float, noise_torque: float, u_supply: float, u_dump: float,
+                 k_coil: tuple, k_mech: tuple, k_bus: tuple):
     """The plant over one inner sample (docs/model.md §5): PWM counts ``ua, ub, uc`` on the bus
-    drive the coil, the torque the rotor, the coil's power the DC bus.
+    drive the coil, the torque the rotor (and the load behind an elastic coupling), the coil's
+    power the DC bus.
 
-    Returns ``(theta1, omega1, i_re1, i_im1, ubus1, dump_on1, p_el, p_cu, e_fric, e_dump,
-    e_sup)``: the new state, the mean electrical and copper powers [W] and the energies of the
-    step [J]. Pure arithmetic on scalars: :func:`inner_sample` and the SIMD lanes of
-    :mod:`jvl_gym.families.mac050_141.lanes` share it.
+    Returns ``(theta1, omega1, theta_l1, omega_l1, i_re1, i_im1, ubus1, dump_on1, p_el, p_cu,
+    e_fric, e_load, e_dump, e_sup)``: the new state, the mean electrical and copper powers [W]
+    and the energies of the step [J]. Pure arithmetic on scalars: :func:`inner_sample` and the
+    SIMD lanes of :mod:`jvl_gym.families.mac050_141.lanes` share it. The load torque ``load``
+    acts on the motor shaft when it is rigid and on the load behind the coupling otherwise.
     """
     kv = ubus * _HALF_PWM_PER_VOLT
     s_u = phase_to_vector(ua * kv, ub * kv, uc * kv)
     omega_mid = omega + 0.5 * _H * acc
     s1, torque, p_el, p_cu = coil_step_prepared(complex(i_re, i_im), s_u, theta_e,
                                                 pp * omega_mid, r_phase, lam, pp, _H, k_coil)
-    drive = torque - load + end_stop_torque(theta, omega, stop_lo, stop_hi, stop_k, stop_d)
+    two = k_mech[2] > 0.0
+    load_l = load if two else 0.0
+    drive = torque - (0.0 if two else load) + end_stop_torque(theta, omega, stop_lo, stop_hi,
+                                                              stop_k, stop_d)
     if noise_torque != 0.0:
         drive += noise_torque
-    theta1, omega1, e_fric = mech_step_prepared(theta, omega, drive, j, coulomb, _H, k_mech)
+    theta1, omega1, theta_l1, omega_l1, e_fric = mech_step_prepared(
+        theta, omega, theta_l, omega_l, drive, load_l, j, coulomb, _H, k_mech)
+    e_load = load * ((theta_l1 - theta_l) if two else (theta1 - theta))
     ubus1, dump_on1, e_dump, e_sup = bus_step_prepared(ubus, p_el, u_supply, u_dump, dump_on,
                                                        _H, k_bus)
-    return (theta1, omega1, s1.real, s1.imag, ubus1, dump_on1, p_el, p_cu, e_fric, e_dump,
-            e_sup)
+    return (theta1, omega1, theta_l1, omega_l1, s1.real, s1.imag, ubus1, dump_on1, p_el, p_cu,
+            e_fric, e_load, e_dump, e_sup)
 
 
 @njit(cache=True, inline="always")
@@ -308,7 +316,8 @@ def sample_constants(p: np.ndarray) -> tuple:
     ``(counts_per_amp, k_coil, k_mech, k_bus)`` (ADC counts per ampere and the plant factors of
     ``coil_constants``, ``mech_constants``, ``bus_constants``)."""
     return (1.0 / p[L.P_AMPS_PER_COUNT], coil_constants(p[L.P_R], p[L.P_L], p[L.P_LAMBDA], _H),
-            mech_constants(p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_VISCOUS], _H),
+            mech_constants(p[L.P_J_MOTOR], p[L.P_J_LOAD], p[L.P_VISCOUS], p[L.P_K_COUPLING],
+                           p[L.P_D_COUPLING], _H),
             bus_constants(p[L.P_C_BUS], p[L.P_R_SUPPLY], p[L.P_R_DUMP], _H))
 
 
@@ -407,21 +416,24 @@ def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key
     if p[L.P_TORQUE_NOISE] > 0.0:
         noise_torque = p[L.P_TORQUE_NOISE] * gauss(key, tick, 4)
     load = u[L.I_LOAD_TORQUE]
-    (theta1, omega1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric, e_dump,
-     e_sup) = plant_sample(theta, omega, s[L.S_ACC], s[L.S_I_RE], s[L.S_I_IM], s[L.S_UBUS],
-                           s[L.S_DUMP_ON], ua, ub, uc, theta_e, pp, p[L.P_R], p[L.P_LAMBDA],
-                           p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_COULOMB], p[L.P_STOP_LO],
-                           p[L.P_STOP_HI], p[L.P_STOP_K], p[L.P_STOP_D], load, noise_torque,
-                           u[L.I_SUPPLY_VOLTS], p[L.P_U_DUMP], k_coil, k_mech, k_bus)
+    (theta1, omega1, theta_l1, omega_l1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric,
+     e_load, e_dump, e_sup) = plant_sample(
+        theta, omega, s[L.S_LOAD_THETA], s[L.S_LOAD_OMEGA], s[L.S_ACC], s[L.S_I_RE],
+        s[L.S_I_IM], s[L.S_UBUS], s[L.S_DUMP_ON], ua, ub, uc, theta_e, pp, p[L.P_R],
+        p[L.P_LAMBDA], shaft_inertia(p[L.P_J_MOTOR], p[L.P_J_LOAD], p[L.P_K_COUPLING]),
+        p[L.P_COULOMB], p[L.P_STOP_LO], p[L.P_STOP_HI], p[L.P_STOP_K], p[L.P_STOP_D], load,
+        noise_torque, u[L.I_SUPPLY_VOLTS], p[L.P_U_DUMP], k_coil, k_mech, k_bus)
     s[L.S_THETA] = theta1
     s[L.S_OMEGA] = omega1
+    s[L.S_LOAD_THETA] = theta_l1
+    s[L.S_LOAD_OMEGA] = omega_l1
     s[L.S_ACC] = (omega1 - omega) * c.INNER_HZ
     s[L.S_I_RE] = i_re1
     s[L.S_I_IM] = i_im1
     s[L.S_E_ELEC] += p_el * _H
     s[L.S_E_COPPER] += p_cu * _H
     s[L.S_E_FRICTION] += e_fric
-    s[L.S_E_LOAD] += load * (theta1 - theta)
+    s[L.S_E_LOAD] += e_load
     s[L.S_UBUS] = ubus
     s[L.S_DUMP_ON] = dump_on
     s[L.S_E_DUMP] += e_dump

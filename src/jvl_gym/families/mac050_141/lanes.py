@@ -24,6 +24,7 @@ from .kernel import adc_count, inner_samples_one, plant_sample, sample_constants
 from .plant.coil import vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import hall_code, sector_index
+from .plant.mechanics import shaft_inertia
 
 #: motors per block
 LANES = 16
@@ -45,13 +46,13 @@ _LANE_COLS = np.array(L.LANE_STATE, dtype=np.int64)
     F_VF_OUT, F_PHASE_COMP, F_AMPLITUDE, F_KIA, F_KIB, F_KIC, F_KIB1, F_KIB0, F_KIFX2, F_KIFX1,
     F_KIFY1, F_KIFY0, F_POLE_PAIRS, F_THETA_E0, F_HALL_ANGLE, F_PWM_DELAY, F_R, F_LAMBDA, F_J,
     F_COULOMB, F_STOP_LO, F_STOP_HI, F_STOP_K, F_STOP_D, F_U_DUMP, F_LOAD, F_SUPPLY,
-    F_COUNTS_PER_AMP, F_KC0, F_KC1, F_KC2, F_KC3, F_KM0, F_KM1, F_KB0, F_KB1, F_KB2, F_KB3,
-    F_KB4, F_KB5, F_KB6, F_MOTOR,
+    F_COUNTS_PER_AMP, F_KC0, F_KC1, F_KC2, F_KC3, F_KM0, F_KM1, F_KM2, F_KM3, F_KM4, F_KM5,
+    F_KB0, F_KB1, F_KB2, F_KB3, F_KB4, F_KB5, F_KB6, F_MOTOR,
     # the parameters F_COUNTS_PER_AMP .. F_KB6 were computed from (see _lane_constants)
     F_SRC_AMPS, F_SRC_R, F_SRC_L, F_SRC_LAMBDA, F_SRC_J_MOTOR, F_SRC_J_LOAD, F_SRC_VISCOUS,
-    F_SRC_C_BUS, F_SRC_R_SUPPLY, F_SRC_R_DUMP,
+    F_SRC_C_BUS, F_SRC_R_SUPPLY, F_SRC_R_DUMP, F_SRC_K_COUPLING, F_SRC_D_COUPLING,
     N_FIELDS,
-) = range(N_LANE_STATE, N_LANE_STATE + 67)
+) = range(N_LANE_STATE, N_LANE_STATE + 73)
 
 _H = c.INNER_DT
 
@@ -121,7 +122,7 @@ def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.
     _put(sc, F_PWM_DELAY, j, p[L.P_PWM_DELAY])
     _put(sc, F_R, j, p[L.P_R])
     _put(sc, F_LAMBDA, j, p[L.P_LAMBDA])
-    _put(sc, F_J, j, p[L.P_J_MOTOR] + p[L.P_J_LOAD])
+    _put(sc, F_J, j, shaft_inertia(p[L.P_J_MOTOR], p[L.P_J_LOAD], p[L.P_K_COUPLING]))
     _put(sc, F_COULOMB, j, p[L.P_COULOMB])
     _put(sc, F_STOP_LO, j, p[L.P_STOP_LO])
     _put(sc, F_STOP_HI, j, p[L.P_STOP_HI])
@@ -138,7 +139,7 @@ def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.
 def _lane_constants(sc: np.ndarray, j: int, p: np.ndarray) -> None:
     """Lane ``j``'s :func:`mac050_141.kernel.sample_constants` of the parameter row ``p``.
 
-    They are a pure function of ten parameters, which the lane keeps beside them: when the
+    They are a pure function of twelve parameters, which the lane keeps beside them: when the
     parameters are those of the last gather (the same motor, as a rule) the stored constants
     are reused, which saves an exponential and nine divisions per motor and outer sample.
     """
@@ -149,13 +150,15 @@ def _lane_constants(sc: np.ndarray, j: int, p: np.ndarray) -> None:
             and _get(sc, F_SRC_VISCOUS, j) == p[L.P_VISCOUS]
             and _get(sc, F_SRC_C_BUS, j) == p[L.P_C_BUS]
             and _get(sc, F_SRC_R_SUPPLY, j) == p[L.P_R_SUPPLY]
-            and _get(sc, F_SRC_R_DUMP, j) == p[L.P_R_DUMP]):
+            and _get(sc, F_SRC_R_DUMP, j) == p[L.P_R_DUMP]
+            and _get(sc, F_SRC_K_COUPLING, j) == p[L.P_K_COUPLING]
+            and _get(sc, F_SRC_D_COUPLING, j) == p[L.P_D_COUPLING]):
         return
     counts_per_amp, k_coil, k_mech, k_bus = sample_constants(p)
     _put(sc, F_COUNTS_PER_AMP, j, counts_per_amp)
     for k in range(4):
         _put(sc, F_KC0 + k, j, k_coil[k])
-    for k in range(2):
+    for k in range(6):
         _put(sc, F_KM0 + k, j, k_mech[k])
     for k in range(7):
         _put(sc, F_KB0 + k, j, k_bus[k])
@@ -169,6 +172,8 @@ def _lane_constants(sc: np.ndarray, j: int, p: np.ndarray) -> None:
     _put(sc, F_SRC_C_BUS, j, p[L.P_C_BUS])
     _put(sc, F_SRC_R_SUPPLY, j, p[L.P_R_SUPPLY])
     _put(sc, F_SRC_R_DUMP, j, p[L.P_R_DUMP])
+    _put(sc, F_SRC_K_COUPLING, j, p[L.P_K_COUPLING])
+    _put(sc, F_SRC_D_COUPLING, j, p[L.P_D_COUPLING])
 
 
 @njit(cache=True, inline="always")
@@ -272,27 +277,31 @@ def _lane_sample(sc: np.ndarray, j: int, last: bool) -> None:
         _put(sc, F_UB_VAL, j, ub)
         _put(sc, F_UC_VAL, j, uc)
     load = _get(sc, F_LOAD, j)
-    (theta1, omega1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric, e_dump,
-     e_sup) = plant_sample(
-        theta, omega, _sget(sc, L.S_ACC, j), i_re, i_im, _sget(sc, L.S_UBUS, j),
+    (theta1, omega1, theta_l1, omega_l1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric,
+     e_load, e_dump, e_sup) = plant_sample(
+        theta, omega, _sget(sc, L.S_LOAD_THETA, j), _sget(sc, L.S_LOAD_OMEGA, j),
+        _sget(sc, L.S_ACC, j), i_re, i_im, _sget(sc, L.S_UBUS, j),
         _sget(sc, L.S_DUMP_ON, j), _pwm_lane(sc, j, 0, ua), _pwm_lane(sc, j, 1, ub),
         _pwm_lane(sc, j, 2, uc), theta_e, pp, _get(sc, F_R, j), _get(sc, F_LAMBDA, j),
         _get(sc, F_J, j), _get(sc, F_COULOMB, j), _get(sc, F_STOP_LO, j),
         _get(sc, F_STOP_HI, j), _get(sc, F_STOP_K, j), _get(sc, F_STOP_D, j), load, 0.0,
         _get(sc, F_SUPPLY, j), _get(sc, F_U_DUMP, j),
         (_get(sc, F_KC0, j), _get(sc, F_KC1, j), _get(sc, F_KC2, j), _get(sc, F_KC3, j)),
-        (_get(sc, F_KM0, j), _get(sc, F_KM1, j)),
+        (_get(sc, F_KM0, j), _get(sc, F_KM1, j), _get(sc, F_KM2, j), _get(sc, F_KM3, j),
+         _get(sc, F_KM4, j), _get(sc, F_KM5, j)),
         (_get(sc, F_KB0, j), _get(sc, F_KB1, j), _get(sc, F_KB2, j), _get(sc, F_KB3, j),
          _get(sc, F_KB4, j), _get(sc, F_KB5, j), _get(sc, F_KB6, j)))
     _sput(sc, L.S_THETA, j, theta1)
     _sput(sc, L.S_OMEGA, j, omega1)
+    _sput(sc, L.S_LOAD_THETA, j, theta_l1)
+    _sput(sc, L.S_LOAD_OMEGA, j, omega_l1)
     _sput(sc, L.S_ACC, j, (omega1 - omega) * c.INNER_HZ)
     _sput(sc, L.S_I_RE, j, i_re1)
     _sput(sc, L.S_I_IM, j, i_im1)
     _sput(sc, L.S_E_ELEC, j, _sget(sc, L.S_E_ELEC, j) + p_el * _H)
     _sput(sc, L.S_E_COPPER, j, _sget(sc, L.S_E_COPPER, j) + p_cu * _H)
     _sput(sc, L.S_E_FRICTION, j, _sget(sc, L.S_E_FRICTION, j) + e_fric)
-    _sput(sc, L.S_E_LOAD, j, _sget(sc, L.S_E_LOAD, j) + load * (theta1 - theta))
+    _sput(sc, L.S_E_LOAD, j, _sget(sc, L.S_E_LOAD, j) + e_load)
     _sput(sc, L.S_UBUS, j, ubus)
     _sput(sc, L.S_DUMP_ON, j, dump_on)
     _sput(sc, L.S_E_DUMP, j, _sget(sc, L.S_E_DUMP, j) + e_dump)

@@ -72,8 +72,11 @@ N_REGS = 165
     S_E_SUPPLY,  # energy drawn from the supply source
     # mode-specific memory (home search, analogue hysteresis, coil direction, ...)
     S_AUX0, S_AUX1, S_AUX2, S_AUX3, S_AUX4, S_AUX5, S_AUX6, S_AUX7,
+    # load behind an elastic coupling (docs/model.md §5.2); equal to S_THETA, S_OMEGA when rigid
+    S_LOAD_THETA,  # load angle [rad]
+    S_LOAD_OMEGA,  # load speed [rad/s]
     N_STATE,
-) = range(72)
+) = range(74)
 
 #: the state fields the SIMD lanes of the inner samples carry (``lanes.py``): gathered into a
 #: block's scratch before its 15 inner samples and scattered back after them, in this order
@@ -81,13 +84,13 @@ LANE_STATE = (
     S_THETA, S_OMEGA, S_ACC, S_I_RE, S_I_IM, S_UBUS, S_DUMP_ON, S_ELDEG_PREV, S_HALL_SECTOR,
     S_IE1_A, S_IE1_B, S_IE1_C, S_IU1_A, S_IU1_B, S_IU1_C, S_IU2_A, S_IU2_B, S_IU2_C, S_IIST1_A,
     S_IIST1_B, S_IIST1_C, S_UPEND_A, S_UPEND_B, S_UPEND_C, S_E_ELEC, S_E_COPPER, S_E_FRICTION,
-    S_E_LOAD, S_E_DUMP, S_E_SUPPLY, S_I2_SUM, S_PREG_SUM,
+    S_E_LOAD, S_E_DUMP, S_E_SUPPLY, S_I2_SUM, S_PREG_SUM, S_LOAD_THETA, S_LOAD_OMEGA,
 )
 
 # --- parameters ------------------------------------------------------------------------------
 (
     P_J_MOTOR,  # rotor inertia [kg·m²]
-    P_J_LOAD,  # load inertia [kg·m²]
+    P_J_LOAD,  # load inertia [kg·m²] (behind the coupling when P_K_COUPLING > 0)
     P_VISCOUS,  # viscous friction [N·m·s/rad]
     P_COULOMB,  # Coulomb friction [N·m]
     P_R,  # phase resistance [Ω]
@@ -113,8 +116,10 @@ LANE_STATE = (
     P_THETA_E0,  # electrical angle at mechanical angle 0 [rad]
     P_HALL_START,  # 0: commutation aligned at power-on; 1: hall sector estimate until first edge
     P_HALL_ANGLE,  # electrical angle of the hall zero transition [rad]
+    P_K_COUPLING,  # stiffness of the coupling to the load [N·m/rad] (0: rigid)
+    P_D_COUPLING,  # damping of the coupling to the load [N·m·s/rad]
     N_PARAM,
-) = range(28)
+) = range(30)
 
 # --- inputs ----------------------------------------------------------------------------------
 (

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any, ClassVar
 
 import numpy as np
@@ -30,6 +30,7 @@ from .firmware import modes as M
 from .firmware import regs as R
 from .firmware import write_rules as W
 from .firmware.monitor import filter_gain
+from .plant.mechanics import coupling_problem
 from .power_on import power_on_from_memory, reset_rows, start_loaded_rows
 from .store import store_rows
 from .table import TABLE
@@ -58,9 +59,12 @@ _PARAMETERS: dict[str, int] = {
     "phase_inductance": L.P_L,  # H
     "rotor_inertia": L.P_J_MOTOR,  # kg·m²
     "flux_linkage": L.P_LAMBDA,  # V·s
+    "coupling_stiffness": L.P_K_COUPLING,  # N·m/rad; 0: rigid load, > 0: load behind a coupling
+    "coupling_damping": L.P_D_COUPLING,  # N·m·s/rad
 }
 _NONNEGATIVE = {"load_inertia", "viscous_friction", "coulomb_friction", "current_noise",
-                "position_noise", "torque_noise", "end_stop_stiffness", "end_stop_damping"}
+                "position_noise", "torque_noise", "end_stop_stiffness", "end_stop_damping",
+                "coupling_stiffness", "coupling_damping"}
 _POSITIVE = {"phase_resistance", "phase_inductance", "rotor_inertia", "flux_linkage"}
 _BINARY = {"pwm_delay_samples", "hall_start"}
 #: per-motor initial state keywords of the constructor and :meth:`MacMotorArray.reset`
@@ -110,7 +114,8 @@ class MacMotorArray(MotorArray):
         "pulse_counts": InputRule(whole=True, unit="counts per outer sample"),
         "home": InputRule(allow_bool=True),
         "supply_volts": InputRule(0.0, 60.0, unit="V")}
-    PHYSICAL = frozenset({"speed_rpm", "speed_rad_s", "position_rad", "torque", "bus_voltage"})
+    PHYSICAL = frozenset({"speed_rpm", "speed_rad_s", "position_rad", "torque", "bus_voltage",
+                          "load_angle", "load_speed"})
     ONE_BY_ONE = frozenset(W.POINTERS) | {R.CNTRL_BITS}
 
     def __init__(self, motor: MotorSpec = "MAC140", n: int = 1, seed: Seed = None,
@@ -129,12 +134,37 @@ class MacMotorArray(MotorArray):
         self._latched_cntrl = np.zeros(self.n, dtype=np.int64)
         self.set_record_length(self._record_length)
 
+    def reset(self, index: MotorIndex = None, motor_type: str | Sequence[str] | None = None,
+              **params: Any) -> None:
+        """:meth:`jvl_gym.MotorArray.reset`; also refuses an elastic coupling the inner step
+        cannot carry (``mac050_141.plant.mechanics.coupling_problem``), changing nothing."""
+        types = self._type_of.copy()
+        try:
+            super().reset(index, motor_type, **params)
+        except (TypeError, ValueError):
+            self._type_of[:] = types
+            raise
+
     def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
                     values: np.ndarray) -> None:
+        self._check_coupling(idx, cols, to_state, values)
         reset_rows(self.regs, self.state, self.params, self.inputs, self._latched_cntrl, idx,
                    self._type_of[idx], self._rom, self._type_params, self._type_inputs,
                    self._rom if self._flash is None else self._flash, self._has_flash,
                    cols, to_state, values)
+
+    def _check_coupling(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
+                        values: np.ndarray) -> None:
+        """Raise ValueError naming the parameter when a motor's coupling to its load is one the
+        inner step cannot integrate (docs/model.md §5.2)."""
+        p = self._type_params[self._type_of[idx]].copy()
+        for q in np.flatnonzero(~to_state):
+            p[:, cols[q]] = values[q]
+        for j, row in enumerate(p):
+            problem = coupling_problem(row[L.P_J_MOTOR], row[L.P_J_LOAD], row[L.P_K_COUPLING],
+                                       row[L.P_D_COUPLING], c.INNER_DT)
+            if problem is not None:
+                raise ValueError(f"motor {int(idx[j])}: {problem}. Nothing was changed.")
 
     def _special_request(self, raw: np.ndarray) -> bool:
         """A SAFE_MODE command (256..258) or a test mode that records (allocates the sample
@@ -391,7 +421,8 @@ class MacMotorArray(MotorArray):
         """
         idx = as_index(index, self.n)
         self._indices_in(idx, (c.INIT_MODE, c.SAFE_MODE), "software_reset")
-        keep = [L.S_THETA, L.S_OMEGA, L.S_I_RE, L.S_I_IM, L.S_ACC, L.S_UBUS, L.S_DUMP_ON,
+        keep = [L.S_THETA, L.S_OMEGA, L.S_LOAD_THETA, L.S_LOAD_OMEGA, L.S_I_RE, L.S_I_IM,
+                L.S_ACC, L.S_UBUS, L.S_DUMP_ON,
                 L.S_TICK, L.S_REC_LEN, L.S_E_ELEC, L.S_E_COPPER, L.S_E_FRICTION, L.S_E_LOAD,
                 L.S_E_DUMP, L.S_E_SUPPLY, L.S_I2T_Q, L.S_UIT_Q]
         saved = self.state[np.ix_(idx, keep)].copy()
@@ -468,6 +499,17 @@ class MacMotorArray(MotorArray):
         """Shaft angle [rad] relative to the world zero, (N,)."""
         return self.state[:, L.S_THETA].copy()
 
+    @property
+    def load_angle(self) -> np.ndarray:
+        """Angle of the load [rad], (N,): behind an elastic coupling its own, else the
+        shaft's (docs/model.md §5.2)."""
+        return self.state[:, L.S_LOAD_THETA].copy()
+
+    @property
+    def load_speed(self) -> np.ndarray:
+        """Speed of the load [rad/s], (N,) (the shaft's when the load is rigid)."""
+        return self.state[:, L.S_LOAD_OMEGA].copy()
+
     def _current_vector(self) -> np.ndarray:
         """Stator current space vector [A], (N,) complex (``mac050_141.plant.coil``)."""
         return self.state[:, L.S_I_RE] + 1j * self.state[:, L.S_I_IM]
@@ -495,9 +537,14 @@ class MacMotorArray(MotorArray):
 
     @property
     def energy(self) -> dict[str, np.ndarray]:
-        """Energy accounts since power-on [J], (N,) each, and the kinetic energy now."""
-        s = self.state
-        j = self.params[:, L.P_J_MOTOR] + self.params[:, L.P_J_LOAD]
+        """Energy accounts since power-on [J], (N,) each, the kinetic energy of rotor and load
+        now and the energy stored in the twist of an elastic coupling ("coupling"; 0 when
+        rigid). "friction" includes the coupling's damping."""
+        s, p = self.state, self.params
+        rigid = p[:, L.P_K_COUPLING] <= 0.0
+        j_shaft = p[:, L.P_J_MOTOR] + np.where(rigid, p[:, L.P_J_LOAD], 0.0)
+        j_load = np.where(rigid, 0.0, p[:, L.P_J_LOAD])
+        twist = s[:, L.S_THETA] - s[:, L.S_LOAD_THETA]
         return {
             "electrical": s[:, L.S_E_ELEC].copy(),
             "copper": s[:, L.S_E_COPPER].copy(),
@@ -505,7 +552,9 @@ class MacMotorArray(MotorArray):
             "load": s[:, L.S_E_LOAD].copy(),
             "dump": s[:, L.S_E_DUMP].copy(),
             "supply": s[:, L.S_E_SUPPLY].copy(),
-            "kinetic": 0.5 * j * s[:, L.S_OMEGA] ** 2,
+            "kinetic": 0.5 * j_shaft * s[:, L.S_OMEGA] ** 2
+            + 0.5 * j_load * s[:, L.S_LOAD_OMEGA] ** 2,
+            "coupling": np.where(rigid, 0.0, 0.5 * p[:, L.P_K_COUPLING] * twist**2),
         }
 
     def mode_name(self, index: int = 0) -> str:

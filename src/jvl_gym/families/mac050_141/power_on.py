@@ -98,7 +98,8 @@ def reset_rows(regs: np.ndarray, state: np.ndarray, params: np.ndarray, inputs: 
 
     Per motor: the parameters and world inputs at rest of its type, then the given parameters;
     the state cleared but for the record length (default TEST_RECORD_SAMPLES, manual 4.4.9),
-    then the given state (rotor angle and speed), the bus at the supply voltage; registers from
+    then the given state (rotor angle and speed, the load's the same: an elastic coupling starts
+    untwisted), the bus at the supply voltage; registers from
     flash if written, else the type's ROM image; then :func:`power_on_rows`. The values are
     checked (:func:`first_bad_value`).
 
@@ -133,6 +134,8 @@ def reset_rows(regs: np.ndarray, state: np.ndarray, params: np.ndarray, inputs: 
         for q in range(cols.shape[0]):
             if to_state[q]:
                 state[i, cols[q]] = values[q, j]
+        state[i, L.S_LOAD_THETA] = state[i, L.S_THETA]  # the coupling starts untwisted
+        state[i, L.S_LOAD_OMEGA] = state[i, L.S_OMEGA]
         state[i, L.S_UBUS] = inputs[i, L.I_SUPPLY_VOLTS]
     power_on_from_memory(regs, state, params, latched, idx, types, rom, flash, has_flash)
 

@@ -1,0 +1,331 @@
+"""Resonance of a load behind an elastic coupling, from torque-step records (docs/tuning.md,
+"Two-mass loads").
+
+The record. In AT_MODE (manual 4.4.5) the speed regulator is passive and the current loop
+makes the torque ``VF_OUT = ANINP·T_SOLL/1023``; ANINP is the analogue input plus ANINP_OFFSET
+(3.2.122/123), so writing ANINP_OFFSET = ±1023 with the input at 0 V is a torque step of
+±T_SOLL that needs no signal source. The sample buffer (3.2.112–116, CNTRL_BITS RECORDBIT,
+REWINDBIT, RECINNERBIT, 3.2.36) records ELDEG_IST (3.2.143, the encoder count modulo 2048) at the
+current-loop rate, 7812.5 Hz. The buffer holds 64 samples (8.2 ms), less than one period of a
+30 Hz resonance, so the step is repeated and window ``w`` starts recording ``4w`` outer samples
+(60 inner samples) after the step: the windows overlap by four samples, whose equality fixes the
+multiple of 2048 counts between them, and joined they are one inner-rate record of the motor
+angle after the step, as long as wanted. Between steps the motor is braked by the reversed
+torque and rests.
+
+The model. With the current loop fast against the mechanics the torque is a step ``T`` and the
+motor angle (torque-driven two-mass system, the load free) is::
+
+    θ_m(t) = T t²/(2 J) + A (1 − e^{−σt} cos(ω_d t + φ)) + …,   ω_r = √(k (1/J_m + 1/J_l))
+
+with ``J = J_m + J_l``: a parabola and a damped oscillation at the coupling's resonance. The fit
+takes a cubic polynomial (back-EMF and friction bend the parabola) plus ``e^{−σt}(a cos ω t +
+b sin ω t)``, from 2 ms after the step (the current rise); ω and σ nonlinear (a grid over the
+frequency, then least squares), the rest linear. The interval of the frequency is the fit's
+covariance with the residual variance inflated for its autocorrelation
+(:func:`tuning.identify_coil.correlation_inflation`) and a Student t factor.
+
+The load ratio. ``J_l/J_m = J/J_m − 1`` from the identified total inertia
+(:mod:`tuning.identify_mechanics`, TESTA) and the type's rotor inertia; the anti-resonance (the
+load's own frequency on a held motor) is ``ω_a = ω_r/√(1 + J_l/J_m)``.
+
+Two records: a short one (3 windows, 24 ms) with a large torque for resonances above about
+120 Hz, whose oscillation in the angle is small (``∝ 1/ω²``), and a long one (14 windows,
+108 ms) with a small torque for low ones. The short record is kept when it holds at least three
+periods and its oscillation stands out of the noise, else the long one.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from scipy import optimize, stats
+
+from jvl_gym.families.mac050_141 import constants as C
+
+from .identify_coil import correlation_inflation
+from .intervals import LEVEL
+from .models import TS_I, TS_O
+
+__all__ = ["ResonanceEstimate", "ResonanceFit", "acquire_step_windows", "fit_resonance",
+           "identify_resonance", "join_windows", "step_torques", "estimate_from_fits",
+           "WINDOW", "WINDOW_STEP"]
+
+WINDOW: int = 64  #: samples of one record (the sample buffer)
+WINDOW_STEP: int = 4  #: outer samples between the starts of two windows (60 inner samples)
+ELDEG_TURN: int = 2048  #: ELDEG_IST counts per electrical turn (3.2.143)
+ANINP_FULL: int = 1023  #: ANINP of ±10 V (3.2.122)
+SKIP_S: float = 2e-3  #: time after the step left out of the fit (the current rise) [s]
+F_MIN, F_MAX = 15.0, 480.0  #: frequency range searched [Hz]
+
+
+@dataclass
+class ResonanceFit:
+    """The fit of one joined record.
+
+    Attributes
+    ----------
+    f_hz, f_sd : float
+        Damped oscillation frequency [Hz] and its standard error (inflated).
+    sigma : float
+        Decay rate [1/s].
+    amplitude : float
+        Oscillation amplitude [counts] at the start of the fit.
+    amplitude_sd : float
+        Its standard error [counts].
+    periods : float
+        Oscillation periods within the fitted part of the record.
+    rms : float
+        Residual rms [counts].
+    dof : int
+        Degrees of freedom of the interval (effective samples − parameters).
+    """
+
+    f_hz: float
+    f_sd: float
+    sigma: float
+    amplitude: float
+    amplitude_sd: float
+    periods: float
+    rms: float
+    dof: int
+
+
+@dataclass
+class ResonanceEstimate:
+    """Identified resonance of a two-mass load.
+
+    Attributes
+    ----------
+    f_res, f_anti : float
+        Resonance (motor driven, load free) and anti-resonance frequency [Hz].
+    load_ratio : float
+        J_l/J_m.
+    zeta : float
+        Damping ratio of the resonance, σ/ω_r.
+    ci : dict
+        95 % intervals (lo, hi) of "f_res", "f_anti", "load_ratio".
+    detected : bool
+        An oscillation was found (amplitude above three standard errors with enough periods).
+    fits : list of ResonanceFit
+        The fits of the short and the long record; ``used`` indexes the one kept.
+    used : int
+        Index into ``fits``.
+    """
+
+    f_res: float
+    f_anti: float
+    load_ratio: float
+    zeta: float
+    ci: dict[str, tuple[float, float]]
+    detected: bool
+    fits: list[ResonanceFit] = field(default_factory=list)
+    used: int = 0
+
+
+def _step_until(m: Any, done: Any, max_samples: int) -> None:
+    for _ in range(max_samples):
+        if done():
+            return
+        m.step(1)
+
+
+def _brake_and_rest(m: Any, sign: np.ndarray, rest_s: float) -> None:
+    """Reverse the torque until every motor's V_IST has reached zero, leave AT_MODE (4.4.5:
+    any mode request goes to INIT below 300 rpm) and rest ``rest_s`` [s]."""
+    braking = np.ones(m.n, dtype=bool)
+    for _ in range(int(1.0 / TS_O)):
+        v = np.asarray(m.read("V_IST"), dtype=float)
+        braking &= v * sign > 0
+        if not braking.any():
+            break
+        m.write("ANINP_OFFSET", np.where(braking, -sign * ANINP_FULL, 0).astype(int))
+        m.step(1)
+    m.write("ANINP_OFFSET", 0)
+    m.write("MODE_REG", 0)
+    _step_until(m, lambda: bool(np.all(np.asarray(m.read("MODE_REG")) == 0)), 5000)
+    m.step(int(rest_s / TS_O))
+
+
+def acquire_step_windows(m: Any, t_soll: np.ndarray | float, n_windows: int,
+                         rest_s: float = 1.0) -> list[np.ndarray]:
+    """Record ``n_windows`` windows of ELDEG_IST after AT_MODE torque steps of ``t_soll``
+    (VF_OUT units, per motor) on every motor of ``m`` (module docstring).
+
+    Returns one (n_windows, 64) int array per motor, ELDEG_IST relative to its value at rest
+    before the step (modulo 2048); window ``w`` starts ``60·w`` inner samples after the step.
+    The motors end in INIT_MODE at rest; T_SOLL, ANINP_OFFSET, SAMPLE1/2 and CNTRL_BITS are
+    restored.
+    """
+    t = np.broadcast_to(np.abs(np.asarray(t_soll, dtype=float)), (m.n,)).round()
+    saved = {k: np.asarray(m.read(k)).copy()
+             for k in ("T_SOLL", "ANINP_OFFSET", "SAMPLE1", "SAMPLE2", "CNTRL_BITS")}
+    el = m.table.lookup("ELDEG_IST").number if hasattr(m, "table") else 143
+    out = np.zeros((m.n, n_windows, WINDOW), dtype=np.int64)
+    sign = np.ones(m.n)
+    m.write("T_SOLL", t)
+    m.write("SAMPLE1", el)
+    m.write("SAMPLE2", el)
+    rec_bits = C.RECORDBIT | C.REWINDBIT | C.RECINNERBIT
+    for w in range(n_windows):
+        cb = np.asarray(m.read("CNTRL_BITS")).astype(np.int64) & ~rec_bits
+        start = np.asarray(m.read("ELDEG_IST")).astype(np.int64)
+        m.write("ANINP_OFFSET", (sign * ANINP_FULL).astype(int))
+        m.write("MODE_REG", C.AT_MODE)
+        if w:
+            m.step(WINDOW_STEP * w)
+        m.write("CNTRL_BITS", cb | rec_bits)
+        m.step(math.ceil(WINDOW / C.INNER_PER_OUTER))
+        m.write("CNTRL_BITS", cb)
+        buf = m.sample_buffer()
+        raw = np.asarray(buf.get("ELDEG_IST", buf.get("SAMPLE1")))[:, :WINDOW]
+        out[:, w] = (raw - start[:, None]) % ELDEG_TURN
+        _brake_and_rest(m, sign, rest_s)
+    for k in ("T_SOLL", "ANINP_OFFSET", "SAMPLE1", "SAMPLE2", "CNTRL_BITS"):
+        m.write(k, saved[k])
+    return [out[i] for i in range(m.n)]
+
+
+def join_windows(windows: np.ndarray) -> np.ndarray:
+    """One record of the motor angle [counts] from the windows of :func:`acquire_step_windows`
+    (rows), 0 at the step: each window unwrapped (period 2048) and shifted so that its first
+    samples match, on average, the overlapping last ones of the previous window. The shift is
+    a multiple of 2048 counts for identical repetitions; with noise the repetitions drift
+    apart by a little, which the shift removes at each join."""
+    step = WINDOW_STEP * C.INNER_PER_OUTER
+    overlap = WINDOW - step
+    x = np.unwrap(np.asarray(windows[0], dtype=float), period=ELDEG_TURN)
+    joined = list(x[:step])
+    prev = x
+    for row in windows[1:]:
+        y = np.unwrap(np.asarray(row, dtype=float), period=ELDEG_TURN)
+        y = y + np.mean(prev[step:] - y[:overlap])
+        joined.extend(y[:step])
+        prev = y
+    joined.extend(prev[step:])
+    a = np.asarray(joined)
+    return a - a[0]
+
+
+def _basis(t: np.ndarray, w: float, sigma: float, order: int) -> np.ndarray:
+    e = np.exp(-sigma * t)
+    tt = t / t[-1]
+    return np.column_stack([tt**q for q in range(order + 1)]
+                           + [e * np.cos(w * t), e * np.sin(w * t)])
+
+
+def fit_resonance(x: np.ndarray, dt: float = TS_I, skip_s: float = SKIP_S,
+                  order: int = 3) -> ResonanceFit:
+    """Fit the polynomial-plus-damped-oscillation model (module docstring; polynomial of
+    ``order``) to the angle record ``x`` [counts] sampled every ``dt`` [s] from the step on."""
+    x = np.asarray(x, dtype=float)
+    k0 = int(round(skip_s / dt))
+    t = np.arange(x.size)[k0:] * dt
+    y = x[k0:]
+    t0 = t[0]
+    ts = t - t0
+
+    def rss(w: float, sigma: float) -> tuple[float, np.ndarray, np.ndarray]:
+        a = _basis(ts, w, sigma, order)
+        coef, *_ = np.linalg.lstsq(a, y, rcond=None)
+        r = y - a @ coef
+        return float(r @ r), coef, r
+
+    f_hi = min(F_MAX, 0.45 / dt)
+    f_lo = max(F_MIN, 1.2 / ts[-1])
+    grid = np.geomspace(f_lo, f_hi, 600)
+    scores = [rss(2 * math.pi * f, 0.0)[0] for f in grid]
+    f0 = grid[int(np.argmin(scores))]
+
+    def resid(p: np.ndarray) -> np.ndarray:
+        return rss(p[0], p[1])[2]
+
+    sol = optimize.least_squares(resid, [2 * math.pi * f0, 0.0],
+                                 bounds=([2 * math.pi * f_lo * 0.8, -50.0],
+                                         [2 * math.pi * f_hi * 1.2, 2e3]),
+                                 x_scale=[2 * math.pi * f0 * 0.01, 10.0])
+    w, sigma = float(sol.x[0]), float(sol.x[1])
+    _, coef, r = rss(w, sigma)
+    # covariance of all eight parameters from the full Jacobian
+    a = _basis(ts, w, sigma, order)
+    e = np.exp(-sigma * ts)
+    ca, cb = coef[-2], coef[-1]
+    d_w = e * ts * (-ca * np.sin(w * ts) + cb * np.cos(w * ts))
+    d_s = -ts * e * (ca * np.cos(w * ts) + cb * np.sin(w * ts))
+    jac = np.column_stack([a, d_w, d_s])
+    n, npar = y.size, jac.shape[1]
+    s2 = float(r @ r) / max(n - npar, 1)
+    infl = correlation_inflation(r)
+    cov = np.linalg.pinv(jac.T @ jac) * s2 * infl
+    amp = math.hypot(ca, cb)
+    g = np.array([ca, cb]) / amp if amp > 0 else np.zeros(2)
+    amp_sd = math.sqrt(max(float(g @ cov[-4:-2, -4:-2] @ g), 0.0))
+    dof = max(int(n / infl) - npar, 1)
+    f_sd = math.sqrt(max(cov[-2, -2], 0.0)) / (2 * math.pi)
+    return ResonanceFit(f_hz=w / (2 * math.pi), f_sd=f_sd,
+                        sigma=sigma, amplitude=amp, amplitude_sd=amp_sd,
+                        periods=w / (2 * math.pi) * ts[-1], rms=math.sqrt(float(r @ r) / n),
+                        dof=dof)
+
+
+def _usable(fit: ResonanceFit, min_periods: float) -> bool:
+    return (fit.periods >= min_periods and fit.amplitude > 3.0 * fit.amplitude_sd
+            and fit.amplitude > 0.5 and fit.f_sd < 0.05 * fit.f_hz)
+
+
+def estimate_from_fits(fits: Sequence[ResonanceFit], J: float, J_ci: tuple[float, float],
+                       J_m: float) -> ResonanceEstimate:
+    """The estimate from the short record's fit (kept when it holds ≥ 3 periods and a clear
+    oscillation) or the long one's, with the load ratio from the identified total inertia
+    ``J`` (interval ``J_ci``) [kg·m²] and the rotor inertia ``J_m``."""
+    used = 0 if _usable(fits[0], 3.0) else len(fits) - 1
+    fit = fits[used]
+    detected = _usable(fit, 1.5)
+    tq = float(stats.t.ppf(0.5 + LEVEL / 2, fit.dof))
+    # the oscillation's frequency is the damped one; the resonance is √(ω_d² + σ²)
+    w_d = 2 * math.pi * fit.f_hz
+    f_res = math.hypot(w_d, fit.sigma) / (2 * math.pi)
+    hw = tq * fit.f_sd
+    ratio = max(J / J_m - 1.0, 0.0)
+    r_lo, r_hi = max(J_ci[0] / J_m - 1.0, 0.0), max(J_ci[1] / J_m - 1.0, 0.0)
+    f_lo, f_hi = max(f_res - hw, 0.0), f_res + hw
+    f_anti = f_res / math.sqrt(1.0 + ratio)
+    return ResonanceEstimate(
+        f_res=f_res, f_anti=f_anti, load_ratio=ratio,
+        zeta=fit.sigma / math.hypot(w_d, fit.sigma) if f_res > 0 else 0.0,
+        ci={"f_res": (f_lo, f_hi), "load_ratio": (r_lo, r_hi),
+            "f_anti": (f_lo / math.sqrt(1.0 + r_hi), f_hi / math.sqrt(1.0 + r_lo))},
+        detected=detected, fits=list(fits), used=used)
+
+
+def step_torques(J: np.ndarray, torque_per_vf: np.ndarray, duration_s: float,
+                 end_speed: float = 150.0) -> np.ndarray:
+    """T_SOLL [VF_OUT units] that brings total inertias ``J`` [kg·m²] to ``end_speed`` [rad/s]
+    in ``duration_s`` [s], within 5..1023."""
+    t = np.asarray(J) * end_speed / duration_s / np.asarray(torque_per_vf)
+    return np.clip(np.round(t), 5, 1023)
+
+
+def identify_resonance(m: Any, idents: Sequence[Any], short_windows: int = 3,
+                       long_windows: int = 14) -> list[ResonanceEstimate]:
+    """Record the short and the long step record (module docstring) on every motor of ``m``
+    and identify the resonance; ``idents`` are the motors' :class:`tuning.autotune.
+    Identification` (their total inertia J and its interval, rotor inertia J_m, K_vf).
+
+    Returns one :class:`ResonanceEstimate` per motor.
+    """
+    J = np.array([i.mechanics.J for i in idents])
+    kvf = np.array([i.motor.torque_per_vf for i in idents])
+    fits: list[list[ResonanceFit]] = [[] for _ in idents]
+    for n_win in (short_windows, long_windows):
+        dur = (n_win * WINDOW_STEP * C.INNER_PER_OUTER + WINDOW - WINDOW_STEP
+               * C.INNER_PER_OUTER) * TS_I
+        wins = acquire_step_windows(m, step_torques(J, kvf, dur), n_win)
+        for i, w in enumerate(wins):
+            fits[i].append(fit_resonance(join_windows(w)))
+    return [estimate_from_fits(f, idn.mechanics.J, idn.mechanics.ci["J"], idn.motor.J_m)
+            for f, idn in zip(fits, idents)]
