@@ -84,10 +84,12 @@ def test_script_sections(bench, tmp_path) -> None:
     assert "4,000" in protocol and "8 TCP clients" in protocol
 
     envs = bench("bench_envs")
-    rows = [{"env": "jvl_gym/GearSync-v0", "trials": False, "dec": 2, "single": 100000.0,
-             "dec1": 150000.0, "copies": 1024, "vector": 1.2e6, "vec1": 2.0e6},
-            {"env": "jvl_gym/FilterTuning-v0", "trials": True, "dec": 1, "single": 300.0,
-             "dec1": 300.0, "copies": 256, "vector": 12000.0, "vec1": 12000.0}]
+    rows = [{"env": "jvl_gym/GearSync-v0", "trials": False, "dec": 2, "dt": 1.92e-3,
+             "single": 100000.0, "dec1": 150000.0, "copies": 1024, "vector": 1.2e6,
+             "vec1": 2.0e6},
+            {"env": "jvl_gym/FilterTuning-v0", "trials": True, "dec": 1, "dt": 1.92e-3,
+             "single": 300.0, "dec1": 300.0, "copies": 256, "vector": 12000.0,
+             "vec1": 12000.0}]
     env_text = envs.section((5000.0, 1e-4), rows)
     assert "| jvl_gym/GearSync-v0 | 2 | 100,000 | 20.0 |" in env_text
     assert "12,000 (256 copies)" in env_text
