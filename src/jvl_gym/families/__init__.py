@@ -3,8 +3,8 @@
 A family is its register table, constants and units, firmware, plant, configs and default
 setups, the compiled step the engine drives and its motor-array class (docs/architecture.md,
 "Adding a motor family"). The generic layers reach a family only through its :class:`Family`
-record. ``mac800`` and ``mis`` hold register tables and units only so far; they are not
-registered until they can run.
+record. ``mac800`` (MAC800 and MAC400) is registered and runs; ``mis`` holds its register table
+and units only so far and is not registered until it can run.
 """
 
 from __future__ import annotations
@@ -57,6 +57,7 @@ class Family:
 
 
 _MODULES: dict[str, str] = {"mac050_141": "jvl_gym.families.mac050_141"}
+_MODULES["mac800"] = "jvl_gym.families.mac800"
 
 
 def register_family(key: str, module: str) -> None:

@@ -1,0 +1,43 @@
+"""The MAC800 family's compiled step, as the engine's driver calls it
+(:mod:`jvl_gym.engine.driver`): ``outer_sample`` per motor, ``inner_block`` per block of
+:data:`LANES` motors."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ...engine.view import EngineView
+from .inner import LANES, inner_samples, lane_scratch
+from .kernel import outer_firmware
+
+__all__ = ["LANES", "outer_sample", "inner_block", "prepare", "scratch"]
+
+
+@njit(cache=True, inline="always")
+def outer_sample(view: EngineView, i: int, t: int) -> None:  # pragma: no cover - compiled
+    """Steps 1–3 of a servo sample (``mac800.kernel``) of motor ``i``; a non-empty world-input
+    plan's row ``t`` sets the motor's inputs first."""
+    plan = view.plan
+    inputs = view.inputs
+    if plan.shape[0] > 0:
+        for k in range(inputs.shape[1]):
+            inputs[i, k] = plan[t, i, k]
+    b = view.buf[i] if view.rec else view.buf[0]
+    outer_firmware(view.regs[i], view.state[i], view.params[i], inputs[i], b, view.rec)
+
+
+@njit(cache=True, inline="always")
+def inner_block(view: EngineView, i0: int, n: int, blk: int) -> None:  # pragma: no cover
+    """The ten current-loop samples of motors ``i0 … i0 + n − 1`` (block ``blk``)."""
+    inner_samples(view.regs, view.state, view.params, view.inputs, view.buf, view.rec, i0, n,
+                  view.scratch[blk])
+
+
+def scratch(n_motors: int) -> np.ndarray:
+    """Working memory of the blocks of ``n_motors`` motors (``view.scratch``)."""
+    return lane_scratch(n_motors)
+
+
+def prepare(arrays: tuple) -> None:
+    """Nothing to compile ahead (the inner samples compile with the driver)."""
