@@ -16,6 +16,8 @@ Decisions (the overview lists only the names and formats):
   taps of delay 0 … n − 1 (at least delay 0), FF's and VB's taps of delay up to n.
 - MODEL_POT is a power-of-two exponent ("POT") dividing VF's output, so that small gains keep
   their Fixed16 resolution.
+- FNC_OUT (register 166, Fixed16) holds the profile in counts/sample, 16 fractional bits: the
+  function blocks' 1/16 count/sample is 1/16 in it.
 - FF_OUT and VB_OUT are rounded when stored (Int32 registers) and the next block reads the
   stored value; VF_OUT is rounded and limited to ±T_SOLL (±1023).
 - Function correction (MAC050–141 manual 4.2, docs/model.md §8): in the correcting modes a VF_OUT
@@ -38,6 +40,8 @@ from . import regs as R
 _FX16 = 1.0 / 65536.0
 _FX24 = 1.0 / 16777216.0
 _INT32 = 2147483647.0
+#: FNC_OUT is Fixed16 (register 166) in counts/sample: raw = (1/16 count/sample)·65536/16
+_FNC_RAW = 4096.0
 
 
 @njit(cache=True, inline="always")
@@ -108,7 +112,7 @@ def main_filter(r: np.ndarray, s: np.ndarray, f: float, correcting: bool,
         if abs(vf) > t_limit:
             vf = clamp(vf, -t_limit, t_limit)
             y = vf / scale if scale != 0.0 else 0.0
-    r[R.FNC_OUT] = int(clamp(f, -_INT32, _INT32))
+    r[R.FNC_OUT] = int(clamp(f * _FNC_RAW, -_INT32, _INT32))
     r[R.FF_OUT] = int(ff)
     r[R.VB_OUT] = int(vb)
     r[R.VF_OUT] = int(clamp(rnd(vf), -1023.0, 1023.0))
