@@ -97,9 +97,9 @@ def test_uit_err() -> None:
 
 def test_plim_err_and_dis_p_lim() -> None:
     m = running(300.0)
-    m.write_many({"MIN_P_IST": -1000, "MAX_P_IST": 50000, "ERR_STAT": c.DIS_P_LIM})
+    m.write_many({"MIN_P_IST": -1000, "MAX_P_IST": 20000, "ERR_STAT": c.DIS_P_LIM})
     m.run(0.5)
-    assert m.read("P_IST")[0] > 50000 and not bit(m, c.PLIM_ERR)  # limits disabled
+    assert m.read("P_IST")[0] > 20000 and not bit(m, c.PLIM_ERR)  # limits disabled
     m.write("ERR_STAT", 0)
     m.step()
     assert bit(m, c.PLIM_ERR)
@@ -163,8 +163,10 @@ def test_ipeak_err() -> None:
 
 
 def test_speed_err() -> None:
-    m = MotorArray("MAC800", n=1, seed=0, initial_speed=3700 * 2 * np.pi / 60)
-    m.write_many({"V_SOLL": round(u.rpm_to_v_soll(3700)), "MODE_REG": 1})
+    m = MotorArray("MAC800", n=1, seed=0, initial_speed=4000 * 2 * np.pi / 60)
+    m.step(2)  # passive, turning freely at 4000 RPM: the bit, no reaction
+    assert bit(m, c.SPEED_ERR) and m.read("MODE_REG")[0] == 0
+    m.write_many({"ERR_STAT": 0, "V_SOLL": round(u.rpm_to_v_soll(4000)), "MODE_REG": 1})
     m.step()
     assert bit(m, c.SPEED_ERR)
     stops_with_acc_emerg(m)

@@ -12,11 +12,26 @@ from jvl_gym.families.mac800 import units as u
 
 
 def test_default_filter_is_well_damped() -> None:
-    """A velocity step: no more than 10 % overshoot, settled within 2 % in 0.2 s."""
+    """The default main filter on the default motor: the closed loop of the sampled model
+    (speed measured as the mean over a sample) has its poles well inside the unit circle and
+    damped (ζ > 0.7); in the simulator a velocity step (the profile's integral term makes it
+    overshoot) settles within ±2 % in 0.2 s without ringing."""
     m = MotorArray("MAC800", n=1, seed=0)
+    cfg = m.motor_configs[0]
+    b = (cfg.peak_torque / 1023 / cfg.rotor_inertia / u.SAMPLE_HZ**2 * u.COUNTS_PER_REV
+         / (2 * np.pi) * 16)
+    x6, x5, y5 = (m.read(k)[0] for k in ("KVFX6", "KVFX5", "KVFY5"))
+    kff, kvb = m.read("KFF5")[0], m.read("KVB4")[0]
+    assert (kff, kvb, y5) == (1.0, 1.0, 1.0)
+    # (z − 1)²·z + b·(z + 1)/2·(x6·z + x5) = 0
+    poles = np.roots(np.polyadd(np.polymul([1, -2, 1], [1, 0]),
+                                b * np.polymul([0.5, 0.5], [x6, x5])))
+    assert np.abs(poles).max() < 0.9
+    zeta = [-np.log(abs(z)) / np.hypot(np.log(abs(z)), np.angle(z)) for z in poles]
+    assert min(zeta) > 0.7
     m.write_many({"A_SOLL": 100000, "V_SOLL": round(u.rpm_to_v_soll(500)), "MODE_REG": 1})
     rpm = m.trace(["speed_rpm"], 300)["speed_rpm"][:, 0]
-    assert rpm.max() < 550.0
+    assert rpm.max() < 650.0
     assert np.all(np.abs(rpm[154:] - 500.0) < 10.0)
 
 
@@ -36,7 +51,7 @@ def test_gear_mode_follows_the_pulse_input() -> None:
     m.set_input(pulse_counts=0)
     m.run(0.5)
     assert m.read("P_FUNC")[0] == 770 * 10 * 3 // 2
-    assert abs(m.read("P_IST")[0] - 11550) <= 2
+    assert abs(m.read("P_IST")[0] - 11550) <= 10
     m.write("HW_SETUP", c.INVXDIR)
     m.set_input(pulse_counts=10)
     m.step(10)
@@ -56,24 +71,27 @@ def test_torque_zero_search_then_start_mode() -> None:
 
 @pytest.mark.parametrize("mode", [13, 14])
 def test_sensor_zero_search(mode: int) -> None:
-    m = MotorArray("MAC800", n=1, seed=0, home_position=2.0)
+    m = MotorArray("MAC800", n=1, seed=0, home_position=2.0, coulomb_friction=0.2)
     m.write_many({"V_HOME": 600, "T_HOME": 100, "P_HOME": 0, "MODE_REG": mode})
     m.run(4.0)
     assert m.read("HOME_MODE")[0] & c.HOME_DONE
-    assert m.read("MODE_REG")[0] == 0  # START_MODE 0: passive
-    # the zero is at the sensor: P_IST counts from there
+    assert m.read("MODE_REG")[0] == 0 and m.speed_rpm[0] == 0.0  # START_MODE 0: passive
+    # the zero is at the sensor: P_IST counts from there; sensor type 1 meets the edge at
+    # V_HOME (within two samples' travel), type 2 leaves it at V_HOME/64
     zero_rad = m.position_rad[0] - m.read("P_IST")[0] * c.RAD_PER_COUNT
-    assert zero_rad == pytest.approx(2.0, abs=0.01)
+    travel = 600 / 16 * c.RAD_PER_COUNT
+    assert zero_rad == pytest.approx(2.0, abs=2 * travel if mode == 13 else travel / 16)
 
 
 def test_index_home() -> None:
-    m = MotorArray("MAC800", n=1, seed=0, home_position=2.0, index_angle=0.3)
+    m = MotorArray("MAC800", n=1, seed=0, home_position=2.0, index_angle=0.3,
+                   coulomb_friction=0.2)
     m.write_many({"V_HOME": 600, "T_HOME": 100, "P_HOME": 0, "CNTRL_BITS": c.INDEX_HOME,
                   "MODE_REG": 13})
     m.run(4.0)
     zero_rad = m.position_rad[0] - m.read("P_IST")[0] * c.RAD_PER_COUNT
-    assert zero_rad == pytest.approx(0.3, abs=0.01)  # the index nearest to the sensor
-    assert m.read("INDEX_OFFSET")[0] == pytest.approx((2.0 - 0.3) / c.RAD_PER_COUNT, abs=2)
+    assert zero_rad == pytest.approx(0.3, abs=0.002)  # the index nearest to the sensor
+    assert m.read("INDEX_OFFSET")[0] == pytest.approx((2.0 - 0.3) / c.RAD_PER_COUNT, abs=80)
 
 
 def test_power_on_zero_search_and_start_mode() -> None:
