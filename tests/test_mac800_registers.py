@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from jvl_gym import MotorArray
 from jvl_gym.config import ConfigError
 from jvl_gym.families.mac800 import constants as c
+from jvl_gym.families.mac800 import units as u
 from jvl_gym.families.mac800.config import CONFIGS, load_motor, motor_types
 from jvl_gym.registers import RegisterError
 
@@ -142,3 +143,26 @@ def test_bad_motor_config_names_file_and_field(tmp_path: Path, field: str, value
 def test_unknown_motor_type() -> None:
     with pytest.raises(ConfigError, match="MAC400, MAC800"):
         load_motor("MAC900")
+
+
+def test_task_interface() -> None:
+    """``mac800.task``: the MAC050–141 task interface's names with this family's registers."""
+    from jvl_gym.engine.view import EngineView
+    from jvl_gym.families.mac050_141 import task as t050
+    from jvl_gym.families.mac800 import task
+
+    shared = set(t050.__all__) - {"coil_direction"}
+    assert shared <= set(task.__all__)
+    assert task.FAMILY_KEY == "mac800" and task.DEFAULT_MOTOR_TYPE == "MAC800"
+    assert dict(task.TERMINAL_ERRORS)["OV_ERR"] == c.OV_ERR
+    m = MotorArray("MAC800", n=2, seed=0)
+    view = EngineView(*m.engine_view())
+    task.set_reg(view, 1, task.R.T_SOLL, 5000)  # saturated to the range 0..1023
+    assert task.reg(view, 1, task.R.T_SOLL) == 1023 and m.read("T_SOLL")[0] == 1023
+    task.set_load_torque(view, 0, 1.5)
+    task.set_analog_volts(view, 0, 2.0)
+    task.set_pulse_counts(view, 0, 7.0)
+    m.step()
+    assert m.read("ANINP")[0] == round(2.0 / u.ANINP_VOLTS_PER_UNIT)
+    assert m.read("V_EXT")[0] == 7
+    assert task.shaft_angle(view, 0) == m.position_rad[0]

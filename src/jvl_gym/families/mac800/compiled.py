@@ -5,7 +5,7 @@
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
+from numba import njit, typeof, types
 
 from ...engine.view import EngineView
 from .inner import LANES, inner_samples, lane_scratch
@@ -39,5 +39,21 @@ def scratch(n_motors: int) -> np.ndarray:
     return lane_scratch(n_motors)
 
 
+_prepared: list[bool] = []
+
+
 def prepare(arrays: tuple) -> None:
-    """Nothing to compile ahead (the inner samples compile with the driver)."""
+    """Compile (or load from numba's cache) the current-loop samples and the servo sample for
+    the types of ``arrays`` (the fields of an :class:`EngineView`) on their own, once per
+    process, before a driver that calls them is compiled: compiled inside a caller's
+    compilation, numba takes several times as long."""
+    if _prepared:
+        return
+    view = EngineView(*arrays)
+    inner_samples.compile((typeof(view.regs), typeof(view.state), typeof(view.params),
+                           typeof(view.inputs), typeof(view.buf), types.boolean, types.int64,
+                           types.int64, typeof(view.scratch[0])))
+    outer_firmware.compile((typeof(view.regs[0]), typeof(view.state[0]),
+                            typeof(view.params[0]), typeof(view.inputs[0]),
+                            typeof(view.buf[0]), types.boolean))
+    _prepared.append(True)

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 
 from .units import (
+    ANINP_VOLTS_PER_UNIT,
     COUNTS_PER_REV,
     DEGC_CELSIUS_PER_UNIT,
     OVERSPEED_RPM,
@@ -40,7 +41,7 @@ ELDEG_PER_TURN = 4096
 ADC_FULL = 1023  #: IA_IST..IC_IST range ±1023 (decision, as the MAC050–141)
 PWM_FULL = 1023  #: UA_VAL..UC_VAL ±1023 = ±U_BUS/2 phase to bus midpoint (decision)
 ANINP_FULL = 2047  #: ANINP ±2047 ↔ ±10 V (register 170: V = ANINP × 0.0048828)
-ANINP_VOLTS = ANINP_FULL * 0.0048828
+ANINP_VOLTS = ANINP_FULL * ANINP_VOLTS_PER_UNIT
 REC_CNT_MAX = 895  #: sample buffer depth (register 162; decision, as the MAC050–141)
 #: 100 % of I2T / UIT (registers 17, 19: "100 %" levels; decision: 65536)
 PERCENT_100 = 65536

@@ -124,12 +124,15 @@ def _pf(col: int) -> int:
 @njit(cache=True, inline="always")
 def _gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.ndarray,
             u: np.ndarray) -> None:
-    """Copy what motor ``i``'s samples read into lane ``j``."""
+    """Copy what motor ``i``'s samples read into lane ``j`` (the parameters only when the
+    lane held another motor or the motor was reset since: they change only at a reset)."""
     for q in range(_NS):
         _put(sc, q, j, s[_COLS[q]])
-    for q in range(_NP):
-        _put(sc, _NS + q, j, p[_PCOLS[q]])
-    _put(sc, F_J, j, p[L.P_J_MOTOR] + p[L.P_J_LOAD])
+    if _get(sc, F_MOTOR, j) != float(i) or s[L.S_PARAMS_NEW] > 0.5:
+        for q in range(_NP):
+            _put(sc, _NS + q, j, p[_PCOLS[q]])
+        _put(sc, F_J, j, p[L.P_J_MOTOR] + p[L.P_J_LOAD])
+        s[L.S_PARAMS_NEW] = 0.0
     _put(sc, F_LOAD, j, u[L.I_LOAD_TORQUE])
     _put(sc, F_SUPPLY, j, u[L.I_SUPPLY_VOLTS])
     mode = int(r[R.MODE_REG])

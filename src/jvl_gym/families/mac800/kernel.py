@@ -35,7 +35,9 @@ from .firmware.recorder import record
 from .plant.encoder import counts_from_index, encoder_count, turn
 from .units import COUNTS_PER_REV
 
-_ANINP_PER_VOLT = 1.0 / 0.0048828
+_ANINP_PER_VOLT = 1.0 / c.ANINP_VOLTS_PER_UNIT
+_U_BUS_PER_VOLT = 1.0 / c.U_BUS_VOLTS
+_U_24V_PER_VOLT = 1.0 / c.U_24V_VOLTS
 _INT32 = 2147483647.0
 _TURN = float(COUNTS_PER_REV)
 
@@ -68,12 +70,9 @@ def _encoder(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray) -> floa
     r[R.V_IST] = int(v)
     r[R.P_IST] = wrap32(r[R.P_IST] + int(v))
     pos = int(s[L.S_VH_POS])
+    r[R.V_IST16] = r[R.V_IST16] + int(v) - int(s[L.S_VH0 + pos])  # the last 16 V_IST summed
     s[L.S_VH0 + pos] = v
     s[L.S_VH_POS] = float((pos + 1) % 16)
-    total = 0.0
-    for k in range(16):
-        total += s[L.S_VH0 + k]
-    r[R.V_IST16] = int(total)
     t = turn(theta, p[L.P_INDEX_POS])
     if t != s[L.S_INDEX_TURN]:
         edge = t if t > s[L.S_INDEX_TURN] else s[L.S_INDEX_TURN]
@@ -136,8 +135,8 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray,
                            -2047.0, 2047.0))
     pulses = clamp(rnd(u[L.I_PULSE_COUNTS]), -_INT32, _INT32)
     r[R.V_EXT] = int(-pulses if r[R.HW_SETUP] & c.INVXDIR else pulses)
-    r[R.U_BUS] = int(clamp(rnd(s[L.S_UBUS] / c.U_BUS_VOLTS), 0.0, _INT32))
-    r[R.U_24V] = int(clamp(rnd(u[L.I_CONTROL_VOLTS] / c.U_24V_VOLTS), 0.0, _INT32))
+    r[R.U_BUS] = int(clamp(rnd(s[L.S_UBUS] * _U_BUS_PER_VOLT), 0.0, _INT32))
+    r[R.U_24V] = int(clamp(rnd(u[L.I_CONTROL_VOLTS] * _U_24V_PER_VOLT), 0.0, _INT32))
 
     cb = r[R.CNTRL_BITS]
     if cb & c.REWINDBIT:
@@ -159,8 +158,11 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray,
     if mode == c.PASSIVE_MODE and (cb & c.SYNCPOSAUTO):
         r[R.P_SOLL] = r[R.P_IST]
         s[L.S_PF16] = 16.0 * float(r[R.P_IST])
-    factor = A.gear_factor(r) if mode == c.ANALOG_GEAR_MODE else 1.0
-    gv = geared_velocity(r, s, factor)
+    gv = 0.0
+    if mode == c.GEAR_MODE or mode == c.ANALOG_VELOCITY_GEAR_MODE or mode == c.ANALOG_GEAR_MODE:
+        gv = geared_velocity(r, s, A.gear_factor(r) if mode == c.ANALOG_GEAR_MODE else 1.0)
+    else:
+        r[R.GV_EXT] = 0
     if regulated(mode):
         emerg = s[L.S_EMERG] > 0.5
         f, t_lim = _profile(r, s, mode, gv)
@@ -184,9 +186,11 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray,
             _after_search(r, s)
     elif mode == c.ANALOG_TORQUE_MODE:
         r[R.VF_OUT] = int(A.analog_torque(r))
-    else:
+    else:  # passive: FLWERR and FNCERR 0, as in the MAC050–141's INIT_MODE
         r[R.VF_OUT] = 0
         r[R.FNC_OUT] = 0
+        r[R.FLWERR] = 0
+        r[R.FNCERR] = 0
     r[R.P_FUNC] = wrap32(int(rnd(s[L.S_PF16] / 16.0)))
     r[R.G_FNC] = int(clamp(rnd(s[L.S_G_FNC]), -_INT32, _INT32))
 

@@ -37,6 +37,7 @@ from __future__ import annotations
     S_PF16,  # function position P_FUNC in 1/16 count
     S_GEAR_REM,  # remainder of the gear division GEARF_1/GEARF_2 [1/16 count·GEARF_2]
     S_FILT_BAD,  # 1 when the main filter setting is not valid (checked when it is written)
+    S_PARAMS_NEW,  # 1 after a reset: the current-loop lanes copy the parameters again
     S_VH_POS,  # next slot of the V_IST history ring (V_IST16)
     S_VH0, S_VH1, S_VH2, S_VH3, S_VH4, S_VH5, S_VH6, S_VH7,  # V_IST history ring, 16 samples
     S_VH8, S_VH9, S_VH10, S_VH11, S_VH12, S_VH13, S_VH14, S_VH15,
@@ -63,7 +64,7 @@ from __future__ import annotations
     # energy accounts since power-on [J]
     S_E_ELEC, S_E_COPPER, S_E_FRICTION, S_E_LOAD, S_E_DUMP, S_E_SUPPLY,
     N_STATE,
-) = range(91)
+) = range(92)
 
 #: index of the k-th entry (k = 1 … 5) of the FF input history, etc.
 S_F = (S_F1, S_F2, S_F3, S_F4, S_F5)
@@ -83,9 +84,9 @@ S_Y = (S_Y1, S_Y2, S_Y3, S_Y4, S_Y5, S_Y6)
     P_AMPS_PER_COUNT,  # [A per ADC count]
     P_POLE_PAIRS,
     P_PWM_DELAY,  # 0 or 1 inner samples
-    P_I_RATED,  # rated (continuous) phase current amplitude [A], I2T's 100 %
+    P_I2T_SCALE,  # 65536 / rated phase current amplitude² [1/A²] (I2T's 100 %)
     P_K_I2T,  # I2T filter gain per outer sample
-    P_P_REGEN,  # continuous regenerative power the motor's dump takes [W], UIT's 100 %
+    P_UIT_SCALE,  # 65536 / continuous regenerative power of the dump [1/W] (UIT's 100 %)
     P_K_UIT,  # UIT filter gain per outer sample
     P_R_TH,  # thermal resistance winding → ambient [K/W]
     P_K_TEMP,  # winding temperature filter gain per outer sample

@@ -166,9 +166,9 @@ class Mac800MotorArray(MotorArray):
         p[L.P_AMPS_PER_COUNT] = cfg.amps_per_count
         p[L.P_POLE_PAIRS] = cfg.pole_pairs
         p[L.P_PWM_DELAY] = cfg.pwm_delay_samples
-        p[L.P_I_RATED] = cfg.rated_current
+        p[L.P_I2T_SCALE] = c.PERCENT_100 / cfg.rated_current**2
         p[L.P_K_I2T] = filter_gain(cfg.thermal_time_constant)
-        p[L.P_P_REGEN] = cfg.regen_power
+        p[L.P_UIT_SCALE] = c.PERCENT_100 / cfg.regen_power
         p[L.P_K_UIT] = filter_gain(cfg.regen_time_constant)
         p[L.P_R_TH] = cfg.thermal_resistance
         p[L.P_K_TEMP] = filter_gain(cfg.winding_time_constant)
@@ -217,6 +217,7 @@ class Mac800MotorArray(MotorArray):
         s[L.S_INDEX_COUNT] = math.nan
         s[L.S_HOME_AFTER] = -1.0
         s[L.S_A2P_LEVEL] = -1.0
+        s[L.S_PARAMS_NEW] = 1.0
         self._check_filter(np.array([i]))
         self.regs[i, R.U_BUS] = round(s[L.S_UBUS] / c.U_BUS_VOLTS)
         self.regs[i, R.U_24V] = round(self.inputs[i, L.I_CONTROL_VOLTS] / c.U_24V_VOLTS)

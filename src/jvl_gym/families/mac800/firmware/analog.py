@@ -31,8 +31,8 @@ from . import regs as R
 
 _FULL = float(c.ANINP_FULL)
 DEAD_BAND = 128.0  #: mode 16's dead band [ANINP units], 0.625 V
-_HIGH = 5.4 / 0.0048828
-_LOW = 4.4 / 0.0048828
+_HIGH = 5.4 / c.ANINP_VOLTS_PER_UNIT
+_LOW = 4.4 / c.ANINP_VOLTS_PER_UNIT
 
 
 @njit(cache=True, inline="always")

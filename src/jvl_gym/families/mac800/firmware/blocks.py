@@ -97,7 +97,8 @@ def stop_block(r: np.ndarray, s: np.ndarray) -> float:
 def geared_velocity(r: np.ndarray, s: np.ndarray, factor: float) -> float:
     """GV_EXT: the pulse input's speed V_EXT times GEARF_1/GEARF_2 (registers 14, 15, 163,
     164) and ``factor``, in 1/16 count/sample, the division's remainder carried to the next
-    sample so that no count is lost."""
+    sample so that no count is lost. Computed in the modes that use it (3, 6, 18); GV_EXT is 0
+    in the others (decision)."""
     num = 16.0 * float(r[R.V_EXT]) * float(r[R.GEARF_1]) * factor + s[L.S_GEAR_REM]
     den = float(r[R.GEARF_2])
     q = math.floor(num / den)

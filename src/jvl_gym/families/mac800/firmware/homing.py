@@ -33,7 +33,7 @@ from .blocks import velocity_block
 
 DETECTIONS = 50  #: torque search: samples above |T_HOME| that find the limit
 TORQUE_FACTOR = 1.25  #: torque search: torque limit / |T_HOME|
-_SENSOR_HIGH = 5.0 / 0.0048828  #: ANINP above 5 V is high
+_SENSOR_HIGH = 5.0 / c.ANINP_VOLTS_PER_UNIT  #: ANINP above 5 V is high
 
 
 @njit(cache=True, inline="always")

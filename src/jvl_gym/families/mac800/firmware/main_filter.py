@@ -39,6 +39,8 @@ from . import regs as R
 
 _FX16 = 1.0 / 65536.0
 _FX24 = 1.0 / 16777216.0
+#: 2^−MODEL_POT for MODEL_POT = 0 … 16 (exact)
+_POW2_NEG = np.array([2.0**-k for k in range(17)])
 _INT32 = 2147483647.0
 #: FNC_OUT is Fixed16 (register 166) in counts/sample: raw = (1/16 count/sample)·65536/16
 _FNC_RAW = 4096.0
@@ -92,7 +94,7 @@ def main_filter(r: np.ndarray, s: np.ndarray, f: float, correcting: bool,
     for d in range(1, 7):
         if d <= order:
             rest += r[R.KVFY5 + d - 1] * _FX16 * s[L.S_Y1 + d - 1]
-    scale = r[R.KVOUT] * _FX16 / float(1 << int(r[R.MODEL_POT]))
+    scale = r[R.KVOUT] * _FX16 * _POW2_NEG[int(r[R.MODEL_POT])]
     ff = _ff(r, s, f, order)
     e = ff - vb
     y = x0 * e + rest

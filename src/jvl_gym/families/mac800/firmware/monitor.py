@@ -46,7 +46,8 @@ from .. import layout as L
 from . import regs as R
 from .modes import go_passive, regulated, trip
 
-_N = float(c.INNER_PER_OUTER)
+_PER_N = 1.0 / c.INNER_PER_OUTER  #: the mean of a servo sample's current-loop samples
+_DEGC_PER_CELSIUS = 1.0 / c.DEGC_CELSIUS
 _OV_UNITS = c.OVERVOLTAGE / c.U_BUS_VOLTS
 _UV_UNITS = c.UV_BUS_VOLTS / c.U_BUS_VOLTS
 _U24_UNITS = c.U24V_MIN_VOLTS / c.U_24V_VOLTS
@@ -61,18 +62,16 @@ def filter_gain(tau: float) -> float:
 @njit(**KERNEL)
 def loads(r: np.ndarray, s: np.ndarray, p: np.ndarray) -> None:
     """I2T, UIT and DEGC from the sums of the last servo sample's current-loop samples."""
-    s[L.S_I2T_Q] += p[L.P_K_I2T] * (s[L.S_I2_SUM] / _N - s[L.S_I2T_Q])
-    s[L.S_UIT_Q] += p[L.P_K_UIT] * (s[L.S_PREG_SUM] / _N - s[L.S_UIT_Q])
-    target = c.AMBIENT_CELSIUS + p[L.P_R_TH] * s[L.S_PCU_SUM] / _N
+    s[L.S_I2T_Q] += p[L.P_K_I2T] * (s[L.S_I2_SUM] * _PER_N - s[L.S_I2T_Q])
+    s[L.S_UIT_Q] += p[L.P_K_UIT] * (s[L.S_PREG_SUM] * _PER_N - s[L.S_UIT_Q])
+    target = c.AMBIENT_CELSIUS + p[L.P_R_TH] * s[L.S_PCU_SUM] * _PER_N
     s[L.S_TEMP] += p[L.P_K_TEMP] * (target - s[L.S_TEMP])
     s[L.S_I2_SUM] = 0.0
     s[L.S_PREG_SUM] = 0.0
     s[L.S_PCU_SUM] = 0.0
-    i_rated = p[L.P_I_RATED]
-    r[R.I2T] = int(clamp(rnd(c.PERCENT_100 * s[L.S_I2T_Q] / (i_rated * i_rated)), 0.0,
-                         2147483647.0))
-    r[R.UIT] = int(clamp(rnd(c.PERCENT_100 * s[L.S_UIT_Q] / p[L.P_P_REGEN]), 0.0, 2147483647.0))
-    r[R.DEGC] = int(rnd(s[L.S_TEMP] / c.DEGC_CELSIUS))
+    r[R.I2T] = int(clamp(rnd(s[L.S_I2T_Q] * p[L.P_I2T_SCALE]), 0.0, 2147483647.0))
+    r[R.UIT] = int(clamp(rnd(s[L.S_UIT_Q] * p[L.P_UIT_SCALE]), 0.0, 2147483647.0))
+    r[R.DEGC] = int(rnd(s[L.S_TEMP] * _DEGC_PER_CELSIUS))
 
 
 @njit(**KERNEL)
