@@ -6,7 +6,7 @@
   one long call;
 - memory per motor at N = 4096 (all per-motor arrays; the sample buffer is allocated only when a
   recording is started and is reported separately);
-- the MAC800 family beside the MAC140: motor-inner-steps per second at N = 4096 (its 10
+- the MAC800 family beside the MAC140: motor-inner-steps per second at N = 4096 (its 15
   current-loop samples per servo sample) and outer steps per second at N = 1 (section
   "sim-mac800" of the page).
 

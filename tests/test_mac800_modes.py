@@ -98,7 +98,7 @@ def test_power_on_zero_search_and_start_mode() -> None:
     m = MotorArray("MAC800", n=1, seed=0, home_position=1.0,
                    setup={"HOME_MODE": 13, "START_MODE": 1, "V_HOME": 600, "V_SOLL": 277,
                           "KFF5": 1.0, "KVB4": 1.0, "KVFX6": 0.1073, "KVFX5": -0.0998,
-                          "KVFY5": 1.0, "KIFX2": 2.43, "KIFX1": -2.05, "KIFY1": 1.0,
+                          "KVFY5": 1.0, "KIFX2": 3.621, "KIFX1": -3.057, "KIFY1": 1.0,
                           "KIB1": 1.0, "AMPLITUDE": 776})
     assert m.read("MODE_REG")[0] == 13
     m.run(3.0)

@@ -29,7 +29,7 @@ def outer_sample(view: EngineView, i: int, t: int) -> None:  # pragma: no cover 
 
 @njit(cache=True, inline="always")
 def inner_block(view: EngineView, i0: int, n: int, blk: int) -> None:  # pragma: no cover
-    """The ten current-loop samples of motors ``i0 … i0 + n − 1`` (block ``blk``)."""
+    """The fifteen current-loop samples of motors ``i0 … i0 + n − 1`` (block ``blk``)."""
     inner_samples(view.regs, view.state, view.params, view.inputs, view.buf, view.rec, i0, n,
                   view.scratch[blk])
 

@@ -4,7 +4,7 @@ A motor config is ``configs/motors/<TYPE>.yaml`` in this package (``family: mac8
 default register set is ``configs/setups/<setup>.yaml``. Every value must be a finite number of
 its type inside the interval given here: physically plausible for a MAC800-class servo (about
 750 W, 3000 RPM, a rectified-mains DC bus of about 325 V) and inside the region where the
-simulation's integration is stable (the end stops' damping is explicit over a 130 µs
+simulation's integration is stable (the end stops' damping is explicit over an 87 µs
 current-loop sample and diverges for a total inertia below about 2e-5 kg·m², so the rotor
 inertia is at least 5e-5 kg·m²; the bus takes the motor power explicitly over a sample, so its
 capacitance is at least 100 µF). A malformed file raises :class:`jvl_gym.config.ConfigError`

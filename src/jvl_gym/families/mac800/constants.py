@@ -27,10 +27,11 @@ from .units import (
 OUTER_HZ = SAMPLE_HZ  #: servo (outer-loop) sample rate [Hz], derived in :mod:`.units`
 OUTER_DT = 1.0 / OUTER_HZ
 #: current-loop samples per servo sample: OUTLOOPDIV (register 157), read as the outer-loop
-#: divider of the current-loop rate (decision; the unit figures fix the servo rate, so the
-#: divider is a constant of the firmware and the register is read-only)
-INNER_PER_OUTER = 10
-INNER_HZ = OUTER_HZ * INNER_PER_OUTER  #: 7700 Hz current loop (decision, near the MAC050's)
+#: divider of the current-loop rate, 15 as on the MAC050–141 (7812.5 Hz / 520.8 Hz): the same
+#: firmware on a faster clock (decision; the unit figures fix the servo rate, so the divider is
+#: a constant of the firmware and the register is read-only)
+INNER_PER_OUTER = 15
+INNER_HZ = OUTER_HZ * INNER_PER_OUTER  #: 11550 Hz current loop
 INNER_DT = 1.0 / INNER_HZ
 
 # --- units --------------------------------------------------------------------------------

@@ -1,6 +1,7 @@
 """The MAC800's current-loop samples and the plant, for a block of motors in SIMD lanes.
 
-Ten current-loop samples (7700 Hz, 130 µs) follow each servo sample (OUTLOOPDIV, register 157).
+Fifteen current-loop samples (11550 Hz, 86.6 µs) follow each servo sample (OUTLOOPDIV,
+register 157).
 Each sample of a motor:
 
 1. the encoder: ELDEG_IST (4096 per electrical turn) and V_ELDEG (counts over the sample);

@@ -1,4 +1,4 @@
-"""One MAC800 servo sample (1.2987 ms): the firmware's outer loop, then ten current-loop samples.
+"""One MAC800 servo sample (1.2987 ms): the firmware's outer loop, then 15 current-loop samples.
 
 Order within a servo sample (the MAC050–141's sampled-system order, its manual 1.2):
 

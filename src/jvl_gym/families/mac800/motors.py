@@ -71,12 +71,13 @@ _FILTER = frozenset(range(R.KVFY5, R.KVFY5 + 6)) | {R.S_ORDER}
 
 
 def _aliases() -> dict[str, Register]:
-    """MacTalk names (the table's ``alias`` column) that name exactly one register."""
+    """MacTalk names (the table's ``alias`` column) that name exactly one register (not the
+    MacTalk places printed in parentheses, such as "(Error monitor)")."""
     seen: dict[str, list[Register]] = {}
     for reg in TABLE:
-        if reg.alias:
+        if reg.alias and not reg.alias.startswith("("):
             seen.setdefault(reg.alias.strip().upper(), []).append(reg)
-    return {k: v[0] for k, v in seen.items() if len(v) == 1 and k not in TABLE._by_name}
+    return {k: v[0] for k, v in seen.items() if len(v) == 1 and k not in TABLE}
 
 
 _ALIASES = _aliases()
