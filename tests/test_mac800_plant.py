@@ -48,6 +48,7 @@ def test_braking_charges_the_bus_and_the_dump_holds_it() -> None:
     ubus = m.trace(["bus_voltage"], 800)["bus_voltage"][:, 0]
     assert ubus.max() > 380.0 and ubus.max() < 420.0  # the dump switches on above 390 V
     assert m.energy["dump"][0] > 0.0
+    m.run(2.0)
     assert abs(m.speed_rpm[0]) < 5.0
 
 
