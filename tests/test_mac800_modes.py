@@ -11,12 +11,13 @@ from jvl_gym.families.mac800 import constants as c
 from jvl_gym.families.mac800 import units as u
 
 
-def test_default_filter_is_well_damped() -> None:
+@pytest.mark.parametrize("motor", ["MAC800", "MAC400"])
+def test_default_filter_is_well_damped(motor: str) -> None:
     """The default main filter on the default motor: the closed loop of the sampled model
     (speed measured as the mean over a sample) has its poles well inside the unit circle and
     damped (ζ > 0.7); in the simulator a velocity step (the profile's integral term makes it
     overshoot) settles within ±2 % in 0.2 s without ringing."""
-    m = MotorArray("MAC800", n=1, seed=0)
+    m = MotorArray(motor, n=1, seed=0)
     cfg = m.motor_configs[0]
     b = (cfg.peak_torque / 1023 / cfg.rotor_inertia / u.SAMPLE_HZ**2 * u.COUNTS_PER_REV
          / (2 * np.pi) * 16)
