@@ -24,7 +24,8 @@ def outer_sample(view: EngineView, i: int, t: int) -> None:  # pragma: no cover 
         for k in range(inputs.shape[1]):
             inputs[i, k] = plan[t, i, k]
     b = view.buf[i] if view.rec else view.buf[0]
-    outer_firmware(view.regs[i], view.state[i], view.params[i], inputs[i], b, view.rec)
+    outer_firmware(view.regs[i], view.state[i], view.params[i], inputs[i], view.keys[i], b,
+                   view.rec)
 
 
 @njit(cache=True, inline="always")
@@ -55,5 +56,5 @@ def prepare(arrays: tuple) -> None:
                            types.int64, typeof(view.scratch[0])))
     outer_firmware.compile((typeof(view.regs[0]), typeof(view.state[0]),
                             typeof(view.params[0]), typeof(view.inputs[0]),
-                            typeof(view.buf[0]), types.boolean))
+                            typeof(view.keys[0]), typeof(view.buf[0]), types.boolean))
     _prepared.append(True)

@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from ...jit import KERNEL
+from ...noise import gauss
 from ..mac050_141.firmware.fixed import clamp, rnd, wrap32
 from ..mac050_141.plant.coil import coil_constants
 from ..mac050_141.plant.mechanics import mech_constants
@@ -56,15 +57,19 @@ def _analog_volts(s: np.ndarray, p: np.ndarray, u: np.ndarray) -> float:
 
 
 @njit(**KERNEL)
-def _encoder(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray) -> float:
-    """Step 1's encoder: the count (an encoder fault loses every second count), V_IST, P_IST,
-    V_IST16 and the index check (INDEX_ERR); returns V_IST."""
+def _encoder(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray,
+             key: np.uint64) -> float:
+    """Step 1's encoder: the count (an encoder fault loses every second count; with
+    ``position_noise`` the reading has Gaussian noise of that many counts, from the motor's
+    noise key), V_IST, P_IST, V_IST16 and the index check (INDEX_ERR); returns V_IST."""
     theta = s[L.S_THETA]
     true = encoder_count(theta)
     d_true = true - (s[L.S_ENC_PREV] + s[L.S_SLIP])
     if u[L.I_ENCODER_FAULT] > 0.5:
         s[L.S_SLIP] += float(int(d_true / 2.0))
     fw = true - s[L.S_SLIP]
+    if p[L.P_POSITION_NOISE] > 0.0:
+        fw += rnd(p[L.P_POSITION_NOISE] * gauss(key, s[L.S_TICK], 3))
     v = clamp(fw - s[L.S_ENC_PREV], -_INT32, _INT32)
     s[L.S_ENC_PREV] = fw
     r[R.V_IST] = int(v)
@@ -127,10 +132,10 @@ def _after_search(r: np.ndarray, s: np.ndarray) -> None:
 
 
 @njit(**KERNEL)
-def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray,
+def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
                    buf: np.ndarray, rec: bool) -> None:
     """Steps 1–3 of a servo sample of one motor (module docstring)."""
-    v = _encoder(r, s, p, u)
+    v = _encoder(r, s, p, u, key)
     r[R.ANINP] = int(clamp(rnd(_analog_volts(s, p, u) * _ANINP_PER_VOLT) - r[R.ANINP_OFFSET],
                            -2047.0, 2047.0))
     pulses = clamp(rnd(u[L.I_PULSE_COUNTS]), -_INT32, _INT32)

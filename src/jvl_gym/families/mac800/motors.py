@@ -48,6 +48,7 @@ _PARAMETERS: dict[str, int] = {
     "end_stop_damping": L.P_STOP_D,  # N·m·s/rad
     "home_position": L.P_HOME_POS,  # rad (inf: no sensor)
     "index_angle": L.P_INDEX_POS,  # rad
+    "position_noise": L.P_POSITION_NOISE,  # encoder counts (std)
 }
 _STATES: dict[str, int] = {
     "initial_angle": L.S_THETA,  # rad
@@ -55,7 +56,7 @@ _STATES: dict[str, int] = {
     "initial_temperature": L.S_TEMP,  # °C
 }
 _NONNEGATIVE = {"load_inertia", "viscous_friction", "coulomb_friction", "end_stop_stiffness",
-                "end_stop_damping"}
+                "end_stop_damping", "position_noise"}
 #: the register-set selectors (register → first register of its set, step between them,
 #: the register they set), overview §1.2 "Registers (P0-7, V0-7 etc.)"
 _SELECTORS: dict[int, tuple[int, int, str]] = {
