@@ -252,9 +252,11 @@ def _sample(sc: np.ndarray, j: int, last: bool) -> None:
     drive = torque - load + end_stop_torque(
         theta, omega, _get(sc, _pf(L.P_STOP_LO), j), _get(sc, _pf(L.P_STOP_HI), j),
         _get(sc, _pf(L.P_STOP_K), j), _get(sc, _pf(L.P_STOP_D), j))
-    theta1, omega1, e_fric = mech_step_prepared(
-        theta, omega, drive, _get(sc, F_J, j), _get(sc, _pf(L.P_COULOMB), j), _H,
-        (_get(sc, _pf(L.P_KM0), j), _get(sc, _pf(L.P_KM1), j)))
+    # a rigid shaft: the load follows the rotor, its torque is part of ``drive``
+    theta1, omega1, _theta_l, _omega_l, e_fric = mech_step_prepared(
+        theta, omega, theta, omega, drive, 0.0, _get(sc, F_J, j),
+        _get(sc, _pf(L.P_COULOMB), j), _H,
+        (_get(sc, _pf(L.P_KM0), j), _get(sc, _pf(L.P_KM1), j), 0.0, 0.0, 0.0, 0.0))
     ubus1, dump_on, e_dump, e_sup = bus_step_prepared(
         ubus, p_el, _get(sc, F_SUPPLY, j), _get(sc, _pf(L.P_U_DUMP), j),
         _get(sc, _sf(L.S_DUMP_ON), j), _H,

@@ -216,7 +216,7 @@ def derive_constants(p: np.ndarray) -> None:
     kc = coil_constants(p[L.P_R], p[L.P_L], p[L.P_LAMBDA], h)
     for k in range(4):
         p[L.P_KC0 + k] = kc[k]
-    km = mech_constants(p[L.P_J_MOTOR] + p[L.P_J_LOAD], p[L.P_VISCOUS], h)
+    km = mech_constants(p[L.P_J_MOTOR] + p[L.P_J_LOAD], 0.0, p[L.P_VISCOUS], 0.0, 0.0, h)
     p[L.P_KM0] = km[0]
     p[L.P_KM1] = km[1]
     kb = bus_constants(p[L.P_C_BUS], p[L.P_R_SUPPLY], p[L.P_R_DUMP], h)

@@ -104,7 +104,7 @@ S_Y = (S_Y1, S_Y2, S_Y3, S_Y4, S_Y5, S_Y6)
     # per-sample constants derived from the above at reset (``kernel.derive_constants``)
     P_CPA,  # ADC counts per ampere
     P_KC0, P_KC1, P_KC2, P_KC3,  # coil_constants(R, L, λ, h)
-    P_KM0, P_KM1,  # mech_constants(J, b, h)
+    P_KM0, P_KM1,  # mech_constants(J, 0, b, 0, 0, h)[:2] (a rigid shaft)
     P_KB0, P_KB1, P_KB2, P_KB3, P_KB4, P_KB5, P_KB6,  # bus_constants(C, R_src, R_dump, h)
     N_PARAM,
 ) = range(42)
