@@ -8,6 +8,9 @@
   recording is started and is reported separately);
 - MIS/SMC step motors (``families/mis``): motor-outer-steps per second (1 ms firmware sample
   with its 10 plant samples) at N = 1, 64, 4096, MIS232s at speeds spread over ±3000 RPM.
+- the MAC800 family beside the MAC140: motor-inner-steps per second at N = 4096 (its 15
+  current-loop samples per servo sample) and outer steps per second at N = 1 (section
+  "sim-mac800" of the page).
 
 The figures also go to the generated page ``docs/benchmarks.md`` (section "Simulator",
 :mod:`bench_page`).
@@ -23,6 +26,7 @@ from best_rate import best_rate
 
 from jvl_gym import MotorArray
 from jvl_gym.families.mac050_141 import constants as c
+from jvl_gym.families.mac800 import constants as c800
 
 
 def _array(n: int) -> MotorArray:
@@ -89,6 +93,40 @@ def mis_section(rates: dict[int, float]) -> str:
     return table(["figure", "value"], rows)
 
 
+def _mac800_array(n: int) -> MotorArray:
+    m = MotorArray("MAC800", n=n, seed=0, load_inertia=np.linspace(0, 1e-3, n))
+    m.write("V_SOLL", np.linspace(-5541, 5541, n).round())  # ±2000 RPM
+    m.write("MODE_REG", 1)
+    m.step(2)  # compile / warm up
+    return m
+
+
+def mac800_rates(seconds: float = 2.0) -> tuple[float, float, float]:
+    """MAC800: motor-inner-steps/s at N = 4096, outer steps/s at N = 1 in ``step(1)`` calls
+    and in one long call (the MAC140 figures' patterns)."""
+    n = 4096
+    m = _mac800_array(n)
+    outer = max(1, int(2e5 / (n * c800.INNER_PER_OUTER)))
+    inner = best_rate(m.step, outer, seconds) * c800.INNER_PER_OUTER * n
+    one = _mac800_array(1)
+
+    def calls(k: int) -> None:
+        for _ in range(k):
+            one.step(1)
+
+    return inner, best_rate(calls, 1000, seconds), best_rate(one.step, 5000, seconds)
+
+
+def mac800_section(rates: tuple[float, float, float], mac140: tuple[float, float, float]
+                   ) -> str:
+    """The page section (Markdown) of the MAC800 figures beside the MAC140's of this run."""
+    names = ["motor-inner-steps/s, N = 4096", "outer steps/s, N = 1, one `step(1)` call each",
+             "outer steps/s, N = 1, one long call"]
+    rows = [[name, f"{a:,.4g}", f"{b:,.4g}", f"{a / b:.2f}"]
+            for name, a, b in zip(names, rates, mac140)]
+    return table(["figure", "MAC800", "MAC140", "ratio"], rows)
+
+
 def main() -> None:
     print("jvl_gym simulator benchmark (goals: the project's speed targets)")
     inner = {}
@@ -112,6 +150,12 @@ def main() -> None:
                           + mis_section(mis))
     if page:
         print(f"  written to {page}")
+    rates = mac800_rates()
+    mac140 = (inner[4096], calls, long_call)
+    for name, a, b in zip(("N = 4096 motor-inner-steps/s", "N = 1 outer steps/s (calls)",
+                           "N = 1 outer steps/s (long)"), rates, mac140):
+        print(f"  MAC800 {name}: {a:12.4g}  ({a / b:.2f} of MAC140's)   goal >= 0.8")
+    update_section("sim-mac800", mac800_section(rates, mac140))
 
 
 if __name__ == "__main__":

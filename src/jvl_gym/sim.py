@@ -218,7 +218,8 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         """How each motor decodes its pulse input: ``(pulse_dir, inverted)``, (N,) bool
         arrays (pulse + direction rather than quadrature; count reversed). Families with a
         pulse input define it (:class:`jvl_gym.world.PulseInput` uses it)."""
-        raise NotImplementedError(f"{self.family.title} motors have no pulse input")
+        raise NotImplementedError(f"{self.family.title}: the decoding of a pulse source is not "
+                                  "modelled; drive the input with set_input(pulse_counts=...)")
 
     @abstractmethod
     def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,

@@ -3,8 +3,8 @@
 A family is its register table, constants and units, firmware, plant, configs and default
 setups, the compiled step the engine drives and its motor-array class (docs/architecture.md,
 "Adding a motor family"). The generic layers reach a family only through its :class:`Family`
-record. ``mis`` (the MIS/SMC step motors) is registered beside ``mac050_141``; ``mac800`` holds
-a register table and units only so far and is not registered until it can run.
+record. ``mis`` (the MIS/SMC step motors) and ``mac800`` (MAC800 and MAC400) are registered
+beside ``mac050_141``.
 """
 
 from __future__ import annotations
@@ -57,7 +57,8 @@ class Family:
 
 
 _MODULES: dict[str, str] = {"mac050_141": "jvl_gym.families.mac050_141",
-                            "mis": "jvl_gym.families.mis"}
+                            "mis": "jvl_gym.families.mis",
+                            "mac800": "jvl_gym.families.mac800"}
 
 
 def register_family(key: str, module: str) -> None:

@@ -1,0 +1,60 @@
+"""The MAC800 family's compiled step, as the engine's driver calls it
+(:mod:`jvl_gym.engine.driver`): ``outer_sample`` per motor, ``inner_block`` per block of
+:data:`LANES` motors."""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, typeof, types
+
+from ...engine.view import EngineView
+from .inner import LANES, inner_samples, lane_scratch
+from .kernel import outer_firmware
+
+__all__ = ["LANES", "outer_sample", "inner_block", "prepare", "scratch"]
+
+
+@njit(cache=True, inline="always")
+def outer_sample(view: EngineView, i: int, t: int) -> None:  # pragma: no cover - compiled
+    """Steps 1–3 of a servo sample (``mac800.kernel``) of motor ``i``; a non-empty world-input
+    plan's row ``t`` sets the motor's inputs first."""
+    plan = view.plan
+    inputs = view.inputs
+    if plan.shape[0] > 0:
+        for k in range(inputs.shape[1]):
+            inputs[i, k] = plan[t, i, k]
+    b = view.buf[i] if view.rec else view.buf[0]
+    outer_firmware(view.regs[i], view.state[i], view.params[i], inputs[i], view.keys[i], b,
+                   view.rec)
+
+
+@njit(cache=True, inline="always")
+def inner_block(view: EngineView, i0: int, n: int, blk: int) -> None:  # pragma: no cover
+    """The fifteen current-loop samples of motors ``i0 … i0 + n − 1`` (block ``blk``)."""
+    inner_samples(view.regs, view.state, view.params, view.inputs, view.buf, view.rec, i0, n,
+                  view.scratch[blk])
+
+
+def scratch(n_motors: int) -> np.ndarray:
+    """Working memory of the blocks of ``n_motors`` motors (``view.scratch``)."""
+    return lane_scratch(n_motors)
+
+
+_prepared: list[bool] = []
+
+
+def prepare(arrays: tuple) -> None:
+    """Compile (or load from numba's cache) the current-loop samples and the servo sample for
+    the types of ``arrays`` (the fields of an :class:`EngineView`) on their own, once per
+    process, before a driver that calls them is compiled: compiled inside a caller's
+    compilation, numba takes several times as long."""
+    if _prepared:
+        return
+    view = EngineView(*arrays)
+    inner_samples.compile((typeof(view.regs), typeof(view.state), typeof(view.params),
+                           typeof(view.inputs), typeof(view.buf), types.boolean, types.int64,
+                           types.int64, typeof(view.scratch[0])))
+    outer_firmware.compile((typeof(view.regs[0]), typeof(view.state[0]),
+                            typeof(view.params[0]), typeof(view.inputs[0]),
+                            typeof(view.keys[0]), typeof(view.buf[0]), types.boolean))
+    _prepared.append(True)

@@ -1,0 +1,102 @@
+"""Analogue function blocks of the MAC800: modes 4, 5, 6, 16, 17, 18, 21 (register overview
+§1.2, register 2), reading ANINP (register 170: ±2047 ↔ ±10 V).
+
+The overview names the modes only; each follows the MAC050–141 mode of the same name (its
+manual 4.1.4–4.1.6, 4.1.10, 4.4.18) scaled to the MAC800's ±2047 input (decisions):
+
+- 4 analogue torque: VF_OUT = ANINP·T_SOLL/2047, limited to ±T_SOLL (no function block);
+- 5 analogue velocity: target = ANINP·V_SOLL/2047 (±10 V ↔ ±V_SOLL);
+- 6 analogue velocity/gear: target = ANINP·V_SOLL/2047 + GV_EXT;
+- 16 analogue velocity with dead band: ±128 (±0.625 V) gives 0, beyond it linear to ±V_SOLL
+  at ±2047;
+- 17 velocity/analogue torque: the velocity block at V_SOLL with the torque limit
+  |ANINP|·T_SOLL/2047;
+- 18 analogue gear: the gear block with the ratio scaled by ANINP/2047;
+- 21 analogue to position: the input as a logic level with hysteresis (high above 5.4 V, low
+  below 4.4 V); a rising edge sets the target to POS1, a falling one to POS0 (with CNTRL_BITS
+  RELPOSPSOLL added to P_SOLL, with RELPOSPFNC to the function position); on entry the level
+  is taken without an edge and, in absolute positioning, sets the target.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ....jit import KERNEL
+from ...mac050_141.firmware.fixed import clamp, rnd, wrap32
+from .. import constants as c
+from .. import layout as L
+from . import regs as R
+
+_FULL = float(c.ANINP_FULL)
+DEAD_BAND = 128.0  #: mode 16's dead band [ANINP units], 0.625 V
+_HIGH = 5.4 / c.ANINP_VOLTS_PER_UNIT
+_LOW = 4.4 / c.ANINP_VOLTS_PER_UNIT
+
+
+@njit(cache=True, inline="always")
+def analog_torque(r: np.ndarray) -> float:
+    """Mode 4: VF_OUT."""
+    t = float(r[R.T_SOLL])
+    return clamp(rnd(r[R.ANINP] * t / _FULL), -t, t)
+
+
+@njit(cache=True, inline="always")
+def analog_velocity(r: np.ndarray) -> float:
+    """Modes 5 and 6: ±10 V ↔ ±V_SOLL."""
+    return float(int(r[R.ANINP] * float(r[R.V_SOLL]) / _FULL))
+
+
+@njit(cache=True, inline="always")
+def dead_band_velocity(r: np.ndarray) -> float:
+    """Mode 16: zero within ±DEAD_BAND, linear to ±V_SOLL at ±2047 beyond it."""
+    a = float(r[R.ANINP])
+    k = float(r[R.V_SOLL]) / (_FULL - DEAD_BAND)
+    if a > DEAD_BAND:
+        return float(int((a - DEAD_BAND) * k))
+    if a < -DEAD_BAND:
+        return float(int((a + DEAD_BAND) * k))
+    return 0.0
+
+
+@njit(cache=True, inline="always")
+def torque_limit(r: np.ndarray) -> float:
+    """Mode 17: |ANINP|·T_SOLL/2047."""
+    return abs(r[R.ANINP] * float(r[R.T_SOLL]) / _FULL)
+
+
+@njit(cache=True, inline="always")
+def gear_factor(r: np.ndarray) -> float:
+    """Mode 18: the gear ratio's analogue factor ANINP/2047."""
+    return r[R.ANINP] / _FULL
+
+
+@njit(**KERNEL)
+def analog_position(r: np.ndarray, s: np.ndarray) -> None:
+    """Mode 21: set the target from the input's level changes."""
+    a = float(r[R.ANINP])
+    level = s[L.S_A2P_LEVEL]
+    relative = (r[R.CNTRL_BITS] & (c.RELPOSPSOLL | c.RELPOSPFNC)) != 0
+    if level < 0.0:  # entry: the level without an edge
+        level = 1.0 if a > _HIGH else 0.0
+        s[L.S_A2P_LEVEL] = level
+        if not relative:
+            r[R.P_SOLL] = r[R.POS0 + 2] if level > 0.5 else r[R.POS0]
+        return
+    new = level
+    if level < 0.5 and a > _HIGH:
+        new = 1.0
+    elif level > 0.5 and a < _LOW:
+        new = 0.0
+    if new == level:
+        return
+    s[L.S_A2P_LEVEL] = new
+    px = r[R.POS0 + 2] if new > 0.5 else r[R.POS0]
+    cb = r[R.CNTRL_BITS]
+    if cb & c.RELPOSPFNC:
+        r[R.P_SOLL] = wrap32(int(rnd(s[L.S_PF16] / 16.0)) + px)
+    elif cb & c.RELPOSPSOLL:
+        r[R.P_SOLL] = wrap32(r[R.P_SOLL] + px)
+    else:
+        r[R.P_SOLL] = px

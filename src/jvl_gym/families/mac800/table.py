@@ -1,0 +1,8 @@
+"""The MAC800 register table (public module): ``registers.csv`` beside this module, one row per
+register number 1 … 206, every register 32 bits wide (MAC800 register overview §1.1, §1.2)."""
+
+from __future__ import annotations
+
+from . import REGISTERS as TABLE
+
+__all__ = ["TABLE"]
