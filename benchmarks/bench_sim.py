@@ -9,8 +9,7 @@
 - MIS/SMC step motors (``families/mis``): motor-outer-steps per second (1 ms firmware sample
   with its 10 plant samples) at N = 1, 64, 4096, MIS232s at speeds spread over ±3000 RPM.
 - the MAC800 family beside the MAC140: motor-inner-steps per second at N = 4096 (its 15
-  current-loop samples per servo sample) and outer steps per second at N = 1 (section
-  "sim-mac800" of the page).
+  current-loop samples per servo sample) and outer steps per second at N = 1.
 
 The figures also go to the generated page ``docs/benchmarks.md`` (section "Simulator",
 :mod:`bench_page`).
@@ -146,16 +145,15 @@ def main() -> None:
         mis[n] = rate = mis_outer_steps_per_second(n)
         goal = "   goal >= 1e6" if n == 4096 else ""
         print(f"  MIS N = {n:5d}: {rate:12.4g} motor-outer-steps/s{goal}")
-    page = update_section("sim", section(inner, calls, long_call, base, buf) + "\n\n"
-                          + mis_section(mis))
-    if page:
-        print(f"  written to {page}")
     rates = mac800_rates()
     mac140 = (inner[4096], calls, long_call)
     for name, a, b in zip(("N = 4096 motor-inner-steps/s", "N = 1 outer steps/s (calls)",
                            "N = 1 outer steps/s (long)"), rates, mac140):
         print(f"  MAC800 {name}: {a:12.4g}  ({a / b:.2f} of MAC140's)   goal >= 0.8")
-    update_section("sim-mac800", mac800_section(rates, mac140))
+    page = update_section("sim", section(inner, calls, long_call, base, buf) + "\n\n"
+                          + mis_section(mis) + "\n\n" + mac800_section(rates, mac140))
+    if page:
+        print(f"  written to {page}")
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """JVL's own client against the twin (issue #18): the MacTalk code of the ``jvlmotor`` package
 (JVL A/S, MIT; ``JVLMotor.Protocols.MacTalkProtocol``, written for the MAC400+ and MIS motors,
-whose read reply names the register) reads and writes P_SOLL, V_SOLL and MODE_REG of a MIS twin
-over a pseudo-terminal and reads back what it wrote.
+whose read reply names the register) reads and writes P_SOLL, V_SOLL and MODE_REG of a MIS and
+of a MAC800 twin over a pseudo-terminal and reads back what it wrote.
 
 ``jvlmotor`` is installed without its dependencies (``pip install --no-deps jvlmotor``: they pin
 pymodbus 3.5.2 and include Windows-only packages); its ``MotorCom`` front end imports them, so
@@ -42,10 +42,11 @@ pytestmark = pytest.mark.skipif(not _pty_available(), reason="pseudo-terminals a
 ADDRESS = 7
 
 
-@pytest.fixture
-def jvl():
-    """A MIS twin at address 7 on a pty, and jvlmotor's MacTalk client on it."""
-    m = (MotorArray("MIS231", n=1, seed=0) if "mis" in families()
+@pytest.fixture(params=["MIS231", "MAC800"])
+def jvl(request):
+    """A MIS or MAC800 twin at address 7 on a pty, and jvlmotor's MacTalk client on it."""
+    key = "mis" if request.param.startswith("MIS") else "mac800"
+    m = (MotorArray(request.param, n=1, seed=0) if key in families()
          else RegisterArray(mis.REGISTERS, 1))
     twin = Twin(m, [ADDRESS], dialect=MACTALK32)
     with TwinServer(twin, pty=True, run_clock=False) as server:
@@ -62,9 +63,13 @@ def _number(name: str) -> int:
     return smc85.SMC85Motor().registers[name][0]
 
 
-def test_jvlmotor_register_numbers_are_the_mis_tables() -> None:
+def test_jvlmotor_register_numbers_are_the_mis_and_mac800_tables() -> None:
+    from jvl_gym.families.mac800 import REGISTERS as MAC800
+
     for name in ("P_SOLL", "V_SOLL", "MODE_REG", "P_IST"):
         assert _number(name.lower()) == mis.REGISTERS.lookup(name).number
+    for name in ("P_SOLL", "V_SOLL", "MODE_REG"):
+        assert _number(name.lower()) == MAC800.lookup(name).number
 
 
 @pytest.mark.parametrize("name, values", [
@@ -84,7 +89,7 @@ def test_jvlmotor_writes_and_reads_back(jvl, name: str, values: list[int]) -> No
 
 def test_jvlmotor_sees_a_refused_write_as_no_accept(jvl) -> None:
     client, twin = jvl
-    reg = _number("v_soll")
-    assert client.write(reg, 1234) == 0
-    assert client.write(reg, 300_001) is None  # beyond V_SOLL's range: no accept
-    assert client.read(reg) == 1234
+    reg = _number("mode_reg")
+    assert client.write(reg, 1) == 0
+    assert client.write(reg, 99) is None  # beyond MODE_REG's range: no accept
+    assert client.read(reg) == 1
