@@ -121,3 +121,5 @@ def test_world_inputs_of_a_family_go_through_the_generic_checks() -> None:
         with pytest.raises(error):
             m.set_input(**bad)
         np.testing.assert_array_equal(m.inputs[:, 0], [0.5, -0.5])
+    with pytest.raises(AttributeError, match="no shaft state"):
+        m.speed_rpm  # noqa: B018  (the toy declares no shaft columns)

@@ -104,6 +104,9 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
     INPUTS: ClassVar[dict[str, int]] = {}
     #: world-input name → what it accepts beyond a finite real number (``jvl_gym.inputs``)
     INPUT_RULES: ClassVar[dict[str, InputRule]] = {}
+    #: columns of ``state`` holding the shaft's angle [rad] and speed [rad/s] (−1: none)
+    SHAFT_ANGLE: ClassVar[int] = -1
+    SHAFT_SPEED: ClassVar[int] = -1
     #: the physical quantities :meth:`trace` records (names of properties)
     PHYSICAL: ClassVar[frozenset[str]] = frozenset()
 
@@ -213,6 +216,28 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         idx = as_index(index, self.n)
         for col, values in staged_inputs(inputs, self.INPUTS, self.INPUT_RULES, idx.size):
             self.inputs[idx, col] = values
+
+    # ------------------------------------------------------------------ the shaft
+    def _shaft(self, column: int) -> np.ndarray:
+        if column < 0:
+            raise AttributeError(f"{self.family.title} motors declare no shaft state "
+                                 "(SHAFT_ANGLE, SHAFT_SPEED)")
+        return self.state[:, column]
+
+    @property
+    def speed_rad_s(self) -> np.ndarray:
+        """Shaft (rotor) speed [rad/s], (N,)."""
+        return self._shaft(self.SHAFT_SPEED).copy()
+
+    @property
+    def speed_rpm(self) -> np.ndarray:
+        """Shaft (rotor) speed [RPM], (N,)."""
+        return self._shaft(self.SHAFT_SPEED) * 60.0 / (2.0 * np.pi)
+
+    @property
+    def position_rad(self) -> np.ndarray:
+        """Shaft (rotor) angle from the world zero at power-on [rad], (N,)."""
+        return self._shaft(self.SHAFT_ANGLE).copy()
 
     def pulse_decoding(self) -> tuple[np.ndarray, np.ndarray]:
         """How each motor decodes its pulse input: ``(pulse_dir, inverted)``, (N,) bool

@@ -116,6 +116,7 @@ class MacMotorArray(MotorArray):
         "supply_volts": InputRule(0.0, 60.0, unit="V")}
     PHYSICAL = frozenset({"speed_rpm", "speed_rad_s", "position_rad", "torque", "bus_voltage",
                           "load_angle", "load_speed"})
+    SHAFT_ANGLE, SHAFT_SPEED = L.S_THETA, L.S_OMEGA
     ONE_BY_ONE = frozenset(W.POINTERS) | {R.CNTRL_BITS}
 
     def __init__(self, motor: MotorSpec = "MAC140", n: int = 1, seed: Seed = None,
@@ -483,21 +484,6 @@ class MacMotorArray(MotorArray):
         """
         super().set_input(index, load_torque=load_torque, analog_volts=analog_volts,
                           pulse_counts=pulse_counts, home=home, supply_volts=supply_volts)
-
-    @property
-    def speed_rpm(self) -> np.ndarray:
-        """Shaft speed [rpm], (N,)."""
-        return self.state[:, L.S_OMEGA] * 60.0 / (2.0 * math.pi)
-
-    @property
-    def speed_rad_s(self) -> np.ndarray:
-        """Shaft speed [rad/s], (N,)."""
-        return self.state[:, L.S_OMEGA].copy()
-
-    @property
-    def position_rad(self) -> np.ndarray:
-        """Shaft angle [rad] relative to the world zero, (N,)."""
-        return self.state[:, L.S_THETA].copy()
 
     @property
     def load_angle(self) -> np.ndarray:

@@ -130,6 +130,7 @@ class Mac800MotorArray(MotorArray):
         "encoder_fault": InputRule(0.0, 1.0, allow_bool=True)}
     PHYSICAL = frozenset({"speed_rpm", "speed_rad_s", "position_rad", "torque", "bus_voltage",
                           "temperature"})
+    SHAFT_ANGLE, SHAFT_SPEED = L.S_THETA, L.S_OMEGA
     ONE_BY_ONE = frozenset(_SELECTORS) | {R.CNTRL_BITS}
 
     @staticmethod
@@ -352,21 +353,6 @@ class Mac800MotorArray(MotorArray):
                           control_volts=control_volts, encoder_fault=encoder_fault)
 
     # ------------------------------------------------------------------ physical truth
-    @property
-    def speed_rpm(self) -> np.ndarray:
-        """Shaft speed [RPM], (N,)."""
-        return self.state[:, L.S_OMEGA] * 60.0 / (2.0 * math.pi)
-
-    @property
-    def speed_rad_s(self) -> np.ndarray:
-        """Shaft speed [rad/s], (N,)."""
-        return self.state[:, L.S_OMEGA].copy()
-
-    @property
-    def position_rad(self) -> np.ndarray:
-        """Shaft angle [rad] relative to the world zero, (N,)."""
-        return self.state[:, L.S_THETA].copy()
-
     @property
     def bus_voltage(self) -> np.ndarray:
         """DC bus voltage [V], (N,)."""

@@ -112,8 +112,9 @@ class MisMotorArray(MotorArray):
         "supply_volts": InputRule(0.0, 80.0, unit="V"),
         "pulse_counts": InputRule(whole=True, unit="counts per outer sample"),
         "digital_inputs": InputRule(0.0, 255.0, whole=True, unit="(bits of IO1-IO8)")}
-    PHYSICAL = frozenset({"speed_rpm", "position_rad", "torque", "current_amplitude",
+    PHYSICAL = frozenset({"speed_rpm", "speed_rad_s", "position_rad", "torque", "current_amplitude",
                           "lost_steps"})
+    SHAFT_ANGLE, SHAFT_SPEED = L.S_THETA, L.S_OMEGA
     ONE_BY_ONE = _SPECIAL
 
     @staticmethod
@@ -457,16 +458,6 @@ class MisMotorArray(MotorArray):
         super().set_input(index, **inputs)
 
     # ------------------------------------------------------------------ physical truth
-    @property
-    def speed_rpm(self) -> np.ndarray:
-        """Rotor speed [RPM], (N,)."""
-        return self.state[:, L.S_OMEGA] * 60.0 / (2.0 * math.pi)
-
-    @property
-    def position_rad(self) -> np.ndarray:
-        """Rotor angle from power-on [rad], (N,)."""
-        return self.state[:, L.S_THETA].copy()
-
     @property
     def rotor_counts(self) -> np.ndarray:
         """Rotor angle from power-on in motor counts (409 600 per revolution), (N,)."""
