@@ -5,7 +5,9 @@ writes FNC_OUT [1/16 count/sample], keeps V_OLD, sets ERR_STAT ACC_FLAG / DEC_FL
 and advances the function position (``S_PF16`` in 1/16 count; P_FUNC, register 8, holds it in
 counts). Profile arithmetic is integer-valued (float64 holding integers). With V_SOLL = 277 the
 velocity block settles at FNC_OUT = 277 (100 RPM ± 0.01 %); with A_SOLL = 360 it changes by
-360 per sample (100 052 RPM/s), the overview's examples (registers 5 and 6).
+360 per sample (100 052 RPM/s), the overview's examples (registers 5 and 6). The position
+block's landing-speed search is the MAC050–141's (``mac050_141.firmware.blocks``, register-free
+arithmetic on the sampled profile).
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
+from ...mac050_141.firmware.blocks import max_landing_speed
 from ...mac050_141.firmware.fixed import clamp
 from .. import constants as c
 from .. import layout as L
@@ -42,33 +45,6 @@ def velocity_block(r: np.ndarray, s: np.ndarray, target: float, accel: float) ->
     """Velocity block: V_OLD ramps towards ``target`` by at most ``accel`` per sample."""
     v_old = s[L.S_V_OLD]
     return _finish(r, s, v_old + clamp(target - v_old, -accel, accel))
-
-
-@njit(cache=True, inline="always")
-def stopping_distance(v: float, a: float) -> float:
-    """Distance covered from speed ``v`` ≥ 0 braking by ``a`` per sample: v + (v−a) + … > 0."""
-    if v <= 0.0:
-        return 0.0
-    n = math.ceil(v / a) - 1.0
-    return (n + 1.0) * v - a * n * (n + 1.0) / 2.0
-
-
-@njit(**KERNEL)
-def max_landing_speed(dp: float, a: float) -> float:
-    """Largest integer speed whose sampled braking profile fits in ``dp`` ≥ 0 [1/16 count]
-    (the position block lands on P_SOLL without overshooting its own profile)."""
-    if dp <= 0.0:
-        return 0.0
-    if a <= 0.0:
-        return dp
-    v = math.floor(math.sqrt(2.0 * a * dp + 0.25 * a * a) - 0.5 * a)
-    if v < 0.0:
-        v = 0.0
-    while stopping_distance(v + 1.0, a) <= dp:
-        v += 1.0
-    while v > 0.0 and stopping_distance(v, a) > dp:
-        v -= 1.0
-    return v
 
 
 @njit(**KERNEL)
