@@ -472,3 +472,16 @@ def test_raws_of_rows_converts_like_to_raw():
     values[7, 3] = np.nan
     values[4, 1] = bounds[4, 1] + 1.0
     assert raws_of_rows(values, bounds, out) == 4
+
+
+def test_data_write_limits_cover_only_read_write_registers():
+    """What a compiled task may store directly: read-write registers in their raw range; the
+    excluded mode register and read-only registers have no range (0, 0)."""
+    from jvl_gym.families.mac050_141.table import TABLE
+
+    low, high = TABLE.data_write_limits(TABLE.lookup("MODE_REG").number)
+    v_soll, v_ist, mode = (TABLE.lookup(n) for n in ("V_SOLL", "V_IST", "MODE_REG"))
+    assert (low[v_soll.number], high[v_soll.number]) == (v_soll.raw_min, v_soll.raw_max)
+    assert (low[v_ist.number], high[v_ist.number]) == (0, 0)
+    assert (low[mode.number], high[mode.number]) == (0, 0)
+    assert low.shape == high.shape == (TABLE.last + 1,)

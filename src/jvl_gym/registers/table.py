@@ -295,6 +295,17 @@ class RegisterTable:
         """Highest register number."""
         return self.registers[-1].number
 
+    def data_write_limits(self, *excluded: int) -> tuple[np.ndarray, np.ndarray]:
+        """Raw ``(low, high)`` of every read-write register by number, both 0 for the others
+        and for the ``excluded`` numbers (a mode request, a command): what a compiled task may
+        store directly, saturated to the register's range. Shape (last + 1,) int64 each."""
+        low = np.zeros(self.last + 1, dtype=np.int64)
+        high = np.zeros(self.last + 1, dtype=np.int64)
+        for r in self.registers:
+            if r.access == Access.RW and r.number not in excluded:
+                low[r.number], high[r.number] = r.raw_min, r.raw_max
+        return low, high
+
     def lookup(self, key: str | int) -> Register:
         """Return a register by name (case-insensitive) or number.
 

@@ -9,11 +9,9 @@ needs (the shaft angle, the COIL block's direction).
 
 from __future__ import annotations
 
-import numpy as np
 from numba import njit
 
 from ...engine.view import EngineView
-from ...registers import Access as _Access
 from . import constants as _c
 from . import layout as _L
 from .firmware import regs as R
@@ -39,17 +37,7 @@ TERMINAL_ERRORS = (("I2T_ERR", _c.I2T_ERR), ("FLW_ERR", _c.FLW_ERR), ("FNC_ERR",
 ERROR_BITS = _c.I2T_ERR | _c.FLW_ERR | _c.FNC_ERR | _c.UIT_ERR | _c.PLIM_ERR
 
 
-def _raw_limits() -> tuple[np.ndarray, np.ndarray]:
-    """Raw range of every register a task may set (read-write), by number; empty elsewhere."""
-    low = np.zeros(_TABLE.last + 1, dtype=np.int64)
-    high = np.zeros(_TABLE.last + 1, dtype=np.int64)
-    for r in _TABLE:
-        if r.access == _Access.RW and r.number != R.MODE_REG:
-            low[r.number], high[r.number] = r.raw_min, r.raw_max
-    return low, high
-
-
-_RAW_MIN, _RAW_MAX = _raw_limits()
+_RAW_MIN, _RAW_MAX = _TABLE.data_write_limits(R.MODE_REG)
 
 
 @njit(cache=True, inline="always")

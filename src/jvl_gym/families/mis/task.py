@@ -15,7 +15,6 @@ import numpy as np
 from numba import njit
 
 from ...engine.view import EngineView
-from ...registers import Access as _Access
 from . import constants as _c
 from . import layout as _L
 from . import regs as R
@@ -36,17 +35,7 @@ TERMINAL_ERRORS = (("FOLLOW", _c.ERR_FOLLOW), ("POSITION_LIMIT", _c.ERR_POSITION
 ERROR_BITS = _c.ERR_FOLLOW | _c.ERR_POSITION_LIMIT | _c.ERR_LOW_BUS
 
 
-def _raw_limits() -> tuple[np.ndarray, np.ndarray]:
-    """Raw range of every register a task may set (read-write), by number; empty elsewhere."""
-    low = np.zeros(_TABLE.last + 1, dtype=np.int64)
-    high = np.zeros(_TABLE.last + 1, dtype=np.int64)
-    for r in _TABLE:
-        if r.access == _Access.RW and r.number != R.MODE_REG:
-            low[r.number], high[r.number] = r.raw_min, r.raw_max
-    return low, high
-
-
-_RAW_MIN, _RAW_MAX = _raw_limits()
+_RAW_MIN, _RAW_MAX = _TABLE.data_write_limits(R.MODE_REG)
 _COUNTS_PER_RAD = _CPR / (2.0 * math.pi)
 
 
