@@ -43,6 +43,7 @@ import logging
 import os
 import threading
 from collections import Counter
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -373,18 +374,23 @@ class Twin:
         if not isinstance(frame, mt.Request):
             self.stats["ignored"] += 1
             return b""
+        return self.dispatch(frame.address, mt.BROADCAST, lambda i: self._one(i, frame))
+
+    def dispatch(self, address: int, broadcast: int, one: Callable[[int], bytes]) -> bytes:
+        """Carry out a request to ``address`` on each motor it names (``one(i)`` under the
+        lock, the motor's reply bytes); the reply of the first, none to a ``broadcast``
+        unless the twin answers broadcasts."""
         with self.lock:
-            targets = self.targets(frame.address)
+            targets = self.targets(address)
             if not targets:
                 self.stats["ignored"] += 1
                 return b""
-            replies = [self._one(i, frame) for i in targets]
-        if frame.address == mt.BROADCAST and not self.answers_broadcast:
+            replies = [one(i) for i in targets]
+        if address == broadcast and not self.answers_broadcast:
             return b""
-        reply = replies[0]
-        if reply:
+        if replies[0]:
             self.stats["replies"] += 1
-        return reply
+        return replies[0]
 
     def _one(self, i: int, f: mt.Request) -> bytes:
         c = mt.Command

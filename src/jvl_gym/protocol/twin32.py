@@ -121,17 +121,7 @@ class MacTalk32Unit:
         if not isinstance(frame, m32.Request):
             t.stats["ignored"] += 1
             return b""
-        with t.lock:
-            targets = t.targets(frame.address)
-            if not targets:
-                t.stats["ignored"] += 1
-                return b""
-            replies = [self._one(i, frame) for i in targets]
-        if frame.address == m32.BROADCAST and not t.answers_broadcast:
-            return b""
-        if replies[0]:
-            t.stats["replies"] += 1
-        return replies[0]
+        return t.dispatch(frame.address, m32.BROADCAST, lambda i: self._one(i, frame))
 
     def _group_write(self, f: m32.GroupWrite) -> None:
         t = self.twin
