@@ -65,12 +65,17 @@ from .sixth_order import (
     speed_plant,
 )
 from .synthesis import design_current_loop
-from .verify import POLE_RADIUS_MAX, LoopMetrics, frequency_grid, loop_metrics, \
-    metrics_from_response
+from .verify import (
+    POLE_RADIUS_MAX,
+    LoopMetrics,
+    frequency_grid,
+    loop_metrics,
+    metrics_from_response,
+)
 
-__all__ = ["EXACT_SUMS", "LOWPASS_PER_CROSSOVER", "LOWPASS_DAMPING", "NOTCH_WIDTH", "Design800", "Verification800",
-           "design_current800", "main_filter_registers", "design_speed800", "synthesize800",
-           "verify800", "check800", "quantize800", "rigid_gain800"]
+__all__ = ["EXACT_SUMS", "LOWPASS_PER_CROSSOVER", "LOWPASS_DAMPING", "NOTCH_WIDTH", "Design800",
+           "Verification800", "design_current800", "main_filter_registers", "design_speed800",
+           "synthesize800", "verify800", "check800", "quantize800", "rigid_gain800"]
 
 #: register groups whose stored sums stay exact (the current PI, VF's integrators and gain)
 EXACT_SUMS: tuple[tuple[str, ...], ...] = (("KIFY1", "KIFY0"), ("KIFX2", "KIFX1"), VFY_KEYS,

@@ -12,9 +12,13 @@ IB_IST, UA_VAL, UB_VAL. Per phase, the ZOH-exact coil (:mod:`tuning.sixth_order`
     I(k+1) = a·I(k) + β·U(k − d) − β·E(k)/k_u,   a = exp(−R·TS_I/L),  β = g(1 − a)
 
 where E is the back-EMF. The rotor starts from rest, so over the short record E is a smooth
-function of time: a cubic in k per phase (speed ∝ t, the electrical angle ∝ t²) absorbs it. The
-fit is linear least squares in (a, β) shared by both phases and the cubics; d ∈ {0, 1} is the
-one with the smaller residual. Then ``R = k_u(1 − a)/(β·A_count)``, ``L = −R·TS_I/ln a`` with
+function of time that starts at 0: a cubic in k without a constant term per phase (speed ∝ t,
+the electrical angle ∝ t²) absorbs it. The phase voltages are to the bus midpoint; the star
+point's common-mode voltage U_n (the current filters' integrators hold one that no current
+corrects) is the same in both phases, one shared constant ``−β·U_n``; the loops start from an
+empty history (passive mode before the step) so it stays nearly constant. The fit is linear
+least squares in (a, β, β·U_n) shared by both phases and the cubics; d ∈ {0, 1} is the one
+with the smaller residual. Then ``R = k_u(1 − a)/(β·A_count)``, ``L = −R·TS_I/ln a`` with
 k_u from U_BUS (register 198).
 
 *Mechanics*: steps at two levels VF₁ and VF₂ ≈ VF₁/2, each recorded ``repeats`` times at the
@@ -162,6 +166,10 @@ def record_coil(m: Any, vf: float = COIL_VF, n: int = COIL_SAMPLES) -> list[Coil
     """A torque step of VF_OUT = ``vf`` from rest in mode 4, recorded at the current-loop rate
     (RECINNERBIT) for ``n`` samples; one record per motor. Leaves the motors braked."""
     brake(m)
+    m.write("MODE_REG", _c.PASSIVE_MODE)  # the current filters' histories cleared
+    m.step(3)
+    m.write("MODE_REG", _c.ANALOG_TORQUE_MODE)
+    m.step(2)
     t_soll = np.asarray(m.read("T_SOLL"), dtype=float)
     _start_recording(m, COIL_CHANNELS, inner=True)
     m.set_input(analog_volts=_analog_volts(np.full(m.n, float(vf)), t_soll))
@@ -214,12 +222,13 @@ def identify_coil800(rec: CoilRecord, base: Motor800) -> Coil800:
             k = np.arange(d, n - 1)
             if k.size < 12:
                 raise ValueError(f"the coil record has {n} samples; at least {14 + d} needed")
-            poly = np.vander(k / n, 4, increasing=True)
-            block = np.zeros((k.size, 2 + 8))
+            poly = np.vander(k / n, 4, increasing=True)[:, 1:]
+            block = np.zeros((k.size, 3 + 6))
             block[:, 0] = i[k]
             block[:, 1] = u[k - d]
-            off = 2 if len(rows) == 0 else 6
-            block[:, off:off + 4] = poly
+            block[:, 2] = 1.0
+            off = 3 if len(rows) == 0 else 6
+            block[:, off:off + 3] = poly
             rows.append(block)
             rhs.append(i[k + 1])
         a_mat, y = np.vstack(rows), np.concatenate(rhs)

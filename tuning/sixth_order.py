@@ -43,7 +43,7 @@ from jvl_gym.families.mac800 import constants as _c
 from jvl_gym.families.mac800.config import Mac800Config, load_motor, setup_path
 from jvl_gym.families.mac800.table import TABLE
 
-from .models import if_tf, ib_tf
+from .models import ib_tf, if_tf
 
 __all__ = ["TS_I", "TS_O", "INNER_PER_OUTER", "COUNTS_PER_RAD", "VF_FULL", "FF_KEYS", "VB_KEYS",
            "VFX_KEYS", "VFY_KEYS", "CURRENT_KEYS", "MAIN_KEYS", "Motor800", "ff_tf", "vb_tf",
