@@ -22,7 +22,7 @@ with the smaller residual. Then ``R = k_u(1 − a)/(β·A_count)``, ``L = −R·
 k_u from U_BUS (register 198).
 
 *Mechanics*: steps at two levels VF₁ and VF₂ ≈ VF₁/2, each recorded ``repeats`` times at the
-servo rate (770 Hz), channels P_IST, VF_OUT, V_IST, I_NOM, each from rest. With the rigid rotor
+servo rate (770 Hz), channels P_IST, VF_OUT, V_IST, each from rest. With the rigid rotor
 ``J dω/dt = K_vf·VF_OUT − T_c − b·ω`` (ω > 0), integrating twice from the step at t = 0::
 
     J·θ(t) + T_c·t²/2 + b·∫₀ᵗθ + c_r·t + d_r = K_vf·VF_r·t²/2
@@ -45,6 +45,7 @@ from scipy import stats
 
 from jvl_gym.families.mac800 import constants as _c
 
+from .design800 import design_current800
 from .sixth_order import COUNTS_PER_RAD, CURRENT_KEYS, TS_I, TS_O, Motor800
 
 __all__ = ["CoilRecord", "TorqueRecord", "Coil800", "Mechanics800", "Identification800",
@@ -55,7 +56,7 @@ Progress = Callable[[str], None]
 
 #: channels of the coil record (current-loop rate) and of the torque steps (servo rate)
 COIL_CHANNELS = ("IA_IST", "IB_IST", "UA_VAL", "UB_VAL")
-STEP_CHANNELS = ("P_IST", "VF_OUT", "V_IST", "I_NOM")
+STEP_CHANNELS = ("P_IST", "VF_OUT", "V_IST")
 COIL_VF: int = 100  #: VF_OUT of the coil step (about 10 % of peak torque)
 COIL_SAMPLES: int = 60  #: current-loop samples of the coil fit (5.2 ms, 1.7 L/R)
 PILOT_VF: int = 50  #: VF_OUT of the pilot step that sizes the levels
@@ -319,7 +320,7 @@ def identify800(m: Any, repeats: int = 2, progress: Progress = lambda _: None,
        times → J, T_c, b (:func:`identify_mechanics800`).
     """
     if current_design is None:
-        from .design800 import design_current800 as current_design
+        current_design = design_current800
     amp = np.asarray(m.read("AMPLITUDE"), dtype=float)
     base = [Motor800.from_config(cfg, amplitude=float(amp[i]))
             for i, cfg in enumerate(m.motor_configs)]
