@@ -153,6 +153,21 @@ def test_cli_autotune_mac800_writes_a_setup_the_family_loads(tmp_path):
     assert res.exit_code != 0 and "not available for the MAC800" in res.output
 
 
+def test_cli_synthesize_mac800_and_refusals(tmp_path):
+    out = tmp_path / "s.yaml"
+    res = CliRunner().invoke(app, ["synthesize", "--motor", "MAC400", "--inertia", "3e-4",
+                                   "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "pi + low-pass" in res.output
+    regs = yaml.safe_load(out.read_text())["registers"]
+    assert regs["KVOUT"] == pytest.approx(5.0, abs=1e-4)  # 3e-4 / J_m 6e-5 (MAC400.yaml)
+    MotorArray("MAC400", n=1, setup=out)
+    res = CliRunner().invoke(app, ["verify", "--setup", str(out), "--inertia", "3e-4"])
+    assert res.exit_code == 0 and "all stable True" in res.output
+    res = CliRunner().invoke(app, ["identify", "--motor", "MAC800", "--testu", str(out)])
+    assert res.exit_code != 0 and "no TESTU/TESTA" in res.output
+
+
 def test_default_filters_are_the_family_setup():
     regs = default_filters("MAC800")
     assert regs["KVFX6"] == pytest.approx(0.1073) and regs["KVFY5"] == 1.0

@@ -109,6 +109,10 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
     """
     from .credibility import friction_text, problems
 
+    if _family_key(motor) == "mac800":
+        raise typer.BadParameter("the MAC800 family has no TESTU/TESTA records; `jvl-tune "
+                                 "autotune --motor MAC800` records torque steps with the sample "
+                                 "buffer", param_hint="'--motor'")
     if not testu and not testa:
         raise typer.BadParameter("give --testu and/or --testa record files",
                                  param_hint="'--testu' / '--testa'")
@@ -170,6 +174,15 @@ def synthesize_cmd(motor: str = typer.Option(...), inertia: float = typer.Option
                                       callback=_nonnegative),
         out: Path = typer.Option(Path("setup.yaml"))) -> None:
     """Design and quantise all filters for given motor data; write a setup YAML."""
+    if _family_key(motor) == "mac800":
+        given = {"--current-bw": current_bw is not None, "--speed-bw": speed_bw is not None,
+                 "--structure": structure != "ip", "--coulomb": coulomb > 0}
+        bad = [k for k, v in given.items() if v]
+        if bad:
+            raise typer.BadParameter(f"not available for the MAC800 family: {', '.join(bad)}",
+                                     param_hint="'--motor'")
+        _synthesize800(motor, inertia, resistance, inductance, out)
+        return
     md = MotorData.from_config(motor)
     if resistance:
         md = md.with_(R_phase=resistance)
@@ -426,6 +439,33 @@ def _autotune800(motor: str, load_inertia: float, viscous: float, coulomb: float
         if bad:
             typer.echo("FAILED: " + "; ".join(bad))
             raise typer.Exit(1)
+
+
+def _synthesize800(motor: str, inertia: float, resistance: float | None,
+                   inductance: float | None, out: Path) -> None:
+    """``synthesize`` for a MAC800-family motor: the sixth-order design with the low-pass
+    (:func:`tuning.design800.synthesize800`) written in the family's setup format."""
+    from .autotune800 import setup_text
+    from .design800 import check800, synthesize800
+    from .sixth_order import Motor800
+
+    md = Motor800.from_config(motor)
+    if resistance:
+        md = md.with_(R_phase=resistance)
+    if inductance:
+        md = md.with_(L_phase=inductance)
+    d = synthesize800(md, inertia)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(setup_text(md.name, d.registers, f"jvl-tune synthesize: {d.name}"))
+    v = d.verification
+    typer.echo(f"{d.name}: speed PM {v.speed.pm_deg:.1f} deg, GM {v.speed.gm_db:.1f} dB, "
+               f"crossover {v.speed.crossover_hz:.1f} Hz, |z|max {v.speed.pole_radius:.4f}, "
+               f"worst robust PM {v.worst_robust_pm:.1f} deg; current PM "
+               f"{v.current.pm_deg:.1f} deg, GM {v.current.gm_db:.1f} dB")
+    bad = check800(v)
+    if bad:
+        typer.echo("FAILED: " + "; ".join(bad))
+        raise typer.Exit(1)
 
 
 def _verify800(motor: str | None, setup: Path, inertia: float | None) -> None:
