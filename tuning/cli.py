@@ -8,6 +8,8 @@ Every command works against the simulator (``jvl_gym.MotorArray``) or on record 
 Examples
 --------
 ``jvl-tune autotune --motor MAC140 --load-inertia 5e-5 --out DIR``
+``jvl-tune autotune --motor MAC800 --load-inertia 6e-4 --out DIR``  (the MAC800 family,
+:mod:`tuning.autotune800`; the family comes from the motor type, :mod:`tuning.family`)
 ``jvl-tune autotune --motor MAC140 --port socket://127.0.0.1:5000 --address 19 --write``
 ``jvl-tune identify --motor MAC140 --testu u.csv --testa a1.csv --testa a2.csv``
 ``jvl-tune synthesize --motor MAC140 --inertia 6.7e-5 --out setup.yaml``
@@ -46,7 +48,7 @@ from .report import text_table, write_report
 from .verify import verify_current_loop, verify_speed_loop
 
 app = App(prog="jvl-tune",
-          help="JVL MAC50-141 tuning toolkit (identification, synthesis, verification)",
+          help="JVL MAC50-141 and MAC800 tuning toolkit (identification, synthesis, verification)",
           no_args_is_help=True)
 
 
@@ -107,6 +109,10 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
     """
     from .credibility import friction_text, problems
 
+    if _family_key(motor) == "mac800":
+        raise typer.BadParameter("the MAC800 family has no TESTU/TESTA records; `jvl-tune "
+                                 "autotune --motor MAC800` records torque steps with the sample "
+                                 "buffer", param_hint="'--motor'")
     if not testu and not testa:
         raise typer.BadParameter("give --testu and/or --testa record files",
                                  param_hint="'--testu' / '--testa'")
@@ -168,6 +174,15 @@ def synthesize_cmd(motor: str = typer.Option(...), inertia: float = typer.Option
                                       callback=_nonnegative),
         out: Path = typer.Option(Path("setup.yaml"))) -> None:
     """Design and quantise all filters for given motor data; write a setup YAML."""
+    if _family_key(motor) == "mac800":
+        given = {"--current-bw": current_bw is not None, "--speed-bw": speed_bw is not None,
+                 "--structure": structure != "ip", "--coulomb": coulomb > 0}
+        bad = [k for k, v in given.items() if v]
+        if bad:
+            raise typer.BadParameter(f"not available for the MAC800 family: {', '.join(bad)}",
+                                     param_hint="'--motor'")
+        _synthesize800(motor, inertia, resistance, inductance, out)
+        return
     md = MotorData.from_config(motor)
     if resistance:
         md = md.with_(R_phase=resistance)
@@ -228,6 +243,9 @@ def verify(motor: str = typer.Option(None, help="motor type (default: the setup'
                                          callback=_positive)
            ) -> None:
     """Margins, bandwidths, pole radii and robustness of a setup file's filters."""
+    if _family_key(motor if motor is not None else _setup_motor(setup)) == "mac800":
+        _verify800(motor, setup, inertia)
+        return
     motor, regs = _setup_registers(motor, setup)
     md = MotorData.from_config(motor)
     J = inertia if inertia else regs.get("KVOUT", 1.0) * md.J_m
@@ -275,7 +293,10 @@ def autotune(motor: str = typer.Option("MAC140"),
                                               callback=_positive),
              write: bool = typer.Option(False, help="with --port: write the design to the motor"),
              accept: bool = typer.Option(False, help="exit 0 even when an identified value is "
-                                         "not credible (tuning.credibility)")
+                                         "not credible (tuning.credibility)"),
+             notch_hz: float = typer.Option(None, help="MAC800 family: a known resonance [Hz] "
+                                            "the sixth-order filter's extra orders notch",
+                                            callback=_positive)
              ) -> None:
     """Identify, synthesise, verify (simulator or --port); write OUT/setup.yaml and a report.
 
@@ -283,6 +304,21 @@ def autotune(motor: str = typer.Option("MAC140"),
     the exit status is 1 unless ``--accept``.
     """
     from jvl_gym import MotorArray
+
+    if _family_key(motor) == "mac800":
+        given = {"--port": port is not None, "--resonance": resonance,
+                 "--coupling-stiffness": coupling_stiffness > 0,
+                 "--coupling-damping": coupling_damping > 0, "--n-coil": n_coil is not None,
+                 "--n-mech": n_mech is not None, "--structure": structure != "pi"}
+        bad = [k for k, v in given.items() if v]
+        if bad:
+            raise typer.BadParameter(f"not available for the MAC800 family: {', '.join(bad)}",
+                                     param_hint="'--motor'")
+        _autotune800(motor, load_inertia, viscous, coulomb, noise, seed, out, notch_hz)
+        return
+    if notch_hz is not None:
+        raise typer.BadParameter("--notch-hz is for the MAC800 family; the MAC050-141 use "
+                                 "--resonance", param_hint="'--notch-hz'")
 
     if port is not None:
         from jvl_gym.families.mac050_141.constants import TEST_RECORD_SAMPLES
@@ -346,6 +382,117 @@ def autotune(motor: str = typer.Option("MAC140"),
     if not math.isfinite(ident.mechanics.J):
         raise typer.Exit(1)
     _check_credible(ident, accept)
+
+
+def _family_key(motor: str | None) -> str | None:
+    """The tuning family of a motor type (:func:`tuning.family.tuning_family`), None if no
+    motor is named."""
+    from .family import tuning_family
+
+    if motor is None:
+        return None
+    try:
+        return tuning_family(motor).key
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc), param_hint="'--motor'") from exc
+
+
+def _setup_motor(setup: Path) -> str | None:
+    """The ``motor:`` of a setup file (None when it has none or cannot be read: the family's
+    loader then says what is wrong)."""
+    try:
+        data = yaml.safe_load(setup.read_text())
+    except (OSError, yaml.YAMLError):
+        return None
+    name = data.get("motor") if isinstance(data, dict) else None
+    return name if isinstance(name, str) else None
+
+
+def _autotune800(motor: str, load_inertia: float, viscous: float, coulomb: float, noise: bool,
+                 seed: int, out: Path, notch_hz: float | None) -> None:
+    """``autotune`` of a MAC800-family motor on the simulator (:mod:`tuning.autotune800`):
+    OUT/setup.yaml (the family's setup format) and OUT/report.txt."""
+    from jvl_gym import MotorArray
+
+    from .autotune800 import autotune800, report800, write_setup800
+
+    params = {"load_inertia": load_inertia, "viscous_friction": viscous,
+              "coulomb_friction": coulomb}
+    if noise:
+        params["position_noise"] = 0.85
+    m = MotorArray(motor, n=1, seed=seed, **params)
+    res = autotune800(m, notch_hz=notch_hz, seed=seed, progress=_say)[0]
+    setup = write_setup800(out / "setup.yaml", res)
+    MotorArray(motor, n=1, setup=setup)  # the family loads it
+    j_true = m.motor_configs[0].rotor_inertia + load_inertia
+    text = report800(res) + (f"Simulated truth: J {j_true:.5g} kg m^2 (identified "
+                             f"{100 * (res.ident.mechanics.J / j_true - 1):+.2f} %), "
+                             f"Tc {coulomb:g} N m, b {viscous:g} N m s/rad\n")
+    (out / "report.txt").write_text(text)
+    typer.echo(text)
+    typer.echo(f"wrote {setup} and {out / 'report.txt'}")
+    design = res.chosen.design
+    if design is not None:
+        from .design800 import check800
+
+        bad = check800(design.verification)
+        if bad:
+            typer.echo("FAILED: " + "; ".join(bad))
+            raise typer.Exit(1)
+
+
+def _synthesize800(motor: str, inertia: float, resistance: float | None,
+                   inductance: float | None, out: Path) -> None:
+    """``synthesize`` for a MAC800-family motor: the sixth-order design with the low-pass
+    (:func:`tuning.design800.synthesize800`) written in the family's setup format."""
+    from .autotune800 import setup_text
+    from .design800 import check800, synthesize800
+    from .sixth_order import Motor800
+
+    md = Motor800.from_config(motor)
+    if resistance:
+        md = md.with_(R_phase=resistance)
+    if inductance:
+        md = md.with_(L_phase=inductance)
+    d = synthesize800(md, inertia)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(setup_text(md.name, d.registers, f"jvl-tune synthesize: {d.name}"))
+    v = d.verification
+    typer.echo(f"{d.name}: speed PM {v.speed.pm_deg:.1f} deg, GM {v.speed.gm_db:.1f} dB, "
+               f"crossover {v.speed.crossover_hz:.1f} Hz, |z|max {v.speed.pole_radius:.4f}, "
+               f"worst robust PM {v.worst_robust_pm:.1f} deg; current PM "
+               f"{v.current.pm_deg:.1f} deg, GM {v.current.gm_db:.1f} dB")
+    bad = check800(v)
+    if bad:
+        typer.echo("FAILED: " + "; ".join(bad))
+        raise typer.Exit(1)
+
+
+def _verify800(motor: str | None, setup: Path, inertia: float | None) -> None:
+    """``verify`` of a MAC800-family setup: validated by the family's loader, then the loops'
+    margins (:func:`tuning.autotune800.verify_setup800`)."""
+    from jvl_gym import MotorArray
+
+    from .autotune800 import verify_setup800
+
+    named = _setup_motor(setup)
+    if motor is not None and named is not None and motor != named:
+        raise typer.BadParameter(f"{setup} is a setup for {named}, not {motor}",
+                                 param_hint="'--motor'")
+    name = motor if motor is not None else named
+    MotorArray(name, n=1, setup=setup)  # validates the setup, naming it in the error
+    regs = yaml.safe_load(setup.read_text()).get("registers") or {}
+    v, bad = verify_setup800(name, {k: float(x) for k, x in regs.items()}, inertia)
+    for label, n, worst in (("current", v.current, math.inf), ("speed", v.speed,
+                                                               v.worst_robust_pm)):
+        typer.echo(f"{label}: PM {n.pm_deg:.1f} deg, GM {n.gm_db:.1f} dB, BW "
+                   f"{n.bandwidth_hz:.1f} Hz, |z|max {n.pole_radius:.4f}"
+                   + (f", worst robust PM {worst:.1f} deg" if math.isfinite(worst) else "")
+                   + f", all stable {v.all_stable}")
+    if bad:
+        typer.echo("checks: " + "; ".join(bad))
+    if not v.all_stable:
+        raise typer.Exit(1)
 
 
 def _two_mass_step(m: object, ident: object, d: object, out: Path) -> tuple[str, Path]:

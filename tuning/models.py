@@ -166,14 +166,18 @@ def coil_tf(motor: MotorData) -> ct.TransferFunction:
     return _tf([g * (1.0 - a)], list(den), TS_I)
 
 
-def if_tf(regs: Mapping[str, float]) -> ct.TransferFunction:
-    """IF filter (3.2.106–3.2.109): ``(KIFX2 z² + KIFX1 z)/(z² − KIFY1 z − KIFY0)``."""
-    return _tf([regs["KIFX2"], regs["KIFX1"], 0.0], [1.0, -regs["KIFY1"], -regs["KIFY0"]], TS_I)
+def if_tf(regs: Mapping[str, float], dt: float = TS_I) -> ct.TransferFunction:
+    """IF filter (3.2.106–3.2.109): ``(KIFX2 z² + KIFX1 z)/(z² − KIFY1 z − KIFY0)``.
+
+    ``dt``: the family's current-loop sample time [s] (the MAC800's current filter has the
+    same structure, register overview §1.2 registers 144–149).
+    """
+    return _tf([regs["KIFX2"], regs["KIFX1"], 0.0], [1.0, -regs["KIFY1"], -regs["KIFY0"]], dt)
 
 
-def ib_tf(regs: Mapping[str, float]) -> ct.TransferFunction:
-    """IB filter (3.2.110–3.2.111): ``(KIB1 z + KIB0)/z``."""
-    return _tf([regs["KIB1"], regs["KIB0"]], [1.0, 0.0], TS_I)
+def ib_tf(regs: Mapping[str, float], dt: float = TS_I) -> ct.TransferFunction:
+    """IB filter (3.2.110–3.2.111): ``(KIB1 z + KIB0)/z`` (``dt`` as in :func:`if_tf`)."""
+    return _tf([regs["KIB1"], regs["KIB0"]], [1.0, 0.0], dt)
 
 
 def ff_tf(regs: Mapping[str, float]) -> ct.TransferFunction:

@@ -2,7 +2,9 @@
 3.2.13, 3.2.126, 3.2.127).
 
 Formats, scales, ranges and manual sections come from the family's register table
-(``jvl_gym.families.mac050_141.table.TABLE``, docs/registers.md), the one source of these facts:
+(``jvl_gym.families.mac050_141.table.TABLE``, docs/registers.md, by default; another family's
+table with the ``table`` argument, e.g. the MAC800's Fixed16 = raw/65536 and Fixed24 =
+raw/16777216 of its register overview §1.2), the one source of these facts:
 Fixed4 = raw/4096 and Fixed8 = raw/256 with the raw range of the table (±32767, so Fixed4
 ±7.999756, Fixed8 ±127.996; AMPLITUDE 0 … 0.83). A value outside its register's range raises
 :class:`QuantizationError` naming the register and its section (nothing is silently saturated).
@@ -15,12 +17,12 @@ integral gain is as exact as the format allows.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
 import numpy as np
 
 from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
-from jvl_gym.registers import Format, round_half_away
+from jvl_gym.registers import Format, RegisterTable, round_half_away
 
 __all__ = [
     "FILTER_REGISTERS",
@@ -29,6 +31,7 @@ __all__ = [
     "register_format",
     "quantize_value",
     "quantize_registers",
+    "MAC050_141_GROUPS",
 ]
 
 #: the registers the toolkit designs and quantises (manual 3.2.13, 3.2.89–3.2.111, 3.2.126–127)
@@ -39,9 +42,18 @@ FILTER_REGISTERS: tuple[str, ...] = (
     "KVOUT", "AMPLITUDE", "PHASE_COMP")
 
 
-def _table_format(name: str) -> tuple[str, int, int, int]:
-    reg = MAC050_141.lookup(name)
-    if reg.format not in (Format.FIXED4, Format.FIXED8):
+#: the formats the toolkit quantises: the Fixed formats of manual 3.1 and of the 32-bit tables,
+#: and the 32-bit integers (MAC800 AMPLITUDE, MODEL_POT, S_ORDER)
+_QUANTISED = (Format.FIXED4, Format.FIXED8, Format.FIXED16, Format.FIXED24, Format.INT32)
+#: the groups of the MAC050–141 filters whose stored sums are kept exact (module docstring)
+MAC050_141_GROUPS: tuple[tuple[str, ...], ...] = (
+    ("KIFY1", "KIFY0"), ("KVFY3", "KVFY2", "KVFY1", "KVFY0"), ("KIFX2", "KIFX1"),
+    ("KVFX4", "KVFX3", "KVFX2", "KVFX1"))
+
+
+def _table_format(name: str, table: RegisterTable = MAC050_141) -> tuple[str, int, int, int]:
+    reg = table.lookup(name)
+    if reg.format not in _QUANTISED:
         raise ValueError(f"{name} is {reg.format.value}, not a Fixed filter register")
     return reg.format.value, reg.scale, reg.raw_min, reg.raw_max
 
@@ -54,15 +66,21 @@ class QuantizationError(ValueError):
     """A coefficient does not fit its register format."""
 
 
-def register_format(name: str) -> tuple[str, int, int, int]:
-    """(format name, scale, raw min, raw max) of a filter register (from the register table)."""
+def register_format(name: str, table: RegisterTable | None = None) -> tuple[str, int, int, int]:
+    """(format name, scale, raw min, raw max) of a filter register (from the register table;
+    ``table`` another family's table, default the MAC050–141's)."""
+    if table is not None and table is not MAC050_141:
+        try:
+            return _table_format(name, table)
+        except KeyError:
+            raise KeyError(f"{name} is not a register of the family's table") from None
     try:
         return FORMATS[name]
     except KeyError:
         raise KeyError(f"{name} is not a filter register known to the tuning toolkit") from None
 
 
-def quantize_value(name: str, value: float) -> float:
+def quantize_value(name: str, value: float, table: RegisterTable | None = None) -> float:
     """Round ``value`` to register ``name``'s format; raise if it does not fit.
 
     Parameters
@@ -71,6 +89,8 @@ def quantize_value(name: str, value: float) -> float:
         A register of :data:`FILTER_REGISTERS`.
     value : float
         Ideal value in user units.
+    table : RegisterTable, optional
+        The family's register table (default the MAC050–141's).
 
     Returns
     -------
@@ -84,10 +104,10 @@ def quantize_value(name: str, value: float) -> float:
         The stored integer is outside the register's raw range (message: the range and the
         manual section from the register table), or KVOUT is not positive (3.2.13).
     """
-    fmt, scale, lo, hi = register_format(name)
+    fmt, scale, lo, hi = register_format(name, table)
     raw = int(round_half_away(float(value) * scale))
     if not lo <= raw <= hi:
-        sec = MAC050_141.lookup(name).section
+        sec = (table or MAC050_141).lookup(name).section
         raise QuantizationError(
             f"{name} = {value:.6g} does not fit {fmt} (range {lo / scale:.6g} … {hi / scale:.6g}, "
             f"manual {sec}); reduce the target bandwidth or change the design")
@@ -96,9 +116,10 @@ def quantize_value(name: str, value: float) -> float:
     return raw / scale
 
 
-def _exact_sum(names: list[str], regs: dict[str, float], out: dict[str, float]) -> None:
+def _exact_sum(names: list[str], regs: dict[str, float], out: dict[str, float],
+               table: RegisterTable | None = None) -> None:
     """Quantise ``names`` so their stored sum equals the rounded sum of the ideal values."""
-    _, scale, _, _ = register_format(names[0])
+    _, scale, _, _ = register_format(names[0], table)
     ideal = np.array([regs[n] for n in names]) * scale
     target = int(round_half_away(float(ideal.sum())))
     raw = np.floor(ideal)
@@ -108,16 +129,25 @@ def _exact_sum(names: list[str], regs: dict[str, float], out: dict[str, float]) 
     for k in order[: abs(need)]:
         raw[k] += 1 if need > 0 else -1
     for n, r in zip(names, raw):
-        out[n] = quantize_value(n, r / scale)
+        out[n] = quantize_value(n, r / scale, table)
 
 
-def quantize_registers(regs: Mapping[str, float]) -> dict[str, float]:
+def quantize_registers(regs: Mapping[str, float], table: RegisterTable | None = None,
+                       groups: Sequence[Sequence[str]] = MAC050_141_GROUPS
+                       ) -> dict[str, float]:
     """Quantise a register set (name → value); non-filter registers are passed through.
 
     Parameters
     ----------
     regs : mapping
         Ideal (float) register values.
+    table : RegisterTable, optional
+        The family's register table (default the MAC050–141's, whose filter registers are
+        :data:`FILTER_REGISTERS`); with another table every register of a quantised format is
+        quantised.
+    groups : sequence of sequence of str
+        Registers whose stored sum is kept exact (integrators, integral gains), in order;
+        default :data:`MAC050_141_GROUPS`.
 
     Returns
     -------
@@ -132,13 +162,13 @@ def quantize_registers(regs: Mapping[str, float]) -> dict[str, float]:
     """
     src = dict(regs)
     out: dict[str, float] = {}
-    groups = [["KIFY1", "KIFY0"], ["KVFY3", "KVFY2", "KVFY1", "KVFY0"],
-              ["KIFX2", "KIFX1"], ["KVFX4", "KVFX3", "KVFX2", "KVFX1"]]
+    known = FORMATS if table is None or table is MAC050_141 else {
+        r.name for r in table if r.format in _QUANTISED}
     for g in groups:
         if all(n in src for n in g):
-            _exact_sum(g, src, out)
+            _exact_sum(list(g), src, out, table)
     for name, value in src.items():
         if name in out:
             continue
-        out[name] = quantize_value(name, value) if name in FORMATS else value
+        out[name] = quantize_value(name, value, table) if name in known else value
     return {name: out[name] for name in src}

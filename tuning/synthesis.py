@@ -139,7 +139,8 @@ def _metrics_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, dt: float) ->
 def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
                         pm_min: float = 50.0, gm_min: float = 8.0,
                         robust_pm_min: float = 35.0,
-                        gains: tuple[float, float] | None = None) -> CurrentDesign:
+                        gains: tuple[float, float] | None = None,
+                        dt: float = TS_I) -> CurrentDesign:
     """Design IF and IB for a target closed-loop bandwidth.
 
     Parameters
@@ -156,18 +157,22 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
         PM required on every R, L ±30 % corner [deg].
     gains : (float, float), optional
         Fixed normalised (kp, ki) instead of the search (e.g. the default setups' design point).
+    dt : float
+        The family's current-loop sample time [s] (default the MAC050–141's TS_I; ``motor``'s
+        coil pole and gain must be for the same sample time): the loop is the same polynomial
+        in z, ``dt`` sets the frequencies.
 
     Returns
     -------
     CurrentDesign
     """
-    w = frequency_grid(TS_I, 1500)
+    w = frequency_grid(dt, 1500)
     if gains is not None:
         regs = current_registers(motor, *gains)
-        m = _metrics_poly(*_current_loop_poly(motor, regs), w, TS_I)
+        m = _metrics_poly(*_current_loop_poly(motor, regs), w, dt)
         rpm = min(_metrics_poly(*_current_loop_poly(
             motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl), regs), w,
-            TS_I).pm_deg for fr in (0.7, 1.3) for fl in (0.7, 1.3))
+            dt).pm_deg for fr in (0.7, 1.3) for fl in (0.7, 1.3))
         return CurrentDesign(regs, gains[0], m, rpm, [], gains[1])
     feasible = []
     corners = [motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
@@ -175,13 +180,13 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
     for kpn in np.linspace(0.05, 0.8, 31):
         for kin in np.geomspace(0.005, 0.25, 31):
             regs = current_registers(motor, float(kpn), float(kin))
-            m = _metrics_poly(*_current_loop_poly(motor, regs), w, TS_I)
+            m = _metrics_poly(*_current_loop_poly(motor, regs), w, dt)
             if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
                 continue
             rpm = math.inf
             ok = True
             for mm in corners:
-                r = _metrics_poly(*_current_loop_poly(mm, regs), w, TS_I)
+                r = _metrics_poly(*_current_loop_poly(mm, regs), w, dt)
                 ok &= r.stable
                 rpm = min(rpm, r.pm_deg)
             if ok and rpm >= robust_pm_min:

@@ -286,12 +286,14 @@ class MoveResult:
 
 
 def position_move(m, distance: int, v_soll: int, a_soll: int, seconds: float = 1.0,
-                  window: int = 10) -> MoveResult:
+                  window: int = 10, dt: float = TS_O) -> MoveResult:
     """Run a P_MODE move of ``distance`` counts on every motor of ``m`` (a ``MotorArray``).
+
+    ``dt`` is the family's servo sample time [s] (default the MAC050–141's TS_O).
 
     The motors must be in INIT_MODE at rest; they are left in P_MODE at the target.
     """
-    n_steps = int(round(seconds / TS_O))
+    n_steps = int(round(seconds / dt))
     start = np.asarray(m.read("P_IST")).astype(float)
     target = start + distance
     m.write("V_SOLL", v_soll)
@@ -311,9 +313,9 @@ def position_move(m, distance: int, v_soll: int, a_soll: int, seconds: float = 1
     for i in range(m.n):
         bad = np.flatnonzero(off[:, i])
         if bad.size == 0:
-            settle[i] = TS_O
+            settle[i] = dt
         elif bad[-1] < n_steps - 1:
-            settle[i] = (bad[-1] + 2) * TS_O
+            settle[i] = (bad[-1] + 2) * dt
     over = np.max((pos - target) * np.sign(distance), axis=0).clip(min=0)
     return MoveResult(settle, over, fnc, err, pos)
 

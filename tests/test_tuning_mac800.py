@@ -1,0 +1,174 @@
+"""Tuning toolkit on the MAC800 family (issue #18): identification from sample-buffer torque
+steps, the sixth-order main filter, its quantisation to Fixed16/Fixed24, the acceptance move,
+and ``jvl-tune autotune/verify --motor MAC800``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import yaml
+from tuning.autotune800 import (
+    DEFAULT_NAME,
+    MOVE_DISTANCE,
+    MOVE_V_SOLL,
+    autotune800,
+    default_filters,
+)
+from tuning.cli import app
+from tuning.design800 import (
+    check800,
+    design_current800,
+    main_filter_registers,
+    quantize800,
+    synthesize800,
+    verify800,
+)
+from tuning.family import tuning_family
+from tuning.quantize import QuantizationError
+from tuning.sixth_order import TS_I, TS_O, VFX_KEYS, VFY_KEYS, Motor800
+from tuning.verify import position_move
+from typer.testing import CliRunner
+
+from jvl_gym import MotorArray
+from jvl_gym.families.mac800.table import TABLE
+from jvl_gym.registers import from_raw, to_raw
+
+J_M = 1.2e-4  #: rotor inertia of the representative MAC800 (configs/motors/MAC800.yaml)
+
+
+def test_the_family_comes_from_the_motor_type():
+    f = tuning_family("MAC800")
+    assert f.key == "mac800" and f.filter_order == 6 and not f.test_modes
+    assert f.outer_dt == pytest.approx(1 / 770) and f.inner_dt == pytest.approx(1 / 11550)
+    assert f.counts_per_rev == 8000 and f.table.lookup("KVFX6").format.value == "Fixed16"
+    assert (TS_O, TS_I) == (f.outer_dt, f.inner_dt)
+    g = tuning_family("MAC140")
+    assert g.key == "mac050_141" and g.filter_order == 4 and g.counts_per_rev == 4096
+    with pytest.raises(ValueError, match="no tuning procedure"):
+        tuning_family("MIS231")
+
+
+def test_autotune_of_two_loaded_mac800s_meets_the_acceptance():
+    # load ratios 3 and 7 (J = 4 and 8 x J_m); the second with Coulomb friction, which holds
+    # the default setup's loop (KVOUT = 1) outside the in-position window
+    loads = np.array([3.0, 7.0]) * J_M
+    kw = dict(load_inertia=loads, coulomb_friction=np.array([0.0, 0.05]),
+              viscous_friction=np.array([2e-4, 0.0]))
+    m = MotorArray("MAC800", n=2, seed=0, position_noise=0.85, **kw)
+    res = autotune800(m)
+    for i, r in enumerate(res):
+        j_true = J_M + loads[i]
+        assert abs(r.ident.mechanics.J / j_true - 1) < 0.05
+        assert r.ident.mechanics.ci_J[0] < r.ident.mechanics.J < r.ident.mechanics.ci_J[1]
+        assert abs(r.ident.coil.R_phase / 2.9 - 1) < 0.1
+        assert abs(r.ident.coil.L_phase / 8.7e-3 - 1) < 0.05 and r.ident.coil.delay == 1
+        assert r.chosen.name != DEFAULT_NAME and "settles in" in r.reason
+        d = r.chosen.design
+        # stable after quantisation with PM >= 45 deg, on the identified and the true motor
+        assert check800(d.verification) == []
+        assert d.verification.speed.pm_deg >= 45 and d.verification.all_stable
+        true = verify800(Motor800.from_config("MAC800"), d.registers, j_true)
+        assert true.speed.pm_deg >= 45 and true.current.pm_deg >= 45 and true.all_stable
+        # the 20 000-count move on the true motor: faster than the default setup
+        sim = MotorArray("MAC800", n=2, seed=1, position_noise=0.85,
+                         **{k: v[i] for k, v in kw.items()})
+        sim.load_setup({"registers": r.chosen.registers}, index=[0])
+        mv = position_move(sim, MOVE_DISTANCE, MOVE_V_SOLL, r.move[2], seconds=2.0, dt=TS_O)
+        assert np.isfinite(mv.settle_s[0]) and mv.settle_s[0] < mv.settle_s[1]
+        assert mv.errors[0] == 0
+    assert res[1].settle_s[DEFAULT_NAME] == np.inf  # friction: the default never settles
+
+
+def test_quantisation_round_trip_to_the_exact_fixed16_and_fixed24_raw_values():
+    md = Motor800.from_config("MAC800")
+    d = synthesize800(md, 5 * J_M, notch_hz=120.0)
+    q, ideal = d.registers, d.ideal
+    raws = {}
+    for name, value in q.items():
+        reg = TABLE.lookup(name)
+        raw = int(to_raw(reg, value))
+        raws[name] = raw
+        assert from_raw(reg, raw) == value  # exactly representable
+        if reg.format.value in ("Fixed16", "Fixed24"):
+            assert abs(raw - ideal[name] * reg.scale) <= 1.0  # rounded to the nearest raw
+    assert TABLE.lookup("KVFX6").scale == 2**16 and TABLE.lookup("KVB4").scale == 2**24
+    # the integrator's pole stays at z = 1: the stored KVFY sum to exactly 1 (65536 raw)
+    assert sum(raws[k] for k in VFY_KEYS) == 2**16
+    assert raws["KIFY1"] + raws["KIFY0"] == 2**16
+    # PI, low-pass and notch: 4 numerator taps, 5 denominator taps (fifth order)
+    assert raws["KVFX3"] != 0 and raws["KVFX2"] == 0
+    assert raws["KVFY1"] != 0 and raws["KVFY0"] == 0
+    # the motor stores the same raw values
+    m = MotorArray("MAC800", n=1)
+    m.load_setup({"registers": q})
+    for name, value in q.items():
+        assert float(m.read(name)[0]) == value
+    assert check800(d.verification) == []
+    assert d.verification.ideal_speed is not None
+
+
+def test_quantisation_refuses_values_outside_the_table_ranges():
+    with pytest.raises(QuantizationError, match="KVB4.*Fixed24"):
+        quantize800({"KVB4": 200.0})
+    with pytest.raises(QuantizationError, match="KVFX6.*Fixed16"):
+        quantize800({"KVFX6": 40000.0})
+    with pytest.raises(ValueError, match="not in"):
+        main_filter_registers(0.01, 0.001, 4.0, f_lp=500.0)
+
+
+def test_lowpass_takes_the_speed_noise_down_at_nyquist():
+    md = Motor800.from_config("MAC800")
+    cur = design_current800(md)
+    lp = synthesize800(md, 4 * J_M, cur, lowpass=True)
+    pi = synthesize800(md, 4 * J_M, cur, lowpass=False)
+
+    def nyquist_gain(regs):
+        num = sum(regs[k] * (-1) ** n for n, k in enumerate(VFX_KEYS))
+        den = 1 - sum(regs[k] * (-1) ** (n + 1) for n, k in enumerate(VFY_KEYS))
+        return abs(num / den) * regs["KVOUT"] * 2.0 ** -regs["MODEL_POT"]
+
+    assert nyquist_gain(lp.registers) < 0.6 * nyquist_gain(pi.registers)
+    assert lp.f_lp and lp.f_lp < 0.5 / TS_O
+    assert sum(1 for k in VFY_KEYS if lp.registers[k] != 0) == 3  # integrator + 2 poles
+
+
+def test_cli_autotune_mac800_writes_a_setup_the_family_loads(tmp_path):
+    res = CliRunner().invoke(app, ["autotune", "--motor", "MAC800", "--load-inertia", "6e-4",
+                                   "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    setup = tmp_path / "setup.yaml"
+    data = yaml.safe_load(setup.read_text())
+    assert data["motor"] == "MAC800"
+    assert abs(data["registers"]["KVOUT"] - 6.0) < 0.3
+    assert data["registers"]["S_ORDER"] == 6
+    m = MotorArray("MAC800", n=1, setup=setup)
+    assert float(m.read("KVOUT")[0]) == data["registers"]["KVOUT"]
+    report = (tmp_path / "report.txt").read_text()
+    assert "Acceptance step" in report and "default setup" in report
+    res = CliRunner().invoke(app, ["verify", "--setup", str(setup)])
+    assert res.exit_code == 0, res.output
+    assert "all stable True" in res.output
+    res = CliRunner().invoke(app, ["autotune", "--motor", "MAC800", "--port", "loop://",
+                                   "--out", str(tmp_path)])
+    assert res.exit_code != 0 and "not available for the MAC800" in res.output
+
+
+def test_cli_synthesize_mac800_and_refusals(tmp_path):
+    out = tmp_path / "s.yaml"
+    res = CliRunner().invoke(app, ["synthesize", "--motor", "MAC400", "--inertia", "3e-4",
+                                   "--out", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "pi + low-pass" in res.output
+    regs = yaml.safe_load(out.read_text())["registers"]
+    assert regs["KVOUT"] == pytest.approx(5.0, abs=1e-4)  # 3e-4 / J_m 6e-5 (MAC400.yaml)
+    MotorArray("MAC400", n=1, setup=out)
+    res = CliRunner().invoke(app, ["verify", "--setup", str(out), "--inertia", "3e-4"])
+    assert res.exit_code == 0 and "all stable True" in res.output
+    res = CliRunner().invoke(app, ["identify", "--motor", "MAC800", "--testu", str(out)])
+    assert res.exit_code != 0 and "no TESTU/TESTA" in res.output
+
+
+def test_default_filters_are_the_family_setup():
+    regs = default_filters("MAC800")
+    assert regs["KVFX6"] == pytest.approx(0.1073) and regs["KVFY5"] == 1.0
+    assert regs["S_ORDER"] == 6  # the table's default: the full order
