@@ -25,6 +25,16 @@ frequency, then least squares), the rest linear. The interval of the frequency i
 covariance with the residual variance inflated for its autocorrelation
 (:func:`tuning.identify_coil.correlation_inflation`) and a Student t factor.
 
+The current loop. The record shows the coupling *under the closed current loop*: the per-phase
+PI loops do not reject the back-EMF of the oscillation completely, and the torque it costs acts
+on the rotor like extra inertia and damping, which lowers the resonance by 1–5 % (more for large
+load ratios) and raises its damping. :func:`coupling_resonance` undoes this with the model of
+:func:`tuning.models.inner_modes` (current loop, coil with back-EMF, both masses; the current-loop
+registers of the record): it finds the coupling's resonance and damping ratio whose modelled
+mode is the fitted one. The model is quasi-static in the electrical angle; what it leaves out
+(the per-phase loops see the oscillation beside the electrical frequency) is taken as up to
+:data:`SHIFT_ERROR` of the modelled shift and added to both sides of the intervals.
+
 The load ratio. ``J_l/J_m = J/J_m − 1`` from the identified total inertia
 (:mod:`tuning.identify_mechanics`, TESTA) and the type's rotor inertia; the anti-resonance (the
 load's own frequency on a held motor) is ``ω_a = ω_r/√(1 + J_l/J_m)``.
@@ -38,7 +48,7 @@ periods and its oscillation stands out of the noise, else the long one.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -49,11 +59,12 @@ from jvl_gym.families.mac050_141 import constants as C
 
 from .identify_coil import correlation_inflation
 from .intervals import LEVEL
-from .models import TS_I, TS_O
+from .models import TS_I, TS_O, MotorData, inner_modes
 
 __all__ = ["ResonanceEstimate", "ResonanceFit", "acquire_step_windows", "fit_resonance",
            "identify_resonance", "join_windows", "step_torques", "estimate_from_fits",
-           "WINDOW", "WINDOW_STEP"]
+           "coupling_of", "apparent_resonance", "coupling_resonance", "CURRENT_LOOP_KEYS",
+           "WINDOW", "WINDOW_STEP", "SHIFT_ERROR"]
 
 WINDOW: int = 64  #: samples of one record (the sample buffer)
 WINDOW_STEP: int = 4  #: outer samples between the starts of two windows (60 inner samples)
@@ -61,6 +72,12 @@ ELDEG_TURN: int = 2048  #: ELDEG_IST counts per electrical turn (3.2.143)
 ANINP_FULL: int = 1023  #: ANINP of ±10 V (3.2.122)
 SKIP_S: float = 2e-3  #: time after the step left out of the fit (the current rise) [s]
 F_MIN, F_MAX = 15.0, 480.0  #: frequency range searched [Hz]
+#: the current-loop registers (3.2.106–3.2.111) the correction for the current loop needs
+CURRENT_LOOP_KEYS = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
+#: the model's error of the current loop's shift, as a share of the modelled shift (module
+#: docstring); on the benchmark's 20 loads (docs/tuning.md) the largest was 0.64
+SHIFT_ERROR: float = 0.75
+ZETA_MIN: float = 0.002  #: smallest damping ratio an estimate or interval reports
 
 
 @dataclass
@@ -71,8 +88,8 @@ class ResonanceFit:
     ----------
     f_hz, f_sd : float
         Damped oscillation frequency [Hz] and its standard error (inflated).
-    sigma : float
-        Decay rate [1/s].
+    sigma, sigma_sd : float
+        Decay rate [1/s] and its standard error (inflated).
     amplitude : float
         Oscillation amplitude [counts] at the start of the fit.
     amplitude_sd : float
@@ -88,6 +105,7 @@ class ResonanceFit:
     f_hz: float
     f_sd: float
     sigma: float
+    sigma_sd: float
     amplitude: float
     amplitude_sd: float
     periods: float
@@ -102,13 +120,16 @@ class ResonanceEstimate:
     Attributes
     ----------
     f_res, f_anti : float
-        Resonance (motor driven, load free) and anti-resonance frequency [Hz].
+        Resonance (motor driven, load free) and anti-resonance frequency [Hz] of the coupling.
     load_ratio : float
         J_l/J_m.
     zeta : float
-        Damping ratio of the resonance, σ/ω_r.
+        Modal damping ratio of the coupling's resonance.
+    f_seen, zeta_seen : float
+        Resonance [Hz] and damping ratio as recorded, under the closed current loop
+        (√(ω_d² + σ²)/2π and σ/√(ω_d² + σ²) of the fit).
     ci : dict
-        95 % intervals (lo, hi) of "f_res", "f_anti", "load_ratio".
+        95 % intervals (lo, hi) of "f_res", "f_anti", "load_ratio", "zeta".
     detected : bool
         An oscillation was found (amplitude above three standard errors with enough periods).
     fits : list of ResonanceFit
@@ -121,6 +142,8 @@ class ResonanceEstimate:
     f_anti: float
     load_ratio: float
     zeta: float
+    f_seen: float
+    zeta_seen: float
     ci: dict[str, tuple[float, float]]
     detected: bool
     fits: list[ResonanceFit] = field(default_factory=list)
@@ -266,8 +289,9 @@ def fit_resonance(x: np.ndarray, dt: float = TS_I, skip_s: float = SKIP_S,
     amp_sd = math.sqrt(max(float(g @ cov[-4:-2, -4:-2] @ g), 0.0))
     dof = max(int(n / infl) - npar, 1)
     f_sd = math.sqrt(max(cov[-2, -2], 0.0)) / (2 * math.pi)
-    return ResonanceFit(f_hz=w / (2 * math.pi), f_sd=f_sd,
-                        sigma=sigma, amplitude=amp, amplitude_sd=amp_sd,
+    return ResonanceFit(f_hz=w / (2 * math.pi), f_sd=f_sd, sigma=sigma,
+                        sigma_sd=math.sqrt(max(cov[-1, -1], 0.0)), amplitude=amp,
+                        amplitude_sd=amp_sd,
                         periods=w / (2 * math.pi) * ts[-1], rms=math.sqrt(float(r @ r) / n),
                         dof=dof)
 
@@ -277,28 +301,73 @@ def _usable(fit: ResonanceFit, min_periods: float) -> bool:
             and fit.amplitude > 0.5 and fit.f_sd < 0.05 * fit.f_hz)
 
 
+def coupling_of(J_m: float, load_ratio: float, f_res: float, zeta: float
+                ) -> tuple[float, float, float]:
+    """``(J_l, k, d)`` of the two-mass plant with resonance ``f_res`` [Hz], load ratio J_l/J_m
+    (> 0) and modal damping ratio ``zeta`` (docs/model.md §5.2)."""
+    j_l = load_ratio * J_m
+    w = 2 * math.pi * f_res
+    k = w * w / (1 / J_m + 1 / j_l)
+    d = 2 * zeta * w * J_m * j_l / (J_m + j_l)
+    return j_l, k, d
+
+
+def apparent_resonance(motor: MotorData, regs: Mapping[str, float], load_ratio: float,
+                       f_res: float, zeta: float) -> tuple[float, float]:
+    """Resonance [Hz] and damping ratio of the motor under its closed current loop (current-loop
+    registers ``regs``, back-EMF included, :func:`tuning.models.inner_modes`) for a coupling
+    with resonance ``f_res`` [Hz], damping ratio ``zeta`` and load ratio ``load_ratio`` (> 0)."""
+    cp = coupling_of(motor.J_m, load_ratio, f_res, zeta)
+    s = inner_modes(motor, regs, motor.J_m, 0.0, cp, back_emf=True)
+    s = s[s.imag > 0]
+    k = int(np.argmin(np.abs(np.abs(s) - 2 * math.pi * f_res)))
+    return float(abs(s[k])) / (2 * math.pi), float(-s[k].real / abs(s[k]))
+
+
+def coupling_resonance(motor: MotorData, regs: Mapping[str, float], load_ratio: float,
+                       f_seen: float, zeta_seen: float) -> tuple[float, float]:
+    """The coupling's resonance [Hz] and damping ratio whose mode under the closed current loop
+    (:func:`apparent_resonance`) is ``f_seen`` [Hz], ``zeta_seen`` (fixed-point iteration; the
+    map is close to a constant factor and offset)."""
+    f, z = f_seen, max(zeta_seen, ZETA_MIN)
+    for _ in range(8):
+        fa, za = apparent_resonance(motor, regs, load_ratio, f, z)
+        f *= f_seen / fa
+        z = max(z + zeta_seen - za, ZETA_MIN)
+    return f, z
+
+
 def estimate_from_fits(fits: Sequence[ResonanceFit], J: float, J_ci: tuple[float, float],
-                       J_m: float) -> ResonanceEstimate:
+                       motor: MotorData, regs: Mapping[str, float] | None = None
+                       ) -> ResonanceEstimate:
     """The estimate from the short record's fit (kept when it holds ≥ 3 periods and a clear
     oscillation) or the long one's, with the load ratio from the identified total inertia
-    ``J`` (interval ``J_ci``) [kg·m²] and the rotor inertia ``J_m``."""
+    ``J`` (interval ``J_ci``) [kg·m²] and the rotor inertia ``motor.J_m``. With the current-loop
+    registers ``regs`` (:data:`CURRENT_LOOP_KEYS`) of the records the resonance and damping
+    are the coupling's (:func:`coupling_resonance`), else the recorded ones."""
     used = 0 if _usable(fits[0], 3.0) else len(fits) - 1
     fit = fits[used]
     detected = _usable(fit, 1.5)
     tq = float(stats.t.ppf(0.5 + LEVEL / 2, fit.dof))
     # the oscillation's frequency is the damped one; the resonance is √(ω_d² + σ²)
     w_d = 2 * math.pi * fit.f_hz
-    f_res = math.hypot(w_d, fit.sigma) / (2 * math.pi)
-    hw = tq * fit.f_sd
-    ratio = max(J / J_m - 1.0, 0.0)
-    r_lo, r_hi = max(J_ci[0] / J_m - 1.0, 0.0), max(J_ci[1] / J_m - 1.0, 0.0)
+    w_n = math.hypot(w_d, fit.sigma)
+    f_seen = w_n / (2 * math.pi)
+    zeta_seen = fit.sigma / w_n if w_n > 0 else 0.0
+    ratio = max(J / motor.J_m - 1.0, 0.0)
+    r_lo, r_hi = max(J_ci[0] / motor.J_m - 1.0, 0.0), max(J_ci[1] / motor.J_m - 1.0, 0.0)
+    f_res, zeta = f_seen, max(zeta_seen, ZETA_MIN)
+    if regs is not None and ratio > 0 and f_seen > 0:
+        f_res, zeta = coupling_resonance(motor, regs, ratio, f_seen, zeta_seen)
+    hw = tq * fit.f_sd * f_res / f_seen + SHIFT_ERROR * abs(f_res - f_seen) if f_seen else 0.0
+    z_hw = tq * fit.sigma_sd / w_n + SHIFT_ERROR * abs(zeta - zeta_seen) if w_n else 0.0
     f_lo, f_hi = max(f_res - hw, 0.0), f_res + hw
-    f_anti = f_res / math.sqrt(1.0 + ratio)
     return ResonanceEstimate(
-        f_res=f_res, f_anti=f_anti, load_ratio=ratio,
-        zeta=fit.sigma / math.hypot(w_d, fit.sigma) if f_res > 0 else 0.0,
+        f_res=f_res, f_anti=f_res / math.sqrt(1.0 + ratio), load_ratio=ratio, zeta=zeta,
+        f_seen=f_seen, zeta_seen=zeta_seen,
         ci={"f_res": (f_lo, f_hi), "load_ratio": (r_lo, r_hi),
-            "f_anti": (f_lo / math.sqrt(1.0 + r_hi), f_hi / math.sqrt(1.0 + r_lo))},
+            "f_anti": (f_lo / math.sqrt(1.0 + r_hi), f_hi / math.sqrt(1.0 + r_lo)),
+            "zeta": (max(zeta - z_hw, ZETA_MIN), zeta + z_hw)},
         detected=detected, fits=list(fits), used=used)
 
 
@@ -316,8 +385,11 @@ def identify_resonance(m: Any, idents: Sequence[Any], short_windows: int = 3,
     and identify the resonance; ``idents`` are the motors' :class:`tuning.autotune.
     Identification` (their total inertia J and its interval, rotor inertia J_m, K_vf).
 
-    Returns one :class:`ResonanceEstimate` per motor.
+    Returns one :class:`ResonanceEstimate` per motor, corrected for the current loop with the
+    current-loop registers ``m`` has.
     """
+    regs = [{k: float(np.asarray(m.read(k))[i]) for k in CURRENT_LOOP_KEYS}
+            for i in range(len(idents))]
     J = np.array([i.mechanics.J for i in idents])
     kvf = np.array([i.motor.torque_per_vf for i in idents])
     fits: list[list[ResonanceFit]] = [[] for _ in idents]
@@ -327,5 +399,5 @@ def identify_resonance(m: Any, idents: Sequence[Any], short_windows: int = 3,
         wins = acquire_step_windows(m, step_torques(J, kvf, dur), n_win)
         for i, w in enumerate(wins):
             fits[i].append(fit_resonance(join_windows(w)))
-    return [estimate_from_fits(f, idn.mechanics.J, idn.mechanics.ci["J"], idn.motor.J_m)
-            for f, idn in zip(fits, idents)]
+    return [estimate_from_fits(f, idn.mechanics.J, idn.mechanics.ci["J"], idn.motor, r)
+            for f, idn, r in zip(fits, idents, regs)]

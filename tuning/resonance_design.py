@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .identify_resonance import coupling_of
 from .models import TS_O, MotorData, freqresp, speed_open_loop, speed_plant
 from .quantize import quantize_registers
 from .verify import LoopMetrics, frequency_grid, metrics_from_response
@@ -135,17 +136,6 @@ def scaled_gains(regs: Mapping[str, float], g: float) -> dict[str, float]:
     kp, ki = -regs["KVFX3"], regs["KVFX4"] + regs["KVFX3"]
     out.update({"KVFX4": g * kp + g * g * ki, "KVFX3": -g * kp})
     return out
-
-
-def coupling_of(J_m: float, load_ratio: float, f_res: float, zeta: float
-                ) -> tuple[float, float, float]:
-    """``(J_l, k, d)`` of the two-mass plant with resonance ``f_res`` [Hz], load ratio J_l/J_m
-    and modal damping ratio ``zeta`` (docs/model.md §5.2)."""
-    j_l = load_ratio * J_m
-    w = 2 * math.pi * f_res
-    k = w * w / (1 / J_m + 1 / j_l)
-    d = 2 * zeta * w * J_m * j_l / (J_m + j_l)
-    return j_l, k, d
 
 
 def two_mass_metrics(motor: MotorData, regs: Mapping[str, float],
