@@ -237,6 +237,7 @@ def run_two_mass(n: int = 10, seed: int = 0, subset: list[int] | None = None
     from tuning.autotune import synthesize
     from tuning.identify_resonance import identify_resonance
     from tuning.resonance_design import (
+        RATIO_MIN,
         choose,
         coupling_of,
         move_on,
@@ -254,12 +255,11 @@ def run_two_mass(n: int = 10, seed: int = 0, subset: list[int] | None = None
     for i, (idn, est) in enumerate(zip(ids, res)):
         md, mech = idn.motor, idn.mechanics
         plain = synthesize(md, mech.J, mech.coulomb, structure="pi", position_integral=False)
-        cands = resonance_designs(md, plain.registers, est.f_res, max(est.load_ratio, 0.05),
-                                  max(est.zeta, 0.005), max(mech.viscous, 0.0),
-                                  est.ci["f_res"])
+        ratio = max(est.load_ratio, RATIO_MIN)
+        cands = resonance_designs(md, plain.registers, est.f_res, ratio, est.zeta,
+                                  max(mech.viscous, 0.0), est.ci)
         params = simulation_parameters(idn)
-        j_l, k, d = coupling_of(md.J_m, max(est.load_ratio, 0.05), est.f_res,
-                                max(est.zeta, 0.005))
+        j_l, k, d = coupling_of(md.J_m, ratio, est.f_res, est.zeta)
         params.update(rotor_inertia=md.J_m, load_inertia=j_l, coupling_stiffness=k,
                       coupling_damping=d)
         a_soll = move_acceleration(idn)
