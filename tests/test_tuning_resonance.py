@@ -9,9 +9,10 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 from tuning.autotune import synthesize
-from tuning.identify_resonance import ELDEG_TURN, WINDOW, identify_resonance, join_windows
+from tuning.identify_resonance import ELDEG_TURN, identify_resonance, step_record
 from tuning.models import TS_O, MotorData, freqresp, speed_plant
 from tuning.quantize import quantize_value
+from tuning.records import RecordError
 from tuning.resonance_design import (
     PM_MIN,
     alias_hz,
@@ -59,13 +60,25 @@ def test_resonance_is_found_within_five_percent() -> None:
     assert np.all(m.read("MODE_REG") == 0)  # left in INIT_MODE
 
 
-def test_join_windows_undoes_the_wrap_and_the_offsets() -> None:
-    x = 0.5 * np.arange(400) ** 1.5  # a motor angle after a step [counts]
-    starts = np.arange(0, 400 - WINDOW + 1, 60)
-    win = np.array([np.floor(x[s:s + WINDOW]) % ELDEG_TURN for s in starts])
-    joined = join_windows(win)
-    n = joined.size
-    assert np.max(np.abs(joined - (np.floor(x[:n]) - np.floor(x[0])))) < 1e-9
+def test_step_record_starts_at_the_step_and_ends_at_the_brake() -> None:
+    n = 895
+    k0, k1 = 37, 600  # the step and the brake, inner samples
+    vf = np.zeros(n)
+    vf[k0:k1], vf[k1:] = 300.0, -300.0
+    x = np.zeros(n)
+    t = np.arange(k1 - k0)
+    x[k0:k1] = 0.5 * t**2 + 3.0 * np.sin(0.2 * t)  # angle after the step [counts]
+    x[:k0] = 0.0
+    x[k1:] = x[k1 - 1]
+    rec = step_record(np.floor(x + 100.0) % ELDEG_TURN, vf)
+    assert rec.size == k1 - k0
+    np.testing.assert_allclose(rec, np.floor(x[k0:k1] + 100.0) - np.floor(x[k0] + 100.0))
+    with pytest.raises(RecordError, match="not in the sample buffer"):
+        step_record(x % ELDEG_TURN, np.zeros(n))
+    late = np.zeros(n)
+    late[n - 20:] = 300.0
+    with pytest.raises(RecordError, match="came late"):
+        step_record(x % ELDEG_TURN, late)
 
 
 def test_sections_have_unity_dc_gain_and_fit_the_free_order() -> None:

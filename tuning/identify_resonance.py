@@ -5,13 +5,13 @@ The record. In AT_MODE (manual 4.4.5) the speed regulator is passive and the cur
 makes the torque ``VF_OUT = ANINP·T_SOLL/1023``; ANINP is the analogue input plus ANINP_OFFSET
 (3.2.122/123), so writing ANINP_OFFSET = ±1023 with the input at 0 V is a torque step of
 ±T_SOLL that needs no signal source. The sample buffer (3.2.112–116, CNTRL_BITS RECORDBIT,
-REWINDBIT, RECINNERBIT, 3.2.36) records ELDEG_IST (3.2.143, the encoder count modulo 2048) at the
-current-loop rate, 7812.5 Hz. The buffer holds 64 samples (8.2 ms), less than one period of a
-30 Hz resonance, so the step is repeated and window ``w`` starts recording ``4w`` outer samples
-(60 inner samples) after the step: the windows overlap by four samples, whose equality fixes the
-multiple of 2048 counts between them, and joined they are one inner-rate record of the motor
-angle after the step, as long as wanted. Between steps the motor is braked by the reversed
-torque and rests.
+REWINDBIT, RECINNERBIT, 3.2.36) records ELDEG_IST (3.2.143, the encoder count modulo 2048) and
+VF_OUT (3.2.121) at the current-loop rate, 7812.5 Hz, 895 samples (REC_CNT, 3.2.116: 114.6 ms).
+The recording starts :data:`LEAD_OUTER` outer samples before the step, so the step is in the
+record wherever it falls: VF_OUT marks it, and the end of the step (the brake) too. This needs no
+timing between the host and the motor, so the same procedure runs over a serial link
+(:class:`tuning.serial_source.SerialMotor`), where a frame's round trip is milliseconds of motor
+time. Between steps the motor is braked by the reversed torque and rests.
 
 The model. With the current loop fast against the mechanics the torque is a step ``T`` and the
 motor angle (torque-driven two-mass system, the load free) is::
@@ -39,9 +39,10 @@ The load ratio. ``J_l/J_m = J/J_m − 1`` from the identified total inertia
 (:mod:`tuning.identify_mechanics`, TESTA) and the type's rotor inertia; the anti-resonance (the
 load's own frequency on a held motor) is ``ω_a = ω_r/√(1 + J_l/J_m)``.
 
-Two records: a short one (3 windows, 24 ms) with a large torque for resonances above about
-120 Hz, whose oscillation in the angle is small (``∝ 1/ω²``), and a long one (14 windows,
-108 ms) with a small torque for low ones. The short record is kept when it holds at least three
+Two records: a short one (:data:`SHORT_S`, 24 ms) with a large torque for resonances above
+about 120 Hz, whose oscillation in the angle is small (``∝ 1/ω²``), and a long one
+(:data:`LONG_S`, 108 ms) with a small torque for low ones; each torque reaches 150 rad/s at the
+step's planned end. The short record is kept when it holds at least three
 periods and its oscillation stands out of the noise, else the long one.
 """
 
@@ -56,18 +57,21 @@ import numpy as np
 from scipy import optimize, stats
 
 from jvl_gym.families.mac050_141 import constants as C
+from jvl_gym.families.mac050_141.table import TABLE
 
 from .identify_coil import correlation_inflation
 from .intervals import LEVEL
 from .models import TS_I, TS_O, MotorData, inner_modes
+from .records import RecordError
 
-__all__ = ["ResonanceEstimate", "ResonanceFit", "acquire_step_windows", "fit_resonance",
-           "identify_resonance", "join_windows", "step_torques", "estimate_from_fits",
+__all__ = ["ResonanceEstimate", "ResonanceFit", "acquire_step_records", "fit_resonance",
+           "identify_resonance", "step_record", "step_torques", "estimate_from_fits",
            "coupling_of", "apparent_resonance", "coupling_resonance", "CURRENT_LOOP_KEYS",
-           "WINDOW", "WINDOW_STEP", "SHIFT_ERROR"]
+           "SHORT_S", "LONG_S", "SHIFT_ERROR"]
 
-WINDOW: int = 64  #: samples of one record (the sample buffer)
-WINDOW_STEP: int = 4  #: outer samples between the starts of two windows (60 inner samples)
+LEAD_OUTER: int = 2  #: outer samples recorded before the step
+SHORT_S, LONG_S = 0.024, 0.108  #: torque-step lengths of the short and the long record [s]
+MIN_RECORD_S: float = 0.012  #: least length of a usable record after the step [s]
 ELDEG_TURN: int = 2048  #: ELDEG_IST counts per electrical turn (3.2.143)
 ANINP_FULL: int = 1023  #: ANINP of ±10 V (3.2.122)
 SKIP_S: float = 2e-3  #: time after the step left out of the fit (the current rise) [s]
@@ -174,64 +178,69 @@ def _brake_and_rest(m: Any, sign: np.ndarray, rest_s: float) -> None:
     m.step(int(rest_s / TS_O))
 
 
-def acquire_step_windows(m: Any, t_soll: np.ndarray | float, n_windows: int,
+def acquire_step_records(m: Any, t_soll: np.ndarray | float, duration_s: float,
                          rest_s: float = 1.0) -> list[np.ndarray]:
-    """Record ``n_windows`` windows of ELDEG_IST after AT_MODE torque steps of ``t_soll``
-    (VF_OUT units, per motor) on every motor of ``m`` (module docstring).
+    """Record the motor angle after an AT_MODE torque step of ``t_soll`` (VF_OUT units, per
+    motor) held ``duration_s`` [s], on every motor of ``m`` (module docstring).
 
-    Returns one (n_windows, 64) int array per motor, ELDEG_IST relative to its value at rest
-    before the step (modulo 2048); window ``w`` starts ``60·w`` inner samples after the step.
+    The sample buffer records ELDEG_IST and VF_OUT at the inner rate from before the step; the
+    step is where VF_OUT turns to the torque, the record ends where the brake reverses it or
+    the buffer ends. Returns one angle record per motor [counts, unwrapped], 0 at the step.
     The motors end in INIT_MODE at rest; T_SOLL, ANINP_OFFSET, SAMPLE1/2 and CNTRL_BITS are
     restored.
+
+    Raises
+    ------
+    RecordError
+        A motor's record does not hold the step and :data:`MIN_RECORD_S` after it (over a slow
+        serial link the mode change can arrive after the buffer is full).
     """
     t = np.broadcast_to(np.abs(np.asarray(t_soll, dtype=float)), (m.n,)).round()
     saved = {k: np.asarray(m.read(k)).copy()
              for k in ("T_SOLL", "ANINP_OFFSET", "SAMPLE1", "SAMPLE2", "CNTRL_BITS")}
-    el = m.table.lookup("ELDEG_IST").number if hasattr(m, "table") else 143
-    out = np.zeros((m.n, n_windows, WINDOW), dtype=np.int64)
     sign = np.ones(m.n)
     m.write("T_SOLL", t)
-    m.write("SAMPLE1", el)
-    m.write("SAMPLE2", el)
+    m.write("SAMPLE1", TABLE.lookup("ELDEG_IST").number)
+    m.write("SAMPLE2", TABLE.lookup("VF_OUT").number)
+    m.write("ANINP_OFFSET", (sign * ANINP_FULL).astype(int))
     rec_bits = C.RECORDBIT | C.REWINDBIT | C.RECINNERBIT
-    for w in range(n_windows):
-        cb = np.asarray(m.read("CNTRL_BITS")).astype(np.int64) & ~rec_bits
-        start = np.asarray(m.read("ELDEG_IST")).astype(np.int64)
-        m.write("ANINP_OFFSET", (sign * ANINP_FULL).astype(int))
-        m.write("MODE_REG", C.AT_MODE)
-        if w:
-            m.step(WINDOW_STEP * w)
-        m.write("CNTRL_BITS", cb | rec_bits)
-        m.step(math.ceil(WINDOW / C.INNER_PER_OUTER))
-        m.write("CNTRL_BITS", cb)
-        buf = m.sample_buffer()
-        raw = np.asarray(buf.get("ELDEG_IST", buf.get("SAMPLE1")))[:, :WINDOW]
-        out[:, w] = (raw - start[:, None]) % ELDEG_TURN
-        _brake_and_rest(m, sign, rest_s)
+    cb = np.asarray(m.read("CNTRL_BITS")).astype(np.int64) & ~rec_bits
+    m.write("CNTRL_BITS", cb | rec_bits)
+    m.step(LEAD_OUTER)
+    m.write("MODE_REG", C.AT_MODE)
+    m.step(max(int(round(duration_s / TS_O)), 1))
+    _brake_and_rest(m, sign, rest_s)
+    buf = m.sample_buffer()
     for k in ("T_SOLL", "ANINP_OFFSET", "SAMPLE1", "SAMPLE2", "CNTRL_BITS"):
         m.write(k, saved[k])
-    return [out[i] for i in range(m.n)]
+    return [step_record(buf["ELDEG_IST"][i], buf["VF_OUT"][i]) for i in range(m.n)]
 
 
-def join_windows(windows: np.ndarray) -> np.ndarray:
-    """One record of the motor angle [counts] from the windows of :func:`acquire_step_windows`
-    (rows), 0 at the step: each window unwrapped (period 2048) and shifted so that its first
-    samples match, on average, the overlapping last ones of the previous window. The shift is
-    a multiple of 2048 counts for identical repetitions; with noise the repetitions drift
-    apart by a little, which the shift removes at each join."""
-    step = WINDOW_STEP * C.INNER_PER_OUTER
-    overlap = WINDOW - step
-    x = np.unwrap(np.asarray(windows[0], dtype=float), period=ELDEG_TURN)
-    joined = list(x[:step])
-    prev = x
-    for row in windows[1:]:
-        y = np.unwrap(np.asarray(row, dtype=float), period=ELDEG_TURN)
-        y = y + np.mean(prev[step:] - y[:overlap])
-        joined.extend(y[:step])
-        prev = y
-    joined.extend(prev[step:])
-    a = np.asarray(joined)
-    return a - a[0]
+def step_record(eldeg: np.ndarray, vf_out: np.ndarray) -> np.ndarray:
+    """The motor angle [counts] from the torque step on, 0 at the step, from the recorded
+    ELDEG_IST (modulo 2048, unwrapped here) and VF_OUT of one motor: from the first sample with
+    VF_OUT > 0 to the last before VF_OUT changes again (the brake) or the record ends.
+
+    Raises
+    ------
+    RecordError
+        Fewer than :data:`MIN_RECORD_S` of the step in the record.
+    """
+    vf = np.asarray(vf_out, dtype=float)
+    on = np.flatnonzero(vf > 0)
+    n_min = int(round(MIN_RECORD_S / TS_I))
+    if on.size == 0:
+        raise RecordError("the torque step is not in the sample buffer (VF_OUT never turned "
+                          "on): the mode change came after the record ended")
+    k0 = int(on[0])
+    change = np.flatnonzero(vf[k0:] != vf[k0])
+    k1 = k0 + int(change[0]) if change.size else vf.size
+    if k1 - k0 < n_min:
+        raise RecordError(f"only {(k1 - k0) * TS_I * 1e3:.1f} ms of the torque step are in the "
+                          f"sample buffer, {MIN_RECORD_S * 1e3:.0f} ms needed: the mode change "
+                          "came late in the record (slow link)")
+    x = np.unwrap(np.asarray(eldeg, dtype=float)[k0:k1], period=ELDEG_TURN)
+    return x - x[0]
 
 
 def _basis(t: np.ndarray, w: float, sigma: float, order: int) -> np.ndarray:
@@ -379,11 +388,12 @@ def step_torques(J: np.ndarray, torque_per_vf: np.ndarray, duration_s: float,
     return np.clip(np.round(t), 5, 1023)
 
 
-def identify_resonance(m: Any, idents: Sequence[Any], short_windows: int = 3,
-                       long_windows: int = 14) -> list[ResonanceEstimate]:
-    """Record the short and the long step record (module docstring) on every motor of ``m``
-    and identify the resonance; ``idents`` are the motors' :class:`tuning.autotune.
-    Identification` (their total inertia J and its interval, rotor inertia J_m, K_vf).
+def identify_resonance(m: Any, idents: Sequence[Any], short_s: float = SHORT_S,
+                       long_s: float = LONG_S) -> list[ResonanceEstimate]:
+    """Record the short and the long torque step (module docstring) on every motor of ``m``
+    (a ``MotorArray`` or :class:`tuning.serial_source.SerialMotor`) and identify the
+    resonance; ``idents`` are the motors' :class:`tuning.autotune.Identification` (their total
+    inertia J and its interval, rotor inertia J_m, K_vf).
 
     Returns one :class:`ResonanceEstimate` per motor, corrected for the current loop with the
     current-loop registers ``m`` has.
@@ -393,11 +403,8 @@ def identify_resonance(m: Any, idents: Sequence[Any], short_windows: int = 3,
     J = np.array([i.mechanics.J for i in idents])
     kvf = np.array([i.motor.torque_per_vf for i in idents])
     fits: list[list[ResonanceFit]] = [[] for _ in idents]
-    for n_win in (short_windows, long_windows):
-        dur = (n_win * WINDOW_STEP * C.INNER_PER_OUTER + WINDOW - WINDOW_STEP
-               * C.INNER_PER_OUTER) * TS_I
-        wins = acquire_step_windows(m, step_torques(J, kvf, dur), n_win)
-        for i, w in enumerate(wins):
-            fits[i].append(fit_resonance(join_windows(w)))
+    for dur in (short_s, long_s):
+        for i, x in enumerate(acquire_step_records(m, step_torques(J, kvf, dur), dur)):
+            fits[i].append(fit_resonance(x))
     return [estimate_from_fits(f, idn.mechanics.J, idn.mechanics.ci["J"], idn.motor, r)
             for f, idn, r in zip(fits, idents, regs)]
