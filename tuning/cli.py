@@ -289,14 +289,20 @@ def autotune(motor: str = typer.Option("MAC140"),
 
         from .serial_source import autotune_over_serial
 
+        sections: list[tuple[str, Path]] = []
+        step = ((lambda sm, i, dd: sections.append(_two_mass_step(sm, i, dd, out)))
+                if resonance else None)
         ident, d = autotune_over_serial(port, motor, address, time_scale,
                                         n_coil or TEST_RECORD_SAMPLES,
                                         n_mech or TEST_RECORD_SAMPLES, structure, write,
-                                        progress=_say)
+                                        progress=_say, two_mass=step)
         setup = out / "setup.yaml"
         _write_setup(setup, motor, d.registers,
                      f"jvl-tune autotune --port {port}: identified J = {ident.mechanics.J:.4g}")
         files = write_report(out, ident, d, ident.motor, ident.mechanics.J)
+        for text, _path in sections:
+            with files[0].open("a") as fh:
+                fh.write("\n" + text)
         typer.echo(files[0].read_text())
         bad = verify_design(d)
         typer.echo(f"wrote {setup}" + (" and the motor's registers" if write and not bad else ""))

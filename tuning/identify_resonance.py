@@ -163,7 +163,11 @@ def _step_until(m: Any, done: Any, max_samples: int) -> None:
 
 def _brake_and_rest(m: Any, sign: np.ndarray, rest_s: float) -> None:
     """Reverse the torque until every motor's V_IST has reached zero, leave AT_MODE (4.4.5:
-    any mode request goes to INIT below 300 rpm) and rest ``rest_s`` [s]."""
+    any mode request goes to INIT below 300 rpm) and rest ``rest_s`` [s]. Over a serial link
+    the motor may not have started when this begins: it first waits until every motor
+    moves (at most 0.2 s)."""
+    _step_until(m, lambda: bool(np.all(np.asarray(m.read("V_IST"), dtype=float) * sign > 0)),
+                int(0.2 / TS_O))
     braking = np.ones(m.n, dtype=bool)
     for _ in range(int(1.0 / TS_O)):
         v = np.asarray(m.read("V_IST"), dtype=float)
@@ -231,7 +235,9 @@ def step_record(eldeg: np.ndarray, vf_out: np.ndarray) -> np.ndarray:
     n_min = int(round(MIN_RECORD_S / TS_I))
     if on.size == 0:
         raise RecordError("the torque step is not in the sample buffer (VF_OUT never turned "
-                          "on): the mode change came after the record ended")
+                          "on): the mode change came after the record ended; the link (or the "
+                          "twin's clock: `jvl-gym serve --speed 25` advances the motor in steps "
+                          "as long as the record) is too coarse, use --speed 5 or less")
     k0 = int(on[0])
     change = np.flatnonzero(vf[k0:] != vf[k0])
     k1 = k0 + int(change[0]) if change.size else vf.size
