@@ -19,11 +19,12 @@ motor angle (torque-driven two-mass system, the load free) is::
     θ_m(t) = T t²/(2 J) + A (1 − e^{−σt} cos(ω_d t + φ)) + …,   ω_r = √(k (1/J_m + 1/J_l))
 
 with ``J = J_m + J_l``: a parabola and a damped oscillation at the coupling's resonance. The fit
-takes a cubic polynomial (back-EMF and friction bend the parabola) plus ``e^{−σt}(a cos ω t +
-b sin ω t)``, from 2 ms after the step (the current rise); ω and σ nonlinear (a grid over the
-frequency, then least squares), the rest linear. The interval of the frequency is the fit's
-covariance with the residual variance inflated for its autocorrelation
-(:func:`tuning.identify_coil.correlation_inflation`) and a Student t factor.
+takes a polynomial (back-EMF and friction bend the parabola: order 3 over the short record,
+5 over the long one, whose residual is white with it and strongly correlated with order 3)
+plus ``e^{−σt}(a cos ω t + b sin ω t)``, from 2 ms after the step (the current rise); ω and σ
+nonlinear (a grid over the frequency, then least squares), the rest linear. The interval of
+the frequency is the fit's covariance with the residual variance inflated for its
+autocorrelation (:func:`tuning.identify_coil.correlation_inflation`) and a Student t factor.
 
 The current loop. The record shows the coupling *under the closed current loop*: the per-phase
 PI loops do not reject the back-EMF of the oscillation completely, and the torque it costs acts
@@ -72,6 +73,8 @@ __all__ = ["ResonanceEstimate", "ResonanceFit", "acquire_step_records", "fit_res
 LEAD_OUTER: int = 2  #: outer samples recorded before the step
 SHORT_S, LONG_S = 0.024, 0.108  #: torque-step lengths of the short and the long record [s]
 MIN_RECORD_S: float = 0.012  #: least length of a usable record after the step [s]
+#: polynomial order of the fit of the short and of the long record (module docstring)
+FIT_ORDERS: tuple[int, int] = (3, 5)
 ELDEG_TURN: int = 2048  #: ELDEG_IST counts per electrical turn (3.2.143)
 ANINP_FULL: int = 1023  #: ANINP of ±10 V (3.2.122)
 SKIP_S: float = 2e-3  #: time after the step left out of the fit (the current rise) [s]
@@ -409,8 +412,8 @@ def identify_resonance(m: Any, idents: Sequence[Any], short_s: float = SHORT_S,
     J = np.array([i.mechanics.J for i in idents])
     kvf = np.array([i.motor.torque_per_vf for i in idents])
     fits: list[list[ResonanceFit]] = [[] for _ in idents]
-    for dur in (short_s, long_s):
+    for dur, order in zip((short_s, long_s), FIT_ORDERS):
         for i, x in enumerate(acquire_step_records(m, step_torques(J, kvf, dur), dur)):
-            fits[i].append(fit_resonance(x))
+            fits[i].append(fit_resonance(x, order=order))
     return [estimate_from_fits(f, idn.mechanics.J, idn.mechanics.ci["J"], idn.motor, r)
             for f, idn, r in zip(fits, idents, regs)]
