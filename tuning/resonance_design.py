@@ -7,19 +7,21 @@ gain at DC, ``N(z) = (n0 + n1 z⁻¹ + n2 z⁻²)/(1 + d1 z⁻¹ + d2 z⁻²)``,
 them: ``VF·N`` has a numerator of order 3 (KVFX4..KVFX1) and a denominator ``(1 − z⁻¹)(1 + d1 z⁻¹
 + d2 z⁻²)`` of order 3 (KVFY3..KVFY1). The section is
 
-* a **notch** at the resonance as the speed loop sees it: VF runs at 520.8 Hz, so a resonance
-  above 260.4 Hz appears at its alias ``|f − round(f/f_s)·f_s|``;
+* a **notch** at the resonance as the speed loop sees it (the mode under the design's current
+  loop, :func:`tuning.identify_resonance.apparent_resonance`): VF runs at 520.8 Hz, so a
+  resonance above 260.4 Hz appears at its alias ``|f − round(f/f_s)·f_s|``;
   ``N = g·(1 − 2 cos ω₀ z⁻¹ + z⁻²)/(1 − 2 r cos ω₀ z⁻¹ + r² z⁻²)``, width set by the pole
   radius r, g for unity DC gain;
 * or a **low-pass**, a double real pole at p: ``N = (1 − p)²/(1 − 2p z⁻¹ + p² z⁻²)``.
 
 With a position integral (VF of order 2 over 2) the section does not fit and only the plain
 design is offered. Each candidate scales the design's crossover by a factor g (kp × g,
-ki × g², :func:`scaled_gains`) and is quantised to the registers' Fixed4 format
-(:mod:`tuning.quantize`). On the identified two-mass plant (:func:`tuning.models.speed_plant`
-with the coupling, lifted exactly to the outer rate, so the aliasing is in it), with the
-resonance where identified and ±:data:`F_SPREAD` (or its interval) away, the fastest candidate
-of each kind that is stable with PM ≥ 45° and GM ≥ 6 dB is kept: one without a section, one
+ki × g², :func:`scaled_gains`), moves gain between VF's numerator and KVOUT so quantisation
+keeps the integral gain (:func:`balanced`) and is quantised (:mod:`tuning.quantize`). On the
+two-mass plants of :func:`design_cases` (the identified load and the corners of its intervals;
+:func:`two_mass_plant`: :func:`tuning.models.speed_plant` with the coupling and the back-EMF,
+lifted exactly to the outer rate, so the aliasing is in it) the fastest candidate of each kind
+that is stable with PM ≥ 45° and GM ≥ 6 dB on all of them is kept: one without a section, one
 with a notch, one with a low-pass. :func:`choose` then simulates them and the plain design on
 the identified motor and keeps the one that settles first without a sustained oscillation.
 """
