@@ -9,17 +9,28 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 from tuning.autotune import synthesize
-from tuning.identify_resonance import ELDEG_TURN, WINDOW, identify_resonance, join_windows
+from tuning.identify_resonance import (
+    ELDEG_TURN,
+    apparent_resonance,
+    coupling_resonance,
+    identify_resonance,
+    step_record,
+)
 from tuning.models import TS_O, MotorData, freqresp, speed_plant
-from tuning.quantize import quantize_value
+from tuning.quantize import quantize_registers, quantize_value
+from tuning.records import RecordError
 from tuning.resonance_design import (
+    GM_MIN,
     PM_MIN,
     alias_hz,
+    balanced,
     choose,
     coupling_of,
+    design_cases,
     lowpass_section,
     notch_section,
     resonance_designs,
+    scaled_gains,
     two_mass_metrics,
     with_section,
 )
@@ -59,13 +70,25 @@ def test_resonance_is_found_within_five_percent() -> None:
     assert np.all(m.read("MODE_REG") == 0)  # left in INIT_MODE
 
 
-def test_join_windows_undoes_the_wrap_and_the_offsets() -> None:
-    x = 0.5 * np.arange(400) ** 1.5  # a motor angle after a step [counts]
-    starts = np.arange(0, 400 - WINDOW + 1, 60)
-    win = np.array([np.floor(x[s:s + WINDOW]) % ELDEG_TURN for s in starts])
-    joined = join_windows(win)
-    n = joined.size
-    assert np.max(np.abs(joined - (np.floor(x[:n]) - np.floor(x[0])))) < 1e-9
+def test_step_record_starts_at_the_step_and_ends_at_the_brake() -> None:
+    n = 895
+    k0, k1 = 37, 600  # the step and the brake, inner samples
+    vf = np.zeros(n)
+    vf[k0:k1], vf[k1:] = 300.0, -300.0
+    x = np.zeros(n)
+    t = np.arange(k1 - k0)
+    x[k0:k1] = 0.5 * t**2 + 3.0 * np.sin(0.2 * t)  # angle after the step [counts]
+    x[:k0] = 0.0
+    x[k1:] = x[k1 - 1]
+    rec = step_record(np.floor(x + 100.0) % ELDEG_TURN, vf)
+    assert rec.size == k1 - k0
+    np.testing.assert_allclose(rec, np.floor(x[k0:k1] + 100.0) - np.floor(x[k0] + 100.0))
+    with pytest.raises(RecordError, match="not in the sample buffer"):
+        step_record(x % ELDEG_TURN, np.zeros(n))
+    late = np.zeros(n)
+    late[n - 20:] = 300.0
+    with pytest.raises(RecordError, match="came late"):
+        step_record(x % ELDEG_TURN, late)
 
 
 def test_sections_have_unity_dc_gain_and_fit_the_free_order() -> None:
@@ -136,3 +159,53 @@ def test_two_mass_bode_marks_crossover_margins_and_resonance() -> None:
     assert any("alias 211 Hz" in s for s in labels)
     assert any("anti-resonance" in s for s in labels)
     assert all("PM" in t.get_text() for t in fig.axes[0].get_legend().get_texts()[:2])
+
+
+def test_current_loop_lowers_the_recorded_resonance_and_the_correction_undoes_it() -> None:
+    md = MotorData.from_config("MAC141")
+    regs = {k: float(MotorArray("MAC141", n=1).read(k)[0])
+            for k in ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")}
+    f_seen, z_seen = apparent_resonance(md, regs, 7.8, 200.0, 0.02)
+    assert 0.9 * 200.0 < f_seen < 0.99 * 200.0  # the back-EMF through the current loop
+    assert z_seen > 0.02
+    f, z = coupling_resonance(md, regs, 7.8, f_seen, z_seen)
+    assert f == pytest.approx(200.0, rel=1e-4) and z == pytest.approx(0.02, abs=1e-4)
+
+
+def test_balanced_keeps_the_loop_and_the_integral_gain_through_quantisation() -> None:
+    md = MotorData.from_config("MAC140")
+    pi = synthesize(md, 8 * md.J_m, structure="pi", position_integral=False).registers
+    low = with_section(scaled_gains(pi, 0.1), notch_section(35.0, 0.65))
+    b = balanced(low)
+    keys = ("KVFX4", "KVFX3", "KVFX2", "KVFX1")
+    np.testing.assert_allclose([b["KVOUT"] * b[k] for k in keys],
+                               [low["KVOUT"] * low[k] for k in keys], rtol=1e-12)
+
+    def integral(r: dict[str, float]) -> float:
+        return r["KVOUT"] * sum(r[k] for k in keys)
+
+    plain_err = abs(integral(quantize_registers(low)) / integral(low) - 1)
+    bal_err = abs(integral(quantize_registers(b)) / integral(low) - 1)
+    assert plain_err > 0.5  # rounded to (almost) no integral action
+    assert bal_err < 0.03
+
+
+def test_low_resonance_with_a_large_load_ratio_gets_a_design_with_the_margins() -> None:
+    # 34.7 Hz, J_l/J_m = 7: the anti-resonance (12.3 Hz) lies inside the rigid design's
+    # bandwidth; a lower crossover with a notch has the margins on every design case and on
+    # the true plant, after quantisation
+    md = MotorData.from_config("MAC140")
+    f, r, z = 34.7, 7.0, 0.012
+    plain = synthesize(md, md.J_m * (1 + r), structure="pi", position_integral=False)
+    ci = {"f_res": (0.97 * f, 1.03 * f), "load_ratio": (0.95 * r, 1.05 * r),
+          "zeta": (0.008, 0.016)}
+    cases = design_cases(f, r, z, ci)
+    assert len(cases) == 5 and min(c[2] for c in cases) == 0.008
+    cands = resonance_designs(md, plain.registers, f, r, z, 0.0, ci)
+    assert cands
+    for c in cands:
+        assert c.gain < 1.0
+        for f_c, r_c, z_c in cases:
+            m = two_mass_metrics(md, c.registers, coupling_of(md.J_m, r_c, f_c, z_c))
+            assert m.stable and m.pm_deg >= PM_MIN and m.gm_db >= GM_MIN
+        assert c.registers == quantize_registers(c.registers)

@@ -65,3 +65,61 @@ def test_serial_record_length_is_checked(twin_server):
         with pytest.raises(RecordError, match="recorded 64 samples"):
             sm.sample_buffer()
         assert np.asarray(sm.read("MODE_REG"))[0] == 0
+
+
+def test_resonance_over_the_twin_with_its_default_record_length():
+    # a MAC140 with 4·J_m behind a coupling resonating at 70 Hz; `jvl-gym serve`'s default
+    # TESTU/TESTA record length (11) does not limit the free sample-buffer recording (895
+    # samples), and the step is found in the record, so the link's timing does not matter
+    from types import SimpleNamespace
+
+    from tuning.identify_resonance import coupling_of, identify_resonance
+    from tuning.models import MotorData
+
+    from jvl_gym.protocol import MacTalkClient
+
+    md = MotorData.from_config("MAC140")
+    j_l, k, d = coupling_of(md.J_m, 4.0, 70.0, 0.02)
+    m = MotorArray("MAC140", n=1, seed=0, load_inertia=j_l, coupling_stiffness=k,
+                   coupling_damping=d)
+    server = TwinServer(Twin(m, [19]), speed=5.0, tcp=("127.0.0.1", 0)).start()
+    J = md.J_m + j_l
+    ident = SimpleNamespace(motor=md, mechanics=SimpleNamespace(J=J, ci={"J": (0.98 * J,
+                                                                                1.02 * J)}))
+    try:
+        with MacTalkClient(server.endpoint("mactalk", "tcp").url, address=19) as client:
+            est = identify_resonance(SerialMotor(client, "MAC140", time_scale=5.0), [ident])[0]
+    finally:
+        server.stop()
+    assert est.detected
+    assert est.f_res == pytest.approx(70.0, rel=0.05)
+    assert est.ci["f_res"][0] <= 70.0 <= est.ci["f_res"][1]
+    assert m.read("MODE_REG")[0] == 0
+
+
+def test_cli_autotune_port_resonance_writes_the_kept_notch(tmp_path):
+    # `jvl-tune autotune --port --resonance --write` on a twin MAC140 with 4·J_m behind a
+    # coupling at 90 Hz: the two-mass step runs over MacTalk and its notch reaches the motor
+    from tuning.cli import app
+    from tuning.identify_resonance import coupling_of
+    from tuning.models import MotorData
+    from typer.testing import CliRunner
+
+    md = MotorData.from_config("MAC140")
+    j_l, k, d = coupling_of(md.J_m, 4.0, 90.0, 0.02)
+    m = MotorArray("MAC140", n=1, seed=0, load_inertia=j_l, coupling_stiffness=k,
+                   coupling_damping=d)
+    server = TwinServer(Twin(m, [19]), speed=5.0, tcp=("127.0.0.1", 0)).start()
+    try:
+        res = CliRunner().invoke(app, [
+            "autotune", "--motor", "MAC140", "--port", server.endpoint("mactalk", "tcp").url,
+            "--address", "19", "--time-scale", "5", "--resonance", "--write", "--accept",
+            "--out", str(tmp_path)])
+    finally:
+        server.stop()
+    assert res.exit_code == 0, res.output
+    report = (tmp_path / "report.txt").read_text()
+    assert "Two-mass load" in report and "kept notch" in report
+    f_res = float(report.split("  resonance ")[1].split(" Hz")[0])
+    assert f_res == pytest.approx(90.0, rel=0.05)
+    assert m.read("KVFY2")[0] != 0.0  # the notch fills VF's free order in the motor

@@ -325,14 +325,20 @@ def autotune(motor: str = typer.Option("MAC140"),
 
         from .serial_source import autotune_over_serial
 
+        sections: list[tuple[str, Path]] = []
+        step = ((lambda sm, i, dd: sections.append(_two_mass_step(sm, i, dd, out)))
+                if resonance else None)
         ident, d = autotune_over_serial(port, motor, address, time_scale,
                                         n_coil or TEST_RECORD_SAMPLES,
                                         n_mech or TEST_RECORD_SAMPLES, structure, write,
-                                        progress=_say)
+                                        progress=_say, two_mass=step)
         setup = out / "setup.yaml"
         _write_setup(setup, motor, d.registers,
                      f"jvl-tune autotune --port {port}: identified J = {ident.mechanics.J:.4g}")
         files = write_report(out, ident, d, ident.motor, ident.mechanics.J)
+        for text, _path in sections:
+            with files[0].open("a") as fh:
+                fh.write("\n" + text)
         typer.echo(files[0].read_text())
         bad = verify_design(d)
         typer.echo(f"wrote {setup}" + (" and the motor's registers" if write and not bad else ""))
@@ -516,17 +522,18 @@ def _two_mass_step(m: object, ident: object, d: object, out: Path) -> tuple[str,
              f"  resonance {est.f_res:.1f} Hz (95 % {est.ci['f_res'][0]:.1f} .. "
              f"{est.ci['f_res'][1]:.1f}), anti-resonance {est.f_anti:.1f} Hz, load ratio "
              f"J_l/J_m {est.load_ratio:.2f}, damping ratio {est.zeta:.3f}, "
-             f"detected {est.detected}"]
+             f"detected {est.detected}",
+             f"  as recorded under the current loop: {est.f_seen:.1f} Hz, damping ratio "
+             f"{est.zeta_seen:.3f}"]
     out.mkdir(parents=True, exist_ok=True)
     path = out / "bode_two_mass.png"
     if not est.detected or est.load_ratio <= 0.0:
         lines.append("  no resonance detected: the rigid design is kept")
         return "\n".join(lines) + "\n", path
     plain = synthesize(md, mech.J, mech.coulomb, structure="pi", position_integral=False)
-    zeta = max(est.zeta, 0.005)
-    cands = resonance_designs(md, plain.registers, est.f_res, est.load_ratio, zeta,
-                              max(mech.viscous, 0.0), est.ci["f_res"])
-    coupling = coupling_of(md.J_m, est.load_ratio, est.f_res, zeta)
+    cands = resonance_designs(md, plain.registers, est.f_res, est.load_ratio, est.zeta,
+                              max(mech.viscous, 0.0), est.ci)
+    coupling = coupling_of(md.J_m, est.load_ratio, est.f_res, est.zeta)
     params = simulation_parameters(ident)  # type: ignore[arg-type]
     params.update(rotor_inertia=md.J_m, load_inertia=coupling[0],
                   coupling_stiffness=coupling[1], coupling_damping=coupling[2])

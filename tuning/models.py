@@ -51,6 +51,7 @@ __all__ = [
     "current_open_loop",
     "current_closed_loop",
     "speed_plant",
+    "inner_modes",
     "rigid_speed_plant",
     "speed_open_loop",
     "speed_closed_loop",
@@ -217,8 +218,8 @@ def current_closed_loop(motor: MotorData, regs: Mapping[str, float]) -> ct.Trans
 
 
 def _inner_position_ss(motor: MotorData, regs: Mapping[str, float], J: float, b: float,
-                       coupling: tuple[float, float, float] | None = None
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                       coupling: tuple[float, float, float] | None = None,
+                       back_emf: bool = False) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Inner-rate state space, input I_SOLL [counts], output encoder position [counts].
 
     States: continuous plant (i [A], ω [rad/s], θ [counts], and with ``coupling = (J_l, k,
@@ -228,7 +229,8 @@ def _inner_position_ss(motor: MotorData, regs: Mapping[str, float], J: float, b:
     """
     k_u, R, L, A = motor.volts_per_count, motor.R_phase, motor.L_phase, motor.amps_per_count
     kt = motor.torque_constant
-    ac = np.array([[-R / L, 0.0, 0.0], [kt / J, -b / J, 0.0], [0.0, COUNTS_PER_RAD, 0.0]])
+    ke = motor.pole_pairs * motor.flux_linkage if back_emf else 0.0
+    ac = np.array([[-R / L, -ke / L, 0.0], [kt / J, -b / J, 0.0], [0.0, COUNTS_PER_RAD, 0.0]])
     if coupling is not None:
         j_l, k, d = coupling
         ac = np.pad(ac, ((0, 2), (0, 2)))
@@ -265,9 +267,20 @@ def _inner_position_ss(motor: MotorData, regs: Mapping[str, float], J: float, b:
     return np.asarray(sys.A), np.asarray(sys.B), np.asarray(sys.C)
 
 
+def inner_modes(motor: MotorData, regs: Mapping[str, float], J: float, b: float = 0.0,
+                coupling: tuple[float, float, float] | None = None,
+                back_emf: bool = False) -> np.ndarray:
+    """Modes of the plant under its closed current loop at a constant I_SOLL (AT_MODE, manual
+    4.4.5): the inner-rate closed-loop poles z ≠ 0 as ``s = ln(z)/TS_I`` [1/s]; arguments as
+    :func:`_inner_position_ss`."""
+    z = np.linalg.eigvals(_inner_position_ss(motor, regs, J, b, coupling, back_emf)[0])
+    z = z[np.abs(z) > 1e-12].astype(complex)
+    return np.log(z) / TS_I
+
+
 def speed_plant(motor: MotorData, regs: Mapping[str, float], J: float | None = None,
-                b: float = 0.0, coupling: tuple[float, float, float] | None = None
-                ) -> ct.TransferFunction:
+                b: float = 0.0, coupling: tuple[float, float, float] | None = None,
+                back_emf: bool = False) -> ct.TransferFunction:
     """VF_OUT → V_IST [counts/sample] at TS_O, including the closed current loop.
 
     Parameters
@@ -284,6 +297,8 @@ def speed_plant(motor: MotorData, regs: Mapping[str, float], J: float | None = N
         ``(J_l, k, d)``: a load of inertia J_l [kg·m²] behind an elastic coupling of stiffness
         k [N·m/rad] and damping d [N·m·s/rad] (docs/model.md §5.2); ``J`` is then the rotor's
         inertia alone.
+    back_emf : bool
+        Include the back-EMF in the coil (:func:`_inner_position_ss`).
 
     Returns
     -------
@@ -293,7 +308,7 @@ def speed_plant(motor: MotorData, regs: Mapping[str, float], J: float | None = N
         outer sample, V_IST = (1 − z⁻¹)·P.
     """
     J = motor.J_m if J is None else J
-    a, bb, c = _inner_position_ss(motor, regs, J, b, coupling)
+    a, bb, c = _inner_position_ss(motor, regs, J, b, coupling, back_emf)
     n = INNER_PER_OUTER
     a_o = np.linalg.matrix_power(a, n)
     acc = np.zeros_like(a)

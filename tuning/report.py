@@ -198,17 +198,18 @@ def two_mass_bode_figure(motor: Any, loops: Sequence[tuple[str, Mapping[str, flo
     one curve per ``(name, registers)`` of ``loops`` with its gain crossover, phase margin and
     gain margin marked, and the resonance ``f_res`` [Hz] (with its alias at the outer rate
     when above 260 Hz) and anti-resonance ``f_anti`` marked. ``coupling = (J_l, k, d)``."""
-    from .resonance_design import alias_hz, two_mass_metrics
+    from .resonance_design import alias_hz, loop_metrics, two_mass_plant
 
     fig, ax = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
     for q, (name, regs) in enumerate(loops):
-        lp = speed_open_loop(speed_plant(motor, regs, motor.J_m, 0.0, tuple(coupling)), regs)
+        plant = two_mass_plant(motor, regs, tuple(coupling))
+        lp = speed_open_loop(plant, regs)
         w = frequency_grid(lp.dt, 1500, lowest=1e-3)
         resp = freqresp(lp, w)
         f = w / (2 * math.pi)
         mag = 20 * np.log10(np.abs(resp))
         phase = np.degrees(np.unwrap(np.angle(resp)))
-        m = two_mass_metrics(motor, regs, tuple(coupling))
+        m = loop_metrics(plant, regs)
         color = f"C{q}"
         ax[0].semilogx(f, mag, color=color,
                        label=f"{name}: PM {m.pm_deg:.0f}°, GM {m.gm_db:.1f} dB")

@@ -7,19 +7,21 @@ gain at DC, ``N(z) = (n0 + n1 z⁻¹ + n2 z⁻²)/(1 + d1 z⁻¹ + d2 z⁻²)``,
 them: ``VF·N`` has a numerator of order 3 (KVFX4..KVFX1) and a denominator ``(1 − z⁻¹)(1 + d1 z⁻¹
 + d2 z⁻²)`` of order 3 (KVFY3..KVFY1). The section is
 
-* a **notch** at the resonance as the speed loop sees it: VF runs at 520.8 Hz, so a resonance
-  above 260.4 Hz appears at its alias ``|f − round(f/f_s)·f_s|``;
+* a **notch** at the resonance as the speed loop sees it (the mode under the design's current
+  loop, :func:`tuning.identify_resonance.apparent_resonance`): VF runs at 520.8 Hz, so a
+  resonance above 260.4 Hz appears at its alias ``|f − round(f/f_s)·f_s|``;
   ``N = g·(1 − 2 cos ω₀ z⁻¹ + z⁻²)/(1 − 2 r cos ω₀ z⁻¹ + r² z⁻²)``, width set by the pole
   radius r, g for unity DC gain;
 * or a **low-pass**, a double real pole at p: ``N = (1 − p)²/(1 − 2p z⁻¹ + p² z⁻²)``.
 
 With a position integral (VF of order 2 over 2) the section does not fit and only the plain
 design is offered. Each candidate scales the design's crossover by a factor g (kp × g,
-ki × g², :func:`scaled_gains`) and is quantised to the registers' Fixed4 format
-(:mod:`tuning.quantize`). On the identified two-mass plant (:func:`tuning.models.speed_plant`
-with the coupling, lifted exactly to the outer rate, so the aliasing is in it), with the
-resonance where identified and ±:data:`F_SPREAD` (or its interval) away, the fastest candidate
-of each kind that is stable with PM ≥ 45° and GM ≥ 6 dB is kept: one without a section, one
+ki × g², :func:`scaled_gains`), moves gain between VF's numerator and KVOUT so quantisation
+keeps the integral gain (:func:`balanced`) and is quantised (:mod:`tuning.quantize`). On the
+two-mass plants of :func:`design_cases` (the identified load and the corners of its intervals;
+:func:`two_mass_plant`: :func:`tuning.models.speed_plant` with the coupling and the back-EMF,
+lifted exactly to the outer rate, so the aliasing is in it) the fastest candidate of each kind
+that is stable with PM ≥ 45° and GM ≥ 6 dB on all of them is kept: one without a section, one
 with a notch, one with a low-pass. :func:`choose` then simulates them and the plain design on
 the identified motor and keeps the one that settles first without a sustained oscillation.
 """
@@ -30,23 +32,27 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 
+import control as ct
 import numpy as np
 
+from .identify_resonance import apparent_resonance, coupling_of
 from .models import TS_O, MotorData, freqresp, speed_open_loop, speed_plant
 from .quantize import quantize_registers
 from .verify import LoopMetrics, frequency_grid, metrics_from_response
 
 __all__ = ["FilteredDesign", "TwoMassChoice", "choose", "move_on", "scaled_gains", "alias_hz",
            "notch_section", "lowpass_section", "with_section", "coupling_of",
-           "two_mass_metrics", "resonance_designs", "PM_MIN", "GM_MIN"]
+           "two_mass_plant", "loop_metrics", "balanced", "two_mass_metrics", "design_cases",
+           "resonance_designs", "PM_MIN", "GM_MIN"]
 
 PM_MIN: float = 45.0  #: phase margin every kept candidate has after quantisation [deg]
 GM_MIN: float = 6.0  #: gain margin [dB]
 GAIN_FACTORS = tuple(float(g) for g in np.geomspace(1.0, 0.04, 20))
-#: relative spread of the resonance the candidates must also keep their margins at: the
-#: identified resonance is that of the motor with its current loop, a few % below the
-#: coupling's own (docs/tuning.md, "Two-mass loads")
-F_SPREAD: float = 0.06
+#: least relative spread of the resonance, beyond its identified interval, the candidates must
+#: keep their margins over (:func:`design_cases`)
+F_SPREAD: float = 0.03
+NUM_MAX: float = 6.0  #: largest |KVFX| :func:`balanced` makes (Fixed4 holds ±8)
+RATIO_MIN: float = 0.05  #: smallest load ratio J_l/J_m a design case takes
 NOTCH_RADII = (0.3, 0.5, 0.65, 0.8)
 LOWPASS_POLES = (0.2, 0.35, 0.5, 0.65)
 
@@ -137,22 +143,35 @@ def scaled_gains(regs: Mapping[str, float], g: float) -> dict[str, float]:
     return out
 
 
-def coupling_of(J_m: float, load_ratio: float, f_res: float, zeta: float
-                ) -> tuple[float, float, float]:
-    """``(J_l, k, d)`` of the two-mass plant with resonance ``f_res`` [Hz], load ratio J_l/J_m
-    and modal damping ratio ``zeta`` (docs/model.md §5.2)."""
-    j_l = load_ratio * J_m
-    w = 2 * math.pi * f_res
-    k = w * w / (1 / J_m + 1 / j_l)
-    d = 2 * zeta * w * J_m * j_l / (J_m + j_l)
-    return j_l, k, d
+def balanced(regs: Mapping[str, float]) -> dict[str, float]:
+    """The same speed loop with VF's numerator (KVFX4..KVFX1) × s and KVOUT / s (they multiply,
+    manual 4.2, 3.2.13), s chosen so that quantisation costs the integral gain (the sum of the
+    numerator, Fixed4) and KVOUT (Fixed8) the same relative resolution, the numerator within
+    ±:data:`NUM_MAX`. A scaled-down crossover (:func:`scaled_gains`) leaves the integral gain
+    few Fixed4 steps otherwise."""
+    keys = ("KVFX4", "KVFX3", "KVFX2", "KVFX1")
+    num = np.array([regs[k] for k in keys])
+    ki, kvout = float(num.sum()), float(regs["KVOUT"])
+    if ki <= 0.0 or kvout <= 0.0:
+        return dict(regs)
+    s = min(math.sqrt(kvout / (16.0 * ki)), NUM_MAX / float(np.max(np.abs(num))))
+    out = dict(regs)
+    out.update({k: v * s for k, v in zip(keys, num)})
+    out["KVOUT"] = kvout / s
+    return out
 
 
-def two_mass_metrics(motor: MotorData, regs: Mapping[str, float],
-                     coupling: tuple[float, float, float], b: float = 0.0) -> LoopMetrics:
-    """Speed-loop margins with the registers ``regs`` on the two-mass plant (rotor
-    ``motor.J_m``, ``coupling = (J_l, k, d)``), closed-loop poles for stability."""
-    plant = speed_plant(motor, regs, motor.J_m, b, coupling)
+def two_mass_plant(motor: MotorData, regs: Mapping[str, float],
+                   coupling: tuple[float, float, float], b: float = 0.0) -> ct.TransferFunction:
+    """The speed plant VF_OUT → V_IST of the two-mass load (rotor ``motor.J_m``, ``coupling =
+    (J_l, k, d)``) under the current loop of ``regs``, the back-EMF included
+    (:func:`tuning.models.speed_plant`)."""
+    return speed_plant(motor, regs, motor.J_m, b, coupling, back_emf=True)
+
+
+def loop_metrics(plant: ct.TransferFunction, regs: Mapping[str, float]) -> LoopMetrics:
+    """Speed-loop margins with the registers ``regs`` on ``plant``, closed-loop poles for
+    stability."""
     loop = speed_open_loop(plant, regs)
     w = frequency_grid(TS_O, 2500, lowest=1e-3)
     num = np.asarray(loop.num[0][0], dtype=float)
@@ -160,29 +179,56 @@ def two_mass_metrics(motor: MotorData, regs: Mapping[str, float],
     return metrics_from_response(freqresp(loop, w), w, np.polyadd(den, num))
 
 
+def two_mass_metrics(motor: MotorData, regs: Mapping[str, float],
+                     coupling: tuple[float, float, float], b: float = 0.0) -> LoopMetrics:
+    """Speed-loop margins with the registers ``regs`` on the two-mass plant
+    (:func:`two_mass_plant`)."""
+    return loop_metrics(two_mass_plant(motor, regs, coupling, b), regs)
+
+
 def _ok(m: LoopMetrics) -> bool:
     return bool(m.stable and m.pm_deg >= PM_MIN and m.gm_db >= GM_MIN)
 
 
+def design_cases(f_res: float, load_ratio: float, zeta: float,
+                 ci: Mapping[str, tuple[float, float]] | None = None
+                 ) -> list[tuple[float, float, float]]:
+    """The two-mass loads ``(f_res, load_ratio, zeta)`` a candidate must keep its margins on:
+    the identified one and the corners of the intervals ``ci`` ("f_res" widened to at least
+    ±:data:`F_SPREAD`, "load_ratio", the low end of "zeta")."""
+    ci = ci or {}
+    f_lo, f_hi = ci.get("f_res", (f_res, f_res))
+    f_lo, f_hi = min(f_lo, f_res * (1 - F_SPREAD)), max(f_hi, f_res * (1 + F_SPREAD))
+    r_lo, r_hi = ci.get("load_ratio", (load_ratio, load_ratio))
+    r_lo = max(min(r_lo, load_ratio), RATIO_MIN)
+    z_lo = min(ci.get("zeta", (zeta, zeta))[0], zeta)
+    return [(f_res, load_ratio, zeta)] + [(f, r, z_lo) for f in (f_lo, f_hi)
+                                          for r in dict.fromkeys((r_lo, max(r_hi, r_lo)))]
+
+
 def resonance_designs(motor: MotorData, regs: Mapping[str, float], f_res: float,
                       load_ratio: float, zeta: float = 0.02, b: float = 0.0,
-                      f_interval: tuple[float, float] | None = None) -> list[FilteredDesign]:
+                      ci: Mapping[str, tuple[float, float]] | None = None
+                      ) -> list[FilteredDesign]:
     """The fastest acceptable candidate of each kind (no filter, notch, low-pass) for the
-    registers ``regs`` of a design (current and speed loop) on the identified two-mass load.
+    registers ``regs`` of a design (current and speed loop) on the identified two-mass load
+    (the coupling's resonance ``f_res`` [Hz], ``load_ratio`` J_l/J_m, damping ratio ``zeta``,
+    their 95 % intervals ``ci`` as :class:`tuning.identify_resonance.ResonanceEstimate.ci`).
 
     A candidate is acceptable when it has the margins (:data:`PM_MIN`, :data:`GM_MIN`, stable)
-    on the plant with the identified resonance and on the plants with the resonance at both
-    ends of ``f_interval`` [Hz] widened to at least ±:data:`F_SPREAD`; the metrics kept are
-    the worst of the three. Returns the candidates found, in that order; a kind none of whose
-    candidates meets the margins is left out.
+    on every load of :func:`design_cases`; the metrics kept are the worst. The notch sits at
+    the resonance the speed loop sees under the design's current loop
+    (:func:`tuning.identify_resonance.apparent_resonance`). Returns the candidates found, in
+    that order; a kind none of whose candidates meets the margins is left out.
     """
-    lo, hi = f_interval if f_interval is not None else (f_res, f_res)
-    freqs = (f_res, min(lo, f_res * (1 - F_SPREAD)), max(hi, f_res * (1 + F_SPREAD)))
-    plants = [coupling_of(motor.J_m, load_ratio, f, zeta) for f in freqs]
+    load_ratio = max(load_ratio, RATIO_MIN)
+    plants = [two_mass_plant(motor, regs, coupling_of(motor.J_m, r, f, z), b)
+              for f, r, z in design_cases(f_res, load_ratio, zeta, ci)]
+    f_notch = apparent_resonance(motor, regs, load_ratio, f_res, zeta)[0]
     sections: list[tuple[str, str, tuple[np.ndarray, np.ndarray]]] = [
         ("none", "no filter", (np.array([1.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0])))]
-    sections += [("notch", f"notch {alias_hz(f_res):.0f} Hz r={r}", notch_section(f_res, r))
-                 for r in NOTCH_RADII]
+    sections += [("notch", f"notch {alias_hz(f_notch):.0f} Hz r={r}",
+                  notch_section(f_notch, r)) for r in NOTCH_RADII]
     sections += [("lowpass", f"low-pass p={p}", lowpass_section(p)) for p in LOWPASS_POLES]
     best: dict[str, FilteredDesign] = {}
     for kind, name, sec in sections:
@@ -190,12 +236,12 @@ def resonance_designs(motor: MotorData, regs: Mapping[str, float], f_res: float,
             if kind in best and best[kind].gain >= g:
                 break
             try:
-                q = quantize_registers(with_section(scaled_gains(regs, g), sec))
+                q = quantize_registers(balanced(with_section(scaled_gains(regs, g), sec)))
             except ValueError:
                 break
             ms = []
-            for cp in plants:
-                ms.append(two_mass_metrics(motor, q, cp, b))
+            for plant in plants:
+                ms.append(loop_metrics(plant, q))
                 if not _ok(ms[-1]):
                     break
             m = min(ms, key=lambda x: (_ok(x), x.pm_deg))

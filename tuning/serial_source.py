@@ -106,7 +106,7 @@ class SerialMotor:
 def autotune_over_serial(port: str, motor: str, address: int = 1, time_scale: float = 1.0,
                          n_coil: int = TEST_RECORD_SAMPLES, n_mech: int = TEST_RECORD_SAMPLES,
                          structure: str = "pi", write: bool = False, progress: Any = None,
-                         accept: bool = True) -> tuple[Any, Any]:
+                         accept: bool = True, two_mass: Any = None) -> tuple[Any, Any]:
     """Identify and design on a motor behind ``port`` (device path or pyserial URL).
 
     Runs TESTU and the two-level TESTA through MacTalk with the firmware's record length
@@ -117,6 +117,12 @@ def autotune_over_serial(port: str, motor: str, address: int = 1, time_scale: fl
     ``write``, writes the kept registers to the motor and reads them back. Returns
     ``(Identification, Design)``; ``Design.acceptance`` holds the acceptance result. The motor
     must be in INIT_MODE and free to turn.
+
+    ``two_mass(m, ident, design)``, if given, runs on the motor (``m``, a :class:`SerialMotor`)
+    after the design and before the write, e.g. the resonance step of ``jvl-tune autotune
+    --resonance`` (:mod:`tuning.identify_resonance`: one continuous sample-buffer record per
+    torque step, so the link's timing does not matter as long as a frame's round trip is short
+    against the 114 ms record); it may change ``design.registers``.
     """
     from jvl_gym.protocol import MacTalkClient
 
@@ -136,6 +142,8 @@ def autotune_over_serial(port: str, motor: str, address: int = 1, time_scale: fl
         else:
             design = synthesize(ident.motor, ident.mechanics.J, ident.mechanics.coulomb,
                                 structure=structure)
+        if two_mass is not None:
+            two_mass(m, ident, design)
         bad = verify_design(design)
         if write and not bad:
             say("writing the synthesised registers and reading them back")
