@@ -157,6 +157,24 @@ def test_compile_caches_are_dropped_when_compiled_sources_change(tmp_path):
     assert drop_stale_caches(pkg) == 0 and cache.exists()
 
 
+@pytest.mark.parametrize("name", ["constants.py", "registers.csv"])
+def test_an_edited_family_fact_drops_the_caches_that_froze_it(tmp_path, name):
+    """A family's constants and register table are frozen into compiled code as numbers, though
+    their files use no numba: an edit of them drops the caches too."""
+    from jvl_gym.engine.cache import drop_stale_caches
+
+    folder = tmp_path / "pkg" / "families" / "toy"
+    (folder / "__pycache__").mkdir(parents=True)
+    (folder / "kernel.py").write_text("from numba import njit\n")
+    fact = folder / name
+    fact.write_text("x = 1\n")
+    cache = folder / "__pycache__" / "kernel.f-1.py311.nbi"
+    drop_stale_caches(tmp_path / "pkg")
+    cache.write_bytes(b"x")
+    fact.write_text("x = 2\n")
+    assert drop_stale_caches(tmp_path / "pkg") == 1 and not cache.exists()
+
+
 def test_stale_caches_under_numba_cache_dir_are_dropped_too(tmp_path, monkeypatch):
     from jvl_gym.engine.cache import drop_stale_caches
 

@@ -4,7 +4,9 @@ numba checks a cached function against the modification time of its own source f
 machine code of a jvl_gym step has its callees inlined: a family's firmware and plant, the
 engine's drivers and a task's hooks, from many files. After an edit of a callee, the cached step
 of the caller would still be loaded, with the old callee inside. So the package keeps one stamp:
-a hash of every source file of the package that uses numba. When the sources no longer match
+a hash of every source file of the package that uses numba and of every file under the folders
+that hold the facts compiled code freezes in as constants (a family's constants and register
+table, the register formats: :data:`FROZEN_FOLDERS`). When the sources no longer match
 the stamp, every cache file under the package is removed before anything compiles, and the stamp
 is rewritten. An installed package that never changes computes the hash once per process (a few
 milliseconds) and removes nothing.
@@ -24,8 +26,26 @@ STAMP_NAME = "__pycache__/jvl_gym.compiled-sources"
 CACHE_SUFFIXES = (".nbi", ".nbc")
 
 
+#: folders under the package whose Python and CSV files all count as compiled sources: numba
+#: freezes the module-level numbers of a family (its constants, its register table's numbers and
+#: ranges) and of the register formats into the machine code of the functions that read them
+FROZEN_FOLDERS = ("families", "registers")
+#: the files of :data:`FROZEN_FOLDERS` that count
+FROZEN_SUFFIXES = (".py", ".csv")
+
+
+def _compiled_source(root: Path, path: Path, text: bytes) -> bool:
+    """True when ``path`` (text ``text``) can change the machine code of a compiled function."""
+    if path.suffix == ".py" and (b"numba" in text or b"njit" in text):
+        return True
+    top = path.relative_to(root).parts[0]
+    return top in FROZEN_FOLDERS and path.suffix in FROZEN_SUFFIXES
+
+
 def source_hash(root: Path) -> str:
-    """SHA-256 over the path and text of every ``*.py`` file under ``root`` that uses numba.
+    """SHA-256 over the path and text of every file under ``root`` that compiled code depends
+    on: the ``*.py`` files that use numba, and the ``*.py`` and ``*.csv`` files under
+    :data:`FROZEN_FOLDERS`.
 
     Parameters
     ----------
@@ -38,9 +58,10 @@ def source_hash(root: Path) -> str:
         Hex digest; it changes with any edit of compiled code (and only then).
     """
     digest = hashlib.sha256()
-    for path in sorted(root.rglob("*.py")):
+    paths = [p for suffix in FROZEN_SUFFIXES for p in root.rglob(f"*{suffix}")]
+    for path in sorted(paths):
         text = path.read_bytes()
-        if b"numba" in text or b"njit" in text:
+        if _compiled_source(root, path, text):
             digest.update(path.relative_to(root).as_posix().encode())
             digest.update(b"\0")
             digest.update(text)
