@@ -103,6 +103,14 @@ class Column:
         getattr(obj, self.table)[:, self.col] = value
 
 
+def _damping_scale(key: str) -> float:
+    """Rated torque over rated speed [N·m·s/rad] of the default motor type of family ``key``
+    (its motor config)."""
+    tf = task_family(key)
+    cfg = tf.family.array_class.load_motor(tf.task.DEFAULT_MOTOR_TYPE)
+    return cfg.rated_torque / (cfg.rated_speed_rpm * 2.0 * np.pi / 60.0)
+
+
 def _seed_list(seed: int | Sequence[int | None] | None, n: int) -> list[int | None]:
     if seed is None:
         return [None] * n
@@ -172,6 +180,10 @@ class MotorVectorEnv(VectorEnv, ABC):
     act_labels: tuple[str, ...] = ()
     #: domain randomisation ranges, name -> (low, high)
     default_ranges: dict[str, tuple[float, float]] = {}
+    #: names of ranges of viscous friction [N·m·s/rad]: stated for the default motor type of
+    #: the first of :attr:`families`; on another family scaled by the ratio of rated torque to
+    #: rated speed of its default motor type to that of the first's (:meth:`_family_ranges`)
+    viscous_ranges: tuple[str, ...] = ()
     default_decimation: int = 1
     default_max_episode_steps: int = 1000
     #: names of the scope traces drawn by render (values from :meth:`_scope_values`)
@@ -289,9 +301,17 @@ class MotorVectorEnv(VectorEnv, ABC):
         return next(iter(found))
 
     def _family_ranges(self) -> dict[str, tuple[float, float]]:
-        """The task's default randomisation ranges on the env's family (here the class's
-        :attr:`default_ranges`; a task whose ranges depend on the motor family adapts them)."""
-        return dict(type(self).default_ranges)
+        """The task's default randomisation ranges on the env's family: the class's
+        :attr:`default_ranges`, those of :attr:`viscous_ranges` scaled to the family's motors
+        (the same friction torque at rated speed relative to the rated torque)."""
+        ranges = dict(type(self).default_ranges)
+        first = self.supported_families()[0]
+        if self.viscous_ranges and self.family_key != first:
+            scale = _damping_scale(self.family_key) / _damping_scale(first)
+            for name in self.viscous_ranges:
+                lo, hi = ranges[name]
+                ranges[name] = (lo * scale, hi * scale)
+        return ranges
 
     def _check_types(self, motor_type: str | Sequence[str]) -> tuple[str, ...]:
         fam = family(self.family_key)

@@ -114,6 +114,7 @@ class PositioningVectorEnv(MotorVectorEnv):
         "coulomb_ratio": (0.0, 0.1),
         "target_turns": (-2.0, 2.0),
     }
+    viscous_ranges = ("viscous_friction",)
     default_decimation = 1
     default_max_episode_steps = 300
     scope_channels = ("position error [turns]", "speed [rpm]", "torque command [1]")
@@ -203,6 +204,12 @@ class PositioningEnv(MotorEnv):
     ## Episode End
     Terminated when an error bit (I2T, FLW, FNC, UIT, position limit) is set; truncated after
     ``max_episode_steps`` steps (default 300 ≈ 0.58 s at decimation 1).
+
+    ## Families
+    MAC050–141 (default MAC140) and MAC800 (``motor_type="MAC800"`` or ``"MAC400"``: mode 4,
+    Analog torque, ±2047 ANINP ↔ ±T_SOLL; 8000 counts/rev and 770 Hz, so a step is 1.30 ms and
+    the observation's scales are in those units; the viscous friction range scaled to the
+    motor, docs/envs.md "Motor families").
 
     ## Arguments
     ``motor_type`` (str or list of types drawn per episode), ``randomization`` (overrides of the

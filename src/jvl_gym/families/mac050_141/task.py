@@ -4,7 +4,9 @@ A task's hooks (``jvl_gym.engine.driver``) receive the engine's
 :class:`~jvl_gym.engine.view.EngineView` and reach the motors only through these inlined
 accessors: register values by number (``R``, taken from the register table), the world inputs
 the motor's connectors and shaft see, and the physical truth a process model around the motor
-needs (the shaft angle, the COIL block's direction).
+needs (the shaft angle, the COIL block's direction). Beside them, the modes and registers the
+tasks drive, under names every family's task module shares (``POSITION_MODE`` …
+``AG_CENTRE_FACTOR``), so that a task written once runs on each family (docs/envs.md).
 """
 
 from __future__ import annotations
