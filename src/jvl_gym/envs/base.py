@@ -441,6 +441,12 @@ class MotorVectorEnv(VectorEnv, ABC):
         """Peak torque (T_SOLL = 1023) [N·m] of the motor types of copies ``idx``."""
         return np.array([cfg.peak_torque for cfg in self._type_configs(idx)])
 
+    def _kvout_for_load(self, idx: np.ndarray, inertia_ratio: np.ndarray) -> None:
+        """Set KVOUT = 1 + ``inertia_ratio`` (J_load/J_m, (M,)) of copies ``idx`` when the
+        family's task module says its tasks do (``KVOUT_FROM_LOAD``)."""
+        if task_family(self.family_key).task.KVOUT_FROM_LOAD:
+            self.motors.write("KVOUT", 1.0 + inertia_ratio, index=idx)
+
     # ------------------------------------------------------------------ reset
     def _reset_envs(self, idx: np.ndarray, seeds: Sequence[int | None],
                     options: Mapping[str, Any] | None) -> None:

@@ -147,6 +147,7 @@ class PositioningVectorEnv(MotorVectorEnv):
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
         fam = self._fam
+        self._kvout_for_load(idx, draws["inertia_ratio"])
         _reset_rows(idx, draws["target_turns"], self.target, self.direction,
                     fam.constants.COUNTS_PER_REV)
         if self.baseline:

@@ -25,7 +25,7 @@ __all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BI
            "set_reg", "shaft_angle", "set_analog_volts", "set_load_torque", "set_pulse_counts",
            "POSITION_MODE", "VELOCITY_MODE", "ANALOG_TORQUE_MODE", "ANALOG_GEAR_MODE",
            "rpm_to_v_soll", "SPEED_PI", "GEARF", "AG_CENTRE_VOLTS", "AG_SPAN_VOLTS",
-           "AG_CENTRE_FACTOR"]
+           "AG_CENTRE_FACTOR", "KVOUT_FROM_LOAD"]
 
 #: the family's key, and the motor type of a task when none is given
 FAMILY_KEY = "mac800"
@@ -54,6 +54,11 @@ GEARF = ("GEARF_1", "GEARF_2")  #: the gear factor's numerator and denominator (
 #: MAC050–141's ±13.9 %)
 AG_CENTRE_VOLTS = 5.0
 AG_SPAN_VOLTS = 1.0
+#: whether a task sets KVOUT = (J_motor + J_load)/J_motor for its load (register 13): yes, the
+#: default setup's speed loop is designed for the bare rotor at KVOUT = 1
+#: (configs/setups/MAC800.yaml) and is too slow to follow a gear under a load of several rotor
+#: inertias without it (decision)
+KVOUT_FROM_LOAD = True
 
 
 def _ag_centre_factor() -> float:
