@@ -221,3 +221,20 @@ def test_bad_actions_are_refused_and_change_nothing(mac800_envs, env_index, shap
     after = (m.regs, m.state, m.inputs, core._t, core._obs)
     for x, y in zip(before, after):
         np.testing.assert_array_equal(x, y)
+
+
+@pytest.mark.parametrize("env_id", ENVS)
+def test_pickled_mac800_env_continues_identically(env_id: str) -> None:
+    import pickle
+
+    env = gym.make(env_id, motor_type="MAC400")
+    env.reset(seed=3)
+    a = env.action_space.sample()
+    if env_id != "jvl_gym/FilterTuning-v0":
+        env.step(a)
+    clone = pickle.loads(pickle.dumps(env))
+    assert clone.unwrapped.core.family_key == "mac800"
+    o1, r1, *_ = env.step(a)
+    o2, r2, *_ = clone.step(a)
+    np.testing.assert_array_equal(o1, o2)
+    assert r1 == r2

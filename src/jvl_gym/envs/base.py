@@ -37,7 +37,7 @@ from ..engine.driver import all_finite
 from ..families import DEFAULT_FAMILY, families, family
 from ..noise import normals
 from .compiled import OBS_BOUND, reset_counters
-from .family_task import task_family
+from .family_task import TaskFamily, task_family
 
 __all__ = ["MotorVectorEnv", "NumpyTaskEnv", "Column", "OBS_BOUND"]
 _FLOAT64 = np.dtype(np.float64)
@@ -440,6 +440,12 @@ class MotorVectorEnv(VectorEnv, ABC):
     def peak_torque(self, idx: np.ndarray) -> np.ndarray:
         """Peak torque (T_SOLL = 1023) [N·m] of the motor types of copies ``idx``."""
         return np.array([cfg.peak_torque for cfg in self._type_configs(idx)])
+
+    @property
+    def _fam(self) -> TaskFamily:
+        """The public modules of the env's family (:func:`~jvl_gym.envs.family_task.task_family`;
+        looked up, not kept, so that the env pickles)."""
+        return task_family(self.family_key)
 
     def _kvout_for_load(self, idx: np.ndarray, inertia_ratio: np.ndarray) -> None:
         """Set KVOUT = 1 + ``inertia_ratio`` (J_load/J_m, (M,)) of copies ``idx`` when the

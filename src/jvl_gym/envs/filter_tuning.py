@@ -9,7 +9,6 @@ import numpy as np
 
 from ..families import DEFAULT_FAMILY, family
 from .base import NumpyTaskEnv
-from .family_task import task_family
 from .single import MotorEnv
 
 __all__ = ["FilterTuningEnv", "FilterTuningVectorEnv", "synthesis_registers"]
@@ -83,7 +82,7 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
 
     def _build(self) -> None:
         n = self.num_envs
-        self._fam = fam = task_family(self.family_key)
+        fam = self._fam
         k = fam.constants
         self._types = tuple(fam.family.motor_types())
         hz = k.OUTER_HZ

@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from ..engine import TaskDriver
 from ..jit import KERNEL
 from ..noise import normal
 from .base import Column, MotorVectorEnv
@@ -22,7 +23,6 @@ from .family_task import (
     set_load_torque,
     set_pulse_counts,
     shaft_angle,
-    task_family,
 )
 from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
@@ -265,8 +265,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
 
     def _build(self) -> None:
         n = self.num_envs
-        self._fam = fam = task_family(self.family_key)
-        self._driver = _HOOKS.driver(self.family_key)
+        fam = self._fam
         self._dt = dt = fam.constants.OUTER_DT
         #: the motor's top speed in the task: the rated speed of the family's default type
         self.rated_rpm = float(
@@ -314,6 +313,11 @@ class GearSyncVectorEnv(MotorVectorEnv):
             m.start_under_load(load, idx)
         else:  # the motor takes the load up in its first samples
             m.set_input(idx, load_torque=load)
+
+    @property
+    def _driver(self) -> TaskDriver:
+        """The compiled step of the task on the env's family (looked up: the env pickles)."""
+        return _HOOKS.driver(self.family_key)
 
     def _step_copies(self, actions: np.ndarray) -> bool:
         return self._driver.step(self.motors.engine_view(), self._episode, self._task, actions,

@@ -7,6 +7,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
+from ..engine import TaskDriver
 from ..jit import KERNEL
 from .base import MotorVectorEnv
 from .compiled import action, end_step, put_obs
@@ -18,7 +19,6 @@ from .family_task import (
     c,
     reg,
     set_analog_volts,
-    task_family,
 )
 from .single import MotorEnv
 
@@ -128,8 +128,6 @@ class PositioningVectorEnv(MotorVectorEnv):
 
     def _build(self) -> None:
         n = self.num_envs
-        self._driver = _HOOKS.driver(self.family_key)
-        self._fam = task_family(self.family_key)
         self.target = np.zeros(n, dtype=np.int64)  # counts
         self.direction = np.ones(n)
         self._k = np.zeros(_N_CONSTS)  # constants of the compiled step
@@ -156,6 +154,11 @@ class PositioningVectorEnv(MotorVectorEnv):
                                      "MODE_REG": fam.task.POSITION_MODE}, idx)
         else:
             self.motors.write("MODE_REG", fam.task.ANALOG_TORQUE_MODE, index=idx)
+
+    @property
+    def _driver(self) -> TaskDriver:
+        """The compiled step of the task on the env's family (looked up: the env pickles)."""
+        return _HOOKS.driver(self.family_key)
 
     def _step_copies(self, actions: np.ndarray) -> bool:
         return self._driver.step(self.motors.engine_view(), self._episode, self._task, actions,
