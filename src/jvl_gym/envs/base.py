@@ -646,10 +646,21 @@ class MotorVectorEnv(VectorEnv, ABC):
 
         close_figures(self._figures)
 
+    def _transient(self) -> dict[str, Any]:
+        """Attributes the env keeps but does not pickle (compiled drivers): rebuilt after
+        unpickling."""
+        return {}
+
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_figures"] = {}
+        for name in self._transient():
+            state.pop(name, None)
         return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self.__dict__.update(self._transient())
 
 
 class NumpyTaskEnv(MotorVectorEnv):

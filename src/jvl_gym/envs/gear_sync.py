@@ -265,6 +265,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
 
     def _build(self) -> None:
         n = self.num_envs
+        self.__dict__.update(self._transient())
         fam = self._fam
         self._dt = dt = fam.constants.OUTER_DT
         #: the motor's top speed in the task: the rated speed of the family's default type
@@ -314,10 +315,9 @@ class GearSyncVectorEnv(MotorVectorEnv):
         else:  # the motor takes the load up in its first samples
             m.set_input(idx, load_torque=load)
 
-    @property
-    def _driver(self) -> TaskDriver:
-        """The compiled step of the task on the env's family (looked up: the env pickles)."""
-        return _HOOKS.driver(self.family_key)
+    def _transient(self) -> dict[str, TaskDriver]:
+        """The compiled step of the task on the env's family (rebuilt after unpickling)."""
+        return {"_driver": _HOOKS.driver(self.family_key)}
 
     def _step_copies(self, actions: np.ndarray) -> bool:
         return self._driver.step(self.motors.engine_view(), self._episode, self._task, actions,

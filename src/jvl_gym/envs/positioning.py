@@ -128,6 +128,7 @@ class PositioningVectorEnv(MotorVectorEnv):
 
     def _build(self) -> None:
         n = self.num_envs
+        self.__dict__.update(self._transient())
         self.target = np.zeros(n, dtype=np.int64)  # counts
         self.direction = np.ones(n)
         self._k = np.zeros(_N_CONSTS)  # constants of the compiled step
@@ -155,10 +156,9 @@ class PositioningVectorEnv(MotorVectorEnv):
         else:
             self.motors.write("MODE_REG", fam.task.ANALOG_TORQUE_MODE, index=idx)
 
-    @property
-    def _driver(self) -> TaskDriver:
-        """The compiled step of the task on the env's family (looked up: the env pickles)."""
-        return _HOOKS.driver(self.family_key)
+    def _transient(self) -> dict[str, TaskDriver]:
+        """The compiled step of the task on the env's family (rebuilt after unpickling)."""
+        return {"_driver": _HOOKS.driver(self.family_key)}
 
     def _step_copies(self, actions: np.ndarray) -> bool:
         return self._driver.step(self.motors.engine_view(), self._episode, self._task, actions,
