@@ -3,8 +3,9 @@
 Every env is a ``gymnasium.Env`` (``*Env``) and a native ``gymnasium.vector.VectorEnv``
 (``*VectorEnv``) sharing one implementation (:mod:`jvl_gym.envs.base`). Ids:
 ``jvl_gym/Positioning-v0``, ``jvl_gym/FilterTuning-v0``, ``jvl_gym/GearSync-v0``,
-``jvl_gym/CoilWinding-v0`` on the MAC050–141 servos, ``jvl_gym/StepperIndexing-v0`` on the
-MIS step motors (registered when ``jvl_gym`` is imported). See ``docs/envs.md``.
+``jvl_gym/CoilWinding-v0`` on the MAC050–141 servos (all but CoilWinding also on the MAC800
+family: the family follows from ``motor_type``), ``jvl_gym/StepperIndexing-v0`` on the MIS
+step motors (registered when ``jvl_gym`` is imported). See ``docs/envs.md``.
 """
 
 from __future__ import annotations

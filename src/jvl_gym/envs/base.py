@@ -34,9 +34,10 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from ..engine.driver import all_finite
-from ..families import DEFAULT_FAMILY, family
+from ..families import DEFAULT_FAMILY, families, family
 from ..noise import normals
 from .compiled import OBS_BOUND, reset_counters
+from .family_task import TaskFamily, task_family
 
 __all__ = ["MotorVectorEnv", "NumpyTaskEnv", "Column", "OBS_BOUND"]
 _FLOAT64 = np.dtype(np.float64)
@@ -102,6 +103,14 @@ class Column:
         getattr(obj, self.table)[:, self.col] = value
 
 
+def _damping_scale(key: str) -> float:
+    """Rated torque over rated speed [N·m·s/rad] of the default motor type of family ``key``
+    (its motor config)."""
+    tf = task_family(key)
+    cfg = tf.family.array_class.load_motor(tf.task.DEFAULT_MOTOR_TYPE)
+    return cfg.rated_torque / (cfg.rated_speed_rpm * 2.0 * np.pi / 60.0)
+
+
 def _seed_list(seed: int | Sequence[int | None] | None, n: int) -> list[int | None]:
     if seed is None:
         return [None] * n
@@ -121,9 +130,10 @@ class MotorVectorEnv(VectorEnv, ABC):
     num_envs : int
         Number of copies.
     motor_type : str or sequence of str, optional
-        Motor type of the task's family, or types drawn uniformly at every reset (for the MAC
-        tasks ``"MAC050"``, ``"MAC095"``, ``"MAC140"``, ``"MAC141"``); default: the task's
-        :attr:`default_motor_type`.
+        Motor type, or types drawn uniformly at every reset, all of one family the task runs on
+        (:meth:`supported_families`; e.g. ``"MAC050"`` … ``"MAC141"``, or ``"MAC800"``,
+        ``"MAC400"``); the env's family follows from them (:attr:`family_key`), a mix of
+        families is refused. Default: the task's :attr:`default_motor_type`.
     randomization : mapping, optional
         Overrides of the task's domain-randomisation ranges, ``name -> (low, high)``; see the
         task's ``default_ranges``. ``(x, x)`` fixes a parameter.
@@ -149,12 +159,20 @@ class MotorVectorEnv(VectorEnv, ABC):
     metadata: dict[str, Any] = {"render_modes": ["rgb_array"], "render_fps": 25,
                                 "autoreset_mode": AutoresetMode.NEXT_STEP}
 
-    #: the motor family the task runs on (``jvl_gym.families``)
+    #: the motor family the task runs on (``jvl_gym.families``); on an instance of a task that
+    #: runs on several (:attr:`families`), the family of its motor types
     family_key: str = DEFAULT_FAMILY
-    #: (name, bit) of the error bits that end an episode, in :attr:`error_register`
-    terminal_errors: tuple[tuple[str, int], ...] = ()
+    #: the families the task runs on (empty: :attr:`family_key` alone); an env's family
+    #: follows from its motor types
+    families: tuple[str, ...] = ()
+    #: families the task refuses, with the reason (one line)
+    refused_families: dict[str, str] = {}
+    #: (name, bit) of the error bits that end an episode, in :attr:`error_register` (None:
+    #: the ``TERMINAL_ERRORS`` of the family's task module)
+    terminal_errors: tuple[tuple[str, int], ...] | None = ()
     error_register: str = "ERR_STAT"
-    #: motor type when none is given
+    #: motor type when none is given ("": the ``DEFAULT_MOTOR_TYPE`` of the first family's task
+    #: module)
     default_motor_type: str = ""
     #: names of the observation components (normalised)
     obs_labels: tuple[str, ...] = ()
@@ -162,6 +180,10 @@ class MotorVectorEnv(VectorEnv, ABC):
     act_labels: tuple[str, ...] = ()
     #: domain randomisation ranges, name -> (low, high)
     default_ranges: dict[str, tuple[float, float]] = {}
+    #: names of ranges of viscous friction [N·m·s/rad]: stated for the default motor type of
+    #: the first of :attr:`families`; on another family scaled by the ratio of rated torque to
+    #: rated speed of its default motor type to that of the first's (:meth:`_family_ranges`)
+    viscous_ranges: tuple[str, ...] = ()
     default_decimation: int = 1
     default_max_episode_steps: int = 1000
     #: names of the scope traces drawn by render (values from :meth:`_scope_values`)
@@ -197,8 +219,14 @@ class MotorVectorEnv(VectorEnv, ABC):
         if _real("obs_noise", obs_noise) < 0:
             raise ValueError(f"obs_noise must be finite and >= 0, got {obs_noise!r}")
         self.obs_noise = float(obs_noise)
-        self.motor_types = self._check_types(motor_type if motor_type is not None
-                                             else self.default_motor_type)
+        if motor_type is None:
+            motor_type = (self.default_motor_type or
+                          task_family(self.supported_families()[0]).task.DEFAULT_MOTOR_TYPE)
+        self.family_key = self._family_of(motor_type)
+        if self.terminal_errors is None:
+            self.terminal_errors = task_family(self.family_key).task.TERMINAL_ERRORS
+        self.motor_types = self._check_types(motor_type)
+        self.default_ranges = self._family_ranges()
         self.ranges = self._check_ranges(randomization or {})
         self._range_names = tuple(sorted(self.default_ranges))
         self._range_cache: tuple[dict[str, tuple[float, float]], np.ndarray, np.ndarray] = (
@@ -234,13 +262,68 @@ class MotorVectorEnv(VectorEnv, ABC):
         self._build()
 
     # ------------------------------------------------------------------ configuration
+    @classmethod
+    def supported_families(cls) -> tuple[str, ...]:
+        """Keys of the motor families the task runs on."""
+        return cls.families or (cls.family_key,)
+
+    def _family_of(self, motor_type: Any) -> str:
+        """The family of ``motor_type`` (a name or a sequence of names): one of
+        :meth:`supported_families`, the same for every name; ValueError otherwise."""
+        types = (motor_type,) if isinstance(motor_type, str) else motor_type
+        try:
+            types = tuple(types)
+        except TypeError:
+            types = ()
+        name = env_name(type(self))
+        found: dict[str, list[str]] = {}
+        for t in types:
+            if not isinstance(t, str):
+                continue
+            for key in (*self.supported_families(), *(k for k in families()
+                                                      if k not in self.supported_families())):
+                fam = family(key)
+                if fam.canonical_name(t) in fam.motor_types():
+                    found.setdefault(key, []).append(t)
+                    break
+        refused = [k for k in found if k not in self.supported_families()]
+        if refused:
+            key = refused[0]
+            why = self.refused_families.get(key, "the task is not written for it")
+            raise ValueError(f"{name}: motor_type {found[key][0]!r} (family {key}) is refused: "
+                             f"{why}")
+        if len(found) > 1:
+            mix = "; ".join(f"{k}: {', '.join(v)}" for k, v in found.items())
+            raise ValueError(f"{name}: the motor types of one env must be of one family, got "
+                             f"{mix}")
+        if not found:  # unknown names: _check_types names the known ones
+            return self.supported_families()[0]
+        return next(iter(found))
+
+    def _family_ranges(self) -> dict[str, tuple[float, float]]:
+        """The task's default randomisation ranges on the env's family: the class's
+        :attr:`default_ranges`, those of :attr:`viscous_ranges` scaled to the family's motors
+        (the same friction torque at rated speed relative to the rated torque)."""
+        ranges = dict(type(self).default_ranges)
+        first = self.supported_families()[0]
+        if self.viscous_ranges and self.family_key != first:
+            scale = _damping_scale(self.family_key) / _damping_scale(first)
+            for name in self.viscous_ranges:
+                lo, hi = ranges[name]
+                ranges[name] = (lo * scale, hi * scale)
+        return ranges
+
     def _check_types(self, motor_type: str | Sequence[str]) -> tuple[str, ...]:
         fam = family(self.family_key)
         types = (motor_type,) if isinstance(motor_type, str) else tuple(motor_type)
         known = fam.motor_types()
         types = tuple(fam.canonical_name(t) if isinstance(t, str) else t for t in types)
         if not types or any(t not in known for t in types):
-            raise ValueError(f"motor_type must be one or more of {known}, got {motor_type!r}")
+            others = [t for key in self.supported_families() if key != self.family_key
+                      for t in family(key).motor_types()]
+            also = f" (or, in an env of its own, one or more of {others})" if others else ""
+            raise ValueError(f"motor_type must be one or more of {known}{also}, got "
+                             f"{motor_type!r}")
         return types
 
     def _check_ranges(self, overrides: Mapping[str, tuple[float, float]]
@@ -357,6 +440,18 @@ class MotorVectorEnv(VectorEnv, ABC):
     def peak_torque(self, idx: np.ndarray) -> np.ndarray:
         """Peak torque (T_SOLL = 1023) [N·m] of the motor types of copies ``idx``."""
         return np.array([cfg.peak_torque for cfg in self._type_configs(idx)])
+
+    @property
+    def _fam(self) -> TaskFamily:
+        """The public modules of the env's family (:func:`~jvl_gym.envs.family_task.task_family`;
+        looked up, not kept, so that the env pickles)."""
+        return task_family(self.family_key)
+
+    def _kvout_for_load(self, idx: np.ndarray, inertia_ratio: np.ndarray) -> None:
+        """Set KVOUT = 1 + ``inertia_ratio`` (J_load/J_m, (M,)) of copies ``idx`` when the
+        family's task module says its tasks do (``KVOUT_FROM_LOAD``)."""
+        if task_family(self.family_key).task.KVOUT_FROM_LOAD:
+            self.motors.write("KVOUT", 1.0 + inertia_ratio, index=idx)
 
     # ------------------------------------------------------------------ reset
     def _reset_envs(self, idx: np.ndarray, seeds: Sequence[int | None],
@@ -551,10 +646,21 @@ class MotorVectorEnv(VectorEnv, ABC):
 
         close_figures(self._figures)
 
+    def _transient(self) -> dict[str, Any]:
+        """Attributes the env keeps but does not pickle (compiled drivers): rebuilt after
+        unpickling."""
+        return {}
+
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
         state["_figures"] = {}
+        for name in self._transient():
+            state.pop(name, None)
         return state
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        self.__dict__.update(state)
+        self.__dict__.update(self._transient())
 
 
 class NumpyTaskEnv(MotorVectorEnv):

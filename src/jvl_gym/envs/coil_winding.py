@@ -240,6 +240,10 @@ class CoilWindingVectorEnv(MotorVectorEnv):
     family_key = FAMILY_KEY
     default_motor_type = DEFAULT_MOTOR_TYPE
     terminal_errors = TERMINAL_ERRORS
+    refused_families = {
+        "mac800": "the MAC800 register overview gives no registers for mode 19 (Coil), so the "
+                  "MAC800's COIL mode is not modelled",
+        "mis": "a step motor has no COIL mode"}
 
     d0 = Column("coil", _C_D0)  #: nominal wire diameter [m]
     d_mean = Column("coil", _C_D_MEAN)  #: true mean wire diameter [m]
@@ -425,6 +429,10 @@ class CoilWindingEnv(MotorEnv):
     ## Episode End
     Terminated when ``n_layers`` (4) layers are wound or on a motor error bit; truncated after
     ``max_episode_steps`` (1500 steps = 11.5 s at the default decimation 4).
+
+    ## Families
+    MAC050–141 only: ``motor_type="MAC800"`` (or ``"MAC400"``) is refused, since the MAC800
+    register overview gives no registers for mode 19 (Coil) and the family does not model it.
 
     ## Arguments
     ``motor_type``, ``randomization``, ``decimation`` (4), ``obs_noise``,

@@ -7,19 +7,21 @@ from typing import Any
 
 import numpy as np
 
-from ..families.mac050_141 import constants as c
-from ..families.mac050_141.task import DEFAULT_MOTOR_TYPE, FAMILY_KEY, TERMINAL_ERRORS
+from ..families import DEFAULT_FAMILY, family
 from .base import NumpyTaskEnv
 from .single import MotorEnv
 
 __all__ = ["FilterTuningEnv", "FilterTuningVectorEnv", "synthesis_registers"]
 
-_TYPES = ("MAC050", "MAC095", "MAC140", "MAC141")
-_STEP_COUNTS = c.COUNTS_PER_REV  #: position step: one turn
-_POS_SAMPLES = 160  #: 0.31 s
-_VEL_SAMPLES = 120  #: 0.23 s, the load steps in after 40 samples
-_LOAD_AT = 40
-_SETTLE_TOL = 20.0  #: counts
+#: the families the task runs on (docs/envs.md)
+_FAMILIES = ("mac050_141", "mac800")
+#: the trial's durations [s]: the position step, the velocity step, the load step's time in it,
+#: the stretch whose speed ripple is measured (160, 120, 40 and 20 samples at 520.8 Hz)
+_POS_TIME, _VEL_TIME, _LOAD_TIME, _RIPPLE_TIME = 0.3072, 0.2304, 0.0768, 0.0384
+#: the trial's position figures in turns (20, 100, 200 and 1000 counts at 4096 counts/rev):
+#: settled band, final error of a failed trial, FLWERR and FNCERR scales of the cost
+_SETTLE_TURNS, _FAIL_TURNS, _FLW_TURNS, _FNC_TURNS = (20.0 / 4096, 100.0 / 4096, 200.0 / 4096,
+                                                      1000.0 / 4096)
 _IF_NAMES = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
 
 
@@ -45,40 +47,65 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
     """Vector version of :class:`FilterTuningEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
 
-    family_key = FAMILY_KEY
-    default_motor_type = DEFAULT_MOTOR_TYPE
-    terminal_errors = TERMINAL_ERRORS
+    families = _FAMILIES
+    refused_families = {"mis": "a step motor has no speed-loop filter to design "
+                                "(StepperIndexing-v0 is the MIS task)"}
+    terminal_errors = None
 
-    obs_labels = (*(f"type_{t}" for t in _TYPES), "inertia_ratio_estimate",
-                  "viscous_estimate", "coulomb_estimate")
+    #: the labels on the default family; an instance's follow its family's motor types
+    obs_labels = (*(f"type_{t}" for t in family(DEFAULT_FAMILY).motor_types()),
+                  "inertia_ratio_estimate", "viscous_estimate", "coulomb_estimate")
     act_labels = ("proportional_gain", "integral_gain", "kvout")
     default_ranges = {
         "inertia_ratio": (0.0, 10.0),
         "viscous_friction": (0.0, 5e-5),
         "coulomb_ratio": (0.0, 0.05),
     }
+    viscous_ranges = ("viscous_friction",)
     default_decimation = 1
     default_max_episode_steps = 1
     scope_channels = ("position error [counts]", "speed [rpm]", "VF_OUT")
-    scope_length = _POS_SAMPLES + _VEL_SAMPLES
 
-    def __init__(self, num_envs: int = 1, *, motor_type: str | tuple[str, ...] = _TYPES,
+    def __init__(self, num_envs: int = 1, *, motor_type: str | tuple[str, ...] | None = None,
                  baseline: bool = False, estimate_error: float = 0.1,
                  instability_penalty: float = 10.0, **kwargs: Any) -> None:
         self.baseline = bool(baseline)
         self.estimate_error = float(estimate_error)
         self.instability_penalty = float(instability_penalty)
+        if motor_type is None:  # every type of the default family
+            motor_type = tuple(family(DEFAULT_FAMILY).motor_types())
+        else:  # the labels of the motor types' family (checked by the base class)
+            key = self._family_of(motor_type)
+            self.obs_labels = (*(f"type_{t}" for t in family(key).motor_types()),
+                               *type(self).obs_labels[-3:])
         super().__init__(num_envs, motor_type=motor_type, **kwargs)
 
     def _build(self) -> None:
         n = self.num_envs
+        fam = self._fam
+        k = fam.constants
+        self._types = tuple(fam.family.motor_types())
+        hz = k.OUTER_HZ
+        self._pos_samples = round(_POS_TIME * hz)
+        self._vel_samples = round(_VEL_TIME * hz)
+        self._load_at = round(_LOAD_TIME * hz)
+        self._ripple_samples = round(_RIPPLE_TIME * hz)
+        #: the position step [counts]: one turn, and the trial's figures in counts
+        self._step_counts = k.COUNTS_PER_REV
+        self._settle_tol = _SETTLE_TURNS * k.COUNTS_PER_REV
+        self._fail_counts = _FAIL_TURNS * k.COUNTS_PER_REV
+        self._flw_scale = _FLW_TURNS * k.COUNTS_PER_REV
+        self._fnc_scale = _FNC_TURNS * k.COUNTS_PER_REV
+        self.scope_length = self._pos_samples + self._vel_samples
         self.estimates = np.zeros((n, 3))
         self.truth = np.zeros((n, 3))
         self.metrics: dict[str, np.ndarray] = {}
         self._ok = np.arange(n)
         self._trace = np.zeros((n, 3, self.scope_length), dtype=np.float32)
-        self.baseline_source = ("tuning.synthesis" if synthesis_registers("MAC140") is not None
-                                else "default setup") if self.baseline else "agent"
+        synthesis = (self.family_key == DEFAULT_FAMILY
+                     and synthesis_registers(fam.task.DEFAULT_MOTOR_TYPE) is not None)
+        self.baseline_source = (("tuning.synthesis" if synthesis else "default setup")
+                                if self.baseline else "agent")
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
@@ -88,20 +115,27 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
 
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
-        truth = np.stack([draws["inertia_ratio"], draws["viscous_friction"] / 5e-5,
-                          draws["coulomb_ratio"] / 0.05], axis=1)
+        # the friction draws relative to the family's default ranges' highs
+        truth = np.stack([draws["inertia_ratio"],
+                          draws["viscous_friction"] / self.default_ranges["viscous_friction"][1],
+                          draws["coulomb_ratio"] / self.default_ranges["coulomb_ratio"][1]],
+                         axis=1)
         noise = np.array([rng.standard_normal(3) for rng in rngs]).reshape(idx.size, 3)
         self.truth[idx] = truth
         self.estimates[idx] = np.maximum(truth * (1.0 + self.estimate_error * noise), 0.0)
 
     def _apply_action(self, action: np.ndarray) -> None:
         m = self.motors
+        fam = self._fam
         # a copy left in an error by its last trial (NEXT_STEP: stepped once more before its
         # reset) cannot leave INIT; it is skipped and reset afterwards
-        ok = np.flatnonzero((m.read_raw("ERR_STAT") & c.BLOCKING_ERRORS) == 0)
+        ok = np.flatnonzero((m.read_raw("ERR_STAT") & fam.constants.BLOCKING_ERRORS) == 0)
         self._ok = ok
         kvout_est = 1.0 + self.estimates[:, 0]
         if self.baseline:
+            if self.family_key != DEFAULT_FAMILY:  # default setup, KVOUT from the estimate
+                m.write("KVOUT", np.round(kvout_est[ok] * 256) / 256, index=ok)
+                return
             for name in sorted(set(self._type_names[ok])):
                 regs = synthesis_registers(name)
                 sel = ok[self._type_names[ok] == name]
@@ -112,60 +146,64 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
                 m.write("KVOUT", np.round(kvout_est[sel] * 256) / 256, index=sel)
             return
         a = action[ok]
-        kvfx4 = m.read("KVFX4")[ok]
-        kvfx3 = m.read("KVFX3")[ok]
-        p, i = -kvfx3, kvfx4 + kvfx3  # default PI split: KVFX4 = c(kp+ki), KVFX3 = −c·kp
+        lead, lag = fam.task.SPEED_PI
+        x_lead = m.read(lead)[ok]
+        x_lag = m.read(lag)[ok]
+        p, i = -x_lag, x_lead + x_lag  # the PI split: lead = c(kp+ki), lag = −c·kp
         sp = 2.0 ** a[:, 0]
         si = 2.0 ** (1.5 * a[:, 1])
-        m.write("KVFX4", np.round((sp * p + si * i) * 4096) / 4096, index=ok)
-        m.write("KVFX3", np.round(-sp * p * 4096) / 4096, index=ok)
+        m.write(lead, np.round((sp * p + si * i) * 4096) / 4096, index=ok)
+        m.write(lag, np.round(-sp * p * 4096) / 4096, index=ok)
         m.write("KVOUT", np.round(2.0 ** (2.0 * (a[:, 2] + 1.0)) * 256) / 256, index=ok)
 
     def _advance(self) -> None:
         m = self.motors
         n = self.num_envs
-        m.write("V_SOLL", round(c.rpm_to_v_soll(2000.0)), index=self._ok)
-        m.write("P_SOLL", _STEP_COUNTS, index=self._ok)
-        m.write("MODE_REG", c.P_MODE, index=self._ok)
-        pos = np.zeros((n, _POS_SAMPLES))
-        flw = np.zeros((n, _POS_SAMPLES))
+        task = self._fam.task
+        n_pos, n_vel, load_at = self._pos_samples, self._vel_samples, self._load_at
+        step_counts = self._step_counts
+        m.write("V_SOLL", round(task.rpm_to_v_soll(2000.0)), index=self._ok)
+        m.write("P_SOLL", step_counts, index=self._ok)
+        m.write("MODE_REG", task.POSITION_MODE, index=self._ok)
+        pos = np.zeros((n, n_pos))
+        flw = np.zeros((n, n_pos))
         fnc_end = np.zeros(n)
-        for k in range(_POS_SAMPLES):
+        for k in range(n_pos):
             m.step(1)
             pos[:, k] = m.read_raw("P_IST")
             flw[:, k] = m.read_raw("FLWERR")
-            self._trace[:, 0, k] = pos[:, k] - _STEP_COUNTS
+            self._trace[:, 0, k] = pos[:, k] - step_counts
             self._trace[:, 1, k] = m.speed_rpm
             self._trace[:, 2, k] = m.read_raw("VF_OUT")
         fnc_end[:] = np.abs(m.read_raw("FNCERR"))
         errors = self.error_bits() != 0
-        v_ref = c.rpm_to_v_soll(1000.0) / 16.0  # counts/sample
+        v_ref = task.rpm_to_v_soll(1000.0) / 16.0  # counts/sample
         ok = np.flatnonzero(~errors)
-        vel = np.zeros((n, _VEL_SAMPLES))
+        vel = np.zeros((n, n_vel))
         if ok.size:
-            m.write("V_SOLL", round(c.rpm_to_v_soll(1000.0)), index=ok)
-            m.write("MODE_REG", c.V_MODE, index=ok)
-        for k in range(_VEL_SAMPLES):
-            if k == _LOAD_AT:
+            m.write("V_SOLL", round(task.rpm_to_v_soll(1000.0)), index=ok)
+            m.write("MODE_REG", task.VELOCITY_MODE, index=ok)
+        for k in range(n_vel):
+            if k == load_at:
                 m.set_input(load_torque=0.3 * self.rated_torque(np.arange(n)))
             m.step(1)
             vel[:, k] = m.read_raw("V_IST")
-            j = _POS_SAMPLES + k
-            self._trace[:, 0, j] = m.read_raw("P_IST") - _STEP_COUNTS
+            j = n_pos + k
+            self._trace[:, 0, j] = m.read_raw("P_IST") - step_counts
             self._trace[:, 1, j] = m.speed_rpm
             self._trace[:, 2, j] = m.read_raw("VF_OUT")
         errors |= self.error_bits() != 0
-        err = np.abs(pos - _STEP_COUNTS)
-        outside = err > _SETTLE_TOL
+        err = np.abs(pos - step_counts)
+        outside = err > self._settle_tol
         last_out = np.where(outside.any(axis=1),
-                            _POS_SAMPLES - 1 - np.argmax(outside[:, ::-1], axis=1), 0)
-        settle = (last_out + 1) * c.OUTER_DT
-        overshoot = np.maximum(pos.max(axis=1) - _STEP_COUNTS, 0.0) / _STEP_COUNTS
-        after = vel[:, _LOAD_AT:]
+                            n_pos - 1 - np.argmax(outside[:, ::-1], axis=1), 0)
+        settle = (last_out + 1) * self._fam.constants.OUTER_DT
+        overshoot = np.maximum(pos.max(axis=1) - step_counts, 0.0) / step_counts
+        after = vel[:, load_at:]
         dip = np.max(np.abs(after - v_ref), axis=1) / v_ref
-        ripple = np.std(vel[:, -20:], axis=1) / v_ref
+        ripple = np.std(vel[:, -self._ripple_samples:], axis=1) / v_ref
         unstable = errors | (ripple > 0.05) | (overshoot > 0.25) | (err[:, -10:].max(axis=1)
-                                                                   > 100)
+                                                                   > self._fail_counts)
         self.metrics = {"settling_time": settle, "overshoot": overshoot,
                         "flwerr_rms": np.sqrt(np.mean(flw * flw, axis=1)), "speed_dip": dip,
                         "speed_ripple": ripple, "fncerr": fnc_end, "unstable": unstable}
@@ -178,14 +216,15 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
 
     def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         mt = self.metrics
-        cost = (mt["settling_time"] / 0.1 + 10.0 * mt["overshoot"] + mt["flwerr_rms"] / 200.0
-                + 2.0 * mt["speed_dip"] + 20.0 * mt["speed_ripple"] + mt["fncerr"] / 1000.0)
+        cost = (mt["settling_time"] / 0.1 + 10.0 * mt["overshoot"]
+                + mt["flwerr_rms"] / self._flw_scale + 2.0 * mt["speed_dip"]
+                + 20.0 * mt["speed_ripple"] + mt["fncerr"] / self._fnc_scale)
         cost = np.minimum(cost, self.instability_penalty)
         cost = np.where(mt["unstable"], self.instability_penalty, cost)
         return -cost, np.ones(self.num_envs, dtype=np.bool_)
 
     def _observe(self) -> np.ndarray:
-        onehot = np.array([[1.0 if name == t else 0.0 for t in _TYPES]
+        onehot = np.array([[1.0 if name == t else 0.0 for t in self._types]
                            for name in self._type_names])
         est = self.estimates
         return np.concatenate([onehot, np.stack([est[:, 0] / 5.0 - 1.0, est[:, 1] * 2.0 - 1.0,
@@ -229,6 +268,13 @@ class FilterTuningEnv(MotorEnv):
 
     ## Episode End
     Every episode is one step (terminated after the trial).
+
+    ## Families
+    MAC050–141 (default: all four types) and MAC800 (``motor_type="MAC800"``, ``"MAC400"`` or
+    both): the one-hot is over the family's types; the action scales the PI in the main
+    filter's leading taps KVFX6/KVFX5 (the other taps keep the setup's values); the trial's
+    figures in turns and seconds (docs/envs.md); baseline: the default setup with KVOUT from
+    the inertia estimate.
 
     ## Arguments
     ``motor_type`` (default: all four types), ``randomization`` (``inertia_ratio``,

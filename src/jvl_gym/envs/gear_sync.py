@@ -9,34 +9,35 @@ import numpy as np
 from numba import njit
 
 from ..engine import TaskDriver
-from ..families import family
-from ..families.mac050_141 import constants as c
-from ..families.mac050_141.task import (
-    DEFAULT_MOTOR_TYPE,
+from ..jit import KERNEL
+from ..noise import normal
+from .base import Column, MotorVectorEnv
+from .compiled import action, end_step, put_obs
+from .family_task import (
     ERROR_BITS,
-    FAMILY_KEY,
-    TERMINAL_ERRORS,
+    FamilyHooks,
     R,
+    TaskFamily,
     reg,
     set_analog_volts,
     set_load_torque,
     set_pulse_counts,
     shaft_angle,
 )
-from ..jit import KERNEL
-from ..noise import normal
-from .base import Column, MotorVectorEnv
-from .compiled import action, end_step, put_obs
 from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
 from .web import load_cell_s, span_step_s, tension_s, winder_radius_s
 
 __all__ = ["GearSyncEnv", "GearSyncVectorEnv"]
 
-_DT = c.OUTER_DT
-_V_MOTOR_NORM = 3000.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 3000 rpm in counts/sample
+#: the families the task runs on (docs/envs.md)
+_FAMILIES = ("mac050_141", "mac800")
+_NORM_RPM = 3000.0  #: rpm: scale of the motor speed channel
 _GEARF2 = 1000  #: GEARF2 of the nominal gear (GEARF1 = round(ratio·1000))
-_AG_CENTRE = 1.01  #: AG factor at 0 V (manual 4.1.9: −10 V ↔ 0.87, +10 V ↔ 1.15)
+#: the default gear ratio, 10 at a rated speed of 4000 rpm (MAC140), in proportion to the rated
+#: speed of the family's default motor type, so that the line's top speed is within every
+#: family's speed range
+_DEFAULT_GEAR_RATIO, _DEFAULT_GEAR_RPM = 10.0, 4000.0
 _INTEGRAL_TAU = 2.0  #: time constant of the leaky tension-error integral [s]
 _LOADCELL_STREAM = np.uint64(0x5EED)  #: noise key offset of the load cell
 
@@ -50,7 +51,18 @@ _LOADCELL_STREAM = np.uint64(0x5EED)  #: noise key offset of the load cell
  _LC_K, _LC_NOISE, _TOLERANCE, _RATE_W, _BREAK, _SLACK_SAMPLES, _PENALTY, _N_CONSTS) = range(15)
 
 
-@njit(cache=True, inline="always")
+def _figures(tf: TaskFamily) -> dict[str, float]:
+    """The hooks' figures on a family: the outer sample time [s], the motor speed scale in
+    counts/sample, the analogue input's centre and span [V]."""
+    k = tf.constants
+    return {"_DT": k.OUTER_DT, "_V_MOTOR_NORM": _NORM_RPM / 60.0 * k.COUNTS_PER_REV / k.OUTER_HZ,
+            "_AG_CENTRE_VOLTS": tf.task.AG_CENTRE_VOLTS, "_AG_SPAN_VOLTS": tf.task.AG_SPAN_VOLTS}
+
+
+# bound per family by ``_figures``
+_DT = _V_MOTOR_NORM = _AG_CENTRE_VOLTS = _AG_SPAN_VOLTS = 1.0
+
+
 def _line_before(i, view, episode, task):  # pragma: no cover - compiled
     """Outer sample of copy ``i``, before the motor: master speed and pulses; remembers the
     speed and the motor angle for :func:`_line_after`."""
@@ -65,7 +77,6 @@ def _line_before(i, view, episode, task):  # pragma: no cover - compiled
     w[i, _W_THETA0] = shaft_angle(view, i)
 
 
-@njit(cache=True, inline="always")
 def _line_after(i, view, episode, task):  # pragma: no cover - compiled
     """Outer sample of copy ``i``, after the motor: span strain, winder radius, tension, load
     torque (for the next sample), load cell (``jvl_gym.envs.web``), master angle and time."""
@@ -88,7 +99,6 @@ def _line_after(i, view, episode, task):  # pragma: no cover - compiled
     w[i, _W_TIME] += _DT
 
 
-@njit(cache=True, inline="always")
 def _observe_row(i, view, episode, task):  # pragma: no cover - compiled
     """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
     k, _, w = task
@@ -112,17 +122,15 @@ def _observe_row(i, view, episode, task):  # pragma: no cover - compiled
     put_obs(obs, i, 7, episode.prev_action[i, 0], key, t[i], noise)
 
 
-@njit(cache=True, inline="always")
 def _step_begin(i, view, episode, task, actions):  # pragma: no cover - compiled
     """Beginning of an env step of copy ``i``: analogue input, step accumulators."""
     w = task[2]
     a = action(actions, i, 0)
-    set_analog_volts(view, i, c.ANINP_VOLTS * a)
+    set_analog_volts(view, i, _AG_CENTRE_VOLTS + _AG_SPAN_VOLTS * a)
     w[i, _W_PREV_MEASURED] = w[i, _W_MEASURED]
     w[i, _W_PULSES] = 0.0
 
 
-@njit(cache=True, inline="always")
 def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
     """End of an env step of copy ``i``: leaky error integral, reward, termination,
     observation (the action is clipped again: a pure function of ``actions``)."""
@@ -145,23 +153,22 @@ def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
     _observe_row(i, view, episode, task)
 
 
-_DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "gear_sync", begin=_step_begin,
-                     before=_line_before, after=_line_after, end=_step_end,
-                     observe=_observe_row)
-
+_HOOKS = FamilyHooks(__file__, "gear_sync", _figures, begin=_step_begin, before=_line_before,
+                     after=_line_after, end=_step_end, observe=_observe_row)
 
 
 @njit(**KERNEL)
 def _reset_rows(idx: np.ndarray, line: np.ndarray, gear: np.ndarray, ea: np.ndarray,
                 thickness: np.ndarray, r0: np.ndarray, span: np.ndarray,
                 tension_ref: np.ndarray, master_radius: float, gear_ratio: float,
-                master_counts_per_rev: int, gearf1: np.ndarray,
-                load: np.ndarray) -> None:  # pragma: no cover - compiled
+                master_counts_per_rev: int, counts_per_rev: int, ag_centre: float,
+                gearf1: np.ndarray, load: np.ndarray) -> None:  # pragma: no cover - compiled
     """Line state (N, _W_COLS) of copies ``idx`` at rest, the web pre-tensioned to the
     reference, from the (M,) draws (E·A [N], thickness [m], core radius [m], span [m],
     reference tension [N]); the nominal gear ``gear`` (N,) and its GEARF1 ``gearf1`` (M,) (at
-    the core radius and 0 V the winder runs at v1/(1 − ε_ref)); the load torque ``load`` (M,)
-    [N·m] of the pre-tension."""
+    the core radius and the analogue input's centre, where the AG factor is ``ag_centre``, the
+    winder runs at v1/(1 − ε_ref)); the load torque ``load`` (M,) [N·m] of the pre-tension;
+    ``counts_per_rev``: the motor's encoder counts per revolution."""
     for j in range(idx.shape[0]):
         i = idx[j]
         w = line[i]
@@ -178,8 +185,8 @@ def _reset_rows(idx: np.ndarray, line: np.ndarray, gear: np.ndarray, ea: np.ndar
         w[_W_MEASURED] = tension_ref[j]
         w[_W_PREV_MEASURED] = tension_ref[j]
         motor_per_master = (master_radius / r0[j] * gear_ratio / (1.0 - strain_ref)
-                            / _AG_CENTRE)
-        ratio = motor_per_master * c.COUNTS_PER_REV / master_counts_per_rev
+                            / ag_centre)
+        ratio = motor_per_master * counts_per_rev / master_counts_per_rev
         gearf1[j] = np.round(ratio * _GEARF2)
         gear[i] = gearf1[j] / _GEARF2
         load[j] = r0[j] * tension_ref[j] / gear_ratio
@@ -189,9 +196,10 @@ class GearSyncVectorEnv(MotorVectorEnv):
     """Vector version of :class:`GearSyncEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
 
-    family_key = FAMILY_KEY
-    default_motor_type = DEFAULT_MOTOR_TYPE
-    terminal_errors = TERMINAL_ERRORS
+    families = _FAMILIES
+    refused_families = {"mis": "a step motor has no analogue gear mode (StepperIndexing-v0 is "
+                                "the MIS task)"}
+    terminal_errors = None
 
     ea = Column("line", _W_EA)  #: E·A [N]
     thickness = Column("line", _W_THICK)  #: web thickness [m]
@@ -232,20 +240,22 @@ class GearSyncVectorEnv(MotorVectorEnv):
     default_max_episode_steps = 1500
     scope_channels = ("tension [N]", "tension ref [N]", "analogue input [V]", "winder rpm")
 
-    def __init__(self, num_envs: int = 1, *, gear_ratio: float = 10.0, master_radius: float = 0.05,
+    def __init__(self, num_envs: int = 1, *, gear_ratio: float | None = None,
+                 master_radius: float = 0.05,
                  master_counts_per_rev: int = 8192, loadcell_tau: float = 0.005,
                  loadcell_noise: float = 0.01, break_ratio: float = 3.0, slack_time: float = 0.01,
                  action_rate_weight: float = 0.05, tension_tolerance: float = 0.1,
                  failure_penalty: float = 100.0, **kwargs: Any) -> None:
-        if gear_ratio <= 0 or master_radius <= 0 or master_counts_per_rev <= 0:
+        if ((gear_ratio is not None and gear_ratio <= 0) or master_radius <= 0
+                or master_counts_per_rev <= 0):
             raise ValueError("gear_ratio, master_radius and master_counts_per_rev must be > 0")
-        self.gear_ratio = float(gear_ratio)
+        self.gear_ratio = None if gear_ratio is None else float(gear_ratio)
+        self._slack_time = float(slack_time)
         self.master_radius = float(master_radius)
         self.master_counts_per_rev = int(master_counts_per_rev)
         self.loadcell_tau = float(loadcell_tau)
         self.loadcell_noise = float(loadcell_noise)
         self.break_ratio = float(break_ratio)
-        self.slack_samples = max(1, int(round(slack_time / _DT)))
         self.action_rate_weight = float(action_rate_weight)
         self.tension_tolerance = float(tension_tolerance)
         self.failure_penalty = float(failure_penalty)
@@ -255,6 +265,15 @@ class GearSyncVectorEnv(MotorVectorEnv):
 
     def _build(self) -> None:
         n = self.num_envs
+        self.__dict__.update(self._transient())
+        fam = self._fam
+        self._dt = dt = fam.constants.OUTER_DT
+        #: the motor's top speed in the task: the rated speed of the family's default type
+        self.rated_rpm = float(
+            fam.family.array_class.load_motor(fam.task.DEFAULT_MOTOR_TYPE).rated_speed_rpm)
+        if self.gear_ratio is None:
+            self.gear_ratio = _DEFAULT_GEAR_RATIO * self.rated_rpm / _DEFAULT_GEAR_RPM
+        self.slack_samples = max(1, int(round(self._slack_time / dt)))
         self.profile = SpeedProfile(n)
         self.line = np.zeros((n, _W_COLS))
         self.gear = np.ones(n)
@@ -264,7 +283,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
                  _PENALTY]] = (
             self.obs_noise, self.max_episode_steps, self.decimation, self.profile.t_change,
             self._counts_per_m, self.master_radius, self.gear_ratio,
-            1.0 - math.exp(-_DT / self.loadcell_tau) if self.loadcell_tau > 0 else 1.0,
+            1.0 - math.exp(-dt / self.loadcell_tau) if self.loadcell_tau > 0 else 1.0,
             self.loadcell_noise, self.tension_tolerance, self.action_rate_weight,
             self.break_ratio, self.slack_samples, self.failure_penalty)
         #: the arrays the compiled hooks unpack: constants, master profiles, line state
@@ -280,17 +299,29 @@ class GearSyncVectorEnv(MotorVectorEnv):
                            draws["speed_step"], draws["step_time"], draws["walk"],
                            draws["ripple"])
         m = self.motors
+        fam = self._fam
         gearf1, load = np.empty(idx.size), np.empty(idx.size)
         _reset_rows(idx, self.line, self.gear, draws["ea"], draws["thickness"],
                     draws["r0"], draws["span"], draws["tension_ref"], self.master_radius,
-                    self.gear_ratio, self.master_counts_per_rev, gearf1, load)
-        m.write_many({"GEARF1": gearf1, "GEARF2": _GEARF2,
-                       "V_SOLL": round(c.rpm_to_v_soll(4000.0)), "MODE_REG": c.AG_MODE}, idx)
-        m.start_under_load(load, idx)
+                    self.gear_ratio, self.master_counts_per_rev, fam.constants.COUNTS_PER_REV,
+                    fam.task.AG_CENTRE_FACTOR, gearf1, load)
+        self._kvout_for_load(idx, draws["inertia_ratio"])
+        num, den = fam.task.GEARF
+        m.write_many({num: gearf1, den: _GEARF2,
+                      "V_SOLL": round(fam.task.rpm_to_v_soll(self.rated_rpm)),
+                      "MODE_REG": fam.task.ANALOG_GEAR_MODE}, idx)
+        if hasattr(m, "start_under_load"):  # the speed regulator already holds the load
+            m.start_under_load(load, idx)
+        else:  # the motor takes the load up in its first samples
+            m.set_input(idx, load_torque=load)
+
+    def _transient(self) -> dict[str, TaskDriver]:
+        """The compiled step of the task on the env's family (rebuilt after unpickling)."""
+        return {"_driver": _HOOKS.driver(self.family_key)}
 
     def _step_copies(self, actions: np.ndarray) -> bool:
-        return _DRIVER.step(self.motors.engine_view(), self._episode, self._task, actions,
-                            self.decimation)
+        return self._driver.step(self.motors.engine_view(), self._episode, self._task, actions,
+                                 self.decimation)
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
         """Web break (tension above ``break_ratio`` × reference), slack longer than
@@ -308,10 +339,12 @@ class GearSyncVectorEnv(MotorVectorEnv):
         return out
 
     def _observe_copies(self, idx: np.ndarray) -> None:
-        _DRIVER.observe(self.motors.engine_view(), self._episode, self._task, idx)
+        self._driver.observe(self.motors.engine_view(), self._episode, self._task, idx)
 
     def _scope_values(self) -> np.ndarray:
-        return np.stack([self.force, self.tension_ref, self._prev_action[:, 0] * c.ANINP_VOLTS,
+        task = self._fam.task
+        volts = task.AG_CENTRE_VOLTS + task.AG_SPAN_VOLTS * self._prev_action[:, 0]
+        return np.stack([self.force, self.tension_ref, volts,
                          self.motors.speed_rpm / self.gear_ratio], axis=1)
 
 
@@ -358,9 +391,15 @@ class GearSyncEnv(MotorEnv):
     ``slack_time`` (10 ms) or a motor error bit; truncated after ``max_episode_steps`` (1500
     steps = 5.76 s at the default decimation 2).
 
+    ## Families
+    MAC050–141 (default MAC140) and MAC800 (``motor_type="MAC800"`` or ``"MAC400"``): mode 18,
+    Analog gear (factor ANINP/2047), the analogue input 5 V + 1 V × action, the nominal gear
+    holding the reference at 5 V; gear ratio 7.5 and V_SOLL 3000 rpm (docs/envs.md).
+
     ## Arguments
     ``motor_type``, ``randomization``, ``decimation`` (2), ``obs_noise``, ``max_episode_steps``,
-    ``render_mode``, ``gear_ratio`` (10), ``master_radius`` (0.05 m),
+    ``render_mode``, ``gear_ratio`` (10 at the MAC140's 4000 rpm rated speed, in proportion to
+    the rated speed of the family's default type), ``master_radius`` (0.05 m),
     ``master_counts_per_rev`` (8192), ``loadcell_tau`` (5 ms), ``loadcell_noise`` (0.01),
     ``break_ratio`` (3), ``slack_time`` (0.01 s), ``action_rate_weight`` (0.05),
     ``tension_tolerance`` (0.1), ``failure_penalty`` (100). Reset options:

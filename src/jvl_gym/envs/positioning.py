@@ -8,32 +8,42 @@ import numpy as np
 from numba import njit
 
 from ..engine import TaskDriver
-from ..families import family
-from ..families.mac050_141 import constants as c
-from ..families.mac050_141.task import (
-    DEFAULT_MOTOR_TYPE,
-    ERROR_BITS,
-    FAMILY_KEY,
-    TERMINAL_ERRORS,
-    R,
-    reg,
-    set_analog_volts,
-)
 from ..jit import KERNEL
 from .base import MotorVectorEnv
 from .compiled import action, end_step, put_obs
+from .family_task import (
+    ERROR_BITS,
+    FamilyHooks,
+    R,
+    TaskFamily,
+    c,
+    reg,
+    set_analog_volts,
+)
 from .single import MotorEnv
 
 __all__ = ["PositioningEnv", "PositioningVectorEnv"]
 
-_V_NORM = 3000.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 3000 rpm in counts/sample
-_FINE = 200.0  #: counts: scale of the fine position-error channel
+#: the families the task runs on (docs/envs.md)
+_FAMILIES = ("mac050_141", "mac800")
+_FINE_TURNS = 200.0 / 4096  #: turns: scale of the fine position-error channel
+_NORM_RPM = 3000.0  #: rpm: scale of the speed channel
 _BASELINE_RPM = 3000.0
 #: entries of the per-env constants array
 _NOISE, _MAX_STEPS, _DECIMATION, _OVERSHOOT_W, _EFFORT_W, _BASELINE, _N_CONSTS = range(7)
 
 
-@njit(cache=True, inline="always")
+def _figures(tf: TaskFamily) -> dict[str, float]:
+    """The hooks' figures on a family: the speed scale in counts/sample and the fine error
+    scale in counts."""
+    k = tf.constants
+    return {"_V_NORM": _NORM_RPM / 60.0 * k.COUNTS_PER_REV / k.OUTER_HZ,
+            "_FINE": _FINE_TURNS * k.COUNTS_PER_REV}
+
+
+_V_NORM = _FINE = 1.0  # bound per family by ``_figures``
+
+
 def _observe_row(i, view, episode, task):  # pragma: no cover - compiled
     """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
     k, target, _ = task
@@ -45,7 +55,6 @@ def _observe_row(i, view, episode, task):  # pragma: no cover - compiled
     put_obs(obs, i, 3, episode.prev_action[i, 0], key, count, noise)
 
 
-@njit(cache=True, inline="always")
 def _step_begin(i, view, episode, task, actions):  # pragma: no cover - compiled
     """Beginning of an env step of copy ``i``: the torque command (unless baseline)."""
     k = task[0]
@@ -55,7 +64,6 @@ def _step_begin(i, view, episode, task, actions):  # pragma: no cover - compiled
         set_analog_volts(view, i, c.ANINP_VOLTS * a)
 
 
-@njit(cache=True, inline="always")
 def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
     """End of an env step of copy ``i``: reward, termination, observation (the action is
     clipped again: a pure function of ``actions``)."""
@@ -74,19 +82,18 @@ def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
     _observe_row(i, view, episode, task)
 
 
-_DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "positioning", begin=_step_begin,
-                     end=_step_end, observe=_observe_row)
-
+_HOOKS = FamilyHooks(__file__, "positioning", _figures, begin=_step_begin, end=_step_end,
+                     observe=_observe_row)
 
 
 @njit(**KERNEL)
 def _reset_rows(idx: np.ndarray, target_turns: np.ndarray, target: np.ndarray,
-                direction: np.ndarray) -> None:  # pragma: no cover - compiled
+                direction: np.ndarray, counts_per_rev: int) -> None:  # pragma: no cover
     """Targets [counts] (N,) int64 of copies ``idx`` from the (M,) draws [turns], and the
     direction of the move (N,) (+1 or −1)."""
     for j in range(idx.shape[0]):
         i = idx[j]
-        target[i] = int(np.round(target_turns[j] * c.COUNTS_PER_REV))
+        target[i] = int(np.round(target_turns[j] * counts_per_rev))
         direction[i] = 1.0 if target[i] >= 0 else -1.0
 
 
@@ -94,9 +101,10 @@ class PositioningVectorEnv(MotorVectorEnv):
     """Vector version of :class:`PositioningEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
 
-    family_key = FAMILY_KEY
-    default_motor_type = DEFAULT_MOTOR_TYPE
-    terminal_errors = TERMINAL_ERRORS
+    families = _FAMILIES
+    refused_families = {"mis": "a step motor has no analogue torque mode (StepperIndexing-v0 "
+                                "is the MIS task)"}
+    terminal_errors = None
 
     obs_labels = ("position_error", "position_error_fine", "speed", "previous_action")
     act_labels = ("torque",)
@@ -106,6 +114,7 @@ class PositioningVectorEnv(MotorVectorEnv):
         "coulomb_ratio": (0.0, 0.1),
         "target_turns": (-2.0, 2.0),
     }
+    viscous_ranges = ("viscous_friction",)
     default_decimation = 1
     default_max_episode_steps = 300
     scope_channels = ("position error [turns]", "speed [rpm]", "torque command [1]")
@@ -119,6 +128,7 @@ class PositioningVectorEnv(MotorVectorEnv):
 
     def _build(self) -> None:
         n = self.num_envs
+        self.__dict__.update(self._transient())
         self.target = np.zeros(n, dtype=np.int64)  # counts
         self.direction = np.ones(n)
         self._k = np.zeros(_N_CONSTS)  # constants of the compiled step
@@ -135,25 +145,34 @@ class PositioningVectorEnv(MotorVectorEnv):
 
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
-        _reset_rows(idx, draws["target_turns"], self.target, self.direction)
+        fam = self._fam
+        self._kvout_for_load(idx, draws["inertia_ratio"])
+        _reset_rows(idx, draws["target_turns"], self.target, self.direction,
+                    fam.constants.COUNTS_PER_REV)
         if self.baseline:
-            self.motors.write_many({"V_SOLL": round(c.rpm_to_v_soll(_BASELINE_RPM)),
-                                     "P_SOLL": self.target[idx], "MODE_REG": c.P_MODE}, idx)
+            self.motors.write_many({"V_SOLL": round(fam.task.rpm_to_v_soll(_BASELINE_RPM)),
+                                     "P_SOLL": self.target[idx],
+                                     "MODE_REG": fam.task.POSITION_MODE}, idx)
         else:
-            self.motors.write("MODE_REG", c.AT_MODE, index=idx)
+            self.motors.write("MODE_REG", fam.task.ANALOG_TORQUE_MODE, index=idx)
+
+    def _transient(self) -> dict[str, TaskDriver]:
+        """The compiled step of the task on the env's family (rebuilt after unpickling)."""
+        return {"_driver": _HOOKS.driver(self.family_key)}
 
     def _step_copies(self, actions: np.ndarray) -> bool:
-        return _DRIVER.step(self.motors.engine_view(), self._episode, self._task, actions,
-                            self.decimation)
+        return self._driver.step(self.motors.engine_view(), self._episode, self._task, actions,
+                                 self.decimation)
 
     def _observe_copies(self, idx: np.ndarray) -> None:
-        _DRIVER.observe(self.motors.engine_view(), self._episode, self._task, idx)
+        self._driver.observe(self.motors.engine_view(), self._episode, self._task, idx)
 
     def _error_counts(self) -> np.ndarray:
         return (self.target - self.motors.read_raw("P_IST")).astype(np.float64)
 
     def _scope_values(self) -> np.ndarray:
-        return np.stack([self._error_counts() / c.COUNTS_PER_REV, self.motors.speed_rpm,
+        return np.stack([self._error_counts() / self._fam.constants.COUNTS_PER_REV,
+                         self.motors.speed_rpm,
                          self._prev_action[:, 0]], axis=1)
 
 
@@ -189,6 +208,12 @@ class PositioningEnv(MotorEnv):
     ## Episode End
     Terminated when an error bit (I2T, FLW, FNC, UIT, position limit) is set; truncated after
     ``max_episode_steps`` steps (default 300 ≈ 0.58 s at decimation 1).
+
+    ## Families
+    MAC050–141 (default MAC140) and MAC800 (``motor_type="MAC800"`` or ``"MAC400"``: mode 4,
+    Analog torque, ±2047 ANINP ↔ ±T_SOLL; 8000 counts/rev and 770 Hz, so a step is 1.30 ms and
+    the observation's scales are in those units; the viscous friction range scaled to the
+    motor, docs/envs.md "Motor families").
 
     ## Arguments
     ``motor_type`` (str or list of types drawn per episode), ``randomization`` (overrides of the

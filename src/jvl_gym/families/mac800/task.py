@@ -3,22 +3,29 @@ module): the names of ``families/mac050_141/task.py`` where the meaning is the s
 an env written against that interface runs on this family.
 
 Register values by number (``R``, from the register table), the world inputs the motor's
-connectors and shaft see, and the shaft angle. (The MAC050–141's ``coil_direction`` has no
-counterpart: the MAC800's coil mode is not modelled.)
+connectors and shaft see, and the shaft angle; the modes and registers the tasks drive. (The
+MAC050–141's ``coil_direction`` has no counterpart: the MAC800's coil mode is not modelled.)
 """
 
 from __future__ import annotations
 
+import numpy as _np
 from numba import njit
 
 from ...engine.view import EngineView
 from . import constants as _c
 from . import layout as _L
 from .firmware import regs as R
+from .firmware.analog import gear_factor as _gear_factor
 from .table import TABLE as _TABLE
+from .units import ANINP_VOLTS_PER_UNIT as _ANINP_VOLTS_PER_UNIT
+from .units import rpm_to_v_soll
 
 __all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BITS", "reg",
-           "set_reg", "shaft_angle", "set_analog_volts", "set_load_torque", "set_pulse_counts"]
+           "set_reg", "shaft_angle", "set_analog_volts", "set_load_torque", "set_pulse_counts",
+           "POSITION_MODE", "VELOCITY_MODE", "ANALOG_TORQUE_MODE", "ANALOG_GEAR_MODE",
+           "rpm_to_v_soll", "SPEED_PI", "GEARF", "AG_CENTRE_VOLTS", "AG_SPAN_VOLTS",
+           "AG_CENTRE_FACTOR", "KVOUT_FROM_LOAD"]
 
 #: the family's key, and the motor type of a task when none is given
 FAMILY_KEY = "mac800"
@@ -28,6 +35,41 @@ TERMINAL_ERRORS = tuple((name, bit) for bit, name in _c.ERROR_NAMES.items())
 ERROR_BITS = 0
 for _bit in _c.ERROR_NAMES:
     ERROR_BITS |= _bit
+
+# --- the modes and registers the tasks drive (register 2 MODE_REG; docs/envs.md) -------------
+POSITION_MODE = _c.POSITION_MODE  #: mode 2, Position
+VELOCITY_MODE = _c.VELOCITY_MODE  #: mode 1, Velocity
+#: mode 4, Analog torque: VF_OUT = ANINP·T_SOLL/2047 (firmware/analog.py)
+ANALOG_TORQUE_MODE = _c.ANALOG_TORQUE_MODE
+#: mode 18, Analog gear: the pulse input geared by GEARF_1/GEARF_2 times ANINP/2047
+#: (firmware/analog.py)
+ANALOG_GEAR_MODE = _c.ANALOG_GEAR_MODE
+#: the main filter's PI taps of the default setup: KVFX6 = kp + ki, KVFX5 = −kp (register
+#: overview §1.2 "Filters"; configs/setups/MAC800.yaml)
+SPEED_PI = ("KVFX6", "KVFX5")
+GEARF = ("GEARF_1", "GEARF_2")  #: the gear factor's numerator and denominator (registers 14, 15)
+#: a task's analogue gear trim: input = AG_CENTRE_VOLTS + AG_SPAN_VOLTS·a for a ∈ [−1, 1]
+#: (decision): mode 18's factor is ANINP/2047, 0 at 0 V, so the trim works around the middle of
+#: the forward half, 5 V (factor 0.5), ±1 V (factor ±0.1: a trim of ±20 %, near the
+#: MAC050–141's ±13.9 %)
+AG_CENTRE_VOLTS = 5.0
+AG_SPAN_VOLTS = 1.0
+#: whether a task sets KVOUT = (J_motor + J_load)/J_motor for its load (register 13): yes, the
+#: default setup's speed loop is designed for the bare rotor at KVOUT = 1
+#: (configs/setups/MAC800.yaml) and is too slow to follow a gear under a load of several rotor
+#: inertias without it (decision)
+KVOUT_FROM_LOAD = True
+
+
+def _ag_centre_factor() -> float:
+    """Mode 18's factor at AG_CENTRE_VOLTS, as the firmware computes it from ANINP (register
+    170: V = ANINP × 0.0048828, ANINP_OFFSET 0)."""
+    row = _np.zeros(_TABLE.last + 1, dtype=_np.int64)
+    row[R.ANINP] = round(AG_CENTRE_VOLTS / _ANINP_VOLTS_PER_UNIT)
+    return float(_gear_factor.py_func(row))
+
+
+AG_CENTRE_FACTOR = _ag_centre_factor()  #: mode 18's factor at AG_CENTRE_VOLTS
 
 
 @njit(cache=True, inline="always")
