@@ -1,0 +1,352 @@
+"""The inner sample: one 128 µs current-loop sample and the plant over it (docs/model.md §2).
+
+Each inner sample (step 4 of ``mac050_141.kernel``): ELDEG_IST and V_ELDEG from the rotor angle
+(3.2.143, 3.2.144; with the hall synchronisation of 3.2.124/125 until its first zero
+transition when the motor starts from its hall sector); the three phase currents measured
+(IA/IB/IC_IST, quantised and limited to ±1023, IX_ERR 3.2.147); commutation and the three
+current loops (4.3.1), or the mode's fixed voltages (INIT, SAFE: 4.4.1; TESTU 4.4.9; TESTKI),
+or MANI's stator field (3.2.128); inner-rate recording (3.2.112–3.2.116); then the PWM voltage
+(after ``pwm_delay_samples``) drives the coil, the mechanics and the DC bus for 128 µs
+(docs/model.md §5) and the energy accounts.
+
+:func:`inner_sample` is the one implementation. It works on a lane of the block's scratch
+(:mod:`mac050_141.scratch`) and takes a compile-time flag ``full`` (a literal at each call,
+which the compiler folds), so one source gives two specialisations:
+
+- ``full`` False: the sample of a motor that :func:`mac050_141.lanes.in_lanes` admits, with no
+  branch the compiler cannot turn into a select, so that the loop over the lanes of a block
+  (:func:`mac050_141.lanes.inner_samples`) runs in SIMD registers; the registers of the sample
+  are kept for the last of the 15 only;
+- ``full`` True: every per-motor feature besides (hall synchronisation, current and torque
+  noise, the passive and test modes and MANI, inner-rate recording, IX_ERR at once, the
+  registers of every sample), one motor at a time (:func:`inner_samples_one`).
+
+Both specialisations do the same arithmetic in the same order on the same values, so a motor
+gives the same bits on either path and an N-motor array is bit-for-bit equal to N one-motor
+arrays (tests/test_lanes.py).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ...jit import LANE_KERNEL
+from ...noise import gauss
+from . import constants as c
+from . import layout as L
+from .firmware import regs as R
+from .firmware.current_loop import manual_references, phase_step, references, store_references
+from .firmware.modes import enter_mode
+from .firmware.recorder import record
+from .kernel import adc_count, plant_sample
+from .plant.coil import vector_to_phases
+from .plant.encoder import eldeg, encoder_count
+from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
+from .scratch import (
+    F_AMPLITUDE,
+    F_COULOMB,
+    F_COUNTS_PER_AMP,
+    F_ELDEG_IST,
+    F_HALL_ANGLE,
+    F_I_NOM,
+    F_IA_IST,
+    F_IA_SOLL,
+    F_IB_IST,
+    F_IB_SOLL,
+    F_IC_IST,
+    F_IC_SOLL,
+    F_IX_ERR,
+    F_J,
+    F_KB0,
+    F_KB1,
+    F_KB2,
+    F_KB3,
+    F_KB4,
+    F_KB5,
+    F_KB6,
+    F_KC0,
+    F_KC1,
+    F_KC2,
+    F_KC3,
+    F_KIA,
+    F_KIB,
+    F_KIB0,
+    F_KIB1,
+    F_KIC,
+    F_KIFX1,
+    F_KIFX2,
+    F_KIFY0,
+    F_KIFY1,
+    F_KM0,
+    F_KM1,
+    F_KM2,
+    F_KM3,
+    F_KM4,
+    F_KM5,
+    F_LAMBDA,
+    F_LOAD,
+    F_PHASE_COMP,
+    F_PHI_SOLL,
+    F_POLE_PAIRS,
+    F_PWM_DELAY,
+    F_R,
+    F_STOP_D,
+    F_STOP_HI,
+    F_STOP_K,
+    F_STOP_LO,
+    F_SUPPLY,
+    F_THETA_E0,
+    F_U_DUMP,
+    F_UA_VAL,
+    F_UB_VAL,
+    F_UC_VAL,
+    F_V_ELDEG,
+    F_VF_OUT,
+    gather,
+    get,
+    put,
+    scatter_state,
+    sget,
+    sput,
+)
+
+_H = c.INNER_DT
+
+
+@njit(cache=True, inline="always")
+def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float) -> float:
+    """Phase ``k``'s current loop in lane ``j`` (4.3.1, :func:`current_loop.phase_step`):
+    U, and the histories e(k−1), U(k−1), U(k−2), I_IST(k−1) moved on."""
+    u1 = sget(sc, L.S_IU1_A + k, j)
+    u, e = phase_step(i_soll, i_ist, sget(sc, L.S_IE1_A + k, j), u1, sget(sc, L.S_IU2_A + k, j),
+                      sget(sc, L.S_IIST1_A + k, j), get(sc, F_KIB1, j), get(sc, F_KIB0, j),
+                      get(sc, F_KIFX2, j), get(sc, F_KIFX1, j), get(sc, F_KIFY1, j),
+                      get(sc, F_KIFY0, j))
+    sput(sc, L.S_IE1_A + k, j, e)
+    sput(sc, L.S_IU2_A + k, j, u1)
+    sput(sc, L.S_IU1_A + k, j, u)
+    sput(sc, L.S_IIST1_A + k, j, i_ist)
+    return u
+
+
+@njit(cache=True, inline="always")
+def _at_rest(sc: np.ndarray, j: int, k: int, i_ist: float) -> None:
+    """Phase ``k``'s loop held at rest while the current regulator is passive (4.4.1, 4.4.9):
+    no history but the measured current."""
+    sput(sc, L.S_IE1_A + k, j, 0.0)
+    sput(sc, L.S_IU1_A + k, j, 0.0)
+    sput(sc, L.S_IU2_A + k, j, 0.0)
+    sput(sc, L.S_IIST1_A + k, j, i_ist)
+
+
+@njit(cache=True, inline="always")
+def _pwm(sc: np.ndarray, j: int, k: int, u: float) -> float:
+    """PWM value applied in phase ``k`` of lane ``j``: ``u`` itself, or the value computed one
+    sample earlier when the motor has a PWM delay (docs/model.md §2). ``u`` is kept either
+    way (so switching the delay on applies the previous sample's value): a store that depends
+    on the delay became a masked store, slow on AMD cores."""
+    pending = sget(sc, L.S_UPEND_A + k, j)
+    sput(sc, L.S_UPEND_A + k, j, u)
+    return pending if get(sc, F_PWM_DELAY, j) > 0.5 else u
+
+
+@njit(cache=True, inline="always")
+def _hall_eldeg(r: np.ndarray, s: np.ndarray, p: np.ndarray, theta_e: float, enc_abs: float,
+                sec: float, cross: int) -> float:
+    """ELDEG_IST of a motor that started from its hall sector (3.2.124/125): the encoder
+    count plus the offset latched at the last hall zero transition that counted (the first
+    after power-on, later ones with CNTRL_BITS HALL_INT), mod 2048."""
+    if cross != 0 and (s[L.S_HALL_SYNCED] < 0.5 or (r[R.CNTRL_BITS] & c.HALL_INT)):
+        # the firmware latches the count at the edge
+        edge_e = p[L.P_HALL_ANGLE] + (sec if cross > 0 else sec + 1.0) * SECTOR
+        enc_edge = encoder_count((edge_e - p[L.P_THETA_E0]) / p[L.P_POLE_PAIRS])
+        target = r[R.ELDEGP_OFFSET] if cross > 0 else r[R.ELDEGN_OFFSET]
+        s[L.S_ELDEG_OFS] = target - enc_edge
+        s[L.S_HALL_SYNCED] = 1.0
+    return float(int(enc_abs + s[L.S_ELDEG_OFS]) % c.ELDEG_PER_TURN)
+
+
+@njit(cache=True, inline="always")
+def inner_sample(sc: np.ndarray, j: int, k: int, last: bool, full: bool, r: np.ndarray,
+                 s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64, buf: np.ndarray,
+                 rec: bool, fmt: np.ndarray) -> None:
+    """Inner sample ``k`` (0 … 14) of an outer sample for the motor in lane ``j`` of the
+    scratch row ``sc`` (module docstring).
+
+    ``last`` and ``full`` are constants at each call. ``last``: the sample stores its
+    registers into the lane's fields (``full`` False; the earlier samples' registers would be
+    overwritten unread). ``full``: the per-motor features, with the motor's rows ``r``, ``s``,
+    ``p``, ``u``, its noise ``key`` and the sample buffer ``buf``, ``rec``, ``fmt``; the
+    registers go to ``r`` at once. Without ``full`` those arguments are not read (any rows of
+    the right types will do).
+    """
+    theta = sget(sc, L.S_THETA, j)
+    omega = sget(sc, L.S_OMEGA, j)
+    pp = get(sc, F_POLE_PAIRS, j)
+    theta_e = pp * theta + get(sc, F_THETA_E0, j)
+    enc_abs = encoder_count(theta)
+    if full:
+        sec = sector_index(theta_e, get(sc, F_HALL_ANGLE, j))
+        cross = zero_crossing(sget(sc, L.S_HALL_SECTOR, j), sec)
+        sput(sc, L.S_HALL_SECTOR, j, sec)
+        if p[L.P_HALL_START] < 0.5:  # commutation aligned from power-on
+            el = eldeg(theta_e)
+        else:
+            el = _hall_eldeg(r, s, p, theta_e, enc_abs, sec, cross)
+        r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] & 0x1FFF) | (hall_code(sec) << c.HALL_STATUS_SHIFT)
+    else:
+        if last:
+            sput(sc, L.S_HALL_SECTOR, j, sector_index(theta_e, get(sc, F_HALL_ANGLE, j)))
+        el = eldeg(theta_e)
+    # V_ELDEG: encoder counts per inner sample (3.2.144)
+    dv = enc_abs - sget(sc, L.S_ELDEG_PREV, j)
+    sput(sc, L.S_ELDEG_PREV, j, enc_abs)
+
+    tick = s[L.S_TICK] + k if full else 0.0  # the noise streams' counter
+    i_re = sget(sc, L.S_I_RE, j)
+    i_im = sget(sc, L.S_I_IM, j)
+    ia, ib, ic = vector_to_phases(complex(i_re, i_im))
+    cpa = get(sc, F_COUNTS_PER_AMP, j)
+    xa = ia * cpa * get(sc, F_KIA, j) / 256.0
+    xb = ib * cpa * get(sc, F_KIB, j) / 256.0
+    xc = ic * cpa * get(sc, F_KIC, j) / 256.0
+    if full and p[L.P_CURRENT_NOISE] > 0.0:
+        xa += p[L.P_CURRENT_NOISE] * gauss(key, tick, 0)
+        xb += p[L.P_CURRENT_NOISE] * gauss(key, tick, 1)
+        xc += p[L.P_CURRENT_NOISE] * gauss(key, tick, 2)
+    xa, over_a = adc_count(xa)
+    xb, over_b = adc_count(xb)
+    xc, over_c = adc_count(xc)
+    if full:
+        if over_a or over_b or over_c:
+            r[R.ERR_STAT] |= c.IX_ERR
+        r[R.ELDEG_IST] = int(el)
+        r[R.V_ELDEG] = int(dv)
+        r[R.IA_IST] = int(xa)
+        r[R.IB_IST] = int(xb)
+        r[R.IC_IST] = int(xc)
+    else:
+        # F_IX_ERR counts the samples with a saturated converter (a select between the stored
+        # flag and 1 became a masked, conditional store: slow on AMD cores)
+        put(sc, F_IX_ERR, j, get(sc, F_IX_ERR, j) + (1.0 if (over_a or over_b or over_c)
+                                                      else 0.0))
+
+    mode = int(r[R.MODE_REG]) if full else c.V_MODE
+    passive = full and (mode == c.INIT_MODE or mode == c.SAFE_MODE or mode == c.TESTU_MODE
+                        or mode == c.TESTKI_MODE)
+    if passive:  # current regulator passive: fixed voltages, loops at rest (4.4.1, 4.4.9)
+        um = float(r[R.UMEAS]) if mode == c.TESTU_MODE or mode == c.TESTKI_MODE else 0.0
+        ua = um
+        ub = -um + 0.0 if mode == c.TESTKI_MODE else 0.0  # TESTKI: UA = UMEAS, UB = −UMEAS
+        uc = -um + 0.0 if mode == c.TESTU_MODE else 0.0  # 4.4.9: UA = UMEAS, UC = −UMEAS
+        _at_rest(sc, j, 0, xa)
+        _at_rest(sc, j, 1, xb)
+        _at_rest(sc, j, 2, xc)
+        r[R.I_NOM] = 0
+        r[R.IA_SOLL] = 0
+        r[R.IB_SOLL] = 0
+        r[R.IC_SOLL] = 0
+        i_nom = phi = isa = isb = isc = 0.0
+    else:
+        if full and mode == c.MANI_MODE:  # 3.2.128: stator field set by hand
+            isa, isb, isc = manual_references(float(r[R.MAN_I_NOM]), int(r[R.MAN_ALPHA]),
+                                              r[R.AMPLITUDE])
+            r[R.IA_SOLL] = int(isa)
+            r[R.IB_SOLL] = int(isb)
+            r[R.IC_SOLL] = int(isc)
+            i_nom = 0.0
+            phi = 0.0
+        else:  # commutation (4.3.1)
+            i_nom, phi, isa, isb, isc = references(get(sc, F_VF_OUT, j), el, dv,
+                                                   get(sc, F_PHASE_COMP, j),
+                                                   get(sc, F_AMPLITUDE, j))
+            if full:
+                store_references(r, i_nom, phi, isa, isb, isc)
+        ua = _phase(sc, j, 0, isa, xa)
+        ub = _phase(sc, j, 1, isb, xb)
+        uc = _phase(sc, j, 2, isc, xc)
+    if full:
+        r[R.UA_VAL] = int(ua)
+        r[R.UB_VAL] = int(ub)
+        r[R.UC_VAL] = int(uc)
+        cb = r[R.CNTRL_BITS]
+        if mode == c.TESTU_MODE or mode == c.TESTKI_MODE:
+            if (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
+                record(r, buf, fmt, rec)
+            s[L.S_TEST_CNT] += 1.0
+            if s[L.S_TEST_CNT] >= s[L.S_REC_LEN]:
+                r[R.CNTRL_BITS] &= ~c.RECORDBIT
+                enter_mode(r, s, c.INIT_MODE)
+        elif (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
+            record(r, buf, fmt, rec)
+    elif last:
+        put(sc, F_ELDEG_IST, j, el)
+        put(sc, F_V_ELDEG, j, dv)
+        put(sc, F_IA_IST, j, xa)
+        put(sc, F_IB_IST, j, xb)
+        put(sc, F_IC_IST, j, xc)
+        put(sc, F_I_NOM, j, i_nom)
+        put(sc, F_PHI_SOLL, j, phi)
+        put(sc, F_IA_SOLL, j, isa)
+        put(sc, F_IB_SOLL, j, isb)
+        put(sc, F_IC_SOLL, j, isc)
+        put(sc, F_UA_VAL, j, ua)
+        put(sc, F_UB_VAL, j, ub)
+        put(sc, F_UC_VAL, j, uc)
+
+    noise_torque = 0.0
+    if full and p[L.P_TORQUE_NOISE] > 0.0:
+        noise_torque = p[L.P_TORQUE_NOISE] * gauss(key, tick, 4)
+    load = get(sc, F_LOAD, j)
+    (theta1, omega1, theta_l1, omega_l1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric,
+     e_load, e_dump, e_sup) = plant_sample(
+        theta, omega, sget(sc, L.S_LOAD_THETA, j), sget(sc, L.S_LOAD_OMEGA, j),
+        sget(sc, L.S_ACC, j), i_re, i_im, sget(sc, L.S_UBUS, j),
+        sget(sc, L.S_DUMP_ON, j), _pwm(sc, j, 0, ua), _pwm(sc, j, 1, ub),
+        _pwm(sc, j, 2, uc), theta_e, pp, get(sc, F_R, j), get(sc, F_LAMBDA, j),
+        get(sc, F_J, j), get(sc, F_COULOMB, j), get(sc, F_STOP_LO, j),
+        get(sc, F_STOP_HI, j), get(sc, F_STOP_K, j), get(sc, F_STOP_D, j), load, noise_torque,
+        get(sc, F_SUPPLY, j), get(sc, F_U_DUMP, j),
+        (get(sc, F_KC0, j), get(sc, F_KC1, j), get(sc, F_KC2, j), get(sc, F_KC3, j)),
+        (get(sc, F_KM0, j), get(sc, F_KM1, j), get(sc, F_KM2, j), get(sc, F_KM3, j),
+         get(sc, F_KM4, j), get(sc, F_KM5, j)),
+        (get(sc, F_KB0, j), get(sc, F_KB1, j), get(sc, F_KB2, j), get(sc, F_KB3, j),
+         get(sc, F_KB4, j), get(sc, F_KB5, j), get(sc, F_KB6, j)))
+    sput(sc, L.S_THETA, j, theta1)
+    sput(sc, L.S_OMEGA, j, omega1)
+    sput(sc, L.S_LOAD_THETA, j, theta_l1)
+    sput(sc, L.S_LOAD_OMEGA, j, omega_l1)
+    sput(sc, L.S_ACC, j, (omega1 - omega) * c.INNER_HZ)
+    sput(sc, L.S_I_RE, j, i_re1)
+    sput(sc, L.S_I_IM, j, i_im1)
+    sput(sc, L.S_E_ELEC, j, sget(sc, L.S_E_ELEC, j) + p_el * _H)
+    sput(sc, L.S_E_COPPER, j, sget(sc, L.S_E_COPPER, j) + p_cu * _H)
+    sput(sc, L.S_E_FRICTION, j, sget(sc, L.S_E_FRICTION, j) + e_fric)
+    sput(sc, L.S_E_LOAD, j, sget(sc, L.S_E_LOAD, j) + e_load)
+    sput(sc, L.S_UBUS, j, ubus)
+    sput(sc, L.S_DUMP_ON, j, dump_on)
+    sput(sc, L.S_E_DUMP, j, sget(sc, L.S_E_DUMP, j) + e_dump)
+    sput(sc, L.S_E_SUPPLY, j, sget(sc, L.S_E_SUPPLY, j) + e_sup)
+    sput(sc, L.S_I2_SUM, j, sget(sc, L.S_I2_SUM, j) + (xa * xa + xb * xb + xc * xc))
+    # the regenerated power; no branch on its sign
+    sput(sc, L.S_PREG_SUM, j, sget(sc, L.S_PREG_SUM, j) + max(-p_el, 0.0))
+
+
+@njit(**LANE_KERNEL)
+def inner_samples_one(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray,
+                      key: np.uint64, buf: np.ndarray, rec: bool, fmt: np.ndarray,
+                      sc: np.ndarray, j: int) -> None:
+    """The 15 inner samples of one outer sample of one motor, with every per-motor feature
+    (:func:`inner_sample` with ``full``), in lane ``j`` of the scratch row ``sc``: the path of
+    the motors :func:`mac050_141.lanes.inner_samples` cannot put into SIMD lanes.
+
+    A function of its own, not inlined into ``inner_samples``: numba's inliner copies the
+    whole scope of the caller for every block of an inlined function, so inlining this loop
+    beside the two inlined lane samples would multiply ``inner_samples``' compile time. The
+    call costs one argument transfer per motor and outer sample, on this path only.
+    """
+    gather(sc, j, 0, r, s, p, u)
+    for k in range(c.INNER_PER_OUTER):
+        inner_sample(sc, j, k, True, True, r, s, p, u, key, buf, rec, fmt)
+    scatter_state(sc, j, s)
