@@ -31,7 +31,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...jit import LANE_KERNEL
+from ...jit import KERNEL, LANE_KERNEL
 from ...noise import gauss
 from . import constants as c
 from . import layout as L
@@ -152,19 +152,136 @@ def _pwm(sc: np.ndarray, j: int, k: int, u: float) -> float:
 
 
 @njit(cache=True, inline="always")
-def _hall_eldeg(r: np.ndarray, s: np.ndarray, p: np.ndarray, theta_e: float, enc_abs: float,
-                sec: float, cross: int) -> float:
-    """ELDEG_IST of a motor that started from its hall sector (3.2.124/125): the encoder
-    count plus the offset latched at the last hall zero transition that counted (the first
-    after power-on, later ones with CNTRL_BITS HALL_INT), mod 2048."""
-    if cross != 0 and (s[L.S_HALL_SYNCED] < 0.5 or (r[R.CNTRL_BITS] & c.HALL_INT)):
-        # the firmware latches the count at the edge
-        edge_e = p[L.P_HALL_ANGLE] + (sec if cross > 0 else sec + 1.0) * SECTOR
-        enc_edge = encoder_count((edge_e - p[L.P_THETA_E0]) / p[L.P_POLE_PAIRS])
-        target = r[R.ELDEGP_OFFSET] if cross > 0 else r[R.ELDEGN_OFFSET]
-        s[L.S_ELDEG_OFS] = target - enc_edge
-        s[L.S_HALL_SYNCED] = 1.0
-    return float(int(enc_abs + s[L.S_ELDEG_OFS]) % c.ELDEG_PER_TURN)
+def _commutation(sc: np.ndarray, j: int, el: float, dv: float
+                 ) -> tuple[float, float, float, float, float]:
+    """Commutation of lane ``j`` (4.3.1): (I_NOM, PHI_SOLL, IA_SOLL, IB_SOLL, IC_SOLL)."""
+    return references(get(sc, F_VF_OUT, j), el, dv, get(sc, F_PHASE_COMP, j),
+                      get(sc, F_AMPLITUDE, j))
+
+
+@njit(cache=True, inline="always")
+def _loops(sc: np.ndarray, j: int, isa: float, isb: float, isc: float, xa: float, xb: float,
+           xc: float) -> tuple[float, float, float]:
+    """The three current loops of lane ``j`` (4.3.1): (UA, UB, UC)."""
+    return (_phase(sc, j, 0, isa, xa), _phase(sc, j, 1, isb, xb), _phase(sc, j, 2, isc, xc))
+
+
+@njit(**KERNEL)
+def _angle(sc: np.ndarray, j: int, r: np.ndarray, s: np.ndarray, p: np.ndarray,
+           theta_e: float, enc_abs: float) -> float:
+    """ELDEG_IST of the motor in lane ``j``, one motor at a time; the hall sector and the hall
+    status of CNTRL_BITS (bits 15..13) at every sample.
+
+    Commutation aligned from power-on: the electrical angle. A motor that started from its
+    hall sector (3.2.124/125): the encoder count plus the offset latched at the last hall zero
+    transition that counted (the first after power-on, later ones with CNTRL_BITS HALL_INT),
+    mod 2048.
+    """
+    sec = sector_index(theta_e, get(sc, F_HALL_ANGLE, j))
+    cross = zero_crossing(sget(sc, L.S_HALL_SECTOR, j), sec)
+    sput(sc, L.S_HALL_SECTOR, j, sec)
+    if p[L.P_HALL_START] < 0.5:
+        el = eldeg(theta_e)
+    else:
+        if cross != 0 and (s[L.S_HALL_SYNCED] < 0.5 or (r[R.CNTRL_BITS] & c.HALL_INT)):
+            # the firmware latches the count at the edge
+            edge_e = p[L.P_HALL_ANGLE] + (sec if cross > 0 else sec + 1.0) * SECTOR
+            enc_edge = encoder_count((edge_e - p[L.P_THETA_E0]) / p[L.P_POLE_PAIRS])
+            target = r[R.ELDEGP_OFFSET] if cross > 0 else r[R.ELDEGN_OFFSET]
+            s[L.S_ELDEG_OFS] = target - enc_edge
+            s[L.S_HALL_SYNCED] = 1.0
+        el = float(int(enc_abs + s[L.S_ELDEG_OFS]) % c.ELDEG_PER_TURN)
+    r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] & 0x1FFF) | (hall_code(sec) << c.HALL_STATUS_SHIFT)
+    return el
+
+
+@njit(**KERNEL)
+def _measure(r: np.ndarray, p: np.ndarray, key: np.uint64, tick: float, el: float, dv: float,
+             xa: float, xb: float, xc: float) -> tuple[float, float, float]:
+    """The phase current readings of ``xa, xb, xc`` ADC counts (before rounding) with the
+    current sensing noise (noise channels 0–2), one motor at a time: stored with ELDEG_IST
+    ``el`` and V_ELDEG ``dv``; a saturated converter sets IX_ERR (3.2.147) at once."""
+    if p[L.P_CURRENT_NOISE] > 0.0:
+        xa += p[L.P_CURRENT_NOISE] * gauss(key, tick, 0)
+        xb += p[L.P_CURRENT_NOISE] * gauss(key, tick, 1)
+        xc += p[L.P_CURRENT_NOISE] * gauss(key, tick, 2)
+    xa, over_a = adc_count(xa)
+    xb, over_b = adc_count(xb)
+    xc, over_c = adc_count(xc)
+    if over_a or over_b or over_c:
+        r[R.ERR_STAT] |= c.IX_ERR
+    r[R.ELDEG_IST] = int(el)
+    r[R.V_ELDEG] = int(dv)
+    r[R.IA_IST] = int(xa)
+    r[R.IB_IST] = int(xb)
+    r[R.IC_IST] = int(xc)
+    return xa, xb, xc
+
+
+@njit(**KERNEL)
+def _regulate(sc: np.ndarray, j: int, r: np.ndarray, mode: int, el: float, dv: float,
+              xa: float, xb: float, xc: float) -> tuple[float, float, float]:
+    """The current regulator in mode ``mode``, one motor at a time, with its registers:
+    (UA, UB, UC) = UA/UB/UC_VAL.
+
+    Passive (INIT, SAFE 4.4.1; TESTU 4.4.9: UA = UMEAS, UC = −UMEAS; TESTKI, the documented
+    measurement: UA = UMEAS, UB = −UMEAS): the fixed voltages, the loops of lane ``j`` at rest
+    and no references. Otherwise the references of commutation (4.3.1) or of MANI_MODE's
+    stator field (3.2.128), then the three current loops (the lanes' :func:`_commutation` and
+    :func:`_loops`).
+    """
+    if (mode == c.INIT_MODE or mode == c.SAFE_MODE or mode == c.TESTU_MODE
+            or mode == c.TESTKI_MODE):
+        um = float(r[R.UMEAS]) if mode == c.TESTU_MODE or mode == c.TESTKI_MODE else 0.0
+        ua = um
+        # + 0.0: −UMEAS of a zero UMEAS is the +0.0 the register holds
+        ub = -um + 0.0 if mode == c.TESTKI_MODE else 0.0
+        uc = -um + 0.0 if mode == c.TESTU_MODE else 0.0
+        _at_rest(sc, j, 0, xa)
+        _at_rest(sc, j, 1, xb)
+        _at_rest(sc, j, 2, xc)
+        r[R.I_NOM] = 0
+        r[R.IA_SOLL] = 0
+        r[R.IB_SOLL] = 0
+        r[R.IC_SOLL] = 0
+    else:
+        if mode == c.MANI_MODE:
+            isa, isb, isc = manual_references(float(r[R.MAN_I_NOM]), int(r[R.MAN_ALPHA]),
+                                              r[R.AMPLITUDE])
+            r[R.IA_SOLL] = int(isa)
+            r[R.IB_SOLL] = int(isb)
+            r[R.IC_SOLL] = int(isc)
+        else:
+            i_nom, phi, isa, isb, isc = _commutation(sc, j, el, dv)
+            store_references(r, i_nom, phi, isa, isb, isc)
+        ua, ub, uc = _loops(sc, j, isa, isb, isc, xa, xb, xc)
+    r[R.UA_VAL] = int(ua)
+    r[R.UB_VAL] = int(ub)
+    r[R.UC_VAL] = int(uc)
+    return ua, ub, uc
+
+
+@njit(**KERNEL)
+def _record_inner(r: np.ndarray, s: np.ndarray, buf: np.ndarray, rec: bool, fmt: np.ndarray,
+                  mode: int) -> None:
+    """Inner-rate recording (3.2.112–3.2.116, RECINNERBIT) and the end of a TESTU / TESTKI
+    record (4.4.9): after its samples the motor enters INIT_MODE."""
+    cb = r[R.CNTRL_BITS]
+    if mode == c.TESTU_MODE or mode == c.TESTKI_MODE:
+        if (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
+            record(r, buf, fmt, rec)
+        s[L.S_TEST_CNT] += 1.0
+        if s[L.S_TEST_CNT] >= s[L.S_REC_LEN]:
+            r[R.CNTRL_BITS] &= ~c.RECORDBIT
+            enter_mode(r, s, c.INIT_MODE)
+    elif (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
+        record(r, buf, fmt, rec)
+
+
+@njit(**KERNEL)
+def _torque_noise(p: np.ndarray, key: np.uint64, tick: float) -> float:
+    """The process torque noise of the sample [N·m] (noise channel 4)."""
+    return p[L.P_TORQUE_NOISE] * gauss(key, tick, 4) if p[L.P_TORQUE_NOISE] > 0.0 else 0.0
 
 
 @njit(cache=True, inline="always")
@@ -187,14 +304,7 @@ def inner_sample(sc: np.ndarray, j: int, k: int, last: bool, full: bool, r: np.n
     theta_e = pp * theta + get(sc, F_THETA_E0, j)
     enc_abs = encoder_count(theta)
     if full:
-        sec = sector_index(theta_e, get(sc, F_HALL_ANGLE, j))
-        cross = zero_crossing(sget(sc, L.S_HALL_SECTOR, j), sec)
-        sput(sc, L.S_HALL_SECTOR, j, sec)
-        if p[L.P_HALL_START] < 0.5:  # commutation aligned from power-on
-            el = eldeg(theta_e)
-        else:
-            el = _hall_eldeg(r, s, p, theta_e, enc_abs, sec, cross)
-        r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] & 0x1FFF) | (hall_code(sec) << c.HALL_STATUS_SHIFT)
+        el = _angle(sc, j, r, s, p, theta_e, enc_abs)
     else:
         if last:
             sput(sc, L.S_HALL_SECTOR, j, sector_index(theta_e, get(sc, F_HALL_ANGLE, j)))
@@ -203,7 +313,6 @@ def inner_sample(sc: np.ndarray, j: int, k: int, last: bool, full: bool, r: np.n
     dv = enc_abs - sget(sc, L.S_ELDEG_PREV, j)
     sput(sc, L.S_ELDEG_PREV, j, enc_abs)
 
-    tick = s[L.S_TICK] + k if full else 0.0  # the noise streams' counter
     i_re = sget(sc, L.S_I_RE, j)
     i_im = sget(sc, L.S_I_IM, j)
     ia, ib, ic = vector_to_phases(complex(i_re, i_im))
@@ -211,93 +320,38 @@ def inner_sample(sc: np.ndarray, j: int, k: int, last: bool, full: bool, r: np.n
     xa = ia * cpa * get(sc, F_KIA, j) / 256.0
     xb = ib * cpa * get(sc, F_KIB, j) / 256.0
     xc = ic * cpa * get(sc, F_KIC, j) / 256.0
-    if full and p[L.P_CURRENT_NOISE] > 0.0:
-        xa += p[L.P_CURRENT_NOISE] * gauss(key, tick, 0)
-        xb += p[L.P_CURRENT_NOISE] * gauss(key, tick, 1)
-        xc += p[L.P_CURRENT_NOISE] * gauss(key, tick, 2)
-    xa, over_a = adc_count(xa)
-    xb, over_b = adc_count(xb)
-    xc, over_c = adc_count(xc)
+    noise_torque = 0.0
     if full:
-        if over_a or over_b or over_c:
-            r[R.ERR_STAT] |= c.IX_ERR
-        r[R.ELDEG_IST] = int(el)
-        r[R.V_ELDEG] = int(dv)
-        r[R.IA_IST] = int(xa)
-        r[R.IB_IST] = int(xb)
-        r[R.IC_IST] = int(xc)
+        tick = s[L.S_TICK] + k  # the noise streams' counter
+        xa, xb, xc = _measure(r, p, key, tick, el, dv, xa, xb, xc)
+        mode = int(r[R.MODE_REG])
+        ua, ub, uc = _regulate(sc, j, r, mode, el, dv, xa, xb, xc)
+        _record_inner(r, s, buf, rec, fmt, mode)
+        noise_torque = _torque_noise(p, key, tick)
     else:
+        xa, over_a = adc_count(xa)
+        xb, over_b = adc_count(xb)
+        xc, over_c = adc_count(xc)
         # F_IX_ERR counts the samples with a saturated converter (a select between the stored
         # flag and 1 became a masked, conditional store: slow on AMD cores)
         put(sc, F_IX_ERR, j, get(sc, F_IX_ERR, j) + (1.0 if (over_a or over_b or over_c)
                                                       else 0.0))
-
-    mode = int(r[R.MODE_REG]) if full else c.V_MODE
-    passive = full and (mode == c.INIT_MODE or mode == c.SAFE_MODE or mode == c.TESTU_MODE
-                        or mode == c.TESTKI_MODE)
-    if passive:  # current regulator passive: fixed voltages, loops at rest (4.4.1, 4.4.9)
-        um = float(r[R.UMEAS]) if mode == c.TESTU_MODE or mode == c.TESTKI_MODE else 0.0
-        ua = um
-        ub = -um + 0.0 if mode == c.TESTKI_MODE else 0.0  # TESTKI: UA = UMEAS, UB = −UMEAS
-        uc = -um + 0.0 if mode == c.TESTU_MODE else 0.0  # 4.4.9: UA = UMEAS, UC = −UMEAS
-        _at_rest(sc, j, 0, xa)
-        _at_rest(sc, j, 1, xb)
-        _at_rest(sc, j, 2, xc)
-        r[R.I_NOM] = 0
-        r[R.IA_SOLL] = 0
-        r[R.IB_SOLL] = 0
-        r[R.IC_SOLL] = 0
-        i_nom = phi = isa = isb = isc = 0.0
-    else:
-        if full and mode == c.MANI_MODE:  # 3.2.128: stator field set by hand
-            isa, isb, isc = manual_references(float(r[R.MAN_I_NOM]), int(r[R.MAN_ALPHA]),
-                                              r[R.AMPLITUDE])
-            r[R.IA_SOLL] = int(isa)
-            r[R.IB_SOLL] = int(isb)
-            r[R.IC_SOLL] = int(isc)
-            i_nom = 0.0
-            phi = 0.0
-        else:  # commutation (4.3.1)
-            i_nom, phi, isa, isb, isc = references(get(sc, F_VF_OUT, j), el, dv,
-                                                   get(sc, F_PHASE_COMP, j),
-                                                   get(sc, F_AMPLITUDE, j))
-            if full:
-                store_references(r, i_nom, phi, isa, isb, isc)
-        ua = _phase(sc, j, 0, isa, xa)
-        ub = _phase(sc, j, 1, isb, xb)
-        uc = _phase(sc, j, 2, isc, xc)
-    if full:
-        r[R.UA_VAL] = int(ua)
-        r[R.UB_VAL] = int(ub)
-        r[R.UC_VAL] = int(uc)
-        cb = r[R.CNTRL_BITS]
-        if mode == c.TESTU_MODE or mode == c.TESTKI_MODE:
-            if (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
-                record(r, buf, fmt, rec)
-            s[L.S_TEST_CNT] += 1.0
-            if s[L.S_TEST_CNT] >= s[L.S_REC_LEN]:
-                r[R.CNTRL_BITS] &= ~c.RECORDBIT
-                enter_mode(r, s, c.INIT_MODE)
-        elif (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
-            record(r, buf, fmt, rec)
-    elif last:
-        put(sc, F_ELDEG_IST, j, el)
-        put(sc, F_V_ELDEG, j, dv)
-        put(sc, F_IA_IST, j, xa)
-        put(sc, F_IB_IST, j, xb)
-        put(sc, F_IC_IST, j, xc)
-        put(sc, F_I_NOM, j, i_nom)
-        put(sc, F_PHI_SOLL, j, phi)
-        put(sc, F_IA_SOLL, j, isa)
-        put(sc, F_IB_SOLL, j, isb)
-        put(sc, F_IC_SOLL, j, isc)
-        put(sc, F_UA_VAL, j, ua)
-        put(sc, F_UB_VAL, j, ub)
-        put(sc, F_UC_VAL, j, uc)
-
-    noise_torque = 0.0
-    if full and p[L.P_TORQUE_NOISE] > 0.0:
-        noise_torque = p[L.P_TORQUE_NOISE] * gauss(key, tick, 4)
+        i_nom, phi, isa, isb, isc = _commutation(sc, j, el, dv)
+        ua, ub, uc = _loops(sc, j, isa, isb, isc, xa, xb, xc)
+        if last:
+            put(sc, F_ELDEG_IST, j, el)
+            put(sc, F_V_ELDEG, j, dv)
+            put(sc, F_IA_IST, j, xa)
+            put(sc, F_IB_IST, j, xb)
+            put(sc, F_IC_IST, j, xc)
+            put(sc, F_I_NOM, j, i_nom)
+            put(sc, F_PHI_SOLL, j, phi)
+            put(sc, F_IA_SOLL, j, isa)
+            put(sc, F_IB_SOLL, j, isb)
+            put(sc, F_IC_SOLL, j, isc)
+            put(sc, F_UA_VAL, j, ua)
+            put(sc, F_UB_VAL, j, ub)
+            put(sc, F_UC_VAL, j, uc)
     load = get(sc, F_LOAD, j)
     (theta1, omega1, theta_l1, omega_l1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric,
      e_load, e_dump, e_sup) = plant_sample(
