@@ -222,3 +222,48 @@ def test_block_index_is_int64_for_a_prange_index() -> None:
     assert index_of(np.uint64(5)) == 5
     assert index_of(np.int64(5)) == 5
     assert {sig.return_type for sig in index_of.nopython_signatures} == {types.int64}
+
+
+def _features(types: list[str], params: dict[str, np.ndarray], k: np.ndarray | None = None,
+              seed: int = 4) -> MotorArray:
+    """Motors in every mode of the one-motor path: TESTU and TESTKI (their records end in
+    INIT), MANI, INIT, hall start with and without HALL_INT, current and torque noise, an
+    inner-rate recording, beside motors in the lanes; ``k`` selects motors of the set."""
+    idx = np.arange(len(types)) if k is None else k
+    m = MotorArray([types[i] for i in idx], n=idx.size, seed=seed,
+                   **{name: v[idx] for name, v in params.items()})
+    modes = np.array([c.TESTU_MODE, c.TESTKI_MODE, c.MANI_MODE, c.V_MODE, c.V_MODE, c.P_MODE,
+                      c.INIT_MODE, c.V_MODE, c.V_MODE])
+    m.write_many({"V_SOLL": 2500, "P_SOLL": 40000, "UMEAS": 60, "MAN_I_NOM": 150,
+                  "MAN_ALPHA": 1900, "MODE_REG": modes[idx % modes.size]})
+    for j, i in enumerate(idx):
+        bits = int(m.read_raw("CNTRL_BITS")[j])
+        if i % modes.size == 4:
+            m.write_raw("CNTRL_BITS", bits | c.HALL_INT, index=j)
+        elif i % modes.size == 7:
+            m.write("SAMPLE1", R.IA_IST, index=j)
+            m.write_raw("CNTRL_BITS", bits | c.RECORDBIT | c.RECINNERBIT, index=j)
+    return m
+
+
+def test_the_one_motor_path_gives_each_motor_the_bits_of_a_one_motor_array() -> None:
+    """A block mixing lanes and the one-motor path (which runs in the block's top lanes) gives
+    every motor the bits of the same motor alone, in every per-motor feature."""
+    n = LANES
+    k = np.arange(n)
+    types = ["MAC140" if i % 2 == 0 else "MAC050" for i in range(n)]
+    params = {"hall_start": np.where(k % 9 == 3, 1.0, 0.0) + np.where(k % 9 == 4, 1.0, 0.0),
+              "current_noise": np.where(k % 5 == 1, 0.7, 0.0),
+              "torque_noise": np.where(k % 7 == 5, 2e-4, 0.0),
+              "pwm_delay_samples": (k % 2).astype(float)}
+    a = _features(types, params)
+    eligible = [in_lanes(a.regs[i], a.params[i]) for i in range(n)]
+    assert 0 < sum(eligible) < n
+    a.step(300)
+    assert set(a.read_raw("MODE_REG")[:2]) == {c.INIT_MODE}  # the test records ended
+    for i in range(n):
+        one = _features(types, params, np.array([i]))
+        one.reseed(a.keys[i:i + 1])
+        one.step(300)
+        np.testing.assert_array_equal(one.regs[0], a.regs[i])
+        np.testing.assert_array_equal(one.state[0], a.state[i])

@@ -19,7 +19,12 @@ which the compiler folds), so one source gives two specialisations:
   are kept for the last of the 15 only;
 - ``full`` True: every per-motor feature besides (hall synchronisation, current and torque
   noise, the passive and test modes and MANI, inner-rate recording, IX_ERR at once, the
-  registers of every sample), one motor at a time (:func:`inner_samples_one`).
+  registers of every sample), one motor at a time (:func:`inner_samples_one`). These features
+  are compiled functions of their own (:func:`_angle`, :func:`_measure`, :func:`_regulate`,
+  :func:`_record_inner`, :func:`_torque_noise`), one call each from a single ``if full``
+  block: numba's inliner copies the caller's scope for every block of an inlined function,
+  so each block the flag removes would still cost compile time at every inlined copy of the
+  sample.
 
 Both specialisations do the same arithmetic in the same order on the same values, so a motor
 gives the same bits on either path and an N-motor array is bit-for-bit equal to N one-motor
@@ -103,12 +108,10 @@ from .scratch import (
     F_UC_VAL,
     F_V_ELDEG,
     F_VF_OUT,
+    LANE_BASE,
+    LANES,
     gather,
-    get,
-    put,
     scatter_state,
-    sget,
-    sput,
 )
 
 _H = c.INNER_DT
@@ -118,15 +121,16 @@ _H = c.INNER_DT
 def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float) -> float:
     """Phase ``k``'s current loop in lane ``j`` (4.3.1, :func:`current_loop.phase_step`):
     U, and the histories e(k−1), U(k−1), U(k−2), I_IST(k−1) moved on."""
-    u1 = sget(sc, L.S_IU1_A + k, j)
-    u, e = phase_step(i_soll, i_ist, sget(sc, L.S_IE1_A + k, j), u1, sget(sc, L.S_IU2_A + k, j),
-                      sget(sc, L.S_IIST1_A + k, j), get(sc, F_KIB1, j), get(sc, F_KIB0, j),
-                      get(sc, F_KIFX2, j), get(sc, F_KIFX1, j), get(sc, F_KIFY1, j),
-                      get(sc, F_KIFY0, j))
-    sput(sc, L.S_IE1_A + k, j, e)
-    sput(sc, L.S_IU2_A + k, j, u1)
-    sput(sc, L.S_IU1_A + k, j, u)
-    sput(sc, L.S_IIST1_A + k, j, i_ist)
+    u1 = sc[LANE_BASE[L.S_IU1_A + k] + j]
+    u, e = phase_step(i_soll, i_ist, sc[LANE_BASE[L.S_IE1_A + k] + j], u1,
+                      sc[LANE_BASE[L.S_IU2_A + k] + j], sc[LANE_BASE[L.S_IIST1_A + k] + j],
+                      sc[F_KIB1 * LANES + j], sc[F_KIB0 * LANES + j],
+                      sc[F_KIFX2 * LANES + j], sc[F_KIFX1 * LANES + j], sc[F_KIFY1 * LANES + j],
+                      sc[F_KIFY0 * LANES + j])
+    sc[LANE_BASE[L.S_IE1_A + k] + j] = e
+    sc[LANE_BASE[L.S_IU2_A + k] + j] = u1
+    sc[LANE_BASE[L.S_IU1_A + k] + j] = u
+    sc[LANE_BASE[L.S_IIST1_A + k] + j] = i_ist
     return u
 
 
@@ -134,10 +138,10 @@ def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float) -> float
 def _at_rest(sc: np.ndarray, j: int, k: int, i_ist: float) -> None:
     """Phase ``k``'s loop held at rest while the current regulator is passive (4.4.1, 4.4.9):
     no history but the measured current."""
-    sput(sc, L.S_IE1_A + k, j, 0.0)
-    sput(sc, L.S_IU1_A + k, j, 0.0)
-    sput(sc, L.S_IU2_A + k, j, 0.0)
-    sput(sc, L.S_IIST1_A + k, j, i_ist)
+    sc[LANE_BASE[L.S_IE1_A + k] + j] = 0.0
+    sc[LANE_BASE[L.S_IU1_A + k] + j] = 0.0
+    sc[LANE_BASE[L.S_IU2_A + k] + j] = 0.0
+    sc[LANE_BASE[L.S_IIST1_A + k] + j] = i_ist
 
 
 @njit(cache=True, inline="always")
@@ -146,17 +150,17 @@ def _pwm(sc: np.ndarray, j: int, k: int, u: float) -> float:
     sample earlier when the motor has a PWM delay (docs/model.md §2). ``u`` is kept either
     way (so switching the delay on applies the previous sample's value): a store that depends
     on the delay became a masked store, slow on AMD cores."""
-    pending = sget(sc, L.S_UPEND_A + k, j)
-    sput(sc, L.S_UPEND_A + k, j, u)
-    return pending if get(sc, F_PWM_DELAY, j) > 0.5 else u
+    pending = sc[LANE_BASE[L.S_UPEND_A + k] + j]
+    sc[LANE_BASE[L.S_UPEND_A + k] + j] = u
+    return pending if sc[F_PWM_DELAY * LANES + j] > 0.5 else u
 
 
 @njit(cache=True, inline="always")
 def _commutation(sc: np.ndarray, j: int, el: float, dv: float
                  ) -> tuple[float, float, float, float, float]:
     """Commutation of lane ``j`` (4.3.1): (I_NOM, PHI_SOLL, IA_SOLL, IB_SOLL, IC_SOLL)."""
-    return references(get(sc, F_VF_OUT, j), el, dv, get(sc, F_PHASE_COMP, j),
-                      get(sc, F_AMPLITUDE, j))
+    return references(sc[F_VF_OUT * LANES + j], el, dv, sc[F_PHASE_COMP * LANES + j],
+                      sc[F_AMPLITUDE * LANES + j])
 
 
 @njit(cache=True, inline="always")
@@ -177,9 +181,9 @@ def _angle(sc: np.ndarray, j: int, r: np.ndarray, s: np.ndarray, p: np.ndarray,
     transition that counted (the first after power-on, later ones with CNTRL_BITS HALL_INT),
     mod 2048.
     """
-    sec = sector_index(theta_e, get(sc, F_HALL_ANGLE, j))
-    cross = zero_crossing(sget(sc, L.S_HALL_SECTOR, j), sec)
-    sput(sc, L.S_HALL_SECTOR, j, sec)
+    sec = sector_index(theta_e, sc[F_HALL_ANGLE * LANES + j])
+    cross = zero_crossing(sc[LANE_BASE[L.S_HALL_SECTOR] + j], sec)
+    sc[LANE_BASE[L.S_HALL_SECTOR] + j] = sec
     if p[L.P_HALL_START] < 0.5:
         el = eldeg(theta_e)
     else:
@@ -298,28 +302,28 @@ def inner_sample(sc: np.ndarray, j: int, k: int, last: bool, full: bool, r: np.n
     registers go to ``r`` at once. Without ``full`` those arguments are not read (any rows of
     the right types will do).
     """
-    theta = sget(sc, L.S_THETA, j)
-    omega = sget(sc, L.S_OMEGA, j)
-    pp = get(sc, F_POLE_PAIRS, j)
-    theta_e = pp * theta + get(sc, F_THETA_E0, j)
+    theta = sc[LANE_BASE[L.S_THETA] + j]
+    omega = sc[LANE_BASE[L.S_OMEGA] + j]
+    pp = sc[F_POLE_PAIRS * LANES + j]
+    theta_e = pp * theta + sc[F_THETA_E0 * LANES + j]
     enc_abs = encoder_count(theta)
     if full:
         el = _angle(sc, j, r, s, p, theta_e, enc_abs)
     else:
         if last:
-            sput(sc, L.S_HALL_SECTOR, j, sector_index(theta_e, get(sc, F_HALL_ANGLE, j)))
+            sc[LANE_BASE[L.S_HALL_SECTOR] + j] = sector_index(theta_e, sc[F_HALL_ANGLE * LANES + j])
         el = eldeg(theta_e)
     # V_ELDEG: encoder counts per inner sample (3.2.144)
-    dv = enc_abs - sget(sc, L.S_ELDEG_PREV, j)
-    sput(sc, L.S_ELDEG_PREV, j, enc_abs)
+    dv = enc_abs - sc[LANE_BASE[L.S_ELDEG_PREV] + j]
+    sc[LANE_BASE[L.S_ELDEG_PREV] + j] = enc_abs
 
-    i_re = sget(sc, L.S_I_RE, j)
-    i_im = sget(sc, L.S_I_IM, j)
+    i_re = sc[LANE_BASE[L.S_I_RE] + j]
+    i_im = sc[LANE_BASE[L.S_I_IM] + j]
     ia, ib, ic = vector_to_phases(complex(i_re, i_im))
-    cpa = get(sc, F_COUNTS_PER_AMP, j)
-    xa = ia * cpa * get(sc, F_KIA, j) / 256.0
-    xb = ib * cpa * get(sc, F_KIB, j) / 256.0
-    xc = ic * cpa * get(sc, F_KIC, j) / 256.0
+    cpa = sc[F_COUNTS_PER_AMP * LANES + j]
+    xa = ia * cpa * sc[F_KIA * LANES + j] / 256.0
+    xb = ib * cpa * sc[F_KIB * LANES + j] / 256.0
+    xc = ic * cpa * sc[F_KIC * LANES + j] / 256.0
     noise_torque = 0.0
     if full:
         tick = s[L.S_TICK] + k  # the noise streams' counter
@@ -334,57 +338,59 @@ def inner_sample(sc: np.ndarray, j: int, k: int, last: bool, full: bool, r: np.n
         xc, over_c = adc_count(xc)
         # F_IX_ERR counts the samples with a saturated converter (a select between the stored
         # flag and 1 became a masked, conditional store: slow on AMD cores)
-        put(sc, F_IX_ERR, j, get(sc, F_IX_ERR, j) + (1.0 if (over_a or over_b or over_c)
-                                                      else 0.0))
+        sc[F_IX_ERR * LANES + j] = sc[F_IX_ERR * LANES + j] + (1.0 if (over_a or over_b or over_c)
+                                                      else 0.0)
         i_nom, phi, isa, isb, isc = _commutation(sc, j, el, dv)
         ua, ub, uc = _loops(sc, j, isa, isb, isc, xa, xb, xc)
         if last:
-            put(sc, F_ELDEG_IST, j, el)
-            put(sc, F_V_ELDEG, j, dv)
-            put(sc, F_IA_IST, j, xa)
-            put(sc, F_IB_IST, j, xb)
-            put(sc, F_IC_IST, j, xc)
-            put(sc, F_I_NOM, j, i_nom)
-            put(sc, F_PHI_SOLL, j, phi)
-            put(sc, F_IA_SOLL, j, isa)
-            put(sc, F_IB_SOLL, j, isb)
-            put(sc, F_IC_SOLL, j, isc)
-            put(sc, F_UA_VAL, j, ua)
-            put(sc, F_UB_VAL, j, ub)
-            put(sc, F_UC_VAL, j, uc)
-    load = get(sc, F_LOAD, j)
+            sc[F_ELDEG_IST * LANES + j] = el
+            sc[F_V_ELDEG * LANES + j] = dv
+            sc[F_IA_IST * LANES + j] = xa
+            sc[F_IB_IST * LANES + j] = xb
+            sc[F_IC_IST * LANES + j] = xc
+            sc[F_I_NOM * LANES + j] = i_nom
+            sc[F_PHI_SOLL * LANES + j] = phi
+            sc[F_IA_SOLL * LANES + j] = isa
+            sc[F_IB_SOLL * LANES + j] = isb
+            sc[F_IC_SOLL * LANES + j] = isc
+            sc[F_UA_VAL * LANES + j] = ua
+            sc[F_UB_VAL * LANES + j] = ub
+            sc[F_UC_VAL * LANES + j] = uc
+    load = sc[F_LOAD * LANES + j]
     (theta1, omega1, theta_l1, omega_l1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric,
      e_load, e_dump, e_sup) = plant_sample(
-        theta, omega, sget(sc, L.S_LOAD_THETA, j), sget(sc, L.S_LOAD_OMEGA, j),
-        sget(sc, L.S_ACC, j), i_re, i_im, sget(sc, L.S_UBUS, j),
-        sget(sc, L.S_DUMP_ON, j), _pwm(sc, j, 0, ua), _pwm(sc, j, 1, ub),
-        _pwm(sc, j, 2, uc), theta_e, pp, get(sc, F_R, j), get(sc, F_LAMBDA, j),
-        get(sc, F_J, j), get(sc, F_COULOMB, j), get(sc, F_STOP_LO, j),
-        get(sc, F_STOP_HI, j), get(sc, F_STOP_K, j), get(sc, F_STOP_D, j), load, noise_torque,
-        get(sc, F_SUPPLY, j), get(sc, F_U_DUMP, j),
-        (get(sc, F_KC0, j), get(sc, F_KC1, j), get(sc, F_KC2, j), get(sc, F_KC3, j)),
-        (get(sc, F_KM0, j), get(sc, F_KM1, j), get(sc, F_KM2, j), get(sc, F_KM3, j),
-         get(sc, F_KM4, j), get(sc, F_KM5, j)),
-        (get(sc, F_KB0, j), get(sc, F_KB1, j), get(sc, F_KB2, j), get(sc, F_KB3, j),
-         get(sc, F_KB4, j), get(sc, F_KB5, j), get(sc, F_KB6, j)))
-    sput(sc, L.S_THETA, j, theta1)
-    sput(sc, L.S_OMEGA, j, omega1)
-    sput(sc, L.S_LOAD_THETA, j, theta_l1)
-    sput(sc, L.S_LOAD_OMEGA, j, omega_l1)
-    sput(sc, L.S_ACC, j, (omega1 - omega) * c.INNER_HZ)
-    sput(sc, L.S_I_RE, j, i_re1)
-    sput(sc, L.S_I_IM, j, i_im1)
-    sput(sc, L.S_E_ELEC, j, sget(sc, L.S_E_ELEC, j) + p_el * _H)
-    sput(sc, L.S_E_COPPER, j, sget(sc, L.S_E_COPPER, j) + p_cu * _H)
-    sput(sc, L.S_E_FRICTION, j, sget(sc, L.S_E_FRICTION, j) + e_fric)
-    sput(sc, L.S_E_LOAD, j, sget(sc, L.S_E_LOAD, j) + e_load)
-    sput(sc, L.S_UBUS, j, ubus)
-    sput(sc, L.S_DUMP_ON, j, dump_on)
-    sput(sc, L.S_E_DUMP, j, sget(sc, L.S_E_DUMP, j) + e_dump)
-    sput(sc, L.S_E_SUPPLY, j, sget(sc, L.S_E_SUPPLY, j) + e_sup)
-    sput(sc, L.S_I2_SUM, j, sget(sc, L.S_I2_SUM, j) + (xa * xa + xb * xb + xc * xc))
+        theta, omega, sc[LANE_BASE[L.S_LOAD_THETA] + j], sc[LANE_BASE[L.S_LOAD_OMEGA] + j],
+        sc[LANE_BASE[L.S_ACC] + j], i_re, i_im, sc[LANE_BASE[L.S_UBUS] + j],
+        sc[LANE_BASE[L.S_DUMP_ON] + j], _pwm(sc, j, 0, ua), _pwm(sc, j, 1, ub),
+        _pwm(sc, j, 2, uc), theta_e, pp, sc[F_R * LANES + j], sc[F_LAMBDA * LANES + j],
+        sc[F_J * LANES + j], sc[F_COULOMB * LANES + j], sc[F_STOP_LO * LANES + j],
+        sc[F_STOP_HI * LANES + j], sc[F_STOP_K * LANES + j], sc[F_STOP_D * LANES + j], load,
+        noise_torque,
+        sc[F_SUPPLY * LANES + j], sc[F_U_DUMP * LANES + j],
+        (sc[F_KC0 * LANES + j], sc[F_KC1 * LANES + j], sc[F_KC2 * LANES + j],
+         sc[F_KC3 * LANES + j]),
+        (sc[F_KM0 * LANES + j], sc[F_KM1 * LANES + j], sc[F_KM2 * LANES + j], sc[F_KM3 * LANES + j],
+         sc[F_KM4 * LANES + j], sc[F_KM5 * LANES + j]),
+        (sc[F_KB0 * LANES + j], sc[F_KB1 * LANES + j], sc[F_KB2 * LANES + j], sc[F_KB3 * LANES + j],
+         sc[F_KB4 * LANES + j], sc[F_KB5 * LANES + j], sc[F_KB6 * LANES + j]))
+    sc[LANE_BASE[L.S_THETA] + j] = theta1
+    sc[LANE_BASE[L.S_OMEGA] + j] = omega1
+    sc[LANE_BASE[L.S_LOAD_THETA] + j] = theta_l1
+    sc[LANE_BASE[L.S_LOAD_OMEGA] + j] = omega_l1
+    sc[LANE_BASE[L.S_ACC] + j] = (omega1 - omega) * c.INNER_HZ
+    sc[LANE_BASE[L.S_I_RE] + j] = i_re1
+    sc[LANE_BASE[L.S_I_IM] + j] = i_im1
+    sc[LANE_BASE[L.S_E_ELEC] + j] = sc[LANE_BASE[L.S_E_ELEC] + j] + p_el * _H
+    sc[LANE_BASE[L.S_E_COPPER] + j] = sc[LANE_BASE[L.S_E_COPPER] + j] + p_cu * _H
+    sc[LANE_BASE[L.S_E_FRICTION] + j] = sc[LANE_BASE[L.S_E_FRICTION] + j] + e_fric
+    sc[LANE_BASE[L.S_E_LOAD] + j] = sc[LANE_BASE[L.S_E_LOAD] + j] + e_load
+    sc[LANE_BASE[L.S_UBUS] + j] = ubus
+    sc[LANE_BASE[L.S_DUMP_ON] + j] = dump_on
+    sc[LANE_BASE[L.S_E_DUMP] + j] = sc[LANE_BASE[L.S_E_DUMP] + j] + e_dump
+    sc[LANE_BASE[L.S_E_SUPPLY] + j] = sc[LANE_BASE[L.S_E_SUPPLY] + j] + e_sup
+    sc[LANE_BASE[L.S_I2_SUM] + j] = sc[LANE_BASE[L.S_I2_SUM] + j] + (xa * xa + xb * xb + xc * xc)
     # the regenerated power; no branch on its sign
-    sput(sc, L.S_PREG_SUM, j, sget(sc, L.S_PREG_SUM, j) + max(-p_el, 0.0))
+    sc[LANE_BASE[L.S_PREG_SUM] + j] = sc[LANE_BASE[L.S_PREG_SUM] + j] + max(-p_el, 0.0)
 
 
 @njit(**LANE_KERNEL)

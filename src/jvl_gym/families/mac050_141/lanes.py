@@ -21,7 +21,7 @@ from .firmware import regs as R
 from .firmware.mode_table import N_MODES
 from .firmware.modes import COMMUTATED
 from .inner import inner_sample, inner_samples_one
-from .scratch import F_MOTOR, LANES, gather, get, lane_scratch, scatter_state, store_registers
+from .scratch import F_MOTOR, LANES, gather, lane_scratch, scatter_state, store_registers
 
 __all__ = ["LANES", "in_lanes", "inner_samples", "lane_scratch"]
 
@@ -77,6 +77,6 @@ def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scrat
         inner_sample(scratch, j, c.INNER_PER_OUTER - 1, True, False, r0, s0, p0, u0, key0, b0,
                      rec, fmt)
     for j in range(m):
-        i = int(get(scratch, F_MOTOR, j))
+        i = int(scratch[F_MOTOR * LANES + j])
         scatter_state(scratch, j, state[i])
         store_registers(scratch, j, regs[i])

@@ -1,7 +1,10 @@
 """The lane scratch of a block of :data:`LANES` motors: what the inner samples read and write.
 
 A motor's inner samples (:mod:`mac050_141.inner`) run on a lane ``j`` of its block's scratch row:
-field ``f`` of lane ``j`` is ``scratch[f * LANES + j]``. :func:`gather` copies the state the
+field ``f`` of lane ``j`` is ``scratch[f * LANES + j]``, state column ``col`` (one of
+``layout.LANE_STATE``) is ``scratch[LANE_BASE[col] + j]``; they are written out as such
+expressions, not as calls of accessor functions, each of which numba's inliner would copy
+into the caller's scope at a cost in compile time. :func:`gather` copies the state the
 samples carry (``layout.LANE_STATE``), the registers, parameters and inputs they read and the
 parameter-only plant factors into the lane; :func:`scatter_state` and :func:`store_registers`
 copy the results back. With the fields side by side, the loop over the lanes of a block runs
@@ -29,6 +32,9 @@ LANES = 16
 N_LANE_STATE = len(L.LANE_STATE)
 _LANE_OF = np.full(L.N_STATE, -1, dtype=np.int64)
 _LANE_OF[list(L.LANE_STATE)] = np.arange(N_LANE_STATE)
+#: index of lane 0's value of each state column the lanes carry: lane ``j``'s value of column
+#: ``col`` is ``scratch[LANE_BASE[col] + j]`` (negative for the columns the lanes do not carry)
+LANE_BASE = _LANE_OF * LANES
 _LANE_COLS = np.array(L.LANE_STATE, dtype=np.int64)
 #: the other fields, after the state
 (
@@ -56,64 +62,40 @@ def lane_scratch(n_motors: int) -> np.ndarray:
 
 
 @njit(cache=True, inline="always")
-def get(sc: np.ndarray, f: int, j: int) -> float:
-    """Field ``f`` of lane ``j``."""
-    return sc[f * LANES + j]
-
-
-@njit(cache=True, inline="always")
-def put(sc: np.ndarray, f: int, j: int, x: float) -> None:
-    """Set field ``f`` of lane ``j``."""
-    sc[f * LANES + j] = x
-
-
-@njit(cache=True, inline="always")
-def sget(sc: np.ndarray, col: int, j: int) -> float:
-    """Lane ``j``'s value of state column ``col`` (one of ``layout.LANE_STATE``)."""
-    return sc[_LANE_OF[col] * LANES + j]
-
-
-@njit(cache=True, inline="always")
-def sput(sc: np.ndarray, col: int, j: int, x: float) -> None:
-    """Set lane ``j``'s value of state column ``col`` (one of ``layout.LANE_STATE``)."""
-    sc[_LANE_OF[col] * LANES + j] = x
-
-
-@njit(cache=True, inline="always")
 def gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.ndarray,
            u: np.ndarray) -> None:
     """Copy what the inner samples of motor ``i`` read into lane ``j``."""
     for q in range(N_LANE_STATE):
-        put(sc, q, j, s[_LANE_COLS[q]])
-    put(sc, F_IX_ERR, j, 0.0)
-    put(sc, F_VF_OUT, j, float(r[R.VF_OUT]))
-    put(sc, F_PHASE_COMP, j, float(r[R.PHASE_COMP]))
-    put(sc, F_AMPLITUDE, j, float(r[R.AMPLITUDE]))
-    put(sc, F_KIA, j, float(r[R.KIA]))
-    put(sc, F_KIB, j, float(r[R.KIB]))
-    put(sc, F_KIC, j, float(r[R.KIC]))
-    put(sc, F_KIB1, j, fx8(r[R.KIB1]))
-    put(sc, F_KIB0, j, fx8(r[R.KIB0]))
-    put(sc, F_KIFX2, j, fx4(r[R.KIFX2]))
-    put(sc, F_KIFX1, j, fx4(r[R.KIFX1]))
-    put(sc, F_KIFY1, j, fx4(r[R.KIFY1]))
-    put(sc, F_KIFY0, j, fx4(r[R.KIFY0]))
-    put(sc, F_POLE_PAIRS, j, p[L.P_POLE_PAIRS])
-    put(sc, F_THETA_E0, j, p[L.P_THETA_E0])
-    put(sc, F_HALL_ANGLE, j, p[L.P_HALL_ANGLE])
-    put(sc, F_PWM_DELAY, j, p[L.P_PWM_DELAY])
-    put(sc, F_R, j, p[L.P_R])
-    put(sc, F_LAMBDA, j, p[L.P_LAMBDA])
-    put(sc, F_J, j, shaft_inertia(p[L.P_J_MOTOR], p[L.P_J_LOAD], p[L.P_K_COUPLING]))
-    put(sc, F_COULOMB, j, p[L.P_COULOMB])
-    put(sc, F_STOP_LO, j, p[L.P_STOP_LO])
-    put(sc, F_STOP_HI, j, p[L.P_STOP_HI])
-    put(sc, F_STOP_K, j, p[L.P_STOP_K])
-    put(sc, F_STOP_D, j, p[L.P_STOP_D])
-    put(sc, F_U_DUMP, j, p[L.P_U_DUMP])
-    put(sc, F_LOAD, j, u[L.I_LOAD_TORQUE])
-    put(sc, F_SUPPLY, j, u[L.I_SUPPLY_VOLTS])
-    put(sc, F_MOTOR, j, float(i))
+        sc[q * LANES + j] = s[_LANE_COLS[q]]
+    sc[F_IX_ERR * LANES + j] = 0.0
+    sc[F_VF_OUT * LANES + j] = float(r[R.VF_OUT])
+    sc[F_PHASE_COMP * LANES + j] = float(r[R.PHASE_COMP])
+    sc[F_AMPLITUDE * LANES + j] = float(r[R.AMPLITUDE])
+    sc[F_KIA * LANES + j] = float(r[R.KIA])
+    sc[F_KIB * LANES + j] = float(r[R.KIB])
+    sc[F_KIC * LANES + j] = float(r[R.KIC])
+    sc[F_KIB1 * LANES + j] = fx8(r[R.KIB1])
+    sc[F_KIB0 * LANES + j] = fx8(r[R.KIB0])
+    sc[F_KIFX2 * LANES + j] = fx4(r[R.KIFX2])
+    sc[F_KIFX1 * LANES + j] = fx4(r[R.KIFX1])
+    sc[F_KIFY1 * LANES + j] = fx4(r[R.KIFY1])
+    sc[F_KIFY0 * LANES + j] = fx4(r[R.KIFY0])
+    sc[F_POLE_PAIRS * LANES + j] = p[L.P_POLE_PAIRS]
+    sc[F_THETA_E0 * LANES + j] = p[L.P_THETA_E0]
+    sc[F_HALL_ANGLE * LANES + j] = p[L.P_HALL_ANGLE]
+    sc[F_PWM_DELAY * LANES + j] = p[L.P_PWM_DELAY]
+    sc[F_R * LANES + j] = p[L.P_R]
+    sc[F_LAMBDA * LANES + j] = p[L.P_LAMBDA]
+    sc[F_J * LANES + j] = shaft_inertia(p[L.P_J_MOTOR], p[L.P_J_LOAD], p[L.P_K_COUPLING])
+    sc[F_COULOMB * LANES + j] = p[L.P_COULOMB]
+    sc[F_STOP_LO * LANES + j] = p[L.P_STOP_LO]
+    sc[F_STOP_HI * LANES + j] = p[L.P_STOP_HI]
+    sc[F_STOP_K * LANES + j] = p[L.P_STOP_K]
+    sc[F_STOP_D * LANES + j] = p[L.P_STOP_D]
+    sc[F_U_DUMP * LANES + j] = p[L.P_U_DUMP]
+    sc[F_LOAD * LANES + j] = u[L.I_LOAD_TORQUE]
+    sc[F_SUPPLY * LANES + j] = u[L.I_SUPPLY_VOLTS]
+    sc[F_MOTOR * LANES + j] = float(i)
     _lane_constants(sc, j, p)
 
 
@@ -125,44 +107,45 @@ def _lane_constants(sc: np.ndarray, j: int, p: np.ndarray) -> None:
     parameters are those of the last gather (the same motor, as a rule) the stored constants
     are reused, which saves an exponential and nine divisions per motor and outer sample.
     """
-    if (get(sc, F_SRC_AMPS, j) == p[L.P_AMPS_PER_COUNT] and get(sc, F_SRC_R, j) == p[L.P_R]
-            and get(sc, F_SRC_L, j) == p[L.P_L] and get(sc, F_SRC_LAMBDA, j) == p[L.P_LAMBDA]
-            and get(sc, F_SRC_J_MOTOR, j) == p[L.P_J_MOTOR]
-            and get(sc, F_SRC_J_LOAD, j) == p[L.P_J_LOAD]
-            and get(sc, F_SRC_VISCOUS, j) == p[L.P_VISCOUS]
-            and get(sc, F_SRC_C_BUS, j) == p[L.P_C_BUS]
-            and get(sc, F_SRC_R_SUPPLY, j) == p[L.P_R_SUPPLY]
-            and get(sc, F_SRC_R_DUMP, j) == p[L.P_R_DUMP]
-            and get(sc, F_SRC_K_COUPLING, j) == p[L.P_K_COUPLING]
-            and get(sc, F_SRC_D_COUPLING, j) == p[L.P_D_COUPLING]):
+    if (sc[F_SRC_AMPS * LANES + j] == p[L.P_AMPS_PER_COUNT] and sc[F_SRC_R * LANES + j] == p[L.P_R]
+            and sc[F_SRC_L * LANES + j] == p[L.P_L]
+            and sc[F_SRC_LAMBDA * LANES + j] == p[L.P_LAMBDA]
+            and sc[F_SRC_J_MOTOR * LANES + j] == p[L.P_J_MOTOR]
+            and sc[F_SRC_J_LOAD * LANES + j] == p[L.P_J_LOAD]
+            and sc[F_SRC_VISCOUS * LANES + j] == p[L.P_VISCOUS]
+            and sc[F_SRC_C_BUS * LANES + j] == p[L.P_C_BUS]
+            and sc[F_SRC_R_SUPPLY * LANES + j] == p[L.P_R_SUPPLY]
+            and sc[F_SRC_R_DUMP * LANES + j] == p[L.P_R_DUMP]
+            and sc[F_SRC_K_COUPLING * LANES + j] == p[L.P_K_COUPLING]
+            and sc[F_SRC_D_COUPLING * LANES + j] == p[L.P_D_COUPLING]):
         return
     counts_per_amp, k_coil, k_mech, k_bus = sample_constants(p)
-    put(sc, F_COUNTS_PER_AMP, j, counts_per_amp)
+    sc[F_COUNTS_PER_AMP * LANES + j] = counts_per_amp
     for k in range(4):
-        put(sc, F_KC0 + k, j, k_coil[k])
+        sc[(F_KC0 + k) * LANES + j] = k_coil[k]
     for k in range(6):
-        put(sc, F_KM0 + k, j, k_mech[k])
+        sc[(F_KM0 + k) * LANES + j] = k_mech[k]
     for k in range(7):
-        put(sc, F_KB0 + k, j, k_bus[k])
-    put(sc, F_SRC_AMPS, j, p[L.P_AMPS_PER_COUNT])
-    put(sc, F_SRC_R, j, p[L.P_R])
-    put(sc, F_SRC_L, j, p[L.P_L])
-    put(sc, F_SRC_LAMBDA, j, p[L.P_LAMBDA])
-    put(sc, F_SRC_J_MOTOR, j, p[L.P_J_MOTOR])
-    put(sc, F_SRC_J_LOAD, j, p[L.P_J_LOAD])
-    put(sc, F_SRC_VISCOUS, j, p[L.P_VISCOUS])
-    put(sc, F_SRC_C_BUS, j, p[L.P_C_BUS])
-    put(sc, F_SRC_R_SUPPLY, j, p[L.P_R_SUPPLY])
-    put(sc, F_SRC_R_DUMP, j, p[L.P_R_DUMP])
-    put(sc, F_SRC_K_COUPLING, j, p[L.P_K_COUPLING])
-    put(sc, F_SRC_D_COUPLING, j, p[L.P_D_COUPLING])
+        sc[(F_KB0 + k) * LANES + j] = k_bus[k]
+    sc[F_SRC_AMPS * LANES + j] = p[L.P_AMPS_PER_COUNT]
+    sc[F_SRC_R * LANES + j] = p[L.P_R]
+    sc[F_SRC_L * LANES + j] = p[L.P_L]
+    sc[F_SRC_LAMBDA * LANES + j] = p[L.P_LAMBDA]
+    sc[F_SRC_J_MOTOR * LANES + j] = p[L.P_J_MOTOR]
+    sc[F_SRC_J_LOAD * LANES + j] = p[L.P_J_LOAD]
+    sc[F_SRC_VISCOUS * LANES + j] = p[L.P_VISCOUS]
+    sc[F_SRC_C_BUS * LANES + j] = p[L.P_C_BUS]
+    sc[F_SRC_R_SUPPLY * LANES + j] = p[L.P_R_SUPPLY]
+    sc[F_SRC_R_DUMP * LANES + j] = p[L.P_R_DUMP]
+    sc[F_SRC_K_COUPLING * LANES + j] = p[L.P_K_COUPLING]
+    sc[F_SRC_D_COUPLING * LANES + j] = p[L.P_D_COUPLING]
 
 
 @njit(cache=True, inline="always")
 def scatter_state(sc: np.ndarray, j: int, s: np.ndarray) -> None:
     """Store lane ``j``'s state back into its motor's state row, 15 inner samples on."""
     for q in range(N_LANE_STATE):
-        s[_LANE_COLS[q]] = get(sc, q, j)
+        s[_LANE_COLS[q]] = sc[q * LANES + j]
     s[L.S_TICK] += c.INNER_PER_OUTER
 
 
@@ -170,20 +153,20 @@ def scatter_state(sc: np.ndarray, j: int, s: np.ndarray) -> None:
 def store_registers(sc: np.ndarray, j: int, r: np.ndarray) -> None:
     """Store lane ``j``'s registers of the last sample (``F_ELDEG_IST`` .. ``F_UC_VAL``, the
     hall status of CNTRL_BITS and IX_ERR of ERR_STAT) into its motor's register row."""
-    r[R.ELDEG_IST] = int(get(sc, F_ELDEG_IST, j))
-    r[R.V_ELDEG] = int(get(sc, F_V_ELDEG, j))
-    r[R.IA_IST] = int(get(sc, F_IA_IST, j))
-    r[R.IB_IST] = int(get(sc, F_IB_IST, j))
-    r[R.IC_IST] = int(get(sc, F_IC_IST, j))
-    r[R.I_NOM] = int(get(sc, F_I_NOM, j))
-    r[R.PHI_SOLL] = int(get(sc, F_PHI_SOLL, j))
-    r[R.IA_SOLL] = int(get(sc, F_IA_SOLL, j))
-    r[R.IB_SOLL] = int(get(sc, F_IB_SOLL, j))
-    r[R.IC_SOLL] = int(get(sc, F_IC_SOLL, j))
-    r[R.UA_VAL] = int(get(sc, F_UA_VAL, j))
-    r[R.UB_VAL] = int(get(sc, F_UB_VAL, j))
-    r[R.UC_VAL] = int(get(sc, F_UC_VAL, j))
-    hall = hall_code(sget(sc, L.S_HALL_SECTOR, j)) << c.HALL_STATUS_SHIFT
+    r[R.ELDEG_IST] = int(sc[F_ELDEG_IST * LANES + j])
+    r[R.V_ELDEG] = int(sc[F_V_ELDEG * LANES + j])
+    r[R.IA_IST] = int(sc[F_IA_IST * LANES + j])
+    r[R.IB_IST] = int(sc[F_IB_IST * LANES + j])
+    r[R.IC_IST] = int(sc[F_IC_IST * LANES + j])
+    r[R.I_NOM] = int(sc[F_I_NOM * LANES + j])
+    r[R.PHI_SOLL] = int(sc[F_PHI_SOLL * LANES + j])
+    r[R.IA_SOLL] = int(sc[F_IA_SOLL * LANES + j])
+    r[R.IB_SOLL] = int(sc[F_IB_SOLL * LANES + j])
+    r[R.IC_SOLL] = int(sc[F_IC_SOLL * LANES + j])
+    r[R.UA_VAL] = int(sc[F_UA_VAL * LANES + j])
+    r[R.UB_VAL] = int(sc[F_UB_VAL * LANES + j])
+    r[R.UC_VAL] = int(sc[F_UC_VAL * LANES + j])
+    hall = hall_code(sc[LANE_BASE[L.S_HALL_SECTOR] + j]) << c.HALL_STATUS_SHIFT
     r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] & 0x1FFF) | hall
-    if get(sc, F_IX_ERR, j) > 0.0:
+    if sc[F_IX_ERR * LANES + j] > 0.0:
         r[R.ERR_STAT] |= c.IX_ERR
