@@ -21,7 +21,8 @@ from jvl_gym.trig import fma, sincos
 @njit(**KERNEL)
 def _reference(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, plan, scratch):
     """The kernel without lanes: every motor's inner samples by ``inner_samples_one``, in
-    lane 0 of ``scratch``."""
+    lane 0 of ``scratch`` (an int64, as the drivers pass it: a literal 0 would compile a
+    second version)."""
     for t in range(n_outer):
         for i in range(regs.shape[0]):
             if plan.shape[0] > 0:
@@ -31,7 +32,7 @@ def _reference(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, plan, 
                            buf[i] if rec else buf[0], rec, fmt)
         for i in range(regs.shape[0]):
             inner_samples_one(regs[i], state[i], params[i], inputs[i], keys[i],
-                              buf[i] if rec else buf[0], rec, fmt, scratch, 0)
+                              buf[i] if rec else buf[0], rec, fmt, scratch, np.int64(0))
 
 
 def _run_reference(m: MotorArray, n_outer: int) -> None:
