@@ -1,4 +1,5 @@
-"""The SIMD lanes of mac050_141.lanes give the bits of the one-motor reference kernel."""
+"""The SIMD lanes of mac050_141.lanes give the bits of the one-motor path (the inner sample
+of mac050_141.inner with every per-motor feature)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,8 @@ from jvl_gym import MotorArray
 from jvl_gym.families.mac050_141 import constants as c
 from jvl_gym.families.mac050_141 import layout as L
 from jvl_gym.families.mac050_141.firmware import regs as R
-from jvl_gym.families.mac050_141.kernel import inner_sample, outer_firmware, sample_constants
+from jvl_gym.families.mac050_141.inner import inner_samples_one
+from jvl_gym.families.mac050_141.kernel import outer_firmware
 from jvl_gym.families.mac050_141.lanes import LANES, in_lanes, lane_scratch
 from jvl_gym.jit import KERNEL
 from jvl_gym.sim import driver
@@ -17,8 +19,10 @@ from jvl_gym.trig import fma, sincos
 
 
 @njit(**KERNEL)
-def _reference(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, plan):
-    """The kernel without lanes: every motor's inner samples by ``inner_sample``."""
+def _reference(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, plan, scratch):
+    """The kernel without lanes: every motor's inner samples by ``inner_samples_one``, in
+    lane 0 of ``scratch`` (an int64, as the drivers pass it: a literal 0 would compile a
+    second version)."""
     for t in range(n_outer):
         for i in range(regs.shape[0]):
             if plan.shape[0] > 0:
@@ -27,11 +31,15 @@ def _reference(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, plan):
             outer_firmware(regs[i], state[i], params[i], inputs[i], keys[i],
                            buf[i] if rec else buf[0], rec, fmt)
         for i in range(regs.shape[0]):
-            counts_per_amp, k_coil, k_mech, k_bus = sample_constants(params[i])
-            b = buf[i] if rec else buf[0]
-            for _ in range(c.INNER_PER_OUTER):
-                inner_sample(regs[i], state[i], params[i], inputs[i], keys[i], b, rec, fmt,
-                             counts_per_amp, k_coil, k_mech, k_bus)
+            inner_samples_one(regs[i], state[i], params[i], inputs[i], keys[i],
+                              buf[i] if rec else buf[0], rec, fmt, scratch, np.int64(0))
+
+
+def _run_reference(m: MotorArray, n_outer: int) -> None:
+    """``n_outer`` outer samples of ``m`` by :func:`_reference`, with the arrays the drivers
+    get (the same types, so ``inner_samples_one`` keeps one compiled version)."""
+    regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch = m.engine_view()
+    _reference(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, plan, scratch[0])
 
 
 def _mixed(n: int) -> MotorArray:
@@ -69,8 +77,7 @@ def test_lanes_give_the_bits_of_the_one_motor_kernel() -> None:
     eligible = [in_lanes(a.regs[i], a.params[i]) for i in range(n)]
     assert 10 < sum(eligible) < n  # both paths are exercised
     a.step(150)  # lanes (parallel driver: n >= 32)
-    _reference(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, False, b._fmt, 150,
-               b._no_schedule)
+    _run_reference(b, 150)
     np.testing.assert_array_equal(a.regs, b.regs)
     np.testing.assert_array_equal(a.state, b.state)
     assert np.any(a.state[:, L.S_OMEGA] != 0.0)
@@ -90,8 +97,7 @@ def test_lanes_flag_a_saturated_current_reading() -> None:
         m.write("MODE_REG", c.V_MODE)
     assert all(in_lanes(a.regs[i], a.params[i]) for i in range(n))
     driver(a.family.key).parallel(*a.engine_view(), 40)
-    _reference(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, False, b._fmt, 40,
-               b._no_schedule)
+    _run_reference(b, 40)
     np.testing.assert_array_equal(a.regs, b.regs)
     np.testing.assert_array_equal(a.state, b.state)
     assert np.any(a.regs[:4, R.ERR_STAT] & c.IX_ERR)
@@ -138,8 +144,7 @@ def test_lanes_follow_a_parameter_change_between_steps() -> None:
         for m in (a, b):
             m.params[:, list(cols)] *= scale
         driver(a.family.key).serial(*a.engine_view(), 40)
-        _reference(b.regs, b.state, b.params, b.inputs, b.keys, b._buf, False, b._fmt, 40,
-                   b._no_schedule)
+        _run_reference(b, 40)
         np.testing.assert_array_equal(a.state, b.state)
 
 
@@ -189,7 +194,6 @@ def test_the_inner_samples_are_compiled_once_for_the_drivers_and_the_env_steps()
     import gymnasium as gym
 
     import jvl_gym  # noqa: F401
-    from jvl_gym.families.mac050_141.kernel import inner_samples_one
     from jvl_gym.families.mac050_141.lanes import inner_samples
 
     MotorArray("MAC140", n=3, seed=0).step(2)
@@ -219,3 +223,48 @@ def test_block_index_is_int64_for_a_prange_index() -> None:
     assert index_of(np.uint64(5)) == 5
     assert index_of(np.int64(5)) == 5
     assert {sig.return_type for sig in index_of.nopython_signatures} == {types.int64}
+
+
+def _features(types: list[str], params: dict[str, np.ndarray], k: np.ndarray | None = None,
+              seed: int = 4) -> MotorArray:
+    """Motors in every mode of the one-motor path: TESTU and TESTKI (their records end in
+    INIT), MANI, INIT, hall start with and without HALL_INT, current and torque noise, an
+    inner-rate recording, beside motors in the lanes; ``k`` selects motors of the set."""
+    idx = np.arange(len(types)) if k is None else k
+    m = MotorArray([types[i] for i in idx], n=idx.size, seed=seed,
+                   **{name: v[idx] for name, v in params.items()})
+    modes = np.array([c.TESTU_MODE, c.TESTKI_MODE, c.MANI_MODE, c.V_MODE, c.V_MODE, c.P_MODE,
+                      c.INIT_MODE, c.V_MODE, c.V_MODE])
+    m.write_many({"V_SOLL": 2500, "P_SOLL": 40000, "UMEAS": 60, "MAN_I_NOM": 150,
+                  "MAN_ALPHA": 1900, "MODE_REG": modes[idx % modes.size]})
+    for j, i in enumerate(idx):
+        bits = int(m.read_raw("CNTRL_BITS")[j])
+        if i % modes.size == 4:
+            m.write_raw("CNTRL_BITS", bits | c.HALL_INT, index=j)
+        elif i % modes.size == 7:
+            m.write("SAMPLE1", R.IA_IST, index=j)
+            m.write_raw("CNTRL_BITS", bits | c.RECORDBIT | c.RECINNERBIT, index=j)
+    return m
+
+
+def test_the_one_motor_path_gives_each_motor_the_bits_of_a_one_motor_array() -> None:
+    """A block mixing lanes and the one-motor path (which runs in the block's top lanes) gives
+    every motor the bits of the same motor alone, in every per-motor feature."""
+    n = LANES
+    k = np.arange(n)
+    types = ["MAC140" if i % 2 == 0 else "MAC050" for i in range(n)]
+    params = {"hall_start": np.where(k % 9 == 3, 1.0, 0.0) + np.where(k % 9 == 4, 1.0, 0.0),
+              "current_noise": np.where(k % 5 == 1, 0.7, 0.0),
+              "torque_noise": np.where(k % 7 == 5, 2e-4, 0.0),
+              "pwm_delay_samples": (k % 2).astype(float)}
+    a = _features(types, params)
+    eligible = [in_lanes(a.regs[i], a.params[i]) for i in range(n)]
+    assert 0 < sum(eligible) < n
+    a.step(300)
+    assert set(a.read_raw("MODE_REG")[:2]) == {c.INIT_MODE}  # the test records ended
+    for i in range(n):
+        one = _features(types, params, np.array([i]))
+        one.reseed(a.keys[i:i + 1])
+        one.step(300)
+        np.testing.assert_array_equal(one.regs[0], a.regs[i])
+        np.testing.assert_array_equal(one.state[0], a.state[i])

@@ -19,7 +19,7 @@ KERNEL: dict[str, Any] = {"cache": True, "_nrt": False}
 #: the same for the multi-threaded drivers
 KERNEL_PARALLEL: dict[str, Any] = {**KERNEL, "parallel": True}
 #: the functions of the current-loop samples (``mac050_141.lanes.inner_samples``, which steps
-#: motors in SIMD lanes, and ``mac050_141.kernel.inner_samples_one``, its one-motor path): numpy's
+#: motors in SIMD lanes, and ``mac050_141.inner.inner_samples_one``, its one-motor path): numpy's
 #: error model, so that a float division is a plain division, not a test for a zero divisor
 #: with a branch to a ZeroDivisionError that keeps LLVM from vectorising the loop over lanes.
 #: (A lane's divisors are parameters validated on the Python side and the bus voltage, which

@@ -12,7 +12,8 @@ import numpy as np
 from numba import njit, typeof, types
 
 from ...engine.view import EngineView
-from .kernel import inner_samples_one, outer_firmware
+from .inner import inner_samples_one
+from .kernel import outer_firmware
 from .lanes import LANES, inner_samples, lane_scratch
 
 __all__ = ["LANES", "outer_sample", "inner_block", "prepare", "scratch"]
@@ -58,7 +59,7 @@ def prepare(arrays: tuple) -> None:
     inner_samples_one.compile((typeof(view.regs[0]), typeof(view.state[0]),
                                typeof(view.params[0]), typeof(view.inputs[0]),
                                typeof(view.keys[0]), typeof(view.buf[0]), rec,
-                               typeof(view.fmt)))
+                               typeof(view.fmt), typeof(view.scratch[0]), types.int64))
     inner_samples.compile((typeof(view.regs), typeof(view.state), typeof(view.params),
                            typeof(view.inputs), typeof(view.keys), typeof(view.buf), rec,
                            typeof(view.fmt), types.int64, types.int64,

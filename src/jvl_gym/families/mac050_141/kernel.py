@@ -7,15 +7,16 @@ Order within an outer sample (manual 1.2 sampled-system convention, docs/model.m
 2. the active mode's function block → FNC_OUT; speed regulator → VF_OUT (with the function
    correction in the correcting modes); FLWERR / FNCERR;
 3. monitoring (4.5), IN_POS, mode transitions; outer-rate recording;
-4. 15 inner samples, each: ELDEG_IST / V_ELDEG, current measurement, commutation and the three
-   current loops (or the mode's fixed voltages), inner-rate recording, then the PWM voltage
-   (after ``pwm_delay_samples``) drives the coil, mechanics and DC bus for 128 µs.
-   VF_OUT computed in step 2 is used from the first of these inner samples on.
+4. 15 inner samples (:mod:`mac050_141.inner`), each: ELDEG_IST / V_ELDEG, current measurement,
+   commutation and the three current loops (or the mode's fixed voltages), inner-rate
+   recording, then the PWM voltage (after ``pwm_delay_samples``) drives the coil, mechanics and
+   DC bus for 128 µs. VF_OUT computed in step 2 is used from the first of these inner samples on.
 
-The drivers (:mod:`mac050_141.lanes`) advance blocks of motors in lockstep, steps 1–3 one motor at
-a time and step 4 for several motors in SIMD lanes where :func:`inner_sample`'s branches allow;
-every motor's arithmetic is independent of the others, so an N-motor array is bit-for-bit
-equal to N one-motor arrays.
+This module holds steps 1–3 (:func:`outer_firmware`) and the pure arithmetic the inner sample
+calls (:func:`adc_count`, :func:`plant_sample`, :func:`sample_constants`). The drivers
+(:mod:`mac050_141.lanes`) advance blocks of motors in lockstep, steps 1–3 one motor at a time
+and step 4 for several motors in SIMD lanes where the motors allow; every motor's arithmetic is
+independent of the others, so an N-motor array is bit-for-bit equal to N one-motor arrays.
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ...jit import KERNEL, LANE_KERNEL
+from ...jit import KERNEL
 from ...noise import gauss
 from . import constants as c
 from . import layout as L
@@ -39,7 +40,6 @@ from .firmware.analog_blocks import (
 )
 from .firmware.blocks import position_block, stop_block, velocity_block
 from .firmware.coil import coil_block
-from .firmware.current_loop import commutate, passive, regulate, set_references
 from .firmware.fixed import clamp, rnd, sat16, wrap32
 from .firmware.gear_blocks import (
     analog_gear_factor,
@@ -62,10 +62,9 @@ from .firmware.modes import (
 from .firmware.monitor import check_errors, in_position, thermal, undervoltage
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
-from .plant.coil import coil_constants, coil_step_prepared, phase_to_vector, vector_to_phases
-from .plant.encoder import eldeg, encoder_count
-from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
-from .plant.mechanics import end_stop_torque, mech_constants, mech_step_prepared, shaft_inertia
+from .plant.coil import coil_constants, coil_step_prepared, phase_to_vector
+from .plant.encoder import encoder_count
+from .plant.mechanics import end_stop_torque, mech_constants, mech_step_prepared
 from .plant.supply import bus_constants, bus_step_prepared
 
 _H = c.INNER_DT
@@ -254,23 +253,11 @@ def adc_count(x: float) -> tuple[float, bool]:
     """A phase current reading of ``x`` ADC counts (before rounding): the stored IX_IST value,
     rounded and limited to ±1023, and whether the converter saturated (IX_ERR, 3.2.147).
 
-    ``+ 0.0`` turns a rounded −0.0 into +0.0, the zero an integer register holds: the SIMD
-    lanes (``mac050_141.lanes``) use the value without storing it in a register first.
+    ``+ 0.0`` turns a rounded −0.0 into +0.0, the zero an integer register holds: the inner
+    sample (``mac050_141.inner``) uses the value without reading it back from a register.
     """
     x = rnd(x)
     return clamp(x, -1023.0, 1023.0) + 0.0, x >= 1023.0 or x <= -1023.0
-
-
-@njit(cache=True, inline="always")
-def _measure(r: np.ndarray, i_amp: float, p: np.ndarray, counts_per_amp: float, gain: float,
-             key: np.uint64, tick: float, ch: int) -> float:
-    x = i_amp * counts_per_amp * gain / 256.0
-    if p[L.P_CURRENT_NOISE] > 0.0:
-        x += p[L.P_CURRENT_NOISE] * gauss(key, tick, ch)
-    x, over = adc_count(x)
-    if over:
-        r[R.ERR_STAT] |= c.IX_ERR
-    return x
 
 
 @njit(cache=True, inline="always")
@@ -286,8 +273,8 @@ def plant_sample(theta: float, omega: float, theta_l: float, omega_l: float, acc
 
     Returns ``(theta1, omega1, theta_l1, omega_l1, i_re1, i_im1, ubus1, dump_on1, p_el, p_cu,
     e_fric, e_load, e_dump, e_sup)``: the new state, the mean electrical and copper powers [W]
-    and the energies of the step [J]. Pure arithmetic on scalars: :func:`inner_sample` and the
-    SIMD lanes of :mod:`jvl_gym.families.mac050_141.lanes` share it. The load torque ``load``
+    and the energies of the step [J]. Pure arithmetic on scalars, so that the inner sample
+    (:mod:`mac050_141.inner`) runs it in SIMD lanes. The load torque ``load``
     acts on the motor shaft when it is rigid and on the load behind the coupling otherwise.
     """
     kv = ubus * _HALF_PWM_PER_VOLT
@@ -312,149 +299,10 @@ def plant_sample(theta: float, omega: float, theta_l: float, omega_l: float, acc
 
 @njit(cache=True, inline="always")
 def sample_constants(p: np.ndarray) -> tuple:
-    """The parameter-only arguments of :func:`inner_sample` for a motor's parameter row ``p``:
+    """The parameter-only factors of the inner sample for a motor's parameter row ``p``:
     ``(counts_per_amp, k_coil, k_mech, k_bus)`` (ADC counts per ampere and the plant factors of
     ``coil_constants``, ``mech_constants``, ``bus_constants``)."""
     return (1.0 / p[L.P_AMPS_PER_COUNT], coil_constants(p[L.P_R], p[L.P_L], p[L.P_LAMBDA], _H),
             mech_constants(p[L.P_J_MOTOR], p[L.P_J_LOAD], p[L.P_VISCOUS], p[L.P_K_COUPLING],
                            p[L.P_D_COUPLING], _H),
             bus_constants(p[L.P_C_BUS], p[L.P_R_SUPPLY], p[L.P_R_DUMP], _H))
-
-
-@njit(cache=True, inline="always")
-def inner_sample(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
-                 buf: np.ndarray, rec: bool, fmt: np.ndarray, counts_per_amp: float,
-                 k_coil: tuple, k_mech: tuple, k_bus: tuple) -> None:
-    """One 128 µs current-loop sample and the plant over it (step 4 of the module docstring).
-
-    The reference form, one motor at a time; :func:`mac050_141.lanes.inner_samples` runs the
-    same operations for the motors of a block in SIMD lanes when they need none of the
-    per-motor branches (hall synchronisation, noise, inner-rate recording, passive and test
-    modes). Inlined into the 15-sample loop of :func:`inner_samples_one`: as a call it would
-    receive each of its six arrays field by field (numba passes an array's fields one by one)
-    on every sample (docs/model.md §17).
-    ``counts_per_amp`` (ADC counts per ampere) and the plant factors ``k_coil``, ``k_mech`` and
-    ``k_bus`` (``coil_constants``, ``mech_constants``, ``bus_constants`` of ``mac050_141.plant``)
-    depend on the motor's parameters only: the caller computes them once per call, not nine
-    divisions and an exponential per 128 µs.
-    """
-    theta = s[L.S_THETA]
-    omega = s[L.S_OMEGA]
-    pp = p[L.P_POLE_PAIRS]
-    theta_e = pp * theta + p[L.P_THETA_E0]
-    sec = sector_index(theta_e, p[L.P_HALL_ANGLE])
-    cross = zero_crossing(s[L.S_HALL_SECTOR], sec)
-    s[L.S_HALL_SECTOR] = sec
-    enc_abs = encoder_count(theta)
-    if p[L.P_HALL_START] < 0.5:  # commutation aligned from power-on
-        el = int(eldeg(theta_e))
-    else:  # hall synchronisation, 3.2.124/125 (the firmware latches the count at the edge)
-        if cross != 0 and (s[L.S_HALL_SYNCED] < 0.5 or (r[R.CNTRL_BITS] & c.HALL_INT)):
-            edge_e = p[L.P_HALL_ANGLE] + (sec if cross > 0 else sec + 1.0) * SECTOR
-            enc_edge = encoder_count((edge_e - p[L.P_THETA_E0]) / pp)
-            target = r[R.ELDEGP_OFFSET] if cross > 0 else r[R.ELDEGN_OFFSET]
-            s[L.S_ELDEG_OFS] = target - enc_edge
-            s[L.S_HALL_SYNCED] = 1.0
-        el = int(enc_abs + s[L.S_ELDEG_OFS]) % c.ELDEG_PER_TURN
-    r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] & 0x1FFF) | (hall_code(sec) << c.HALL_STATUS_SHIFT)
-    # V_ELDEG: encoder counts per inner sample (3.2.144)
-    dv = int(enc_abs - s[L.S_ELDEG_PREV])
-    s[L.S_ELDEG_PREV] = enc_abs
-    r[R.ELDEG_IST] = el
-    r[R.V_ELDEG] = dv
-
-    tick = s[L.S_TICK]
-    ia, ib, ic = vector_to_phases(complex(s[L.S_I_RE], s[L.S_I_IM]))
-    r[R.IA_IST] = int(_measure(r, ia, p, counts_per_amp, float(r[R.KIA]), key, tick, 0))
-    r[R.IB_IST] = int(_measure(r, ib, p, counts_per_amp, float(r[R.KIB]), key, tick, 1))
-    r[R.IC_IST] = int(_measure(r, ic, p, counts_per_amp, float(r[R.KIC]), key, tick, 2))
-
-    mode = int(r[R.MODE_REG])
-    if mode == c.INIT_MODE or mode == c.SAFE_MODE:
-        passive(r, s, 0.0, 0.0, 0.0)
-    elif mode == c.TESTU_MODE:  # 4.4.9: UA = UMEAS, UC = −UMEAS
-        um = float(r[R.UMEAS])
-        passive(r, s, um, 0.0, -um)
-    elif mode == c.TESTKI_MODE:  # documented measurement: UA = UMEAS, UB = −UMEAS
-        um = float(r[R.UMEAS])
-        passive(r, s, um, -um, 0.0)
-    else:
-        if mode == c.MANI_MODE:  # 3.2.128: stator field set by hand
-            set_references(r, float(r[R.MAN_I_NOM]), int(r[R.MAN_ALPHA]))
-        else:
-            commutate(r)
-        regulate(r, s)
-
-    cb = r[R.CNTRL_BITS]
-    if mode == c.TESTU_MODE or mode == c.TESTKI_MODE:
-        if (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
-            record(r, buf, fmt, rec)
-        s[L.S_TEST_CNT] += 1.0
-        if s[L.S_TEST_CNT] >= s[L.S_REC_LEN]:
-            r[R.CNTRL_BITS] &= ~c.RECORDBIT
-            enter_mode(r, s, c.INIT_MODE)
-    elif (cb & c.RECORDBIT) and (cb & c.RECINNERBIT):
-        record(r, buf, fmt, rec)
-
-    ua = float(r[R.UA_VAL])
-    ub = float(r[R.UB_VAL])
-    uc = float(r[R.UC_VAL])
-    # S_UPEND_* hold the PWM values computed in the last sample, whatever the delay (so
-    # switching the delay on applies the previous sample's values); with the delay they drive
-    # the coil now
-    pa = s[L.S_UPEND_A]
-    pb = s[L.S_UPEND_B]
-    pc = s[L.S_UPEND_C]
-    s[L.S_UPEND_A] = ua
-    s[L.S_UPEND_B] = ub
-    s[L.S_UPEND_C] = uc
-    if p[L.P_PWM_DELAY] > 0.5:
-        ua = pa
-        ub = pb
-        uc = pc
-    noise_torque = 0.0
-    if p[L.P_TORQUE_NOISE] > 0.0:
-        noise_torque = p[L.P_TORQUE_NOISE] * gauss(key, tick, 4)
-    load = u[L.I_LOAD_TORQUE]
-    (theta1, omega1, theta_l1, omega_l1, i_re1, i_im1, ubus, dump_on, p_el, p_cu, e_fric,
-     e_load, e_dump, e_sup) = plant_sample(
-        theta, omega, s[L.S_LOAD_THETA], s[L.S_LOAD_OMEGA], s[L.S_ACC], s[L.S_I_RE],
-        s[L.S_I_IM], s[L.S_UBUS], s[L.S_DUMP_ON], ua, ub, uc, theta_e, pp, p[L.P_R],
-        p[L.P_LAMBDA], shaft_inertia(p[L.P_J_MOTOR], p[L.P_J_LOAD], p[L.P_K_COUPLING]),
-        p[L.P_COULOMB], p[L.P_STOP_LO], p[L.P_STOP_HI], p[L.P_STOP_K], p[L.P_STOP_D], load,
-        noise_torque, u[L.I_SUPPLY_VOLTS], p[L.P_U_DUMP], k_coil, k_mech, k_bus)
-    s[L.S_THETA] = theta1
-    s[L.S_OMEGA] = omega1
-    s[L.S_LOAD_THETA] = theta_l1
-    s[L.S_LOAD_OMEGA] = omega_l1
-    s[L.S_ACC] = (omega1 - omega) * c.INNER_HZ
-    s[L.S_I_RE] = i_re1
-    s[L.S_I_IM] = i_im1
-    s[L.S_E_ELEC] += p_el * _H
-    s[L.S_E_COPPER] += p_cu * _H
-    s[L.S_E_FRICTION] += e_fric
-    s[L.S_E_LOAD] += e_load
-    s[L.S_UBUS] = ubus
-    s[L.S_DUMP_ON] = dump_on
-    s[L.S_E_DUMP] += e_dump
-    s[L.S_E_SUPPLY] += e_sup
-    s[L.S_I2_SUM] += float(r[R.IA_IST] ** 2 + r[R.IB_IST] ** 2 + r[R.IC_IST] ** 2)
-    s[L.S_PREG_SUM] += max(-p_el, 0.0)  # regenerated power; no branch on its sign
-    s[L.S_TICK] = tick + 1.0
-
-
-@njit(**LANE_KERNEL)
-def inner_samples_one(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray,
-                      key: np.uint64, buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:
-    """The 15 inner samples of one outer sample (step 4) of one motor by :func:`inner_sample`:
-    the reference form, which :func:`mac050_141.lanes.inner_samples` runs for the motors it
-    cannot put into SIMD lanes.
-
-    A function of its own, not inlined into ``inner_samples``: numba's inliner copies the
-    whole scope of the caller for every block of an inlined function, so inlining this loop
-    beside the two inlined lane samples would multiply ``inner_samples``' compile time. The
-    call costs one argument transfer per motor and outer sample, on the slow path only.
-    """
-    counts_per_amp, k_coil, k_mech, k_bus = sample_constants(p)
-    for _k in range(c.INNER_PER_OUTER):
-        inner_sample(r, s, p, u, key, buf, rec, fmt, counts_per_amp, k_coil, k_mech, k_bus)

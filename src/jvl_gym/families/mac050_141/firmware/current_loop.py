@@ -17,12 +17,10 @@ import math
 import numpy as np
 from numba import njit
 
-from ....jit import KERNEL
 from ....trig import fma, sincos
 from .. import constants as c
-from .. import layout as L
 from . import regs as R
-from .fixed import clamp, fx4, fx8, rnd
+from .fixed import clamp, fx8, rnd
 
 _HALF_SQRT3 = 0.5 * math.sqrt(3.0)
 _PER_TURN = 1.0 / c.ELDEG_PER_TURN  #: exact (a power of two)
@@ -37,7 +35,7 @@ def references(vf: float, eldeg: float, v_eldeg: float, phase_comp: float, ampli
     VF_OUT, ELDEG_IST, V_ELDEG and the raw PHASE_COMP (Fixed8) and AMPLITUDE (Fixed8) registers.
 
     Pure arithmetic on floats holding the registers' integers (the angle's ``mod 2048`` by
-    ``floor``, exact), so that :mod:`mac050_141.lanes` can run it for several motors in SIMD lanes.
+    ``floor``, exact), so that :mod:`mac050_141.inner` can run it for several motors in SIMD lanes.
     """
     i_nom = abs(vf)
     quarter = 512.0 if vf >= 0.0 else -512.0
@@ -55,7 +53,7 @@ def phase_references(amp: float, phi: float) -> tuple[float, float, float]:
     here (:func:`jvl_gym.trig.sincos` of ``phi·2π/2048``, within an ulp of the exact
     values) rather than looked up: a table lookup needs an integer index, which made the
     compiler step the whole angle computation lane by lane instead of in SIMD registers
-    (``jvl_gym.families.mac050_141.lanes``). Then ``sin(φ + 120°) = −sin φ/2 + (√3/2)·cos φ`` and
+    (``jvl_gym.families.mac050_141.inner``). Then ``sin(φ + 120°) = −sin φ/2 + (√3/2)·cos φ`` and
     ``sin(φ + 240°) = −sin φ/2 − (√3/2)·cos φ``. ``+ 0.0`` makes a zero +0.0, as the integer
     registers hold it (:func:`phase_step`).
     """
@@ -76,24 +74,6 @@ def store_references(r: np.ndarray, i_nom: float, phi: float, ia: float, ib: flo
     r[R.IC_SOLL] = int(ic)
 
 
-@njit(**KERNEL)
-def commutate(r: np.ndarray) -> None:
-    """Compute I_NOM, PHI_SOLL and IA/IB/IC_SOLL from VF_OUT and the rotor angle (4.3.1)."""
-    i_nom, phi, ia, ib, ic = references(float(r[R.VF_OUT]), float(r[R.ELDEG_IST]),
-                                        float(r[R.V_ELDEG]), float(r[R.PHASE_COMP]),
-                                        float(r[R.AMPLITUDE]))
-    store_references(r, i_nom, phi, ia, ib, ic)
-
-
-@njit(**KERNEL)
-def set_references(r: np.ndarray, i_nom: float, phi: int) -> None:
-    """IA/IB/IC_SOLL for a stator field of ``i_nom`` at angle ``phi`` (MANI_MODE, 3.2.128)."""
-    ia, ib, ic = phase_references(i_nom * fx8(r[R.AMPLITUDE]), float(phi % c.ELDEG_PER_TURN))
-    r[R.IA_SOLL] = int(ia)
-    r[R.IB_SOLL] = int(ib)
-    r[R.IC_SOLL] = int(ic)
-
-
 @njit(cache=True, inline="always")
 def phase_step(i_soll: float, i_ist: float, e1: float, u1: float, u2: float, i_ist1: float,
                kib1: float, kib0: float, kifx2: float, kifx1: float, kify1: float,
@@ -101,9 +81,8 @@ def phase_step(i_soll: float, i_ist: float, e1: float, u1: float, u2: float, i_i
     """One phase's loop (4.3.1): ``(U, e)`` from IX_SOLL, IX_IST, the histories ``e(k−1)``,
     ``U(k−1)``, ``U(k−2)``, ``I_IST(k−1)`` and the coefficients (Fixed8 KIB, Fixed4 KIF values).
 
-    ``U`` is an integer; ``+ 0.0`` makes a rounded −0.0 the +0.0 that UX_VAL holds, so that the
-    SIMD lanes (``mac050_141.lanes``), which apply ``U`` without storing it in the register,
-    compute with the same zero.
+    ``U`` is an integer; ``+ 0.0`` makes a rounded −0.0 the +0.0 that UX_VAL holds: the inner
+    sample (``mac050_141.inner``) applies ``U`` without reading it back from the register.
     """
     e = i_soll - fma(kib1, i_ist, kib0 * i_ist1)
     u = fma(kifx2, e, fma(kifx1, e1, fma(kify1, u1, kify0 * u2)))
@@ -111,46 +90,8 @@ def phase_step(i_soll: float, i_ist: float, e1: float, u1: float, u2: float, i_i
 
 
 @njit(cache=True, inline="always")
-def _phase(s: np.ndarray, i_soll: float, i_ist: float, k: int, kib1: float, kib0: float,
-           kifx2: float, kifx1: float, kify1: float, kify0: float) -> float:
-    u, e = phase_step(i_soll, i_ist, s[L.S_IE1_A + k], s[L.S_IU1_A + k], s[L.S_IU2_A + k],
-                      s[L.S_IIST1_A + k], kib1, kib0, kifx2, kifx1, kify1, kify0)
-    s[L.S_IE1_A + k] = e
-    s[L.S_IU2_A + k] = s[L.S_IU1_A + k]
-    s[L.S_IU1_A + k] = u
-    s[L.S_IIST1_A + k] = i_ist
-    return u
-
-
-@njit(**KERNEL)
-def regulate(r: np.ndarray, s: np.ndarray) -> None:
-    """Run the three current loops once and store UA/UB/UC_VAL (4.3.1)."""
-    # the six filter coefficients are read once for the three phases; IA..IC_SOLL, IA..IC_IST
-    # and UA..UC_VAL are consecutive registers (3.2.133–3.2.147)
-    kib1 = fx8(r[R.KIB1])
-    kib0 = fx8(r[R.KIB0])
-    kifx2 = fx4(r[R.KIFX2])
-    kifx1 = fx4(r[R.KIFX1])
-    kify1 = fx4(r[R.KIFY1])
-    kify0 = fx4(r[R.KIFY0])
-    for k in range(3):
-        u = _phase(s, float(r[R.IA_SOLL + k]), float(r[R.IA_IST + k]), k, kib1, kib0, kifx2,
-                   kifx1, kify1, kify0)
-        r[R.UA_VAL + k] = int(u)
-
-
-@njit(**KERNEL)
-def passive(r: np.ndarray, s: np.ndarray, ua: float, ub: float, uc: float) -> None:
-    """Current regulator passive: apply fixed voltages and hold the loops at rest (4.4.1, 4.4.9)."""
-    r[R.UA_VAL] = int(ua)
-    r[R.UB_VAL] = int(ub)
-    r[R.UC_VAL] = int(uc)
-    r[R.I_NOM] = 0
-    r[R.IA_SOLL] = 0
-    r[R.IB_SOLL] = 0
-    r[R.IC_SOLL] = 0
-    for k in range(3):
-        s[L.S_IE1_A + k] = 0.0
-        s[L.S_IU1_A + k] = 0.0
-        s[L.S_IU2_A + k] = 0.0
-        s[L.S_IIST1_A + k] = float(r[R.IA_IST + k])
+def manual_references(man_i_nom: float, man_alpha: int, amplitude: float
+                      ) -> tuple[float, float, float]:
+    """IA/IB/IC_SOLL of MANI_MODE (3.2.128): a stator field of MAN_I_NOM at the angle
+    MAN_ALPHA (mod 2048), scaled by the raw AMPLITUDE (Fixed8) register."""
+    return phase_references(man_i_nom * fx8(amplitude), float(man_alpha % c.ELDEG_PER_TURN))
