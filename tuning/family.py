@@ -17,6 +17,7 @@ Other families (the MIS/SMC step motors) have no tuning procedure; :func:`tuning
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass
 from typing import Any
 
@@ -55,18 +56,28 @@ class TuningFamily:
     test_modes: bool
 
 
+def _facts(key: str, c: Any, table: RegisterTable) -> TuningFamily:
+    """A family's tuning facts from its constants ``c`` and register ``table``: the speed
+    filter's order is the number of its numerator taps KVFX1 … KVFXn in the table (MAC050–141
+    manual 3.2.89–3.2.111; MAC800 overview, registers KVFX6 … KVFX1), the test modes are
+    there when the constants name TESTU and TESTA."""
+    order = sum(1 for reg in table if re.fullmatch(r"KVFX\d", reg.name))
+    tests = hasattr(c, "TESTU_MODE") and hasattr(c, "TESTA_MODE")
+    return TuningFamily(key, c.INNER_DT, c.OUTER_DT, c.COUNTS_PER_REV, table, order, tests)
+
+
 def _mac050_141() -> TuningFamily:
     from jvl_gym.families.mac050_141 import constants as c
     from jvl_gym.families.mac050_141.table import TABLE
 
-    return TuningFamily("mac050_141", c.INNER_DT, c.OUTER_DT, c.COUNTS_PER_REV, TABLE, 4, True)
+    return _facts("mac050_141", c, TABLE)
 
 
 def _mac800() -> TuningFamily:
     from jvl_gym.families.mac800 import constants as c
     from jvl_gym.families.mac800.table import TABLE
 
-    return TuningFamily("mac800", c.INNER_DT, c.OUTER_DT, c.COUNTS_PER_REV, TABLE, 6, False)
+    return _facts("mac800", c, TABLE)
 
 
 #: the families with a tuning procedure
