@@ -7,6 +7,9 @@ the world-input plan and the blocks' working memory. The column meaning of ``sta
 through the family's task interface (``jvl_gym.families.<family>.task``).
 
 :class:`Episode` holds the per-copy bookkeeping every environment shares.
+
+:func:`take_planned_inputs` and :func:`record_rows` are what every family's outer sample does
+with the view before its firmware runs.
 """
 
 from __future__ import annotations
@@ -14,8 +17,9 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import numpy as np
+from numba import njit
 
-__all__ = ["EngineView", "Episode"]
+__all__ = ["EngineView", "Episode", "take_planned_inputs", "record_rows"]
 
 
 class EngineView(NamedTuple):
@@ -44,3 +48,21 @@ class Episode(NamedTuple):
     reward: np.ndarray  #: (N,) float64
     terminated: np.ndarray  #: (N,) bool
     truncated: np.ndarray  #: (N,) bool
+
+
+@njit(cache=True, inline="always")
+def take_planned_inputs(view: EngineView, i: int, t: int) -> None:  # pragma: no cover
+    """Set motor ``i``'s world inputs from row ``t`` of the world-input plan, when the plan is
+    not empty (otherwise the inputs are held)."""
+    plan = view.plan
+    inputs = view.inputs
+    if plan.shape[0] > 0:
+        for k in range(inputs.shape[1]):
+            inputs[i, k] = plan[t, i, k]
+
+
+@njit(cache=True, inline="always")
+def record_rows(view: EngineView, i: int) -> np.ndarray:  # pragma: no cover - compiled
+    """Motor ``i``'s sample buffer (depth, channels), or the placeholder when none is
+    allocated."""
+    return view.buf[i] if view.rec else view.buf[0]

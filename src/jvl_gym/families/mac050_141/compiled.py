@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, typeof, types
 
-from ...engine.view import EngineView
+from ...engine.view import EngineView, record_rows, take_planned_inputs
 from .inner import inner_samples_one
 from .kernel import outer_firmware
 from .lanes import LANES, inner_samples, lane_scratch
@@ -23,12 +23,9 @@ __all__ = ["LANES", "outer_sample", "inner_block", "prepare", "scratch"]
 def outer_sample(view: EngineView, i: int, t: int) -> None:  # pragma: no cover - compiled
     """Steps 1–3 of an outer sample (``mac050_141.kernel``) for motor ``i``; with a non-empty
     world-input plan its row ``t`` sets the motor's inputs first."""
-    plan = view.plan
+    take_planned_inputs(view, i, t)
     inputs = view.inputs
-    if plan.shape[0] > 0:
-        for k in range(inputs.shape[1]):
-            inputs[i, k] = plan[t, i, k]
-    b = view.buf[i] if view.rec else view.buf[0]
+    b = record_rows(view, i)
     outer_firmware(view.regs[i], view.state[i], view.params[i], inputs[i], view.keys[i], b,
                    view.rec, view.fmt)
 
