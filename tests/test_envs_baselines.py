@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from typer.testing import CliRunner
 
 import jvl_gym  # noqa: F401
@@ -34,6 +35,30 @@ def test_pi_baseline_holds_tension_better_than_a_fixed_ratio() -> None:
     held = episode_returns(env_id, pi, 123, 4, reset_policy=pi.reset)
     fixed = episode_returns(env_id, make_baseline("jvl_gym/CoilWinding-v0", 4, 1), 123, 4)
     assert held.mean() > fixed.mean()
+
+
+def test_the_pi_baseline_steps_at_the_env_family_outer_sample_time() -> None:
+    from jvl_gym.families.mac050_141 import constants as c141
+    from jvl_gym.families.mac800 import constants as c800
+
+    env_id = "jvl_gym/GearSync-v0"
+    assert make_baseline(env_id, 1, 1, decimation=3, motor_type="MAC800").dt == (
+        3 * c800.OUTER_DT)
+    assert make_baseline(env_id, 1, 1, motor_type="MAC800").dt == 2 * c800.OUTER_DT
+    assert 2 * c800.OUTER_DT == pytest.approx(2.597e-3, rel=1e-3)  # 770 Hz
+    for pi in (make_baseline(env_id, 1, 1), make_baseline(env_id, 1, 1, motor_type="MAC140")):
+        assert pi.dt == 2 * c141.OUTER_DT == pytest.approx(2 * 1.92e-3, rel=1e-15)
+    with pytest.raises(ValueError, match="decimation"):
+        make_baseline(env_id, 1, 1, decimation=0)
+
+
+def test_the_mac050_141_pi_baseline_returns_are_those_of_the_1_92_ms_step() -> None:
+    env_id = "jvl_gym/GearSync-v0"
+    pi = make_baseline(env_id, 3, 1)
+    old = PITension(3, kp=2.0, ki=15.0, dt=2 * 1.92e-3)
+    np.testing.assert_array_equal(
+        episode_returns(env_id, pi, 7, 3, {"max_episode_steps": 400}, pi.reset),
+        episode_returns(env_id, old, 7, 3, {"max_episode_steps": 400}, old.reset))
 
 
 def test_firmware_baselines_ignore_the_action() -> None:

@@ -123,7 +123,8 @@ def test_gear_sync_runs_the_mac800_analogue_gear_mode_and_the_pi_baseline_holds(
     # action 0 ↔ 5 V ↔ ANINP 1024 (register 170)
     np.testing.assert_array_equal(m.read_raw("ANINP"), 1024)
     steps = 600
-    pi_error, pi_ended = _gear_sync_errors(make_baseline("jvl_gym/GearSync-v0", 3, 1), steps)
+    pi_error, pi_ended = _gear_sync_errors(make_baseline("jvl_gym/GearSync-v0", 3, 1,
+                                                          motor_type="MAC800"), steps)
     fixed_error, _ = _gear_sync_errors(ZeroAction(3, 1), steps)
     assert not pi_ended.any()
     assert pi_error < 0.1 and pi_error < fixed_error

@@ -11,13 +11,24 @@ Examples
 ``jvl-gym serve -m MAC140 -a 19 -m MIS231 -a 7 --pty``  (two families, one line)
 ``jvl-gym serve --motor MIS231 --address 42 --modbus --tcp 127.0.0.1:5020``
 ``python -m jvl_gym.cli_serve --motor MAC050 --pty --user-pty``  (FastMAC/FlexMAC too)
+``jvl-gym serve -m MAC140 -a 19 --tcp 127.0.0.1:5000 --load-inertia 1e-4``  (a rigid load)
+``jvl-gym serve -m MAC140 -a 19 --pty --load-inertia 1e-4 --coupling-stiffness 40``
+(the load behind an elastic coupling: a two-mass plant)
+
+The load options (:data:`LOAD_OPTIONS`) set the motors' reset keywords of those names
+(:class:`~jvl_gym.MotorArray`; docs/model.md §5.2 "Mechanics"): given once for every motor or
+once per ``--address``, in SI units, checked by the motor array (finite, >= 0; an elastic
+coupling the inner step can carry). The elastic coupling is the MAC050–141's alone; on a
+family without it a value other than 0 is refused.
 """
 
 from __future__ import annotations
 
 import logging
+import re
 import signal
 import threading
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -25,7 +36,8 @@ import typer
 
 from .cli_app import App
 
-__all__ = ["app", "serve", "parse_tcp", "banner", "build_line"]
+__all__ = ["app", "serve", "parse_tcp", "banner", "build_line", "LOAD_OPTIONS",
+           "LoadError", "load_per_motor"]
 
 app = App(prog="jvl-gym serve", add_completion=False,
           help="Serve simulated MAC motors over serial protocols.")
@@ -56,15 +68,107 @@ def parse_tcp(text: str) -> tuple[str, int]:
     return host, int(port)
 
 
+class LoadError(ValueError):
+    """A load option the motors refuse (one line, naming the option)."""
+
+
+#: the load options of ``serve`` → the ``MotorArray`` reset keywords they set (SI units:
+#: kg·m², N·m, N·m·s/rad, N·m/rad, N·m·s/rad; docs/model.md §5.2)
+LOAD_OPTIONS: dict[str, str] = {
+    "--load-inertia": "load_inertia",
+    "--coulomb-friction": "coulomb_friction",
+    "--viscous-friction": "viscous_friction",
+    "--coupling-stiffness": "coupling_stiffness",
+    "--coupling-damping": "coupling_damping",
+}
+
+
+def _option_text(text: str) -> str:
+    """``text`` with the load's reset keywords named by their ``serve`` options."""
+    for option, keyword in LOAD_OPTIONS.items():
+        text = text.replace(keyword, option)
+    return text
+
+
+def load_per_motor(given: dict[str, Sequence[float] | None], addresses: Sequence[int]
+                   ) -> dict[str, list[float]]:
+    """The load of each motor (one per ``addresses``): reset keyword → one value per motor,
+    from the values of the load options ``given`` (option of :data:`LOAD_OPTIONS` → one
+    value for every motor, one per motor, or None: not given).
+
+    Raises
+    ------
+    LoadError
+        An option given neither once nor once per address, or a coupling damping on a motor
+        without a coupling stiffness (one line, naming the option). The values themselves are
+        the motor array's to check (:func:`build_line`).
+    """
+    n = len(addresses)
+    load: dict[str, list[float]] = {}
+    for option, values in given.items():
+        if not values:
+            continue
+        if len(values) not in (1, n):
+            raise LoadError(f"{option}: give one value for every motor or one per --address "
+                            f"({n}), got {len(values)}")
+        load[LOAD_OPTIONS[option]] = [float(v) for v in values] * (n // len(values))
+    damping = load.get("coupling_damping", [0.0] * n)
+    stiffness = load.get("coupling_stiffness", [0.0] * n)
+    for a, d, k in zip(addresses, damping, stiffness):
+        if d != 0.0 and not k > 0.0:
+            raise LoadError(f"--coupling-damping {d:g} for the motor at address {a} needs a "
+                            "--coupling-stiffness > 0 there (the damping is the coupling's)")
+    return load
+
+
+def _put_load(twin: Any, load: dict[str, list[float]], members: list[int]) -> None:
+    """Power on the motors of ``twin`` (the line's motors ``members``) with their ``load``
+    (:meth:`~jvl_gym.MotorArray.reset`: registers from flash, so the addresses stay); one-line
+    :class:`LoadError` naming the option and the address for a value the family refuses, nothing
+    changed."""
+    from .families import families, family
+
+    m = twin.m
+    kw = {}
+    for keyword, values in load.items():
+        mine = [values[k] for k in members]
+        if keyword in m.PARAMETER_KEYWORDS:
+            kw[keyword] = mine
+        elif any(v != 0.0 for v in mine):
+            option = next(o for o, k in LOAD_OPTIONS.items() if k == keyword)
+            types = sorted({cfg.name for cfg in m.motor_configs})
+            having = [family(key).title for key in families()
+                      if keyword in family(key).array_class.PARAMETER_KEYWORDS]
+            raise LoadError(f"{option}: the {m.family.title} ({', '.join(types)}) model no "
+                            f"{keyword.replace('_', ' ')} (only the {', '.join(having)} do); "
+                            "give 0 for them")
+    if not kw:
+        return
+    try:
+        m.reset(**kw)
+    except (TypeError, ValueError) as exc:
+        text = re.sub(r"^motor (\d+):",
+                      lambda g: f"motor at address {twin.addresses()[int(g[1])]}:", str(exc))
+        raise LoadError(_option_text(text)) from None
+
+
 def build_line(types: list[str], addresses: list[int], seed: int = 0,
                flash_dir: Path | None = None,
                fastmac_code: dict[str, tuple[int, int]] | None = None,
+               load: dict[str, list[float]] | None = None,
                **array_kw: Any) -> tuple[Any, list[int]]:
     """The twins of ``types`` at ``addresses``: one :class:`~.protocol.twin.Twin` per motor
     family (a :class:`~.protocol.bus.Bus` of them when there are several), and the motor
     indices in the order the line lists them (family by family). With several families each
     keeps its flash files in ``flash_dir/<family key>``; ``array_kw`` go to every
-    ``MotorArray``."""
+    ``MotorArray``; ``load`` (reset keyword → one value per motor of ``types``,
+    :func:`load_per_motor`) is each motor's load after power-on.
+
+    Raises
+    ------
+    LoadError
+        A load value the motor's family refuses (one line, naming the option).
+    """
     from .families import family_of_motor
     from .protocol import fastmac as fm
     from .protocol.bus import Bus
@@ -78,8 +182,10 @@ def build_line(types: list[str], addresses: list[int], seed: int = 0,
     for key, members in groups.items():
         m = MotorArray([types[k] for k in members], n=len(members), seed=seed, **array_kw)
         where = flash_dir / key if flash_dir is not None and len(groups) > 1 else flash_dir
-        twins.append(Twin(m, [addresses[k] for k in members], flash_dir=where,
-                          fastmac_code=fastmac_code or fm.DEFAULT_CODE))
+        twin = Twin(m, [addresses[k] for k in members], flash_dir=where,
+                    fastmac_code=fastmac_code or fm.DEFAULT_CODE)
+        _put_load(twin, load or {}, members)
+        twins.append(twin)
     order = [k for members in groups.values() for k in members]
     return (twins[0] if len(twins) == 1 else Bus(twins)), order
 
@@ -116,9 +222,27 @@ def serve(
     fastmac_code: Annotated[str, typer.Option(
         help="FastMAC register code: 'example' (manual 5.2.1.5) or 'table' (5.2.1.4).")
     ] = "example",
+    load_inertia: Annotated[list[float] | None, typer.Option(
+        "--load-inertia", help="Load inertia at the shaft in kg·m², >= 0 (repeat: one per "
+        "--address; once: every motor). Default: none, the bare rotor.")] = None,
+    coulomb_friction: Annotated[list[float] | None, typer.Option(
+        "--coulomb-friction", help="Coulomb friction torque in N·m, >= 0 (repeat like "
+        "--load-inertia). Default: the motor type's.")] = None,
+    viscous_friction: Annotated[list[float] | None, typer.Option(
+        "--viscous-friction", help="Viscous friction in N·m·s/rad, >= 0 (repeat like "
+        "--load-inertia). Default: the motor type's.")] = None,
+    coupling_stiffness: Annotated[list[float] | None, typer.Option(
+        "--coupling-stiffness", help="Stiffness in N·m/rad of an elastic coupling the load "
+        "sits behind (a two-mass plant; needs --load-inertia > 0; MAC050–141 only; 0: rigid; "
+        "repeat like --load-inertia).")] = None,
+    coupling_damping: Annotated[list[float] | None, typer.Option(
+        "--coupling-damping", help="Damping of that coupling in N·m·s/rad (needs "
+        "--coupling-stiffness > 0; repeat like --load-inertia).")] = None,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log every refusal.")] = False,
 ) -> None:
-    """Serve one or many simulated motors (multi-drop by MYADDR) until Ctrl-C."""
+    """Serve one or many simulated motors (multi-drop by MYADDR) until Ctrl-C, each with
+    an optional load: inertia, friction, an elastic coupling (SI units; one value for every
+    motor or one per --address; checked before anything is served)."""
     from .protocol import fastmac as fm
     from .protocol.transport import TwinServer
 
@@ -137,8 +261,14 @@ def serve(
     if modbus and (user_tcp is not None or user_pty):
         raise typer.BadParameter("--modbus serves the main channel only (no --user-tcp/-pty)")
     array_kw = {} if record_length is None else {"record_length": record_length}
-    line, order = build_line(types, list(address), seed=seed, flash_dir=flash_dir,
-                             fastmac_code=code, **array_kw)
+    given = dict(zip(LOAD_OPTIONS, (load_inertia, coulomb_friction, viscous_friction,
+                                    coupling_stiffness, coupling_damping)))
+    try:
+        load = load_per_motor(given, address)
+        line, order = build_line(types, list(address), seed=seed, flash_dir=flash_dir,
+                                 fastmac_code=code, load=load, **array_kw)
+    except LoadError as exc:
+        raise typer.BadParameter(str(exc)) from None
     endpoint = parse_tcp(tcp) if tcp else None
     if modbus:
         server = _modbus_server(line, endpoint, pty, speed, switch=modbus_switch)

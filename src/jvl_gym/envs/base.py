@@ -227,8 +227,7 @@ class MotorVectorEnv(VectorEnv, ABC):
             raise ValueError(f"obs_noise must be finite and >= 0, got {obs_noise!r}")
         self.obs_noise = float(obs_noise)
         if motor_type is None:
-            motor_type = (self.default_motor_type or
-                          task_family(self.supported_families()[0]).task.DEFAULT_MOTOR_TYPE)
+            motor_type = self._default_type()
         self.family_key = self._family_of(motor_type)
         if self.terminal_errors is None:
             self.terminal_errors = task_family(self.family_key).task.TERMINAL_ERRORS
@@ -274,7 +273,35 @@ class MotorVectorEnv(VectorEnv, ABC):
         """Keys of the motor families the task runs on."""
         return cls.families or (cls.family_key,)
 
-    def _family_of(self, motor_type: Any) -> str:
+    @classmethod
+    def _default_type(cls) -> str:
+        """The motor type when none is given: :attr:`default_motor_type`, else the
+        ``DEFAULT_MOTOR_TYPE`` of the first family's task module."""
+        return (cls.default_motor_type
+                or task_family(cls.supported_families()[0]).task.DEFAULT_MOTOR_TYPE)
+
+    @classmethod
+    def step_seconds(cls, motor_type: str | Sequence[str] | None = None,
+                     decimation: int | None = None) -> float:
+        """Motor time per environment step [s]: ``decimation`` (default: the task's) outer
+        samples of the family of ``motor_type`` (default: the task's default type), each the
+        family's ``OUTER_DT`` (its ``constants`` module: 1.92 ms on the MAC050–141,
+        docs/model.md §2; 1.2987 ms on the MAC800, docs/families/mac800.md "Sample rate and
+        counts per revolution").
+
+        Raises
+        ------
+        ValueError
+            A motor type of a family the task refuses, or a decimation that is not a whole
+            number >= 1.
+        """
+        key = cls._family_of(cls._default_type() if motor_type is None else motor_type)
+        steps = _whole("decimation", cls.default_decimation if decimation is None
+                       else decimation, 1)
+        return steps * task_family(key).constants.OUTER_DT
+
+    @classmethod
+    def _family_of(cls, motor_type: Any) -> str:
         """The family of ``motor_type`` (a name or a sequence of names): one of
         :meth:`supported_families`, the same for every name; ValueError otherwise."""
         types = (motor_type,) if isinstance(motor_type, str) else motor_type
@@ -282,21 +309,21 @@ class MotorVectorEnv(VectorEnv, ABC):
             types = tuple(types)
         except TypeError:
             types = ()
-        name = env_name(type(self))
+        name = env_name(cls)
         found: dict[str, list[str]] = {}
         for t in types:
             if not isinstance(t, str):
                 continue
-            for key in (*self.supported_families(), *(k for k in families()
-                                                      if k not in self.supported_families())):
+            for key in (*cls.supported_families(), *(k for k in families()
+                                                      if k not in cls.supported_families())):
                 fam = family(key)
                 if fam.canonical_name(t) in fam.motor_types():
                     found.setdefault(key, []).append(t)
                     break
-        refused = [k for k in found if k not in self.supported_families()]
+        refused = [k for k in found if k not in cls.supported_families()]
         if refused:
             key = refused[0]
-            why = self.refused_families.get(key, "the task is not written for it")
+            why = cls.refused_families.get(key, "the task is not written for it")
             raise ValueError(f"{name}: motor_type {found[key][0]!r} (family {key}) is refused: "
                              f"{why}")
         if len(found) > 1:
@@ -304,7 +331,7 @@ class MotorVectorEnv(VectorEnv, ABC):
             raise ValueError(f"{name}: the motor types of one env must be of one family, got "
                              f"{mix}")
         if not found:  # unknown names: _check_types names the known ones
-            return self.supported_families()[0]
+            return cls.supported_families()[0]
         return next(iter(found))
 
     def _family_ranges(self) -> dict[str, tuple[float, float]]:
@@ -674,7 +701,7 @@ class MotorVectorEnv(VectorEnv, ABC):
             return None
         from .scope import draw_scope
 
-        dt = self.decimation / self.motors.OUTER_HZ
+        dt = self.step_seconds(self.motor_types, self.decimation)
         return draw_scope(self._figures, index, self.scope_trace(index), self.scope_channels, dt,
                           title=f"{type(self).__name__.replace('VectorEnv', '')} #{index}")
 

@@ -17,6 +17,7 @@ A baseline is used like a policy: ``actions = baseline(obs)``, with
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -51,11 +52,12 @@ class PITension:
     kp, ki : float
         Gains per unit tension error (action units, action units per second).
     dt : float
-        Step period [s] (decimation × 1.92 ms).
+        Step period [s]: the env's decimation × its family's outer sample time
+        (:meth:`~jvl_gym.envs.base.MotorVectorEnv.step_seconds`; :func:`make_baseline` sets
+        it).
     """
 
-    def __init__(self, num_envs: int, kp: float = 2.0, ki: float = 15.0,
-                 dt: float = 2 * 1.92e-3) -> None:
+    def __init__(self, num_envs: int, kp: float, ki: float, dt: float) -> None:
         self.kp, self.ki, self.dt = float(kp), float(ki), float(dt)
         self.integral = np.zeros(num_envs)
 
@@ -97,14 +99,31 @@ BASELINES: dict[str, Baseline] = {
                                            "firmware trapezoid, default registers"),
 }
 
-#: PI gains found by the grid search of docs/envs.md (decimation 2)
+#: PI gains found by the grid search of docs/envs.md (decimation 2, MAC050–141)
 PI_GAINS = {"kp": 2.0, "ki": 15.0}
 
 
-def make_baseline(env_id: str, num_envs: int, act_dim: int, decimation: int = 2
-                  ) -> ZeroAction | PITension:
-    """The baseline policy of ``env_id`` for ``num_envs`` copies."""
+def make_baseline(env_id: str, num_envs: int, act_dim: int, decimation: int | None = None,
+                  motor_type: str | Sequence[str] | None = None) -> ZeroAction | PITension:
+    """The baseline policy of ``env_id`` for ``num_envs`` copies.
+
+    Parameters
+    ----------
+    env_id : str
+        A key of :data:`BASELINES`.
+    num_envs : int
+        Number of copies.
+    act_dim : int
+        Number of action components.
+    decimation, motor_type : optional
+        The env's arguments of those names (default: the env's defaults); a stateful
+        baseline's step period follows from them
+        (:meth:`~jvl_gym.envs.base.MotorVectorEnv.step_seconds`).
+    """
+    from .registration import vector_class
+
     spec = BASELINES[env_id]
     if spec.policy == "pi_tension":
-        return PITension(num_envs, dt=decimation * 1.92e-3, **PI_GAINS)
+        dt = vector_class(env_id).step_seconds(motor_type, decimation)
+        return PITension(num_envs, dt=dt, **PI_GAINS)
     return ZeroAction(num_envs, act_dim)

@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import gymnasium as gym
 
-__all__ = ["ENV_IDS", "register_envs"]
+__all__ = ["ENV_IDS", "register_envs", "vector_class"]
 
 #: env id -> (module, single class, vector class, max_episode_steps)
 _ENVS = {
@@ -30,3 +32,12 @@ def register_envs() -> None:
             vector_entry_point=f"jvl_gym.envs.{module}:{vector}",
             max_episode_steps=steps,
         )
+
+
+def vector_class(env_id: str) -> Any:
+    """The native vector env class of ``env_id`` (its ``vector_entry_point``), imported."""
+    import importlib
+
+    register_envs()
+    module, _, cls = gym.spec(env_id).vector_entry_point.partition(":")
+    return getattr(importlib.import_module(module), cls)

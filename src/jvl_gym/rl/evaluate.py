@@ -51,6 +51,7 @@ def evaluate(env_id: str, model_file: str | Path | None, n_seeds: int | None = N
     """Mean ± std (over seeds) of the per-seed mean return of the policy and the baseline,
     and ``seeds_won``: (seeds where the policy's mean beats the baseline's, seeds)."""
     from ..envs.baselines import BASELINES, make_baseline
+    from ..envs.registration import vector_class
 
     cfg = rl_config(env_id, config_dir)
     ev = cfg["eval"]
@@ -73,9 +74,9 @@ def evaluate(env_id: str, model_file: str | Path | None, n_seeds: int | None = N
 
         iterator = tqdm(seeds, desc=f"evaluate {env_id}")
     for seed in iterator:
-        vec_cls = _vector_class(env_id)
-        decimation = int(kwargs.get("decimation", vec_cls.default_decimation))
-        bl = make_baseline(env_id, n_ep, len(vec_cls.act_labels), decimation=decimation)
+        bl = make_baseline(env_id, n_ep, len(vector_class(env_id).act_labels),
+                           decimation=kwargs.get("decimation"),
+                           motor_type=kwargs.get("motor_type"))
         rows["baseline"].append(float(episode_returns(
             env_id, bl, seed, n_ep, {**kwargs, **base.env_kwargs}, bl.reset).mean()))
         if model is not None:
@@ -89,17 +90,6 @@ def evaluate(env_id: str, model_file: str | Path | None, n_seeds: int | None = N
         wins = sum(p > b for p, b in zip(rows["policy"], rows["baseline"]))
         out["seeds_won"] = (float(wins), float(n_seeds))
     return out
-
-
-def _vector_class(env_id: str) -> Any:
-    import importlib
-
-    import gymnasium as gym
-
-    import jvl_gym  # noqa: F401
-
-    module, _, cls = gym.spec(env_id).vector_entry_point.partition(":")
-    return getattr(importlib.import_module(module), cls)
 
 
 def format_table(results: dict[str, dict[str, tuple[float, float]]]) -> str:
