@@ -5,6 +5,7 @@ and ``jvl-tune autotune/verify --motor MAC800``."""
 from __future__ import annotations
 
 import math
+
 import numpy as np
 import pytest
 import yaml
@@ -25,7 +26,6 @@ from tuning.design_sixth_order import (
     verify_sixth_order,
 )
 from tuning.family import tuning_family
-from tuning.quantize import QuantizationError
 from tuning.models import (
     MotorData,
     ff_tf,
@@ -35,6 +35,7 @@ from tuning.models import (
     vb_tf,
     vf_tf,
 )
+from tuning.quantize import QuantizationError
 from tuning.sixth_order import FAMILY, TS_I, TS_O, VFX_KEYS, VFY_KEYS, default_registers
 from tuning.verify import position_move
 from typer.testing import CliRunner

@@ -243,7 +243,7 @@ def identify_coil_step(rec: CoilRecord, base: MotorData) -> CoilStepEstimate:
     if not (0.0 < a < 1.0 and beta > 0.0):
         raise ValueError(f"coil fit gives no physical coil (a = {a:.4g}, β = {beta:.4g}); "
                          "check the record")
-    k_u = rec.bus_voltage / 2.0 / _c.PWM_FULL
+    k_u = base.with_(supply_voltage=rec.bus_voltage).volts_per_count
     R = k_u * (1.0 - a) / (beta * base.amps_per_count)
     L = -R * TS_I / math.log(a)
     return CoilStepEstimate(R, L, d, nrmse)
