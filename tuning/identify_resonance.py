@@ -57,6 +57,7 @@ from typing import Any
 import numpy as np
 from scipy import optimize, stats
 
+from jvl_gym.coupling import coupling_for
 from jvl_gym.families.mac050_141 import constants as C
 from jvl_gym.families.mac050_141.table import TABLE
 
@@ -323,12 +324,10 @@ def _usable(fit: ResonanceFit, min_periods: float) -> bool:
 def coupling_of(J_m: float, load_ratio: float, f_res: float, zeta: float
                 ) -> tuple[float, float, float]:
     """``(J_l, k, d)`` of the two-mass plant with resonance ``f_res`` [Hz], load ratio J_l/J_m
-    (> 0) and modal damping ratio ``zeta`` (docs/model.md §5.2)."""
+    (> 0) and modal damping ratio ``zeta`` (:func:`jvl_gym.coupling.coupling_for`)."""
     j_l = load_ratio * J_m
-    w = 2 * math.pi * f_res
-    k = w * w / (1 / J_m + 1 / j_l)
-    d = 2 * zeta * w * J_m * j_l / (J_m + j_l)
-    return j_l, k, d
+    k, d = coupling_for(J_m, j_l, f_res, zeta)
+    return j_l, float(k), float(d)
 
 
 def apparent_resonance(motor: MotorData, regs: Mapping[str, float], load_ratio: float,

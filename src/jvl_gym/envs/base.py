@@ -33,6 +33,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from ..coupling import coupling_for
 from ..engine.driver import all_finite
 from ..families import DEFAULT_FAMILY, families, family
 from ..noise import normals
@@ -180,6 +181,12 @@ class MotorVectorEnv(VectorEnv, ABC):
     act_labels: tuple[str, ...] = ()
     #: domain randomisation ranges, name -> (low, high)
     default_ranges: dict[str, tuple[float, float]] = {}
+    #: ranges of a load behind an elastic coupling (docs/envs.md, "Compliant loads"), every
+    #: task: the resonance of the coupled rotor and load [Hz] (0, the default: the rigid shaft)
+    #: and its modal damping ratio; the load inertia is the task's. Drawn only when the
+    #: resonance range is above 0, on families whose motors take a coupling.
+    coupling_ranges: dict[str, tuple[float, float]] = {"resonance_hz": (0.0, 0.0),
+                                                       "coupling_damping_ratio": (0.02, 0.02)}
     #: names of ranges of viscous friction [N·m·s/rad]: stated for the default motor type of
     #: the first of :attr:`families`; on another family scaled by the ratio of rated torque to
     #: rated speed of its default motor type to that of the first's (:meth:`_family_ranges`)
@@ -328,11 +335,11 @@ class MotorVectorEnv(VectorEnv, ABC):
 
     def _check_ranges(self, overrides: Mapping[str, tuple[float, float]]
                       ) -> dict[str, tuple[float, float]]:
-        out = dict(self.default_ranges)
+        out = {**self.coupling_ranges, **self.default_ranges}
         for name, rng in overrides.items():
-            if name not in self.default_ranges:
+            if name not in out:
                 raise ValueError(f"unknown randomisation parameter {name!r}; known: "
-                                 f"{sorted(self.default_ranges)}")
+                                 f"{sorted(out)}")
             try:
                 lo, hi = (_real(f"randomisation range of {name!r}", v) for v in rng)
             except (TypeError, ValueError) as exc:  # not two finite numbers
@@ -342,7 +349,37 @@ class MotorVectorEnv(VectorEnv, ABC):
                 raise ValueError(f"randomisation range of {name!r} must be finite with "
                                  f"low <= high, got {rng!r}")
             out[name] = (lo, hi)
+        self._check_coupling_ranges(out)
         return out
+
+    def _check_coupling_ranges(self, ranges: Mapping[str, tuple[float, float]]) -> None:
+        """Refuse coupling ranges (:attr:`coupling_ranges`) the env's motors cannot take: a
+        negative resonance or damping ratio, a coupling on a family without one, a resonance
+        the family's plant cannot integrate (its motor array says why)."""
+        f_lo, f_hi = ranges["resonance_hz"]
+        z_lo, z_hi = ranges["coupling_damping_ratio"]
+        for name, lo in (("resonance_hz", f_lo), ("coupling_damping_ratio", z_lo)):
+            if lo < 0.0:
+                raise ValueError(f"randomisation range of {name!r} must be >= 0, got "
+                                 f"{ranges[name]!r}")
+        if f_hi <= 0.0:
+            return
+        fam = family(self.family_key)
+        if "coupling_stiffness" not in fam.array_class.PARAMETER_KEYWORDS:
+            raise ValueError(f"randomisation range of 'resonance_hz' {ranges['resonance_hz']!r}: "
+                             f"the {fam.title} have no elastic coupling to a load; keep it "
+                             "(0, 0)")
+        # the coupled pair's worst case for the plant: the highest resonance and damping ratio
+        # (the same for every inertia pair), on the first motor type with J_l = J_m
+        j_m = fam.array_class.load_motor(self.motor_types[0]).rotor_inertia
+        k, d = coupling_for(j_m, j_m, f_hi, z_hi)
+        try:
+            fam.array_class(self.motor_types[0], n=1, load_inertia=j_m,
+                            coupling_stiffness=float(k), coupling_damping=float(d))
+        except ValueError as exc:
+            raise ValueError(f"randomisation ranges resonance_hz {ranges['resonance_hz']!r}, "
+                             f"coupling_damping_ratio {ranges['coupling_damping_ratio']!r}: "
+                             f"{exc}") from None
 
     # ------------------------------------------------------------------ task hooks
     def _build(self) -> None:
@@ -478,10 +515,17 @@ class MotorVectorEnv(VectorEnv, ABC):
         draws = dict(zip(names, low[:, None] + u[:, :-1].T * span[:, None]))
         type_names = [types[min(int(x * len(types)), len(types) - 1)] for x in u[:, -1].tolist()]
         self._type_names[idx] = type_names
+        params = self._motor_params(idx, draws)
+        if ranges["resonance_hz"][1] > 0.0:  # then each copy's resonance and damping ratio
+            (f_lo, f_hi), (z_lo, z_hi) = ranges["resonance_hz"], ranges["coupling_damping_ratio"]
+            c = np.array([rng.random(2) for rng in rngs]).reshape(idx.size, 2)
+            k, d = coupling_for(self.rotor_inertia(idx), params.get("load_inertia", 0.0),
+                                f_lo + c[:, 0] * (f_hi - f_lo), z_lo + c[:, 1] * (z_hi - z_lo))
+            params.update(coupling_stiffness=k, coupling_damping=d)
         reset_counters(idx, keys, self._noise_key, self._t, self._prev_action,
                        self._scope_count)
         self.motors.reseed(keys[:, 0], idx)
-        self.motors.reset(index=idx, motor_type=type_names, **self._motor_params(idx, draws))
+        self.motors.reset(index=idx, motor_type=type_names, **params)
         self._task_reset(idx, draws, rngs)
         self._observe_copies(idx)
 
