@@ -38,10 +38,10 @@ from .models import MotorData
 from .sixth_order import COUNTS_PER_RAD, CURRENT_KEYS, MAIN_KEYS, TS_O, default_registers
 from .verify import position_move
 
-__all__ = ["MOVE_DISTANCE", "MOVE_V_SOLL", "DEFAULT_NAME", "Candidate", "AutotuneResult",
-           "move_acceleration", "simulation_motor", "candidates", "accept",
-           "autotune_sixth_order", "setup_text", "write_setup", "autotune_report", "verify_setup",
-           "default_filters"]
+__all__ = ["MOVE_DISTANCE", "MOVE_V_SOLL", "DEFAULT_NAME", "SixthOrderCandidate",
+           "SixthOrderResult", "move_acceleration", "simulation_motor", "design_candidates",
+           "accept_by_move", "autotune_sixth_order", "setup_text", "write_setup",
+           "autotune_report", "verify_setup", "default_filters"]
 
 MOVE_DISTANCE: int = 20000  #: acceptance move [counts] (2.5 revolutions)
 MOVE_V_SOLL: int = 2000  #: its velocity [1/16 count/sample] (722 RPM, register 5)
@@ -52,7 +52,7 @@ Progress = Callable[[str], None]
 
 
 @dataclass
-class Candidate:
+class SixthOrderCandidate:
     """A setup the acceptance step tries: its name, filter registers and design (None for the
     default setup)."""
 
@@ -62,16 +62,16 @@ class Candidate:
 
 
 @dataclass
-class AutotuneResult:
+class SixthOrderResult:
     """Autotune result of one motor."""
 
     ident: BufferIdentification
-    chosen: Candidate
+    chosen: SixthOrderCandidate
     settle_s: dict[str, float]
     final_error: dict[str, float]
     move: tuple[int, int, int]
     reason: str
-    candidates: list[Candidate] = field(default_factory=list)
+    candidates: list[SixthOrderCandidate] = field(default_factory=list)
 
 
 def move_acceleration(ident: BufferIdentification) -> int:
@@ -102,30 +102,30 @@ def default_filters(motor_type: str) -> dict[str, float]:
     return {k: regs[k] for k in (*CURRENT_KEYS, *MAIN_KEYS)}
 
 
-def candidates(ident: BufferIdentification, notch_hz: float | None = None
-                  ) -> list[Candidate]:
+def design_candidates(ident: BufferIdentification, notch_hz: float | None = None
+                     ) -> list[SixthOrderCandidate]:
     """The designs to try, the preferred first: PI with the low-pass (and the notch), then the
     plain PI; designs that fail :func:`tuning.design_sixth_order.check_sixth_order` are left
     out except the first (flagged by its verification)."""
     md, J = ident.motor, ident.mechanics.J
     first = synthesize_sixth_order(md, J, ident.current_registers, lowpass=True, notch_hz=notch_hz)
-    out = [Candidate(first.name, first.registers, first)]
+    out = [SixthOrderCandidate(first.name, first.registers, first)]
     plain = synthesize_sixth_order(md, J, ident.current_registers, lowpass=False)
     if not check_sixth_order(plain.verification):
-        out.append(Candidate(plain.name, plain.registers, plain))
+        out.append(SixthOrderCandidate(plain.name, plain.registers, plain))
     return out
 
 
-def accept(idents: Sequence[BufferIdentification],
-              candidates: Sequence[Sequence[Candidate]], seconds: float = 2.0,
-              seed: int = 0) -> list[AutotuneResult]:
+def accept_by_move(idents: Sequence[BufferIdentification],
+                   candidates: Sequence[Sequence[SixthOrderCandidate]], seconds: float = 2.0,
+                   seed: int = 0) -> list[SixthOrderResult]:
     """Simulate every candidate and the default setup on its identified motor; keep the best
     (module docstring, step 3)."""
     from jvl_gym import MotorArray
 
     out = []
     for ident, cands in zip(idents, candidates):
-        lanes = [*cands, Candidate(DEFAULT_NAME, default_filters(ident.motor.name))]
+        lanes = [*cands, SixthOrderCandidate(DEFAULT_NAME, default_filters(ident.motor.name))]
         cfg, params = simulation_motor(ident)
         m = MotorArray(cfg, n=len(lanes), seed=seed, **params)
         for j, c in enumerate(lanes):
@@ -149,8 +149,8 @@ def accept(idents: Sequence[BufferIdentification],
                    f"identified motor, the {asked} design in {_ms(settle[asked])}"
                    + ("" if chosen.name == DEFAULT_NAME else
                       f", the default setup in {_ms(settle[DEFAULT_NAME])}"))
-        out.append(AutotuneResult(ident, chosen, settle, final,
-                             (MOVE_DISTANCE, MOVE_V_SOLL, acc), why, list(cands)))
+        out.append(SixthOrderResult(ident, chosen, settle, final,
+                                    (MOVE_DISTANCE, MOVE_V_SOLL, acc), why, list(cands)))
     return out
 
 
@@ -159,15 +159,15 @@ def _ms(t: float) -> str:
 
 
 def autotune_sixth_order(m: Any, notch_hz: float | None = None, repeats: int = 2, seed: int = 0,
-                progress: Progress = lambda _: None) -> list[AutotuneResult]:
+                         progress: Progress = lambda _: None) -> list[SixthOrderResult]:
     """Identify every motor of ``m``, design, verify and keep the best setup (module
     docstring)."""
     idents = identify_from_buffer(m, repeats=repeats, progress=progress)
     progress("synthesis of the sixth-order filter, quantisation, verification")
-    cands = [candidates(i, notch_hz) for i in idents]
+    cands = [design_candidates(i, notch_hz) for i in idents]
     progress(f"acceptance step: a {MOVE_DISTANCE}-count move of every candidate on the "
              "identified motor")
-    return accept(idents, cands, seed=seed)
+    return accept_by_move(idents, cands, seed=seed)
 
 
 def setup_text(motor_type: str, regs: dict[str, float], note: str) -> str:
@@ -179,7 +179,7 @@ def setup_text(motor_type: str, regs: dict[str, float], note: str) -> str:
                                   "registers": clean}, sort_keys=False)
 
 
-def write_setup(path: str | os.PathLike[str], result: AutotuneResult) -> Path:
+def write_setup(path: str | os.PathLike[str], result: SixthOrderResult) -> Path:
     """Write the kept setup of ``result`` with the identified values and the reason."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -190,7 +190,7 @@ def write_setup(path: str | os.PathLike[str], result: AutotuneResult) -> Path:
     return path
 
 
-def autotune_report(result: AutotuneResult) -> str:
+def autotune_report(result: SixthOrderResult) -> str:
     """The text report of one motor's autotune."""
     idn, mech = result.ident, result.ident.mechanics
     lines = [f"MAC800-family autotune: {idn.motor.name}",
@@ -219,7 +219,7 @@ def autotune_report(result: AutotuneResult) -> str:
 
 
 def verify_setup(motor_type: str, regs: dict[str, float], J: float | None = None
-                    ) -> tuple[Any, list[str]]:
+                ) -> tuple[Any, list[str]]:
     """Verify a MAC800 register set on the motor type's data (J default KVOUT·J_m)."""
     md = MotorData.from_config(motor_type, amplitude=regs.get("AMPLITUDE"))
     full = {**default_filters(motor_type), **regs}

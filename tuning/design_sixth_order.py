@@ -187,7 +187,7 @@ class SixthOrderVerification:
 
 
 def verify_sixth_order(motor: MotorData, regs: Mapping[str, float], J: float, robust: bool = True
-              ) -> SixthOrderVerification:
+                      ) -> SixthOrderVerification:
     """Verify registers ``regs`` (current and main filter) on ``motor`` with inertia ``J``."""
     cur = loop_metrics(current_open_loop(motor, regs))
     loop = speed_open_loop(speed_plant(motor, regs, J=J), regs, motor.family)
@@ -273,8 +273,8 @@ def _search(motor: MotorData, cur: Mapping[str, float], f_lp: float | None,
 
 
 def design_main_filter(motor: MotorData, cur: Mapping[str, float], J: float,
-                    lowpass: bool = True, notch_hz: float | None = None
-                    ) -> tuple[dict[str, float], float, float, float | None, list[str]]:
+                       lowpass: bool = True, notch_hz: float | None = None
+                      ) -> tuple[dict[str, float], float, float, float | None, list[str]]:
     """Search (kp, ki) (module docstring); the main filter's ideal registers, kp_n, ki_n, the
     low-pass corner [Hz] (None without) and notes."""
     notes: list[str] = []
@@ -291,7 +291,7 @@ def design_main_filter(motor: MotorData, cur: Mapping[str, float], J: float,
 
 
 def synthesize_sixth_order(motor: MotorData, J: float, current: Mapping[str, float] | None = None,
-                  lowpass: bool = True, notch_hz: float | None = None) -> SixthOrderDesign:
+                           lowpass: bool = True, notch_hz: float | None = None) -> SixthOrderDesign:
     """Design, quantise and verify the current filter (unless ``current`` is given, e.g. the
     one the identification wrote) and the main filter for inertia ``J`` [kg·m²]."""
     cur = dict(current) if current is not None else design_current_filter(motor)

@@ -277,7 +277,7 @@ def _fit_rigid(recs: Sequence[TorqueRecord], k_vf: float
 
 
 def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], motor: MotorData
-                          ) -> TorqueStepEstimate:
+                         ) -> TorqueStepEstimate:
     """J, T_c and b from the two-level torque steps (module docstring).
 
     Parameters
@@ -309,8 +309,8 @@ def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], mo
 
 # ----------------------------------------------------------------------------- procedure
 def identify_from_buffer(m: Any, repeats: int = 2, progress: Progress = lambda _: None,
-                current_design: Callable[[MotorData], dict[str, float]] | None = None
-                ) -> list[BufferIdentification]:
+                         current_design: Callable[[MotorData], dict[str, float]] | None = None
+                        ) -> list[BufferIdentification]:
     """Identify every motor of ``m`` (a MAC800-family ``MotorArray`` or compatible).
 
     1. Coil step at the current-loop rate → R, L, PWM delay (:func:`identify_coil_step`).
