@@ -81,7 +81,7 @@ def quantize_sixth_order(regs: Mapping[str, float]) -> dict[str, float]:
 
 def design_current_filter(motor: MotorData) -> dict[str, float]:
     """The current filter for the motor's coil, quantised (module docstring)."""
-    return quantize_sixth_order(design_current_loop(motor, dt=motor.family.inner_dt).registers)  # type: ignore[arg-type]
+    return quantize_sixth_order(design_current_loop(motor, dt=motor.family.inner_dt).registers)
 
 
 def _poly_lowpass(f_lp: float | None) -> tuple[np.ndarray, np.ndarray]:

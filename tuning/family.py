@@ -34,8 +34,9 @@ from jvl_gym.registers import Format, RegisterTable
 
 __all__ = ["TuningFamily", "tuning_family", "family_facts", "SUPPORTED", "SPEED_UNITS"]
 
-#: speed registers' unit per count/sample: FNC_OUT, V_SOLL and the speed error are in
-#: 1/16 count/sample (MAC050–141 manual 3.2.5, 3.2.101; MAC800 register overview §1.2 register 5)
+#: speed registers' unit per count/sample: V_SOLL, FNC_OUT and the speed error are in
+#: 1/16 count/sample (MAC050–141 manual 3.2.5, 3.2.101, 3.2.117; MAC800 register overview §1.2
+#: register 5)
 SPEED_UNITS: float = 16.0
 
 
@@ -61,7 +62,7 @@ class TuningFamily:
         Current-loop samples per servo sample.
     pwm_full : int
         UA_VAL … full scale ↔ half the supply (bus) voltage [PWM counts].
-    amplitude_vf : float
+    amplitude_vf : int
         VF_OUT at which the phase current amplitude is AMPLITUDE ADC counts: 1 where AMPLITUDE
         is a fixed-point gain per VF_OUT unit (MAC050–141 manual 3.2.127), VF_FULL where it is
         an integer number of ADC counts at peak torque (MAC800 overview register 174).
@@ -88,7 +89,7 @@ class TuningFamily:
     test_modes: bool
     inner_per_outer: int
     pwm_full: int
-    amplitude_vf: float
+    amplitude_vf: int
     ff_keys: tuple[str, ...]
     vb_keys: tuple[str, ...]
     vfx_keys: tuple[str, ...]
