@@ -9,7 +9,7 @@ Examples
 --------
 ``jvl-tune autotune --motor MAC140 --load-inertia 5e-5 --out DIR``
 ``jvl-tune autotune --motor MAC800 --load-inertia 6e-4 --out DIR``  (the MAC800 family,
-:mod:`tuning.autotune800`; the family comes from the motor type, :mod:`tuning.family`)
+:mod:`tuning.autotune_sixth_order`; the family comes from the motor type, :mod:`tuning.family`)
 ``jvl-tune autotune --motor MAC140 --port socket://127.0.0.1:5000 --address 19 --write``
 ``jvl-tune identify --motor MAC140 --testu u.csv --testa a1.csv --testa a2.csv``
 ``jvl-tune synthesize --motor MAC140 --inertia 6.7e-5 --out setup.yaml``
@@ -181,7 +181,7 @@ def synthesize_cmd(motor: str = typer.Option(...), inertia: float = typer.Option
         if bad:
             raise typer.BadParameter(f"not available for the MAC800 family: {', '.join(bad)}",
                                      param_hint="'--motor'")
-        _synthesize800(motor, inertia, resistance, inductance, out)
+        _synthesize_sixth_order(motor, inertia, resistance, inductance, out)
         return
     md = MotorData.from_config(motor)
     if resistance:
@@ -244,7 +244,7 @@ def verify(motor: str = typer.Option(None, help="motor type (default: the setup'
            ) -> None:
     """Margins, bandwidths, pole radii and robustness of a setup file's filters."""
     if _family_key(motor if motor is not None else _setup_motor(setup)) == "mac800":
-        _verify800(motor, setup, inertia)
+        _verify_sixth_order(motor, setup, inertia)
         return
     motor, regs = _setup_registers(motor, setup)
     md = MotorData.from_config(motor)
@@ -314,7 +314,7 @@ def autotune(motor: str = typer.Option("MAC140"),
         if bad:
             raise typer.BadParameter(f"not available for the MAC800 family: {', '.join(bad)}",
                                      param_hint="'--motor'")
-        _autotune800(motor, load_inertia, viscous, coulomb, noise, seed, out, notch_hz)
+        _autotune_sixth_order(motor, load_inertia, viscous, coulomb, noise, seed, out, notch_hz)
         return
     if notch_hz is not None:
         raise typer.BadParameter("--notch-hz is for the MAC800 family; the MAC050-141 use "
@@ -414,53 +414,54 @@ def _setup_motor(setup: Path) -> str | None:
     return name if isinstance(name, str) else None
 
 
-def _autotune800(motor: str, load_inertia: float, viscous: float, coulomb: float, noise: bool,
-                 seed: int, out: Path, notch_hz: float | None) -> None:
-    """``autotune`` of a MAC800-family motor on the simulator (:mod:`tuning.autotune800`):
-    OUT/setup.yaml (the family's setup format) and OUT/report.txt."""
+def _autotune_sixth_order(motor: str, load_inertia: float, viscous: float, coulomb: float,
+                          noise: bool, seed: int, out: Path, notch_hz: float | None) -> None:
+    """``autotune`` of a MAC800-family motor on the simulator
+    (:mod:`tuning.autotune_sixth_order`): OUT/setup.yaml (the family's setup format) and
+    OUT/report.txt."""
     from jvl_gym import MotorArray
 
-    from .autotune800 import autotune800, report800, write_setup800
+    from .autotune_sixth_order import autotune_report, autotune_sixth_order, write_setup
 
     params = {"load_inertia": load_inertia, "viscous_friction": viscous,
               "coulomb_friction": coulomb}
     if noise:
         params["position_noise"] = 0.85
     m = MotorArray(motor, n=1, seed=seed, **params)
-    res = autotune800(m, notch_hz=notch_hz, seed=seed, progress=_say)[0]
-    setup = write_setup800(out / "setup.yaml", res)
+    res = autotune_sixth_order(m, notch_hz=notch_hz, seed=seed, progress=_say)[0]
+    setup = write_setup(out / "setup.yaml", res)
     MotorArray(motor, n=1, setup=setup)  # the family loads it
     j_true = m.motor_configs[0].rotor_inertia + load_inertia
-    text = report800(res) + (f"Simulated truth: J {j_true:.5g} kg m^2 (identified "
-                             f"{100 * (res.ident.mechanics.J / j_true - 1):+.2f} %), "
-                             f"Tc {coulomb:g} N m, b {viscous:g} N m s/rad\n")
+    text = autotune_report(res) + (f"Simulated truth: J {j_true:.5g} kg m^2 (identified "
+                                   f"{100 * (res.ident.mechanics.J / j_true - 1):+.2f} %), "
+                                   f"Tc {coulomb:g} N m, b {viscous:g} N m s/rad\n")
     (out / "report.txt").write_text(text)
     typer.echo(text)
     typer.echo(f"wrote {setup} and {out / 'report.txt'}")
     design = res.chosen.design
     if design is not None:
-        from .design800 import check800
+        from .design_sixth_order import check_sixth_order
 
-        bad = check800(design.verification)
+        bad = check_sixth_order(design.verification)
         if bad:
             typer.echo("FAILED: " + "; ".join(bad))
             raise typer.Exit(1)
 
 
-def _synthesize800(motor: str, inertia: float, resistance: float | None,
-                   inductance: float | None, out: Path) -> None:
+def _synthesize_sixth_order(motor: str, inertia: float, resistance: float | None,
+                            inductance: float | None, out: Path) -> None:
     """``synthesize`` for a MAC800-family motor: the sixth-order design with the low-pass
-    (:func:`tuning.design800.synthesize800`) written in the family's setup format."""
-    from .autotune800 import setup_text
-    from .design800 import check800, synthesize800
-    from .sixth_order import Motor800
+    (:func:`tuning.design_sixth_order.synthesize_sixth_order`) written in the family's setup
+    format."""
+    from .autotune_sixth_order import setup_text
+    from .design_sixth_order import check_sixth_order, synthesize_sixth_order
 
-    md = Motor800.from_config(motor)
+    md = MotorData.from_config(motor)
     if resistance:
         md = md.with_(R_phase=resistance)
     if inductance:
         md = md.with_(L_phase=inductance)
-    d = synthesize800(md, inertia)
+    d = synthesize_sixth_order(md, inertia)
     out.parent.mkdir(parents=True, exist_ok=True)
     out.write_text(setup_text(md.name, d.registers, f"jvl-tune synthesize: {d.name}"))
     v = d.verification
@@ -468,18 +469,18 @@ def _synthesize800(motor: str, inertia: float, resistance: float | None,
                f"crossover {v.speed.crossover_hz:.1f} Hz, |z|max {v.speed.pole_radius:.4f}, "
                f"worst robust PM {v.worst_robust_pm:.1f} deg; current PM "
                f"{v.current.pm_deg:.1f} deg, GM {v.current.gm_db:.1f} dB")
-    bad = check800(v)
+    bad = check_sixth_order(v)
     if bad:
         typer.echo("FAILED: " + "; ".join(bad))
         raise typer.Exit(1)
 
 
-def _verify800(motor: str | None, setup: Path, inertia: float | None) -> None:
+def _verify_sixth_order(motor: str | None, setup: Path, inertia: float | None) -> None:
     """``verify`` of a MAC800-family setup: validated by the family's loader, then the loops'
-    margins (:func:`tuning.autotune800.verify_setup800`)."""
+    margins (:func:`tuning.autotune_sixth_order.verify_setup`)."""
     from jvl_gym import MotorArray
 
-    from .autotune800 import verify_setup800
+    from .autotune_sixth_order import verify_setup
 
     named = _setup_motor(setup)
     if motor is not None and named is not None and motor != named:
@@ -488,7 +489,7 @@ def _verify800(motor: str | None, setup: Path, inertia: float | None) -> None:
     name = motor if motor is not None else named
     MotorArray(name, n=1, setup=setup)  # validates the setup, naming it in the error
     regs = yaml.safe_load(setup.read_text()).get("registers") or {}
-    v, bad = verify_setup800(name, {k: float(x) for k, x in regs.items()}, inertia)
+    v, bad = verify_setup(name, {k: float(x) for k, x in regs.items()}, inertia)
     for label, n, worst in (("current", v.current, math.inf), ("speed", v.speed,
                                                                v.worst_robust_pm)):
         typer.echo(f"{label}: PM {n.pm_deg:.1f} deg, GM {n.gm_db:.1f} dB, BW "

@@ -1,31 +1,36 @@
-"""Plant and filter models of the MAC50–141 current and speed loops (python-control).
+"""Plant and filter models of the current and speed loops of the tuned families (python-control).
 
 Everything here is the *exact* discrete model the firmware and the simulator implement
-(docs/model.md §2, §3, §6, §7; manual 4.2, 4.3 and the filter registers 3.2.89–3.2.111):
+(MAC050–141: docs/model.md §2, §3, §6, §7, manual 4.2, 4.3 and the filter registers
+3.2.89–3.2.111; MAC800: the same loops on its registers, register overview §1.2 and
+:mod:`tuning.sixth_order`). The family's numbers come from :class:`tuning.family.TuningFamily`
+(``motor.family``, or the ``family`` argument of the filter functions; default the MAC050–141):
 
-* inner (current) loop at ``TS_I`` = 128 µs, outer (speed) loop at ``TS_O`` = 15·TS_I = 1.92 ms;
+* inner (current) loop at ``TS_I`` (MAC050–141: 128 µs), outer (speed) loop at
+  ``TS_O`` = 15·TS_I (1.92 ms);
 * per phase, from the PWM value ``U`` [PWM counts] to the measured current ``I_IST`` [ADC counts]::
 
       I_IST(z)/U(z) = g (1 − a) / (z^d (z − a)),   a = exp(−R·TS_I/L),   g = k_u / (R·A_count)
 
   with ``k_u = U_supply/2/1023`` volts per PWM count and ``d`` the PWM delay (0 or 1);
 * filter transfer functions exactly as printed in the manual, including the sign convention of
-  the IF and VF denominators (3.2.93–3.2.100, 3.2.106–3.2.109);
+  the IF and VF denominators (3.2.93–3.2.100, 3.2.106–3.2.109); FF, VB and VF with the family's
+  taps (MAC800: six FF, five VB, six VF numerator and denominator taps);
 * the speed plant from VF_OUT to V_IST: the current loop closed at the inner rate, the rigid
   rotor ``J dω/dt = K_t·i − b·ω``, the encoder in counts, lifted exactly to the outer rate
   (VF_OUT held for 15 inner samples, the position sampled every 15th), and
   ``V_IST = (1 − z⁻¹)·P``. With an ideal current loop it reduces to
-  ``(4096/2π)·K_vf·TS_O²/(2J)·(z+1)/(z(z−1))``.
+  ``(counts/rev/2π)·K_vf·TS_O²/(2J)·(z+1)/(z(z−1))``.
 
 Register values are passed as plain ``dict[str, float]`` (register name → value in user units),
-the same mapping a ``families/mac050_141/configs/setups/*.yaml`` file holds.
+the same mapping a ``families/<family>/configs/setups/*.yaml`` file holds.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import control as ct
@@ -34,6 +39,8 @@ from scipy.linalg import expm
 
 from jvl_gym.families.mac050_141 import constants as _c
 
+from .family import SPEED_UNITS, TuningFamily, family_facts, tuning_family
+
 __all__ = [
     "TS_I",
     "TS_O",
@@ -41,6 +48,7 @@ __all__ = [
     "PWM_FULL",
     "ADC_FULL",
     "COUNTS_PER_REV",
+    "MAC050_141",
     "MotorData",
     "coil_tf",
     "if_tf",
@@ -52,6 +60,7 @@ __all__ = [
     "current_closed_loop",
     "speed_plant",
     "inner_modes",
+    "rigid_gain",
     "rigid_speed_plant",
     "speed_open_loop",
     "speed_closed_loop",
@@ -70,18 +79,22 @@ PWM_FULL: int = _c.PWM_FULL
 ADC_FULL: int = _c.ADC_FULL
 COUNTS_PER_REV: int = _c.COUNTS_PER_REV
 COUNTS_PER_RAD: float = COUNTS_PER_REV / (2.0 * math.pi)  #: encoder counts per radian
+#: the MAC050–141 family's tuning facts, the default family of :class:`MotorData` and the filters
+MAC050_141: TuningFamily = family_facts("mac050_141")
 
 
 @dataclass(frozen=True)
 class MotorData:
-    """Physical data of one motor, SI units (docs/model.md §15; representative values).
+    """Physical data of one motor, SI units, and its family's tuning facts (docs/model.md §15;
+    representative values).
 
     Parameters
     ----------
     name : str
-        Motor type (``"MAC140"``).
+        Motor type (``"MAC140"``, ``"MAC800"``).
     J_m : float
-        Rotor inertia [kg·m²]; KVOUT is relative to it (manual 3.2.13).
+        Rotor inertia [kg·m²]; KVOUT is relative to it (MAC050–141 manual 3.2.13; MAC800
+        register 13).
     flux_linkage : float
         λ [V·s] (peak, per phase).
     R_phase, L_phase : float
@@ -91,11 +104,15 @@ class MotorData:
     pole_pairs : int
         p.
     supply_voltage : float
-        Bus voltage [V].
+        Supply (DC bus) voltage [V] (MAC800: U_BUS, register 198).
     pwm_delay : int
         Inner samples between computing a PWM value and applying it (0 or 1).
     amplitude : float
-        AMPLITUDE register (3.2.127): phase current amplitude per VF_OUT unit [ADC counts].
+        AMPLITUDE register: the phase current amplitude [ADC counts] at VF_OUT =
+        ``family.amplitude_vf`` (MAC050–141 manual 3.2.127: per VF_OUT unit; MAC800 register
+        174: at VF_OUT = 1023).
+    family : TuningFamily
+        The motor family's sample times, scales and filter taps (:mod:`tuning.family`).
     """
 
     name: str
@@ -108,19 +125,28 @@ class MotorData:
     supply_voltage: float = 48.0
     pwm_delay: int = 1
     amplitude: float = 0.83
+    family: TuningFamily = field(default=MAC050_141, repr=False)
 
     @classmethod
-    def from_config(cls, motor: Any, amplitude: float = 0.83) -> MotorData:
-        """Build from a motor type name, a config path or a motor config
-        (``jvl_gym.families.mac050_141.config.MotorConfig``)."""
-        from jvl_gym.families.mac050_141.config import MotorConfig, load_motor
+    def from_config(cls, motor: Any, amplitude: float | None = None) -> MotorData:
+        """Build from a motor type name, a config path or a motor config of a tuned family
+        (:func:`tuning.family.tuning_family`); AMPLITUDE from the type's default setup unless
+        given (:meth:`tuning.family.TuningFamily.default_amplitude`).
 
-        cfg = motor if isinstance(motor, MotorConfig) else load_motor(motor)
+        Raises
+        ------
+        ValueError
+            The motor's family has no tuning procedure.
+        """
+        fam = tuning_family(motor)
+        cfg = fam.load_motor(motor)
+        if amplitude is None:
+            amplitude = fam.default_amplitude(cfg)
         return cls(name=cfg.name, J_m=cfg.rotor_inertia, flux_linkage=cfg.flux_linkage,
                    R_phase=cfg.phase_resistance, L_phase=cfg.phase_inductance,
                    amps_per_count=cfg.amps_per_count, pole_pairs=cfg.pole_pairs,
                    supply_voltage=cfg.supply_voltage, pwm_delay=cfg.pwm_delay_samples,
-                   amplitude=amplitude)
+                   amplitude=amplitude, family=fam)
 
     def with_(self, **changes: Any) -> MotorData:
         """A copy with some fields changed (e.g. identified R and L)."""
@@ -128,13 +154,13 @@ class MotorData:
 
     @property
     def volts_per_count(self) -> float:
-        """k_u: phase-to-midpoint volts per PWM count [V]."""
-        return self.supply_voltage / 2.0 / PWM_FULL
+        """k_u: phase-to-midpoint volts per PWM count [V] (±PWM_FULL ↔ ±U_supply/2)."""
+        return self.supply_voltage / 2.0 / self.family.pwm_full
 
     @property
     def coil_pole(self) -> float:
-        """a = exp(−R·TS_I/L) (dimensionless)."""
-        return math.exp(-self.R_phase * TS_I / self.L_phase)
+        """a = exp(−R·TS_I/L) (dimensionless), TS_I the family's current-loop sample time."""
+        return math.exp(-self.R_phase * self.family.inner_dt / self.L_phase)
 
     @property
     def coil_gain(self) -> float:
@@ -148,8 +174,10 @@ class MotorData:
 
     @property
     def torque_per_vf(self) -> float:
-        """K_vf = 1.5·p·λ·A_count·AMPLITUDE: torque per VF_OUT unit [N·m] (manual 4.3)."""
-        return self.torque_constant * self.amps_per_count * self.amplitude
+        """K_vf = 1.5·p·λ·A_count·AMPLITUDE/amplitude_vf: torque per VF_OUT unit [N·m]
+        (MAC050–141 manual 4.3; MAC800 register 174, amplitude_vf = 1023)."""
+        k_t, amp = self.torque_constant, self.amplitude
+        return k_t * self.amps_per_count * amp / self.family.amplitude_vf
 
 
 # ----------------------------------------------------------------------------- filters
@@ -164,7 +192,7 @@ def coil_tf(motor: MotorData) -> ct.TransferFunction:
     """
     a, g, d = motor.coil_pole, motor.coil_gain, int(motor.pwm_delay)
     den = np.polymul([1.0, -a], [1.0] + [0.0] * d)
-    return _tf([g * (1.0 - a)], list(den), TS_I)
+    return _tf([g * (1.0 - a)], list(den), motor.family.inner_dt)
 
 
 def if_tf(regs: Mapping[str, float], dt: float = TS_I) -> ct.TransferFunction:
@@ -181,40 +209,57 @@ def ib_tf(regs: Mapping[str, float], dt: float = TS_I) -> ct.TransferFunction:
     return _tf([regs["KIB1"], regs["KIB0"]], [1.0, 0.0], dt)
 
 
-def ff_tf(regs: Mapping[str, float]) -> ct.TransferFunction:
-    """FF filter (3.2.89–3.2.92): ``(KFF3 z³ + KFF2 z² + KFF1 z + KFF0)/z³``."""
-    return _tf([regs["KFF3"], regs["KFF2"], regs["KFF1"], regs["KFF0"]], [1.0, 0, 0, 0], TS_O)
+def _fir(taps: list[float], dt: float) -> ct.TransferFunction:
+    """``Σ taps[d]·z⁻ᵈ`` (taps of delay 0, 1, …) as a TF in z at ``dt``."""
+    return _tf(taps, [1.0] + [0.0] * (len(taps) - 1), dt)
 
 
-def vb_tf(regs: Mapping[str, float]) -> ct.TransferFunction:
-    """VB filter with GEARB (3.2.101–3.2.105): ``GEARB·(KVB3 z³ + … + KVB0)/z³``."""
-    gb = regs["GEARB"]
-    return _tf([gb * regs["KVB3"], gb * regs["KVB2"], gb * regs["KVB1"], gb * regs["KVB0"]],
-               [1.0, 0, 0, 0], TS_O)
+def ff_tf(regs: Mapping[str, float], family: TuningFamily = MAC050_141) -> ct.TransferFunction:
+    """FF filter on the family's taps, at its TS_O: MAC050–141 (3.2.89–3.2.92)
+    ``(KFF3 z³ + KFF2 z² + KFF1 z + KFF0)/z³``; MAC800 (registers 121–126)
+    ``KFF5 + KFF4 z⁻¹ + … + KFF0 z⁻⁵``."""
+    return _fir([regs[k] for k in family.ff_keys], family.outer_dt)
 
 
-def vf_tf(regs: Mapping[str, float], with_kvout: bool = True) -> ct.TransferFunction:
-    """VF filter (3.2.93–3.2.100), times KVOUT (3.2.13) unless ``with_kvout`` is False.
+def vb_tf(regs: Mapping[str, float], family: TuningFamily = MAC050_141) -> ct.TransferFunction:
+    """VB filter on the family's taps, at its TS_O, from V_IST [counts/sample] to the speed
+    error's unit [1/16 count/sample]: MAC050–141 with GEARB (3.2.101–3.2.105)
+    ``GEARB·(KVB3 z³ + … + KVB0)/z³``; MAC800 (registers 139–143, the firmware's 16·V_IST)
+    ``16·(KVB4 + KVB3 z⁻¹ + … + KVB0 z⁻⁴)``."""
+    reg = family.vb_gain_register
+    gain = regs[reg] if reg is not None else SPEED_UNITS
+    return _fir([gain * regs[k] for k in family.vb_keys], family.outer_dt)
 
-    ``(KVFX4 z⁴ + KVFX3 z³ + KVFX2 z² + KVFX1 z)/(z⁴ − KVFY3 z³ − KVFY2 z² − KVFY1 z − KVFY0)``
+
+def vf_tf(regs: Mapping[str, float], with_gain: bool = True,
+          family: TuningFamily = MAC050_141) -> ct.TransferFunction:
+    """VF filter on the family's taps, at its TS_O, times its gain KVOUT·2^−MODEL_POT unless
+    ``with_gain`` is False (KVOUT: MAC050–141 3.2.13, MAC800 register 13; MODEL_POT: MAC800
+    register 154, 0 where ``regs`` has none).
+
+    MAC050–141 (3.2.93–3.2.100):
+    ``(KVFX4 z⁴ + KVFX3 z³ + KVFX2 z² + KVFX1 z)/(z⁴ − KVFY3 z³ − KVFY2 z² − KVFY1 z − KVFY0)``;
+    MAC800 (registers 127–138): ``(KVFX6 + … + KVFX1 z⁻⁵)/(1 − KVFY5 z⁻¹ − … − KVFY0 z⁻⁶)``
     (note the sign convention of the denominator).
     """
-    k = regs["KVOUT"] if with_kvout else 1.0
-    num = [k * regs["KVFX4"], k * regs["KVFX3"], k * regs["KVFX2"], k * regs["KVFX1"], 0.0]
-    den = [1.0, -regs["KVFY3"], -regs["KVFY2"], -regs["KVFY1"], -regs["KVFY0"]]
-    return _tf(num, den, TS_O)
+    k = regs["KVOUT"] * 2.0 ** -regs.get("MODEL_POT", 0.0) if with_gain else 1.0
+    num = [k * regs[x] for x in family.vfx_keys] + [0.0]
+    den = [1.0] + [-regs[y] for y in family.vfy_keys]
+    return _tf(num, den, family.outer_dt)
 
 
 # ----------------------------------------------------------------------------- current loop
 def current_open_loop(motor: MotorData, regs: Mapping[str, float]) -> ct.TransferFunction:
     """Current loop broken at the PWM output: ``L = IF·coil·IB`` (per phase, at TS_I)."""
-    return if_tf(regs) * coil_tf(motor) * ib_tf(regs)
+    dt = motor.family.inner_dt
+    return if_tf(regs, dt) * coil_tf(motor) * ib_tf(regs, dt)
 
 
 def current_closed_loop(motor: MotorData, regs: Mapping[str, float]) -> ct.TransferFunction:
     """``I_SOLL`` → ``I_IST`` (per phase, ADC counts/ADC counts): ``IF·P/(1 + IF·P·IB)``."""
-    fwd = if_tf(regs) * coil_tf(motor)
-    return ct.feedback(fwd, ib_tf(regs))
+    dt = motor.family.inner_dt
+    fwd = if_tf(regs, dt) * coil_tf(motor)
+    return ct.feedback(fwd, ib_tf(regs, dt))
 
 
 def _inner_position_ss(motor: MotorData, regs: Mapping[str, float], J: float, b: float,
@@ -224,13 +269,16 @@ def _inner_position_ss(motor: MotorData, regs: Mapping[str, float], J: float, b:
 
     States: continuous plant (i [A], ω [rad/s], θ [counts], and with ``coupling = (J_l, k,
     d)`` the load speed ω_l [rad/s] and the twist θ − θ_l [rad] of the two-mass plant of
-    docs/model.md §5.2, ``J`` then being the rotor's inertia) sampled at TS_I, the PWM delay
-    line, IF and IB states. The back-EMF is left out (it is a disturbance the PI rejects).
+    docs/model.md §5.2, ``J`` then being the rotor's inertia) sampled at the family's TS_I, the
+    PWM delay line, IF and IB states. The back-EMF is left out unless ``back_emf`` (it is a
+    disturbance the PI rejects).
     """
+    ts_i = motor.family.inner_dt
     k_u, R, L, A = motor.volts_per_count, motor.R_phase, motor.L_phase, motor.amps_per_count
     kt = motor.torque_constant
     ke = motor.pole_pairs * motor.flux_linkage if back_emf else 0.0
-    ac = np.array([[-R / L, -ke / L, 0.0], [kt / J, -b / J, 0.0], [0.0, COUNTS_PER_RAD, 0.0]])
+    ac = np.array([[-R / L, -ke / L, 0.0], [kt / J, -b / J, 0.0],
+                   [0.0, motor.family.counts_per_rad, 0.0]])
     if coupling is not None:
         j_l, k, d = coupling
         ac = np.pad(ac, ((0, 2), (0, 2)))
@@ -246,23 +294,23 @@ def _inner_position_ss(motor: MotorData, regs: Mapping[str, float], J: float, b:
     bc = np.zeros((ns, 1))
     bc[0, 0] = k_u / L
     m = np.zeros((ns + 1, ns + 1))
-    m[:ns, :ns] = ac * TS_I
-    m[:ns, ns:] = bc * TS_I
+    m[:ns, :ns] = ac * ts_i
+    m[:ns, ns:] = bc * ts_i
     e = expm(m)
     ad, bd = e[:ns, :ns], e[:ns, ns:]
     cc = np.zeros((2, ns))
     cc[0, 0] = 1.0 / A
     cc[1, 2] = 1.0
-    plant = ct.ss(ad, bd, cc, np.zeros((2, 1)), TS_I)
+    plant = ct.ss(ad, bd, cc, np.zeros((2, 1)), ts_i)
     d = int(motor.pwm_delay)
-    delay = ct.tf([1.0], [1.0] + [0.0] * d, TS_I) if d else ct.tf([1.0], [1.0], TS_I)
+    delay = ct.tf([1.0], [1.0] + [0.0] * d, ts_i)
     p_u = plant * ct.ss(delay)
-    ifs = ct.ss(if_tf(regs))
-    ibs = ct.ss(ib_tf(regs))
-    p_u = ct.ss(p_u.A, p_u.B, p_u.C, p_u.D, TS_I, inputs="u", outputs=["iist", "pos"])
-    ifs = ct.ss(ifs.A, ifs.B, ifs.C, ifs.D, TS_I, inputs="e", outputs="u")
-    ibs = ct.ss(ibs.A, ibs.B, ibs.C, ibs.D, TS_I, inputs="iist", outputs="ibf")
-    sumblk = ct.summing_junction(inputs=["isoll", "-ibf"], output="e", dt=TS_I)
+    ifs = ct.ss(if_tf(regs, ts_i))
+    ibs = ct.ss(ib_tf(regs, ts_i))
+    p_u = ct.ss(p_u.A, p_u.B, p_u.C, p_u.D, ts_i, inputs="u", outputs=["iist", "pos"])
+    ifs = ct.ss(ifs.A, ifs.B, ifs.C, ifs.D, ts_i, inputs="e", outputs="u")
+    ibs = ct.ss(ibs.A, ibs.B, ibs.C, ibs.D, ts_i, inputs="iist", outputs="ibf")
+    sumblk = ct.summing_junction(inputs=["isoll", "-ibf"], output="e", dt=ts_i)
     sys = ct.interconnect([p_u, ifs, ibs, sumblk], inputs="isoll", outputs="pos")
     return np.asarray(sys.A), np.asarray(sys.B), np.asarray(sys.C)
 
@@ -275,18 +323,18 @@ def inner_modes(motor: MotorData, regs: Mapping[str, float], J: float, b: float 
     :func:`_inner_position_ss`."""
     z = np.linalg.eigvals(_inner_position_ss(motor, regs, J, b, coupling, back_emf)[0])
     z = z[np.abs(z) > 1e-12].astype(complex)
-    return np.log(z) / TS_I
+    return np.log(z) / motor.family.inner_dt
 
 
 def speed_plant(motor: MotorData, regs: Mapping[str, float], J: float | None = None,
                 b: float = 0.0, coupling: tuple[float, float, float] | None = None,
                 back_emf: bool = False) -> ct.TransferFunction:
-    """VF_OUT → V_IST [counts/sample] at TS_O, including the closed current loop.
+    """VF_OUT → V_IST [counts/sample] at the family's TS_O, including the closed current loop.
 
     Parameters
     ----------
     motor : MotorData
-        Coil, torque constant and AMPLITUDE.
+        Coil, torque constant, AMPLITUDE and the family's rates.
     regs : mapping
         Current-loop registers KIFX2..KIFY0, KIB1, KIB0.
     J : float, optional
@@ -304,46 +352,55 @@ def speed_plant(motor: MotorData, regs: Mapping[str, float], J: float | None = N
     -------
     TransferFunction
         Exact lift to the outer rate: VF_OUT is held for 15 inner samples (I_SOLL =
-        AMPLITUDE·VF_OUT from inner sample 15m on), the encoder is read at the start of each
-        outer sample, V_IST = (1 − z⁻¹)·P.
+        AMPLITUDE·VF_OUT/amplitude_vf from inner sample 15m on), the encoder is read at the
+        start of each outer sample, V_IST = (1 − z⁻¹)·P.
     """
     J = motor.J_m if J is None else J
+    fam = motor.family
     a, bb, c = _inner_position_ss(motor, regs, J, b, coupling, back_emf)
-    n = INNER_PER_OUTER
+    n = fam.inner_per_outer
     a_o = np.linalg.matrix_power(a, n)
     acc = np.zeros_like(a)
     pw = np.eye(a.shape[0])
     for _ in range(n):
         acc += pw
         pw = pw @ a
-    b_o = acc @ bb * motor.amplitude
+    b_o = acc @ bb * motor.amplitude / fam.amplitude_vf
     # V_IST(m) = θ(m) − θ(m−1): θ feeds nothing back, so drop its state and output the increment
     k = int(np.argmax(np.abs(c[0])))
     keep = [i for i in range(a_o.shape[0]) if i != k]
     inc_c = (c[0] @ (a_o - np.eye(a_o.shape[0])))[keep][None, :]
-    inc = ct.ss(a_o[np.ix_(keep, keep)], b_o[keep], inc_c, (c[0] @ b_o)[None, :], TS_O)
-    delay = ct.tf([1.0], [1.0, 0.0], TS_O)
+    ts_o = fam.outer_dt
+    inc = ct.ss(a_o[np.ix_(keep, keep)], b_o[keep], inc_c, (c[0] @ b_o)[None, :], ts_o)
+    delay = ct.tf([1.0], [1.0, 0.0], ts_o)
     return ct.minreal(ct.tf(inc) * delay, tol=1e-10, verbose=False)
 
 
-def rigid_speed_plant(motor: MotorData, J: float | None = None) -> ct.TransferFunction:
-    """Ideal current loop: ``(4096/2π)·K_vf·TS_O²/(2J)·(z+1)/(z(z−1))`` (VF_OUT → V_IST)."""
+def rigid_gain(motor: MotorData, J: float | None = None) -> float:
+    """Kpl = (counts/rev/2π)·K_vf·TS_O²/(2·J): the rigid rotor's V_IST per VF_OUT [counts/sample
+    per VF_OUT unit] at KVOUT = 1, TS_O the family's servo sample time; ``J`` default J_m."""
     J = motor.J_m if J is None else J
-    k = COUNTS_PER_RAD * motor.torque_per_vf * TS_O**2 / (2.0 * J)
-    return _tf([k, k], [1.0, -1.0, 0.0], TS_O)
+    return motor.family.counts_per_rad * motor.torque_per_vf * motor.family.outer_dt**2 / (2.0 * J)
 
 
-def speed_open_loop(plant: ct.TransferFunction, regs: Mapping[str, float]
-                    ) -> ct.TransferFunction:
-    """Speed loop broken at VF_OUT: ``L = KVOUT·VF·GEARB·VB·P`` (manual 4.2)."""
-    return vf_tf(regs) * vb_tf(regs) * plant
+def rigid_speed_plant(motor: MotorData, J: float | None = None) -> ct.TransferFunction:
+    """Ideal current loop: ``Kpl·(z+1)/(z(z−1))`` (VF_OUT → V_IST, :func:`rigid_gain`)."""
+    k = rigid_gain(motor, J)
+    return _tf([k, k], [1.0, -1.0, 0.0], motor.family.outer_dt)
 
 
-def speed_closed_loop(plant: ct.TransferFunction, regs: Mapping[str, float]
-                      ) -> ct.TransferFunction:
+def speed_open_loop(plant: ct.TransferFunction, regs: Mapping[str, float],
+                    family: TuningFamily = MAC050_141) -> ct.TransferFunction:
+    """Speed loop broken at VF_OUT: ``L = KVOUT·VF·VB·P`` with VB's gain (MAC050–141 manual 4.2:
+    GEARB; MAC800: 16, :func:`vb_tf`)."""
+    return vf_tf(regs, family=family) * vb_tf(regs, family) * plant
+
+
+def speed_closed_loop(plant: ct.TransferFunction, regs: Mapping[str, float],
+                      family: TuningFamily = MAC050_141) -> ct.TransferFunction:
     """FNC_OUT [1/16 count/sample] → 16·V_IST [1/16 count/sample]: ``16·FF·KVOUT·VF·P/(1+L)``."""
-    fwd = vf_tf(regs) * plant
-    return ff_tf(regs) * ct.feedback(fwd, vb_tf(regs)) * 16.0
+    fwd = vf_tf(regs, family=family) * plant
+    return ff_tf(regs, family) * ct.feedback(fwd, vb_tf(regs, family)) * SPEED_UNITS
 
 
 def freqresp(sys: ct.TransferFunction, w: np.ndarray) -> np.ndarray:

@@ -40,6 +40,7 @@ from .models import (
     TS_O,
     MotorData,
     freqresp,
+    rigid_gain,
     speed_plant,
 )
 from .verify import LoopMetrics, frequency_grid, metrics_from_response
@@ -52,7 +53,6 @@ __all__ = [
     "current_registers",
     "speed_registers",
     "torque_guidance",
-    "rigid_gain",
     "friction_dead_band",
 ]
 
@@ -209,11 +209,6 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
 
 
 # ----------------------------------------------------------------------------- speed loop
-def rigid_gain(motor: MotorData) -> float:
-    """Kpl = (4096/2π)·K_vf·TS_O²/(2·J_m): rigid-body V_IST per VF_OUT gain at KVOUT = 1."""
-    return COUNTS_PER_RAD * motor.torque_per_vf * TS_O**2 / (2.0 * motor.J_m)
-
-
 def speed_registers(kp: float, ki: float, kvout: float, structure: str = "ip",
                     setpoint_weight: float = 0.0, kii: float = 0.0) -> dict[str, float]:
     """FF, VB (with GEARB = 16), VF and KVOUT registers of a PI / I-P speed loop.

@@ -49,21 +49,9 @@ from dataclasses import dataclass, field
 import control as ct
 import numpy as np
 
-from jvl_gym.families.mac800.table import TABLE
-
+from .models import MotorData, current_open_loop, rigid_gain, speed_open_loop, speed_plant
 from .quantize import quantize_registers
-from .sixth_order import (
-    COUNTS_PER_RAD,
-    CURRENT_KEYS,
-    TS_I,
-    TS_O,
-    VFX_KEYS,
-    VFY_KEYS,
-    Motor800,
-    current_open_loop,
-    speed_open_loop,
-    speed_plant,
-)
+from .sixth_order import CURRENT_KEYS, FAMILY, TS_O, VFX_KEYS, VFY_KEYS
 from .synthesis import design_current_loop
 from .verify import (
     POLE_RADIUS_MAX,
@@ -73,9 +61,10 @@ from .verify import (
     metrics_from_response,
 )
 
-__all__ = ["EXACT_SUMS", "LOWPASS_PER_CROSSOVER", "LOWPASS_DAMPING", "NOTCH_WIDTH", "Design800",
-           "Verification800", "design_current800", "main_filter_registers", "design_speed800",
-           "synthesize800", "verify800", "check800", "quantize800", "rigid_gain800"]
+__all__ = ["EXACT_SUMS", "LOWPASS_PER_CROSSOVER", "LOWPASS_DAMPING", "NOTCH_WIDTH",
+           "SixthOrderDesign", "SixthOrderVerification", "design_current_filter",
+           "main_filter_registers", "design_main_filter", "synthesize_sixth_order",
+           "verify_sixth_order", "check_sixth_order", "quantize_sixth_order"]
 
 #: register groups whose stored sums stay exact (the current PI, VF's integrators and gain)
 EXACT_SUMS: tuple[tuple[str, ...], ...] = (("KIFY1", "KIFY0"), ("KIFX2", "KIFX1"), VFY_KEYS,
@@ -85,19 +74,14 @@ LOWPASS_DAMPING: float = 0.5  #: ζ of the low-pass's poles
 NOTCH_WIDTH: float = 0.9  #: r of the notch's poles (the notch's −3 dB width ≈ (1 − r)/(π·TS_O))
 
 
-def quantize800(regs: Mapping[str, float]) -> dict[str, float]:
+def quantize_sixth_order(regs: Mapping[str, float]) -> dict[str, float]:
     """Quantise to the MAC800 table's formats with :data:`EXACT_SUMS` exact."""
-    return quantize_registers(regs, TABLE, EXACT_SUMS)
+    return quantize_registers(regs, FAMILY.table, EXACT_SUMS)
 
 
-def design_current800(motor: Motor800) -> dict[str, float]:
+def design_current_filter(motor: MotorData) -> dict[str, float]:
     """The current filter for the motor's coil, quantised (module docstring)."""
-    return quantize800(design_current_loop(motor, dt=TS_I).registers)  # type: ignore[arg-type]
-
-
-def rigid_gain800(motor: Motor800) -> float:
-    """Kpl = COUNTS_PER_RAD·K_vf·TS_O²/(2·J_m): V_IST per VF_OUT of the rigid rotor, KVOUT = 1."""
-    return COUNTS_PER_RAD * motor.torque_per_vf * TS_O**2 / (2.0 * motor.J_m)
+    return quantize_sixth_order(design_current_loop(motor, dt=motor.family.inner_dt).registers)
 
 
 def _poly_lowpass(f_lp: float | None) -> tuple[np.ndarray, np.ndarray]:
@@ -163,7 +147,7 @@ def main_filter_registers(kp: float, ki: float, kvout: float, f_lp: float | None
 
 
 @dataclass
-class Design800:
+class SixthOrderDesign:
     """A MAC800 design: the quantised registers and what the search found."""
 
     registers: dict[str, float]
@@ -173,13 +157,13 @@ class Design800:
     f_lp: float | None
     notch_hz: float | None
     kii: float
-    verification: Verification800
+    verification: SixthOrderVerification
     name: str = "pi + low-pass"
     notes: list[str] = field(default_factory=list)
 
 
 @dataclass
-class Verification800:
+class SixthOrderVerification:
     """Loop metrics of a design on a motor: nominal current and speed loop, the speed loop's
     robustness set, python-control's own margins of the speed loop, and the ideal design's."""
 
@@ -202,28 +186,28 @@ class Verification800:
                 and all(m.stable for m in self.robust.values()))
 
 
-def verify800(motor: Motor800, regs: Mapping[str, float], J: float, robust: bool = True
-              ) -> Verification800:
+def verify_sixth_order(motor: MotorData, regs: Mapping[str, float], J: float, robust: bool = True
+                      ) -> SixthOrderVerification:
     """Verify registers ``regs`` (current and main filter) on ``motor`` with inertia ``J``."""
     cur = loop_metrics(current_open_loop(motor, regs))
-    loop = speed_open_loop(speed_plant(motor, regs, J=J), regs)
+    loop = speed_open_loop(speed_plant(motor, regs, J=J), regs, motor.family)
     spd = loop_metrics(loop)
     gm, pm = ct.stability_margins(loop)[:2]
     rob: dict[str, LoopMetrics] = {}
     if robust:
         for fk in (0.5, 2.0):
             rob[f"KVOUT x{fk:g}"] = loop_metrics(
-                speed_open_loop(speed_plant(motor, regs, J=J / fk), regs))
+                speed_open_loop(speed_plant(motor, regs, J=J / fk), regs, motor.family))
         for fr in (0.7, 1.3):
             for fl in (0.7, 1.3):
                 mm = motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
                 rob[f"R x{fr:g}, L x{fl:g}"] = loop_metrics(
-                    speed_open_loop(speed_plant(mm, regs, J=J), regs))
+                    speed_open_loop(speed_plant(mm, regs, J=J), regs, motor.family))
     gm_db = 20.0 * math.log10(gm) if gm and math.isfinite(gm) and gm > 0 else math.inf
-    return Verification800(cur, spd, rob, float(pm), gm_db)
+    return SixthOrderVerification(cur, spd, rob, float(pm), gm_db)
 
 
-def check800(v: Verification800) -> list[str]:
+def check_sixth_order(v: SixthOrderVerification) -> list[str]:
     """The acceptance checks of a verification; the failures (empty if all pass)."""
     bad = []
     if not (v.current.pm_deg >= 45 and v.current.gm_db >= 6):
@@ -240,7 +224,7 @@ def check800(v: Verification800) -> list[str]:
     return bad
 
 
-def _search(motor: Motor800, cur: Mapping[str, float], f_lp: float | None,
+def _search(motor: MotorData, cur: Mapping[str, float], f_lp: float | None,
             notch_hz: float | None) -> tuple[float, float, LoopMetrics]:
     """(kp_n, ki_n, metrics) of the largest integral gain meeting the constraints."""
     w = frequency_grid(TS_O, 800, lowest=1e-3)
@@ -261,7 +245,7 @@ def _search(motor: Motor800, cur: Mapping[str, float], f_lp: float | None,
     ln_z = np.r_[ln, np.zeros(deg - ln.size)]
     ld_z = np.r_[ld, np.zeros(deg - ld.size)]
     fw = np.polyval(ln_z, z) / np.polyval(ld_z, z)
-    kpl16 = 16.0 * rigid_gain800(motor)
+    kpl16 = 16.0 * rigid_gain(motor)
     best: tuple[float, float, LoopMetrics] | None = None
     for kin in np.geomspace(0.3, 0.002, 48):
         for kpn in np.geomspace(1.2, 0.03, 48):
@@ -288,9 +272,9 @@ def _search(motor: Motor800, cur: Mapping[str, float], f_lp: float | None,
     raise ValueError("no speed-loop gains meet the margin constraints")
 
 
-def design_speed800(motor: Motor800, cur: Mapping[str, float], J: float,
-                    lowpass: bool = True, notch_hz: float | None = None
-                    ) -> tuple[dict[str, float], float, float, float | None, list[str]]:
+def design_main_filter(motor: MotorData, cur: Mapping[str, float], J: float,
+                       lowpass: bool = True, notch_hz: float | None = None
+                      ) -> tuple[dict[str, float], float, float, float | None, list[str]]:
     """Search (kp, ki) (module docstring); the main filter's ideal registers, kp_n, ki_n, the
     low-pass corner [Hz] (None without) and notes."""
     notes: list[str] = []
@@ -301,22 +285,22 @@ def design_speed800(motor: Motor800, cur: Mapping[str, float], J: float,
         kpn, kin, m = _search(motor, cur, f_lp, notch_hz)
         notes.append(f"low-pass at {f_lp:.0f} Hz ({LOWPASS_PER_CROSSOVER:g} x the plain PI's "
                      f"crossover)")
-    kpl16 = 16.0 * rigid_gain800(motor)
+    kpl16 = 16.0 * rigid_gain(motor)
     regs = main_filter_registers(kpn / kpl16, kin / kpl16, J / motor.J_m, f_lp, notch_hz)
     return regs, kpn, kin, f_lp, notes
 
 
-def synthesize800(motor: Motor800, J: float, current: Mapping[str, float] | None = None,
-                  lowpass: bool = True, notch_hz: float | None = None) -> Design800:
+def synthesize_sixth_order(motor: MotorData, J: float, current: Mapping[str, float] | None = None,
+                           lowpass: bool = True, notch_hz: float | None = None) -> SixthOrderDesign:
     """Design, quantise and verify the current filter (unless ``current`` is given, e.g. the
     one the identification wrote) and the main filter for inertia ``J`` [kg·m²]."""
-    cur = dict(current) if current is not None else design_current800(motor)
-    spd, kpn, kin, f_lp, notes = design_speed800(motor, cur, J, lowpass, notch_hz)
+    cur = dict(current) if current is not None else design_current_filter(motor)
+    spd, kpn, kin, f_lp, notes = design_main_filter(motor, cur, J, lowpass, notch_hz)
     ideal = {**{k: cur[k] for k in CURRENT_KEYS}, **spd}
-    regs = quantize800(ideal)
-    ver = verify800(motor, regs, J)
-    ver.ideal_speed = verify800(motor, ideal, J, robust=False).speed
+    regs = quantize_sixth_order(ideal)
+    ver = verify_sixth_order(motor, regs, J)
+    ver.ideal_speed = verify_sixth_order(motor, ideal, J, robust=False).speed
     name = "pi + low-pass" if f_lp else "pi"
     if notch_hz:
         name += " + notch"
-    return Design800(regs, ideal, kpn, kin, f_lp, notch_hz, 0.0, ver, name, notes)
+    return SixthOrderDesign(regs, ideal, kpn, kin, f_lp, notch_hz, 0.0, ver, name, notes)

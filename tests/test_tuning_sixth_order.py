@@ -4,28 +4,39 @@ and ``jvl-tune autotune/verify --motor MAC800``."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 import yaml
-from tuning.autotune800 import (
+from tuning.autotune_sixth_order import (
     DEFAULT_NAME,
     MOVE_DISTANCE,
     MOVE_V_SOLL,
-    autotune800,
+    autotune_sixth_order,
     default_filters,
 )
 from tuning.cli import app
-from tuning.design800 import (
-    check800,
-    design_current800,
+from tuning.design_sixth_order import (
+    check_sixth_order,
+    design_current_filter,
     main_filter_registers,
-    quantize800,
-    synthesize800,
-    verify800,
+    quantize_sixth_order,
+    synthesize_sixth_order,
+    verify_sixth_order,
 )
 from tuning.family import tuning_family
+from tuning.models import (
+    MotorData,
+    ff_tf,
+    freqresp,
+    rigid_speed_plant,
+    speed_plant,
+    vb_tf,
+    vf_tf,
+)
 from tuning.quantize import QuantizationError
-from tuning.sixth_order import TS_I, TS_O, VFX_KEYS, VFY_KEYS, Motor800
+from tuning.sixth_order import FAMILY, TS_I, TS_O, VFX_KEYS, VFY_KEYS, default_registers
 from tuning.verify import position_move
 from typer.testing import CliRunner
 
@@ -48,6 +59,45 @@ def test_the_family_comes_from_the_motor_type():
         tuning_family("MIS231")
 
 
+def test_one_motor_data_carries_each_familys_numbers():
+    md = MotorData.from_config("MAC800")
+    assert md.family is FAMILY and md.family.key == "mac800"
+    assert md.amplitude == 776.0 and md.supply_voltage == 325.0  # setup AMPLITUDE, mains bus
+    k_t = 1.5 * md.pole_pairs * md.flux_linkage
+    assert md.torque_per_vf == pytest.approx(k_t * md.amps_per_count * 776.0 / 1023, rel=1e-15)
+    assert md.coil_pole == pytest.approx(np.exp(-md.R_phase / 11550 / md.L_phase), rel=1e-15)
+    assert md.volts_per_count == pytest.approx(325.0 / 2 / 1023)
+    small = MotorData.from_config("MAC140")
+    assert small.family.key == "mac050_141" and small.amplitude == 0.83
+    assert small.torque_per_vf == 1.5 * small.pole_pairs * small.flux_linkage * \
+        small.amps_per_count * 0.83
+    assert small.coil_pole == math.exp(-small.R_phase * 128e-6 / small.L_phase)
+    with pytest.raises(ValueError, match="no tuning procedure"):
+        MotorData.from_config("MIS231")
+
+
+def test_the_filters_take_the_familys_taps_and_gains():
+    regs = default_registers("MAC800")
+    regs.update({"KVB4": 1.0, "KVB3": 0.25, "KFF5": 1.0, "KFF0": 0.5, "MODEL_POT": 2.0,
+                 "KVOUT": 3.0})
+    ff, vb, vf = ff_tf(regs, FAMILY), vb_tf(regs, FAMILY), vf_tf(regs, family=FAMILY)
+    assert ff.dt == TS_O and len(ff.num[0][0]) == 6 and ff.num[0][0][-1] == 0.5
+    assert list(vb.num[0][0][:2]) == [16.0, 4.0]  # the firmware's 16·V_IST, no GEARB
+    assert len(vf.den[0][0]) == 7  # sixth order
+    assert vf.num[0][0][0] == 3.0 / 4.0 * regs["KVFX6"]  # KVOUT / 2^MODEL_POT
+    with pytest.raises(KeyError, match="KFF5"):
+        ff_tf({"KFF3": 1.0}, FAMILY)
+
+
+def test_the_lifted_speed_plant_meets_the_rigid_rotor_at_low_frequency():
+    md = MotorData.from_config("MAC800")
+    plant = speed_plant(md, default_registers("MAC800"))
+    assert plant.dt == TS_O
+    w = np.array([2 * np.pi * 0.5, 2 * np.pi * 2.0])
+    ratio = freqresp(plant, w) / freqresp(rigid_speed_plant(md), w)
+    assert np.allclose(ratio, 1.0, atol=0.02)
+
+
 def test_autotune_of_two_loaded_mac800s_meets_the_acceptance():
     # load ratios 3 and 7 (J = 4 and 8 x J_m); the second with Coulomb friction, which holds
     # the default setup's loop (KVOUT = 1) outside the in-position window
@@ -55,7 +105,7 @@ def test_autotune_of_two_loaded_mac800s_meets_the_acceptance():
     kw = dict(load_inertia=loads, coulomb_friction=np.array([0.0, 0.05]),
               viscous_friction=np.array([2e-4, 0.0]))
     m = MotorArray("MAC800", n=2, seed=0, position_noise=0.85, **kw)
-    res = autotune800(m)
+    res = autotune_sixth_order(m)
     for i, r in enumerate(res):
         j_true = J_M + loads[i]
         assert abs(r.ident.mechanics.J / j_true - 1) < 0.05
@@ -65,9 +115,9 @@ def test_autotune_of_two_loaded_mac800s_meets_the_acceptance():
         assert r.chosen.name != DEFAULT_NAME and "settles in" in r.reason
         d = r.chosen.design
         # stable after quantisation with PM >= 45 deg, on the identified and the true motor
-        assert check800(d.verification) == []
+        assert check_sixth_order(d.verification) == []
         assert d.verification.speed.pm_deg >= 45 and d.verification.all_stable
-        true = verify800(Motor800.from_config("MAC800"), d.registers, j_true)
+        true = verify_sixth_order(MotorData.from_config("MAC800"), d.registers, j_true)
         assert true.speed.pm_deg >= 45 and true.current.pm_deg >= 45 and true.all_stable
         # the 20 000-count move on the true motor: faster than the default setup
         sim = MotorArray("MAC800", n=2, seed=1, position_noise=0.85,
@@ -80,8 +130,8 @@ def test_autotune_of_two_loaded_mac800s_meets_the_acceptance():
 
 
 def test_quantisation_round_trip_to_the_exact_fixed16_and_fixed24_raw_values():
-    md = Motor800.from_config("MAC800")
-    d = synthesize800(md, 5 * J_M, notch_hz=120.0)
+    md = MotorData.from_config("MAC800")
+    d = synthesize_sixth_order(md, 5 * J_M, notch_hz=120.0)
     q, ideal = d.registers, d.ideal
     raws = {}
     for name, value in q.items():
@@ -103,24 +153,24 @@ def test_quantisation_round_trip_to_the_exact_fixed16_and_fixed24_raw_values():
     m.load_setup({"registers": q})
     for name, value in q.items():
         assert float(m.read(name)[0]) == value
-    assert check800(d.verification) == []
+    assert check_sixth_order(d.verification) == []
     assert d.verification.ideal_speed is not None
 
 
 def test_quantisation_refuses_values_outside_the_table_ranges():
     with pytest.raises(QuantizationError, match="KVB4.*Fixed24"):
-        quantize800({"KVB4": 200.0})
+        quantize_sixth_order({"KVB4": 200.0})
     with pytest.raises(QuantizationError, match="KVFX6.*Fixed16"):
-        quantize800({"KVFX6": 40000.0})
+        quantize_sixth_order({"KVFX6": 40000.0})
     with pytest.raises(ValueError, match="not in"):
         main_filter_registers(0.01, 0.001, 4.0, f_lp=500.0)
 
 
 def test_lowpass_takes_the_speed_noise_down_at_nyquist():
-    md = Motor800.from_config("MAC800")
-    cur = design_current800(md)
-    lp = synthesize800(md, 4 * J_M, cur, lowpass=True)
-    pi = synthesize800(md, 4 * J_M, cur, lowpass=False)
+    md = MotorData.from_config("MAC800")
+    cur = design_current_filter(md)
+    lp = synthesize_sixth_order(md, 4 * J_M, cur, lowpass=True)
+    pi = synthesize_sixth_order(md, 4 * J_M, cur, lowpass=False)
 
     def nyquist_gain(regs):
         num = sum(regs[k] * (-1) ** n for n, k in enumerate(VFX_KEYS))

@@ -1,11 +1,11 @@
 """Autotune of MAC800-family motors: identify, design the sixth-order filter, keep the best setup
 by simulation, write a setup file the family loads.
 
-1. Identification from sample-buffer records of torque steps (:mod:`tuning.identify800`): the
-   coil, the current loop designed for it, then J, T_c, b.
-2. Candidates (:mod:`tuning.design800`): the PI with the low-pass in the extra orders (and a
-   notch at ``notch_hz`` when a resonance is known), the plain PI, and the motor type's default
-   setup (``families/mac800/configs/setups``).
+1. Identification from sample-buffer records of torque steps (:mod:`tuning.identify_buffer`):
+   the coil, the current loop designed for it, then J, T_c, b.
+2. Candidates (:mod:`tuning.design_sixth_order`): the PI with the low-pass in the extra orders
+   (and a notch at ``notch_hz`` when a resonance is known), the plain PI, and the motor type's
+   default setup (``families/mac800/configs/setups``).
 3. Acceptance step (as the MAC050–141's, :mod:`tuning.acceptance`): every candidate runs the
    same position-mode move (:data:`MOVE_DISTANCE` counts, mode 2) on a ``MotorArray`` built from
    the *identified* motor (R, L, PWM delay, J, b, T_c); the candidate that settles first in the
@@ -26,17 +26,22 @@ import numpy as np
 import yaml
 
 from jvl_gym.families.mac800 import constants as _c
-from jvl_gym.families.mac800.config import load_motor
 
-from .design800 import Design800, check800, synthesize800, verify800
-from .identify800 import Identification800, identify800
+from .design_sixth_order import (
+    SixthOrderDesign,
+    check_sixth_order,
+    synthesize_sixth_order,
+    verify_sixth_order,
+)
+from .identify_buffer import BufferIdentification, identify_from_buffer
+from .models import MotorData
 from .sixth_order import COUNTS_PER_RAD, CURRENT_KEYS, MAIN_KEYS, TS_O, default_registers
 from .verify import position_move
 
-__all__ = ["MOVE_DISTANCE", "MOVE_V_SOLL", "DEFAULT_NAME", "Candidate800", "Result800",
-           "move_acceleration", "simulation_motor", "candidates800", "accept800",
-           "autotune800", "setup_text", "write_setup800", "report800", "verify_setup800",
-           "default_filters"]
+__all__ = ["MOVE_DISTANCE", "MOVE_V_SOLL", "DEFAULT_NAME", "SixthOrderCandidate",
+           "SixthOrderResult", "move_acceleration", "simulation_motor", "design_candidates",
+           "accept_by_move", "autotune_sixth_order", "setup_text", "write_setup",
+           "autotune_report", "verify_setup", "default_filters"]
 
 MOVE_DISTANCE: int = 20000  #: acceptance move [counts] (2.5 revolutions)
 MOVE_V_SOLL: int = 2000  #: its velocity [1/16 count/sample] (722 RPM, register 5)
@@ -47,29 +52,29 @@ Progress = Callable[[str], None]
 
 
 @dataclass
-class Candidate800:
+class SixthOrderCandidate:
     """A setup the acceptance step tries: its name, filter registers and design (None for the
     default setup)."""
 
     name: str
     registers: dict[str, float]
-    design: Design800 | None = None
+    design: SixthOrderDesign | None = None
 
 
 @dataclass
-class Result800:
+class SixthOrderResult:
     """Autotune result of one motor."""
 
-    ident: Identification800
-    chosen: Candidate800
+    ident: BufferIdentification
+    chosen: SixthOrderCandidate
     settle_s: dict[str, float]
     final_error: dict[str, float]
     move: tuple[int, int, int]
     reason: str
-    candidates: list[Candidate800] = field(default_factory=list)
+    candidates: list[SixthOrderCandidate] = field(default_factory=list)
 
 
-def move_acceleration(ident: Identification800) -> int:
+def move_acceleration(ident: BufferIdentification) -> int:
     """A_SOLL of the acceptance move [1/16 count/sample²]: half the peak torque over the
     identified J, within 10 … 200 (register 6)."""
     md, J = ident.motor, ident.mechanics.J
@@ -77,11 +82,11 @@ def move_acceleration(ident: Identification800) -> int:
     return int(np.clip(alpha * COUNTS_PER_RAD * TS_O**2 * 16.0, 10, 200))
 
 
-def simulation_motor(ident: Identification800) -> tuple[Any, dict[str, float]]:
+def simulation_motor(ident: BufferIdentification) -> tuple[Any, dict[str, float]]:
     """The identified motor for a ``MotorArray``: the config with the identified coil, and the
     keywords load_inertia (J − J_m; all of J as rotor when J < J_m) and the friction."""
     md, mech = ident.motor, ident.mechanics
-    cfg = load_motor(md.name)
+    cfg = md.family.load_motor(md.name)
     rotor = md.J_m if mech.J >= md.J_m else mech.J
     cfg = cfg.model_copy(update={"phase_resistance": md.R_phase, "phase_inductance": md.L_phase,
                                  "pwm_delay_samples": int(md.pwm_delay),
@@ -97,30 +102,30 @@ def default_filters(motor_type: str) -> dict[str, float]:
     return {k: regs[k] for k in (*CURRENT_KEYS, *MAIN_KEYS)}
 
 
-def candidates800(ident: Identification800, notch_hz: float | None = None
-                  ) -> list[Candidate800]:
+def design_candidates(ident: BufferIdentification, notch_hz: float | None = None
+                     ) -> list[SixthOrderCandidate]:
     """The designs to try, the preferred first: PI with the low-pass (and the notch), then the
-    plain PI; designs that fail :func:`tuning.design800.check800` are left out except the
-    first (flagged by its verification)."""
+    plain PI; designs that fail :func:`tuning.design_sixth_order.check_sixth_order` are left
+    out except the first (flagged by its verification)."""
     md, J = ident.motor, ident.mechanics.J
-    first = synthesize800(md, J, ident.current_registers, lowpass=True, notch_hz=notch_hz)
-    out = [Candidate800(first.name, first.registers, first)]
-    plain = synthesize800(md, J, ident.current_registers, lowpass=False)
-    if not check800(plain.verification):
-        out.append(Candidate800(plain.name, plain.registers, plain))
+    first = synthesize_sixth_order(md, J, ident.current_registers, lowpass=True, notch_hz=notch_hz)
+    out = [SixthOrderCandidate(first.name, first.registers, first)]
+    plain = synthesize_sixth_order(md, J, ident.current_registers, lowpass=False)
+    if not check_sixth_order(plain.verification):
+        out.append(SixthOrderCandidate(plain.name, plain.registers, plain))
     return out
 
 
-def accept800(idents: Sequence[Identification800],
-              candidates: Sequence[Sequence[Candidate800]], seconds: float = 2.0,
-              seed: int = 0) -> list[Result800]:
+def accept_by_move(idents: Sequence[BufferIdentification],
+                   candidates: Sequence[Sequence[SixthOrderCandidate]], seconds: float = 2.0,
+                   seed: int = 0) -> list[SixthOrderResult]:
     """Simulate every candidate and the default setup on its identified motor; keep the best
     (module docstring, step 3)."""
     from jvl_gym import MotorArray
 
     out = []
     for ident, cands in zip(idents, candidates):
-        lanes = [*cands, Candidate800(DEFAULT_NAME, default_filters(ident.motor.name))]
+        lanes = [*cands, SixthOrderCandidate(DEFAULT_NAME, default_filters(ident.motor.name))]
         cfg, params = simulation_motor(ident)
         m = MotorArray(cfg, n=len(lanes), seed=seed, **params)
         for j, c in enumerate(lanes):
@@ -144,8 +149,8 @@ def accept800(idents: Sequence[Identification800],
                    f"identified motor, the {asked} design in {_ms(settle[asked])}"
                    + ("" if chosen.name == DEFAULT_NAME else
                       f", the default setup in {_ms(settle[DEFAULT_NAME])}"))
-        out.append(Result800(ident, chosen, settle, final,
-                             (MOVE_DISTANCE, MOVE_V_SOLL, acc), why, list(cands)))
+        out.append(SixthOrderResult(ident, chosen, settle, final,
+                                    (MOVE_DISTANCE, MOVE_V_SOLL, acc), why, list(cands)))
     return out
 
 
@@ -153,16 +158,16 @@ def _ms(t: float) -> str:
     return "never (2 s)" if not math.isfinite(t) else f"{1e3 * t:.0f} ms"
 
 
-def autotune800(m: Any, notch_hz: float | None = None, repeats: int = 2, seed: int = 0,
-                progress: Progress = lambda _: None) -> list[Result800]:
+def autotune_sixth_order(m: Any, notch_hz: float | None = None, repeats: int = 2, seed: int = 0,
+                         progress: Progress = lambda _: None) -> list[SixthOrderResult]:
     """Identify every motor of ``m``, design, verify and keep the best setup (module
     docstring)."""
-    idents = identify800(m, repeats=repeats, progress=progress)
+    idents = identify_from_buffer(m, repeats=repeats, progress=progress)
     progress("synthesis of the sixth-order filter, quantisation, verification")
-    cands = [candidates800(i, notch_hz) for i in idents]
+    cands = [design_candidates(i, notch_hz) for i in idents]
     progress(f"acceptance step: a {MOVE_DISTANCE}-count move of every candidate on the "
              "identified motor")
-    return accept800(idents, cands, seed=seed)
+    return accept_by_move(idents, cands, seed=seed)
 
 
 def setup_text(motor_type: str, regs: dict[str, float], note: str) -> str:
@@ -174,7 +179,7 @@ def setup_text(motor_type: str, regs: dict[str, float], note: str) -> str:
                                   "registers": clean}, sort_keys=False)
 
 
-def write_setup800(path: str | os.PathLike[str], result: Result800) -> Path:
+def write_setup(path: str | os.PathLike[str], result: SixthOrderResult) -> Path:
     """Write the kept setup of ``result`` with the identified values and the reason."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -185,7 +190,7 @@ def write_setup800(path: str | os.PathLike[str], result: Result800) -> Path:
     return path
 
 
-def report800(result: Result800) -> str:
+def autotune_report(result: SixthOrderResult) -> str:
     """The text report of one motor's autotune."""
     idn, mech = result.ident, result.ident.mechanics
     lines = [f"MAC800-family autotune: {idn.motor.name}",
@@ -202,7 +207,7 @@ def report800(result: Result800) -> str:
                      f"{v.ct_pm_deg:.1f}), GM {v.speed.gm_db:.1f} dB, crossover "
                      f"{v.speed.crossover_hz:.1f} Hz, |z|max {v.speed.pole_radius:.4f}, worst "
                      f"robust PM {v.worst_robust_pm:.1f} deg; current PM {v.current.pm_deg:.1f} "
-                     f"deg; checks {'; '.join(check800(v)) or 'ok'}")
+                     f"deg; checks {'; '.join(check_sixth_order(v)) or 'ok'}")
         lines.extend(f"    {n}" for n in c.design.notes)
     d, vs, a = result.move
     lines.append(f"Acceptance step: {d}-count move, V_SOLL {vs}, A_SOLL {a} on the identified "
@@ -213,13 +218,11 @@ def report800(result: Result800) -> str:
     return "\n".join(lines) + "\n"
 
 
-def verify_setup800(motor_type: str, regs: dict[str, float], J: float | None = None
-                    ) -> tuple[Any, list[str]]:
+def verify_setup(motor_type: str, regs: dict[str, float], J: float | None = None
+                ) -> tuple[Any, list[str]]:
     """Verify a MAC800 register set on the motor type's data (J default KVOUT·J_m)."""
-    from .sixth_order import Motor800
-
-    md = Motor800.from_config(motor_type, amplitude=regs.get("AMPLITUDE"))
+    md = MotorData.from_config(motor_type, amplitude=regs.get("AMPLITUDE"))
     full = {**default_filters(motor_type), **regs}
     J = J if J else full.get("KVOUT", 1.0) * md.J_m
-    v = verify800(md, full, J)
-    return v, check800(v)
+    v = verify_sixth_order(md, full, J)
+    return v, check_sixth_order(v)

@@ -1,4 +1,4 @@
-"""Identification of a MAC800-family motor from sample-buffer records of torque steps.
+"""Identification of a motor from sample-buffer records of torque steps (the MAC800 family).
 
 The MAC800 has no TESTU/TESTA test modes (its modes, register overview §1.2 register 2: 0–6,
 12–14, 16–21). The toolkit records with the sample buffer instead (registers 158–162, SAMPLE1–4
@@ -45,12 +45,13 @@ from scipy import stats
 
 from jvl_gym.families.mac800 import constants as _c
 
-from .design800 import design_current800
-from .sixth_order import COUNTS_PER_RAD, CURRENT_KEYS, TS_I, TS_O, Motor800
+from .design_sixth_order import design_current_filter
+from .models import MotorData
+from .sixth_order import COUNTS_PER_RAD, CURRENT_KEYS, TS_I, TS_O
 
-__all__ = ["CoilRecord", "TorqueRecord", "Coil800", "Mechanics800", "Identification800",
-           "record_coil", "record_torque_steps", "identify_coil800", "identify_mechanics800",
-           "identify800"]
+__all__ = ["CoilRecord", "TorqueRecord", "CoilStepEstimate", "TorqueStepEstimate",
+           "BufferIdentification", "record_coil", "record_torque_steps", "identify_coil_step",
+           "identify_torque_steps", "identify_from_buffer"]
 
 Progress = Callable[[str], None]
 
@@ -86,7 +87,7 @@ class TorqueRecord:
 
 
 @dataclass
-class Coil800:
+class CoilStepEstimate:
     """Identified coil: per-phase R [Ω], L [H], the PWM delay, the fit's NRMSE [%]."""
 
     R_phase: float
@@ -94,13 +95,13 @@ class Coil800:
     delay: int
     nrmse: float
 
-    def motor(self, base: Motor800) -> Motor800:
+    def motor(self, base: MotorData) -> MotorData:
         """``base`` with the identified coil."""
         return base.with_(R_phase=self.R_phase, L_phase=self.L_phase, pwm_delay=self.delay)
 
 
 @dataclass
-class Mechanics800:
+class TorqueStepEstimate:
     """Identified mechanics: J [kg·m²] with its 95 % interval, T_c [N·m], b [N·m·s/rad]."""
 
     J: float
@@ -112,12 +113,12 @@ class Mechanics800:
 
 
 @dataclass
-class Identification800:
+class BufferIdentification:
     """What the identification found for one motor."""
 
-    motor: Motor800
-    coil: Coil800
-    mechanics: Mechanics800
+    motor: MotorData
+    coil: CoilStepEstimate
+    mechanics: TorqueStepEstimate
     current_registers: dict[str, float]
 
 
@@ -207,7 +208,7 @@ def record_torque_steps(m: Any, vf: np.ndarray, n: int = MECH_SAMPLES) -> list[T
 
 
 # ----------------------------------------------------------------------------- fits
-def identify_coil800(rec: CoilRecord, base: Motor800) -> Coil800:
+def identify_coil_step(rec: CoilRecord, base: MotorData) -> CoilStepEstimate:
     """R, L and the PWM delay from one coil record (module docstring).
 
     Raises
@@ -242,10 +243,10 @@ def identify_coil800(rec: CoilRecord, base: Motor800) -> Coil800:
     if not (0.0 < a < 1.0 and beta > 0.0):
         raise ValueError(f"coil fit gives no physical coil (a = {a:.4g}, β = {beta:.4g}); "
                          "check the record")
-    k_u = rec.bus_voltage / 2.0 / _c.PWM_FULL
+    k_u = base.with_(supply_voltage=rec.bus_voltage).volts_per_count
     R = k_u * (1.0 - a) / (beta * base.amps_per_count)
     L = -R * TS_I / math.log(a)
-    return Coil800(R, L, d, nrmse)
+    return CoilStepEstimate(R, L, d, nrmse)
 
 
 def _fit_rigid(recs: Sequence[TorqueRecord], k_vf: float
@@ -275,15 +276,15 @@ def _fit_rigid(recs: Sequence[TorqueRecord], k_vf: float
     return float(x[0]), float(x[1]), float(x[2]), nrmse
 
 
-def identify_mechanics800(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], motor: Motor800
-                          ) -> Mechanics800:
+def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], motor: MotorData
+                         ) -> TorqueStepEstimate:
     """J, T_c and b from the two-level torque steps (module docstring).
 
     Parameters
     ----------
     pairs : sequence of (TorqueRecord, TorqueRecord)
         Per repetition, the steps at the higher and the lower level.
-    motor : Motor800
+    motor : MotorData
         K_vf (torque constant, A_count, AMPLITUDE).
 
     Raises
@@ -303,31 +304,32 @@ def identify_mechanics800(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], mo
             len(singles))
     else:
         half = math.nan
-    return Mechanics800(J, max(tc, 0.0), max(b, 0.0), (J - half, J + half), singles, nrmse)
+    return TorqueStepEstimate(J, max(tc, 0.0), max(b, 0.0), (J - half, J + half), singles, nrmse)
 
 
 # ----------------------------------------------------------------------------- procedure
-def identify800(m: Any, repeats: int = 2, progress: Progress = lambda _: None,
-                current_design: Callable[[Motor800], dict[str, float]] | None = None
-                ) -> list[Identification800]:
+def identify_from_buffer(m: Any, repeats: int = 2, progress: Progress = lambda _: None,
+                         current_design: Callable[[MotorData], dict[str, float]] | None = None
+                        ) -> list[BufferIdentification]:
     """Identify every motor of ``m`` (a MAC800-family ``MotorArray`` or compatible).
 
-    1. Coil step at the current-loop rate → R, L, PWM delay (:func:`identify_coil800`).
+    1. Coil step at the current-loop rate → R, L, PWM delay (:func:`identify_coil_step`).
     2. The current loop designed for the identified coil (``current_design``, default
-       :func:`tuning.design800.design_current800`) and written, so the torque steps run on it.
+       :func:`tuning.design_sixth_order.design_current_filter`) and written, so the torque
+       steps run on it.
     3. A pilot step (VF_OUT = :data:`PILOT_VF`) sizes the higher level so the motor reaches
        about :data:`FINAL_SPEED` at the end of its record; then the two levels ``repeats``
-       times → J, T_c, b (:func:`identify_mechanics800`).
+       times → J, T_c, b (:func:`identify_torque_steps`).
     """
     if current_design is None:
-        current_design = design_current800
+        current_design = design_current_filter
     amp = np.asarray(m.read("AMPLITUDE"), dtype=float)
-    base = [Motor800.from_config(cfg, amplitude=float(amp[i]))
+    base = [MotorData.from_config(cfg, amplitude=float(amp[i]))
             for i, cfg in enumerate(m.motor_configs)]
     progress("coil: torque step in analogue torque mode 4, recorded at 11550 Hz")
     coil_recs = record_coil(m)
-    coils = [identify_coil800(r, md) for r, md in zip(coil_recs, base)]
-    motors = [c.motor(md).with_(bus_voltage=r.bus_voltage)
+    coils = [identify_coil_step(r, md) for r, md in zip(coil_recs, base)]
+    motors = [c.motor(md).with_(supply_voltage=r.bus_voltage)
               for c, md, r in zip(coils, base, coil_recs)]
     progress("current loop: designed for the identified coils and written")
     cur = []
@@ -357,8 +359,8 @@ def identify800(m: Any, repeats: int = 2, progress: Progress = lambda _: None,
             pairs[i].append((hi[i], lo[i]))
     out = []
     for i, md in enumerate(motors):
-        mech = identify_mechanics800(pairs[i], md)
-        out.append(Identification800(md, coils[i], mech,
+        mech = identify_torque_steps(pairs[i], md)
+        out.append(BufferIdentification(md, coils[i], mech,
                                      {k: cur[i][k] for k in CURRENT_KEYS}))
     progress("identification done")
     return out
