@@ -15,7 +15,7 @@ $(STAMP): pyproject.toml
 	touch $@
 
 $(STAMP_RL): $(STAMP)
-	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks,test,scale]"
+	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks,test,scale,canopen,studio]"
 	$(BIN)/python -m pip install -q --no-deps "jvlmotor==0.1.3"  # JVL's MacTalk client, tests/test_protocol_jvlmotor.py
 	$(BIN)/jvl-gym compile  # numba: every environment's step, once per machine (cached)
 	touch $@
