@@ -11,6 +11,8 @@ Examples
 ``jvl-gym serve -m MAC140 -a 19 -m MIS231 -a 7 --pty``  (two families, one line)
 ``jvl-gym serve --motor MIS231 --address 42 --modbus --tcp 127.0.0.1:5020``
 ``python -m jvl_gym.cli_serve --motor MAC050 --pty --user-pty``  (FastMAC/FlexMAC too)
+``jvl-gym serve -m MIS232 -a 1 -m MIS232 -a 2 --canopen --can-interface socketcan
+--can-channel vcan0 --node-id 5 --node-id 6``  (two MIS as CANopen slaves, MIS manual §11)
 ``jvl-gym serve -m MAC140 -a 19 --tcp 127.0.0.1:5000 --load-inertia 1e-4``  (a rigid load)
 ``jvl-gym serve -m MAC140 -a 19 --pty --load-inertia 1e-4 --coupling-stiffness 40``
 (the load behind an elastic coupling: a two-mass plant)
@@ -37,7 +39,7 @@ import typer
 from .cli_app import App
 
 __all__ = ["app", "serve", "parse_tcp", "banner", "build_line", "LOAD_OPTIONS",
-           "LoadError", "load_per_motor"]
+           "LoadError", "load_per_motor", "canopen_server"]
 
 app = App(prog="jvl-gym serve", add_completion=False,
           help="Serve simulated MAC motors over serial protocols.")
@@ -238,6 +240,20 @@ def serve(
     coupling_damping: Annotated[list[float] | None, typer.Option(
         "--coupling-damping", help="Damping of that coupling in N·m·s/rad (needs "
         "--coupling-stiffness > 0; repeat like --load-inertia).")] = None,
+    canopen: Annotated[bool, typer.Option(
+        "--canopen", help="Serve the motors as CANopen slaves (MIS manual §11) on a python-can "
+        "bus, beside any --tcp/--pty endpoint of the same motors.")] = False,
+    can_interface: Annotated[str, typer.Option(
+        help="python-can interface of --canopen (socketcan, virtual, pcan, …).")
+    ] = "socketcan",
+    can_channel: Annotated[str, typer.Option(
+        help="python-can channel of --canopen (vcan0, can0, a virtual bus name, …).")
+    ] = "vcan0",
+    can_bitrate: Annotated[int | None, typer.Option(
+        help="Bit rate [bit/s] of --canopen, for interfaces that set it.")] = None,
+    node_id: Annotated[list[int] | None, typer.Option(
+        "--node-id", help="CANopen node id 1..127 of each motor (repeat: one per --address; "
+        "default: each motor's register 166, factory value 5).")] = None,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log every refusal.")] = False,
 ) -> None:
     """Serve one or many simulated motors (multi-drop by MYADDR) until Ctrl-C, each with
@@ -249,8 +265,13 @@ def serve(
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
     motor = motor or ["MAC140"]
     address = address or [1]
-    if tcp is None and not pty:
-        raise typer.BadParameter("give --tcp HOST:PORT and/or --pty")
+    if tcp is None and not pty and not canopen:
+        raise typer.BadParameter("give --tcp HOST:PORT, --pty and/or --canopen")
+    if node_id and not canopen:
+        raise typer.BadParameter("--node-id is the CANopen node id: give --canopen too")
+    if node_id and len(node_id) != len(address):
+        raise typer.BadParameter(f"give one --node-id per --address ({len(address)}), got "
+                                 f"{len(node_id)}")
     types = motor if len(motor) == len(address) else [motor[0]] * len(address)
     if len(motor) not in (1, len(address)):
         raise typer.BadParameter("give one --motor, or one per --address")
@@ -270,16 +291,31 @@ def serve(
     except LoadError as exc:
         raise typer.BadParameter(str(exc)) from None
     endpoint = parse_tcp(tcp) if tcp else None
-    if modbus:
-        server = _modbus_server(line, endpoint, pty, speed, switch=modbus_switch)
+    can_server = None
+    if canopen:
+        ids = None if not node_id else [node_id[k] for k in order]
+        can_server = canopen_server(line, can_interface, can_channel, ids, speed,
+                                    bitrate=can_bitrate)
+    serial = tcp is not None or pty
+    if not serial:
+        server: Any = None
+    elif modbus:
+        server = _modbus_server(line, endpoint, pty, speed, switch=modbus_switch,
+                                run_clock=can_server is None)
     else:
         server = TwinServer(line, speed=speed, tcp=endpoint, pty=pty, user_tcp=user_tcp,
-                            user_pty=user_pty)
-    server.start()
+                            user_pty=user_pty, run_clock=can_server is None)
+    if server is not None:
+        server.start()
+    if can_server is not None:
+        can_server.start()
     for text in banner([types[k] for k in order], line, [address[k] for k in order]):
         typer.echo(text)
-    for e in server.endpoints:
+    for e in server.endpoints if server is not None else []:
         typer.echo(f"{e.what} {e.kind}: {e.url}", err=False)
+    if can_server is not None:
+        for k, s in enumerate(can_server.slaves):
+            typer.echo(f"canopen {can_interface}:{can_channel}: motor {k} node id {s.node_id}")
     typer.echo(f"running at speed {speed}; Ctrl-C to stop")
     done = threading.Event()
     signal.signal(signal.SIGINT, lambda *_: done.set())
@@ -287,13 +323,41 @@ def serve(
     try:
         done.wait()
     finally:
-        server.stop()
-        stats = server.bus.stats if modbus else line.stats
+        if can_server is not None:
+            can_server.stop()
+        if server is not None:
+            server.stop()
+        stats = server.bus.stats if modbus and server is not None else line.stats
         typer.echo(f"stopped; {dict(stats)}")
 
 
+def canopen_server(line: Any, interface: str, channel: str, node_ids: list[int] | None,
+                   speed: float, bitrate: int | None = None, run_clock: bool = True) -> Any:
+    """A CANopen server (:class:`~.protocol.canopen.server.CanopenServer`) of the motors of
+    ``line`` (a twin or a bus of twins, every one of a family with a CANopen interface) on the
+    python-can bus ``interface``/``channel``; one-line BadParameter for a family without
+    CANopen, a bad node id or a bus that cannot be opened (nothing left open)."""
+    from .protocol.canopen.facts import has_canopen
+    from .protocol.canopen.server import CanopenServer, open_bus
+
+    twins = list(getattr(line, "twins", [line]))
+    for twin in twins:
+        if not has_canopen(twin.m):
+            raise typer.BadParameter(f"--canopen: the {twin.m.family.title} have no CANopen "
+                                     "interface (the MIS/SMC have)")
+    try:
+        bus = open_bus(interface, channel, bitrate)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc)) from None
+    try:
+        return CanopenServer(twins, bus, node_ids=node_ids, speed=speed, run_clock=run_clock)
+    except ValueError as exc:
+        bus.shutdown()
+        raise typer.BadParameter(f"--canopen: {exc}") from None
+
+
 def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
-                   switch: bool = False) -> Any:
+                   switch: bool = False, run_clock: bool = True) -> Any:
     """A Modbus RTU server of the motors of ``line`` (one twin of a 32-bit family); with
     ``switch``, every stream starts in MacTalk and goes to Modbus as the first motor's register
     121 says (MIS manual §12.2.1), the silence counted from now (power-on)."""
@@ -319,7 +383,7 @@ def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: flo
             raise typer.BadParameter(f"--modbus: address {a} is no Modbus slave address "
                                      "(1..247; MIS manual §12.1)")
     if not switch:
-        return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=True)
+        return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=run_clock)
     setup = bus.slaves[0].registers.setup
     if setup is None:
         raise typer.BadParameter("--modbus-switch: the family has no Modbus set-up register")
@@ -328,7 +392,7 @@ def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: flo
     def switching() -> SwitchingSession:
         return SwitchingSession(line.session(), ModbusSession(bus), line_switch)
 
-    return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=True,
+    return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=run_clock,
                         make_session=switching)
 
 
