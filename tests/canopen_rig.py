@@ -11,6 +11,7 @@ of simulated time, whatever the wall clock does.
 from __future__ import annotations
 
 import itertools
+import threading
 import time
 from typing import Any
 
@@ -42,11 +43,17 @@ class Rig:
         self.net.connect(interface="virtual", channel=self.channel)
         self.raw = can.Bus(interface="virtual", channel=self.channel)
         self.frames: list[can.Message] = []
-        self.net.notifier.add_listener(self.frames.append)
+        self.raw_sent = 0
+        self.seen = 0
+        self.net.notifier.add_listener(self._on_frame)
         self.node_class = node_class
         self.nodes: dict[int, Any] = {}
         self.server.start()
         self.settle()
+
+    def _on_frame(self, msg: can.Message) -> None:
+        self.frames.append(msg)
+        self.seen += 1
 
     def node(self, node_id: int = 5) -> Any:
         """The master's view of node ``node_id`` (from the shipped EDS)."""
@@ -65,9 +72,13 @@ class Rig:
         self.settle()
 
     def settle(self) -> None:
-        """Let the master's notifier thread take the frames the slaves sent."""
+        """Carry out the frames sent so far and wait until the master's notifier thread has
+        taken every frame the slaves sent."""
         self.server.advance(0)
-        time.sleep(0.02)
+        deadline = time.monotonic() + 5.0
+        while (self.seen < self.raw_sent + self.server.frames_sent
+               and time.monotonic() < deadline):
+            time.sleep(0.001)
 
     def clear(self) -> None:
         self.settle()
@@ -76,12 +87,14 @@ class Rig:
     def sent(self, cob: int) -> list[bytes]:
         """Data of the frames on COB-ID ``cob`` since the last :meth:`clear`."""
         self.settle()
-        return [bytes(f.data) for f in self.frames if f.arbitration_id == cob]
+        return [bytes(f.data) for f in self.frames
+                if f.arbitration_id == cob and not f.is_remote_frame]
 
     def send(self, cob: int, data: bytes = b"", remote: bool = False) -> None:
         """A raw frame from the master's side, carried out before this returns."""
         self.raw.send(can.Message(arbitration_id=cob, data=data, is_extended_id=False,
                                   is_remote_frame=remote, dlc=len(data)))
+        self.raw_sent += 1
         self.server.advance(0)
 
     def request(self, cob: int, data: bytes, reply: int) -> bytes | None:
@@ -93,5 +106,9 @@ class Rig:
 
     def close(self) -> None:
         self.server.stop()
+        # wake the master's notifier (it waits up to 1 s for a frame) so it stops at once
+        wake = threading.Timer(0.01, lambda: self.raw.send(can.Message(arbitration_id=0x7FF)))
+        wake.start()
         self.net.disconnect()
+        wake.join()
         self.raw.shutdown()

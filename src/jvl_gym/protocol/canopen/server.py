@@ -98,6 +98,8 @@ class CanopenServer:
         self._stop = threading.Event()
         self._threads: list[threading.Thread] = []
         self.errors = 0
+        #: frames sent so far
+        self.frames_sent = 0
         total = sum(t.m.n for t in self.twins)
         if node_ids is not None and len(node_ids) != total:
             raise ValueError(f"{len(node_ids)} node ids for {total} motors")
@@ -163,6 +165,7 @@ class CanopenServer:
                           is_remote_frame=remote, dlc=len(data))
         try:
             self.bus.send(msg)
+            self.frames_sent += 1
         except can.CanError as exc:
             self.errors += 1
             log.warning("CAN send of 0x%03X failed: %s", cob, exc)
