@@ -6,8 +6,8 @@ from __future__ import annotations
 from collections.abc import Iterator
 
 import pytest
-from canopen_rig import Rig
 
+from canopen_rig import Rig
 from jvl_gym.protocol.canopen.emcy import NODE_GUARD
 
 

@@ -233,7 +233,7 @@ class Pdos:
                 if t.next_ms is None:
                     t.next_ms = now + period
                 if now >= t.next_ms:
-                    t.next_ms += period
+                    t.next_ms = now + period
                     self._send(n)
             else:
                 data = self._data(n)
