@@ -46,6 +46,7 @@ acceleration: A_SOLL units (RPM/s) = user × 6097h sub 1 / sub 2.
 from __future__ import annotations
 
 import enum
+import math
 from fractions import Fraction
 from typing import Any
 
@@ -227,8 +228,8 @@ class Drive:
         disable_voltage = not cw & 0x02
         quick_stop = (cw & 0x06) == 0x02
         shutdown = (low & 0x87) == 0x06
-        switch_on = (low & 0x87) == 0x07  # also "disable operation" from enabled
-        enable = (low & 0x8F) == 0x0F
+        switch_on = low == 0x07  # "disable operation" from enabled
+        enable = low == 0x0F
         if s == State.SWITCH_ON_DISABLED:
             if shutdown:
                 self.state = State.READY_TO_SWITCH_ON
@@ -237,7 +238,7 @@ class Drive:
                 self.state = State.SWITCH_ON_DISABLED
             elif switch_on:
                 self.state = State.SWITCHED_ON
-            elif enable:  # DSP-402 transition 3 then 4
+            elif enable:  # xxxx x111 switches on (transition 3), then enables (4)
                 self.state = State.SWITCHED_ON
                 self._enable()
         elif s == State.SWITCHED_ON:
@@ -303,6 +304,7 @@ class Drive:
             self._w(self.f.p_soll, self.last_target_counts)
             if m in (_IP, _CSP):
                 self._w(self.f.a_soll, _A_MAX)
+                self._w(self.f.d_soll, _A_MAX)
             self._w(self.f.mode, self.f.position)
             self.ip_enabled = m in (_IP, _CSP) and bool(self.controlword & 0x10)
         elif m in (_PV, _PT, _CSV, _CST):
@@ -327,8 +329,11 @@ class Drive:
             if self._v(0x607E) & 0x40:
                 v = -v
             self._w(self.f.a_soll, _A_MAX)
+            self._w(self.f.d_soll, _A_MAX)
         else:
             self._w(self.f.a_soll, self.acceleration(self._v(0x6083)))
+            dec = self._v(0x6084)
+            self._w(self.f.d_soll, self.acceleration(dec) if dec else 0)
         self._w(self.f.v_soll, v)
 
     def _mode_bits(self, old: int, cw: int) -> None:
@@ -347,12 +352,14 @@ class Drive:
                 target = self.counts(self._v(0x607A))
                 base = (self.last_target_counts if cw & 0x40 else 0)
                 goal = base + target
-                moving = not self._pp_reached()
+                moving = self.queued is not None or (
+                    self._r(self.f.mode) == self.f.position
+                    and self._r(self.f.p_ist) != self._r(self.f.p_soll))
                 if cw & 0x20 or not moving:
                     self._start_move(goal)
-                else:
+                    self.ack = True
+                else:  # acknowledged when the move under way ends (§11.5.4, t6)
                     self.queued = (goal, True)
-                self.ack = True
             if not cw & 0x10 and self.queued is None:
                 self.ack = False
         elif m in (_PV, _PT):
@@ -405,7 +412,10 @@ class Drive:
         goal = self.last_target_counts + counts if relative else counts
         period_ms = max(1, self._v(0x60C2, 1))
         delta = abs(goal - self._r(self.f.p_ist))
-        rpm100 = round(delta * 60000 * 100 / (self.f.counts_per_rev * period_ms))
+        # the speed that covers the step in the period less two samples (the motor's 1 ms
+        # samples of the start and the end of the step's short ramp)
+        span = max(1, period_ms - 2)
+        rpm100 = math.ceil(delta * 60000 * 100 / (self.f.counts_per_rev * span))
         self._w(self.f.v_soll, max(1, min(300000, rpm100)))
         self._w(self.f.p_soll, goal)
         self.last_target_counts = goal
@@ -437,6 +447,7 @@ class Drive:
             goal, _ = self.queued
             self.queued = None
             self._start_move(goal)
+            self.ack = bool(self.controlword & 0x10)
         elif self.mode == _HM and self.homing == "running":
             if self._r(self.f.mode) not in (self.f.zero_search_1, self.f.zero_search_2):
                 ok = not err and bool(self._r(self.f.statusbits) & self.f.st_zero_search_done)

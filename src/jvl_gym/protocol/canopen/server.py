@@ -186,7 +186,12 @@ class CanopenServer:
             msg = self.bus.recv(timeout=0)
             if msg is None:
                 return False
-            self._handle(msg)
+            try:
+                self._handle(msg)
+            except Exception:  # a slave's fault must not stop the bus: logged and counted
+                self.errors += 1
+                log.exception("CANopen frame 0x%03X %s not carried out", msg.arbitration_id,
+                              bytes(msg.data).hex())
             return True
 
     def _receive(self) -> None:
