@@ -97,6 +97,8 @@ def _var(name: str, index: int, sub: int, dtype: int, access: str, default: Any 
         if relative:
             v.relative = True
             v.default_raw = f"$NODEID+0x{default:X}"
+        elif isinstance(default, int) and default < 0:
+            v.default_raw = str(default)  # canopen's EDS export writes "0x-…" otherwise
     return v
 
 
