@@ -117,7 +117,7 @@ class Pdos:
             raise SdoAbortedError(ABORT["no_object"])
         obj = od[index]
         if not hasattr(obj, "data_type"):
-            if sub not in obj:
+            if sub not in obj.subindices:
                 raise SdoAbortedError(ABORT["no_sub"])
             obj = obj[sub]
         elif sub:

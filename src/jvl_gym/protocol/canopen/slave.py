@@ -291,7 +291,7 @@ class CanopenSlave:
             if sub:
                 raise SdoAbortedError(ABORT["no_sub"])
             return obj
-        if sub not in obj:
+        if sub not in obj.subindices:  # (an ODArray makes up any other sub-index)
             raise SdoAbortedError(ABORT["no_sub"])
         return obj[sub]
 
