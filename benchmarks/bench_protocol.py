@@ -8,6 +8,13 @@ ERR_STAT) and block reads. Prints requests per second, lost (unanswered) and cor
 (read-back mismatch) counts, and writes them to the generated page ``docs/benchmarks.md``
 (section "Serial protocol", :mod:`bench_page`; ``--page`` or ``$JVL_BENCH_PAGE`` for another
 file, ``none`` for no page).
+
+The same section gets the CANopen figures (:func:`canopen_load`, ``--canopen-requests``, 0 to
+skip): an MIS232 as CANopen slave (``jvl_gym.protocol.canopen``) on a python-can ``virtual``
+bus with the ``canopen`` package as master — SDO round trips per second (expedited uploads and
+downloads of 2012h, one after the other), received PDO frames carried out per second (RPDO 21
+moving the motor) and transmitted PDO frames per second (TPDO 1 with a 1 ms event timer while
+the server advances simulated time as fast as it can).
 """
 
 from __future__ import annotations
@@ -107,8 +114,69 @@ def run_load(url: str, addresses: list[int], n_requests: int) -> tuple[LoadResul
     return total, wall
 
 
-def section(clients: int, requests: int, motor: str, total: LoadResult, wall: float) -> str:
-    """The page section (Markdown) of one run."""
+def canopen_load(requests: int) -> dict[str, float]:
+    """CANopen figures through the twin (module docstring): SDO round trips/s, RPDO and TPDO
+    frames/s."""
+    import can
+    import canopen
+
+    from jvl_gym import MotorArray
+    from jvl_gym.protocol.canopen.eds import shipped_path
+    from jvl_gym.protocol.canopen.server import CanopenServer, open_bus
+
+    m = MotorArray("MIS232", n=1, seed=0)
+    m.step(1)
+    channel = f"bench-canopen-{time.monotonic_ns()}"
+    server = CanopenServer([Twin(m)], open_bus("virtual", channel), run_clock=False)
+    net = canopen.Network()
+    net.connect(interface="virtual", channel=channel)
+    raw = can.Bus(interface="virtual", channel=channel)
+    tpdos = []
+    net.subscribe(0x185, lambda *_: tpdos.append(1))
+    try:
+        server.start()
+        node = net.add_node(5, str(shipped_path()))
+        t0 = time.perf_counter()
+        for k in range(requests):
+            if k % 2:
+                node.sdo.download(0x2012, 5, (1000 + k % 1000).to_bytes(4, "little"))
+            else:
+                node.sdo.upload(0x2012, 10)
+        sdo_rate = requests / (time.perf_counter() - t0)
+        node.sdo[0x1414][1].raw = 0x215
+        node.sdo[0x1A00][0].raw = 0
+        node.sdo[0x1A00][1].raw = 0x20120A20
+        node.sdo[0x1A00][0].raw = 1
+        node.sdo[0x1800][2].raw = 255
+        node.sdo[0x1800][5].raw = 1
+        node.sdo[0x1800][1].raw = 0x185
+        node.sdo[0x2012][2].raw = 2
+        node.nmt.state = "OPERATIONAL"
+        slave = server.slaves[0]
+        t0 = time.perf_counter()
+        for k in range(requests):
+            p = (k % 100) * 100
+            raw.send(can.Message(arbitration_id=0x215, is_extended_id=False,
+                                 data=p.to_bytes(4, "little", signed=True)
+                                 + (10000).to_bytes(2, "little") + (1000).to_bytes(2, "little")))
+        while slave.stats["RPDO"] < requests and time.perf_counter() - t0 < 60:
+            time.sleep(0.001)
+        rpdo_rate = slave.stats["RPDO"] / (time.perf_counter() - t0)
+        seconds = max(1.0, requests / 1000)
+        t0 = time.perf_counter()
+        server.advance(seconds)
+        tpdo_rate = slave.stats["TPDO"] / (time.perf_counter() - t0)
+    finally:
+        server.stop()
+        net.disconnect()
+        raw.shutdown()
+    return {"SDO round trips/s": sdo_rate, "RPDO frames/s": rpdo_rate,
+            "TPDO frames/s": tpdo_rate}
+
+
+def section(clients: int, requests: int, motor: str, total: LoadResult, wall: float,
+            canopen: dict[str, float] | None = None) -> str:
+    """The page section (Markdown) of one run (with the CANopen figures, if measured)."""
     head = (f"{clients} TCP clients × {requests:,} mixed requests against one twin "
             f"({motor} × {clients}, real-time clock running).\n\n")
     rows = [["requests/s", f"{total.requests / wall:,.0f}"],
@@ -117,7 +185,12 @@ def section(clients: int, requests: int, motor: str, total: LoadResult, wall: fl
             ["lost (unanswered)", total.lost],
             ["corrupted (read-back mismatch)", total.corrupted],
             ["wall time", f"{wall:.2f} s"]]
-    return head + table(["figure", "value"], rows)
+    text = head + table(["figure", "value"], rows)
+    if canopen:
+        text += ("\n\nCANopen: one MIS232 as slave on a python-can virtual bus, the canopen "
+                 "package as master.\n\n"
+                 + table(["figure", "value"], [[k, f"{v:,.0f}"] for k, v in canopen.items()]))
+    return text
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -125,6 +198,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--clients", type=int, default=8)
     ap.add_argument("--requests", type=int, default=10_000, help="requests per client")
     ap.add_argument("--motor", default="MAC140")
+    ap.add_argument("--canopen-requests", type=int, default=2000,
+                    help="SDO requests and RPDO frames of the CANopen figures (0: skip)")
     ap.add_argument("--page", default=None,
                     help="page to write (default docs/benchmarks.md; 'none': no page)")
     args = ap.parse_args(argv)
@@ -145,11 +220,14 @@ def main(argv: list[str] | None = None) -> int:
     print(f"  wall time {wall:.2f} s, {rate:.0f} requests/s")
     for e in total.errors[:5]:
         print("  ", e)
+    figures = canopen_load(args.canopen_requests) if args.canopen_requests > 0 else None
+    for k, v in (figures or {}).items():
+        print(f"  CANopen {k}: {v:.0f}")
     page = (page_path() if args.page is None
             else None if args.page.lower() == "none" else Path(args.page))
     if page is not None:
-        update_section("protocol", section(args.clients, args.requests, args.motor, total, wall),
-                       page)
+        update_section("protocol", section(args.clients, args.requests, args.motor, total, wall,
+                                           figures), page)
         print(f"  written to {page}")
     return 0 if total.lost == 0 and total.corrupted == 0 else 1
 

@@ -93,7 +93,7 @@ class LssSlave:
                 node.set_node_id(self.pending)
             if self.pending_rate is not None:
                 node.reg_write(node.facts.baud, self.pending_rate, sdo=False)
-                image = dict(node.m.flash_image(node.i)) or node._register_image()
+                image = dict(node.m.flash_image(node.i)) or node.register_image()
                 image[node.facts.baud] = self.pending_rate
                 node.m.load_flash_image(node.i, image)
         except (ValueError, Exception) as exc:  # noqa: BLE001 - the motor's refusal

@@ -168,10 +168,10 @@ class CanopenSlave:
         image = dict(self.m.flash_image(self.i))
         image[self.facts.node_id] = int(node_id)
         if len(image) == 1:  # no flash yet: it holds the registers as they are now
-            image = self._register_image() | image
+            image = self.register_image() | image
         self.m.load_flash_image(self.i, image)
 
-    def _register_image(self) -> dict[int, int]:
+    def register_image(self) -> dict[int, int]:
         """The registers flash holds, as they are now (read-write, not MODE_REG)."""
         return {r.number: self.reg_read(r.number) for r in self.m.table
                 if r.access == Access.RW and r.number != self.facts.mode
