@@ -244,3 +244,66 @@ def test_factors_manual_example(rig: Rig) -> None:
     with pytest.raises(canopen.SdoAbortedError) as info:
         node.sdo[0x6091][2].raw = 0
     assert info.value.code == 0x06090032
+
+
+def test_interpolated_position_at_each_sync(rig: Rig) -> None:
+    """§11.5.8: 60C1h sub 1 is reached by the next period after each SYNC; sub 2 = 1 makes
+    it relative."""
+    node = _node(rig)
+    node.sdo[0x60C2][1].raw = 10
+    node.op_mode = "INTERPOLATED POSITION"
+    node.state = "OPERATION ENABLED"
+    node.controlword = 0x1F  # ENABLE_IP_MODE
+    assert node.sdo[0x6041].raw & 0x400  # IP_MODE_READY
+    node.sdo[0x60C1][1].raw = 2000
+    assert rig.m.read_raw("P_SOLL")[0] == 0  # taken at the SYNC
+    rig.send(0x80)
+    rig.advance(0.01)
+    assert rig.m.read_raw("P_IST")[0] == 2000
+    node.sdo[0x60C1][2].raw = 1
+    node.sdo[0x60C1][1].raw = 500
+    for _ in range(3):
+        rig.send(0x80)
+        rig.advance(0.01)
+    assert rig.m.read_raw("P_IST")[0] == 3500
+
+
+def test_cyclic_velocity_and_torque(rig: Rig) -> None:
+    """§11.5.10–11: CSV takes 60FFh at once, reversed by bit 6 of 607Eh; CST runs at 6080h
+    with the current of 6071h."""
+    node = _node(rig)
+    node.op_mode = "CYCLIC SYNCHRONOUS VELOCITY"
+    node.state = "OPERATION ENABLED"
+    node.sdo[0x60FF].raw = 5000
+    assert rig.m.read_raw("V_SOLL")[0] == 5000 and rig.m.read_raw("MODE_REG")[0] == 1
+    rig.advance(0.2)
+    assert node.sdo[0x606C].raw == 5000
+    node.state = "SWITCHED ON"
+    node.sdo[0x607E].raw = 0x40
+    node.sdo[0x6080].raw = 2000
+    node.sdo[0x6071].raw = 250
+    current = int(rig.m.read_raw("RUN_CURRENT")[0])
+    node.op_mode = "CYCLIC SYNCHRONOUS TORQUE"
+    node.state = "OPERATION ENABLED"
+    assert rig.m.read_raw("V_SOLL")[0] == -2000
+    assert rig.m.read_raw("RUN_CURRENT")[0] == round(current / 4)
+    rig.advance(0.5)
+    assert node.sdo[0x606C].raw == -2000
+
+
+def test_profile_velocity_halt(rig: Rig) -> None:
+    """§11.5.5: halt (bit 8) decelerates to 0 (status bit 12 velocity zero); released, the
+    motor runs at 60FFh again (bit 10 velocity reached)."""
+    node = _node(rig)
+    node.sdo[0x60FF].raw = 10000
+    node.sdo[0x6083].raw = 5000
+    node.op_mode = "PROFILED VELOCITY"
+    node.state = "OPERATION ENABLED"
+    rig.advance(0.5)
+    assert node.sdo[0x6041].raw & 0x1400 == 0x400
+    node.controlword = 0x10F
+    rig.advance(0.5)
+    assert node.sdo[0x606C].raw == 0 and node.sdo[0x6041].raw & 0x1000
+    node.controlword = 0x0F
+    rig.advance(0.5)
+    assert node.sdo[0x606C].raw == 10000
