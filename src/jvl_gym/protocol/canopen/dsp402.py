@@ -94,7 +94,7 @@ class Drive:
         self.mode = 0
         self.ack = False
         self.target_reached = True
-        self.queued: tuple[int, bool] | None = None
+        self.queued: int | None = None
         self.homing: str | None = None  # None, "running", "attained", "error"
         self.halted = False
         self.base_current = 0
@@ -359,7 +359,7 @@ class Drive:
                     self._start_move(goal)
                     self.ack = True
                 else:  # acknowledged when the move under way ends (§11.5.4, t6)
-                    self.queued = (goal, True)
+                    self.queued = goal
             if not cw & 0x10 and self.queued is None:
                 self.ack = False
         elif m in (_PV, _PT):
@@ -444,7 +444,7 @@ class Drive:
             return
         if self.mode == _PP and self.queued is not None and (
                 self._r(self.f.p_ist) == self._r(self.f.p_soll)):
-            goal, _ = self.queued
+            goal = self.queued
             self.queued = None
             self._start_move(goal)
             self.ack = bool(self.controlword & 0x10)

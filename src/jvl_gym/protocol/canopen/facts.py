@@ -12,8 +12,8 @@ from there instead.
 from __future__ import annotations
 
 import importlib
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass, replace
+from typing import Any, ClassVar
 
 from ...registers import RegisterError
 
@@ -112,12 +112,12 @@ class CanopenFacts:
     vendor_id: int = 0x117
     device_type: int = 0x40192
     device_name: str = "JVL A/S"
-    register_fields: tuple[str, ...] = field(default=(
+    #: the attributes that name registers
+    REGISTER_FIELDS: ClassVar[tuple[str, ...]] = (
         "node_id", "baud", "mode", "p_soll", "v_soll", "a_soll", "d_soll", "p_ist", "v_ist",
         "flwerr", "flwerrmax", "err_bits", "statusbits", "command", "inputs", "outputs",
         "setup_bits", "run_current", "home_mask", "nl_mask", "pl_mask", "v_home",
-        "v_home_crawl", "p_home", "t_home", "motor_type", "serial", "version", "hardware"),
-        repr=False)
+        "v_home_crawl", "p_home", "t_home", "motor_type", "serial", "version", "hardware")
 
     def numbered(self, table: Any) -> CanopenFacts:
         """This record with every register name replaced by its number in ``table``.
@@ -128,14 +128,14 @@ class CanopenFacts:
             The table lacks a register the slave needs (naming it).
         """
         numbers = {}
-        for name in self.register_fields:
+        for name in self.REGISTER_FIELDS:
             key = getattr(self, name)
             try:
                 numbers[name] = table.lookup(key).number
             except RegisterError:
                 raise ValueError(f"the motors' register table has no {key} register, which "
                                  "the CANopen slave needs") from None
-        return CanopenFacts(**{**self.__dict__, **numbers})
+        return replace(self, **numbers)
 
 
 def _constants(motors: Any) -> Any:

@@ -24,6 +24,8 @@ from __future__ import annotations
 import struct
 from typing import Any
 
+from canopen.sdo import SdoAbortedError
+
 __all__ = ["LssSlave", "LSS_MASTER_COB", "LSS_SLAVE_COB", "BIT_RATES"]
 
 LSS_MASTER_COB, LSS_SLAVE_COB = 0x7E5, 0x7E4
@@ -96,7 +98,7 @@ class LssSlave:
                 image = dict(node.m.flash_image(node.i)) or node.register_image()
                 image[node.facts.baud] = self.pending_rate
                 node.m.load_flash_image(node.i, image)
-        except (ValueError, Exception) as exc:  # noqa: BLE001 - the motor's refusal
+        except (ValueError, SdoAbortedError) as exc:  # the motor's refusal
             node.refuse(f"LSS store configuration: {exc}")
             return False
         return True

@@ -452,7 +452,7 @@ class CanopenSlave:
         if obj.max is not None and value > obj.max:
             raise SdoAbortedError(ABORT["too_high"])
         self.write_value(obj.index, obj.subindex, value)
-        self.stats["SDO write" if self.sdo else "write"] += 1
+        self.stats["writes"] += 1
 
     def pdo_read(self, index: int, sub: int) -> int:
         """Raw value of a mapped object for a transmit PDO."""
