@@ -2,8 +2,8 @@
 the modes of operation and the factors, carried out with the motor's own registers.
 
 **State machine** (DSP-402; statusword bits 0–6: ready to switch on, switched on, operation
-enabled, fault, voltage enabled, quick stop, switch on disabled; bit 9 remote; bit 7 warning =
-unused). Commands of the controlword: shutdown (xxxx x110), switch on (xxxx x111),
+enabled, fault, voltage enabled, quick stop, switch on disabled (the state's value carries
+bits 0–3, 5 and 6); bit 9 remote; bit 7, warning, is not used). Commands of the controlword: shutdown (xxxx x110), switch on (xxxx x111),
 disable voltage (xxxx xx0x), quick stop (xxxx x01x), disable operation (xxxx 0111), enable
 operation (xxxx 1111), fault reset (bit 7 rising). Every transition 2–16; after power-on the
 drive is SWITCH ON DISABLED. Entering OPERATION ENABLED puts the motor in the mode's MODE_REG;
@@ -146,10 +146,6 @@ class Drive:
         if self.state in (State.READY_TO_SWITCH_ON, State.SWITCHED_ON,
                           State.OPERATION_ENABLED, State.QUICK_STOP_ACTIVE):
             sw |= STATUS_BITS["voltage"]
-        if self.state not in (State.QUICK_STOP_ACTIVE,):
-            sw |= 1 << 5  # quick stop not active
-        if self.state in (State.SWITCH_ON_DISABLED, State.FAULT, State.NOT_READY):
-            sw &= ~(1 << 5)
         if self.state != State.OPERATION_ENABLED:
             return sw | (STATUS_BITS["target"] if self.mode != _HM or self.homing else 0)
         if self.mode == _PP:
