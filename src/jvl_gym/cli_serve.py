@@ -300,8 +300,13 @@ def serve(
     if not serial:
         server: Any = None
     elif modbus:
-        server = _modbus_server(line, endpoint, pty, speed, switch=modbus_switch,
-                                run_clock=can_server is None)
+        try:
+            server = _modbus_server(line, endpoint, pty, speed, switch=modbus_switch,
+                                    run_clock=can_server is None)
+        except typer.BadParameter:
+            if can_server is not None:
+                can_server.stop()
+            raise
     else:
         server = TwinServer(line, speed=speed, tcp=endpoint, pty=pty, user_tcp=user_tcp,
                             user_pty=user_pty, run_clock=can_server is None)
@@ -344,7 +349,7 @@ def canopen_server(line: Any, interface: str, channel: str, node_ids: list[int] 
     for twin in twins:
         if not has_canopen(twin.m):
             raise typer.BadParameter(f"--canopen: the {twin.m.family.title} have no CANopen "
-                                     "interface (the MIS/SMC have)")
+                                     "interface; serve only motors of a family that has one")
     try:
         bus = open_bus(interface, channel, bitrate)
     except ValueError as exc:
