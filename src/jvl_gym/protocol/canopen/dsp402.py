@@ -2,17 +2,17 @@
 the modes of operation and the factors, carried out with the motor's own registers.
 
 **State machine** (DSP-402; statusword bits 0–6: ready to switch on, switched on, operation
-enabled, fault, voltage enabled, quick stop, switch on disabled (the state's value carries
-bits 0–3, 5 and 6); bit 9 remote; bit 7, warning, is not used). Commands of the controlword: shutdown (xxxx x110), switch on (xxxx x111),
-disable voltage (xxxx xx0x), quick stop (xxxx x01x), disable operation (xxxx 0111), enable
-operation (xxxx 1111), fault reset (bit 7 rising). Every transition 2–16; after power-on the
-drive is SWITCH ON DISABLED. Entering OPERATION ENABLED puts the motor in the mode's MODE_REG;
-leaving it makes it passive. Quick stop decelerates at 6085h (velocity mode, V_SOLL 0), then by
-the quick stop option code 605Ah (0: at once, 1–3: after the stop, 5–7: stays) goes to SWITCH
-ON DISABLED. A motor error (ERR_BITS ≠ 0) in any state is the fault reaction: the motor is made
-passive and the drive is FAULT; a fault reset clears the motor's errors (command 97) and, if
-none remains, leads to SWITCH ON DISABLED. "The start mode of the motor must be set to passive"
-(§11.5.1): the drive assumes it.
+enabled, fault, voltage enabled, quick stop, switch on disabled (the state's value carries bits
+0–3, 5 and 6); bit 9 remote; bit 7, warning, is not used). Commands of the controlword: shutdown
+(xxxx x110), switch on (xxxx x111), disable voltage (xxxx xx0x), quick stop (xxxx x01x), disable
+operation (xxxx 0111), enable operation (xxxx 1111), fault reset (bit 7 rising). Every
+transition 2–16; after power-on the drive is SWITCH ON DISABLED. Entering OPERATION ENABLED puts
+the motor in the mode's MODE_REG; leaving it makes it passive. Quick stop decelerates at 6085h
+(velocity mode, V_SOLL 0), then by the quick stop option code 605Ah (0: at once, 1–3: after the
+stop, 5–7: stays) goes to SWITCH ON DISABLED. A motor error (ERR_BITS ≠ 0) in any state is the
+fault reaction: the motor is made passive and the drive is FAULT; a fault reset clears the
+motor's errors (command 97) and, if none remains, leads to SWITCH ON DISABLED. "The start mode
+of the motor must be set to passive" (§11.5.1): the drive assumes it.
 
 **Modes** (6060h → 6061h; changed only while operation is not enabled, §11.5.3, except from
 homing to profile position once the homing is done):
