@@ -1,0 +1,181 @@
+"""Stored programs of the MIS motor array: storing, running, stopping and stepping them.
+
+The program lives in the motor's program flash: it survives a reset and, unless SETUP_BITS bit 1
+("Don't start program after power up", §8.2.68) is set, starts at power-on with the motor in
+position mode (§9.1: "When a program is made and stored the motor will always startup in
+position mode"; the power-up zero search of HOMEMODE is not done: §6.5.2 "unless a eRXP program
+exist"). The executor (:mod:`.executor`) runs between the outer samples of :meth:`step`; motors
+without a running program step in one compiled call as before.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from ....arguments import MotorIndex, as_index, motor_index, outer_count
+from .. import constants as c
+from .. import regs as R
+from .binary import FLASH_BYTES, encode_command
+from .commands import Command
+from .executor import ProgramRunner, ProgramStatus
+from .format import ProgramError, check_program, parse_program, print_program
+
+__all__ = ["ProgramMixin", "SETUP_NO_PROGRAM_START"]
+
+#: SETUP_BITS bit 1: "Don't start program after power up" (§8.2.68)
+SETUP_NO_PROGRAM_START = 1 << 1
+
+
+def _checked(program: str | Sequence[Command]) -> list[Command]:
+    """A program as commands, refused (ProgramError) if malformed or too big for the flash."""
+    if isinstance(program, str):
+        cmds = parse_program(program)
+    else:
+        cmds = list(program)
+        if not cmds or not all(isinstance(x, Command) for x in cmds):
+            raise ProgramError(1, None, "a program is its text or a non-empty list of Commands")
+        cmds = parse_program(print_program(cmds))  # the same checks as text
+    check_program(cmds)
+    size = 2
+    for n, cmd in enumerate(cmds, 1):
+        size += len(encode_command(cmd))
+        if size > FLASH_BYTES:
+            raise ProgramError(n, None, f"the program does not fit the {FLASH_BYTES}-byte "
+                                        "program flash from this line on")
+    return cmds
+
+
+class ProgramMixin:
+    """Program methods of :class:`~jvl_gym.families.mis.motors.MisMotorArray`."""
+
+    n: int
+    regs: np.ndarray
+    _runners: list[ProgramRunner | None] | None = None
+
+    # ------------------------------------------------------------------ flash
+    def store_program(self, program: str | Sequence[Command], index: MotorIndex = None) -> None:
+        """Store a program in the program flash of the motors (MacTalk "Save in motor").
+
+        The program is checked whole first; a refused program leaves the stored program,
+        the registers and a running program as they were. A stored program replaces the old
+        one (which stops) and runs from the next power-on, or at once by :meth:`program_start`.
+
+        Parameters
+        ----------
+        program : str or sequence of Command
+            Program text (:mod:`.format`) or its commands.
+        index : int, slice, bool mask or int array, optional
+            The motors (default all).
+
+        Raises
+        ------
+        ProgramError
+            Malformed (its line and field), or larger than the 3072-byte program flash.
+        """
+        cmds = _checked(program)
+        idx = as_index(index, self.n)
+        if self._runners is None:
+            self._runners = [None] * self.n
+        for i in idx.tolist():
+            self._runners[i] = ProgramRunner(cmds)
+
+    def erase_program(self, index: MotorIndex = None) -> None:
+        """Clear the program flash (user command 342, §8.2.22: "Clear all flash sectors in the
+        RXP area")."""
+        if self._runners is not None:
+            for i in as_index(index, self.n).tolist():
+                self._runners[i] = None
+
+    def program_text(self, index: int = 0) -> str | None:
+        """The stored program of one motor as text (None: no program)."""
+        r = self._runner(index, "program_text", need=False)
+        return None if r is None else print_program(r.cmds)
+
+    # ------------------------------------------------------------------ control
+    def program_start(self, index: MotorIndex = None) -> None:
+        """Start program execution (program command 1, §18.2.10): a paused program resumes,
+        otherwise it starts at line 1."""
+        for r in self._each(index, "program_start"):
+            r.start(resume=True)
+
+    def program_restart(self, index: MotorIndex = None) -> None:
+        """Start the program at line 1 whatever its state."""
+        for r in self._each(index, "program_restart"):
+            r.start(resume=False)
+
+    def program_stop(self, index: MotorIndex = None) -> None:
+        """Stop program execution (program command 2); the motor keeps its mode."""
+        for r in self._each(index, "program_stop"):
+            r.stop()
+
+    def program_pause(self, index: MotorIndex = None) -> None:
+        """Pause program execution (program command 3); :meth:`program_start` resumes."""
+        for r in self._each(index, "program_pause"):
+            r.pause()
+
+    def program_step(self, index: MotorIndex = None) -> None:
+        """Run the line at the program pointer, then pause (program command 4 with the area of
+        that line); a line that waits completes when its wait ends."""
+        for r in self._each(index, "program_step"):
+            r.step_line()
+
+    def program_status(self, index: int = 0) -> ProgramStatus:
+        """Program state, line, error flag and checksum of one motor (§18.2.10)."""
+        r = self._runner(index, "program_status", need=False)
+        if r is None:
+            return ProgramStatus(0, "passive", 0, False, 0)
+        return r.status()
+
+    def program_refusals(self, index: int = 0) -> list[str]:
+        """Register writes of the program the firmware refused (e.g. an active mode while
+        ERR_BITS ≠ 0), oldest first."""
+        r = self._runner(index, "program_refusals", need=False)
+        return [] if r is None else list(r.refusals)
+
+    def _runner(self, index: int, what: str, need: bool = True) -> ProgramRunner | None:
+        i = motor_index(index, self.n, what)
+        r = None if self._runners is None else self._runners[i]
+        if r is None and need:
+            raise ProgramError(1, None, f"{what}: motor {i} has no stored program")
+        return r
+
+    def _each(self, index: MotorIndex, what: str) -> list[ProgramRunner]:
+        idx = as_index(index, self.n).tolist()
+        runners = [self._runner(i, what) for i in idx]
+        return [r for r in runners if r is not None]
+
+    # ------------------------------------------------------------------ hooks
+    def _program_power_on(self, idx: np.ndarray) -> None:
+        """Power-on of the motors ``idx``: a stored program restarts from line 1 in position
+        mode unless SETUP_BITS says not to (module docstring)."""
+        if self._runners is None:
+            return
+        for i in idx.tolist():
+            old = self._runners[i]
+            if old is None:
+                continue
+            r = ProgramRunner(old.cmds)
+            self._runners[i] = r
+            if not int(self.regs[i, R.SETUP_BITS]) & SETUP_NO_PROGRAM_START:
+                self.regs[i, R.MODE_REG] = c.POSITION
+                r.start(resume=False)
+
+    def step(self, n_outer: int = 1) -> None:
+        """Advance all motors by ``n_outer`` outer samples; running programs run their lines
+        before each outer sample (:mod:`.executor`)."""
+        runners = self._runners
+        if runners is None or not any(r is not None and r.active for r in runners):
+            super().step(n_outer)  # type: ignore[misc]
+            return
+        left = outer_count(n_outer, "step")
+        while left:
+            live = [(i, r) for i, r in enumerate(runners) if r is not None and r.active]
+            if not live:
+                super().step(left)  # type: ignore[misc]
+                return
+            for i, r in live:
+                r.sample(self, i)  # type: ignore[arg-type]
+            super().step(1)  # type: ignore[misc]
+            left -= 1
