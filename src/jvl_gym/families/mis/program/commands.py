@@ -90,7 +90,7 @@ SPECS: dict[str, Spec] = {s.keyword: s for s in (
           safety_distance=(Source(lo=0), 0), **_COND),
     _spec("set_output", "§9.7.9", "Set outputs (single)", output=(Choice(_OUTPUTS), None),
           state=(Choice(("low", "high", "low_pulse", "high_pulse")), None),
-          pulse_ms=(Int(1, 32767), 0)),
+          pulse_ms=(Int(0, 32767), 0)),
     _spec("set_outputs", "§9.7.9", "Set outputs (multiple)",
           outputs=(Pattern(_OUTPUTS), None)),
     _spec("jump", "§9.7.10", "Unconditional jump", line=(_LINE, None)),

@@ -3,7 +3,8 @@
 Timing (§9.8, §9.9): the firmware runs one program instruction per pass of its main loop (about
 30 µs); a line takes the time of the §9.8 table (:func:`.commands.cost_us`). The simulated
 firmware runs the main loop between its 1 ms outer samples: before each outer sample a running
-program gets 1000 µs of lines. The registers it reads are those the last outer sample left (so a
+program gets 1000 µs of lines (a line that runs past the outer sample takes its overrun from
+the next one). The registers it reads are those the last outer sample left (so a
 jump on an input reads INPUTS, the filtered inputs of §2.2.6, and a wait for a register sees it
 as the firmware updates it); a line that waits (for time, an input, a register, in-position)
 re-tests every pass, and as nothing changes between two outer samples, it holds the program
@@ -118,6 +119,7 @@ class ProgramRunner:
         self.pc = 0
         self.sum = 0
         self.seen = 0  # input word at the previous pass
+        self.carry = 0  # µs of the last line that ran into the next outer sample
         self.wait: str | None = None  # what the line at pc waits for
         self.wait_tick = 0  # first tick the wait may end (or the wait-ms deadline)
         self.search = 0  # move_sensor: 0 searching, 1 target set
@@ -179,7 +181,7 @@ class ProgramRunner:
         if self.state not in (RUNNING, SINGLE_STEP):
             return
         word = _word(regs)
-        used = 0
+        used, self.carry = self.carry, 0
         while used < SAMPLE_US and self.state in (RUNNING, SINGLE_STEP):
             if self.pc >= len(self.cmds):
                 self.state = PROGRAM_OVERFLOW
@@ -197,6 +199,8 @@ class ProgramRunner:
                 self.state = PAUSED
             if self.wait is not None and self.wait_tick > tick:
                 break  # the line waits for a later outer sample
+        else:
+            self.carry = max(used - SAMPLE_US, 0)  # a line that ran past the outer sample
 
     def _end_pulses(self, m: MisMotorArray, i: int, tick: int) -> None:
         for bit, (end, level) in list(self.pulses.items()):

@@ -128,7 +128,7 @@ def _check(cmd: Command, got: dict[str, str], n: int) -> None:
     k = cmd.keyword
     if k == "set_output":
         pulse = str(cmd["state"]).endswith("_pulse")
-        if pulse and "pulse_ms" not in got:
+        if pulse and not cmd["pulse_ms"]:
             raise ProgramError(n, "pulse_ms", "a pulse needs its length (1 … 32767 ms)")
         if not pulse and "pulse_ms" in got:
             raise ProgramError(n, "pulse_ms", "only a pulse has a length")
