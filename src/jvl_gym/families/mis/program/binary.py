@@ -11,6 +11,7 @@ program bytes.
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Sequence
 
 from .commands import SPECS, Command
@@ -40,7 +41,7 @@ def _decode_at(data: bytes, k: int) -> tuple[Command, int]:
     try:
         for key, (ftype, _) in SPECS[keyword].fields.items():
             values[key], k = ftype.unpack(data, k)
-    except (IndexError, UnicodeDecodeError, ValueError) as exc:
+    except (IndexError, UnicodeDecodeError, ValueError, struct.error) as exc:
         raise FieldError(f"{keyword}: {exc}") from None
     if keyword == "set_output":
         if str(values["state"]).endswith("_pulse") != (values["pulse_ms"] != 0):

@@ -27,7 +27,7 @@ from .fields import FieldError
 
 __all__ = ["ProgramError", "parse_program", "parse_line", "print_program", "print_line"]
 
-_BARE = re.compile(r'[^\s"=]+\Z')
+_BARE = re.compile(r'[^\s"]+\Z')
 
 
 class ProgramError(ValueError):
@@ -48,8 +48,9 @@ class ProgramError(ValueError):
         self.field = field
 
 
-def _tokens(text: str, n: int) -> list[str]:
-    out: list[str] = []
+def _tokens(text: str, n: int) -> list[tuple[str, str | None]]:
+    """The words of a line: (word, None), or ("key=", value) for a quoted value."""
+    out: list[tuple[str, str | None]] = []
     k = 0
     while k < len(text):
         if text[k] in " \t":
@@ -59,6 +60,7 @@ def _tokens(text: str, n: int) -> list[str]:
         while k < len(text) and text[k] not in ' \t"':
             k += 1
         tok = text[start:k]
+        quoted = None
         if k < len(text) and text[k] == '"':
             if not tok.endswith("="):
                 raise ProgramError(n, None, f"a quote must follow 'key=' (at character {k + 1})")
@@ -79,8 +81,8 @@ def _tokens(text: str, n: int) -> list[str]:
                     k += 1
             if k < len(text) and text[k] not in " \t":
                 raise ProgramError(n, tok[:-1], "a space must follow the closing quote")
-            tok += "\0" + "".join(chars)
-        out.append(tok)
+            quoted = "".join(chars)
+        out.append((tok, quoted))
     return out
 
 
@@ -89,17 +91,19 @@ def parse_line(text: str, n: int = 1) -> Command:
     toks = _tokens(text, n)
     if not toks:
         raise ProgramError(n, None, "empty line (every line is a command; use remark)")
-    keyword = toks[0]
+    keyword = toks[0][0]
     spec = SPECS.get(keyword)
     if spec is None:
         raise ProgramError(n, None, f"unknown command {keyword!r}; the commands are "
                                     f"{', '.join(SPECS)}")
     got: dict[str, str] = {}
-    for tok in toks[1:]:
+    if toks[0][1] is not None:
+        raise ProgramError(n, None, "a line starts with its command")
+    for tok, quoted in toks[1:]:
         key, sep, value = tok.partition("=")
         if not sep or not key:
             raise ProgramError(n, None, f"{tok!r} is not key=value")
-        value = value[1:] if value.startswith("\0") else value
+        value = value if quoted is None else quoted
         if key not in spec.fields:
             raise ProgramError(n, key, f"{keyword} has no field {key!r}; its fields are "
                                        f"{', '.join(spec.fields)}")
