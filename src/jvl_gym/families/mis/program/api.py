@@ -121,6 +121,48 @@ class ProgramMixin:
         for r in self._each(index, "program_step"):
             r.step_line()
 
+    def program_command(self, index: int, command: int, data: bytes = b"") -> bytes:
+        """The serial command "Program status and command" (61h, MIS manual §18.2.10) for one
+        motor: carry out ``command`` with its data and return the 8 status bytes.
+
+        Commands: 0 no operation, 1 start, 2 stop, 3 pause, 4 run while the program pointer
+        is inside [data 1, data 2] (16-bit each), 5 set (data 1) and clear (data 2) outputs,
+        6 reserved (nothing), 7 prepare the flash for a new program (the stored program is
+        erased). Status: state, program pointer (16 bit), stack pointer, checksum (16 bit),
+        inputs, outputs (§18.2.10 "returned data"); numbers low byte first as the register
+        data of §18.2. The program pointer is the index of the line (line 1 is 0: the
+        manual's example answers a start with pointer 0); the stack pointer is 0 (a line
+        leaves nothing on the stack).
+
+        Raises
+        ------
+        ProgramError
+            An unknown command, data of the wrong length, or a command that needs a program
+            where there is none.
+        """
+        i = motor_index(index, self.n, "program_command")
+        need = {0: 0, 1: 0, 2: 0, 3: 0, 4: 4, 5: 2, 6: 0, 7: 2}
+        if command not in need or len(data) != need[command]:
+            raise ProgramError(1, None, f"program command {command} with {len(data)} data bytes "
+                                        "is not one of §18.2.10")
+        if command == 5:
+            out = int(self.regs[i, R.OUTPUTS])
+            self.regs[i, R.OUTPUTS] = (out | data[0]) & ~data[1] & 0xFF
+        elif command == 7:
+            self.erase_program(i)
+        elif command in (1, 2, 3, 4):
+            r = self._runner(i, "program_command")
+            assert r is not None
+            if command == 4:
+                r.run_area(int.from_bytes(data[:2], "little") + 1,
+                           int.from_bytes(data[2:], "little") + 1)
+            else:
+                (r.start, r.stop, r.pause)[command - 1]()
+        s = self.program_status(i)
+        return (bytes([s.state]) + max(s.line - 1, 0).to_bytes(2, "little") + bytes([0])
+                + s.checksum.to_bytes(2, "little")
+                + bytes([int(self.regs[i, R.INPUTS]) & 0xFF, int(self.regs[i, R.OUTPUTS]) & 0xFF]))
+
     def program_status(self, index: int = 0) -> ProgramStatus:
         """Program state, line, error flag and checksum of one motor (§18.2.10)."""
         r = self._runner(index, "program_status", need=False)

@@ -119,6 +119,7 @@ class ProgramRunner:
         self.pc = 0
         self.sum = 0
         self.seen = 0  # input word at the previous pass
+        self.area = (0, 0)  # lines a single step runs in
         self.carry = 0  # µs of the last line that ran into the next outer sample
         self.wait: str | None = None  # what the line at pc waits for
         self.wait_tick = 0  # first tick the wait may end (or the wait-ms deadline)
@@ -154,11 +155,18 @@ class ProgramRunner:
         if self.state in (RUNNING, SINGLE_STEP, STARTING):
             self.state = PAUSED
 
-    def step_line(self) -> None:
-        """Run one line, then pause (program command 4 with the area [line, line])."""
+    def run_area(self, first: int, last: int) -> None:
+        """Program command 4: run until the pointer is outside lines ``first`` … ``last``
+        (1-based), then pause."""
         if self.state == STARTING:
             self.pc = 0
+        self.area = (first, last)
         self.state = SINGLE_STEP
+
+    def step_line(self) -> None:
+        """Run the line at the pointer, then pause (command 4 with the area of that line)."""
+        line = (0 if self.state == STARTING else self.pc) + 1
+        self.run_area(line, line)
 
     def status(self) -> ProgramStatus:
         return ProgramStatus(self.state, STATE_NAMES[self.state], self.pc + 1,
@@ -195,7 +203,8 @@ class ProgramRunner:
                 cmd = self.cmds[self.pc]
                 used += max(cost_us(cmd), 1)
                 self._run(m, i, cmd, regs, tick, prev, word)
-            if self.state == SINGLE_STEP and self.wait is None:
+            if self.state == SINGLE_STEP and self.wait is None and not (
+                    self.area[0] <= self.pc + 1 <= self.area[1]):
                 self.state = PAUSED
             if self.wait is not None and self.wait_tick > tick:
                 break  # the line waits for a later outer sample
