@@ -15,6 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from ....arguments import MotorIndex, as_index, motor_index, outer_count
+from ....stepping import driver
 from .. import constants as c
 from .. import regs as R
 from .binary import FLASH_BYTES, encode_command
@@ -219,5 +220,7 @@ class ProgramMixin:
                 return
             for i, r in live:
                 r.sample(self, i)  # type: ignore[arg-type]
-            super().step(1)  # type: ignore[misc]
+            world = getattr(self, "world", None)
+            plan = None if world is None else world.schedule(self, 1)
+            driver(self.FAMILY_KEY).run(self.engine_view(plan), 1, serial=True)  # type: ignore[attr-defined]
             left -= 1
