@@ -209,6 +209,12 @@ def serve(
         "--modbus-switch", help="Serve the MIS main channel as the motor does: MacTalk after "
         "power-on, Modbus RTU after 1 s of silence if bit 0 of register 121 is set (MIS manual "
         "§12.2.1).")] = False,
+    dmx: Annotated[bool, typer.Option(
+        "--dmx", help="Serve DMX512 (MIS manual §13) instead of MacTalk: break FFh 00h 00h, "
+        "FFh sent as FFh FFh (docs/protocol.md).")] = False,
+    dmx_start: Annotated[list[int] | None, typer.Option(
+        "--dmx-start", help="DMX Start Address 1 of each motor (repeat, one per --address; "
+        "default 1, 4, 7, …); Start Address 2 is 500.")] = None,
     user_tcp: Annotated[int | None, typer.Option(
         help="FastMAC/FlexMAC user interface of motor i on TCP port BASE+i.")] = None,
     user_pty: Annotated[bool, typer.Option(
@@ -270,7 +276,10 @@ def serve(
     except LoadError as exc:
         raise typer.BadParameter(str(exc)) from None
     endpoint = parse_tcp(tcp) if tcp else None
-    if modbus:
+    if dmx:
+        server = _dmx_server(line, endpoint, pty, speed, dmx_start, modbus or user_tcp is not None
+                             or user_pty)
+    elif modbus:
         server = _modbus_server(line, endpoint, pty, speed, switch=modbus_switch)
     else:
         server = TwinServer(line, speed=speed, tcp=endpoint, pty=pty, user_tcp=user_tcp,
@@ -290,6 +299,28 @@ def serve(
         server.stop()
         stats = server.bus.stats if modbus else line.stats
         typer.echo(f"stopped; {dict(stats)}")
+
+
+def _dmx_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
+                starts: list[int] | None, other: bool) -> Any:
+    """A DMX512 server of the motors of ``line`` (one twin of a family with DMX512)."""
+    from .protocol.dmx512.receiver import DmxSettings
+    from .protocol.dmx512.server import DmxLine, DmxServer
+    from .protocol.twin import Twin
+
+    if other:
+        raise typer.BadParameter("--dmx serves the DMX line only (no --modbus, --user-tcp/-pty)")
+    if not isinstance(line, Twin):
+        raise typer.BadParameter("--dmx serves motors of one family")
+    n = line.m.n
+    starts = starts or [1 + 3 * i for i in range(n)]
+    if len(starts) != n:
+        raise typer.BadParameter(f"give one --dmx-start per --address ({n})")
+    try:
+        settings = [DmxSettings(start_address1=a) for a in starts]
+        return DmxServer(line, speed=speed, tcp=tcp, pty=pty, line=DmxLine(line, settings))
+    except (ValueError, KeyError) as exc:
+        raise typer.BadParameter(f"--dmx: {exc}") from None
 
 
 def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
