@@ -215,6 +215,12 @@ def serve(
     dmx_start: Annotated[list[int] | None, typer.Option(
         "--dmx-start", help="DMX Start Address 1 of each motor (repeat, one per --address; "
         "default 1, 4, 7, …); Start Address 2 is 500.")] = None,
+    j1939: Annotated[str | None, typer.Option(
+        "--j1939", help="Also serve the motors as J1939 nodes (MIS manual §11.8) on a "
+        "python-can bus INTERFACE:CHANNEL, e.g. socketcan:vcan0 or virtual:bus0.")] = None,
+    j1939_address: Annotated[list[int] | None, typer.Option(
+        "--j1939-address", help="J1939 node address 1..252 of each motor (repeat; default "
+        "the motor's FBUS_NODE_ID, 5).")] = None,
     user_tcp: Annotated[int | None, typer.Option(
         help="FastMAC/FlexMAC user interface of motor i on TCP port BASE+i.")] = None,
     user_pty: Annotated[bool, typer.Option(
@@ -255,8 +261,8 @@ def serve(
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
     motor = motor or ["MAC140"]
     address = address or [1]
-    if tcp is None and not pty:
-        raise typer.BadParameter("give --tcp HOST:PORT and/or --pty")
+    if tcp is None and not pty and j1939 is None:
+        raise typer.BadParameter("give --tcp HOST:PORT and/or --pty (or --j1939)")
     types = motor if len(motor) == len(address) else [motor[0]] * len(address)
     if len(motor) not in (1, len(address)):
         raise typer.BadParameter("give one --motor, or one per --address")
@@ -284,6 +290,7 @@ def serve(
     else:
         server = TwinServer(line, speed=speed, tcp=endpoint, pty=pty, user_tcp=user_tcp,
                             user_pty=user_pty)
+    node = _j1939_node(line, j1939, j1939_address) if j1939 is not None else None
     server.start()
     for text in banner([types[k] for k in order], line, [address[k] for k in order]):
         typer.echo(text)
@@ -297,8 +304,39 @@ def serve(
         done.wait()
     finally:
         server.stop()
+        if node is not None:
+            node.close()
+            node.bus.shutdown()
         stats = server.bus.stats if modbus else line.stats
         typer.echo(f"stopped; {dict(stats)}")
+
+
+def _j1939_node(line: Any, spec: str, addresses: list[int] | None) -> Any:
+    """J1939 nodes of the motors of ``line`` on the python-can bus ``spec`` (INTERFACE:CHANNEL),
+    claiming their addresses now."""
+    import can
+
+    from .protocol.sae_j1939.node import J1939Node
+    from .protocol.twin import Twin
+
+    if not isinstance(line, Twin):
+        raise typer.BadParameter("--j1939 serves motors of one family")
+    interface, sep, channel = spec.partition(":")
+    if not sep or not interface or not channel:
+        raise typer.BadParameter(f"--j1939 {spec!r}: give INTERFACE:CHANNEL, e.g. socketcan:vcan0")
+    try:
+        if addresses is None:
+            addresses = [int(v) for v in line.m.read_raw("FBUS_NODE_ID")]
+        bus = can.Bus(interface=interface, channel=channel)
+    except (ValueError, KeyError, OSError, can.CanError, ImportError) as exc:
+        raise typer.BadParameter(f"--j1939 {spec}: {exc}") from None
+    try:
+        node = J1939Node(line, bus, addresses)
+    except ValueError as exc:
+        bus.shutdown()
+        raise typer.BadParameter(f"--j1939-address: {exc}") from None
+    typer.echo(f"j1939 {spec}: node addresses {', '.join(str(a) for a in addresses)}")
+    return node.start()
 
 
 def _dmx_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
