@@ -8,7 +8,7 @@ import pytest
 
 from jvl_gym import MotorArray
 from jvl_gym.families.mis import constants as c
-from jvl_gym.families.mis.program import ProgramError, parse_program
+from jvl_gym.families.mis.program import SPECS, ProgramError, parse_program
 from jvl_gym.families.mis.program.binary import encode_command
 
 REV = 409600
@@ -502,3 +502,33 @@ def test_a_fatal_error_holds_the_program_at_its_move() -> None:
     m.step(500)
     assert _reg(m, "MODE_REG") == 0 and m.program_status().line == 1
     assert _reg(m, "OUTPUTS") == 0
+
+
+def _summed(data: bytes) -> bytes:
+    return data + (sum(data) & 0xFFFF).to_bytes(2, "little")
+
+
+def test_program_image_round_trip_and_flash_errors() -> None:
+    """§18.2.10 states 10 (program data corrupted), 11 (checksum incorrect) and 6 (invalid
+    instruction) of flash images; a good image runs."""
+    m = MotorArray("MIS232", seed=0)
+    m.store_program(_end("set_output output=3 state=high\n"))
+    image = m.program_image()
+    other = MotorArray("MIS232", seed=0)
+    other.load_program_image(0, image)
+    assert other.program_text() == m.program_text()
+    other.program_start()
+    other.step(1)
+    assert _reg(other, "OUTPUTS") == 4
+    bad_sum = image[:-2] + ((int.from_bytes(image[-2:], "little") + 1) & 0xFFFF).to_bytes(
+        2, "little")
+    garbage = b"\x01\x00\xee"  # one line of an unknown instruction code
+    # one line: a binary command whose code (FFh) is no instruction
+    binary = bytes([1, 0, list(SPECS).index("binary"), 1, 0xFF])
+    for data, state in ((bad_sum, 11), (_summed(garbage), 10), (_summed(binary), 6)):
+        other.load_program_image(0, data)
+        other.program_start()
+        other.step(1)
+        assert other.program_status().state == state and other.program_status().error
+    with pytest.raises(ProgramError):
+        other.load_program_image(0, b"\x00")

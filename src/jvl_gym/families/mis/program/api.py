@@ -89,10 +89,35 @@ class ProgramMixin:
             for i in as_index(index, self.n).tolist():
                 self._runners[i] = None
 
+    def program_image(self, index: int = 0) -> bytes:
+        """The program flash of one motor: the program bytes (:mod:`.binary`) and their 16-bit
+        checksum, low byte first (``b""``: no program)."""
+        r = self._runner(index, "program_image", need=False)
+        return b"" if r is None else r.flash + r.stored_checksum.to_bytes(2, "little")
+
+    def load_program_image(self, index: int, image: bytes) -> None:
+        """Restore a program flash saved by :meth:`program_image` (e.g. from a file). The bytes
+        are taken as they are, as the motor's flash would hold them: bytes that are no program
+        or a wrong checksum show when the program starts (states 10 and 11, §18.2.10).
+
+        Raises
+        ------
+        ProgramError
+            ``image`` is not 4 … 3074 bytes.
+        """
+        i = motor_index(index, self.n, "load_program_image")
+        if not isinstance(image, (bytes, bytearray)) or not 4 <= len(image) <= FLASH_BYTES + 2:
+            raise ProgramError(1, None, "a program image is 4 … 3074 bytes (program_image)")
+        if self._runners is None:
+            self._runners = [None] * self.n
+        data = bytes(image)
+        self._runners[i] = ProgramRunner([], (data[:-2], int.from_bytes(data[-2:], "little")))
+
     def program_text(self, index: int = 0) -> str | None:
-        """The stored program of one motor as text (None: no program)."""
+        """The stored program of one motor as text (None: no program, or flash bytes that are
+        no program)."""
         r = self._runner(index, "program_text", need=False)
-        return None if r is None else print_program(r.cmds)
+        return None if r is None or r.corrupt else print_program(r.cmds)
 
     # ------------------------------------------------------------------ control
     def program_start(self, index: MotorIndex = None) -> None:
@@ -199,7 +224,7 @@ class ProgramMixin:
             old = self._runners[i]
             if old is None:
                 continue
-            r = ProgramRunner(old.cmds)
+            r = ProgramRunner(old.cmds, (old.flash, old.stored_checksum))
             self._runners[i] = r
             if not int(self.regs[i, R.SETUP_BITS]) & SETUP_NO_PROGRAM_START:
                 self.regs[i, R.MODE_REG] = c.POSITION

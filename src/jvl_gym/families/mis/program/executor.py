@@ -35,7 +35,7 @@ from .. import layout as L
 from .. import regs as R
 from ..firmware.arith import wrap32
 from ..table import TABLE
-from .binary import checksum, decode_command, encode_program
+from .binary import checksum, decode_command, decode_program, encode_program
 from .commands import FASTMAC_GROUPS, Command, cost_us
 from .fields import INPUT_NAMES, FieldError
 
@@ -109,12 +109,23 @@ class ProgramRunner:
     ----------
     cmds : sequence of Command
         The program (checked by :func:`.format.parse_program`).
+    image : tuple (bytes, int), optional
+        Flash bytes and their stored checksum instead (a flash image: it is decoded when the
+        program starts; bytes that are no program stop it with "flash error", a checksum that
+        does not match with "flash checksum error").
     """
 
-    def __init__(self, cmds: Sequence[Command]) -> None:
+    def __init__(self, cmds: Sequence[Command],
+                 image: tuple[bytes, int] | None = None) -> None:
         self.cmds = list(cmds)
-        self.flash = encode_program(self.cmds)
-        self.stored_checksum = checksum(self.flash)
+        self.flash = encode_program(self.cmds) if image is None else bytes(image[0])
+        self.stored_checksum = checksum(self.flash) if image is None else image[1]
+        self.corrupt = False
+        if image is not None:
+            try:
+                self.cmds = decode_program(self.flash)
+            except FieldError:
+                self.corrupt = True
         self.state = STOPPED
         self.pc = 0
         self.sum = 0
@@ -187,6 +198,9 @@ class ProgramRunner:
             self.state = RUNNING
             self.seen = _word(regs)
         if self.state not in (RUNNING, SINGLE_STEP):
+            return
+        if self.corrupt:
+            self.state = FLASH_ERROR
             return
         word = _word(regs)
         used, self.carry = self.carry, 0
