@@ -126,3 +126,12 @@ def test_random_text_is_refused_cleanly_or_round_trips(text: str) -> None:
     again = parse_program(print_program(cmds))
     assert again == cmds
     assert decode_program(encode_program(cmds)) == cmds
+
+
+@pytest.mark.parametrize("text", ["wait_ms time=" + "9" * 5000,
+                                  "set_register register=P2 value=" + "9" * 300 + "rev",
+                                  "move_relative distance=1 velocity=" + "9" * 200,
+                                  "calculate register=P2 expression=" + "9" * 200])
+def test_huge_numbers_are_refused_cleanly(text: str) -> None:
+    with pytest.raises(ProgramError, match="line 1, field"):
+        parse_program(text)

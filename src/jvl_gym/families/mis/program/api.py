@@ -21,7 +21,7 @@ from .. import regs as R
 from .binary import FLASH_BYTES, encode_command
 from .commands import Command
 from .executor import ProgramRunner, ProgramStatus
-from .format import ProgramError, check_program, parse_program, print_program
+from .format import ProgramError, parse_program, print_program
 
 __all__ = ["ProgramMixin", "SETUP_NO_PROGRAM_START"]
 
@@ -38,7 +38,6 @@ def _checked(program: str | Sequence[Command]) -> list[Command]:
         if not cmds or not all(isinstance(x, Command) for x in cmds):
             raise ProgramError(1, None, "a program is its text or a non-empty list of Commands")
         cmds = parse_program(print_program(cmds))  # the same checks as text
-    check_program(cmds)
     size = 2
     for n, cmd in enumerate(cmds, 1):
         size += len(encode_command(cmd))
@@ -198,7 +197,7 @@ class ProgramMixin:
 
     def program_refusals(self, index: int = 0) -> list[str]:
         """Register writes of the program the firmware refused (e.g. an active mode while
-        ERR_BITS ≠ 0), oldest first."""
+        ERR_BITS ≠ 0), oldest first (the latest 100)."""
         r = self._runner(index, "program_refusals", need=False)
         return [] if r is None else list(r.refusals)
 

@@ -25,6 +25,7 @@ Program states (§18.2.10): 0 passive, 1 running, 2 single step, 3 paused, 5 pro
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -45,6 +46,7 @@ if TYPE_CHECKING:
 __all__ = ["ProgramRunner", "ProgramStatus", "STATE_NAMES", "ERROR_STATES", "PASS_US",
            "SAMPLE_US"]
 
+REFUSALS_KEPT = 100  #: refused writes remembered (the latest)
 PASS_US = 30  #: one main-loop pass (§9.9: "approximately 30 microseconds")
 SAMPLE_US = 1000  #: main-loop time between two outer samples of the simulated firmware
 
@@ -110,9 +112,9 @@ class ProgramRunner:
     cmds : sequence of Command
         The program (checked by :func:`.format.parse_program`).
     image : tuple (bytes, int), optional
-        Flash bytes and their stored checksum instead (a flash image: it is decoded when the
-        program starts; bytes that are no program stop it with "flash error", a checksum that
-        does not match with "flash checksum error").
+        Flash bytes and their stored checksum instead (a flash image: bytes that are no
+        program stop it with "flash error" when it starts, a checksum that does not match with
+        "flash checksum error").
     """
 
     def __init__(self, cmds: Sequence[Command],
@@ -138,7 +140,7 @@ class ProgramRunner:
         self.changed = False  # move_relative_change: new velocity given
         self.start_pos = 0
         self.pulses: dict[int, tuple[int, bool]] = {}  # output bit → (end tick, level after)
-        self.refusals: list[str] = []
+        self.refusals: deque[str] = deque(maxlen=REFUSALS_KEPT)
 
     # ------------------------------------------------------------------ control
     @property

@@ -40,7 +40,7 @@ class FieldError(ValueError):
 
 
 def _int(text: str, lo: int, hi: int) -> int:
-    if not _INT.match(text):
+    if len(text) > 24 or not _INT.match(text):
         raise FieldError(f"{text!r} is not a whole number")
     v = int(text)
     if not lo <= v <= hi:
@@ -112,7 +112,7 @@ class Velocity(Field):
     held as V_SOLL units of 0.01 RPM."""
 
     def parse(self, text: str) -> int:
-        if not _DECIMAL.match(text):
+        if len(text) > 24 or not _DECIMAL.match(text):
             raise FieldError(f"{text!r} is not a velocity in RPM (at most two decimals)")
         whole, _, frac = text.lstrip("+-").partition(".")
         units = int(whole) * 100 + int((frac + "00")[:2])
@@ -203,7 +203,7 @@ class Value(Field):
                     x = float(num)
                 except ValueError:
                     raise FieldError(f"{text!r} is not a number of {suffix}") from None
-                if not re.fullmatch(r"[+-]?[0-9]+(\.[0-9]+)?", num):
+                if len(num) > 24 or not re.fullmatch(r"[+-]?[0-9]+(\.[0-9]+)?", num):
                     raise FieldError(f"{text!r} is not a number of {suffix}")
                 v = round(x * per)
                 if not _I32[0] <= v <= _I32[1]:

@@ -109,6 +109,8 @@ def parse_line(text: str, n: int = 1) -> Command:
                                        f"{', '.join(spec.fields)}")
         if key in got:
             raise ProgramError(n, key, "given twice")
+        if len(value) > 400:
+            raise ProgramError(n, key, "the value is longer than 400 characters")
         got[key] = value
     values: dict[str, object] = {}
     for key, (ftype, default) in spec.fields.items():
