@@ -36,7 +36,9 @@ def _command(words: list[str]):
     import typer.main
 
     group = typer.main.get_command(app)
-    return group.commands[words[1]]
+    cmd = group.commands[words[1]]
+    sub = getattr(cmd, "commands", None)  # a command group: ``jvl-gym program run``
+    return cmd if sub is None else sub[words[2]]
 
 
 def test_readme_cli_lines_use_existing_commands_and_options():
