@@ -530,5 +530,7 @@ def test_program_image_round_trip_and_flash_errors() -> None:
         other.program_start()
         other.step(1)
         assert other.program_status().state == state and other.program_status().error
-    with pytest.raises(ProgramError):
+    with pytest.raises(ValueError, match="4 … 3074 bytes"):
         other.load_program_image(0, b"\x00")
+    with pytest.raises(ValueError, match="no stored program"):
+        MotorArray("MIS232").program_start()

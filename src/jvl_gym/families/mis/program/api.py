@@ -101,12 +101,13 @@ class ProgramMixin:
 
         Raises
         ------
-        ProgramError
+        ValueError
             ``image`` is not 4 … 3074 bytes.
         """
         i = motor_index(index, self.n, "load_program_image")
         if not isinstance(image, (bytes, bytearray)) or not 4 <= len(image) <= FLASH_BYTES + 2:
-            raise ProgramError(1, None, "a program image is 4 … 3074 bytes (program_image)")
+            raise ValueError("load_program_image: a program image is 4 … 3074 bytes (as "
+                             "program_image gives it). Nothing was changed.")
         if self._runners is None:
             self._runners = [None] * self.n
         data = bytes(image)
@@ -161,15 +162,15 @@ class ProgramMixin:
 
         Raises
         ------
-        ProgramError
+        ValueError
             An unknown command, data of the wrong length, or a command that needs a program
             where there is none.
         """
         i = motor_index(index, self.n, "program_command")
         need = {0: 0, 1: 0, 2: 0, 3: 0, 4: 4, 5: 2, 6: 0, 7: 2}
         if command not in need or len(data) != need[command]:
-            raise ProgramError(1, None, f"program command {command} with {len(data)} data bytes "
-                                        "is not one of §18.2.10")
+            raise ValueError(f"program command {command} with {len(data)} data bytes is not one "
+                             "of §18.2.10. Nothing was changed.")
         if command == 5:
             out = int(self.regs[i, R.OUTPUTS])
             self.regs[i, R.OUTPUTS] = (out | data[0]) & ~data[1] & 0xFF
@@ -205,7 +206,7 @@ class ProgramMixin:
         i = motor_index(index, self.n, what)
         r = None if self._runners is None else self._runners[i]
         if r is None and need:
-            raise ProgramError(1, None, f"{what}: motor {i} has no stored program")
+            raise ValueError(f"{what}: motor {i} has no stored program (store_program)")
         return r
 
     def _each(self, index: MotorIndex, what: str) -> list[ProgramRunner]:
