@@ -65,7 +65,8 @@ def test_readme_says_how_to_reach_the_commands_and_the_rl_extra():
     assert "setup-rl" in README
 
 
-@pytest.mark.parametrize("folder", ["demo_out", "tune_out", "autotune_out", "runs", "site"])
+@pytest.mark.parametrize("folder", ["demo_out", "tune_out", "autotune_out", "runs", "site",
+                                    "program_out"])
 def test_output_folders_are_ignored(folder):
     out = subprocess.run(["git", "check-ignore", "-q", f"{folder}/x"], cwd=ROOT)
     assert out.returncode == 0, folder
