@@ -36,7 +36,9 @@ def _command(words: list[str]):
     import typer.main
 
     group = typer.main.get_command(app)
-    return group.commands[words[1]]
+    cmd = group.commands[words[1]]
+    sub = getattr(cmd, "commands", None)  # a command group: ``jvl-gym program run``
+    return cmd if sub is None else sub[words[2]]
 
 
 def test_readme_cli_lines_use_existing_commands_and_options():
@@ -63,7 +65,8 @@ def test_readme_says_how_to_reach_the_commands_and_the_rl_extra():
     assert "setup-rl" in README
 
 
-@pytest.mark.parametrize("folder", ["demo_out", "tune_out", "autotune_out", "runs", "site"])
+@pytest.mark.parametrize("folder", ["demo_out", "tune_out", "autotune_out", "runs", "site",
+                                    "program_out"])
 def test_output_folders_are_ignored(folder):
     out = subprocess.run(["git", "check-ignore", "-q", f"{folder}/x"], cwd=ROOT)
     assert out.returncode == 0, folder

@@ -1,5 +1,5 @@
-"""``jvl-gym`` command line: ``train``, ``evaluate``, ``compile``, ``sweep`` (and ``serve`` when
-available).
+"""``jvl-gym`` command line: ``train``, ``evaluate``, ``compile``, ``sweep``, ``program run``
+(and ``serve`` when available).
 
 Errors are one line on stderr with a non-zero exit status; ``--debug`` shows the traceback
 (:class:`jvl_gym.cli_app.App`).
@@ -14,6 +14,7 @@ from typing import Annotated
 import typer
 
 from .cli_app import RL_EXTRA_HINT, App, CliError
+from .cli_program import program_app
 
 app = App(prog="jvl-gym",
           help="jvl_gym: train and evaluate policies on the MAC motor environments.",
@@ -143,6 +144,7 @@ def _mount_serve() -> None:
 
 
 _mount_serve()
+app.add_typer(program_app, name="program")
 
 if __name__ == "__main__":
     app()

@@ -211,6 +211,18 @@ def serve(
         "--modbus-switch", help="Serve the MIS main channel as the motor does: MacTalk after "
         "power-on, Modbus RTU after 1 s of silence if bit 0 of register 121 is set (MIS manual "
         "§12.2.1).")] = False,
+    dmx: Annotated[bool, typer.Option(
+        "--dmx", help="Serve DMX512 (MIS manual §13) instead of MacTalk: break FFh 00h 00h, "
+        "FFh sent as FFh FFh (docs/protocol.md).")] = False,
+    dmx_start: Annotated[list[int] | None, typer.Option(
+        "--dmx-start", help="DMX Start Address 1 of each motor (repeat, one per --address; "
+        "default 1, 4, 7, …); Start Address 2 is 500.")] = None,
+    j1939: Annotated[str | None, typer.Option(
+        "--j1939", help="Also serve the motors as J1939 nodes (MIS manual §11.8) on a "
+        "python-can bus INTERFACE:CHANNEL, e.g. socketcan:vcan0 or virtual:bus0.")] = None,
+    j1939_address: Annotated[list[int] | None, typer.Option(
+        "--j1939-address", help="J1939 node address 1..252 of each motor (repeat; default "
+        "the motor's FBUS_NODE_ID, 5).")] = None,
     user_tcp: Annotated[int | None, typer.Option(
         help="FastMAC/FlexMAC user interface of motor i on TCP port BASE+i.")] = None,
     user_pty: Annotated[bool, typer.Option(
@@ -265,13 +277,15 @@ def serve(
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
     motor = motor or ["MAC140"]
     address = address or [1]
-    if tcp is None and not pty and not canopen:
-        raise typer.BadParameter("give --tcp HOST:PORT, --pty and/or --canopen")
+    if tcp is None and not pty and not canopen and j1939 is None:
+        raise typer.BadParameter("give --tcp HOST:PORT, --pty, --canopen and/or --j1939")
     if node_id and not canopen:
         raise typer.BadParameter("--node-id is the CANopen node id: give --canopen too")
     if node_id and len(node_id) != len(address):
         raise typer.BadParameter(f"give one --node-id per --address ({len(address)}), got "
                                  f"{len(node_id)}")
+    if dmx and canopen:
+        raise typer.BadParameter("--dmx serves the DMX line only (no --canopen)")
     types = motor if len(motor) == len(address) else [motor[0]] * len(address)
     if len(motor) not in (1, len(address)):
         raise typer.BadParameter("give one --motor, or one per --address")
@@ -296,20 +310,24 @@ def serve(
         ids = None if not node_id else [node_id[k] for k in order]
         can_server = canopen_server(line, can_interface, can_channel, ids, speed,
                                     bitrate=can_bitrate)
-    serial = tcp is not None or pty
-    if not serial:
-        server: Any = None
-    elif modbus:
-        try:
+    clock = can_server is None
+    try:
+        if can_server is not None and tcp is None and not pty:
+            server: Any = None
+        elif dmx:
+            server = _dmx_server(line, endpoint, pty, speed, dmx_start,
+                                 modbus or user_tcp is not None or user_pty)
+        elif modbus:
             server = _modbus_server(line, endpoint, pty, speed, switch=modbus_switch,
-                                    run_clock=can_server is None)
-        except typer.BadParameter:
-            if can_server is not None:
-                can_server.stop()
-            raise
-    else:
-        server = TwinServer(line, speed=speed, tcp=endpoint, pty=pty, user_tcp=user_tcp,
-                            user_pty=user_pty, run_clock=can_server is None)
+                                    run_clock=clock)
+        else:
+            server = TwinServer(line, speed=speed, tcp=endpoint, pty=pty, user_tcp=user_tcp,
+                                user_pty=user_pty, run_clock=clock)
+        node = _j1939_node(line, j1939, j1939_address) if j1939 is not None else None
+    except typer.BadParameter:
+        if can_server is not None:
+            can_server.stop()
+        raise
     if server is not None:
         server.start()
     if can_server is not None:
@@ -332,6 +350,9 @@ def serve(
             can_server.stop()
         if server is not None:
             server.stop()
+        if node is not None:
+            node.close()
+            node.bus.shutdown()
         stats = server.bus.stats if modbus and server is not None else line.stats
         typer.echo(f"stopped; {dict(stats)}")
 
@@ -359,6 +380,56 @@ def canopen_server(line: Any, interface: str, channel: str, node_ids: list[int] 
     except ValueError as exc:
         bus.shutdown()
         raise typer.BadParameter(f"--canopen: {exc}") from None
+
+
+def _j1939_node(line: Any, spec: str, addresses: list[int] | None) -> Any:
+    """J1939 nodes of the motors of ``line`` on the python-can bus ``spec`` (INTERFACE:CHANNEL),
+    claiming their addresses now."""
+    import can
+
+    from .protocol.sae_j1939.node import J1939Node
+    from .protocol.twin import Twin
+
+    if not isinstance(line, Twin):
+        raise typer.BadParameter("--j1939 serves motors of one family")
+    interface, sep, channel = spec.partition(":")
+    if not sep or not interface or not channel:
+        raise typer.BadParameter(f"--j1939 {spec!r}: give INTERFACE:CHANNEL, e.g. socketcan:vcan0")
+    try:
+        if addresses is None:
+            addresses = [int(v) for v in line.m.read_raw("FBUS_NODE_ID")]
+        bus = can.Bus(interface=interface, channel=channel)
+    except (ValueError, KeyError, OSError, can.CanError, ImportError) as exc:
+        raise typer.BadParameter(f"--j1939 {spec}: {exc}") from None
+    try:
+        node = J1939Node(line, bus, addresses)
+    except ValueError as exc:
+        bus.shutdown()
+        raise typer.BadParameter(f"--j1939-address: {exc}") from None
+    typer.echo(f"j1939 {spec}: node addresses {', '.join(str(a) for a in addresses)}")
+    return node.start()
+
+
+def _dmx_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
+                starts: list[int] | None, other: bool) -> Any:
+    """A DMX512 server of the motors of ``line`` (one twin of a family with DMX512)."""
+    from .protocol.dmx512.receiver import DmxSettings
+    from .protocol.dmx512.server import DmxLine, DmxServer
+    from .protocol.twin import Twin
+
+    if other:
+        raise typer.BadParameter("--dmx serves the DMX line only (no --modbus, --user-tcp/-pty)")
+    if not isinstance(line, Twin):
+        raise typer.BadParameter("--dmx serves motors of one family")
+    n = line.m.n
+    starts = starts or [1 + 3 * i for i in range(n)]
+    if len(starts) != n:
+        raise typer.BadParameter(f"give one --dmx-start per --address ({n})")
+    try:
+        settings = [DmxSettings(start_address1=a) for a in starts]
+        return DmxServer(line, speed=speed, tcp=tcp, pty=pty, line=DmxLine(line, settings))
+    except (ValueError, KeyError) as exc:
+        raise typer.BadParameter(f"--dmx: {exc}") from None
 
 
 def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,

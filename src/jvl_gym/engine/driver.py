@@ -216,13 +216,16 @@ class MotorDriver:
         self.serial = fns["_run_serial"]
         self.parallel = fns["_run_parallel"]
 
-    def run(self, arrays: tuple, n_outer: int) -> None:
+    def run(self, arrays: tuple, n_outer: int, serial: bool = False) -> None:
         """Advance every motor by ``n_outer`` outer samples (``arrays``: the fields of an
-        :class:`EngineView` as a plain tuple, ``MotorArray.engine_view()``)."""
+        :class:`EngineView` as a plain tuple, ``MotorArray.engine_view()``); ``serial``: in
+        this thread whatever the number of motors (for a caller that steps one outer sample
+        at a time, where starting the threads would cost more than the sample)."""
         if not self._prepared:
             self.family.compiled.prepare(arrays)
             self._prepared = True
-        run = self.parallel if arrays[0].shape[0] >= PARALLEL_MIN else self.serial
+        threaded = not serial and arrays[0].shape[0] >= PARALLEL_MIN
+        run = self.parallel if threaded else self.serial
         run(*arrays, n_outer)
 
 

@@ -13,6 +13,9 @@ following byte protected by its complement, ``AAh AAh`` end), with these differe
   (decision below);
 * 54h is "enter safe mode" and 55h "exit safe mode" (MIS §18.2.5, §18.2.6); 53h (sample
   buffer) is not a command of this dialect (MIS §18.2.1 does not list it);
+* program status and command (61h, MIS §18.2.10): the command number and its data after a
+  length, every byte protected; the unit answers with 61h to the master's address and 8 status
+  bytes (:class:`ProgramReply`);
 * group write (59h, MIS §18.2.9): ``59h×3 <group> <sequence> <regnum> <len> <data> AAh AAh``,
   every field protected, never answered.
 
@@ -26,7 +29,9 @@ Grammar::
     write flash   56h 56h 56h  <addr>                             AAh AAh  → accept if it failed
     reset         57h 57h 57h  <addr>                             AAh AAh  → none
     group write   59h 59h 59h  <group> <seq> <regnum> <len> <data…> AAh AAh → none
+    program       61h 61h 61h  <addr> <len> <command> <data…>     AAh AAh  → program reply
     reply         52h 52h 52h  00h FFh <regnum> <len> <data…>     AAh AAh
+    program reply 61h 61h 61h  00h FFh <len> <status…>            AAh AAh
     accept        11h 11h 11h
 
 Decisions where the sources are ambiguous (``docs/protocol.md``, "MacTalk of the 32-bit
@@ -74,6 +79,7 @@ __all__ = [
     "Request",
     "GroupWrite",
     "Reply",
+    "ProgramReply",
     "Accept",
     "Frame",
     "MASTER",
@@ -94,6 +100,8 @@ __all__ = [
     "encode_reset",
     "encode_group_write",
     "encode_reply",
+    "encode_program",
+    "encode_program_reply",
     "encode_accept",
     "encode",
     "value_bytes",
@@ -127,6 +135,7 @@ class Command(enum.IntEnum):
     WRITE_FLASH = 0x56  #: registers to flash, then reset (accept only if it failed; §18.2.7)
     RESET = 0x57  #: reset the controller (no reply; MIS §18.2.8)
     GROUP_WRITE = 0x59  #: write a register of every unit of a group (no reply; MIS §18.2.9)
+    PROGRAM = 0x61  #: program status and command (reply 61h with 8 status bytes; MIS §18.2.10)
 
 
 _SYNC_BYTES = frozenset(int(c) for c in Command)
@@ -146,7 +155,8 @@ class Request:
     register : int or None
         Register number 1..255 for READ, READ_BLOCK and WRITE, else None.
     data : bytes
-        The data of a WRITE (2 or 4 bytes, low byte first), else ``b""``.
+        The data of a WRITE (2 or 4 bytes, low byte first); of a PROGRAM the command number and
+        its data (1 … 5 bytes); else ``b""``.
     """
 
     command: Command
@@ -185,7 +195,15 @@ class Reply:
     data: bytes
 
 
-Frame = Request | GroupWrite | Reply | Accept
+@dataclass(frozen=True)
+class ProgramReply:
+    """A unit's answer to a program command (MIS §18.2.10): program state, program pointer
+    (16 bit), stack pointer, program checksum (16 bit), inputs, outputs — 8 bytes."""
+
+    data: bytes
+
+
+Frame = Request | GroupWrite | Reply | ProgramReply | Accept
 
 
 # ----------------------------------------------------------------------------- encoding
@@ -306,6 +324,23 @@ def encode_reply(register: int, data: bytes) -> bytes:
     return _message(Command.WRITE, bytes((MASTER, _register(register), len(data))), data)
 
 
+def encode_program(address: int, command: int, data: bytes = b"") -> bytes:
+    """Program status and command (MIS §18.2.10): ``command`` (0 … 7) and its data bytes
+    (e.g. start and end address of command 4, 16 bits each, low byte first)."""
+    body = bytes((_byte(command, "program command"),)) + bytes(data)
+    if len(body) > 5:
+        raise ValueError(f"a program command carries at most 4 data bytes, got {len(data)}")
+    return _message(Command.PROGRAM, bytes((_unit(address), len(body))), body)
+
+
+def encode_program_reply(data: bytes) -> bytes:
+    """A unit's answer to a program command: 8 status bytes (MIS §18.2.10)."""
+    data = bytes(data)
+    if len(data) != 8:
+        raise ValueError(f"the program status is 8 bytes, got {len(data)}")
+    return _message(Command.PROGRAM, bytes((MASTER, len(data))), data)
+
+
 def encode_accept() -> bytes:
     """The accept ``11h 11h 11h``."""
     return ACCEPT
@@ -317,8 +352,12 @@ def encode(frame: Frame) -> bytes:
         return ACCEPT
     if isinstance(frame, Reply):
         return encode_reply(frame.register, frame.data)
+    if isinstance(frame, ProgramReply):
+        return encode_program_reply(frame.data)
     if isinstance(frame, GroupWrite):
         return encode_group_write(frame.group, frame.sequence, frame.register, frame.data)
+    if frame.command == Command.PROGRAM:
+        return encode_program(frame.address, frame.data[0], frame.data[1:])
     if frame.command == Command.WRITE:
         return encode_write(frame.address, _register(frame.register), frame.data)
     if frame.command in _WITH_REGISTER:
@@ -357,7 +396,7 @@ def _parse(buf: bytes | bytearray) -> tuple[Frame, int]:
         return Accept(), 3
     if b0 not in _SYNC_BYTES:
         raise Malformed(f"unknown sync byte {b0:02X}h (the 32-bit MacTalk syncs are 50h, 51h, "
-                        "52h, 54h..57h, 59h, accept 11h)", "unknown_sync")
+                        "52h, 54h..57h, 59h, 61h, accept 11h)", "unknown_sync")
     rest = r.take(2)
     if rest[0] != b0 or rest[1] != b0:
         raise Malformed(f"sync bytes differ: {b0:02X}h {rest[0]:02X}h {rest[1]:02X}h "
@@ -378,6 +417,18 @@ def _parse(buf: bytes | bytearray) -> tuple[Frame, int]:
         data = r.data(n, "data")
         r.end(f"{n} data bytes")
         return Reply(register, data), r.pos
+    if cmd == Command.PROGRAM:
+        n = r.protected("length")
+        if address == MASTER:
+            data = r.data(n, "status")
+            r.end(f"{n} status bytes")
+            return ProgramReply(data), r.pos
+        if not 1 <= n <= 5:
+            raise Malformed(f"wrong length: a program command carries 1 … 5 bytes, Len is {n}",
+                            "wrong_length")
+        data = r.data(n, "data")
+        r.end(f"{n} data bytes")
+        return Request(cmd, address, None, data), r.pos
     if address == MASTER:
         raise Malformed(f"{cmd.name} addressed to 00h, the master's address", "bad_address")
     if cmd in _WITH_REGISTER:
@@ -394,7 +445,7 @@ def _parse(buf: bytes | bytearray) -> tuple[Frame, int]:
 
 
 #: a possible frame start: a sync or accept byte twice more, or up to the end of the buffer
-_START = re.compile(rb"([\x11\x50-\x52\x54-\x57\x59])(?:\1\1|\1\Z|\Z)")
+_START = re.compile(rb"([\x11\x50-\x52\x54-\x57\x59\x61])(?:\1\1|\1\Z|\Z)")
 _RUNS = {b: re.compile(re.escape(bytes((b,))) + b"+") for b in _SYNC_BYTES}
 
 

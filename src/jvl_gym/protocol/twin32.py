@@ -15,6 +15,10 @@ write flash (56h)      only in SAFE_MODE: save registers to flash (and the flash
                        be transmitted if the command failed")
 reset (57h)            ``software_reset`` if the family has one, else the power-on
                        ``reset``; no reply (MIS §18.2.8)
+program (61h)          the family's ``program_command`` (MIS: stored programs): start, stop,
+                       pause, run an area, set/clear outputs, prepare the flash; reply 61h
+                       with the 8 status bytes (MIS §18.2.10); no reply where the family has
+                       no programs or refuses the command
 group write (59h)      every motor whose GROUP_ID is the group writes the register, unless the
                        sequence is that of the last group write it received; the sequence is
                        then held in GROUP_SEQ; never answered (MIS §18.2.9, §8.2.86–87)
@@ -165,6 +169,11 @@ class MacTalk32Unit:
                 t._save_flash_file(i)
                 self.power_on(i)
                 return b""
+            if cmd == c.PROGRAM:
+                method = getattr(t.m, "program_command", None)
+                if method is None:
+                    raise ValueError("the motor family has no stored programs")
+                return m32.encode_program_reply(method(i, f.data[0], f.data[1:]))
             if cmd == c.RESET:
                 self._call(("software_reset", "reset"), i)
                 self.power_on(i)

@@ -27,6 +27,7 @@ from . import layout as L
 from . import regs as R
 from .config import MisMotorConfig, load_motor
 from .firmware.arith import wrap32
+from .program.api import ProgramMixin
 from .table import TABLE
 from .torque_curve import pull_out_torque
 from .units import COUNTS_PER_REV, CURRENT_AMPS_PER_UNIT
@@ -73,7 +74,7 @@ BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
 _PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD]
 
 
-class MisMotorArray(MotorArray):
+class MisMotorArray(ProgramMixin, MotorArray):
     """N simulated MIS/SMC integrated step motors (:class:`~jvl_gym.MotorArray` of the
     ``mis`` family).
 
@@ -207,6 +208,7 @@ class MisMotorArray(MotorArray):
         regs[idx, R.MODE_REG] = np.where(np.isin(home, (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2)),
                                          home, np.where(np.isin(start, list(c.START_MODES)),
                                                         start, c.PASSIVE))
+        self._program_power_on(idx)
 
     @property
     def time(self) -> np.ndarray:

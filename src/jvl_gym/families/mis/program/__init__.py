@@ -1,0 +1,14 @@
+"""Stored programs of the MIS/SMC motors (MIS manual chapter 9, "eRxP"): the commands of §9.7
+(:mod:`.commands`), their text format (:mod:`.format`), their flash bytes (:mod:`.binary`), the
+executor of the firmware (:mod:`.executor`) and the motor array's program methods
+(:mod:`.api`).
+"""
+
+from __future__ import annotations
+
+from .commands import SPECS, Command
+from .executor import STATE_NAMES, ProgramStatus
+from .format import ProgramError, parse_program, print_program
+
+__all__ = ["SPECS", "Command", "ProgramError", "ProgramStatus", "STATE_NAMES", "parse_program",
+           "print_program"]

@@ -1,0 +1,91 @@
+"""``jvl-gym program run``: a program with an I/O script on a simulated MIS, its trace CSV and
+plot; errors one line with exit status 2."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import pytest
+
+from jvl_gym.cli import app
+from jvl_gym.families.mis.program.bench import IoScriptError, load_io_script
+
+PICK = """mode mode=position
+move_sensor distance=20480 velocity=300 safety_distance=409600 input=3 condition=high
+set_output output=1 state=high
+wait_input input=1 condition=rising
+move_absolute position=0 velocity=600
+set_output output=1 state=low
+jump line=7
+"""
+IO = """registers: {A_SOLL: 20000, IN_POSITION_COUNT: 0}
+sensors:
+  - {input: 3, from: 200000, to: 220000}
+inputs:
+  - {t: 0.5, set: {1: high}}
+load: [{t: 0, torque: 0.02}]
+"""
+
+
+def _run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    with pytest.raises(SystemExit) as info:
+        app(args)
+    out, err = capsys.readouterr()
+    err = "".join(line for line in err.splitlines(keepends=True)
+                  if not line.startswith("jvl_gym: compil"))  # first-use compile notices
+    return int(info.value.code or 0), out, err
+
+
+def _files(tmp_path: Path, program: str = PICK, io: str = IO) -> tuple[Path, Path]:
+    (tmp_path / "p.txt").write_text(program)
+    (tmp_path / "io.yaml").write_text(io)
+    return tmp_path / "p.txt", tmp_path / "io.yaml"
+
+
+def test_program_run_writes_the_trace(tmp_path: Path, capsys: pytest.CaptureFixture[str]
+                                      ) -> None:
+    prog, io = _files(tmp_path)
+    code, out, _ = _run(["program", "run", str(prog), "--motor", "MIS232", "--seconds", "1",
+                         "--io", str(io), "--out", str(tmp_path / "o")], capsys)
+    assert code == 0 and "at line 7" in out
+    rows = list(csv.DictReader((tmp_path / "o" / "trace.csv").open()))
+    assert len(rows) == 1000 and rows[0]["t [s]"] == "0.001"
+    hit = next(r for r in rows if int(r["INPUTS"]) & 4)  # the sensor at 200000 counts
+    assert float(hit["rotor [counts]"]) >= 200000
+    stop = next(r for r in rows if int(r["OUTPUTS"]) & 1)  # 20480 counts after it
+    assert int(stop["P_IST"]) == int(hit["P_IST"]) + 20480 or abs(
+        int(stop["P_IST"]) - int(hit["P_IST"]) - 20480) < 2048
+    at_input = [r for r in rows if float(r["t [s]"]) > 0.5 and r["line"] == "5"]
+    assert at_input and float(at_input[0]["t [s]"]) <= 0.503  # the input 1 edge at 0.5 s
+    assert rows[-1]["line"] == "7" and rows[-1]["OUTPUTS"] == "0"
+    assert (tmp_path / "o" / "trace.png").stat().st_size > 10000
+
+
+@pytest.mark.parametrize(("program", "io", "args", "words"), [
+    ("mode mode=position\nmove_relative distance=x\n", IO, [], "line 2, field distance"),
+    (PICK, "inputs: [{t: -1, set: {1: high}}]\n", [], "inputs[0].t"),
+    (PICK, "sensors: [{input: 9, from: 0, to: 1}]\n", [], "input 9"),
+    (PICK, "bogus: 1\n", [], "unknown key 'bogus'"),
+    (PICK, IO, ["--motor", "MAC140"], "does not run stored programs"),
+    (PICK, IO, ["--motor", "MIS999"], "--motor MIS999"),
+    (PICK, "registers: {NOPE: 1}\n", [], "NOPE"),
+])
+def test_errors_are_one_line_with_status_2(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                           program: str, io: str, args: list[str],
+                                           words: str) -> None:
+    prog, script = _files(tmp_path, program, io)
+    code, _, err = _run(["program", "run", str(prog), "--io", str(script), "--seconds", "0.01",
+                         "--out", str(tmp_path / "o"), *args], capsys)
+    assert code == 2 and err.count("\n") == 1 and words in err, err
+    assert not (tmp_path / "o").exists()
+
+
+def test_io_script_checks() -> None:
+    s = load_io_script({"inputs": [{"t": 1, "set": {2: "high"}}, {"t": 0, "set": {2: 0}}],
+                        "load": 0.1})
+    assert s.inputs == [(0.0, {2: 0}), (1.0, {2: 1})] and s.load == [(0.0, 0.1)]
+    with pytest.raises(IoScriptError, match="level"):
+        load_io_script({"inputs": [{"t": 0, "set": {1: "on"}}]})
+    with pytest.raises(IoScriptError, match="from"):
+        load_io_script({"sensors": [{"input": 1, "from": 5, "to": 1}]})
