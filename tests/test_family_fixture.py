@@ -69,7 +69,7 @@ def test_the_twin_reads_and_writes_toy_registers_over_mactalk() -> None:
 
 
 def test_a_task_env_on_the_toy_family() -> None:
-    from toy_family.task import ToySpeedVectorEnv
+    from toy_family.speed_env import ToySpeedVectorEnv
 
     vec = ToySpeedVectorEnv(num_envs=3)
     obs, _ = vec.reset(seed=4)

@@ -3,8 +3,8 @@
 A family is its register table, constants and units, firmware, plant, configs and default
 setups, the compiled step the engine drives and its motor-array class (docs/architecture.md,
 "Adding a motor family"). The generic layers reach a family only through its :class:`Family`
-record. ``mis`` (the MIS/SMC step motors) and ``mac800`` (MAC800 and MAC400) are registered
-beside ``mac050_141``.
+record, the contract of :mod:`.contract`. ``mis`` (the MIS/SMC step motors) and ``mac800``
+(MAC800 and MAC400) are registered beside ``mac050_141``.
 """
 
 from __future__ import annotations
@@ -12,48 +12,26 @@ from __future__ import annotations
 import functools
 import importlib
 import os
-from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import yaml
 
-__all__ = ["Family", "DEFAULT_FAMILY", "register_family", "family", "families",
+from .contract import (
+    Capability,
+    Family,
+    FamilyConfig,
+    TuningSpec,
+    TwinSpec,
+    UnsupportedOperation,
+)
+
+__all__ = ["Family", "Capability", "FamilyConfig", "TwinSpec", "TuningSpec",
+           "UnsupportedOperation", "DEFAULT_FAMILY", "register_family", "family", "families",
            "family_of_motor"]
 
 #: the family of a motor type no registered family names
 DEFAULT_FAMILY = "mac050_141"
-
-
-@dataclass(frozen=True)
-class Family:
-    """What the engine knows of a motor family.
-
-    Attributes
-    ----------
-    key : str
-        Identifier (``"mac050_141"``), also used in compiled-cache file names.
-    title : str
-        Human name (``"MAC050–141 integrated servo motors"``).
-    compiled : module
-        The compiled step: ``outer_sample``, ``inner_block``, ``LANES``, ``prepare``,
-        ``scratch`` (see :mod:`jvl_gym.engine.driver`).
-    array_class : type
-        The family's :class:`~jvl_gym.MotorArray` subclass.
-    motor_types : callable
-        Names of the family's motor types (each with a motor config).
-    canonical_name : callable
-        The motor-type name a user's spelling stands for (default: unchanged).
-    """
-
-    key: str
-    title: str
-    compiled: ModuleType
-    array_class: type
-    motor_types: Callable[[], list[str]]
-    canonical_name: Callable[[str], str] = str
 
 
 _MODULES: dict[str, str] = {"mac050_141": "jvl_gym.families.mac050_141",

@@ -18,7 +18,7 @@ write (52h)            2 bytes: the 16-bit word of register N; 4 bytes: a 32-bit
                        Validated by the simulator; accept ``11h×3`` only if it was carried out
 read sample buffer     the next sample: SAMPLE1..4 as four 32-bit values (16 bytes); after
 (53h)                  the last of REC_CNT samples an empty reply (dl = 0), then from the start
-go safe mode (54h)     MotorArray.go_safe_mode (stops first, 4.4.16), accept
+go safe mode (54h)     MotorArray.enter_safe_mode (stops first, 4.4.16), accept
 go init mode (55h)     leaves SAFE_MODE (exit_safe_mode) or goes to INIT_MODE, accept
 write flash (56h)      only in SAFE_MODE: save registers to flash (and the flash file), reset;
                        no accept (5.1)
@@ -119,7 +119,7 @@ class MotorBackend(Protocol):
     def read_raw(self, key: str | int) -> np.ndarray: ...
     def write_raw(self, key: str | int, raw: Any, index: Any = None) -> None: ...
     def step(self, n_outer: int = 1) -> None: ...
-    def go_safe_mode(self, index: Any = None) -> None: ...
+    def enter_safe_mode(self, index: Any = None) -> None: ...
     def go_init_mode(self, index: Any = None) -> None: ...
     def exit_safe_mode(self, index: Any = None) -> None: ...
     def write_flash(self, index: Any = None) -> None: ...
@@ -406,7 +406,7 @@ class Twin:
             if cmd == c.READ_SAMPLE_BUFFER:
                 return mt.encode_data_reply(self._next_sample(i))
             if cmd == c.GO_SAFE_MODE:
-                self.m.go_safe_mode(i)
+                self.m.enter_safe_mode(i)
                 return mt.ACCEPT
             if cmd == c.GO_INIT_MODE:
                 if self.mode(i) == SAFE_MODE:

@@ -30,7 +30,7 @@ from ...config import (
 from ...config import load_setup as _load_setup
 
 __all__ = ["MotorConfig", "MOTORS_DIR", "SETUPS_DIR", "canonical_motor_name", "load_motor",
-           "load_setup", "motor_types"]
+           "load_setup", "motor_types", "setup_path"]
 
 #: the motor configs of the family's types
 MOTORS_DIR = Path(__file__).resolve().with_name("configs") / "motors"
@@ -137,3 +137,8 @@ def load_setup(name_or_path: str | os.PathLike[str] | dict[str, Any]) -> SetupCo
 def motor_types() -> list[str]:
     """Names of the motor types that have a config in :data:`MOTORS_DIR`."""
     return sorted(p.stem for p in MOTORS_DIR.glob("*.yaml"))
+
+
+def setup_path(name: str) -> Path:
+    """The file of the default setup ``name`` (a motor config's ``setup``)."""
+    return SETUPS_DIR / f"{name}.yaml"

@@ -16,12 +16,11 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ...arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, motor_index, real_array
+from ...arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, real_array
 from ...bank import StorePlan
 from ...inputs import InputRule
 from ...keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
 from ...registers import Format, Register, RegisterError
-from ...registers.formats import from_raw
 from ...sim import ModeError, MotorArray
 from . import constants as c
 from . import layout as L
@@ -386,7 +385,7 @@ class MacMotorArray(MotorArray):
             raise ModeError(f"{what} needs {names} (manual 4.4.16); motor {int(bad[0])} is in "
                             f"{c.MODE_NAMES.get(int(self.regs[bad[0], R.MODE_REG]), '?')}")
 
-    def go_safe_mode(self, index: MotorIndex = None) -> None:
+    def enter_safe_mode(self, index: MotorIndex = None) -> None:
         """MacTalk 'go safe mode' (5.1): stop if moving, then SAFE_MODE (4.4.16)."""
         M.go_safe(self.regs, self.state, as_index(index, self.n))
 
@@ -435,34 +434,6 @@ class MacMotorArray(MotorArray):
         if not self._buf_allocated:
             self._buf = np.zeros((self.n, c.REC_CNT_MAX, 4), dtype=np.int64)
             self._buf_allocated = True
-
-    def sample_buffer_raw(self, index: int) -> np.ndarray:
-        """Raw samples of one motor, shape (REC_CNT, 4) for SAMPLE1..SAMPLE4."""
-        index = motor_index(index, self.n, "sample_buffer_raw")
-        count = int(self.regs[index, R.REC_CNT])
-        if not self._buf_allocated:
-            return np.zeros((0, 4), dtype=np.int64)
-        return self._buf[index, :count].copy()
-
-    def sample_buffer(self) -> dict[str, np.ndarray]:
-        """The sample buffer in user units: {register name: (N, max REC_CNT) array}.
-
-        Channels are named after SAMPLE1..SAMPLE4 of motor 0 (a channel whose register differs
-        between motors is named ``SAMPLEk``); entries past a motor's REC_CNT are 0.
-        """
-        count = int(self.regs[:, R.REC_CNT].max()) if self._buf_allocated else 0
-        valid = np.arange(count)[None, :] < self.regs[:, R.REC_CNT][:, None]
-        out: dict[str, np.ndarray] = {}
-        for ch, num in enumerate((R.SAMPLE1, R.SAMPLE2, R.SAMPLE3, R.SAMPLE4)):
-            nums = self.regs[:, num]
-            raw = np.where(valid, self._buf[:, :count, ch], 0) if count else np.zeros(
-                (self.n, 0), dtype=np.int64)
-            reg = self.table.lookup(int(nums[0])) if 1 <= nums[0] <= 164 else None
-            if reg is None or np.any(nums != nums[0]) or reg.name in out:
-                out[f"SAMPLE{ch + 1}"] = raw  # raw values: no single register to name them by
-            else:
-                out[reg.name] = from_raw(reg, raw)
-        return out
 
     def set_input(self, index: MotorIndex = None, *, load_torque: InputValue = None,
                   analog_volts: InputValue = None, pulse_counts: InputValue = None,
@@ -542,8 +513,3 @@ class MacMotorArray(MotorArray):
             + 0.5 * j_load * s[:, L.S_LOAD_OMEGA] ** 2,
             "coupling": np.where(rigid, 0.0, 0.5 * p[:, L.P_K_COUPLING] * twist**2),
         }
-
-    def mode_name(self, index: int = 0) -> str:
-        """Name of the current mode of one motor."""
-        index = motor_index(index, self.n, "mode_name")
-        return c.MODE_NAMES.get(int(self.regs[index, R.MODE_REG]), "?")

@@ -15,12 +15,11 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ...arguments import InputValue, MotorIndex, as_index, motor_index
+from ...arguments import InputValue, MotorIndex, as_index
 from ...bank import StorePlan
 from ...inputs import InputRule
 from ...keywords import FINITE, NONNEGATIVE, POSITIVE
 from ...registers import Register, RegisterError, RegisterRangeError
-from ...registers.formats import from_raw
 from ...sim import ModeError, MotorArray
 from . import constants as c
 from . import layout as L
@@ -426,25 +425,9 @@ class MisMotorArray(MotorArray):
             self._buf_allocated = True
 
     # ------------------------------------------------------------------ sample buffer
-    def sample_buffer(self) -> dict[str, np.ndarray]:
-        """The samples taken (§8.2.60–63), by SAMPLE1..4's register names of motor 0 (raw
-        ``SAMPLEk`` where the motors differ): {name: (N, samples)} in user units; entries past
-        a motor's count are 0."""
-        count = int(self.state[:, L.S_REC_N].max()) if self._buf_allocated else 0
-        valid = np.arange(count)[None, :] < self.state[:, L.S_REC_N][:, None]
-        out: dict[str, np.ndarray] = {}
-        for ch in range(4):
-            nums = self.regs[:, R.SAMPLE1 + ch]
-            raw = (np.where(valid, self._buf[:, :count, ch], 0) if count
-                   else np.zeros((self.n, 0), dtype=np.int64))
-            reg = (self.table.lookup(int(nums[0])) if 0 < nums[0] <= self.table.last
-                   else None)
-            if reg is None or np.any(nums != nums[0]) or reg.name in out or reg.access.value \
-                    == "reserved":
-                out[f"SAMPLE{ch + 1}"] = raw
-            else:
-                out[reg.name] = from_raw(reg, raw)
-        return out
+    def _sample_counts(self) -> np.ndarray:
+        """Samples taken by each motor (§8.2.60–63), (N,)."""
+        return self.state[:, L.S_REC_N]
 
     # ------------------------------------------------------------------ world inputs
     def set_input(self, index: MotorIndex = None, **inputs: InputValue) -> None:
@@ -498,8 +481,3 @@ class MisMotorArray(MotorArray):
             :, L.P_AMPS_PER_UNIT]
         return np.array([pull_out_torque(rpm, amps[i], p[i, L.P_KT], p[i, L.P_R], p[i, L.P_L],
                                          u[i, L.I_SUPPLY_VOLTS]) for i in range(self.n)])
-
-    def mode_name(self, index: int = 0) -> str:
-        """Name of the current mode of one motor."""
-        i = motor_index(index, self.n, "mode_name")
-        return c.MODE_NAMES.get(int(self.regs[i, R.MODE_REG]), "?")
