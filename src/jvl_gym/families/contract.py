@@ -144,6 +144,9 @@ class TwinSpec:
         MODE_REG value of safe mode, None where the family has none.
     init_mode : int or None
         MODE_REG value of the mode "go init mode" and "exit safe mode" lead to, or None.
+    passive_mode : int or None
+        MODE_REG value of the passive mode (the power stage off), which a bus time-out may
+        command; None where the family has none.
     status_register : str
         The register whose bits :attr:`status_bits` names (the status a FastMAC status byte
         or a CANopen status word is built from).
@@ -161,6 +164,7 @@ class TwinSpec:
     dialects: tuple[str, ...]
     safe_mode: int | None = None
     init_mode: int | None = None
+    passive_mode: int | None = None
     status_register: str = "ERR_STAT"
     status_bits: Mapping[int, str] = field(default_factory=dict)
     error_bits: tuple[str, ...] = ()

@@ -17,6 +17,7 @@ FAMILY = Family(
     task=task,
     twin=TwinSpec(
         dialects=(_C.MACTALK_DIALECT,), safe_mode=_C.SAFE_MODE, init_mode=_C.INIT_MODE,
+        passive_mode=_C.INIT_MODE,  # INIT_MODE: passive (manual 4.4.1)
         status_register="ERR_STAT",
         # ERR_STAT bits (manual 3.2.35); the FastMAC status byte's error bit is any of the
         # first four, and "reset errors" clears the latched errors (manual 5.2.1.4, 5.2.1.6)

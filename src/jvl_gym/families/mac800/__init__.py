@@ -28,7 +28,7 @@ FAMILY = Family(
     array_class=Mac800MotorArray, table=REGISTERS, constants=constants, units=units,
     config=config, task=task,
     twin=TwinSpec(
-        dialects=(_C.MACTALK_DIALECT,), status_register="ERR_STAT",
+        dialects=(_C.MACTALK_DIALECT,), passive_mode=_C.PASSIVE_MODE, status_register="ERR_STAT",
         # ERR_STAT bits (register overview §1.2, register 35)
         status_bits=TwinSpec.named_bits(_C, (
             "I2T_ERR", "FLW_ERR", "FNC_ERR", "UIT_ERR", "IN_POS", "ACC_FLAG", "DEC_FLAG",

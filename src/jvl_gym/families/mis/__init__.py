@@ -29,6 +29,7 @@ FAMILY = Family(
     config=config, task=task,
     twin=TwinSpec(
         dialects=(_C.MACTALK_DIALECT,), safe_mode=_C.SAFE, init_mode=_C.PASSIVE,
+        passive_mode=_C.PASSIVE,
         # STATUSBITS (§8.2.24); ERR_BITS (§8.2.31) holds the errors
         status_register="STATUSBITS",
         status_bits=TwinSpec.named_bits(_C, (
