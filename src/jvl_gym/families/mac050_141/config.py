@@ -44,9 +44,9 @@ class MotorConfig(BaseModel):
     Every physical value must be a finite number of its type (a bool, a string or an infinity
     is refused) inside the interval given here: physically plausible for an integrated servo of
     this class and inside the region where the simulation's integration is stable. The DC bus
-    takes the motor power explicitly over an inner sample (``mac050_141.plant.supply``): a bus
+    takes the motor power explicitly over an inner sample (``jvl_gym.physics.bus``): a bus
     capacitance of a few µF lets the bus voltage diverge, so at least 100 µF is required. The
-    end stops' damping (0.05 N·m·s/rad by default, ``mac050_141.plant.mechanics``) is explicit
+    end stops' damping (0.05 N·m·s/rad by default, ``jvl_gym.physics.mechanics``) is explicit
     over an inner sample of 128 µs and diverges for a total inertia below about 3.2e-6 kg·m²,
     so the rotor inertia is at least 5e-6 kg·m².
     """

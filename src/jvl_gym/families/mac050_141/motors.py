@@ -20,6 +20,7 @@ from ...arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, real
 from ...bank import StorePlan
 from ...inputs import InputRule
 from ...keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
+from ...physics.mechanics import coupling_problem
 from ...registers import Format, Register, RegisterError
 from ...sim import ModeError, MotorArray
 from . import constants as c
@@ -29,7 +30,6 @@ from .firmware import modes as M
 from .firmware import regs as R
 from .firmware import write_rules as W
 from .firmware.monitor import filter_gain
-from .plant.mechanics import coupling_problem
 from .power_on import power_on_from_memory, reset_rows, start_loaded_rows
 from .store import store_rows
 from .table import TABLE
@@ -137,7 +137,7 @@ class MacMotorArray(MotorArray):
     def reset(self, index: MotorIndex = None, motor_type: str | Sequence[str] | None = None,
               **params: Any) -> None:
         """:meth:`jvl_gym.MotorArray.reset`; also refuses an elastic coupling the inner step
-        cannot carry (``mac050_141.plant.mechanics.coupling_problem``), changing nothing."""
+        cannot carry (``jvl_gym.physics.mechanics.coupling_problem``), changing nothing."""
         types = self._type_of.copy()
         try:
             super().reset(index, motor_type, **params)
@@ -468,7 +468,7 @@ class MacMotorArray(MotorArray):
         return self.state[:, L.S_LOAD_OMEGA].copy()
 
     def _current_vector(self) -> np.ndarray:
-        """Stator current space vector [A], (N,) complex (``mac050_141.plant.coil``)."""
+        """Stator current space vector [A], (N,) complex (``jvl_gym.physics.coil``)."""
         return self.state[:, L.S_I_RE] + 1j * self.state[:, L.S_I_IM]
 
     @property

@@ -19,15 +19,15 @@ from ...arguments import InputValue, MotorIndex, as_index
 from ...bank import StorePlan
 from ...inputs import InputRule
 from ...keywords import FINITE, NONNEGATIVE, POSITIVE
+from ...physics.fixed import wrap32
 from ...registers import Register, RegisterError, RegisterRangeError
 from ...sim import ModeError, MotorArray
 from . import constants as c
 from . import layout as L
-from . import regs as R
 from .config import MisMotorConfig, load_motor
-from .firmware.arith import wrap32
+from .firmware import regs as R
+from .plant.torque_curve import pull_out_torque
 from .table import TABLE
-from .torque_curve import pull_out_torque
 from .units import COUNTS_PER_REV, CURRENT_AMPS_PER_UNIT
 
 __all__ = ["MisMotorArray"]

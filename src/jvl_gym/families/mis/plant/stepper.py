@@ -64,11 +64,11 @@ import math
 import numpy as np
 from numba import njit
 
-from ...jit import LANE_KERNEL
-from ...trig import sincos
-from . import constants as c
-from . import layout as L
-from .units import COUNTS_PER_REV
+from ....jit import LANE_KERNEL
+from ....trig import sincos
+from .. import constants as c
+from .. import layout as L
+from ..units import COUNTS_PER_REV
 
 #: motors per block
 LANES = 8
