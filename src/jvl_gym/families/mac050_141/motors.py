@@ -400,12 +400,10 @@ class MacMotorArray(MotorArray):
         M.go_init(self.regs, self.state, idx)
 
     def _save_flash(self, idx: np.ndarray) -> None:
-        if self._flash is None:
-            self._flash = np.zeros_like(self.regs)
-        rw = self._rw_numbers()
-        self._flash[np.ix_(idx, rw)] = self.regs[np.ix_(idx, rw)]
+        """The registers flash holds, and the firmware's PROG_VERSION of the type's ROM."""
+        super()._save_flash(idx)
+        assert self._flash is not None
         self._flash[idx, R.PROG_VERSION] = self._rom[self._type_of[idx], R.PROG_VERSION]
-        self._has_flash[idx] = True
 
     def write_flash(self, index: MotorIndex = None) -> None:
         """Save the register set to flash and reset; only in SAFE_MODE (manual 2.2, 5.1)."""

@@ -288,13 +288,6 @@ class MisMotorArray(MotorArray):
         self._save_flash(idx)
         self.software_reset(idx)
 
-    def _save_flash(self, idx: np.ndarray) -> None:
-        if self._flash is None:
-            self._flash = np.zeros_like(self.regs)
-        rw = self._rw_numbers()
-        self._flash[np.ix_(idx, rw)] = self.regs[np.ix_(idx, rw)]
-        self._has_flash[idx] = True
-
     def software_reset(self, index: MotorIndex = None) -> None:
         """Reset the electronics (user command 267, §8.2.22): registers from flash or ROM and
         the power-on of the firmware (:meth:`_power_on`); the rotor keeps its angle and speed,
