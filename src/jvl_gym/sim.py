@@ -419,6 +419,12 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         raise UnsupportedOperation(self.family.title, Capability.USER_INTERFACE)
 
     # ------------------------------------------------------------------ sample buffer
+    def _ensure_buffer(self) -> None:
+        """Allocate the sample buffer, (N, *BUFFER_SHAPE) int64, on the first recording."""
+        if not self._buf_allocated:
+            self._buf = np.zeros((self.n, *self.BUFFER_SHAPE), dtype=np.int64)
+            self._buf_allocated = True
+
     def _sample_counts(self) -> np.ndarray:
         """Samples recorded so far by each motor, (N,) (default: the REC_CNT register)."""
         return self.regs[:, self.table.lookup("REC_CNT").number]

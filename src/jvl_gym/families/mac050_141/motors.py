@@ -428,11 +428,6 @@ class MacMotorArray(MotorArray):
         self.state[np.ix_(idx, keep)] = saved
         self._power_on(idx)
 
-    def _ensure_buffer(self) -> None:
-        if not self._buf_allocated:
-            self._buf = np.zeros((self.n, c.REC_CNT_MAX, 4), dtype=np.int64)
-            self._buf_allocated = True
-
     def set_input(self, index: MotorIndex = None, *, load_torque: InputValue = None,
                   analog_volts: InputValue = None, pulse_counts: InputValue = None,
                   home: InputValue = None, supply_volts: InputValue = None) -> None:

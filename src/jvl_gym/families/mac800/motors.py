@@ -300,12 +300,6 @@ class Mac800MotorArray(MotorArray):
             self._ensure_buffer()
         return False
 
-    # ------------------------------------------------------------------ sample buffer
-    def _ensure_buffer(self) -> None:
-        if not self._buf_allocated:
-            self._buf = np.zeros((self.n, c.REC_CNT_MAX, 4), dtype=np.int64)
-            self._buf_allocated = True
-
     # ------------------------------------------------------------------ world inputs
     def set_input(self, index: MotorIndex = None, *, load_torque: InputValue = None,
                   analog_volts: InputValue = None, pulse_counts: InputValue = None,

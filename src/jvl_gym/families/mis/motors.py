@@ -412,11 +412,6 @@ class MisMotorArray(MotorArray):
             if cmd in (c.CMD_RESET, c.CMD_SAVE_RESET):
                 self.software_reset(np.array([i]))
 
-    def _ensure_buffer(self) -> None:
-        if not self._buf_allocated:
-            self._buf = np.zeros((self.n, BUFFER_DEPTH, 4), dtype=np.int64)
-            self._buf_allocated = True
-
     # ------------------------------------------------------------------ sample buffer
     def _sample_counts(self) -> np.ndarray:
         """Samples taken by each motor (§8.2.60–63), (N,)."""
