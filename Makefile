@@ -50,7 +50,7 @@ notebooks: $(STAMP_RL)
 
 docs: $(STAMP)
 	$(BIN)/python -m pip install -q -e ".[docs]"
-	$(BIN)/python -m jvl_gym.registers.reference docs/registers.md
+	$(BIN)/python -m jvl_gym.families.mac050_141.reference docs/registers.md
 	$(BIN)/python -m jvl_gym.families.reference docs/families
 	$(BIN)/mkdocs build --strict -d site
 

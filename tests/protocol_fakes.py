@@ -1,19 +1,35 @@
-"""A MotorArray-like backend on any register table, for the protocol tests of families whose
-simulator is not runnable yet: registers with the table's validation, safe mode, flash and reset,
-no physics. It offers what the twin and the Modbus adapter use, with the method names of the MIS
-array (``enter_safe_mode``, ``exit_safe_mode``, ``write_flash``, the power-on ``reset``).
+"""A MotorArray-like backend on any register table, for protocol tests without physics:
+registers with the table's validation, safe mode, flash and reset. It offers what the twin and
+the Modbus adapter use, under the names of the family contract (``enter_safe_mode``,
+``exit_safe_mode``, ``write_flash``, the power-on ``reset``), and declares what it supports
+as a family does (:class:`FakeFamily`: safe mode and flash, no software reset).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from jvl_gym.families import Capability, TwinSpec
+from jvl_gym.protocol.dialect import MACTALK16
 from jvl_gym.registers import Access, ReadOnlyRegisterError, RegisterError
 from jvl_gym.registers.formats import to_raw
 
 SAFE_MODE = 15
+
+
+@dataclass(frozen=True)
+class FakeFamily:
+    """The twin's view of the fake's family (:class:`jvl_gym.protocol.twin.TwinFamily`)."""
+
+    twin: TwinSpec
+    title: str = "register fake"
+    capabilities: frozenset[Capability] = frozenset({Capability.SAFE_MODE, Capability.FLASH})
+
+    def supports(self, capability: Capability) -> bool:
+        return capability in self.capabilities
 
 
 class ModeError(RegisterError):
@@ -23,12 +39,15 @@ class ModeError(RegisterError):
 class RegisterArray:
     """``n`` motors of ``table``: ROM defaults from the table, writes validated by it.
 
-    ``family_dialect``, if given, is the MacTalk dialect the twin should speak for it.
+    ``dialect`` is the MacTalk dialect its family declares.
     """
 
     OUTER_HZ = 1000.0
 
-    def __init__(self, table: Any, n: int = 1, mode_register: str = "MODE_REG") -> None:
+    def __init__(self, table: Any, n: int = 1, mode_register: str = "MODE_REG",
+                 dialect: str = MACTALK16) -> None:
+        self.family = FakeFamily(TwinSpec(dialects=(dialect,), safe_mode=SAFE_MODE, init_mode=0,
+                                          passive_mode=0))
         self.table = table
         self.n = n
         self.mode_number = table.lookup(mode_register).number
@@ -91,10 +110,3 @@ class RegisterArray:
         for number, raw in image.items():
             self._check(number, raw)
         self.flash[index] = {**self.flash[index], **image}
-
-    @property
-    def interface_bits(self) -> np.ndarray:
-        return np.zeros(self.n, dtype=np.int64)
-
-    def sample_buffer_raw(self, index: int) -> np.ndarray:
-        return np.zeros((0, 4), dtype=np.int64)

@@ -1,5 +1,7 @@
 """A second motor family from a fixture folder (tests/fixtures/toy_family) runs through the
-generic layers — MotorArray, the MacTalk twin and a task env — with no edit outside it."""
+generic layers — MotorArray, the MacTalk twin (read, write, safe mode, flash save and reload)
+and a task env — with no edit outside it: everything the layers need is in its contract
+(``FAMILY``, :mod:`jvl_gym.families.contract`)."""
 
 from __future__ import annotations
 
@@ -12,7 +14,7 @@ import pytest
 from gymnasium.utils.env_checker import check_env
 
 from jvl_gym import MotorArray
-from jvl_gym.families import family_of_motor, register_family
+from jvl_gym.families import Capability, UnsupportedOperation, family_of_motor, register_family
 from jvl_gym.protocol import mactalk as mt
 from jvl_gym.protocol.twin import Twin
 
@@ -69,7 +71,7 @@ def test_the_twin_reads_and_writes_toy_registers_over_mactalk() -> None:
 
 
 def test_a_task_env_on_the_toy_family() -> None:
-    from toy_family.task import ToySpeedVectorEnv
+    from toy_family.speed_env import ToySpeedVectorEnv
 
     vec = ToySpeedVectorEnv(num_envs=3)
     obs, _ = vec.reset(seed=4)
@@ -123,3 +125,49 @@ def test_world_inputs_of_a_family_go_through_the_generic_checks() -> None:
         np.testing.assert_array_equal(m.inputs[:, 0], [0.5, -0.5])
     with pytest.raises(AttributeError, match="no shaft state"):
         m.speed_rpm  # noqa: B018  (the toy declares no shaft columns)
+
+
+def ask(twin: Twin, frame: bytes) -> bytes:
+    session = twin.session()
+    return session.feed(frame) + session.flush()
+
+
+def test_the_twin_saves_the_toy_registers_to_flash_and_reloads_them(tmp_path: Path) -> None:
+    """Safe mode, write flash and reset over MacTalk as the toy's contract declares them: the
+    flash file holds the registers, and a new twin on a fresh array powers on from it."""
+    m = MotorArray("TOY1", n=1, seed=0)
+    twin = Twin(m, addresses=[5], flash_dir=tmp_path)
+    assert ask(twin, mt.encode_write(5, 7, mt.words_to_bytes([3 * 256]))) == mt.ACCEPT
+    assert ask(twin, mt.encode_write_flash(5)) == b""  # refused outside safe mode
+    assert twin.stats["refused"] == 1 and not (tmp_path / "flash_0.json").exists()
+    assert ask(twin, mt.encode_go_safe_mode(5)) == mt.ACCEPT
+    assert m.mode_name(0) == "safe"
+    assert ask(twin, mt.encode_write_flash(5)) == b""  # saved, then reset from flash
+    assert (tmp_path / "flash_0.json").exists()
+    assert m.read("KP").tolist() == [3.0] and m.mode_name(0) == "passive"
+    again = MotorArray("TOY1", n=1, seed=0)
+    assert again.read("KP").tolist() == [2.0]
+    Twin(again, addresses=[5], flash_dir=tmp_path)
+    assert again.read("KP").tolist() == [3.0] and again.read("MYADDR").tolist() == [5]
+    assert ask(twin, mt.encode_go_safe_mode(5)) == mt.ACCEPT
+    assert ask(twin, mt.encode_go_init_mode(5)) == mt.ACCEPT  # leaves safe mode
+    assert m.mode_name(0) == "passive"
+
+
+def test_operations_the_toy_does_not_declare_are_refused_by_name() -> None:
+    """The toy has no sample buffer, torque, energy or init-mode command: the array raises
+    UnsupportedOperation naming the capability, the twin refuses and nothing changes."""
+    m = MotorArray("TOY1", n=1, seed=0)
+    for call, cap in ((lambda: m.sample_buffer(), Capability.SAMPLE_BUFFER),
+                      (lambda: m.torque, Capability.TORQUE),
+                      (lambda: m.energy, Capability.ENERGY),
+                      (lambda: m.go_init_mode(), Capability.INIT_MODE)):
+        with pytest.raises(UnsupportedOperation, match=cap.name) as info:
+            call()
+        assert info.value.capability is cap
+    twin = Twin(m, addresses=[5])
+    before = m.regs.copy()
+    assert ask(twin, mt.encode_read_sample_buffer(5)) == b""
+    assert ask(twin, mt.encode_go_init_mode(5)) == b""
+    assert twin.stats["refused"] == 2 and "INIT_MODE" in twin.last_refusal
+    np.testing.assert_array_equal(m.regs, before)

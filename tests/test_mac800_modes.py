@@ -145,7 +145,7 @@ def test_sample_buffer_and_rewind() -> None:
     m.write("CNTRL_BITS", c.RECORDBIT)
     m.step(20)
     assert m.read("REC_CNT")[0] == 20
-    buf = m.sample_buffer()
+    buf = m.sample_buffer(0)
     assert buf["P_IST"].shape == (20,) and buf["P_IST"][-1] == m.read("P_IST")[0]
     m.write("CNTRL_BITS", c.REWINDBIT | c.RECINNERBIT | c.RECORDBIT)
     m.step(3)

@@ -11,7 +11,7 @@ import yaml
 from jvl_gym import MotorArray
 from jvl_gym.config import ConfigError
 from jvl_gym.families import family_of_motor
-from jvl_gym.families.mis.config import CONFIGS_DIR, load_motor, motor_types
+from jvl_gym.families.mis.config import MOTORS_DIR, load_motor, motor_types
 from jvl_gym.families.mis.units import MOTOR_TYPE_CODES
 
 
@@ -39,7 +39,7 @@ def test_every_type_loads_runs_and_names_its_motor_type_code() -> None:
 ])
 def test_bad_configs_name_file_and_field(tmp_path: Path, field: str, value: object,
                                          match: str) -> None:
-    data = yaml.safe_load((CONFIGS_DIR / "MIS232.yaml").read_text())
+    data = yaml.safe_load((MOTORS_DIR / "MIS232.yaml").read_text())
     data[field] = value
     path = tmp_path / "BAD.yaml"
     path.write_text(yaml.safe_dump(data))

@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from jvl_gym.families.mac050_141.plant.coil import coil_step, phase_to_vector, vector_to_phases
-from jvl_gym.families.mac050_141.plant.mechanics import mech_step
-from jvl_gym.families.mac050_141.plant.supply import bus_step
+from jvl_gym.physics.bus import bus_step
+from jvl_gym.physics.coil import coil_step, phase_to_vector, vector_to_phases
+from jvl_gym.physics.mechanics import mech_step
 
 R, LL, LAM, PP = 0.83, 0.83e-3, 0.0265, 2.0
 H = 128e-6

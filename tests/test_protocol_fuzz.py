@@ -180,7 +180,7 @@ def twin():
     t = Twin(MotorArray("MAC140", n=2, seed=0), [19, 20])
     m = t.m
     m.write("CNTRL_BITS", 3)
-    m.go_safe_mode(0)
+    m.enter_safe_mode(0)
     m.write_flash(0)  # motor 0: FastMAC/FlexMAC user interface active
     return t
 

@@ -62,7 +62,7 @@ def exception_of(frame: bytes) -> int:
 # ----------------------------------------------------------------------------- the adapter
 def test_the_slave_registers_are_found_by_name_in_the_mis_table() -> None:
     """MIS manual §12.1: set-up 121, baud rate 146, time-out 199, response 200, delay 201."""
-    assert modbus_registers(mis.REGISTERS) == MIS_REGISTERS
+    assert modbus_registers(mis.REGISTERS, mis.FAMILY.twin.passive_mode) == MIS_REGISTERS
 
 
 def test_adapter_reads_and_writes_by_number_and_refuses_as_the_simulator() -> None:

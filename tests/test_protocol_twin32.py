@@ -213,7 +213,7 @@ FAMILY_DIALECTS = {"mac050_141": ("MAC140", MACTALK16), "mis": ("MIS231", MACTAL
 
 @pytest.mark.parametrize("key", sorted(FAMILY_DIALECTS))
 def test_each_family_declares_its_dialect(key: str) -> None:
-    """``MACTALK_DIALECT`` in the family's constants (checked for the registered families)."""
+    """The first of the family contract's dialects (checked for the registered families)."""
     from jvl_gym.families import families
 
     if key not in families():
@@ -222,8 +222,10 @@ def test_each_family_declares_its_dialect(key: str) -> None:
     assert dialect_of(MotorArray(motor, n=1, seed=0)) == dialect
 
 
-def test_a_backend_of_no_family_speaks_the_default_dialect() -> None:
+def test_a_backend_speaks_the_dialect_its_family_declares() -> None:
     assert dialect_of(RegisterArray(mis.REGISTERS)) == MACTALK16
+    assert dialect_of(RegisterArray(mis.REGISTERS, dialect=MACTALK32)) == MACTALK32
+    assert Twin(RegisterArray(mis.REGISTERS, dialect=MACTALK32), [7]).dialect == MACTALK32
     with pytest.raises(ValueError, match="unknown MacTalk dialect"):
         Twin(RegisterArray(mis.REGISTERS), [7], dialect="mactalk64")
 

@@ -157,13 +157,13 @@ def test_safe_mode_flash_and_defaults(m):
     with pytest.raises(ModeError):
         m.write_flash()
     m.write("KVOUT", 4.0)
-    m.go_safe_mode()
+    m.enter_safe_mode()
     assert m.mode_name() == "SAFE_MODE"
     with pytest.raises(ModeError):
         m.write("MODE_REG", 1)
     m.write_flash()
     assert m.read("KVOUT")[0] == 4.0  # reloaded from flash after the reset
-    m.go_safe_mode()
+    m.enter_safe_mode()
     m.write("MODE_REG", 257)  # ROM defaults, not saved
     assert m.read("KVOUT")[0] == 1.0
     m.write("MODE_REG", 258)  # last saved user parameters

@@ -261,7 +261,7 @@ def _user_twin() -> Twin:
     twin = make_twin()
     m = twin.m
     m.write("CNTRL_BITS", 3)  # USERINTF = 11: FastMAC/FlexMAC (3.2.36), acts after a reset
-    m.go_safe_mode()
+    m.enter_safe_mode()
     m.write_flash()  # → reset: latched
     assert int(m.interface_bits[0]) & 3 == 3
     for name, v in {"P5": -3000, "P6": 4096, "P7": 10000, "V3": 800, "V4": 1600, "A4": 200,
@@ -325,7 +325,7 @@ def test_flexmac_on_the_user_interface_and_safe_mode() -> None:
     u.feed(bytes.fromhex("63 63 63 47 B9 05 FA"))
     np.testing.assert_array_equal(twin.m.regs, before)
     # SAFE_MODE: writes are refused, status still sent, MacTalk takes the motor out (4.4.16)
-    twin.m.go_safe_mode()
+    twin.m.enter_safe_mode()
     twin.m.step(100)
     u.feed(fx.encode_write(2, index=3))
     assert int(twin.m.read("V_SOLL")[0]) == 0x0547

@@ -10,7 +10,7 @@ import pytest
 
 from jvl_gym import MotorArray
 from jvl_gym.families.mac050_141 import constants as c
-from jvl_gym.families.mac050_141.plant.mechanics import (
+from jvl_gym.physics.mechanics import (
     MAX_COUPLING_OMEGA_H,
     coupling_problem,
     mech_step,

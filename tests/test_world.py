@@ -83,7 +83,7 @@ def test_world_takes_the_sample_time_and_pulse_decoding_from_the_motors():
     latched configuration (PULSEDIR, INPSIGN on the MAC050–141, manual 3.2.36)."""
     m = MotorArray("MAC140", n=2, seed=0)
     m.write("CNTRL_BITS", [0, c.PULSEDIR | c.INPSIGN])
-    m.go_safe_mode()
+    m.enter_safe_mode()
     m.write_flash()  # saved, then a reset: latched at power-on
     np.testing.assert_array_equal(m.pulse_decoding()[0], [False, True])
     np.testing.assert_array_equal(m.pulse_decoding()[1], [False, True])

@@ -13,8 +13,12 @@ from typing import Any
 
 import numpy as np
 
-from .families.mac050_141 import constants as c
+from .families import family_of_motor
 from .sim import MotorArray
+
+#: the motor the demo runs, and its family's constants (modes, units)
+MOTOR = "MAC140"
+c = family_of_motor(MOTOR).constants
 
 
 def _trace(m: MotorArray, n: int, log: dict[str, list[float]], phase: str) -> None:
@@ -26,14 +30,14 @@ def _trace(m: MotorArray, n: int, log: dict[str, list[float]], phase: str) -> No
         log["p_ist"].append(float(m.read("P_IST")[0]))
         log["vf_out"].append(float(m.read("VF_OUT")[0]))
         log["i_a"].append(float(m.phase_currents[0, 0]))
-        log["i_abs"].append(float(abs(m._current_vector()[0])))
+        log["i_abs"].append(float(np.sqrt(np.sum(m.phase_currents[0] ** 2) / 1.5)))
         log["phase"].append(phase)
 
 
 def run_demo(out: Path) -> str:
     """Run the demo sequence, write the plot and the summary, return the summary text."""
     out.mkdir(parents=True, exist_ok=True)
-    m = MotorArray("MAC140", n=1, seed=0, load_inertia=30e-6, viscous_friction=2e-6)
+    m = MotorArray(MOTOR, n=1, seed=0, load_inertia=30e-6, viscous_friction=2e-6)
     cfg = m.motor_configs[0]
     lines = [f"jvl_gym demo: {m!r}, load inertia 30e-6 kg·m² "
              f"(KVOUT ideal {(cfg.rotor_inertia + 30e-6) / cfg.rotor_inertia:.2f})"]

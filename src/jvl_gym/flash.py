@@ -49,6 +49,14 @@ class FlashStorage:
                          and r.number != self._mode_number
                          and r.format != Format.LONGINT_HIGH])
 
+    def _save_flash(self, idx: np.ndarray) -> None:
+        """Save the registers flash holds (:meth:`_rw_numbers`) of motors ``idx`` (M,)."""
+        if self._flash is None:
+            self._flash = np.zeros_like(self.regs)
+        rw = self._rw_numbers()
+        self._flash[np.ix_(idx, rw)] = self.regs[np.ix_(idx, rw)]
+        self._has_flash[idx] = True
+
     def flash_image(self, index: int) -> dict[int, int]:
         """The flash contents of one motor (register number → raw), or {} if never written.
 

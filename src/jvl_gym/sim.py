@@ -7,6 +7,14 @@ the pool of motor types, resets with per-motor parameters and the hooks a family
 What depends on the family — its ROM image and parameters, the firmware's write and mode rules,
 SAFE_MODE and test modes, world inputs and the physical observables — is the family's subclass
 (``MotorArray("MAC140")`` returns one, see :func:`jvl_gym.families.family_of_motor`).
+
+The operations every family offers under one name and one signature are declared here
+(:mod:`jvl_gym.families.contract`): ``torque``, ``energy``, ``mode_name(index)``,
+``sample_buffer(index)``, ``sample_buffer_raw(index)``, ``enter_safe_mode``,
+``exit_safe_mode``, ``go_init_mode``, ``software_reset``, ``write_flash`` (flash save), and
+``flash_image`` / ``load_flash_image`` (:mod:`jvl_gym.flash`). One that the family does not
+declare in its :class:`~jvl_gym.families.Capability` set raises
+:class:`~jvl_gym.families.UnsupportedOperation` naming the capability, and changes nothing.
 """
 
 from __future__ import annotations
@@ -20,14 +28,15 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from .arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, real_array
+from .arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, motor_index, real_array
 from .bank import RegisterBank, StorePlan
-from .families import Family, family, family_of_motor
+from .families import Capability, Family, UnsupportedOperation, family, family_of_motor
 from .flash import FlashStorage
 from .inputs import InputRule, staged_inputs
 from .keywords import BINARY, RULE_TEXT, first_bad_value
 from .noise import motor_keys
-from .registers import RegisterError, RegisterTable
+from .registers import Register, RegisterError, RegisterTable
+from .registers.formats import from_raw
 from .stepping import Stepping, driver
 
 __all__ = ["MotorArray", "ModeError", "driver"]
@@ -109,6 +118,8 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
     SHAFT_SPEED: ClassVar[int] = -1
     #: the physical quantities :meth:`trace` records (names of properties)
     PHYSICAL: ClassVar[frozenset[str]] = frozenset()
+    #: the registers naming what each channel of the sample buffer records
+    SAMPLE_REGISTERS: ClassVar[tuple[str, ...]] = ("SAMPLE1", "SAMPLE2", "SAMPLE3", "SAMPLE4")
 
     def __new__(cls, motor: MotorSpec = "MAC140", *args: Any, **kwargs: Any) -> MotorArray:
         if cls is MotorArray:
@@ -353,11 +364,121 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
             raise ValueError(f"{name} must be 0 or 1, got {val!r}")
         raise ValueError(f"{name}: values must be {RULE_TEXT[rule]}, got {val!r}")
 
-    # ------------------------------------------------------------------ stepping
+    # ------------------------------------------------------------------ the contract's operations
+    def _require(self, capability: Capability) -> None:
+        """:class:`UnsupportedOperation` unless the family declares ``capability``."""
+        self.family.require(capability)
 
-    # ------------------------------------------------------------------ registers
+    @property
+    def torque(self) -> np.ndarray:
+        """Electromagnetic torque now [N·m], (N,) (:attr:`Capability.TORQUE`)."""
+        raise UnsupportedOperation(self.family.title, Capability.TORQUE)
 
-    # ------------------------------------------------------------------ flash
+    @property
+    def energy(self) -> dict[str, np.ndarray]:
+        """Energy accounts since power-on [J], {account: (N,)} (:attr:`Capability.ENERGY`);
+        every family has ``"copper"`` and ``"load"``."""
+        raise UnsupportedOperation(self.family.title, Capability.ENERGY)
+
+    def mode_name(self, index: int = 0) -> str:
+        """Name of the current mode of motor ``index`` (the family constants' ``MODE_NAMES``;
+        ``"?"`` for a value it does not name)."""
+        i = motor_index(index, self.n, "mode_name")
+        return self.family.constants.MODE_NAMES.get(int(self.regs[i, self._mode_number]), "?")
+
+    def enter_safe_mode(self, index: MotorIndex = None) -> None:
+        """Safe mode: the bridge off, flash save and reset allowed (:attr:`Capability.SAFE_MODE`;
+        MAC050–141 manual 4.4.16, MIS manual §8.2.3)."""
+        raise UnsupportedOperation(self.family.title, Capability.SAFE_MODE)
+
+    def exit_safe_mode(self, index: MotorIndex = None) -> None:
+        """Leave safe mode (:attr:`Capability.SAFE_MODE`); a motor not in safe mode raises
+        :class:`ModeError`."""
+        raise UnsupportedOperation(self.family.title, Capability.SAFE_MODE)
+
+    def go_init_mode(self, index: MotorIndex = None) -> None:
+        """The MacTalk "go init mode" path (:attr:`Capability.INIT_MODE`; MAC050–141 manual
+        5.1)."""
+        raise UnsupportedOperation(self.family.title, Capability.INIT_MODE)
+
+    def software_reset(self, index: MotorIndex = None) -> None:
+        """Restart the firmware from flash (or ROM): the rotor keeps its angle and speed
+        (:attr:`Capability.SOFTWARE_RESET`). Families without it restart by :meth:`reset`."""
+        raise UnsupportedOperation(self.family.title, Capability.SOFTWARE_RESET)
+
+    def write_flash(self, index: MotorIndex = None) -> None:
+        """Save the register set in flash, then :meth:`software_reset` (in safe mode only;
+        :attr:`Capability.FLASH`). :meth:`flash_image` and :meth:`load_flash_image` read and
+        load a flash image of every family."""
+        raise UnsupportedOperation(self.family.title, Capability.FLASH)
+
+    @property
+    def interface_bits(self) -> np.ndarray:
+        """The user-interface bits latched at power-on, (N,) int64
+        (:attr:`Capability.USER_INTERFACE`; MAC050–141 manual 3.2.36)."""
+        raise UnsupportedOperation(self.family.title, Capability.USER_INTERFACE)
+
+    # ------------------------------------------------------------------ sample buffer
+    def _ensure_buffer(self) -> None:
+        """Allocate the sample buffer, (N, *BUFFER_SHAPE) int64, on the first recording."""
+        if not self._buf_allocated:
+            self._buf = np.zeros((self.n, *self.BUFFER_SHAPE), dtype=np.int64)
+            self._buf_allocated = True
+
+    def _sample_counts(self) -> np.ndarray:
+        """Samples recorded so far by each motor, (N,) (default: the REC_CNT register)."""
+        return self.regs[:, self.table.lookup("REC_CNT").number]
+
+    def _sample_register(self, number: int) -> Register | None:
+        """The register a channel records, or None where ``number`` names none."""
+        if number not in self.table:
+            return None
+        reg = self.table.lookup(number)
+        return None if reg.access.value == "reserved" else reg
+
+    def sample_buffer_raw(self, index: int) -> np.ndarray:
+        """Raw samples of motor ``index``, (samples, channels) int64, one channel per
+        :attr:`SAMPLE_REGISTERS` (:attr:`Capability.SAMPLE_BUFFER`)."""
+        self._require(Capability.SAMPLE_BUFFER)
+        i = motor_index(index, self.n, "sample_buffer_raw")
+        if not self._buf_allocated:
+            return np.zeros((0, self.BUFFER_SHAPE[1]), dtype=np.int64)
+        return self._buf[i, :int(self._sample_counts()[i])].copy()
+
+    def sample_buffer(self, index: int | None = None) -> dict[str, np.ndarray]:
+        """The sample buffer in user units (:attr:`Capability.SAMPLE_BUFFER`).
+
+        Parameters
+        ----------
+        index : int or None
+            One motor: {name: (samples,)}; None: every motor, {name: (N, samples)} with the
+            entries past a motor's count 0.
+
+        Returns
+        -------
+        dict of str to ndarray
+            Channels named after the registers :attr:`SAMPLE_REGISTERS` select (of the first
+            motor given); a channel whose register differs between the motors, is no register
+            or is named twice is ``SAMPLEk`` in raw units.
+        """
+        self._require(Capability.SAMPLE_BUFFER)
+        rows = (np.arange(self.n) if index is None
+                else np.array([motor_index(index, self.n, "sample_buffer")]))
+        counts = (self._sample_counts()[rows].astype(np.int64) if self._buf_allocated
+                  else np.zeros(rows.size, dtype=np.int64))
+        count = int(counts.max())
+        valid = np.arange(count)[None, :] < counts[:, None]
+        out: dict[str, np.ndarray] = {}
+        for ch, name in enumerate(self.SAMPLE_REGISTERS):
+            nums = self.regs[rows, self.table.lookup(name).number]
+            raw = (np.where(valid, self._buf[rows, :count, ch], 0) if count
+                   else np.zeros((rows.size, 0), dtype=np.int64))
+            reg = self._sample_register(int(nums[0]))
+            if reg is None or np.any(nums != nums[0]) or reg.name in out:
+                out[f"SAMPLE{ch + 1}"] = raw
+            else:
+                out[reg.name] = from_raw(reg, raw)
+        return out if index is None else {key: value[0] for key, value in out.items()}
 
     def __repr__(self) -> str:
         types = sorted({cfg.name for cfg in self._configs})

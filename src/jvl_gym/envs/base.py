@@ -35,7 +35,7 @@ from gymnasium.vector.utils import batch_space
 
 from ..coupling import coupling_for
 from ..engine.driver import all_finite
-from ..families import DEFAULT_FAMILY, families, family
+from ..families import families, family
 from ..noise import normals
 from .compiled import OBS_BOUND, reset_counters
 from .family_task import TaskFamily, task_family
@@ -162,7 +162,7 @@ class MotorVectorEnv(VectorEnv, ABC):
 
     #: the motor family the task runs on (``jvl_gym.families``); on an instance of a task that
     #: runs on several (:attr:`families`), the family of its motor types
-    family_key: str = DEFAULT_FAMILY
+    family_key: str = ""
     #: the families the task runs on (empty: :attr:`family_key` alone); an env's family
     #: follows from its motor types
     families: tuple[str, ...] = ()

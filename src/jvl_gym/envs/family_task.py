@@ -18,7 +18,6 @@ names come from; they are never called as they are.
 from __future__ import annotations
 
 import functools
-import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from types import ModuleType
@@ -78,12 +77,10 @@ class TaskFamily:
 
 @functools.cache
 def task_family(key: str) -> TaskFamily:
-    """The :class:`TaskFamily` of the registered family ``key`` (its public modules are the
-    ``task`` and ``constants`` modules beside its compiled step)."""
+    """The :class:`TaskFamily` of the registered family ``key``: the task interface and the
+    constants its contract names (:class:`jvl_gym.families.Family`)."""
     fam = family(key)
-    package = fam.compiled.__name__.rpartition(".")[0]
-    return TaskFamily(key, fam, importlib.import_module(f"{package}.task"),
-                      importlib.import_module(f"{package}.constants"))
+    return TaskFamily(key, fam, fam.task, fam.constants)
 
 
 class FamilyHooks:

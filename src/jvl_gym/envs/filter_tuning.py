@@ -7,7 +7,8 @@ from typing import Any
 
 import numpy as np
 
-from ..families import DEFAULT_FAMILY, family
+from ..config import load_setup
+from ..families import Family, family, family_of_motor
 from .base import NumpyTaskEnv
 from .single import MotorEnv
 
@@ -23,6 +24,14 @@ _POS_TIME, _VEL_TIME, _LOAD_TIME, _RIPPLE_TIME = 0.3072, 0.2304, 0.0768, 0.0384
 _SETTLE_TURNS, _FAIL_TURNS, _FLW_TURNS, _FNC_TURNS = (20.0 / 4096, 100.0 / 4096, 200.0 / 4096,
                                                       1000.0 / 4096)
 _IF_NAMES = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
+#: the tuning strategy (``Family.tuning.strategy``) whose speed-loop synthesis the baseline
+#: uses: the PI design of the fourth-order speed filter (``tuning.synthesis``)
+_PI_SYNTHESIS = "testu_pi"
+
+
+def _has_synthesis(fam: Family) -> bool:
+    """Whether the baseline designs the speed loop of ``fam``'s motors by the synthesis."""
+    return fam.tuning is not None and fam.tuning.strategy == _PI_SYNTHESIS
 
 
 @functools.lru_cache(maxsize=8)
@@ -34,10 +43,11 @@ def synthesis_registers(motor_type: str) -> dict[str, float] | None:
         from tuning.synthesis import design_speed_loop
     except ImportError:
         return None
-    from ..families.mac050_141.config import load_motor, load_setup
-
-    cfg = load_motor(motor_type)
-    setup = load_setup(cfg.setup).registers
+    fam = family_of_motor(motor_type)
+    if not _has_synthesis(fam):
+        return None
+    cfg = fam.load_motor(motor_type)
+    setup = load_setup(fam.config.setup_path(cfg.setup)).registers
     current = {k: float(setup[k]) for k in _IF_NAMES}
     design = design_speed_loop(MotorData.from_config(cfg), current, cfg.rotor_inertia)
     return {k: float(v) for k, v in design.registers.items() if k != "KVOUT"}
@@ -53,7 +63,7 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
     terminal_errors = None
 
     #: the labels on the default family; an instance's follow its family's motor types
-    obs_labels = (*(f"type_{t}" for t in family(DEFAULT_FAMILY).motor_types()),
+    obs_labels = (*(f"type_{t}" for t in family(_FAMILIES[0]).motor_types()),
                   "inertia_ratio_estimate", "viscous_estimate", "coulomb_estimate")
     act_labels = ("proportional_gain", "integral_gain", "kvout")
     default_ranges = {
@@ -72,8 +82,8 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         self.baseline = bool(baseline)
         self.estimate_error = float(estimate_error)
         self.instability_penalty = float(instability_penalty)
-        if motor_type is None:  # every type of the default family
-            motor_type = tuple(family(DEFAULT_FAMILY).motor_types())
+        if motor_type is None:  # every type of the task's first family
+            motor_type = tuple(family(self.supported_families()[0]).motor_types())
         else:  # the labels of the motor types' family (checked by the base class)
             key = self._family_of(motor_type)
             self.obs_labels = (*(f"type_{t}" for t in family(key).motor_types()),
@@ -102,7 +112,8 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         self.metrics: dict[str, np.ndarray] = {}
         self._ok = np.arange(n)
         self._trace = np.zeros((n, 3, self.scope_length), dtype=np.float32)
-        synthesis = (self.family_key == DEFAULT_FAMILY
+        self._synthesis = _has_synthesis(fam.family)
+        synthesis = (self._synthesis
                      and synthesis_registers(fam.task.DEFAULT_MOTOR_TYPE) is not None)
         self.baseline_source = (("tuning.synthesis" if synthesis else "default setup")
                                 if self.baseline else "agent")
@@ -133,7 +144,7 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         self._ok = ok
         kvout_est = 1.0 + self.estimates[:, 0]
         if self.baseline:
-            if self.family_key != DEFAULT_FAMILY:  # default setup, KVOUT from the estimate
+            if not self._synthesis:  # default setup, KVOUT from the estimate
                 m.write("KVOUT", np.round(kvout_est[ok] * 256) / 256, index=ok)
                 return
             for name in sorted(set(self._type_names[ok])):

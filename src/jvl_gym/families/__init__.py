@@ -3,8 +3,8 @@
 A family is its register table, constants and units, firmware, plant, configs and default
 setups, the compiled step the engine drives and its motor-array class (docs/architecture.md,
 "Adding a motor family"). The generic layers reach a family only through its :class:`Family`
-record. ``mis`` (the MIS/SMC step motors) and ``mac800`` (MAC800 and MAC400) are registered
-beside ``mac050_141``.
+record, the contract of :mod:`.contract`. ``mis`` (the MIS/SMC step motors) and ``mac800``
+(MAC800 and MAC400) are registered beside ``mac050_141``.
 """
 
 from __future__ import annotations
@@ -12,53 +12,32 @@ from __future__ import annotations
 import functools
 import importlib
 import os
-from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import yaml
 
-__all__ = ["Family", "DEFAULT_FAMILY", "register_family", "family", "families",
-           "family_of_motor"]
+from .contract import (
+    Capability,
+    Family,
+    FamilyConfig,
+    TuningSpec,
+    TwinSpec,
+    UnsupportedOperation,
+)
 
-#: the family of a motor type no registered family names
-DEFAULT_FAMILY = "mac050_141"
+__all__ = ["Family", "Capability", "FamilyConfig", "TwinSpec", "TuningSpec",
+           "UnsupportedOperation", "register_family", "family", "families", "family_of_motor",
+           "unknown_motor_type"]
 
-
-@dataclass(frozen=True)
-class Family:
-    """What the engine knows of a motor family.
-
-    Attributes
-    ----------
-    key : str
-        Identifier (``"mac050_141"``), also used in compiled-cache file names.
-    title : str
-        Human name (``"MAC050–141 integrated servo motors"``).
-    compiled : module
-        The compiled step: ``outer_sample``, ``inner_block``, ``LANES``, ``prepare``,
-        ``scratch`` (see :mod:`jvl_gym.engine.driver`).
-    array_class : type
-        The family's :class:`~jvl_gym.MotorArray` subclass.
-    motor_types : callable
-        Names of the family's motor types (each with a motor config).
-    canonical_name : callable
-        The motor-type name a user's spelling stands for (default: unchanged).
-    """
-
-    key: str
-    title: str
-    compiled: ModuleType
-    array_class: type
-    motor_types: Callable[[], list[str]]
-    canonical_name: Callable[[str], str] = str
-
-
+# --- registration data ---------------------------------------------------------------------
+#: family key → the package that defines its ``FAMILY``
 _MODULES: dict[str, str] = {"mac050_141": "jvl_gym.families.mac050_141",
                             "mis": "jvl_gym.families.mis",
                             "mac800": "jvl_gym.families.mac800"}
+#: the family that reads a motor config file naming no ``family`` (its config files predate
+#: the key), and whose loader reports a file no family can read
+_UNTAGGED_CONFIGS = "mac050_141"
 
 
 def register_family(key: str, module: str) -> None:
@@ -85,16 +64,45 @@ def families() -> tuple[str, ...]:
 
 def family_of_motor(motor: Any) -> Family:
     """The family of ``motor``: a motor config object (its class's ``FAMILY_KEY``), a config
-    file (its top-level ``family`` key) or a motor type name one registered family lists;
-    anything else belongs to :data:`DEFAULT_FAMILY`, whose loader says what is wrong."""
+    file (its top-level ``family`` key; a file naming none, or that cannot be read, goes to the
+    loader of the family whose files carry no key, which says what is wrong) or a motor type
+    name (in a user's spelling) that one registered family lists.
+
+    Raises
+    ------
+    ConfigError
+        A motor type name no registered family lists (the message lists every family's types),
+        or something that is no name, path or config.
+    """
+    from ..config import ConfigError
+
     key = getattr(type(motor), "FAMILY_KEY", None)
-    if key is None and isinstance(motor, (str, os.PathLike)):
-        path = Path(motor)
-        if path.suffix in (".yaml", ".yml"):
-            key = _family_in_file(path)
-        else:
-            key = next((k for k in _MODULES if str(motor) in family(k).motor_types()), None)
-    return family(key if isinstance(key, str) and key in _MODULES else DEFAULT_FAMILY)
+    if isinstance(key, str) and key in _MODULES:
+        return family(key)
+    if not isinstance(motor, (str, os.PathLike)):
+        raise ConfigError(f"a motor is a type name, a config path or a motor config, got "
+                          f"{motor!r}")
+    path = Path(motor)
+    if path.suffix in (".yaml", ".yml") or path.exists():
+        key = _family_in_file(path)
+        return family(key if isinstance(key, str) and key in _MODULES else _UNTAGGED_CONFIGS)
+    name = str(motor)
+    for k in _MODULES:
+        fam = family(k)
+        if fam.canonical_name(name) in fam.motor_types():
+            return fam
+    raise unknown_motor_type(name)
+
+
+def unknown_motor_type(name: str) -> ValueError:
+    """The error for a motor type ``name`` no registered family lists: a ConfigError that
+    lists every family's types."""
+    from ..config import ConfigError
+
+    known = "; ".join(f"{', '.join(family(k).motor_types())} ({family(k).title})"
+                      for k in _MODULES)
+    return ConfigError(f"unknown motor type {name!r}; known: {known} (or give the path of a "
+                       ".yaml motor config)")
 
 
 def _family_in_file(path: Path) -> str | None:

@@ -30,12 +30,13 @@ __all__ = ["MacTalkClient", "DEFAULT_BAUDRATE"]
 DEFAULT_BAUDRATE = 19200
 
 
-
 def _default_table() -> RegisterTable:
-    """The register table of the default motor family (``jvl_gym.families``)."""
-    from ..families import DEFAULT_FAMILY, family
+    """The register table of the first registered family that speaks this client's MacTalk
+    (:data:`~.dialect.MACTALK16`, ``jvl_gym.families``)."""
+    from ..families import families, family
+    from .dialect import MACTALK16
 
-    return family(DEFAULT_FAMILY).array_class.TABLE
+    return next(family(k).table for k in families() if family(k).twin.dialect == MACTALK16)
 
 class MacTalkClient:
     """A MacTalk master for one unit address.
@@ -53,7 +54,8 @@ class MacTalkClient:
     baudrate : int
         Serial speed (ignored by socket URLs).
     table : RegisterTable, optional
-        Register table for typed access (default: MAC50–141).
+        Register table for typed access (default: the table of the first registered family
+        that speaks the 16-bit MacTalk, the MAC050–141).
     serial_kwargs
         Passed to ``serial.serial_for_url``.
     """

@@ -37,16 +37,17 @@ REGISTER_NAMES = {"setup": "MODBUS_SETUP", "baud": "BAUD_RATE", "timeout": "MODB
                   "mode": "MODE_REG"}
 
 
-def modbus_registers(table: Any) -> ModbusRegisters:
+def modbus_registers(table: Any, passive_mode: int) -> ModbusRegisters:
     """The Modbus slave's registers of ``table`` by name (:data:`REGISTER_NAMES`; None where
-    the table has none); passive mode is MODE_REG 0 (MIS manual §8.2.3)."""
+    the table has none); ``passive_mode`` is the MODE_REG value of passive mode (the family's
+    :attr:`~jvl_gym.families.TwinSpec.passive_mode`; MIS manual §8.2.3: 0)."""
     numbers: dict[str, int | None] = {}
     for field, name in REGISTER_NAMES.items():
         try:
             numbers[field] = table.lookup(name).number
         except RegisterError:
             numbers[field] = None
-    return ModbusRegisters(**numbers, passive_mode=0)
+    return ModbusRegisters(**numbers, passive_mode=passive_mode)
 
 
 class MotorRegisters:
@@ -114,5 +115,8 @@ def modbus_bus(twin: Twin) -> ModbusBus:
     if twin.dialect != MACTALK32:
         raise ValueError("Modbus RTU serves motors of 32-bit registers at one number (MIS "
                          f"manual §12.3); these motors speak {twin.dialect}")
-    regs = modbus_registers(twin.m.table)
+    if twin.spec.passive_mode is None:
+        raise ValueError(f"{twin.family.title} motors have no passive mode for the Modbus "
+                         "time-out (MIS manual §12.1)")
+    regs = modbus_registers(twin.m.table, twin.spec.passive_mode)
     return ModbusBus([MotorRegisters(twin, i) for i in range(twin.m.n)], regs)

@@ -18,12 +18,17 @@ write (52h)            2 bytes: the 16-bit word of register N; 4 bytes: a 32-bit
                        Validated by the simulator; accept ``11h×3`` only if it was carried out
 read sample buffer     the next sample: SAMPLE1..4 as four 32-bit values (16 bytes); after
 (53h)                  the last of REC_CNT samples an empty reply (dl = 0), then from the start
-go safe mode (54h)     MotorArray.go_safe_mode (stops first, 4.4.16), accept
-go init mode (55h)     leaves SAFE_MODE (exit_safe_mode) or goes to INIT_MODE, accept
-write flash (56h)      only in SAFE_MODE: save registers to flash (and the flash file), reset;
+go safe mode (54h)     MotorArray.enter_safe_mode (stops first, 4.4.16), accept
+go init mode (55h)     leaves safe mode (exit_safe_mode) or goes to INIT_MODE, accept
+write flash (56h)      only in safe mode: save registers to flash (and the flash file), reset;
                        no accept (5.1)
 reset (57h)            only in INIT or SAFE mode: software reset; no accept (5.1)
 =====================  ===================================================================
+
+What the twin knows of the motors' family it takes from the family's contract
+(:class:`~jvl_gym.families.TwinSpec` and the capabilities of ``motors.family``): the dialect,
+the safe and init modes, the status bits by name, and which commands the family has; a command
+the family does not support is refused (no reply) and changes nothing.
 
 A refused request (range, read-only, wrong mode) changes nothing and gets **no reply**, as a
 real unit that does not accept. Frames addressed to another unit, the master's data replies and
@@ -49,16 +54,17 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ..families.contract import Capability, TwinSpec, UnsupportedOperation
 from . import fastmac as fm
 from . import flexmac as fx
 from . import mactalk as mt
 from . import mactalk32 as m32
-from .dialect import MACTALK32, check_dialect, dialect_of
+from .dialect import MACTALK32, check_dialect
 from .errors import FrameError
 from .twin32 import MacTalk32Unit
 
-__all__ = ["MotorBackend", "Twin", "MacTalkSession", "UserInterfaceSession", "BLOCK_WORDS",
-           "RegisterNumbers"]
+__all__ = ["MotorBackend", "TwinFamily", "Twin", "MacTalkSession", "UserInterfaceSession",
+           "BLOCK_WORDS", "RegisterNumbers"]
 
 log = logging.getLogger(__name__)
 
@@ -102,11 +108,13 @@ class RegisterNumbers:
                         "T": self.T_REG_P, "L": self.L_REG_P, "Z": self.Z_REG_P}
 
 
-SAFE_MODE, INIT_MODE = 15, 0
-_IN_POS, _ACC, _DEC = 1 << 4, 1 << 5, 1 << 6
-_ERRORS = 0x0F  # I2T_ERR, FLW_ERR, FNC_ERR, UIT_ERR (status bit 0, manual 5.2.1.6)
-_CLEARABLE = 0x0F | (1 << 7) | (1 << 8) | (1 << 11) | (1 << 12)  # errors reset by command 01h
-_RELPOSPSOLL, _RELPOSPFNC = 1 << 9, 1 << 10
+class TwinFamily(Protocol):
+    """What the twin asks of the motors' family (:class:`jvl_gym.families.Family` has it)."""
+
+    title: str
+    twin: TwinSpec
+
+    def supports(self, capability: Capability) -> bool: ...
 
 
 class MotorBackend(Protocol):
@@ -116,10 +124,13 @@ class MotorBackend(Protocol):
     table: Any
     OUTER_HZ: float
 
+    @property
+    def family(self) -> TwinFamily: ...
+
     def read_raw(self, key: str | int) -> np.ndarray: ...
     def write_raw(self, key: str | int, raw: Any, index: Any = None) -> None: ...
     def step(self, n_outer: int = 1) -> None: ...
-    def go_safe_mode(self, index: Any = None) -> None: ...
+    def enter_safe_mode(self, index: Any = None) -> None: ...
     def go_init_mode(self, index: Any = None) -> None: ...
     def exit_safe_mode(self, index: Any = None) -> None: ...
     def write_flash(self, index: Any = None) -> None: ...
@@ -160,12 +171,14 @@ class Twin:
         FastMAC register code (:data:`~.fastmac.EXAMPLE_CODE` or ``TABLE_CODE``).
     dialect : str, optional
         MacTalk dialect (:data:`~.dialect.DIALECTS`); default: the one the motors' family
-        declares (:func:`~.dialect.dialect_of`).
+        declares first (:attr:`~jvl_gym.families.TwinSpec.dialects`).
 
     Attributes
     ----------
     dialect : str
         The MacTalk dialect the twin speaks.
+    family : TwinFamily
+        The motors' family: its twin facts (``family.twin``) and capabilities.
     outer_dt : float
         Seconds per outer sample of the motors (``1 / OUTER_HZ``).
     lock : threading.RLock
@@ -179,7 +192,9 @@ class Twin:
                  fastmac_code: dict[str, tuple[int, int]] = fm.DEFAULT_CODE,
                  dialect: str | None = None) -> None:
         self.m = motors
-        self.dialect = check_dialect(dialect) if dialect is not None else dialect_of(motors)
+        self.family = motors.family
+        self.spec = motors.family.twin
+        self.dialect = check_dialect(dialect if dialect is not None else self.spec.dialect)
         self.outer_dt = 1.0 / float(motors.OUTER_HZ)
         self._sim_time = 0.0
         self._stepped = 0
@@ -213,11 +228,28 @@ class Twin:
                 motors.write_raw(self.reg.MYADDR, addresses[i], index=i)
 
     # ------------------------------------------------------------------ helpers
+    def supports(self, capability: Capability) -> bool:
+        """Whether the motors' family declares ``capability``."""
+        return self.family.supports(capability)
+
+    def require(self, capability: Capability) -> None:
+        """:class:`~jvl_gym.families.UnsupportedOperation` unless the family declares
+        ``capability`` (the request is then refused)."""
+        if not self.family.supports(capability):
+            raise UnsupportedOperation(self.family.title, capability)
+
+    def in_safe_mode(self, i: int) -> bool:
+        """Whether motor ``i`` is in the family's safe mode (never, for a family without)."""
+        return self.spec.safe_mode is not None and self.mode(i) == self.spec.safe_mode
+
     def _power_on(self, i: int) -> None:
-        """Motor ``i`` restarts from its flash: the family's ``software_reset`` if it has one,
-        else the power-on ``reset`` of every motor array."""
-        reset = getattr(self.m, "software_reset", None) or self.m.reset
-        reset(i)
+        """Motor ``i`` restarts from its flash: the family's ``software_reset`` where it has
+        one (:attr:`~jvl_gym.families.Capability.SOFTWARE_RESET`), else the power-on
+        ``reset`` of every motor array."""
+        if self.supports(Capability.SOFTWARE_RESET):
+            self.m.software_reset(i)
+        else:
+            self.m.reset(i)
 
     def _flash_path(self, i: int) -> Path | None:
         return None if self.flash_dir is None else self.flash_dir / f"flash_{i}.json"
@@ -404,26 +436,30 @@ class Twin:
             if cmd == c.WRITE:
                 return mt.ACCEPT if self.write_bytes(i, f.register or 0, f.data) else b""
             if cmd == c.READ_SAMPLE_BUFFER:
+                self.require(Capability.SAMPLE_BUFFER)
                 return mt.encode_data_reply(self._next_sample(i))
             if cmd == c.GO_SAFE_MODE:
-                self.m.go_safe_mode(i)
+                self.require(Capability.SAFE_MODE)
+                self.m.enter_safe_mode(i)
                 return mt.ACCEPT
             if cmd == c.GO_INIT_MODE:
-                if self.mode(i) == SAFE_MODE:
+                if self.in_safe_mode(i):
                     self.m.exit_safe_mode(i)
                 else:
+                    self.require(Capability.INIT_MODE)
                     self.m.go_init_mode(i)
                 return mt.ACCEPT
             if cmd == c.WRITE_FLASH:
-                self.m.write_flash(i)  # refuses unless SAFE_MODE
+                self.require(Capability.FLASH)
+                self.m.write_flash(i)  # refuses unless in safe mode
                 self._save_flash_file(i)
                 self._after_reset(i)
                 return b""
             if cmd == c.RESET:
-                self.m.software_reset(i)  # refuses unless INIT or SAFE
+                self._power_on(i)  # the MAC050–141 refuses unless INIT or SAFE
                 self._after_reset(i)
                 return b""
-        except ValueError as exc:  # RegisterError / ModeError are ValueErrors
+        except (ValueError, UnsupportedOperation) as exc:  # RegisterError, ModeError
             self.refuse(f"{cmd.name} for motor {i}: {exc}")
             return b""
         raise AssertionError(cmd)  # pragma: no cover
@@ -500,19 +536,25 @@ class UserInterfaceSession:
 
     @property
     def active(self) -> bool:
-        """USERINTF = 11 at the last power-on (a family without these bits, or of 32-bit
-        registers, has no FastMAC/FlexMAC user interface)."""
-        bits = getattr(self.twin.m, "interface_bits", None)
-        if bits is None or self.twin.unit32 is not None:
+        """USERINTF = 11 at the last power-on (a family without the FastMAC/FlexMAC user
+        interface, :attr:`~jvl_gym.families.Capability.USER_INTERFACE`, never is)."""
+        if not self.twin.supports(Capability.USER_INTERFACE) or self.twin.unit32 is not None:
             return False
-        return int(bits[self.i]) & 3 == 3
+        return int(self.twin.m.interface_bits[self.i]) & 3 == 3
+
+    def _bit(self, name: str) -> int:
+        """Mask of the status bit ``name`` of the family's status register."""
+        return self.twin.spec.bit(name)
 
     def status(self) -> int:
-        """The status byte now (manual 5.2.1.6)."""
-        st = int(self.twin.m.read_raw(self.twin.reg.ERR_STAT)[self.i])
-        dec, acc = bool(st & _DEC), bool(st & _ACC)
-        return fm.encode_status(fm.Status(self.toggle, dec, acc and not dec, bool(st & _IN_POS),
-                                          self.flexmac, False, bool(st & _ERRORS)))
+        """The status byte now (manual 5.2.1.6): IN_POS, ACC_FLAG, DEC_FLAG and the error bits
+        of the family's status register."""
+        spec = self.twin.spec
+        st = int(self.twin.m.read_raw(spec.status_register)[self.i])
+        dec, acc = bool(st & self._bit("DEC_FLAG")), bool(st & self._bit("ACC_FLAG"))
+        return fm.encode_status(fm.Status(self.toggle, dec, acc and not dec,
+                                          bool(st & self._bit("IN_POS")), self.flexmac, False,
+                                          bool(st & spec.mask(spec.error_bits))))
 
     def feed(self, chunk: bytes) -> bytes:
         """Received bytes → status bytes / read replies."""
@@ -537,7 +579,7 @@ class UserInterfaceSession:
             self.twin.stats["errors"] += 1
         elif got is not None:
             self.twin.stats["fastmac"] += 1
-            if self.twin.mode(self.i) == SAFE_MODE:
+            if self.twin.in_safe_mode(self.i):
                 self.twin.refuse("FastMAC command in SAFE_MODE (manual 4.4.16)")
             else:
                 self.toggle = got.toggle
@@ -553,9 +595,13 @@ class UserInterfaceSession:
                                      if reg in (r.P_SOLL, r.P_IST, r.P_FNC)
                                      else mt.words_to_bytes([raw & 0xFFFF]))
 
-    def _err_stat(self, clear: int = 0, set_: int = 0) -> None:
-        st = int(self.twin.m.read_raw(self.twin.reg.ERR_STAT)[self.i])
-        self._w(self.twin.reg.ERR_STAT, (st & ~clear) | set_)
+    def _err_stat(self, clear: str | tuple[str, ...] = (), set_: str = "") -> None:
+        """Clear the status bits named ``clear`` and set the one named ``set_``."""
+        spec = self.twin.spec
+        number = self.twin.m.table.lookup(spec.status_register).number
+        st = int(self.twin.m.read_raw(number)[self.i])
+        off = spec.mask((clear,) if isinstance(clear, str) else clear)
+        self._w(number, (st & ~off) | (spec.bit(set_) if set_ else 0))
 
     def _raw(self, reg: int) -> int:
         return int(self.twin.m.read_raw(reg)[self.i])
@@ -571,31 +617,31 @@ class UserInterfaceSession:
         k = fm.FastCommand
         cmd = c.command
         if cmd == k.RESET_ERROR:
-            self._err_stat(clear=_CLEARABLE)
+            self._err_stat(clear=self.twin.spec.clearable_bits)
         elif cmd == k.P_SOLL_ZERO:
             self._w(self.twin.reg.P_SOLL, 0)
-            self._err_stat(clear=_IN_POS)
+            self._err_stat(clear="IN_POS")
         elif cmd == k.P_IST_ZERO:
             self._w(self.twin.reg.P_IST, 0)
         elif cmd == k.P_FNC_ZERO:
             self._w(self.twin.reg.P_FNC, 0)
-            self._err_stat(clear=_IN_POS)
+            self._err_stat(clear="IN_POS")
         elif cmd == k.V_SOLL_ZERO:
             self._w(self.twin.reg.V_SOLL, 0)
         elif cmd == k.T_SOLL_ZERO:
             self._w(self.twin.reg.T_SOLL, 0)
         elif cmd == k.IN_POS_ZERO:
-            self._err_stat(clear=_IN_POS)
+            self._err_stat(clear="IN_POS")
         elif cmd in (k.REL_P7_FNC, k.REL_P8_FNC):
             p = self._raw(self.twin.reg.P7 if cmd == k.REL_P7_FNC else self.twin.reg.P8)
             # literally as in 5.2.1.4
             self._w(self.twin.reg.P_FNC, (self._raw(self.twin.reg.FLWERR) - p) * 16)
-            self._err_stat(clear=_IN_POS)
+            self._err_stat(clear="IN_POS")
         elif cmd in (k.SET1, k.SET2, k.SET3, k.SET4):
             n = int(cmd) - int(k.SET1) + 1
             for reg in self.twin.reg.pointer.values():
                 self._w(reg, n)
-            self._err_stat(clear=_IN_POS)
+            self._err_stat(clear="IN_POS")
         elif cmd == k.HOME:
             home = self._raw(self.twin.reg.HOME_MODE) >> 8
             if home in (12, 13, 14):
@@ -607,11 +653,11 @@ class UserInterfaceSession:
         elif cmd == k.TRANSMIT_SLOWLY:
             self.slow = True
         elif cmd == k.ABSOLUTE:
-            self._err_stat(clear=_RELPOSPSOLL | _RELPOSPFNC)
+            self._err_stat(clear=("RELPOSPSOLL", "RELPOSPFNC"))
         elif cmd == k.RELATIVE_P_SOLL:
-            self._err_stat(clear=_RELPOSPFNC, set_=_RELPOSPSOLL)
+            self._err_stat(clear="RELPOSPFNC", set_="RELPOSPSOLL")
         elif cmd == k.RELATIVE_P_FNC:
-            self._err_stat(clear=_RELPOSPSOLL, set_=_RELPOSPFNC)
+            self._err_stat(clear="RELPOSPSOLL", set_="RELPOSPFNC")
         elif cmd == k.TRANSMIT_MYADDR:
             self.send_myaddr = True
         elif cmd == k.USE_FLEXMAC:
@@ -643,7 +689,7 @@ class UserInterfaceSession:
                 return b""
             return fx.encode_read_reply(msg.header, self.twin.words(self.i, reg,
                                                                     2 if msg.long else 1))
-        if self.twin.mode(self.i) == SAFE_MODE:
+        if self.twin.in_safe_mode(self.i):
             self.twin.refuse("FlexMAC write in SAFE_MODE (manual 4.4.16)")
         elif reg is None:
             self.twin.refuse(f"FlexMAC write to {msg}: no register there")

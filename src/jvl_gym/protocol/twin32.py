@@ -7,13 +7,13 @@ read block (51h)       reply with the 32 registers N … N+31 (128 bytes)
 write (52h)            4 bytes: the 32-bit value; 2 bytes: extended as the register's format
                        (sign for signed, zero for Word32; :mod:`.mactalk32`). Validated by the
                        simulator; accept only if carried out
-enter safe mode (54h)  ``enter_safe_mode`` (or ``go_safe_mode``), accept (MIS §18.2.5)
-exit safe mode (55h)   ``exit_safe_mode`` when in SAFE_MODE (else nothing to do), accept
+enter safe mode (54h)  ``enter_safe_mode``, accept (MIS §18.2.5)
+exit safe mode (55h)   ``exit_safe_mode`` when in safe mode (else nothing to do), accept
                        (MIS §18.2.6)
-write flash (56h)      only in SAFE_MODE: save registers to flash (and the flash file), reset;
+write flash (56h)      only in safe mode: save registers to flash (and the flash file), reset;
                        no reply; an accept when it fails (MIS §18.2.7: "The response will only
                        be transmitted if the command failed")
-reset (57h)            ``software_reset`` if the family has one, else the power-on
+reset (57h)            ``software_reset`` where the family has it, else the power-on
                        ``reset``; no reply (MIS §18.2.8)
 program (61h)          the family's ``program_command`` (MIS: stored programs): start, stop,
                        pause, run an area, set/clear outputs, prepare the flash; reply 61h
@@ -26,7 +26,8 @@ group write (59h)      every motor whose GROUP_ID is the group writes the regist
 
 A register number the table does not have, or a reserved one, reads as 0 and refuses writes.
 Any other refusal (range, read-only, mode) changes nothing and gets no reply; so does a command
-whose method the motors' family does not have.
+the motors' family does not support (its :class:`~jvl_gym.families.Capability` set; a failed
+write flash excepted, which is accepted as the manual says).
 """
 
 from __future__ import annotations
@@ -35,15 +36,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..families.contract import Capability, UnsupportedOperation
 from . import mactalk32 as m32
 
 if TYPE_CHECKING:
     from .twin import Twin
 
 __all__ = ["MacTalk32Unit", "is_signed"]
-
-#: the SAFE_MODE value of MODE_REG (MAC800 and MIS: 15; MIS §8.2.3)
-SAFE_MODE = 15
 
 
 def is_signed(fmt: object) -> bool:
@@ -104,16 +103,6 @@ class MacTalk32Unit:
             return False
         return True
 
-    def _call(self, names: tuple[str, ...], i: int) -> None:
-        """The first of the motors' methods ``names`` the family has, for motor ``i``;
-        ValueError if it has none of them."""
-        for name in names:
-            method = getattr(self.twin.m, name, None)
-            if method is not None:
-                method(i)
-                return
-        raise ValueError(f"the motor family has no {' or '.join(names)}")
-
     # ------------------------------------------------------------------ frames
     def handle(self, frame: m32.Frame) -> bytes:
         """Carry out one decoded frame; the reply bytes (maybe empty)."""
@@ -154,16 +143,18 @@ class MacTalk32Unit:
             if cmd == c.WRITE:
                 return m32.ACCEPT if self.write(i, f.register or 0, f.data) else b""
             if cmd == c.ENTER_SAFE_MODE:
-                self._call(("enter_safe_mode", "go_safe_mode"), i)
+                t.require(Capability.SAFE_MODE)
+                t.m.enter_safe_mode(i)
                 return m32.ACCEPT
             if cmd == c.EXIT_SAFE_MODE:
-                if t.mode(i) == SAFE_MODE:
-                    self._call(("exit_safe_mode",), i)
+                if t.in_safe_mode(i):
+                    t.m.exit_safe_mode(i)
                 return m32.ACCEPT
             if cmd == c.WRITE_FLASH:
                 try:
-                    self._call(("write_flash",), i)  # refuses unless SAFE_MODE
-                except ValueError as exc:
+                    t.require(Capability.FLASH)
+                    t.m.write_flash(i)  # refuses unless in safe mode
+                except (ValueError, UnsupportedOperation) as exc:
                     t.refuse(f"WRITE_FLASH for motor {i}: {exc}")
                     return m32.ACCEPT  # MIS §18.2.7: a response only if the command failed
                 t._save_flash_file(i)
@@ -175,10 +166,10 @@ class MacTalk32Unit:
                     raise ValueError("the motor family has no stored programs")
                 return m32.encode_program_reply(method(i, f.data[0], f.data[1:]))
             if cmd == c.RESET:
-                self._call(("software_reset", "reset"), i)
+                t._power_on(i)
                 self.power_on(i)
                 return b""
-        except ValueError as exc:  # RegisterError / ModeError are ValueErrors
+        except (ValueError, UnsupportedOperation) as exc:  # RegisterError, ModeError
             t.refuse(f"{cmd.name} for motor {i}: {exc}")
             return b""
         raise AssertionError(cmd)  # pragma: no cover

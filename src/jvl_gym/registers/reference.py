@@ -1,14 +1,12 @@
-"""Generate the Markdown register reference (``docs/registers.md``) from a register table.
+"""Markdown register references of register tables (``docs/registers.md``, ``docs/families``).
 
-Run ``python -m jvl_gym.registers.reference [OUTPUT]`` from the repository root; the default
-output is ``docs/registers.md``.
+The pages are written by the families' generators: ``python -m
+jvl_gym.families.mac050_141.reference`` and ``python -m jvl_gym.families.reference``.
 """
 
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable
-from pathlib import Path
 
 from .table import FORMAT_SCALE, Access, Format, RegisterTable
 
@@ -31,8 +29,13 @@ def _cell(text: str) -> str:
     return text.replace("|", "\\|")
 
 
+#: the command that writes the MAC050–141 reference
+MAC_GENERATOR = "python -m jvl_gym.families.mac050_141.reference"
+
+
 def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
-                       usage: Callable[[str], list[str]] | None = None) -> str:
+                       usage: Callable[[str], list[str]] | None = None,
+                       generator: str = MAC_GENERATOR) -> str:
     """Render a register table as a Markdown document.
 
     Parameters
@@ -43,6 +46,8 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
         Motor family shown in the heading.
     usage : callable, optional
         ``usage(name) -> [mode names]``: adds a column with the modes that read the register.
+    generator : str
+        The command that writes the page (named in its header).
 
     Returns
     -------
@@ -53,7 +58,7 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
     lines = [
         f"# Register reference: {title}",
         "",
-        f"Generated from `{table.source}` by `python -m jvl_gym.registers.reference`; "
+        f"Generated from `{table.source}` by `{generator}`; "
         "do not edit by hand.",
         "",
         "Values are in user units (Fixed4/Fixed8 as real numbers; raw = value·4096 / value·256, "
@@ -129,22 +134,3 @@ def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
             f"{_cell(r.unit)} | {r.access.value} | {default} | {user} | {_cell(r.section)} | "
             f"{_cell(r.description)} |")
     return "\n".join(lines) + "\n"
-
-
-def main(argv: list[str] | None = None) -> int:
-    """Write the reference of the MAC050–141 register table to ``argv[0]`` (default
-    docs/registers.md) and its mode table to ``modes.md`` beside it."""
-    args = sys.argv[1:] if argv is None else argv
-    out = Path(args[0]) if args else Path("docs/registers.md")
-    out.parent.mkdir(parents=True, exist_ok=True)
-    from ..families.mac050_141.firmware.mode_table import markdown_mode_table, modes_using
-    from ..families.mac050_141.table import TABLE as table
-
-    out.write_text(markdown_reference(table, usage=modes_using), encoding="utf-8")
-    (out.parent / "modes.md").write_text(markdown_mode_table(), encoding="utf-8")
-    print(f"wrote {out} ({len(table)} registers)")
-    return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

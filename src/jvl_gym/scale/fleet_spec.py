@@ -118,9 +118,12 @@ class FleetSpec:
 
 
 def _motor_types() -> list[str]:
-    from jvl_gym.families.mac050_141.config import motor_types
+    """The motor types a fleet may hold: those of the families with the TESTU/TESTA test modes
+    the fleet's identification records (:attr:`~jvl_gym.families.Capability.TEST_MODES`)."""
+    from jvl_gym.families import Capability, families, family
 
-    return motor_types()
+    return [t for k in families() if family(k).supports(Capability.TEST_MODES)
+            for t in family(k).motor_types()]
 
 
 def _int(value: Any, where: str, low: int = 1) -> int:

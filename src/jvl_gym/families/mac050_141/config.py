@@ -30,7 +30,7 @@ from ...config import (
 from ...config import load_setup as _load_setup
 
 __all__ = ["MotorConfig", "MOTORS_DIR", "SETUPS_DIR", "canonical_motor_name", "load_motor",
-           "load_setup", "motor_types"]
+           "load_setup", "motor_types", "setup_path"]
 
 #: the motor configs of the family's types
 MOTORS_DIR = Path(__file__).resolve().with_name("configs") / "motors"
@@ -44,9 +44,9 @@ class MotorConfig(BaseModel):
     Every physical value must be a finite number of its type (a bool, a string or an infinity
     is refused) inside the interval given here: physically plausible for an integrated servo of
     this class and inside the region where the simulation's integration is stable. The DC bus
-    takes the motor power explicitly over an inner sample (``mac050_141.plant.supply``): a bus
+    takes the motor power explicitly over an inner sample (``jvl_gym.physics.bus``): a bus
     capacitance of a few µF lets the bus voltage diverge, so at least 100 µF is required. The
-    end stops' damping (0.05 N·m·s/rad by default, ``mac050_141.plant.mechanics``) is explicit
+    end stops' damping (0.05 N·m·s/rad by default, ``jvl_gym.physics.mechanics``) is explicit
     over an inner sample of 128 µs and diverges for a total inertia below about 3.2e-6 kg·m²,
     so the rotor inertia is at least 5e-6 kg·m².
     """
@@ -137,3 +137,8 @@ def load_setup(name_or_path: str | os.PathLike[str] | dict[str, Any]) -> SetupCo
 def motor_types() -> list[str]:
     """Names of the motor types that have a config in :data:`MOTORS_DIR`."""
     return sorted(p.stem for p in MOTORS_DIR.glob("*.yaml"))
+
+
+def setup_path(name: str) -> Path:
+    """The file of the default setup ``name`` (a motor config's ``setup``)."""
+    return SETUPS_DIR / f"{name}.yaml"

@@ -38,6 +38,7 @@ from numba import njit
 
 from ...jit import KERNEL, LANE_KERNEL
 from ...noise import gauss
+from ...physics.coil import vector_to_phases
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R
@@ -45,7 +46,6 @@ from .firmware.current_loop import manual_references, phase_step, references, st
 from .firmware.modes import enter_mode
 from .firmware.recorder import record
 from .kernel import adc_count, plant_sample
-from .plant.coil import vector_to_phases
 from .plant.encoder import eldeg, encoder_count
 from .plant.hall import SECTOR, hall_code, sector_index, zero_crossing
 from .scratch import (

@@ -28,6 +28,10 @@ from numba import njit
 
 from ...jit import KERNEL
 from ...noise import gauss
+from ...physics.bus import bus_constants, bus_step_prepared
+from ...physics.coil import coil_constants, coil_step_prepared, phase_to_vector
+from ...physics.fixed import clamp, rnd, sat16, wrap32
+from ...physics.mechanics import end_stop_torque, mech_constants, mech_step_prepared
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R
@@ -40,7 +44,6 @@ from .firmware.analog_blocks import (
 )
 from .firmware.blocks import position_block, stop_block, velocity_block
 from .firmware.coil import coil_block
-from .firmware.fixed import clamp, rnd, sat16, wrap32
 from .firmware.gear_blocks import (
     analog_gear_factor,
     avg_target,
@@ -62,10 +65,7 @@ from .firmware.modes import (
 from .firmware.monitor import check_errors, in_position, thermal, undervoltage
 from .firmware.recorder import record
 from .firmware.speed_loop import speed_regulator
-from .plant.coil import coil_constants, coil_step_prepared, phase_to_vector
 from .plant.encoder import encoder_count
-from .plant.mechanics import end_stop_torque, mech_constants, mech_step_prepared
-from .plant.supply import bus_constants, bus_step_prepared
 
 _H = c.INNER_DT
 _HALF_PWM_PER_VOLT = 1.0 / (2.0 * c.PWM_FULL)  #: bus volts → phase volts per PWM count

@@ -16,12 +16,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ...arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, motor_index, real_array
+from ...arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, real_array
 from ...bank import StorePlan
 from ...inputs import InputRule
 from ...keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
+from ...physics.mechanics import coupling_problem
 from ...registers import Format, Register, RegisterError
-from ...registers.formats import from_raw
 from ...sim import ModeError, MotorArray
 from . import constants as c
 from . import layout as L
@@ -30,7 +30,6 @@ from .firmware import modes as M
 from .firmware import regs as R
 from .firmware import write_rules as W
 from .firmware.monitor import filter_gain
-from .plant.mechanics import coupling_problem
 from .power_on import power_on_from_memory, reset_rows, start_loaded_rows
 from .store import store_rows
 from .table import TABLE
@@ -138,7 +137,7 @@ class MacMotorArray(MotorArray):
     def reset(self, index: MotorIndex = None, motor_type: str | Sequence[str] | None = None,
               **params: Any) -> None:
         """:meth:`jvl_gym.MotorArray.reset`; also refuses an elastic coupling the inner step
-        cannot carry (``mac050_141.plant.mechanics.coupling_problem``), changing nothing."""
+        cannot carry (``jvl_gym.physics.mechanics.coupling_problem``), changing nothing."""
         types = self._type_of.copy()
         try:
             super().reset(index, motor_type, **params)
@@ -386,7 +385,7 @@ class MacMotorArray(MotorArray):
             raise ModeError(f"{what} needs {names} (manual 4.4.16); motor {int(bad[0])} is in "
                             f"{c.MODE_NAMES.get(int(self.regs[bad[0], R.MODE_REG]), '?')}")
 
-    def go_safe_mode(self, index: MotorIndex = None) -> None:
+    def enter_safe_mode(self, index: MotorIndex = None) -> None:
         """MacTalk 'go safe mode' (5.1): stop if moving, then SAFE_MODE (4.4.16)."""
         M.go_safe(self.regs, self.state, as_index(index, self.n))
 
@@ -401,12 +400,10 @@ class MacMotorArray(MotorArray):
         M.go_init(self.regs, self.state, idx)
 
     def _save_flash(self, idx: np.ndarray) -> None:
-        if self._flash is None:
-            self._flash = np.zeros_like(self.regs)
-        rw = self._rw_numbers()
-        self._flash[np.ix_(idx, rw)] = self.regs[np.ix_(idx, rw)]
+        """The registers flash holds, and the firmware's PROG_VERSION of the type's ROM."""
+        super()._save_flash(idx)
+        assert self._flash is not None
         self._flash[idx, R.PROG_VERSION] = self._rom[self._type_of[idx], R.PROG_VERSION]
-        self._has_flash[idx] = True
 
     def write_flash(self, index: MotorIndex = None) -> None:
         """Save the register set to flash and reset; only in SAFE_MODE (manual 2.2, 5.1)."""
@@ -430,39 +427,6 @@ class MacMotorArray(MotorArray):
         self.state[idx] = 0.0
         self.state[np.ix_(idx, keep)] = saved
         self._power_on(idx)
-
-    def _ensure_buffer(self) -> None:
-        if not self._buf_allocated:
-            self._buf = np.zeros((self.n, c.REC_CNT_MAX, 4), dtype=np.int64)
-            self._buf_allocated = True
-
-    def sample_buffer_raw(self, index: int) -> np.ndarray:
-        """Raw samples of one motor, shape (REC_CNT, 4) for SAMPLE1..SAMPLE4."""
-        index = motor_index(index, self.n, "sample_buffer_raw")
-        count = int(self.regs[index, R.REC_CNT])
-        if not self._buf_allocated:
-            return np.zeros((0, 4), dtype=np.int64)
-        return self._buf[index, :count].copy()
-
-    def sample_buffer(self) -> dict[str, np.ndarray]:
-        """The sample buffer in user units: {register name: (N, max REC_CNT) array}.
-
-        Channels are named after SAMPLE1..SAMPLE4 of motor 0 (a channel whose register differs
-        between motors is named ``SAMPLEk``); entries past a motor's REC_CNT are 0.
-        """
-        count = int(self.regs[:, R.REC_CNT].max()) if self._buf_allocated else 0
-        valid = np.arange(count)[None, :] < self.regs[:, R.REC_CNT][:, None]
-        out: dict[str, np.ndarray] = {}
-        for ch, num in enumerate((R.SAMPLE1, R.SAMPLE2, R.SAMPLE3, R.SAMPLE4)):
-            nums = self.regs[:, num]
-            raw = np.where(valid, self._buf[:, :count, ch], 0) if count else np.zeros(
-                (self.n, 0), dtype=np.int64)
-            reg = self.table.lookup(int(nums[0])) if 1 <= nums[0] <= 164 else None
-            if reg is None or np.any(nums != nums[0]) or reg.name in out:
-                out[f"SAMPLE{ch + 1}"] = raw  # raw values: no single register to name them by
-            else:
-                out[reg.name] = from_raw(reg, raw)
-        return out
 
     def set_input(self, index: MotorIndex = None, *, load_torque: InputValue = None,
                   analog_volts: InputValue = None, pulse_counts: InputValue = None,
@@ -497,7 +461,7 @@ class MacMotorArray(MotorArray):
         return self.state[:, L.S_LOAD_OMEGA].copy()
 
     def _current_vector(self) -> np.ndarray:
-        """Stator current space vector [A], (N,) complex (``mac050_141.plant.coil``)."""
+        """Stator current space vector [A], (N,) complex (``jvl_gym.physics.coil``)."""
         return self.state[:, L.S_I_RE] + 1j * self.state[:, L.S_I_IM]
 
     @property
@@ -542,8 +506,3 @@ class MacMotorArray(MotorArray):
             + 0.5 * j_load * s[:, L.S_LOAD_OMEGA] ** 2,
             "coupling": np.where(rigid, 0.0, 0.5 * p[:, L.P_K_COUPLING] * twist**2),
         }
-
-    def mode_name(self, index: int = 0) -> str:
-        """Name of the current mode of one motor."""
-        index = motor_index(index, self.n, "mode_name")
-        return c.MODE_NAMES.get(int(self.regs[index, R.MODE_REG]), "?")

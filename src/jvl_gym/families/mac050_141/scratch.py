@@ -16,13 +16,13 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...physics.fixed import fx4, fx8
+from ...physics.mechanics import shaft_inertia
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R
-from .firmware.fixed import fx4, fx8
 from .kernel import sample_constants
 from .plant.hall import hall_code
-from .plant.mechanics import shaft_inertia
 
 #: motors per block
 LANES = 16

@@ -2,9 +2,10 @@
 
 ``REGISTERS`` is the family's register table (``registers.csv`` in this package, every register
 of the overview at one register number, 32 bits wide); :mod:`.units` holds its sample rate,
-counts per revolution and unit scalings. ``FAMILY`` is the family's record for the engine: the
-compiled step (:mod:`.compiled`), the motor array (:class:`.motors.Mac800MotorArray`) and the
-motor types (``configs/motors``: MAC800, MAC400).
+counts per revolution and unit scalings. ``FAMILY`` is the family's record
+(:class:`jvl_gym.families.Family`): the compiled step (:mod:`.compiled`), the motor array
+(:class:`.motors.Mac800MotorArray`), the motor types (``configs/motors``: MAC800, MAC400), the
+twin's facts, the capabilities and the tuning strategy.
 """
 
 from __future__ import annotations
@@ -16,10 +17,26 @@ __all__ = ["REGISTERS", "FAMILY"]
 #: the MAC800 register table (registers 1 … 206)
 REGISTERS: RegisterTable = load_packaged_table(__name__)
 
-from .. import Family  # noqa: E402  (the table first: the modules below read it)
-from . import compiled  # noqa: E402
-from .config import motor_types  # noqa: E402
+from ..contract import Capability, Family, TuningSpec, TwinSpec  # noqa: E402  (table first)
+from . import compiled, config, constants, task, units  # noqa: E402
 from .motors import Mac800MotorArray  # noqa: E402
 
-FAMILY = Family(key="mac800", title="MAC800 integrated servo motors", compiled=compiled,
-                array_class=Mac800MotorArray, motor_types=motor_types)
+_C = constants
+
+FAMILY = Family(
+    key="mac800", title="MAC800 integrated servo motors", compiled=compiled,
+    array_class=Mac800MotorArray, table=REGISTERS, constants=constants, units=units,
+    config=config, task=task,
+    twin=TwinSpec(
+        dialects=(_C.MACTALK_DIALECT,), passive_mode=_C.PASSIVE_MODE, status_register="ERR_STAT",
+        # ERR_STAT bits (register overview §1.2, register 35)
+        status_bits=TwinSpec.named_bits(_C, (
+            "I2T_ERR", "FLW_ERR", "FNC_ERR", "UIT_ERR", "IN_POS", "ACC_FLAG", "DEC_FLAG",
+            "PLIM_ERR", "DEGC_ERR", "UV_ERR", "UV_DETECT", "OV_ERR", "IPEAK_ERR", "SPEED_ERR",
+            "DIS_P_LIM", "INDEX_ERR", "OLD_FILT_ERR", "U24V_ERR")),
+        error_bits=tuple(_C.ERROR_NAMES.values()),
+        clearable_bits=tuple(_C.ERROR_NAMES.values())),
+    capabilities=frozenset({Capability.TORQUE, Capability.ENERGY, Capability.SAMPLE_BUFFER,
+                            Capability.ANALOG_TORQUE, Capability.ANALOG_GEAR,
+                            Capability.SPEED_FILTER}),
+    tuning=TuningSpec.of("buffer_sixth_order", constants, REGISTERS))

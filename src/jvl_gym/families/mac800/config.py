@@ -29,10 +29,15 @@ from ...config import (
     validate_config,
 )
 
-__all__ = ["Mac800Config", "CONFIGS", "load_motor", "motor_types", "setup_path"]
+__all__ = ["Mac800Config", "CONFIGS", "MOTORS_DIR", "SETUPS_DIR", "canonical_motor_name",
+           "load_motor", "motor_types", "setup_path"]
 
 #: the family's configs: ``motors/`` and ``setups/``
 CONFIGS = Path(__file__).resolve().parent / "configs"
+#: the motor configs of the family's types
+MOTORS_DIR = CONFIGS / "motors"
+#: the default setups (register sets) of the family's types
+SETUPS_DIR = CONFIGS / "setups"
 
 
 class Mac800Config(BaseModel):
@@ -92,7 +97,7 @@ class Mac800Config(BaseModel):
 
 def motor_types() -> list[str]:
     """Names of the MAC800 motor types (one config each)."""
-    return sorted(p.stem for p in (CONFIGS / "motors").glob("*.yaml"))
+    return sorted(p.stem for p in MOTORS_DIR.glob("*.yaml"))
 
 
 def load_motor(motor: str | os.PathLike[str] | Mac800Config) -> Mac800Config:
@@ -109,10 +114,16 @@ def load_motor(motor: str | os.PathLike[str] | Mac800Config) -> Mac800Config:
     if not isinstance(motor, (str, os.PathLike)):
         raise ConfigError(f"a motor is a type name, a config path or a Mac800Config, got "
                           f"{motor!r}")
-    path = resolve_config(CONFIGS / "motors", motor, "MAC800 motor type")
+    path = resolve_config(MOTORS_DIR, motor, "MAC800 motor type")
     return validate_config(Mac800Config, read_config_file(path), str(path))
 
 
 def setup_path(name: str) -> Path:
     """The file of a default setup named in a motor config."""
-    return CONFIGS / "setups" / f"{name}.yaml"
+    return SETUPS_DIR / f"{name}.yaml"
+
+
+def canonical_motor_name(name: str) -> str:
+    """The motor-type name a user's spelling stands for: the name as written (the MAC800
+    types have one spelling each)."""
+    return name

@@ -35,11 +35,11 @@ import numpy as np
 from numba import njit
 
 from ...jit import LANE_KERNEL
+from ...physics.bus import bus_step_prepared
+from ...physics.coil import coil_step_prepared, phase_to_vector, vector_to_phases
+from ...physics.fixed import clamp, rnd
+from ...physics.mechanics import end_stop_torque, mech_step_prepared
 from ...trig import fma, sincos
-from ..mac050_141.firmware.fixed import clamp, rnd
-from ..mac050_141.plant.coil import coil_step_prepared, phase_to_vector, vector_to_phases
-from ..mac050_141.plant.mechanics import end_stop_torque, mech_step_prepared
-from ..mac050_141.plant.supply import bus_step_prepared
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R

@@ -19,10 +19,10 @@ from numba import njit
 
 from ...jit import KERNEL
 from ...noise import gauss
-from ..mac050_141.firmware.fixed import clamp, rnd, wrap32
-from ..mac050_141.plant.coil import coil_constants
-from ..mac050_141.plant.mechanics import mech_constants
-from ..mac050_141.plant.supply import bus_constants
+from ...physics.bus import bus_constants
+from ...physics.coil import coil_constants
+from ...physics.fixed import clamp, rnd, wrap32
+from ...physics.mechanics import mech_constants
 from . import constants as c
 from . import layout as L
 from .firmware import analog as A

@@ -14,13 +14,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ...arguments import InputValue, MotorIndex, motor_index
+from ...arguments import InputValue, MotorIndex
 from ...bank import StorePlan
 from ...config import load_setup
 from ...inputs import InputRule
 from ...keywords import BINARY, FINITE, NONNEGATIVE
 from ...registers import Register, RegisterError
-from ...registers.formats import from_raw
 from ...sim import ModeError, MotorArray
 from . import constants as c
 from . import layout as L
@@ -301,29 +300,6 @@ class Mac800MotorArray(MotorArray):
             self._ensure_buffer()
         return False
 
-    # ------------------------------------------------------------------ sample buffer
-    def _ensure_buffer(self) -> None:
-        if not self._buf_allocated:
-            self._buf = np.zeros((self.n, c.REC_CNT_MAX, 4), dtype=np.int64)
-            self._buf_allocated = True
-
-    def sample_buffer_raw(self, index: int) -> np.ndarray:
-        """Stored samples of one motor, (REC_CNT, 4) int64 for SAMPLE1 … SAMPLE4."""
-        index = motor_index(index, self.n, "sample_buffer_raw")
-        if not self._buf_allocated:
-            return np.zeros((0, 4), dtype=np.int64)
-        return self._buf[index, :int(self.regs[index, R.REC_CNT])].copy()
-
-    def sample_buffer(self, index: int = 0) -> dict[str, np.ndarray]:
-        """One motor's samples in user units: {register name: (REC_CNT,) array}."""
-        raw = self.sample_buffer_raw(index)
-        out: dict[str, np.ndarray] = {}
-        for ch, num in enumerate((R.SAMPLE1, R.SAMPLE2, R.SAMPLE3, R.SAMPLE4)):
-            reg = self.table.lookup(int(self.regs[index, num]))
-            out[reg.name if reg.name not in out else f"SAMPLE{ch + 1}"] = from_raw(reg,
-                                                                                   raw[:, ch])
-        return out
-
     # ------------------------------------------------------------------ world inputs
     def set_input(self, index: MotorIndex = None, *, load_torque: InputValue = None,
                   analog_volts: InputValue = None, pulse_counts: InputValue = None,
@@ -380,8 +356,3 @@ class Mac800MotorArray(MotorArray):
                 "friction": s[:, L.S_E_FRICTION].copy(), "load": s[:, L.S_E_LOAD].copy(),
                 "dump": s[:, L.S_E_DUMP].copy(), "supply": s[:, L.S_E_SUPPLY].copy(),
                 "kinetic": 0.5 * j * s[:, L.S_OMEGA] ** 2}
-
-    def mode_name(self, index: int = 0) -> str:
-        """Name of the current mode of one motor."""
-        index = motor_index(index, self.n, "mode_name")
-        return c.MODE_NAMES.get(int(self.regs[index, R.MODE_REG]), "?")

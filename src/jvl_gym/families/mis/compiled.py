@@ -11,8 +11,8 @@ import numpy as np
 from numba import njit, typeof, types
 
 from ...engine.view import EngineView, record_rows, take_planned_inputs
-from .firmware.outer import outer_firmware
-from .plant import LANES, inner_samples, lane_scratch, prepare_lane
+from .kernel import outer_firmware
+from .plant.stepper import LANES, inner_samples, lane_scratch, prepare_lane
 
 __all__ = ["LANES", "outer_sample", "inner_block", "prepare", "scratch"]
 

@@ -1,4 +1,4 @@
-"""Motor configs of the MIS/SMC types (``configs/<TYPE>.yaml`` beside this module).
+"""Motor configs of the MIS/SMC types (``configs/motors/<TYPE>.yaml`` beside this module).
 
 Each file holds one type's representative motor data with its ``provenance`` (the MIS manual
 §5.1 gives holding torques and currents; the electrical and inertia figures are representative
@@ -34,9 +34,14 @@ from ...config import (
 from . import constants as c
 from .units import CURRENT_AMPS_PER_UNIT, ENCODER_TYPES, MOTOR_TYPE_CODES
 
-__all__ = ["MisMotorConfig", "CONFIGS_DIR", "motor_types", "load_motor"]
+__all__ = ["MisMotorConfig", "CONFIGS_DIR", "MOTORS_DIR", "SETUPS_DIR", "canonical_motor_name",
+           "motor_types", "load_motor", "setup_path"]
 
 CONFIGS_DIR = Path(__file__).resolve().with_name("configs")
+#: the motor configs of the family's types
+MOTORS_DIR = CONFIGS_DIR / "motors"
+#: the family's default setups: none (a motor powers on with the table's defaults, §8.2)
+SETUPS_DIR: Path | None = None
 #: largest ``ω_n·h`` a config may give (module docstring)
 MAX_STIFFNESS_STEP = 0.5
 
@@ -97,7 +102,7 @@ class MisMotorConfig(BaseModel):
 
 def motor_types() -> list[str]:
     """Names of the MIS/SMC types with a config."""
-    return sorted(p.stem for p in CONFIGS_DIR.glob("*.yaml"))
+    return sorted(p.stem for p in MOTORS_DIR.glob("*.yaml"))
 
 
 @functools.lru_cache(maxsize=64)
@@ -112,4 +117,15 @@ def load_motor(motor: Any) -> MisMotorConfig:
     if not isinstance(motor, (str, os.PathLike)):
         raise ConfigError(f"an MIS/SMC motor is a type name, a config path or a "
                           f"MisMotorConfig, got {motor!r}")
-    return _load_file(resolve_config(CONFIGS_DIR, motor, "MIS/SMC motor type").resolve())
+    return _load_file(resolve_config(MOTORS_DIR, motor, "MIS/SMC motor type").resolve())
+
+
+def canonical_motor_name(name: str) -> str:
+    """The motor-type name a user's spelling stands for: the name as written."""
+    return name
+
+
+def setup_path(name: str) -> Path:
+    """The file of a default setup: the MIS/SMC types have none (ValueError)."""
+    raise ValueError(f"the MIS/SMC motor types have no default setups (asked for {name!r}); "
+                     "give a setup file or mapping")

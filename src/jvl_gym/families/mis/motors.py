@@ -15,21 +15,20 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ...arguments import InputValue, MotorIndex, as_index, motor_index
+from ...arguments import InputValue, MotorIndex, as_index
 from ...bank import StorePlan
 from ...inputs import InputRule
 from ...keywords import FINITE, NONNEGATIVE, POSITIVE
+from ...physics.fixed import wrap32
 from ...registers import Register, RegisterError, RegisterRangeError
-from ...registers.formats import from_raw
 from ...sim import ModeError, MotorArray
 from . import constants as c
 from . import layout as L
-from . import regs as R
 from .config import MisMotorConfig, load_motor
-from .firmware.arith import wrap32
+from .firmware import regs as R
+from .plant.torque_curve import pull_out_torque
 from .program.api import ProgramMixin
 from .table import TABLE
-from .torque_curve import pull_out_torque
 from .units import COUNTS_PER_REV, CURRENT_AMPS_PER_UNIT
 
 __all__ = ["MisMotorArray"]
@@ -291,13 +290,6 @@ class MisMotorArray(ProgramMixin, MotorArray):
         self._save_flash(idx)
         self.software_reset(idx)
 
-    def _save_flash(self, idx: np.ndarray) -> None:
-        if self._flash is None:
-            self._flash = np.zeros_like(self.regs)
-        rw = self._rw_numbers()
-        self._flash[np.ix_(idx, rw)] = self.regs[np.ix_(idx, rw)]
-        self._has_flash[idx] = True
-
     def software_reset(self, index: MotorIndex = None) -> None:
         """Reset the electronics (user command 267, §8.2.22): registers from flash or ROM and
         the power-on of the firmware (:meth:`_power_on`); the rotor keeps its angle and speed,
@@ -422,31 +414,10 @@ class MisMotorArray(ProgramMixin, MotorArray):
             if cmd in (c.CMD_RESET, c.CMD_SAVE_RESET):
                 self.software_reset(np.array([i]))
 
-    def _ensure_buffer(self) -> None:
-        if not self._buf_allocated:
-            self._buf = np.zeros((self.n, BUFFER_DEPTH, 4), dtype=np.int64)
-            self._buf_allocated = True
-
     # ------------------------------------------------------------------ sample buffer
-    def sample_buffer(self) -> dict[str, np.ndarray]:
-        """The samples taken (§8.2.60–63), by SAMPLE1..4's register names of motor 0 (raw
-        ``SAMPLEk`` where the motors differ): {name: (N, samples)} in user units; entries past
-        a motor's count are 0."""
-        count = int(self.state[:, L.S_REC_N].max()) if self._buf_allocated else 0
-        valid = np.arange(count)[None, :] < self.state[:, L.S_REC_N][:, None]
-        out: dict[str, np.ndarray] = {}
-        for ch in range(4):
-            nums = self.regs[:, R.SAMPLE1 + ch]
-            raw = (np.where(valid, self._buf[:, :count, ch], 0) if count
-                   else np.zeros((self.n, 0), dtype=np.int64))
-            reg = (self.table.lookup(int(nums[0])) if 0 < nums[0] <= self.table.last
-                   else None)
-            if reg is None or np.any(nums != nums[0]) or reg.name in out or reg.access.value \
-                    == "reserved":
-                out[f"SAMPLE{ch + 1}"] = raw
-            else:
-                out[reg.name] = from_raw(reg, raw)
-        return out
+    def _sample_counts(self) -> np.ndarray:
+        """Samples taken by each motor (§8.2.60–63), (N,)."""
+        return self.state[:, L.S_REC_N]
 
     # ------------------------------------------------------------------ world inputs
     def set_input(self, index: MotorIndex = None, **inputs: InputValue) -> None:
@@ -500,8 +471,3 @@ class MisMotorArray(ProgramMixin, MotorArray):
             :, L.P_AMPS_PER_UNIT]
         return np.array([pull_out_torque(rpm, amps[i], p[i, L.P_KT], p[i, L.P_R], p[i, L.P_L],
                                          u[i, L.I_SUPPLY_VOLTS]) for i in range(self.n)])
-
-    def mode_name(self, index: int = 0) -> str:
-        """Name of the current mode of one motor."""
-        i = motor_index(index, self.n, "mode_name")
-        return c.MODE_NAMES.get(int(self.regs[i, R.MODE_REG]), "?")

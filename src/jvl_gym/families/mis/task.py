@@ -17,7 +17,7 @@ from numba import njit
 from ...engine.view import EngineView
 from . import constants as _c
 from . import layout as _L
-from . import regs as R
+from .firmware import regs as R
 from .table import TABLE as _TABLE
 from .units import COUNTS_PER_REV as _CPR
 

@@ -10,10 +10,10 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
+from ....physics.fixed import wrap32
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
-from .fixed import wrap32
 
 _A2POS_HIGH = 5.4 * c.ANINP_FULL / c.ANINP_VOLTS  #: low → high above 5.4 V
 _A2POS_LOW = 4.4 * c.ANINP_FULL / c.ANINP_VOLTS  #: high → low below 4.4 V

@@ -20,10 +20,11 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
+from ....physics.fixed import clamp
+from ....physics.profile import max_landing_speed
 from .. import layout as L
 from . import regs as R
-from .blocks import _finish, max_landing_speed
-from .fixed import clamp
+from .blocks import _finish
 from .gear_blocks import gear_factor
 
 ANALOG_HIGH = 512  #: ANINP above 5 V counts as "high" (start-position command)

@@ -17,10 +17,10 @@ import math
 import numpy as np
 from numba import njit
 
+from ....physics.fixed import clamp, fx8, rnd
 from ....trig import fma, sincos
 from .. import constants as c
 from . import regs as R
-from .fixed import clamp, fx8, rnd
 
 _HALF_SQRT3 = 0.5 * math.sqrt(3.0)
 _PER_TURN = 1.0 / c.ELDEG_PER_TURN  #: exact (a power of two)

@@ -12,11 +12,12 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
+from ....physics.fixed import clamp
+from ....physics.profile import max_landing_speed
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
-from .blocks import _finish, max_landing_speed
-from .fixed import clamp
+from .blocks import _finish
 
 _AVG_BIAS = c.rpm_to_v_soll(300.0)  #: AVG: ±10 V ↔ ±300 rpm (4.4.7)
 

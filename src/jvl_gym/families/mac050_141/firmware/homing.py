@@ -20,11 +20,11 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
+from ....physics.fixed import wrap32
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
 from .blocks import velocity_block
-from .fixed import wrap32
 
 DETECTIONS = 50  #: HOME1: samples above T_HOME that define the limit (4.4.13)
 HOME1_TORQUE_FACTOR = 1.25

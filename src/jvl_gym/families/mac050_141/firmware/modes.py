@@ -74,7 +74,7 @@ REQUEST_MESSAGES = {
     E_ERROR_BITS: "cannot leave INIT_MODE while an error bit (ERR_STAT bits 0–3: I2T_ERR, FLW_ERR, "
     "FNC_ERR, UIT_ERR) is set; clear it by writing ERR_STAT first (manual 4.4.1)",
     E_BREAK: "BREAK_MODE (10) is entered automatically after TESTA_MODE (manual 4.4.11)",
-    E_SAFE: "SAFE_MODE (15) cannot be entered by writing MODE_REG; use go_safe_mode() "
+    E_SAFE: "SAFE_MODE (15) cannot be entered by writing MODE_REG; use enter_safe_mode() "
     "(MacTalk 'go safe mode', manual 4.4.16)",
     E_IN_SAFE: "in SAFE_MODE only 256, 257, 258 may be written to MODE_REG; leave SAFE_MODE with "
     "exit_safe_mode() (manual 4.4.16)",

@@ -19,10 +19,10 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
+from ....physics.fixed import clamp, rnd
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
-from .fixed import clamp, rnd
 from .mode_table import N_MODES
 from .modes import GEAR_INPOS, POSITION_INPOS, VELOCITY_INPOS, stop_to
 

@@ -22,9 +22,9 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
+from ....physics.fixed import clamp, fx4, fx8, rnd, sat16
 from .. import layout as L
 from . import regs as R
-from .fixed import clamp, fx4, fx8, rnd, sat16
 
 
 @njit(cache=True, inline="always")

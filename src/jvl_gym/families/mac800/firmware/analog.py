@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
-from ...mac050_141.firmware.fixed import clamp, rnd, wrap32
+from ....physics.fixed import clamp, rnd, wrap32
 from .. import constants as c
 from .. import layout as L
 from . import regs as R

@@ -18,8 +18,8 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
-from ...mac050_141.firmware.blocks import max_landing_speed
-from ...mac050_141.firmware.fixed import clamp
+from ....physics.fixed import clamp
+from ....physics.profile import max_landing_speed
 from .. import constants as c
 from .. import layout as L
 from . import regs as R

@@ -40,7 +40,7 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
-from ...mac050_141.firmware.fixed import clamp, rnd
+from ....physics.fixed import clamp, rnd
 from .. import constants as c
 from .. import layout as L
 from . import regs as R

@@ -28,8 +28,8 @@ from numba import njit
 
 from .. import constants as c
 from .. import layout as L
-from .. import regs as R
 from ..units import CUR_SCALE_CLOCK_HZ, CUR_SCALE_FULL, OUTER_DT
+from . import regs as R
 
 #: 36 MHz clock ticks per outer sample
 TICKS_PER_OUTER = CUR_SCALE_CLOCK_HZ * OUTER_DT

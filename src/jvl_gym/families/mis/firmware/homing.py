@@ -26,11 +26,11 @@ import math
 
 from numba import njit
 
+from ....physics.fixed import wrap32
 from .. import constants as c
 from .. import layout as L
-from .. import regs as R
 from ..units import ZERO_SEARCH_TIMEOUT_DEFAULT_S
-from .arith import wrap32
+from . import regs as R
 from .monitor import COUNTS_PER_RAD, set_encoder
 from .profile import position_step, velocity_step
 

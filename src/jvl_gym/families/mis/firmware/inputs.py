@@ -23,8 +23,8 @@ import numpy as np
 from numba import njit
 
 from .. import layout as L
-from .. import regs as R
 from ..units import ANALOGUE_FULL, ANALOGUE_VOLTS_PER_UNIT
+from . import regs as R
 
 #: outer samples (ms) between two analogue filter samples (§2.3.5: "fixed intervals of 10 mS")
 AF_PERIOD = 10

@@ -27,11 +27,11 @@ import math
 import numpy as np
 from numba import njit
 
+from ....physics.fixed import wrap32
 from .. import constants as c
 from .. import layout as L
-from .. import regs as R
 from ..units import BUSVOL_VOLTS_PER_UNIT, COUNTS_PER_REV
-from .arith import wrap32
+from . import regs as R
 
 #: encoder counts per revolution by ENCODER_TYPE code (0: none)
 _CPR = np.array([c.ENCODER_CPR.get(k, 0) for k in range(11)], dtype=np.int64)

@@ -15,7 +15,7 @@ from numba import njit
 
 from .. import constants as c
 from .. import layout as L
-from .. import regs as R
+from . import regs as R
 
 
 @njit(cache=True, inline="always")

@@ -30,11 +30,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from ....physics.fixed import wrap32
 from ....registers import RegisterError
 from .. import constants as c
 from .. import layout as L
 from .. import regs as R
-from ..firmware.arith import wrap32
 from ..table import TABLE
 from .binary import checksum, decode_command, decode_program, encode_program
 from .commands import FASTMAC_GROUPS, Command, cost_us

@@ -5,7 +5,7 @@ The kernel sees them as compile-time constants, and no register number is writte
 
 from __future__ import annotations
 
-from . import REGISTERS as _TABLE
+from .. import REGISTERS as _TABLE
 
 _NAMES = (
     "MODE_REG P_SOLL V_SOLL A_SOLL RUN_CURRENT STANDBY_TIME STANDBY_CURRENT P_IST V_IST V_START "

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from . import constants as c
+from .. import constants as c
 
 __all__ = ["pull_out_torque"]
 

@@ -2,7 +2,7 @@
 
 Order: time and inputs; encoder, follow error and monitoring; the mode's profile velocity;
 the commanded position (P_IST) advanced by it; status bits; the phase current the chopper aims
-at; the sample buffer. The plant then runs the sample's inner samples (``..plant``) with the
+at; the sample buffer. The plant then runs the sample's inner samples (``plant``) with the
 commanded position moving linearly from ``S_CMD_PREV`` to ``S_CMD``.
 
 Modes (§8.2.3): passive (0) and safe (15) switch the bridge off; velocity (1) runs at V_SOLL by
@@ -30,16 +30,16 @@ import math
 import numpy as np
 from numba import njit
 
-from .. import constants as c
-from .. import layout as L
-from .. import regs as R
-from .arith import wrap32
-from .closed_loop import field_step, scale_current
-from .homing import zero_search
-from .inputs import update_inputs
-from .monitor import check_errors, read_encoder, status_bits
-from .profile import position_step, velocity_step
-from .turntable import tt_active, tt_distance, tt_wrap
+from ...physics.fixed import wrap32
+from . import constants as c
+from . import layout as L
+from .firmware import regs as R
+from .firmware.closed_loop import field_step, scale_current
+from .firmware.homing import zero_search
+from .firmware.inputs import update_inputs
+from .firmware.monitor import check_errors, read_encoder, status_bits
+from .firmware.profile import position_step, velocity_step
+from .firmware.turntable import tt_active, tt_distance, tt_wrap
 
 #: a motor's RUN_CURRENT unit [A RMS] → phase current amplitude [A peak] (sine microstepping)
 _SQRT2 = math.sqrt(2.0)

@@ -20,8 +20,8 @@ import math
 
 from numba import njit
 
-from ....jit import KERNEL
-from ....trig import fma, sincos
+from ..jit import KERNEL
+from ..trig import fma, sincos
 
 SQRT3 = math.sqrt(3.0)
 # Divisions are the slowest arithmetic of the inner sample (long latency, one divider per core):

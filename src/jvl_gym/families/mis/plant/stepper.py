@@ -1,5 +1,5 @@
 """The plant of a two-phase hybrid step motor with its chopper, in SIMD lanes (MIS manual
-§1.1.1, §5.1, §5.3; the motor data: ``configs/*.yaml``).
+§1.1.1, §5.1, §5.3; the motor data: ``configs/motors/*.yaml``).
 
 **Motor.** 50 rotor teeth (200 full steps, 4 full steps per electrical turn, 8192 counts per
 electrical turn). Two phases a, b with resistance R and inductance L; the rotor flux gives the
@@ -64,11 +64,11 @@ import math
 import numpy as np
 from numba import njit
 
-from ...jit import LANE_KERNEL
-from ...trig import sincos
-from . import constants as c
-from . import layout as L
-from .units import COUNTS_PER_REV
+from ....jit import LANE_KERNEL
+from ....trig import sincos
+from .. import constants as c
+from .. import layout as L
+from ..units import COUNTS_PER_REV
 
 #: motors per block
 LANES = 8

@@ -1,0 +1,363 @@
+"""The family contract: what every layer may know of a motor family, stated once.
+
+A family is one folder ``families/<key>/`` whose package defines ``FAMILY``, a :class:`Family`
+record. Every generic layer reaches the family through that record and nothing else:
+
+=================  ==========================================================================
+engine             ``compiled`` (the step the engine binds) and ``array_class``
+                   (the family's :class:`~jvl_gym.MotorArray` subclass)
+registers, units   ``table`` (the register table), ``constants`` (modes, bits, scalings),
+                   ``units`` (sample rates, counts per revolution, unit conversions)
+configs            ``config``: a module of the names of :class:`FamilyConfig`
+capabilities       ``capabilities``: the :class:`Capability` members the family supports; a
+                   layer asks ``family.supports(...)``, never a list of family keys or
+                   ``getattr`` on the motor array
+twin               ``twin``: a :class:`TwinSpec` (MacTalk dialects, safe and init modes,
+                   status bits by name, user command numbers)
+tasks              ``task``: the task interface module (the names of ``__all__`` a compiled
+                   task may use, ``FAMILY_KEY``, ``DEFAULT_MOTOR_TYPE``, ``TERMINAL_ERRORS``)
+tuning             ``tuning``: a :class:`TuningSpec` (the strategy and the facts it needs) or
+                   None where the family has no tuning procedure
+=================  ==========================================================================
+
+Operations a motor array offers under one name and one signature for every family are declared
+on :class:`~jvl_gym.MotorArray`; one that a family lacks raises :class:`UnsupportedOperation`
+naming the :class:`Capability`.
+"""
+
+from __future__ import annotations
+
+import enum
+import math
+import re
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+
+if TYPE_CHECKING:
+    from ..registers import RegisterTable
+
+__all__ = ["Capability", "UnsupportedOperation", "FamilyConfig", "TwinSpec", "TuningSpec",
+           "Family", "MODULES"]
+
+#: the public modules of a family package, by the :class:`Family` field that holds each
+MODULES = ("compiled", "constants", "units", "config", "task", "table")
+
+
+class Capability(enum.Enum):
+    """What a family may support, declared in :attr:`Family.capabilities`.
+
+    The operations (the first group) are methods of :class:`~jvl_gym.MotorArray`; the others
+    are firmware features that tasks and tuning ask for.
+    """
+
+    #: ``enter_safe_mode`` / ``exit_safe_mode``: the bridge off, flash and reset allowed
+    #: (MAC050–141 manual 4.4.16, MIS manual §8.2.3)
+    SAFE_MODE = "safe mode"
+    #: ``go_init_mode``: the MacTalk "go init mode" path to INIT_MODE (MAC050–141 manual 5.1)
+    INIT_MODE = "init mode"
+    #: ``software_reset``: the firmware restarts from flash, the rotor keeps moving
+    SOFTWARE_RESET = "software reset"
+    #: ``write_flash``: save the register set in flash (in safe mode), then restart from it
+    FLASH = "flash save"
+    #: ``sample_buffer`` / ``sample_buffer_raw``: the registers SAMPLE1 … SAMPLE4 recorded
+    SAMPLE_BUFFER = "sample buffer"
+    #: ``torque``: the electromagnetic torque of the plant
+    TORQUE = "torque observable"
+    #: ``energy``: the energy accounts of the plant
+    ENERGY = "energy accounts"
+    #: the TESTU/TESTA test modes (MAC050–141 manual 4.4.9, 4.4.10)
+    TEST_MODES = "TESTU/TESTA test modes"
+    #: FastMAC/FlexMAC on the user interface (``interface_bits``; MAC050–141 manual 5.2)
+    USER_INTERFACE = "FastMAC/FlexMAC user interface"
+    #: an analogue torque mode (MAC050–141 manual 4.4.4; MAC800 mode 4)
+    ANALOG_TORQUE = "analogue torque mode"
+    #: an analogue gear mode (MAC050–141 manual 4.4.7; MAC800 mode 18)
+    ANALOG_GEAR = "analogue gear mode"
+    #: a speed-loop filter of registers to design (MAC050–141 manual 3.2.89–3.2.111)
+    SPEED_FILTER = "speed-loop filter"
+    #: a COIL mode with the registers that drive it (MAC050–141 manual 4.4.13)
+    COIL_MODE = "COIL mode"
+    #: a step motor's microstep indexing (MIS manual §8.2)
+    STEP_INDEXING = "step-motor indexing"
+
+
+class UnsupportedOperation(NotImplementedError):
+    """An operation the motors' family does not support; nothing was changed.
+
+    Parameters
+    ----------
+    family_title : str
+        The family's human name.
+    capability : Capability
+        What the operation needs.
+    """
+
+    def __init__(self, family_title: str, capability: Capability) -> None:
+        self.capability = capability
+        super().__init__(f"{family_title} motors have no {capability.value} "
+                         f"(the family does not declare Capability.{capability.name})")
+
+
+@runtime_checkable
+class FamilyConfig(Protocol):
+    """The names a family's ``config`` module exports (the module satisfies this protocol).
+
+    Attributes
+    ----------
+    MOTORS_DIR : Path
+        The folder of the motor configs (``configs/motors``), one YAML file per motor type.
+    SETUPS_DIR : Path or None
+        The folder of the default setups (``configs/setups``), register sets by name; None
+        where the family has none.
+    """
+
+    MOTORS_DIR: Path
+    SETUPS_DIR: Path | None
+
+    def load_motor(self, motor: Any) -> Any:
+        """The validated config of a motor type name, a config path or a config object;
+        ``ConfigError`` naming the known types otherwise."""
+
+    def motor_types(self) -> list[str]:
+        """Names of the family's motor types (one config each)."""
+
+    def canonical_motor_name(self, name: str) -> str:
+        """The motor-type name a user's spelling stands for."""
+
+    def setup_path(self, name: str) -> Path:
+        """The file of the default setup ``name`` (a motor config's ``setup``)."""
+
+
+@dataclass(frozen=True)
+class TwinSpec:
+    """What the digital twin needs of a family beyond its register table.
+
+    Attributes
+    ----------
+    dialects : tuple of str
+        The MacTalk dialects the motors speak (``jvl_gym.protocol.dialect``), the default
+        first.
+    safe_mode : int or None
+        MODE_REG value of safe mode, None where the family has none.
+    init_mode : int or None
+        MODE_REG value of the mode "go init mode" and "exit safe mode" lead to, or None.
+    passive_mode : int or None
+        MODE_REG value of the passive mode (the power stage off), which a bus time-out may
+        command; None where the family has none.
+    status_register : str
+        The register whose bits :attr:`status_bits` names (the status a FastMAC status byte
+        or a CANopen status word is built from).
+    status_bits : Mapping[int, str]
+        Bit mask → name of the status register's bits.
+    error_bits : tuple of str
+        Names (in :attr:`status_bits`) of the bits that report an error.
+    clearable_bits : tuple of str
+        Names of the bits a "reset errors" command clears.
+    commands : Mapping[str, int]
+        User command numbers by meaning (``"reset"``, ``"save_reset"``, ``"save"``, …) for
+        families with a command register; empty otherwise.
+    """
+
+    dialects: tuple[str, ...]
+    safe_mode: int | None = None
+    init_mode: int | None = None
+    passive_mode: int | None = None
+    status_register: str = "ERR_STAT"
+    status_bits: Mapping[int, str] = field(default_factory=dict)
+    error_bits: tuple[str, ...] = ()
+    clearable_bits: tuple[str, ...] = ()
+    commands: Mapping[str, int] = field(default_factory=dict)
+
+    @property
+    def dialect(self) -> str:
+        """The default MacTalk dialect."""
+        return self.dialects[0]
+
+    def bit(self, name: str) -> int:
+        """The mask of status bit ``name``; KeyError naming the known bits if there is none."""
+        for mask, known in self.status_bits.items():
+            if known == name:
+                return mask
+        raise KeyError(f"no status bit {name!r} in {self.status_register}; known: "
+                       f"{', '.join(self.status_bits.values())}")
+
+    @staticmethod
+    def named_bits(constants: Any, names: tuple[str, ...]) -> dict[int, str]:
+        """Bit mask → name of the bits ``names``, each a constant of ``constants``."""
+        return {int(getattr(constants, name)): name for name in names}
+
+    def has_bit(self, name: str) -> bool:
+        """Whether the status register has a bit ``name``."""
+        return name in self.status_bits.values()
+
+    def mask(self, names: tuple[str, ...]) -> int:
+        """The OR of the masks of the status bits ``names``."""
+        out = 0
+        for name in names:
+            out |= self.bit(name)
+        return out
+
+
+def filter_taps(table: RegisterTable, prefix: str) -> tuple[str, ...]:
+    """Register names ``<prefix><digit>`` in ``table``, highest digit first."""
+    names = [reg.name for reg in table if re.fullmatch(prefix + r"\d", reg.name)]
+    return tuple(sorted(names, key=lambda n: -int(n[len(prefix):])))
+
+
+@dataclass(frozen=True)
+class TuningSpec:
+    """What the tuning toolkit needs of a family: its strategy and the facts it works with.
+
+    Attributes
+    ----------
+    strategy : str
+        Key of the tuning strategy (``"testu_pi"``: TESTU/TESTA records and a PI speed loop
+        in the fourth-order filter; ``"buffer_sixth_order"``: sample-buffer records of torque
+        steps and the sixth-order main filter).
+    implementation : str or None
+        ``"package.module:Name"`` of a strategy object the toolkit loads with importlib
+        instead of a built-in one for :attr:`strategy` (a family outside the package brings
+        its own); None: the toolkit's strategy of that key.
+    inner_dt, outer_dt : float
+        Current-loop and servo sample times [s].
+    inner_per_outer : int
+        Current-loop samples per servo sample.
+    counts_per_rev : int
+        Encoder counts per revolution.
+    pwm_full : int
+        UA_VAL … full scale ↔ half the supply (bus) voltage [PWM counts].
+    amplitude_vf : int
+        VF_OUT at which the phase current amplitude is AMPLITUDE ADC counts: 1 where AMPLITUDE
+        is a fixed-point gain per VF_OUT unit, VF_FULL where it is an integer number of ADC
+        counts at peak torque.
+    ff_keys, vb_keys, vfx_keys, vfy_keys : tuple of str
+        The speed filter's taps in the table, highest number first: FF and VB numerator taps
+        of delay 0, 1, …; VF numerator taps of delay 0, 1, …; VF denominator taps of delay
+        1, 2, ….
+    vb_gain_register : str or None
+        The register that scales V_IST into the speed error's unit (GEARB), None where the
+        firmware scales it by :attr:`speed_units`.
+    speed_units : float
+        Speed registers' unit per count/sample (V_SOLL, FNC_OUT, the speed error: 1/16
+        count/sample).
+    """
+
+    strategy: str
+    inner_dt: float
+    outer_dt: float
+    inner_per_outer: int
+    counts_per_rev: int
+    pwm_full: int
+    amplitude_vf: int
+    ff_keys: tuple[str, ...]
+    vb_keys: tuple[str, ...]
+    vfx_keys: tuple[str, ...]
+    vfy_keys: tuple[str, ...]
+    vb_gain_register: str | None
+    speed_units: float = 16.0
+    implementation: str | None = None
+
+    @property
+    def filter_order(self) -> int:
+        """Order of the speed (main) filter VF: the number of its numerator taps."""
+        return len(self.vfx_keys)
+
+    @property
+    def counts_per_rad(self) -> float:
+        """Encoder counts per radian."""
+        return self.counts_per_rev / (2.0 * math.pi)
+
+    @classmethod
+    def of(cls, strategy: str, constants: Any, table: RegisterTable,
+           implementation: str | None = None) -> TuningSpec:
+        """The spec of a family from its ``constants`` (``INNER_DT``, ``OUTER_DT``,
+        ``INNER_PER_OUTER``, ``COUNTS_PER_REV``, ``PWM_FULL``, ``VF_FULL``) and register
+        ``table``: the filter taps are its KFF, KVB, KVFX and KVFY registers, AMPLITUDE is a
+        gain per VF_OUT unit where its format is fixed-point, and V_IST is scaled by GEARB
+        where the table has it (MAC050–141 manual 3.2.89–3.2.111, 3.2.127; MAC800 register
+        overview §1.2, registers 121–143 and 174)."""
+        from ..registers import Format
+
+        amp_fixed = table.lookup("AMPLITUDE").format in (Format.FIXED4, Format.FIXED8,
+                                                         Format.FIXED16, Format.FIXED24)
+        return cls(strategy=strategy, inner_dt=constants.INNER_DT, outer_dt=constants.OUTER_DT,
+                   inner_per_outer=constants.INNER_PER_OUTER,
+                   counts_per_rev=constants.COUNTS_PER_REV, pwm_full=constants.PWM_FULL,
+                   amplitude_vf=1 if amp_fixed else constants.VF_FULL,
+                   ff_keys=filter_taps(table, "KFF"), vb_keys=filter_taps(table, "KVB"),
+                   vfx_keys=filter_taps(table, "KVFX"), vfy_keys=filter_taps(table, "KVFY"),
+                   vb_gain_register="GEARB" if "GEARB" in table else None,
+                   implementation=implementation)
+
+
+@dataclass(frozen=True)
+class Family:
+    """A motor family as every layer sees it (``FAMILY`` of the family's package).
+
+    Attributes
+    ----------
+    key : str
+        Identifier (``"mac050_141"``), also used in compiled-cache file names.
+    title : str
+        Human name (``"MAC050–141 integrated servo motors"``).
+    compiled : module
+        The compiled step: ``outer_sample``, ``inner_block``, ``LANES``, ``prepare``,
+        ``scratch`` (see :mod:`jvl_gym.engine.driver`).
+    array_class : type
+        The family's :class:`~jvl_gym.MotorArray` subclass.
+    table : RegisterTable
+        The register table.
+    constants : module
+        Modes, status and control bits, scalings (``constants.py``).
+    units : module
+        Sample rates, counts per revolution and unit conversions (``units.py``).
+    config : FamilyConfig
+        The motor configs and default setups (``config.py``).
+    task : module
+        The task interface (``task.py``).
+    twin : TwinSpec
+        What the digital twin needs.
+    capabilities : frozenset of Capability
+        What the family supports.
+    tuning : TuningSpec or None
+        The tuning strategy and its facts; None: no tuning procedure.
+    """
+
+    key: str
+    title: str
+    compiled: ModuleType
+    array_class: type
+    table: RegisterTable
+    constants: ModuleType
+    units: ModuleType
+    config: FamilyConfig
+    task: ModuleType
+    twin: TwinSpec
+    capabilities: frozenset[Capability] = frozenset()
+    tuning: TuningSpec | None = None
+
+    def motor_types(self) -> list[str]:
+        """Names of the family's motor types (each with a motor config)."""
+        return self.config.motor_types()
+
+    def canonical_name(self, name: str) -> str:
+        """The motor-type name a user's spelling stands for."""
+        return self.config.canonical_motor_name(name)
+
+    def load_motor(self, motor: Any) -> Any:
+        """The validated motor config of ``motor`` (:meth:`FamilyConfig.load_motor`)."""
+        return self.config.load_motor(motor)
+
+    def supports(self, capability: Capability) -> bool:
+        """Whether the family declares ``capability``."""
+        return capability in self.capabilities
+
+    def require(self, capability: Capability) -> None:
+        """Nothing if the family declares ``capability``; :class:`UnsupportedOperation`
+        naming it otherwise."""
+        if capability not in self.capabilities:
+            raise UnsupportedOperation(self.title, capability)
+
