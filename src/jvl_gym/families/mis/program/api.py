@@ -17,7 +17,7 @@ import numpy as np
 from ....arguments import MotorIndex, as_index, motor_index, outer_count
 from ....stepping import driver
 from .. import constants as c
-from .. import regs as R
+from ..firmware import regs as R
 from .binary import FLASH_BYTES, encode_command
 from .commands import Command
 from .executor import ProgramRunner, ProgramStatus

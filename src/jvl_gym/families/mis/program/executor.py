@@ -34,7 +34,7 @@ from ....physics.fixed import wrap32
 from ....registers import RegisterError
 from .. import constants as c
 from .. import layout as L
-from .. import regs as R
+from ..firmware import regs as R
 from ..table import TABLE
 from .binary import checksum, decode_command, decode_program, encode_program
 from .commands import FASTMAC_GROUPS, Command, cost_us
