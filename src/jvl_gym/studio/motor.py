@@ -136,9 +136,6 @@ class StudioMotor(ABC):
     def sample_buffer(self) -> dict[str, np.ndarray]:
         """The motor's sample buffer in user units: channel name → samples."""
 
-    def close(self) -> None:
-        """Release what the motor holds."""
-
 
 class SimMotor(StudioMotor):
     """One simulated motor: a one-motor :class:`~jvl_gym.MotorArray`, run by the session's

@@ -141,7 +141,5 @@ class Session:
         if self._thread is not None:
             self._thread.join(timeout=2.0)
             self._thread = None
-        for m in self.motors:
-            m.close()
         if self.line is not None:
             self.line.close()
