@@ -69,6 +69,7 @@ def _scope_block(page: Page) -> None:
         counter = ui.label("").props(tid("scope-count"))
     chart = ui.echart(chart_options(state["scope"].series(), motor.label)).classes(
         "w-full h-96").props(tid("scope-chart"))
+    last = ui.label("").classes("text-sm").props(tid("scope-last"))
 
     def tick() -> None:
         if not state["live"]:
@@ -80,6 +81,8 @@ def _scope_block(page: Page) -> None:
         chart.options.update(chart_options(sc.series(), motor.label))
         chart.update()
         counter.set_text(f"{len(sc.t)} points, t = {sc.t[-1]:.2f} s")
+        last.set_text("; ".join(f"{sc.label(c)} = {b[-1]:.6g}"
+                                for c, b in zip(sc.channels, sc.values)))
     ui.timer(PERIOD_S, page.guard(tick))
 
 
