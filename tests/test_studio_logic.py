@@ -109,7 +109,8 @@ def test_an_edit_writes_in_the_registers_unit(mac):
     assert R.edit(mac, "A_SOLL", "0x20").ok and mac.read_raw("A_SOLL") == 32
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=60, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(st.one_of(st.integers(-10**6, 10**6).map(str), st.floats(allow_nan=True).map(str),
                  st.text(max_size=8)))
 def test_an_edit_is_written_exactly_or_refused_unchanged(mac, text):
