@@ -14,9 +14,16 @@ from ..session import Session
 from .common import Page, frame, tid
 
 #: seconds between two scope updates
-PERIOD_S = 0.05
+PERIOD_S = 0.03
+#: points a live chart keeps per channel (10 s at the page's rate)
+DEPTH = 250
 #: the channels a scope opens with: those of these names the motor has
 DEFAULT_CHANNELS = ("V_SOLL", "V_IST", "shaft speed", "MODE_REG")
+
+
+def _short(v: float) -> float:
+    """``v`` to 7 significant digits (what a chart can show; a smaller message)."""
+    return float(f"{float(v):.7g}")
 
 
 def chart_options(series: dict[str, Any], title: str = "") -> dict[str, Any]:
@@ -31,13 +38,14 @@ def chart_options(series: dict[str, Any], title: str = "") -> dict[str, Any]:
         if unit not in units:
             units.append(unit)
         lines.append({"name": k, "type": "line", "showSymbol": False, "animation": False,
+                      "sampling": "lttb",
                       "yAxisIndex": units.index(unit),
-                      "data": [[float(a), float(b)] for a, b in zip(x, series[k])]})
+                      "data": [[_short(a), _short(b)] for a, b in zip(x, series[k])]})
     axes = [{"type": "value", "name": u or "value", "scale": True,
              "position": "left" if i % 2 == 0 else "right", "offset": 50 * (i // 2)}
             for i, u in enumerate(units or [""])]
     return {"title": {"text": title, "textStyle": {"fontSize": 12}},
-            "animation": False, "tooltip": {"trigger": "axis"},
+            "animation": False, "tooltip": {"trigger": "axis", "animation": False},
             "legend": {"top": 20}, "grid": {"top": 60, "left": 70, "right": 70},
             "xAxis": {"type": "value", "name": keys[0], "scale": True}, "yAxis": axes,
             "series": lines}
@@ -47,14 +55,14 @@ def _scope_block(page: Page) -> None:
     motor = page.motor
     choices = channel_choices(motor)
     start = [c for c in DEFAULT_CHANNELS if c in choices]
-    state: dict[str, Any] = {"scope": Scope(motor, start), "live": True, "updates": 0}
+    state: dict[str, Any] = {"scope": Scope(motor, start, DEPTH), "live": True, "updates": 0}
     with ui.row().classes("items-center gap-4 w-full"):
         pick = ui.select(choices, value=start, multiple=True, label="channels",
                          with_input=True).props("use-chips " + tid("channels")
                                                 ).classes("min-w-[28rem]")
 
         def set_channels() -> None:
-            state["scope"] = Scope(motor, list(pick.value))
+            state["scope"] = Scope(motor, list(pick.value), DEPTH)
         pick.on_value_change(page.guard(set_channels))
         live = ui.switch("live", value=True).props(tid("live"))
         live.on_value_change(lambda e: state.update(live=e.value))
@@ -80,7 +88,7 @@ def _scope_block(page: Page) -> None:
         chart.options.clear()
         chart.options.update(chart_options(sc.series(), motor.label))
         chart.update()
-        counter.set_text(f"{len(sc.t)} points, t = {sc.t[-1]:.2f} s")
+        counter.set_text(f"update {state['updates']}: {len(sc.t)} points, t = {sc.t[-1]:.2f} s")
         last.set_text("; ".join(f"{sc.label(c)} = {b[-1]:.6g}"
                                 for c, b in zip(sc.channels, sc.values)))
     ui.timer(PERIOD_S, page.guard(tick))
