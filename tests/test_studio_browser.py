@@ -117,6 +117,7 @@ def studio() -> Iterator[str]:
 
 
 def write(page, name: str, value: str) -> None:
+    expect(page.get_by_test_id(f"raw-{name}")).to_contain_text("raw")  # the page is live
     field = page.get_by_label(name, exact=True)
     field.fill(value)
     field.press("Enter")

@@ -11,7 +11,11 @@ from collections.abc import Callable
 
 from ..session import Session
 
-__all__ = ["serve"]
+__all__ = ["serve", "RECONNECT_S"]
+
+#: seconds a page waits for its websocket to come back before it reloads (a busy machine
+#: may hold the server up for seconds)
+RECONNECT_S = 30.0
 
 
 def build(session: Session) -> None:
@@ -45,4 +49,5 @@ def serve(session: Session, host: str = "127.0.0.1", port: int = 8080,
     logging.getLogger("jvl_gym.studio").setLevel(logging.INFO)
     build(session)
     ui.run(host=host, port=port, show=show, reload=False, title="jvl-gym studio",
-           show_welcome_message=False, favicon="⚙", uvicorn_logging_level="warning")
+           show_welcome_message=False, favicon="⚙", uvicorn_logging_level="warning",
+           reconnect_timeout=RECONNECT_S)

@@ -26,15 +26,15 @@ def build(session: Session, m: int) -> None:
     fields: dict[int, tuple[Any, Any, Any, Any]] = {}  # number → (register, input, raw, row)
     editing: set[int] = set()
 
-    async def write(reg: Any, field: Any) -> None:
-        result = await run.io_bound(edit, motor, reg.name, str(field.value))
+    async def write(reg: Any, text: str) -> None:
+        result = await run.io_bound(edit, motor, reg.name, text)
         page.say(result.message, result.ok)
         editing.discard(reg.number)
         await refresh()
 
-    def writer(reg: Any, field: Any) -> Any:
-        async def on_enter() -> None:
-            await write(reg, field)
+    def writer(reg: Any) -> Any:
+        async def on_enter(e: events.GenericEventArguments) -> None:
+            await write(reg, str(e.args))
         return page.guard(on_enter)
 
     with ui.row().classes("items-center gap-4"):
@@ -64,17 +64,19 @@ def build(session: Session, m: int) -> None:
         with ui.expansion(f"{title} ({len(regs)})", value=True).classes("w-full"):
             for reg in regs:
                 with ui.row().classes("items-center gap-3 w-full no-wrap") as row:
-                    ui.label(str(reg.number)).classes("w-10 text-right text-gray-500")
+                    ui.label(str(reg.number)).classes("w-10 shrink-0 text-right text-gray-500")
                     field = ui.input(label=reg.name).props(
                         f'dense outlined {tid("reg-" + reg.name)}'
-                        + (" readonly" if reg.access.value != "rw" else "")).classes("w-48")
+                        + (" readonly" if reg.access.value != "rw" else "")).classes("w-48 shrink-0")
                     field.on("focus", lambda _e, n=reg.number: editing.add(n))
                     field.on("blur", lambda _e, n=reg.number: editing.discard(n))
-                    field.on("keydown.enter", writer(reg, field))
-                    raw = ui.label("").classes("w-32 text-gray-600").props(
+                    # the text typed travels with the event: what Enter writes is what is shown
+                    field.on("keydown.enter", writer(reg),
+                             js_handler="(e) => emit(e.target.value)")
+                    raw = ui.label("").classes("w-32 shrink-0 text-gray-600").props(
                         tid("raw-" + reg.name))
-                    ui.label(reg.unit).classes("w-40 text-sm")
-                    ui.label(range_text(reg)).classes("w-56 text-sm")
+                    ui.label(reg.unit).classes("w-40 shrink-0 text-sm")
+                    ui.label(range_text(reg)).classes("w-56 shrink-0 text-sm")
                     ui.label(f"{reg.access.value} · {reg.description}").classes(
                         "text-sm text-gray-700")
                 fields[reg.number] = (reg, field, raw, row)
