@@ -14,7 +14,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SRC = ROOT / "src"
 #: layers that must not know a family's internals
 GENERIC = [SRC / "jvl_gym" / "envs", SRC / "jvl_gym" / "protocol", SRC / "jvl_gym" / "world",
-           ROOT / "tuning"]
+           SRC / "jvl_gym" / "studio", ROOT / "tuning"]
 #: what a family shows the other layers: its package, units and constants, register table,
 #: task interface
 PUBLIC = {"constants", "table", "task", "config"}

@@ -49,9 +49,10 @@ def artefacts(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return path
 
 
-def shoot(page, artefacts: Path, name: str) -> None:
-    """Save a screenshot of the page as an artefact (and for the docs, if asked)."""
-    page.screenshot(path=str(artefacts / f"{name}.png"), full_page=True)
+def shoot(page, artefacts: Path, name: str, full: bool = False) -> None:
+    """Save a screenshot of the page (``full``: the whole page, else the window) as an
+    artefact, and for the docs if asked."""
+    page.screenshot(path=str(artefacts / f"{name}.png"), full_page=full)
     if os.environ.get("JVL_STUDIO_DOCS") == "1":
         docs = ROOT / "docs" / "img" / "studio"
         docs.mkdir(parents=True, exist_ok=True)
@@ -176,7 +177,7 @@ def test_write_from_registers_and_see_it_run_on_the_scope(page, studio, artefact
         page.get_by_test_id("capture").click()
         expect(page.get_by_test_id("message")).to_contain_text(
             "sample buffer: 200 samples of V_IST, P_IST", timeout=30000)
-        shoot(page, artefacts, "scope")
+        shoot(page, artefacts, "scope", full=True)
 
 
 def test_save_and_load_a_setup(page, studio, tmp_path):
@@ -208,7 +209,7 @@ def test_tuning_page_to_the_written_result(page, studio, artefacts):
     table = page.get_by_test_id("tuning-registers")
     row = table.locator("tr", has_text="KVOUT")
     new = row.locator("td").nth(2).inner_text()
-    shoot(page, artefacts, "tuning")
+    shoot(page, artefacts, "tuning", full=True)
     page.get_by_test_id("tuning-write").click()
     page.get_by_test_id("tuning-confirm").click()
     expect(page.get_by_test_id("message")).to_contain_text("wrote")

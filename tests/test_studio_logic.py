@@ -322,3 +322,32 @@ def test_episode_is_deterministic_and_refuses_unknown():
         run_episode("jvl_gym/Nope-v0")
     with pytest.raises(ValueError, match="controller"):
         run_episode("jvl_gym/Positioning-v0", "magic")
+
+
+# ---------------------------------------------------------------------- the command line
+def _cli(args, capsys):
+    from jvl_gym.cli import app
+
+    with pytest.raises(SystemExit) as info:
+        app(["studio", *args])
+    _, err = capsys.readouterr()
+    lines = [ln for ln in err.strip().splitlines() if not ln.startswith("jvl_gym: compil")]
+    assert info.value.code not in (0, None) and len(lines) == 1 and "Traceback" not in err, err
+    return info.value.code, lines[0]
+
+
+def test_cli_errors_are_one_line(capsys):
+    code, line = _cli(["--scan", "1-3"], capsys)
+    assert code == 2 and "--scan needs --connect" in line
+    code, line = _cli(["--connect", "socket://127.0.0.1:9", "--scan", "0-3"], capsys)
+    assert code == 2 and "1..254" in line
+    code, line = _cli(["--motor", "MAC999", "--no-browser", "--port", "8", "--host",
+                       "127.0.0.1"], capsys)
+    assert code == 1 and line.startswith("jvl-gym studio: error:")
+    with __import__("socket").socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        code, line = _cli(["--no-browser", "--port", str(s.getsockname()[1])], capsys)
+    assert code == 1 and "cannot listen" in line and "--port" in line
+    code, line = _cli(["--connect", "socket://127.0.0.1:9", "--scan", "1-2"], capsys)
+    assert code == 1 and "cannot open socket://127.0.0.1:9" in line

@@ -69,7 +69,11 @@ class Line:
         refused value (:class:`RegisterError`) passes through with the line kept."""
         with self.lock:
             if self._client is None:
-                self._client = self._open()
+                try:
+                    self._client = self._open()
+                except LineDown as exc:
+                    self.problem = str(exc)
+                    raise
             self._client.address = address
             try:
                 out = fn(self._client)

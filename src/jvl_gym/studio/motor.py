@@ -59,6 +59,8 @@ class StudioMotor(ABC):
     """
 
     simulated = False
+    #: True while a long run (a tuning) has the motor to itself: the pages leave it alone
+    paused = False
 
     def __init__(self, motor_type: str, address: int) -> None:
         self.motor_type = motor_type

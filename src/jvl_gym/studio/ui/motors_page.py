@@ -24,13 +24,21 @@ def _card(page: Page, motor, k: int) -> None:
         bit_labels = {r.name: ui.label("").props(tid(f"bits-{k}-{r.name}"))
                       for r in bit_regs}
 
-        def refresh() -> None:
+        busy = [False]
+
+        async def refresh() -> None:
+            if busy[0] or motor.paused:
+                return
+            busy[0] = True
             try:
-                raws = motor.read_raws([motor.register(facts.mode_register).number]
-                                       + [r.number for r in bit_regs])
+                raws = await run.io_bound(motor.read_raws,
+                                          [motor.register(facts.mode_register).number]
+                                          + [r.number for r in bit_regs])
             except LineDown as exc:
                 mode.set_text(f"not reachable: {exc}")
                 return
+            finally:
+                busy[0] = False
             value = raws[motor.register(facts.mode_register).number]
             mode.set_text(f"mode: {facts.mode_name(value)} ({value})")
             for r in bit_regs:

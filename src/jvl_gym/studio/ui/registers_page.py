@@ -67,7 +67,8 @@ def build(session: Session, m: int) -> None:
                     ui.label(str(reg.number)).classes("w-10 shrink-0 text-right text-gray-500")
                     field = ui.input(label=reg.name).props(
                         f'dense outlined {tid("reg-" + reg.name)}'
-                        + (" readonly" if reg.access.value != "rw" else "")).classes("w-48 shrink-0")
+                        + (" readonly" if reg.access.value != "rw" else "")
+                    ).classes("w-48 shrink-0")
                     field.on("focus", lambda _e, n=reg.number: editing.add(n))
                     field.on("blur", lambda _e, n=reg.number: editing.discard(n))
                     # the text typed travels with the event: what Enter writes is what is shown

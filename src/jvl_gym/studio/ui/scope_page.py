@@ -79,11 +79,15 @@ def _scope_block(page: Page) -> None:
         "w-full h-96").props(tid("scope-chart"))
     last = ui.label("").classes("text-sm").props(tid("scope-last"))
 
-    def tick() -> None:
-        if not state["live"]:
+    async def tick() -> None:
+        if not state["live"] or state.get("busy") or motor.paused:
             return
         sc = state["scope"]
-        sc.sample()
+        state["busy"] = True
+        try:
+            await run.io_bound(sc.sample)  # a line motor answers over the wire
+        finally:
+            state["busy"] = False
         state["updates"] += 1
         chart.options.clear()
         chart.options.update(chart_options(sc.series(), motor.label))
