@@ -56,7 +56,7 @@ def shoot(page, artefacts: Path, name: str, full: bool = False) -> None:
     if os.environ.get("JVL_STUDIO_DOCS") == "1":
         docs = ROOT / "docs" / "img" / "studio"
         docs.mkdir(parents=True, exist_ok=True)
-        page.screenshot(path=str(docs / f"{name}.png"))
+        page.screenshot(path=str(docs / f"{name}.png"), full_page=full)
 
 
 def free_port() -> int:
@@ -176,7 +176,7 @@ def test_write_from_registers_and_see_it_run_on_the_scope(page, studio, artefact
     if m == 0:
         page.get_by_test_id("capture").click()
         expect(page.get_by_test_id("message")).to_contain_text(
-            "sample buffer: 200 samples of V_IST, P_IST", timeout=30000)
+            "sample buffer: 200 samples of V_IST [counts/sample], P_IST [counts]", timeout=30000)
         shoot(page, artefacts, "scope", full=True)
 
 

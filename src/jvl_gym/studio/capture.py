@@ -53,7 +53,7 @@ def _wait(motor: StudioMotor, done: callable, seconds: float, what: str) -> None
 def capture(motor: StudioMotor, registers: Sequence[str], samples: int,
             timeout: float | None = None) -> dict[str, np.ndarray]:
     """Record ``samples`` samples of up to four ``registers`` in the motor's sample buffer and
-    read it back, channel name → values in the register's unit (and ``"t [s]"``).
+    read it back: ``"t [s]"`` and ``"<register> [<unit>]"`` → values in the register's unit.
 
     Raises
     ------
@@ -108,8 +108,17 @@ def capture(motor: StudioMotor, registers: Sequence[str], samples: int,
     out = {"t [s]": np.arange(count) * interval}
     for k, (key, values) in enumerate(buf.items()):
         if k < len(names):
-            out[key] = np.asarray(values, dtype=float)[:count]
+            out[_label(motor, key)] = np.asarray(values, dtype=float)[:count]
     return out
+
+
+def _label(motor: StudioMotor, key: str) -> str:
+    """``"<register> [<unit>]"`` for a buffer channel named by its register, else ``key``."""
+    try:
+        unit = motor.register(key).unit
+    except KeyError:
+        return key
+    return f"{key} [{unit}]" if unit else key
 
 
 def run_test(motor: StudioMotor, test: str, setup: Mapping[str, float],
@@ -136,5 +145,5 @@ def run_test(motor: StudioMotor, test: str, setup: Mapping[str, float],
     buf = motor.sample_buffer()
     n = min(len(v) for v in buf.values()) if buf else 0
     out = {"sample": np.arange(n, dtype=float)}
-    out.update({k: np.asarray(v, dtype=float)[:n] for k, v in buf.items()})
+    out.update({_label(motor, k): np.asarray(v, dtype=float)[:n] for k, v in buf.items()})
     return out

@@ -41,12 +41,14 @@ def chart_options(series: dict[str, Any], title: str = "") -> dict[str, Any]:
                       "sampling": "lttb",
                       "yAxisIndex": units.index(unit),
                       "data": [[_short(a), _short(b)] for a, b in zip(x, series[k])]})
-    axes = [{"type": "value", "name": u or "value", "scale": True,
-             "position": "left" if i % 2 == 0 else "right", "offset": 50 * (i // 2)}
+    axes = [{"type": "value", "name": u or "value", "scale": True, "nameLocation": "end",
+             "nameGap": 8 + 14 * (i // 2), "position": "left" if i % 2 == 0 else "right",
+             "offset": 70 * (i // 2), "axisLine": {"show": True}}
             for i, u in enumerate(units or [""])]
+    side = 70 * ((len(axes) + 1) // 2)
     return {"title": {"text": title, "textStyle": {"fontSize": 12}},
             "animation": False, "tooltip": {"trigger": "axis", "animation": False},
-            "legend": {"top": 20}, "grid": {"top": 60, "left": 70, "right": 70},
+            "legend": {"top": 20}, "grid": {"top": 80, "left": side, "right": side},
             "xAxis": {"type": "value", "name": keys[0], "scale": True}, "yAxis": axes,
             "series": lines}
 
