@@ -354,3 +354,26 @@ def test_cli_errors_are_one_line(capsys):
     assert code == 1 and "cannot listen" in line and "--port" in line
     code, line = _cli(["--connect", "socket://127.0.0.1:9", "--scan", "1-2"], capsys)
     assert code == 1 and "cannot open socket://127.0.0.1:9" in line
+
+
+@pytest.mark.parametrize("motor_type, register, bit", [("MAC140", "ERR_STAT", 1 << 1),
+                                                       ("MIS232", "ERR_BITS", 1 << 1)])
+def test_actions_of_the_family(motor_type, register, bit):
+    """Clear errors writes 0 to the error register (follow-error bit: MAC050–141 manual 3.2.35,
+    MIS manual §8.2.31); save in flash needs safe mode and is refused with the reason outside
+    it (MAC050–141 manual 2.2, MIS manual §8.2.3)."""
+    m = SimMotor(motor_type, 1)
+    acts = m.actions()
+    assert {"passive", "safe mode", "leave safe mode", "save in flash", "reset",
+            "clear errors"} <= set(acts)
+    m.write(register, bit)
+    assert m.read_raw(register) & bit
+    acts["clear errors"]()
+    assert not m.read_raw(register) & bit
+    with pytest.raises(ValueError, match="(?i)safe"):
+        acts["save in flash"]()
+    acts["safe mode"]()
+    assert "safe" in m.facts.mode_name(m.read_raw("MODE_REG")).lower()
+    m.write("A_SOLL", 123)
+    acts["save in flash"]()  # saves and resets: the value stays, from flash
+    assert m.read("A_SOLL") == 123
