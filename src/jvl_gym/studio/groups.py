@@ -17,7 +17,7 @@ from typing import Any
 
 from ..registers import Access, Format, Register, RegisterTable
 
-__all__ = ["register_groups", "visible"]
+__all__ = ["register_groups", "visible", "family_ranges"]
 
 _SECTION = re.compile(r"^\s*(?P<number>\d+(?:\.\d+)*)\s*(?P<title>.*)$")
 
@@ -74,5 +74,3 @@ def family_ranges(constants: Any) -> list[tuple[str, int, int]] | None:
     ranges = getattr(constants, "REGISTER_GROUPS", None)
     return [(str(t), int(a), int(b)) for t, a, b in ranges] if ranges else None
 
-
-__all__ += ["family_ranges"]

@@ -25,7 +25,8 @@ from .line import LineDown
 from .motor import StudioMotor
 
 __all__ = ["Row", "rows", "value_text", "range_text", "parse_value", "edit", "EditResult",
-           "setup_of", "save_setup", "read_setup", "load_setup_file", "grouped_registers"]
+           "setup_of", "setup_text", "save_setup", "read_setup", "load_setup_file",
+           "grouped_registers"]
 
 
 def value_text(reg: Register, raw: int) -> str:
@@ -126,12 +127,16 @@ def setup_of(motor: StudioMotor) -> dict[str, object]:
     return {"motor": motor.motor_type, "registers": values}
 
 
+def setup_text(motor: StudioMotor) -> str:
+    """The setup of ``motor`` as the text of a setup file (YAML)."""
+    return (f"# setup of {motor.label}, saved by jvl-gym studio\n"
+            + yaml.safe_dump(setup_of(motor), sort_keys=False))
+
+
 def save_setup(motor: StudioMotor, path: str | os.PathLike[str]) -> Path:
     """Write the setup of ``motor`` to ``path`` (YAML) and return the path."""
     path = Path(path)
-    text = (f"# setup of {motor.label}, saved by jvl-gym studio\n"
-            + yaml.safe_dump(setup_of(motor), sort_keys=False))
-    path.write_text(text, encoding="utf-8")
+    path.write_text(setup_text(motor), encoding="utf-8")
     return path
 
 

@@ -9,7 +9,14 @@ from typing import Any
 from nicegui import events, run, ui
 
 from ..line import LineDown
-from ..registers import edit, grouped_registers, load_setup_file, range_text, setup_of, value_text
+from ..registers import (
+    edit,
+    grouped_registers,
+    load_setup_file,
+    range_text,
+    setup_text,
+    value_text,
+)
 from ..session import Session
 from .common import frame, tid
 
@@ -19,8 +26,6 @@ REFRESH_S = 0.5
 
 def build(session: Session, m: int) -> None:
     """The Registers page of motor ``m``."""
-    import yaml
-
     page = frame(session, "/registers", m)
     motor = page.motor
     fields: dict[int, tuple[Any, Any, Any, Any]] = {}  # number → (register, input, raw, row)
@@ -40,9 +45,8 @@ def build(session: Session, m: int) -> None:
     with ui.row().classes("items-center gap-4"):
         ui.label(f"{motor.label} · {motor.facts.title}").classes("text-lg")
 
-        def save() -> None:
-            text = (f"# setup of {motor.label}, saved by jvl-gym studio\n"
-                    + yaml.safe_dump(setup_of(motor), sort_keys=False))
+        async def save() -> None:
+            text = await run.io_bound(setup_text, motor)
             ui.download.content(text, f"{motor.motor_type}_{motor.address}_setup.yaml")
             page.say(f"setup of {motor.label} saved")
 
