@@ -2,10 +2,11 @@
 
 The steps and their code are the command line's (:mod:`tuning`): the records and the fits with
 their 95 % intervals (:func:`tuning.autotune.identify_motors`, :func:`tuning.report.text_table`,
-:func:`tuning.report.plot_fits`), the candidate designs with their margins, quantised registers
-and the acceptance move against the motor type's default setup
-(:func:`tuning.acceptance.autotune_designs`; :func:`tuning.report.bode_figure`,
-:func:`tuning.report.steps_figure`); a family with a sixth-order main filter runs
+:func:`tuning.report.plot_fits`), the candidate designs with their margins and quantised
+registers (:func:`tuning.report.bode_figure`, :func:`tuning.report.steps_figure`), the
+acceptance move against the motor type's default setup
+(:func:`tuning.acceptance.autotune_designs`) and against the motor's present setup
+(:func:`tuning.acceptance.accept`); a family with a sixth-order main filter runs
 :func:`tuning.autotune_sixth_order.autotune_sixth_order`. A simulated motor is identified in
 place (the studio's clock pauses it meanwhile); a motor on a line through
 :func:`tuning.serial_source.autotune_over_serial`. The result is written only by
@@ -36,6 +37,13 @@ def tuning_problem(motor: StudioMotor) -> str | None:
         return (f"{motor.label}: tuning over a line needs the TESTU/TESTA modes, which the "
                 f"{motor.facts.title} do not have; tune a simulated one")
     return None
+
+
+def _filter_registers() -> list[str]:
+    """The filter registers a design of :mod:`tuning.autotune` sets (current and speed loop)."""
+    from tuning.autotune import CURRENT_KEYS, SPEED_KEYS
+
+    return [*CURRENT_KEYS, *SPEED_KEYS]
 
 
 def _png(fig: Any) -> bytes:
@@ -140,9 +148,23 @@ class TuningRun:
             return self._sim()
         return self._line()
 
-    def _design_result(self, ident: Any, acc: Any, design: Any) -> TuningResult:
+    def _against_present(self, ident: Any, design: Any, present: dict[str, float]
+                         ) -> list[str]:
+        """The acceptance move of the kept design beside the motor's present setup, both
+        simulated on the identified motor (:func:`tuning.acceptance.accept`)."""
+        from tuning.acceptance import Candidate, accept
+
+        self._say("acceptance move: the kept design against the present setup")
+        kept = Candidate("kept design", dict(design.registers), design)
+        res = accept([ident], [[kept, Candidate("present setup", present)]], seed=self.seed)[0]
+        return [f"{k}: settle {v * 1e3:.1f} ms, final error {res.final_error[k]:.0f} counts"
+                for k, v in res.settle_s.items() if k in ("kept design", "present setup")]
+
+    def _design_result(self, ident: Any, acc: Any, design: Any,
+                       present: dict[str, float]) -> TuningResult:
         from tuning.report import bode_figure, steps_figure, text_table
 
+        against = self._against_present(ident, design, present)
         self._say("plots: fits, Bode with margins, steps")
         plots = {"fits": self._fits(ident),
                  "Bode (margins)": _png(bode_figure(design, ident.motor, ident.mechanics.J)),
@@ -153,8 +175,7 @@ class TuningRun:
         if acc is not None:
             lines.append(f"kept: {acc.chosen.name}; {acc.reason}")
         regs = dict(design.registers)
-        return TuningResult(text_table(ident, design), regs, self._present(list(regs)), lines,
-                            plots)
+        return TuningResult(text_table(ident, design), regs, present, against + lines, plots)
 
     def _fits(self, ident: Any) -> bytes:
         import tempfile
@@ -174,6 +195,7 @@ class TuningRun:
         if m.read_raw(m.facts.mode_register) != 0:
             raise ValueError(f"{m.label}: tuning starts in mode 0 "
                              f"({m.facts.mode_name(0)}, at rest): press 'passive' first")
+        present = self._present(_filter_registers())
         m.paused = True
         try:
             with m.lock:
@@ -183,19 +205,20 @@ class TuningRun:
             m.paused = False
         self._say("synthesis, quantisation, verification and the acceptance move")
         acc = autotune_designs([ident], seed=self.seed)[0]
-        return self._design_result(ident, acc, acc.chosen.design)
+        return self._design_result(ident, acc, acc.chosen.design, present)
 
     def _line(self) -> TuningResult:
         from tuning.serial_source import autotune_over_serial
 
         m = self.motor
         line = m.line  # type: ignore[attr-defined]
+        present = self._present(_filter_registers())
         self._say(f"records over {line.port}: TESTU and TESTA, 11 samples each")
         with line.lock:
             line.close()
             ident, design = autotune_over_serial(line.port, m.motor_type, m.address,
                                                  progress=self._say)
-        return self._design_result(ident, design.acceptance, design)
+        return self._design_result(ident, design.acceptance, design, present)
 
     def _sixth_order(self) -> TuningResult:
         from tuning.autotune_sixth_order import autotune_report, autotune_sixth_order
