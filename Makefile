@@ -35,6 +35,7 @@ bench: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_protocol.py
 	$(BIN)/python benchmarks/bench_envs.py
 	$(BIN)/python benchmarks/bench_scale.py
+	$(BIN)/python benchmarks/bench_studio.py
 	@echo "figures written to docs/benchmarks.md"
 
 # BASELINE=<git revision>: speed of that revision beside this tree, in one run

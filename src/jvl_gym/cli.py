@@ -1,5 +1,5 @@
-"""``jvl-gym`` command line: ``train``, ``evaluate``, ``compile``, ``sweep``, ``program run``
-(and ``serve`` when available).
+"""``jvl-gym`` command line: ``train``, ``evaluate``, ``compile``, ``sweep``, ``program run``,
+``studio`` (and ``serve`` when available).
 
 Errors are one line on stderr with a non-zero exit status; ``--debug`` shows the traceback
 (:class:`jvl_gym.cli_app.App`).
@@ -145,6 +145,15 @@ def _mount_serve() -> None:
 
 _mount_serve()
 app.add_typer(program_app, name="program")
+
+
+def _mount_studio() -> None:
+    from .cli_studio import studio
+
+    app.command(name="studio")(studio)
+
+
+_mount_studio()
 
 if __name__ == "__main__":
     app()

@@ -105,3 +105,17 @@ SET_UV_ERR = 1 << 0
 UV_GO_PASSIVE = 1 << 1
 UV_SOLL0 = 1 << 3
 MACTALK_DIALECT = "mactalk16"  #: MacTalk of manual 5.1, 16-bit registers (protocol.dialect)
+
+#: the manual's register groups, (title, first, last register number) (manual 3.2: "The
+#: Parameter and Data Registers can be categorised into the following groups")
+REGISTER_GROUPS: tuple[tuple[str, int, int], ...] = (
+    ("Main Control", 1, 15),
+    ("Error handling", 16, 35),
+    ("Power on", 36, 42),
+    ("Register mode", 43, 88),
+    ("Filters", 89, 111),
+    ("Data acquisition", 112, 116),
+    ("Position / velocity-loop", 117, 123),
+    ("Current-loops", 124, 152),
+    ("Diverse", 153, 163),
+)

@@ -1,0 +1,19 @@
+"""``jvl-gym studio``: the motor workbench in the browser (docs/studio.md).
+
+The logic lives in modules of one concept each and runs without a browser:
+
+* :mod:`.facts` — what the studio takes from a motor family (register table, mode names,
+  error and status bits, test modes), through the family's public objects only;
+* :mod:`.motor` — one motor seen by the studio: :class:`~.motor.SimMotor` (one in-process
+  :class:`~jvl_gym.MotorArray`), :mod:`.line` — :class:`~.line.LineMotor` (a twin or a real
+  motor behind the project's MacTalk client), :mod:`.session` — the motors of a studio and the
+  real-time clock of the simulated ones;
+* :mod:`.bits` — bit registers in words, :mod:`.groups` — the register groups of the manuals,
+  :mod:`.registers` — the register view's rows, edits and setup files;
+* :mod:`.scope` — scope channels and buffers, CSV and PNG export; :mod:`.capture` — the
+  motor's sample buffer and the TESTU/TESTA records;
+* :mod:`.tuning_run` — the ``jvl-tune`` pipeline as steps with progress;
+* :mod:`.episodes` — one episode of a registered env with its policy or baseline.
+
+The browser pages (:mod:`.ui`, NiceGUI) only lay these out.
+"""

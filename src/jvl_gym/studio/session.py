@@ -1,0 +1,145 @@
+"""The motors of one studio and the real-time clock of the simulated ones.
+
+A :class:`Session` holds the motors the command line named: simulated motors in-process
+(:class:`~.motor.SimMotor`, any families side by side) and motors on a line
+(:class:`~.line.LineMotor`). Its clock thread advances every simulated motor that is not
+paused by as many firmware samples as wall-clock time has passed (times ``speed``), so the
+simulated motors run in real time while the pages read and write them.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Sequence
+
+from .line import Line, LineMotor, scan
+from .motor import SimMotor, StudioMotor
+
+__all__ = ["Session", "plan_motors", "DEFAULT_MOTOR"]
+
+#: the motor type when none is named (MotorArray's default)
+DEFAULT_MOTOR = "MAC140"
+
+
+def plan_motors(motors: Sequence[str], addresses: Sequence[int], default: str
+                ) -> list[tuple[str, int]]:
+    """Pair motor types with addresses as ``jvl-gym serve`` does: one type for every address
+    or one per address; no address: 1, 2, … per type; no type: ``default``.
+
+    Raises
+    ------
+    ValueError
+        Types and addresses that do not pair, or an address outside 1..254.
+    """
+    types = list(motors) or [default]
+    addrs = list(addresses) or list(range(1, len(types) + 1))
+    if len(types) == 1 and len(addrs) > 1:
+        types = types * len(addrs)
+    if len(types) != len(addrs):
+        raise ValueError(f"give one --motor, or one per --address ({len(addrs)} addresses, "
+                         f"{len(types)} motors)")
+    bad = [a for a in addrs if not 1 <= a <= 254]
+    if bad:
+        raise ValueError(f"--address {bad[0]} is no unit address (1..254, MYADDR)")
+    if len(set(addrs)) != len(addrs):
+        raise ValueError("two motors at one address: give each --address once")
+    return list(zip(types, addrs))
+
+
+class Session:
+    """The studio's motors.
+
+    Parameters
+    ----------
+    motors : list of StudioMotor
+        The motors, in the order the pages list them.
+    speed : float
+        Simulated seconds per wall-clock second of the simulated motors.
+    line : Line, optional
+        The line the line motors share.
+    """
+
+    def __init__(self, motors: list[StudioMotor], speed: float = 1.0,
+                 line: Line | None = None) -> None:
+        if not speed > 0:
+            raise ValueError(f"speed must be > 0, got {speed}")
+        self.motors = motors
+        self.speed = float(speed)
+        self.line = line
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        #: last error of the clock (a motor that refused to step), None if none
+        self.clock_problem: str | None = None
+
+    @classmethod
+    def simulated(cls, motors: Sequence[str], addresses: Sequence[int] = (), seed: int = 0,
+                  speed: float = 1.0) -> Session:
+        """Simulated motors of the given types (any families), one MotorArray each."""
+        plan = plan_motors(motors, addresses, DEFAULT_MOTOR)
+        return cls([SimMotor(t, a, seed=seed + k) for k, (t, a) in enumerate(plan)], speed)
+
+    @classmethod
+    def on_line(cls, port: str, motors: Sequence[str], addresses: Sequence[int] = (),
+                scan_range: Sequence[int] | None = None) -> Session:
+        """Motors on the line at ``port``: the ``addresses`` given, or those of ``scan_range``
+        that answer."""
+        line = Line(port)
+        if scan_range is not None and not addresses:
+            addresses = scan(line, scan_range)
+            if not addresses:
+                raise ValueError(f"no motor answered on {port} at addresses "
+                                 f"{min(scan_range)}..{max(scan_range)}")
+            if len(motors) > 1:
+                raise ValueError("with a scan give one --motor (the type of every motor found)")
+        plan = plan_motors(motors, addresses, DEFAULT_MOTOR)
+        return cls([LineMotor(line, t, a) for t, a in plan], line=line)
+
+    def motor(self, label: str) -> StudioMotor:
+        """The motor shown as ``label`` (``"MAC140 @ 1"``)."""
+        for m in self.motors:
+            if m.label == label:
+                return m
+        raise KeyError(f"no motor {label!r}; the studio has {', '.join(self.labels())}")
+
+    def labels(self) -> list[str]:
+        """The motors' labels."""
+        return [m.label for m in self.motors]
+
+    # ------------------------------------------------------------------ clock
+    def start(self, period: float = 0.005) -> None:
+        """Start the real-time clock of the simulated motors (a daemon thread)."""
+        if self._thread is not None or not any(m.simulated for m in self.motors):
+            return
+        self._stop.clear()
+        self._thread = threading.Thread(target=self._run, args=(period,), daemon=True,
+                                        name="studio-clock")
+        self._thread.start()
+
+    def _run(self, period: float) -> None:
+        sims = [m for m in self.motors if isinstance(m, SimMotor)]
+        start = time.monotonic()
+        done = [0] * len(sims)
+        while not self._stop.wait(period):
+            elapsed = (time.monotonic() - start) * self.speed
+            for k, m in enumerate(sims):
+                due = int(elapsed * m.facts.outer_hz)
+                if m.paused:
+                    done[k] = due
+                    continue
+                n = min(due - done[k], int(m.facts.outer_hz))  # at most 1 s behind
+                if n > 0:
+                    try:
+                        m.step(n)
+                    except Exception as exc:  # noqa: BLE001 - shown on the page, clock runs on
+                        self.clock_problem = f"{m.label}: {exc}"
+                    done[k] = due
+
+    def stop(self) -> None:
+        """Stop the clock and close the line."""
+        self._stop.set()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
+            self._thread = None
+        if self.line is not None:
+            self.line.close()

@@ -1,0 +1,53 @@
+"""Build the studio's pages on a :class:`~jvl_gym.studio.session.Session` and serve them.
+
+NiceGUI serves the pages (FastAPI and uvicorn underneath, Vue and Quasar in the browser, ECharts
+for the live charts); each page updates itself over its websocket from timers on the server.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+
+from ..session import Session
+
+__all__ = ["serve", "RECONNECT_S"]
+
+#: seconds a page waits for its websocket to come back before it reloads (a busy machine
+#: may hold the server up for seconds)
+RECONNECT_S = 30.0
+
+
+def build(session: Session) -> None:
+    """Register the studio's pages for ``session``."""
+    from nicegui import app, ui
+
+    from . import episodes_page, motors_page, registers_page, scope_page, tuning_page
+
+    def route(builder: Callable[[Session, int], None]) -> Callable[[int], None]:
+        def page(m: int = 0) -> None:
+            builder(session, m)
+        return page
+
+    for path, module in (("/", motors_page), ("/registers", registers_page),
+                         ("/scope", scope_page), ("/tuning", tuning_page),
+                         ("/episodes", episodes_page)):
+        ui.page(path)(route(module.build))
+    app.on_startup(session.start)
+    app.on_shutdown(session.stop)
+
+
+def serve(session: Session, host: str = "127.0.0.1", port: int = 8080,
+          show: bool = True) -> None:
+    """Serve the studio of ``session`` on ``host``:``port`` until Ctrl-C (``show``: open the
+    browser)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from nicegui import ui
+
+    logging.getLogger("jvl_gym.studio").setLevel(logging.INFO)
+    build(session)
+    ui.run(host=host, port=port, show=show, reload=False, title="jvl-gym studio",
+           show_welcome_message=False, favicon="⚙", uvicorn_logging_level="warning",
+           reconnect_timeout=RECONNECT_S)

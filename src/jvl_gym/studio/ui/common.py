@@ -1,0 +1,103 @@
+"""What every page shares: the header with the views and the motor choice, the message line,
+and the guard that turns an error into a message on the page."""
+
+from __future__ import annotations
+
+import functools
+import inspect
+import logging
+from collections.abc import Callable
+from typing import Any
+
+from nicegui import ui
+
+from ...cli_app import one_line
+from ..motor import StudioMotor
+from ..session import Session
+
+__all__ = ["VIEWS", "Page", "frame", "tid"]
+
+#: the views: path → title
+VIEWS = {"/": "Motors", "/registers": "Registers", "/scope": "Scope", "/tuning": "Tuning",
+         "/episodes": "Episodes"}
+
+log = logging.getLogger("jvl_gym.studio")
+
+
+def tid(name: str) -> str:
+    """The props that name an element for the browser tests (``data-testid``)."""
+    return f'data-testid="{name}"'
+
+
+class Page:
+    """One open page: its motor and its message line.
+
+    Attributes
+    ----------
+    motor : StudioMotor
+        The motor the page works on.
+    message : ui.label
+        The line that shows the last outcome (``#message``).
+    """
+
+    def __init__(self, session: Session, motor: StudioMotor) -> None:
+        self.session = session
+        self.motor = motor
+        self.message: Any = None
+
+    def say(self, text: str, ok: bool = True) -> None:
+        """Show ``text`` on the message line (and as a notification when it is an error)."""
+        self.message.set_text(text)
+        self.message.classes(replace="text-positive" if ok else "text-negative")
+        if not ok:
+            ui.notify(text, type="negative", multi_line=True)
+
+    def guard(self, fn: Callable[..., Any]) -> Callable[..., Any]:
+        """``fn`` (sync or async) with its exceptions shown on the message line."""
+        if inspect.iscoroutinefunction(fn):
+            @functools.wraps(fn)
+            async def run_async(*args: Any, **kw: Any) -> Any:
+                try:
+                    return await fn(*args, **kw)
+                except Exception as exc:  # noqa: BLE001 - an error is a message, never a dead page
+                    log.debug("studio action failed", exc_info=True)
+                    self.say(one_line(exc), ok=False)
+            return run_async
+
+        @functools.wraps(fn)
+        def run(*args: Any, **kw: Any) -> Any:
+            try:
+                return fn(*args, **kw)
+            except Exception as exc:  # noqa: BLE001
+                log.debug("studio action failed", exc_info=True)
+                self.say(one_line(exc), ok=False)
+        return run
+
+
+def frame(session: Session, path: str, m: int = 0) -> Page:
+    """Lay out the header (views, motor choice, line state) and the message line of the page
+    at ``path`` for motor index ``m``; return the page."""
+    m = m if 0 <= m < len(session.motors) else 0
+    page = Page(session, session.motors[m])
+    ui.page_title(f"jvl-gym studio · {VIEWS[path]}")
+    with ui.header().classes("items-center gap-4 bg-slate-800"):
+        ui.label("jvl-gym studio").classes("text-lg font-bold")
+        for p, title in VIEWS.items():
+            link = ui.link(title, f"{p}?m={m}").classes("text-white")
+            if p == path:
+                link.classes("underline font-bold")
+        ui.space()
+        options = {k: mm.label for k, mm in enumerate(session.motors)}
+        ui.select(options, value=m, label="motor",
+                  on_change=lambda e: ui.navigate.to(f"{path}?m={e.value}")
+                  ).props("dark dense outlined").classes("w-48").props(tid("motor-select"))
+    state = ui.label("").classes("text-negative").props(tid("line-state"))
+
+    def show_state() -> None:
+        problems = [p for p in (session.clock_problem,
+                                session.line.problem if session.line else None) if p]
+        state.set_text("; ".join(problems))
+
+    ui.timer(1.0, show_state)
+    page.message = ui.label("").props(tid("message"))
+    return page

@@ -1,0 +1,262 @@
+"""The studio in Chromium (pytest-playwright): a simulated MAC140 and MIS232 driven from the
+registers view and seen running on the scope, a refused value with its reason, a setup saved
+and loaded, a sample buffer captured, the tuning page run to the written result, the episodes
+page, and a ``jvl-gym serve`` twin whose value written by another client appears (and whose
+line comes back after the twin restarts). Each view is saved as a screenshot in the artefacts
+folder (``$JVL_ARTEFACTS``, default the test run's temporary folder), and in ``docs/img/studio``
+with ``JVL_STUDIO_DOCS=1``."""
+
+from __future__ import annotations
+
+import os
+import re
+import socket
+import subprocess
+import sys
+import time
+import urllib.request
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+CHROMIUM = "/usr/bin/chromium"
+ROOT = Path(__file__).resolve().parents[1]
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+pytestmark = pytest.mark.skipif(not Path(CHROMIUM).exists(),
+                                reason=f"Debian's Chromium ({CHROMIUM}) is not installed")
+expect = pytest.importorskip("playwright.sync_api").expect
+
+
+@pytest.fixture(scope="session")
+def browser_type_launch_args(browser_type_launch_args: dict) -> dict:
+    return {**browser_type_launch_args, "executable_path": CHROMIUM, "args": ARGS}
+
+
+@pytest.fixture(scope="session")
+def browser_context_args(browser_context_args: dict) -> dict:
+    return {**browser_context_args, "viewport": {"width": 1400, "height": 900},
+            "accept_downloads": True}
+
+
+@pytest.fixture(scope="session")
+def artefacts(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = Path(os.environ.get("JVL_ARTEFACTS") or tmp_path_factory.getbasetemp() / "artefacts")
+    path = path / "studio"
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def shoot(page, artefacts: Path, name: str, full: bool = False) -> None:
+    """Save a screenshot of the page (``full``: the whole page, else the window) as an
+    artefact, and for the docs if asked."""
+    page.screenshot(path=str(artefacts / f"{name}.png"), full_page=full)
+    if os.environ.get("JVL_STUDIO_DOCS") == "1":
+        docs = ROOT / "docs" / "img" / "studio"
+        docs.mkdir(parents=True, exist_ok=True)
+        page.screenshot(path=str(docs / f"{name}.png"), full_page=full)
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ, MPLBACKEND="Agg")
+    env.pop("PYTEST_CURRENT_TEST", None)  # NiceGUI would start in its own test mode
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), str(ROOT),
+                                         env.get("PYTHONPATH", "")])
+    return env
+
+
+def _wait_http(url: str, proc: subprocess.Popen, seconds: float = 300.0) -> None:
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        if proc.poll() is not None:
+            raise RuntimeError(f"{url}: the server exited: {proc.stdout.read()}")
+        try:
+            with urllib.request.urlopen(url, timeout=5) as r:
+                if r.status == 200:
+                    return
+        except OSError:
+            time.sleep(0.3)
+    raise TimeoutError(f"{url} did not answer within {seconds} s")
+
+
+def _stop(proc: subprocess.Popen) -> None:
+    proc.terminate()
+    try:
+        proc.wait(10)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        proc.wait()
+
+
+def start_studio(*args: str) -> tuple[subprocess.Popen, str]:
+    port = free_port()
+    proc = subprocess.Popen([sys.executable, "-m", "jvl_gym.cli", "studio", "--no-browser",
+                             "--port", str(port), *args], env=_env(), cwd=ROOT,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    url = f"http://127.0.0.1:{port}"
+    try:
+        _wait_http(url + "/", proc)
+    except Exception:
+        _stop(proc)
+        raise
+    return proc, url
+
+
+@pytest.fixture(scope="module")
+def studio() -> Iterator[str]:
+    proc, url = start_studio("--motor", "MAC140", "--motor", "MIS232", "--motor", "MAC140")
+    yield url
+    _stop(proc)
+
+
+def write(page, name: str, value: str) -> None:
+    expect(page.get_by_test_id(f"raw-{name}")).to_contain_text("raw")  # the page is live
+    field = page.get_by_label(name, exact=True)
+    field.fill(value)
+    field.press("Enter")
+
+
+def last_value(page, name: str) -> float:
+    text = page.get_by_test_id("scope-last").inner_text()
+    m = re.search(rf"{re.escape(name)}(?: \[[^\]]*\])? = (\S+?)(?:;|$)", text)
+    return float(m.group(1)) if m else float("nan")
+
+
+def wait_value(page, name: str, target: float, tol: float, seconds: float = 20.0) -> float:
+    end = time.monotonic() + seconds
+    v = float("nan")
+    while time.monotonic() < end:
+        v = last_value(page, name)
+        if abs(v - target) <= tol:
+            return v
+        time.sleep(0.2)
+    raise AssertionError(f"{name} = {v} on the scope, expected {target} ± {tol}")
+
+
+def test_motors_view(page, studio, artefacts):
+    page.goto(studio + "/?m=0")
+    expect(page.get_by_test_id("mode-0")).to_contain_text("INIT_MODE")
+    expect(page.get_by_test_id("mode-1")).to_contain_text("passive")
+    expect(page.get_by_test_id("bits-1-ERR_BITS")).to_contain_text("ERR_BITS")
+    card = page.get_by_test_id("motor-1")
+    card.get_by_role("button", name="safe mode", exact=True).click()
+    expect(page.get_by_test_id("mode-1")).to_contain_text("safe")
+    card.get_by_role("button", name="leave safe mode").click()
+    expect(page.get_by_test_id("mode-1")).to_contain_text("passive")
+    shoot(page, artefacts, "motors")
+
+
+@pytest.mark.parametrize("m, v_soll, v_ist, name", [(0, "320", 20.0, "MAC140"),
+                                                    (1, "5000", 5000.0, "MIS232")])
+def test_write_from_registers_and_see_it_run_on_the_scope(page, studio, artefacts, m, v_soll,
+                                                          v_ist, name):
+    """V_SOLL then MODE_REG = 1 (velocity mode): the MAC050–141 runs at V_SOLL/16
+    counts/sample (manual 3.2.5, 3.2.12), the MIS at V_SOLL in 0.01 rpm (§8.2.6, §8.2.13)."""
+    page.goto(f"{studio}/registers?m={m}")
+    message = page.get_by_test_id("message")
+    write(page, "V_SOLL", v_soll)
+    expect(message).to_have_text(f"V_SOLL = {v_soll}")
+    write(page, "MODE_REG", "1")
+    expect(message).to_have_text("MODE_REG = 1")
+    write(page, "V_SOLL", "9999999999")
+    expect(message).to_contain_text("outside the range")
+    expect(page.get_by_label("V_SOLL", exact=True)).to_have_value(v_soll)
+    shoot(page, artefacts, f"registers_{name}")
+    page.goto(f"{studio}/scope?m={m}")
+    wait_value(page, "V_IST", v_ist, 0.15 * v_ist)
+    assert last_value(page, "V_SOLL") == float(v_soll)
+    if m == 0:
+        page.get_by_test_id("capture").click()
+        expect(page.get_by_test_id("message")).to_contain_text(
+            "sample buffer: 200 samples of V_IST [counts/sample], P_IST [counts]", timeout=30000)
+        shoot(page, artefacts, "scope", full=True)
+
+
+def test_save_and_load_a_setup(page, studio, tmp_path):
+    page.goto(studio + "/registers?m=0")
+    field = page.get_by_label("A_SOLL", exact=True)
+    expect(field).not_to_have_value("")
+    saved = field.input_value()
+    with page.expect_download() as download:
+        page.get_by_test_id("save-setup").click()
+    path = tmp_path / "setup.yaml"
+    download.value.save_as(path)
+    assert f"A_SOLL: {saved}" in path.read_text()
+    write(page, "A_SOLL", "99")
+    expect(page.get_by_test_id("message")).to_have_text("A_SOLL = 99")
+    page.get_by_test_id("load-setup").locator("input[type=file]").set_input_files(path)
+    expect(page.get_by_test_id("message")).to_contain_text("loaded")
+    expect(field).to_have_value(saved)
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("registers: {A_SOLL: 5, V_SOLL: 1e9}\n")
+    page.get_by_test_id("load-setup").locator("input[type=file]").set_input_files(bad)
+    expect(page.get_by_test_id("message")).to_contain_text("outside the range")
+    expect(field).to_have_value(saved)
+
+
+def test_tuning_page_to_the_written_result(page, studio, artefacts):
+    page.goto(studio + "/tuning?m=2")
+    page.get_by_test_id("tuning-run").click()
+    expect(page.get_by_test_id("tuning-write")).to_be_visible(timeout=240000)
+    table = page.get_by_test_id("tuning-registers")
+    row = table.locator("tr", has_text="KVOUT")
+    new = row.locator("td").nth(2).inner_text()
+    shoot(page, artefacts, "tuning", full=True)
+    page.get_by_test_id("tuning-write").click()
+    page.get_by_test_id("tuning-confirm").click()
+    expect(page.get_by_test_id("message")).to_contain_text("wrote")
+    page.goto(studio + "/registers?m=2")
+    expect(page.get_by_label("KVOUT", exact=True)).to_have_value(new)
+
+
+def test_episodes_page(page, studio, artefacts):
+    page.goto(studio + "/episodes")
+    page.get_by_test_id("episode-run").click()
+    expect(page.get_by_test_id("episode-total")).to_contain_text("return", timeout=120000)
+    shoot(page, artefacts, "episodes")
+
+
+def test_a_twin_shows_what_another_client_writes(page, artefacts):
+    from jvl_gym.protocol.client import MacTalkClient
+
+    tcp = free_port()
+    serve = [sys.executable, "-m", "jvl_gym.cli", "serve", "--motor", "MAC140", "--address",
+             "19", "--tcp", f"127.0.0.1:{tcp}"]
+
+    def start_twin() -> subprocess.Popen:
+        proc = subprocess.Popen(serve, env=_env(), cwd=ROOT, stdout=subprocess.PIPE,
+                                stderr=subprocess.STDOUT, text=True)
+        for line in proc.stdout:
+            if "running at speed" in line:
+                return proc
+        raise RuntimeError("jvl-gym serve did not start")
+
+    twin = start_twin()
+    proc = None
+    try:
+        proc, url = start_studio("--connect", f"socket://127.0.0.1:{tcp}", "--scan", "18-20")
+        page.goto(url + "/registers?m=0")
+        field = page.get_by_label("V_SOLL", exact=True)
+        with MacTalkClient(f"socket://127.0.0.1:{tcp}", 19) as other:
+            other.write("V_SOLL", 321)
+        expect(field).to_have_value("321")
+        shoot(page, artefacts, "registers_twin")
+        _stop(twin)
+        expect(page.get_by_test_id("line-state")).to_contain_text("127.0.0.1", timeout=10000)
+        twin = start_twin()
+        with MacTalkClient(f"socket://127.0.0.1:{tcp}", 19) as other:
+            other.write("V_SOLL", 123)
+        expect(field).to_have_value("123", timeout=10000)
+        expect(page.get_by_test_id("line-state")).to_have_text("")
+    finally:
+        if proc is not None:
+            _stop(proc)
+        _stop(twin)

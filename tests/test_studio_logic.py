@@ -1,0 +1,379 @@
+"""The studio's logic without a browser: family facts, bit words, register groups, edits with
+the API's validation, setup files, the scope, the sample buffer, a line through the protocol
+client (with a twin that goes away and comes back), tuning and episodes refusals."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+import yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from jvl_gym.families import family
+from jvl_gym.registers import to_raw
+from jvl_gym.studio import bits, capture, groups
+from jvl_gym.studio import registers as R
+from jvl_gym.studio.facts import facts_of
+from jvl_gym.studio.motor import SimMotor
+from jvl_gym.studio.scope import Scope, channel_choices
+from jvl_gym.studio.session import Session, plan_motors
+
+
+@pytest.fixture(scope="module")
+def mac() -> SimMotor:
+    return SimMotor("MAC140", 1)
+
+
+@pytest.fixture(scope="module")
+def mis() -> SimMotor:
+    return SimMotor("MIS232", 2)
+
+
+# ---------------------------------------------------------------------- facts, bits, groups
+def test_facts_come_from_the_family():
+    f = facts_of("MAC140")
+    assert f.title == family("mac050_141").title
+    assert f.mode_name(1) == "V_MODE" and f.mode_register == "MODE_REG"
+    # TESTU and TESTA are modes 8 and 9 (MAC050–141 manual 4.4.9, 4.4.10); the MIS has none
+    assert f.test_modes() == {"TESTU": 8, "TESTA": 9}
+    assert facts_of("MIS232").test_modes() == {}
+    assert facts_of("MIS232").mode_name(1) == "velocity"  # MIS manual §8.2.3
+
+
+def test_err_stat_bits_in_words():
+    """ERR_STAT bits of MAC050–141 manual 3.2.35: 1 FLW, 4 IN_POS; a bit the table does not
+    name is shown by number."""
+    table = facts_of("MAC140").table
+    reg = table.lookup("ERR_STAT")
+    assert reg in bits.status_registers(table)
+    assert bits.words(reg, (1 << 1) | (1 << 4)) == ["FLW", "IN_POS"]
+    assert bits.words(reg, 0) == []
+    assert bits.words(reg, 1 << 15) == ["bit 15"]
+
+
+def test_mis_bit_registers_and_fields():
+    """MIS ERR_BITS (§8.2.31): bit 1 follow error; bits 8-10 one field (H3 encoder)."""
+    table = facts_of("MIS232").table
+    names = [r.name for r in bits.status_registers(table)]
+    assert {"ERR_BITS", "STATUSBITS"} <= set(names)
+    err = table.lookup("ERR_BITS")
+    assert bits.words(err, 1 << 1) == ["follow error"]
+    field = next(f for f in bits.bit_fields(err) if f.first == 8)
+    assert field.last == 10 and bits.words(err, 1 << 9) == [field.name]
+
+
+def test_record_and_rewind_bits_from_the_table():
+    """CNTRL_BITS: RECORD bit 6, REWIND bit 7 (MAC050–141 manual 3.2.36); MAC800 bits 0, 1."""
+    assert capture.control_register(facts_of("MAC140").table) == ("CNTRL_BITS", 6, 7)
+    assert capture.control_register(facts_of("MAC800").table) == ("CNTRL_BITS", 0, 1)
+    assert capture.control_register(facts_of("MIS232").table) is None
+
+
+def test_mac050_141_groups_are_the_manuals():
+    """MAC050–141 manual 3.2: Main Control 1..15, Error handling 16..35, …, Diverse 153..163."""
+    f = facts_of("MAC140")
+    got = groups.register_groups(f.table, groups.family_ranges(f.constants))
+    titles = [t for t, _ in got]
+    assert titles[:9] == ["Main Control", "Error handling", "Power on", "Register mode",
+                          "Filters", "Data acquisition", "Position / velocity-loop",
+                          "Current-loops", "Diverse"]
+    main = dict(got)["Main Control"]
+    assert min(r.number for r in main) == 1 and max(r.number for r in main) <= 15
+    shown = [r.number for _, regs in got for r in regs]
+    assert len(shown) == len(set(shown)) == sum(groups.visible(r) for r in f.table)
+
+
+def test_groups_from_the_section_column():
+    """The MAC800 overview names each row's group (§1.2 Main Control, …)."""
+    f = facts_of("MAC800")
+    titles = [t for t, _ in groups.register_groups(f.table, groups.family_ranges(f.constants))]
+    assert "1.2 Main Control" in titles and "1.2 Filters (main 6th order servo filter)" in titles
+
+
+# ---------------------------------------------------------------------- edits and setups
+def test_a_refused_value_changes_nothing_and_says_why(mac):
+    numbers = [r.number for r in mac.table if groups.visible(r)]
+    before = mac.read_raws(numbers)
+    for name, text, reason in (("V_SOLL", "99999", "outside the range"),
+                               ("V_IST", "3", "ro"), ("V_SOLL", "fast", "not a number")):
+        res = R.edit(mac, name, text)
+        assert not res.ok and res.message.startswith(name) and reason in res.message
+    assert mac.read_raws(numbers) == before
+
+
+def test_an_edit_writes_in_the_registers_unit(mac):
+    res = R.edit(mac, "KVOUT", "1.5")  # Fixed8 (MAC050–141 manual 3.1, 3.2.13): raw = 1.5 · 256
+    assert res.ok and mac.read_raw("KVOUT") == 384
+    assert R.edit(mac, "A_SOLL", "0x20").ok and mac.read_raw("A_SOLL") == 32
+
+
+@settings(max_examples=60, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.one_of(st.integers(-10**6, 10**6).map(str), st.floats(allow_nan=True).map(str),
+                 st.text(max_size=8)))
+def test_an_edit_is_written_exactly_or_refused_unchanged(mac, text):
+    reg = mac.register("V_SOLL")
+    before = mac.read_raw("V_SOLL")
+    res = R.edit(mac, "V_SOLL", text)
+    if res.ok:
+        assert mac.read_raw("V_SOLL") == int(to_raw(reg, float(text)))  # the table's rounding
+        assert reg.minimum <= mac.read("V_SOLL") <= reg.maximum
+    else:
+        assert mac.read_raw("V_SOLL") == before
+
+
+def test_setup_round_trip_between_two_motors(mac, tmp_path):
+    mac.write("A_SOLL", 77)
+    mac.write("KVOUT", 2.0)
+    path = R.save_setup(mac, tmp_path / "setup.yaml")
+    other = SimMotor("MAC140", 3)
+    res = R.load_setup_file(other, path.read_text(), path.name)
+    assert res.ok, res.message
+    assert R.setup_of(other) == R.setup_of(mac)
+    assert yaml.safe_load(path.read_text())["motor"] == "MAC140"
+
+
+def test_a_refused_setup_changes_nothing(mac):
+    before = R.setup_of(mac)
+    for text, reason in (("registers: {A_SOLL: 5, V_SOLL: 1e9}", "outside the range"),
+                         ("registers: {A_SOLL: 5, NOPE: 1}", "NOPE"),
+                         ("registers: {A_SOLL: 5, MODE_REG: 1}", "MODE_REG"),
+                         ("[1, 2", "not YAML"), ("motor: MAC140", "registers")):
+        res = R.load_setup_file(mac, text, "bad.yaml")
+        assert not res.ok and reason in res.message
+    assert R.setup_of(mac) == before
+
+
+def test_mis_setup_round_trip(mis):
+    mis.write("V_SOLL", 4321)
+    text = yaml.safe_dump(R.setup_of(mis))
+    other = SimMotor("MIS232", 4)
+    assert R.load_setup_file(other, text).ok
+    assert other.read("V_SOLL") == 4321
+
+
+def test_plan_motors():
+    assert plan_motors(["MAC140", "MIS232"], [], "MAC140") == [("MAC140", 1), ("MIS232", 2)]
+    assert plan_motors(["MAC140"], [5, 6], "X") == [("MAC140", 5), ("MAC140", 6)]
+    assert plan_motors([], [], "MAC140") == [("MAC140", 1)]
+    for motors, addresses, what in ((["A", "B"], [1, 2, 3], "one per --address"),
+                                    (["A"], [0], "1..254"), (["A", "B"], [3, 3], "once")):
+        with pytest.raises(ValueError, match=what):
+            plan_motors(motors, addresses, "A")
+
+
+# ---------------------------------------------------------------------- scope and buffer
+def test_scope_reads_registers_and_physical_signals():
+    m = SimMotor("MAC140", 1, seed=1)
+    m.write("V_SOLL", 400)  # 400/16 counts/sample (MAC050–141 manual 3.2.5)
+    m.write("MODE_REG", 1)
+    assert "shaft speed" in channel_choices(m) and "phase currents A" in channel_choices(m)
+    sc = Scope(m, ["V_IST", "V_SOLL", "shaft speed", "phase currents A"])
+    for _ in range(20):
+        m.step(50)
+        sc.sample()
+    s = sc.series()
+    assert list(s) == ["t [s]", "V_IST [counts/sample]", "V_SOLL [1/16 count/sample]",
+                       "shaft speed [rpm]", "phase currents A [A]"]
+    assert np.all(np.diff(s["t [s]"]) > 0)
+    # at speed: V_IST = V_SOLL / 16 counts/sample, shaft speed = that in rpm (4096 counts/rev)
+    assert s["V_IST [counts/sample]"][-1] == pytest.approx(25, abs=2)
+    rpm = 25 * m.facts.outer_hz * 60 / 4096
+    assert s["shaft speed [rpm]"][-1] == pytest.approx(rpm, rel=0.1)
+    csv = sc.csv().splitlines()
+    assert csv[0].startswith('"t [s]","V_IST [counts/sample]"') and len(csv) == 21
+    assert sc.png().startswith(b"\x89PNG")
+    with pytest.raises(KeyError):
+        Scope(m, ["NO_SUCH_SIGNAL"])
+
+
+@pytest.fixture(scope="module")
+def running() -> Session:
+    s = Session.simulated(["MAC140", "MIS232"], seed=3)
+    s.start()
+    yield s
+    s.stop()
+
+
+def test_capture_the_sample_buffer_of_both_families(running):
+    mac, mis = running.motors
+    mac.write("V_SOLL", 320)
+    mac.write("MODE_REG", 1)
+    mis.write("V_SOLL", 5000)  # 50 rpm (0.01 rpm units, MIS manual §8.2.6)
+    mis.write("MODE_REG", 1)
+    time.sleep(1.0)
+    a = capture.capture(mac, ["V_IST", "P_IST"], 100)
+    assert list(a) == ["t [s]", "V_IST [counts/sample]", "P_IST [counts]"]
+    assert len(a["P_IST [counts]"]) == 100
+    assert np.all(np.diff(a["P_IST [counts]"]) > 0)  # running forwards, one sample apart
+    assert np.median(a["V_IST [counts/sample]"]) == pytest.approx(20, abs=2)
+    b = capture.capture(mis, ["V_IST"], 30)
+    v_ist = b[f"V_IST [{mis.register('V_IST').unit}]"]
+    assert len(v_ist) == 30 and np.all(v_ist == 5000)
+    with pytest.raises(capture.CaptureError, match="samples"):
+        capture.capture(mac, ["V_IST"], 10**6)
+
+
+def test_testu_where_the_family_has_it(running):
+    m = SimMotor("MAC140", 9)
+    m.write("UMEAS", 50)
+    sess = Session([m])
+    sess.start()
+    try:
+        rec = capture.run_test(m, "TESTU", {"UMEAS": 60})
+    finally:
+        sess.stop()
+    assert len(rec["sample"]) >= 11  # TESTU records 11 samples (manual 4.4.9)
+    assert m.read("MODE_REG") == 0
+    with pytest.raises(capture.CaptureError, match="no TESTA"):
+        capture.run_test(running.motors[1], "TESTA", {})
+
+
+# ---------------------------------------------------------------------- a line
+@pytest.fixture()
+def twin_server():
+    from jvl_gym.cli_serve import build_line
+    from jvl_gym.protocol.transport import TwinServer
+
+    line, _ = build_line(["MAC140"], [19])
+    server = TwinServer(line, tcp=("127.0.0.1", 0)).start()
+    yield line, server
+    server.stop()
+
+
+def test_a_line_motor_reads_what_another_client_writes(twin_server):
+    from jvl_gym.protocol.client import MacTalkClient
+
+    twin, server = twin_server
+    port = server.endpoint("mactalk", "tcp").port
+    s = Session.on_line(f"socket://127.0.0.1:{port}", [], [], range(18, 21))
+    try:
+        assert s.labels() == ["MAC140 @ 19"]
+        m = s.motors[0]
+        nums = [r.number for r in m.table if groups.visible(r)]
+        raws = m.read_raws(nums)
+        assert raws[m.register("KVOUT").number] == int(twin.m.read_raw("KVOUT")[0])
+        with MacTalkClient(f"socket://127.0.0.1:{port}", 19) as other:
+            other.write("V_SOLL", 321)
+        assert m.read("V_SOLL") == 321
+        res = R.edit(m, "V_SOLL", "99999")
+        assert not res.ok and "outside the range" in res.message and m.read("V_SOLL") == 321
+        assert R.edit(m, "A_SOLL", "40").ok and int(twin.m.read_raw("A_SOLL")[0]) == 40
+        assert not R.load_setup_file(m, "registers: {A_SOLL: 5, V_SOLL: 1e9}").ok
+        assert m.read("A_SOLL") == 40
+    finally:
+        s.stop()
+
+
+def test_a_line_survives_a_twin_that_goes_and_comes_back():
+    from jvl_gym.cli_serve import build_line
+    from jvl_gym.protocol.transport import TwinServer
+    from jvl_gym.studio.line import LineDown
+
+    line, _ = build_line(["MAC140"], [19])
+    server = TwinServer(line, tcp=("127.0.0.1", 0)).start()
+    port = server.endpoint("mactalk", "tcp").port
+    s = Session.on_line(f"socket://127.0.0.1:{port}", ["MAC140"], [19])
+    m = s.motors[0]
+    try:
+        assert m.read("MODE_REG") == 0
+        server.stop()
+        with pytest.raises(LineDown):
+            m.read("MODE_REG")
+        assert s.line.problem
+        server = TwinServer(line, tcp=("127.0.0.1", port)).start()
+        assert m.read("MODE_REG") == 0 and s.line.problem is None
+    finally:
+        server.stop()
+        s.stop()
+
+
+def test_a_family_the_client_does_not_speak_is_refused_on_a_line():
+    with pytest.raises(ValueError, match="mactalk32"):
+        Session.on_line("socket://127.0.0.1:9", ["MIS232"], [1])
+
+
+# ---------------------------------------------------------------------- tuning, episodes
+def test_tuning_refuses_what_it_cannot_tune():
+    from jvl_gym.studio.tuning_run import TuningRun, tuning_problem
+
+    assert "no tuning" in tuning_problem(SimMotor("MIS232", 1)).lower() or \
+        "MIS" in tuning_problem(SimMotor("MIS232", 1))
+    m = SimMotor("MAC140", 1)
+    assert tuning_problem(m) is None
+    m.write("MODE_REG", 1)
+    tr = TuningRun(m)
+    tr.start()
+    tr.join(60)
+    assert tr.result is None and "mode 0" in tr.error
+    with pytest.raises(RuntimeError):
+        tr.write()
+
+
+def test_episode_is_deterministic_and_refuses_unknown():
+    from jvl_gym.studio.episodes import controllers, run_episode
+
+    a = run_episode("jvl_gym/Positioning-v0", "baseline", seed=3)
+    b = run_episode("jvl_gym/Positioning-v0", "baseline", seed=3)
+    assert a.total == b.total and a.total == pytest.approx(a.signals["reward"].sum())
+    assert "action: torque" in a.signals and len(a.signals["reward"]) > 10
+    assert controllers("jvl_gym/Positioning-v0")[0] == "baseline"
+    with pytest.raises(ValueError, match="unknown env"):
+        run_episode("jvl_gym/Nope-v0")
+    with pytest.raises(ValueError, match="controller"):
+        run_episode("jvl_gym/Positioning-v0", "magic")
+
+
+# ---------------------------------------------------------------------- the command line
+def _cli(args, capsys):
+    from jvl_gym.cli import app
+
+    with pytest.raises(SystemExit) as info:
+        app(["studio", *args])
+    _, err = capsys.readouterr()
+    lines = [ln for ln in err.strip().splitlines() if not ln.startswith("jvl_gym: compil")]
+    assert info.value.code not in (0, None) and len(lines) == 1 and "Traceback" not in err, err
+    return info.value.code, lines[0]
+
+
+def test_cli_errors_are_one_line(capsys):
+    code, line = _cli(["--scan", "1-3"], capsys)
+    assert code == 2 and "--scan needs --connect" in line
+    code, line = _cli(["--connect", "socket://127.0.0.1:9", "--scan", "0-3"], capsys)
+    assert code == 2 and "1..254" in line
+    code, line = _cli(["--motor", "MAC999", "--no-browser", "--port", "8", "--host",
+                       "127.0.0.1"], capsys)
+    assert code == 1 and line.startswith("jvl-gym studio: error:")
+    with __import__("socket").socket() as s:
+        s.bind(("127.0.0.1", 0))
+        s.listen()
+        code, line = _cli(["--no-browser", "--port", str(s.getsockname()[1])], capsys)
+    assert code == 1 and "cannot listen" in line and "--port" in line
+    code, line = _cli(["--connect", "socket://127.0.0.1:9", "--scan", "1-2"], capsys)
+    assert code == 1 and "cannot open socket://127.0.0.1:9" in line
+
+
+@pytest.mark.parametrize("motor_type, register, bit", [("MAC140", "ERR_STAT", 1 << 1),
+                                                       ("MIS232", "ERR_BITS", 1 << 1)])
+def test_actions_of_the_family(motor_type, register, bit):
+    """Clear errors writes 0 to the error register (follow-error bit: MAC050–141 manual 3.2.35,
+    MIS manual §8.2.31); save in flash needs safe mode and is refused with the reason outside
+    it (MAC050–141 manual 2.2, MIS manual §8.2.3)."""
+    m = SimMotor(motor_type, 1)
+    acts = m.actions()
+    assert {"passive", "safe mode", "leave safe mode", "save in flash", "reset",
+            "clear errors"} <= set(acts)
+    m.write(register, bit)
+    assert m.read_raw(register) & bit
+    acts["clear errors"]()
+    assert not m.read_raw(register) & bit
+    with pytest.raises(ValueError, match="(?i)safe"):
+        acts["save in flash"]()
+    acts["safe mode"]()
+    assert "safe" in m.facts.mode_name(m.read_raw("MODE_REG")).lower()
+    m.write("A_SOLL", 123)
+    acts["save in flash"]()  # saves and resets: the value stays, from flash
+    assert m.read("A_SOLL") == 123
