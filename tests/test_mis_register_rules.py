@@ -6,6 +6,7 @@ and the Modbus worked example."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from jvl_gym import MotorArray
 from jvl_gym.families.mis import constants as c
@@ -203,3 +204,140 @@ def test_modbus_write_multiple_example_is_accepted_as_the_manual_replies() -> No
     assert m.read("V1")[0] == 409600 and m.read("V2")[0] == 13
     m.write("COMMAND", c.CMD_REGISTER_SET[0])  # V_SOLL = V1, within V_SOLL's range
     assert m.read("V_SOLL")[0] == 300000
+
+
+# --- §8.2.21, §8.2.41–44: the register sets ------------------------------------------------
+@pytest.mark.parametrize("command, names", [
+    (108, ("P1", "V1", "A1", "T1")), (109, ("P2", "V2", "A2", "T2")),
+    (110, ("P3", "V3", "A3", "T3")), (111, ("P4", "V4", "A4", "T4"))])
+def test_fastmac_register_sets_load_the_profile(command: int, names: tuple[str, ...]) -> None:
+    """FastMac 12–15 (commands 108–111): P_SOLL, V_SOLL, A_SOLL and the running current from
+    position, velocity, acceleration and current register n."""
+    m = _motor(**dict(zip(names, (123456, 4321, 2222, 300))))
+    m.write("COMMAND", command)
+    got = [m.read(k)[0] for k in ("P_SOLL", "V_SOLL", "A_SOLL", "RUN_CURRENT")]
+    assert got == [123456, 4321, 2222, 300] and m.read("COMMAND")[0] == 0
+
+
+@pytest.mark.parametrize("command, name", [(113, "P7"), (114, "P8")])
+def test_fastmac_relative_moves_add_p7_and_p8(command: int, name: str) -> None:
+    """FastMac 17/18 (commands 113/114): P_SOLL = P_IST + position register 7 / 8."""
+    m = _motor(P_IST=1000, **{name: -400})
+    m.write("COMMAND", command)
+    assert m.read("P_SOLL")[0] == 600
+
+
+# --- §8.2.45–46, §2.3.5: the eight analogue inputs -------------------------------------
+@pytest.mark.parametrize("k", range(1, 9))
+def test_each_analogue_input_has_its_registers(k: int) -> None:
+    """ANALOGUE_INPUTn (register 88 + n) is the raw 0 … 5 V value of IOn; ANALOGUE_FILTEREDn
+    (80 + n) its filtered value; AFZUP_CONFMIN discards raw samples below it."""
+    names = {"ANALOGUE_INPUT1": 89, "ANALOGUE_INPUT2": 90, "ANALOGUE_INPUT3": 91,
+             "ANALOGUE_INPUT4": 92, "ANALOGUE_INPUT5": 93, "ANALOGUE_INPUT6": 94,
+             "ANALOGUE_INPUT7": 95, "ANALOGUE_INPUT8": 96, "ANALOGUE_FILTERED1": 81,
+             "ANALOGUE_FILTERED2": 82, "ANALOGUE_FILTERED3": 83, "ANALOGUE_FILTERED4": 84,
+             "ANALOGUE_FILTERED5": 85, "ANALOGUE_FILTERED6": 86, "ANALOGUE_FILTERED7": 87,
+             "ANALOGUE_FILTERED8": 88}
+    raw, filt = f"ANALOGUE_INPUT{k}", f"ANALOGUE_FILTERED{k}"
+    assert (names[raw], names[filt]) == (88 + k, 80 + k)
+    m = _motor()
+    m.set_input(**{f"analog{k}": 2000 * 5.0 / 4095})
+    m.step(200)
+    assert m.read(raw)[0] == 2000 and m.read(filt)[0] == 2000
+    low = _motor(AFZUP_CONFMIN=2500)
+    low.set_input(**{f"analog{k}": 2000 * 5.0 / 4095})
+    low.step(200)
+    assert low.read(raw)[0] == 2000 and low.read(filt)[0] == 0
+
+
+# --- §8.2.60–64: the fourth channel and the buffer size ----------------------------------
+def test_sample4_records_and_the_buffer_holds_buf_size_samples() -> None:
+    m = _motor(SAMPLE1=0, SAMPLE2=0, SAMPLE3=0, SAMPLE4=10, REC_CNT=1024, S_TIME=1,
+               V_SOLL=5000, V_START=10000)
+    m.write("MODE_REG", c.VELOCITY)
+    m.write("S_CONTROL", 2)
+    m.step(m.read("BUF_SIZE")[0] + 20)
+    buf = m.sample_buffer()
+    assert buf["P_IST"].shape == (1, m.read("BUF_SIZE")[0]) == (1, 1024)
+    assert np.all(np.diff(buf["P_IST"][0]) > 0) and m.read("S_CONTROL")[0] == 0
+
+
+# --- §5.9.2, §8.2.72: the negative limit input --------------------------------------------
+def test_negative_limit_input_of_nl_mask() -> None:
+    m = _motor(NL_MASK=0b1000, V_SOLL=-5000, V_START=10000, SETUP_BITS=c.SETUP_NO_LIMIT_ERROR)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(20)
+    m.set_input(digital_inputs=0b1000)
+    m.step(5)
+    assert m.read("WARN_BITS")[0] & c.WARN_NEG_LIMIT and m.read("V_IST")[0] == 0
+    m.write("V_SOLL", 5000)  # away from it
+    m.step(5)
+    assert m.read("V_IST")[0] == 5000
+
+
+# --- §8.2.121, §8.2.131: the velocities ---------------------------------------------------
+def test_v_ist_calc_and_v_encoder_follow_the_motion() -> None:
+    m = _motor(V_SOLL=12000, A_SOLL=5000)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(800)
+    assert m.read("V_IST_CALC")[0] == m.read("V_IST")[0] == 12000
+    venc = m.trace(["V_ENCODER"], 200)["V_ENCODER"][:, 0]
+    assert abs(venc.mean() - 12000) < 300
+
+
+# --- §8.2.108–114: the closed-loop current scale ------------------------------------------
+def test_closed_loop_current_scale_stays_within_its_limits() -> None:
+    """ACTUAL_TORQUE stays within CUR_SCALE_MIN … CUR_SCALE_MAX; a larger CUR_SCALE_INC
+    (time per step up) and CUR_SCALE_DEC / CUR_SCALE_FACTOR (time per step down) slow the
+    scale's changes."""
+    cl = c.SETUP_CLOSED_LOOP | c.SETUP_CURRENT_CONTROL
+    m = MotorArray("MIS232", n=2, seed=0)
+    m.write_many({"SETUP_BITS": cl, "CUR_SCALE_MAX": 1500, "CUR_SCALE_MIN": 400,
+                  "CUR_SCALE_INC": np.array([2000, 20000]),
+                  "CUR_SCALE_DEC": np.array([4000, 40000]),
+                  "CUR_SCALE_FACTOR": 500, "V_SOLL": 30000, "A_SOLL": 2000, "MODE_REG": 1})
+    tr = m.trace(["ACTUAL_TORQUE"], 1500)["ACTUAL_TORQUE"]
+    assert tr[300:, 0].min() >= 400 and tr[300:, 0].max() <= 1500 and tr.min() >= 400
+    assert np.abs(np.diff(tr[:, 1])).max() < np.abs(np.diff(tr[:, 0])).max()
+
+
+# --- §5.6 type 2 zero search: the crawl velocity ------------------------------------------
+def test_zero_search_type_2_leaves_the_sensor_at_v_home_crawl() -> None:
+    """V_HOME_CRAWL (§8.2.125): type 2 leaves the sensor at this velocity (0: V_HOME/64)."""
+    m = MotorArray("MIS232", n=1, seed=0, home_position=-0.5)
+    m.write_many({"HOME_MASK": 1, "V_HOME": -20000, "V_HOME_CRAWL": 700,
+                  "IN_POSITION_COUNT": 0})
+    m.write("MODE_REG", c.ZERO_SEARCH_2)
+    v = m.trace(["V_IST"], 3000)["V_IST"][:, 0]
+    assert v.min() < -5000 and 700 in v.tolist() and v.max() == 700
+
+
+# --- §8.2.96: not saved -------------------------------------------------------------------
+def test_notsaved_is_zero_after_a_reset() -> None:
+    """NOTSAVED: "not used by the firmware", 0 after power-on, even when saved in flash."""
+    m = _motor(NOTSAVED=77)
+    assert m.read("NOTSAVED")[0] == 77
+    m.enter_safe_mode()
+    m.write_flash()
+    assert m.read("NOTSAVED")[0] == 0
+
+
+# --- §8.2.67 bit 5, §5.10.2 bit 23 -------------------------------------------------------
+def test_zero_search_bit_5_disables_the_time_out() -> None:
+    """ZERO_SEARCH_BITS bit 5: "Disable zero search time out"."""
+    m = _motor(HOME_MASK=1, V_HOME=-3000, V_HOME_TIMEOUT=200, ZERO_SEARCH_BITS=1 << 5)
+    m.write("MODE_REG", c.ZERO_SEARCH_1)
+    m.step(400)
+    assert m.read("ERR_BITS")[0] == 0 and m.read("MODE_REG")[0] == c.ZERO_SEARCH_1
+
+
+def test_low_bus_voltage_bit_23_sets_v_soll_to_0() -> None:
+    """SETUP_BITS bit 23: "Low bus voltage" sets V_SOLL to 0 RPM; the motor decelerates and
+    stays in its mode (§5.10)."""
+    m = _motor(V_SOLL=10000, SETUP_BITS=1 << 23)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(50)
+    m.set_input(supply_volts=10.0)
+    m.step(300)
+    assert m.read("V_SOLL")[0] == 0 and m.read("V_IST")[0] == 0
+    assert m.read("MODE_REG")[0] == c.VELOCITY and m.read("ERR_BITS")[0] == 0

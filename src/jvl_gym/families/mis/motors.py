@@ -27,7 +27,7 @@ from . import layout as L
 from . import regs as R
 from .config import MisMotorConfig, load_motor
 from .firmware.arith import wrap32
-from .table import TABLE
+from .table import CONFORMANCE, TABLE
 from .torque_curve import pull_out_torque
 from .units import COUNTS_PER_REV, CURRENT_AMPS_PER_UNIT
 
@@ -95,6 +95,7 @@ class MisMotorArray(MotorArray):
 
     FAMILY_KEY = "mis"
     TABLE = TABLE
+    CONFORMANCE = CONFORMANCE
     N_STATE = L.N_STATE
     N_PARAM = L.N_PARAM
     N_INPUT = L.N_INPUT
@@ -185,13 +186,13 @@ class MisMotorArray(MotorArray):
         self._power_on(idx)
 
     def _power_on(self, idx: np.ndarray) -> None:
-        """Firmware start: positions, counters and error bits cleared (P_IST = P_SOLL = 0, so
-        a saved P_SOLL makes no move at power-on; the position back-up of §5.4 is not
-        modelled), the mode from HOMEMODE or else STARTMODE (§8.2.33, §8.2.37)."""
+        """Firmware start: positions, counters, NOTSAVED (§8.2.96) and error bits cleared
+        (P_IST = P_SOLL = 0, so a saved P_SOLL makes no move at power-on; the position back-up
+        of §5.4 is not modelled), the mode from HOMEMODE or else STARTMODE (§8.2.33, §8.2.37)."""
         s, regs = self.state, self.regs
         for num in (R.P_IST, R.P_SOLL, R.V_IST, R.ENCODER_POS, R.FLWERR, R.ERR_BITS,
                     R.WARN_BITS, R.STATUSBITS, R.TURNTAB_COUNT, R.EXT_ENCODER, R.COMMAND,
-                    R.S_CONTROL, R.ACTUAL_TORQUE, R.TICKS, R.MOTOR_REV):
+                    R.S_CONTROL, R.ACTUAL_TORQUE, R.TICKS, R.MOTOR_REV, R.NOTSAVED):
             regs[idx, num] = 0
         s[idx, L.S_CUR_SCALE] = 2047.0
         s[idx, L.S_SEEN_PSOLL] = regs[idx, R.P_SOLL]
