@@ -10,26 +10,29 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from ..registers.conformance import Conformance
 from ..registers.reference import markdown_reference_32
 from ..registers.table import RegisterTable
 from . import mac800, mis
+from .mac800.table import CONFORMANCE as MAC800_CONFORMANCE
+from .mis.table import CONFORMANCE as MIS_CONFORMANCE
 
 __all__ = ["FAMILY_REFERENCES", "family_references"]
 
 _GENERATOR = "python -m jvl_gym.families.reference"
 
-#: output file name → (table, title, source note)
-FAMILY_REFERENCES: dict[str, tuple[RegisterTable, str, str]] = {
+#: output file name → (table, title, source note, conformance matrix)
+FAMILY_REFERENCES: dict[str, tuple[RegisterTable, str, str, Conformance]] = {
     "mac800-registers.md": (
         mac800.REGISTERS, "MAC800",
         "Source: the MAC800 register overview (§1.2) and serial quick guide (§1.3). Sections "
         "are the overview's sub-tables. Derivations, OCR repairs and chosen values: "
-        "[MAC800: register table and units](mac800.md)."),
+        "[MAC800: register table and units](mac800.md).", MAC800_CONFORMANCE),
     "mis-registers.md": (
         mis.REGISTERS, "MIS/SMC step motors",
         "Source: the MIS manual, register list §8.2 (overview §8.2.1, detail sections §8.2.2 … "
         "§8.2.131). Where the overview and a detail section disagree, the choice and both "
-        "readings are in [MIS/SMC: register table and units](mis.md)."),
+        "readings are in [MIS/SMC: register table and units](mis.md).", MIS_CONFORMANCE),
 }
 
 
@@ -41,8 +44,8 @@ def family_references() -> dict[str, str]:
     dict of str to str
         Output file name → Markdown text.
     """
-    return {name: markdown_reference_32(table, title, note, _GENERATOR)
-            for name, (table, title, note) in FAMILY_REFERENCES.items()}
+    return {name: markdown_reference_32(table, title, note, _GENERATOR, conformance)
+            for name, (table, title, note, conformance) in FAMILY_REFERENCES.items()}
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -10,6 +10,7 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+from .conformance import STATUSES, Conformance
 from .table import FORMAT_SCALE, Access, Format, RegisterTable
 
 __all__ = ["markdown_reference", "markdown_reference_32"]
@@ -31,8 +32,25 @@ def _cell(text: str) -> str:
     return text.replace("|", "\\|")
 
 
+def _conformance_lines(conformance: Conformance | None) -> list[str]:
+    """The paragraph on the conformance column, with the counts per status."""
+    if conformance is None:
+        return []
+    counts = conformance.counts()
+    bits = conformance.bit_counts()
+    return [
+        f"Conformance (`{conformance.source}`): whether the simulator models the register "
+        "(the tests that exercise it are named there), only stores it (kept and read back, "
+        "no effect), or does not model it; a write of a value other than the default to a "
+        "register or bit it does not model warns (`NotModelledWarning`). Registers: "
+        + ", ".join(f"{counts[s]} {s}" for s in STATUSES) + "; documented bits and values: "
+        + ", ".join(f"{bits[s]} {s}" for s in STATUSES) + ".",
+        ""]
+
+
 def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
-                       usage: Callable[[str], list[str]] | None = None) -> str:
+                       usage: Callable[[str], list[str]] | None = None,
+                       conformance: Conformance | None = None) -> str:
     """Render a register table as a Markdown document.
 
     Parameters
@@ -43,12 +61,14 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
         Motor family shown in the heading.
     usage : callable, optional
         ``usage(name) -> [mode names]``: adds a column with the modes that read the register.
+    conformance : Conformance, optional
+        The family's conformance matrix: adds a column with each register's status.
 
     Returns
     -------
     str
         Markdown with one table row per register number: number, name, format, range, unit,
-        access, default, section, description.
+        access, default, section, description (and the optional columns).
     """
     lines = [
         f"# Register reference: {title}",
@@ -61,9 +81,11 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
         "word. Access: `rw` user-writable, `ro` computed by the firmware (writes are refused), "
         "`reserved` undocumented.",
         "",
+        *_conformance_lines(conformance),
         "| no. | name | format | range | unit | access | default | section | description |"
-        + (" modes |" if usage else ""),
-        "|---:|---|---|---|---|---|---:|---|---|" + ("---|" if usage else ""),
+        + (" modes |" if usage else "") + (" conformance |" if conformance else ""),
+        "|---:|---|---|---|---|---|---:|---|---|" + ("---|" if usage else "")
+        + ("---|" if conformance else ""),
     ]
     for r in table:
         if r.access == Access.RESERVED:
@@ -74,12 +96,13 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
         lines.append(
             f"| {r.number} | {r.name} | {r.format.value} | {rng} | {_cell(r.unit)} | "
             f"{r.access.value} | {default} | {r.section} | {_cell(r.description)} |"
-            + (f" {', '.join(usage(r.name))} |" if usage else ""))
+            + (f" {', '.join(usage(r.name))} |" if usage else "")
+            + (f" {_cell(conformance.cell(r))} |" if conformance else ""))
     return "\n".join(lines) + "\n"
 
 
 def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
-                          generator: str) -> str:
+                          generator: str, conformance: Conformance | None = None) -> str:
     """Render a table of 32-bit registers (one register number each) as a Markdown document.
 
     Parameters
@@ -92,6 +115,8 @@ def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
         One paragraph naming the source document and where its decisions are recorded.
     generator : str
         The command that writes the document (named in its header).
+    conformance : Conformance, optional
+        The family's conformance matrix: adds a column with each register's status.
 
     Returns
     -------
@@ -113,9 +138,10 @@ def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
         "firmware (writes are refused), `reserved` undocumented. *user* `no` marks registers "
         "not meant for the normal user.",
         "",
+        *_conformance_lines(conformance),
         "| no. | name | MacTalk name | format | range | unit | access | default | user | section "
-        "| description |",
-        "|---:|---|---|---|---|---|---|---:|---|---|---|",
+        "| description |" + (" conformance |" if conformance else ""),
+        "|---:|---|---|---|---|---|---|---:|---|---|---|" + ("---|" if conformance else ""),
     ]
     for r in table:
         if r.access == Access.RESERVED:
@@ -127,7 +153,8 @@ def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
         lines.append(
             f"| {r.number} | {r.name} | {_cell(r.alias)} | {r.format.value} | {rng} | "
             f"{_cell(r.unit)} | {r.access.value} | {default} | {user} | {_cell(r.section)} | "
-            f"{_cell(r.description)} |")
+            f"{_cell(r.description)} |" + (f" {_cell(conformance.cell(r))} |" if conformance
+                                           else ""))
     return "\n".join(lines) + "\n"
 
 
@@ -138,9 +165,11 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(args[0]) if args else Path("docs/registers.md")
     out.parent.mkdir(parents=True, exist_ok=True)
     from ..families.mac050_141.firmware.mode_table import markdown_mode_table, modes_using
+    from ..families.mac050_141.table import CONFORMANCE as conformance
     from ..families.mac050_141.table import TABLE as table
 
-    out.write_text(markdown_reference(table, usage=modes_using), encoding="utf-8")
+    out.write_text(markdown_reference(table, usage=modes_using, conformance=conformance),
+                   encoding="utf-8")
     (out.parent / "modes.md").write_text(markdown_mode_table(), encoding="utf-8")
     print(f"wrote {out} ({len(table)} registers)")
     return 0
