@@ -131,3 +131,22 @@ def test_acc_and_dec_flags_and_dis_p_lim() -> None:
     lim.step(300)
     err = lim.read("ERR_STAT")
     assert err[0] & c.PLIM_ERR and not err[1] & c.PLIM_ERR
+
+
+def test_uv_handle_go_passive() -> None:
+    """UV_HANDLE bit 1 UV_GO_PASSIVE (manual 3.2.23): an under-voltage makes the motor
+    passive."""
+    from jvl_gym.families.mac050_141 import constants as c
+    from jvl_gym.world import SupplyEvents, World
+
+    m = MotorArray("MAC140", n=1, seed=0, viscous_friction=1e-3)
+    m.write_many({"U_MIN_SUP": round(35 / 0.0537), "UV_HANDLE": c.UV_GO_PASSIVE,
+                  "V_SOLL": 6000, "MODE_REG": c.V_MODE})
+    m.run(0.3)
+    assert m.read("MODE_REG")[0] == c.V_MODE
+    m.world = World(supply=SupplyEvents([(0.0, 0.3, 20.0)], nominal=48.0, n=1))
+    m.run(0.25)
+    assert m.read("ERR_STAT")[0] & c.UV_DETECT
+    assert m.read("MODE_REG")[0] in (c.STOP_MODE, c.INIT_MODE)
+    m.run(1.0)
+    assert m.read("MODE_REG")[0] == c.INIT_MODE
