@@ -341,3 +341,35 @@ def test_low_bus_voltage_bit_23_sets_v_soll_to_0() -> None:
     m.step(300)
     assert m.read("V_SOLL")[0] == 0 and m.read("V_IST")[0] == 0
     assert m.read("MODE_REG")[0] == c.VELOCITY and m.read("ERR_BITS")[0] == 0
+
+
+# --- §8.2.68 SETUP_BITS 5, 12, 16 ----------------------------------------------------------
+def test_setup_bit_5_syncs_the_encoder_to_p_ist_on_entering_an_active_mode() -> None:
+    """Bit 5: "Synchronize encoder position to P_IST after change to active mode. Follow
+    error = 0"."""
+    for bits, synced in ((0, False), (c.SETUP_SYNC_ENCODER, True)):
+        m = _motor(SETUP_BITS=bits, P_IST=50000, P_SOLL=50000)
+        m.write("MODE_REG", c.POSITION)
+        assert bool(m.read("ENCODER_POS")[0] == 50000) is synced
+        if synced:
+            m.step(5)
+            assert abs(m.read("FLWERR")[0]) < 1000
+
+
+def test_setup_bit_12_keeps_the_external_encoder_over_a_reset() -> None:
+    """Bit 12 KeepExtEncoder: "Do not zero the external encoder count on startup"."""
+    for bits, kept in ((0, 0), (c.SETUP_KEEP_EXT_ENCODER, 1234)):
+        m = _motor(SETUP_BITS=bits, EXT_ENCODER=1234)
+        m.enter_safe_mode()
+        m.write_flash()
+        assert m.read("EXT_ENCODER")[0] == kept
+
+
+def test_setup_bit_16_inverts_the_external_encoder_count() -> None:
+    """Bit 16: "External Encoder counting direction (1 = inverse)"."""
+    for bits, sign in ((0, 1), (c.SETUP_EXT_ENCODER_INVERSE, -1)):
+        m = _motor(SETUP_BITS=bits, GEAR1=1, GEAR2=1, V_SOLL=100000, A_SOLL=100000)
+        m.write("MODE_REG", c.GEAR)
+        m.set_input(pulse_counts=5)
+        m.step(10)
+        assert m.read("EXT_ENCODER")[0] == sign * 50 and m.read("P_SOLL")[0] == sign * 50

@@ -188,12 +188,16 @@ class MisMotorArray(MotorArray):
     def _power_on(self, idx: np.ndarray) -> None:
         """Firmware start: positions, counters, NOTSAVED (§8.2.96) and error bits cleared
         (P_IST = P_SOLL = 0, so a saved P_SOLL makes no move at power-on; the position back-up
-        of §5.4 is not modelled), the mode from HOMEMODE or else STARTMODE (§8.2.33, §8.2.37)."""
+        of §5.4 is not modelled), EXT_ENCODER too unless SETUP_BITS bit 12 keeps it, the mode
+        from HOMEMODE or else STARTMODE (§8.2.33, §8.2.37)."""
         s, regs = self.state, self.regs
         for num in (R.P_IST, R.P_SOLL, R.V_IST, R.ENCODER_POS, R.FLWERR, R.ERR_BITS,
-                    R.WARN_BITS, R.STATUSBITS, R.TURNTAB_COUNT, R.EXT_ENCODER, R.COMMAND,
+                    R.WARN_BITS, R.STATUSBITS, R.TURNTAB_COUNT, R.COMMAND,
                     R.S_CONTROL, R.ACTUAL_TORQUE, R.TICKS, R.MOTOR_REV, R.NOTSAVED):
             regs[idx, num] = 0
+        # SETUP_BITS bit 12 KeepExtEncoder: "Do not zero the external encoder count on startup"
+        keep = (regs[idx, R.SETUP_BITS] & c.SETUP_KEEP_EXT_ENCODER) != 0
+        regs[idx[~keep], R.EXT_ENCODER] = 0
         s[idx, L.S_CUR_SCALE] = 2047.0
         s[idx, L.S_SEEN_PSOLL] = regs[idx, R.P_SOLL]
         code = self.params[idx, L.P_ENCODER].astype(np.int64)
@@ -246,6 +250,13 @@ class MisMotorArray(MotorArray):
             halt = off & ~running
             s[idx[halt], L.S_VEL] = 0.0
             s[idx[halt], L.S_EMERGENCY] = 0.0
+            # SETUP_BITS bit 5 (§8.2.68): "Synchronize encoder position to P_IST after change
+            # to active mode. Follow error = 0"
+            was_off = np.isin(regs[idx, R.MODE_REG], (c.PASSIVE, c.SAFE))
+            sync = was_off & ~off & ((regs[idx, R.SETUP_BITS] & c.SETUP_SYNC_ENCODER) != 0)
+            for i in idx[sync].tolist():
+                self._set_encoder(i, int(regs[i, R.P_IST]))
+                regs[i, R.FLWERR] = 0
             regs[idx, R.MODE_REG] = np.where(running, c.STOP, raw)
         elif num in _MEMBERS:
             self._check_member(reg, raw, *_MEMBERS[num])

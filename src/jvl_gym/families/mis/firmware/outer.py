@@ -49,8 +49,11 @@ _SQRT2 = math.sqrt(2.0)
 @njit(cache=True)
 def _gear_input(regs, s, u) -> None:  # pragma: no cover - compiled
     """Pulse input → EXT_ENCODER and P_SOLL += counts × GEAR1 / GEAR2 with the remainder
-    carried (§8.2.3 gear mode, §8.2.13–14); GEAR2 = 0 moves nothing."""
+    carried (§8.2.3 gear mode, §8.2.13–14); GEAR2 = 0 moves nothing. SETUP_BITS bit 16 counts
+    the input the other way (§8.2.68)."""
     counts = int(u[L.I_PULSE_COUNTS])
+    if regs[R.SETUP_BITS] & c.SETUP_EXT_ENCODER_INVERSE:
+        counts = -counts
     regs[R.EXT_ENCODER] = wrap32(regs[R.EXT_ENCODER] + counts)
     g2 = regs[R.GEAR2]
     if counts == 0 or g2 == 0:
