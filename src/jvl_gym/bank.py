@@ -152,9 +152,10 @@ class RegisterBank(ABC):
             for k, (reg, value) in enumerate(zip(plan.regs, values)):
                 raws[k] = self._validated_raw(reg, value, idx.size)
         self._store_many(plan, idx, raws)
-        self._note_not_modelled(plan.regs, raws)
+        self._note_not_modelled(plan.regs, raws, 4)
 
-    def _note_not_modelled(self, regs: tuple[Register, ...], raws: np.ndarray) -> None:
+    def _note_not_modelled(self, regs: tuple[Register, ...], raws: np.ndarray,
+                           stacklevel: int) -> None:
         """Warn once per register (:class:`NotModelledWarning`) and log when a write stored a
         value other than the default in a register, or a bit, the family's conformance matrix
         calls not modelled; the value stays stored."""
@@ -173,7 +174,7 @@ class RegisterBank(ABC):
                 msg = (f"{what} is not modelled by the simulator (manual {entry.section}): "
                        f"{conf.cell(reg)}; the value is stored and read back but has no effect")
                 log.warning("%s", msg)
-                warnings.warn(msg, NotModelledWarning, stacklevel=4)
+                warnings.warn(msg, NotModelledWarning, stacklevel=stacklevel)
 
     def _batch_raws(self, plan: StorePlan, values: tuple[Any, ...], size: int
                     ) -> np.ndarray | None:
@@ -209,7 +210,7 @@ class RegisterBank(ABC):
         self._validated_raw(reg, arr / reg.scale, idx.size)
         raws = np.broadcast_to(arr.astype(np.int64), (idx.size,)).copy()
         self._store(reg, idx, raws)
-        self._note_not_modelled((reg,), raws[None])
+        self._note_not_modelled((reg,), raws[None], 3)
 
     def _validated_raw(self, reg: Register, value: Any, size: int) -> np.ndarray:
         if reg.access != Access.RW:
