@@ -142,12 +142,16 @@ def test_filter_tuning_on_mac800_writes_the_main_filter_pi_and_its_baseline_is_s
     assert lo == 0.0 and 4e-4 < hi < 6e-4
     env.reset(seed=0)
     m = core.motors
-    p, i = 0.0998, 0.1073 - 0.0998  # the default setup's PI split (configs/setups/MAC800.yaml)
-    np.testing.assert_allclose(m.read("KVFX6"), p + i, atol=1e-4)
+    # the default setup's I-P split (configs/setups/MAC800.yaml): ki in VF, kp/ki in VB
+    i = m.read("KVFX6")[0]
+    p = -m.read("KVB3")[0] * i
+    np.testing.assert_allclose((p, i), (0.2 / 2.004, 0.015 / 2.004), rtol=2e-3)
     env.step(np.array([[1.0, 0.0, -1.0]] * 3, dtype=np.float32))
-    # proportional × 2, integral × 1, KVOUT = 1 (written before the trial)
+    # proportional × 2, integral × 1 as a PI in VF, VB = 1, KVOUT = 1 (written before the trial)
     np.testing.assert_allclose(m.read("KVFX6"), 2 * p + i, atol=3e-4)
     np.testing.assert_allclose(m.read("KVFX5"), -2 * p, atol=3e-4)
+    np.testing.assert_allclose(m.read("KVB4"), 1.0)
+    np.testing.assert_allclose(m.read("KVB3"), 0.0)
     np.testing.assert_allclose(m.read("KVOUT"), 1.0)
     base = gym.make_vec("jvl_gym/FilterTuning-v0", num_envs=3,
                         vectorization_mode="vector_entry_point", motor_type="MAC800",

@@ -185,7 +185,7 @@ def test_mac800_arrays_hold_32_bit_raws():
                                                      20000, "counts (1/409600 rev)"),
      (34, "IN_POSITION_COUNT", 0, 100, 2, ""), (40, "V_HOME", -300000, 300000, -5000,
                                                  "0.01 RPM"),
-     (41, "T_HOME", 0, 2047, 1024, "1/2047 (100 %)"), (65, "V1", -300000, 300000, 25000,
+     (41, "T_HOME", 0, 2047, 1024, "1/2047 (100 %)"), (65, "V1", -(2**31), 2**31 - 1, 25000,
                                                         "0.01 RPM"),
      (77, "T1", 0, 1533, 511, "5.87 mA"), (97, "BUSVOL", 0, 4095, 0, "26.525 mV"),
      (98, "MIN_BUSVOL", 0, 4095, 565, "26.525 mV"), (105, "AFZUP_FILTER", 1, 64, 64, "1/64"),
@@ -212,9 +212,10 @@ def test_mis_positions_odd_and_high_words_reserved():
 
 def test_mis_access_and_formats():
     for name in ("V_IST", "FLWERR", "STATUSBITS", "TEMP", "INPUTS", "BUSVOL", "MOTORTYPE",
-                 "ACTUAL_TORQUE", "V_IST_CALC", "MOTOR_REV", "TEMP_LIMITS", "BUF_SIZE"):
+                 "ACTUAL_TORQUE", "V_IST_CALC", "TEMP_LIMITS", "BUF_SIZE"):
         assert MIS.lookup(name).access == Access.RO, name
-    for name in ("P_IST", "ERR_BITS", "WARN_BITS", "OUTPUTS", "COMMAND", "CUR_SCALE_MIN"):
+    for name in ("P_IST", "ERR_BITS", "WARN_BITS", "OUTPUTS", "COMMAND", "CUR_SCALE_MIN",
+                 "MOTOR_REV"):  # MOTOR_REV: R/W (§8.2.122)
         assert MIS.lookup(name).access == Access.RW, name
     for name in ("TICKS", "MOTOR_REV", "TURNTABLE_SIZE", "FW_BUILD", "V_HOME_TIMEOUT"):
         r = MIS.lookup(name)

@@ -220,5 +220,7 @@ def test_cli_synthesize_mac800_and_refusals(tmp_path):
 
 def test_default_filters_are_the_family_setup():
     regs = default_filters("MAC800")
-    assert regs["KVFX6"] == pytest.approx(0.1073) and regs["KVFY5"] == 1.0
+    # the I-P arrangement of configs/setups/MAC800.yaml: ki in VF, kp/ki in VB
+    assert regs["KVFX6"] == pytest.approx(0.015 / 2.004, rel=2e-3) and regs["KVFY5"] == 1.0
+    assert regs["KVB3"] == pytest.approx(-0.2 / 0.015) and regs["KVB4"] + regs["KVB3"] == 1.0
     assert regs["S_ORDER"] == 6  # the table's default: the full order

@@ -8,7 +8,9 @@ decide in its hooks (:meth:`RegisterBank._store_rows`, :meth:`RegisterBank._stor
 
 from __future__ import annotations
 
+import logging
 import os
+import warnings
 from abc import ABC, abstractmethod
 from collections.abc import Mapping
 from typing import Any, ClassVar, NamedTuple
@@ -19,7 +21,9 @@ from .arguments import MotorIndex, RegisterKey, RegisterValue, as_index
 from .config import load_setup
 from .registers import (
     Access,
+    Conformance,
     Format,
+    NotModelledWarning,
     ReadOnlyRegisterError,
     Register,
     RegisterError,
@@ -40,6 +44,8 @@ __all__ = ["RegisterBank", "StorePlan"]
 
 #: register-key tuples whose store plan an array keeps (``RegisterBank._key_plan``)
 _PLAN_CACHE_SIZE = 256
+#: where a write of a register the simulator does not model is logged (the twin's log too)
+log = logging.getLogger("jvl_gym.conformance")
 
 
 class StorePlan(NamedTuple):
@@ -80,6 +86,9 @@ class RegisterBank(ABC):
     _mode_number: int
     #: registers stored one at a time through :meth:`_store_special` (numbers)
     ONE_BY_ONE: ClassVar[frozenset[int]] = frozenset()
+    #: the family's conformance matrix (``registers.conformance``): a write of a value other
+    #: than the default to a register or bit it calls not modelled warns once per register
+    CONFORMANCE: ClassVar[Conformance | None] = None
 
     def _lookup(self, key: RegisterKey) -> Register:
         if isinstance(key, (bool, np.bool_)) or not isinstance(key, (str, int, np.integer)):
@@ -143,6 +152,29 @@ class RegisterBank(ABC):
             for k, (reg, value) in enumerate(zip(plan.regs, values)):
                 raws[k] = self._validated_raw(reg, value, idx.size)
         self._store_many(plan, idx, raws)
+        self._note_not_modelled(plan.regs, raws, 4)
+
+    def _note_not_modelled(self, regs: tuple[Register, ...], raws: np.ndarray,
+                           stacklevel: int) -> None:
+        """Warn once per register (:class:`NotModelledWarning`) and log when a write stored a
+        value other than the default in a register, or a bit, the family's conformance matrix
+        calls not modelled; the value stays stored."""
+        conf = self.CONFORMANCE
+        if conf is None or not conf.warn_rules:
+            return
+        warned = self.__dict__.setdefault("_not_modelled_warned", set())
+        for reg, raw in zip(regs, raws):
+            num = reg.number
+            if num in conf.warn_rules and num not in warned and conf.not_modelled_change(
+                    num, reg.default_raw, raw):
+                warned.add(num)
+                entry = conf.entries[num]
+                what = (f"{reg.name} (register {num})" if entry.status == "not modelled" else
+                        f"{reg.name} (register {num}) bits {conf.warn_rules[num][0]:#x}")
+                msg = (f"{what} is not modelled by the simulator (manual {entry.section}): "
+                       f"{conf.cell(reg)}; the value is stored and read back but has no effect")
+                log.warning("%s", msg)
+                warnings.warn(msg, NotModelledWarning, stacklevel=stacklevel)
 
     def _batch_raws(self, plan: StorePlan, values: tuple[Any, ...], size: int
                     ) -> np.ndarray | None:
@@ -176,7 +208,9 @@ class RegisterBank(ABC):
                 f"{reg.name} (register {reg.number}): raw values must be integers (the stored "
                 f"integer: Fixed4 = value·4096, Fixed8 = value·256), got {raw!r}")
         self._validated_raw(reg, arr / reg.scale, idx.size)
-        self._store(reg, idx, np.broadcast_to(arr.astype(np.int64), (idx.size,)).copy())
+        raws = np.broadcast_to(arr.astype(np.int64), (idx.size,)).copy()
+        self._store(reg, idx, raws)
+        self._note_not_modelled((reg,), raws[None], 3)
 
     def _validated_raw(self, reg: Register, value: Any, size: int) -> np.ndarray:
         if reg.access != Access.RW:

@@ -161,6 +161,11 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         x_lead = m.read(lead)[ok]
         x_lag = m.read(lag)[ok]
         p, i = -x_lag, x_lead + x_lag  # the PI split: lead = c(kp+ki), lag = −c·kp
+        feedback = getattr(fam.task, "SPEED_FEEDBACK", None)
+        if feedback is not None:  # an I-P setup: kp in the feedback filter, 1 + (kp/ki)(1 − z⁻¹)
+            fb_lag = m.read(feedback[1])[ok]
+            p, i = p - x_lead * fb_lag, i * (m.read(feedback[0])[ok] + fb_lag)
+            m.write_many({feedback[0]: 1.0, feedback[1]: 0.0}, index=ok)  # the PI goes in VF
         sp = 2.0 ** a[:, 0]
         si = 2.0 ** (1.5 * a[:, 1])
         m.write(lead, np.round((sp * p + si * i) * 4096) / 4096, index=ok)

@@ -38,6 +38,7 @@ from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
     from ..registers import RegisterTable
+    from ..registers.conformance import Conformance
 
 __all__ = ["Capability", "UnsupportedOperation", "FamilyConfig", "TwinSpec", "TuningSpec",
            "Family", "MODULES"]
@@ -324,6 +325,9 @@ class Family:
         What the family supports.
     tuning : TuningSpec or None
         The tuning strategy and its facts; None: no tuning procedure.
+    conformance : Conformance or None
+        The family's conformance matrix (:mod:`jvl_gym.registers.conformance`): for every
+        register and documented bit, modelled, stored only or not modelled; None: none stated.
     """
 
     key: str
@@ -338,6 +342,7 @@ class Family:
     twin: TwinSpec
     capabilities: frozenset[Capability] = frozenset()
     tuning: TuningSpec | None = None
+    conformance: Conformance | None = None
 
     def motor_types(self) -> list[str]:
         """Names of the family's motor types (each with a motor config)."""

@@ -40,7 +40,8 @@ def family_references() -> dict[str, str]:
     dict of str to str
         Output file name → Markdown text.
     """
-    return {name: markdown_reference_32(family(key).table, title, note, _GENERATOR)
+    return {name: markdown_reference_32(family(key).table, title, note, _GENERATOR,
+                                        family(key).conformance)
             for name, (key, title, note) in FAMILY_REFERENCES.items()}
 
 

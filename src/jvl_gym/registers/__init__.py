@@ -8,6 +8,12 @@
 
 from __future__ import annotations
 
+from .conformance import (
+    Conformance,
+    ConformanceError,
+    NotModelledWarning,
+    load_packaged_conformance,
+)
 from .errors import (
     ReadOnlyRegisterError,
     RegisterError,
@@ -41,6 +47,8 @@ from .table import (
 
 __all__ = [
     "Access",
+    "Conformance",
+    "ConformanceError",
     "FORMAT_CODES",
     "Format",
     "ReadOnlyRegisterError",
@@ -56,6 +64,8 @@ __all__ = [
     "from_word16",
     "join_longint",
     "join_word32",
+    "NotModelledWarning",
+    "load_packaged_conformance",
     "load_packaged_table",
     "load_table",
     "round_half_away",

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
+from .conformance import STATUSES, Conformance
 from .table import FORMAT_SCALE, Access, Format, RegisterTable
 
 __all__ = ["markdown_reference", "markdown_reference_32"]
@@ -33,9 +34,26 @@ def _cell(text: str) -> str:
 MAC_GENERATOR = "python -m jvl_gym.families.mac050_141.reference"
 
 
+def _conformance_lines(conformance: Conformance | None) -> list[str]:
+    """The paragraph on the conformance column, with the counts per status."""
+    if conformance is None:
+        return []
+    counts = conformance.counts()
+    bits = conformance.bit_counts()
+    return [
+        f"Conformance (`{conformance.source}`): whether the simulator models the register "
+        "(the tests that exercise it are named there), only stores it (kept and read back, "
+        "no effect), or does not model it; a write of a value other than the default to a "
+        "register or bit it does not model warns (`NotModelledWarning`). Registers: "
+        + ", ".join(f"{counts[s]} {s}" for s in STATUSES) + "; documented bits and values: "
+        + ", ".join(f"{bits[s]} {s}" for s in STATUSES) + ".",
+        ""]
+
+
 def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
                        usage: Callable[[str], list[str]] | None = None,
-                       generator: str = MAC_GENERATOR) -> str:
+                       generator: str = MAC_GENERATOR,
+                       conformance: Conformance | None = None) -> str:
     """Render a register table as a Markdown document.
 
     Parameters
@@ -48,12 +66,14 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
         ``usage(name) -> [mode names]``: adds a column with the modes that read the register.
     generator : str
         The command that writes the page (named in its header).
+    conformance : Conformance, optional
+        The family's conformance matrix: adds a column with each register's status.
 
     Returns
     -------
     str
         Markdown with one table row per register number: number, name, format, range, unit,
-        access, default, section, description.
+        access, default, section, description (and the optional columns).
     """
     lines = [
         f"# Register reference: {title}",
@@ -66,9 +86,11 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
         "word. Access: `rw` user-writable, `ro` computed by the firmware (writes are refused), "
         "`reserved` undocumented.",
         "",
+        *_conformance_lines(conformance),
         "| no. | name | format | range | unit | access | default | section | description |"
-        + (" modes |" if usage else ""),
-        "|---:|---|---|---|---|---|---:|---|---|" + ("---|" if usage else ""),
+        + (" modes |" if usage else "") + (" conformance |" if conformance else ""),
+        "|---:|---|---|---|---|---|---:|---|---|" + ("---|" if usage else "")
+        + ("---|" if conformance else ""),
     ]
     for r in table:
         if r.access == Access.RESERVED:
@@ -79,12 +101,13 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
         lines.append(
             f"| {r.number} | {r.name} | {r.format.value} | {rng} | {_cell(r.unit)} | "
             f"{r.access.value} | {default} | {r.section} | {_cell(r.description)} |"
-            + (f" {', '.join(usage(r.name))} |" if usage else ""))
+            + (f" {', '.join(usage(r.name))} |" if usage else "")
+            + (f" {_cell(conformance.cell(r))} |" if conformance else ""))
     return "\n".join(lines) + "\n"
 
 
 def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
-                          generator: str) -> str:
+                          generator: str, conformance: Conformance | None = None) -> str:
     """Render a table of 32-bit registers (one register number each) as a Markdown document.
 
     Parameters
@@ -97,6 +120,8 @@ def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
         One paragraph naming the source document and where its decisions are recorded.
     generator : str
         The command that writes the document (named in its header).
+    conformance : Conformance, optional
+        The family's conformance matrix: adds a column with each register's status.
 
     Returns
     -------
@@ -118,9 +143,10 @@ def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
         "firmware (writes are refused), `reserved` undocumented. *user* `no` marks registers "
         "not meant for the normal user.",
         "",
+        *_conformance_lines(conformance),
         "| no. | name | MacTalk name | format | range | unit | access | default | user | section "
-        "| description |",
-        "|---:|---|---|---|---|---|---|---:|---|---|---|",
+        "| description |" + (" conformance |" if conformance else ""),
+        "|---:|---|---|---|---|---|---|---:|---|---|---|" + ("---|" if conformance else ""),
     ]
     for r in table:
         if r.access == Access.RESERVED:
@@ -132,5 +158,6 @@ def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
         lines.append(
             f"| {r.number} | {r.name} | {_cell(r.alias)} | {r.format.value} | {rng} | "
             f"{_cell(r.unit)} | {r.access.value} | {default} | {user} | {_cell(r.section)} | "
-            f"{_cell(r.description)} |")
+            f"{_cell(r.description)} |" + (f" {_cell(conformance.cell(r))} |" if conformance
+                                           else ""))
     return "\n".join(lines) + "\n"

@@ -5,7 +5,7 @@ from __future__ import annotations
 from ..contract import Capability, Family, TuningSpec, TwinSpec
 from . import compiled, config, constants, task, units
 from .motors import MacMotorArray
-from .table import TABLE
+from .table import CONFORMANCE, TABLE
 
 __all__ = ["FAMILY"]
 
@@ -14,7 +14,7 @@ _C = constants
 FAMILY = Family(
     key="mac050_141", title="MAC050–141 integrated servo motors", compiled=compiled,
     array_class=MacMotorArray, table=TABLE, constants=constants, units=units, config=config,
-    task=task,
+    task=task, conformance=CONFORMANCE,
     twin=TwinSpec(
         dialects=(_C.MACTALK_DIALECT,), safe_mode=_C.SAFE_MODE, init_mode=_C.INIT_MODE,
         passive_mode=_C.INIT_MODE,  # INIT_MODE: passive (manual 4.4.1)

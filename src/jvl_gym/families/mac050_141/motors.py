@@ -32,7 +32,7 @@ from .firmware import write_rules as W
 from .firmware.monitor import filter_gain
 from .power_on import power_on_from_memory, reset_rows, start_loaded_rows
 from .store import store_rows
-from .table import TABLE
+from .table import CONFORMANCE, TABLE
 
 __all__ = ["MacMotorArray"]
 
@@ -91,6 +91,7 @@ class MacMotorArray(MotorArray):
 
     FAMILY_KEY = "mac050_141"
     TABLE = TABLE
+    CONFORMANCE = CONFORMANCE
     N_STATE = L.N_STATE
     N_PARAM = L.N_PARAM
     N_INPUT = L.N_INPUT

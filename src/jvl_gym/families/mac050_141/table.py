@@ -8,10 +8,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ...registers.conformance import Conformance, load_packaged_conformance
 from ...registers.table import RegisterTable, load_table
 
-__all__ = ["TABLE"]
+__all__ = ["TABLE", "CONFORMANCE"]
 
 #: the register table of the MAC50, MAC95, MAC140 and MAC141
 TABLE: RegisterTable = load_table(Path(__file__).with_name("registers.csv"),
                                   source="jvl_gym/families/mac050_141/registers.csv")
+
+#: what the simulator does with each register and documented bit (``conformance.yaml``)
+CONFORMANCE: Conformance = load_packaged_conformance(__package__, TABLE)

@@ -137,7 +137,7 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
     """Steps 1–3 of a servo sample of one motor (module docstring)."""
     v = _encoder(r, s, p, u, key)
     r[R.ANINP] = int(clamp(rnd(_analog_volts(s, p, u) * _ANINP_PER_VOLT) - r[R.ANINP_OFFSET],
-                           -2047.0, 2047.0))
+                           -2048.0, 2047.0))  # the register's range (overview, register 170)
     pulses = clamp(rnd(u[L.I_PULSE_COUNTS]), -_INT32, _INT32)
     r[R.V_EXT] = int(-pulses if r[R.HW_SETUP] & c.INVXDIR else pulses)
     r[R.U_BUS] = int(clamp(rnd(s[L.S_UBUS] * _U_BUS_PER_VOLT), 0.0, _INT32))

@@ -19,7 +19,7 @@ from ...bank import StorePlan
 from ...config import load_setup
 from ...inputs import InputRule
 from ...keywords import BINARY, FINITE, NONNEGATIVE
-from ...registers import Register, RegisterError
+from ...registers import Register, RegisterError, RegisterRangeError
 from ...sim import ModeError, MotorArray
 from . import constants as c
 from . import layout as L
@@ -30,7 +30,7 @@ from .firmware.modes import enter_mode, start_mode
 from .firmware.monitor import filter_gain
 from .kernel import derive_constants
 from .plant.encoder import encoder_count, turn
-from .table import TABLE
+from .table import CONFORMANCE, TABLE
 
 __all__ = ["Mac800MotorArray"]
 
@@ -104,6 +104,7 @@ class Mac800MotorArray(MotorArray):
 
     FAMILY_KEY = "mac800"
     TABLE = TABLE
+    CONFORMANCE = CONFORMANCE
     N_STATE = L.N_STATE
     N_PARAM = L.N_PARAM
     N_INPUT = L.N_INPUT
@@ -154,6 +155,8 @@ class Mac800MotorArray(MotorArray):
             for name, value in setup_cfg.registers.items():
                 reg = self._lookup(name)
                 raw = self._validated_raw(reg, value, 1)
+                if reg.number == R.START_MODE:
+                    self._check_start_modes(raw)
                 if reg.number in _SELECTORS:
                     start, step, target = _SELECTORS[reg.number]
                     k = int(raw[0])
@@ -252,11 +255,26 @@ class Mac800MotorArray(MotorArray):
             if num == R.MODE_REG:
                 self._request_modes(idx, raws[k])
                 continue
+            if num == R.START_MODE:
+                self._check_start_modes(raws[k])
             self.regs[idx, num] = raws[k]
             if num == R.P_FUNC:
                 self.state[idx, L.S_PF16] = 16.0 * raws[k]
         if not _FILTER.isdisjoint(plan.nums.tolist()):
             self._check_filter(idx)
+
+    @staticmethod
+    def _check_start_modes(raw: np.ndarray) -> None:
+        """START_MODE (register 37) takes the modes MODE_REG takes (a MODE_REG value, overview
+        §1.2): a reserved mode or one the simulator does not run is refused, not left to power
+        up passive."""
+        for mode in raw.tolist():
+            if mode not in c.RUNNABLE_MODES:
+                what = c.MODE_NAMES.get(mode)
+                why = "not modelled by the simulator" if what else "reserved (overview §1.2)"
+                raise RegisterRangeError(
+                    f"START_MODE = {mode} ({what or 'reserved'}) refused: {why}; allowed: "
+                    f"{sorted(c.RUNNABLE_MODES)}. Nothing was changed.")
 
     def _request_modes(self, idx: np.ndarray, req: np.ndarray) -> None:
         """MODE_REG requests: a mode the simulator runs, and no blocking error set."""

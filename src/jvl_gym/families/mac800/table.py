@@ -3,6 +3,10 @@ register number 1 … 206, every register 32 bits wide (MAC800 register overview
 
 from __future__ import annotations
 
+from ...registers.conformance import Conformance, load_packaged_conformance
 from . import REGISTERS as TABLE
 
-__all__ = ["TABLE"]
+__all__ = ["TABLE", "CONFORMANCE"]
+
+#: what the simulator does with each register and documented bit (``conformance.yaml``)
+CONFORMANCE: Conformance = load_packaged_conformance(__package__, TABLE)

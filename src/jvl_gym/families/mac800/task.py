@@ -24,8 +24,8 @@ from .units import rpm_to_v_soll
 __all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BITS", "reg",
            "set_reg", "shaft_angle", "set_analog_volts", "set_load_torque", "set_pulse_counts",
            "POSITION_MODE", "VELOCITY_MODE", "ANALOG_TORQUE_MODE", "ANALOG_GEAR_MODE",
-           "rpm_to_v_soll", "SPEED_PI", "GEARF", "AG_CENTRE_VOLTS", "AG_SPAN_VOLTS",
-           "AG_CENTRE_FACTOR", "KVOUT_FROM_LOAD"]
+           "rpm_to_v_soll", "SPEED_PI", "SPEED_FEEDBACK", "GEARF", "AG_CENTRE_VOLTS",
+           "AG_SPAN_VOLTS", "AG_CENTRE_FACTOR", "KVOUT_FROM_LOAD"]
 
 #: the family's key, and the motor type of a task when none is given
 FAMILY_KEY = "mac800"
@@ -44,9 +44,12 @@ ANALOG_TORQUE_MODE = _c.ANALOG_TORQUE_MODE
 #: mode 18, Analog gear: the pulse input geared by GEARF_1/GEARF_2 times ANINP/2047
 #: (firmware/analog.py)
 ANALOG_GEAR_MODE = _c.ANALOG_GEAR_MODE
-#: the main filter's PI taps of the default setup: KVFX6 = kp + ki, KVFX5 = −kp (register
-#: overview §1.2 "Filters"; configs/setups/MAC800.yaml)
+#: the main filter's PI taps: KVFX6 = kp + ki, KVFX5 = −kp (register overview §1.2 "Filters")
 SPEED_PI = ("KVFX6", "KVFX5")
+#: the feedback filter's leading taps, which the default setup's I-P arrangement uses for the
+#: proportional part: KVB4 = 1 + kp/ki, KVB3 = −kp/ki with KVFX6 = ki, KVFX5 = 0
+#: (configs/setups/MAC800.yaml)
+SPEED_FEEDBACK = ("KVB4", "KVB3")
 GEARF = ("GEARF_1", "GEARF_2")  #: the gear factor's numerator and denominator (registers 14, 15)
 #: a task's analogue gear trim: input = AG_CENTRE_VOLTS + AG_SPAN_VOLTS·a for a ∈ [−1, 1]
 #: (decision): mode 18's factor is ANINP/2047, 0 at 0 V, so the trim works around the middle of

@@ -92,8 +92,15 @@ WARN_NEG_LIMIT_SEEN = 1 << 3
 WARN_LOW_BUS = 1 << 4
 
 # --- SETUP_BITS (§5.3.6, §8.2.68) ------------------------------------------------------------
+SETUP_INVERT_DIRECTION = 1 << 0
+SETUP_SYNC_ENCODER = 1 << 5
+SETUP_IN_PHYS_POS_CONTINUOUS = 1 << 6
+SETUP_KEEP_EXT_ENCODER = 1 << 12
+SETUP_EXT_ENCODER_INVERSE = 1 << 16
+SETUP_NO_LIMIT_ERROR = 1 << 17
 SETUP_CLOSED_LOOP = 1 << 24
 SETUP_CURRENT_CONTROL = 1 << 25
+SETUP_LIMITS_WITHOUT_MEMORY = 1 << 28
 
 # --- TURNTABLE_MODE (§5.12.3) -------------------------------------------------------------
 TT_OFF, TT_CW, TT_CCW, TT_SHORTEST, TT_MULTI_CW, TT_MULTI_CCW = range(6)

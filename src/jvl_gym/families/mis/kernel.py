@@ -40,6 +40,7 @@ from .firmware.inputs import update_inputs
 from .firmware.monitor import check_errors, read_encoder, status_bits
 from .firmware.profile import position_step, velocity_step
 from .firmware.turntable import tt_active, tt_distance, tt_wrap
+from .units import COUNTS_PER_REV
 
 #: a motor's RUN_CURRENT unit [A RMS] → phase current amplitude [A peak] (sine microstepping)
 _SQRT2 = math.sqrt(2.0)
@@ -48,8 +49,11 @@ _SQRT2 = math.sqrt(2.0)
 @njit(cache=True)
 def _gear_input(regs, s, u) -> None:  # pragma: no cover - compiled
     """Pulse input → EXT_ENCODER and P_SOLL += counts × GEAR1 / GEAR2 with the remainder
-    carried (§8.2.3 gear mode, §8.2.13–14); GEAR2 = 0 moves nothing."""
+    carried (§8.2.3 gear mode, §8.2.13–14); GEAR2 = 0 moves nothing. SETUP_BITS bit 16 counts
+    the input the other way (§8.2.68)."""
     counts = int(u[L.I_PULSE_COUNTS])
+    if regs[R.SETUP_BITS] & c.SETUP_EXT_ENCODER_INVERSE:
+        counts = -counts
     regs[R.EXT_ENCODER] = wrap32(regs[R.EXT_ENCODER] + counts)
     g2 = regs[R.GEAR2]
     if counts == 0 or g2 == 0:
@@ -95,8 +99,22 @@ def _move(regs, s, has_encoder: bool, tt: bool,
     vmax = abs(regs[R.V_SOLL])
     if retry and regs[R.V_SOLL_AUTO] != 0:
         vmax = abs(regs[R.V_SOLL_AUTO])
-    dist = tt_distance(regs, s) if tt else float(wrap32(regs[R.P_SOLL] - regs[R.P_IST]))
+    dist = tt_distance(regs, s) if tt else _within_limits(
+        regs, float(wrap32(regs[R.P_SOLL] - regs[R.P_IST])))
     return position_step(regs, s, dist - s[L.S_FRAC], vmax * c.VEL_UNIT_TO_COUNTS)
+
+
+@njit(cache=True, inline="always")
+def _within_limits(regs, dist: float) -> float:  # pragma: no cover - compiled
+    """A move of ``dist`` counts cut at the software position limits (§5.9.3: in position and
+    gear mode the motor stops at the limit; §5.9.5: braking with the normal deceleration), so
+    that P_IST never passes MIN_P_IST or MAX_P_IST (both active when either is ≠ 0)."""
+    lo, hi = regs[R.MIN_P_IST], regs[R.MAX_P_IST]
+    if lo == 0 and hi == 0:
+        return dist
+    if dist > 0.0:
+        return min(dist, max(float(hi - regs[R.P_IST]), 0.0))
+    return max(dist, min(float(lo - regs[R.P_IST]), 0.0))
 
 
 @njit(cache=True, inline="always")
@@ -108,7 +126,9 @@ def _unblocked(v: float, limits: int) -> float:  # pragma: no cover - compiled
 @njit(cache=True)
 def _advance(regs, s, v: float, arrive: bool, tt: bool) -> None:  # pragma: no cover
     """Move the commanded position by ``v`` counts (exactly onto the target when
-    ``arrive``): P_IST by whole counts, the fraction carried, the plant's command."""
+    ``arrive``): P_IST by whole counts, the fraction carried, the plant's command (the other
+    way with SETUP_BITS bit 0, invert motor direction, §8.2.68), and MOTOR_REV, which counts
+    every 409 600 counts run in either direction (§8.2.122)."""
     old = s[L.S_FRAC]
     x = old + v
     steps = math.floor(x)
@@ -118,7 +138,16 @@ def _advance(regs, s, v: float, arrive: bool, tt: bool) -> None:  # pragma: no c
         frac = 0.0
     s[L.S_FRAC] = frac
     s[L.S_CMD_PREV] = s[L.S_CMD]
-    s[L.S_CMD] += steps + frac - old
+    if regs[R.SETUP_BITS] & c.SETUP_INVERT_DIRECTION:
+        s[L.S_CMD] -= steps + frac - old
+    else:
+        s[L.S_CMD] += steps + frac - old
+    run = s[L.S_REV_ACC] + abs(steps)
+    if run >= COUNTS_PER_REV:
+        revs = math.floor(run / COUNTS_PER_REV)
+        regs[R.MOTOR_REV] = (regs[R.MOTOR_REV] + int(revs)) & 0xFFFFFFFF
+        run -= revs * COUNTS_PER_REV
+    s[L.S_REV_ACC] = run
     if s[L.S_TT_TRAVEL] != 0.0:
         left = s[L.S_TT_TRAVEL] - (steps + frac - old)
         s[L.S_TT_TRAVEL] = 0.0 if arrive or (left > 0.0) != (s[L.S_TT_TRAVEL] > 0.0) else left

@@ -48,7 +48,9 @@ from __future__ import annotations
 ) = range(36)
 S_AF0 = 36  #: analogue filtered values of IO1 … IO8 (units of 1.221 mV, fractional)
 S_DIN0 = S_AF0 + 8  #: input filter: ms the raw level of IO1 … IO8 has differed from the state
-N_STATE = S_DIN0 + 8
+#: counts run since MOTOR_REV last counted a revolution (§8.2.122)
+S_REV_ACC = S_DIN0 + 8
+N_STATE = S_REV_ACC + 1
 
 # --- params ---------------------------------------------------------------------------------
 (

@@ -28,7 +28,7 @@ from .config import MisMotorConfig, load_motor
 from .firmware import regs as R
 from .plant.torque_curve import pull_out_torque
 from .program.api import ProgramMixin
-from .table import TABLE
+from .table import CONFORMANCE, TABLE
 from .units import COUNTS_PER_REV, CURRENT_AMPS_PER_UNIT
 
 __all__ = ["MisMotorArray"]
@@ -95,6 +95,7 @@ class MisMotorArray(ProgramMixin, MotorArray):
 
     FAMILY_KEY = "mis"
     TABLE = TABLE
+    CONFORMANCE = CONFORMANCE
     N_STATE = L.N_STATE
     N_PARAM = L.N_PARAM
     N_INPUT = L.N_INPUT
@@ -185,21 +186,25 @@ class MisMotorArray(ProgramMixin, MotorArray):
         self._power_on(idx)
 
     def _power_on(self, idx: np.ndarray) -> None:
-        """Firmware start: positions, counters and error bits cleared (P_IST = P_SOLL = 0, so
-        a saved P_SOLL makes no move at power-on; the position back-up of §5.4 is not
-        modelled), the mode from HOMEMODE or else STARTMODE (§8.2.33, §8.2.37)."""
+        """Firmware start: positions, counters, NOTSAVED (§8.2.96) and error bits cleared
+        (P_IST = P_SOLL = 0, so a saved P_SOLL makes no move at power-on; the position back-up
+        of §5.4 is not modelled), EXT_ENCODER too unless SETUP_BITS bit 12 keeps it, the mode
+        from HOMEMODE or else STARTMODE (§8.2.33, §8.2.37)."""
         s, regs = self.state, self.regs
         for num in (R.P_IST, R.P_SOLL, R.V_IST, R.ENCODER_POS, R.FLWERR, R.ERR_BITS,
-                    R.WARN_BITS, R.STATUSBITS, R.TURNTAB_COUNT, R.EXT_ENCODER, R.COMMAND,
-                    R.S_CONTROL, R.ACTUAL_TORQUE, R.TICKS):
+                    R.WARN_BITS, R.STATUSBITS, R.TURNTAB_COUNT, R.COMMAND,
+                    R.S_CONTROL, R.ACTUAL_TORQUE, R.TICKS, R.MOTOR_REV, R.NOTSAVED):
             regs[idx, num] = 0
+        # SETUP_BITS bit 12 KeepExtEncoder: "Do not zero the external encoder count on startup"
+        keep = (regs[idx, R.SETUP_BITS] & c.SETUP_KEEP_EXT_ENCODER) != 0
+        regs[idx[~keep], R.EXT_ENCODER] = 0
         s[idx, L.S_CUR_SCALE] = 2047.0
         s[idx, L.S_SEEN_PSOLL] = regs[idx, R.P_SOLL]
         code = self.params[idx, L.P_ENCODER].astype(np.int64)
         regs[idx, R.ENCODER_TYPE] = code
         cpr = np.array([c.ENCODER_CPR[k] for k in code.tolist()], dtype=np.int64)
         per = np.where(cpr > 0, COUNTS_PER_REV // np.maximum(cpr, 1), 1)
-        q = np.floor(s[idx, L.S_THETA] * COUNTS_PER_REV / (2 * math.pi) / per) * per
+        q = np.floor(self._firmware_angle(idx) * COUNTS_PER_REV / (2 * math.pi) / per) * per
         s[idx, L.S_ENC_OFFSET] = np.where(cpr > 0, -q, 0.0)
         s[idx, L.S_CMD] = s[idx, L.S_CMD_PREV] = 0.0
         home = regs[idx, R.HOMEMODE]
@@ -238,10 +243,22 @@ class MisMotorArray(ProgramMixin, MotorArray):
             enter_home = changed & np.isin(raw, (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2))
             s[idx[enter_home], L.S_HOME_PHASE] = 0.0
             s[idx[enter_home], L.S_HOME_MS] = 0.0
-            off = np.isin(raw, (c.PASSIVE,))
-            s[idx[off], L.S_VEL] = 0.0
-            s[idx[off], L.S_EMERGENCY] = 0.0
-            regs[idx, R.MODE_REG] = raw
+            off = raw == c.PASSIVE
+            # §5.11.2: "When changing to Passive mode the motor goes into Stop mode to
+            # decelerate according to the 'Deceleration'-ramp" (an error stop keeps its own)
+            running = off & (s[idx, L.S_VEL] != 0.0) & (s[idx, L.S_EMERGENCY] == 0.0) & ~np.isin(
+                regs[idx, R.MODE_REG], (c.PASSIVE, c.SAFE))
+            halt = off & ~running
+            s[idx[halt], L.S_VEL] = 0.0
+            s[idx[halt], L.S_EMERGENCY] = 0.0
+            # SETUP_BITS bit 5 (§8.2.68): "Synchronize encoder position to P_IST after change
+            # to active mode. Follow error = 0"
+            was_off = np.isin(regs[idx, R.MODE_REG], (c.PASSIVE, c.SAFE))
+            sync = was_off & ~off & ((regs[idx, R.SETUP_BITS] & c.SETUP_SYNC_ENCODER) != 0)
+            for i in idx[sync].tolist():
+                self._set_encoder(i, int(regs[i, R.P_IST]))
+                regs[i, R.FLWERR] = 0
+            regs[idx, R.MODE_REG] = np.where(running, c.STOP, raw)
         elif num in _MEMBERS:
             self._check_member(reg, raw, *_MEMBERS[num])
             regs[idx, num] = raw
@@ -348,12 +365,19 @@ class MisMotorArray(ProgramMixin, MotorArray):
             else:
                 regs[i, R.P_SOLL] = min(max(value, lo), hi)
 
+    def _firmware_angle(self, idx: np.ndarray) -> np.ndarray:
+        """Rotor angles [rad] in the firmware's direction (``firmware.monitor.firmware_angle``:
+        mirrored by SETUP_BITS bit 0), (len(idx),)."""
+        theta = self.state[idx, L.S_THETA]
+        return np.where(self.regs[idx, R.SETUP_BITS] & c.SETUP_INVERT_DIRECTION, -theta, theta)
+
     def _set_encoder(self, i: int, value: int) -> None:
         """ENCODER_POS := ``value`` at the present rotor angle."""
         cpr = c.ENCODER_CPR[int(self.params[i, L.P_ENCODER])]
         if cpr > 0:
             per = COUNTS_PER_REV // cpr
-            q = math.floor(self.state[i, L.S_THETA] * COUNTS_PER_REV / (2 * math.pi) / per) * per
+            q = math.floor(self._firmware_angle(np.array([i]))[0] * COUNTS_PER_REV
+                           / (2 * math.pi) / per) * per
             self.state[i, L.S_ENC_OFFSET] = value - q
             self.state[i, L.S_ENC_PREV] = value
         self.regs[i, R.ENCODER_POS] = value
@@ -385,7 +409,11 @@ class MisMotorArray(ProgramMixin, MotorArray):
                 k = c.CMD_REGISTER_SET.index(cmd)
                 pn = TABLE.lookup(f"P{k + 1}").number
                 self._store_p_soll(np.array([i]), np.array([regs[i, pn]]))
-                regs[i, R.V_SOLL] = regs[i, TABLE.lookup(f"V{k + 1}").number]
+                # Vn holds any 32-bit value (§12.5's example writes V1 = 409 600); V_SOLL takes
+                # it within its own range (§8.2.5)
+                v_soll = TABLE.lookup("V_SOLL")
+                regs[i, R.V_SOLL] = min(max(int(regs[i, TABLE.lookup(f"V{k + 1}").number]),
+                                            int(v_soll.minimum)), int(v_soll.maximum))
                 regs[i, R.A_SOLL] = regs[i, TABLE.lookup(f"A{k + 1}").number]
                 regs[i, R.RUN_CURRENT] = regs[i, TABLE.lookup(f"T{k + 1}").number]
             elif cmd in c.CMD_RELATIVE:

@@ -6,6 +6,10 @@ undocumented are ``RESERVED_<n>`` rows. Loaded and validated once (the package's
 
 from __future__ import annotations
 
+from ...registers.conformance import Conformance, load_packaged_conformance
 from . import REGISTERS as TABLE
 
-__all__ = ["TABLE"]
+__all__ = ["TABLE", "CONFORMANCE"]
+
+#: what the simulator does with each register and documented bit (``conformance.yaml``)
+CONFORMANCE: Conformance = load_packaged_conformance(__package__, TABLE)

@@ -15,7 +15,13 @@ status bits (MIS manual §8.2.15, §8.2.18–19, §8.2.24, §8.2.31–32, §5.9,
   hardware limits on the inputs of PL_MASK / NL_MASK. Moving into a limit sets WARN_BITS 0/1
   (active) and 2/3 (has been active) and ERR_BITS bit 3, unless SETUP_BITS bit 17 disables the
   error; either way the motor stops, and while a limit is active the profile does not move
-  towards it.
+  towards it. A travel-limit input, and a software limit in velocity mode, is noticed when the
+  motor is at or past it while moving towards it; with bit 17 the motor then brakes with
+  ACC_EMERG and stays active (§5.9.5). In position and gear mode the move itself ends at a
+  software limit, braking with the normal deceleration (``outer``), so P_IST never passes it;
+  the limit counts as reached when the motor stands at it with P_SOLL beyond. With SETUP_BITS
+  bit 28 (limits without memory, §5.9.6) a has-been-active warning clears when the motor moves
+  away from its limit and the limit is no longer active.
 - An error (ERR_BITS ≠ 0) in an active mode stops the motor with ACC_EMERG and then makes it
   passive (§8.2.28, §8.2.31: "will not move until all the errors have been cleared").
 """
@@ -52,6 +58,14 @@ def rotor_counts_quantised(theta: float, cpr: int) -> float:  # pragma: no cover
     return np.floor(theta * COUNTS_PER_RAD / per) * per
 
 
+@njit(cache=True, inline="always")
+def firmware_angle(regs, s) -> float:  # pragma: no cover - compiled
+    """The rotor angle [rad] in the firmware's direction: mirrored with SETUP_BITS bit 0
+    (invert motor direction, §8.2.68), under which positive counts turn the shaft the other
+    way and the encoder counts with them."""
+    return -s[L.S_THETA] if regs[R.SETUP_BITS] & c.SETUP_INVERT_DIRECTION else s[L.S_THETA]
+
+
 @njit(cache=True)
 def read_encoder(regs, s, p) -> bool:  # pragma: no cover - compiled
     """ENCODER_POS, V_ENCODER and FLWERR of this sample; True if the motor has an encoder."""
@@ -59,7 +73,7 @@ def read_encoder(regs, s, p) -> bool:  # pragma: no cover - compiled
     if cpr == 0:
         regs[R.FLWERR] = 0
         return False
-    absolute = int(rotor_counts_quantised(s[L.S_THETA], cpr))
+    absolute = int(rotor_counts_quantised(firmware_angle(regs, s), cpr))
     single_turn = int(p[L.P_ENCODER]) in (1, 3)  # H2 (§5.12.5: 0 … 409599, §8.2.38)
     regs[R.ABSENCODER] = absolute % COUNTS_PER_REV if single_turn else wrap32(absolute)
     pos = wrap32(int(absolute + s[L.S_ENC_OFFSET]))
@@ -76,7 +90,7 @@ def set_encoder(regs, s, p, value: int) -> None:  # pragma: no cover - compiled
     """Make ENCODER_POS read ``value`` at the present rotor angle."""
     cpr = encoder_cpr(p)
     if cpr > 0:
-        s[L.S_ENC_OFFSET] = value - rotor_counts_quantised(s[L.S_THETA], cpr)
+        s[L.S_ENC_OFFSET] = value - rotor_counts_quantised(firmware_angle(regs, s), cpr)
         s[L.S_ENC_PREV] = value
     regs[R.ENCODER_POS] = value
 
@@ -109,18 +123,29 @@ def check_errors(regs, s, u, active: bool, has_encoder: bool,
     lo, hi = regs[R.MIN_P_IST], regs[R.MAX_P_IST]
     soft = (lo != 0 or hi != 0) and not tt
     inputs = regs[R.INPUTS]
-    pos_hit = (inputs & regs[R.PL_MASK]) != 0 or (soft and regs[R.P_IST] >= hi)
-    neg_hit = (inputs & regs[R.NL_MASK]) != 0 or (soft and regs[R.P_IST] <= lo)
+    soft_pos = soft and regs[R.P_IST] >= hi
+    soft_neg = soft and regs[R.P_IST] <= lo
+    pos_hit = (inputs & regs[R.PL_MASK]) != 0 or soft_pos
+    neg_hit = (inputs & regs[R.NL_MASK]) != 0 or soft_neg
     warn = (warn & ~(c.WARN_POS_LIMIT | c.WARN_NEG_LIMIT))
     if pos_hit:
         warn |= c.WARN_POS_LIMIT | c.WARN_POS_LIMIT_SEEN
     if neg_hit:
         warn |= c.WARN_NEG_LIMIT | c.WARN_NEG_LIMIT_SEEN
-    if active and ((pos_hit and v > 0.0) or (neg_hit and v < 0.0)):
-        if setup & (1 << 17):
-            s[L.S_EMERGENCY] = 2.0  # stop, stay active
-        else:
+    if setup & c.SETUP_LIMITS_WITHOUT_MEMORY:
+        if v < 0.0 and not pos_hit:
+            warn &= ~c.WARN_POS_LIMIT_SEEN
+        if v > 0.0 and not neg_hit:
+            warn &= ~c.WARN_NEG_LIMIT_SEEN
+    mode = regs[R.MODE_REG]
+    ahead = wrap32(regs[R.P_SOLL] - regs[R.P_IST]) if (
+        mode == c.POSITION or mode == c.GEAR) else 0
+    passing = (pos_hit and v > 0.0) or (neg_hit and v < 0.0)
+    if active and (passing or (soft_pos and ahead > 0) or (soft_neg and ahead < 0)):
+        if not setup & c.SETUP_NO_LIMIT_ERROR:
             err |= c.ERR_POSITION_LIMIT
+        elif passing:
+            s[L.S_EMERGENCY] = 2.0  # stop with ACC_EMERG, stay active
     if err & ~c.ERR_GENERAL:
         err |= c.ERR_GENERAL
     regs[R.ERR_BITS] = err
@@ -131,7 +156,15 @@ def check_errors(regs, s, u, active: bool, has_encoder: bool,
 @njit(cache=True)
 def status_bits(regs, s, v: float, prev_v: float, target_v: float, mode: int,
                 has_encoder: bool, closed_loop: bool, standby: bool) -> None:  # pragma: no cover
-    """STATUSBITS of this sample (§8.2.24)."""
+    """STATUSBITS of this sample (§8.2.24) and the dedicated outputs.
+
+    Bit 2 (in physical position) in position and gear mode while the encoder is within
+    IN_POSITION_WINDOW of P_SOLL: evaluated at standstill, or continuously with SETUP_BITS bit
+    6 (§8.2.68). Bit 22 (in target position) once the motor has stood still for
+    INTARGETPOSITIONTIME ms (§8.2.105) with the encoder in that window. The dedicated outputs
+    (§8.2.77–78): the IO pins of INPOS_MASK and ERROR_MASK that IOSETUP bits 8–15 make
+    outputs follow bit 4 (in position: a movement has completed) and ERR_BITS ≠ 0 in OUTPUTS.
+    """
     st = regs[R.STATUSBITS] & (c.ST_ZERO_SEARCH_DONE | c.ST_AUTOCORRECTION)
     moving_mode = mode == c.VELOCITY or mode == c.POSITION or mode == c.GEAR
     if moving_mode and v == target_v:
@@ -142,15 +175,17 @@ def status_bits(regs, s, v: float, prev_v: float, target_v: float, mode: int,
         st |= c.ST_DECELERATING
     in_target = has_encoder and abs(wrap32(regs[R.ENCODER_POS] - regs[R.P_SOLL])) <= regs[
         R.IN_POSITION_WINDOW]
-    if (mode == c.POSITION or mode == c.GEAR) and v == 0.0:
+    positional = mode == c.POSITION or mode == c.GEAR
+    if positional and v == 0.0:
         if closed_loop:
             if in_target:
                 st |= c.ST_IN_POSITION
         elif regs[R.P_IST] == regs[R.P_SOLL]:
             st |= c.ST_IN_POSITION
-        if in_target:
-            st |= c.ST_IN_PHYSICAL_POSITION
-    if in_target:
+    if positional and in_target and (
+            v == 0.0 or regs[R.SETUP_BITS] & c.SETUP_IN_PHYS_POS_CONTINUOUS):
+        st |= c.ST_IN_PHYSICAL_POSITION
+    if in_target and s[L.S_STILL_MS] >= regs[R.INTARGETPOSITIONTIME]:
         st |= c.ST_IN_TARGET_POSITION
     if regs[R.ERR_BITS] != 0:
         st |= c.ST_GENERAL_ERROR
@@ -161,3 +196,13 @@ def status_bits(regs, s, v: float, prev_v: float, target_v: float, mode: int,
     if standby:
         st |= c.ST_STANDBY_CURRENT
     regs[R.STATUSBITS] = st
+    outputs = (regs[R.IOSETUP] >> 8) & 0xFF
+    inpos = regs[R.INPOS_MASK] & outputs
+    error = regs[R.ERROR_MASK] & outputs
+    if inpos | error:
+        o = regs[R.OUTPUTS] & ~(inpos | error)
+        if st & c.ST_IN_POSITION:
+            o |= inpos
+        if regs[R.ERR_BITS] != 0:
+            o |= error
+        regs[R.OUTPUTS] = o

@@ -1,0 +1,233 @@
+"""The conformance matrix of a motor family: what the simulator does with each register.
+
+Each family keeps, beside its register table, a ``conformance.yaml`` saying for every register,
+and for every bit or value the manual documents, one of:
+
+- ``modelled``: the simulator does what the manual says; ``tests`` names the tests
+  (``test_file.py::test_name`` in ``tests/``) that exercise it;
+- ``stored only``: the register is kept and read back (and saved in flash) but has no effect
+  on the simulation; ``why`` says why that is faithful enough;
+- ``not modelled``: the manual's behaviour is absent; ``why`` says why. Writing a value other
+  than the default to such a register, or setting or clearing such a bit, warns once per
+  register (:class:`NotModelledWarning`) and is still stored and read back.
+
+The file's layout::
+
+    reserved: {status: not modelled, why: ...}   # every RESERVED_<n> row of the table
+    registers:
+      NAME:                                      # every other row (a LongInt's _HI row
+        status: modelled                         # shares its register's entry)
+        tests: [test_file.py::test_name, ...]
+        section: "8.2.24"                        # optional: the table's section otherwise
+        bits:                                    # optional: documented bits (0 … 31)
+          22: {name: In target position, status: modelled, tests: [...]}
+        values:                                  # optional: documented values of a code
+          11: {name: Stop, status: modelled, tests: [...]}
+
+A malformed file raises :class:`ConformanceError` naming the file and the entry.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from importlib import resources
+from typing import Any
+
+import numpy as np
+import yaml
+
+from .errors import RegisterError
+from .table import Access, Format, Register, RegisterTable
+
+__all__ = ["MODELLED", "STORED_ONLY", "NOT_MODELLED", "STATUSES", "Conformance",
+           "ConformanceError", "Entry", "NotModelledWarning", "load_packaged_conformance"]
+
+MODELLED = "modelled"
+STORED_ONLY = "stored only"
+NOT_MODELLED = "not modelled"
+STATUSES = (MODELLED, STORED_ONLY, NOT_MODELLED)
+_FILE = "conformance.yaml"
+
+
+class ConformanceError(RegisterError):
+    """A family's conformance file is malformed or does not match its register table."""
+
+
+class NotModelledWarning(UserWarning):
+    """A register or bit the simulator does not model was given a value other than its
+    default: the value is stored and read back, but the simulated motor ignores it."""
+
+
+@dataclass(frozen=True)
+class Entry:
+    """The conformance of one register, bit or value.
+
+    Attributes
+    ----------
+    status : str
+        ``"modelled"``, ``"stored only"`` or ``"not modelled"``.
+    tests : tuple of str
+        Test ids (``file.py::name`` in ``tests/``) of a modelled entry.
+    why : str
+        Why the entry is stored only or not modelled (may be given for a modelled one too).
+    name : str
+        The manual's name of a bit or value (``""`` for a register).
+    section : str
+        Manual section.
+    bits, values : dict
+        Bit number (0 … 31) or documented value → its :class:`Entry` (registers only).
+    """
+
+    status: str
+    tests: tuple[str, ...] = ()
+    why: str = ""
+    name: str = ""
+    section: str = ""
+    bits: dict[int, Entry] = field(default_factory=dict)
+    values: dict[int, Entry] = field(default_factory=dict)
+
+
+def _entry(raw: Any, where: str, section: str, nested: bool) -> Entry:
+    if not isinstance(raw, dict):
+        raise ConformanceError(f"{where}: expected a mapping, got {raw!r}")
+    allowed = {"status", "tests", "why", "name", "section"} | (set() if nested else
+                                                                {"bits", "values"})
+    unknown = set(raw) - allowed
+    if unknown:
+        raise ConformanceError(f"{where}: unknown keys {sorted(unknown)}")
+    status = raw.get("status")
+    if status not in STATUSES:
+        raise ConformanceError(f"{where}: status must be one of {list(STATUSES)}, got "
+                               f"{status!r}")
+    tests = raw.get("tests") or []
+    if not isinstance(tests, list) or not all(isinstance(t, str) and "::" in t for t in tests):
+        raise ConformanceError(f"{where}: tests must be a list of 'file.py::test_name'")
+    why = str(raw.get("why") or "")
+    if status == MODELLED and not tests:
+        raise ConformanceError(f"{where}: a modelled entry names its tests")
+    if status != MODELLED and not why:
+        raise ConformanceError(f"{where}: a {status} entry says why")
+    subs: dict[str, dict[int, Entry]] = {"bits": {}, "values": {}}
+    for key in ("bits", "values"):
+        for k, sub in (raw.get(key) or {}).items():
+            if not isinstance(k, int) or (key == "bits" and not 0 <= k <= 31):
+                raise ConformanceError(f"{where}: {key} key {k!r} is not a "
+                                       f"{'bit number 0 … 31' if key == 'bits' else 'value'}")
+            subs[key][k] = _entry(sub, f"{where} {key[:-1]} {k}", section, True)
+    return Entry(status, tuple(tests), why, str(raw.get("name") or ""),
+                 str(raw.get("section") or section), subs["bits"], subs["values"])
+
+
+class Conformance:
+    """A family's conformance matrix, checked against its register table.
+
+    Parameters
+    ----------
+    table : RegisterTable
+        The family's register table.
+    data : dict
+        The parsed ``conformance.yaml``.
+    source : str
+        Where the data came from (error messages).
+    """
+
+    def __init__(self, table: RegisterTable, data: Any, source: str) -> None:
+        if not isinstance(data, dict) or not isinstance(data.get("registers"), dict):
+            raise ConformanceError(f"{source}: expected a mapping with 'registers'")
+        self.source = source
+        self.table = table
+        reserved = data.get("reserved")
+        self.reserved = None if reserved is None else _entry(reserved, f"{source} reserved",
+                                                             "", True)
+        self.entries: dict[int, Entry] = {}
+        for name, raw in data["registers"].items():
+            try:
+                reg = table.lookup(str(name))
+            except RegisterError as exc:
+                raise ConformanceError(f"{source}: {exc}") from exc
+            if reg.number in self.entries:
+                raise ConformanceError(f"{source}: {reg.name} listed twice")
+            self.entries[reg.number] = _entry(raw, f"{source} {reg.name}", reg.section, False)
+        #: register number → (mask of the not-modelled bits, whole register not modelled)
+        self.warn_rules: dict[int, tuple[int, bool]] = {}
+        for num, e in self.entries.items():
+            mask = 0
+            for bit, sub in e.bits.items():
+                if sub.status == NOT_MODELLED:
+                    mask |= 1 << bit
+            whole = e.status == NOT_MODELLED
+            if (mask or whole) and table.lookup(num).access == Access.RW:
+                self.warn_rules[num] = (mask, whole)
+
+    def entry(self, reg: Register) -> Entry | None:
+        """The entry that covers ``reg`` (a LongInt's high word: its register's; a reserved
+        row: the ``reserved`` entry), or None when the matrix has none."""
+        if reg.access == Access.RESERVED:
+            return self.entries.get(reg.number, self.reserved)
+        if reg.format == Format.LONGINT_HIGH:
+            return self.entries.get(reg.number - 1)
+        return self.entries.get(reg.number)
+
+    def missing(self) -> list[str]:
+        """Registers of the table without an entry (names)."""
+        return [reg.name for reg in self.table if self.entry(reg) is None]
+
+    def counts(self) -> dict[str, int]:
+        """Registers per status (a LongInt's high word and the reserved rows not counted)."""
+        out = dict.fromkeys(STATUSES, 0)
+        for e in self.entries.values():
+            out[e.status] += 1
+        return out
+
+    def bit_counts(self) -> dict[str, int]:
+        """Documented bits and values per status."""
+        out = dict.fromkeys(STATUSES, 0)
+        for e in self.entries.values():
+            for sub in (*e.bits.values(), *e.values.values()):
+                out[sub.status] += 1
+        return out
+
+    def cell(self, reg: Register) -> str:
+        """One Markdown-ready line for ``reg``: its status, tests or reason, and the bits and
+        values that are not modelled."""
+        e = self.entry(reg)
+        if e is None:
+            return ""
+        text = e.status
+        if e.status != MODELLED:
+            text += f": {e.why}"
+        partial = [f"{kind} {k}" for kind, subs in (("bit", e.bits), ("value", e.values))
+                   for k, sub in subs.items() if sub.status == NOT_MODELLED]
+        if partial:
+            text += f" (not modelled: {', '.join(partial)})"
+        return text
+
+    def not_modelled_change(self, num: int, default: int, raw: Any) -> bool:
+        """Whether stored integers ``raw`` of register ``num`` differ from ``default`` where
+        the register or one of its bits is not modelled."""
+        rule = self.warn_rules.get(num)
+        if rule is None:
+            return False
+        mask, whole = rule
+
+        diff = np.asarray(raw, dtype=np.int64) ^ default
+        return bool(np.any(diff != 0) if whole else np.any(diff & mask))
+
+
+def load_packaged_conformance(package: str, table: RegisterTable) -> Conformance:
+    """Load the ``conformance.yaml`` of a family package (beside its ``registers.csv``).
+
+    Parameters
+    ----------
+    package : str
+        Dotted name of the family package.
+    table : RegisterTable
+        The family's register table.
+    """
+    source = f"{package.replace('.', '/')}/{_FILE}"
+    text = resources.files(package).joinpath(_FILE).read_text(encoding="utf-8")
+    try:
+        data = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise ConformanceError(f"{source}: not valid YAML ({exc})") from exc
+    return Conformance(table, data, source)
