@@ -394,13 +394,13 @@ def test_calculator_left_to_right_in_32_bits() -> None:
                          "calculate register=P2 expression=P2+1\n"
                          "calculate register=P3 expression=P3/2\n"
                          "calculate register=P4 expression=P3*0-9/0\n"
-                         "calculate register=V1 expression=1000000\n"))
+                         "calculate register=A_SOLL expression=1000000\n"))
     m.program_start()
     m.step(1)
     assert _reg(m, "V_SOLL") == 400  # (100 + 100) * 2, not 100 + 200
     assert _reg(m, "P2") == -(2**31)  # "it will therefore become negative"
     assert _reg(m, "P3") == -3 and _reg(m, "P4") == 0
-    assert _reg(m, "V1") == 300000  # stored within the register's range
+    assert _reg(m, "A_SOLL") == 500000  # stored within the register's range (§8.2.6)
 
 
 @pytest.mark.parametrize(("op", "taken"), [(">=", True), ("<", False), ("=", False)])
