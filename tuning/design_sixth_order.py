@@ -51,7 +51,7 @@ import numpy as np
 
 from .models import MotorData, current_open_loop, rigid_gain, speed_open_loop, speed_plant
 from .quantize import quantize_registers
-from .sixth_order import CURRENT_KEYS, FAMILY, TS_O, VFX_KEYS, VFY_KEYS
+from .sixth_order import CURRENT_KEYS, FAMILY_RECORD, TS_O, VFX_KEYS, VFY_KEYS
 from .synthesis import design_current_loop
 from .verify import (
     POLE_RADIUS_MAX,
@@ -76,12 +76,12 @@ NOTCH_WIDTH: float = 0.9  #: r of the notch's poles (the notch's âˆ’3 dB width â
 
 def quantize_sixth_order(regs: Mapping[str, float]) -> dict[str, float]:
     """Quantise to the MAC800 table's formats with :data:`EXACT_SUMS` exact."""
-    return quantize_registers(regs, FAMILY.table, EXACT_SUMS)
+    return quantize_registers(regs, FAMILY_RECORD.table, EXACT_SUMS)
 
 
 def design_current_filter(motor: MotorData) -> dict[str, float]:
     """The current filter for the motor's coil, quantised (module docstring)."""
-    return quantize_sixth_order(design_current_loop(motor, dt=motor.family.inner_dt).registers)
+    return quantize_sixth_order(design_current_loop(motor).registers)
 
 
 def _poly_lowpass(f_lp: float | None) -> tuple[np.ndarray, np.ndarray]:
