@@ -168,6 +168,7 @@ def synthesize_cmd(motor: str = typer.Option(...), inertia: float = typer.Option
         "structure": structure, "current_bw": current_bw, "speed_bw": speed_bw,
         "coulomb": coulomb, "resistance": resistance, "inductance": inductance})
     write_setup(out, md.name, cand.registers, f"jvl-tune synthesize: {cand.name}")
+    typer.echo(f"design: {cand.name}")
     typer.echo("\n".join(design_table(strategy, cand, md, inertia)))
     bad = strategy.failures(cand)
     if bad:

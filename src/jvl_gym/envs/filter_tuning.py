@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-import functools
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -11,7 +11,7 @@ from ..families import DEFAULT_FAMILY, family
 from .base import NumpyTaskEnv
 from .single import MotorEnv
 
-__all__ = ["FilterTuningEnv", "FilterTuningVectorEnv", "synthesis_registers"]
+__all__ = ["FilterTuningEnv", "FilterTuningVectorEnv", "Designer"]
 
 #: the families the task runs on (docs/envs.md)
 _FAMILIES = ("mac050_141", "mac800")
@@ -25,22 +25,10 @@ _SETTLE_TURNS, _FAIL_TURNS, _FLW_TURNS, _FNC_TURNS = (20.0 / 4096, 100.0 / 4096,
 _IF_NAMES = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
 
 
-@functools.lru_cache(maxsize=8)
-def synthesis_registers(motor_type: str) -> dict[str, float] | None:
-    """Speed-loop registers of the tuning toolkit's synthesis at KVOUT = 1 for a motor type
-    (the design is load-invariant with KVOUT = J_total/J_m), or None without the toolkit."""
-    try:
-        from tuning.models import MotorData
-        from tuning.synthesis import design_speed_loop
-    except ImportError:
-        return None
-    from ..families.mac050_141.config import load_motor, load_setup
-
-    cfg = load_motor(motor_type)
-    setup = load_setup(cfg.setup).registers
-    current = {k: float(setup[k]) for k in _IF_NAMES}
-    design = design_speed_loop(MotorData.from_config(cfg), current, cfg.rotor_inertia)
-    return {k: float(v) for k, v in design.registers.items() if k != "KVOUT"}
+#: a speed-loop designer: motor type → the speed-loop registers at KVOUT = 1 (the design is
+#: load-invariant with KVOUT = J_total/J_m), or None where it has no design (e.g.
+#: ``tuning.baseline.speed_loop_registers``, the tuning toolkit's synthesis)
+Designer = Callable[[str], "dict[str, float] | None"]
 
 
 class FilterTuningVectorEnv(NumpyTaskEnv):
@@ -68,8 +56,10 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
 
     def __init__(self, num_envs: int = 1, *, motor_type: str | tuple[str, ...] | None = None,
                  baseline: bool = False, estimate_error: float = 0.1,
-                 instability_penalty: float = 10.0, **kwargs: Any) -> None:
+                 instability_penalty: float = 10.0, designer: Designer | None = None,
+                 **kwargs: Any) -> None:
         self.baseline = bool(baseline)
+        self.designer = designer
         self.estimate_error = float(estimate_error)
         self.instability_penalty = float(instability_penalty)
         if motor_type is None:  # every type of the default family
@@ -102,9 +92,9 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         self.metrics: dict[str, np.ndarray] = {}
         self._ok = np.arange(n)
         self._trace = np.zeros((n, 3, self.scope_length), dtype=np.float32)
-        synthesis = (self.family_key == DEFAULT_FAMILY
-                     and synthesis_registers(fam.task.DEFAULT_MOTOR_TYPE) is not None)
-        self.baseline_source = (("tuning.synthesis" if synthesis else "default setup")
+        synthesis = (self.family_key == DEFAULT_FAMILY and self.designer is not None
+                     and self.designer(fam.task.DEFAULT_MOTOR_TYPE) is not None)
+        self.baseline_source = (("designer" if synthesis else "default setup")
                                 if self.baseline else "agent")
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
@@ -137,7 +127,7 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
                 m.write("KVOUT", np.round(kvout_est[ok] * 256) / 256, index=ok)
                 return
             for name in sorted(set(self._type_names[ok])):
-                regs = synthesis_registers(name)
+                regs = None if self.designer is None else self.designer(name)
                 sel = ok[self._type_names[ok] == name]
                 if regs is None:
                     continue  # default setup
@@ -280,8 +270,9 @@ class FilterTuningEnv(MotorEnv):
     ``motor_type`` (default: all four types), ``randomization`` (``inertia_ratio``,
     ``viscous_friction``, ``coulomb_ratio``), ``obs_noise``, ``render_mode`` (the trial's
     scope), ``estimate_error`` (0.1), ``instability_penalty`` (10), ``baseline`` (True: the
-    tuning toolkit's synthesis with KVOUT from the inertia estimate when ``tuning.synthesis`` is
-    importable, else the default setup; the action is ignored). ``decimation`` and
+    registers of ``designer`` with KVOUT from the inertia estimate, else the default setup;
+    the action is ignored), ``designer`` (motor type → speed-loop registers at KVOUT = 1 or
+    None, e.g. ``tuning.baseline.speed_loop_registers``; default none). ``decimation`` and
     ``max_episode_steps`` have no effect.
 
     ## Version History

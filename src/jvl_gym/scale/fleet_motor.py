@@ -132,13 +132,14 @@ def tune_motor(motor: FleetMotor, spec: FleetSpec, save_records: bool = False
         ``row`` (the fleet-report row), ``files`` (relative path -> bytes: ``setup.yaml``,
         ``report.txt``, plots, ``motor.yaml``, records) and ``registers``.
     """
-    from tuning.acceptance import autotune_designs
     from tuning.autotune import identify_motors, verify_design
     from tuning.models import MotorData
+    from tuning.pipeline import design_and_accept
     from tuning.records import save_csv
     from tuning.report import write_report
+    from tuning.strategy import strategy_of
     from tuning.synthesis import torque_guidance
-    from tuning.verify import position_move, velocity_step
+    from tuning.verify import position_move
 
     t0 = time.perf_counter()
     c0 = time.process_time()
@@ -180,7 +181,8 @@ def tune_motor(motor: FleetMotor, spec: FleetSpec, save_records: bool = False
     if not (math.isfinite(mech.J) and mech.J > 0):
         row.update(checks="no design: J not identified", wall_s=time.perf_counter() - t0)
         return {"row": row, "files": files, "registers": None}
-    acc = autotune_designs([ident], spec.structure)[0]
+    strategy = strategy_of(motor.type)
+    acc = design_and_accept(strategy, [ident], {"structure": spec.structure})[0]
     d = acc.chosen.design
     bad = verify_design(d)
     cr, sr = d.current_report.nominal, d.speed_report.nominal
@@ -214,13 +216,12 @@ def tune_motor(motor: FleetMotor, spec: FleetSpec, save_records: bool = False
                move_model="motor" if motor.simulated else "identified model")
     with tempfile.TemporaryDirectory(prefix="jvl-fleet-") as tmp:
         tmp_path = Path(tmp)
-        v = None
+        step: tuple[Any, Any] = (None, None)
         if motor.simulated:
             sim = _array(motor, spec, motor.seed, load, visc, coul)
             sim.load_setup({"registers": d.registers})
-            v = velocity_step(sim, 800)
-        report = write_report(tmp_path, ident, d, ident.motor, mech.J, truth, v,
-                              800 if v is not None else None)
+            step = strategy.speed_step(sim)
+        report = write_report(tmp_path, strategy, acc, truth, *step)
         for f in report:
             files[f.name] = f.read_bytes()
         if save_records:
