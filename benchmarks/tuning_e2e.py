@@ -3,7 +3,7 @@
 Draws N random motors (type, load inertia 0–10·J_m, viscous and Coulomb friction, 1 % noise),
 runs the toolkit's identification on a ``MotorArray`` (TESTU + two-level TESTA), synthesises
 and verifies the filters, keeps the best candidate by the acceptance step
-(:mod:`tuning.acceptance`, simulated on the *identified* motor), then runs the same position
+(:mod:`tuning.pipeline`, simulated on the *identified* motor), then runs the same position
 move on the true motors with the default setup (KVOUT = 1) and with the kept setup, and prints
 one row per motor and a summary: coverage of every 95 % interval (R, L, PWM delay, J, KVOUT,
 T_c, b), negative friction reported, motors settling at least as fast as with the default.

@@ -135,7 +135,7 @@ twin_motor = MotorArray("MAC140", n=1, seed=3, record_length=N_SAMPLES, **truth)
 server = TwinServer(Twin(twin_motor, [19]), speed=25.0, tcp=("127.0.0.1", 0)).start()
 try:
     url = server.endpoint("mactalk", "tcp").url
-    ident_s, design_s = autotune_over_serial(url, "MAC140", address=19, time_scale=25.0,
+    ident_s, result_s = autotune_over_serial(url, "MAC140", address=19, time_scale=25.0,
                                              n_coil=N_SAMPLES, n_mech=N_SAMPLES, write=True)
 finally:
     server.stop()

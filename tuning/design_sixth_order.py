@@ -150,14 +150,17 @@ def main_filter_registers(kp: float, ki: float, kvout: float, f_lp: float | None
 class SixthOrderDesign:
     """A MAC800 design: the quantised registers and what the search found."""
 
+    verification: SixthOrderVerification
+    #: the quantised and the unquantised registers (name → value)
     registers: dict[str, float]
     ideal: dict[str, float]
+    #: normalised PI gains (16·Kpl·kp, 16·Kpl·ki) the search found
     kp_norm: float
     ki_norm: float
-    f_lp: float | None
-    notch_hz: float | None
-    kii: float
-    verification: SixthOrderVerification
+    #: low-pass corner and notch frequency [Hz] (None: not used)
+    f_lp: float | None = None
+    notch_hz: float | None = None
+    kii: float = 0.0  #: position-integral gain in VF units (0: none)
     name: str = "pi + low-pass"
     notes: list[str] = field(default_factory=list)
 
@@ -303,4 +306,5 @@ def synthesize_sixth_order(motor: MotorData, J: float, current: Mapping[str, flo
     name = "pi + low-pass" if f_lp else "pi"
     if notch_hz:
         name += " + notch"
-    return SixthOrderDesign(regs, ideal, kpn, kin, f_lp, notch_hz, 0.0, ver, name, notes)
+    return SixthOrderDesign(ver, regs, ideal, kpn, kin, f_lp=f_lp, notch_hz=notch_hz,
+                            name=name, notes=notes)

@@ -293,7 +293,8 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
         In-position window the moves must settle in [counts] (INPOSWIN, 3.2.33).
     position_integral : bool, optional
         ``"pi"`` only: force the position integral on (True) or off (False); default (None)
-        the dead-band rule above. The acceptance step of :mod:`tuning.acceptance` tries both.
+        the dead-band rule above. The acceptance step (:mod:`tuning.strategies.testu_pi`)
+        tries both.
 
     Returns
     -------

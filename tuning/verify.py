@@ -154,12 +154,11 @@ def loop_metrics(loop: ct.TransferFunction, n: int = 3000) -> LoopMetrics:
 
 
 # ----------------------------------------------------------------------------- reports
-@dataclass
-class CurrentLoopReport:
-    """Verification of a current-loop design (per phase, TS_I)."""
+class _Robustness:
+    """The robustness set's summary of a loop report (``nominal``, ``robust``)."""
 
     nominal: LoopMetrics
-    robust: dict[str, LoopMetrics] = field(default_factory=dict)
+    robust: dict[str, LoopMetrics]
 
     @property
     def worst_robust_pm(self) -> float:
@@ -173,23 +172,21 @@ class CurrentLoopReport:
 
 
 @dataclass
-class SpeedLoopReport:
+class CurrentLoopReport(_Robustness):
+    """Verification of a current-loop design (per phase, TS_I)."""
+
+    nominal: LoopMetrics
+    robust: dict[str, LoopMetrics] = field(default_factory=dict)
+
+
+@dataclass
+class SpeedLoopReport(_Robustness):
     """Verification of a speed-loop design (TS_O), including the closed current loop."""
 
     nominal: LoopMetrics
     reference_bandwidth_hz: float
     step_overshoot: float
     robust: dict[str, LoopMetrics] = field(default_factory=dict)
-
-    @property
-    def worst_robust_pm(self) -> float:
-        """Smallest phase margin over the robustness set [deg]."""
-        return min((m.pm_deg for m in self.robust.values()), default=math.inf)
-
-    @property
-    def all_stable(self) -> bool:
-        """Nominal and every robustness case have all poles inside POLE_RADIUS_MAX."""
-        return self.nominal.stable and all(m.stable for m in self.robust.values())
 
 
 ROBUST_RL: tuple[float, ...] = (0.7, 1.3)  #: R and L factors of the robustness set (±30 %)

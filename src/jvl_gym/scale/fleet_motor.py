@@ -2,7 +2,7 @@
 
 A simulated motor runs the procedure of ``jvl-tune autotune`` on a one-motor ``MotorArray``
 (:func:`tuning.autotune.identify_motors`, then the design with its acceptance step,
-:func:`tuning.acceptance.autotune_designs`, checked by :func:`tuning.autotune.verify_design`); a
+:func:`tuning.pipeline.design_and_accept`, checked by :func:`tuning.autotune.verify_design`); a
 recorded motor is identified from its CSVs (:func:`tuning.identify_coil.identify_coil`,
 :func:`tuning.identify_mechanics.identify_mechanics`) and designed the same way. Then the same
 position move (:func:`tuning.verify.position_move`) runs with the default setup and with the
