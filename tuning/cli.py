@@ -403,7 +403,7 @@ def fleet(spec: Path = typer.Argument(..., help="fleet file (configs/fleets/*.ym
           verbose: bool = typer.Option(False, help="forward the Ray workers' logs")
           ) -> None:
     """Autotune a fleet of motors as Ray tasks; per-motor register sets and a fleet report."""
-    from jvl_gym.scale.commands import fleet_command
+    from .fleet import fleet_command
 
     fleet_command(spec, out, address, num_cpus, save_records, structure, verbose)
 

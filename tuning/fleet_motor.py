@@ -50,7 +50,7 @@ def credibility(ident: Any) -> list[str]:
     list of str
         One reason per failed criterion.
     """
-    from tuning.credibility import problems
+    from .credibility import problems
 
     c, m = ident.coil, ident.mechanics
     out = problems(ident.motor, m, c)
@@ -69,11 +69,11 @@ def credibility(ident: Any) -> list[str]:
 
 
 def _identify_records(motor: FleetMotor) -> Any:
-    from tuning.autotune import Identification
-    from tuning.identify_coil import identify_coil
-    from tuning.identify_mechanics import identify_mechanics
-    from tuning.models import MotorData
-    from tuning.records import load_csv, record_registers
+    from .autotune import Identification
+    from .identify_coil import identify_coil
+    from .identify_mechanics import identify_mechanics
+    from .models import MotorData
+    from .records import load_csv, record_registers
 
     if motor.record_data:
         with tempfile.TemporaryDirectory(prefix="jvl-records-") as tmp:
@@ -132,14 +132,14 @@ def tune_motor(motor: FleetMotor, spec: FleetSpec, save_records: bool = False
         ``row`` (the fleet-report row), ``files`` (relative path -> bytes: ``setup.yaml``,
         ``report.txt``, plots, ``motor.yaml``, records) and ``registers``.
     """
-    from tuning.autotune import identify_motors, verify_design
-    from tuning.models import MotorData
-    from tuning.pipeline import design_and_accept
-    from tuning.records import save_csv
-    from tuning.report import write_report
-    from tuning.strategy import strategy_of
-    from tuning.synthesis import torque_guidance
-    from tuning.verify import position_move
+    from .autotune import identify_motors, verify_design
+    from .models import MotorData
+    from .pipeline import design_and_accept
+    from .records import save_csv
+    from .report import write_report
+    from .strategy import strategy_of
+    from .synthesis import torque_guidance
+    from .verify import position_move
 
     t0 = time.perf_counter()
     c0 = time.process_time()
