@@ -97,7 +97,7 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
 
     fam = _strategy(motor).family
     if not fam.supports(Capability.TEST_MODES):
-        raise typer.BadParameter(f"{fam.title} have no TESTU/TESTA records; `jvl-tune "
+        raise typer.BadParameter(f"no TESTU/TESTA records on the {fam.title}; `jvl-tune "
                                  f"autotune --motor {motor}` identifies them on the motor",
                                  param_hint="'--motor'")
     if not testu and not testa:
@@ -252,12 +252,12 @@ def autotune(motor: str = typer.Option("MAC140"),
         from .serial_source import autotune_over_serial
         from .testmode_facts import TEST_RECORD_SAMPLES
 
-        step = ((lambda sm, res: sections.append(_two_mass_step(sm, res, out)))
-                if resonance else None)
+        two_mass = ((lambda sm, res: sections.append(_two_mass_step(sm, res, out)))
+                    if resonance else None)
         ident, res = autotune_over_serial(port, motor, address, time_scale,
                                           n_coil or TEST_RECORD_SAMPLES,
                                           n_mech or TEST_RECORD_SAMPLES, structure, write,
-                                          progress=_say, two_mass=step)
+                                          progress=_say, two_mass=two_mass)
         truth, step, note = None, (None, None), f"jvl-tune autotune --port {port}: " \
             f"identified J = {ident.mechanics.J:.4g}"
     else:

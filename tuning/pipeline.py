@@ -145,18 +145,16 @@ def settle_text(t: float, seconds: float = 2.0) -> str:
 
 
 def _reason(chosen: Candidate, asked: str, settle: Mapping[str, float], seconds: float) -> str:
-    """Why ``chosen`` was kept, one line."""
-    def settle_text_(t: float) -> str:
-        return settle_text(t, seconds)
-
-    d_def, d_ask = settle_text_(settle[DEFAULT_NAME]), settle_text_(settle[asked])
+    """Why ``chosen`` was kept, one line (``seconds``: how long the move was simulated)."""
+    when = {name: settle_text(t, seconds) for name, t in settle.items()}
     if chosen.name == asked:
-        return (f"kept the {asked} design: it settles in {d_ask} on the identified motor, "
-                f"the default setup in {d_def}")
+        return (f"kept the {asked} design: it settles in {when[asked]} on the identified motor, "
+                f"the default setup in {when[DEFAULT_NAME]}")
     return (f"kept the {chosen.name}{'' if chosen.name == DEFAULT_NAME else ' design'} instead "
-            f"of the {asked} design: it settles in {settle_text_(settle[chosen.name])} on the "
-            f"identified motor, the {asked} design in {d_ask}"
-            + ("" if chosen.name == DEFAULT_NAME else f", the default setup in {d_def}"))
+            f"of the {asked} design: it settles in {when[chosen.name]} on the identified motor, "
+            f"the {asked} design in {when[asked]}"
+            + ("" if chosen.name == DEFAULT_NAME else
+               f", the default setup in {when[DEFAULT_NAME]}"))
 
 
 def accept(strategy: Strategy, idents: Sequence[Any], candidates: Sequence[Sequence[Candidate]],

@@ -22,7 +22,6 @@ _POS_TIME, _VEL_TIME, _LOAD_TIME, _RIPPLE_TIME = 0.3072, 0.2304, 0.0768, 0.0384
 #: settled band, final error of a failed trial, FLWERR and FNCERR scales of the cost
 _SETTLE_TURNS, _FAIL_TURNS, _FLW_TURNS, _FNC_TURNS = (20.0 / 4096, 100.0 / 4096, 200.0 / 4096,
                                                       1000.0 / 4096)
-_IF_NAMES = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
 
 
 #: a speed-loop designer: motor type → the speed-loop registers at KVOUT = 1 (the design is
