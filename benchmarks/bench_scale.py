@@ -24,9 +24,9 @@ import time
 from pathlib import Path
 
 from bench_page import table, update_section  # benchmarks/ is the script's directory
+from tuning.fleet import run_fleet
+from tuning.fleet_spec import parse_fleet
 
-from jvl_gym.scale.fleet import run_fleet
-from jvl_gym.scale.fleet_spec import parse_fleet
 from jvl_gym.scale.ray_session import connect
 from jvl_gym.scale.sweep import run_sweep
 from jvl_gym.scale.sweep_spec import parse_sweep

@@ -3,7 +3,7 @@
 Draws N random motors (type, load inertia 0–10·J_m, viscous and Coulomb friction, 1 % noise),
 runs the toolkit's identification on a ``MotorArray`` (TESTU + two-level TESTA), synthesises
 and verifies the filters, keeps the best candidate by the acceptance step
-(:mod:`tuning.acceptance`, simulated on the *identified* motor), then runs the same position
+(:mod:`tuning.pipeline`, simulated on the *identified* motor), then runs the same position
 move on the true motors with the default setup (KVOUT = 1) and with the kept setup, and prints
 one row per motor and a summary: coverage of every 95 % interval (R, L, PWM delay, J, KVOUT,
 T_c, b), negative friction reported, motors settling at least as fast as with the default.
@@ -33,15 +33,30 @@ import sys
 import time
 
 import numpy as np
-from tuning.acceptance import autotune_designs
 from tuning.autotune import identify_motors, verify_design
+from tuning.family import tuned_family
 from tuning.models import MotorData
+from tuning.pipeline import Move, design_and_accept
+from tuning.strategies.testu_pi import MOVE_DISTANCE, MOVE_V_SOLL, TestuPiStrategy
 from tuning.synthesis import torque_guidance
 from tuning.verify import position_move
 
 from jvl_gym import MotorArray
 
 TYPES = ("MAC050", "MAC095", "MAC140", "MAC141")
+
+
+
+class _OneMove(TestuPiStrategy):
+    """The MAC050–141 strategy with one acceleration for every motor's acceptance move (the
+    benchmark compares the motors on the same profile)."""
+
+    def __init__(self, a_soll: int) -> None:
+        super().__init__(tuned_family("MAC140"))
+        self.a_soll = a_soll
+
+    def move(self, ident: object) -> Move:
+        return Move(MOVE_DISTANCE, MOVE_V_SOLL, self.a_soll)
 
 
 def draw_motors(n: int, seed: int) -> dict[str, np.ndarray]:
@@ -104,7 +119,7 @@ def run_e2e(n: int = 20, seed: int = 0, distance: int = 20000, v_soll: int = 200
     guide = [torque_guidance(i.motor, i.mechanics.J, i.mechanics.coulomb)["A_SOLL_max"]
              for i in ids]
     a_soll = int(max(10, min(200, min(guide))))
-    acc = autotune_designs(ids, structure, a_soll=a_soll)
+    acc = design_and_accept(_OneMove(a_soll), ids, {"structure": structure})
     rows = []
     setups = []
     for i, (idn, ac) in enumerate(zip(ids, acc)):
@@ -246,7 +261,6 @@ def _two_mass_array(p: dict[str, np.ndarray], seed: int) -> MotorArray:
 def run_two_mass(n: int = 10, seed: int = 0, subset: list[int] | None = None
                  ) -> list[dict[str, float]]:
     """The two-mass part of the benchmark (module docstring); one dict per load."""
-    from tuning.acceptance import move_acceleration, simulation_parameters
     from tuning.autotune import synthesize
     from tuning.identify_resonance import identify_resonance
     from tuning.resonance_design import (
@@ -257,6 +271,7 @@ def run_two_mass(n: int = 10, seed: int = 0, subset: list[int] | None = None
         resonance_designs,
         two_mass_metrics,
     )
+    from tuning.strategies.testu_pi import move_acceleration, simulation_parameters
 
     p = draw_two_mass(n, seed)
     if subset is not None:

@@ -36,7 +36,9 @@ import numpy as np
 from jvl_gym import MotorArray
 from jvl_gym.families.mac050_141 import constants as c
 from tuning.autotune import identify_motors, synthesize, verify_design
-from tuning.report import plot_bode, plot_fits, text_table
+from tuning.pipeline import Candidate
+from tuning.report import bode_figure, design_table, identification_table
+from tuning.strategy import strategy_of
 
 FAST = os.environ.get("JVL_FAST") == "1"
 N_SAMPLES = 32 if FAST else 64  # the toolkit recommends 64; the manual records 11
@@ -61,9 +63,8 @@ print(f"J      {ident.mechanics.J:.4e} kg·m² (true {J_true:.4e}), "
       f"KVOUT {ident.mechanics.kvout:.2f}")
 
 # %%
-fits = plot_fits(ident, out / "fits.png")
-plt.imshow(plt.imread(fits))
-plt.axis("off")
+strategy = strategy_of("MAC140")
+strategy.fit_figure(ident)
 plt.show()
 
 # %% [markdown]
@@ -71,14 +72,13 @@ plt.show()
 
 # %%
 design = synthesize(ident.motor, ident.mechanics.J, ident.mechanics.coulomb, structure="pi")
-print(text_table(ident, design))
+tuned = Candidate("pi", design.registers, design)
+print("\n".join([*identification_table(strategy, ident),
+                 *design_table(strategy, tuned, ident.motor, ident.mechanics.J)]))
 print("verification problems:", verify_design(design) or "none")
 
 # %%
-bode = plot_bode(design, ident.motor, ident.mechanics.J, out / "bode.png")
-plt.figure(figsize=(10, 6))
-plt.imshow(plt.imread(bode))
-plt.axis("off")
+bode_figure(strategy.open_loops(tuned, ident.motor, ident.mechanics.J))
 plt.show()
 
 # %% [markdown]
@@ -135,7 +135,7 @@ twin_motor = MotorArray("MAC140", n=1, seed=3, record_length=N_SAMPLES, **truth)
 server = TwinServer(Twin(twin_motor, [19]), speed=25.0, tcp=("127.0.0.1", 0)).start()
 try:
     url = server.endpoint("mactalk", "tcp").url
-    ident_s, design_s = autotune_over_serial(url, "MAC140", address=19, time_scale=25.0,
+    ident_s, result_s = autotune_over_serial(url, "MAC140", address=19, time_scale=25.0,
                                              n_coil=N_SAMPLES, n_mech=N_SAMPLES, write=True)
 finally:
     server.stop()

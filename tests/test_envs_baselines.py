@@ -103,8 +103,11 @@ def test_filter_tuning_trial_and_synthesis_baseline() -> None:
     matched = np.tile(np.array([0.0, 0.0, np.log2(9.0) / 2 - 1], dtype=np.float32), (4, 1))
     _, r_matched, *_ = venv.step(matched)  # KVOUT ≈ J_total/J_m
     assert r_matched.mean() > r_low.mean()
-    base = gym.make("jvl_gym/FilterTuning-v0", baseline=True, motor_type="MAC140")
-    assert base.unwrapped.core.baseline_source == "tuning.synthesis"
+    from tuning.baseline import speed_loop_registers
+
+    base = gym.make("jvl_gym/FilterTuning-v0", baseline=True, motor_type="MAC140",
+                    designer=speed_loop_registers)  # the toolkit's synthesis, given to the env
+    assert base.unwrapped.core.baseline_source == "designer"
     base.reset(seed=0)
     _, r_base, *_ = base.step(base.action_space.sample())
     assert r_base > -base.unwrapped.core.instability_penalty

@@ -171,3 +171,31 @@ def test_operations_the_toy_does_not_declare_are_refused_by_name() -> None:
     assert ask(twin, mt.encode_go_init_mode(5)) == b""
     assert twin.stats["refused"] == 2 and "INIT_MODE" in twin.last_refusal
     np.testing.assert_array_equal(m.regs, before)
+
+
+def test_jvl_tune_autotune_runs_the_toy_familys_own_strategy(tmp_path: Path) -> None:
+    """``jvl-tune autotune --motor TOY1`` goes through the one pipeline with the strategy the
+    toy family names in its contract (``TuningSpec.implementation``, in the fixture folder):
+    the identified inertia is the simulated one, the kept gain settles the speed step faster
+    than the table's default, and the setup written loads."""
+    from tuning.cli import app
+    from typer.testing import CliRunner
+
+    res = CliRunner().invoke(app, ["autotune", "--motor", "TOY1", "--load-inertia", "2e-4",
+                                   "--out", str(tmp_path)])
+    assert res.exit_code == 0, res.output
+    report = (tmp_path / "report.txt").read_text()
+    row = next(ln for ln in report.splitlines() if ln.startswith("J "))
+    J, true_J = float(row.split()[1]), float(row.split()[-1])
+    assert true_J == pytest.approx(4e-4) and J == pytest.approx(true_J, rel=0.05)
+    assert "kept the p design" in report
+    assert {p.name for p in tmp_path.iterdir()} >= {"setup.yaml", "report.txt", "fits.png",
+                                                    "bode.png", "steps.png"}
+    m = MotorArray("TOY1", n=1)
+    m.load_setup(tmp_path / "setup.yaml")
+    assert m.read("KP")[0] > 2.0  # the designed gain, above the default's
+    # an option the toy strategy does not take is refused, naming it, and nothing is written
+    res = CliRunner().invoke(app, ["autotune", "--motor", "TOY1", "--structure", "ip",
+                                   "--out", str(tmp_path / "no")])
+    assert res.exit_code != 0 and "--structure" in res.output
+    assert not (tmp_path / "no").exists()

@@ -213,22 +213,24 @@ def _inconsistent_identification():
 def test_autotune_refuses_an_identification_that_is_not_credible(capsys):
     import typer
     from tuning.cli import _check_credible
+    from tuning.strategy import strategy_of
 
     ident = _inconsistent_identification()
+    strategy = strategy_of("MAC140")
     with pytest.raises(typer.Exit):
-        _check_credible(ident, accept=False)
+        _check_credible(strategy, ident, accept=False)
     assert "NOT CREDIBLE" in capsys.readouterr().err
-    _check_credible(ident, accept=True)
+    _check_credible(strategy, ident, accept=True)
 
 
 def test_report_prints_negative_friction_as_not_detected():
-    from tuning.autotune import synthesize
-    from tuning.report import text_table
+    from tuning.report import identification_table
+    from tuning.strategy import strategy_of
 
     ident = _inconsistent_identification()
     # the fit's Coulomb friction is negative; the identification reports it as 0, not detected
     assert ident.mechanics.raw["coulomb"] < 0 and ident.mechanics.coulomb == 0.0
     assert not ident.mechanics.detected["coulomb"]
-    table = text_table(ident, synthesize(ident.motor, 5e-5, 0.0))
-    row = [ln for ln in table.splitlines() if ln.startswith("Coulomb Tc")][0]
+    table = identification_table(strategy_of("MAC140"), ident)
+    row = [ln for ln in table if ln.startswith("Coulomb Tc")][0]
     assert "not detected" in row

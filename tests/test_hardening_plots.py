@@ -35,10 +35,12 @@ def design():
 
 
 def test_bode_marks_crossover_and_margins(design):
+    from tuning.pipeline import Candidate
     from tuning.report import bode_figure
+    from tuning.strategy import strategy_of
 
     md, d = design
-    fig = bode_figure(d, md, 5e-5)
+    fig = bode_figure(strategy_of("MAC140").open_loops(Candidate("pi", d.registers), md, 5e-5))
     texts = [t.get_text() for a in fig.axes for t in a.texts]
     labels = [ln.get_label() for a in fig.axes for ln in a.get_lines()]
     assert sum(t.startswith("PM ") for t in texts) == 2
@@ -47,10 +49,13 @@ def test_bode_marks_crossover_and_margins(design):
 
 
 def test_step_plot_legend_has_no_register_units(design):
+    from tuning.pipeline import Candidate
     from tuning.report import steps_figure
+    from tuning.strategy import strategy_of
 
     md, d = design
-    fig = steps_figure(d, md, 5e-5, np.full((50, 1), 100.0), 1600)
+    cl = strategy_of("MAC140").step_loop(Candidate("pi", d.registers), md, 5e-5)
+    fig = steps_figure(cl, np.full((50, 1), 1600.0), 1600)
     legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
     assert not any("1/16" in t for t in legend)
     assert "commanded" in fig.axes[0].get_ylabel()

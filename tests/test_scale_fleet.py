@@ -12,9 +12,8 @@ ray = pytest.importorskip("ray")
 
 import yaml  # noqa: E402
 from tuning.cli import app  # noqa: E402
+from tuning.fleet_spec import load_fleet  # noqa: E402
 from typer.testing import CliRunner  # noqa: E402
-
-from jvl_gym.scale.fleet_spec import load_fleet  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "configs" / "fleets" / "example.yml"

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from tuning.autotune import synthesize, verify_design
 from tuning.models import (
-    TS_O,
     MotorData,
     coil_tf,
     freqresp,
@@ -14,6 +13,7 @@ from tuning.models import (
     speed_plant,
 )
 from tuning.quantize import QuantizationError, quantize_registers, quantize_value
+from tuning.testmode_facts import TS_O
 from tuning.verify import loop_metrics
 
 TYPES = ["MAC050", "MAC095", "MAC140", "MAC141"]
@@ -65,7 +65,7 @@ def test_pole_radius_decides_stability_not_margins():
     regs["KVOUT"] = 6.0  # a loop gain six times too high: unstable
     from tuning.models import speed_open_loop
 
-    m = loop_metrics(speed_open_loop(speed_plant(md, regs), regs))
+    m = loop_metrics(speed_open_loop(speed_plant(md, regs), regs, md.family))
     assert not m.stable and m.pole_radius > 1.0
 
 

@@ -16,7 +16,7 @@ from tuning.identify_resonance import (
     identify_resonance,
     step_record,
 )
-from tuning.models import TS_O, MotorData, freqresp, speed_plant
+from tuning.models import MotorData, freqresp, speed_plant
 from tuning.quantize import quantize_registers, quantize_value
 from tuning.records import RecordError
 from tuning.resonance_design import (
@@ -34,6 +34,7 @@ from tuning.resonance_design import (
     two_mass_metrics,
     with_section,
 )
+from tuning.testmode_facts import TS_O
 
 from jvl_gym import MotorArray
 

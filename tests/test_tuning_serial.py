@@ -25,12 +25,12 @@ def twin_server():
 def test_autotune_over_the_twin_identifies_and_writes(twin_server):
     server, m = twin_server
     url = server.endpoint("mactalk", "tcp").url
-    ident, design = autotune_over_serial(url, "MAC140", address=19, time_scale=25.0,
+    ident, result = autotune_over_serial(url, "MAC140", address=19, time_scale=25.0,
                                          n_coil=64, n_mech=64, write=True)
     cfg = m.motor_configs[0]
     assert ident.coil.R_line == pytest.approx(2 * cfg.phase_resistance, rel=0.03)
     assert ident.mechanics.J == pytest.approx(cfg.rotor_inertia + 30e-6, rel=0.08)
-    for name, value in design.registers.items():  # written and read back through MacTalk
+    for name, value in result.chosen.registers.items():  # written and read back (MacTalk)
         assert m.read(name)[0] == pytest.approx(value, abs=1 / 256)
 
 
@@ -41,7 +41,7 @@ def test_autotune_over_the_twin_with_the_firmware_record_length():
     m = MotorArray("MAC140", n=1, seed=0, load_inertia=load)
     server = TwinServer(Twin(m, [19]), speed=25.0, tcp=("127.0.0.1", 0)).start()
     try:
-        ident, design = autotune_over_serial(server.endpoint("mactalk", "tcp").url, "MAC140",
+        ident, result = autotune_over_serial(server.endpoint("mactalk", "tcp").url, "MAC140",
                                              address=19, time_scale=25.0)
     finally:
         server.stop()
@@ -49,7 +49,7 @@ def test_autotune_over_the_twin_with_the_firmware_record_length():
     J = m.motor_configs[0].rotor_inertia + load
     assert ident.mechanics.J == pytest.approx(J, rel=0.05)
     assert ident.mechanics.coulomb >= 0.0
-    assert design.acceptance is not None and design.acceptance.reason
+    assert result.chosen.design is not None and result.reason
 
 
 def test_serial_record_length_is_checked(twin_server):

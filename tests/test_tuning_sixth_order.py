@@ -9,13 +9,6 @@ import math
 import numpy as np
 import pytest
 import yaml
-from tuning.autotune_sixth_order import (
-    DEFAULT_NAME,
-    MOVE_DISTANCE,
-    MOVE_V_SOLL,
-    autotune_sixth_order,
-    default_filters,
-)
 from tuning.cli import app
 from tuning.design_sixth_order import (
     check_sixth_order,
@@ -25,7 +18,7 @@ from tuning.design_sixth_order import (
     synthesize_sixth_order,
     verify_sixth_order,
 )
-from tuning.family import tuning_family
+from tuning.family import tuned_family, tuning_spec
 from tuning.models import (
     MotorData,
     ff_tf,
@@ -35,12 +28,16 @@ from tuning.models import (
     vb_tf,
     vf_tf,
 )
+from tuning.pipeline import DEFAULT_NAME, autotune
 from tuning.quantize import QuantizationError
 from tuning.sixth_order import FAMILY, TS_I, TS_O, VFX_KEYS, VFY_KEYS, default_registers
+from tuning.strategies.buffer_sixth_order import MOVE_DISTANCE, MOVE_V_SOLL
+from tuning.strategy import strategy_of
 from tuning.verify import position_move
 from typer.testing import CliRunner
 
 from jvl_gym import MotorArray
+from jvl_gym.families import Capability
 from jvl_gym.families.mac800.table import TABLE
 from jvl_gym.registers import from_raw, to_raw
 
@@ -48,27 +45,31 @@ J_M = 1.2e-4  #: rotor inertia of the representative MAC800 (configs/motors/MAC8
 
 
 def test_the_family_comes_from_the_motor_type():
-    f = tuning_family("MAC800")
-    assert f.key == "mac800" and f.filter_order == 6 and not f.test_modes
+    f = tuning_spec("MAC800")
+    fam = tuned_family("MAC800")
+    assert fam.key == "mac800" and f.filter_order == 6
+    assert not fam.supports(Capability.TEST_MODES) and f.strategy == "buffer_sixth_order"
+    assert type(strategy_of("MAC800")).__name__ == "BufferSixthOrderStrategy"
     assert f.outer_dt == pytest.approx(1 / 770) and f.inner_dt == pytest.approx(1 / 11550)
-    assert f.counts_per_rev == 8000 and f.table.lookup("KVFX6").format.value == "Fixed16"
+    assert f.counts_per_rev == 8000 and fam.table.lookup("KVFX6").format.value == "Fixed16"
     assert (TS_O, TS_I) == (f.outer_dt, f.inner_dt)
-    g = tuning_family("MAC140")
-    assert g.key == "mac050_141" and g.filter_order == 4 and g.counts_per_rev == 4096
+    g = tuning_spec("MAC140")
+    assert g.strategy == "testu_pi" and g.filter_order == 4 and g.counts_per_rev == 4096
+    assert tuned_family("MAC140").supports(Capability.TEST_MODES)
     with pytest.raises(ValueError, match="no tuning procedure"):
-        tuning_family("MIS231")
+        tuning_spec("MIS231")
 
 
 def test_one_motor_data_carries_each_familys_numbers():
     md = MotorData.from_config("MAC800")
-    assert md.family is FAMILY and md.family.key == "mac800"
+    assert md.family is FAMILY and md.family is tuned_family("MAC800").tuning
     assert md.amplitude == 776.0 and md.supply_voltage == 325.0  # setup AMPLITUDE, mains bus
     k_t = 1.5 * md.pole_pairs * md.flux_linkage
     assert md.torque_per_vf == pytest.approx(k_t * md.amps_per_count * 776.0 / 1023, rel=1e-15)
     assert md.coil_pole == pytest.approx(np.exp(-md.R_phase / 11550 / md.L_phase), rel=1e-15)
     assert md.volts_per_count == pytest.approx(325.0 / 2 / 1023)
     small = MotorData.from_config("MAC140")
-    assert small.family.key == "mac050_141" and small.amplitude == 0.83
+    assert small.family.strategy == "testu_pi" and small.amplitude == 0.83
     assert small.torque_per_vf == 1.5 * small.pole_pairs * small.flux_linkage * \
         small.amps_per_count * 0.83
     assert small.coil_pole == math.exp(-small.R_phase * 128e-6 / small.L_phase)
@@ -105,7 +106,7 @@ def test_autotune_of_two_loaded_mac800s_meets_the_acceptance():
     kw = dict(load_inertia=loads, coulomb_friction=np.array([0.0, 0.05]),
               viscous_friction=np.array([2e-4, 0.0]))
     m = MotorArray("MAC800", n=2, seed=0, position_noise=0.85, **kw)
-    res = autotune_sixth_order(m)
+    res = autotune(m, strategy_of("MAC800"))
     for i, r in enumerate(res):
         j_true = J_M + loads[i]
         assert abs(r.ident.mechanics.J / j_true - 1) < 0.05
@@ -123,7 +124,7 @@ def test_autotune_of_two_loaded_mac800s_meets_the_acceptance():
         sim = MotorArray("MAC800", n=2, seed=1, position_noise=0.85,
                          **{k: v[i] for k, v in kw.items()})
         sim.load_setup({"registers": r.chosen.registers}, index=[0])
-        mv = position_move(sim, MOVE_DISTANCE, MOVE_V_SOLL, r.move[2], seconds=2.0, dt=TS_O)
+        mv = position_move(sim, MOVE_DISTANCE, MOVE_V_SOLL, r.move.a_soll, seconds=2.0, dt=TS_O)
         assert np.isfinite(mv.settle_s[0]) and mv.settle_s[0] < mv.settle_s[1]
         assert mv.errors[0] == 0
     assert res[1].settle_s[DEFAULT_NAME] == np.inf  # friction: the default never settles
@@ -219,7 +220,7 @@ def test_cli_synthesize_mac800_and_refusals(tmp_path):
 
 
 def test_default_filters_are_the_family_setup():
-    regs = default_filters("MAC800")
+    regs = default_registers("MAC800")
     # the I-P arrangement of configs/setups/MAC800.yaml: ki in VF, kp/ki in VB
     assert regs["KVFX6"] == pytest.approx(0.015 / 2.004, rel=2e-3) and regs["KVFY5"] == 1.0
     assert regs["KVB3"] == pytest.approx(-0.2 / 0.015) and regs["KVB4"] + regs["KVB3"] == 1.0

@@ -31,7 +31,7 @@ from .identify_mechanics import (
     identify_mechanics,
     two_level_torques,
 )
-from .models import COUNTS_PER_RAD, TS_O, MotorData
+from .models import MotorData
 from .quantize import quantize_registers
 from .records import Record, acquire_testa, acquire_testu, align_rotor
 from .synthesis import (
@@ -41,6 +41,7 @@ from .synthesis import (
     design_speed_loop,
     torque_guidance,
 )
+from .testmode_facts import COUNTS_PER_RAD, TS_O
 from .verify import CurrentLoopReport, SpeedLoopReport, verify_current_loop, verify_speed_loop
 
 __all__ = ["RECOMMENDED_COIL_SAMPLES", "RECOMMENDED_MECH_SAMPLES", "RECOMMENDED_TESTA_REPEATS",
@@ -85,8 +86,6 @@ class Design:
     quantization_delta: dict[str, float]
     guidance: dict[str, float]
     notes: list[str] = field(default_factory=list)
-    #: the acceptance step's result (:class:`tuning.acceptance.Acceptance`) when it chose this
-    acceptance: Any = None
 
 
 def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,

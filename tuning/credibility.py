@@ -39,7 +39,7 @@ def problems(motor: MotorData, mech: Any = None, coil: Any = None) -> list[str]:
     zero, an inertia below half the rotor's or a KVOUT outside its Fixed8 range (manual
     3.2.13), a fit below :data:`MIN_FIT`. Empty when every estimate is credible.
     """
-    from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
+    from .family import tuned_family
 
     out: list[str] = []
     if coil is not None:
@@ -49,12 +49,12 @@ def problems(motor: MotorData, mech: Any = None, coil: Any = None) -> list[str]:
             out.append(f"coil fit {coil.nrmse_fit:.1f} % < {MIN_FIT:g} %")
     if mech is not None:
         out += _positive_interval("J", mech.J, mech.ci.get("J"))
-        kv = MAC050_141.lookup("KVOUT")
+        kv = tuned_family(motor.name).table.lookup("KVOUT")
         if math.isfinite(mech.J) and mech.J < _J_MIN_OF_ROTOR * motor.J_m:
             out.append(f"J = {mech.J:.4g} kg m^2 is below half the rotor inertia "
                        f"{motor.J_m:.4g} kg m^2")
         if not kv.minimum <= mech.kvout <= kv.maximum:
-            out.append(f"KVOUT = {mech.kvout:.4g} is outside its Fixed8 range "
+            out.append(f"KVOUT = {mech.kvout:.4g} is outside its {kv.format.value} range "
                        f"{kv.minimum:g} … {kv.maximum:g} (manual {kv.section})")
         if not mech.nrmse_fit >= MIN_FIT:
             out.append(f"mechanics fit {mech.nrmse_fit:.1f} % < {MIN_FIT:g} %")

@@ -82,13 +82,13 @@ def render_setup(motor_type: str) -> str:
 def write_default_setups(directory: str | os.PathLike[str] | None = None,
                          motor_types: list[str] | None = None) -> list[Path]:
     """Write ``<directory>/<TYPE>.yaml`` for every motor type (default: ``configs/setups``)."""
-    from jvl_gym.families.mac050_141.config import SETUPS_DIR
-    from jvl_gym.families.mac050_141.config import motor_types as all_types
+    from .testmode_facts import TEST_FAMILY
 
-    out_dir = Path(directory) if directory is not None else SETUPS_DIR
+    setups = TEST_FAMILY.config.SETUPS_DIR
+    out_dir = Path(directory) if directory is not None else setups
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
-    for t in motor_types or all_types():
+    for t in motor_types or TEST_FAMILY.motor_types():
         p = out_dir / f"{t}.yaml"
         p.write_text(render_setup(t))
         paths.append(p)

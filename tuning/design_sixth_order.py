@@ -51,7 +51,7 @@ import numpy as np
 
 from .models import MotorData, current_open_loop, rigid_gain, speed_open_loop, speed_plant
 from .quantize import quantize_registers
-from .sixth_order import CURRENT_KEYS, FAMILY, TS_O, VFX_KEYS, VFY_KEYS
+from .sixth_order import CURRENT_KEYS, FAMILY_RECORD, TS_O, VFX_KEYS, VFY_KEYS
 from .synthesis import design_current_loop
 from .verify import (
     POLE_RADIUS_MAX,
@@ -76,12 +76,12 @@ NOTCH_WIDTH: float = 0.9  #: r of the notch's poles (the notch's −3 dB width �
 
 def quantize_sixth_order(regs: Mapping[str, float]) -> dict[str, float]:
     """Quantise to the MAC800 table's formats with :data:`EXACT_SUMS` exact."""
-    return quantize_registers(regs, FAMILY.table, EXACT_SUMS)
+    return quantize_registers(regs, FAMILY_RECORD.table, EXACT_SUMS)
 
 
 def design_current_filter(motor: MotorData) -> dict[str, float]:
     """The current filter for the motor's coil, quantised (module docstring)."""
-    return quantize_sixth_order(design_current_loop(motor, dt=motor.family.inner_dt).registers)
+    return quantize_sixth_order(design_current_loop(motor).registers)
 
 
 def _poly_lowpass(f_lp: float | None) -> tuple[np.ndarray, np.ndarray]:
@@ -150,14 +150,17 @@ def main_filter_registers(kp: float, ki: float, kvout: float, f_lp: float | None
 class SixthOrderDesign:
     """A MAC800 design: the quantised registers and what the search found."""
 
+    verification: SixthOrderVerification
+    #: the quantised and the unquantised registers (name → value)
     registers: dict[str, float]
     ideal: dict[str, float]
+    #: normalised PI gains (16·Kpl·kp, 16·Kpl·ki) the search found
     kp_norm: float
     ki_norm: float
-    f_lp: float | None
-    notch_hz: float | None
-    kii: float
-    verification: SixthOrderVerification
+    #: low-pass corner and notch frequency [Hz] (None: not used)
+    f_lp: float | None = None
+    notch_hz: float | None = None
+    kii: float = 0.0  #: position-integral gain in VF units (0: none)
     name: str = "pi + low-pass"
     notes: list[str] = field(default_factory=list)
 
@@ -303,4 +306,5 @@ def synthesize_sixth_order(motor: MotorData, J: float, current: Mapping[str, flo
     name = "pi + low-pass" if f_lp else "pi"
     if notch_hz:
         name += " + notch"
-    return SixthOrderDesign(regs, ideal, kpn, kin, f_lp, notch_hz, 0.0, ver, name, notes)
+    return SixthOrderDesign(ver, regs, ideal, kpn, kin, f_lp=f_lp, notch_hz=notch_hz,
+                            name=name, notes=notes)

@@ -43,10 +43,9 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from jvl_gym.families.mac800 import constants as _c
-
 from .design_sixth_order import design_current_filter
 from .models import MotorData
+from .sixth_order import CONSTANTS as _c
 from .sixth_order import COUNTS_PER_RAD, CURRENT_KEYS, TS_I, TS_O
 
 __all__ = ["CoilRecord", "TorqueRecord", "CoilStepEstimate", "TorqueStepEstimate",
@@ -120,6 +119,9 @@ class BufferIdentification:
     coil: CoilStepEstimate
     mechanics: TorqueStepEstimate
     current_registers: dict[str, float]
+    #: the coil record and the torque steps (higher, lower level of every repetition)
+    coil_record: CoilRecord | None = None
+    torque_records: list[TorqueRecord] = field(default_factory=list)
 
 
 # ----------------------------------------------------------------------------- records
@@ -361,6 +363,7 @@ def identify_from_buffer(m: Any, repeats: int = 2, progress: Progress = lambda _
     for i, md in enumerate(motors):
         mech = identify_torque_steps(pairs[i], md)
         out.append(BufferIdentification(md, coils[i], mech,
-                                     {k: cur[i][k] for k in CURRENT_KEYS}))
+                                        {k: cur[i][k] for k in CURRENT_KEYS}, coil_recs[i],
+                                        [r for p in pairs[i] for r in p]))
     progress("identification done")
     return out

@@ -36,8 +36,9 @@ from .intervals import (
     positive,
     student_halfwidth,
 )
-from .models import TS_I, MotorData
+from .models import MotorData
 from .records import Record, RecordError, validate
+from .testmode_facts import TS_I
 
 __all__ = ["CoilEstimate", "identify_coil", "residual_check"]
 

@@ -43,8 +43,9 @@ from .intervals import (
     positive,
     student_halfwidth,
 )
-from .models import COUNTS_PER_RAD, INNER_PER_OUTER, TS_I, TS_O, MotorData
+from .models import MotorData
 from .records import Record, RecordError, record_registers, validate
+from .testmode_facts import COUNTS_PER_RAD, INNER_PER_OUTER, TS_I, TS_O
 
 __all__ = ["MechanicsEstimate", "identify_mechanics", "position_model", "two_level_torques",
            "electrical_position", "repeat_sets", "coil_uncertainty"]

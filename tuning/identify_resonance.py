@@ -58,13 +58,14 @@ import numpy as np
 from scipy import optimize, stats
 
 from jvl_gym.coupling import coupling_for
-from jvl_gym.families.mac050_141 import constants as C
-from jvl_gym.families.mac050_141.table import TABLE
 
 from .identify_coil import correlation_inflation
 from .intervals import LEVEL
-from .models import TS_I, TS_O, MotorData, inner_modes
+from .models import MotorData, inner_modes
 from .records import RecordError
+from .testmode_facts import TABLE, TEST_FAMILY, TS_I, TS_O
+
+C = TEST_FAMILY.constants  #: AT_MODE and the sample buffer's control bits
 
 __all__ = ["ResonanceEstimate", "ResonanceFit", "acquire_step_records", "fit_resonance",
            "identify_resonance", "step_record", "step_torques", "estimate_from_fits",

@@ -3,8 +3,9 @@
 Everything here is the *exact* discrete model the firmware and the simulator implement
 (MAC050–141: docs/model.md §2, §3, §6, §7, manual 4.2, 4.3 and the filter registers
 3.2.89–3.2.111; MAC800: the same loops on its registers, register overview §1.2 and
-:mod:`tuning.sixth_order`). The family's numbers come from :class:`tuning.family.TuningFamily`
-(``motor.family``, or the ``family`` argument of the filter functions; default the MAC050–141):
+:mod:`tuning.sixth_order`). The family's numbers come from the family contract's
+:class:`~jvl_gym.families.TuningSpec` (``motor.family``, or the ``family`` argument of the
+filter functions), e.g. for the MAC050–141:
 
 * inner (current) loop at ``TS_I`` (MAC050–141: 128 µs), outer (speed) loop at
   ``TS_O`` = 15·TS_I (1.92 ms);
@@ -37,18 +38,11 @@ import control as ct
 import numpy as np
 from scipy.linalg import expm
 
-from jvl_gym.families.mac050_141 import constants as _c
+from jvl_gym.families import TuningSpec
 
-from .family import SPEED_UNITS, TuningFamily, family_facts, tuning_family
+from .family import setup_registers, tuned_family
 
 __all__ = [
-    "TS_I",
-    "TS_O",
-    "INNER_PER_OUTER",
-    "PWM_FULL",
-    "ADC_FULL",
-    "COUNTS_PER_REV",
-    "MAC050_141",
     "MotorData",
     "coil_tf",
     "if_tf",
@@ -66,21 +60,6 @@ __all__ = [
     "speed_closed_loop",
     "freqresp",
 ]
-
-#: sample times and scales, one source: the family's constants
-#: (:mod:`jvl_gym.families.mac050_141.constants`; manual 1.2, 3.2.12, 3.2.139; docs/model.md
-#: §2). TS_I: inner (current-loop) sample time [s]; TS_O = INNER_PER_OUTER·TS_I: outer
-#: (speed-loop) sample time [s]; PWM_FULL: UA_VAL full scale ↔ U_supply/2; ADC_FULL: IA_IST..
-#: measurement range; COUNTS_PER_REV: encoder counts per revolution.
-TS_I: float = _c.INNER_DT
-INNER_PER_OUTER: int = _c.INNER_PER_OUTER
-TS_O: float = _c.OUTER_DT
-PWM_FULL: int = _c.PWM_FULL
-ADC_FULL: int = _c.ADC_FULL
-COUNTS_PER_REV: int = _c.COUNTS_PER_REV
-COUNTS_PER_RAD: float = COUNTS_PER_REV / (2.0 * math.pi)  #: encoder counts per radian
-#: the MAC050–141 family's tuning facts, the default family of :class:`MotorData` and the filters
-MAC050_141: TuningFamily = family_facts("mac050_141")
 
 
 @dataclass(frozen=True)
@@ -111,8 +90,9 @@ class MotorData:
         AMPLITUDE register: the phase current amplitude [ADC counts] at VF_OUT =
         ``family.amplitude_vf`` (MAC050–141 manual 3.2.127: per VF_OUT unit; MAC800 register
         174: at VF_OUT = 1023).
-    family : TuningFamily
-        The motor family's sample times, scales and filter taps (:mod:`tuning.family`).
+    family : TuningSpec
+        The motor family's sample times, scales and filter taps (``Family.tuning`` of the
+        family contract, :mod:`tuning.family`).
     """
 
     name: str
@@ -125,28 +105,29 @@ class MotorData:
     supply_voltage: float = 48.0
     pwm_delay: int = 1
     amplitude: float = 0.83
-    family: TuningFamily = field(default=MAC050_141, repr=False)
+    family: TuningSpec = field(kw_only=True, repr=False)
 
     @classmethod
     def from_config(cls, motor: Any, amplitude: float | None = None) -> MotorData:
         """Build from a motor type name, a config path or a motor config of a tuned family
-        (:func:`tuning.family.tuning_family`); AMPLITUDE from the type's default setup unless
-        given (:meth:`tuning.family.TuningFamily.default_amplitude`).
+        (:func:`tuning.family.tuned_family`); AMPLITUDE from the type's default setup unless
+        given, the register table's ROM default where the setup leaves it out.
 
         Raises
         ------
         ValueError
             The motor's family has no tuning procedure.
         """
-        fam = tuning_family(motor)
+        fam = tuned_family(motor)
         cfg = fam.load_motor(motor)
         if amplitude is None:
-            amplitude = fam.default_amplitude(cfg)
+            amplitude = setup_registers(fam, cfg).get(
+                "AMPLITUDE", float(fam.table.lookup("AMPLITUDE").default))
         return cls(name=cfg.name, J_m=cfg.rotor_inertia, flux_linkage=cfg.flux_linkage,
                    R_phase=cfg.phase_resistance, L_phase=cfg.phase_inductance,
                    amps_per_count=cfg.amps_per_count, pole_pairs=cfg.pole_pairs,
                    supply_voltage=cfg.supply_voltage, pwm_delay=cfg.pwm_delay_samples,
-                   amplitude=amplitude, family=fam)
+                   amplitude=amplitude, family=fam.tuning)
 
     def with_(self, **changes: Any) -> MotorData:
         """A copy with some fields changed (e.g. identified R and L)."""
@@ -195,7 +176,7 @@ def coil_tf(motor: MotorData) -> ct.TransferFunction:
     return _tf([g * (1.0 - a)], list(den), motor.family.inner_dt)
 
 
-def if_tf(regs: Mapping[str, float], dt: float = TS_I) -> ct.TransferFunction:
+def if_tf(regs: Mapping[str, float], dt: float) -> ct.TransferFunction:
     """IF filter (3.2.106–3.2.109): ``(KIFX2 z² + KIFX1 z)/(z² − KIFY1 z − KIFY0)``.
 
     ``dt``: the family's current-loop sample time [s] (the MAC800's current filter has the
@@ -204,7 +185,7 @@ def if_tf(regs: Mapping[str, float], dt: float = TS_I) -> ct.TransferFunction:
     return _tf([regs["KIFX2"], regs["KIFX1"], 0.0], [1.0, -regs["KIFY1"], -regs["KIFY0"]], dt)
 
 
-def ib_tf(regs: Mapping[str, float], dt: float = TS_I) -> ct.TransferFunction:
+def ib_tf(regs: Mapping[str, float], dt: float) -> ct.TransferFunction:
     """IB filter (3.2.110–3.2.111): ``(KIB1 z + KIB0)/z`` (``dt`` as in :func:`if_tf`)."""
     return _tf([regs["KIB1"], regs["KIB0"]], [1.0, 0.0], dt)
 
@@ -214,25 +195,25 @@ def _fir(taps: list[float], dt: float) -> ct.TransferFunction:
     return _tf(taps, [1.0] + [0.0] * (len(taps) - 1), dt)
 
 
-def ff_tf(regs: Mapping[str, float], family: TuningFamily = MAC050_141) -> ct.TransferFunction:
+def ff_tf(regs: Mapping[str, float], family: TuningSpec) -> ct.TransferFunction:
     """FF filter on the family's taps, at its TS_O: MAC050–141 (3.2.89–3.2.92)
     ``(KFF3 z³ + KFF2 z² + KFF1 z + KFF0)/z³``; MAC800 (registers 121–126)
     ``KFF5 + KFF4 z⁻¹ + … + KFF0 z⁻⁵``."""
     return _fir([regs[k] for k in family.ff_keys], family.outer_dt)
 
 
-def vb_tf(regs: Mapping[str, float], family: TuningFamily = MAC050_141) -> ct.TransferFunction:
+def vb_tf(regs: Mapping[str, float], family: TuningSpec) -> ct.TransferFunction:
     """VB filter on the family's taps, at its TS_O, from V_IST [counts/sample] to the speed
     error's unit [1/16 count/sample]: MAC050–141 with GEARB (3.2.101–3.2.105)
     ``GEARB·(KVB3 z³ + … + KVB0)/z³``; MAC800 (registers 139–143, the firmware's 16·V_IST)
     ``16·(KVB4 + KVB3 z⁻¹ + … + KVB0 z⁻⁴)``."""
     reg = family.vb_gain_register
-    gain = regs[reg] if reg is not None else SPEED_UNITS
+    gain = regs[reg] if reg is not None else family.speed_units
     return _fir([gain * regs[k] for k in family.vb_keys], family.outer_dt)
 
 
-def vf_tf(regs: Mapping[str, float], with_gain: bool = True,
-          family: TuningFamily = MAC050_141) -> ct.TransferFunction:
+def vf_tf(regs: Mapping[str, float], family: TuningSpec,
+          with_gain: bool = True) -> ct.TransferFunction:
     """VF filter on the family's taps, at its TS_O, times its gain KVOUT·2^−MODEL_POT unless
     ``with_gain`` is False (KVOUT: MAC050–141 3.2.13, MAC800 register 13; MODEL_POT: MAC800
     register 154, 0 where ``regs`` has none).
@@ -390,17 +371,17 @@ def rigid_speed_plant(motor: MotorData, J: float | None = None) -> ct.TransferFu
 
 
 def speed_open_loop(plant: ct.TransferFunction, regs: Mapping[str, float],
-                    family: TuningFamily = MAC050_141) -> ct.TransferFunction:
+                    family: TuningSpec) -> ct.TransferFunction:
     """Speed loop broken at VF_OUT: ``L = KVOUT·VF·VB·P`` with VB's gain (MAC050–141 manual 4.2:
     GEARB; MAC800: 16, :func:`vb_tf`)."""
-    return vf_tf(regs, family=family) * vb_tf(regs, family) * plant
+    return vf_tf(regs, family) * vb_tf(regs, family) * plant
 
 
 def speed_closed_loop(plant: ct.TransferFunction, regs: Mapping[str, float],
-                      family: TuningFamily = MAC050_141) -> ct.TransferFunction:
+                      family: TuningSpec) -> ct.TransferFunction:
     """FNC_OUT [1/16 count/sample] → 16·V_IST [1/16 count/sample]: ``16·FF·KVOUT·VF·P/(1+L)``."""
-    fwd = vf_tf(regs, family=family) * plant
-    return ff_tf(regs, family) * ct.feedback(fwd, vb_tf(regs, family)) * SPEED_UNITS
+    fwd = vf_tf(regs, family) * plant
+    return ff_tf(regs, family) * ct.feedback(fwd, vb_tf(regs, family)) * family.speed_units
 
 
 def freqresp(sys: ct.TransferFunction, w: np.ndarray) -> np.ndarray:

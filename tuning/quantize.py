@@ -2,7 +2,8 @@
 3.2.13, 3.2.126, 3.2.127).
 
 Formats, scales, ranges and manual sections come from the family's register table
-(``jvl_gym.families.mac050_141.table.TABLE``, docs/registers.md, by default; another family's
+(by default the table of the family with the TESTU/TESTA test modes,
+:data:`tuning.testmode_facts.TABLE`, the MAC050–141's, docs/registers.md; another family's
 table with the ``table`` argument, e.g. the MAC800's Fixed16 = raw/65536 and Fixed24 =
 raw/16777216 of its register overview §1.2), the one source of these facts:
 Fixed4 = raw/4096 and Fixed8 = raw/256 with the raw range of the table (±32767, so Fixed4
@@ -21,8 +22,9 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
 from jvl_gym.registers import Format, RegisterTable, round_half_away
+
+from .testmode_facts import TABLE as MAC050_141
 
 __all__ = [
     "FILTER_REGISTERS",

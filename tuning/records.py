@@ -45,7 +45,8 @@ from typing import Any
 
 import numpy as np
 
-from .models import ADC_FULL, COUNTS_PER_RAD, PWM_FULL, TS_I, TS_O, MotorData
+from .models import MotorData
+from .testmode_facts import ADC_FULL, COUNTS_PER_RAD, PWM_FULL, TS_I, TS_O
 
 __all__ = [
     "Record",
@@ -183,8 +184,9 @@ def save_csv(rec: Record, path: str | os.PathLike[str]) -> Path:
 def _registers_header(path: Path, ln: int, text: str) -> dict[str, float]:
     """The ``# registers:`` line ``text`` (line ``ln`` of ``path``): NAME=value pairs of
     distinct writable registers of the MAC050–141 table, each value finite and in its range."""
-    from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
     from jvl_gym.registers import Access, RegisterError, to_raw
+
+    from .testmode_facts import TABLE as MAC050_141
 
     out: dict[str, float] = {}
     for item in text.split():

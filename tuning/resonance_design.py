@@ -35,9 +35,12 @@ from dataclasses import dataclass
 import control as ct
 import numpy as np
 
+from jvl_gym.families import TuningSpec
+
 from .identify_resonance import apparent_resonance, coupling_of
-from .models import TS_O, MotorData, freqresp, speed_open_loop, speed_plant
+from .models import MotorData, freqresp, speed_open_loop, speed_plant
 from .quantize import quantize_registers
+from .testmode_facts import TS_O
 from .verify import LoopMetrics, frequency_grid, metrics_from_response
 
 __all__ = ["FilteredDesign", "TwoMassChoice", "choose", "move_on", "scaled_gains", "alias_hz",
@@ -169,11 +172,12 @@ def two_mass_plant(motor: MotorData, regs: Mapping[str, float],
     return speed_plant(motor, regs, motor.J_m, b, coupling, back_emf=True)
 
 
-def loop_metrics(plant: ct.TransferFunction, regs: Mapping[str, float]) -> LoopMetrics:
-    """Speed-loop margins with the registers ``regs`` on ``plant``, closed-loop poles for
-    stability."""
-    loop = speed_open_loop(plant, regs)
-    w = frequency_grid(TS_O, 2500, lowest=1e-3)
+def loop_metrics(plant: ct.TransferFunction, regs: Mapping[str, float],
+                 family: TuningSpec) -> LoopMetrics:
+    """Speed-loop margins with the registers ``regs`` on ``plant`` (``family``'s speed
+    filter), closed-loop poles for stability."""
+    loop = speed_open_loop(plant, regs, family)
+    w = frequency_grid(family.outer_dt, 2500, lowest=1e-3)
     num = np.asarray(loop.num[0][0], dtype=float)
     den = np.asarray(loop.den[0][0], dtype=float)
     return metrics_from_response(freqresp(loop, w), w, np.polyadd(den, num))
@@ -183,7 +187,7 @@ def two_mass_metrics(motor: MotorData, regs: Mapping[str, float],
                      coupling: tuple[float, float, float], b: float = 0.0) -> LoopMetrics:
     """Speed-loop margins with the registers ``regs`` on the two-mass plant
     (:func:`two_mass_plant`)."""
-    return loop_metrics(two_mass_plant(motor, regs, coupling, b), regs)
+    return loop_metrics(two_mass_plant(motor, regs, coupling, b), regs, motor.family)
 
 
 def _ok(m: LoopMetrics) -> bool:
@@ -241,7 +245,7 @@ def resonance_designs(motor: MotorData, regs: Mapping[str, float], f_res: float,
                 break
             ms = []
             for plant in plants:
-                ms.append(loop_metrics(plant, q))
+                ms.append(loop_metrics(plant, q, motor.family))
                 if not _ok(ms[-1]):
                     break
             m = min(ms, key=lambda x: (_ok(x), x.pm_deg))

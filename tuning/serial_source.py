@@ -20,10 +20,9 @@ from typing import Any
 
 import numpy as np
 
-from jvl_gym.families.mac050_141.config import MotorConfig, load_motor
-from jvl_gym.families.mac050_141.constants import OUTER_DT, RECORDBIT, TEST_RECORD_SAMPLES
-
+from .family import tuned_family
 from .records import RecordError
+from .testmode_facts import TEST_RECORD_SAMPLES
 
 
 class SerialMotor:
@@ -42,16 +41,17 @@ class SerialMotor:
 
     n = 1
 
-    def __init__(self, client: Any, motor: str | MotorConfig, time_scale: float = 1.0) -> None:
+    def __init__(self, client: Any, motor: Any, time_scale: float = 1.0) -> None:
         if not time_scale > 0:
             raise ValueError(f"time_scale must be > 0, got {time_scale}")
         self.client = client
-        self.config = load_motor(motor)
+        self.family = tuned_family(motor)
+        self.config = self.family.load_motor(motor)
         self.time_scale = float(time_scale)
         self._wanted = 0
 
     @property
-    def motor_configs(self) -> list[MotorConfig]:
+    def motor_configs(self) -> list[Any]:
         """The motor type's data, as MotorArray.motor_configs."""
         return [self.config]
 
@@ -73,7 +73,7 @@ class SerialMotor:
 
     def step(self, n_outer: int = 1) -> None:
         """Let ``n_outer`` outer samples (1.92 ms each) of motor time pass."""
-        time.sleep(n_outer * OUTER_DT / self.time_scale)
+        time.sleep(n_outer * self.family.tuning.outer_dt / self.time_scale)
 
     def set_record_length(self, n_samples: int) -> None:
         """Remember the record length the next test needs (the motor's own is fixed)."""
@@ -89,7 +89,7 @@ class SerialMotor:
         end = time.monotonic() + timeout
         while time.monotonic() < end:
             count = int(self.client.read("REC_CNT"))
-            recording = int(self.client.read("CNTRL_BITS")) & RECORDBIT
+            recording = int(self.client.read("CNTRL_BITS")) & self.family.constants.RECORDBIT
             if count > 0 and not recording:
                 break
             time.sleep(0.005)
@@ -106,46 +106,41 @@ class SerialMotor:
 def autotune_over_serial(port: str, motor: str, address: int = 1, time_scale: float = 1.0,
                          n_coil: int = TEST_RECORD_SAMPLES, n_mech: int = TEST_RECORD_SAMPLES,
                          structure: str = "pi", write: bool = False, progress: Any = None,
-                         accept: bool = True, two_mass: Any = None) -> tuple[Any, Any]:
+                         two_mass: Any = None) -> tuple[Any, Any]:
     """Identify and design on a motor behind ``port`` (device path or pyserial URL).
 
     Runs TESTU and the two-level TESTA through MacTalk with the firmware's record length
     (``n_coil``, ``n_mech``: 11 samples, manual 4.4.9/4.4.10; several records are combined,
     :func:`tuning.autotune.testa_repeats`, :func:`tuning.autotune.testu_repeats`),
     synthesises and quantises the filters, keeps the best candidate by the acceptance step
-    (``accept``; simulated on the identified motor, :mod:`tuning.acceptance`), and, with
+    (simulated on the identified motor, :func:`tuning.pipeline.design_and_accept`), and, with
     ``write``, writes the kept registers to the motor and reads them back. Returns
-    ``(Identification, Design)``; ``Design.acceptance`` holds the acceptance result. The motor
-    must be in INIT_MODE and free to turn.
+    ``(Identification, Result)``. The motor must be in INIT_MODE and free to turn.
 
-    ``two_mass(m, ident, design)``, if given, runs on the motor (``m``, a :class:`SerialMotor`)
+    ``two_mass(m, result)``, if given, runs on the motor (``m``, a :class:`SerialMotor`)
     after the design and before the write, e.g. the resonance step of ``jvl-tune autotune
     --resonance`` (:mod:`tuning.identify_resonance`: one continuous sample-buffer record per
     torque step, so the link's timing does not matter as long as a frame's round trip is short
-    against the 114 ms record); it may change ``design.registers``.
+    against the 114 ms record); it may change ``result.chosen.registers``.
     """
     from jvl_gym.protocol import MacTalkClient
 
-    from .autotune import identify_motors, synthesize, verify_design
+    from .pipeline import design_and_accept
+    from .strategy import strategy_of
 
     say = progress or (lambda _msg: None)
+    strategy = strategy_of(motor)
     with MacTalkClient(port, address=address) as client:
         m = SerialMotor(client, motor, time_scale)
         if int(m.read("MODE_REG")[0]) != 0:
             raise RecordError("the motor must be in INIT_MODE (MODE_REG = 0) to be identified")
-        ident = identify_motors(m, n_coil, n_mech, progress=say)[0]
-        if accept:
-            from .acceptance import autotune_designs
-
-            say("acceptance: simulating the candidates on the identified motor")
-            design = autotune_designs([ident], structure)[0].chosen.design
-        else:
-            design = synthesize(ident.motor, ident.mechanics.J, ident.mechanics.coulomb,
-                                structure=structure)
+        ident = strategy.identify(m, {"n_coil": n_coil, "n_mech": n_mech}, say)[0]
+        say("acceptance: simulating the candidates on the identified motor")
+        result = design_and_accept(strategy, [ident], {"structure": structure})[0]
         if two_mass is not None:
-            two_mass(m, ident, design)
-        bad = verify_design(design)
+            two_mass(m, result)
+        bad = strategy.failures(result.chosen)
         if write and not bad:
             say("writing the synthesised registers and reading them back")
-            client.write_registers(design.registers)
-    return ident, design
+            client.write_registers(result.chosen.registers)
+    return ident, result

@@ -1,7 +1,7 @@
 """The sixth-order main filter of the MAC800 family (MAC800, MAC400): its registers and the
 type's default setup. The loops are those of :mod:`tuning.models` on the family's numbers
-(:class:`tuning.models.MotorData` with ``family`` = :data:`FAMILY`; MAC800 register overview
-§1.2):
+(:class:`tuning.models.MotorData` with ``family`` = :data:`FAMILY`, the contract's TuningSpec of
+the family whose strategy is ``"buffer_sixth_order"``; MAC800 register overview §1.2):
 
 * servo sample TS_O = 1/770 s, 15 current-loop samples per servo sample, 8000 counts/rev, PWM
   and ADC full scale ±1023, VF_OUT full scale T_SOLL_FULL = 1023 of peak torque;
@@ -29,15 +29,30 @@ type's default setup. The loops are those of :mod:`tuning.models` on the family'
 
 from __future__ import annotations
 
-import yaml
+from jvl_gym.families import Family, TuningSpec, families, family
 
-from .family import TuningFamily, family_facts
+from .family import default_filters
 
-__all__ = ["FAMILY", "TS_I", "TS_O", "COUNTS_PER_RAD", "FF_KEYS", "VB_KEYS", "VFX_KEYS",
-           "VFY_KEYS", "CURRENT_KEYS", "MAIN_KEYS", "default_registers"]
+__all__ = ["FAMILY", "FAMILY_RECORD", "CONSTANTS", "STRATEGY", "TS_I", "TS_O", "COUNTS_PER_RAD",
+           "FF_KEYS", "VB_KEYS", "VFX_KEYS", "VFY_KEYS", "CURRENT_KEYS", "MAIN_KEYS",
+           "default_registers"]
 
-#: the tuning facts of the family with the sixth-order main filter
-FAMILY: TuningFamily = family_facts("mac800")
+STRATEGY = "buffer_sixth_order"  #: the strategy key of the family with this filter
+
+
+def _sixth_order_family() -> Family:
+    for key in families():
+        fam = family(key)
+        if fam.tuning is not None and fam.tuning.strategy == STRATEGY:
+            return fam
+    raise ImportError(f"no registered family has the tuning strategy {STRATEGY!r}")
+
+
+#: the family whose tuning strategy is :data:`STRATEGY` (found by the strategy, not its key)
+FAMILY_RECORD: Family = _sixth_order_family()
+#: its tuning facts (the family contract's TuningSpec)
+FAMILY: TuningSpec = FAMILY_RECORD.tuning  # type: ignore[assignment]
+CONSTANTS = FAMILY_RECORD.constants  #: its modes, bits and scalings
 TS_I: float = FAMILY.inner_dt  #: current-loop sample time [s]
 TS_O: float = FAMILY.outer_dt  #: servo sample time [s]
 COUNTS_PER_RAD: float = FAMILY.counts_per_rad  #: encoder counts per radian
@@ -51,10 +66,7 @@ MAIN_KEYS = (*FF_KEYS, *VB_KEYS, *VFX_KEYS, *VFY_KEYS, "KVOUT", "MODEL_POT", "S_
 
 
 def default_registers(motor_type: str) -> dict[str, float]:
-    """The registers of the motor type's default setup (the family's ``configs/setups``), the
-    filter registers it leaves out at their ROM defaults (the family's register table)."""
-    cfg = FAMILY.load_motor(motor_type)
-    data = yaml.safe_load((FAMILY.setups_dir / f"{cfg.setup}.yaml").read_text())
-    regs = {k: FAMILY.table.lookup(k).default for k in (*CURRENT_KEYS, *MAIN_KEYS)}
-    regs.update({k: float(v) for k, v in (data.get("registers") or {}).items()})
-    return regs
+    """The current and main filter registers of the motor type's default setup (the family's
+    ``configs/setups``), those it leaves out at their ROM defaults (the family's register
+    table)."""
+    return default_filters(motor_type, (*CURRENT_KEYS, *MAIN_KEYS))

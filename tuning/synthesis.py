@@ -35,9 +35,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .models import (
-    COUNTS_PER_RAD,
-    TS_I,
-    TS_O,
     MotorData,
     freqresp,
     rigid_gain,
@@ -140,7 +137,7 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
                         pm_min: float = 50.0, gm_min: float = 8.0,
                         robust_pm_min: float = 35.0,
                         gains: tuple[float, float] | None = None,
-                        dt: float = TS_I) -> CurrentDesign:
+                        dt: float | None = None) -> CurrentDesign:
     """Design IF and IB for a target closed-loop bandwidth.
 
     Parameters
@@ -157,15 +154,16 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
         PM required on every R, L ±30 % corner [deg].
     gains : (float, float), optional
         Fixed normalised (kp, ki) instead of the search (e.g. the default setups' design point).
-    dt : float
-        The family's current-loop sample time [s] (default the MAC050–141's TS_I; ``motor``'s
-        coil pole and gain must be for the same sample time): the loop is the same polynomial
-        in z, ``dt`` sets the frequencies.
+    dt : float, optional
+        The current-loop sample time [s] (default ``motor.family.inner_dt``, for which the
+        coil pole and gain are): the loop is the same polynomial in z, ``dt`` sets the
+        frequencies.
 
     Returns
     -------
     CurrentDesign
     """
+    dt = motor.family.inner_dt if dt is None else dt
     w = frequency_grid(dt, 1500)
     if gains is not None:
         regs = current_registers(motor, *gains)
@@ -295,14 +293,16 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
         In-position window the moves must settle in [counts] (INPOSWIN, 3.2.33).
     position_integral : bool, optional
         ``"pi"`` only: force the position integral on (True) or off (False); default (None)
-        the dead-band rule above. The acceptance step of :mod:`tuning.acceptance` tries both.
+        the dead-band rule above. The acceptance step (:mod:`tuning.strategies.testu_pi`)
+        tries both.
 
     Returns
     -------
     SpeedDesign
     """
-    w = frequency_grid(TS_O, 1200, lowest=1e-3)
-    z = np.exp(1j * w * TS_O)
+    ts_o = motor.family.outer_dt
+    w = frequency_grid(ts_o, 1200, lowest=1e-3)
+    z = np.exp(1j * w * ts_o)
     pn, pd, pw, rl = _speed_candidates(motor, current_regs, w)
     kpl16 = 16.0 * rigid_gain(motor)
     feasible = []
@@ -434,6 +434,7 @@ def torque_guidance(motor: MotorData, J_total: float, coulomb: float = 0.0,
     torque = motor.torque_per_vf * t_soll
     usable = max(0.0, (1.0 - reserve) * torque - coulomb)
     alpha = usable / J_total
-    a_soll = alpha * COUNTS_PER_RAD * 16.0 * TS_O**2
+    fam = motor.family
+    a_soll = alpha * fam.counts_per_rad * fam.speed_units * fam.outer_dt**2
     return {"T_SOLL": float(t_soll), "torque_Nm": torque, "A_SOLL_max": float(math.floor(a_soll)),
             "accel_rad_s2": alpha}

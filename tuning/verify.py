@@ -18,8 +18,6 @@ import control as ct
 import numpy as np
 
 from .models import (
-    TS_I,
-    TS_O,
     MotorData,
     current_open_loop,
     freqresp,
@@ -156,12 +154,11 @@ def loop_metrics(loop: ct.TransferFunction, n: int = 3000) -> LoopMetrics:
 
 
 # ----------------------------------------------------------------------------- reports
-@dataclass
-class CurrentLoopReport:
-    """Verification of a current-loop design (per phase, TS_I)."""
+class _Robustness:
+    """The robustness set's summary of a loop report (``nominal``, ``robust``)."""
 
     nominal: LoopMetrics
-    robust: dict[str, LoopMetrics] = field(default_factory=dict)
+    robust: dict[str, LoopMetrics]
 
     @property
     def worst_robust_pm(self) -> float:
@@ -175,23 +172,21 @@ class CurrentLoopReport:
 
 
 @dataclass
-class SpeedLoopReport:
+class CurrentLoopReport(_Robustness):
+    """Verification of a current-loop design (per phase, TS_I)."""
+
+    nominal: LoopMetrics
+    robust: dict[str, LoopMetrics] = field(default_factory=dict)
+
+
+@dataclass
+class SpeedLoopReport(_Robustness):
     """Verification of a speed-loop design (TS_O), including the closed current loop."""
 
     nominal: LoopMetrics
     reference_bandwidth_hz: float
     step_overshoot: float
     robust: dict[str, LoopMetrics] = field(default_factory=dict)
-
-    @property
-    def worst_robust_pm(self) -> float:
-        """Smallest phase margin over the robustness set [deg]."""
-        return min((m.pm_deg for m in self.robust.values()), default=math.inf)
-
-    @property
-    def all_stable(self) -> bool:
-        """Nominal and every robustness case have all poles inside POLE_RADIUS_MAX."""
-        return self.nominal.stable and all(m.stable for m in self.robust.values())
 
 
 ROBUST_RL: tuple[float, ...] = (0.7, 1.3)  #: R and L factors of the robustness set (±30 %)
@@ -215,7 +210,6 @@ def verify_current_loop(motor: MotorData, regs: Mapping[str, float],
             for fl in ROBUST_RL:
                 m = motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
                 rep.robust[f"R x{fr:g}, L x{fl:g}"] = loop_metrics(current_open_loop(m, regs))
-    assert TS_I > 0
     return rep
 
 
@@ -238,10 +232,11 @@ def verify_speed_loop(motor: MotorData, regs: Mapping[str, float], J_total: floa
     ``ROBUST_KVOUT`` (KVOUT × 0.5–2), and the coil R, L ±30 % under the current loop.
     """
     plant = speed_plant(motor, regs, J=J_total)
-    loop = speed_open_loop(plant, regs)
+    fam = motor.family
+    loop = speed_open_loop(plant, regs, fam)
     nominal = loop_metrics(loop)
-    cl = speed_closed_loop(plant, regs)
-    w = np.logspace(-1, math.log10(0.999 * math.pi / TS_O), 2000)
+    cl = speed_closed_loop(plant, regs, fam)
+    w = np.logspace(-1, math.log10(0.999 * math.pi / fam.outer_dt), 2000)
     tw = np.abs(freqresp(ct.minreal(cl, verbose=False), w))
     below = np.flatnonzero(tw < abs(tw[0]) / math.sqrt(2.0))
     ref_bw = w[below[0]] / (2 * math.pi) if below.size else w[-1] / (2 * math.pi)
@@ -250,12 +245,12 @@ def verify_speed_loop(motor: MotorData, regs: Mapping[str, float], J_total: floa
     if robust:
         for fk in ROBUST_KVOUT:
             p = speed_plant(motor, regs, J=J_total / fk)
-            rep.robust[f"KVOUT x{fk:g}"] = loop_metrics(speed_open_loop(p, regs))
+            rep.robust[f"KVOUT x{fk:g}"] = loop_metrics(speed_open_loop(p, regs, fam))
         for fr in ROBUST_RL:
             for fl in ROBUST_RL:
                 m = motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
                 p = speed_plant(m, regs, J=J_total)
-                rep.robust[f"R x{fr:g}, L x{fl:g}"] = loop_metrics(speed_open_loop(p, regs))
+                rep.robust[f"R x{fr:g}, L x{fl:g}"] = loop_metrics(speed_open_loop(p, regs, fam))
     return rep
 
 
@@ -286,13 +281,14 @@ class MoveResult:
 
 
 def position_move(m, distance: int, v_soll: int, a_soll: int, seconds: float = 1.0,
-                  window: int = 10, dt: float = TS_O) -> MoveResult:
+                  window: int = 10, dt: float | None = None) -> MoveResult:
     """Run a P_MODE move of ``distance`` counts on every motor of ``m`` (a ``MotorArray``).
 
-    ``dt`` is the family's servo sample time [s] (default the MAC050–141's TS_O).
+    ``dt`` is the family's servo sample time [s] (default ``1/m.OUTER_HZ``).
 
     The motors must be in INIT_MODE at rest; they are left in P_MODE at the target.
     """
+    dt = 1.0 / m.OUTER_HZ if dt is None else dt
     n_steps = int(round(seconds / dt))
     start = np.asarray(m.read("P_IST")).astype(float)
     target = start + distance
@@ -322,7 +318,7 @@ def position_move(m, distance: int, v_soll: int, a_soll: int, seconds: float = 1
 
 def velocity_step(m, v_soll: int, a_soll: int = 10000, seconds: float = 0.3) -> np.ndarray:
     """V_MODE step to ``v_soll`` [1/16 count/sample]; returns V_IST, shape (n_samples, N)."""
-    n_steps = int(round(seconds / TS_O))
+    n_steps = int(round(seconds / (1.0 / m.OUTER_HZ)))
     m.write("A_SOLL", a_soll)
     m.write("V_SOLL", v_soll)
     m.write("MODE_REG", 1)

@@ -6,7 +6,8 @@
   (no trim).
 - Positioning-v0: the firmware P_MODE with the default setup (env argument ``baseline=True``;
   the action is ignored).
-- FilterTuning-v0: the tuning toolkit's synthesis if it is importable, else the default setup
+- FilterTuning-v0: the registers of the speed-loop designer the env is given (``designer``,
+  e.g. ``tuning.baseline.speed_loop_registers``), else the default setup
   (env argument ``baseline=True``; the action is ignored).
 - StepperIndexing-v0: the MIS firmware's trapezoid with the default registers (V_SOLL,
   A_SOLL, RUN_CURRENT; env argument ``baseline=True``; the action is ignored).
@@ -94,7 +95,7 @@ BASELINES: dict[str, Baseline] = {
     "jvl_gym/Positioning-v0": Baseline({"baseline": True}, "zero",
                                        "firmware P_MODE, default setup"),
     "jvl_gym/FilterTuning-v0": Baseline({"baseline": True}, "zero",
-                                        "tuning toolkit synthesis (else default setup)"),
+                                        "the designer it is given (else default setup)"),
     "jvl_gym/StepperIndexing-v0": Baseline({"baseline": True}, "zero",
                                            "firmware trapezoid, default registers"),
 }

@@ -2,17 +2,16 @@
 
 from __future__ import annotations
 
-import functools
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
-from ..config import load_setup
-from ..families import Family, family, family_of_motor
+from ..families import family
 from .base import NumpyTaskEnv
 from .single import MotorEnv
 
-__all__ = ["FilterTuningEnv", "FilterTuningVectorEnv", "synthesis_registers"]
+__all__ = ["FilterTuningEnv", "FilterTuningVectorEnv", "Designer"]
 
 #: the families the task runs on (docs/envs.md)
 _FAMILIES = ("mac050_141", "mac800")
@@ -23,34 +22,12 @@ _POS_TIME, _VEL_TIME, _LOAD_TIME, _RIPPLE_TIME = 0.3072, 0.2304, 0.0768, 0.0384
 #: settled band, final error of a failed trial, FLWERR and FNCERR scales of the cost
 _SETTLE_TURNS, _FAIL_TURNS, _FLW_TURNS, _FNC_TURNS = (20.0 / 4096, 100.0 / 4096, 200.0 / 4096,
                                                       1000.0 / 4096)
-_IF_NAMES = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
-#: the tuning strategy (``Family.tuning.strategy``) whose speed-loop synthesis the baseline
-#: uses: the PI design of the fourth-order speed filter (``tuning.synthesis``)
-_PI_SYNTHESIS = "testu_pi"
 
 
-def _has_synthesis(fam: Family) -> bool:
-    """Whether the baseline designs the speed loop of ``fam``'s motors by the synthesis."""
-    return fam.tuning is not None and fam.tuning.strategy == _PI_SYNTHESIS
-
-
-@functools.lru_cache(maxsize=8)
-def synthesis_registers(motor_type: str) -> dict[str, float] | None:
-    """Speed-loop registers of the tuning toolkit's synthesis at KVOUT = 1 for a motor type
-    (the design is load-invariant with KVOUT = J_total/J_m), or None without the toolkit."""
-    try:
-        from tuning.models import MotorData
-        from tuning.synthesis import design_speed_loop
-    except ImportError:
-        return None
-    fam = family_of_motor(motor_type)
-    if not _has_synthesis(fam):
-        return None
-    cfg = fam.load_motor(motor_type)
-    setup = load_setup(fam.config.setup_path(cfg.setup)).registers
-    current = {k: float(setup[k]) for k in _IF_NAMES}
-    design = design_speed_loop(MotorData.from_config(cfg), current, cfg.rotor_inertia)
-    return {k: float(v) for k, v in design.registers.items() if k != "KVOUT"}
+#: a speed-loop designer: motor type → the speed-loop registers at KVOUT = 1 (the design is
+#: load-invariant with KVOUT = J_total/J_m), or None where it has no design (e.g.
+#: ``tuning.baseline.speed_loop_registers``, the tuning toolkit's synthesis)
+Designer = Callable[[str], "dict[str, float] | None"]
 
 
 class FilterTuningVectorEnv(NumpyTaskEnv):
@@ -78,8 +55,10 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
 
     def __init__(self, num_envs: int = 1, *, motor_type: str | tuple[str, ...] | None = None,
                  baseline: bool = False, estimate_error: float = 0.1,
-                 instability_penalty: float = 10.0, **kwargs: Any) -> None:
+                 instability_penalty: float = 10.0, designer: Designer | None = None,
+                 **kwargs: Any) -> None:
         self.baseline = bool(baseline)
+        self.designer = designer
         self.estimate_error = float(estimate_error)
         self.instability_penalty = float(instability_penalty)
         if motor_type is None:  # every type of the task's first family
@@ -112,10 +91,10 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         self.metrics: dict[str, np.ndarray] = {}
         self._ok = np.arange(n)
         self._trace = np.zeros((n, 3, self.scope_length), dtype=np.float32)
-        self._synthesis = _has_synthesis(fam.family)
-        synthesis = (self._synthesis
-                     and synthesis_registers(fam.task.DEFAULT_MOTOR_TYPE) is not None)
-        self.baseline_source = (("tuning.synthesis" if synthesis else "default setup")
+        synthesis = (self.designer is not None
+                     and self.designer(fam.task.DEFAULT_MOTOR_TYPE) is not None)
+        self._synthesis = synthesis
+        self.baseline_source = (("designer" if synthesis else "default setup")
                                 if self.baseline else "agent")
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
@@ -148,7 +127,7 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
                 m.write("KVOUT", np.round(kvout_est[ok] * 256) / 256, index=ok)
                 return
             for name in sorted(set(self._type_names[ok])):
-                regs = synthesis_registers(name)
+                regs = None if self.designer is None else self.designer(name)
                 sel = ok[self._type_names[ok] == name]
                 if regs is None:
                     continue  # default setup
@@ -296,8 +275,9 @@ class FilterTuningEnv(MotorEnv):
     ``motor_type`` (default: all four types), ``randomization`` (``inertia_ratio``,
     ``viscous_friction``, ``coulomb_ratio``), ``obs_noise``, ``render_mode`` (the trial's
     scope), ``estimate_error`` (0.1), ``instability_penalty`` (10), ``baseline`` (True: the
-    tuning toolkit's synthesis with KVOUT from the inertia estimate when ``tuning.synthesis`` is
-    importable, else the default setup; the action is ignored). ``decimation`` and
+    registers of ``designer`` with KVOUT from the inertia estimate, else the default setup;
+    the action is ignored), ``designer`` (motor type → speed-loop registers at KVOUT = 1 or
+    None, e.g. ``tuning.baseline.speed_loop_registers``; default none). ``decimation`` and
     ``max_episode_steps`` have no effect.
 
     ## Version History

@@ -1,4 +1,5 @@
-"""Past one machine: training sweeps, fleet autotuning and RLlib on Ray (``scale`` extra).
+"""Past one machine: training sweeps and RLlib on Ray (``scale`` extra), and the Ray session
+the toolkit's fleet autotune uses.
 
 One concept per module:
 
@@ -10,13 +11,13 @@ One concept per module:
 - :mod:`.ledger`: finished trials on disk (what a resumed sweep skips);
 - :mod:`.sweep`: the sweep on Ray Tune (``jvl-gym sweep``);
 - :mod:`.sweep_report`: results table (CSV, markdown) and learning-curve plot;
-- :mod:`.fleet_spec`: the fleet file (``configs/fleets/*.yml``) or a folder of records;
-- :mod:`.fleet_motor`: autotuning one motor (one Ray task);
-- :mod:`.fleet`: the fleet on Ray tasks (``jvl-tune fleet``);
-- :mod:`.fleet_report`: the fleet report (table, histograms, flagged motors);
 - :mod:`.ray_session`: connecting to local Ray or a cluster (``--address``);
 - :mod:`.rllib`: the envs as RLlib environments and a PPO example;
-- :mod:`.commands`: the bodies of the two CLI commands.
+- :mod:`.commands`: the body of ``jvl-gym sweep`` and what ``jvl-tune fleet`` shares with it.
+
+The fleet autotune (``jvl-tune fleet``) is the tuning toolkit's (``tuning.fleet``,
+``tuning.fleet_spec``, ``tuning.fleet_motor``, ``tuning.fleet_report``) on this package's Ray
+session; nothing here imports the toolkit.
 
 Importing this package does not import Ray.
 """

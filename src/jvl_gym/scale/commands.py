@@ -1,6 +1,7 @@
-"""The bodies of ``jvl-gym sweep`` and ``jvl-tune fleet`` (the typer commands call these).
+"""The body of ``jvl-gym sweep`` (the typer command calls it) and what ``jvl-tune fleet``
+(:func:`tuning.fleet.fleet_command`) shares with it.
 
-Both check for Ray first (without the ``scale`` extra they print one line saying how to
+It checks for Ray first (without the ``scale`` extra they print one line saying how to
 install it and exit with status 1), then read and validate their file, then run. Errors are
 :class:`jvl_gym.cli_app.CliError` (one line, ``--debug`` for the traceback).
 """
@@ -15,17 +16,17 @@ import typer
 from .errors import UserError, run_cli
 from .extra import require_ray
 
-__all__ = ["sweep_command", "fleet_command"]
+__all__ = ["sweep_command", "say", "out_dir"]
 
 
-def _say(prog: str) -> Callable[[str], None]:
+def say(prog: str) -> Callable[[str], None]:
     def say(line: str) -> None:
         typer.echo(f"[{prog}] {line}", err=True)
 
     return say
 
 
-def _out_dir(out: Path) -> Path:
+def out_dir(out: Path) -> Path:
     if out.exists() and not out.is_dir():
         raise UserError(f"--out {out}: exists and is not a directory; give a directory")
     return out
@@ -64,47 +65,9 @@ def sweep_command(config: Path, out: Path, address: str | None = None,
                             ("--stop-after", stop_after)):
             if value is not None and value < 1:
                 raise UserError(f"{name} {value}: give a positive integer")
-        outcome = run_sweep(spec, _out_dir(out), address, num_cpus, max_concurrent,
-                            stop_after, storage, progress=_say("sweep"), verbose=verbose)
+        outcome = run_sweep(spec, out_dir(out), address, num_cpus, max_concurrent,
+                            stop_after, storage, progress=say("sweep"), verbose=verbose)
         if outcome.failed or (stop_after is None and not outcome.complete):
             raise typer.Exit(1)  # a trial failed, or the sweep was interrupted
-
-    run_cli(body)
-
-
-def fleet_command(spec_path: Path, out: Path, address: str | None = None,
-                  num_cpus: int | None = None, save_records: bool = False,
-                  structure: str | None = None, verbose: bool = False) -> None:
-    """``jvl-tune fleet``: autotune a fleet file or records folder; exit 1 if a motor has no
-    design or its design fails the checks (non-credible identifications are listed in the
-    report).
-
-    Parameters
-    ----------
-    spec_path : Path
-        Fleet file or records folder (:mod:`jvl_gym.scale.fleet_spec`).
-    out : Path
-        Output directory.
-    address, num_cpus, save_records, verbose
-        See :func:`jvl_gym.scale.fleet.run_fleet`.
-    structure : str, optional
-        Speed-loop structure (overrides the file's).
-    """
-    def body() -> None:
-        require_ray()
-        from .fleet import run_fleet
-        from .fleet_spec import load_fleet
-
-        spec = load_fleet(spec_path)
-        if structure is not None:
-            if structure not in ("pi", "ip"):
-                raise UserError(f"--structure {structure!r}: use pi or ip")
-            spec.structure = structure
-        if num_cpus is not None and num_cpus < 1:
-            raise UserError(f"--num-cpus {num_cpus}: give a positive integer")
-        rows = run_fleet(spec, _out_dir(out), address, num_cpus, save_records,
-                         progress=_say("fleet"), verbose=verbose)
-        if not all(r.get("checks") == "ok" for r in rows):
-            raise typer.Exit(1)
 
     run_cli(body)

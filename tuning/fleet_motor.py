@@ -2,7 +2,7 @@
 
 A simulated motor runs the procedure of ``jvl-tune autotune`` on a one-motor ``MotorArray``
 (:func:`tuning.autotune.identify_motors`, then the design with its acceptance step,
-:func:`tuning.acceptance.autotune_designs`, checked by :func:`tuning.autotune.verify_design`); a
+:func:`tuning.pipeline.design_and_accept`, checked by :func:`tuning.autotune.verify_design`); a
 recorded motor is identified from its CSVs (:func:`tuning.identify_coil.identify_coil`,
 :func:`tuning.identify_mechanics.identify_mechanics`) and designed the same way. Then the same
 position move (:func:`tuning.verify.position_move`) runs with the default setup and with the
@@ -50,7 +50,7 @@ def credibility(ident: Any) -> list[str]:
     list of str
         One reason per failed criterion.
     """
-    from tuning.credibility import problems
+    from .credibility import problems
 
     c, m = ident.coil, ident.mechanics
     out = problems(ident.motor, m, c)
@@ -69,11 +69,11 @@ def credibility(ident: Any) -> list[str]:
 
 
 def _identify_records(motor: FleetMotor) -> Any:
-    from tuning.autotune import Identification
-    from tuning.identify_coil import identify_coil
-    from tuning.identify_mechanics import identify_mechanics
-    from tuning.models import MotorData
-    from tuning.records import load_csv, record_registers
+    from .autotune import Identification
+    from .identify_coil import identify_coil
+    from .identify_mechanics import identify_mechanics
+    from .models import MotorData
+    from .records import load_csv, record_registers
 
     if motor.record_data:
         with tempfile.TemporaryDirectory(prefix="jvl-records-") as tmp:
@@ -132,13 +132,14 @@ def tune_motor(motor: FleetMotor, spec: FleetSpec, save_records: bool = False
         ``row`` (the fleet-report row), ``files`` (relative path -> bytes: ``setup.yaml``,
         ``report.txt``, plots, ``motor.yaml``, records) and ``registers``.
     """
-    from tuning.acceptance import autotune_designs
-    from tuning.autotune import identify_motors, verify_design
-    from tuning.models import MotorData
-    from tuning.records import save_csv
-    from tuning.report import write_report
-    from tuning.synthesis import torque_guidance
-    from tuning.verify import position_move, velocity_step
+    from .autotune import identify_motors, verify_design
+    from .models import MotorData
+    from .pipeline import design_and_accept
+    from .records import save_csv
+    from .report import write_report
+    from .strategy import strategy_of
+    from .synthesis import torque_guidance
+    from .verify import position_move
 
     t0 = time.perf_counter()
     c0 = time.process_time()
@@ -180,7 +181,8 @@ def tune_motor(motor: FleetMotor, spec: FleetSpec, save_records: bool = False
     if not (math.isfinite(mech.J) and mech.J > 0):
         row.update(checks="no design: J not identified", wall_s=time.perf_counter() - t0)
         return {"row": row, "files": files, "registers": None}
-    acc = autotune_designs([ident], spec.structure)[0]
+    strategy = strategy_of(motor.type)
+    acc = design_and_accept(strategy, [ident], {"structure": spec.structure})[0]
     d = acc.chosen.design
     bad = verify_design(d)
     cr, sr = d.current_report.nominal, d.speed_report.nominal
@@ -214,13 +216,12 @@ def tune_motor(motor: FleetMotor, spec: FleetSpec, save_records: bool = False
                move_model="motor" if motor.simulated else "identified model")
     with tempfile.TemporaryDirectory(prefix="jvl-fleet-") as tmp:
         tmp_path = Path(tmp)
-        v = None
+        step: tuple[Any, Any] = (None, None)
         if motor.simulated:
             sim = _array(motor, spec, motor.seed, load, visc, coul)
             sim.load_setup({"registers": d.registers})
-            v = velocity_step(sim, 800)
-        report = write_report(tmp_path, ident, d, ident.motor, mech.J, truth, v,
-                              800 if v is not None else None)
+            step = strategy.speed_step(sim)
+        report = write_report(tmp_path, strategy, acc, truth, *step)
         for f in report:
             files[f.name] = f.read_bytes()
         if save_records:

@@ -51,7 +51,7 @@ def fleet_markdown(spec: FleetSpec, rows: list[dict[str, Any]]) -> str:
     spec : FleetSpec
         The fleet (source, settle-time move).
     rows : list of dict
-        One row per motor (:func:`jvl_gym.scale.fleet_motor.tune_motor`); J in kg m^2, T_c in
+        One row per motor (:func:`tuning.fleet_motor.tune_motor`); J in kg m^2, T_c in
         N m, b in N m s/rad, settle times in s.
 
     Returns

@@ -1,10 +1,10 @@
 """``jvl-tune fleet``: every motor of a fleet autotuned as a Ray task, then the fleet report.
 
-One Ray task per motor (:func:`jvl_gym.scale.fleet_motor.tune_motor`, one CPU each); a recorded
+One Ray task per motor (:func:`tuning.fleet_motor.tune_motor`, one CPU each); a recorded
 motor's CSVs are read here and sent with its task. The driver writes each motor's files under
 ``<out>/motors/<motor_id>/`` as its task finishes (the tasks return the files' bytes, so on a
 cluster nothing needs a shared filesystem) and prints one line per motor; at the end it writes
-the fleet report (:mod:`jvl_gym.scale.fleet_report`).
+the fleet report (:mod:`tuning.fleet_report`).
 """
 
 from __future__ import annotations
@@ -16,11 +16,17 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import typer
+
+from jvl_gym.scale.commands import out_dir, say
+from jvl_gym.scale.errors import UserError, run_cli
+from jvl_gym.scale.extra import require_ray
+from jvl_gym.scale.ray_session import connect
+
 from .fleet_report import write_fleet_report
 from .fleet_spec import FleetMotor, FleetSpec
-from .ray_session import connect
 
-__all__ = ["run_fleet"]
+__all__ = ["run_fleet", "fleet_command"]
 
 Progress = Callable[[str], None]
 
@@ -112,3 +118,40 @@ def run_fleet(spec: FleetSpec, out: str | Path, address: str | None = None,
     files = write_fleet_report(spec, ordered, out)
     progress(f"fleet report: {', '.join(str(f) for f in files)}")
     return ordered
+
+
+def fleet_command(spec_path: Path, out: Path, address: str | None = None,
+                  num_cpus: int | None = None, save_records: bool = False,
+                  structure: str | None = None, verbose: bool = False) -> None:
+    """``jvl-tune fleet``: autotune a fleet file or records folder; exit 1 if a motor has no
+    design or its design fails the checks (non-credible identifications are listed in the
+    report).
+
+    Parameters
+    ----------
+    spec_path : Path
+        Fleet file or records folder (:mod:`tuning.fleet_spec`).
+    out : Path
+        Output directory.
+    address, num_cpus, save_records, verbose
+        See :func:`run_fleet`.
+    structure : str, optional
+        Speed-loop structure (overrides the file's).
+    """
+    def body() -> None:
+        require_ray()
+        from .fleet_spec import load_fleet
+
+        spec = load_fleet(spec_path)
+        if structure is not None:
+            if structure not in ("pi", "ip"):
+                raise UserError(f"--structure {structure!r}: use pi or ip")
+            spec.structure = structure
+        if num_cpus is not None and num_cpus < 1:
+            raise UserError(f"--num-cpus {num_cpus}: give a positive integer")
+        rows = run_fleet(spec, out_dir(out), address, num_cpus, save_records,
+                         progress=say("fleet"), verbose=verbose)
+        if not all(r.get("checks") == "ok" for r in rows):
+            raise typer.Exit(1)
+
+    run_cli(body)

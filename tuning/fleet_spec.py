@@ -34,8 +34,8 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .distributions import parse_distribution
-from .errors import UserError, read_yaml
+from jvl_gym.scale.distributions import parse_distribution
+from jvl_gym.scale.errors import UserError, read_yaml
 
 __all__ = ["FleetMotor", "FleetSpec", "load_fleet", "parse_fleet", "fleet_from_records"]
 
@@ -140,7 +140,7 @@ def parse_fleet(data: Any, path: Path | None = None) -> FleetSpec:
     UserError
         On any malformed entry; the message names the file and the key.
     """
-    from tuning.models import MotorData
+    from .models import MotorData
 
     where = str(path) if path is not None else "fleet"
     if not isinstance(data, dict):
@@ -213,7 +213,7 @@ def fleet_from_records(folder: Path, structure: str = "pi") -> FleetSpec:
         No subfolders with CSVs, a subfolder without TESTU or TESTA records, records of
         different motor types, or an unknown type.
     """
-    from tuning.records import RecordError, load_csv
+    from .records import RecordError, load_csv
 
     subdirs = sorted(p for p in folder.iterdir() if p.is_dir() and any(p.rglob("*.csv")))
     if not subdirs:
