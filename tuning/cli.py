@@ -393,12 +393,16 @@ def autotune(motor: str = typer.Option("MAC140"),
 def _family_key(motor: str | None) -> str | None:
     """The tuning family of a motor type (:func:`tuning.family.tuning_family`), None if no
     motor is named."""
+    from jvl_gym.config import ConfigError
+
     from .family import tuning_family
 
     if motor is None:
         return None
     try:
         return tuning_family(motor).key
+    except ConfigError:
+        raise  # an unknown motor type: the loader's error, one line unless --debug
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="'--motor'") from exc
 
