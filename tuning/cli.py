@@ -297,8 +297,12 @@ def autotune(motor: str = typer.Option("MAC140"),
 
 def _strategy(motor: str | None) -> Strategy:
     """The tuning strategy of a motor type's family (:func:`tuning.strategy.strategy_of`)."""
+    from jvl_gym.config import ConfigError
+
     try:
         return strategy_of(motor)
+    except ConfigError:
+        raise  # an unknown motor type: the loader's error, one line unless --debug
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="'--motor'") from exc
 
