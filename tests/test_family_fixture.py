@@ -154,25 +154,6 @@ def test_the_twin_saves_the_toy_registers_to_flash_and_reloads_them(tmp_path: Pa
     assert m.mode_name(0) == "passive"
 
 
-def test_operations_the_toy_does_not_declare_are_refused_by_name() -> None:
-    """The toy has no sample buffer, torque, energy or init-mode command: the array raises
-    UnsupportedOperation naming the capability, the twin refuses and nothing changes."""
-    m = MotorArray("TOY1", n=1, seed=0)
-    for call, cap in ((lambda: m.sample_buffer(), Capability.SAMPLE_BUFFER),
-                      (lambda: m.torque, Capability.TORQUE),
-                      (lambda: m.energy, Capability.ENERGY),
-                      (lambda: m.go_init_mode(), Capability.INIT_MODE)):
-        with pytest.raises(UnsupportedOperation, match=cap.name) as info:
-            call()
-        assert info.value.capability is cap
-    twin = Twin(m, addresses=[5])
-    before = m.regs.copy()
-    assert ask(twin, mt.encode_read_sample_buffer(5)) == b""
-    assert ask(twin, mt.encode_go_init_mode(5)) == b""
-    assert twin.stats["refused"] == 2 and "INIT_MODE" in twin.last_refusal
-    np.testing.assert_array_equal(m.regs, before)
-
-
 def test_programs_and_fieldbuses_the_toy_does_not_declare_are_refused_by_name(
         tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     """The program CLI and the CANopen slave ask the family record: the toy, declaring neither
@@ -195,3 +176,23 @@ def test_programs_and_fieldbuses_the_toy_does_not_declare_are_refused_by_name(
     assert info.value.code == 2 and err.count("\n") == 1 and "Capability.PROGRAMS" in err
     assert types and f"({', '.join(types)})" in err and "TOY1" not in err.split(";")[1]
     assert not (tmp_path / "o").exists()
+
+
+def test_operations_the_toy_does_not_declare_are_refused_by_name() -> None:
+    """The toy has no sample buffer, torque, energy or init-mode command: the array raises
+    UnsupportedOperation naming the capability, the twin refuses and nothing changes."""
+    m = MotorArray("TOY1", n=1, seed=0)
+    for call, cap in ((lambda: m.sample_buffer(), Capability.SAMPLE_BUFFER),
+                      (lambda: m.torque, Capability.TORQUE),
+                      (lambda: m.energy, Capability.ENERGY),
+                      (lambda: m.go_init_mode(), Capability.INIT_MODE)):
+        with pytest.raises(UnsupportedOperation, match=cap.name) as info:
+            call()
+        assert info.value.capability is cap
+    twin = Twin(m, addresses=[5])
+    before = m.regs.copy()
+    assert ask(twin, mt.encode_read_sample_buffer(5)) == b""
+    assert ask(twin, mt.encode_go_init_mode(5)) == b""
+    assert twin.stats["refused"] == 2 and "INIT_MODE" in twin.last_refusal
+    np.testing.assert_array_equal(m.regs, before)
+
