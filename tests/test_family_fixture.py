@@ -195,4 +195,3 @@ def test_operations_the_toy_does_not_declare_are_refused_by_name() -> None:
     assert ask(twin, mt.encode_go_init_mode(5)) == b""
     assert twin.stats["refused"] == 2 and "INIT_MODE" in twin.last_refusal
     np.testing.assert_array_equal(m.regs, before)
-
