@@ -29,8 +29,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from . import mactalk32 as m32
 
 if TYPE_CHECKING:
@@ -94,7 +92,7 @@ class MacTalk32Unit:
             return False
         value = m32.data_value(data, signed=is_signed(t.m.table.lookup(reg).format))
         try:
-            t.m.write_raw(reg, np.int64(value), index=i)
+            t.store(i, {reg: value})
         except (RegisterError, ValueError) as exc:
             t.refuse(str(exc))
             return False
