@@ -93,8 +93,24 @@ def family_of_motor(motor: Any) -> Family:
         if path.suffix in (".yaml", ".yml"):
             key = _family_in_file(path)
         else:
-            key = next((k for k in _MODULES if str(motor) in family(k).motor_types()), None)
+            key = next((k for k in _MODULES if family(k).canonical_name(str(motor))
+                        in family(k).motor_types()), None)
+            if key is None and not path.exists():
+                raise _unknown_motor(motor)
+    elif key is None and not hasattr(motor, "name"):  # not a config object either
+        raise _unknown_motor(motor)
     return family(key if isinstance(key, str) and key in _MODULES else DEFAULT_FAMILY)
+
+
+def _unknown_motor(motor: Any) -> Exception:
+    """The error for ``motor`` that names no motor: it lists every family's motor types."""
+    from ..config import ConfigError
+
+    known = "; ".join(f"{family(k).title}: {', '.join(family(k).motor_types())}"
+                      for k in _MODULES)
+    what = (f"unknown motor type {str(motor)!r}" if isinstance(motor, (str, os.PathLike))
+            else f"a motor is a type name, a config path or a config object, got {motor!r}")
+    return ConfigError(f"{what}; known types: {known} (or give the path of a .yaml file)")
 
 
 def _family_in_file(path: Path) -> str | None:
