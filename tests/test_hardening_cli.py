@@ -1,4 +1,4 @@
-"""Issue 20, command lines: every error is one line on stderr with a non-zero exit status (the
+"""Command lines: every error is one line on stderr with a non-zero exit status (the
 traceback only with --debug); train/evaluate say what is missing; verify reads the motor from
 the setup."""
 
@@ -55,6 +55,14 @@ def test_usage_error_is_one_line(capsys):
 def test_nan_options_are_one_line(capsys, args):
     code, _, err = _run(tune, args, capsys)
     _one_line_error(code, err)
+
+
+@pytest.mark.parametrize("args", [["autotune", "--out", "/proc/x"],
+                                  ["fleet", "configs/fleets/example.yml", "--out", "/proc/x"]])
+def test_unwritable_out_is_refused_before_the_run(capsys, args):
+    code, _, err = _run(tune, args, capsys)
+    line = _one_line_error(code, err)
+    assert "/proc/x" in line and "--out" in line and "writable directory" in line
 
 
 def test_list_shaped_and_partial_setups(tmp_path, capsys):
