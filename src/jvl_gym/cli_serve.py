@@ -275,7 +275,11 @@ def serve(
     else:
         server = TwinServer(line, speed=speed, tcp=endpoint, pty=pty, user_tcp=user_tcp,
                             user_pty=user_pty)
-    server.start()
+    try:
+        server.start()
+    except OSError as exc:
+        server.stop()
+        raise typer.BadParameter(exc.strerror or str(exc), param_hint="'--tcp'") from None
     for text in banner([types[k] for k in order], line, [address[k] for k in order]):
         typer.echo(text)
     for e in server.endpoints:
