@@ -1,4 +1,4 @@
-"""Issue 20: every input path either does what it says or raises a documented error and changes
+"""Every input path either does what it says or raises a documented error and changes
 nothing (indices, values, flash images, setups, motor configs, wording of the errors)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Issue 20, plots: the demo scope's phases on their own axis and a readable current panel, the
+"""Plots: the demo scope's phases on their own axis and a readable current panel, the
 Bode plot's crossover and margin markers, the step plot's legend, GearSync's tension panel."""
 
 from __future__ import annotations

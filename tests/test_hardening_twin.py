@@ -1,4 +1,4 @@
-"""Issue 20, the digital twin: flash files named in errors, an unwritable flash directory
+"""The digital twin: flash files named in errors, an unwritable flash directory
 neither loses state nor drops the client, the banner shows the addresses the motors answer at,
 closed connections are released, and garbage is skipped a run at a time."""
 
