@@ -329,7 +329,13 @@ def serve(
             can_server.stop()
         raise
     if server is not None:
-        server.start()
+        try:
+            server.start()
+        except OSError as exc:
+            server.stop()
+            if can_server is not None:
+                can_server.stop()
+            raise typer.BadParameter(exc.strerror or str(exc), param_hint="'--tcp'") from None
     if can_server is not None:
         can_server.start()
     for text in banner([types[k] for k in order], line, [address[k] for k in order]):

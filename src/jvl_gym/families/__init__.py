@@ -111,6 +111,7 @@ def unknown_motor_type(name: str) -> ValueError:
                        ".yaml motor config)")
 
 
+
 def _family_in_file(path: Path) -> str | None:
     """The ``family`` key of a motor config file, if it is readable and has one."""
     try:
