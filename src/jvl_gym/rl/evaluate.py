@@ -136,14 +136,15 @@ def held_out_seeds(offset: int, n_seeds: int) -> list[int]:
     return [int(offset) + 1000 * k for k in range(n_seeds)]
 
 
-def _model_policy(model_file: str | Path) -> Policy:
+def _model_policy(model_file: str | Path, default_algo: str) -> Policy:
     """The deterministic policy of a saved SB3 model; the algorithm is the last part of its
-    file name (``*-ppo.zip``), PPO for a file named after the env alone."""
+    file name (``*-ppo.zip``), else ``default_algo``."""
+    from .config import ALGOS
     from .train import algo_class
 
     stem = Path(model_file).stem.rpartition("-")[2].upper()
-    model = algo_class(stem if stem in ("PPO", "SAC", "TD3") else "PPO").load(
-        str(model_file), device="cpu")
+    model = algo_class(stem if stem in ALGOS else default_algo).load(str(model_file),
+                                                                     device="cpu")
 
     def policy(obs: np.ndarray) -> np.ndarray:
         return model.predict(obs, deterministic=True)[0]
@@ -177,7 +178,7 @@ def evaluate_controllers(env_id: str, models: dict[str, str | Path], *,
     if max_episode_steps is not None and (limit is None or max_episode_steps < limit):
         kwargs["max_episode_steps"] = int(max_episode_steps)
     act_dim = len(vector_class(env_id).act_labels)
-    policies = {label: _model_policy(path) for label, path in models.items()}
+    policies = {label: _model_policy(path, cfg["algo"]) for label, path in models.items()}
     out = {label: ControllerResult() for label in ("baseline", *models)}
     if random_policy:
         out["random"] = ControllerResult()
