@@ -152,7 +152,7 @@ def _verdict(row: Row) -> str:
     n = len(base.seed_means)
     wins = {algo: row.results[algo].seeds_won(base) for algo in row.sources}
     if not wins:
-        return "no trained policy"
+        return "no trained policy: untrained"
     best = max(wins, key=lambda a: (wins[a], row.results[a].mean_std[0]))
     beats = wins[best] >= WIN_FRACTION * n
     return f"{best} {'beats' if beats else 'does not beat'} the baseline ({wins[best]}/{n} seeds)"
@@ -177,7 +177,9 @@ def write_page(rows: list[Row], out_dir: str | Path, runs: str | Path = "runs",
              "Return: mean ± std over the held-out seeds of the per-seed mean episode return. "
              "Seeds won: seeds on which the controller's mean return is above the baseline's. "
              "Episode: mean length in seconds of motor time. Ended: the envs' "
-             "`info[\"termination_reason\"]` of every episode (numbers shown as N).",
+             "`info[\"termination_reason\"]` of every episode (numbers shown as N); the envs "
+             "report no other episode statistic in `info` (settle time, tension error, copper "
+             "loss are in the rewards, not reported apart).",
              "", "| env | family | best trained policy |", "|---|---|---|"]
     for row in rows:
         lines.append(f"| {row.env_id} | {row.family} | {_verdict(row)} |")
