@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed-core
 STAMP_RL := $(VENV)/.installed-rl
 
-.PHONY: setup setup-rl demo test bench bench-compare bench-compile lint docs notebooks clean
+.PHONY: setup setup-rl demo results test bench bench-compare bench-compile lint docs notebooks clean
 
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
@@ -26,6 +26,10 @@ setup-rl: $(STAMP_RL)
 
 demo: $(STAMP)
 	MPLBACKEND=Agg $(BIN)/python -m jvl_gym.demo --out demo_out
+
+# every env × family × {trained policies, baseline, random}: docs/results.md and its plots
+results: $(STAMP_RL)
+	MPLBACKEND=Agg $(BIN)/jvl-gym evaluate --all --out docs
 
 test: $(STAMP_RL)
 	JVL_FAST=1 MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 --nbmake tests notebooks

@@ -182,7 +182,7 @@ def test_evaluate_uses_a_shipped_policy_when_runs_has_none(monkeypatch, tmp_path
 
     shipped = tmp_path / "policies"
     shipped.mkdir()
-    (shipped / "GearSync-v0.zip").write_bytes(b"model")
+    (shipped / "GearSync-v0-mac050_141-ppo.zip").write_bytes(b"model")
     monkeypatch.setattr(tr, "SHIPPED_DIR", shipped)
     used = []
 
@@ -194,14 +194,15 @@ def test_evaluate_uses_a_shipped_policy_when_runs_has_none(monkeypatch, tmp_path
     code, out, err = _run(gym_cli, ["evaluate", "jvl_gym/GearSync-v0", "--runs",
                                     str(tmp_path / "runs")], capsys)
     assert code == 0
-    assert used == [shipped / "GearSync-v0.zip"]
+    assert used == [shipped / "GearSync-v0-mac050_141-ppo.zip"]
     assert "shipped" in err and "2.00 ± 0.10" in out
 
 
 def test_the_trained_policies_ship_with_the_package():
     from jvl_gym.rl.train import shipped_model
 
-    for env_id in ("jvl_gym/GearSync-v0", "jvl_gym/CoilWinding-v0"):
+    for env_id in ("jvl_gym/GearSync-v0", "jvl_gym/CoilWinding-v0",
+                   "jvl_gym/StepperIndexing-v0"):
         path = shipped_model(env_id)
         assert path is not None and 10_000 < path.stat().st_size < 1_000_000
 

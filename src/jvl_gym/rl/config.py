@@ -1,13 +1,23 @@
 """RL hyper-parameters: ``configs/rl/*.yml``, each a mapping keyed by env id.
 
-Each entry holds ``algo`` (PPO or SAC), ``n_envs``, ``total_timesteps``, ``policy``,
+Each entry holds ``algo`` (PPO, SAC or TD3), ``n_envs``, ``total_timesteps``, ``policy``,
 ``env_kwargs`` (constructor arguments), ``hyperparams`` (algorithm keyword arguments;
 ``policy_kwargs.net_arch`` as a list), ``eval`` (``n_seeds``, ``episodes_per_seed``,
-``seed_offset``: held-out seeds start there) and ``seed``.
+``seed_offset``: held-out seeds start there) and ``seed``, and optionally
+
+- ``families``: family key -> overrides of the entry for that family (``{}``: as the entry). A
+  family not listed is not configured; an entry without ``families`` configures the env's
+  first family only. Without a ``motor_type`` in ``env_kwargs``, a family other than the
+  env's first runs its family's default motor type (:func:`family_motor_type`);
+  ``motor_type: all`` draws every motor type of the family per episode.
+- ``algos``: algorithm name (one of :data:`ALGOS`) -> overrides of the entry for that
+  algorithm (its ``hyperparams``, ``n_envs`` ...), trained on every configured family; the
+  entry's own ``algo`` is the default one.
 """
 
 from __future__ import annotations
 
+import importlib
 from pathlib import Path
 from typing import Any
 
@@ -15,18 +25,57 @@ import yaml
 
 from ..config import configs_dir
 
-__all__ = ["load_rl_configs", "rl_config"]
+__all__ = ["ALGOS", "load_rl_configs", "rl_config", "rl_runs", "env_families",
+           "family_motor_type"]
+
+#: the stable-baselines3 algorithms a config may name
+ALGOS = ("PPO", "SAC", "TD3")
 
 _DEFAULTS: dict[str, Any] = {
     "algo": "PPO", "n_envs": 16, "total_timesteps": 200_000, "policy": "MlpPolicy",
     "env_kwargs": {}, "hyperparams": {}, "seed": 0,
     "eval": {"n_seeds": 5, "episodes_per_seed": 8, "seed_offset": 100_000},
 }
+_NESTED = ("families", "algos")
+
+
+def env_families(env_id: str) -> tuple[str, ...]:
+    """Keys of the motor families ``env_id`` runs on, its default family first (the
+    ``supported_families()`` of its registered vector entry point)."""
+    from ..envs.registration import vector_class
+
+    return tuple(vector_class(env_id).supported_families())
+
+
+def family_motor_type(key: str) -> str:
+    """The default motor type of the family ``key`` (``DEFAULT_MOTOR_TYPE`` of its public
+    ``task`` module)."""
+    from ..families import family
+
+    fam: Any = family(key)
+    task = getattr(fam, "task", None)
+    if task is None:
+        task = importlib.import_module(fam.compiled.__name__.rpartition(".")[0] + ".task")
+    return str(task.DEFAULT_MOTOR_TYPE)
+
+
+def _check_keys(where: str, cfg: Any, allowed: set[str]) -> None:
+    if not isinstance(cfg, dict):
+        raise ValueError(f"{where}: expected a mapping, got {type(cfg).__name__}")
+    unknown = set(cfg) - allowed
+    if unknown:
+        raise ValueError(f"{where}: unknown keys {sorted(unknown)}")
+
+
+def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
+    out = {**base, **over}
+    out["eval"] = {**base.get("eval", {}), **over.get("eval", {})}
+    return out
 
 
 def load_rl_configs(directory: str | Path | None = None) -> dict[str, dict[str, Any]]:
-    """Every env id's config from the ``*.yml`` files of ``directory`` (default
-    ``configs/rl``), with defaults filled in."""
+    """Every env id's entry from the ``*.yml`` files of ``directory`` (default
+    ``configs/rl``), with defaults filled in (``families`` and ``algos`` kept as written)."""
     root = Path(directory) if directory is not None else configs_dir() / "rl"
     out: dict[str, dict[str, Any]] = {}
     for path in sorted(root.glob("*.yml")):
@@ -36,18 +85,68 @@ def load_rl_configs(directory: str | Path | None = None) -> dict[str, dict[str, 
         for env_id, cfg in data.items():
             if env_id in out:
                 raise ValueError(f"{path}: {env_id} is configured twice")
-            unknown = set(cfg) - set(_DEFAULTS)
-            if unknown:
-                raise ValueError(f"{path}: {env_id}: unknown keys {sorted(unknown)}")
-            merged = {**_DEFAULTS, **cfg}
-            merged["eval"] = {**_DEFAULTS["eval"], **cfg.get("eval", {})}
-            out[env_id] = merged
+            _check_keys(f"{path}: {env_id}", cfg, set(_DEFAULTS) | set(_NESTED))
+            for name in _NESTED:
+                for key, over in (cfg.get(name) or {}).items():
+                    _check_keys(f"{path}: {env_id}: {name}: {key}", over or {}, set(_DEFAULTS))
+            for name in cfg.get("algos") or {}:
+                if str(name).upper() not in ALGOS:
+                    raise ValueError(f"{path}: {env_id}: algos: {name} is not one of "
+                                     f"{', '.join(ALGOS)}")
+            if cfg.get("algo", _DEFAULTS["algo"]) not in ALGOS:
+                raise ValueError(f"{path}: {env_id}: algo must be one of {', '.join(ALGOS)}")
+            out[env_id] = _merge(_DEFAULTS, cfg)
     return out
 
 
-def rl_config(env_id: str, directory: str | Path | None = None) -> dict[str, Any]:
-    """The config of one env id."""
+def _configured_families(env_id: str, entry: dict[str, Any]) -> list[str]:
+    listed = entry.get("families")
+    return list(listed) if listed else [env_families(env_id)[0]]
+
+
+def rl_config(env_id: str, directory: str | Path | None = None, *, family: str | None = None,
+              algo: str | None = None) -> dict[str, Any]:
+    """The config of one env id on one family (default: the first configured) with one
+    algorithm (default: the entry's ``algo``; case-insensitive).
+
+    Raises
+    ------
+    KeyError
+        The env, family or algorithm is not configured (the message lists what is).
+    """
     configs = load_rl_configs(directory)
     if env_id not in configs:
         raise KeyError(f"no RL config for {env_id!r}; configured: {sorted(configs)}")
-    return configs[env_id]
+    entry = configs[env_id]
+    fams = _configured_families(env_id, entry)
+    key = fams[0] if family is None else family
+    if key not in fams:
+        raise KeyError(f"no RL config for {env_id} on family {key!r}; configured: "
+                       f"{', '.join(fams)}")
+    algos = {entry["algo"].upper(): {}}
+    algos.update({name.upper(): over or {} for name, over in (entry.get("algos") or {}).items()})
+    name = entry["algo"].upper() if algo is None else algo.upper()
+    if name not in algos:
+        raise KeyError(f"no {name} config for {env_id}; configured: {', '.join(algos)}")
+    base = {k: v for k, v in entry.items() if k not in _NESTED}
+    cfg = _merge(_merge(base, {**algos[name], "algo": name}),
+                 (entry.get("families") or {}).get(key) or {})
+    kwargs = dict(cfg["env_kwargs"])
+    if kwargs.get("motor_type") == "all":
+        from ..families import family as family_record
+
+        kwargs["motor_type"] = list(family_record(key).motor_types())
+    elif "motor_type" not in kwargs and key != env_families(env_id)[0]:
+        kwargs["motor_type"] = family_motor_type(key)
+    cfg["env_kwargs"] = kwargs
+    return cfg
+
+
+def rl_runs(directory: str | Path | None = None) -> list[tuple[str, str, str]]:
+    """Every configured training: (env id, family key, algorithm), in config order."""
+    out = []
+    for env_id, entry in load_rl_configs(directory).items():
+        names = [entry["algo"].upper(), *(str(name).upper() for name in entry.get("algos") or {})]
+        for key in _configured_families(env_id, entry):
+            out.extend((env_id, key, name) for name in names)
+    return out

@@ -8,27 +8,52 @@ from typing import Any
 
 from .config import rl_config
 
-__all__ = ["train", "model_path", "shipped_model", "SHIPPED_DIR"]
+__all__ = ["train", "model_path", "log_path", "shipped_model", "algo_class", "SHIPPED_DIR"]
 
-#: trained policies shipped with the package: the models behind docs/envs.md "Results"
+def algo_class(name: str) -> Any:
+    """The stable-baselines3 class of an algorithm name (``PPO``, ``SAC``, ``TD3``)."""
+    import stable_baselines3
+
+    return getattr(stable_baselines3, name.upper())
+
+
+#: trained policies shipped with the package: the models behind docs/results.md
 SHIPPED_DIR = Path(__file__).resolve().parent / "policies"
 
 
-def model_path(out_dir: str | Path, env_id: str) -> Path:
-    """Where the model of ``env_id`` is saved (``<out>/<EnvName>.zip``)."""
-    return Path(out_dir) / f"{env_id.split('/')[-1]}.zip"
+def model_path(out_dir: str | Path, env_id: str, family: str | None = None,
+               algo: str | None = None) -> Path:
+    """Where the model of ``env_id`` is saved: ``<out>/<EnvName>-<family>-<algo>.zip`` (algo
+    in lower case), or ``<out>/<EnvName>.zip`` when neither family nor algo is given."""
+    name = env_id.split("/")[-1]
+    if family is None and algo is None:
+        return Path(out_dir) / f"{name}.zip"
+    from .config import env_families
+
+    key = env_families(env_id)[0] if family is None else family
+    return Path(out_dir) / f"{name}-{key}-{(algo or 'PPO').lower()}.zip"
 
 
-def shipped_model(env_id: str) -> Path | None:
-    """The shipped trained policy of ``env_id`` (:data:`SHIPPED_DIR`), or None."""
-    path = model_path(SHIPPED_DIR, env_id)
+def log_path(model: str | Path) -> Path:
+    """The training log (SB3 ``Monitor`` CSV: return ``r``, length ``l``, time ``t`` of each
+    episode) beside a model file."""
+    model = Path(model)
+    return model.with_name(model.stem + ".monitor.csv")
+
+
+def shipped_model(env_id: str, family: str | None = None, algo: str = "PPO") -> Path | None:
+    """The shipped trained policy of ``env_id`` on ``family`` (default: the env's first) with
+    ``algo`` (:data:`SHIPPED_DIR`), or None."""
+    path = model_path(SHIPPED_DIR, env_id, family, algo)
     return path if path.is_file() else None
 
 
 def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None = None,
           seed: int | None = None, progress_bar: bool = True, threads: int = 1,
-          config_dir: str | Path | None = None) -> Path:
-    """Train the configured algorithm on ``env_id`` and save it; returns the model path.
+          config_dir: str | Path | None = None, family: str | None = None,
+          algo: str | None = None) -> Path:
+    """Train the configured algorithm on ``env_id`` and save it (:func:`model_path`, with the
+    training log beside it, :func:`log_path`); returns the model path.
 
     Parameters
     ----------
@@ -43,27 +68,33 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
     threads : int
         torch and numba threads (1 lets two trainings share 2 cores; a vector env of 32 or
         more copies runs the motor kernel on numba's thread pool).
+    config_dir : path, optional
+        Directory of the RL ``*.yml`` (default ``configs/rl``).
+    family, algo : str, optional
+        Motor family key and algorithm (default: the config's first family and its ``algo``).
     """
     import numba
     import torch
-    from stable_baselines3 import PPO, SAC
     from stable_baselines3.common.vec_env import VecMonitor
 
+    from .config import env_families
     from .sb3_adapter import make_sb3_env
 
-    cfg = rl_config(env_id, config_dir)
+    cfg = rl_config(env_id, config_dir, family=family, algo=algo)
+    family = env_families(env_id)[0] if family is None else family
+    path = model_path(out_dir, env_id, family, cfg["algo"])
+    path.parent.mkdir(parents=True, exist_ok=True)
     torch.set_num_threads(int(threads))
     numba.set_num_threads(min(int(threads), numba.config.NUMBA_NUM_THREADS))
     seed = int(cfg["seed"] if seed is None else seed)
     steps = int(cfg["total_timesteps"] if total_timesteps is None else total_timesteps)
-    venv = VecMonitor(make_sb3_env(env_id, int(cfg["n_envs"]), **cfg["env_kwargs"]))
-    algo = {"PPO": PPO, "SAC": SAC}[cfg["algo"]]
+    venv = VecMonitor(make_sb3_env(env_id, int(cfg["n_envs"]), **cfg["env_kwargs"]),
+                      filename=str(log_path(path)))
     hyper: dict[str, Any] = dict(cfg["hyperparams"])
-    model = algo(cfg["policy"], venv, seed=seed, verbose=0, device="cpu", **hyper)
+    model = algo_class(cfg["algo"])(cfg["policy"], venv, seed=seed, verbose=0, device="cpu",
+                                    **hyper)
     t0 = time.perf_counter()
     model.learn(total_timesteps=steps, progress_bar=progress_bar)
-    path = model_path(out_dir, env_id)
-    path.parent.mkdir(parents=True, exist_ok=True)
     model.save(path)
     print(f"{env_id}: {steps} steps in {time.perf_counter() - t0:.0f} s -> {path}")
     venv.close()

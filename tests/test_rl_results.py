@@ -1,0 +1,119 @@
+"""The results page (``jvl-gym evaluate --all``): every registered env × family × {trained,
+baseline, random}, deterministic; per-family configs; one-line errors for bad options."""
+
+from __future__ import annotations
+
+import shutil
+
+import pytest
+
+pytest.importorskip("stable_baselines3")
+
+from jvl_gym.cli import app as gym_cli  # noqa: E402
+from jvl_gym.envs import ENV_IDS  # noqa: E402
+from jvl_gym.families import family  # noqa: E402
+from jvl_gym.rl.config import env_families, rl_config, rl_runs  # noqa: E402
+from jvl_gym.rl.train import SHIPPED_DIR, log_path, model_path  # noqa: E402
+
+TINY = ["--seeds", "1", "--episodes", "2", "--max-steps", "6"]
+
+
+def _run(args, capsys):
+    with pytest.raises(SystemExit) as info:
+        gym_cli(args)
+    out, err = capsys.readouterr()
+    return info.value.code, out, err
+
+
+def _one_line_error(code, err):
+    assert code not in (0, None)
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+def test_every_env_and_family_is_configured_and_families_come_from_the_env():
+    runs = rl_runs()
+    for env_id in ENV_IDS:
+        for key in env_families(env_id):
+            cfg = rl_config(env_id, family=key)
+            assert cfg["eval"]["n_seeds"] >= 5
+            assert (env_id, key, cfg["algo"]) in runs
+    # the second algorithm on every task with more than one step per episode
+    for env_id in ENV_IDS:
+        if env_id != "jvl_gym/FilterTuning-v0":
+            assert (env_id, env_families(env_id)[0], "SAC") in runs
+    # a family other than the env's first runs that family's default motor type
+    assert rl_config("jvl_gym/GearSync-v0", family="mac800")["env_kwargs"] == {
+        "motor_type": "MAC800"}
+    # ``motor_type: all``: every type of the family, drawn per episode
+    assert rl_config("jvl_gym/FilterTuning-v0", family="mac800")["env_kwargs"][
+        "motor_type"] == list(family("mac800").motor_types())
+    with pytest.raises(KeyError, match="mis"):
+        rl_config("jvl_gym/GearSync-v0", family="mis")
+
+
+@pytest.fixture(scope="module")
+def pages(tmp_path_factory):
+    """Two runs of ``evaluate --all`` on a tiny budget; the StepperIndexing model in RUNS with
+    a training log (a copy of the shipped one)."""
+    root = tmp_path_factory.mktemp("results")
+    runs = root / "runs"
+    runs.mkdir()
+    shipped = model_path(SHIPPED_DIR, "jvl_gym/StepperIndexing-v0", "mis", "PPO")
+    ran = model_path(runs, "jvl_gym/StepperIndexing-v0", "mis", "PPO")
+    shutil.copy(shipped, ran)
+    log_path(ran).write_text('#{"t_start": 0.0, "env_id": "None"}\nr,l,t\n'
+                             + "".join(f"{-20 + k * 0.1},{300 - k},{k}\n" for k in range(150)))
+    texts = []
+    for k in range(2):
+        out = root / f"docs{k}"
+        with pytest.raises(SystemExit) as info:
+            gym_cli(["evaluate", "--all", "--out", str(out), "--runs", str(runs), *TINY])
+        assert info.value.code in (0, None)
+        texts.append((out / "results.md").read_text())
+        assert (out / "results" / f"{log_path(ran).stem}.png").stat().st_size > 1000
+    return texts
+
+
+def test_the_page_has_every_env_and_family_with_baseline_and_random(pages):
+    page = pages[0]
+    for env_id in ENV_IDS:
+        section = page.split(f"## {env_id}\n", 1)[1].split("\n## ", 1)[0]
+        for key in env_families(env_id):
+            assert f"### {key}\n" in section
+            block = section.split(f"### {key}\n", 1)[1].split("\n### ", 1)[0]
+            assert "\n| baseline |" in block and "\n| random |" in block
+            shipped = [a for e, f, a in rl_runs() if (e, f) == (env_id, key)
+                       and model_path(SHIPPED_DIR, e, f, a).is_file()]
+            for algo in shipped:
+                assert f"| {algo} (" in block
+            if not shipped:
+                assert "no trained policy" in block
+    # the model in RUNS takes precedence over the shipped one, and its log is plotted
+    assert "`StepperIndexing-v0-mis-ppo.zip` in the runs directory" in page
+    assert "](results/StepperIndexing-v0-mis-ppo.monitor.png)" in page
+    assert "episodes cut at 6 steps" in page
+    assert "time limit" in page  # every 6-step episode of the longer tasks is truncated
+
+
+def test_the_page_is_deterministic(pages):
+    assert pages[0] == pages[1]
+
+
+@pytest.mark.parametrize("args, words", [
+    (["evaluate", "--all"], "--out"),
+    (["evaluate", "--all", "--out", "x", "jvl_gym/GearSync-v0"], "--all"),
+    (["evaluate", "jvl_gym/GearSync-v0", "--out", "x"], "--out"),
+    (["evaluate"], "--all"),
+    (["evaluate", "--all", "--out", "x", "--max-steps", "0"], "max-steps"),
+    (["evaluate", "jvl_gym/CoilWinding-v0", "--family", "mac800"], "mac050_141"),
+    (["train", "jvl_gym/Positioning-v0", "--family", "mis"], "mac800"),
+    (["train", "jvl_gym/FilterTuning-v0", "--algo", "sac"], "PPO"),
+])
+def test_bad_options_are_one_line_errors(capsys, tmp_path, monkeypatch, args, words):
+    monkeypatch.chdir(tmp_path)
+    code, _, err = _run(args, capsys)
+    assert words in _one_line_error(code, err)
+    assert not (tmp_path / "x").exists()
