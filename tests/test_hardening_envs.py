@@ -95,8 +95,8 @@ def test_gear_sync_reasons_name_break_slack_and_errors():
 
     venv = G.GearSyncVectorEnv(num_envs=3)
     venv.reset(seed=0)
-    venv.line[0, G._W_FORCE] = 10 * venv.line[0, G._W_REF]
-    venv.line[1, G._W_SLACK] = venv.slack_samples
+    venv.force[0] = 10 * venv.tension_ref[0]
+    venv.slack_count[1] = venv.slack_samples
     venv.motors.regs[2, R.ERR_STAT] |= c.I2T_ERR
     reasons = venv._termination_reasons(np.arange(3))
     assert "break" in reasons[0] and "slack" in reasons[1] and "I2T_ERR" in reasons[2]
@@ -107,7 +107,7 @@ def test_coil_winding_reason_names_the_finished_coil():
 
     venv = W.CoilWindingVectorEnv(num_envs=1)
     venv.reset(seed=0)
-    venv.coil[0, W._C_LAYER] = venv._k[W._N_LAYERS]
+    venv.layer[0] = venv.n_layers
     assert "layers" in venv._termination_reasons(np.arange(1))[0]
 
 

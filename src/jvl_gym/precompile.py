@@ -51,14 +51,14 @@ def env_jobs(env_ids: tuple[str, ...]) -> list[tuple[str, str | None]]:
 
     import jvl_gym  # noqa: F401  (registers the ids)
 
-    from .envs.family_task import task_family
+    from .families import family
 
     jobs: list[tuple[str, str | None]] = []
     for env_id in env_ids:
         module, _, name = str(gym.spec(env_id).vector_entry_point).partition(":")
         keys = getattr(importlib.import_module(module), name).supported_families()
         jobs.append((env_id, None))
-        jobs.extend((env_id, task_family(key).task.DEFAULT_MOTOR_TYPE) for key in keys[1:])
+        jobs.extend((env_id, family(key).task.DEFAULT_MOTOR_TYPE) for key in keys[1:])
     return jobs
 
 

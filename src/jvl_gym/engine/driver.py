@@ -15,9 +15,12 @@ binds for a family —
   ``blk``;
 - ``lanes``: the block size;
 
-and, for a task, its hooks (each inlined, called per copy ``i``; ``view`` is the engine's
-:class:`~jvl_gym.engine.view.EngineView`, ``episode`` the env's
-:class:`~jvl_gym.engine.view.Episode` arrays, ``task`` the task's own tuple of arrays):
+and, for a task, its state and hooks (each inlined, called per copy ``i``; ``view`` is the
+engine's :class:`~jvl_gym.engine.view.EngineView`, ``episode`` the env's
+:class:`~jvl_gym.engine.view.Episode` arrays, ``task`` the task's state):
+
+- ``task_state(args)``: the task's state (its named tuple) from the plain tuple of arrays the
+  driver is given (numba dispatches on a plain tuple fastest), once per block;
 
 - ``task_begin(i, view, episode, task, actions)``: once per env step, before the motors;
 - ``task_before(i, view, episode, task)``: before each outer sample of the motor;
@@ -39,7 +42,8 @@ from ..jit import KERNEL, KERNEL_PARALLEL
 from .specialize import specialise
 from .view import EngineView, Episode
 
-__all__ = ["PARALLEL_MIN", "MotorDriver", "TaskDriver", "noop_hook", "noop_step_hook"]
+__all__ = ["PARALLEL_MIN", "MotorDriver", "TaskDriver", "noop_hook", "noop_step_hook",
+           "same_state"]
 
 #: from this many motors (or env copies) the blocks are spread over threads
 PARALLEL_MIN = 32
@@ -48,11 +52,18 @@ PARALLEL_MIN = 32
 outer_sample: Any = None
 inner_block: Any = None
 lanes: int = 0
+task_state: Any = None
 task_begin: Any = None
 task_before: Any = None
 task_after: Any = None
 task_end: Any = None
 task_observe: Any = None
+
+
+@njit(cache=True, inline="always")
+def same_state(args: tuple) -> tuple:  # pragma: no cover - compiled
+    """A ``task_state`` that passes the driver's tuple to the hooks as it is."""
+    return args
 
 
 @njit(cache=True, inline="always")
@@ -129,19 +140,20 @@ def _task_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scr
     samples; after hook per copy), then the task's end hook per copy."""
     view = EngineView(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch)
     episode = Episode(prev_action, t, noise_key, obs, reward, terminated, truncated)
+    hooks_task = task_state(task)
     i0 = blk * lanes
     n = min(lanes, regs.shape[0] - i0)
     for i in range(i0, i0 + n):
-        task_begin(i, view, episode, task, actions)
+        task_begin(i, view, episode, hooks_task, actions)
     for t in range(decimation):
         for i in range(i0, i0 + n):
-            task_before(i, view, episode, task)
+            task_before(i, view, episode, hooks_task)
             outer_sample(view, i, t)
         inner_block(view, i0, n, blk)
         for i in range(i0, i0 + n):
-            task_after(i, view, episode, task)
+            task_after(i, view, episode, hooks_task)
     for i in range(i0, i0 + n):
-        task_end(i, view, episode, task, actions)
+        task_end(i, view, episode, hooks_task, actions)
 
 
 def _task_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
@@ -178,8 +190,9 @@ def _task_observe(idx, regs, state, params, inputs, keys, buf, rec, fmt, plan, s
     """The task's observation hook for copies ``idx`` (after their reset)."""
     view = EngineView(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch)
     episode = Episode(prev_action, t, noise_key, obs, reward, terminated, truncated)
+    hooks_task = task_state(task)
     for i in idx:
-        task_observe(i, view, episode, task)
+        task_observe(i, view, episode, hooks_task)
 
 
 _MOTOR_TEMPLATES = {"_advance_block": _advance_block, "_run_serial": _run_serial,
@@ -243,16 +256,19 @@ class TaskDriver:
         The task's hooks (``task_begin`` … ``task_observe`` of the module docstring), compiled
         with ``inline="always"``; :func:`noop_hook` / :func:`noop_step_hook` where a task has
         none.
+    state : numba dispatcher
+        ``task_state`` of the module docstring (inlined); default :func:`same_state`.
     tag : str
         Identifier of the task in cache file names.
     """
 
     def __init__(self, family: Any, source: str, tag: str, *, begin: Any = noop_step_hook,
                  before: Any = noop_hook, after: Any = noop_hook, end: Any = noop_step_hook,
-                 observe: Any = noop_hook) -> None:
+                 observe: Any = noop_hook, state: Any = same_state) -> None:
         self.family = family
-        bindings = {**_family_bindings(family), "task_begin": begin, "task_before": before,
-                    "task_after": after, "task_end": end, "task_observe": observe}
+        bindings = {**_family_bindings(family), "task_state": state, "task_begin": begin,
+                    "task_before": before, "task_after": after, "task_end": end,
+                    "task_observe": observe}
         fns = specialise(_TASK_TEMPLATES, bindings, f"{tag}__{family.key}", source,
                          _TASK_OPTIONS)
         self._prepared = False
@@ -267,7 +283,8 @@ class TaskDriver:
         """One env step of every copy (one motor each) with ``actions`` (N, A) float64.
 
         ``arrays`` and ``episode`` are the fields of an :class:`EngineView` and an
-        :class:`Episode` as plain tuples; ``task`` is the task's tuple its hooks unpack.
+        :class:`Episode` as plain tuples; ``task`` is the plain tuple of the task's arrays
+        (``task_state`` makes the hooks' state of it).
 
         Returns
         -------

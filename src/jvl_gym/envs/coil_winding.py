@@ -3,202 +3,225 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 
-from ..engine import TaskDriver
-from ..families import family
-from ..families.mac050_141 import constants as c
-from ..families.mac050_141.task import (
-    DEFAULT_MOTOR_TYPE,
+from ..families import Capability, Family
+from ..jit import KERNEL
+from . import deposition as dep
+from .base import Field, MotorVectorEnv
+from .compiled import action, end_step, put_obs
+from .deposition import flatness_row, lay_turn_row, profile_summary_row
+from .profiles import SpeedProfile, row_speed
+from .single import MotorEnv
+from .task import (
     ERROR_BITS,
-    FAMILY_KEY,
-    TERMINAL_ERRORS,
     R,
+    Task,
     coil_direction,
+    record,
     reg,
     set_pulse_counts,
     set_reg,
     shaft_angle,
 )
-from ..jit import KERNEL
-from . import deposition as dep
-from .base import Column, MotorVectorEnv
-from .compiled import action, end_step, put_obs
-from .deposition import flatness_row, lay_turn_row, profile_summary_row
-from .profiles import SpeedProfile, row_speed
-from .single import MotorEnv
 
-__all__ = ["CoilWindingEnv", "CoilWindingVectorEnv"]
+__all__ = ["CoilWindingEnv", "CoilWindingVectorEnv", "CoilWindingState"]
 
-_DT = c.OUTER_DT
 _GEARF2 = 10000
 _GROUPS = 8  #: groups of bins in the observed profile summary
-_V_TRAVERSE_NORM = 500.0 / 60.0 * c.COUNTS_PER_REV / c.OUTER_HZ  #: 500 rpm in counts/sample
 _N_FIXED_OBS = 5  #: observation components before the profile summary
 _TURN_EMA = 0.25  #: weight of the newest turn in the laid-pitch averages
 _TURN_OBS_SCALE = 10.0  #: laid pitch and gap (relative to d0) × 10 in the observation
+_TRAVERSE_RPM = 500.0  #: rpm: scale of the traverse speed channel
 
-#: columns of the per-copy coil state (_C_V and _C_X0 carry the spindle speed and the traverse
-#: position of the present outer sample from before to after the block's inner samples;
-#: _C_PROFILE_CHANGED is 1 when a turn was laid since the profile summary was computed)
-(_C_D0, _C_D_MEAN, _C_D_VAR, _C_D_FREQ, _C_D_PHASE, _C_TIME, _C_SPINDLE_REV, _C_COUNT_ACC,
- _C_PULSES, _C_FLOOR, _C_LAST_STD, _C_LAYER_VOID, _C_LAYER_PILES, _C_STEP_PENALTY, _C_GEAR0,
- _C_HALF_D_COUNTS, _C_DIRECTION, _C_LAYER, _C_PREV_X, _C_LAID_PITCH, _C_LAID_GAP,
- _C_LAID_SLIDE, _C_V, _C_X0, _C_PROFILE_CHANGED, _C_COLS) = range(26)
-#: entries of the per-env constants array
-(_NOISE, _MAX_STEPS, _DECIMATION, _T_CHANGE, _SPINDLE_CPR, _METRES_PER_RAD, _WIDTH, _NEST,
- _PITCH_TRIM, _P4, _N_LAYERS, _VOID_W, _FLATNESS_W, _ERROR_PENALTY, _N_CONSTS) = range(15)
+#: the env's constants of the compiled step (``spindle_cpr``: spindle counts per revolution,
+#: ``metres_per_rad``: traverse travel per motor radian, ``p4``: the upper flange in counts)
+CONSTS = record(noise=float, max_steps=float, decimation=float, t_change=float,
+                spindle_cpr=float, metres_per_rad=float, width=float, nest=float,
+                pitch_trim=float, p4=float, n_layers=float, void_weight=float,
+                flatness_weight=float, error_penalty=float)
+#: a copy's coil (``v`` and ``x0`` carry the spindle speed and the traverse position of the
+#: present outer sample from before to after the block's inner samples; ``profile_changed`` is
+#: 1 when a turn was laid since the profile summary was computed)
+COIL = record(d0=float, d_mean=float, d_var=float, d_freq=float, d_phase=float, time=float,
+              spindle_rev=float, count_acc=float, pulses=float, floor=float, last_std=float,
+              layer_void=float, layer_piles=float, step_penalty=float, gear0=float,
+              half_d_counts=float, direction=float, layer=float, prev_x=float,
+              laid_pitch=float, laid_gap=float, laid_slide=float, v=float, x0=float,
+              profile_changed=float)
 
 
-@njit(cache=True, inline="always")
-def _lay_turn(i, x, t, h, centres, w, k):  # pragma: no cover - compiled
-    """Lay the turn of copy ``i`` at traverse position ``x`` [m] and time ``t`` [s]."""
-    d = w[i, _C_D_MEAN] * (1.0 + w[i, _C_D_VAR] * math.sin(
-        2.0 * math.pi * w[i, _C_D_FREQ] * t + w[i, _C_D_PHASE]))
-    base, void, x_laid = lay_turn_row(h[i], centres, x, d, k[_WIDTH], k[_NEST] > 0.5)
-    w[i, _C_PROFILE_CHANGED] = 1.0
+class CoilWindingState(NamedTuple):
+    """The task's state (:mod:`jvl_gym.envs.task`)."""
+
+    consts: np.ndarray  #: (1,) :data:`CONSTS`
+    profile: np.ndarray  #: (N, profile columns) the spindle speed profiles (:mod:`.profiles`)
+    coil: np.ndarray  #: (N,) :data:`COIL`
+    h: np.ndarray  #: (N, bins) the heights of the wound surface [m] (:mod:`.deposition`)
+    centres: np.ndarray  #: (bins,) the bin centres [m]
+    summary: np.ndarray  #: (N, groups) the observed profile summary
+
+
+def _figures(fam: Family) -> dict[str, float]:
+    """The hooks' figures on a family: the outer sample time [s] and the traverse speed scale
+    in counts/sample."""
+    k = fam.constants
+    return {"_DT": k.OUTER_DT,
+            "_V_TRAVERSE_NORM": _TRAVERSE_RPM / 60.0 * k.COUNTS_PER_REV / k.OUTER_HZ}
+
+
+_DT = _V_TRAVERSE_NORM = 1.0  # bound per family by ``_figures``
+
+
+def _lay_turn(x, t, h, centres, w, k):  # pragma: no cover - compiled
+    """Lay a copy's turn at traverse position ``x`` [m] and time ``t`` [s] on its heights ``h``
+    (its coil record ``w``, the env's constants ``k``)."""
+    d = w.d_mean * (1.0 + w.d_var * math.sin(
+        2.0 * math.pi * w.d_freq * t + w.d_phase))
+    base, void, x_laid = lay_turn_row(h, centres, x, d, k.width, k.nest > 0.5)
+    w.profile_changed = 1.0
     # what a camera at the laying point sees: the sideways slide of the new turn from the wire
     # guide (pushed ahead by its neighbour when the wire is thicker than the pitch) and, for
     # regular turns (spacing 0.5..1.5 d0 from the previous turn of the layer), the turn
     # spacing and the gap between the two turns (spacing − d), averaged
-    d0 = w[i, _C_D0]
-    w[i, _C_LAID_SLIDE] = (x_laid - x) * w[i, _C_DIRECTION] / d0
-    spacing = abs(x_laid - w[i, _C_PREV_X]) / d0  # NaN for the first turn of a layer
+    d0 = w.d0
+    w.laid_slide = (x_laid - x) * w.direction / d0
+    spacing = abs(x_laid - w.prev_x) / d0  # NaN for the first turn of a layer
     if 0.5 < spacing < 1.5:
-        w[i, _C_LAID_PITCH] += _TURN_EMA * ((spacing - 1.0) - w[i, _C_LAID_PITCH])
-        w[i, _C_LAID_GAP] += _TURN_EMA * ((spacing - d / d0) - w[i, _C_LAID_GAP])
-    w[i, _C_PREV_X] = x_laid
-    w[i, _C_LAYER_VOID] += void / (d * d)
-    if base > w[i, _C_FLOOR] + 0.5 * d:
-        w[i, _C_LAYER_PILES] += 1.0
-    w[i, _C_STEP_PENALTY] += k[_VOID_W] * void / (d * d)
+        w.laid_pitch += _TURN_EMA * ((spacing - 1.0) - w.laid_pitch)
+        w.laid_gap += _TURN_EMA * ((spacing - d / d0) - w.laid_gap)
+    w.prev_x = x_laid
+    w.layer_void += void / (d * d)
+    if base > w.floor + 0.5 * d:
+        w.layer_piles += 1.0
+    w.step_penalty += k.void_weight * void / (d * d)
 
 
-@njit(cache=True, inline="always")
-def _spindle_before(i, view, episode, task):  # pragma: no cover - compiled
+def _spindle_before(i, view, episode, s):  # pragma: no cover - compiled
     """Outer sample of copy ``i``, before the motor: spindle speed and pulses; remembers the
     speed and the traverse position for :func:`_spindle_after`."""
-    k, prof, w = task[0], task[1], task[2]
-    v = row_speed(prof[i], w[i, _C_TIME], w[i, _C_SPINDLE_REV] * 2.0 * math.pi, k[_T_CHANGE])
-    acc = w[i, _C_COUNT_ACC] + v * k[_SPINDLE_CPR] * _DT
+    k = s.consts[0]
+    w = s.coil[i]
+    v = row_speed(s.profile[i], w.time, w.spindle_rev * 2.0 * math.pi, k.t_change)
+    acc = w.count_acc + v * k.spindle_cpr * _DT
     counts = math.floor(acc)
-    w[i, _C_COUNT_ACC] = acc - counts
-    w[i, _C_PULSES] += counts
+    w.count_acc = acc - counts
+    w.pulses += counts
     set_pulse_counts(view, i, counts)
-    w[i, _C_V] = v
-    w[i, _C_X0] = shaft_angle(view, i) * k[_METRES_PER_RAD]
+    w.v = v
+    w.x0 = shaft_angle(view, i) * k.metres_per_rad
 
 
-@njit(cache=True, inline="always")
-def _spindle_after(i, view, episode, task):  # pragma: no cover - compiled
+def _spindle_after(i, view, episode, s):  # pragma: no cover - compiled
     """Outer sample of copy ``i``, after the motor: a turn is laid when the spindle completes
     a revolution, at the traverse position interpolated to that instant."""
-    k, w, h, centres = task[0], task[2], task[3], task[4]
-    v = w[i, _C_V]
-    x0 = w[i, _C_X0]
-    rev0 = w[i, _C_SPINDLE_REV]
+    k = s.consts[0]
+    w = s.coil[i]
+    v = w.v
+    x0 = w.x0
+    rev0 = w.spindle_rev
     rev1 = rev0 + v * _DT
-    w[i, _C_SPINDLE_REV] = rev1
+    w.spindle_rev = rev1
     if math.floor(rev1) > math.floor(rev0):
         frac = min(max((math.floor(rev0) + 1.0 - rev0) / max(v * _DT, 1e-12), 0.0), 1.0)
-        x1 = shaft_angle(view, i) * k[_METRES_PER_RAD]
-        _lay_turn(i, x0 + frac * (x1 - x0), w[i, _C_TIME] + frac * _DT, h, centres, w, k)
-    w[i, _C_TIME] += _DT
+        x1 = shaft_angle(view, i) * k.metres_per_rad
+        _lay_turn(x0 + frac * (x1 - x0), w.time + frac * _DT, s.h[i], s.centres, w, k)
+    w.time += _DT
 
 
-@njit(cache=True, inline="always")
 def _track_layer(i, view, w, h):  # pragma: no cover - compiled
-    """A reversal of the COIL block closes a layer: its flatness is booked and scored."""
+    """A reversal of the COIL block of copy ``i`` (its coil record ``w``, its heights ``h``)
+    closes a layer: its flatness is booked and scored."""
     direction = coil_direction(view, i)
     if direction == 0.0:
         return 0.0
-    flipped = direction != w[i, _C_DIRECTION]
-    w[i, _C_DIRECTION] = direction
+    flipped = direction != w.direction
+    w.direction = direction
     if not flipped:
         return 0.0
-    std, _, _ = flatness_row(h[i], w[i, _C_D0])
-    w[i, _C_LAST_STD] = std
-    w[i, _C_FLOOR] = h[i].mean()
-    w[i, _C_LAYER] += 1.0
-    w[i, _C_LAYER_VOID] = 0.0
-    w[i, _C_LAYER_PILES] = 0.0
-    w[i, _C_PREV_X] = math.nan
+    std, _, _ = flatness_row(h, w.d0)
+    w.last_std = std
+    w.floor = h.mean()
+    w.layer += 1.0
+    w.layer_void = 0.0
+    w.layer_piles = 0.0
+    w.prev_x = math.nan
     return std
 
 
-@njit(cache=True, inline="always")
-def _observe_row(i, view, episode, task):  # pragma: no cover - compiled
+def _observe_row(i, view, episode, s):  # pragma: no cover - compiled
     """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
-    k, w, h, summary = task[0], task[2], task[3], task[5]
+    k = s.consts[0]
+    w = s.coil[i]
     obs, prev, t = episode.obs, episode.prev_action, episode.t
     key = episode.noise_key[i]
-    noise = k[_NOISE]
-    x = shaft_angle(view, i) * k[_METRES_PER_RAD]
-    spindle_norm = 2000.0 / 60.0 * k[_SPINDLE_CPR] * _DT
-    put_obs(obs, i, 0, 2.0 * x / k[_WIDTH] - 1.0, key, t[i], noise)
+    noise = k.noise
+    x = shaft_angle(view, i) * k.metres_per_rad
+    spindle_norm = 2000.0 / 60.0 * k.spindle_cpr * _DT
+    put_obs(obs, i, 0, 2.0 * x / k.width - 1.0, key, t[i], noise)
     put_obs(obs, i, 1, reg(view, i, R.V_IST) / _V_TRAVERSE_NORM, key, t[i], noise)
-    put_obs(obs, i, 2, w[i, _C_PULSES] / k[_DECIMATION] / spindle_norm, key, t[i], noise)
-    put_obs(obs, i, 3, w[i, _C_LAYER] / k[_N_LAYERS], key, t[i], noise)
-    put_obs(obs, i, 4, w[i, _C_DIRECTION], key, t[i], noise)
-    if w[i, _C_PROFILE_CHANGED] != 0.0:  # else summary[i] is still that of h[i]
-        profile_summary_row(h[i], _GROUPS, w[i, _C_D0], summary[i])
-        w[i, _C_PROFILE_CHANGED] = 0.0
+    put_obs(obs, i, 2, w.pulses / k.decimation / spindle_norm, key, t[i], noise)
+    put_obs(obs, i, 3, w.layer / k.n_layers, key, t[i], noise)
+    put_obs(obs, i, 4, w.direction, key, t[i], noise)
+    if w.profile_changed != 0.0:  # else summary[i] is still that of h[i]
+        profile_summary_row(s.h[i], _GROUPS, w.d0, s.summary[i])
+        w.profile_changed = 0.0
     for g in range(_GROUPS):
-        put_obs(obs, i, _N_FIXED_OBS + g, summary[i, g], key, t[i], noise)
+        put_obs(obs, i, _N_FIXED_OBS + g, s.summary[i, g], key, t[i], noise)
     j = _N_FIXED_OBS + _GROUPS
-    put_obs(obs, i, j, w[i, _C_LAST_STD], key, t[i], noise)
-    put_obs(obs, i, j + 1, w[i, _C_LAYER_VOID] / 5.0, key, t[i], noise)
-    put_obs(obs, i, j + 2, w[i, _C_LAYER_PILES] / 5.0, key, t[i], noise)
-    put_obs(obs, i, j + 3, _TURN_OBS_SCALE * w[i, _C_LAID_PITCH], key, t[i], noise)
-    put_obs(obs, i, j + 4, _TURN_OBS_SCALE * w[i, _C_LAID_GAP], key, t[i], noise)
-    put_obs(obs, i, j + 5, 2.0 * w[i, _C_LAID_SLIDE], key, t[i], noise)
+    put_obs(obs, i, j, w.last_std, key, t[i], noise)
+    put_obs(obs, i, j + 1, w.layer_void / 5.0, key, t[i], noise)
+    put_obs(obs, i, j + 2, w.layer_piles / 5.0, key, t[i], noise)
+    put_obs(obs, i, j + 3, _TURN_OBS_SCALE * w.laid_pitch, key, t[i], noise)
+    put_obs(obs, i, j + 4, _TURN_OBS_SCALE * w.laid_gap, key, t[i], noise)
+    put_obs(obs, i, j + 5, 2.0 * w.laid_slide, key, t[i], noise)
     for a in range(prev.shape[1]):
         put_obs(obs, i, j + 6 + a, prev[i, a], key, t[i], noise)
 
 
-@njit(cache=True, inline="always")
-def _step_begin(i, view, episode, task, actions):  # pragma: no cover - compiled
+def _step_begin(i, view, episode, s, actions):  # pragma: no cover - compiled
     """Beginning of an env step of copy ``i``: pitch and dwell trims, step accumulators."""
-    k, w = task[0], task[2]
+    k = s.consts[0]
+    w = s.coil[i]
     a0 = action(actions, i, 0)
     a1 = action(actions, i, 1)
     a2 = action(actions, i, 2)
-    half = w[i, _C_HALF_D_COUNTS]
-    set_reg(view, i, R.GEARF1, round(w[i, _C_GEAR0] * (1.0 + k[_PITCH_TRIM] * a0) * _GEARF2))
+    half = w.half_d_counts
+    set_reg(view, i, R.GEARF1, round(w.gear0 * (1.0 + k.pitch_trim * a0) * _GEARF2))
     set_reg(view, i, R.P2, round((1.0 + a1) * half))
-    set_reg(view, i, R.P3, int(k[_P4]) - round((1.0 + a2) * half))
-    w[i, _C_PULSES] = 0.0
-    w[i, _C_STEP_PENALTY] = 0.0
+    set_reg(view, i, R.P3, int(k.p4) - round((1.0 + a2) * half))
+    w.pulses = 0.0
+    w.step_penalty = 0.0
 
 
-@njit(cache=True, inline="always")
-def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
+def _step_end(i, view, episode, s, actions):  # pragma: no cover - compiled
     """End of an env step of copy ``i``: layer bookkeeping, reward, termination, observation
     (the actions are clipped again: a pure function of ``actions``)."""
-    k, w, h = task[0], task[2], task[3]
+    k = s.consts[0]
+    w = s.coil[i]
     prev, t = episode.prev_action, episode.t
     a0 = action(actions, i, 0)
     a1 = action(actions, i, 1)
     a2 = action(actions, i, 2)
-    w[i, _C_STEP_PENALTY] += k[_FLATNESS_W] * _track_layer(i, view, w, h)
+    w.step_penalty += k.flatness_weight * _track_layer(i, view, w, s.h[i])
     t[i] += 1
     error = (reg(view, i, R.ERR_STAT) & ERROR_BITS) != 0
-    episode.reward[i] = -w[i, _C_STEP_PENALTY] - (k[_ERROR_PENALTY] if error else 0.0)
-    end_step(i, error or w[i, _C_LAYER] >= k[_N_LAYERS], t, int(k[_MAX_STEPS]),
+    episode.reward[i] = -w.step_penalty - (k.error_penalty if error else 0.0)
+    end_step(i, error or w.layer >= k.n_layers, t, int(k.max_steps),
              episode.terminated, episode.truncated)
     prev[i, 0] = a0
     prev[i, 1] = a1
     prev[i, 2] = a2
-    _observe_row(i, view, episode, task)
+    _observe_row(i, view, episode, s)
 
 
-_DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "coil_winding", begin=_step_begin,
-                     before=_spindle_before, after=_spindle_after, end=_step_end,
-                     observe=_observe_row)
-
+TASK = Task("coil_winding", __file__, needs={Capability.COIL_MODE}, state=CoilWindingState,
+            figures=_figures, helpers={"_lay_turn": _lay_turn, "_track_layer": _track_layer},
+            begin=_step_begin, before=_spindle_before, after=_spindle_after, end=_step_end,
+            observe=_observe_row)
 
 
 @njit(**KERNEL)
@@ -206,7 +229,8 @@ def _reset_rows(idx: np.ndarray, w: np.ndarray, h: np.ndarray, d0: np.ndarray,
                 bias: np.ndarray, variation: np.ndarray, a_soll: np.ndarray, u: np.ndarray,
                 counts_per_m: float, spindle_cpr: int, gearf1: np.ndarray, half: np.ndarray,
                 a_soll_raw: np.ndarray) -> None:  # pragma: no cover - compiled
-    """Coil state ``w`` (N, _C_COLS) and heights ``h`` (N, bins) of copies ``idx`` empty, from
+    """Coil state ``w`` (N,) :data:`COIL` and heights ``h`` (N, bins) of copies ``idx`` empty
+    (zeroed by the caller), from
     the (M,) draws (wire diameter d0 [m], diameter bias, variation, A_SOLL) and the (M, 2)
     uniform numbers ``u`` of the diameter variation (frequency 0.05–0.3 Hz, phase); the
     nominal registers from d0 (the traverse advances d0 per spindle revolution, ``counts_per_m``
@@ -215,21 +239,20 @@ def _reset_rows(idx: np.ndarray, w: np.ndarray, h: np.ndarray, d0: np.ndarray,
     ``a_soll_raw``, (M,) each."""
     for j in range(idx.shape[0]):
         i = idx[j]
-        w[i].fill(0.0)
-        h[i].fill(0.0)
-        w[i, _C_D0] = d0[j]
-        w[i, _C_D_MEAN] = d0[j] * (1.0 + bias[j])
-        w[i, _C_D_VAR] = variation[j]
-        w[i, _C_D_FREQ] = 0.05 + 0.25 * u[j, 0]
-        w[i, _C_D_PHASE] = 2 * np.pi * u[j, 1]
-        w[i, _C_DIRECTION] = 1.0
-        w[i, _C_PREV_X] = np.nan
-        w[i, _C_PROFILE_CHANGED] = 1.0  # the empty profile is summarised anew
+        r = w[i]
+        r.d0 = d0[j]
+        r.d_mean = d0[j] * (1.0 + bias[j])
+        r.d_var = variation[j]
+        r.d_freq = 0.05 + 0.25 * u[j, 0]
+        r.d_phase = 2 * np.pi * u[j, 1]
+        r.direction = 1.0
+        r.prev_x = np.nan
+        r.profile_changed = 1.0  # the empty profile is summarised anew
         gear = d0[j] * counts_per_m / spindle_cpr
-        w[i, _C_GEAR0] = gear
-        w[i, _C_HALF_D_COUNTS] = 0.5 * d0[j] * counts_per_m
+        r.gear0 = gear
+        r.half_d_counts = 0.5 * d0[j] * counts_per_m
         gearf1[j] = np.round(gear * _GEARF2)
-        half[j] = int(np.round(w[i, _C_HALF_D_COUNTS]))
+        half[j] = int(np.round(r.half_d_counts))
         a_soll_raw[j] = np.round(a_soll[j])
 
 
@@ -237,36 +260,30 @@ class CoilWindingVectorEnv(MotorVectorEnv):
     """Vector version of :class:`CoilWindingEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
 
-    family_key = FAMILY_KEY
-    default_motor_type = DEFAULT_MOTOR_TYPE
-    terminal_errors = TERMINAL_ERRORS
-    refused_families = {
-        "mac800": "the MAC800 register overview gives no registers for mode 19 (Coil), so the "
-                  "MAC800's COIL mode is not modelled",
-        "mis": "a step motor has no COIL mode"}
+    task = TASK
 
-    d0 = Column("coil", _C_D0)  #: nominal wire diameter [m]
-    d_mean = Column("coil", _C_D_MEAN)  #: true mean wire diameter [m]
-    d_var = Column("coil", _C_D_VAR)  #: relative amplitude of the diameter variation
-    d_freq = Column("coil", _C_D_FREQ)  #: frequency of the diameter variation [Hz]
-    d_phase = Column("coil", _C_D_PHASE)  #: phase of the diameter variation [rad]
-    time = Column("coil", _C_TIME)  #: episode time [s]
-    spindle_rev = Column("coil", _C_SPINDLE_REV)  #: spindle revolutions
-    count_acc = Column("coil", _C_COUNT_ACC)  #: fractional spindle counts
-    pulses = Column("coil", _C_PULSES)  #: spindle counts in the last step
-    floor = Column("coil", _C_FLOOR)  #: mean height at the last reversal [m]
-    last_std = Column("coil", _C_LAST_STD)  #: flatness (std / d0) at the last reversal
-    layer_void = Column("coil", _C_LAYER_VOID)  #: voids of this layer [wire cross-sections]
-    layer_piles = Column("coil", _C_LAYER_PILES)  #: pile-up turns of this layer
-    step_penalty = Column("coil", _C_STEP_PENALTY)  #: penalty of the last step
-    gear0 = Column("coil", _C_GEAR0)  #: nominal gear factor
-    half_d_counts = Column("coil", _C_HALF_D_COUNTS)  #: d0/2 in traverse counts
-    direction = Column("coil", _C_DIRECTION)  #: direction of the COIL block (±1)
-    layer = Column("coil", _C_LAYER)  #: layers completed
-    prev_x = Column("coil", _C_PREV_X)  #: where the previous turn of this layer lies [m]
-    laid_pitch = Column("coil", _C_LAID_PITCH)  #: average laid turn spacing / d0 − 1
-    laid_gap = Column("coil", _C_LAID_GAP)  #: average gap between laid turns / d0
-    laid_slide = Column("coil", _C_LAID_SLIDE)  #: slide of the last turn from the guide / d0
+    d0 = Field("coil")  #: nominal wire diameter [m]
+    d_mean = Field("coil")  #: true mean wire diameter [m]
+    d_var = Field("coil")  #: relative amplitude of the diameter variation
+    d_freq = Field("coil")  #: frequency of the diameter variation [Hz]
+    d_phase = Field("coil")  #: phase of the diameter variation [rad]
+    time = Field("coil")  #: episode time [s]
+    spindle_rev = Field("coil")  #: spindle revolutions
+    count_acc = Field("coil")  #: fractional spindle counts
+    pulses = Field("coil")  #: spindle counts in the last step
+    floor = Field("coil")  #: mean height at the last reversal [m]
+    last_std = Field("coil")  #: flatness (std / d0) at the last reversal
+    layer_void = Field("coil")  #: voids of this layer [wire cross-sections]
+    layer_piles = Field("coil")  #: pile-up turns of this layer
+    step_penalty = Field("coil")  #: penalty of the last step
+    gear0 = Field("coil")  #: nominal gear factor
+    half_d_counts = Field("coil")  #: d0/2 in traverse counts
+    direction = Field("coil")  #: direction of the COIL block (±1)
+    layer = Field("coil")  #: layers completed
+    prev_x = Field("coil")  #: where the previous turn of this layer lies [m]
+    laid_pitch = Field("coil")  #: average laid turn spacing / d0 − 1
+    laid_gap = Field("coil")  #: average gap between laid turns / d0
+    laid_slide = Field("coil")  #: slide of the last turn from the guide / d0
 
     obs_labels = ("traverse_position", "traverse_speed", "spindle_speed", "layer",
                   "direction", *(f"profile_{k}" for k in range(_GROUPS)), "last_flatness",
@@ -309,28 +326,23 @@ class CoilWindingVectorEnv(MotorVectorEnv):
         self.flatness_weight = float(flatness_weight)
         self.error_penalty = float(error_penalty)
         self.centres = dep.bin_centres(self.coil_width, float(bin_width))
-        self._counts_per_m = c.COUNTS_PER_REV / self.screw_pitch
         super().__init__(num_envs, **kwargs)
 
     def _build(self) -> None:
         n = self.num_envs
+        #: traverse counts per metre
+        self._counts_per_m = self.fam.constants.COUNTS_PER_REV / self.screw_pitch
         self.profile = SpeedProfile(n)
         self.h = np.zeros((n, self.centres.size))
-        self.coil = np.zeros((n, _C_COLS))
         self.p4 = int(round(self.coil_width * self._counts_per_m))
-        self._summary = np.zeros((n, _GROUPS))
-        self._k = np.zeros(_N_CONSTS)  # constants of the compiled step
-        self._k[[_NOISE, _MAX_STEPS, _DECIMATION, _T_CHANGE, _SPINDLE_CPR, _METRES_PER_RAD,
-                 _WIDTH, _NEST, _PITCH_TRIM, _P4, _N_LAYERS, _VOID_W, _FLATNESS_W,
-                 _ERROR_PENALTY]] = (
+        consts = np.zeros(1, dtype=CONSTS)
+        consts[0] = (
             self.obs_noise, self.max_episode_steps, self.decimation, self.profile.t_change,
             self.spindle_counts_per_rev, self.screw_pitch / (2 * math.pi), self.coil_width,
             float(self.nest), self.pitch_trim, self.p4, self.n_layers, self.void_weight,
             self.flatness_weight, self.error_penalty)
-        #: the arrays the compiled hooks unpack: constants, spindle profiles, coil state,
-        #: heights, bin centres, profile summary
-        self._task = (self._k, self.profile.params, self.coil, self.h, self.centres,
-                      self._summary)
+        self.state = CoilWindingState(consts, self.profile.params, np.zeros(n, dtype=COIL),
+                                      self.h, self.centres, np.zeros((n, _GROUPS)))
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
@@ -344,34 +356,31 @@ class CoilWindingVectorEnv(MotorVectorEnv):
                            np.zeros(idx.size))
         gearf1, a_soll = np.empty(idx.size), np.empty(idx.size)
         half = np.empty(idx.size, dtype=np.int64)
-        _reset_rows(idx, self.coil, self.h, draws["wire_diameter"], draws["diameter_bias"],
+        self.state.coil[idx] = 0
+        self.h[idx] = 0.0
+        _reset_rows(idx, self.state.coil, self.h, draws["wire_diameter"], draws["diameter_bias"],
                     draws["diameter_variation"], draws["a_soll"], u, self._counts_per_m,
                     self.spindle_counts_per_rev, gearf1, half, a_soll)
+        fam = self.fam
         self.motors.write_many({
-            "GEARF1": gearf1, "GEARF2": _GEARF2, "V_SOLL": round(c.rpm_to_v_soll(3000.0)),
+            "GEARF1": gearf1, "GEARF2": _GEARF2, "V_SOLL": round(fam.task.rpm_to_v_soll(3000.0)),
             "A_SOLL": a_soll, "P1": 0, "P2": half, "P3": self.p4 - half, "P4": self.p4,
-            "P5": half, "P6": 1, "MODE_REG": c.COIL_MODE}, idx)
-
-    def _step_copies(self, actions: np.ndarray) -> bool:
-        return _DRIVER.step(self.motors.engine_view(), self._episode, self._task, actions,
-                            self.decimation)
+            "P5": half, "P6": 1, "MODE_REG": fam.constants.COIL_MODE}, idx)
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
         """The coil is complete (all layers wound) or a motor error bit is set."""
-        complete = (self.coil[idx, _C_LAYER] >= self._k[_N_LAYERS]).tolist()
-        done = f"coil complete: {int(self._k[_N_LAYERS])} layers wound"
+        complete = (self.layer[idx] >= self.n_layers).tolist()
+        done = f"coil complete: {self.n_layers} layers wound"
         return ["; ".join(t for t in ((done if c else ""), error) if t) or "terminated by the task"
                 for c, error in zip(complete, self._error_reasons(idx))]
-
-    def _observe_copies(self, idx: np.ndarray) -> None:
-        _DRIVER.observe(self.motors.engine_view(), self._episode, self._task, idx)
 
     def traverse_position(self) -> np.ndarray:
         """Traverse position from the lower flange [m], (N,)."""
         return self.motors.position_rad / (2 * math.pi) * self.screw_pitch
 
     def _scope_values(self) -> np.ndarray:
-        return np.stack([self.traverse_position() * 1e3, self.pulses / self.decimation / _DT
+        dt = self.fam.constants.OUTER_DT
+        return np.stack([self.traverse_position() * 1e3, self.pulses / self.decimation / dt
                          / self.spindle_counts_per_rev * 60.0, self.layer,
                          self.last_std], axis=1)
 

@@ -7,14 +7,15 @@ from typing import Any
 
 import numpy as np
 
-from ..families import family
-from .base import NumpyTaskEnv
+from ..families import Capability, family
+from .numpy_step import NumpyTaskEnv
 from .single import MotorEnv
+from .task import Task
 
 __all__ = ["FilterTuningEnv", "FilterTuningVectorEnv", "Designer"]
 
-#: the families the task runs on (docs/envs.md)
-_FAMILIES = ("mac050_141", "mac800")
+#: the task needs a speed-loop filter to design; its step is a whole trial, in numpy
+TASK = Task("filter_tuning", __file__, needs={Capability.SPEED_FILTER})
 #: the trial's durations [s]: the position step, the velocity step, the load step's time in it,
 #: the stretch whose speed ripple is measured (160, 120, 40 and 20 samples at 520.8 Hz)
 _POS_TIME, _VEL_TIME, _LOAD_TIME, _RIPPLE_TIME = 0.3072, 0.2304, 0.0768, 0.0384
@@ -34,14 +35,11 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
     """Vector version of :class:`FilterTuningEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
 
-    families = _FAMILIES
-    refused_families = {"mis": "a step motor has no speed-loop filter to design "
-                                "(StepperIndexing-v0 is the MIS task)"}
-    terminal_errors = None
+    task = TASK
 
-    #: the labels on the default family; an instance's follow its family's motor types
-    obs_labels = (*(f"type_{t}" for t in family(_FAMILIES[0]).motor_types()),
-                  "inertia_ratio_estimate", "viscous_estimate", "coulomb_estimate")
+    #: the labels after the motor-type one-hot (``type_<name>`` for each type of the env's
+    #: family, set per instance)
+    obs_labels = ("inertia_ratio_estimate", "viscous_estimate", "coulomb_estimate")
     act_labels = ("proportional_gain", "integral_gain", "kvout")
     default_ranges = {
         "inertia_ratio": (0.0, 10.0),
@@ -61,19 +59,19 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         self.designer = designer
         self.estimate_error = float(estimate_error)
         self.instability_penalty = float(instability_penalty)
-        if motor_type is None:  # every type of the task's first family
-            motor_type = tuple(family(self.supported_families()[0]).motor_types())
-        else:  # the labels of the motor types' family (checked by the base class)
-            key = self._family_of(motor_type)
-            self.obs_labels = (*(f"type_{t}" for t in family(key).motor_types()),
-                               *type(self).obs_labels[-3:])
+        if motor_type is None:  # every type of the default type's family
+            motor_type = tuple(family(self.reference_family()).motor_types())
+        # the labels of the motor types' family (checked by the base class)
+        key = self._family_of(motor_type)
+        self.obs_labels = (*(f"type_{t}" for t in family(key).motor_types()),
+                           *type(self).obs_labels)
         super().__init__(num_envs, motor_type=motor_type, **kwargs)
 
     def _build(self) -> None:
         n = self.num_envs
-        fam = self._fam
+        fam = self.fam
         k = fam.constants
-        self._types = tuple(fam.family.motor_types())
+        self._types = tuple(fam.motor_types())
         hz = k.OUTER_HZ
         self._pos_samples = round(_POS_TIME * hz)
         self._vel_samples = round(_VEL_TIME * hz)
@@ -116,7 +114,7 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
 
     def _apply_action(self, action: np.ndarray) -> None:
         m = self.motors
-        fam = self._fam
+        fam = self.fam
         # a copy left in an error by its last trial (NEXT_STEP: stepped once more before its
         # reset) cannot leave INIT; it is skipped and reset afterwards
         ok = np.flatnonzero((m.read_raw("ERR_STAT") & fam.constants.BLOCKING_ERRORS) == 0)
@@ -154,7 +152,7 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
     def _advance(self) -> None:
         m = self.motors
         n = self.num_envs
-        task = self._fam.task
+        task = self.fam.task
         n_pos, n_vel, load_at = self._pos_samples, self._vel_samples, self._load_at
         step_counts = self._step_counts
         m.write("V_SOLL", round(task.rpm_to_v_soll(2000.0)), index=self._ok)
@@ -192,7 +190,7 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
         outside = err > self._settle_tol
         last_out = np.where(outside.any(axis=1),
                             n_pos - 1 - np.argmax(outside[:, ::-1], axis=1), 0)
-        settle = (last_out + 1) * self._fam.constants.OUTER_DT
+        settle = (last_out + 1) * self.fam.constants.OUTER_DT
         overshoot = np.maximum(pos.max(axis=1) - step_counts, 0.0) / step_counts
         after = vel[:, load_at:]
         dip = np.max(np.abs(after - v_ref), axis=1) / v_ref

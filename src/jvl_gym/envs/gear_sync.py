@@ -3,35 +3,33 @@
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 
-from ..engine import TaskDriver
+from ..families import Capability, Family
 from ..jit import KERNEL
 from ..noise import normal
-from .base import Column, MotorVectorEnv
+from .base import Field, MotorVectorEnv
 from .compiled import action, end_step, put_obs
-from .family_task import (
+from .profiles import SpeedProfile, row_speed
+from .single import MotorEnv
+from .task import (
     ERROR_BITS,
-    FamilyHooks,
     R,
-    TaskFamily,
+    Task,
+    record,
     reg,
     set_analog_volts,
     set_load_torque,
     set_pulse_counts,
     shaft_angle,
 )
-from .profiles import SpeedProfile, row_speed
-from .single import MotorEnv
 from .web import load_cell_s, span_step_s, tension_s, winder_radius_s
 
-__all__ = ["GearSyncEnv", "GearSyncVectorEnv"]
+__all__ = ["GearSyncEnv", "GearSyncVectorEnv", "GearSyncState"]
 
-#: the families the task runs on (docs/envs.md)
-_FAMILIES = ("mac050_141", "mac800")
 _NORM_RPM = 3000.0  #: rpm: scale of the motor speed channel
 _GEARF2 = 1000  #: GEARF2 of the nominal gear (GEARF1 = round(ratio·1000))
 #: the default gear ratio, 10 at a rated speed of 4000 rpm (MAC140), in proportion to the rated
@@ -41,120 +39,138 @@ _DEFAULT_GEAR_RATIO, _DEFAULT_GEAR_RPM = 10.0, 4000.0
 _INTEGRAL_TAU = 2.0  #: time constant of the leaky tension-error integral [s]
 _LOADCELL_STREAM = np.uint64(0x5EED)  #: noise key offset of the load cell
 
-#: columns of the per-copy line state (the last two carry the master speed and the motor angle
-#: of the present outer sample from before to after the block's inner samples)
-(_W_EA, _W_THICK, _W_R0, _W_SPAN, _W_REF, _W_STRAIN, _W_WOUND, _W_RADIUS, _W_FORCE, _W_MEASURED,
- _W_MTHETA, _W_TIME, _W_ACC, _W_PREV_MEASURED, _W_PULSES, _W_INTEGRAL, _W_SLACK, _W_V1,
- _W_THETA0, _W_COLS) = range(20)
-#: entries of the per-env constants array
-(_NOISE, _MAX_STEPS, _DECIMATION, _T_CHANGE, _COUNTS_PER_M, _MASTER_RADIUS, _GEAR_RATIO,
- _LC_K, _LC_NOISE, _TOLERANCE, _RATE_W, _BREAK, _SLACK_SAMPLES, _PENALTY, _N_CONSTS) = range(15)
+#: the env's constants of the compiled step (``counts_per_m``: master counts per metre;
+#: ``loadcell_k``: the load cell's filter gain per outer sample)
+CONSTS = record(noise=float, max_steps=float, decimation=float, t_change=float,
+                counts_per_m=float, master_radius=float, gear_ratio=float, loadcell_k=float,
+                loadcell_noise=float, tension_tolerance=float, action_rate_weight=float,
+                break_ratio=float, slack_samples=float, failure_penalty=float)
+#: a copy's line (``v1`` and ``theta0`` carry the master speed and the motor angle of the
+#: present outer sample from before to after the block's inner samples)
+LINE = record(ea=float, thickness=float, r0=float, span=float, tension_ref=float, strain=float,
+              wound=float, radius=float, force=float, measured=float, master_theta=float,
+              time=float, count_acc=float, prev_measured=float, pulses=float,
+              error_integral=float, slack_count=float, v1=float, theta0=float)
 
 
-def _figures(tf: TaskFamily) -> dict[str, float]:
+class GearSyncState(NamedTuple):
+    """The task's state (:mod:`jvl_gym.envs.task`)."""
+
+    consts: np.ndarray  #: (1,) :data:`CONSTS`
+    profile: np.ndarray  #: (N, profile columns) the master speed profiles (:mod:`.profiles`)
+    line: np.ndarray  #: (N,) :data:`LINE`
+
+
+def _figures(fam: Family) -> dict[str, float]:
     """The hooks' figures on a family: the outer sample time [s], the motor speed scale in
     counts/sample, the analogue input's centre and span [V]."""
-    k = tf.constants
+    k = fam.constants
     return {"_DT": k.OUTER_DT, "_V_MOTOR_NORM": _NORM_RPM / 60.0 * k.COUNTS_PER_REV / k.OUTER_HZ,
-            "_AG_CENTRE_VOLTS": tf.task.AG_CENTRE_VOLTS, "_AG_SPAN_VOLTS": tf.task.AG_SPAN_VOLTS}
+            "_AG_CENTRE_VOLTS": fam.task.AG_CENTRE_VOLTS,
+            "_AG_SPAN_VOLTS": fam.task.AG_SPAN_VOLTS}
 
 
 # bound per family by ``_figures``
 _DT = _V_MOTOR_NORM = _AG_CENTRE_VOLTS = _AG_SPAN_VOLTS = 1.0
 
 
-def _line_before(i, view, episode, task):  # pragma: no cover - compiled
+def _line_before(i, view, episode, s):  # pragma: no cover - compiled
     """Outer sample of copy ``i``, before the motor: master speed and pulses; remembers the
     speed and the motor angle for :func:`_line_after`."""
-    k, prof, w = task
-    v1 = row_speed(prof[i], w[i, _W_TIME], w[i, _W_MTHETA], k[_T_CHANGE])
-    acc = w[i, _W_ACC] + v1 * k[_COUNTS_PER_M] * _DT
+    k = s.consts[0]
+    w = s.line[i]
+    v1 = row_speed(s.profile[i], w.time, w.master_theta, k.t_change)
+    acc = w.count_acc + v1 * k.counts_per_m * _DT
     counts = math.floor(acc)
-    w[i, _W_ACC] = acc - counts
-    w[i, _W_PULSES] += counts
+    w.count_acc = acc - counts
+    w.pulses += counts
     set_pulse_counts(view, i, counts)
-    w[i, _W_V1] = v1
-    w[i, _W_THETA0] = shaft_angle(view, i)
+    w.v1 = v1
+    w.theta0 = shaft_angle(view, i)
 
 
-def _line_after(i, view, episode, task):  # pragma: no cover - compiled
+def _line_after(i, view, episode, s):  # pragma: no cover - compiled
     """Outer sample of copy ``i``, after the motor: span strain, winder radius, tension, load
     torque (for the next sample), load cell (``jvl_gym.envs.web``), master angle and time."""
-    k, _, w = task
-    v1 = w[i, _W_V1]
-    theta0 = w[i, _W_THETA0]
-    gear_ratio = k[_GEAR_RATIO]
-    travel = w[i, _W_RADIUS] * (shaft_angle(view, i) - theta0) / gear_ratio
-    strain = span_step_s(w[i, _W_STRAIN], v1, travel / _DT, w[i, _W_SPAN], _DT)
-    w[i, _W_STRAIN] = strain
-    w[i, _W_WOUND] += travel
-    radius = winder_radius_s(w[i, _W_R0], w[i, _W_THICK], w[i, _W_WOUND])
-    w[i, _W_RADIUS] = radius
-    force = tension_s(strain, w[i, _W_EA])
-    w[i, _W_FORCE] = force
+    k = s.consts[0]
+    w = s.line[i]
+    v1 = w.v1
+    theta0 = w.theta0
+    gear_ratio = k.gear_ratio
+    travel = w.radius * (shaft_angle(view, i) - theta0) / gear_ratio
+    strain = span_step_s(w.strain, v1, travel / _DT, w.span, _DT)
+    w.strain = strain
+    w.wound += travel
+    radius = winder_radius_s(w.r0, w.thickness, w.wound)
+    w.radius = radius
+    force = tension_s(strain, w.ea)
+    w.force = force
     set_load_torque(view, i, radius * force / gear_ratio)
-    w[i, _W_MEASURED] = load_cell_s(w[i, _W_MEASURED], force, k[_LC_K])
-    w[i, _W_SLACK] = w[i, _W_SLACK] + 1.0 if strain <= 0.0 else 0.0
-    w[i, _W_MTHETA] += v1 * _DT / k[_MASTER_RADIUS]
-    w[i, _W_TIME] += _DT
+    w.measured = load_cell_s(w.measured, force, k.loadcell_k)
+    w.slack_count = w.slack_count + 1.0 if strain <= 0.0 else 0.0
+    w.master_theta += v1 * _DT / k.master_radius
+    w.time += _DT
 
 
-def _observe_row(i, view, episode, task):  # pragma: no cover - compiled
+def _observe_row(i, view, episode, s):  # pragma: no cover - compiled
     """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
-    k, _, w = task
+    k = s.consts[0]
+    w = s.line[i]
     obs, t = episode.obs, episode.t
-    ref = w[i, _W_REF]
+    ref = w.tension_ref
     key = episode.noise_key[i]
-    noise = k[_NOISE]
-    meas = w[i, _W_MEASURED]
-    if k[_LC_NOISE] > 0.0:
-        meas += k[_LC_NOISE] * ref * normal(key ^ _LOADCELL_STREAM, t[i], 0, 1)
-    decimation = k[_DECIMATION]
-    v1_counts = k[_COUNTS_PER_M] * _DT  # master counts per sample at 1 m/s
+    noise = k.noise
+    meas = w.measured
+    if k.loadcell_noise > 0.0:
+        meas += k.loadcell_noise * ref * normal(key ^ _LOADCELL_STREAM, t[i], 0, 1)
+    decimation = k.decimation
+    v1_counts = k.counts_per_m * _DT  # master counts per sample at 1 m/s
     put_obs(obs, i, 0, (meas - ref) / ref, key, t[i], noise)
-    put_obs(obs, i, 1, (w[i, _W_MEASURED] - w[i, _W_PREV_MEASURED]) / ref
+    put_obs(obs, i, 1, (w.measured - w.prev_measured) / ref
             * (0.1 / (decimation * _DT)), key, t[i], noise)
-    put_obs(obs, i, 2, w[i, _W_INTEGRAL] * 10.0, key, t[i], noise)
-    put_obs(obs, i, 3, w[i, _W_PULSES] / decimation / v1_counts, key, t[i], noise)
+    put_obs(obs, i, 2, w.error_integral * 10.0, key, t[i], noise)
+    put_obs(obs, i, 3, w.pulses / decimation / v1_counts, key, t[i], noise)
     put_obs(obs, i, 4, reg(view, i, R.V_IST) / _V_MOTOR_NORM, key, t[i], noise)
     put_obs(obs, i, 5, reg(view, i, R.FLWERR) / 100.0, key, t[i], noise)
     put_obs(obs, i, 6, reg(view, i, R.FNCERR) / 10000.0, key, t[i], noise)
     put_obs(obs, i, 7, episode.prev_action[i, 0], key, t[i], noise)
 
 
-def _step_begin(i, view, episode, task, actions):  # pragma: no cover - compiled
+def _step_begin(i, view, episode, s, actions):  # pragma: no cover - compiled
     """Beginning of an env step of copy ``i``: analogue input, step accumulators."""
-    w = task[2]
+    w = s.line[i]
     a = action(actions, i, 0)
     set_analog_volts(view, i, _AG_CENTRE_VOLTS + _AG_SPAN_VOLTS * a)
-    w[i, _W_PREV_MEASURED] = w[i, _W_MEASURED]
-    w[i, _W_PULSES] = 0.0
+    w.prev_measured = w.measured
+    w.pulses = 0.0
 
 
-def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
+def _step_end(i, view, episode, s, actions):  # pragma: no cover - compiled
     """End of an env step of copy ``i``: leaky error integral, reward, termination,
     observation (the action is clipped again: a pure function of ``actions``)."""
-    k, _, w = task
+    k = s.consts[0]
+    w = s.line[i]
     prev, t = episode.prev_action, episode.t
     a = action(actions, i, 0)
-    decimation = int(k[_DECIMATION])
-    ref = w[i, _W_REF]
-    e_meas = (w[i, _W_MEASURED] - ref) / ref
-    w[i, _W_INTEGRAL] += decimation * _DT * (e_meas - w[i, _W_INTEGRAL] / _INTEGRAL_TAU)
+    decimation = int(k.decimation)
+    ref = w.tension_ref
+    e_meas = (w.measured - ref) / ref
+    w.error_integral += decimation * _DT * (e_meas - w.error_integral / _INTEGRAL_TAU)
     t[i] += 1
-    e = (w[i, _W_FORCE] - ref) / ref
+    e = (w.force - ref) / ref
     da = a - prev[i, 0]
-    r = 1.0 - min(abs(e) / k[_TOLERANCE], 2.0) - k[_RATE_W] * da * da
-    failed = (w[i, _W_FORCE] > k[_BREAK] * ref or w[i, _W_SLACK] >= k[_SLACK_SAMPLES]
+    r = 1.0 - min(abs(e) / k.tension_tolerance, 2.0) - k.action_rate_weight * da * da
+    failed = (w.force > k.break_ratio * ref or w.slack_count >= k.slack_samples
               or (reg(view, i, R.ERR_STAT) & ERROR_BITS) != 0)
-    episode.reward[i] = r - k[_PENALTY] if failed else r
-    end_step(i, failed, t, int(k[_MAX_STEPS]), episode.terminated, episode.truncated)
+    episode.reward[i] = r - k.failure_penalty if failed else r
+    end_step(i, failed, t, int(k.max_steps), episode.terminated, episode.truncated)
     prev[i, 0] = a
-    _observe_row(i, view, episode, task)
+    _observe_row(i, view, episode, s)
 
 
-_HOOKS = FamilyHooks(__file__, "gear_sync", _figures, begin=_step_begin, before=_line_before,
-                     after=_line_after, end=_step_end, observe=_observe_row)
+TASK = Task("gear_sync", __file__, needs={Capability.ANALOG_GEAR}, state=GearSyncState,
+            figures=_figures, begin=_step_begin, before=_line_before, after=_line_after,
+            end=_step_end, observe=_observe_row)
 
 
 @njit(**KERNEL)
@@ -163,7 +179,7 @@ def _reset_rows(idx: np.ndarray, line: np.ndarray, gear: np.ndarray, ea: np.ndar
                 tension_ref: np.ndarray, master_radius: float, gear_ratio: float,
                 master_counts_per_rev: int, counts_per_rev: int, ag_centre: float,
                 gearf1: np.ndarray, load: np.ndarray) -> None:  # pragma: no cover - compiled
-    """Line state (N, _W_COLS) of copies ``idx`` at rest, the web pre-tensioned to the
+    """Line state (N,) :data:`LINE` of copies ``idx`` (zeroed) at rest, the web pre-tensioned to the
     reference, from the (M,) draws (E·A [N], thickness [m], core radius [m], span [m],
     reference tension [N]); the nominal gear ``gear`` (N,) and its GEARF1 ``gearf1`` (M,) (at
     the core radius and the analogue input's centre, where the AG factor is ``ag_centre``, the
@@ -171,19 +187,18 @@ def _reset_rows(idx: np.ndarray, line: np.ndarray, gear: np.ndarray, ea: np.ndar
     ``counts_per_rev``: the motor's encoder counts per revolution."""
     for j in range(idx.shape[0]):
         i = idx[j]
-        w = line[i]
-        w.fill(0.0)  # wound, master angle, time, counts, integral, slack
-        w[_W_EA] = ea[j]
-        w[_W_THICK] = thickness[j]
-        w[_W_R0] = r0[j]
-        w[_W_SPAN] = span[j]
-        w[_W_REF] = tension_ref[j]
+        w = line[i]  # zeroed: wound, master angle, time, counts, integral, slack
+        w.ea = ea[j]
+        w.thickness = thickness[j]
+        w.r0 = r0[j]
+        w.span = span[j]
+        w.tension_ref = tension_ref[j]
         strain_ref = tension_ref[j] / ea[j]
-        w[_W_STRAIN] = strain_ref
-        w[_W_RADIUS] = r0[j]
-        w[_W_FORCE] = tension_ref[j]
-        w[_W_MEASURED] = tension_ref[j]
-        w[_W_PREV_MEASURED] = tension_ref[j]
+        w.strain = strain_ref
+        w.radius = r0[j]
+        w.force = tension_ref[j]
+        w.measured = tension_ref[j]
+        w.prev_measured = tension_ref[j]
         motor_per_master = (master_radius / r0[j] * gear_ratio / (1.0 - strain_ref)
                             / ag_centre)
         ratio = motor_per_master * counts_per_rev / master_counts_per_rev
@@ -196,28 +211,24 @@ class GearSyncVectorEnv(MotorVectorEnv):
     """Vector version of :class:`GearSyncEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
 
-    families = _FAMILIES
-    refused_families = {"mis": "a step motor has no analogue gear mode (StepperIndexing-v0 is "
-                                "the MIS task)"}
-    terminal_errors = None
-
-    ea = Column("line", _W_EA)  #: E·A [N]
-    thickness = Column("line", _W_THICK)  #: web thickness [m]
-    r0 = Column("line", _W_R0)  #: core radius [m]
-    span = Column("line", _W_SPAN)  #: span length [m]
-    tension_ref = Column("line", _W_REF)  #: reference tension [N]
-    strain = Column("line", _W_STRAIN)
-    wound = Column("line", _W_WOUND)  #: web wound [m]
-    radius = Column("line", _W_RADIUS)  #: winder radius [m]
-    force = Column("line", _W_FORCE)  #: web tension [N]
-    measured = Column("line", _W_MEASURED)  #: load-cell reading without noise [N]
-    master_theta = Column("line", _W_MTHETA)  #: master roll angle [rad]
-    time = Column("line", _W_TIME)  #: episode time [s]
-    count_acc = Column("line", _W_ACC)  #: fractional master counts
-    prev_measured = Column("line", _W_PREV_MEASURED)
-    pulses = Column("line", _W_PULSES)  #: master counts in the last step
-    error_integral = Column("line", _W_INTEGRAL)  #: leaky tension-error integral [s]
-    slack_count = Column("line", _W_SLACK)  #: outer samples the web has been slack
+    task = TASK
+    ea = Field("line")  #: E·A [N]
+    thickness = Field("line")  #: web thickness [m]
+    r0 = Field("line")  #: core radius [m]
+    span = Field("line")  #: span length [m]
+    tension_ref = Field("line")  #: reference tension [N]
+    strain = Field("line")
+    wound = Field("line")  #: web wound [m]
+    radius = Field("line")  #: winder radius [m]
+    force = Field("line")  #: web tension [N]
+    measured = Field("line")  #: load-cell reading without noise [N]
+    master_theta = Field("line")  #: master roll angle [rad]
+    time = Field("line")  #: episode time [s]
+    count_acc = Field("line")  #: fractional master counts
+    prev_measured = Field("line")
+    pulses = Field("line")  #: master counts in the last step
+    error_integral = Field("line")  #: leaky tension-error integral [s]
+    slack_count = Field("line")  #: outer samples the web has been slack
 
     obs_labels = ("tension_error", "tension_rate", "tension_error_integral", "master_speed",
                   "motor_speed", "flwerr", "fncerr", "previous_action")
@@ -265,29 +276,24 @@ class GearSyncVectorEnv(MotorVectorEnv):
 
     def _build(self) -> None:
         n = self.num_envs
-        self.__dict__.update(self._transient())
-        fam = self._fam
+        fam = self.fam
         self._dt = dt = fam.constants.OUTER_DT
         #: the motor's top speed in the task: the rated speed of the family's default type
         self.rated_rpm = float(
-            fam.family.array_class.load_motor(fam.task.DEFAULT_MOTOR_TYPE).rated_speed_rpm)
+            fam.array_class.load_motor(fam.task.DEFAULT_MOTOR_TYPE).rated_speed_rpm)
         if self.gear_ratio is None:
             self.gear_ratio = _DEFAULT_GEAR_RATIO * self.rated_rpm / _DEFAULT_GEAR_RPM
         self.slack_samples = max(1, int(round(self._slack_time / dt)))
         self.profile = SpeedProfile(n)
-        self.line = np.zeros((n, _W_COLS))
         self.gear = np.ones(n)
-        self._k = np.zeros(_N_CONSTS)  # constants of the compiled step
-        self._k[[_NOISE, _MAX_STEPS, _DECIMATION, _T_CHANGE, _COUNTS_PER_M, _MASTER_RADIUS,
-                 _GEAR_RATIO, _LC_K, _LC_NOISE, _TOLERANCE, _RATE_W, _BREAK, _SLACK_SAMPLES,
-                 _PENALTY]] = (
+        consts = np.zeros(1, dtype=CONSTS)
+        consts[0] = (
             self.obs_noise, self.max_episode_steps, self.decimation, self.profile.t_change,
             self._counts_per_m, self.master_radius, self.gear_ratio,
             1.0 - math.exp(-dt / self.loadcell_tau) if self.loadcell_tau > 0 else 1.0,
             self.loadcell_noise, self.tension_tolerance, self.action_rate_weight,
             self.break_ratio, self.slack_samples, self.failure_penalty)
-        #: the arrays the compiled hooks unpack: constants, master profiles, line state
-        self._task = (self._k, self.profile.params, self.line)
+        self.state = GearSyncState(consts, self.profile.params, np.zeros(n, dtype=LINE))
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
@@ -299,9 +305,10 @@ class GearSyncVectorEnv(MotorVectorEnv):
                            draws["speed_step"], draws["step_time"], draws["walk"],
                            draws["ripple"])
         m = self.motors
-        fam = self._fam
+        fam = self.fam
         gearf1, load = np.empty(idx.size), np.empty(idx.size)
-        _reset_rows(idx, self.line, self.gear, draws["ea"], draws["thickness"],
+        self.state.line[idx] = 0
+        _reset_rows(idx, self.state.line, self.gear, draws["ea"], draws["thickness"],
                     draws["r0"], draws["span"], draws["tension_ref"], self.master_radius,
                     self.gear_ratio, self.master_counts_per_rev, fam.constants.COUNTS_PER_REV,
                     fam.task.AG_CENTRE_FACTOR, gearf1, load)
@@ -315,20 +322,12 @@ class GearSyncVectorEnv(MotorVectorEnv):
         else:  # the motor takes the load up in its first samples
             m.set_input(idx, load_torque=load)
 
-    def _transient(self) -> dict[str, TaskDriver]:
-        """The compiled step of the task on the env's family (rebuilt after unpickling)."""
-        return {"_driver": _HOOKS.driver(self.family_key)}
-
-    def _step_copies(self, actions: np.ndarray) -> bool:
-        return self._driver.step(self.motors.engine_view(), self._episode, self._task, actions,
-                                 self.decimation)
-
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
         """Web break (tension above ``break_ratio`` × reference), slack longer than
         ``slack_time``, or the motor error bits, as the compiled step decides."""
-        ref = self.line[idx, _W_REF]
-        broke = (self.line[idx, _W_FORCE] > self.break_ratio * ref).tolist()
-        slack = (self.line[idx, _W_SLACK] >= self.slack_samples).tolist()
+        ref = self.tension_ref[idx]
+        broke = (self.force[idx] > self.break_ratio * ref).tolist()
+        slack = (self.slack_count[idx] >= self.slack_samples).tolist()
         web_break = f"web break: tension above {self.break_ratio:g} × the reference"
         web_slack = f"web slack for {self.slack_samples} outer samples"
         out = []
@@ -338,11 +337,8 @@ class GearSyncVectorEnv(MotorVectorEnv):
             out.append("; ".join(why) or "terminated by the task")
         return out
 
-    def _observe_copies(self, idx: np.ndarray) -> None:
-        self._driver.observe(self.motors.engine_view(), self._episode, self._task, idx)
-
     def _scope_values(self) -> np.ndarray:
-        task = self._fam.task
+        task = self.fam.task
         volts = task.AG_CENTRE_VOLTS + task.AG_SPAN_VOLTS * self._prev_action[:, 0]
         return np.stack([self.force, self.tension_ref, volts,
                          self.motors.speed_rpm / self.gear_ratio], axis=1)

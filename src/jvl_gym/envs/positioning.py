@@ -2,41 +2,42 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 
-from ..engine import TaskDriver
+from ..families import Capability, Family
 from ..jit import KERNEL
-from .base import MotorVectorEnv
+from .base import Field, MotorVectorEnv
 from .compiled import action, end_step, put_obs
-from .family_task import (
-    ERROR_BITS,
-    FamilyHooks,
-    R,
-    TaskFamily,
-    c,
-    reg,
-    set_analog_volts,
-)
 from .single import MotorEnv
+from .task import ERROR_BITS, R, Task, c, record, reg, set_analog_volts
 
-__all__ = ["PositioningEnv", "PositioningVectorEnv"]
+__all__ = ["PositioningEnv", "PositioningVectorEnv", "PositioningState"]
 
-#: the families the task runs on (docs/envs.md)
-_FAMILIES = ("mac050_141", "mac800")
 _FINE_TURNS = 200.0 / 4096  #: turns: scale of the fine position-error channel
 _NORM_RPM = 3000.0  #: rpm: scale of the speed channel
 _BASELINE_RPM = 3000.0
-#: entries of the per-env constants array
-_NOISE, _MAX_STEPS, _DECIMATION, _OVERSHOOT_W, _EFFORT_W, _BASELINE, _N_CONSTS = range(7)
+
+#: the env's constants of the compiled step
+CONSTS = record(noise=float, max_steps=float, decimation=float, overshoot_weight=float,
+                effort_weight=float, baseline=float)
+#: a copy's move: the target [counts] and the direction of the move (+1 or −1)
+COPY = record(target=np.int64, direction=float)
 
 
-def _figures(tf: TaskFamily) -> dict[str, float]:
+class PositioningState(NamedTuple):
+    """The task's state (:mod:`jvl_gym.envs.task`)."""
+
+    consts: np.ndarray  #: (1,) :data:`CONSTS`
+    copies: np.ndarray  #: (N,) :data:`COPY`
+
+
+def _figures(fam: Family) -> dict[str, float]:
     """The hooks' figures on a family: the speed scale in counts/sample and the fine error
     scale in counts."""
-    k = tf.constants
+    k = fam.constants
     return {"_V_NORM": _NORM_RPM / 60.0 * k.COUNTS_PER_REV / k.OUTER_HZ,
             "_FINE": _FINE_TURNS * k.COUNTS_PER_REV}
 
@@ -44,46 +45,46 @@ def _figures(tf: TaskFamily) -> dict[str, float]:
 _V_NORM = _FINE = 1.0  # bound per family by ``_figures``
 
 
-def _observe_row(i, view, episode, task):  # pragma: no cover - compiled
+def _observe_row(i, view, episode, s):  # pragma: no cover - compiled
     """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
-    k, target, _ = task
-    obs, key, count, noise = episode.obs, episode.noise_key[i], episode.t[i], k[_NOISE]
-    e = float(target[i] - reg(view, i, R.P_IST))
+    k = s.consts[0]
+    obs, key, count, noise = episode.obs, episode.noise_key[i], episode.t[i], k.noise
+    e = float(s.copies[i].target - reg(view, i, R.P_IST))
     put_obs(obs, i, 0, e / (2.0 * c.COUNTS_PER_REV), key, count, noise)
     put_obs(obs, i, 1, e / _FINE, key, count, noise)
     put_obs(obs, i, 2, reg(view, i, R.V_IST) / _V_NORM, key, count, noise)
     put_obs(obs, i, 3, episode.prev_action[i, 0], key, count, noise)
 
 
-def _step_begin(i, view, episode, task, actions):  # pragma: no cover - compiled
+def _step_begin(i, view, episode, s, actions):  # pragma: no cover - compiled
     """Beginning of an env step of copy ``i``: the torque command (unless baseline)."""
-    k = task[0]
     a = action(actions, i, 0)
-    baseline = k[_BASELINE] > 0.5
+    baseline = s.consts[0].baseline > 0.5
     if not baseline:
         set_analog_volts(view, i, c.ANINP_VOLTS * a)
 
 
-def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
+def _step_end(i, view, episode, s, actions):  # pragma: no cover - compiled
     """End of an env step of copy ``i``: reward, termination, observation (the action is
     clipped again: a pure function of ``actions``)."""
-    k, target, direction = task
+    k = s.consts[0]
+    row = s.copies[i]
     t = episode.t
     a = action(actions, i, 0)
-    baseline = k[_BASELINE] > 0.5
+    baseline = k.baseline > 0.5
     t[i] += 1
-    e = (target[i] - reg(view, i, R.P_IST)) / c.COUNTS_PER_REV
-    overshoot = max(-e * direction[i], 0.0)
+    e = (row.target - reg(view, i, R.P_IST)) / c.COUNTS_PER_REV
+    overshoot = max(-e * row.direction, 0.0)
     effort = a * a if not baseline else (reg(view, i, R.VF_OUT) / c.VF_FULL) ** 2
-    episode.reward[i] = -abs(e) - k[_OVERSHOOT_W] * overshoot - k[_EFFORT_W] * effort
-    end_step(i, (reg(view, i, R.ERR_STAT) & ERROR_BITS) != 0, t, int(k[_MAX_STEPS]),
+    episode.reward[i] = -abs(e) - k.overshoot_weight * overshoot - k.effort_weight * effort
+    end_step(i, (reg(view, i, R.ERR_STAT) & ERROR_BITS) != 0, t, int(k.max_steps),
              episode.terminated, episode.truncated)
     episode.prev_action[i, 0] = a
-    _observe_row(i, view, episode, task)
+    _observe_row(i, view, episode, s)
 
 
-_HOOKS = FamilyHooks(__file__, "positioning", _figures, begin=_step_begin, end=_step_end,
-                     observe=_observe_row)
+TASK = Task("positioning", __file__, needs={Capability.ANALOG_TORQUE}, state=PositioningState,
+            figures=_figures, begin=_step_begin, end=_step_end, observe=_observe_row)
 
 
 @njit(**KERNEL)
@@ -101,10 +102,9 @@ class PositioningVectorEnv(MotorVectorEnv):
     """Vector version of :class:`PositioningEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
 
-    families = _FAMILIES
-    refused_families = {"mis": "a step motor has no analogue torque mode (StepperIndexing-v0 "
-                                "is the MIS task)"}
-    terminal_errors = None
+    task = TASK
+    target = Field()  #: the target [counts]
+    direction = Field()  #: the direction of the move (+1 or −1)
 
     obs_labels = ("position_error", "position_error_fine", "speed", "previous_action")
     act_labels = ("torque",)
@@ -127,15 +127,12 @@ class PositioningVectorEnv(MotorVectorEnv):
         super().__init__(num_envs, **kwargs)
 
     def _build(self) -> None:
-        n = self.num_envs
-        self.__dict__.update(self._transient())
-        self.target = np.zeros(n, dtype=np.int64)  # counts
-        self.direction = np.ones(n)
-        self._k = np.zeros(_N_CONSTS)  # constants of the compiled step
-        self._k[[_NOISE, _MAX_STEPS, _DECIMATION, _OVERSHOOT_W, _EFFORT_W, _BASELINE]] = (
-            self.obs_noise, self.max_episode_steps, self.decimation, self.overshoot_weight,
-            self.effort_weight, float(self.baseline))
-        self._task = (self._k, self.target, self.direction)
+        consts = np.zeros(1, dtype=CONSTS)
+        consts[0] = (self.obs_noise, self.max_episode_steps, self.decimation,
+                     self.overshoot_weight, self.effort_weight, float(self.baseline))
+        copies = np.zeros(self.num_envs, dtype=COPY)
+        copies["direction"] = 1.0
+        self.state = PositioningState(consts, copies)
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
@@ -145,7 +142,7 @@ class PositioningVectorEnv(MotorVectorEnv):
 
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
-        fam = self._fam
+        fam = self.fam
         self._kvout_for_load(idx, draws["inertia_ratio"])
         _reset_rows(idx, draws["target_turns"], self.target, self.direction,
                     fam.constants.COUNTS_PER_REV)
@@ -156,22 +153,11 @@ class PositioningVectorEnv(MotorVectorEnv):
         else:
             self.motors.write("MODE_REG", fam.task.ANALOG_TORQUE_MODE, index=idx)
 
-    def _transient(self) -> dict[str, TaskDriver]:
-        """The compiled step of the task on the env's family (rebuilt after unpickling)."""
-        return {"_driver": _HOOKS.driver(self.family_key)}
-
-    def _step_copies(self, actions: np.ndarray) -> bool:
-        return self._driver.step(self.motors.engine_view(), self._episode, self._task, actions,
-                                 self.decimation)
-
-    def _observe_copies(self, idx: np.ndarray) -> None:
-        self._driver.observe(self.motors.engine_view(), self._episode, self._task, idx)
-
     def _error_counts(self) -> np.ndarray:
         return (self.target - self.motors.read_raw("P_IST")).astype(np.float64)
 
     def _scope_values(self) -> np.ndarray:
-        return np.stack([self._error_counts() / self._fam.constants.COUNTS_PER_REV,
+        return np.stack([self._error_counts() / self.fam.constants.COUNTS_PER_REV,
                          self.motors.speed_rpm,
                          self._prev_action[:, 0]], axis=1)
 

@@ -3,32 +3,30 @@ losing steps."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numba import njit
 
-from ..engine import TaskDriver
-from ..families import family
-from ..families.mis import constants as c
-from ..families.mis.task import (
-    DEFAULT_MOTOR_TYPE,
+from ..families import Capability, Family
+from ..jit import KERNEL
+from .base import Field, MotorVectorEnv
+from .compiled import action, end_step, put_obs
+from .single import MotorEnv
+from .task import (
     ERROR_BITS,
-    FAMILY_KEY,
-    TERMINAL_ERRORS,
     R,
+    Task,
+    c,
     copper_energy,
     lost_steps,
+    record,
     reg,
     rotor_speed,
     set_reg,
 )
-from ..jit import KERNEL
-from .base import MotorVectorEnv
-from .compiled import action, end_step, put_obs
-from .single import MotorEnv
 
-__all__ = ["StepperIndexingEnv", "StepperIndexingVectorEnv"]
+__all__ = ["StepperIndexingEnv", "StepperIndexingVectorEnv", "StepperIndexingState"]
 
 #: V_SOLL range of the action [RPM]: a0 = −1 … 1 maps linearly onto it
 _RPM_LOW, _RPM_HIGH = 30.0, 1500.0
@@ -36,100 +34,118 @@ _RPM_LOW, _RPM_HIGH = 30.0, 1500.0
 _ACC_LOW, _ACC_HIGH = 500.0, 100000.0
 #: RUN_CURRENT range of the action as a fraction of the type's largest setting
 _CUR_LOW, _CUR_HIGH = 0.1, 1.0
-#: speed scale of the observation: 1500 RPM in V_IST units (0.01 RPM)
-_V_NORM = _RPM_HIGH / c.VELOCITY_RPM_PER_UNIT
 #: rotor speed below which a finished profile counts as settled [rad/s]
 _SETTLED_RAD_S = 0.5
-#: entries of the per-env constants array
-(_NOISE, _MAX_STEPS, _TIME_W, _COPPER_W, _MOVE_BONUS, _LOST_PENALTY, _BASELINE, _N_MOVES,
- _N_CONSTS) = range(9)
+
+#: the env's constants of the compiled step
+CONSTS = record(noise=float, max_steps=float, time_weight=float, copper_weight=float,
+                move_bonus=float, lost_penalty=float, baseline=float, n_moves=float)
+#: a copy's moves: P_SOLL of the present move [counts], the counts per move, the moves left,
+#: the type's largest RUN_CURRENT setting, the copper energy at the end of the last step [J]
+COPY = record(target=np.int64, move=np.int64, moves_left=np.int64, i_max=float, energy=float)
 
 
-@njit(cache=True, inline="always")
-def _observe_row(i, view, episode, task):  # pragma: no cover - compiled
+class StepperIndexingState(NamedTuple):
+    """The task's state (:mod:`jvl_gym.envs.task`)."""
+
+    consts: np.ndarray  #: (1,) :data:`CONSTS`
+    copies: np.ndarray  #: (N,) :data:`COPY`
+
+
+def _figures(fam: Family) -> dict[str, float]:
+    """The hooks' figures on a family: the speed scale of the observation, 1500 RPM in V_IST
+    units."""
+    return {"_V_NORM": _RPM_HIGH / fam.constants.VELOCITY_RPM_PER_UNIT}
+
+
+_V_NORM = 1.0  # bound per family by ``_figures``
+
+
+def _observe_row(i, view, episode, s):  # pragma: no cover - compiled
     """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
-    k, target, move, left, _, _ = task
-    obs, key, count, noise = episode.obs, episode.noise_key[i], episode.t[i], k[_NOISE]
-    put_obs(obs, i, 0, (target[i] - reg(view, i, R.P_IST)) / move[i], key, count, noise)
-    put_obs(obs, i, 1, move[i] / c.COUNTS_PER_REV, key, count, noise)
+    k = s.consts[0]
+    row = s.copies[i]
+    obs, key, count, noise = episode.obs, episode.noise_key[i], episode.t[i], k.noise
+    put_obs(obs, i, 0, (row.target - reg(view, i, R.P_IST)) / row.move, key, count, noise)
+    put_obs(obs, i, 1, row.move / c.COUNTS_PER_REV, key, count, noise)
     put_obs(obs, i, 2, reg(view, i, R.V_IST) / _V_NORM, key, count, noise)
     put_obs(obs, i, 3, reg(view, i, R.FLWERR) / c.COUNTS_PER_FULL_STEP, key, count, noise)
-    put_obs(obs, i, 4, left[i] / k[_N_MOVES], key, count, noise)
+    put_obs(obs, i, 4, row.moves_left / k.n_moves, key, count, noise)
     for a in range(3):
         put_obs(obs, i, 5 + a, episode.prev_action[i, a], key, count, noise)
 
 
-@njit(cache=True, inline="always")
-def _step_begin(i, view, episode, task, actions):  # pragma: no cover - compiled
+def _step_begin(i, view, episode, s, actions):  # pragma: no cover - compiled
     """Beginning of an env step of copy ``i``: the profile registers (unless baseline)."""
-    k, _, _, _, i_max, _ = task
-    if k[_BASELINE] > 0.5:
+    if s.consts[0].baseline > 0.5:
         return
     rpm = _RPM_LOW + 0.5 * (action(actions, i, 0) + 1.0) * (_RPM_HIGH - _RPM_LOW)
     acc = _ACC_LOW * (_ACC_HIGH / _ACC_LOW) ** (0.5 * (action(actions, i, 1) + 1.0))
     cur = _CUR_LOW + 0.5 * (action(actions, i, 2) + 1.0) * (_CUR_HIGH - _CUR_LOW)
     set_reg(view, i, R.V_SOLL, int(round(rpm / c.VELOCITY_RPM_PER_UNIT)))
     set_reg(view, i, R.A_SOLL, int(round(acc)))
-    set_reg(view, i, R.RUN_CURRENT, int(round(cur * i_max[i])))
+    set_reg(view, i, R.RUN_CURRENT, int(round(cur * s.copies[i].i_max)))
 
 
-@njit(cache=True, inline="always")
-def _step_end(i, view, episode, task, actions):  # pragma: no cover - compiled
+def _step_end(i, view, episode, s, actions):  # pragma: no cover - compiled
     """End of an env step of copy ``i``: the next move when this one has settled, reward,
     termination, observation."""
-    k, target, move, left, _, energy = task
+    k = s.consts[0]
+    row = s.copies[i]
     t = episode.t
     t[i] += 1
-    reward = -k[_TIME_W]
-    settled = (reg(view, i, R.P_IST) == target[i]
+    reward = -k.time_weight
+    settled = (reg(view, i, R.P_IST) == row.target
                and abs(rotor_speed(view, i)) < _SETTLED_RAD_S)
-    if settled and left[i] > 0:
-        left[i] -= 1
-        reward += k[_MOVE_BONUS]
-        if left[i] > 0:
-            target[i] += move[i]
-            set_reg(view, i, R.P_SOLL, target[i])
+    if settled and row.moves_left > 0:
+        row.moves_left -= 1
+        reward += k.move_bonus
+        if row.moves_left > 0:
+            row.target += row.move
+            set_reg(view, i, R.P_SOLL, row.target)
     e_cu = copper_energy(view, i)
-    reward -= k[_COPPER_W] * (e_cu - energy[i])
-    energy[i] = e_cu
+    reward -= k.copper_weight * (e_cu - row.energy)
+    row.energy = e_cu
     lost = lost_steps(view, i) != 0
     if lost:
-        reward -= k[_LOST_PENALTY]
+        reward -= k.lost_penalty
     error = (reg(view, i, R.ERR_BITS) & ERROR_BITS) != 0
     episode.reward[i] = reward
-    end_step(i, lost or error or left[i] == 0, t, int(k[_MAX_STEPS]), episode.terminated,
+    end_step(i, lost or error or row.moves_left == 0, t, int(k.max_steps), episode.terminated,
              episode.truncated)
     for a in range(3):
         episode.prev_action[i, a] = action(actions, i, a)
-    _observe_row(i, view, episode, task)
+    _observe_row(i, view, episode, s)
 
 
-_DRIVER = TaskDriver(family(FAMILY_KEY), __file__, "stepper_indexing", begin=_step_begin,
-                     end=_step_end, observe=_observe_row)
+TASK = Task("stepper_indexing", __file__, needs={Capability.STEP_INDEXING},
+            state=StepperIndexingState, figures=_figures, begin=_step_begin, end=_step_end,
+            observe=_observe_row)
 
 
 @njit(**KERNEL)
-def _reset_rows(idx: np.ndarray, move_turns: np.ndarray, n_moves: int, target: np.ndarray,
-                move: np.ndarray, left: np.ndarray, energy: np.ndarray
-                ) -> None:  # pragma: no cover - compiled
+def _reset_rows(idx: np.ndarray, move_turns: np.ndarray, n_moves: int, copies: np.ndarray,
+                counts_per_rev: int) -> None:  # pragma: no cover - compiled
     """Moves [counts] of copies ``idx`` from the (M,) draws [turns]: the first target, the
     moves left, the copper energy counted from power-on (0)."""
     for j in range(idx.shape[0]):
-        i = idx[j]
-        move[i] = max(int(np.round(move_turns[j] * c.COUNTS_PER_REV)), 1)
-        target[i] = move[i]
-        left[i] = n_moves
-        energy[i] = 0.0
+        row = copies[idx[j]]
+        row.move = max(int(np.round(move_turns[j] * counts_per_rev)), 1)
+        row.target = row.move
+        row.moves_left = n_moves
+        row.energy = 0.0
 
 
 class StepperIndexingVectorEnv(MotorVectorEnv):
     """Vector version of :class:`StepperIndexingEnv` (same arguments plus ``num_envs`` and
     ``autoreset_mode``)."""
 
-    family_key = FAMILY_KEY
-    default_motor_type = DEFAULT_MOTOR_TYPE
-    terminal_errors = TERMINAL_ERRORS
+    task = TASK
+    #: the register of the error bits in the family's ``TERMINAL_ERRORS`` (MIS manual §11.4)
     error_register = "ERR_BITS"
+    target = Field()  #: P_SOLL of the present move [counts]
+    move = Field()  #: counts per move
+    moves_left = Field()  #: moves left
 
     obs_labels = ("distance_to_go", "move_length", "profile_speed", "rotor_lag",
                   "moves_left", "previous_speed", "previous_acceleration", "previous_current")
@@ -160,20 +176,14 @@ class StepperIndexingVectorEnv(MotorVectorEnv):
         super().__init__(num_envs, **kwargs)
 
     def _build(self) -> None:
-        n = self.num_envs
-        self.target = np.zeros(n, dtype=np.int64)  # counts: P_SOLL of the present move
-        self.move = np.ones(n, dtype=np.int64)  # counts per move
-        self.moves_left = np.zeros(n, dtype=np.int64)
-        self._i_max = np.zeros(n)  # RUN_CURRENT units: the type's largest setting
-        self._energy = np.zeros(n)  # J: copper energy at the end of the last step
-        self._k = np.zeros(_N_CONSTS)
+        consts = np.zeros(1, dtype=CONSTS)
         w = self.weights
-        self._k[[_NOISE, _MAX_STEPS, _TIME_W, _COPPER_W, _MOVE_BONUS, _LOST_PENALTY, _BASELINE,
-                 _N_MOVES]] = (self.obs_noise, self.max_episode_steps, w["time_weight"],
-                               w["copper_weight"], w["move_bonus"], w["lost_penalty"],
-                               float(self.baseline), self.n_moves)
-        self._task = (self._k, self.target, self.move, self.moves_left, self._i_max,
-                      self._energy)
+        consts[0] = (self.obs_noise, self.max_episode_steps, w["time_weight"],
+                     w["copper_weight"], w["move_bonus"], w["lost_penalty"],
+                     float(self.baseline), self.n_moves)
+        copies = np.zeros(self.num_envs, dtype=COPY)
+        copies["move"] = 1
+        self.state = StepperIndexingState(consts, copies)
 
     def _holding_torque(self, idx: np.ndarray) -> np.ndarray:
         return np.array([cfg.holding_torque for cfg in self._type_configs(idx)])
@@ -185,22 +195,15 @@ class StepperIndexingVectorEnv(MotorVectorEnv):
 
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
-        _reset_rows(idx, draws["move_turns"], self.n_moves, self.target, self.move,
-                    self.moves_left, self._energy)
-        self._i_max[idx] = [cfg.run_current_max for cfg in self._type_configs(idx)]
+        _reset_rows(idx, draws["move_turns"], self.n_moves, self.state.copies,
+                    self.fam.constants.COUNTS_PER_REV)
+        self.state.copies["i_max"][idx] = [cfg.run_current_max for cfg in self._type_configs(idx)]
         self.motors.set_input(idx, load_torque=draws["load_torque_ratio"]
                               * self._holding_torque(idx))
         # D_SOLL = 0: the profile decelerates with A_SOLL too (MIS manual §8.2.1, D_SOLL), so
         # the agent's acceleration shapes the whole trapezoid
         self.motors.write_many({"D_SOLL": 0, "P_SOLL": self.target[idx],
-                                "MODE_REG": c.POSITION}, idx)
-
-    def _step_copies(self, actions: np.ndarray) -> bool:
-        return _DRIVER.step(self.motors.engine_view(), self._episode, self._task, actions,
-                            self.decimation)
-
-    def _observe_copies(self, idx: np.ndarray) -> None:
-        _DRIVER.observe(self.motors.engine_view(), self._episode, self._task, idx)
+                                "MODE_REG": self.fam.constants.POSITION}, idx)
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
         lost = self.motors.lost_steps[idx]
@@ -210,8 +213,9 @@ class StepperIndexingVectorEnv(MotorVectorEnv):
                 for j, i in enumerate(idx.tolist())]
 
     def _scope_values(self) -> np.ndarray:
-        togo = (self.target - self.motors.read_raw("P_IST")) / c.COUNTS_PER_REV
-        lag = self.motors.read_raw("FLWERR") / c.COUNTS_PER_FULL_STEP
+        k = self.fam.constants
+        togo = (self.target - self.motors.read_raw("P_IST")) / k.COUNTS_PER_REV
+        lag = self.motors.read_raw("FLWERR") / k.COUNTS_PER_FULL_STEP
         return np.stack([togo, self.motors.speed_rpm, lag], axis=1)
 
 
