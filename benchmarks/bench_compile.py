@@ -13,7 +13,7 @@ source tree (``NUMBA_CACHE_DIR``, so the project's own cache is neither used nor
    first step of a motor array and of each single env after it (trees without that command
    print "—");
 5. per family, in an empty cache: the first step of a motor array of its first motor type under
-   numba's compile events (``benchmarks/compile_profile.py``): the seconds of each compiled
+   numba's compile events (``benchmarks/compile_profile.py``): the CPU seconds of each compiled
    function in numba's typing, IR inlining, lowering and LLVM, and the functions whose passes
    (their own and those of their inlined copies) take the most front-end time.
 
@@ -106,7 +106,7 @@ def profile(tree: Path) -> dict[str, dict]:
 
 def print_profile(label: str, profiles: dict[str, dict]) -> None:
     """The per-family compile breakdown of one source tree."""
-    print(f"\ncompile of a motor array's first step by stage [s], {label}")
+    print(f"\ncompile of a motor array's first step by stage [CPU s], {label}")
     print(f"{'function':58s}" + "".join(f"{s:>9s}" for s in (*STAGES, "total")))
     for motor_type, functions in profiles.items():
         owners = functions.pop("__inlined__", {})

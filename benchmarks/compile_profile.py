@@ -6,7 +6,8 @@ compile of each dispatcher (only on a cache miss), ``numba:run_pass`` around eac
 ``numba:llvm_lock`` while LLVM works (optimising and emitting machine code). A listener on the
 three keeps a stack of what runs and charges each interval's own time (without the time of what
 runs inside it, such as a callee's compile during type inference) to the innermost function
-being compiled and to a stage:
+being compiled and to a stage. Times are CPU seconds of the process (``time.process_time``), so
+that a loaded machine gives the figures of a quiet one:
 
 - ``typing``: numba's type inference passes;
 - ``inlining``: the passes that inline functions at the IR level (``inline="always"``, overloads);
@@ -62,19 +63,19 @@ class Profile(event.Listener):
         if ev.kind == "numba:compile":
             fn = getattr(data.get("dispatcher"), "py_func", None)
             name = f"{getattr(fn, '__module__', '?')}.{getattr(fn, '__qualname__', '?')}"
-            self.stack.append([name, None, name, time.perf_counter(), 0.0])
+            self.stack.append([name, None, name, time.process_time(), 0.0])
         elif ev.kind == "numba:run_pass":
             name = str(data.get("name", "?"))
             self.stack.append([self._function(), stage_of(name.split(" [")[0]),
-                               str(data.get("qualname", "?")), time.perf_counter(), 0.0])
+                               str(data.get("qualname", "?")), time.process_time(), 0.0])
         else:
-            self.stack.append([self._function(), "llvm", "", time.perf_counter(), 0.0])
+            self.stack.append([self._function(), "llvm", "", time.process_time(), 0.0])
 
     def on_end(self, ev: event.Event) -> None:
         if not self.stack:
             return
         function, stage, owner, start, child = self.stack.pop()
-        elapsed = time.perf_counter() - start
+        elapsed = time.process_time() - start
         own = elapsed - child
         self.totals[function][stage or "other"] += own
         if stage not in (None, "llvm"):
