@@ -25,7 +25,7 @@ setup: $(STAMP)
 setup-rl: $(STAMP_RL)
 
 demo: $(STAMP)
-	$(BIN)/jvl-gym compile --motor MAC140  # numba: the kernel of the demo's motor family only
+	$(BIN)/jvl-gym compile --motor MAC140  # numba: only the family of the demo's motor (jvl_gym.demo.MOTOR)
 	MPLBACKEND=Agg $(BIN)/python -m jvl_gym.demo --out demo_out
 
 test: $(STAMP_RL)
