@@ -1,6 +1,7 @@
 """SHA-256 of every family's registers and state after a few hundred steps (a check, not a
 benchmark): ``python benchmarks/kernel_hash.py`` prints one line per case; two source trees
-whose compiled code computes the same print the same lines.
+whose compiled code computes the same print the same lines. Arguments: family keys (default:
+every family).
 
 Cases per family: a mixed array of 40 motors (every motor type of the family in turn, so the
 threaded driver and partly filled blocks run; each motor in another mode, where the family
@@ -11,6 +12,7 @@ and one single motor of each of the first two types in the same setting as motor
 from __future__ import annotations
 
 import hashlib
+import sys
 
 import numpy as np
 
@@ -46,7 +48,7 @@ def _digest(m: MotorArray) -> str:
 
 
 def main() -> None:
-    for key in families():
+    for key in sys.argv[1:] or families():
         types = family(key).motor_types()
         mixed = [types[i % len(types)] for i in range(40)]
         m = MotorArray(mixed, n=40, seed=1)
