@@ -11,7 +11,6 @@ $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
 	$(BIN)/python -m pip install -q -e ".[dev]"
-	$(BIN)/jvl-gym compile --motors-only  # numba: the kernel, once per machine (cached)
 	touch $@
 
 $(STAMP_RL): $(STAMP)
@@ -21,10 +20,12 @@ $(STAMP_RL): $(STAMP)
 	touch $@
 
 setup: $(STAMP)
+	$(BIN)/jvl-gym compile --motors-only  # numba: every family's kernel (cached: seconds after once)
 
 setup-rl: $(STAMP_RL)
 
 demo: $(STAMP)
+	$(BIN)/jvl-gym compile --motor MAC140  # numba: only the family of the demo's motor (jvl_gym.demo.MOTOR)
 	MPLBACKEND=Agg $(BIN)/python -m jvl_gym.demo --out demo_out
 
 # every env × family × {trained policies, baseline, random}: docs/results.md and its plots

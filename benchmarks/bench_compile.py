@@ -11,7 +11,11 @@ source tree (``NUMBA_CACHE_DIR``, so the project's own cache is neither used nor
 3. the first step again, now from the filled cache (what every later process pays);
 4. in a second empty cache: ``jvl-gym compile`` (what ``make setup`` runs once), then the
    first step of a motor array and of each single env after it (trees without that command
-   print "—").
+   print "—");
+5. per family, in an empty cache: the first step of a motor array of its first motor type under
+   numba's compile events (``benchmarks/compile_profile.py``): the CPU seconds of each compiled
+   function in numba's typing, IR inlining, lowering and LLVM, and the functions whose passes
+   (their own and those of their inlined copies) take the most front-end time.
 
 ``--baseline REV`` measures the source tree of git revision ``REV`` (checked out into a temporary
 worktree) the same way and prints both side by side.
@@ -20,6 +24,7 @@ worktree) the same way and prints both side by side.
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import subprocess
@@ -62,14 +67,64 @@ print(time.perf_counter() - t0)
 """
 
 
+def _last_line(args: list[str], tree: Path, cache_dir: str) -> str:
+    """The last stdout line of ``python ARGS`` in a new process importing jvl_gym from
+    ``tree`` with numba's cache in ``cache_dir``."""
+    env = {**os.environ, "NUMBA_CACHE_DIR": cache_dir, "JVL_QUIET_COMPILE": "1",
+           "PYTHONPATH": f"{tree / 'src'}{os.pathsep}{tree}"}
+    out = subprocess.run([sys.executable, *args], capture_output=True, text=True, check=True,
+                         env=env, cwd=tree)
+    return out.stdout.strip().splitlines()[-1]
+
+
 def seconds(code: str, tree: Path, cache_dir: str) -> float:
     """Wall time [s] of ``code`` in a new Python process importing jvl_gym from ``tree`` with
     numba's cache in ``cache_dir``."""
-    env = {**os.environ, "NUMBA_CACHE_DIR": cache_dir, "JVL_QUIET_COMPILE": "1",
-           "PYTHONPATH": f"{tree / 'src'}{os.pathsep}{tree}"}
-    out = subprocess.run([sys.executable, "-c", TIMED.format(code=code)], capture_output=True,
-                         text=True, check=True, env=env, cwd=tree)
-    return float(out.stdout.strip().splitlines()[-1])
+    return float(_last_line(["-c", TIMED.format(code=code)], tree, cache_dir))
+
+
+FAMILY_TYPES = ("from jvl_gym.families import families, family\n"
+                "print(' '.join(family(k).motor_types()[0] for k in families()))")
+STAGES = ("typing", "inlining", "lowering", "llvm", "other")
+#: functions and inlined owners listed per family: those with at least this many seconds
+SHOWN_FROM = 1.0
+
+
+def profile(tree: Path) -> dict[str, dict]:
+    """Per family (by its first motor type): the compile profile of a motor array's first
+    step in an empty cache (``compile_profile.run``)."""
+    with tempfile.TemporaryDirectory(prefix="jvl-numba-") as cache_dir:
+        types = _last_line(["-c", FAMILY_TYPES], tree, cache_dir).split()
+    result = {}
+    for motor_type in types:
+        code = f"from jvl_gym import MotorArray\nMotorArray({motor_type!r}, n=4).step(1)"
+        with tempfile.TemporaryDirectory(prefix="jvl-numba-") as cache_dir:
+            result[motor_type] = json.loads(_last_line(
+                [str(Path(__file__).with_name("compile_profile.py")), code], tree, cache_dir))
+    return result
+
+
+def print_profile(label: str, profiles: dict[str, dict]) -> None:
+    """The per-family compile breakdown of one source tree."""
+    print(f"\ncompile of a motor array's first step by stage [CPU s], {label}")
+    print(f"{'function':58s}" + "".join(f"{s:>9s}" for s in (*STAGES, "total")))
+    for motor_type, functions in profiles.items():
+        owners = functions.pop("__inlined__", {})
+        family_total = dict.fromkeys(STAGES, 0.0)
+        rows = sorted(functions.items(), key=lambda kv: -sum(kv[1].values()))
+        for name, stages in rows:
+            for s in STAGES:
+                family_total[s] += stages.get(s, 0.0)
+            if sum(stages.values()) >= SHOWN_FROM:
+                print(f"  {name[-56:]:56s}" + "".join(f"{stages.get(s, 0.0):9.1f}"
+                                                      for s in STAGES)
+                      + f"{sum(stages.values()):9.1f}")
+        print(f"{motor_type + ' family, all functions':58s}"
+              + "".join(f"{family_total[s]:9.1f}" for s in STAGES)
+              + f"{sum(family_total.values()):9.1f}")
+        top = sorted(owners.items(), key=lambda kv: -kv[1])
+        shown = ", ".join(f"{name} {sec:.1f}" for name, sec in top[:8] if sec >= SHOWN_FROM)
+        print(f"  front-end seconds by pass owner (inlined copies included): {shown or '-'}")
 
 
 def measure(tree: Path) -> list[float]:
@@ -86,6 +141,8 @@ def measure(tree: Path) -> list[float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--baseline", help="git revision to measure beside this tree")
+    parser.add_argument("--profile-only", action="store_true",
+                        help="only the per-family compile breakdown (step 5)")
     args = parser.parse_args()
     columns = [("this tree", ROOT)]
     with tempfile.TemporaryDirectory(prefix="jvl-baseline-") as base:
@@ -94,12 +151,17 @@ def main() -> None:
                             args.baseline], check=True)
             columns.insert(0, (args.baseline[:10], Path(base)))
         try:
-            results = [measure(tree) for _, tree in columns]
+            results = [] if args.profile_only else [measure(tree) for _, tree in columns]
+            profiles = [profile(tree) for _, tree in columns]
         finally:
             if args.baseline:
                 subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", base],
                                check=False)
-    print(f"{'first use, empty numba cache [s]':40s}"
+    for (label, _), profiles_of_tree in zip(columns, profiles):
+        print_profile(label, profiles_of_tree)
+    if not results:
+        return
+    print(f"\n{'first use, empty numba cache [s]':40s}"
           + "".join(f"{label:>14s}" for label, _ in columns))
     for k, (name, _) in enumerate([*CASES, *AFTER_PRECOMPILE]):
         print(f"{name:40s}" + "".join(f"{r[k]:14.1f}" if r[k] == r[k] else f"{'—':>14s}"

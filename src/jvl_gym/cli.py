@@ -8,6 +8,7 @@ Errors are one line on stderr with a non-zero exit status; ``--debug`` shows the
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 from typing import Annotated
 
@@ -157,15 +158,26 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
 
 @app.command(name="compile")
 def compile_(motors_only: Annotated[bool, typer.Option(
-                 "--motors-only", help="only the motor array, not the environments")] = False,
-             workers: Annotated[int | None, typer.Option(help="worker processes")] = None
+                 "--motors-only", help="only the motor arrays, not the environments")] = False,
+             motor: Annotated[list[str] | None, typer.Option(
+                 help="only the motor array of this motor type's family (repeatable; "
+                      "no environments)")] = None,
+             workers: Annotated[int | None, typer.Option(
+                 help="worker processes (default: the CPU count)")] = None
              ) -> None:
-    """Compile the simulator and the environments for this machine now (numba caches the
-    result on disk; otherwise each compiles on first use)."""
+    """Compile the simulator and the environments for this machine now, in parallel
+    processes (numba caches the result on disk; otherwise each compiles on first use)."""
+    from .config import ConfigError
     from .precompile import compile_all
 
-    for job, seconds in compile_all(workers, envs=not motors_only).items():
-        typer.echo(f"{job}: {seconds:.1f} s")
+    if workers is not None and workers < 1:
+        raise typer.BadParameter(f"--workers {workers}: give 1 or more")
+    start = time.perf_counter()
+    try:
+        times = compile_all(workers, envs=not (motors_only or motor), motor_types=motor)
+    except ConfigError as exc:
+        raise CliError(f"--motor: {exc}") from exc
+    typer.echo(f"compiled {len(times)} units in {time.perf_counter() - start:.1f} s")
 
 
 @app.command()

@@ -34,7 +34,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ...jit import LANE_KERNEL
+from ...jit import KERNEL, LANE_KERNEL
 from ...physics.bus import bus_step_prepared
 from ...physics.coil import coil_step_prepared, phase_to_vector, vector_to_phases
 from ...physics.fixed import clamp, rnd
@@ -100,23 +100,25 @@ def lane_scratch(n_motors: int) -> np.ndarray:
     return np.zeros((-(-int(n_motors) // LANES), N_FIELDS * LANES))
 
 
-@njit(cache=True, inline="always")
+# The lane accessors below are compiled once, as functions of their own, and LLVM inlines them
+# into the lane loops; numba's IR inliner would copy them into each of their many call sites.
+@njit(**KERNEL)
 def _get(sc: np.ndarray, f: int, j: int) -> float:
     return sc[f * LANES + j]
 
 
-@njit(cache=True, inline="always")
+@njit(**KERNEL)
 def _put(sc: np.ndarray, f: int, j: int, x: float) -> None:
     sc[f * LANES + j] = x
 
 
-@njit(cache=True, inline="always")
+@njit(**KERNEL)
 def _sf(col: int) -> int:
     """Lane field of state column ``col``."""
     return _LANE_OF[col]
 
 
-@njit(cache=True, inline="always")
+@njit(**KERNEL)
 def _pf(col: int) -> int:
     """Lane field of parameter column ``col``."""
     return _PLANE_OF[col]
