@@ -75,10 +75,15 @@ class RegisterArray:
             raise ModeError("SAFE_MODE is entered by the safe-mode command only")
 
     def write_raw(self, key: str | int, raw: Any, index: Any = None) -> None:
-        number = self.table.lookup(key).number
-        self._check(number, int(raw))
+        self.write_raw_many({key: raw}, index)
+
+    def write_raw_many(self, values: dict[str | int, Any], index: Any = None) -> None:
+        numbers = {self.table.lookup(key).number: int(raw) for key, raw in values.items()}
+        for number, raw in numbers.items():
+            self._check(number, raw)
         rows = slice(None) if index is None else index
-        self.regs[rows, number] = int(raw)
+        for number, raw in numbers.items():
+            self.regs[rows, number] = raw
 
     # ------------------------------------------------------------------ modes, flash, reset
     def step(self, n_outer: int = 1) -> None:

@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from jvl_gym.cli import app
+from jvl_gym.families import Capability, families_with
 from jvl_gym.families.mis.program.bench import IoScriptError, load_io_script
 
 PICK = """mode mode=position
@@ -67,7 +68,9 @@ def test_program_run_writes_the_trace(tmp_path: Path, capsys: pytest.CaptureFixt
     (PICK, "inputs: [{t: -1, set: {1: high}}]\n", [], "inputs[0].t"),
     (PICK, "sensors: [{input: 9, from: 0, to: 1}]\n", [], "input 9"),
     (PICK, "bogus: 1\n", [], "unknown key 'bogus'"),
-    (PICK, IO, ["--motor", "MAC140"], "does not run stored programs"),
+    (PICK, IO, ["--motor", "MAC140"], "no stored programs (the family does not declare "
+                                      "Capability.PROGRAMS); give a motor type that runs "
+                                      "stored programs (MIS171, "),
     (PICK, IO, ["--motor", "MIS999"], "--motor MIS999"),
     (PICK, "registers: {NOPE: 1}\n", [], "NOPE"),
 ])
@@ -89,3 +92,15 @@ def test_io_script_checks() -> None:
         load_io_script({"inputs": [{"t": 0, "set": {1: "on"}}]})
     with pytest.raises(IoScriptError, match="from"):
         load_io_script({"sensors": [{"input": 1, "from": 5, "to": 1}]})
+
+
+def test_the_motor_defaults_to_a_family_that_runs_programs(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """Without --motor the program runs on the first motor type of the first registered family
+    that declares Capability.PROGRAMS."""
+    prog, io = _files(tmp_path)
+    code, out, _ = _run(["program", "run", str(prog), "--seconds", "0.01", "--io", str(io),
+                         "--out", str(tmp_path / "o")], capsys)
+    first = families_with(Capability.PROGRAMS)[0]
+    assert code == 0 and f" on {first.motor_types()[0]}, " in out
+    assert first.programs is not None and first.programs.ProgramError.__name__ == "ProgramError"

@@ -1,4 +1,4 @@
-"""The default register sets give stable, well-damped control for KVOUT 1–10 (core issue)."""
+"""The default register sets give stable, well-damped control for KVOUT 1–10."""
 
 from __future__ import annotations
 

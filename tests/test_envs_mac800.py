@@ -1,4 +1,4 @@
-"""The MAC050–141 tasks on the MAC800 family (issue #18): an env's family follows from its motor
+"""The MAC050–141 tasks on the MAC800 family: an env's family follows from its motor
 types, the hooks are specialised per family, observations and actions are in the family's own
 units, CoilWinding refuses the MAC800 (docs/envs.md)."""
 

@@ -154,6 +154,30 @@ def test_the_twin_saves_the_toy_registers_to_flash_and_reloads_them(tmp_path: Pa
     assert m.mode_name(0) == "passive"
 
 
+def test_programs_and_fieldbuses_the_toy_does_not_declare_are_refused_by_name(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The program CLI and the CANopen slave ask the family record: the toy, declaring neither
+    Capability.PROGRAMS nor Capability.CANOPEN, is refused by name; the program CLI lists the
+    motor types of the registered families that run programs."""
+    from jvl_gym.cli import app
+    from jvl_gym.families import families_with
+    from jvl_gym.protocol.canopen.facts import facts_of, has_canopen
+
+    m = MotorArray("TOY1", n=1, seed=0)
+    assert not has_canopen(m)
+    with pytest.raises(UnsupportedOperation, match="CANOPEN"):
+        facts_of(m)
+    (tmp_path / "p.txt").write_text("mode mode=position\n")
+    with pytest.raises(SystemExit) as info:
+        app(["program", "run", str(tmp_path / "p.txt"), "--motor", "TOY1", "--seconds", "0.01",
+             "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    types = [t for fam in families_with(Capability.PROGRAMS) for t in fam.motor_types()]
+    assert info.value.code == 2 and err.count("\n") == 1 and "Capability.PROGRAMS" in err
+    assert types and f"({', '.join(types)})" in err and "TOY1" not in err.split(";")[1]
+    assert not (tmp_path / "o").exists()
+
+
 def test_operations_the_toy_does_not_declare_are_refused_by_name() -> None:
     """The toy has no sample buffer, torque, energy or init-mode command: the array raises
     UnsupportedOperation naming the capability, the twin refuses and nothing changes."""

@@ -1,4 +1,4 @@
-"""Issue 20: every input path either does what it says or raises a documented error and changes
+"""Every input path either does what it says or raises a documented error and changes
 nothing (indices, values, flash images, setups, motor configs, wording of the errors)."""
 
 from __future__ import annotations
@@ -195,6 +195,20 @@ def test_unknown_motor_lists_the_known_ones_and_short_names_work():
     assert load_motor("MAC50").name == "MAC050"
     assert load_motor("MAC95").name == "MAC095"
     assert MotorArray("MAC50").motor_configs[0].name == "MAC050"
+
+
+@pytest.mark.parametrize("motor", ["MAC14O", "MIS999", 5])
+def test_unknown_motor_lists_every_familys_types(motor):
+    with pytest.raises(ConfigError) as err:
+        MotorArray(motor)
+    assert all(t in str(err.value) for t in ("MAC140", "MIS232", "SMC66", "MAC800"))
+
+
+def test_env_motor_type_that_is_no_name_is_named():
+    import gymnasium as gym
+
+    with pytest.raises(ValueError, match="motor_type must be one or more of .* got 5"):
+        gym.make("jvl_gym/Positioning-v0", motor_type=5)
 
 
 # ------------------------------------------------------------------ wording

@@ -1,4 +1,4 @@
-"""Issue 20, command lines: every error is one line on stderr with a non-zero exit status (the
+"""Command lines: every error is one line on stderr with a non-zero exit status (the
 traceback only with --debug); train/evaluate say what is missing; verify reads the motor from
 the setup."""
 
@@ -37,8 +37,9 @@ def test_unknown_motor_is_one_line(capsys):
 
 
 def test_debug_shows_the_exception(capsys):
-    with pytest.raises(ConfigError):
+    with pytest.raises(Exception) as info:  # the option's usage error, from the ConfigError
         tune(["--debug", "autotune", "--motor", "MAC999"])
+    assert isinstance(info.value, ConfigError) or isinstance(info.value.__cause__, ConfigError)
 
 
 def test_usage_error_is_one_line(capsys):
@@ -55,6 +56,14 @@ def test_usage_error_is_one_line(capsys):
 def test_nan_options_are_one_line(capsys, args):
     code, _, err = _run(tune, args, capsys)
     _one_line_error(code, err)
+
+
+@pytest.mark.parametrize("args", [["autotune", "--out", "/proc/x"],
+                                  ["fleet", "configs/fleets/example.yml", "--out", "/proc/x"]])
+def test_unwritable_out_is_refused_before_the_run(capsys, args):
+    code, _, err = _run(tune, args, capsys)
+    line = _one_line_error(code, err)
+    assert "/proc/x" in line and "--out" in line and "writable directory" in line
 
 
 def test_list_shaped_and_partial_setups(tmp_path, capsys):

@@ -1,4 +1,4 @@
-"""Issue 20, the first hour: the README's command lines name commands and options that exist,
+"""The first hour: the README's command lines name commands and options that exist,
 the output folders they create are ignored by git, the package metadata has an SPDX license."""
 
 from __future__ import annotations

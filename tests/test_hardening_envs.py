@@ -1,4 +1,4 @@
-"""Issue 20, environments: exact action shapes and types, a single env that ended must be reset,
+"""Environments: exact action shapes and types, a single env that ended must be reset,
 unknown keywords named, and every env's info says why an episode ended."""
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
-"""Issue 20, plots: the demo scope's phases on their own axis and a readable current panel, the
-Bode plot's crossover and margin markers, the step plot's legend, GearSync's tension panel."""
+"""Plots: the demo scope's phases on their own axis and a readable current panel, the
+Bode plot's crossover, bandwidth and margin markers, unsettled motors of the fleet plot, the
+step plot's legend, GearSync's tension panel."""
 
 from __future__ import annotations
 
@@ -45,7 +46,9 @@ def test_bode_marks_crossover_and_margins(design):
     labels = [ln.get_label() for a in fig.axes for ln in a.get_lines()]
     assert sum(t.startswith("PM ") for t in texts) == 2
     assert sum(t.startswith("GM ") for t in texts) >= 1
-    assert any(label.startswith("crossover") for label in labels)
+    assert sum(label.startswith("open-loop gain crossover") for label in labels) == 4
+    assert sum(label.startswith("closed-loop BW") and "report's BW" in label
+               for label in labels) == 2
 
 
 def test_step_plot_legend_has_no_register_units(design):
@@ -70,3 +73,21 @@ def test_scope_puts_a_reference_in_the_panel_of_its_quantity():
     figures: dict = {}
     image = draw_scope(figures, 0, np.zeros((4, 10)), GearSyncVectorEnv.scope_channels, 0.01)
     assert image.ndim == 3 and len(figures[0].axes) == 3
+
+
+def test_fleet_plot_draws_unsettled_motors_as_unsettled(tmp_path, monkeypatch):
+    import matplotlib.figure
+    from jvl_gym.scale.fleet_report import plot_fleet
+
+    figures = []
+    save = matplotlib.figure.Figure.savefig
+    monkeypatch.setattr(matplotlib.figure.Figure, "savefig",
+                        lambda self, *a, **k: (figures.append(self), save(self, *a, **k)))
+    rows = [{"settle_default_s": 0.2, "settle_tuned_s": 0.1, "credible": True},
+            {"settle_default_s": float("inf"), "settle_tuned_s": 0.15, "credible": True}]
+    plot_fleet(rows, tmp_path / "fleet.png")
+    ax = figures[0].axes[-1]
+    marked = {c.get_label(): c.get_offsets().tolist() for c in ax.collections}
+    assert marked["settled"] == [[200.0, 100.0]]
+    (x, y), = marked["did not settle (drawn on the dotted edge)"]
+    assert x > 200.0 and y == 150.0

@@ -1,4 +1,4 @@
-"""Issue 20, property-based: any input to the public write/read/index API, to the flash image,
+"""Property-based: any input to the public write/read/index API, to the flash image,
 to config and setup loading and to record loading either does exactly what it says or raises a
 documented error; after an error every register, the flash and the state are bit-identical to
 before. (Small example counts: these run in the normal suite; the kernel is not stepped.)"""

@@ -1,4 +1,4 @@
-"""Issue 20, record CSV files: every malformed file is a RecordError naming the file and line."""
+"""Record CSV files: every malformed file is a RecordError naming the file and line."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Issue 20, the digital twin: flash files named in errors, an unwritable flash directory
+"""The digital twin: flash files named in errors, an unwritable flash directory
 neither loses state nor drops the client, the banner shows the addresses the motors answer at,
 closed connections are released, and garbage is skipped a run at a time."""
 
@@ -128,3 +128,28 @@ def test_random_garbage_is_skipped_to_the_next_sync():
 def test_server_speed_must_be_finite_and_positive(speed):
     with pytest.raises(ValueError, match="speed"):
         TwinServer(_twin(), speed=speed, run_clock=False)
+
+
+def test_a_port_in_use_is_named():
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen(1)
+        port = taken.getsockname()[1]
+        server = TwinServer(_twin(), tcp=("127.0.0.1", port), run_clock=False)
+        with pytest.raises(OSError, match=f"127.0.0.1:{port}.*choose another port"):
+            server.start()
+        server.stop()
+
+
+def test_serve_on_a_port_in_use_is_one_line(capsys):
+    from jvl_gym.cli import app
+
+    with socket.socket() as taken:
+        taken.bind(("127.0.0.1", 0))
+        taken.listen(1)
+        port = taken.getsockname()[1]
+        with pytest.raises(SystemExit) as info:
+            app(["serve", "--motor", "MAC140", "--tcp", f"127.0.0.1:{port}"])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert info.value.code not in (0, None)
+    assert f"127.0.0.1:{port}" in err[-1] and "Traceback" not in "".join(err)

@@ -1,4 +1,4 @@
-"""Every operating mode against its manual formula (issue 'Every operating mode')."""
+"""Every operating mode against its manual formula."""
 
 from __future__ import annotations
 

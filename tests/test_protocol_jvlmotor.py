@@ -1,4 +1,4 @@
-"""JVL's own client against the twin (issue #18): the MacTalk code of the ``jvlmotor`` package
+"""JVL's own client against the twin: the MacTalk code of the ``jvlmotor`` package
 (JVL A/S, MIT; ``JVLMotor.Protocols.MacTalkProtocol``, written for the MAC400+ and MIS motors,
 whose read reply names the register) reads and writes P_SOLL, V_SOLL and MODE_REG of a MIS and
 of a MAC800 twin over a pseudo-terminal and reads back what it wrote.

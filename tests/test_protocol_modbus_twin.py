@@ -1,4 +1,4 @@
-"""Modbus RTU of the twin's MIS motors (MIS manual §12; issue #23): the served twin answers the
+"""Modbus RTU of the twin's MIS motors (MIS manual §12): the served twin answers the
 manual's example frames byte for byte, pymodbus reads and writes it at 2n and 40 000 + n, the
 refusals are exception replies that change nothing, the time-out action acts on the motor, and
 ``jvl-gym serve --modbus`` wires it up.

@@ -1,4 +1,4 @@
-"""Closed-loop physics of the simulator against the acceptance list of the core issue."""
+"""Closed-loop physics of the simulator."""
 
 from __future__ import annotations
 

@@ -441,3 +441,13 @@ def test_actions_of_the_family(motor_type, register, bit):
     m.write("A_SOLL", 123)
     acts["save in flash"]()  # saves and resets: the value stays, from flash
     assert m.read("A_SOLL") == 123
+
+
+def test_actions_follow_the_family_capabilities():
+    """The MAC800 declares no safe mode, flash save or software reset: its motor offers only
+    passive and clear errors; the MIS, declaring them, offers them all, and no test modes
+    (Capability.TEST_MODES is the MAC050–141's)."""
+    m = SimMotor("MAC800", 1)
+    assert set(m.actions()) == {"passive", "clear errors"}
+    assert facts_of("MIS232").test_modes() == {} and set(facts_of("MAC140").test_modes()) == {
+        "TESTU", "TESTA"}

@@ -1,4 +1,4 @@
-"""Tuning toolkit: models, synthesis, quantisation and verification (issue 4)."""
+"""Tuning toolkit: models, synthesis, quantisation and verification."""
 
 from __future__ import annotations
 

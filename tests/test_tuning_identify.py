@@ -1,4 +1,4 @@
-"""Tuning toolkit: records, coil and mechanics identification (issue 4)."""
+"""Tuning toolkit: records, coil and mechanics identification."""
 
 from __future__ import annotations
 

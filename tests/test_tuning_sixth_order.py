@@ -1,4 +1,4 @@
-"""Tuning toolkit on the MAC800 family (issue #18): identification from sample-buffer torque
+"""Tuning toolkit on the MAC800 family: identification from sample-buffer torque
 steps, the sixth-order main filter, its quantisation to Fixed16/Fixed24, the acceptance move,
 and ``jvl-tune autotune/verify --motor MAC800``."""
 

@@ -65,6 +65,26 @@ def _nonnegative(value: float | None) -> float | None:
     return value
 
 
+def _writable_dir(value: Path) -> Path:
+    """Option callback: a directory that exists and is writable, or that can be created in a
+    writable directory (checked before any work starts; nothing is created here)."""
+    import tempfile
+
+    probe = value.absolute()
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if probe == value.absolute() and not probe.is_dir():
+        raise typer.BadParameter(f"{value} exists and is not a directory; give a directory")
+    try:
+        if not probe.is_dir():
+            raise OSError(f"{probe} is not a directory")
+        tempfile.TemporaryFile(dir=probe).close()  # what the run would do: make a file there
+    except OSError as exc:
+        raise typer.BadParameter(f"{value} cannot be written ({exc.strerror or exc} in "
+                                 f"{probe}); give a writable directory") from None
+    return value
+
+
 def _positive(value: float | None) -> float | None:
     """Option callback: a finite number > 0 (or not given)."""
     if _finite(value) is not None and value <= 0:
@@ -218,7 +238,9 @@ def autotune(motor: str = typer.Option("MAC140"),
              n_mech: int = typer.Option(None, help="TESTA samples per record (default: "
                                         f"{RECOMMENDED_MECH_SAMPLES}; with --port 11)"),
              structure: str = typer.Option("pi", help="speed loop structure: pi or ip"),
-             out: Path = typer.Option(Path("autotune_out")),
+             out: Path = typer.Option(Path("autotune_out"), callback=_writable_dir,
+                                      help="output directory of setup.yaml, the report and "
+                                      "the plots (also with --port)"),
              port: str = typer.Option(None, help="serial device or pyserial URL of a real motor "
                                       "or of `jvl-gym serve` (default: the simulator)"),
              address: int = typer.Option(1, help="MacTalk unit address (MYADDR) with --port"),
@@ -297,8 +319,12 @@ def autotune(motor: str = typer.Option("MAC140"),
 
 def _strategy(motor: str | None) -> Strategy:
     """The tuning strategy of a motor type's family (:func:`tuning.strategy.strategy_of`)."""
+    from jvl_gym.config import ConfigError
+
     try:
         return strategy_of(motor)
+    except ConfigError:
+        raise  # an unknown motor type: the loader's error, one line unless --debug
     except ValueError as exc:
         raise typer.BadParameter(str(exc), param_hint="'--motor'") from exc
 
@@ -393,7 +419,8 @@ def _check_credible(strategy: Strategy, ident: object, accept: bool) -> None:
 @app.command()
 def fleet(spec: Path = typer.Argument(..., help="fleet file (configs/fleets/*.yml) or a folder "
                                       "with one subfolder of record CSVs per motor"),
-          out: Path = typer.Option(Path("fleet_out"), help="output directory"),
+          out: Path = typer.Option(Path("fleet_out"), help="output directory",
+                                   callback=_writable_dir),
           address: str = typer.Option(None, help="Ray cluster: auto, HOST:PORT or "
                                       "ray://HOST:10001 (default: local Ray)"),
           num_cpus: int = typer.Option(None, help="CPUs of the local Ray"),

@@ -144,15 +144,26 @@ def plot_fleet(rows: list[dict[str, Any]], path: str | Path) -> Path:
     cap = max([r["settle_default_s"] for r in moved if math.isfinite(r["settle_default_s"])]
               + [r["settle_tuned_s"] for r in moved if math.isfinite(r["settle_tuned_s"])]
               + [0.1])
-    sd = np.array([min(r["settle_default_s"], 1.1 * cap) for r in moved]) * 1e3
-    st = np.array([min(r["settle_tuned_s"], 1.1 * cap) for r in moved]) * 1e3
-    ax.scatter(sd, st, c=["tab:green" if r.get("credible") else "tab:red" for r in moved])
+    edge = 1.1 * cap * 1e3  # where a motor that did not settle is drawn, beyond every time
+    sd = np.array([r["settle_default_s"] for r in moved]) * 1e3
+    st = np.array([r["settle_tuned_s"] for r in moved]) * 1e3
+    settled = np.isfinite(sd) & np.isfinite(st)
+    colors = np.array(["tab:green" if r.get("credible") else "tab:red" for r in moved])
+    ax.scatter(sd[settled], st[settled], c=colors[settled].tolist(), label="settled")
+    if not settled.all():
+        ax.scatter(np.where(np.isfinite(sd), sd, edge)[~settled],
+                   np.where(np.isfinite(st), st, edge)[~settled], c=colors[~settled].tolist(),
+                   marker="x", label="did not settle (drawn on the dotted edge)")
+        for line in (ax.axvline, ax.axhline):
+            line(edge, color="0.5", lw=0.8, ls=":")
     lim = 1.15 * cap * 1e3
     ax.plot([0, lim], [0, lim], "k--", lw=0.8)
     ax.set_xlabel("settle, default setup [ms]")
     ax.set_ylabel("settle, designed [ms]")
-    ax.set_title("settle times (red: not credible; beyond the\nmove: plotted at 1.1 x the "
-                 "longest)", fontsize=8)
+    if moved:
+        ax.legend(fontsize=7, loc="lower right")
+    ax.set_title("settle times (red: not credible; x: did not\nsettle within the move)",
+                 fontsize=8)
     fig.tight_layout()
     path = Path(path)
     fig.savefig(path, dpi=100)

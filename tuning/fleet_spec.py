@@ -27,6 +27,7 @@ the error columns of the report (``jvl-tune fleet --save-records`` writes such f
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -35,7 +36,7 @@ import numpy as np
 import yaml
 
 from jvl_gym.scale.distributions import parse_distribution
-from jvl_gym.scale.errors import UserError, read_yaml
+from jvl_gym.scale.errors import UserError, file_flag, file_number, read_yaml
 
 __all__ = ["FleetMotor", "FleetSpec", "load_fleet", "parse_fleet", "fleet_from_records"]
 
@@ -159,9 +160,8 @@ def parse_fleet(data: Any, path: Path | None = None) -> FleetSpec:
     move_raw = data.get("move") or {}
     if not isinstance(move_raw, dict) or set(move_raw) - _MOVE:
         raise UserError(f"{where}: move: expected a mapping with keys {sorted(_MOVE)}")
-    move = {"distance": 20000, "v_soll": 2000, "seconds": 2.0, **move_raw}
-    if not all(isinstance(v, (int, float)) and v > 0 for v in move.values()):
-        raise UserError(f"{where}: move: distance, v_soll and seconds must be positive numbers")
+    move = {k: file_number(v, f"{where}: move.{k}", positive=True) for k, v in
+            {"distance": 20000, "v_soll": 2000, "seconds": 2.0, **move_raw}.items()}
     types = _motor_types()
     rng = np.random.default_rng(seed)
     motors: list[FleetMotor] = []
@@ -182,11 +182,11 @@ def parse_fleet(data: Any, path: Path | None = None) -> FleetSpec:
         jm = MotorData.from_config(mtype).J_m
         draws = {}
         for key in ("load_ratio", "load_inertia", "viscous", "coulomb"):
-            dist = parse_distribution(group.get(key, 0.0), f"{gw}: {key}")
+            dist = parse_distribution(group.get(key, 0.0), f"{gw}: {key}", numeric=True)
             values = dist.sample(rng, count)
-            if any(not isinstance(v, (int, float)) or v < 0 for v in values):
-                raise UserError(f"{gw}: {key}: values must be numbers >= 0 (the distribution "
-                                "reaches below 0: narrow it or use truncnormal)")
+            if any(v < 0 or not math.isfinite(v) for v in values):
+                raise UserError(f"{gw}: {key}: values must be finite numbers >= 0 (the "
+                                "distribution reaches below 0: narrow it or use truncnormal)")
             draws[key] = values
         angles = rng.uniform(0, 2 * np.pi, count)
         for i in range(count):
@@ -198,10 +198,11 @@ def parse_fleet(data: Any, path: Path | None = None) -> FleetSpec:
                            coulomb=float(draws["coulomb"][i]), initial_angle=float(angles[i]))
             m.truth = {"J": jm + m.load_inertia, "viscous": m.viscous, "coulomb": m.coulomb}
             motors.append(m)
-    return FleetSpec(path, motors, noise=bool(data.get("noise", True)), structure=structure,
+    return FleetSpec(path, motors, noise=file_flag(data.get("noise", True), f"{where}: noise"),
+                     structure=structure,
                      n_coil=_int(data.get("n_coil", 64), f"{where}: n_coil", 11),
                      n_mech=_int(data.get("n_mech", 64), f"{where}: n_mech", 11),
-                     move={k: float(v) for k, v in move.items()})
+                     move=move)
 
 
 def fleet_from_records(folder: Path, structure: str = "pi") -> FleetSpec:

@@ -60,6 +60,8 @@ def design_table(strategy: Strategy, candidate: Candidate, motor: Any, J: float)
     for name, mt in strategy.loop_rows(candidate, motor, J):
         lines.append(f"{name:<34}{mt.pm_deg:>8.1f}{mt.gm_db:>8.1f}{mt.bandwidth_hz:>9.1f}"
                      f"{mt.pole_radius:>8.3f}{mt.stable!s:>8}")
+    lines.append("(BW: the −3 dB bandwidth of the closed loop L/(1+L); bode.png marks it and the "
+                 "open loop's gain crossover, |L| = 0 dB)")
     return lines + strategy.design_lines(candidate, motor, J)
 
 
@@ -118,7 +120,12 @@ def bode_figure(loops: Sequence[tuple[str, Any]]) -> Any:
             fc = m.crossover_hz
             p_c = float(np.interp(math.log(fc), np.log(f), phase))
             for a in ax[:, j]:
-                a.axvline(fc, color="C3", lw=0.8, ls=":", label=f"crossover {fc:.3g} Hz")
+                a.axvline(fc, color="C3", lw=0.8, ls=":",
+                          label=f"open-loop gain crossover {fc:.3g} Hz (|L| = 0 dB)")
+            if math.isfinite(m.bandwidth_hz):
+                ax[0, j].axvline(m.bandwidth_hz, color="C1", lw=0.8, ls="--",
+                                 label=f"closed-loop BW {m.bandwidth_hz:.3g} Hz (report's BW:"
+                                 " −3 dB of L/(1+L))")
             ax[1, j].vlines(fc, p_c - m.pm_deg, p_c, color="C3", lw=2)
             ax[1, j].annotate(f"PM {m.pm_deg:.1f}°", (fc, p_c), xytext=(4, 4),
                               textcoords="offset points", color="C3", fontsize=8)

@@ -82,6 +82,10 @@ class RegisterBank(ABC):
     table: RegisterTable
     regs: np.ndarray
     state: np.ndarray
+    params: np.ndarray
+    inputs: np.ndarray
+    _flash: np.ndarray | None
+    _has_flash: np.ndarray
     _plans: dict[Any, StorePlan]
     _mode_number: int
     #: registers stored one at a time through :meth:`_store_special` (numbers)
@@ -89,6 +93,10 @@ class RegisterBank(ABC):
     #: the family's conformance matrix (``registers.conformance``): a write of a value other
     #: than the default to a register or bit it calls not modelled warns once per register
     CONFORMANCE: ClassVar[Conformance | None] = None
+    #: per-motor arrays (first axis: the motors) a refused transaction restores, besides the
+    #: flash (:meth:`_snapshot`); a family whose writes change further arrays names them
+    TRANSACTION_ARRAYS: ClassVar[tuple[str, ...]] = ("regs", "state", "params", "inputs",
+                                                     "_has_flash")
 
     def _lookup(self, key: RegisterKey) -> Register:
         if isinstance(key, (bool, np.bool_)) or not isinstance(key, (str, int, np.integer)):
@@ -202,15 +210,39 @@ class RegisterBank(ABC):
         """Write stored integers (Fixed4 = value·4096, …) with the same validation as write."""
         reg = self._lookup(key)
         idx = as_index(index, self.n)
+        raws = self._checked_raw(reg, raw, idx.size)
+        self._store(reg, idx, raws)
+        self._note_not_modelled((reg,), raws[None], 3)
+
+    def write_raw_many(self, values: Mapping[RegisterKey, int | np.integer | np.ndarray],
+                       index: MotorIndex = None) -> None:
+        """Write stored integers of several registers (key → raw, in this order) to the motors
+        ``index`` as one transaction, validated as by :meth:`write_raw` and stored as by
+        :meth:`write_many`: every register is checked before the first is stored, and a store
+        the firmware refuses restores the motors (registers, state and flash) as they were.
+
+        Examples
+        --------
+        >>> m.write_raw_many({"V_SOLL": 1234, "COMMAND": 268}, index=0)
+        """
+        idx = as_index(index, self.n)
+        plan = self._key_plan(tuple(values))
+        raws = np.empty((len(plan.regs), idx.size), dtype=np.int64)
+        for k, (reg, raw) in enumerate(zip(plan.regs, values.values())):
+            raws[k] = self._checked_raw(reg, raw, idx.size)
+        self._store_many(plan, idx, raws)
+        self._note_not_modelled(plan.regs, raws, 3)
+
+    def _checked_raw(self, reg: Register, raw: Any, size: int) -> np.ndarray:
+        """The stored integers ``raw`` of ``reg``, (size,) int64, validated as a write in user
+        units; a :class:`RegisterError` names what is wrong."""
         arr = None if isinstance(raw, (bool, np.bool_, str, bytes)) else np.asarray(raw)
         if arr is None or arr.dtype.kind not in "iu":
             raise RegisterRangeError(
                 f"{reg.name} (register {reg.number}): raw values must be integers (the stored "
                 f"integer: Fixed4 = value·4096, Fixed8 = value·256), got {raw!r}")
-        self._validated_raw(reg, arr / reg.scale, idx.size)
-        raws = np.broadcast_to(arr.astype(np.int64), (idx.size,)).copy()
-        self._store(reg, idx, raws)
-        self._note_not_modelled((reg,), raws[None], 3)
+        self._validated_raw(reg, arr / reg.scale, size)
+        return np.broadcast_to(arr.astype(np.int64), (size,)).copy()
 
     def _validated_raw(self, reg: Register, value: Any, size: int) -> np.ndarray:
         if reg.access != Access.RW:
@@ -260,7 +292,7 @@ class RegisterBank(ABC):
     def _store_many(self, plan: StorePlan, idx: np.ndarray, raws: np.ndarray) -> None:
         """Check and store the (K, M) validated stored integers ``raws`` of the registers of
         ``plan`` (in order) in motors ``idx``; if one is refused, the motors are restored."""
-        saved = (self.regs[idx], self.state[idx]) if len(plan.regs) > 1 else None
+        saved = self._snapshot(idx) if len(plan.regs) > 1 else None
         try:
             if plan.one_by_one or any(self._special_request(raws[k]) for k in plan.mode_rows):
                 for reg, raw in zip(plan.regs, raws):
@@ -269,8 +301,27 @@ class RegisterBank(ABC):
                 self._store_rows(plan, idx, raws)
         except RegisterError:
             if saved is not None:  # (one register is checked for every motor before it is stored)
-                self.regs[idx], self.state[idx] = saved
+                self._restore(idx, saved)
             raise
+
+    def _snapshot(self, idx: np.ndarray) -> tuple[Any, ...]:
+        """Copies of what a transaction on motors ``idx`` may change: the rows of
+        :attr:`TRANSACTION_ARRAYS` and the motors' flash (a user command or a SAFE_MODE
+        request saves to flash and resets)."""
+        flash = self._flash
+        return (tuple(getattr(self, name)[idx] for name in self.TRANSACTION_ARRAYS),
+                flash is None, None if flash is None else flash[idx])
+
+    def _restore(self, idx: np.ndarray, saved: tuple[Any, ...]) -> None:
+        """Put back the rows :meth:`_snapshot` copied."""
+        rows, no_flash, flash = saved
+        for name, row in zip(self.TRANSACTION_ARRAYS, rows):
+            getattr(self, name)[idx] = row
+        if no_flash:
+            self._flash = None
+        elif flash is not None:
+            assert self._flash is not None
+            self._flash[idx] = flash
 
     @abstractmethod
     def _store_rows(self, plan: StorePlan, idx: np.ndarray, raws: np.ndarray) -> None:

@@ -2,23 +2,25 @@
 
 ``jvl-gym program run PROGRAM.txt --motor MIS232 --seconds 5 --io script.yaml --out DIR``
 stores the program in the motor, runs it from power-on with the script's inputs, sensors and
-load, and writes ``DIR/trace.csv`` and ``DIR/trace.png``. A malformed program, an unknown motor
-or a motor without stored programs, or a malformed I/O script is one line on stderr and exit
-status 2.
+load, and writes ``DIR/trace.csv`` and ``DIR/trace.png``. The motor's family declares
+``Capability.PROGRAMS`` and its record's ``programs`` module does the work. A malformed program,
+an unknown motor or a motor without stored programs, or a malformed I/O script is one line on
+stderr and exit status 2.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
 from .cli_app import CliError
+from .families import UnsupportedOperation
 
 __all__ = ["program_app"]
 
-program_app = typer.Typer(help="Stored programs of the motors that run them (MIS/SMC).",
+program_app = typer.Typer(help="Stored programs of the motors that run them.",
                           no_args_is_help=True)
 
 
@@ -30,7 +32,9 @@ class UsageError(CliError):
 
 @program_app.command("run")
 def run(program: Annotated[Path, typer.Argument(help="program text file (one command a line)")],
-        motor: Annotated[str, typer.Option(help="motor type, e.g. MIS232")] = "MIS232",
+        motor: Annotated[str | None, typer.Option(
+            help="motor type (default: the first of the first family with stored "
+                 "programs)")] = None,
         seconds: Annotated[float, typer.Option(help="simulated time [s]", min=0.001,
                                                max=3600.0)] = 5.0,
         io: Annotated[Path | None, typer.Option(help="I/O script (YAML): inputs over time, "
@@ -41,42 +45,45 @@ def run(program: Annotated[Path, typer.Argument(help="program text file (one com
         seed: Annotated[int, typer.Option(help="noise seed")] = 0) -> None:
     """Run PROGRAM on a simulated motor and write its trace (CSV and plot) to OUT."""
     from . import MotorArray
+    from .families import Capability, families_with, family_of_motor
     from .registers import RegisterError
 
+    runners = families_with(Capability.PROGRAMS)
+    if motor is None:
+        motor = runners[0].motor_types()[0]
     try:
         text = program.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as exc:
         raise UsageError(f"cannot read the program {program}: {exc}; give a text file") from None
     try:
-        m = MotorArray(motor, seed=seed)
+        fam = family_of_motor(motor)
+        fam.require(Capability.PROGRAMS)
+    except UnsupportedOperation as exc:
+        types = ", ".join(t for f in runners for t in f.motor_types())
+        raise UsageError(f"--motor {motor}: {exc}; give a motor type that runs stored programs "
+                         f"({types})") from None
     except (ValueError, KeyError, OSError) as exc:
         raise UsageError(f"--motor {motor}: {exc}") from None
-    if not hasattr(m, "store_program"):
-        raise UsageError(f"--motor {motor}: this motor type does not run stored programs; give "
-                         "an MIS/SMC type such as MIS232")
-    from .families.mis.program.bench import (
-        IoScriptError,
-        load_io_script,
-        plot_trace,
-        run_bench,
-        write_csv,
-    )
-    from .families.mis.program.format import ProgramError
-
+    progs = fam.programs
+    assert progs is not None  # a family declaring PROGRAMS states its programs module
+    try:
+        m: Any = MotorArray(motor, seed=seed)  # its family runs programs: store_program …
+    except (ValueError, KeyError, OSError) as exc:
+        raise UsageError(f"--motor {motor}: {exc}") from None
     try:
         m.store_program(text)
-    except ProgramError as exc:
+    except progs.ProgramError as exc:
         raise UsageError(f"{program}: {exc}") from None
     try:
-        script = load_io_script(io)
-        trace = run_bench(m, seconds, script, register or ())
-    except IoScriptError as exc:
+        script = progs.load_io_script(io)
+        trace = progs.run_bench(m, seconds, script, register or ())
+    except progs.IoScriptError as exc:
         raise UsageError(f"{io}: {exc}") from None
     except RegisterError as exc:
         raise UsageError(f"{exc}") from None
     out.mkdir(parents=True, exist_ok=True)
-    write_csv(trace, out / "trace.csv")
-    plot_trace(trace, out / "trace.png", f"{program.name} on {motor}")
+    progs.write_csv(trace, out / "trace.csv")
+    progs.plot_trace(trace, out / "trace.png", f"{program.name} on {motor}")
     s = m.program_status(0)
     typer.echo(f"{program.name}: {seconds:g} s on {motor}, program {s.name} at line {s.line}; "
                f"wrote {out / 'trace.csv'} and {out / 'trace.png'}")

@@ -329,7 +329,13 @@ def serve(
             can_server.stop()
         raise
     if server is not None:
-        server.start()
+        try:
+            server.start()
+        except OSError as exc:
+            server.stop()
+            if can_server is not None:
+                can_server.stop()
+            raise typer.BadParameter(exc.strerror or str(exc), param_hint="'--tcp'") from None
     if can_server is not None:
         can_server.start()
     for text in banner([types[k] for k in order], line, [address[k] for k in order]):
@@ -363,14 +369,11 @@ def canopen_server(line: Any, interface: str, channel: str, node_ids: list[int] 
     ``line`` (a twin or a bus of twins, every one of a family with a CANopen interface) on the
     python-can bus ``interface``/``channel``; one-line BadParameter for a family without
     CANopen, a bad node id or a bus that cannot be opened (nothing left open)."""
-    from .protocol.canopen.facts import has_canopen
+    from .families import Capability
     from .protocol.canopen.server import CanopenServer, open_bus
 
     twins = list(getattr(line, "twins", [line]))
-    for twin in twins:
-        if not has_canopen(twin.m):
-            raise typer.BadParameter(f"--canopen: the {twin.m.family.title} have no CANopen "
-                                     "interface; serve only motors of a family that has one")
+    _require(twins, Capability.CANOPEN, "--canopen")
     try:
         bus = open_bus(interface, channel, bitrate)
     except ValueError as exc:
@@ -382,14 +385,30 @@ def canopen_server(line: Any, interface: str, channel: str, node_ids: list[int] 
         raise typer.BadParameter(f"--canopen: {exc}") from None
 
 
+def _require(twins: list[Any], capability: Any, option: str) -> None:
+    """Nothing if every twin's family declares ``capability``; a one-line BadParameter naming
+    it and the motor types of the families that have it otherwise."""
+    from .families import UnsupportedOperation, families_with
+
+    for twin in twins:
+        try:
+            twin.m.family.require(capability)
+        except UnsupportedOperation as exc:
+            types = ", ".join(t for fam in families_with(capability) for t in fam.motor_types())
+            raise typer.BadParameter(f"{option}: {exc}; serve motors that have it ({types})"
+                                     ) from None
+
+
 def _j1939_node(line: Any, spec: str, addresses: list[int] | None) -> Any:
     """J1939 nodes of the motors of ``line`` on the python-can bus ``spec`` (INTERFACE:CHANNEL),
     claiming their addresses now."""
     import can
 
+    from .families import Capability
     from .protocol.sae_j1939.node import J1939Node
     from .protocol.twin import Twin
 
+    _require(list(getattr(line, "twins", [line])), Capability.J1939, "--j1939")
     if not isinstance(line, Twin):
         raise typer.BadParameter("--j1939 serves motors of one family")
     interface, sep, channel = spec.partition(":")
@@ -413,12 +432,14 @@ def _j1939_node(line: Any, spec: str, addresses: list[int] | None) -> Any:
 def _dmx_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
                 starts: list[int] | None, other: bool) -> Any:
     """A DMX512 server of the motors of ``line`` (one twin of a family with DMX512)."""
+    from .families import Capability
     from .protocol.dmx512.receiver import DmxSettings
     from .protocol.dmx512.server import DmxLine, DmxServer
     from .protocol.twin import Twin
 
     if other:
         raise typer.BadParameter("--dmx serves the DMX line only (no --modbus, --user-tcp/-pty)")
+    _require(list(getattr(line, "twins", [line])), Capability.DMX512, "--dmx")
     if not isinstance(line, Twin):
         raise typer.BadParameter("--dmx serves motors of one family")
     n = line.m.n

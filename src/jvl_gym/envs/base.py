@@ -349,8 +349,13 @@ class MotorVectorEnv(VectorEnv, ABC):
 
     def _check_types(self, motor_type: str | Sequence[str]) -> tuple[str, ...]:
         fam = family(self.family_key)
-        types = (motor_type,) if isinstance(motor_type, str) else tuple(motor_type)
         known = fam.motor_types()
+        if isinstance(motor_type, str):
+            types: tuple[Any, ...] = (motor_type,)
+        elif isinstance(motor_type, Sequence):
+            types = tuple(motor_type)
+        else:
+            types = ()  # not a name nor a sequence of names: refused below
         types = tuple(fam.canonical_name(t) if isinstance(t, str) else t for t in types)
         if not types or any(t not in known for t in types):
             others = [t for key in self.supported_families() if key != self.family_key

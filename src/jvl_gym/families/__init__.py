@@ -18,6 +18,7 @@ from typing import Any
 import yaml
 
 from .contract import (
+    CanopenSpec,
     Capability,
     Family,
     FamilyConfig,
@@ -26,9 +27,9 @@ from .contract import (
     UnsupportedOperation,
 )
 
-__all__ = ["Family", "Capability", "FamilyConfig", "TwinSpec", "TuningSpec",
+__all__ = ["Family", "Capability", "FamilyConfig", "TwinSpec", "TuningSpec", "CanopenSpec",
            "UnsupportedOperation", "register_family", "family", "families", "family_of_motor",
-           "unknown_motor_type"]
+           "families_with", "unknown_motor_type"]
 
 # --- registration data ---------------------------------------------------------------------
 #: family key → the package that defines its ``FAMILY``
@@ -60,6 +61,11 @@ def family(key: str) -> Family:
 def families() -> tuple[str, ...]:
     """Keys of the registered families."""
     return tuple(_MODULES)
+
+
+def families_with(capability: Capability) -> tuple[Family, ...]:
+    """The registered families that declare ``capability``, in registration order."""
+    return tuple(family(k) for k in _MODULES if family(k).supports(capability))
 
 
 def family_of_motor(motor: Any) -> Family:
@@ -103,6 +109,7 @@ def unknown_motor_type(name: str) -> ValueError:
                       for k in _MODULES)
     return ConfigError(f"unknown motor type {name!r}; known: {known} (or give the path of a "
                        ".yaml motor config)")
+
 
 
 def _family_in_file(path: Path) -> str | None:

@@ -18,6 +18,10 @@ tasks              ``task``: the task interface module (the names of ``__all__``
                    task may use, ``FAMILY_KEY``, ``DEFAULT_MOTOR_TYPE``, ``TERMINAL_ERRORS``)
 tuning             ``tuning``: a :class:`TuningSpec` (the strategy and the facts it needs) or
                    None where the family has no tuning procedure
+programs           ``programs``: the family's stored-program module (:attr:`Family.programs`)
+                   or None
+CANopen            ``canopen``: a :class:`CanopenSpec` (registers, bits, commands, identity
+                   of the CANopen slave) or None
 =================  ==========================================================================
 
 Operations a motor array offers under one name and one signature for every family are declared
@@ -31,20 +35,20 @@ import enum
 import math
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from types import ModuleType
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 
 if TYPE_CHECKING:
     from ..registers import RegisterTable
     from ..registers.conformance import Conformance
 
 __all__ = ["Capability", "UnsupportedOperation", "FamilyConfig", "TwinSpec", "TuningSpec",
-           "Family", "MODULES"]
+           "CanopenSpec", "Family", "MODULES"]
 
 #: the public modules of a family package, by the :class:`Family` field that holds each
-MODULES = ("compiled", "constants", "units", "config", "task", "table")
+MODULES = ("compiled", "constants", "units", "config", "task", "table", "programs")
 
 
 class Capability(enum.Enum):
@@ -83,6 +87,14 @@ class Capability(enum.Enum):
     COIL_MODE = "COIL mode"
     #: a step motor's microstep indexing (MIS manual §8.2)
     STEP_INDEXING = "step-motor indexing"
+    #: stored programs run by the firmware (MIS manual chapter 9): :attr:`Family.programs`
+    PROGRAMS = "stored programs"
+    #: a CANopen slave, CiA DS-301/DSP-402 (MIS manual §11): :attr:`Family.canopen`
+    CANOPEN = "CANopen interface"
+    #: DMX512 reception on the RS485 line (MIS manual §13)
+    DMX512 = "DMX512 interface"
+    #: an SAE J1939 node on the CAN bus (MIS manual §11.8)
+    J1939 = "SAE J1939 interface"
 
 
 class UnsupportedOperation(NotImplementedError):
@@ -294,6 +306,134 @@ class TuningSpec:
                    implementation=implementation)
 
 
+
+@dataclass(frozen=True)
+class CanopenSpec:
+    """What a CANopen slave (CiA DS-301/DSP-402) of a family's motors uses: registers, bits,
+    modes, commands and identity, stated by the family (``Family.canopen``).
+
+    Register attributes hold register names as the family states them;
+    :meth:`numbered` gives the same record with the numbers of a register table.
+
+    Attributes
+    ----------
+    node_id, baud : str or int
+        Node id and bit-rate code registers.
+    mode, p_soll, v_soll, a_soll, d_soll, p_ist, v_ist, flwerr, flwerrmax : str or int
+        The mode register and the profile registers.
+    err_bits, statusbits, command, inputs, outputs, setup_bits : str or int
+        Error bits, status bits, the command register, the digital inputs and outputs and the
+        setup bits.
+    run_current, home_mask, nl_mask, pl_mask, v_home, v_home_crawl, p_home, t_home : str or int
+        Running current and the zero search registers.
+    motor_type, serial, version, hardware : str or int
+        Identity registers.
+    passive, velocity, position, zero_search_1, zero_search_2 : int
+        Mode-register values.
+    st_in_position, st_at_velocity, st_zero_search_done : int
+        Status-bit masks.
+    err_general, err_follow, err_low_bus, err_position, err_zero_search_timeout : int
+        Error-bit masks.
+    cmd_clear_errors, cmd_save : int
+        Command numbers: clear errors, save to flash and continue.
+    beckhoff_bit : int
+        The setup bit that selects the Beckhoff variant of the DSP-402 state machine.
+    counts_per_rev : int
+        Position counts per revolution (object 608Fh).
+    vendor_id, device_type : int
+        Objects 1018h sub-index 1 and 1000h.
+    device_name : str
+        Object 1008h (and the manufacturer objects 6404h, 6504h).
+    motor_name : str
+        Object 6402h, the motor type.
+    product_name : str
+        The EDS file's product name.
+    eds : Path or None
+        The family's EDS file (the object dictionary the slave serves, as a file for a
+        master), or None.
+    """
+
+    node_id: str | int
+    baud: str | int
+    mode: str | int
+    p_soll: str | int
+    v_soll: str | int
+    a_soll: str | int
+    d_soll: str | int
+    p_ist: str | int
+    v_ist: str | int
+    flwerr: str | int
+    flwerrmax: str | int
+    err_bits: str | int
+    statusbits: str | int
+    command: str | int
+    inputs: str | int
+    outputs: str | int
+    setup_bits: str | int
+    run_current: str | int
+    home_mask: str | int
+    nl_mask: str | int
+    pl_mask: str | int
+    v_home: str | int
+    v_home_crawl: str | int
+    p_home: str | int
+    t_home: str | int
+    motor_type: str | int
+    serial: str | int
+    version: str | int
+    hardware: str | int
+    passive: int
+    velocity: int
+    position: int
+    zero_search_1: int
+    zero_search_2: int
+    st_in_position: int
+    st_at_velocity: int
+    st_zero_search_done: int
+    err_general: int
+    err_follow: int
+    err_low_bus: int
+    err_position: int
+    err_zero_search_timeout: int
+    cmd_clear_errors: int
+    cmd_save: int
+    beckhoff_bit: int
+    counts_per_rev: int
+    vendor_id: int
+    device_type: int
+    device_name: str
+    motor_name: str
+    product_name: str
+    eds: Path | None = None
+
+    #: the attributes that name registers
+    REGISTER_FIELDS: ClassVar[tuple[str, ...]] = (
+        "node_id", "baud", "mode", "p_soll", "v_soll", "a_soll", "d_soll", "p_ist", "v_ist",
+        "flwerr", "flwerrmax", "err_bits", "statusbits", "command", "inputs", "outputs",
+        "setup_bits", "run_current", "home_mask", "nl_mask", "pl_mask", "v_home",
+        "v_home_crawl", "p_home", "t_home", "motor_type", "serial", "version", "hardware")
+
+    def numbered(self, table: RegisterTable) -> CanopenSpec:
+        """This record with every register name replaced by its number in ``table``.
+
+        Raises
+        ------
+        ValueError
+            The table lacks a register the slave needs (naming it).
+        """
+        from ..registers import RegisterError
+
+        numbers = {}
+        for name in self.REGISTER_FIELDS:
+            key = getattr(self, name)
+            try:
+                numbers[name] = table.lookup(key).number
+            except RegisterError:
+                raise ValueError(f"the motors' register table has no {key} register, which "
+                                 "the CANopen slave needs") from None
+        return replace(self, **numbers)
+
+
 @dataclass(frozen=True)
 class Family:
     """A motor family as every layer sees it (``FAMILY`` of the family's package).
@@ -328,6 +468,15 @@ class Family:
     conformance : Conformance or None
         The family's conformance matrix (:mod:`jvl_gym.registers.conformance`): for every
         register and documented bit, modelled, stored only or not modelled; None: none stated.
+    programs : module or None
+        The stored-program module of a family that declares :attr:`Capability.PROGRAMS`:
+        ``ProgramError`` (a malformed program), ``IoScriptError``, ``load_io_script`` (an I/O
+        script of inputs, sensors and load over time), ``run_bench`` (a program run on a
+        motor array with a script: the trace), ``write_csv`` and ``plot_trace``; the motor
+        array then has ``store_program`` and ``program_status``. None otherwise.
+    canopen : CanopenSpec or None
+        The CANopen slave's facts of a family that declares :attr:`Capability.CANOPEN`, None
+        otherwise.
     """
 
     key: str
@@ -343,6 +492,8 @@ class Family:
     capabilities: frozenset[Capability] = frozenset()
     tuning: TuningSpec | None = None
     conformance: Conformance | None = None
+    programs: ModuleType | None = None
+    canopen: CanopenSpec | None = None
 
     def motor_types(self) -> list[str]:
         """Names of the family's motor types (each with a motor config)."""

@@ -104,6 +104,18 @@ class RegisterAccess(Protocol):
         """
         ...
 
+    def write_many(self, values: Sequence[tuple[int, int]]) -> None:
+        """Write ``(number, value)`` pairs (in this order) as one transaction: every one is
+        checked before the first is stored, so that a refusal changes nothing, side effects
+        of a command among them included.
+
+        Raises
+        ------
+        RegisterError
+            The device refuses one of them: nothing has changed.
+        """
+        ...
+
 
 class RegisterFile:
     """An in-memory device of 32-bit registers implementing :class:`RegisterAccess`.
@@ -147,8 +159,22 @@ class RegisterFile:
         lo, hi = self.ranges.get(number, (-(2**31), 2**31 - 1))
         if not lo <= value <= hi:
             raise RegisterRangeError(f"{value} is outside {lo}..{hi} for register {number}")
-        self.values[number] = int(value)
-        self.writes.append((number, int(value)))
+        self.write_many([(number, value)])
+
+    def write_many(self, values: Sequence[tuple[int, int]]) -> None:
+        """Set the registers of ``(number, value)`` in order, after checking every one as
+        :meth:`write` does (a refusal changes nothing)."""
+        for number, value in values:
+            if number not in self.values:
+                raise UnknownRegisterError(f"no register {number}")
+            if number in self.read_only:
+                raise ReadOnlyRegisterError(f"register {number} is read-only")
+            lo, hi = self.ranges.get(number, (-(2**31), 2**31 - 1))
+            if not lo <= value <= hi:
+                raise RegisterRangeError(f"{value} is outside {lo}..{hi} for register {number}")
+        for number, value in values:
+            self.values[number] = int(value)
+            self.writes.append((number, int(value)))
 
 
 class TimeoutAction(enum.IntEnum):
@@ -331,9 +357,9 @@ class ModbusSlave:
 
     def write_words(self, index: int, words: Sequence[int]) -> None:
         """Write whole 32-bit registers from Modbus index ``index`` (MIS manual §12.3, §12.5,
-        §12.6). All checks come first; the device writes are made in index order, and if the
-        device refuses one, those already made are written back with the values read before, so
-        that a refused request changes nothing.
+        §12.6) in index order, as one transaction of the device
+        (:meth:`RegisterAccess.write_many`): it checks every register before the first is
+        stored, so that a refused request changes nothing, a command's reset or save included.
 
         Raises
         ------
@@ -348,22 +374,10 @@ class ModbusSlave:
             return
         numbers = [k if a == mb.Area.REGISTER else self.pdo[p].target(k, write=True)
                    for a, p, k in targets]
-        old = []
-        for n in numbers:
-            try:
-                old.append(int(self.device.read(n)))
-            except (ValueError, LookupError) as exc:
-                raise _refused(exc, f"write to register {n}") from None
-        for j, (n, v) in enumerate(zip(numbers, values)):
-            try:
-                self.device.write(n, v)
-            except (ValueError, LookupError) as exc:
-                for n0, v0 in reversed(list(zip(numbers[:j], old[:j]))):
-                    try:
-                        self.device.write(n0, v0)
-                    except (ValueError, LookupError):  # pragma: no cover - device-specific
-                        log.warning("could not restore register %d to %d", n0, v0)
-                raise _refused(exc, f"write of {v} to register {n}") from None
+        try:
+            self.device.write_many(list(zip(numbers, values)))
+        except (ValueError, LookupError) as exc:
+            raise _refused(exc, f"write of {values} to registers {numbers}") from None
 
     # ------------------------------------------------------------------ frames
     def execute(self, req: mb.Request, now: float) -> bytes:

@@ -18,6 +18,7 @@ action, the MacTalk → Modbus switch) is :mod:`.modbus` and :mod:`.modbus_serve
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 from ..registers import RegisterError, UnknownRegisterError
@@ -103,10 +104,26 @@ class MotorRegisters:
             Unknown, read-only or reserved register, value out of range, or a mode that
             forbids it: nothing has changed.
         """
-        reg = self._register(number)
-        raw = int(value) if is_signed(reg.format) else int(value) & 0xFFFFFFFF
+        self.write_many([(number, value)])
+
+    def write_many(self, values: Sequence[tuple[int, int]]) -> None:
+        """Write the 32-bit values ``(number, value)`` (in this order, each as by :meth:`write`)
+        as one transaction through :meth:`.twin.Twin.store`: all are checked before the first
+        is stored, and a refusal changes nothing (registers, state, flash, flash file).
+
+        Raises
+        ------
+        RegisterError
+            As :meth:`write`, for any of them: nothing has changed.
+        """
+        raws: dict[int, int] = {}
+        for number, value in values:
+            reg = self._register(number)
+            raws[number] = int(value) if is_signed(reg.format) else int(value) & 0xFFFFFFFF
+        if len(raws) < len(values):
+            raise RegisterError("a register written twice in one request")
         with self.twin.lock:
-            self.twin.m.write_raw(number, raw, index=self.index)
+            self.twin.store(self.index, raws)
 
 
 def modbus_bus(twin: Twin) -> ModbusBus:

@@ -179,7 +179,13 @@ class TwinServer:
         family = socket.AF_INET6 if host == "::1" else socket.AF_INET
         srv = socket.socket(family, socket.SOCK_STREAM)
         srv.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-        srv.bind((host, port))
+        try:
+            srv.bind((host, port))
+        except OSError as exc:
+            srv.close()
+            raise OSError(exc.errno, f"cannot serve {what} on {host}:{port}: "
+                                     f"{exc.strerror or exc}; choose another port (0: any free "
+                                     "port)") from None
         srv.listen(16)
         srv.settimeout(0.2)
         self._socks.append(srv)

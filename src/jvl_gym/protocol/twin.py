@@ -48,7 +48,7 @@ import logging
 import os
 import threading
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any, Protocol
 
@@ -129,6 +129,7 @@ class MotorBackend(Protocol):
 
     def read_raw(self, key: str | int) -> np.ndarray: ...
     def write_raw(self, key: str | int, raw: Any, index: Any = None) -> None: ...
+    def write_raw_many(self, values: Mapping[int, int], index: Any = None) -> None: ...
     def step(self, n_outer: int = 1) -> None: ...
     def enter_safe_mode(self, index: Any = None) -> None: ...
     def go_init_mode(self, index: Any = None) -> None: ...
@@ -312,6 +313,23 @@ class Twin:
                                  f"motor's flash holds the registers until the twin stops")
             log.error("%s", self.last_refusal)
 
+    def store(self, i: int, values: Mapping[int, int]) -> None:
+        """Write stored integers (register number → raw, in this order) to motor ``i`` as one
+        transaction: every register is checked before the first is stored, and a refusal
+        leaves the motor, its flash and its flash file as they were. A write that saves to flash
+        (a user command such as the MIS's COMMAND 268/269, MIS manual §8.2.22, or MODE_REG 258
+        in SAFE_MODE, MAC050–141 manual 4.4.16) writes the motor's flash file.
+
+        Raises
+        ------
+        RegisterError
+            The motor refuses (unknown, read-only or reserved register, range, mode).
+        """
+        before = self.m.flash_image(i) if self.flash_dir is not None else None
+        self.m.write_raw_many(values, index=i)
+        if before is not None and self.m.flash_image(i) != before:
+            self._save_flash_file(i)
+
     def addresses(self) -> list[int]:
         """MYADDR of every motor now."""
         return [int(a) for a in self.m.read_raw(self.reg.MYADDR)]
@@ -360,7 +378,7 @@ class Twin:
                 return False
             raw = v if r.format == Format.WORD else _s32(v)
         try:
-            self.m.write_raw(reg, np.int64(raw), index=i)
+            self.store(i, {reg: raw})
         except (RegisterError, ValueError) as exc:
             self.refuse(str(exc))
             return False

@@ -34,8 +34,6 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-import numpy as np
-
 from ..families.contract import Capability, UnsupportedOperation
 from . import mactalk32 as m32
 
@@ -97,7 +95,7 @@ class MacTalk32Unit:
             return False
         value = m32.data_value(data, signed=is_signed(t.m.table.lookup(reg).format))
         try:
-            t.m.write_raw(reg, np.int64(value), index=i)
+            t.store(i, {reg: value})
         except (RegisterError, ValueError) as exc:
             t.refuse(str(exc))
             return False

@@ -70,7 +70,7 @@ class Distribution:
         return None
 
 
-def parse_distribution(value: Any, where: str) -> Distribution:
+def parse_distribution(value: Any, where: str, numeric: bool = False) -> Distribution:
     """A :class:`Distribution` from a file value (module docstring).
 
     Parameters
@@ -79,6 +79,9 @@ def parse_distribution(value: Any, where: str) -> Distribution:
         The value as read from YAML.
     where : str
         File and key, for the error message.
+    numeric : bool
+        The key is a quantity: a constant or a choice must be a finite number (not a bool or a
+        string).
 
     Raises
     ------
@@ -86,6 +89,8 @@ def parse_distribution(value: Any, where: str) -> Distribution:
         Unknown kind, wrong number of parameters, non-numeric or inverted bounds.
     """
     if isinstance(value, (int, float, str, bool)):
+        if numeric or isinstance(value, float):
+            _finite([value], where, numeric)
         return Distribution("constant", (value,))
     if not isinstance(value, dict) or len(value) != 1:
         raise UserError(f"{where}: expected a number or one of "
@@ -97,9 +102,11 @@ def parse_distribution(value: Any, where: str) -> Distribution:
     if not isinstance(args, list) or not args:
         raise UserError(f"{where}: {kind} needs a list of parameters, e.g. {{{kind}: [0, 1]}}")
     if kind == "choice":
+        _finite(args, where, numeric)
         return Distribution(kind, tuple(args))
-    if len(args) != _N_ARGS[kind] or not all(isinstance(x, (int, float)) for x in args):
+    if len(args) != _N_ARGS[kind]:
         raise UserError(f"{where}: {kind} needs {_N_ARGS[kind]} numbers, got {args!r}")
+    _finite(args, where, True)
     if kind in ("uniform", "loguniform", "randint") and not args[0] <= args[1]:
         raise UserError(f"{where}: {kind} bounds must be [low, high] with low <= high")
     if kind == "loguniform" and args[0] <= 0:
@@ -114,3 +121,12 @@ def parse_distribution(value: Any, where: str) -> Distribution:
             raise UserError(f"{where}: randint needs integer bounds")
         args = [int(x) for x in args]
     return Distribution(kind, tuple(args))
+
+
+def _finite(values: list[Any], where: str, numeric: bool) -> None:
+    """Refuse a bool, a non-number (when ``numeric``) or a NaN or infinity among ``values``."""
+    for x in values:
+        if isinstance(x, float) and not math.isfinite(x):
+            raise UserError(f"{where}: {x!r} is not a finite number")
+        if numeric and (isinstance(x, bool) or not isinstance(x, (int, float))):
+            raise UserError(f"{where}: expected a number, got {x!r}")

@@ -8,6 +8,7 @@ and exits with status 1 (``--debug`` lets it through with its traceback).
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
@@ -16,13 +17,43 @@ import yaml
 
 from .extra import MissingExtraError
 
-__all__ = ["UserError", "run_cli", "read_yaml"]
+__all__ = ["UserError", "run_cli", "read_yaml", "file_number", "file_integer", "file_flag"]
 
 T = TypeVar("T")
 
 
 class UserError(ValueError):
     """Bad input: a malformed sweep or fleet file, an unknown env id, a bad path."""
+
+
+def file_number(value: Any, where: str, low: float | None = None,
+                positive: bool = False) -> float:
+    """``value`` of the file key ``where`` as a finite real number (an int or float, not a bool
+    or a string), at least ``low`` or above 0 when ``positive``; UserError naming key and
+    value otherwise."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise UserError(f"{where}: expected a finite number, got {value!r}")
+    if positive and not value > 0:
+        raise UserError(f"{where}: expected a number > 0, got {value!r}")
+    if low is not None and not value >= low:
+        raise UserError(f"{where}: expected a number >= {low}, got {value!r}")
+    return float(value)
+
+
+def file_integer(value: Any, where: str, low: int = 0) -> int:
+    """``value`` of the file key ``where`` as an integer >= ``low`` (not a bool, a float such as
+    1.5 or 1.0, or a string); UserError naming key and value otherwise."""
+    if isinstance(value, bool) or not isinstance(value, int) or value < low:
+        raise UserError(f"{where}: expected an integer >= {low}, got {value!r}")
+    return value
+
+
+def file_flag(value: Any, where: str) -> bool:
+    """``value`` of the file key ``where`` as true or false (not a string such as "false", not
+    a number); UserError naming key and value otherwise."""
+    if not isinstance(value, bool):
+        raise UserError(f"{where}: expected true or false, got {value!r}")
+    return value
 
 
 def run_cli(body: Callable[[], T]) -> T:

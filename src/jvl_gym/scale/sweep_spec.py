@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from .distributions import Distribution, parse_distribution
-from .errors import UserError, read_yaml
+from .errors import UserError, file_integer, file_number, read_yaml
 
 __all__ = ["SweepSpec", "Trial", "load_sweep", "parse_sweep", "trial_config"]
 
@@ -254,20 +254,19 @@ def parse_sweep(data: Any, path: Path | None = None) -> SweepSpec:
     budget = _mapping(data.get("budget"), f"{where}: budget", _BUDGET)
     res = _mapping(data.get("resources"), f"{where}: resources", _RESOURCES)
     ev = _mapping(data.get("eval"), f"{where}: eval", _EVAL)
-    cpus = res.get("cpus_per_trial", 1)
-    if isinstance(cpus, bool) or not isinstance(cpus, (int, float)) or cpus <= 0:
-        raise UserError(f"{where}: resources.cpus_per_trial: expected a number > 0")
+    cpus = file_number(res.get("cpus_per_trial", 1), f"{where}: resources.cpus_per_trial",
+                       positive=True)
     mc = res.get("max_concurrent")
     spec = SweepSpec(
         path=path, env=env, rl_config_dir=rl_dir, search=search, parameters=params,
         seeds=[int(s) for s in seeds],
         samples=_positive_int(data.get("samples", 1), f"{where}: samples"),
-        sampler_seed=int(data.get("sampler_seed", 0)),
+        sampler_seed=file_integer(data.get("sampler_seed", 0), f"{where}: sampler_seed"),
         timesteps=_positive_int(budget.get("timesteps", base["total_timesteps"]),
                                 f"{where}: budget.timesteps"),
         n_envs=(_positive_int(budget["n_envs"], f"{where}: budget.n_envs")
                 if "n_envs" in budget else None),
-        cpus_per_trial=float(cpus),
+        cpus_per_trial=cpus,
         max_concurrent=(_positive_int(mc, f"{where}: resources.max_concurrent")
                         if mc is not None else None),
         eval_seeds=_positive_int(ev.get("n_seeds", base["eval"]["n_seeds"]),

@@ -15,10 +15,10 @@ import time
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
-from ..protocol.dialect import DEFAULT_DIALECT, DIALECT_CONSTANT, MACTALK16
+from ..protocol.dialect import MACTALK16
 from ..protocol.errors import ProtocolError
 from ..registers import Format, RegisterError, to_raw
-from .motor import StudioMotor
+from .motor import ACTIONS, StudioMotor
 
 __all__ = ["Line", "LineMotor", "LineDown", "scan"]
 
@@ -101,10 +101,6 @@ class Line:
                 self._client = None
 
 
-def _dialect(constants: Any) -> str:
-    return getattr(constants, DIALECT_CONSTANT, DEFAULT_DIALECT)
-
-
 class LineMotor(StudioMotor):
     """A motor at ``address`` on ``line``.
 
@@ -117,7 +113,7 @@ class LineMotor(StudioMotor):
 
     def __init__(self, line: Line, motor_type: str, address: int) -> None:
         super().__init__(motor_type, address)
-        dialect = _dialect(self.facts.constants)
+        dialect = self.family.twin.dialect
         if dialect != MACTALK16:
             raise ValueError(f"{motor_type}: the {self.facts.title} speak {dialect}; the "
                              f"protocol client speaks {MACTALK16} (MAC050–141 manual 5.1) only: "
@@ -179,12 +175,19 @@ class LineMotor(StudioMotor):
         return time.monotonic() - self._t0
 
     def actions(self) -> dict[str, Callable[[], None]]:
-        """MacTalk commands of manual 5.1: go safe mode, go init mode, write flash, reset."""
-        def cmd(name: str) -> Callable[[], None]:
-            return lambda: self.line.call(self.address, lambda c: getattr(c, name)())
-        return {"passive": self.passive, "safe mode": cmd("go_safe_mode"),
-                "leave safe mode": cmd("go_init_mode"), "save in flash": cmd("write_flash"),
-                "reset": cmd("reset"), "clear errors": self.clear_errors}
+        """MacTalk commands of manual 5.1 (go safe mode, go init mode, write flash, reset),
+        those whose capability the family declares (:data:`~.motor.ACTIONS`)."""
+        def cmd(command: Callable[[Any], None]) -> Callable[[], None]:
+            return lambda: self.line.call(self.address, command)
+        commands: dict[str, Callable[[Any], None]] = {
+            "safe mode": lambda c: c.go_safe_mode(), "leave safe mode": lambda c: c.go_init_mode(),
+            "save in flash": lambda c: c.write_flash(), "reset": lambda c: c.reset()}
+        out: dict[str, Callable[[], None]] = {"passive": self.passive}
+        for label, (capability, _) in ACTIONS.items():
+            if self.family.supports(capability):
+                out[label] = cmd(commands[label])
+        out["clear errors"] = self.clear_errors
+        return out
 
     def sample_buffer(self) -> dict[str, Any]:
         """The motor's sample buffer in user units (MAC050–141 manual 3.2.112–3.2.116)."""

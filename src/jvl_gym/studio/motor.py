@@ -16,19 +16,20 @@ from typing import Any
 
 import numpy as np
 
+from ..families import Capability, Family, family_of_motor
 from ..registers import Register, from_raw
 from .facts import FamilyFacts, facts_of
 
 __all__ = ["StudioMotor", "SimMotor", "ACTIONS", "PHYSICAL_SIGNALS"]
 
-#: the family actions the Motors view offers: label → the MotorArray methods that do it, the
-#: first one the family has (MAC050–141 manual 5.1 'go safe mode', 'write flash', 'reset';
-#: MIS manual §18.2 ENTER SAFEMODE, WRITE FLASH, RESET)
-ACTIONS: dict[str, tuple[str, ...]] = {
-    "safe mode": ("go_safe_mode", "enter_safe_mode"),
-    "leave safe mode": ("exit_safe_mode",),
-    "save in flash": ("write_flash",),
-    "reset": ("software_reset",),
+#: the family actions the Motors view offers: label → the capability the family declares for
+#: it and the :class:`~jvl_gym.MotorArray` operation that does it (MAC050–141 manual 5.1 'go
+#: safe mode', 'write flash', 'reset'; MIS manual §18.2 ENTER SAFEMODE, WRITE FLASH, RESET)
+ACTIONS: dict[str, tuple[Capability, Callable[[Any], None]]] = {
+    "safe mode": (Capability.SAFE_MODE, lambda m: m.enter_safe_mode()),
+    "leave safe mode": (Capability.SAFE_MODE, lambda m: m.exit_safe_mode()),
+    "save in flash": (Capability.FLASH, lambda m: m.write_flash()),
+    "reset": (Capability.SOFTWARE_RESET, lambda m: m.software_reset()),
 }
 
 #: physical signals of a simulated motor: label → (MotorArray observable, unit, column names)
@@ -54,6 +55,8 @@ class StudioMotor(ABC):
         The unit address it is shown at.
     facts : FamilyFacts
         Its family's facts.
+    family : Family
+        Its family's record: the capabilities say which actions it offers.
     simulated : bool
         True for an in-process simulated motor.
     """
@@ -66,6 +69,7 @@ class StudioMotor(ABC):
         self.motor_type = motor_type
         self.address = int(address)
         self.facts: FamilyFacts = facts_of(motor_type)
+        self.family: Family = family_of_motor(motor_type)
         #: serialises access to the motor from the UI, the clock and long runs
         self.lock = threading.RLock()
 
@@ -187,18 +191,18 @@ class SimMotor(StudioMotor):
         return float(np.asarray(self.array.time).reshape(-1)[0])
 
     def actions(self) -> dict[str, Callable[[], None]]:
+        """Passive, the :data:`ACTIONS` whose capability the family declares, clear errors."""
         out: dict[str, Callable[[], None]] = {"passive": self.passive}
-        for label, methods in ACTIONS.items():
-            name = next((m for m in methods if callable(getattr(self.array, m, None))), None)
-            if name is not None:
-                out[label] = self._locked(getattr(self.array, name))
+        for label, (capability, operation) in ACTIONS.items():
+            if self.family.supports(capability):
+                out[label] = self._locked(operation)
         out["clear errors"] = self.clear_errors
         return out
 
-    def _locked(self, fn: Callable[[], None]) -> Callable[[], None]:
+    def _locked(self, operation: Callable[[Any], None]) -> Callable[[], None]:
         def run() -> None:
             with self.lock:
-                fn()
+                operation(self.array)
         return run
 
     def sample_buffer(self) -> dict[str, np.ndarray]:

@@ -118,6 +118,8 @@ class MacMotorArray(MotorArray):
                           "load_angle", "load_speed"})
     SHAFT_ANGLE, SHAFT_SPEED = L.S_THETA, L.S_OMEGA
     ONE_BY_ONE = frozenset(W.POINTERS) | {R.CNTRL_BITS}
+    #: the control bits latched at power-on change when a SAFE_MODE request resets a motor
+    TRANSACTION_ARRAYS = (*MotorArray.TRANSACTION_ARRAYS, "_latched_cntrl")
 
     def __init__(self, motor: MotorSpec = "MAC140", n: int = 1, seed: Seed = None,
                  setup: str | os.PathLike[str] | dict[str, Any] | None = None,

@@ -5,7 +5,8 @@ of the MIS manual §8.2 at one register number, 32 bits wide); :mod:`.units` hol
 revolution and unit scalings. ``FAMILY`` is the family's record
 (:class:`jvl_gym.families.Family`): firmware (``firmware/``), the step motor plant
 (``plant``), motor configs (``configs/motors``), the motor array (``motors``), the task
-interface (``task``), the twin's facts and the capabilities; it has no tuning procedure.
+interface (``task``), the twin's facts and the capabilities, stored programs (``program``) and
+the CANopen slave's facts (``canopen``); it has no tuning procedure.
 """
 
 from __future__ import annotations
@@ -18,7 +19,8 @@ __all__ = ["REGISTERS", "FAMILY"]
 REGISTERS: RegisterTable = load_packaged_table(__name__)
 
 from ..contract import Capability, Family, TwinSpec  # noqa: E402  (the table first)
-from . import compiled, config, constants, task, units  # noqa: E402
+from . import compiled, config, constants, program, task, units  # noqa: E402
+from .canopen import CANOPEN  # noqa: E402
 from .motors import MisMotorArray  # noqa: E402
 from .table import CONFORMANCE  # noqa: E402
 
@@ -46,4 +48,9 @@ FAMILY = Family(
                   "emergency_halt": _C.CMD_EMERGENCY_HALT}),
     capabilities=frozenset({Capability.TORQUE, Capability.ENERGY, Capability.SAFE_MODE,
                             Capability.SOFTWARE_RESET, Capability.FLASH,
-                            Capability.SAMPLE_BUFFER, Capability.STEP_INDEXING}))
+                            Capability.SAMPLE_BUFFER, Capability.STEP_INDEXING,
+                            # stored programs (chapter 9), CANopen (§11), J1939 (§11.8),
+                            # DMX512 (§13)
+                            Capability.PROGRAMS, Capability.CANOPEN, Capability.J1939,
+                            Capability.DMX512}),
+    programs=program, canopen=CANOPEN)

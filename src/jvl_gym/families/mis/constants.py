@@ -133,9 +133,6 @@ ENCODER_CPR = {code: cpr for code, (_, cpr) in ENCODER_TYPES.items()}
 # --- serial line (§18.2) ---------------------------------------------------------------------
 #: MacTalk of the 32-bit register families: registers 1–255, data always 4 bytes (protocol.dialect)
 MACTALK_DIALECT = "mactalk32"
-#: field buses the family's motors serve besides the serial line (protocol.canopen): the CANopen
-#: option of the SMC66/SMC85 controllers (§11)
-FIELDBUSES = ("canopen",)
 
 __all__ = [name for name in dir() if name.isupper() and not name.startswith("_")] + [
     "COUNTS_PER_FULL_STEP", "ACCEL_MAX_RPM_PER_S", "CUR_SCALE_FULL"]

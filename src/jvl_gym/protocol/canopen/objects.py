@@ -1,5 +1,6 @@
-"""The object dictionary of the simulated MIS, built once from the register table and the
-objects of MIS manual §11.4 and §11.5; the slave serves it and the EDS file is written from it.
+"""The object dictionary of a motor's CANopen slave, built once from the register table, the
+family's :class:`~jvl_gym.families.CanopenSpec` and the objects of MIS manual §11.4 and §11.5;
+the slave serves it and the EDS file is written from it.
 
 ============  ==========================================================================
 1000h–1018h   the communication objects of §11.4.1 (device type 0x40192, error register,
@@ -300,8 +301,8 @@ def _dsp402(od: ObjectDictionary, facts: CanopenFacts) -> None:
                         (0x6404, "Motor manufacturer"), (0x6405, "http motor catalog address"),
                         (0x6503, "Drive catalogue number"), (0x6504, "Drive manufacturer"),
                         (0x6505, "http drive catalog address")):
-        text = facts.device_name if "manufacturer" in name else ("MIS" if index == 0x6402
-                                                                   else "-")
+        text = (facts.device_name if "manufacturer" in name
+                else facts.motor_name if index == 0x6402 else "-")
         _add(od, name, index, 0, s, "const", text)
     _add(od, "Supported drive modes", 0x6502, 0, u32, "ro", sum(SUPPORTED_MODES.values()))
     _add(od, "Device type", 0x67FF, 0, u32, "ro", facts.device_type)
@@ -317,7 +318,7 @@ def build_dictionary(table: Any, facts: CanopenFacts) -> ObjectDictionary:
     _dsp402(od, facts)
     info = od.device_information
     info.vendor_name, info.vendor_number = facts.device_name, facts.vendor_id
-    info.product_name = "MIS/SMC integrated step motor (simulated)"
+    info.product_name = facts.product_name
     info.nr_of_RXPDO, info.nr_of_TXPDO = len(RPDOS), len(TPDOS)
     info.LSS_supported = True
     info.dynamic_channels_supported = False

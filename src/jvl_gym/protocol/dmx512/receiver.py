@@ -47,19 +47,19 @@ import logging
 from dataclasses import dataclass, fields
 from typing import Any
 
+from ...families import Capability
 from ...registers import RegisterError
 from .frames import DmxPacket
 
-__all__ = ["DmxSettings", "DmxReceiver", "PASSIVE", "VELOCITY", "POSITION", "HOMING_MODES",
-           "CLEAR_ERRORS"]
+__all__ = ["DmxSettings", "DmxReceiver", "MODE_NAMES"]
 
 log = logging.getLogger(__name__)
 
-#: MODE_REG values (MIS manual §8.2.3): passive, velocity, position, zero search type 1 and 2
-PASSIVE, VELOCITY, POSITION = 0, 1, 2
-HOMING_MODES = (13, 14)
-#: COMMAND value of FastMac 1, "Clear errors and warnings" (MIS manual §8.2.21)
-CLEAR_ERRORS = 97
+#: the MODE_REG modes the receiver commands, by their names in the family's ``MODE_NAMES``
+#: (MIS manual §8.2.3): velocity, position and the zero searches of the homing; passive is the
+#: twin spec's ``passive_mode`` and "clear errors" its ``commands["clear_errors"]`` (§8.2.21)
+MODE_NAMES = {"velocity": "velocity", "position": "position",
+              "homing": ("zero search type 1", "zero search type 2")}
 
 _S16 = (-(2**15), 2**15 - 1)
 _U16 = (0, 2**16 - 1)
@@ -138,15 +138,29 @@ class DmxReceiver:
     Parameters
     ----------
     motors : MotorArray
-        Read and written by register name (``read_raw``, ``write_raw``).
+        Read and written by register name (``read_raw``, ``write_raw``); its family declares
+        :attr:`~jvl_gym.families.Capability.DMX512` and names the modes of :data:`MODE_NAMES`.
     index : int
         The motor.
     settings : DmxSettings
+
+    Raises
+    ------
+    UnsupportedOperation
+        The motors' family has no DMX512 interface.
     """
 
     def __init__(self, motors: Any, index: int, settings: DmxSettings | None = None) -> None:
         self.m = motors
         self.i = index
+        fam = motors.family
+        fam.require(Capability.DMX512)
+        modes = {name: value for value, name in fam.constants.MODE_NAMES.items()}
+        self.passive = fam.twin.passive_mode
+        self.velocity = modes[MODE_NAMES["velocity"]]
+        self.position = modes[MODE_NAMES["position"]]
+        self.homing_modes = tuple(modes[n] for n in MODE_NAMES["homing"])
+        self.clear_errors_command = fam.twin.commands["clear_errors"]
         self.s = settings or DmxSettings()
         self.last_control: int | None = None
         self.same = 0
@@ -173,7 +187,7 @@ class DmxReceiver:
 
     def _clear_errors(self) -> None:
         if self._read("ERR_BITS") != 0:
-            self._write("COMMAND", CLEAR_ERRORS)
+            self._write("COMMAND", self.clear_errors_command)
 
     # ------------------------------------------------------------------ DMX data
     def packet(self, packet: DmxPacket) -> None:
@@ -193,17 +207,17 @@ class DmxReceiver:
         if s.auto_clear_errors and command in (0, 6, 18, 20):
             self._clear_errors()
         if command == 0:
-            self._write("MODE_REG", PASSIVE)
+            self._write("MODE_REG", self.passive)
         elif command == 6 and self.homed:
-            if self._read("MODE_REG") != POSITION:
-                self._write("MODE_REG", POSITION)
+            if self._read("MODE_REG") != self.position:
+                self._write("MODE_REG", self.position)
             self._transfer(s.position(slots[a1], slots[a1 + 1]), s.acceleration(slots[a2]),
                            s.velocity(slots[a2 + 1]), slots[a1] << 8 | slots[a1 + 1])
         elif command == 18 and s.homing and self.same == 10:
             self._write("MODE_REG", s.homing_mode)
             self.homing = self._read("MODE_REG") == s.homing_mode
         elif command == 20:
-            self._write("COMMAND", CLEAR_ERRORS)
+            self._write("COMMAND", self.clear_errors_command)
 
     def _transfer(self, position: int, acceleration: int, velocity: int, raw: int) -> None:
         """New values to the motor (velocity and acceleration first, so the move uses them)."""
@@ -225,11 +239,11 @@ class DmxReceiver:
             self.sent["P_SOLL"] = position
 
     def _homing_done(self) -> None:
-        if self.homing and self._read("MODE_REG") not in HOMING_MODES:
+        if self.homing and self._read("MODE_REG") not in self.homing_modes:
             self.homing = False
             if self._read("ERR_BITS") == 0:
                 self.homed = True
-                self._write("MODE_REG", POSITION)
+                self._write("MODE_REG", self.position)
 
     # ------------------------------------------------------------------ inputs
     def poll(self) -> None:
@@ -244,7 +258,7 @@ class DmxReceiver:
             self.homing = False
             if s.jog_reset_errors:
                 self._clear_errors()
-            self._write("MODE_REG", VELOCITY)
+            self._write("MODE_REG", self.velocity)
             self._write("V_SOLL", 0)
         if not self.jogging:
             return
@@ -253,7 +267,7 @@ class DmxReceiver:
             self.homed = not s.homing
             self.sent.clear()
             self.last_position = None
-            self._write("MODE_REG", PASSIVE)
+            self._write("MODE_REG", self.passive)
             self._write("V_SOLL", s.default_velocity)
             self._write("P_SOLL", self._read("P_IST"))
             return

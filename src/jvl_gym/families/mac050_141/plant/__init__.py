@@ -1,5 +1,5 @@
-"""Physics of the motor and its surroundings: coil electrics, mechanics, encoder, supply.
+"""Physics of the MAC050–141 that is its own: the encoder and the Hall sensors.
 
-Every function here is a compiled scalar kernel for one motor and one inner sample; the
-simulator's kernel calls them for every motor of the array.
+The coil electrics, mechanics and DC bus are the shared kernels of :mod:`jvl_gym.physics`.
+Every function here is a compiled scalar kernel for one motor and one inner sample.
 """
