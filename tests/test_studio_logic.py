@@ -316,7 +316,7 @@ def test_tuning_refuses_what_it_cannot_tune():
     on_line = SimpleNamespace(motor_type="MAC800", simulated=False, label="MAC800 @ 3")
     assert "TESTU/TESTA" in tuning_problem(on_line, TOOLKIT)
     m.write("MODE_REG", 1)
-    before = {k: m.read(k) for k in ("KVOUT", "FF", "VB")}
+    before = {k: m.read(k) for k in ("KVOUT", "KVFX1", "KVB0")}
     tr = TuningRun(m, TOOLKIT)
     tr.start()
     tr.join(60)
