@@ -65,10 +65,30 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+def _entry_points() -> Path:
+    """A folder with the distribution metadata of this tree's entry points (pyproject.toml's
+    ``[project.entry-points]``), so that the studio finds the tuning toolkit the way an
+    installed package announces it, also when the installed metadata is older than the tree."""
+    import tempfile
+
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    folder = Path(tempfile.mkdtemp(prefix="jvl-entry-points-"))
+    dist = folder / "jvl_gym_tree_entry_points-0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: jvl-gym-tree-entry-points\n"
+                                   "Version: 0\n")
+    (dist / "entry_points.txt").write_text("".join(
+        f"[{group}]\n" + "".join(f"{k} = {v}\n" for k, v in eps.items())
+        for group, eps in project.get("entry-points", {}).items()))
+    return folder
+
+
 def _env() -> dict[str, str]:
     env = dict(os.environ, MPLBACKEND="Agg")
     env.pop("PYTEST_CURRENT_TEST", None)  # NiceGUI would start in its own test mode
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), str(ROOT),
+    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), str(ROOT), str(_entry_points()),
                                          env.get("PYTHONPATH", "")])
     return env
 

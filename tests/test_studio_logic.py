@@ -1,6 +1,7 @@
 """The studio's logic without a browser: family facts, bit words, register groups, edits with
 the API's validation, setup files, the scope, the sample buffer, a line through the protocol
-client (with a twin that goes away and comes back), tuning and episodes refusals."""
+client (with a twin that goes away and comes back), tuning through the toolkit it is given
+(refusals, the entry point, a run written as a setup file), episodes refusals."""
 
 from __future__ import annotations
 
@@ -298,19 +299,82 @@ def test_a_family_the_client_does_not_speak_is_refused_on_a_line():
 
 # ---------------------------------------------------------------------- tuning, episodes
 def test_tuning_refuses_what_it_cannot_tune():
+    from types import SimpleNamespace
+
+    from tuning.studio_adapter import TOOLKIT
+
+    from jvl_gym.studio.toolkit import MISSING
     from jvl_gym.studio.tuning_run import TuningRun, tuning_problem
 
-    assert "no tuning" in tuning_problem(SimMotor("MIS232", 1)).lower() or \
-        "MIS" in tuning_problem(SimMotor("MIS232", 1))
+    assert "no tuning procedure" in tuning_problem(SimMotor("MIS232", 1), TOOLKIT)
     m = SimMotor("MAC140", 1)
-    assert tuning_problem(m) is None
+    assert tuning_problem(m, None) == MISSING
+    with pytest.raises(ValueError, match="not installed"):
+        TuningRun(m, None)
+    assert tuning_problem(m, TOOLKIT) is None
+    # over a line only with the TESTU/TESTA modes (the contract's Capability.TEST_MODES)
+    on_line = SimpleNamespace(motor_type="MAC800", simulated=False, label="MAC800 @ 3")
+    assert "TESTU/TESTA" in tuning_problem(on_line, TOOLKIT)
     m.write("MODE_REG", 1)
-    tr = TuningRun(m)
+    before = {k: m.read(k) for k in ("KVOUT", "KVFX1", "KVB0")}
+    tr = TuningRun(m, TOOLKIT)
     tr.start()
     tr.join(60)
     assert tr.result is None and "mode 0" in tr.error
+    assert {k: m.read(k) for k in before} == before
     with pytest.raises(RuntimeError):
         tr.write()
+
+
+def test_tuning_toolkit_from_the_entry_point(tmp_path, monkeypatch):
+    """The entry point pyproject.toml declares is what the studio finds when none is given."""
+    from pathlib import Path
+
+    import tomllib
+    from tuning.studio_adapter import TOOLKIT
+
+    from jvl_gym.studio.toolkit import GROUP, NAME, find_toolkit
+
+    project = tomllib.loads((Path(__file__).parents[1] / "pyproject.toml").read_text())
+    value = project["project"]["entry-points"][GROUP][NAME]
+    dist = tmp_path / "jvl_gym_toolkit_probe-0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: jvl-gym-toolkit-probe\n"
+                                   "Version: 0\n")
+    (dist / "entry_points.txt").write_text(f"[{GROUP}]\n{NAME} = {value}\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    assert find_toolkit() is TOOLKIT
+    assert find_toolkit(TOOLKIT) is TOOLKIT
+    with pytest.raises(TypeError, match="TuningToolkit"):
+        find_toolkit(object())
+
+
+def test_tuning_run_writes_the_setup_file_it_shows(tmp_path):
+    """A run on a simulated MAC140: the report and plots of ``jvl-tune autotune``, the kept
+    registers written as the setup file and loaded into the motor as written."""
+    from tuning.pipeline import setup_text
+    from tuning.studio_adapter import TOOLKIT
+
+    from jvl_gym.studio.tuning_run import TuningRun
+
+    m = SimMotor("MAC140", 1)
+    tr = TuningRun(m, TOOLKIT)
+    tr.start()
+    tr.join(600)
+    assert tr.error is None and tr.result is not None, tr.progress
+    out = tr.result.outcome
+    assert "Identified values" in out.report and "Acceptance step" in out.report
+    assert set(out.plots) == {"fits", "Bode (margins)", "speed step"}
+    assert all(png.startswith(b"\x89PNG") for png in out.plots.values())
+    assert "KVOUT" in out.registers and "KVOUT" in tr.result.present
+    assert any(line.startswith("kept") for line in out.acceptance)
+    assert "wrote" in tr.write(tmp_path)
+    path = tmp_path / "setup.yaml"
+    assert tr.written == path
+    assert path.read_text() == setup_text(out.motor, out.registers, out.note)
+    written = yaml.safe_load(path.read_text())["registers"]
+    for k, v in written.items():
+        assert m.read(k) == pytest.approx(v, rel=1e-6, abs=1e-9), k
 
 
 def test_episode_is_deterministic_and_refuses_unknown():

@@ -15,6 +15,7 @@ from collections.abc import Sequence
 
 from .line import Line, LineMotor, scan
 from .motor import SimMotor, StudioMotor
+from .toolkit import TuningToolkit, find_toolkit
 
 __all__ = ["Session", "plan_motors", "DEFAULT_MOTOR"]
 
@@ -58,15 +59,19 @@ class Session:
         Simulated seconds per wall-clock second of the simulated motors.
     line : Line, optional
         The line the line motors share.
+    toolkit : TuningToolkit, optional
+        The tuning toolkit of the tuning page (default: the installed one,
+        :func:`~jvl_gym.studio.toolkit.find_toolkit`; None if there is none).
     """
 
     def __init__(self, motors: list[StudioMotor], speed: float = 1.0,
-                 line: Line | None = None) -> None:
+                 line: Line | None = None, toolkit: TuningToolkit | None = None) -> None:
         if not speed > 0:
             raise ValueError(f"speed must be > 0, got {speed}")
         self.motors = motors
         self.speed = float(speed)
         self.line = line
+        self.toolkit = find_toolkit(toolkit)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         #: last error of the clock (a motor that refused to step), None if none
@@ -74,14 +79,16 @@ class Session:
 
     @classmethod
     def simulated(cls, motors: Sequence[str], addresses: Sequence[int] = (), seed: int = 0,
-                  speed: float = 1.0) -> Session:
+                  speed: float = 1.0, toolkit: TuningToolkit | None = None) -> Session:
         """Simulated motors of the given types (any families), one MotorArray each."""
         plan = plan_motors(motors, addresses, DEFAULT_MOTOR)
-        return cls([SimMotor(t, a, seed=seed + k) for k, (t, a) in enumerate(plan)], speed)
+        return cls([SimMotor(t, a, seed=seed + k) for k, (t, a) in enumerate(plan)], speed,
+                   toolkit=toolkit)
 
     @classmethod
     def on_line(cls, port: str, motors: Sequence[str], addresses: Sequence[int] = (),
-                scan_range: Sequence[int] | None = None) -> Session:
+                scan_range: Sequence[int] | None = None,
+                toolkit: TuningToolkit | None = None) -> Session:
         """Motors on the line at ``port``: the ``addresses`` given, or those of ``scan_range``
         that answer."""
         line = Line(port)
@@ -93,7 +100,7 @@ class Session:
             if len(motors) > 1:
                 raise ValueError("with a scan give one --motor (the type of every motor found)")
         plan = plan_motors(motors, addresses, DEFAULT_MOTOR)
-        return cls([LineMotor(line, t, a) for t, a in plan], line=line)
+        return cls([LineMotor(line, t, a) for t, a in plan], line=line, toolkit=toolkit)
 
     def motor(self, label: str) -> StudioMotor:
         """The motor shown as ``label`` (``"MAC140 @ 1"``)."""

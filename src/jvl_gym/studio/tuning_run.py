@@ -1,87 +1,63 @@
 """The ``jvl-tune autotune`` pipeline on the studio's selected motor, step by step.
 
-The steps and their code are the command line's (:mod:`tuning`): the records and the fits with
-their 95 % intervals (:func:`tuning.autotune.identify_motors`, :func:`tuning.report.text_table`,
-:func:`tuning.report.plot_fits`), the candidate designs with their margins and quantised
-registers (:func:`tuning.report.bode_figure`, :func:`tuning.report.steps_figure`), the
-acceptance move against the motor type's default setup
-(:func:`tuning.acceptance.autotune_designs`) and against the motor's present setup
-(:func:`tuning.acceptance.accept`); a family with a sixth-order main filter runs
-:func:`tuning.autotune_sixth_order.autotune_sixth_order`. A simulated motor is identified in
-place (the studio's clock pauses it meanwhile); a motor on a line through
-:func:`tuning.serial_source.autotune_over_serial`. The result is written only by
-:meth:`TuningRun.write` (the page asks for confirmation first).
+The studio is given the tuning toolkit (:class:`~jvl_gym.studio.toolkit.TuningToolkit`,
+:func:`~jvl_gym.studio.toolkit.find_toolkit`) and runs the command line's pipeline through it:
+the family's strategy from the contract, its records and fits with their 95 % intervals, the
+candidate designs quantised and verified, the acceptance step, the report and its plots. A
+simulated motor is identified in place (the studio's clock pauses it meanwhile); a motor on a
+line through the line's port, for a family with the TESTU/TESTA modes
+(:attr:`~jvl_gym.families.Capability.TEST_MODES`). The result is written only by
+:meth:`TuningRun.write` (the page asks for confirmation first), through the toolkit's setup
+writer: the setup file is written, then loaded into the motor.
 """
 
 from __future__ import annotations
 
-import io
+import tempfile
 import threading
-from dataclasses import dataclass, field
-from typing import Any
+from dataclasses import dataclass
+from pathlib import Path
 
+import yaml
+
+from ..families import Capability, family_of_motor
 from .motor import SimMotor, StudioMotor
+from .toolkit import MISSING, TuningOutcome, TuningToolkit
 
 __all__ = ["TuningResult", "TuningRun", "tuning_problem"]
 
 
-def tuning_problem(motor: StudioMotor) -> str | None:
-    """Why ``motor`` cannot be tuned (one line), or None if it can."""
-    from tuning.family import tuning_family
-
-    try:
-        fam = tuning_family(motor.motor_type)
-    except ValueError as exc:
-        return str(exc)
-    if not motor.simulated and not fam.test_modes:
+def tuning_problem(motor: StudioMotor, toolkit: TuningToolkit | None) -> str | None:
+    """Why ``motor`` cannot be tuned with ``toolkit`` (one line), or None if it can."""
+    if toolkit is None:
+        return MISSING
+    fam = family_of_motor(motor.motor_type)
+    if fam.tuning is None:
+        return f"{motor.label}: the {fam.title} have no tuning procedure"
+    if not motor.simulated and not fam.supports(Capability.TEST_MODES):
         return (f"{motor.label}: tuning over a line needs the TESTU/TESTA modes, which the "
-                f"{motor.facts.title} do not have; tune a simulated one")
+                f"{fam.title} do not have; tune a simulated one")
     return None
-
-
-def _filter_registers() -> list[str]:
-    """The filter registers a design of :mod:`tuning.autotune` sets (current and speed loop)."""
-    from tuning.autotune import CURRENT_KEYS, SPEED_KEYS
-
-    return [*CURRENT_KEYS, *SPEED_KEYS]
-
-
-def _png(fig: Any) -> bytes:
-    import matplotlib.pyplot as plt
-
-    out = io.BytesIO()
-    fig.savefig(out, format="png", dpi=90)
-    plt.close(fig)
-    return out.getvalue()
 
 
 @dataclass
 class TuningResult:
-    """What a finished run shows.
+    """What a finished run shows: the toolkit's outcome and the motor's registers before.
 
     Attributes
     ----------
-    table : str
-        Identified values with their intervals, margins and bandwidths (text table).
-    registers : dict
-        The kept (quantised) filter registers, name → value.
+    outcome : TuningOutcome
+        Report, kept registers, acceptance, plots, setup header.
     present : dict
-        The same registers on the motor before the run.
-    acceptance : list of str
-        The acceptance move: each candidate's settle time, and the reason for the choice.
-    plots : dict
-        Title → PNG bytes (fits, Bode, steps).
+        The kept registers' values on the motor before the run, name → value.
     """
 
-    table: str
-    registers: dict[str, float]
+    outcome: TuningOutcome
     present: dict[str, float]
-    acceptance: list[str]
-    plots: dict[str, bytes] = field(default_factory=dict)
 
 
 class TuningRun:
-    """One autotune run on ``motor`` in a background thread.
+    """One autotune run on ``motor`` with ``toolkit`` in a background thread.
 
     Attributes
     ----------
@@ -91,20 +67,27 @@ class TuningRun:
         Set when the run has finished.
     error : str or None
         Set when the run failed (one line).
-    written : bool
-        True once :meth:`write` has written the result.
+    written : Path or None
+        The setup file once :meth:`write` has written the result.
+
+    Raises
+    ------
+    ValueError
+        The motor cannot be tuned (:func:`tuning_problem`).
     """
 
-    def __init__(self, motor: StudioMotor, seed: int = 0) -> None:
-        problem = tuning_problem(motor)
+    def __init__(self, motor: StudioMotor, toolkit: TuningToolkit | None, seed: int = 0) -> None:
+        problem = tuning_problem(motor, toolkit)
         if problem:
             raise ValueError(problem)
+        assert toolkit is not None
         self.motor = motor
+        self.toolkit = toolkit
         self.seed = seed
         self.progress: list[str] = []
         self.result: TuningResult | None = None
         self.error: str | None = None
-        self.written = False
+        self.written: Path | None = None
         self._thread: threading.Thread | None = None
 
     @property
@@ -127,7 +110,9 @@ class TuningRun:
 
     def _main(self) -> None:
         try:
-            self.result = self._run()
+            outcome = self._run()
+            present = {n: self.motor.read(n) for n in outcome.registers}
+            self.result = TuningResult(outcome, present)
             self._say("done: review the registers and write them to the motor")
         except Exception as exc:  # noqa: BLE001 - shown on the page
             from ..cli_app import one_line
@@ -135,110 +120,27 @@ class TuningRun:
             self.error = one_line(exc)
             self._say(f"failed: {self.error}")
 
-    def _present(self, names: list[str]) -> dict[str, float]:
-        return {n: self.motor.read(n) for n in names}
-
-    def _run(self) -> TuningResult:
-        from tuning.family import tuning_family
-
-        fam = tuning_family(self.motor.motor_type)
-        if not fam.test_modes:
-            return self._sixth_order()
-        if isinstance(self.motor, SimMotor):
-            return self._sim()
-        return self._line()
-
-    def _against_present(self, ident: Any, design: Any, present: dict[str, float]
-                         ) -> list[str]:
-        """The acceptance move of the kept design beside the motor's present setup, both
-        simulated on the identified motor (:func:`tuning.acceptance.accept`)."""
-        from tuning.acceptance import Candidate, accept
-
-        self._say("acceptance move: the kept design against the present setup")
-        kept = Candidate("kept design", dict(design.registers), design)
-        res = accept([ident], [[kept, Candidate("present setup", present)]], seed=self.seed)[0]
-        return [f"{k}: settle {v * 1e3:.1f} ms, final error {res.final_error[k]:.0f} counts"
-                for k, v in res.settle_s.items() if k in ("kept design", "present setup")]
-
-    def _design_result(self, ident: Any, acc: Any, design: Any,
-                       present: dict[str, float]) -> TuningResult:
-        from tuning.report import bode_figure, steps_figure, text_table
-
-        against = self._against_present(ident, design, present)
-        self._say("plots: fits, Bode with margins, steps")
-        plots = {"fits": self._fits(ident),
-                 "Bode (margins)": _png(bode_figure(design, ident.motor, ident.mechanics.J)),
-                 "speed step": _png(steps_figure(design, ident.motor, ident.mechanics.J))}
-        lines = [f"{k}: settle {v * 1e3:.1f} ms, final error "
-                 f"{acc.final_error.get(k, float('nan')):.0f} counts"
-                 for k, v in acc.settle_s.items()] if acc is not None else []
-        if acc is not None:
-            lines.append(f"kept: {acc.chosen.name}; {acc.reason}")
-        regs = dict(design.registers)
-        return TuningResult(text_table(ident, design), regs, present, against + lines, plots)
-
-    def _fits(self, ident: Any) -> bytes:
-        import tempfile
-        from pathlib import Path
-
-        from tuning.report import plot_fits
-
-        with tempfile.TemporaryDirectory() as tmp:
-            return plot_fits(ident, Path(tmp) / "fits.png").read_bytes()
-
-    def _sim(self) -> TuningResult:
-        from tuning.acceptance import autotune_designs
-        from tuning.autotune import identify_motors
-
+    def _run(self) -> TuningOutcome:
         m = self.motor
-        assert isinstance(m, SimMotor)
         if m.read_raw(m.facts.mode_register) != 0:
             raise ValueError(f"{m.label}: tuning starts in mode 0 "
                              f"({m.facts.mode_name(0)}, at rest): press 'passive' first")
-        present = self._present(_filter_registers())
-        m.paused = True
-        try:
-            with m.lock:
-                self._say("records: TESTU (coil) and TESTA (mechanics) on the motor")
-                ident = identify_motors(m.array, progress=self._say)[0]
-        finally:
-            m.paused = False
-        self._say("synthesis, quantisation, verification and the acceptance move")
-        acc = autotune_designs([ident], seed=self.seed)[0]
-        return self._design_result(ident, acc, acc.chosen.design, present)
-
-    def _line(self) -> TuningResult:
-        from tuning.serial_source import autotune_over_serial
-
-        m = self.motor
+        if isinstance(m, SimMotor):
+            m.paused = True
+            try:
+                with m.lock:
+                    return self.toolkit.autotune(m.array, self.seed, self._say)
+            finally:
+                m.paused = False
         line = m.line  # type: ignore[attr-defined]
-        present = self._present(_filter_registers())
-        self._say(f"records over {line.port}: TESTU and TESTA, 11 samples each")
         with line.lock:
             line.close()
-            ident, design = autotune_over_serial(line.port, m.motor_type, m.address,
-                                                 progress=self._say)
-        return self._design_result(ident, design.acceptance, design, present)
+            return self.toolkit.autotune_line(line.port, m.motor_type, m.address, self._say)
 
-    def _sixth_order(self) -> TuningResult:
-        from tuning.autotune_sixth_order import autotune_report, autotune_sixth_order
-
-        m = self.motor
-        assert isinstance(m, SimMotor)
-        m.paused = True
-        try:
-            with m.lock:
-                res = autotune_sixth_order(m.array, seed=self.seed, progress=self._say)[0]
-        finally:
-            m.paused = False
-        lines = [f"{k}: settle {v * 1e3:.1f} ms" for k, v in res.settle_s.items()]
-        lines.append(f"kept: {res.chosen.name}; {res.reason}")
-        regs = dict(res.chosen.registers)
-        return TuningResult(autotune_report(res), regs, self._present(list(regs)), lines)
-
-    def write(self) -> str:
-        """Write the kept registers to the motor (validated as a whole) and return a line
-        saying so.
+    def write(self, folder: Path | None = None) -> str:
+        """Write the kept registers as a setup file into ``folder`` (default: a new temporary
+        folder) through the toolkit's setup writer, load that file's registers into the motor
+        (validated as a whole) and return a line saying so.
 
         Raises
         ------
@@ -247,6 +149,9 @@ class TuningRun:
         """
         if self.result is None:
             raise RuntimeError("the run has no result to write")
-        self.motor.load_setup(self.result.registers)
-        self.written = True
-        return f"wrote {len(self.result.registers)} registers to {self.motor.label}"
+        out = self.result.outcome
+        folder = Path(folder) if folder is not None else Path(tempfile.mkdtemp(prefix="jvl-tune-"))
+        path = self.toolkit.write_setup(folder / "setup.yaml", out.motor, out.registers, out.note)
+        self.motor.load_setup(yaml.safe_load(path.read_text())["registers"])
+        self.written = path
+        return f"wrote {len(out.registers)} registers to {self.motor.label} (setup {path})"

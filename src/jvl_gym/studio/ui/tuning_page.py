@@ -1,7 +1,7 @@
 """The Tuning view: the ``jvl-tune autotune`` pipeline on the selected motor as a guided page
 (:class:`~jvl_gym.studio.tuning_run.TuningRun`): progress, the identified values with their
-intervals, the plots, the quantised registers beside the present ones, the acceptance move, and
-writing the result after a confirmation."""
+intervals, the plots, the quantised registers beside the present ones, the acceptance step, and
+writing the result after a confirmation; without the tuning toolkit it says so in one line."""
 
 from __future__ import annotations
 
@@ -24,9 +24,9 @@ def build(session: Any, m: int) -> None:
     ui.label(f"Autotune {motor.label} ({motor.facts.title})").classes("text-lg")
     ui.markdown("Steps: **records** (TESTU, TESTA or buffer records) → **fits** with 95 % "
                 "intervals → **design** (Bode, margins, step) → **quantised registers** → "
-                "**acceptance move** against the present setup → **write** (after you confirm). "
+                "**acceptance step** against the default setup → **write** (after you confirm). "
                 "The motor must be at rest in mode 0.")
-    problem = tuning_problem(motor)
+    problem = tuning_problem(motor, session.toolkit)
     if problem:
         page.say(problem, ok=False)
         return
@@ -39,7 +39,7 @@ def build(session: Any, m: int) -> None:
         if motor.label in RUNS and RUNS[motor.label].running:
             page.say("a run is going on")
             return
-        tr = TuningRun(motor)
+        tr = TuningRun(motor, session.toolkit)
         RUNS[motor.label] = tr
         shown.update(lines=0, result=False)
         out.clear()
@@ -66,22 +66,22 @@ def build(session: Any, m: int) -> None:
 
 
 def _show(out: Any, tr: TuningRun, page: Any) -> None:
-    res = tr.result
-    assert res is not None
+    assert tr.result is not None
+    res, present = tr.result.outcome, tr.result.present
     with out:
-        ui.label("Identified values, margins, bandwidths").classes("text-lg")
-        ui.code(res.table, language="text").classes("w-full").props(tid("tuning-table"))
+        ui.label("Identified values, loop verification, acceptance step").classes("text-lg")
+        ui.code(res.report, language="text").classes("w-full").props(tid("tuning-table"))
         with ui.row().classes("w-full"):
             for title, png in res.plots.items():
                 with ui.column():
                     ui.label(title)
                     ui.image("data:image/png;base64," + base64.b64encode(png).decode()
                              ).classes("w-[36rem]")
-        ui.label("Acceptance move").classes("text-lg")
+        ui.label("Acceptance step").classes("text-lg")
         for line in res.acceptance:
             ui.label(line)
         ui.label("Quantised registers").classes("text-lg")
-        rows = [{"name": k, "present": f"{res.present.get(k, float('nan')):.10g}",
+        rows = [{"name": k, "present": f"{present.get(k, float('nan')):.10g}",
                  "new": f"{v:.10g}"} for k, v in res.registers.items()]
         ui.table(columns=[{"name": c, "label": c, "field": c} for c in ("name", "present",
                                                                           "new")],
