@@ -8,6 +8,7 @@ with ``JVL_STUDIO_DOCS=1``."""
 
 from __future__ import annotations
 
+import functools
 import os
 import re
 import socket
@@ -65,6 +66,7 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
+@functools.cache
 def _entry_points() -> Path:
     """A folder with the distribution metadata of this tree's entry points (pyproject.toml's
     ``[project.entry-points]``), so that the studio finds the tuning toolkit the way an

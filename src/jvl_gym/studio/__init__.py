@@ -12,7 +12,8 @@ The logic lives in modules of one concept each and runs without a browser:
   :mod:`.registers` — the register view's rows, edits and setup files;
 * :mod:`.scope` — scope channels and buffers, CSV and PNG export; :mod:`.capture` — the
   motor's sample buffer and the TESTU/TESTA records;
-* :mod:`.tuning_run` — the ``jvl-tune`` pipeline as steps with progress;
+* :mod:`.tuning_run` — the ``jvl-tune`` pipeline as steps with progress, through the tuning
+  toolkit the studio is given (:mod:`.toolkit`);
 * :mod:`.episodes` — one episode of a registered env with its policy or baseline.
 
 The browser pages (:mod:`.ui`, NiceGUI) only lay these out.
