@@ -32,17 +32,7 @@ FIXTURES = Path(__file__).resolve().parent / "fixtures" / "architecture"
 #: generic modules that still break a rule while the work that removes the breach is under
 #: way, with that work; an entry whose file keeps to every rule fails
 #: :func:`test_the_pending_list_holds_only_files_that_break_a_rule`, so the list only shrinks
-PENDING: dict[str, str] = {
-    "src/jvl_gym/envs/coil_winding.py": "one way to write a task on the contract",
-    "src/jvl_gym/envs/stepper_indexing.py": "one way to write a task on the contract",
-    "src/jvl_gym/envs/filter_tuning.py": "what the envs take from tuning moves below both",
-    "src/jvl_gym/scale/fleet_motor.py": "the fleet runs the one tuning pipeline it is given",
-    "src/jvl_gym/scale/fleet_spec.py": "the fleet runs the one tuning pipeline it is given",
-    **{f"tuning/{name}.py": "one tuning pipeline that takes every fact from the contract"
-       for name in ("acceptance", "autotune_sixth_order", "cli", "credibility", "defaults",
-                    "family", "identify_buffer", "identify_resonance", "models", "quantize",
-                    "records", "serial_source")},
-}
+PENDING: dict[str, str] = {}
 
 
 def _names() -> frozenset[str]:
