@@ -10,24 +10,13 @@ import pytest
 import yaml
 from tuning.cli import app as tune
 
+from cli_checks import one_line_error, run_cli
 from jvl_gym.cli import app as gym_cli
 from jvl_gym.config import ConfigError
 from jvl_gym.families.mac050_141.config import SETUPS_DIR
 
-
-def _run(app, args, capsys):
-    with pytest.raises(SystemExit) as info:
-        app(args)
-    out, err = capsys.readouterr()
-    return info.value.code, out, err
-
-
-def _one_line_error(code, err):
-    assert code not in (0, None)
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert "Traceback" not in err
-    return lines[0]
+_run = run_cli
+_one_line_error = one_line_error
 
 
 def test_unknown_motor_is_one_line(capsys):

@@ -77,7 +77,7 @@ def test_scope_puts_a_reference_in_the_panel_of_its_quantity():
 
 def test_fleet_plot_draws_unsettled_motors_as_unsettled(tmp_path, monkeypatch):
     import matplotlib.figure
-    from jvl_gym.scale.fleet_report import plot_fleet
+    from tuning.fleet_report import plot_fleet
 
     figures = []
     save = matplotlib.figure.Figure.savefig

@@ -103,10 +103,10 @@ def test_mis_refused_batch_with_a_command_changes_nothing(prefix, command, runni
 def test_mac050_141_refused_batch_after_a_safe_mode_command_changes_nothing(
         prefix, request, saved) -> None:
     m = MotorArray("MAC140", n=1, seed=0)
-    m.go_safe_mode()
+    m.enter_safe_mode()
     if saved:
         m.write_flash()
-        m.go_safe_mode()
+        m.enter_safe_mode()
     before = _whole(m)
     with pytest.raises(RegisterError):  # 256 saves and resets, then MODE_REG 99 is refused
         m.write_many({**prefix, "MODE_REG": request, 2: 99})

@@ -177,8 +177,11 @@ def test_jogging_by_inputs() -> None:
     m.set_input(digital_inputs=0)
     m.step(1)
     r.poll()
-    assert m.read_raw("MODE_REG")[0] == 0 and m.read_raw("V_SOLL")[0] == 70000
+    # passive by way of the stop ramp (§5.11.2): the motor decelerates in mode 11 first
+    assert m.read_raw("MODE_REG")[0] == 11 and m.read_raw("V_SOLL")[0] == 70000
     assert m.read_raw("P_SOLL")[0] == m.read_raw("P_IST")[0] < 0
+    m.step(300)
+    assert m.read_raw("MODE_REG")[0] == 0
     r.packet(_frame(control=60, pos=3000))  # homing disabled: taken again at once
     assert m.read_raw("P_SOLL")[0] == 3000
 

@@ -9,6 +9,7 @@ import pytest
 
 pytest.importorskip("stable_baselines3")
 
+from cli_checks import one_line_error, run_cli  # noqa: E402
 from jvl_gym.cli import app as gym_cli  # noqa: E402
 from jvl_gym.envs import ENV_IDS  # noqa: E402
 from jvl_gym.families import family  # noqa: E402
@@ -19,18 +20,10 @@ TINY = ["--seeds", "1", "--episodes", "2", "--max-steps", "6"]
 
 
 def _run(args, capsys):
-    with pytest.raises(SystemExit) as info:
-        gym_cli(args)
-    out, err = capsys.readouterr()
-    return info.value.code, out, err
+    return run_cli(gym_cli, args, capsys)
 
 
-def _one_line_error(code, err):
-    assert code not in (0, None)
-    lines = err.strip().splitlines()
-    assert len(lines) == 1, err
-    assert "Traceback" not in err
-    return lines[0]
+_one_line_error = one_line_error
 
 
 def test_every_env_and_family_is_configured_and_families_come_from_the_env():

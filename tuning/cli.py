@@ -321,6 +321,9 @@ def _strategy(motor: str | None) -> Strategy:
     """The tuning strategy of a motor type's family (:func:`tuning.strategy.strategy_of`)."""
     from jvl_gym.config import ConfigError
 
+    if motor is None:
+        raise typer.BadParameter("no motor type: give --motor (or a setup with a motor: line)",
+                                 param_hint="'--motor'")
     try:
         return strategy_of(motor)
     except ConfigError:

@@ -80,14 +80,12 @@ def family_of_motor(motor: Any) -> Family:
         A motor type name no registered family lists (the message lists every family's types),
         or something that is no name, path or config.
     """
-    from ..config import ConfigError
 
     key = getattr(type(motor), "FAMILY_KEY", None)
     if isinstance(key, str) and key in _MODULES:
         return family(key)
     if not isinstance(motor, (str, os.PathLike)):
-        raise ConfigError(f"a motor is a type name, a config path or a motor config, got "
-                          f"{motor!r}")
+        raise unknown_motor_type(motor)
     path = Path(motor)
     if path.suffix in (".yaml", ".yml") or path.exists():
         key = _family_in_file(path)
@@ -100,16 +98,16 @@ def family_of_motor(motor: Any) -> Family:
     raise unknown_motor_type(name)
 
 
-def unknown_motor_type(name: str) -> ValueError:
-    """The error for a motor type ``name`` no registered family lists: a ConfigError that
-    lists every family's types."""
+def unknown_motor_type(name: Any) -> ValueError:
+    """The error for ``name``, a motor type no registered family lists or no motor at all: a
+    ConfigError that lists every family's types."""
     from ..config import ConfigError
 
     known = "; ".join(f"{', '.join(family(k).motor_types())} ({family(k).title})"
                       for k in _MODULES)
-    return ConfigError(f"unknown motor type {name!r}; known: {known} (or give the path of a "
-                       ".yaml motor config)")
-
+    what = (f"unknown motor type {name!r}" if isinstance(name, str) else
+            f"a motor is a type name, a config path or a motor config, got {name!r}")
+    return ConfigError(f"{what}; known: {known} (or give the path of a .yaml motor config)")
 
 
 def _family_in_file(path: Path) -> str | None:

@@ -495,6 +495,20 @@ class Family:
     programs: ModuleType | None = None
     canopen: CanopenSpec | None = None
 
+    @classmethod
+    def of_package(cls, package: str, **fields: Any) -> Family:
+        """The record of the family package ``package`` laid out as every family folder is:
+        its ``compiled``, ``constants``, ``units``, ``config`` and ``task`` modules, and the
+        ``TABLE`` and ``CONFORMANCE`` of its ``table`` module; ``fields`` give the rest (key,
+        title, array class, twin, capabilities, …)."""
+        import importlib
+
+        modules = {name: importlib.import_module(f"{package}.{name}")
+                   for name in ("compiled", "constants", "units", "config", "task", "table")}
+        table = modules.pop("table")
+        return cls(**modules, table=table.TABLE,
+                   conformance=getattr(table, "CONFORMANCE", None), **fields)
+
     def motor_types(self) -> list[str]:
         """Names of the family's motor types (each with a motor config)."""
         return self.config.motor_types()

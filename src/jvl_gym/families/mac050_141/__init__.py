@@ -3,18 +3,17 @@
 from __future__ import annotations
 
 from ..contract import Capability, Family, TuningSpec, TwinSpec
-from . import compiled, config, constants, task, units
+from . import constants, units
 from .motors import MacMotorArray
-from .table import CONFORMANCE, TABLE
+from .table import TABLE
 
 __all__ = ["FAMILY"]
 
 _C = constants
 
-FAMILY = Family(
-    key="mac050_141", title="MAC050–141 integrated servo motors", compiled=compiled,
-    array_class=MacMotorArray, table=TABLE, constants=constants, units=units, config=config,
-    task=task, conformance=CONFORMANCE,
+FAMILY = Family.of_package(
+    __name__, key="mac050_141", title="MAC050–141 integrated servo motors",
+    array_class=MacMotorArray,
     twin=TwinSpec(
         dialects=(_C.MACTALK_DIALECT,), safe_mode=_C.SAFE_MODE, init_mode=_C.INIT_MODE,
         passive_mode=_C.INIT_MODE,  # INIT_MODE: passive (manual 4.4.1)

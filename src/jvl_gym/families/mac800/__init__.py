@@ -18,16 +18,13 @@ __all__ = ["REGISTERS", "FAMILY"]
 REGISTERS: RegisterTable = load_packaged_table(__name__)
 
 from ..contract import Capability, Family, TuningSpec, TwinSpec  # noqa: E402  (table first)
-from . import compiled, config, constants, task, units  # noqa: E402
+from . import constants  # noqa: E402
 from .motors import Mac800MotorArray  # noqa: E402
-from .table import CONFORMANCE  # noqa: E402
 
 _C = constants
 
-FAMILY = Family(
-    key="mac800", title="MAC800 integrated servo motors", compiled=compiled,
-    array_class=Mac800MotorArray, table=REGISTERS, constants=constants, units=units,
-    config=config, task=task, conformance=CONFORMANCE,
+FAMILY = Family.of_package(
+    __name__, key="mac800", title="MAC800 integrated servo motors", array_class=Mac800MotorArray,
     twin=TwinSpec(
         dialects=(_C.MACTALK_DIALECT,), passive_mode=_C.PASSIVE_MODE, status_register="ERR_STAT",
         # ERR_STAT bits (register overview §1.2, register 35)

@@ -19,17 +19,14 @@ __all__ = ["REGISTERS", "FAMILY"]
 REGISTERS: RegisterTable = load_packaged_table(__name__)
 
 from ..contract import Capability, Family, TwinSpec  # noqa: E402  (the table first)
-from . import compiled, config, constants, program, task, units  # noqa: E402
+from . import constants, program  # noqa: E402
 from .canopen import CANOPEN  # noqa: E402
 from .motors import MisMotorArray  # noqa: E402
-from .table import CONFORMANCE  # noqa: E402
 
 _C = constants
 
-FAMILY = Family(
-    key="mis", title="MIS/SMC integrated step motors", compiled=compiled,
-    array_class=MisMotorArray, table=REGISTERS, constants=constants, units=units,
-    config=config, task=task, conformance=CONFORMANCE,
+FAMILY = Family.of_package(
+    __name__, key="mis", title="MIS/SMC integrated step motors", array_class=MisMotorArray,
     twin=TwinSpec(
         dialects=(_C.MACTALK_DIALECT,), safe_mode=_C.SAFE, init_mode=_C.PASSIVE,
         passive_mode=_C.PASSIVE,
