@@ -148,5 +148,6 @@ assert all(fixed["P_IST"][k] == 0 for k in opened)
 # The same run from the command line writes the trace as CSV and a plot:
 #
 # ```sh
-# jvl-gym program run pick.txt --motor MIS232 --seconds 4 --io station.yaml --out program_out
+# jvl-gym program run configs/programs/pick.txt --motor MIS232 --seconds 4 \
+#     --io configs/programs/station.yaml --out program_out
 # ```
