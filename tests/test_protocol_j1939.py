@@ -11,7 +11,8 @@ import numpy as np
 import pytest
 
 from jvl_gym import MotorArray
-from jvl_gym.protocol.sae_j1939 import MIS_NAME, J1939Device, Name
+from jvl_gym.families import UnsupportedOperation
+from jvl_gym.protocol.sae_j1939 import J1939Device, Name
 from jvl_gym.protocol.sae_j1939.frames import Dm14, can_id, split_id
 from jvl_gym.protocol.sae_j1939.node import J1939Node
 from jvl_gym.protocol.twin import Twin
@@ -25,15 +26,23 @@ def _device() -> tuple[MotorArray, J1939Device]:
     return m, J1939Device(m, 0, 5)
 
 
+def test_a_family_without_j1939_has_no_node() -> None:
+    """Only a family that declares the J1939 interface gets a node, with its own NAME."""
+    with pytest.raises(UnsupportedOperation, match="J1939"):
+        J1939Device(MotorArray("MAC140"), 0, 5)
+
+
 def _ask(d: J1939Device, pgn: int, data: bytes, now: float = 0.0) -> list[tuple[int, bytes]]:
     return [(f.arbitration_id, f.data) for f in d.handle(can_id(pgn, TOOL, 5), data, now)]
 
 
 def test_name_field_and_address_claim_as_the_explorer_shows() -> None:
     """§11.8.4: "FF FF FF FF 01 FF FE 80" from node 5, PGN 60928 broadcast, priority 6."""
-    assert MIS_NAME.to_bytes() == H("ff ff ff ff 01 ff fe 80")
-    assert Name.from_bytes(MIS_NAME.to_bytes()) == MIS_NAME
-    _, d = _device()
+    m, d = _device()
+    name = Name.from_value(m.family.j1939_name)
+    assert d.name == name and name.to_bytes() == H("ff ff ff ff 01 ff fe 80")
+    assert Name.from_bytes(name.to_bytes()) == name and name.arbitrary_address
+    assert (name.ecu_instance, name.function, name.vehicle_system) == (1, 0xFF, 0x7F)
     [claim] = d.claim()
     assert (claim.arbitration_id, claim.data) == (0x18EEFF05, H("ff ff ff ff 01 ff fe 80"))
     assert split_id(0x18EEFF05) == (6, 60928, 5, 255)

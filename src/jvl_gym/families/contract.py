@@ -477,6 +477,9 @@ class Family:
     canopen : CanopenSpec or None
         The CANopen slave's facts of a family that declares :attr:`Capability.CANOPEN`, None
         otherwise.
+    j1939_name : int or None
+        The 64-bit NAME (SAE J1939/81, byte 0 lowest) with which the motors of a family that
+        declares :attr:`Capability.J1939` claim their address; None otherwise.
     """
 
     key: str
@@ -494,6 +497,7 @@ class Family:
     conformance: Conformance | None = None
     programs: ModuleType | None = None
     canopen: CanopenSpec | None = None
+    j1939_name: int | None = None
 
     @classmethod
     def of_package(cls, package: str, **fields: Any) -> Family:

@@ -50,4 +50,4 @@ FAMILY = Family.of_package(
                             # DMX512 (§13)
                             Capability.PROGRAMS, Capability.CANOPEN, Capability.J1939,
                             Capability.DMX512}),
-    programs=program, canopen=CANOPEN)
+    programs=program, canopen=CANOPEN, j1939_name=_C.J1939_NAME)

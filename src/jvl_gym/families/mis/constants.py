@@ -134,5 +134,13 @@ ENCODER_CPR = {code: cpr for code, (_, cpr) in ENCODER_TYPES.items()}
 #: MacTalk of the 32-bit register families: registers 1–255, data always 4 bytes (protocol.dialect)
 MACTALK_DIALECT = "mactalk32"
 
+#: the J1939 NAME the motor claims its address with (§11.8.4): "Identity number: FFFFh,
+#: Manufacturer code: FFFh, ECU instance: 1, Function instance: 0, Function: FFh, Vehicle
+#: system: 7Fh, Vehicle system instance: 0, Industry group: 0, Arbitrary address capable: 1".
+#: The manual's explorer shows the bytes FF FF FF FF 01 FF FE 80 (byte 0 first): the identity
+#: number's 21 bits and the manufacturer code's 11 bits all set. The bytes are followed
+#: (identity 1FFFFFh, manufacturer 7FFh) rather than the shorter values of the list.
+J1939_NAME = 0x80FE_FF01_FFFF_FFFF
+
 __all__ = [name for name in dir() if name.isupper() and not name.startswith("_")] + [
     "COUNTS_PER_FULL_STEP", "ACCEL_MAX_RPM_PER_S", "CUR_SCALE_FULL"]

@@ -5,6 +5,6 @@ motor's J1939 node (:mod:`.device`) and its service on a python-can bus (:mod:`.
 from __future__ import annotations
 
 from .device import J1939Device
-from .frames import MIS_NAME, Dm14, Dm15, Dm16, Name
+from .frames import Dm14, Dm15, Dm16, Name
 
-__all__ = ["J1939Device", "Name", "MIS_NAME", "Dm14", "Dm15", "Dm16"]
+__all__ = ["J1939Device", "Name", "Dm14", "Dm15", "Dm16"]

@@ -32,13 +32,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from ...families import Capability
 from ...registers import RegisterError
 from .frames import (
     COMPLETED,
     FAILED,
     GLOBAL,
     MAC_REGISTERS,
-    MIS_NAME,
     NULL_ADDRESS,
     OPERATION_COMPLETE,
     PGN_ADDRESS_CLAIMED,
@@ -81,18 +81,25 @@ class J1939Device:
     index : int
     address : int
         Node address 1 … 252 (§11.8.3; factory default 5).
-    name : Name
-        The NAME (default the MIS's, §11.8.4).
+    name : Name or None
+        The NAME; None: the one the motors' family states (``Family.j1939_name``, MIS manual
+        §11.8.4).
+
+    Raises
+    ------
+    UnsupportedOperation
+        The motors' family declares no J1939 interface.
     """
 
     def __init__(self, motors: Any, index: int = 0, address: int = 5,
-                 name: Name = MIS_NAME) -> None:
+                 name: Name | None = None) -> None:
+        motors.family.require(Capability.J1939)
         if not 1 <= address <= 252:
             raise ValueError(f"J1939 node address must be 1 … 252 (§11.8.3), got {address}")
         self.m = motors
         self.i = index
         self.address = address
-        self.name = name
+        self.name = Name.from_value(motors.family.j1939_name) if name is None else name
         self.others: dict[int, int] = {}  # address → NAME value of other nodes
         self.pending: tuple[int, int, int, float] | None = None  # (tool, register, length, t)
 

@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 __all__ = ["PGN_ADDRESS_CLAIMED", "PGN_REQUEST", "PGN_DM14", "PGN_DM15", "PGN_DM16",
-           "GLOBAL", "NULL_ADDRESS", "can_id", "split_id", "Name", "MIS_NAME", "Dm14", "Dm15",
+           "GLOBAL", "NULL_ADDRESS", "can_id", "split_id", "Name", "Dm14", "Dm15",
            "Dm16", "READ", "WRITE", "OPERATION_COMPLETE", "PROCEED", "COMPLETED", "FAILED",
            "MAC_REGISTERS"]
 
@@ -79,17 +79,14 @@ class Name:
 
     @classmethod
     def from_bytes(cls, data: bytes) -> Name:
-        v = int.from_bytes(bytes(data[:8]), "little")
+        """The NAME of the 8 bytes ``data`` (byte 0 lowest)."""
+        return cls.from_value(int.from_bytes(bytes(data[:8]), "little"))
+
+    @classmethod
+    def from_value(cls, v: int) -> Name:
+        """The NAME of the 64-bit number ``v`` (:meth:`value`)."""
         return cls(v & 0x1FFFFF, v >> 21 & 0x7FF, v >> 32 & 7, v >> 35 & 0x1F, v >> 40 & 0xFF,
                    v >> 49 & 0x7F, v >> 56 & 0xF, v >> 60 & 7, bool(v >> 63 & 1))
-
-
-#: the MIS's NAME (§11.8.4): "Identity number: FFFFh, Manufacturer code: FFFh, ECU instance: 1,
-#: Function instance: 0, Function: FFh, Vehicle system: 7Fh, Vehicle system instance: 0,
-#: Industry group: 0, Arbitrary address capable: 1". The manual's explorer shows the bytes
-#: FF FF FF FF 01 FF FE 80: the identity number's 21 bits and the manufacturer code's 11 bits
-#: all set; the bytes are followed (identity 1FFFFFh, manufacturer 7FFh).
-MIS_NAME = Name(0x1FFFFF, 0x7FF, 1, 0, 0xFF, 0x7F, 0, 0, True)
 
 
 @dataclass(frozen=True)
