@@ -9,17 +9,16 @@ the world inputs and the physical truth of the plant (MAC800 register overview Â
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 
 from ...arguments import InputValue, MotorIndex
 from ...bank import StorePlan
-from ...config import load_setup
 from ...inputs import InputRule
 from ...keywords import BINARY, FINITE, NONNEGATIVE
-from ...registers import Register, RegisterError, RegisterRangeError
+from ...physics.servo_data import servo_parameters
+from ...registers import Register, RegisterRangeError
 from ...sim import ModeError, MotorArray
 from . import constants as c
 from . import layout as L
@@ -147,52 +146,32 @@ class Mac800MotorArray(MotorArray):
     # ------------------------------------------------------------------ configuration
     def _rom_image(self, cfg: Mac800Config, setup: Any) -> np.ndarray:
         """Table defaults with the type's setup (validated as :meth:`load_setup` does)."""
-        image = self.table.default_raw_array.astype(np.int64).copy()
-        source = setup if setup is not None else setup_path(cfg.setup)
-        try:
-            setup_cfg = load_setup(source)
-            self._check_setup_keys(setup_cfg.registers)
-            for name, value in setup_cfg.registers.items():
-                reg = self._lookup(name)
-                raw = self._validated_raw(reg, value, 1)
-                if reg.number == R.START_MODE:
-                    self._check_start_modes(raw)
-                if reg.number in _SELECTORS:
-                    start, step, target = _SELECTORS[reg.number]
-                    k = int(raw[0])
-                    if k > 0:
-                        image[self._lookup(target).number] = image[start + step * (k - 1)]
-                image[reg.number] = raw[0]
-        except RegisterError as exc:
-            where = "setup mapping" if isinstance(source, Mapping) else f"setup {source}"
-            raise type(exc)(f"{where}: {exc}") from exc
+        image = self._setup_rom_image(setup if setup is not None else setup_path(cfg.setup),
+                                      self._rom_store)
         image[R.MOTOR_TYPE] = cfg.motor_type_code
         return image
 
+    def _rom_store(self, image: np.ndarray, reg: Register, value: Any, raw: np.ndarray
+                   ) -> None:
+        """Store a setup's validated ``raw`` in the ROM ``image``: START_MODE checked, a
+        register-set selector copies the selected set's value to the register it sets."""
+        if reg.number == R.START_MODE:
+            self._check_start_modes(raw)
+        if reg.number in _SELECTORS:
+            start, step, target = _SELECTORS[reg.number]
+            k = int(raw[0])
+            if k > 0:
+                image[self._lookup(target).number] = image[start + step * (k - 1)]
+        image[reg.number] = raw[0]
+
     def _config_params(self, cfg: Mac800Config) -> np.ndarray:
-        p = np.zeros(L.N_PARAM)
-        p[L.P_J_MOTOR] = cfg.rotor_inertia
-        p[L.P_R] = cfg.phase_resistance
-        p[L.P_L] = cfg.phase_inductance
-        p[L.P_LAMBDA] = cfg.flux_linkage
-        p[L.P_AMPS_PER_COUNT] = cfg.amps_per_count
-        p[L.P_POLE_PAIRS] = cfg.pole_pairs
-        p[L.P_PWM_DELAY] = cfg.pwm_delay_samples
+        p = servo_parameters(L, cfg, stop_stiffness=500.0, stop_damping=0.5)
         p[L.P_I2T_SCALE] = c.PERCENT_100 / cfg.rated_current**2
         p[L.P_K_I2T] = filter_gain(cfg.thermal_time_constant)
         p[L.P_UIT_SCALE] = c.PERCENT_100 / cfg.regen_power
         p[L.P_K_UIT] = filter_gain(cfg.regen_time_constant)
         p[L.P_R_TH] = cfg.thermal_resistance
         p[L.P_K_TEMP] = filter_gain(cfg.winding_time_constant)
-        p[L.P_C_BUS] = cfg.bus_capacitance
-        p[L.P_R_SUPPLY] = cfg.supply_resistance
-        p[L.P_U_DUMP] = cfg.dump_voltage
-        p[L.P_R_DUMP] = cfg.dump_resistance
-        p[L.P_STOP_LO] = 1.0
-        p[L.P_STOP_HI] = -1.0
-        p[L.P_STOP_K] = 500.0
-        p[L.P_STOP_D] = 0.5
-        p[L.P_HOME_POS] = math.inf
         return p
 
     def _rest_inputs(self, cfg: Mac800Config) -> np.ndarray:
