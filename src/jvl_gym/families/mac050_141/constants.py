@@ -77,24 +77,17 @@ globals().update(ERR_STAT_BITS)
 BLOCKING_ERRORS = mask_of(ERR_STAT_BITS, "I2T_ERR FLW_ERR FNC_ERR UIT_ERR")
 
 # --- CNTRL_BITS (3.2.36) ---------------------------------------------------------------------
-USERINTF_MASK = 0b11
-PULSEDIR = 1 << 2
-INPSIGN = 1 << 3
-HICLK = 1 << 4
-HALL_INT = 1 << 5
-RECORDBIT = 1 << 6
-REWINDBIT = 1 << 7
-RECINNERBIT = 1 << 8
-AUTO_RESYNC = 1 << 9
-MAN_RESYNC = 1 << 10
-INDEX_HOME = 1 << 11
-REL_RESYNC = 1 << 12
+USERINTF_MASK = 0b11  #: bits 0–1: the user interface
+#: CNTRL_BITS bits by name, bit 0 first; each name is a constant of this module too
+CNTRL_BITS_BITS = bit_masks("- - PULSEDIR INPSIGN HICLK HALL_INT RECORDBIT REWINDBIT RECINNERBIT "
+                            "AUTO_RESYNC MAN_RESYNC INDEX_HOME REL_RESYNC")
+globals().update(CNTRL_BITS_BITS)
 HALL_STATUS_SHIFT = 13
 
 # --- UV_HANDLE (3.2.160) ---------------------------------------------------------------------
-SET_UV_ERR = 1 << 0
-UV_GO_PASSIVE = 1 << 1
-UV_SOLL0 = 1 << 3
+#: UV_HANDLE bits by name, bit 0 first; each name is a constant of this module too
+UV_HANDLE_BITS = bit_masks("SET_UV_ERR UV_GO_PASSIVE - UV_SOLL0")
+globals().update(UV_HANDLE_BITS)
 MACTALK_DIALECT = "mactalk16"  #: MacTalk of manual 5.1, 16-bit registers (protocol.dialect)
 
 #: the manual's register groups, (title, first, last register number) (manual 3.2: "The

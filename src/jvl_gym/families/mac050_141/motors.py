@@ -75,7 +75,7 @@ _STATES: dict[str, int] = {
 _RECORDING_MODES = frozenset({c.TESTU_MODE, c.TESTA_MODE, c.TESTKI_MODE, c.TESTTQ_MODE})
 
 
-class MacMotorArray(MotorArray):
+class MacMotorArray(MotorArray, layout=L):
     """N simulated MAC50–141 motors (:class:`~jvl_gym.MotorArray` of the MAC050–141 family).
 
     Parameters
@@ -92,9 +92,6 @@ class MacMotorArray(MotorArray):
     FAMILY_KEY = "mac050_141"
     TABLE = TABLE
     CONFORMANCE = CONFORMANCE
-    N_STATE = L.N_STATE
-    N_PARAM = L.N_PARAM
-    N_INPUT = L.N_INPUT
     BUFFER_SHAPE = (c.REC_CNT_MAX, 4)
     OUTER_HZ = c.OUTER_HZ
     SETUPS_DIR = SETUPS_DIR

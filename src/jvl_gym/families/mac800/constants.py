@@ -108,31 +108,13 @@ BLOCKING_ERRORS = STOPPING_ERRORS | PASSIVE_ERRORS | ERR_STAT_BITS["UV_ERR"]
 ERROR_NAMES: dict[int, str] = {mask: name for name, mask in ERR_STAT_BITS.items()
                                if mask & BLOCKING_ERRORS}
 
-# --- CNTRL_BITS (register 36) ---------------------------------------------------------------
-RECORDBIT = 1 << 0
-REWINDBIT = 1 << 1
-RECINNERBIT = 1 << 2
-RELPOSPSOLL = 1 << 3
-RELPOSPFNC = 1 << 4
-SYNCPOSAUTO = 1 << 5
-SYNCPOSMAN = 1 << 6
-MAN_NO_BRAKE = 1 << 7
-SYNCPOSREL = 1 << 8
-INDEX_HOME = 1 << 9
-
-# --- UV_HANDLE (register 23) ----------------------------------------------------------------
-SET_UV_ERR = 1 << 0
-UV_GO_PASSIVE = 1 << 1
-UV_VSOLL0 = 1 << 2
-
-# --- HW_SETUP (register 39) -----------------------------------------------------------------
-DIRAWR = 1 << 0
-DIRBWR = 1 << 1
-PULSEOUT = 1 << 2
-XSEL1 = 1 << 3
-XPRINP = 1 << 4
-NOFILT = 1 << 5
-INVXDIR = 1 << 6
+# --- CNTRL_BITS (register 36), UV_HANDLE (register 23), HW_SETUP (register 39) -------------
+#: each register's bits by name, bit 0 first; each name is a constant of this module too
+CNTRL_BITS_BITS = bit_masks("RECORDBIT REWINDBIT RECINNERBIT RELPOSPSOLL RELPOSPFNC SYNCPOSAUTO "
+                            "SYNCPOSMAN MAN_NO_BRAKE SYNCPOSREL INDEX_HOME")
+UV_HANDLE_BITS = bit_masks("SET_UV_ERR UV_GO_PASSIVE UV_VSOLL0")
+HW_SETUP_BITS = bit_masks("DIRAWR DIRBWR PULSEOUT XSEL1 XPRINP NOFILT INVXDIR")
+globals().update(CNTRL_BITS_BITS, **UV_HANDLE_BITS, **HW_SETUP_BITS)
 
 # --- HOME_MODE (register 42) ----------------------------------------------------------------
 HOME_DONE = 1 << 16

@@ -82,7 +82,7 @@ def _aliases() -> dict[str, Register]:
 _ALIASES = _aliases()
 
 
-class Mac800MotorArray(MotorArray):
+class Mac800MotorArray(MotorArray, layout=L):
     """N simulated MAC800-family motors (:class:`~jvl_gym.MotorArray` of the ``mac800``
     family).
 
@@ -104,9 +104,6 @@ class Mac800MotorArray(MotorArray):
     FAMILY_KEY = "mac800"
     TABLE = TABLE
     CONFORMANCE = CONFORMANCE
-    N_STATE = L.N_STATE
-    N_PARAM = L.N_PARAM
-    N_INPUT = L.N_INPUT
     BUFFER_SHAPE = (c.REC_CNT_MAX, 4)
     OUTER_HZ = c.OUTER_HZ
     PARAMETER_KEYWORDS: ClassVar[dict[str, int]] = _PARAMETERS
@@ -183,37 +180,28 @@ class Mac800MotorArray(MotorArray):
         return u
 
     # ------------------------------------------------------------------ power-on
-    def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
-                    values: np.ndarray) -> None:
-        memory = self._rom if self._flash is None else self._flash
-        for j, i in enumerate(idx.tolist()):
-            t = self._type_of[i]
-            self.regs[i] = memory[i] if self._has_flash[i] else self._rom[t]
-            self.state[i] = 0.0
-            self.state[i, L.S_TEMP] = c.AMBIENT_CELSIUS
-            self.params[i] = self._type_params[t]
-            self.inputs[i] = self._type_inputs[t]
-            for q in range(cols.size):
-                (self.state if to_state[q] else self.params)[i, cols[q]] = values[q, j]
-            self._power_on(i)
+    def _initial_state(self, row: np.ndarray) -> None:
+        """The winding at the ambient temperature."""
+        row[L.S_TEMP] = c.AMBIENT_CELSIUS
 
-    def _power_on(self, i: int) -> None:
-        """Firmware start of motor ``i``: counters from the shaft, bus charged, START_MODE."""
-        s, p = self.state[i], self.params[i]
-        derive_constants(p)
-        s[L.S_UBUS] = self.inputs[i, L.I_SUPPLY_VOLTS]
-        s[L.S_ENC_PREV] = encoder_count(s[L.S_THETA])
-        s[L.S_ELDEG_PREV] = s[L.S_ENC_PREV]
-        s[L.S_INDEX_TURN] = turn(s[L.S_THETA], p[L.P_INDEX_POS])
-        s[L.S_INDEX_COUNT] = math.nan
-        s[L.S_HOME_AFTER] = -1.0
-        s[L.S_A2P_LEVEL] = -1.0
-        s[L.S_PARAMS_NEW] = 1.0
-        self._check_filter(np.array([i]))
-        self.regs[i, R.U_BUS] = round(s[L.S_UBUS] / c.U_BUS_VOLTS)
-        self.regs[i, R.U_24V] = round(self.inputs[i, L.I_CONTROL_VOLTS] / c.U_24V_VOLTS)
-        self.regs[i, R.DEGC] = round(s[L.S_TEMP] / c.DEGC_CELSIUS)
-        start_mode(self.regs[i], s)
+    def _power_on(self, idx: np.ndarray) -> None:
+        """Firmware start of motors ``idx``: counters from the shaft, bus charged, START_MODE."""
+        for i in idx.tolist():
+            s, p = self.state[i], self.params[i]
+            derive_constants(p)
+            s[L.S_UBUS] = self.inputs[i, L.I_SUPPLY_VOLTS]
+            s[L.S_ENC_PREV] = encoder_count(s[L.S_THETA])
+            s[L.S_ELDEG_PREV] = s[L.S_ENC_PREV]
+            s[L.S_INDEX_TURN] = turn(s[L.S_THETA], p[L.P_INDEX_POS])
+            s[L.S_INDEX_COUNT] = math.nan
+            s[L.S_HOME_AFTER] = -1.0
+            s[L.S_A2P_LEVEL] = -1.0
+            s[L.S_PARAMS_NEW] = 1.0
+            self._check_filter(np.array([i]))
+            self.regs[i, R.U_BUS] = round(s[L.S_UBUS] / c.U_BUS_VOLTS)
+            self.regs[i, R.U_24V] = round(self.inputs[i, L.I_CONTROL_VOLTS] / c.U_24V_VOLTS)
+            self.regs[i, R.DEGC] = round(s[L.S_TEMP] / c.DEGC_CELSIUS)
+            start_mode(self.regs[i], s)
 
     def _check_filter(self, idx: np.ndarray) -> None:
         """S_FILT_BAD of motors ``idx`` from their main filter (OLD_FILT_ERR's condition)."""
