@@ -20,9 +20,9 @@ from ...bank import StorePlan
 from ...inputs import InputRule
 from ...keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
 from ...physics.mechanics import coupling_problem
-from ...physics.servo_data import servo_parameters
 from ...registers import Format, Register, RegisterError
 from ...sim import ModeError, MotorArray
+from ..servo_data import servo_parameters
 from . import constants as c
 from . import layout as L
 from .config import SETUPS_DIR, MotorConfig, load_motor

@@ -17,9 +17,9 @@ from ...arguments import InputValue, MotorIndex
 from ...bank import StorePlan
 from ...inputs import InputRule
 from ...keywords import BINARY, FINITE, NONNEGATIVE
-from ...physics.servo_data import servo_parameters
 from ...registers import Register, RegisterRangeError
 from ...sim import ModeError, MotorArray
+from ..servo_data import servo_parameters
 from . import constants as c
 from . import layout as L
 from .config import Mac800Config, load_motor, setup_path

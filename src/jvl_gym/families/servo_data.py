@@ -1,9 +1,9 @@
-"""A PMSM servo's motor data in the parameter columns of a family's layout (plain Python).
+"""A PMSM servo's motor data in the parameter columns of a family's layout.
 
-The servo families' plants (the PMSM coil of :mod:`.coil`, the rotor and end stops of
-:mod:`.mechanics`, the DC bus of :mod:`.bus`) read the same motor data from parameter columns of
-the same names in each family's ``layout`` module; this module copies a motor config into them
-once per motor type. A family adds the columns that are its own (monitor filter gains, thermal
+The servo families' plants (the PMSM coil, the rotor and end stops, the DC bus of
+:mod:`jvl_gym.physics`) read the same motor data from parameter columns of the same names in
+each family's ``layout`` module; this module copies a motor config into them once per motor
+type. A family adds the columns that are its own (monitor filter gains, thermal
 model) to the row it returns.
 """
 
