@@ -12,7 +12,7 @@ import logging
 import os
 import warnings
 from abc import ABC, abstractmethod
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
@@ -343,6 +343,29 @@ class RegisterBank(ABC):
         if any(self._lookup(name).number == self._mode_number for name in registers):
             raise RegisterError("a setup must not contain MODE_REG (manual 3.2.2: a mode is "
                                 "requested after the parameters are written)")
+
+    def _setup_rom_image(self, setup: str | os.PathLike[str] | dict[str, Any],
+                         store: Callable[[np.ndarray, Register, Any, np.ndarray], None]
+                         ) -> np.ndarray:
+        """The table's defaults with the register set ``setup`` written over them: a ROM image
+        (number of registers,) int64.
+
+        Every register is validated as :meth:`load_setup` validates it (no MODE_REG, a value in
+        range) and handed to ``store(image, register, value, raw)`` (the value as given and its
+        stored integers), which applies the family's write rules and stores it. A refusal raises
+        the :class:`RegisterError` naming the setup.
+        """
+        image = self.table.default_raw_array.astype(np.int64).copy()
+        try:
+            cfg = load_setup(setup, self.SETUPS_DIR)
+            self._check_setup_keys(cfg.registers)
+            for name, value in cfg.registers.items():
+                reg = self._lookup(name)
+                store(image, reg, value, self._validated_raw(reg, value, 1))
+        except RegisterError as exc:
+            where = "setup mapping" if isinstance(setup, Mapping) else f"setup {setup}"
+            raise type(exc)(f"{where}: {exc}") from exc
+        return image
 
     def load_setup(self, setup: str | os.PathLike[str] | dict[str, Any],
                    index: MotorIndex = None) -> None:

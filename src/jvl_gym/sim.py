@@ -24,6 +24,7 @@ import os
 from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from pathlib import Path
+from types import ModuleType
 from typing import Any, ClassVar
 
 import numpy as np
@@ -92,7 +93,7 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
     FAMILY_KEY: ClassVar[str] = ""
     #: the family's register table
     TABLE: ClassVar[RegisterTable]
-    #: columns of ``state``, ``params`` and ``inputs``
+    #: columns of ``state``, ``params`` and ``inputs`` (the ``layout`` class keyword sets them)
     N_STATE: ClassVar[int] = 0
     N_PARAM: ClassVar[int] = 0
     N_INPUT: ClassVar[int] = 0
@@ -120,6 +121,13 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
     PHYSICAL: ClassVar[frozenset[str]] = frozenset()
     #: the registers naming what each channel of the sample buffer records
     SAMPLE_REGISTERS: ClassVar[tuple[str, ...]] = ("SAMPLE1", "SAMPLE2", "SAMPLE3", "SAMPLE4")
+
+    def __init_subclass__(cls, *, layout: ModuleType | None = None, **kwargs: Any) -> None:
+        """A family's subclass names its layout module (``class X(MotorArray, layout=L)``):
+        :attr:`N_STATE`, :attr:`N_PARAM` and :attr:`N_INPUT` are the layout's."""
+        super().__init_subclass__(**kwargs)
+        if layout is not None:
+            cls.N_STATE, cls.N_PARAM, cls.N_INPUT = layout.N_STATE, layout.N_PARAM, layout.N_INPUT
 
     def __new__(cls, motor: MotorSpec = "MAC140", *args: Any, **kwargs: Any) -> MotorArray:
         if cls is MotorArray:
@@ -257,12 +265,35 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         raise NotImplementedError(f"{self.family.title}: the decoding of a pulse source is not "
                                   "modelled; drive the input with set_input(pulse_counts=...)")
 
-    @abstractmethod
     def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
                     values: np.ndarray) -> None:
         """Power on motors ``idx`` from flash or ROM with the type pool's parameters and
         inputs, then the reset keywords' ``values`` (P, M) into columns ``cols`` (P,) of
-        ``params`` or, where ``to_state``, of ``state``."""
+        ``params`` or, where ``to_state``, of ``state``.
+
+        By default: the registers from flash (a motor with a saved image) or else its type's
+        ROM, the state zero but for :meth:`_initial_state`, the type's parameters and inputs,
+        the keywords' values, then the firmware's start (:meth:`_power_on`).
+        """
+        memory = self._rom if self._flash is None else self._flash
+        for j, i in enumerate(idx.tolist()):
+            t = self._type_of[i]
+            self.regs[i] = memory[i] if self._has_flash[i] else self._rom[t]
+            self.state[i] = 0.0
+            self._initial_state(self.state[i])
+            self.params[i] = self._type_params[t]
+            self.inputs[i] = self._type_inputs[t]
+            for q in range(cols.size):
+                (self.state if to_state[q] else self.params)[i, cols[q]] = values[q, j]
+        self._power_on(idx)
+
+    def _initial_state(self, row: np.ndarray) -> None:
+        """Set the state ``row`` (N_STATE,) of a motor at power-on where it is not 0 (the
+        reset keywords may still override it)."""
+
+    def _power_on(self, idx: np.ndarray) -> None:
+        """The firmware's start of motors ``idx`` after :meth:`_reset_rows` (default:
+        nothing)."""
 
     # ------------------------------------------------------------------ configuration
     def _add_type(self, cfg: Any) -> None:

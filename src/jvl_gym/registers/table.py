@@ -295,6 +295,12 @@ class RegisterTable:
         """Highest register number."""
         return self.registers[-1].number
 
+    def numbers_by_name(self) -> dict[str, int]:
+        """Register number by name, for every register: the compile-time constants of a
+        family's firmware (its ``firmware/regs.py`` defines one module constant per register,
+        so that each number stays stated once, in the table)."""
+        return {r.name: r.number for r in self.registers}
+
     def data_write_limits(self, *excluded: int) -> tuple[np.ndarray, np.ndarray]:
         """Raw ``(low, high)`` of every read-write register by number, both 0 for the others
         and for the ``excluded`` numbers (a mode request, a command): what a compiled task may

@@ -20,10 +20,7 @@ FAMILY = Family.of_package(
         status_register="ERR_STAT",
         # ERR_STAT bits (manual 3.2.35); the FastMAC status byte's error bit is any of the
         # first four, and "reset errors" clears the latched errors (manual 5.2.1.4, 5.2.1.6)
-        status_bits=TwinSpec.named_bits(_C, (
-            "I2T_ERR", "FLW_ERR", "FNC_ERR", "UIT_ERR", "IN_POS", "ACC_FLAG", "DEC_FLAG",
-            "PLIM_ERR", "FRAME_ERR_TX", "RELPOSPSOLL", "RELPOSPFNC", "IX_ERR", "UV_ERR",
-            "UV_DETECT", "DIS_P_LIM")),
+        status_bits=TwinSpec.named_bits(_C, tuple(_C.ERR_STAT_BITS)),
         error_bits=("I2T_ERR", "FLW_ERR", "FNC_ERR", "UIT_ERR"),
         clearable_bits=("I2T_ERR", "FLW_ERR", "FNC_ERR", "UIT_ERR", "PLIM_ERR", "FRAME_ERR_TX",
                         "IX_ERR", "UV_ERR"),

@@ -10,35 +10,19 @@ validated on load (:mod:`jvl_gym.config`); a malformed file raises
 
 from __future__ import annotations
 
-import os
 import re
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import ClassVar
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
+from pydantic import Field
 
-from ...config import (
-    ConfigError,
-    Real,
-    SetupConfig,
-    Text,
-    Whole,
-    read_config_file,
-    resolve_config,
-    validate_config,
-)
-from ...config import load_setup as _load_setup
+from ...config import MotorConfigs, MotorData, Real, Text, Whole, bounded_by
 
 __all__ = ["MotorConfig", "MOTORS_DIR", "SETUPS_DIR", "canonical_motor_name", "load_motor",
            "load_setup", "motor_types", "setup_path"]
 
-#: the motor configs of the family's types
-MOTORS_DIR = Path(__file__).resolve().with_name("configs") / "motors"
-#: the default setups (register sets) of the family's types
-SETUPS_DIR = Path(__file__).resolve().with_name("configs") / "setups"
 
-
-class MotorConfig(BaseModel):
+class MotorConfig(MotorData):
     """Physical data of one motor type (SI units), representative values (docs/model.md §15).
 
     Every physical value must be a finite number of its type (a bool, a string or an infinity
@@ -51,7 +35,6 @@ class MotorConfig(BaseModel):
     so the rotor inertia is at least 5e-6 kg·m².
     """
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
     FAMILY_KEY: ClassVar[str] = "mac050_141"
 
     name: Text
@@ -74,24 +57,10 @@ class MotorConfig(BaseModel):
     dump_voltage: Real = Field(52.0, le=100.0, description="V, above supply_voltage")
     dump_resistance: Real = Field(3.0, ge=0.1, le=1e4, description="Ω")
     setup: Text
-    provenance: Text = Field(min_length=10)
 
-    @field_validator("peak_torque")
-    @classmethod
-    def _peak_at_least_rated(cls, value: float, info: ValidationInfo) -> float:
-        rated = info.data.get("rated_torque")
-        if rated is not None and value < rated:
-            raise ValueError(f"must be >= rated_torque ({rated}), got {value}")
-        return value
-
-    @field_validator("dump_voltage")
-    @classmethod
-    def _dump_above_supply(cls, value: float, info: ValidationInfo) -> float:
-        supply = info.data.get("supply_voltage")
-        if supply is not None and value <= supply:
-            raise ValueError(f"must be above supply_voltage ({supply} V), got {value} V: the "
-                             "power dump would burn the supply's power")
-        return value
+    _peak_at_least_rated = bounded_by("peak_torque", "rated_torque")
+    _dump_above_supply = bounded_by("dump_voltage", "supply_voltage", strict=True, unit="V",
+                                    why="the power dump would burn the supply's power")
 
     @property
     def torque_per_vf(self) -> float:
@@ -106,39 +75,15 @@ def canonical_motor_name(name: str) -> str:
     return f"MAC{int(match.group(1)):03d}" if match else name
 
 
-def load_motor(name_or_path: str | os.PathLike[str] | MotorConfig) -> MotorConfig:
-    """Load and validate a motor config by type name (``"MAC140"``, also ``"MAC50"`` for
-    ``"MAC050"``: :func:`canonical_motor_name`) or path.
-
-    Raises
-    ------
-    ConfigError
-        Unknown type (the message lists the known ones), missing or unreadable file, or a
-        field that fails validation (named with the file).
-    """
-    if isinstance(name_or_path, MotorConfig):
-        return name_or_path
-    if not isinstance(name_or_path, (str, os.PathLike)):
-        raise ConfigError(f"a motor is a type name, a config path or a MotorConfig, got "
-                          f"{name_or_path!r}")
-    name = name_or_path
-    if isinstance(name, str) and not name.endswith((".yaml", ".yml")):
-        name = canonical_motor_name(name)
-    path = resolve_config(MOTORS_DIR, name, "motor type")
-    return validate_config(MotorConfig, read_config_file(path), str(path))
-
-
-def load_setup(name_or_path: str | os.PathLike[str] | dict[str, Any]) -> SetupConfig:
-    """A register set by name (a default setup of :data:`SETUPS_DIR`), path or mapping
-    (:func:`jvl_gym.config.load_setup`)."""
-    return _load_setup(name_or_path, SETUPS_DIR)
-
-
-def motor_types() -> list[str]:
-    """Names of the motor types that have a config in :data:`MOTORS_DIR`."""
-    return sorted(p.stem for p in MOTORS_DIR.glob("*.yaml"))
-
-
-def setup_path(name: str) -> Path:
-    """The file of the default setup ``name`` (a motor config's ``setup``)."""
-    return SETUPS_DIR / f"{name}.yaml"
+_CONFIGS = MotorConfigs(MotorConfig, Path(__file__).resolve().with_name("configs"), "motor type",
+                        canonical=canonical_motor_name)
+#: the motor configs of the family's types
+MOTORS_DIR = _CONFIGS.motors_dir
+#: the default setups (register sets) of the family's types
+SETUPS_DIR = _CONFIGS.setups_dir
+#: a motor config by type name (``"MAC140"``, also ``"MAC50"`` for ``"MAC050"``) or path
+load_motor = _CONFIGS.load_motor
+#: a register set by name (a default setup of :data:`SETUPS_DIR`), path or mapping
+load_setup = _CONFIGS.load_setup
+motor_types = _CONFIGS.motor_types  #: names of the types with a config in :data:`MOTORS_DIR`
+setup_path = _CONFIGS.setup_path  #: the file of a default setup named in a motor config

@@ -6,6 +6,7 @@ Sources: manual 1.2 (sampled systems), 3.2.2 (MODE_REG), 3.2.35 (ERR_STAT), 3.2.
 
 from __future__ import annotations
 
+from ...registers.bits import bit_masks, mask_of
 from .firmware.mode_table import MODE_NAMES as _MODE_NAMES
 from .firmware.mode_table import number as _mode
 from .units import (  # noqa: F401  (re-exported: the constants module names them too)
@@ -68,42 +69,25 @@ SAFE_LOAD_FLASH = 258  #: in SAFE_MODE: last saved user parameters
 MODE_NAMES = _MODE_NAMES  #: MODE_REG value → mode name (mac050_141.firmware.mode_table)
 
 # --- ERR_STAT bits (3.2.35) ------------------------------------------------------------------
-I2T_ERR = 1 << 0
-FLW_ERR = 1 << 1
-FNC_ERR = 1 << 2
-UIT_ERR = 1 << 3
-IN_POS = 1 << 4
-ACC_FLAG = 1 << 5
-DEC_FLAG = 1 << 6
-PLIM_ERR = 1 << 7
-FRAME_ERR_TX = 1 << 8
-RELPOSPSOLL = 1 << 9
-RELPOSPFNC = 1 << 10
-IX_ERR = 1 << 11
-UV_ERR = 1 << 12
-UV_DETECT = 1 << 13
-DIS_P_LIM = 1 << 14
-BLOCKING_ERRORS = I2T_ERR | FLW_ERR | FNC_ERR | UIT_ERR  #: must be cleared in INIT (4.4.1)
+#: ERR_STAT bits by name, bit 0 first; each name is a constant of this module too
+ERR_STAT_BITS = bit_masks("I2T_ERR FLW_ERR FNC_ERR UIT_ERR IN_POS ACC_FLAG DEC_FLAG PLIM_ERR "
+                          "FRAME_ERR_TX RELPOSPSOLL RELPOSPFNC IX_ERR UV_ERR UV_DETECT DIS_P_LIM")
+globals().update(ERR_STAT_BITS)
+#: must be cleared in INIT (4.4.1)
+BLOCKING_ERRORS = mask_of(ERR_STAT_BITS, "I2T_ERR FLW_ERR FNC_ERR UIT_ERR")
 
 # --- CNTRL_BITS (3.2.36) ---------------------------------------------------------------------
-USERINTF_MASK = 0b11
-PULSEDIR = 1 << 2
-INPSIGN = 1 << 3
-HICLK = 1 << 4
-HALL_INT = 1 << 5
-RECORDBIT = 1 << 6
-REWINDBIT = 1 << 7
-RECINNERBIT = 1 << 8
-AUTO_RESYNC = 1 << 9
-MAN_RESYNC = 1 << 10
-INDEX_HOME = 1 << 11
-REL_RESYNC = 1 << 12
+USERINTF_MASK = 0b11  #: bits 0–1: the user interface
+#: CNTRL_BITS bits by name, bit 0 first; each name is a constant of this module too
+CNTRL_BITS_BITS = bit_masks("- - PULSEDIR INPSIGN HICLK HALL_INT RECORDBIT REWINDBIT RECINNERBIT "
+                            "AUTO_RESYNC MAN_RESYNC INDEX_HOME REL_RESYNC")
+globals().update(CNTRL_BITS_BITS)
 HALL_STATUS_SHIFT = 13
 
 # --- UV_HANDLE (3.2.160) ---------------------------------------------------------------------
-SET_UV_ERR = 1 << 0
-UV_GO_PASSIVE = 1 << 1
-UV_SOLL0 = 1 << 3
+#: UV_HANDLE bits by name, bit 0 first; each name is a constant of this module too
+UV_HANDLE_BITS = bit_masks("SET_UV_ERR UV_GO_PASSIVE - UV_SOLL0")
+globals().update(UV_HANDLE_BITS)
 MACTALK_DIALECT = "mactalk16"  #: MacTalk of manual 5.1, 16-bit registers (protocol.dialect)
 
 #: the manual's register groups, (title, first, last register number) (manual 3.2: "The

@@ -9,9 +9,8 @@ Description"), motor parameters from the motor configs (docs/model.md §15), pow
 
 from __future__ import annotations
 
-import math
 import os
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
@@ -23,9 +22,10 @@ from ...keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
 from ...physics.mechanics import coupling_problem
 from ...registers import Format, Register, RegisterError
 from ...sim import ModeError, MotorArray
+from ..servo_data import servo_parameters
 from . import constants as c
 from . import layout as L
-from .config import SETUPS_DIR, MotorConfig, load_motor, load_setup
+from .config import SETUPS_DIR, MotorConfig, load_motor
 from .firmware import modes as M
 from .firmware import regs as R
 from .firmware import write_rules as W
@@ -75,7 +75,7 @@ _STATES: dict[str, int] = {
 _RECORDING_MODES = frozenset({c.TESTU_MODE, c.TESTA_MODE, c.TESTKI_MODE, c.TESTTQ_MODE})
 
 
-class MacMotorArray(MotorArray):
+class MacMotorArray(MotorArray, layout=L):
     """N simulated MAC50–141 motors (:class:`~jvl_gym.MotorArray` of the MAC050–141 family).
 
     Parameters
@@ -92,9 +92,6 @@ class MacMotorArray(MotorArray):
     FAMILY_KEY = "mac050_141"
     TABLE = TABLE
     CONFORMANCE = CONFORMANCE
-    N_STATE = L.N_STATE
-    N_PARAM = L.N_PARAM
-    N_INPUT = L.N_INPUT
     BUFFER_SHAPE = (c.REC_CNT_MAX, 4)
     OUTER_HZ = c.OUTER_HZ
     SETUPS_DIR = SETUPS_DIR
@@ -196,32 +193,27 @@ class MacMotorArray(MotorArray):
         register, values in range, the firmware's write rules in the order given); a refusal
         raises the :class:`RegisterError` naming the setup.
         """
-        image = self.table.default_raw_array.astype(np.int64).copy()
-        source = setup if setup is not None else cfg.setup
-        setup_cfg = load_setup(source)
-        row = image[None]  # a one-motor register bank over ``image``
-        first = np.zeros(1, dtype=np.int64)
-        try:
-            self._check_setup_keys(setup_cfg.registers)
-            for name, value in setup_cfg.registers.items():
-                reg = self._lookup(name)
-                raw = self._validated_raw(reg, value, 1)
-                problem = W.check_write(row, first, reg.number, raw)
-                if problem is not None:
-                    raise RegisterError(f"{reg.name} (register {reg.number}) = {value!r} "
-                                        f"refused: {problem}")
-                if reg.number in W.POINTERS:
-                    W.apply_pointer(row, first, reg.number, raw)
-                elif reg.format == Format.LONGINT_HIGH:
-                    full = (int(raw[0]) << 16) | (int(image[reg.number - 1]) & 0xFFFF)
-                    image[reg.number - 1] = ((full + 2**31) % 2**32) - 2**31
-                else:
-                    image[reg.number] = raw[0]
-        except RegisterError as exc:
-            where = "setup mapping" if isinstance(source, Mapping) else f"setup {source}"
-            raise type(exc)(f"{where}: {exc}") from exc
+        image = self._setup_rom_image(setup if setup is not None else cfg.setup, self._rom_store)
         image[R.MOTOR_TYPE] = cfg.motor_type_code
         return image
+
+    @staticmethod
+    def _rom_store(image: np.ndarray, reg: Register, value: Any, raw: np.ndarray) -> None:
+        """Store a setup's validated ``raw`` in the ROM ``image`` under the firmware's write
+        rules (register-set pointers, a LongInt's high word)."""
+        row = image[None]  # a one-motor register bank over ``image``
+        first = np.zeros(1, dtype=np.int64)
+        problem = W.check_write(row, first, reg.number, raw)
+        if problem is not None:
+            raise RegisterError(f"{reg.name} (register {reg.number}) = {value!r} refused: "
+                                f"{problem}")
+        if reg.number in W.POINTERS:
+            W.apply_pointer(row, first, reg.number, raw)
+        elif reg.format == Format.LONGINT_HIGH:
+            full = (int(raw[0]) << 16) | (int(image[reg.number - 1]) & 0xFFFF)
+            image[reg.number - 1] = ((full + 2**31) % 2**32) - 2**31
+        else:
+            image[reg.number] = raw[0]
 
     def _rest_inputs(self, cfg: MotorConfig) -> np.ndarray:
         """World inputs at rest: supply on, home sensor from the position, nothing else."""
@@ -231,25 +223,9 @@ class MacMotorArray(MotorArray):
         return inputs
 
     def _config_params(self, cfg: MotorConfig) -> np.ndarray:
-        p = np.zeros(L.N_PARAM)
-        p[L.P_J_MOTOR] = cfg.rotor_inertia
-        p[L.P_R] = cfg.phase_resistance
-        p[L.P_L] = cfg.phase_inductance
-        p[L.P_LAMBDA] = cfg.flux_linkage
-        p[L.P_AMPS_PER_COUNT] = cfg.amps_per_count
-        p[L.P_POLE_PAIRS] = cfg.pole_pairs
-        p[L.P_PWM_DELAY] = cfg.pwm_delay_samples
+        p = servo_parameters(L, cfg, stop_stiffness=50.0, stop_damping=0.05)
         p[L.P_K_THERMAL] = filter_gain(cfg.thermal_time_constant)
         p[L.P_K_REGEN] = filter_gain(cfg.regen_time_constant)
-        p[L.P_C_BUS] = cfg.bus_capacitance
-        p[L.P_R_SUPPLY] = cfg.supply_resistance
-        p[L.P_U_DUMP] = cfg.dump_voltage
-        p[L.P_R_DUMP] = cfg.dump_resistance
-        p[L.P_STOP_LO] = 1.0
-        p[L.P_STOP_HI] = -1.0
-        p[L.P_STOP_K] = 50.0
-        p[L.P_STOP_D] = 0.05
-        p[L.P_HOME_POS] = math.inf
         return p
 
     def set_record_length(self, n_samples: int, index: MotorIndex = None) -> None:

@@ -14,6 +14,7 @@ from __future__ import annotations
 import numpy as _np
 from numba import njit
 
+from ...engine.task_access import task_accessors
 from ...engine.view import EngineView
 from . import constants as _c
 from . import layout as _L
@@ -26,12 +27,6 @@ __all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BI
            "set_load_torque", "set_pulse_counts", "POSITION_MODE", "VELOCITY_MODE",
            "ANALOG_TORQUE_MODE", "ANALOG_GEAR_MODE", "rpm_to_v_soll", "SPEED_PI", "GEARF",
            "AG_CENTRE_VOLTS", "AG_SPAN_VOLTS", "AG_CENTRE_FACTOR", "KVOUT_FROM_LOAD"]
-
-
-@njit(cache=True, inline="always")
-def reg(view: EngineView, i: int, number: int) -> int:  # pragma: no cover - compiled
-    """Stored integer of register ``number`` of motor ``i`` (a LongInt's 32-bit value)."""
-    return view.regs[i, number]
 
 
 #: the family's key, and the motor type of a task when none is given
@@ -65,21 +60,12 @@ KVOUT_FROM_LOAD = False
 AG_CENTRE_FACTOR = float(_analog_gear_factor.py_func(_np.zeros(_TABLE.last + 1, dtype=_np.int64)))
 
 
-_RAW_MIN, _RAW_MAX = _TABLE.data_write_limits(R.MODE_REG)
-
-
-@njit(cache=True, inline="always")
-def set_reg(view: EngineView, i: int, number: int, raw: int) -> None:  # pragma: no cover
-    """Store ``raw`` in the read-write data register ``number`` of motor ``i``, saturated to
-    the register's range (register table); the firmware uses it from the next outer sample.
-    Mode requests and registers with write rules go through ``MotorArray.write``."""
-    view.regs[i, number] = min(max(raw, _RAW_MIN[number]), _RAW_MAX[number])
-
-
-@njit(cache=True, inline="always")
-def shaft_angle(view: EngineView, i: int) -> float:  # pragma: no cover - compiled
-    """Shaft angle of motor ``i`` relative to the world zero [rad]."""
-    return view.state[i, _L.S_THETA]
+#: register values, saturated stores, the shaft angle and the world inputs (``set_analog_volts``:
+#: ANINP, manual 3.2.122; ``set_pulse_counts``: V_EXT, manual 3.2.120)
+reg, set_reg, shaft_angle, set_analog_volts, set_load_torque, set_pulse_counts = task_accessors(
+    FAMILY_KEY, __file__, _TABLE, R.MODE_REG, _L, ("reg", "set_reg", "shaft_angle",
+                                                  "set_analog_volts", "set_load_torque",
+                                                  "set_pulse_counts"))
 
 
 @njit(cache=True, inline="always")
@@ -87,21 +73,3 @@ def coil_direction(view: EngineView, i: int) -> float:  # pragma: no cover - com
     """Direction of the COIL block's traverse of motor ``i`` (+1, −1; 0 before COIL_MODE ran,
     manual 4.4.18)."""
     return view.state[i, _L.S_AUX1]
-
-
-@njit(cache=True, inline="always")
-def set_analog_volts(view: EngineView, i: int, volts: float) -> None:  # pragma: no cover
-    """Analogue input of motor ``i`` [V] from the next outer sample on (manual 3.2.122)."""
-    view.inputs[i, _L.I_ANALOG_VOLTS] = volts
-
-
-@njit(cache=True, inline="always")
-def set_load_torque(view: EngineView, i: int, torque: float) -> None:  # pragma: no cover
-    """External load torque on the shaft of motor ``i``, opposing positive rotation [N·m]."""
-    view.inputs[i, _L.I_LOAD_TORQUE] = torque
-
-
-@njit(cache=True, inline="always")
-def set_pulse_counts(view: EngineView, i: int, counts: float) -> None:  # pragma: no cover
-    """Pulse input counts of motor ``i`` during the next outer sample (V_EXT, manual 3.2.120)."""
-    view.inputs[i, _L.I_PULSE_COUNTS] = counts

@@ -28,10 +28,7 @@ FAMILY = Family.of_package(
     twin=TwinSpec(
         dialects=(_C.MACTALK_DIALECT,), passive_mode=_C.PASSIVE_MODE, status_register="ERR_STAT",
         # ERR_STAT bits (register overview §1.2, register 35)
-        status_bits=TwinSpec.named_bits(_C, (
-            "I2T_ERR", "FLW_ERR", "FNC_ERR", "UIT_ERR", "IN_POS", "ACC_FLAG", "DEC_FLAG",
-            "PLIM_ERR", "DEGC_ERR", "UV_ERR", "UV_DETECT", "OV_ERR", "IPEAK_ERR", "SPEED_ERR",
-            "DIS_P_LIM", "INDEX_ERR", "OLD_FILT_ERR", "U24V_ERR")),
+        status_bits=TwinSpec.named_bits(_C, tuple(_C.ERR_STAT_BITS)),
         error_bits=tuple(_C.ERROR_NAMES.values()),
         clearable_bits=tuple(_C.ERROR_NAMES.values())),
     capabilities=frozenset({Capability.TORQUE, Capability.ENERGY, Capability.SAMPLE_BUFFER,

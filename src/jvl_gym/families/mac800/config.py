@@ -13,37 +13,23 @@ naming the file and the field.
 
 from __future__ import annotations
 
-import os
 from pathlib import Path
 from typing import ClassVar
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator
+from pydantic import Field
 
-from ...config import (
-    ConfigError,
-    Real,
-    Text,
-    Whole,
-    read_config_file,
-    resolve_config,
-    validate_config,
-)
+from ...config import MotorConfigs, MotorData, Real, Text, Whole, bounded_by
 
 __all__ = ["Mac800Config", "CONFIGS", "MOTORS_DIR", "SETUPS_DIR", "canonical_motor_name",
            "load_motor", "motor_types", "setup_path"]
 
 #: the family's configs: ``motors/`` and ``setups/``
 CONFIGS = Path(__file__).resolve().parent / "configs"
-#: the motor configs of the family's types
-MOTORS_DIR = CONFIGS / "motors"
-#: the default setups (register sets) of the family's types
-SETUPS_DIR = CONFIGS / "setups"
 
 
-class Mac800Config(BaseModel):
+class Mac800Config(MotorData):
     """Physical data of one MAC800 motor type (SI units)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
     FAMILY_KEY: ClassVar[str] = "mac800"
 
     family: Text = Field(pattern="^mac800$")
@@ -70,24 +56,10 @@ class Mac800Config(BaseModel):
     dump_voltage: Real = Field(le=445.0, description="V, above supply_voltage, below 450 V")
     dump_resistance: Real = Field(ge=10.0, le=1e5, description="Ω")
     setup: Text
-    provenance: Text = Field(min_length=10)
 
-    @field_validator("peak_torque")
-    @classmethod
-    def _peak_at_least_rated(cls, value: float, info: ValidationInfo) -> float:
-        rated = info.data.get("rated_torque")
-        if rated is not None and value < rated:
-            raise ValueError(f"must be >= rated_torque ({rated}), got {value}")
-        return value
-
-    @field_validator("dump_voltage")
-    @classmethod
-    def _dump_above_supply(cls, value: float, info: ValidationInfo) -> float:
-        supply = info.data.get("supply_voltage")
-        if supply is not None and value <= supply:
-            raise ValueError(f"must be above supply_voltage ({supply} V), got {value} V: the "
-                             "power dump would burn the supply's power")
-        return value
+    _peak_at_least_rated = bounded_by("peak_torque", "rated_torque")
+    _dump_above_supply = bounded_by("dump_voltage", "supply_voltage", strict=True, unit="V",
+                                    why="the power dump would burn the supply's power")
 
     @property
     def rated_current(self) -> float:
@@ -95,35 +67,14 @@ class Mac800Config(BaseModel):
         return self.rated_torque / (1.5 * self.pole_pairs * self.flux_linkage)
 
 
-def motor_types() -> list[str]:
-    """Names of the MAC800 motor types (one config each)."""
-    return sorted(p.stem for p in MOTORS_DIR.glob("*.yaml"))
-
-
-def load_motor(motor: str | os.PathLike[str] | Mac800Config) -> Mac800Config:
-    """The validated config of a motor type name (``"MAC800"``), a ``.yaml`` path or a config.
-
-    Raises
-    ------
-    ConfigError
-        Unknown type (the message lists the known ones), unreadable file, or a field that
-        fails validation (named with the file).
-    """
-    if isinstance(motor, Mac800Config):
-        return motor
-    if not isinstance(motor, (str, os.PathLike)):
-        raise ConfigError(f"a motor is a type name, a config path or a Mac800Config, got "
-                          f"{motor!r}")
-    path = resolve_config(MOTORS_DIR, motor, "MAC800 motor type")
-    return validate_config(Mac800Config, read_config_file(path), str(path))
-
-
-def setup_path(name: str) -> Path:
-    """The file of a default setup named in a motor config."""
-    return SETUPS_DIR / f"{name}.yaml"
-
-
-def canonical_motor_name(name: str) -> str:
-    """The motor-type name a user's spelling stands for: the name as written (the MAC800
-    types have one spelling each)."""
-    return name
+_CONFIGS = MotorConfigs(Mac800Config, CONFIGS, "MAC800 motor type")
+#: the motor configs of the family's types
+MOTORS_DIR = _CONFIGS.motors_dir
+#: the default setups (register sets) of the family's types
+SETUPS_DIR = _CONFIGS.setups_dir
+#: the config of a motor type name (``"MAC800"``; one spelling each), a ``.yaml`` path or a
+#: config
+load_motor = _CONFIGS.load_motor
+motor_types = _CONFIGS.motor_types  #: names of the MAC800 motor types (one config each)
+canonical_motor_name = _CONFIGS.canonical_motor_name  #: the name as written
+setup_path = _CONFIGS.setup_path  #: the file of a default setup named in a motor config

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 
+from ...registers.bits import bit_masks, mask_of
 from .units import (
     ANINP_VOLTS_PER_UNIT,
     COUNTS_PER_REV,
@@ -90,62 +91,30 @@ MODE_NAMES: dict[int, str] = {
 RUNNABLE_MODES = frozenset({0, 1, 2, 3, 4, 5, 6, 12, 13, 14, 16, 17, 18, 21})
 
 # --- ERR_STAT bits (register 35) ------------------------------------------------------------
-I2T_ERR = 1 << 0
-FLW_ERR = 1 << 1
-FNC_ERR = 1 << 2
-UIT_ERR = 1 << 3
-IN_POS = 1 << 4
-ACC_FLAG = 1 << 5
-DEC_FLAG = 1 << 6
-PLIM_ERR = 1 << 7
-DEGC_ERR = 1 << 8
-UV_ERR = 1 << 9
-UV_DETECT = 1 << 10
-OV_ERR = 1 << 11
-IPEAK_ERR = 1 << 12
-SPEED_ERR = 1 << 13
-DIS_P_LIM = 1 << 14
-INDEX_ERR = 1 << 15
-OLD_FILT_ERR = 1 << 16
-U24V_ERR = 1 << 17
+#: ERR_STAT bits by name, bit 0 first; each name is a constant of this module too
+ERR_STAT_BITS = bit_masks("I2T_ERR FLW_ERR FNC_ERR UIT_ERR IN_POS ACC_FLAG DEC_FLAG PLIM_ERR "
+                          "DEGC_ERR UV_ERR UV_DETECT OV_ERR IPEAK_ERR SPEED_ERR DIS_P_LIM "
+                          "INDEX_ERR OLD_FILT_ERR U24V_ERR")
+globals().update(ERR_STAT_BITS)
 #: errors after which the motor stops with ACC_EMERG, then goes passive (decision)
-STOPPING_ERRORS = I2T_ERR | FLW_ERR | FNC_ERR | UIT_ERR | PLIM_ERR | DEGC_ERR | SPEED_ERR
+STOPPING_ERRORS = mask_of(ERR_STAT_BITS, "I2T_ERR FLW_ERR FNC_ERR UIT_ERR PLIM_ERR DEGC_ERR "
+                                         "SPEED_ERR")
 #: errors after which the motor goes passive at once: the power stage or the feedback cannot
 #: be trusted, or braking would feed the fault (decision)
-PASSIVE_ERRORS = OV_ERR | IPEAK_ERR | INDEX_ERR | OLD_FILT_ERR | U24V_ERR
+PASSIVE_ERRORS = mask_of(ERR_STAT_BITS, "OV_ERR IPEAK_ERR INDEX_ERR OLD_FILT_ERR U24V_ERR")
 #: errors that keep the motor passive until cleared in ERR_STAT (decision)
-BLOCKING_ERRORS = STOPPING_ERRORS | PASSIVE_ERRORS | UV_ERR
-ERROR_NAMES: dict[int, str] = {
-    I2T_ERR: "I2T_ERR", FLW_ERR: "FLW_ERR", FNC_ERR: "FNC_ERR", UIT_ERR: "UIT_ERR",
-    PLIM_ERR: "PLIM_ERR", DEGC_ERR: "DEGC_ERR", UV_ERR: "UV_ERR", OV_ERR: "OV_ERR",
-    IPEAK_ERR: "IPEAK_ERR", SPEED_ERR: "SPEED_ERR", INDEX_ERR: "INDEX_ERR",
-    OLD_FILT_ERR: "OLD_FILT_ERR", U24V_ERR: "U24V_ERR"}
+BLOCKING_ERRORS = STOPPING_ERRORS | PASSIVE_ERRORS | ERR_STAT_BITS["UV_ERR"]
+#: the error bits (the blocking ones) by mask, in bit order
+ERROR_NAMES: dict[int, str] = {mask: name for name, mask in ERR_STAT_BITS.items()
+                               if mask & BLOCKING_ERRORS}
 
-# --- CNTRL_BITS (register 36) ---------------------------------------------------------------
-RECORDBIT = 1 << 0
-REWINDBIT = 1 << 1
-RECINNERBIT = 1 << 2
-RELPOSPSOLL = 1 << 3
-RELPOSPFNC = 1 << 4
-SYNCPOSAUTO = 1 << 5
-SYNCPOSMAN = 1 << 6
-MAN_NO_BRAKE = 1 << 7
-SYNCPOSREL = 1 << 8
-INDEX_HOME = 1 << 9
-
-# --- UV_HANDLE (register 23) ----------------------------------------------------------------
-SET_UV_ERR = 1 << 0
-UV_GO_PASSIVE = 1 << 1
-UV_VSOLL0 = 1 << 2
-
-# --- HW_SETUP (register 39) -----------------------------------------------------------------
-DIRAWR = 1 << 0
-DIRBWR = 1 << 1
-PULSEOUT = 1 << 2
-XSEL1 = 1 << 3
-XPRINP = 1 << 4
-NOFILT = 1 << 5
-INVXDIR = 1 << 6
+# --- CNTRL_BITS (register 36), UV_HANDLE (register 23), HW_SETUP (register 39) -------------
+#: each register's bits by name, bit 0 first; each name is a constant of this module too
+CNTRL_BITS_BITS = bit_masks("RECORDBIT REWINDBIT RECINNERBIT RELPOSPSOLL RELPOSPFNC SYNCPOSAUTO "
+                            "SYNCPOSMAN MAN_NO_BRAKE SYNCPOSREL INDEX_HOME")
+UV_HANDLE_BITS = bit_masks("SET_UV_ERR UV_GO_PASSIVE UV_VSOLL0")
+HW_SETUP_BITS = bit_masks("DIRAWR DIRBWR PULSEOUT XSEL1 XPRINP NOFILT INVXDIR")
+globals().update(CNTRL_BITS_BITS, **UV_HANDLE_BITS, **HW_SETUP_BITS)
 
 # --- HOME_MODE (register 42) ----------------------------------------------------------------
 HOME_DONE = 1 << 16

@@ -9,18 +9,17 @@ the world inputs and the physical truth of the plant (MAC800 register overview Â
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
 
 from ...arguments import InputValue, MotorIndex
 from ...bank import StorePlan
-from ...config import load_setup
 from ...inputs import InputRule
 from ...keywords import BINARY, FINITE, NONNEGATIVE
-from ...registers import Register, RegisterError, RegisterRangeError
+from ...registers import Register, RegisterRangeError
 from ...sim import ModeError, MotorArray
+from ..servo_data import servo_parameters
 from . import constants as c
 from . import layout as L
 from .config import Mac800Config, load_motor, setup_path
@@ -83,7 +82,7 @@ def _aliases() -> dict[str, Register]:
 _ALIASES = _aliases()
 
 
-class Mac800MotorArray(MotorArray):
+class Mac800MotorArray(MotorArray, layout=L):
     """N simulated MAC800-family motors (:class:`~jvl_gym.MotorArray` of the ``mac800``
     family).
 
@@ -105,9 +104,6 @@ class Mac800MotorArray(MotorArray):
     FAMILY_KEY = "mac800"
     TABLE = TABLE
     CONFORMANCE = CONFORMANCE
-    N_STATE = L.N_STATE
-    N_PARAM = L.N_PARAM
-    N_INPUT = L.N_INPUT
     BUFFER_SHAPE = (c.REC_CNT_MAX, 4)
     OUTER_HZ = c.OUTER_HZ
     PARAMETER_KEYWORDS: ClassVar[dict[str, int]] = _PARAMETERS
@@ -147,52 +143,32 @@ class Mac800MotorArray(MotorArray):
     # ------------------------------------------------------------------ configuration
     def _rom_image(self, cfg: Mac800Config, setup: Any) -> np.ndarray:
         """Table defaults with the type's setup (validated as :meth:`load_setup` does)."""
-        image = self.table.default_raw_array.astype(np.int64).copy()
-        source = setup if setup is not None else setup_path(cfg.setup)
-        try:
-            setup_cfg = load_setup(source)
-            self._check_setup_keys(setup_cfg.registers)
-            for name, value in setup_cfg.registers.items():
-                reg = self._lookup(name)
-                raw = self._validated_raw(reg, value, 1)
-                if reg.number == R.START_MODE:
-                    self._check_start_modes(raw)
-                if reg.number in _SELECTORS:
-                    start, step, target = _SELECTORS[reg.number]
-                    k = int(raw[0])
-                    if k > 0:
-                        image[self._lookup(target).number] = image[start + step * (k - 1)]
-                image[reg.number] = raw[0]
-        except RegisterError as exc:
-            where = "setup mapping" if isinstance(source, Mapping) else f"setup {source}"
-            raise type(exc)(f"{where}: {exc}") from exc
+        image = self._setup_rom_image(setup if setup is not None else setup_path(cfg.setup),
+                                      self._rom_store)
         image[R.MOTOR_TYPE] = cfg.motor_type_code
         return image
 
+    def _rom_store(self, image: np.ndarray, reg: Register, value: Any, raw: np.ndarray
+                   ) -> None:
+        """Store a setup's validated ``raw`` in the ROM ``image``: START_MODE checked, a
+        register-set selector copies the selected set's value to the register it sets."""
+        if reg.number == R.START_MODE:
+            self._check_start_modes(raw)
+        if reg.number in _SELECTORS:
+            start, step, target = _SELECTORS[reg.number]
+            k = int(raw[0])
+            if k > 0:
+                image[self._lookup(target).number] = image[start + step * (k - 1)]
+        image[reg.number] = raw[0]
+
     def _config_params(self, cfg: Mac800Config) -> np.ndarray:
-        p = np.zeros(L.N_PARAM)
-        p[L.P_J_MOTOR] = cfg.rotor_inertia
-        p[L.P_R] = cfg.phase_resistance
-        p[L.P_L] = cfg.phase_inductance
-        p[L.P_LAMBDA] = cfg.flux_linkage
-        p[L.P_AMPS_PER_COUNT] = cfg.amps_per_count
-        p[L.P_POLE_PAIRS] = cfg.pole_pairs
-        p[L.P_PWM_DELAY] = cfg.pwm_delay_samples
+        p = servo_parameters(L, cfg, stop_stiffness=500.0, stop_damping=0.5)
         p[L.P_I2T_SCALE] = c.PERCENT_100 / cfg.rated_current**2
         p[L.P_K_I2T] = filter_gain(cfg.thermal_time_constant)
         p[L.P_UIT_SCALE] = c.PERCENT_100 / cfg.regen_power
         p[L.P_K_UIT] = filter_gain(cfg.regen_time_constant)
         p[L.P_R_TH] = cfg.thermal_resistance
         p[L.P_K_TEMP] = filter_gain(cfg.winding_time_constant)
-        p[L.P_C_BUS] = cfg.bus_capacitance
-        p[L.P_R_SUPPLY] = cfg.supply_resistance
-        p[L.P_U_DUMP] = cfg.dump_voltage
-        p[L.P_R_DUMP] = cfg.dump_resistance
-        p[L.P_STOP_LO] = 1.0
-        p[L.P_STOP_HI] = -1.0
-        p[L.P_STOP_K] = 500.0
-        p[L.P_STOP_D] = 0.5
-        p[L.P_HOME_POS] = math.inf
         return p
 
     def _rest_inputs(self, cfg: Mac800Config) -> np.ndarray:
@@ -204,37 +180,28 @@ class Mac800MotorArray(MotorArray):
         return u
 
     # ------------------------------------------------------------------ power-on
-    def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
-                    values: np.ndarray) -> None:
-        memory = self._rom if self._flash is None else self._flash
-        for j, i in enumerate(idx.tolist()):
-            t = self._type_of[i]
-            self.regs[i] = memory[i] if self._has_flash[i] else self._rom[t]
-            self.state[i] = 0.0
-            self.state[i, L.S_TEMP] = c.AMBIENT_CELSIUS
-            self.params[i] = self._type_params[t]
-            self.inputs[i] = self._type_inputs[t]
-            for q in range(cols.size):
-                (self.state if to_state[q] else self.params)[i, cols[q]] = values[q, j]
-            self._power_on(i)
+    def _initial_state(self, row: np.ndarray) -> None:
+        """The winding at the ambient temperature."""
+        row[L.S_TEMP] = c.AMBIENT_CELSIUS
 
-    def _power_on(self, i: int) -> None:
-        """Firmware start of motor ``i``: counters from the shaft, bus charged, START_MODE."""
-        s, p = self.state[i], self.params[i]
-        derive_constants(p)
-        s[L.S_UBUS] = self.inputs[i, L.I_SUPPLY_VOLTS]
-        s[L.S_ENC_PREV] = encoder_count(s[L.S_THETA])
-        s[L.S_ELDEG_PREV] = s[L.S_ENC_PREV]
-        s[L.S_INDEX_TURN] = turn(s[L.S_THETA], p[L.P_INDEX_POS])
-        s[L.S_INDEX_COUNT] = math.nan
-        s[L.S_HOME_AFTER] = -1.0
-        s[L.S_A2P_LEVEL] = -1.0
-        s[L.S_PARAMS_NEW] = 1.0
-        self._check_filter(np.array([i]))
-        self.regs[i, R.U_BUS] = round(s[L.S_UBUS] / c.U_BUS_VOLTS)
-        self.regs[i, R.U_24V] = round(self.inputs[i, L.I_CONTROL_VOLTS] / c.U_24V_VOLTS)
-        self.regs[i, R.DEGC] = round(s[L.S_TEMP] / c.DEGC_CELSIUS)
-        start_mode(self.regs[i], s)
+    def _power_on(self, idx: np.ndarray) -> None:
+        """Firmware start of motors ``idx``: counters from the shaft, bus charged, START_MODE."""
+        for i in idx.tolist():
+            s, p = self.state[i], self.params[i]
+            derive_constants(p)
+            s[L.S_UBUS] = self.inputs[i, L.I_SUPPLY_VOLTS]
+            s[L.S_ENC_PREV] = encoder_count(s[L.S_THETA])
+            s[L.S_ELDEG_PREV] = s[L.S_ENC_PREV]
+            s[L.S_INDEX_TURN] = turn(s[L.S_THETA], p[L.P_INDEX_POS])
+            s[L.S_INDEX_COUNT] = math.nan
+            s[L.S_HOME_AFTER] = -1.0
+            s[L.S_A2P_LEVEL] = -1.0
+            s[L.S_PARAMS_NEW] = 1.0
+            self._check_filter(np.array([i]))
+            self.regs[i, R.U_BUS] = round(s[L.S_UBUS] / c.U_BUS_VOLTS)
+            self.regs[i, R.U_24V] = round(self.inputs[i, L.I_CONTROL_VOLTS] / c.U_24V_VOLTS)
+            self.regs[i, R.DEGC] = round(s[L.S_TEMP] / c.DEGC_CELSIUS)
+            start_mode(self.regs[i], s)
 
     def _check_filter(self, idx: np.ndarray) -> None:
         """S_FILT_BAD of motors ``idx`` from their main filter (OLD_FILT_ERR's condition)."""

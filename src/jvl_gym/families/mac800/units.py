@@ -22,6 +22,8 @@ example is followed.
 
 from __future__ import annotations
 
+from ...registers.scaling import linear_unit
+
 __all__ = [
     "V_SOLL_UNITS_PER_RPM",
     "A_SOLL_UNITS_PER_1000_RPM_S",
@@ -105,14 +107,9 @@ OVERVOLTAGE_VOLTS = 450.0  #: ERR_STAT bit 11 OV_ERR: "UB>450V"
 OVERSPEED_RPM = 3600.0  #: ERR_STAT bit 13 SPEED_ERR: ">3600RPM"
 
 
-def rpm_to_v_soll(rpm: float) -> float:
-    """Velocity [RPM] → V_SOLL units (1/16 count/sample): 100 RPM → 277.056 (register 5)."""
-    return rpm * V_SOLL_UNITS_PER_RPM
-
-
-def v_soll_to_rpm(v_soll: float) -> float:
-    """V_SOLL units → RPM (inverse of :func:`rpm_to_v_soll`); also V_HOME, VELn, V_IST16."""
-    return v_soll / V_SOLL_UNITS_PER_RPM
+v_soll_to_rpm, rpm_to_v_soll = linear_unit(
+    "V_SOLL (also V_HOME, VELn, V_IST16)", "velocity [RPM]", "register 5: 100 RPM → 277.056",
+    units_per_quantity=V_SOLL_UNITS_PER_RPM)
 
 
 def rpm_per_s_to_a_soll(rpm_per_s: float) -> float:
@@ -126,44 +123,19 @@ def a_soll_to_rpm_per_s(a_soll: float) -> float:
     return a_soll * 1000.0 / A_SOLL_UNITS_PER_1000_RPM_S
 
 
-def rpm_to_v_ist(rpm: float) -> float:
-    """Velocity [RPM] → V_IST counts/sample (register 12: 1 RPM = 0.17316)."""
-    return rpm * V_IST_COUNTS_PER_RPM
-
-
-def v_ist_to_rpm(v_ist: float) -> float:
-    """V_IST counts/sample → RPM (inverse of :func:`rpm_to_v_ist`)."""
-    return v_ist / V_IST_COUNTS_PER_RPM
-
-
-def u_24v_to_volts(u_24v: float) -> float:
-    """U_24V register → control supply voltage [V] (register 21)."""
-    return u_24v * U_24V_VOLTS_PER_UNIT
-
-
-def degc_to_celsius(degc: float) -> float:
-    """DEGC / DEGCMAX register → temperature [°C] (registers 29, 31)."""
-    return degc * DEGC_CELSIUS_PER_UNIT
-
-
-def celsius_to_degc(celsius: float) -> float:
-    """Temperature [°C] → DEGC units (inverse of :func:`degc_to_celsius`): 90 °C → 737.3."""
-    return celsius / DEGC_CELSIUS_PER_UNIT
-
-
-def u_bus_to_volts(u_bus: float) -> float:
-    """U_BUS register → DC bus voltage [V] (register 198: 366 → 325.3 V)."""
-    return u_bus * U_BUS_VOLTS_PER_UNIT
-
-
-def volts_to_u_bus(volts: float) -> float:
-    """DC bus voltage [V] → U_BUS units (inverse of :func:`u_bus_to_volts`)."""
-    return volts / U_BUS_VOLTS_PER_UNIT
-
-
-def aninp_to_volts(aninp: float) -> float:
-    """ANINP / ANINP_OFFSET register → analogue input voltage [V] (registers 170, 171)."""
-    return aninp * ANINP_VOLTS_PER_UNIT
+v_ist_to_rpm, rpm_to_v_ist = linear_unit(
+    "V_IST (counts/sample)", "velocity [RPM]", "register 12: 1 RPM = 0.17316",
+    units_per_quantity=V_IST_COUNTS_PER_RPM)
+u_24v_to_volts = linear_unit("U_24V", "control supply voltage [V]", "register 21",
+                             quantity_per_unit=U_24V_VOLTS_PER_UNIT)[0]
+degc_to_celsius, celsius_to_degc = linear_unit(
+    "DEGC / DEGCMAX", "temperature [°C]", "registers 29, 31: 90 °C ↔ 737.3",
+    quantity_per_unit=DEGC_CELSIUS_PER_UNIT)
+u_bus_to_volts, volts_to_u_bus = linear_unit(
+    "U_BUS", "DC bus voltage [V]", "register 198: 366 → 325.3 V",
+    quantity_per_unit=U_BUS_VOLTS_PER_UNIT)
+aninp_to_volts = linear_unit("ANINP / ANINP_OFFSET", "analogue input voltage [V]",
+                             "registers 170, 171", quantity_per_unit=ANINP_VOLTS_PER_UNIT)[0]
 
 
 def t_soll_to_percent_of_nominal(t_soll: float) -> float:

@@ -14,42 +14,26 @@ of 100 µs is stable for ``ω_n·h < 2`` and accurate well below; the configs mu
 
 from __future__ import annotations
 
-import functools
 import math
-import os
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import ClassVar
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import Field, model_validator
 
-from ...config import (
-    ConfigError,
-    Real,
-    Text,
-    Whole,
-    read_config_file,
-    resolve_config,
-    validate_config,
-)
+from ...config import MotorConfigs, MotorData, Real, Text, Whole
 from . import constants as c
 from .units import CURRENT_AMPS_PER_UNIT, ENCODER_TYPES, MOTOR_TYPE_CODES
 
 __all__ = ["MisMotorConfig", "CONFIGS_DIR", "MOTORS_DIR", "SETUPS_DIR", "canonical_motor_name",
            "motor_types", "load_motor", "setup_path"]
 
-CONFIGS_DIR = Path(__file__).resolve().with_name("configs")
-#: the motor configs of the family's types
-MOTORS_DIR = CONFIGS_DIR / "motors"
-#: the family's default setups: none (a motor powers on with the table's defaults, §8.2)
-SETUPS_DIR: Path | None = None
 #: largest ``ω_n·h`` a config may give (module docstring)
 MAX_STIFFNESS_STEP = 0.5
 
 
-class MisMotorConfig(BaseModel):
+class MisMotorConfig(MotorData):
     """Motor data of one MIS/SMC type (SI units unless stated)."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
     FAMILY_KEY: ClassVar[str] = "mis"
 
     family: Text = "mis"
@@ -65,7 +49,6 @@ class MisMotorConfig(BaseModel):
     damping_ratio: Real = Field(ge=0.0, le=1.0, description="rotor against the field (plant)")
     supply_voltage: Real = Field(ge=12.0, le=80.0, description="V")
     encoder_type: Whole = Field(ge=0, le=4, description="ENCODER_TYPE code (§8.2.49)")
-    provenance: Text = Field(min_length=10)
 
     @model_validator(mode="after")
     def _consistent(self) -> MisMotorConfig:
@@ -100,32 +83,16 @@ class MisMotorConfig(BaseModel):
         return MOTOR_TYPE_CODES.get(self.name, MOTOR_TYPE_CODES["MIS232"])
 
 
-def motor_types() -> list[str]:
-    """Names of the MIS/SMC types with a config."""
-    return sorted(p.stem for p in MOTORS_DIR.glob("*.yaml"))
-
-
-@functools.lru_cache(maxsize=64)
-def _load_file(path: Path) -> MisMotorConfig:
-    return validate_config(MisMotorConfig, read_config_file(path), str(path))
-
-
-def load_motor(motor: Any) -> MisMotorConfig:
-    """The validated config of ``motor``: a type name, a YAML path or a config object."""
-    if isinstance(motor, MisMotorConfig):
-        return motor
-    if not isinstance(motor, (str, os.PathLike)):
-        raise ConfigError(f"an MIS/SMC motor is a type name, a config path or a "
-                          f"MisMotorConfig, got {motor!r}")
-    return _load_file(resolve_config(MOTORS_DIR, motor, "MIS/SMC motor type").resolve())
-
-
-def canonical_motor_name(name: str) -> str:
-    """The motor-type name a user's spelling stands for: the name as written."""
-    return name
-
-
-def setup_path(name: str) -> Path:
-    """The file of a default setup: the MIS/SMC types have none (ValueError)."""
-    raise ValueError(f"the MIS/SMC motor types have no default setups (asked for {name!r}); "
-                     "give a setup file or mapping")
+CONFIGS_DIR = Path(__file__).resolve().with_name("configs")
+_CONFIGS = MotorConfigs(MisMotorConfig, CONFIGS_DIR, "MIS/SMC motor type", setups=False,
+                        cached=True)
+#: the motor configs of the family's types
+MOTORS_DIR = _CONFIGS.motors_dir
+#: the family's default setups: none (a motor powers on with the table's defaults, §8.2)
+SETUPS_DIR: Path | None = _CONFIGS.setups_dir
+#: the config of a type name, a YAML path or a config object
+load_motor = _CONFIGS.load_motor
+motor_types = _CONFIGS.motor_types  #: names of the MIS/SMC types with a config
+canonical_motor_name = _CONFIGS.canonical_motor_name  #: the name as written
+#: the file of a default setup: the MIS/SMC types have none (ValueError)
+setup_path = _CONFIGS.setup_path

@@ -73,7 +73,7 @@ BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
 _PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD]
 
 
-class MisMotorArray(ProgramMixin, MotorArray):
+class MisMotorArray(ProgramMixin, MotorArray, layout=L):
     """N simulated MIS/SMC integrated step motors (:class:`~jvl_gym.MotorArray` of the
     ``mis`` family).
 
@@ -96,9 +96,6 @@ class MisMotorArray(ProgramMixin, MotorArray):
     FAMILY_KEY = "mis"
     TABLE = TABLE
     CONFORMANCE = CONFORMANCE
-    N_STATE = L.N_STATE
-    N_PARAM = L.N_PARAM
-    N_INPUT = L.N_INPUT
     BUFFER_SHAPE = (BUFFER_DEPTH, 4)
     OUTER_HZ = c.OUTER_HZ
     PARAMETER_KEYWORDS: ClassVar[dict[str, int]] = _PARAMETERS
@@ -174,16 +171,7 @@ class MisMotorArray(ProgramMixin, MotorArray):
                     values[q].tolist()) <= codes:
                 raise ValueError(f"encoder_type must be one of {sorted(codes)} (§8.2.49), got "
                                  f"{values[q].tolist()}")
-        memory = self._rom if self._flash is None else self._flash
-        for j, i in enumerate(idx.tolist()):
-            t = self._type_of[i]
-            self.regs[i] = memory[i] if self._has_flash[i] else self._rom[t]
-            self.state[i] = 0.0
-            self.params[i] = self._type_params[t]
-            self.inputs[i] = self._type_inputs[t]
-            for q in range(cols.size):
-                (self.state if to_state[q] else self.params)[i, cols[q]] = values[q, j]
-        self._power_on(idx)
+        super()._reset_rows(idx, cols, to_state, values)
 
     def _power_on(self, idx: np.ndarray) -> None:
         """Firmware start: positions, counters, NOTSAVED (§8.2.96) and error bits cleared

@@ -14,6 +14,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ...engine.task_access import task_accessors
 from ...engine.view import EngineView
 from . import constants as _c
 from . import layout as _L
@@ -35,29 +36,13 @@ TERMINAL_ERRORS = (("FOLLOW", _c.ERR_FOLLOW), ("POSITION_LIMIT", _c.ERR_POSITION
 ERROR_BITS = _c.ERR_FOLLOW | _c.ERR_POSITION_LIMIT | _c.ERR_LOW_BUS
 
 
-_RAW_MIN, _RAW_MAX = _TABLE.data_write_limits(R.MODE_REG)
+#: register values, saturated stores (P_SOLL in a turn-table mode, COMMAND … go through
+#: ``MotorArray.write``), the rotor angle from power-on, the load torque and the gear input
+#: counts (§8.2.3 gear mode)
+reg, set_reg, rotor_angle, set_load_torque, set_pulse_counts = task_accessors(
+    FAMILY_KEY, __file__, _TABLE, R.MODE_REG, _L, ("reg", "set_reg", "shaft_angle",
+                                                  "set_load_torque", "set_pulse_counts"))
 _COUNTS_PER_RAD = _CPR / (2.0 * math.pi)
-
-
-@njit(cache=True, inline="always")
-def reg(view: EngineView, i: int, number: int) -> int:  # pragma: no cover - compiled
-    """Stored integer of register ``number`` of motor ``i``."""
-    return view.regs[i, number]
-
-
-@njit(cache=True, inline="always")
-def set_reg(view: EngineView, i: int, number: int, raw: int) -> None:  # pragma: no cover
-    """Store ``raw`` in the read-write data register ``number`` of motor ``i``, saturated to
-    the register's range; the firmware uses it from the next outer sample. Mode requests and
-    registers with write rules (P_SOLL in a turn-table mode, COMMAND …) go through
-    ``MotorArray.write``."""
-    view.regs[i, number] = min(max(raw, _RAW_MIN[number]), _RAW_MAX[number])
-
-
-@njit(cache=True, inline="always")
-def rotor_angle(view: EngineView, i: int) -> float:  # pragma: no cover - compiled
-    """Rotor angle of motor ``i`` from power-on [rad]."""
-    return view.state[i, _L.S_THETA]
 
 
 @njit(cache=True, inline="always")
@@ -88,12 +73,6 @@ def load_energy(view: EngineView, i: int) -> float:  # pragma: no cover - compil
 
 
 @njit(cache=True, inline="always")
-def set_load_torque(view: EngineView, i: int, torque: float) -> None:  # pragma: no cover
-    """External load torque on motor ``i``'s shaft, opposing positive rotation [N·m]."""
-    view.inputs[i, _L.I_LOAD_TORQUE] = torque
-
-
-@njit(cache=True, inline="always")
 def set_load_inertia(view: EngineView, i: int, inertia: float) -> None:  # pragma: no cover
     """Load inertia on motor ``i``'s shaft [kg·m²] (≥ 0), from the next outer sample on."""
     view.params[i, _L.P_J_LOAD] = max(inertia, 0.0)
@@ -103,12 +82,6 @@ def set_load_inertia(view: EngineView, i: int, inertia: float) -> None:  # pragm
 def set_supply_volts(view: EngineView, i: int, volts: float) -> None:  # pragma: no cover
     """P+ supply of motor ``i`` [V]."""
     view.inputs[i, _L.I_SUPPLY_VOLTS] = volts
-
-
-@njit(cache=True, inline="always")
-def set_pulse_counts(view: EngineView, i: int, counts: float) -> None:  # pragma: no cover
-    """Gear input counts of motor ``i`` during the next outer sample (§8.2.3 gear mode)."""
-    view.inputs[i, _L.I_PULSE_COUNTS] = counts
 
 
 @njit(cache=True, inline="always")

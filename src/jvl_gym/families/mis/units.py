@@ -16,6 +16,8 @@ inputs (§8.2.46); :data:`OUTER_DT` = 1 ms is the simulator's decision built on 
 
 from __future__ import annotations
 
+from ...registers.scaling import linear_unit
+
 __all__ = [
     "COUNTS_PER_REV",
     "FULL_STEPS_PER_REV",
@@ -135,59 +137,25 @@ ENCODER_TYPES: dict[int, tuple[str, int]] = {
 }
 
 
-def rpm_to_v_soll(rpm: float) -> float:
-    """Velocity [RPM] → V_SOLL units (0.01 RPM): 250 RPM → 25000 (§8.2.5)."""
-    return rpm / VELOCITY_RPM_PER_UNIT
-
-
-def v_soll_to_rpm(v_soll: float) -> float:
-    """V_SOLL (and every 0.01 RPM register) → RPM (inverse of :func:`rpm_to_v_soll`)."""
-    return v_soll * VELOCITY_RPM_PER_UNIT
-
-
-def counts_to_rev(counts: float) -> float:
-    """Position counts → revolutions (409600 counts per revolution, §8.2.4)."""
-    return counts / COUNTS_PER_REV
-
-
-def rev_to_counts(rev: float) -> float:
-    """Revolutions → position counts (inverse of :func:`counts_to_rev`)."""
-    return rev * COUNTS_PER_REV
-
-
-def run_current_to_amps(units: float) -> float:
-    """RUN_CURRENT / STANDBY_CURRENT / Tn → phase current [A RMS]: 100 → 0.587 A (§8.2.7)."""
-    return units * CURRENT_AMPS_PER_UNIT
-
-
-def amps_to_run_current(amps: float) -> float:
-    """Phase current [A RMS] → RUN_CURRENT units (inverse of :func:`run_current_to_amps`)."""
-    return amps / CURRENT_AMPS_PER_UNIT
-
-
-def analogue_to_volts(units: float) -> float:
-    """Analogue input register (81–96, AFZUP limits) → volts: 4095 → 5.00 V (§8.2.45)."""
-    return units * ANALOGUE_VOLTS_PER_UNIT
-
-
-def busvol_to_volts(units: float) -> float:
-    """BUSVOL / MIN_BUSVOL → bus voltage [V] (§8.2.47)."""
-    return units * BUSVOL_VOLTS_PER_UNIT
-
-
-def volts_to_busvol(volts: float) -> float:
-    """Bus voltage [V] → BUSVOL units (inverse of :func:`busvol_to_volts`)."""
-    return volts / BUSVOL_VOLTS_PER_UNIT
-
-
-def cvi_to_volts(units: float) -> float:
-    """ACCEPT_VOLTAGE / SAVE_VOLTAGE / CVI_VOLT → control voltage [V]: 2052 → 17.98 V."""
-    return units * CVI_VOLTS_PER_UNIT
-
-
-def temp_to_celsius(units: float) -> float:
-    """TEMP → approximate temperature [°C] (§8.2.25: Tc = 2.27 · value)."""
-    return units * TEMP_CELSIUS_PER_UNIT
+v_soll_to_rpm, rpm_to_v_soll = linear_unit(
+    "V_SOLL (and every 0.01 RPM register)", "velocity [RPM]", "§8.2.5: 250 RPM → 25000",
+    quantity_per_unit=VELOCITY_RPM_PER_UNIT)
+counts_to_rev, rev_to_counts = linear_unit(
+    "position counts", "revolutions", "409600 counts per revolution, §8.2.4",
+    units_per_quantity=COUNTS_PER_REV)
+run_current_to_amps, amps_to_run_current = linear_unit(
+    "RUN_CURRENT / STANDBY_CURRENT / Tn", "phase current [A RMS]", "§8.2.7: 100 → 0.587 A",
+    quantity_per_unit=CURRENT_AMPS_PER_UNIT)
+analogue_to_volts = linear_unit("analogue input (81–96, AFZUP limits)", "voltage [V]",
+                                "§8.2.45: 4095 → 5.00 V",
+                                quantity_per_unit=ANALOGUE_VOLTS_PER_UNIT)[0]
+busvol_to_volts, volts_to_busvol = linear_unit("BUSVOL / MIN_BUSVOL", "bus voltage [V]",
+                                               "§8.2.47", quantity_per_unit=BUSVOL_VOLTS_PER_UNIT)
+cvi_to_volts = linear_unit("ACCEPT_VOLTAGE / SAVE_VOLTAGE / CVI_VOLT", "control voltage [V]",
+                           "2052 → 17.98 V", quantity_per_unit=CVI_VOLTS_PER_UNIT)[0]
+temp_to_celsius = linear_unit("TEMP", "approximate temperature [°C]",
+                              "§8.2.25: Tc = 2.27 · value",
+                              quantity_per_unit=TEMP_CELSIUS_PER_UNIT)[0]
 
 
 def cur_scale_inc_step_s(cur_scale_inc: float) -> float:

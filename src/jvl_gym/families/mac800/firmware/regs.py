@@ -1,102 +1,27 @@
 """Register numbers used by the compiled MAC800 firmware, read from the family's register table
-(``registers.csv``, MAC800 register overview §1.2) at import: compile-time constants, each
-number stated once (in the table)."""
+(``registers.csv``, MAC800 register overview §1.2) at import: every register is a module
+constant named as in the table (``R.MODE_REG``), a compile-time constant, each number stated
+once (in the table)."""
 
 from __future__ import annotations
 
 from ..table import TABLE as _TABLE
 
-
-def _n(name: str) -> int:
-    return _TABLE.lookup(name).number
-
-
-MODE_REG = _n("MODE_REG")
-P_SOLL = _n("P_SOLL")
-P_NEW = _n("P_NEW")
-V_SOLL = _n("V_SOLL")
-A_SOLL = _n("A_SOLL")
-T_SOLL = _n("T_SOLL")
-P_FUNC = _n("P_FUNC")
-INDEX_OFFSET = _n("INDEX_OFFSET")
-P_IST = _n("P_IST")
-V_IST16 = _n("V_IST16")
-V_IST = _n("V_IST")
-KVOUT = _n("KVOUT")
-GEARF_1 = _n("GEARF_1")
-GEARF_2 = _n("GEARF_2")
-I2T = _n("I2T")
-I2TLIM = _n("I2TLIM")
-UIT = _n("UIT")
-UITLIM = _n("UITLIM")
-FLWERR = _n("FLWERR")
-U_24V = _n("U_24V")
-FLWERRMAX = _n("FLWERRMAX")
-UV_HANDLE = _n("UV_HANDLE")
-FNCERR = _n("FNCERR")
-FNCERRMAX = _n("FNCERRMAX")
-MIN_P_IST = _n("MIN_P_IST")
-DEGC = _n("DEGC")
-MAX_P_IST = _n("MAX_P_IST")
-DEGCMAX = _n("DEGCMAX")
-ACC_EMERG = _n("ACC_EMERG")
-INPOSWIN = _n("INPOSWIN")
-INPOSCNT = _n("INPOSCNT")
-ERR_STAT = _n("ERR_STAT")
-CNTRL_BITS = _n("CNTRL_BITS")
-START_MODE = _n("START_MODE")
-P_HOME = _n("P_HOME")
-HW_SETUP = _n("HW_SETUP")
-V_HOME = _n("V_HOME")
-T_HOME = _n("T_HOME")
-HOME_MODE = _n("HOME_MODE")
-P_REG_P = _n("P_REG_P")
-POS0 = _n("POS0")
-KFF5 = _n("KFF5")  #: KFF5 … KFF0 are consecutive (121 … 126)
-KVFX6 = _n("KVFX6")  #: KVFX6 … KVFX1 (127 … 132)
-KVFY5 = _n("KVFY5")  #: KVFY5 … KVFY0 (133 … 138)
-KVB4 = _n("KVB4")  #: KVB4 … KVB0 (139 … 143)
-KIFX2 = _n("KIFX2")
-KIFX1 = _n("KIFX1")
-KIFY1 = _n("KIFY1")
-KIFY0 = _n("KIFY0")
-KIB1 = _n("KIB1")
-KIB0 = _n("KIB0")
-MODEL_POT = _n("MODEL_POT")
-S_ORDER = _n("S_ORDER")
-SAMPLE1 = _n("SAMPLE1")
-SAMPLE2 = _n("SAMPLE2")
-SAMPLE3 = _n("SAMPLE3")
-SAMPLE4 = _n("SAMPLE4")
-REC_CNT = _n("REC_CNT")
-V_EXT = _n("V_EXT")
-GV_EXT = _n("GV_EXT")
-G_FNC = _n("G_FNC")
-FNC_OUT = _n("FNC_OUT")
-FF_OUT = _n("FF_OUT")
-VB_OUT = _n("VB_OUT")
-VF_OUT = _n("VF_OUT")
-ANINP = _n("ANINP")
-ANINP_OFFSET = _n("ANINP_OFFSET")
-PHASE_COMP = _n("PHASE_COMP")
-AMPLITUDE = _n("AMPLITUDE")
-I_NOM = _n("I_NOM")
-PHI_SOLL = _n("PHI_SOLL")
-IA_SOLL = _n("IA_SOLL")  #: IA/IB/IC_SOLL, IA/IB/IC_IST are consecutive
-IA_IST = _n("IA_IST")
-ELDEG_IST = _n("ELDEG_IST")
-V_ELDEG = _n("V_ELDEG")
-UA_VAL = _n("UA_VAL")  #: UA/UB/UC_VAL, EMK_A/B/C are consecutive
-EMK_A = _n("EMK_A")
-U_BUS = _n("U_BUS")
-MOTOR_TYPE = _n("MOTOR_TYPE")
+_NUMBERS = _TABLE.numbers_by_name()
+globals().update(_NUMBERS)
 LAST = _TABLE.last
 
-assert [_n(f"KFF{k}") for k in range(5, -1, -1)] == list(range(KFF5, KFF5 + 6))
-assert [_n(f"KVFX{k}") for k in range(6, 0, -1)] == list(range(KVFX6, KVFX6 + 6))
-assert [_n(f"KVFY{k}") for k in range(5, -1, -1)] == list(range(KVFY5, KVFY5 + 6))
-assert [_n(f"KVB{k}") for k in range(4, -1, -1)] == list(range(KVB4, KVB4 + 5))
-assert [_n(n) for n in ("IA_SOLL", "IB_SOLL", "IC_SOLL", "IA_IST", "IB_IST", "IC_IST")] == \
-    list(range(IA_SOLL, IA_SOLL + 6))
-assert [_n(n) for n in ("UA_VAL", "UB_VAL", "UC_VAL", "EMK_A", "EMK_B", "EMK_C")] == \
-    list(range(UA_VAL, UA_VAL + 6))
+
+def _consecutive(*names: str) -> bool:
+    """Whether registers ``names`` stand at consecutive numbers in this order (the firmware
+    indexes these groups from their first register)."""
+    first = _NUMBERS[names[0]]
+    return [_NUMBERS[n] for n in names] == list(range(first, first + len(names)))
+
+
+assert _consecutive(*(f"KFF{k}" for k in range(5, -1, -1)))
+assert _consecutive(*(f"KVFX{k}" for k in range(6, 0, -1)))
+assert _consecutive(*(f"KVFY{k}" for k in range(5, -1, -1)))
+assert _consecutive(*(f"KVB{k}" for k in range(4, -1, -1)))
+assert _consecutive("IA_SOLL", "IB_SOLL", "IC_SOLL", "IA_IST", "IB_IST", "IC_IST")
+assert _consecutive("UA_VAL", "UB_VAL", "UC_VAL", "EMK_A", "EMK_B", "EMK_C")
