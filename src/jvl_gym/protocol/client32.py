@@ -86,11 +86,13 @@ class MacTalk32Client(SerialMaster):
         return "data" if isinstance(frame, m32.Reply) else "other"
 
     def _reply(self, request: bytes, what: str, register: int) -> bytes:
-        rep = self.transact(request, what)
-        if rep.register != register:
-            raise UnexpectedReplyError(f"{what}: the reply names register {rep.register} "
-                                       f"(quick guide §1.3.3: always the one requested)")
-        return bytes(rep.data)
+        """The data of the reply naming ``register`` ("always the same as requested", quick
+        guide §1.3.3); a reply naming another register is the late answer to an earlier
+        request and is passed over."""
+        def stale(frame: Any) -> bool:
+            return isinstance(frame, m32.Reply) and frame.register != register
+
+        return bytes(self.transact(request, what, stale=stale).data)
 
     # ------------------------------------------------------------------ raw access
     def read_value(self, register: int, signed: bool = True) -> int:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import time
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from typing import Any
 
 from .errors import FrameError, NoAnswerError, UnexpectedReplyError
@@ -110,9 +111,12 @@ class SerialMaster(ABC):
         """``"accept"``, ``"data"`` or ``"other"``: what ``frame`` is."""
 
     # ------------------------------------------------------------------ exchange
-    def transact(self, request: bytes, what: str, expect: str = "data") -> Any:
+    def transact(self, request: bytes, what: str, expect: str = "data",
+                 stale: Callable[[Any], bool] | None = None) -> Any:
         """Send ``request`` and return the decoded reply (``expect`` = "data", "accept" or
-        "none"), with retries; raise :class:`NoAnswerError` if nothing valid comes back."""
+        "none"), with retries; raise :class:`NoAnswerError` if nothing valid comes back.
+        A reply for which ``stale(frame)`` is true (the late answer to an earlier request) is
+        passed over and the next one awaited."""
         self.requests += 1
         problems: list[str] = []
         for attempt in range(self.retries + 1):
@@ -123,20 +127,24 @@ class SerialMaster(ABC):
             self.ser.flush()
             if expect == "none":
                 return None
-            raw = self._read_reply(time.monotonic() + self.timeout)
-            if not raw:
-                problems.append("no answer")
-                continue
-            try:
-                frame = self._decode(raw)
-            except FrameError as err:
-                problems.append(f"garbled reply ({err.reason})")
-                time.sleep(min(0.05, self.timeout))
-                continue
-            if self._kind(frame) == expect:
-                return frame
-            wanted = "an accept" if expect == "accept" else "a data reply"
-            raise UnexpectedReplyError(f"{what}: expected {wanted}, got {frame!r}")
+            deadline = time.monotonic() + self.timeout
+            while True:
+                raw = self._read_reply(deadline)
+                if not raw:
+                    problems.append("no answer")
+                    break
+                try:
+                    frame = self._decode(raw)
+                except FrameError as err:
+                    problems.append(f"garbled reply ({err.reason})")
+                    time.sleep(min(0.05, self.timeout))
+                    break
+                if stale is not None and stale(frame):
+                    continue
+                if self._kind(frame) == expect:
+                    return frame
+                wanted = "an accept" if expect == "accept" else "a data reply"
+                raise UnexpectedReplyError(f"{what}: expected {wanted}, got {frame!r}")
         raise NoAnswerError(
             f"motor at address {self.address} on {self.port} did not answer {what} "
             f"({self.retries + 1} attempts, timeout {self.timeout} s; {', '.join(problems)}). "

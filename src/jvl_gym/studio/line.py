@@ -19,15 +19,21 @@ from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 from ..protocol.dialect import MACTALK16, MACTALK32, client_class
-from ..protocol.errors import ProtocolError
+from ..protocol.errors import NoAnswerError, ProtocolError, RefusedError
 from ..registers import RegisterError, to_raw
 from .motor import ACTIONS, StudioMotor
 
-__all__ = ["Line", "LineMotor", "LineDown", "scan"]
+__all__ = ["Line", "LineMotor", "LineDown", "RefusedByMotor", "scan"]
 
 
 class LineDown(ConnectionError):
     """The line cannot be reached now (one line: what, where, what to do)."""
+
+
+class RefusedByMotor(RegisterError):
+    """The motor answers but did not carry out a request: a write it did not accept (no
+    accept, MAC050–141 manual 5.1, MIS manual §18.2.4) or a command the client refuses to send
+    (:class:`~jvl_gym.protocol.errors.RefusedError`); nothing was changed."""
 
 
 class Line:
@@ -87,11 +93,29 @@ class Line:
                 out = fn(client)
             except RegisterError:
                 raise
+            except RefusedError as exc:
+                raise RefusedByMotor(str(exc)) from None
+            except NoAnswerError as exc:
+                if self._answers(address):
+                    raise RefusedByMotor(
+                        f"the motor at address {address} answers but did not accept the "
+                        f"request ({str(exc).split(' (')[0].split('did not answer ')[-1]}): "
+                        "a value it refuses in its present mode or state (MAC050–141 manual "
+                        "5.1, MIS manual §18.2.4). Nothing was changed.") from None
+                self._drop(exc)
+                raise LineDown(self.problem) from None
             except (OSError, ProtocolError, ValueError) as exc:
                 self._drop(exc)
                 raise LineDown(self.problem) from None
             self.problem = None
             return out
+
+    def _answers(self, address: int) -> bool:
+        """Whether the unit at ``address`` answers a read now."""
+        try:
+            return self.probe(address) is not None
+        except LineDown:
+            return False
 
     def probe(self, address: int) -> str | None:
         """The dialect of the unit at ``address``, None if none answers
