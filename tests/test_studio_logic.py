@@ -500,6 +500,37 @@ def test_tuning_run_writes_the_setup_file_it_shows(tmp_path):
         assert m.read(k) == pytest.approx(v, rel=1e-6, abs=1e-9), k
 
 
+def test_tuning_a_motor_on_a_line_writes_the_result_to_the_twin(tmp_path):
+    """The tuning page on a MAC140 behind `jvl-gym serve` (in-process, a free port): the
+    pipeline of `jvl-tune autotune --port … --address …` through the toolkit, then the kept
+    registers written as `--write` writes them (the client's write_registers, read back): the
+    twin's registers hold the result's values."""
+    from tuning.studio_adapter import TOOLKIT
+
+    from jvl_gym.cli_serve import build_line
+    from jvl_gym.protocol.transport import TwinServer
+    from jvl_gym.studio.tuning_run import TuningRun
+
+    twin, _ = build_line(["MAC140"], [19])
+    server = TwinServer(twin, tcp=("127.0.0.1", 0)).start()
+    s = Session.on_line(server.endpoint("mactalk", "tcp").url, ["MAC140"], [19],
+                        toolkit=TOOLKIT)
+    try:
+        tr = TuningRun(s.motors[0], s.toolkit)
+        tr.start()
+        tr.join(600)
+        assert tr.error is None and tr.result is not None, (tr.progress, twin.last_refusal)
+        kept = tr.result.outcome.registers
+        assert tr.result.present == {k: float(twin.m.read(k)[0]) for k in kept}
+        assert any(twin.m.read(k)[0] != pytest.approx(v, abs=1 / 256) for k, v in kept.items())
+        assert "wrote" in tr.write(tmp_path)
+        for name, value in kept.items():
+            assert twin.m.read(name)[0] == pytest.approx(value, abs=1 / 256), name
+    finally:
+        server.stop()
+        s.stop()
+
+
 def test_episode_is_deterministic_and_refuses_unknown():
     from jvl_gym.studio.episodes import controllers, run_episode
 
@@ -515,6 +546,52 @@ def test_episode_is_deterministic_and_refuses_unknown():
 
 
 # ---------------------------------------------------------------------- the command line
+class NamedToolkit:
+    """A toolkit other than the installed one, for ``--toolkit test_studio_logic:KIT``."""
+
+    def autotune(self, m, seed, progress):
+        raise NotImplementedError
+
+    def autotune_line(self, port, motor, address, progress):
+        raise NotImplementedError
+
+    def write_setup(self, path, motor, registers, note):
+        raise NotImplementedError
+
+
+KIT = NamedToolkit()
+TOOLKIT = NamedToolkit()
+
+
+def test_a_toolkit_named_on_the_command_line(monkeypatch, capsys):
+    """``jvl-gym studio --toolkit MODULE[:OBJECT]`` gives the tuning page that toolkit instead
+    of the entry point's; a name that is no toolkit is a one-line error."""
+    import jvl_gym.studio.ui.app as app_module
+    from jvl_gym.studio.toolkit import load_toolkit
+
+    assert load_toolkit("test_studio_logic:KIT") is KIT
+    assert load_toolkit("test_studio_logic") is TOOLKIT  # the module's TOOLKIT
+    with pytest.raises(ValueError, match="cannot import"):
+        load_toolkit("no_such_toolkit_module")
+    with pytest.raises(ValueError, match="has no 'NOPE'"):
+        load_toolkit("test_studio_logic:NOPE")
+    with pytest.raises(TypeError, match="TuningToolkit"):
+        load_toolkit("jvl_gym.studio.toolkit:GROUP")
+    started = []
+    monkeypatch.setattr(app_module, "serve", lambda session, *a, **k: started.append(session))
+    from jvl_gym.cli import app
+
+    with __import__("socket").socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = str(sock.getsockname()[1])
+    with pytest.raises(SystemExit) as info:
+        app(["studio", "--toolkit", "test_studio_logic:KIT", "--no-browser", "--port", port])
+    assert info.value.code in (0, None) and started[0].toolkit is KIT
+    code, line = _cli(["--toolkit", "no_such_toolkit_module", "--no-browser", "--port", port],
+                      capsys)
+    assert code == 1 and "--toolkit no_such_toolkit_module" in line
+
+
 def _cli(args, capsys):
     from jvl_gym.cli import app
 
