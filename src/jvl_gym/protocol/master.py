@@ -145,7 +145,7 @@ class SerialMaster(ABC):
                     return frame
                 wanted = "an accept" if expect == "accept" else "a data reply"
                 raise UnexpectedReplyError(f"{what}: expected {wanted}, got {frame!r}")
-        raise NoAnswerError(
+        raise NoAnswerError(what,
             f"motor at address {self.address} on {self.port} did not answer {what} "
             f"({self.retries + 1} attempts, timeout {self.timeout} s; {', '.join(problems)}). "
             "Check the port and baud rate, the address (MYADDR), that the motor is powered, "

@@ -18,7 +18,7 @@ import time
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
-from ..protocol.dialect import MACTALK16, MACTALK32, client_class
+from ..protocol.dialect import MACTALK16, client_class
 from ..protocol.errors import NoAnswerError, ProtocolError, RefusedError
 from ..registers import RegisterError, to_raw
 from .motor import ACTIONS, StudioMotor
@@ -72,10 +72,9 @@ class Line:
                                 "serve) or the motor is running and the port is right")
                 raise LineDown(self.problem) from None
         if dialect not in self._masters:
-            kw = {"table": None} if dialect == MACTALK32 else {}
             self._masters[dialect] = client_class(dialect)(
                 self.port, 1, timeout=self.timeout, retries=self.retries, serial=self._serial,
-                **kw)
+                table=None)
         return self._masters[dialect]
 
     def call(self, address: int, fn: Callable[[Any], Any], *, dialect: str = MACTALK16,
@@ -99,7 +98,7 @@ class Line:
                 if self._answers(address):
                     raise RefusedByMotor(
                         f"the motor at address {address} answers but did not accept the "
-                        f"request ({str(exc).split(' (')[0].split('did not answer ')[-1]}): "
+                        f"request ({exc.request}): "
                         "a value it refuses in its present mode or state (MAC050–141 manual "
                         "5.1, MIS manual §18.2.4). Nothing was changed.") from None
                 self._drop(exc)
@@ -193,8 +192,9 @@ class LineMotor(StudioMotor):
         return time.monotonic() - self._t0
 
     def actions(self) -> dict[str, Callable[[], None]]:
-        """MacTalk commands of manual 5.1 (go safe mode, go init mode, write flash, reset),
-        those whose capability the family declares (:data:`~.motor.ACTIONS`)."""
+        """The MacTalk commands (MAC050–141 manual 5.1: go safe mode, go init mode, write
+        flash, reset; MIS manual §18.2.5–§18.2.8: enter and exit safe mode, write flash,
+        reset), those whose capability the family declares (:data:`~.motor.ACTIONS`)."""
         def cmd(command: Callable[[Any], None]) -> Callable[[], None]:
             return lambda: self.call(command)
         commands: dict[str, Callable[[Any], None]] = {
@@ -208,7 +208,8 @@ class LineMotor(StudioMotor):
         return out
 
     def sample_buffer(self) -> dict[str, Any]:
-        """The motor's sample buffer in user units (MAC050–141 manual 3.2.112–3.2.116)."""
+        """The motor's sample buffer in user units, read back with the read-sample command
+        (MAC050–141 manual 3.2.112–3.2.116 and 5.1; MIS manual §8.2.60–§8.2.63)."""
         return self.call(lambda c: c.read_sample_buffer())
 
 
