@@ -25,7 +25,7 @@ from ..registers import RegisterTable
 from . import mactalk as mt
 from .dialect import MACTALK16
 from .errors import RefusedError, UnexpectedReplyError
-from .master import DEFAULT_BAUDRATE, SerialMaster
+from .master import DEFAULT_BAUDRATE, RegisterMaster
 
 __all__ = ["MacTalkClient", "DEFAULT_BAUDRATE"]
 
@@ -37,7 +37,7 @@ def _default_table() -> RegisterTable:
     return next(family(k).table for k in families() if family(k).twin.dialect == MACTALK16)
 
 
-class MacTalkClient(SerialMaster):
+class MacTalkClient(RegisterMaster):
     """A MacTalk master for one unit address (the port's plumbing: :class:`~.master.SerialMaster`).
 
     Parameters
@@ -217,25 +217,6 @@ class MacTalkClient(SerialMaster):
         assert isinstance(rep, mt.DataReply)
         return rep.data
 
-    def read_sample_buffer_raw(self) -> np.ndarray:
-        """All samples (REC_CNT of them) as raw values, shape (REC_CNT, 4) for SAMPLE1..4.
-
-        The buffer is read sample by sample until the empty reply that marks its end (twin
-        rule, docs/protocol.md); a partial read-out left over from an earlier call is drained
-        first so that the result always starts at sample 0.
-        """
-        count = int(self.read("REC_CNT"))
-        for _ in range(count + 1):  # drain to the end marker, pointer back at 0
-            if self.read_sample() == b"":
-                break
-        rows = []
-        for _ in range(count + 1):
-            d = self.read_sample()
-            if d == b"":
-                break
-            rows.append([mt.bytes_to_long(d[4 * k:4 * k + 4]) for k in range(4)])
-        return np.asarray(rows, dtype=np.int64).reshape(-1, 4)
-
     def read_sample_buffer(self) -> dict[str, np.ndarray]:
         """The sample buffer in user units, keyed by the names of SAMPLE1..SAMPLE4."""
         from ..registers import from_raw
@@ -275,15 +256,3 @@ class MacTalkClient(SerialMaster):
         self.write("MODE_REG", mode)
         self.wait_mode(0, timeout)
         return self.read_sample_buffer()
-
-    def write_registers(self, values: dict[str, float], verify: bool = True) -> None:
-        """Write several registers (e.g. synthesised filter coefficients) and read them back."""
-        for name, value in values.items():
-            self.write(name, value)
-        if verify:
-            for name, value in values.items():
-                reg = self._reg(name)
-                from ..registers import to_raw
-
-                if self.read_raw(reg.number) != int(to_raw(reg, value)):
-                    raise UnexpectedReplyError(f"{name}: read back differs from {value}")

@@ -24,13 +24,13 @@ import numpy as np
 from . import mactalk32 as m32
 from .dialect import MACTALK32
 from .errors import RefusedError, UnexpectedReplyError
-from .master import DEFAULT_BAUDRATE, SerialMaster
+from .master import DEFAULT_BAUDRATE, RegisterMaster
 from .twin32 import is_signed
 
 __all__ = ["MacTalk32Client"]
 
 
-class MacTalk32Client(SerialMaster):
+class MacTalk32Client(RegisterMaster):
     """A 32-bit MacTalk master for one unit address.
 
     Parameters
@@ -160,18 +160,6 @@ class MacTalk32Client(SerialMaster):
                                         f"{reg.access.value}; it cannot be written")
         self.write_value(reg.number, int(to_raw(reg, value)))
 
-    def write_registers(self, values: dict[str, float], verify: bool = True) -> None:
-        """Write several registers and read them back."""
-        from ..registers import to_raw
-
-        for name, value in values.items():
-            self.write(name, value)
-        if verify:
-            for name, value in values.items():
-                reg = self._reg(name)
-                if self.read_raw(reg.number) != int(to_raw(reg, value)):
-                    raise UnexpectedReplyError(f"{name}: read back differs from {value}")
-
     # ------------------------------------------------------------------ commands
     def go_safe_mode(self) -> None:
         """ENTER SAFEMODE (54h, MIS §18.2.5): the power stage off; flash and reset allowed."""
@@ -202,24 +190,6 @@ class MacTalk32Client(SerialMaster):
         the last."""
         rep = self.transact(m32.encode_read_sample(self.address), "READ SAMPLE")
         return bytes(rep.data)
-
-    def read_sample_buffer_raw(self) -> np.ndarray:
-        """All recorded samples as raw signed values, shape (samples, 4) for SAMPLE1..4.
-
-        A read-out left over from an earlier call is drained to its end first, so that the
-        result starts at the first sample; at most REC_CNT samples are read.
-        """
-        count = int(self.read("REC_CNT"))
-        for _ in range(count + 1):
-            if self.read_sample() == b"":
-                break
-        rows = []
-        for _ in range(count + 1):
-            d = self.read_sample()
-            if d == b"":
-                break
-            rows.append([m32.data_value(d[4 * k:4 * k + 4]) for k in range(4)])
-        return np.asarray(rows, dtype=np.int64).reshape(-1, 4)
 
     def read_sample_buffer(self) -> dict[str, np.ndarray]:
         """The sample buffer in user units, keyed by the names of the registers SAMPLE1..4

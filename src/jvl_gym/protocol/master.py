@@ -5,7 +5,8 @@ exchange with its timeout and retries (MAC050–141 manual 5.1; MIS manual §18.
 twin's pty) or any pyserial URL (``socket://127.0.0.1:5000``, ``rfc2217://…``). A dialect's
 client (:class:`~.client.MacTalkClient`, :class:`~.client32.MacTalk32Client`) says how a reply
 is framed and decoded; several clients of different dialects may share one open port
-(``serial=``), as motors of several families share one RS-485 line.
+(``serial=``), as motors of several families share one RS-485 line. :class:`RegisterMaster` adds
+what both dialects' clients do alike on top of their typed register access.
 """
 
 from __future__ import annotations
@@ -15,9 +16,11 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable
 from typing import Any
 
+import numpy as np
+
 from .errors import FrameError, NoAnswerError, UnexpectedReplyError
 
-__all__ = ["SerialMaster", "DEFAULT_BAUDRATE", "open_port"]
+__all__ = ["SerialMaster", "RegisterMaster", "DEFAULT_BAUDRATE", "open_port"]
 
 #: the motors' serial speed (MAC800 quick guide: 19200 baud, 8 data bits, no parity)
 DEFAULT_BAUDRATE = 19200
@@ -162,3 +165,59 @@ class SerialMaster(ABC):
             return self._decode(raw)
         except FrameError:
             return None
+
+
+class RegisterMaster(SerialMaster):
+    """A master with typed register access (a register ``table``; ``read``, ``read_raw``,
+    ``write``, ``read_sample`` of its dialect) and what follows from it alike in both dialects."""
+
+    table: Any
+
+    @abstractmethod
+    def read_raw(self, key: str | int) -> int:
+        """Stored integer of a register."""
+
+    @abstractmethod
+    def read(self, key: str | int) -> float | int:
+        """Register value in user units."""
+
+    @abstractmethod
+    def write(self, key: str | int, value: float) -> None:
+        """Write a register in user units, validated against the table first."""
+
+    @abstractmethod
+    def read_sample(self) -> bytes:
+        """One read-sample request: 16 bytes of a sample, or b"" after the last."""
+
+    def write_registers(self, values: dict[str, float], verify: bool = True) -> None:
+        """Write several registers (e.g. synthesised filter coefficients) and read them back."""
+        from ..registers import to_raw
+
+        for name, value in values.items():
+            self.write(name, value)
+        if verify:
+            for name, value in values.items():
+                reg = self.table.lookup(name)
+                if self.read_raw(reg.number) != int(to_raw(reg, value)):
+                    raise UnexpectedReplyError(f"{name}: read back differs from {value}")
+
+    def read_sample_buffer_raw(self) -> np.ndarray:
+        """All recorded samples (at most REC_CNT) as raw signed values, shape (samples, 4) for
+        SAMPLE1..4, each channel 4 bytes low byte first.
+
+        The buffer is read sample by sample until the empty reply that marks its end; a
+        partial read-out left over from an earlier call is drained first, so that the result
+        always starts at the first sample.
+        """
+        count = int(self.read("REC_CNT"))
+        for _ in range(count + 1):  # drain to the end marker, pointer back at the first
+            if self.read_sample() == b"":
+                break
+        rows = []
+        for _ in range(count + 1):
+            d = self.read_sample()
+            if d == b"":
+                break
+            rows.append([int.from_bytes(d[4 * k:4 * k + 4], "little", signed=True)
+                         for k in range(4)])
+        return np.asarray(rows, dtype=np.int64).reshape(-1, 4)

@@ -60,8 +60,8 @@ class Line:
         #: the last failure, None while the line works
         self.problem: str | None = None
 
-    def _master(self, dialect: str) -> Any:
-        """The master of ``dialect`` on the open port (the port opened if it is not)."""
+    def _port(self) -> Any:
+        """The open port (opened if it is not)."""
         from ..protocol.master import open_port
 
         if self._serial is None:
@@ -71,9 +71,14 @@ class Line:
                 self.problem = (f"cannot open {self.port}: {exc}; check that the twin (jvl-gym "
                                 "serve) or the motor is running and the port is right")
                 raise LineDown(self.problem) from None
+        return self._serial
+
+    def _master(self, dialect: str) -> Any:
+        """The master of ``dialect`` on the open port."""
+        port = self._port()
         if dialect not in self._masters:
             self._masters[dialect] = client_class(dialect)(
-                self.port, 1, timeout=self.timeout, retries=self.retries, serial=self._serial,
+                self.port, 1, timeout=self.timeout, retries=self.retries, serial=port,
                 table=None)
         return self._masters[dialect]
 
@@ -122,9 +127,8 @@ class Line:
         from ..protocol.probe import DialectProbe
 
         with self.lock:
-            self._master(MACTALK16)
             probe = DialectProbe(self.port, address, timeout=self.timeout,
-                                 retries=self.retries, serial=self._serial)
+                                 retries=self.retries, serial=self._port())
             try:
                 return probe.dialect(address)
             except (OSError, ProtocolError, ValueError) as exc:
