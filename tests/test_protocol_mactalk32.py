@@ -142,6 +142,21 @@ def test_mis_address_only_commands(encoder, command, sync: str) -> None:
     assert m32.encode(m32.Request(command, 7)) == frame
 
 
+def test_read_sample_frames() -> None:
+    """MIS §8.2.63: "The sampled values are read back using the command hex 53"; the request
+    as the MAC050–141's (manual 5.1), a sample (four 32-bit channels) in the reply frame naming
+    SAMPLE1 (register 112, MIS §8.2.60), an empty reply after the last (decision)."""
+    req = h("53h,53h,53h - 07h,F8h - AAh,AAh")
+    assert m32.encode_read_sample(7) == req
+    assert m32.decode(req) == m32.Request(C.READ_SAMPLE, 7)
+    sample = b"".join(m32.value_bytes(v) for v in (1000, -1, 0, 230_000))
+    reply = m32.encode_reply(112, sample)
+    assert reply.startswith(h("52h,52h,52h - 00h,FFh - 70h,8Fh - 10h,EFh - E8h,17h,03h,FCh"))
+    assert m32.decode(reply) == m32.Reply(112, sample)
+    assert m32.decode(h("52h,52h,52h - 00h,FFh - 70h,8Fh - 00h,FFh - AAh,AAh")) == \
+        m32.Reply(112, b"")
+
+
 def test_mis_group_write_example() -> None:
     frame = h("59h,59h,59h - 07h,F8h - 04h,FBh - 05h,FAh - 02h,FDh - E8h,17h,03h,FCh - AAh,AAh")
     assert m32.encode_group_write(7, 4, 5, m32.value_bytes(1000, 2)) == frame
@@ -194,7 +209,7 @@ CORRUPT = [
     (h("59 59 59 07 f8 04 fb 00 ff 02 fd e8 17 03 fc aa aa"), "bad_register", "register"),
     (h("50 50 50 08 f7 00 ff aa aa"), "bad_register", "register"),
     (h("50 50 50 00 ff 05 fa aa aa"), "bad_address", "master"),
-    (h("53 53 53 08 f7 aa aa"), "unknown_sync", "53h"),
+    (h("58 58 58 08 f7 aa aa"), "unknown_sync", "58h"),
     (h("54 54 55 08 f7 aa aa"), "bad_sync", "differ"),
     (h("11 11 12"), "bad_sync", "accept"),
 ]
@@ -241,8 +256,9 @@ def frames() -> st.SearchStrategy[m32.Frame]:
     return st.one_of(
         st.builds(m32.Request, st.sampled_from([C.READ, C.READ_BLOCK]), unit, reg),
         st.builds(m32.Request, st.just(C.WRITE), unit, reg, data),
-        st.builds(m32.Request, st.sampled_from([C.ENTER_SAFE_MODE, C.EXIT_SAFE_MODE,
-                                                C.WRITE_FLASH, C.RESET]), unit),
+        st.builds(m32.Request, st.sampled_from([C.READ_SAMPLE, C.ENTER_SAFE_MODE,
+                                                C.EXIT_SAFE_MODE, C.WRITE_FLASH, C.RESET]),
+                  unit),
         st.builds(m32.GroupWrite, st.integers(0, 255), st.integers(0, 255), reg, data),
         st.builds(m32.Reply, reg, st.binary(max_size=255)),
         st.just(m32.Accept()),

@@ -98,7 +98,7 @@ def test_short_and_long_writes_extend_as_the_register_format(register, data, sto
     m32.encode_write_value(7, 5, -1, length=2)[:-5] + b"\xaa\xaa",  # truncated data
     h("52 52 52 07 f8 05 fa 04 fb e8 17 03 fc 00 ff 00 fe aa aa"),  # bad complement
     h("52 52 52 07 f8 05 fa 03 fc e8 17 03 fc 00 ff aa aa"),  # Len 3
-    h("53 53 53 07 f8 aa aa"),  # not a command of this dialect
+    h("53 53 53 07 f8 aa aa"),  # a sample buffer the fake's family does not declare
 ])
 def test_refused_or_malformed_frames_get_no_reply_and_change_nothing(frame: bytes) -> None:
     twin, m = mis_twin()

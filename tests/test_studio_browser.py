@@ -282,3 +282,45 @@ def test_a_twin_shows_what_another_client_writes(page, artefacts):
         if proc is not None:
             _stop(proc)
         _stop(twin)
+
+
+def test_a_line_of_mis_and_mac800_twins(page, artefacts):
+    """`jvl-gym serve` twins of an MIS232 and a MAC800 (32-bit MacTalk, MIS manual §18.2,
+    MAC800 quick guide §1.3): a value written from the registers view is read back by another
+    client, one the other client writes appears on the page, and a value the motor refuses
+    (safe mode by MODE_REG: only by its command, MIS manual §8.2.3, §18.2.5) shows why."""
+    from jvl_gym.families import family_of_motor
+    from jvl_gym.protocol.client32 import MacTalk32Client
+
+    tcp = free_port()
+    serve = [sys.executable, "-m", "jvl_gym.cli", "serve", "--motor", "MIS232", "--address",
+             "7", "--motor", "MAC800", "--address", "8", "--tcp", f"127.0.0.1:{tcp}"]
+    twin = subprocess.Popen(serve, env=_env(), cwd=ROOT, stdout=subprocess.PIPE,
+                            stderr=subprocess.STDOUT, text=True)
+    proc = None
+    line = f"socket://127.0.0.1:{tcp}"
+    try:
+        for out in twin.stdout:
+            if "running at speed" in out:
+                break
+        proc, url = start_studio("--connect", line, "--motor", "MIS232", "--address", "7",
+                                 "--motor", "MAC800", "--address", "8")
+        page.goto(url + "/registers?m=0")
+        message = page.get_by_test_id("message")
+        write(page, "V_SOLL", "4321")
+        expect(message).to_have_text("V_SOLL = 4321")
+        with MacTalk32Client(line, 7, table=family_of_motor("MIS232").table) as other:
+            assert other.read("V_SOLL") == 4321
+        write(page, "MODE_REG", "15")
+        expect(message).to_contain_text("did not accept", timeout=10000)
+        expect(page.get_by_label("MODE_REG", exact=True)).to_have_value("0")
+        shoot(page, artefacts, "registers_line32")
+        page.goto(url + "/registers?m=1")
+        field = page.get_by_label("V_SOLL", exact=True)
+        with MacTalk32Client(line, 8, table=family_of_motor("MAC800").table) as other:
+            other.write("V_SOLL", 277)
+        expect(field).to_have_value("277")
+    finally:
+        if proc is not None:
+            _stop(proc)
+        _stop(twin)

@@ -269,15 +269,16 @@ def test_a_line_motor_reads_what_another_client_writes(twin_server):
         s.stop()
 
 
-def test_a_line_survives_a_twin_that_goes_and_comes_back():
+@pytest.mark.parametrize("motor_type, address", [("MAC140", 19), ("MIS232", 7)])
+def test_a_line_survives_a_twin_that_goes_and_comes_back(motor_type, address):
     from jvl_gym.cli_serve import build_line
     from jvl_gym.protocol.transport import TwinServer
     from jvl_gym.studio.line import LineDown
 
-    line, _ = build_line(["MAC140"], [19])
+    line, _ = build_line([motor_type], [address])
     server = TwinServer(line, tcp=("127.0.0.1", 0)).start()
     port = server.endpoint("mactalk", "tcp").port
-    s = Session.on_line(f"socket://127.0.0.1:{port}", ["MAC140"], [19])
+    s = Session.on_line(f"socket://127.0.0.1:{port}", [motor_type], [address])
     m = s.motors[0]
     try:
         assert m.read("MODE_REG") == 0
@@ -292,9 +293,134 @@ def test_a_line_survives_a_twin_that_goes_and_comes_back():
         s.stop()
 
 
-def test_a_family_the_client_does_not_speak_is_refused_on_a_line():
-    with pytest.raises(ValueError, match="mactalk32"):
-        Session.on_line("socket://127.0.0.1:9", ["MIS232"], [1])
+# ---------------------------------------------------------------------- a line of 32-bit motors
+@pytest.fixture(scope="module")
+def mixed_line():
+    """`jvl-gym serve -m MIS232 -a 7 -m MAC140 -a 8 -m MAC800 -a 9` in-process on a free
+    port: the twins of three families on one line, two dialects."""
+    from jvl_gym.cli_serve import build_line
+    from jvl_gym.protocol.transport import TwinServer
+
+    line, _ = build_line(["MIS232", "MAC140", "MAC800"], [7, 8, 9])
+    server = TwinServer(line, tcp=("127.0.0.1", 0)).start()
+    twins = {t.addresses()[0]: t for t in line.twins}
+    yield f"socket://127.0.0.1:{server.endpoint('mactalk', 'tcp').port}", twins
+    server.stop()
+
+
+def test_pair_scanned_by_dialect():
+    from jvl_gym.studio.session import pair_scanned
+
+    found = {7: "mactalk32", 8: "mactalk16"}
+    assert pair_scanned(found, ["MIS232", "MAC140"]) == [("MIS232", 7), ("MAC140", 8)]
+    with pytest.raises(ValueError, match="none of MAC140"):
+        pair_scanned(found, [])
+    with pytest.raises(ValueError, match="cannot tell them apart"):
+        pair_scanned(found, ["MIS232", "MAC800", "MAC140"])
+
+
+def test_a_scan_finds_motors_of_both_dialects(mixed_line):
+    url, _ = mixed_line
+    s = Session.on_line(url, ["MAC140", "MIS232"], [], range(6, 9))
+    try:
+        assert s.labels() == ["MIS232 @ 7", "MAC140 @ 8"]
+        assert [m.dialect for m in s.motors] == ["mactalk32", "mactalk16"]
+        assert s.motors[0].read("MODE_REG") == 0 and s.motors[1].read("MODE_REG") == 0
+    finally:
+        s.stop()
+
+
+@pytest.mark.parametrize("motor_type, address, register, value, bad, refused", [
+    # 0.01 RPM (MIS manual §8.2.6); safe mode is entered by its command, not by MODE_REG
+    # (MIS manual §8.2.3, §18.2.5)
+    ("MIS232", 7, "V_SOLL", 5000, 10**9, ("MODE_REG", 15)),
+    ("MAC800", 9, "V_SOLL", 277, 2**40, None),  # 100 RPM (quick guide 1.2)
+])
+def test_a_32_bit_line_motor_reads_writes_and_refuses(mixed_line, motor_type, address,
+                                                      register, value, bad, refused):
+    from jvl_gym.protocol.client32 import MacTalk32Client
+
+    url, twins = mixed_line
+    twin = twins[address]
+    s = Session.on_line(url, [motor_type], [address])
+    m = s.motors[0]
+    try:
+        nums = [r.number for r in m.table if groups.visible(r)]
+        with twin.lock:
+            before = {n: int(twin.m.read_raw(n)[0]) for n in nums}
+        raws = m.read_raws(nums)
+        with twin.lock:
+            after = {n: int(twin.m.read_raw(n)[0]) for n in nums}
+        stable = [n for n in nums if before[n] == after[n]]  # not a clock or a measurement
+        assert len(stable) > 0.9 * len(nums) and set(raws) == set(nums)
+        assert {n: raws[n] for n in stable} == {n: before[n] for n in stable}
+        with MacTalk32Client(url, address, table=m.table) as other:
+            other.write(register, value)
+        assert m.read(register) == value
+        res = R.edit(m, register, str(bad))
+        assert not res.ok and "outside the range" in res.message and m.read(register) == value
+        # a value within the table's range that the motor refuses: no accept, the motor
+        # still answers, the page says so and nothing changed
+        if refused is not None:
+            before = twin.m.read_raw(refused[0])[0]
+            res = R.edit(m, *map(str, refused))
+            assert not res.ok and "did not accept" in res.message and s.line.problem is None
+            assert twin.m.read_raw(refused[0])[0] == before
+        assert not R.load_setup_file(m, f"registers: {{{register}: 1, P_SOLL: 1e12}}").ok
+        assert m.read(register) == value
+    finally:
+        s.stop()
+
+
+def test_mis_on_a_line_safe_mode_flash_and_reset(mixed_line):
+    """MIS manual §18.2.5 – §18.2.8 through the studio's actions: flash outside safe mode is
+    refused with the reason and the line kept; in safe mode the value is saved and a reset
+    brings it back from flash."""
+    from jvl_gym.studio.line import RefusedByMotor
+
+    url, twins = mixed_line
+    s = Session.on_line(url, ["MIS232"], [7])
+    m = s.motors[0]
+    acts = m.actions()
+    try:
+        m.write("A_SOLL", 4711)
+        with pytest.raises(RefusedByMotor, match="safe mode"):
+            acts["save in flash"]()
+        assert s.line.problem is None
+        acts["safe mode"]()
+        assert m.facts.mode_name(m.read_raw("MODE_REG")) == "safe"
+        acts["save in flash"]()
+        m.write("A_SOLL", 1)
+        acts["reset"]()
+        assert m.read("A_SOLL") == 4711
+        acts["leave safe mode"]()
+        assert m.read_raw("MODE_REG") != twins[7].spec.safe_mode
+    finally:
+        s.stop()
+
+
+@pytest.mark.parametrize("motor_type, address, mode_register_value", [
+    ("MIS232", 7, 1), ("MAC800", 9, 1)])
+def test_capture_the_sample_buffer_over_the_line(mixed_line, motor_type, address,
+                                                 mode_register_value):
+    """The recipe of the family (MIS manual §8.2.60–8.2.63; MAC800 CNTRL_BITS record bits),
+    read back with 53h: the samples equal the twin's own buffer."""
+    url, twins = mixed_line
+    twin = twins[address]
+    s = Session.on_line(url, [motor_type], [address])
+    m = s.motors[0]
+    try:
+        m.write("V_SOLL", 2000 if motor_type == "MIS232" else 277)
+        m.write("MODE_REG", mode_register_value)
+        got = capture.capture(m, ["V_IST", "P_IST"], 20)
+        m.write("MODE_REG", 0)
+        p = got[f"P_IST [{m.register('P_IST').unit}]"]
+        assert len(p) == 20 and np.all(np.diff(p) >= 0) and p[-1] > p[0]
+        with twin.lock:
+            own = twin.m.sample_buffer(0)
+        assert np.array_equal(p, np.asarray(own["P_IST"], dtype=float)[:20])
+    finally:
+        s.stop()
 
 
 # ---------------------------------------------------------------------- tuning, episodes
@@ -377,6 +503,37 @@ def test_tuning_run_writes_the_setup_file_it_shows(tmp_path):
         assert m.read(k) == pytest.approx(v, rel=1e-6, abs=1e-9), k
 
 
+def test_tuning_a_motor_on_a_line_writes_the_result_to_the_twin(tmp_path):
+    """The tuning page on a MAC140 behind `jvl-gym serve` (in-process, a free port): the
+    pipeline of `jvl-tune autotune --port … --address …` through the toolkit, then the kept
+    registers written as `--write` writes them (the client's write_registers, read back): the
+    twin's registers hold the result's values."""
+    from tuning.studio_adapter import TOOLKIT
+
+    from jvl_gym.cli_serve import build_line
+    from jvl_gym.protocol.transport import TwinServer
+    from jvl_gym.studio.tuning_run import TuningRun
+
+    twin, _ = build_line(["MAC140"], [19])
+    server = TwinServer(twin, tcp=("127.0.0.1", 0)).start()
+    s = Session.on_line(server.endpoint("mactalk", "tcp").url, ["MAC140"], [19],
+                        toolkit=TOOLKIT)
+    try:
+        tr = TuningRun(s.motors[0], s.toolkit)
+        tr.start()
+        tr.join(600)
+        assert tr.error is None and tr.result is not None, (tr.progress, twin.last_refusal)
+        kept = tr.result.outcome.registers
+        assert tr.result.present == {k: float(twin.m.read(k)[0]) for k in kept}
+        assert any(twin.m.read(k)[0] != pytest.approx(v, abs=1 / 256) for k, v in kept.items())
+        assert "wrote" in tr.write(tmp_path)
+        for name, value in kept.items():
+            assert twin.m.read(name)[0] == pytest.approx(value, abs=1 / 256), name
+    finally:
+        server.stop()
+        s.stop()
+
+
 def test_episode_is_deterministic_and_refuses_unknown():
     from jvl_gym.studio.episodes import controllers, run_episode
 
@@ -392,6 +549,52 @@ def test_episode_is_deterministic_and_refuses_unknown():
 
 
 # ---------------------------------------------------------------------- the command line
+class NamedToolkit:
+    """A toolkit other than the installed one, for ``--toolkit test_studio_logic:KIT``."""
+
+    def autotune(self, m, seed, progress):
+        raise NotImplementedError
+
+    def autotune_line(self, port, motor, address, progress):
+        raise NotImplementedError
+
+    def write_setup(self, path, motor, registers, note):
+        raise NotImplementedError
+
+
+KIT = NamedToolkit()
+TOOLKIT = NamedToolkit()
+
+
+def test_a_toolkit_named_on_the_command_line(monkeypatch, capsys):
+    """``jvl-gym studio --toolkit MODULE[:OBJECT]`` gives the tuning page that toolkit instead
+    of the entry point's; a name that is no toolkit is a one-line error."""
+    import jvl_gym.studio.ui.app as app_module
+    from jvl_gym.studio.toolkit import load_toolkit
+
+    assert load_toolkit("test_studio_logic:KIT") is KIT
+    assert load_toolkit("test_studio_logic") is TOOLKIT  # the module's TOOLKIT
+    with pytest.raises(ValueError, match="cannot import"):
+        load_toolkit("no_such_toolkit_module")
+    with pytest.raises(ValueError, match="has no 'NOPE'"):
+        load_toolkit("test_studio_logic:NOPE")
+    with pytest.raises(TypeError, match="TuningToolkit"):
+        load_toolkit("jvl_gym.studio.toolkit:GROUP")
+    started = []
+    monkeypatch.setattr(app_module, "serve", lambda session, *a, **k: started.append(session))
+    from jvl_gym.cli import app
+
+    with __import__("socket").socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = str(sock.getsockname()[1])
+    with pytest.raises(SystemExit) as info:
+        app(["studio", "--toolkit", "test_studio_logic:KIT", "--no-browser", "--port", port])
+    assert info.value.code in (0, None) and started[0].toolkit is KIT
+    code, line = _cli(["--toolkit", "no_such_toolkit_module", "--no-browser", "--port", port],
+                      capsys)
+    assert code == 1 and "--toolkit no_such_toolkit_module" in line
+
+
 def _cli(args, capsys):
     from jvl_gym.cli import app
 

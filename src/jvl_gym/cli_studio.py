@@ -66,6 +66,9 @@ def studio(
     speed: Annotated[float, typer.Option(help="Simulated seconds per wall-clock second.")]
     = 1.0,
     seed: Annotated[int, typer.Option(help="Noise seed of the simulated motors.")] = 0,
+    toolkit: Annotated[str | None, typer.Option(
+        help="The tuning toolkit, MODULE[:OBJECT] (default: the one installed as the entry "
+        "point jvl_gym.toolkits).")] = None,
 ) -> None:
     """Open the motor workbench in the browser: motors, registers, scope, tuning, episodes."""
     try:
@@ -73,6 +76,7 @@ def studio(
     except ImportError as exc:
         raise CliError(STUDIO_EXTRA_HINT) from exc
     from .studio.session import Session
+    from .studio.toolkit import load_toolkit
     from .studio.ui.app import serve
 
     if scan is not None and connect is None:
@@ -81,11 +85,16 @@ def studio(
         raise typer.BadParameter(f"--speed must be > 0, got {speed}")
     _port_free(host, port)
     try:
+        kit = load_toolkit(toolkit) if toolkit is not None else None
+    except (ValueError, TypeError) as exc:
+        raise CliError(str(exc)) from None
+    try:
         if connect is None:
-            session = Session.simulated(motor or [], address or [], seed=seed, speed=speed)
+            session = Session.simulated(motor or [], address or [], seed=seed, speed=speed,
+                                        toolkit=kit)
         else:
             session = Session.on_line(connect, motor or [], address or [],
-                                      parse_range(scan) if scan else None)
+                                      parse_range(scan) if scan else None, toolkit=kit)
     except (ValueError, ConnectionError) as exc:
         raise CliError(str(exc)) from None
     typer.echo(f"jvl-gym studio on http://{host}:{port} with "

@@ -5,7 +5,9 @@
   families (MAC800 serial quick guide §1.3, MIS manual §18.2): pure functions, bytes in / bytes
   out, streaming decoders that resynchronise; :mod:`.dialect` — which MacTalk a family speaks.
 * :class:`MacTalkClient` — pyserial client (device path or any pyserial URL such as
-  ``socket://127.0.0.1:5000``), typed read/write by register name.
+  ``socket://127.0.0.1:5000``), typed read/write by register name; :class:`MacTalk32Client`
+  the same in the 32-bit MacTalk; both on :mod:`.master` (the port, timeout, retries);
+  :mod:`.probe` — which dialect a unit on a line speaks.
 * :mod:`.twin` (:mod:`.twin32` for the 32-bit families) and :mod:`.transport` — a simulated
   motor (or several on one bus; :mod:`.bus`: motors of several families on one line) served over
   a pseudo-terminal or TCP on localhost (``jvl-gym serve``).
@@ -27,6 +29,7 @@ from .errors import FrameError, NoAnswerError, ProtocolError, RefusedError, Unex
 
 __all__ = [
     "FrameError",
+    "MacTalk32Client",
     "MacTalkClient",
     "NoAnswerError",
     "ProtocolError",
@@ -40,9 +43,13 @@ __all__ = [
 ]
 
 
-def __getattr__(name: str) -> Any:  # the client needs pyserial: import it on first use
+def __getattr__(name: str) -> Any:  # the clients need pyserial: import them on first use
     if name == "MacTalkClient":
         from .client import MacTalkClient
 
         return MacTalkClient
+    if name == "MacTalk32Client":
+        from .client32 import MacTalk32Client
+
+        return MacTalk32Client
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -16,30 +16,29 @@ Examples
 from __future__ import annotations
 
 import time
+from collections.abc import Iterable
 from typing import Any
 
 import numpy as np
 
 from ..registers import RegisterTable
 from . import mactalk as mt
-from .errors import FrameError, NoAnswerError, RefusedError, UnexpectedReplyError
+from .dialect import MACTALK16
+from .errors import RefusedError, UnexpectedReplyError
+from .master import DEFAULT_BAUDRATE, RegisterMaster
 
 __all__ = ["MacTalkClient", "DEFAULT_BAUDRATE"]
-
-#: the MAC motors' serial speed (MAC800 quick guide: 19200 baud, 8 data bits, no parity)
-DEFAULT_BAUDRATE = 19200
-
 
 def _default_table() -> RegisterTable:
     """The register table of the first registered family that speaks this client's MacTalk
     (:data:`~.dialect.MACTALK16`, ``jvl_gym.families``)."""
     from ..families import families, family
-    from .dialect import MACTALK16
 
     return next(family(k).table for k in families() if family(k).twin.dialect == MACTALK16)
 
-class MacTalkClient:
-    """A MacTalk master for one unit address.
+
+class MacTalkClient(RegisterMaster):
+    """A MacTalk master for one unit address (the port's plumbing: :class:`~.master.SerialMaster`).
 
     Parameters
     ----------
@@ -56,52 +55,23 @@ class MacTalkClient:
     table : RegisterTable, optional
         Register table for typed access (default: the table of the first registered family
         that speaks the 16-bit MacTalk, the MAC050–141).
+    serial : serial.SerialBase, optional
+        An open port to share.
     serial_kwargs
         Passed to ``serial.serial_for_url``.
     """
 
+    dialect = MACTALK16
+
     def __init__(self, port: str, address: int = 1, *, timeout: float = 0.5, retries: int = 2,
-                 baudrate: int = DEFAULT_BAUDRATE, table: Any = None, **serial_kwargs: Any
-                 ) -> None:
-        import serial
-
-
-        if not 1 <= address <= 255:
-            raise ValueError(f"unit address must be 1..255, got {address}")
-        self.port = port
-        self.address = address
-        self.timeout = timeout
-        self.retries = retries
+                 baudrate: int = DEFAULT_BAUDRATE, table: Any = None, serial: Any = None,
+                 **serial_kwargs: Any) -> None:
+        super().__init__(port, address, timeout=timeout, retries=retries, baudrate=baudrate,
+                         serial=serial, **serial_kwargs)
         self.table = table if table is not None else _default_table()
-        self.ser = serial.serial_for_url(port, baudrate=baudrate, timeout=timeout,
-                                         **serial_kwargs)
-        #: counters: requests, retries, bytes
-        self.requests = 0
-        self.retried = 0
-
-    # ------------------------------------------------------------------ plumbing
-    def close(self) -> None:
-        """Close the port."""
-        self.ser.close()
 
     def __enter__(self) -> MacTalkClient:
         return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
-
-    def _read_exact(self, n: int, deadline: float) -> bytes:
-        out = bytearray()
-        while len(out) < n:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                break
-            self.ser.timeout = left
-            chunk = self.ser.read(n - len(out))
-            if not chunk:
-                break
-            out += chunk
-        return bytes(out)
 
     def _read_reply(self, deadline: float) -> bytes:
         """Read one reply frame: an accept or a data reply (length from its datalength)."""
@@ -114,41 +84,13 @@ class MacTalkClient:
         dl = head[5]
         return head + self._read_exact(2 * dl + 2, deadline)
 
-    def transact(self, request: bytes, what: str, expect: str = "data") -> mt.Frame | None:
-        """Send ``request`` and return the decoded reply (``expect`` = "data", "accept" or
-        "none"), with retries; raise :class:`NoAnswerError` if nothing valid comes back."""
-        self.requests += 1
-        problems: list[str] = []
-        for attempt in range(self.retries + 1):
-            if attempt:
-                self.retried += 1
-            self.ser.reset_input_buffer()
-            self.ser.write(request)
-            self.ser.flush()
-            if expect == "none":
-                return None
-            raw = self._read_reply(time.monotonic() + self.timeout)
-            if not raw:
-                problems.append("no answer")
-                continue
-            try:
-                frame = mt.decode(raw)
-            except FrameError as err:
-                problems.append(f"garbled reply ({err.reason})")
-                time.sleep(min(0.05, self.timeout))
-                continue
-            if expect == "accept" and isinstance(frame, mt.Accept):
-                return frame
-            if expect == "data" and isinstance(frame, mt.DataReply):
-                return frame
-            wanted = "an accept" if expect == "accept" else "a data reply"
-            raise UnexpectedReplyError(f"{what}: expected {wanted}, got {frame!r}")
-        raise NoAnswerError(
-            f"motor at address {self.address} on {self.port} did not answer {what} "
-            f"({self.retries + 1} attempts, timeout {self.timeout} s; {', '.join(problems)}). "
-            "Check the port and baud rate, the address (MYADDR, register 156), that the motor is "
-            "powered, and whether it refused the request: a write that is out of range or not "
-            "allowed in the present mode gets no accept (manual 5.1).")
+    def _decode(self, raw: bytes) -> mt.Frame:
+        return mt.decode(raw)
+
+    def _kind(self, frame: Any) -> str:
+        if isinstance(frame, mt.Accept):
+            return "accept"
+        return "data" if isinstance(frame, mt.DataReply) else "other"
 
     # ------------------------------------------------------------------ raw access
     def read_words(self, register: int) -> tuple[int, int]:
@@ -167,6 +109,29 @@ class MacTalkClient:
                             f"READ BLOCK {register}")
         assert isinstance(rep, mt.DataReply)
         return mt.bytes_to_words(rep.data)
+
+    def read_raws(self, numbers: Iterable[int]) -> dict[int, int]:
+        """Stored integers of several registers (:meth:`read_raw` each), read two numbers
+        per request (a read returns registers N and N+1, manual 5.1)."""
+        from ..registers import Format, from_word16, join_longint
+
+        numbers = sorted(set(numbers))
+        words: dict[int, int] = {}
+        for n in numbers:
+            if n not in words:
+                words[n], words[n + 1] = self.read_words(n)
+        out: dict[int, int] = {}
+        for n in numbers:
+            reg = self._reg(n)
+            if reg.format == Format.LONGINT:
+                if n + 1 not in words:
+                    words[n + 1] = self.read_words(n + 1)[0]
+                out[n] = int(join_longint(words[n], words[n + 1]))
+            elif reg.access.value == "reserved":
+                out[n] = words[n]
+            else:
+                out[n] = int(from_word16(reg, words[n]))
+        return out
 
     def write_word(self, register: int, word: int) -> None:
         """Write one 16-bit word (datalength 2) and wait for the accept."""
@@ -252,25 +217,6 @@ class MacTalkClient:
         assert isinstance(rep, mt.DataReply)
         return rep.data
 
-    def read_sample_buffer_raw(self) -> np.ndarray:
-        """All samples (REC_CNT of them) as raw values, shape (REC_CNT, 4) for SAMPLE1..4.
-
-        The buffer is read sample by sample until the empty reply that marks its end (twin
-        rule, docs/protocol.md); a partial read-out left over from an earlier call is drained
-        first so that the result always starts at sample 0.
-        """
-        count = int(self.read("REC_CNT"))
-        for _ in range(count + 1):  # drain to the end marker, pointer back at 0
-            if self.read_sample() == b"":
-                break
-        rows = []
-        for _ in range(count + 1):
-            d = self.read_sample()
-            if d == b"":
-                break
-            rows.append([mt.bytes_to_long(d[4 * k:4 * k + 4]) for k in range(4)])
-        return np.asarray(rows, dtype=np.int64).reshape(-1, 4)
-
     def read_sample_buffer(self) -> dict[str, np.ndarray]:
         """The sample buffer in user units, keyed by the names of SAMPLE1..SAMPLE4."""
         from ..registers import from_raw
@@ -310,15 +256,3 @@ class MacTalkClient:
         self.write("MODE_REG", mode)
         self.wait_mode(0, timeout)
         return self.read_sample_buffer()
-
-    def write_registers(self, values: dict[str, float], verify: bool = True) -> None:
-        """Write several registers (e.g. synthesised filter coefficients) and read them back."""
-        for name, value in values.items():
-            self.write(name, value)
-        if verify:
-            for name, value in values.items():
-                reg = self._reg(name)
-                from ..registers import to_raw
-
-                if self.read_raw(reg.number) != int(to_raw(reg, value)):
-                    raise UnexpectedReplyError(f"{name}: read back differs from {value}")

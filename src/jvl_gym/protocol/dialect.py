@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from typing import Any
 
-__all__ = ["MACTALK16", "MACTALK32", "DIALECTS", "check_dialect", "dialect_of"]
+__all__ = ["MACTALK16", "MACTALK32", "DIALECTS", "check_dialect", "dialect_of", "client_class"]
 
 #: MacTalk of the MAC050–141 (manual 5.1)
 MACTALK16 = "mactalk16"
@@ -33,3 +33,16 @@ def dialect_of(motors: Any) -> str:
     """The default MacTalk dialect of ``motors``' family (its contract's
     :attr:`~jvl_gym.families.TwinSpec.dialect`), checked."""
     return check_dialect(motors.family.twin.dialect)
+
+
+def client_class(name: str) -> type:
+    """The master of dialect ``name``: :class:`~.client.MacTalkClient` (16-bit) or
+    :class:`~.client32.MacTalk32Client` (32-bit), both :class:`~.master.SerialMaster`."""
+    check_dialect(name)
+    if name == MACTALK32:
+        from .client32 import MacTalk32Client
+
+        return MacTalk32Client
+    from .client import MacTalkClient
+
+    return MacTalkClient

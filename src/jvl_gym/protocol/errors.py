@@ -58,7 +58,19 @@ class FrameError(ProtocolError, ValueError):
 
 
 class NoAnswerError(ProtocolError, TimeoutError):
-    """The motor did not answer within the timeout, after all retries."""
+    """The motor did not answer within the timeout, after all retries.
+
+    Parameters
+    ----------
+    request : str
+        The request that got no answer (``"WRITE 2 = 15"``).
+    message : str
+        What happened and what to check.
+    """
+
+    def __init__(self, request: str, message: str) -> None:
+        super().__init__(message)
+        self.request = request
 
 
 class UnexpectedReplyError(ProtocolError):

@@ -11,8 +11,9 @@ following byte protected by its complement, ``AAh AAh`` end), with these differe
   §18.2.2) — a write frame to the master's address 0;
 * read block (51h) replies with 128 data bytes (MIS §18.2.3), i.e. 32 registers of 4 bytes
   (decision below);
-* 54h is "enter safe mode" and 55h "exit safe mode" (MIS §18.2.5, §18.2.6); 53h (sample
-  buffer) is not a command of this dialect (MIS §18.2.1 does not list it);
+* 54h is "enter safe mode" and 55h "exit safe mode" (MIS §18.2.5, §18.2.6);
+* 53h reads the sample buffer ("The sampled values are read back using the command hex 53
+  SMC_READSAMPLE", MIS §8.2.63), one sample per request (decision below);
 * program status and command (61h, MIS §18.2.10): the command number and its data after a
   length, every byte protected; the unit answers with 61h to the master's address and 8 status
   bytes (:class:`ProgramReply`);
@@ -24,6 +25,7 @@ Grammar::
     read          50h 50h 50h  <addr> <regnum>                    AAh AAh  → reply
     read block    51h 51h 51h  <addr> <regnum>                    AAh AAh  → reply (128 bytes)
     write         52h 52h 52h  <addr> <regnum> <len> <data…>      AAh AAh  → accept
+    read sample   53h 53h 53h  <addr>                             AAh AAh  → reply (16 or 0)
     enter safe    54h 54h 54h  <addr>                             AAh AAh  → accept
     exit safe     55h 55h 55h  <addr>                             AAh AAh  → accept
     write flash   56h 56h 56h  <addr>                             AAh AAh  → accept if it failed
@@ -49,6 +51,14 @@ families"):
 * **Read block size.** MIS §18.2.3 says "64 consecutive registers" and "Len = 128, so 64
   registers is read in each block"; 64 registers of 32 bits are 256 bytes, more than a one-byte
   ``Len`` holds. ``Len`` = 128 is followed: 32 registers of 4 bytes (:data:`BLOCK_REGISTERS`).
+* **Read sample buffer.** MIS §8.2.63 names the command 53h but §18.2.1 does not list it
+  and no section gives its frames. Readings: (a) the request of the MAC050–141 (manual 5.1:
+  ``53h×3 <addr> AAh AAh``, the next sample per request, an empty reply after the last), its
+  reply in this dialect's reply frame; (b) a read block of the buffer. (a) is chosen, the one
+  frame the MacTalk family already has for it: the reply names the register of the first
+  channel (SAMPLE1, as a read reply names the register it answers) and carries one sample,
+  the four channels as 32-bit values (16 bytes), or no data after the last of REC_CNT
+  samples; the next request starts again at the first.
 * **Misprints in the quick guide's examples** (each is a unit test as decided here): §1.3.3
   example 1 sends the register number as ``05h,F6h`` and the reply ``05h,F6h``, whose
   complement is wrong (05h is followed by FAh, as in the block description), and calls the
@@ -94,6 +104,7 @@ __all__ = [
     "encode_read_block",
     "encode_write",
     "encode_write_value",
+    "encode_read_sample",
     "encode_enter_safe_mode",
     "encode_exit_safe_mode",
     "encode_write_flash",
@@ -130,6 +141,7 @@ class Command(enum.IntEnum):
     READ = 0x50  #: read one register (reply 52h with the register number, 4 bytes)
     READ_BLOCK = 0x51  #: read 32 registers (reply 52h, 128 bytes)
     WRITE = 0x52  #: write a register (accept); also the sync of the reply to the master
+    READ_SAMPLE = 0x53  #: the next sample of the sample buffer (reply 52h; MIS §8.2.63)
     ENTER_SAFE_MODE = 0x54  #: enter safe mode (accept; MIS §18.2.5)
     EXIT_SAFE_MODE = 0x55  #: exit safe mode (accept; MIS §18.2.6)
     WRITE_FLASH = 0x56  #: registers to flash, then reset (accept only if it failed; §18.2.7)
@@ -286,6 +298,12 @@ def encode_write_value(address: int, register: int, value: int, length: int = 4)
     return encode_write(address, register, value_bytes(value, length))
 
 
+def encode_read_sample(address: int) -> bytes:
+    """Read the next sample of the sample buffer (MIS §8.2.63; the frame is a decision,
+    see above)."""
+    return _message(Command.READ_SAMPLE, bytes((_unit(address),)))
+
+
 def encode_enter_safe_mode(address: int) -> bytes:
     """Enter safe mode (MIS §18.2.5)."""
     return _message(Command.ENTER_SAFE_MODE, bytes((_unit(address),)))
@@ -395,8 +413,8 @@ def _parse(buf: bytes | bytearray) -> tuple[Frame, int]:
                             "(expected 11h 11h 11h)", "bad_sync")
         return Accept(), 3
     if b0 not in _SYNC_BYTES:
-        raise Malformed(f"unknown sync byte {b0:02X}h (the 32-bit MacTalk syncs are 50h, 51h, "
-                        "52h, 54h..57h, 59h, 61h, accept 11h)", "unknown_sync")
+        raise Malformed(f"unknown sync byte {b0:02X}h (the 32-bit MacTalk syncs are 50h..57h, "
+                        "59h, 61h, accept 11h)", "unknown_sync")
     rest = r.take(2)
     if rest[0] != b0 or rest[1] != b0:
         raise Malformed(f"sync bytes differ: {b0:02X}h {rest[0]:02X}h {rest[1]:02X}h "
@@ -445,7 +463,7 @@ def _parse(buf: bytes | bytearray) -> tuple[Frame, int]:
 
 
 #: a possible frame start: a sync or accept byte twice more, or up to the end of the buffer
-_START = re.compile(rb"([\x11\x50-\x52\x54-\x57\x59\x61])(?:\1\1|\1\Z|\Z)")
+_START = re.compile(rb"([\x11\x50-\x57\x59\x61])(?:\1\1|\1\Z|\Z)")
 _RUNS = {b: re.compile(re.escape(bytes((b,))) + b"+") for b in _SYNC_BYTES}
 
 

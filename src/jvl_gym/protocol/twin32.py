@@ -7,6 +7,11 @@ read block (51h)       reply with the 32 registers N … N+31 (128 bytes)
 write (52h)            4 bytes: the 32-bit value; 2 bytes: extended as the register's format
                        (sign for signed, zero for Word32; :mod:`.mactalk32`). Validated by the
                        simulator; accept only if carried out
+read sample (53h)      the next sample, SAMPLE1..4 as four 32-bit values (16 bytes) in a
+                       reply naming SAMPLE1; after the last of the recorded samples a reply
+                       without data, then from the first again (MIS §8.2.63; the frame is a
+                       decision, :mod:`.mactalk32`). A write of CNTRL_BITS, MODE_REG or
+                       REC_CNT, a reset and a flash write start it at the first again
 enter safe mode (54h)  ``enter_safe_mode``, accept (MIS §18.2.5)
 exit safe mode (55h)   ``exit_safe_mode`` when in safe mode (else nothing to do), accept
                        (MIS §18.2.6)
@@ -99,6 +104,8 @@ class MacTalk32Unit:
         except (RegisterError, ValueError) as exc:
             t.refuse(str(exc))
             return False
+        if reg in (t.reg.CNTRL_BITS, t.reg.MODE_REG, t.reg.REC_CNT):
+            t._sample_ptr[i] = 0
         return True
 
     # ------------------------------------------------------------------ frames
@@ -140,6 +147,9 @@ class MacTalk32Unit:
                                         self.data(i, f.register or 0, m32.BLOCK_REGISTERS))
             if cmd == c.WRITE:
                 return m32.ACCEPT if self.write(i, f.register or 0, f.data) else b""
+            if cmd == c.READ_SAMPLE:
+                t.require(Capability.SAMPLE_BUFFER)
+                return m32.encode_reply(t.reg.SAMPLE1, t._next_sample(i))
             if cmd == c.ENTER_SAFE_MODE:
                 t.require(Capability.SAFE_MODE)
                 t.m.enter_safe_mode(i)
@@ -173,5 +183,7 @@ class MacTalk32Unit:
         raise AssertionError(cmd)  # pragma: no cover
 
     def power_on(self, i: int) -> None:
-        """Protocol state of motor ``i`` after a reset: no group write received."""
+        """Protocol state of motor ``i`` after a reset: no group write received, the sample
+        buffer read from its first sample."""
         self.group_seq[i] = None
+        self.twin._sample_ptr[i] = 0

@@ -6,8 +6,8 @@ The logic lives in modules of one concept each and runs without a browser:
   error and status bits, test modes), through the family's public objects only;
 * :mod:`.motor` — one motor seen by the studio: :class:`~.motor.SimMotor` (one in-process
   :class:`~jvl_gym.MotorArray`), :mod:`.line` — :class:`~.line.LineMotor` (a twin or a real
-  motor behind the project's MacTalk client), :mod:`.session` — the motors of a studio and the
-  real-time clock of the simulated ones;
+  motor behind the project's MacTalk clients, either dialect), :mod:`.session` — the motors
+  of a studio and the real-time clock of the simulated ones;
 * :mod:`.bits` — bit registers in words, :mod:`.groups` — the register groups of the manuals,
   :mod:`.registers` — the register view's rows, edits and setup files;
 * :mod:`.scope` — scope channels and buffers, CSV and PNG export; :mod:`.capture` — the

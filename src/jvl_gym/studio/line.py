@@ -1,11 +1,14 @@
-"""Motors on a serial line or a twin's TCP endpoint, through the project's MacTalk client.
+"""Motors on a serial line or a twin's TCP endpoint, through the project's MacTalk clients.
 
-One :class:`Line` holds one :class:`~jvl_gym.protocol.client.MacTalkClient` (a device path or a
-pyserial URL such as ``socket://127.0.0.1:5000``) and addresses each request to the motor that
-asks (MAC050–141 manual 5.1: one master, several units by MYADDR). A line that fails (the twin
-stopped, the cable pulled) is closed and opened again on the next request, so the studio keeps
-running and the motors come back when the other end does. :class:`LineMotor` is one motor on
-it; :func:`scan` lists the addresses that answer.
+One :class:`Line` holds one open port (a device path or a pyserial URL such as
+``socket://127.0.0.1:5000``) and one master per MacTalk dialect on it
+(:func:`~jvl_gym.protocol.dialect.client_class`: the 16-bit MacTalk of the MAC050–141, manual
+5.1; the 32-bit MacTalk of the MAC800 and MIS, quick guide §1.3, MIS manual §18.2), and
+addresses each request to the motor that asks, in the dialect its family declares (one master,
+several units by MYADDR). A line that fails (the twin stopped, the cable pulled) is closed and
+opened again on the next request, so the studio keeps running and the motors come back when
+the other end does. :class:`LineMotor` is one motor on it; :func:`scan` lists the addresses
+that answer, with the dialect each speaks.
 """
 
 from __future__ import annotations
@@ -15,20 +18,27 @@ import time
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
-from ..protocol.dialect import MACTALK16
-from ..protocol.errors import ProtocolError
-from ..registers import Format, RegisterError, to_raw
+from ..protocol.dialect import MACTALK16, client_class
+from ..protocol.errors import NoAnswerError, ProtocolError, RefusedError
+from ..registers import RegisterError, to_raw
 from .motor import ACTIONS, StudioMotor
 
-__all__ = ["Line", "LineMotor", "LineDown", "scan"]
+__all__ = ["Line", "LineMotor", "LineDown", "RefusedByMotor", "scan"]
 
 
 class LineDown(ConnectionError):
     """The line cannot be reached now (one line: what, where, what to do)."""
 
 
+class RefusedByMotor(RegisterError):
+    """The motor answers but did not carry out a request: a write it did not accept (no
+    accept, MAC050–141 manual 5.1, MIS manual §18.2.4) or a command the client refuses to send
+    (:class:`~jvl_gym.protocol.errors.RefusedError`); nothing was changed."""
+
+
 class Line:
-    """One MacTalk master on ``port``, opened on first use and again after a failure.
+    """One MacTalk master per dialect on ``port``, opened on first use and again after a
+    failure.
 
     Parameters
     ----------
@@ -38,125 +48,136 @@ class Line:
         Seconds to wait for each reply.
     retries : int
         Extra attempts after a timeout.
-    table : RegisterTable
-        The register table of the motors' family (typed access of the client).
     """
 
-    def __init__(self, port: str, *, timeout: float = 0.3, retries: int = 1,
-                 table: Any = None) -> None:
+    def __init__(self, port: str, *, timeout: float = 0.3, retries: int = 1) -> None:
         self.port = port
         self.timeout = timeout
         self.retries = retries
-        self.table = table
         self.lock = threading.RLock()
-        self._client: Any = None
+        self._serial: Any = None
+        self._masters: dict[str, Any] = {}
         #: the last failure, None while the line works
         self.problem: str | None = None
 
-    def _open(self) -> Any:
-        from ..protocol.client import MacTalkClient
+    def _port(self) -> Any:
+        """The open port (opened if it is not)."""
+        from ..protocol.master import open_port
 
-        try:
-            return MacTalkClient(self.port, 1, timeout=self.timeout, retries=self.retries,
-                                 table=self.table)
-        except Exception as exc:  # pyserial raises SerialException (an OSError) or ValueError
-            raise LineDown(f"cannot open {self.port}: {exc}; check that the twin (jvl-gym "
-                           "serve) or the motor is running and the port is right") from None
-
-    def call(self, address: int, fn: Callable[[Any], Any]) -> Any:
-        """Run ``fn(client)`` with the client addressed to ``address``; a failed line is
-        closed (and opened again by the next call) and raised as :class:`LineDown`; a
-        refused value (:class:`RegisterError`) passes through with the line kept."""
-        with self.lock:
-            if self._client is None:
-                try:
-                    self._client = self._open()
-                except LineDown as exc:
-                    self.problem = str(exc)
-                    raise
-            self._client.address = address
+        if self._serial is None:
             try:
-                out = fn(self._client)
+                self._serial = open_port(self.port, self.timeout)
+            except Exception as exc:  # pyserial: SerialException (an OSError) or ValueError
+                self.problem = (f"cannot open {self.port}: {exc}; check that the twin (jvl-gym "
+                                "serve) or the motor is running and the port is right")
+                raise LineDown(self.problem) from None
+        return self._serial
+
+    def _master(self, dialect: str) -> Any:
+        """The master of ``dialect`` on the open port."""
+        port = self._port()
+        if dialect not in self._masters:
+            self._masters[dialect] = client_class(dialect)(
+                self.port, 1, timeout=self.timeout, retries=self.retries, serial=port,
+                table=None)
+        return self._masters[dialect]
+
+    def call(self, address: int, fn: Callable[[Any], Any], *, dialect: str = MACTALK16,
+             table: Any = None) -> Any:
+        """Run ``fn(client)`` with the ``dialect`` master addressed to ``address`` (typed by
+        ``table``); a failed line is closed (and opened again by the next call) and raised as
+        :class:`LineDown`; a refused value (:class:`RegisterError`) passes through with the
+        line kept."""
+        with self.lock:
+            client = self._master(dialect)
+            client.address = address
+            if table is not None:
+                client.table = table
+            try:
+                out = fn(client)
             except RegisterError:
                 raise
+            except RefusedError as exc:
+                raise RefusedByMotor(str(exc)) from None
+            except NoAnswerError as exc:
+                if self._answers(address):
+                    raise RefusedByMotor(
+                        f"the motor at address {address} answers but did not accept the "
+                        f"request ({exc.request}): "
+                        "a value it refuses in its present mode or state (MAC050–141 manual "
+                        "5.1, MIS manual §18.2.4). Nothing was changed.") from None
+                self._drop(exc)
+                raise LineDown(self.problem) from None
             except (OSError, ProtocolError, ValueError) as exc:
                 self._drop(exc)
                 raise LineDown(self.problem) from None
             self.problem = None
             return out
 
+    def _answers(self, address: int) -> bool:
+        """Whether the unit at ``address`` answers a read now."""
+        try:
+            return self.probe(address) is not None
+        except LineDown:
+            return False
+
+    def probe(self, address: int) -> str | None:
+        """The dialect of the unit at ``address``, None if none answers
+        (:class:`~jvl_gym.protocol.probe.DialectProbe`)."""
+        from ..protocol.probe import DialectProbe
+
+        with self.lock:
+            probe = DialectProbe(self.port, address, timeout=self.timeout,
+                                 retries=self.retries, serial=self._port())
+            try:
+                return probe.dialect(address)
+            except (OSError, ProtocolError, ValueError) as exc:
+                self._drop(exc)
+                raise LineDown(self.problem) from None
+
     def _drop(self, exc: BaseException) -> None:
         self.problem = f"{self.port}: {exc}"
-        try:
-            self._client.close()
-        except Exception:  # noqa: BLE001 - the port is gone already
-            pass
-        self._client = None
+        self.close()
 
     def close(self) -> None:
         """Close the port."""
         with self.lock:
-            if self._client is not None:
-                self._client.close()
-                self._client = None
+            self._masters.clear()
+            if self._serial is not None:
+                try:
+                    self._serial.close()
+                except Exception:  # noqa: BLE001 - the port is gone already
+                    pass
+                self._serial = None
 
 
 class LineMotor(StudioMotor):
-    """A motor at ``address`` on ``line``.
-
-    Raises
-    ------
-    ValueError
-        The motor type's family speaks a MacTalk the project's client does not
-        (:mod:`jvl_gym.protocol.dialect`).
-    """
+    """A motor at ``address`` on ``line``, spoken to in its family's MacTalk dialect
+    (:attr:`~jvl_gym.families.TwinSpec.dialect`)."""
 
     def __init__(self, line: Line, motor_type: str, address: int) -> None:
         super().__init__(motor_type, address)
-        dialect = self.family.twin.dialect
-        if dialect != MACTALK16:
-            raise ValueError(f"{motor_type}: the {self.facts.title} speak {dialect}; the "
-                             f"protocol client speaks {MACTALK16} (MAC050–141 manual 5.1) only: "
-                             "simulate it in-process with --motor instead")
-        if line.table is None:
-            line.table = self.table
+        self.dialect = self.family.twin.dialect
+        client_class(self.dialect)  # a dialect the protocol package speaks
         self.line = line
         self._t0 = time.monotonic()
 
+    def call(self, fn: Callable[[Any], Any]) -> Any:
+        """``fn(client)`` on the line, with the master of this motor's dialect and table."""
+        return self.line.call(self.address, fn, dialect=self.dialect, table=self.table)
+
     def read_raw(self, key: str | int) -> int:
         number = self.register(key).number
-        return int(self.line.call(self.address, lambda c: c.read_raw(number)))
+        return int(self.call(lambda c: c.read_raw(number)))
 
     def read_raws(self, numbers: Iterable[int]) -> dict[int, int]:
-        """Stored integers of several registers, read two numbers per request (manual 5.1:
-        a read returns registers N and N+1)."""
-        from ..registers import from_word16, join_longint
-
-        numbers = sorted(set(numbers))
-        out: dict[int, int] = {}
-
-        def read_all(client: Any) -> None:
-            words: dict[int, int] = {}
-            for n in numbers:
-                if n not in words:
-                    words[n], words[n + 1] = client.read_words(n)
-            for n in numbers:
-                reg = self.register(n)
-                if reg.format == Format.LONGINT:
-                    if n + 1 not in words:
-                        words[n + 1] = client.read_words(n + 1)[0]
-                    out[n] = int(join_longint(words[n], words[n + 1]))
-                elif reg.access.value == "reserved":
-                    out[n] = words[n]
-                else:
-                    out[n] = int(from_word16(reg, words[n]))
-
-        self.line.call(self.address, read_all)
-        return out
+        """Stored integers of several registers, in as few requests as the dialect allows
+        (the clients' ``read_raws``)."""
+        return self.call(lambda c: c.read_raws(numbers))
 
     def write(self, key: str | int, value: float) -> None:
         reg = self.register(key)
-        self.line.call(self.address, lambda c: c.write(reg.number, value))
+        self.call(lambda c: c.write(reg.number, value))
 
     def load_setup(self, registers: Mapping[str, float]) -> None:
         regs = {self.register(k).name: float(v) for k, v in registers.items()}
@@ -169,16 +190,17 @@ class LineMotor(StudioMotor):
                 raise RegisterError(f"{name} (register {reg.number}) is {reg.access.value}; "
                                     "a setup holds writable registers only. Nothing was changed.")
             to_raw(reg, value)
-        self.line.call(self.address, lambda c: c.write_registers(regs))
+        self.call(lambda c: c.write_registers(regs))
 
     def now(self) -> float:
         return time.monotonic() - self._t0
 
     def actions(self) -> dict[str, Callable[[], None]]:
-        """MacTalk commands of manual 5.1 (go safe mode, go init mode, write flash, reset),
-        those whose capability the family declares (:data:`~.motor.ACTIONS`)."""
+        """The MacTalk commands (MAC050–141 manual 5.1: go safe mode, go init mode, write
+        flash, reset; MIS manual §18.2.5–§18.2.8: enter and exit safe mode, write flash,
+        reset), those whose capability the family declares (:data:`~.motor.ACTIONS`)."""
         def cmd(command: Callable[[Any], None]) -> Callable[[], None]:
-            return lambda: self.line.call(self.address, command)
+            return lambda: self.call(command)
         commands: dict[str, Callable[[Any], None]] = {
             "safe mode": lambda c: c.go_safe_mode(), "leave safe mode": lambda c: c.go_init_mode(),
             "save in flash": lambda c: c.write_flash(), "reset": lambda c: c.reset()}
@@ -190,19 +212,17 @@ class LineMotor(StudioMotor):
         return out
 
     def sample_buffer(self) -> dict[str, Any]:
-        """The motor's sample buffer in user units (MAC050–141 manual 3.2.112–3.2.116)."""
-        return self.line.call(self.address, lambda c: c.read_sample_buffer())
+        """The motor's sample buffer in user units, read back with the read-sample command
+        (MAC050–141 manual 3.2.112–3.2.116 and 5.1; MIS manual §8.2.60–§8.2.63)."""
+        return self.call(lambda c: c.read_sample_buffer())
 
 
-def scan(line: Line, addresses: Iterable[int], register: int = 2) -> list[int]:
-    """The addresses of ``addresses`` at which a motor answers a read of ``register``."""
-    found = []
+def scan(line: Line, addresses: Iterable[int]) -> dict[int, str]:
+    """The addresses of ``addresses`` at which a unit answers, with the MacTalk dialect of its
+    reply (:meth:`Line.probe`)."""
+    found: dict[int, str] = {}
     for a in addresses:
-        try:
-            line.call(a, lambda c: c.read_words(register))
-        except LineDown:
-            if line.problem and "did not answer" not in line.problem:
-                raise
-            continue
-        found.append(a)
+        dialect = line.probe(a)
+        if dialect is not None:
+            found[a] = dialect
     return found

@@ -211,10 +211,12 @@ class SimMotor(StudioMotor):
         return {k: np.asarray(v)[0] for k, v in buf.items()}
 
     def physical(self) -> dict[str, tuple[str, Callable[[], float]]]:
+        """The :data:`PHYSICAL_SIGNALS` the family's array declares (its contract's
+        ``array_class.PHYSICAL``): label → (unit, reader)."""
+        declared = self.family.array_class.PHYSICAL
         out: dict[str, tuple[str, Callable[[], float]]] = {}
-        have = type(self.array).PHYSICAL
         for label, (attr, unit, columns) in PHYSICAL_SIGNALS.items():
-            if attr not in have and not hasattr(type(self.array), attr):
+            if attr not in declared:
                 continue
             for k, suffix in enumerate(columns):
                 out[label + suffix] = (unit, self._observable(attr, k))
@@ -223,7 +225,6 @@ class SimMotor(StudioMotor):
     def _observable(self, attr: str, column: int) -> Callable[[], float]:
         def read() -> float:
             with self.lock:
-                value = getattr(self.array, attr)
-                value = value() if callable(value) else value
+                value = getattr(self.array, attr)  # a property the family declares
             return float(np.asarray(value, dtype=float).reshape(1, -1)[0, column])
         return read

@@ -11,13 +11,13 @@ from __future__ import annotations
 
 import threading
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 from .line import Line, LineMotor, scan
 from .motor import SimMotor, StudioMotor
 from .toolkit import TuningToolkit, find_toolkit
 
-__all__ = ["Session", "plan_motors", "DEFAULT_MOTOR"]
+__all__ = ["Session", "plan_motors", "pair_scanned", "DEFAULT_MOTOR"]
 
 #: the motor type when none is named (MotorArray's default)
 DEFAULT_MOTOR = "MAC140"
@@ -46,6 +46,35 @@ def plan_motors(motors: Sequence[str], addresses: Sequence[int], default: str
     if len(set(addrs)) != len(addrs):
         raise ValueError("two motors at one address: give each --address once")
     return list(zip(types, addrs))
+
+
+def pair_scanned(found: Mapping[int, str], motors: Sequence[str]) -> list[tuple[str, int]]:
+    """The type of each scanned address: the one of ``motors`` (default
+    :data:`DEFAULT_MOTOR`) whose family speaks the MacTalk dialect the unit answered in.
+
+    Raises
+    ------
+    ValueError
+        A unit whose dialect no given type speaks, or two given types of one dialect (the
+        reply does not tell their families apart: give ``--address`` per ``--motor``).
+    """
+    from ..families import family_of_motor
+
+    types = list(dict.fromkeys(motors or [DEFAULT_MOTOR]))
+    by_dialect: dict[str, list[str]] = {}
+    for t in types:
+        by_dialect.setdefault(family_of_motor(t).twin.dialect, []).append(t)
+    plan = []
+    for address, dialect in found.items():
+        speaking = by_dialect.get(dialect, [])
+        if not speaking:
+            raise ValueError(f"the unit at address {address} speaks {dialect}, which none of "
+                             f"{', '.join(types)} does: add its type with --motor")
+        if len(speaking) > 1:
+            raise ValueError(f"{' and '.join(speaking)} both speak {dialect}: a scan cannot "
+                             "tell them apart; give --address for each --motor instead")
+        plan.append((speaking[0], address))
+    return plan
 
 
 class Session:
@@ -90,16 +119,17 @@ class Session:
                 scan_range: Sequence[int] | None = None,
                 toolkit: TuningToolkit | None = None) -> Session:
         """Motors on the line at ``port``: the ``addresses`` given, or those of ``scan_range``
-        that answer."""
+        that answer, each of the ``motors`` type whose family speaks the dialect its reply
+        is in (:func:`pair_scanned`)."""
         line = Line(port)
         if scan_range is not None and not addresses:
-            addresses = scan(line, scan_range)
-            if not addresses:
+            found = scan(line, scan_range)
+            if not found:
                 raise ValueError(f"no motor answered on {port} at addresses "
                                  f"{min(scan_range)}..{max(scan_range)}")
-            if len(motors) > 1:
-                raise ValueError("with a scan give one --motor (the type of every motor found)")
-        plan = plan_motors(motors, addresses, DEFAULT_MOTOR)
+            plan = pair_scanned(found, motors)
+        else:
+            plan = plan_motors(motors, addresses, DEFAULT_MOTOR)
         return cls([LineMotor(line, t, a) for t, a in plan], line=line, toolkit=toolkit)
 
     def motor(self, label: str) -> StudioMotor:

@@ -4,7 +4,9 @@ The studio never imports the toolkit (``tuning``): it is given one. :class:`Tuni
 the interface; the toolkit provides it (``tuning.studio_adapter``) and announces it as the
 package entry point ``studio_tuning`` of the group :data:`GROUP` (pyproject.toml, taken up
 when the package is installed, ``make setup``). :func:`find_toolkit` returns the toolkit given
-explicitly, else the one of the entry point, else None (the tuning page then says so).
+explicitly, else the one of the entry point, else None (the tuning page then says so);
+:func:`load_toolkit` loads one named as an entry point's value is (``jvl-gym studio --toolkit
+MODULE[:OBJECT]``).
 """
 
 from __future__ import annotations
@@ -15,10 +17,13 @@ from importlib.metadata import entry_points
 from pathlib import Path
 from typing import Any, Protocol, runtime_checkable
 
-__all__ = ["GROUP", "NAME", "MISSING", "TuningOutcome", "TuningToolkit", "find_toolkit"]
+__all__ = ["GROUP", "NAME", "MISSING", "DEFAULT_OBJECT", "TuningOutcome", "TuningToolkit",
+           "find_toolkit", "load_toolkit"]
 
 GROUP: str = "jvl_gym.toolkits"  #: entry-point group of the toolkits the studio takes
 NAME: str = "studio_tuning"  #: entry-point name of the tuning toolkit
+#: the object :func:`load_toolkit` takes from a module named without ``:OBJECT``
+DEFAULT_OBJECT: str = "TOOLKIT"
 #: the tuning page's line when no toolkit is given or installed
 MISSING: str = ("tuning needs the tuning toolkit (jvl-tune), which is not installed: run "
                 "`make setup`")
@@ -90,3 +95,33 @@ def find_toolkit(given: TuningToolkit | None = None) -> TuningToolkit | None:
         raise TypeError(f"{given!r} is not a studio tuning toolkit (jvl_gym.studio.toolkit."
                         "TuningToolkit)")
     return given
+
+
+def load_toolkit(spec: str) -> TuningToolkit:
+    """The toolkit ``spec`` names: ``"package.module:OBJECT"`` (the form of an entry point's
+    value) or ``"package.module"`` (its :data:`DEFAULT_OBJECT`).
+
+    Raises
+    ------
+    ValueError
+        The module cannot be imported or has no such object (one line, what to give).
+    TypeError
+        The object does not provide :class:`TuningToolkit`.
+    """
+    import importlib
+
+    module, _, name = spec.partition(":")
+    name = name or DEFAULT_OBJECT
+    try:
+        mod = importlib.import_module(module)
+    except ImportError as exc:
+        raise ValueError(f"--toolkit {spec}: cannot import {module!r} ({exc}); give an "
+                         "importable module, e.g. tuning.studio_adapter:TOOLKIT") from None
+    try:
+        obj = getattr(mod, name)
+    except AttributeError:
+        raise ValueError(f"--toolkit {spec}: module {module!r} has no {name!r}; give "
+                         "MODULE:OBJECT naming the toolkit object") from None
+    found = find_toolkit(obj)
+    assert found is not None
+    return found

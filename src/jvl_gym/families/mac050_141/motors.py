@@ -112,7 +112,7 @@ class MacMotorArray(MotorArray, layout=L):
         "home": InputRule(allow_bool=True),
         "supply_volts": InputRule(0.0, 60.0, unit="V")}
     PHYSICAL = frozenset({"speed_rpm", "speed_rad_s", "position_rad", "torque", "bus_voltage",
-                          "load_angle", "load_speed"})
+                          "load_angle", "load_speed", "phase_currents"})
     SHAFT_ANGLE, SHAFT_SPEED = L.S_THETA, L.S_OMEGA
     ONE_BY_ONE = frozenset(W.POINTERS) | {R.CNTRL_BITS}
     #: the control bits latched at power-on change when a SAFE_MODE request resets a motor
