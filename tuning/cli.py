@@ -239,7 +239,9 @@ def autotune(motor: str = typer.Option("MAC140"),
                                             "offer a notch/low-pass design (tuning."
                                             "resonance_design)"),
              noise: bool = typer.Option(True, help="1 % measurement noise in the simulator"),
-             seed: int = typer.Option(0),
+             seed: int = typer.Option(0, help="noise seed of the simulated motor and of the "
+                                      "acceptance step's simulation (another seed: another "
+                                      "draw of the measurement noise)"),
              n_coil: int = typer.Option(None, help="TESTU samples per record (default: "
                                         f"{RECOMMENDED_COIL_SAMPLES}; with --port the "
                                         "firmware's 11, several records combined)"),

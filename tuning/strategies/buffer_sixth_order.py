@@ -43,7 +43,7 @@ __all__ = ["BufferSixthOrderStrategy", "MOVE_DISTANCE", "MOVE_V_SOLL", "move_acc
 
 MOVE_DISTANCE: int = 20000  #: acceptance move [counts] (2.5 revolutions)
 MOVE_V_SOLL: int = 2000  #: its velocity [1/16 count/sample] (722 RPM, register 5)
-REPEATS: int = 2  #: repetitions of the two torque levels
+REPEATS: int = 4  #: repetitions of the two torque levels (Student t with 3 dof)
 
 
 def move_acceleration(ident: BufferIdentification) -> int:
@@ -200,25 +200,33 @@ class BufferSixthOrderStrategy(ServoLoops):
 
     # ------------------------------------------------------------------ report
     def identified_rows(self, ident: BufferIdentification) -> list[Any]:
-        """Coil (per-phase R, L, PWM delay) and mechanics (J with its interval, KVOUT, T_c,
-        b)."""
+        """Coil (per-phase R, L, PWM delay) and mechanics (J, KVOUT, b, T_c with their
+        intervals), a friction or J whose interval reaches 0 flagged "not detected"."""
         c, m, md = ident.coil, ident.mechanics, ident.motor
         lo, hi = m.ci_J
-        return [("R phase [ohm]", c.R_phase, None, "R_phase", ""),
-                ("L phase [mH]", 1e3 * c.L_phase, None, "L_phase_mH", ""),
-                ("PWM delay [samples]", c.delay, None, "delay", ""),
-                ("J total [kg m^2]", m.J, (lo, hi), "J", ""),
-                ("KVOUT = J/J_m", m.J / md.J_m, (lo / md.J_m, hi / md.J_m), "kvout", ""),
-                ("viscous b [N m s/rad]", m.viscous, None, "viscous", ""),
-                ("Coulomb Tc [N m]", m.coulomb, None, "coulomb", "")]
+        rows: list[Any] = [("R phase [ohm]", c.R_phase, None, "R_phase", ""),
+                           ("L phase [mH]", 1e3 * c.L_phase, None, "L_phase_mH", ""),
+                           ("PWM delay [samples]", c.delay, None, "delay", "")]
+        for label, val, key in (("J total [kg m^2]", m.J, "J"),
+                                ("KVOUT = J/J_m", m.J / md.J_m, "kvout"),
+                                ("viscous b [N m s/rad]", m.viscous, "viscous"),
+                                ("Coulomb Tc [N m]", m.coulomb, "coulomb")):
+            ci = (lo / md.J_m, hi / md.J_m) if key == "kvout" else m.ci.get(key)
+            flag = ("  not detected (interval reaches 0)"
+                    if not m.detected.get("J" if key == "kvout" else key, True) else "")
+            rows.append((label, val, ci, key, flag))
+        return rows
 
     def identification_lines(self, ident: BufferIdentification) -> list[str]:
         """The fits' NRMSE and how J's interval was computed."""
         m = ident.mechanics
+        model = ("current loop and back-EMF modelled" if m.model == "electrical"
+                 else "rigid model")
         return [f"coil step fit {ident.coil.nrmse:.2f} % NRMSE; torque-step fit "
-                f"{m.nrmse:.3f} % NRMSE",
-                f"J interval: spread of {len(m.repeats)} repeated two-level steps (Student t, "
-                "K-1 dof); J of each: " + ", ".join(f"{j:.5g}" for j in m.repeats)]
+                f"{m.nrmse:.3f} % NRMSE (rigid model, the start of the fit)",
+                f"mechanics: {model}; intervals: spread of {len(m.repeats)} repeated two-level "
+                "steps (Student t, K-1 dof) + quantisation; J of each: "
+                + ", ".join(f"{j:.5g}" for j in m.repeats)]
 
     def fit_figure(self, ident: BufferIdentification) -> Any:
         """The coil step with the identified coil's response (back-EMF left out), and the
