@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from scipy import stats
-from tuning.identify_buffer import _fit_rigid
+from tuning.identify_buffer import identify_torque_steps
 from tuning.strategy import strategy_of
 
 from jvl_gym import MotorArray
@@ -75,9 +75,12 @@ def test_mac800_reports_no_friction_the_simulated_motor_does_not_have(mac800):
     for ident in idents:
         mech = ident.mechanics
         assert mech.viscous == 0.0 and not mech.detected["viscous"]
-        # the rigid model alone reads the current loop's torque deficit at speed as friction
-        b_rigid = _fit_rigid(ident.torque_records[:2], ident.motor.torque_per_vf)[2]
-        assert b_rigid > 10 * mech.ci["viscous"][1]
+        # the rigid model alone (no current registers) reads the current loop's torque deficit
+        # at speed as friction, and detects it
+        recs = ident.torque_records
+        rigid = identify_torque_steps(list(zip(recs[::2], recs[1::2])), ident.motor)
+        assert rigid.model == "rigid" and rigid.detected["viscous"]
+        assert rigid.viscous > 10 * mech.ci["viscous"][1]
 
 
 @pytest.mark.xfail(strict=True, reason="open: a torque deficit the electrical model leaves out "
