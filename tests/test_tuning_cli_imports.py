@@ -5,6 +5,7 @@ that runs, not by the command line's module."""
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 
@@ -54,3 +55,16 @@ def test_the_help_names_the_recommended_record_lengths() -> None:
     _, _, text = _run("autotune", "--help")
     assert f"default: {RECOMMENDED_COIL_SAMPLES}" in text
     assert f"default: {RECOMMENDED_MECH_SAMPLES}" in text
+
+
+def test_numba_loaded_after_jvl_gym_gets_the_compile_notice_and_keeps_its_loader() -> None:
+    probe = ("import sys, jvl_gym; assert 'numba' not in sys.modules; import numba; "
+             "from importlib.machinery import SourceFileLoader; "
+             "from jvl_gym.engine import notice; "
+             "assert isinstance(numba.__spec__.loader, SourceFileLoader); "
+             "assert numba.__loader__ is numba.__spec__.loader; "
+             "assert len(notice._installed) == 1; print('ok')")
+    env = {k: v for k, v in os.environ.items() if k != "JVL_QUIET_COMPILE"}
+    proc = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True,
+                          timeout=120, env=env)
+    assert proc.returncode == 0 and proc.stdout.strip() == "ok", proc.stderr

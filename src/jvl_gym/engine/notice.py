@@ -123,6 +123,8 @@ class _AfterImport(importlib.abc.MetaPathFinder, importlib.abc.Loader):
         return self.loader.create_module(spec)
 
     def exec_module(self, module: Any) -> None:
+        # the module keeps its own loader (resources, reloads); this hook only runs it
+        module.__loader__ = module.__spec__.loader = self.loader
         self.loader.exec_module(module)
         self.then()
 
