@@ -132,6 +132,8 @@ class TorqueStepEstimate:
         :func:`tuning.intervals.positive`).
     model : str
         ``"electrical"`` (current loop and back-EMF modelled) or ``"rigid"``.
+    phase_comp : float
+        PHASE_COMP (register 173) the steps ran with (the electrical model's).
     """
 
     J: float
@@ -143,6 +145,7 @@ class TorqueStepEstimate:
     ci: dict[str, tuple[float, float]] = field(default_factory=dict)
     detected: dict[str, bool] = field(default_factory=dict)
     model: str = "rigid"
+    phase_comp: float = 0.0
 
 
 @dataclass
@@ -353,7 +356,7 @@ def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], mo
             return TorqueStepEstimate(est.J, est.coulomb, est.viscous, est.ci["J"],
                                       [e.J for e in ests], nrmse,
                                       {nm: est.ci[nm] for nm in ("J", "coulomb", "viscous")},
-                                      dict(est.detected), "electrical")
+                                      dict(est.detected), "electrical", phase_comp)
         J, tc, b = ests[0].J, ests[0].coulomb, ests[0].viscous  # one fit: its own interval
     ci, det, vals = {}, {}, {}
     for i, nm in enumerate(("J", "coulomb", "viscous")):
@@ -370,7 +373,7 @@ def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], mo
         vals[nm], ci[nm], det[nm] = bnd.value, bnd.interval, bnd.detected
     return TorqueStepEstimate(J, vals["coulomb"], vals["viscous"], ci["J"],
                               [f[0] for f in rigid], nrmse, ci, det,
-                              "rigid" if current_regs is None else "electrical")
+                              "rigid" if current_regs is None else "electrical", phase_comp)
 
 
 def _electrical(pair: tuple[TorqueRecord, TorqueRecord], motor: MotorData,
