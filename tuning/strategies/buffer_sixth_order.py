@@ -233,7 +233,7 @@ class BufferSixthOrderStrategy(ServoLoops):
                                 ("Coulomb Tc [N m]", m.coulomb, "coulomb")):
             ci = (lo / md.J_m, hi / md.J_m) if key == "kvout" else m.ci.get(key)
             flag = ("  not detected (interval reaches 0)"
-                    if not m.detected.get("J" if key == "kvout" else key, True) else "")
+                    if key != "kvout" and not m.detected.get(key, True) else "")
             rows.append((label, val, ci, key, flag))
         return rows
 
