@@ -21,6 +21,8 @@ def local_ray():
     ray.shutdown()
 
 
+# any gymnasium warning (observation dtype or bounds, a space's precision) fails the test
+@pytest.mark.filterwarnings("error::UserWarning:gymnasium")
 def test_ppo_two_iterations_on_gearsync(tmp_path: Path, local_ray: None) -> None:
     rows = train_ppo("jvl_gym/GearSync-v0", iterations=2, out=tmp_path, progress=lambda _: None,
                      num_env_runners=1, num_envs_per_runner=4, train_batch_size=512,

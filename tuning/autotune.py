@@ -33,6 +33,11 @@ from .identify_mechanics import (
 )
 from .models import MotorData
 from .quantize import quantize_registers
+from .record_lengths import (
+    RECOMMENDED_COIL_SAMPLES,
+    RECOMMENDED_MECH_SAMPLES,
+    RECOMMENDED_TESTA_REPEATS,
+)
 from .records import Record, acquire_testa, acquire_testu, align_rotor
 from .synthesis import (
     CurrentDesign,
@@ -49,9 +54,6 @@ __all__ = ["RECOMMENDED_COIL_SAMPLES", "RECOMMENDED_MECH_SAMPLES", "RECOMMENDED_
            "Design", "identify_motors", "synthesize", "verify_design", "CURRENT_KEYS",
            "SPEED_KEYS"]
 
-RECOMMENDED_COIL_SAMPLES: int = 64  #: TESTU samples (8.2 ms ≈ 8 coil time constants)
-RECOMMENDED_MECH_SAMPLES: int = 64  #: TESTA samples per level (123 ms)
-RECOMMENDED_TESTA_REPEATS: int = 4  #: repetitions of the two-level TESTA pair (8 records)
 CURRENT_KEYS = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
 SPEED_KEYS = ("KFF3", "KFF2", "KFF1", "KFF0", "GEARB", "KVB3", "KVB2", "KVB1", "KVB0",
               "KVFX4", "KVFX3", "KVFX2", "KVFX1", "KVFY3", "KVFY2", "KVFY1", "KVFY0", "KVOUT")

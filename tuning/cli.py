@@ -25,22 +25,21 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 import yaml
 
 from jvl_gym.cli_app import App
-from jvl_gym.families import Capability
 
-from .autotune import RECOMMENDED_COIL_SAMPLES, RECOMMENDED_MECH_SAMPLES
-from .identify_coil import identify_coil
-from .identify_mechanics import coil_uncertainty, identify_mechanics
-from .models import MotorData
-from .pipeline import Result, write_setup
-from .pipeline import autotune as run_autotune
-from .records import load_csv, record_registers
-from .report import design_table, write_report
-from .strategy import Strategy, strategy_of
+from .record_lengths import RECOMMENDED_COIL_SAMPLES, RECOMMENDED_MECH_SAMPLES
+
+if TYPE_CHECKING:  # pragma: no cover
+    from .pipeline import Result
+    from .strategy import Strategy
+
+# The modules of the commands (numerics, the simulator, plotting) are imported by the command
+# that needs them, so that ``--help`` and a usage error answer at once.
 
 app = App(prog="jvl-tune",
           help="JVL MAC50-141 and MAC800 tuning toolkit (identification, synthesis, verification)",
@@ -113,7 +112,13 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
     register format, an interval including zero, a poor fit) are listed on stderr and the exit
     status is 1 unless ``--accept``.
     """
+    from jvl_gym.families import Capability
+
     from .credibility import friction_text, problems
+    from .identify_coil import identify_coil
+    from .identify_mechanics import coil_uncertainty, identify_mechanics
+    from .models import MotorData
+    from .records import load_csv, record_registers
 
     fam = _strategy(motor).family
     if not fam.supports(Capability.TEST_MODES):
@@ -181,6 +186,9 @@ def synthesize_cmd(motor: str = typer.Option(...), inertia: float = typer.Option
                                       callback=_nonnegative),
         out: Path = typer.Option(Path("setup.yaml"))) -> None:
     """Design and quantise all filters for given motor data; write a setup YAML."""
+    from .pipeline import write_setup
+    from .report import design_table
+
     strategy = _strategy(motor)
     _refuse(strategy, {"structure": structure != "ip", "current_bw": current_bw is not None,
                        "speed_bw": speed_bw is not None, "coulomb": coulomb > 0})
@@ -231,7 +239,9 @@ def autotune(motor: str = typer.Option("MAC140"),
                                             "offer a notch/low-pass design (tuning."
                                             "resonance_design)"),
              noise: bool = typer.Option(True, help="1 % measurement noise in the simulator"),
-             seed: int = typer.Option(0),
+             seed: int = typer.Option(0, help="noise seed of the simulated motor and of the "
+                                      "acceptance step's simulation (another seed: another "
+                                      "draw of the measurement noise)"),
              n_coil: int = typer.Option(None, help="TESTU samples per record (default: "
                                         f"{RECOMMENDED_COIL_SAMPLES}; with --port the "
                                         "firmware's 11, several records combined)"),
@@ -259,6 +269,10 @@ def autotune(motor: str = typer.Option("MAC140"),
     the exit status is 1 unless ``--accept``.
     """
     from jvl_gym import MotorArray
+
+    from .pipeline import autotune as run_autotune
+    from .pipeline import write_setup
+    from .report import write_report
 
     strategy = _strategy(motor)
     _refuse(strategy, {"port": port is not None, "resonance": resonance,
@@ -320,6 +334,8 @@ def autotune(motor: str = typer.Option("MAC140"),
 def _strategy(motor: str | None) -> Strategy:
     """The tuning strategy of a motor type's family (:func:`tuning.strategy.strategy_of`)."""
     from jvl_gym.config import ConfigError
+
+    from .strategy import strategy_of
 
     if motor is None:
         raise typer.BadParameter("no motor type: give --motor (or a setup with a motor: line)",

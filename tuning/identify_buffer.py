@@ -29,21 +29,35 @@ servo rate (770 Hz), channels P_IST, VF_OUT, V_IST, each from rest. With the rig
 
 is linear in J, T_c, b (shared) and c_r, d_r (per record: the initial speed and the position
 offset, which also take up the current loop's onset). K_vf = 1.5·p·λ·A_count·AMPLITUDE/1023
-(the motor config's λ, AMPLITUDE read from the motor). Two levels separate J from T_c; the
-95 % interval of J comes from the spread of the estimates of the single repetitions (Student t).
+(the motor config's λ, AMPLITUDE read from the motor). Two levels separate J from T_c.
+
+The rigid model takes the torque as ``K_vf·VF_OUT`` at every speed. It is not: the per-phase
+current loops follow a reference turning at the electrical speed and reject the back-EMF only
+as well as their gain allows, so the torque falls as the rotor speeds up, which the rigid fit
+reads as viscous friction the motor does not have. The rigid estimate is therefore the start of
+an output-error fit with the current loop, the coil and the back-EMF modelled
+(:func:`tuning.identify_mechanics.refine_electrical`, the model of
+:func:`tuning.identify_mechanics.electrical_position`, whose current filter structure is the
+MAC800's, registers 144–149), per record free in the position offset and the initial speed as
+above. Each repetition of the two levels is fitted on its own; the values are their mean and the
+95 % intervals of J, T_c and b come from the spread between the repetitions (batch means,
+Student t with K − 1 degrees of freedom) and the encoder quantisation floor
+(:func:`tuning.identify_mechanics.combine_sets`); a friction whose interval reaches 0 is
+reported as 0 (not detected).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-from scipy import stats
 
 from .design_sixth_order import design_current_filter
+from .identify_mechanics import MechanicsEstimate, combine_sets, refine_electrical
+from .intervals import batch_means, positive, student_halfwidth
 from .models import MotorData
 from .sixth_order import CONSTANTS as _c
 from .sixth_order import COUNTS_PER_RAD, CURRENT_KEYS, TS_I, TS_O
@@ -101,7 +115,26 @@ class CoilStepEstimate:
 
 @dataclass
 class TorqueStepEstimate:
-    """Identified mechanics: J [kg·m²] with its 95 % interval, T_c [N·m], b [N·m·s/rad]."""
+    """Identified mechanics: J [kg·m²], T_c [N·m], b [N·m·s/rad] with their 95 % intervals.
+
+    Attributes
+    ----------
+    ci_J : tuple of float
+        The 95 % interval of J (``ci["J"]``).
+    repeats : list of float
+        J of each repetition [kg·m²].
+    nrmse : float
+        NRMSE [%] of the rigid position fit over all records (the start of the electrical fit).
+    ci : dict
+        95 % intervals (lo, hi) of "J", "coulomb", "viscous".
+    detected : dict
+        "J", "coulomb", "viscous": the interval lies above 0 (else the value is reported as 0,
+        :func:`tuning.intervals.positive`).
+    model : str
+        ``"electrical"`` (current loop and back-EMF modelled) or ``"rigid"``.
+    phase_comp : float
+        PHASE_COMP (register 173) the steps ran with (the electrical model's).
+    """
 
     J: float
     coulomb: float
@@ -109,6 +142,10 @@ class TorqueStepEstimate:
     ci_J: tuple[float, float]
     repeats: list[float] = field(default_factory=list)
     nrmse: float = math.nan
+    ci: dict[str, tuple[float, float]] = field(default_factory=dict)
+    detected: dict[str, bool] = field(default_factory=dict)
+    model: str = "rigid"
+    phase_comp: float = 0.0
 
 
 @dataclass
@@ -278,8 +315,9 @@ def _fit_rigid(recs: Sequence[TorqueRecord], k_vf: float
     return float(x[0]), float(x[1]), float(x[2]), nrmse
 
 
-def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], motor: MotorData
-                         ) -> TorqueStepEstimate:
+def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], motor: MotorData,
+                          current_regs: Mapping[str, float] | None = None,
+                          phase_comp: float = 0.0) -> TorqueStepEstimate:
     """J, T_c and b from the two-level torque steps (module docstring).
 
     Parameters
@@ -287,7 +325,14 @@ def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], mo
     pairs : sequence of (TorqueRecord, TorqueRecord)
         Per repetition, the steps at the higher and the lower level.
     motor : MotorData
-        K_vf (torque constant, A_count, AMPLITUDE).
+        K_vf (torque constant, A_count, AMPLITUDE) and, for the electrical model, the
+        identified coil, PWM delay and bus voltage.
+    current_regs : mapping, optional
+        The current filter registers (KIFX2..KIB0) the steps ran on: the electrical model.
+        Without them the rigid model's values (its interval of each from the spread of the
+        repetitions' rigid fits).
+    phase_comp : float
+        PHASE_COMP (register 173) in use.
 
     Raises
     ------
@@ -297,16 +342,48 @@ def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], mo
     recs = [r for p in pairs for r in p]
     if not recs:
         raise ValueError("no torque-step records to identify the mechanics from")
-    J, tc, b, nrmse = _fit_rigid(recs, motor.torque_per_vf)
+    k_vf = motor.torque_per_vf
+    J, tc, b, nrmse = _fit_rigid(recs, k_vf)
     if not J > 0.0:
         raise ValueError(f"the torque steps give no positive inertia (J = {J:.4g} kg m^2)")
-    singles = [_fit_rigid(list(p), motor.torque_per_vf)[0] for p in pairs]
-    if len(singles) >= 2:
-        half = stats.t.ppf(0.975, len(singles) - 1) * np.std(singles, ddof=1) / math.sqrt(
-            len(singles))
-    else:
-        half = math.nan
-    return TorqueStepEstimate(J, max(tc, 0.0), max(b, 0.0), (J - half, J + half), singles, nrmse)
+    rigid = [_fit_rigid(list(p), k_vf) for p in pairs]
+    if current_regs is not None:
+        ests = [_electrical(p, motor, current_regs, phase_comp, fit)
+                for p, fit in zip(pairs, rigid)]
+        if len(ests) >= 2:
+            est = combine_sets(ests, [[2 * i, 2 * i + 1] for i in range(len(pairs))],
+                               len(recs), motor)
+            return TorqueStepEstimate(est.J, est.coulomb, est.viscous, est.ci["J"],
+                                      [e.J for e in ests], nrmse,
+                                      {nm: est.ci[nm] for nm in ("J", "coulomb", "viscous")},
+                                      dict(est.detected), "electrical", phase_comp)
+        J, tc, b = ests[0].J, ests[0].coulomb, ests[0].viscous  # one fit: its own interval
+    ci, det, vals = {}, {}, {}
+    for i, nm in enumerate(("J", "coulomb", "viscous")):
+        whole = (J, tc, b)[i]
+        if current_regs is not None:
+            lo, hi = ests[0].ci[nm]
+            h = 0.5 * (hi - lo)
+        elif len(rigid) >= 2:
+            _, var, dof = batch_means([f[i] for f in rigid])
+            h = student_halfwidth(math.sqrt(var), dof)
+        else:
+            h = math.nan
+        bnd = positive(whole, whole - h, whole + h)
+        vals[nm], ci[nm], det[nm] = bnd.value, bnd.interval, bnd.detected
+    return TorqueStepEstimate(J, vals["coulomb"], vals["viscous"], ci["J"],
+                              [f[0] for f in rigid], nrmse, ci, det,
+                              "rigid" if current_regs is None else "electrical", phase_comp)
+
+
+def _electrical(pair: tuple[TorqueRecord, TorqueRecord], motor: MotorData,
+                current_regs: Mapping[str, float], phase_comp: float,
+                start: tuple[float, float, float, float]) -> MechanicsEstimate:
+    """The electrical fit of one repetition from its rigid fit ``start`` (J, T_c, b, …)."""
+    levels = [float(np.median(r.vf_out)) for r in pair]
+    pos = [r.position - r.position[0] for r in pair]
+    return refine_electrical(levels, pos, motor, current_regs, phase_comp / 256.0, start[0],
+                             start[1], start[2], free_terms=2)
 
 
 # ----------------------------------------------------------------------------- procedure
@@ -359,9 +436,10 @@ def identify_from_buffer(m: Any, repeats: int = 2, progress: Progress = lambda _
         lo = record_torque_steps(m, vf_lo)
         for i in range(m.n):
             pairs[i].append((hi[i], lo[i]))
+    phase_comp = np.asarray(m.read("PHASE_COMP"), dtype=float)
     out = []
     for i, md in enumerate(motors):
-        mech = identify_torque_steps(pairs[i], md)
+        mech = identify_torque_steps(pairs[i], md, cur[i], float(phase_comp[i]))
         out.append(BufferIdentification(md, coils[i], mech,
                                         {k: cur[i][k] for k in CURRENT_KEYS}, coil_recs[i],
                                         [r for p in pairs[i] for r in p]))

@@ -45,10 +45,11 @@ from .intervals import (
 )
 from .models import MotorData
 from .records import Record, RecordError, record_registers, validate
-from .testmode_facts import COUNTS_PER_RAD, INNER_PER_OUTER, TS_I, TS_O
+from .testmode_facts import COUNTS_PER_RAD, TS_O
 
 __all__ = ["MechanicsEstimate", "identify_mechanics", "position_model", "two_level_torques",
-           "electrical_position", "repeat_sets", "coil_uncertainty"]
+           "electrical_position", "refine_electrical", "repeat_sets", "coil_uncertainty",
+           "combine_sets"]
 
 
 _CURRENT_KEYS = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
@@ -127,16 +128,24 @@ def position_model(t: np.ndarray, alpha: float, beta: float, delay: float) -> np
 def electrical_position(n: int, t_soll: float, J: float, b: float, tc: float,
                         motor: MotorData, current_regs: Mapping[str, float],
                         phase_comp: float = 0.0) -> np.ndarray:
-    """Position [counts] of a TESTA run with the current loop and the back-EMF modelled.
+    """Position [counts] of a torque step from rest with the current loop and the back-EMF
+    modelled (a TESTA run, or a MAC800-family step of VF_OUT in analogue torque mode).
 
     The three per-phase loops are real LTI filters, so they act on the current space vector
-    directly (stationary frame): reference ``AMPLITUDE·T_SOLL·e^{jθ_e}`` advanced by
-    ``V_ELDEG·PHASE_COMP`` (manual 4.3, 3.2.126), IB and IF as in the firmware (no rounding),
-    the PWM delay, the coil ``L ds/dt = k_u s_u − R s − ω_e λ e^{jθ_e}`` (exact exponential
-    with the back-EMF at mid-step), torque ``1.5pλ·Re(s e^{−jθ_e})``, the rotor with b and T_c.
+    directly (stationary frame): reference ``AMPLITUDE·T_SOLL/amplitude_vf·e^{jθ_e}`` advanced
+    by ``pp·h·PHASE_COMP·ω`` [rad] (manual 4.3, 3.2.126; the MAC800's register 173 advances by
+    ``V_ELDEG·PHASE_COMP/256`` electrical units, the same with ``phase_comp`` = PHASE_COMP/256),
+    IB and IF as in the firmware (no rounding; both families' current filters have this
+    structure, MAC800 registers 144–149), the PWM delay, the coil
+    ``L ds/dt = k_u s_u − R s − ω_e λ e^{jθ_e}`` (exact exponential with the back-EMF at
+    mid-step), torque ``1.5pλ·Re(s e^{−jθ_e})``, the rotor with b and T_c. The sample times,
+    the encoder scale and ``amplitude_vf`` are the motor family's (``motor.family``).
     Returns P(k) − P(0) at the n outer samples, shape (n,).
     """
-    h = TS_I
+    fam = motor.family
+    h = fam.inner_dt
+    per_outer = int(round(fam.outer_dt / fam.inner_dt))
+    counts_per_rad = fam.counts_per_rad
     R, L = motor.R_phase, motor.L_phase
     a = math.exp(-R * h / L)
     k_u, amps, pp = motor.volts_per_count, motor.amps_per_count, motor.pole_pairs
@@ -145,7 +154,7 @@ def electrical_position(n: int, t_soll: float, J: float, b: float, tc: float,
     y1, y0 = current_regs["KIFY1"], current_regs["KIFY0"]
     b1, b0 = current_regs["KIB1"], current_regs["KIB0"]
     d = int(motor.pwm_delay)
-    amp = motor.amplitude * t_soll
+    amp = motor.amplitude * t_soll / fam.amplitude_vf
     adv_per_rad_s = pp * h * phase_comp  # electrical advance [rad] per rad/s of shaft speed
     s = 0j
     m_prev = 0j
@@ -155,8 +164,8 @@ def electrical_position(n: int, t_soll: float, J: float, b: float, tc: float,
     theta = omega = 0.0
     out = np.empty(n)
     for k in range(n):
-        out[k] = theta * COUNTS_PER_RAD
-        for _ in range(INNER_PER_OUTER):
+        out[k] = theta * counts_per_rad
+        for _ in range(per_outer):
             th_e = pp * theta
             meas = s / amps
             ref = amp * cmath.exp(1j * (th_e + adv_per_rad_s * omega))
@@ -255,7 +264,7 @@ def identify_mechanics(records: Record | Sequence[Record], motor: MotorData | st
                                      coil_sd), md)
     ests = [_identify_set([recs[i] for i in idx], md, coulomb, viscous, current_regs,
                           phase_comp, coil_sd) for idx in sets]
-    return _combine(ests, sets, len(recs), md)
+    return combine_sets(ests, sets, len(recs), md)
 
 
 def coil_uncertainty(coil: Any) -> dict[str, float]:
@@ -284,10 +293,15 @@ def repeat_sets(recs: Sequence[Record]) -> list[list[int]]:
     return [sorted(v[j] for v in by_level.values()) for j in range(k)]
 
 
-def _combine(ests: list[MechanicsEstimate], sets: list[list[int]], n_recs: int,
-             md: MotorData) -> MechanicsEstimate:
+def combine_sets(ests: list[MechanicsEstimate], sets: list[list[int]], n_recs: int,
+                 md: MotorData) -> MechanicsEstimate:
     """Batch means over K repeated sets: value = mean, 95 % interval from the spread between
-    the sets (t, K − 1 dof) and one set's quantisation floor (:mod:`tuning.intervals`)."""
+    the sets (t, K − 1 dof) and one set's quantisation floor and coil-uncertainty term
+    (:mod:`tuning.intervals`); the detection rule applied.
+
+    ``ests``: the K sets' estimates; ``sets``: the indices of each set's records among the
+    ``n_recs`` records (for the fitted velocities); ``md``: J_m (KVOUT).
+    """
     k = len(ests)
     vals = {nm: np.array([getattr(e, nm) for e in ests]) for nm in ("J", "viscous", "coulomb")}
     vals["delay"] = np.array([e.delay for e in ests])
@@ -413,8 +427,9 @@ def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: boo
     J, dl, tc, b = unpack(sol.x)
     n = sum(r.n for r in recs)
     if current_regs is not None:
-        return _refine_electrical(recs, md, current_regs, phase_comp, J, tc, b, coulomb,
-                                  viscous, pos, coil_sd)
+        return refine_electrical([float(np.median(r.input)) for r in recs], pos,
+                                 md, current_regs, phase_comp, J, tc, b, coulomb, viscous,
+                                 coil_sd)
     p = sol.x.size
     dof = max(n - p, 1)
     s2 = float(sol.fun @ sol.fun) / dof
@@ -445,20 +460,43 @@ def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: boo
                              fitted_velocity=fitted_v, quantisation_var=qv)
 
 
-def _refine_electrical(recs: list[Record], md: MotorData, current_regs: Mapping[str, float],
-                       phase_comp: float, J0: float, tc0: float, b0: float, coulomb: bool,
-                       viscous: bool, pos: list[np.ndarray],
-                       coil_sd: Mapping[str, float] | None = None) -> MechanicsEstimate:
+def refine_electrical(levels: Sequence[float], pos: Sequence[np.ndarray], md: MotorData,
+                      current_regs: Mapping[str, float], phase_comp: float, J0: float,
+                      tc0: float, b0: float, coulomb: bool = True, viscous: bool = True,
+                      coil_sd: Mapping[str, float] | None = None, free_terms: int = 1
+                      ) -> MechanicsEstimate:
     """Output-error fit of J (and T_c, b) with :func:`electrical_position`; offsets projected.
 
-    ``coil_sd``: relative standard deviations of "R_phase" and "L_phase" (the TESTU
-    identification's); their effect on the estimate is returned in ``coil_var``.
+    Parameters
+    ----------
+    levels : sequence of float
+        The torque level of each record (T_SOLL of TESTA, VF_OUT of a MAC800-family step).
+    pos : sequence of ndarray
+        The position of each record [counts], from the sample the torque is applied in,
+        shape (n_r,) each.
+    md : MotorData
+        The motor with the (identified) coil, PWM delay and AMPLITUDE in use.
+    current_regs : mapping
+        The current-loop registers KIFX2..KIB0 the records were taken with.
+    phase_comp : float
+        PHASE_COMP in :func:`electrical_position`'s unit.
+    J0, tc0, b0 : float
+        Start values [kg·m², N·m, N·m·s/rad] (the rigid fit's).
+    coulomb, viscous : bool
+        Estimate T_c / b (otherwise fixed at 0).
+    coil_sd : mapping, optional
+        Relative standard deviations of "R_phase" and "L_phase" (the coil identification's);
+        their effect on the estimate is returned in ``coil_var``.
+    free_terms : int
+        Per record, the polynomial terms in time the residual is made orthogonal to: 1 the
+        position offset, 2 also a speed offset (which takes up an onset between two samples).
     """
     k = md.torque_per_vf
     jscale = md.J_m
-    bscale = jscale / TS_O
+    bscale = jscale / md.family.outer_dt
     names = ["J"] + (["coulomb"] if coulomb else []) + (["viscous"] if viscous else [])
-    levels = [float(np.median(r.input)) for r in recs]
+    levels = [float(v) for v in levels]
+    sizes = [int(np.size(p)) for p in pos]
 
     def unpack(x: np.ndarray) -> tuple[float, float, float]:
         i = 1
@@ -472,14 +510,18 @@ def _refine_electrical(recs: list[Record], md: MotorData, current_regs: Mapping[
 
     def predict(x: np.ndarray, mdx: MotorData = md) -> list[np.ndarray]:
         J, tc, b = unpack(x)
-        return [electrical_position(r.n, t, J, b, tc, mdx, current_regs, phase_comp)
-                for r, t in zip(recs, levels)]
+        return [electrical_position(n, t, J, b, tc, mdx, current_regs, phase_comp)
+                for n, t in zip(sizes, levels)]
+
+    # per record, an orthonormal basis of the free terms (offset, speed offset)
+    bases = [np.linalg.qr(np.vander(np.arange(n, dtype=float), free_terms, increasing=True))[0]
+             for n in sizes]
 
     def resid(x: np.ndarray, mdx: MotorData = md) -> np.ndarray:
         out = []
-        for ph, p in zip(predict(x, mdx), pos):
+        for ph, p, q in zip(predict(x, mdx), pos, bases):
             r = ph - p
-            out.append(r - r.mean())
+            out.append(r - q @ (q.T @ r))
         return np.concatenate(out)
 
     x0 = [J0 / jscale] + ([tc0 / k] if coulomb else []) + ([b0 / bscale] if viscous else [])
@@ -487,11 +529,11 @@ def _refine_electrical(recs: list[Record], md: MotorData, current_regs: Mapping[
     sol = optimize.least_squares(resid, np.maximum(np.array(x0), 2e-3), bounds=(lo, np.inf),
                                  x_scale="jac", diff_step=1e-6, xtol=1e-12, ftol=1e-12)
     J, tc, b = unpack(sol.x)
-    n = sum(r.n for r in recs)
-    p = sol.x.size + len(recs)
+    n = sum(sizes)
+    p = sol.x.size + free_terms * len(sizes)
     dof = max(n - p, 1)
     s2 = float(sol.fun @ sol.fun) / dof
-    cov = s2 * correlation_inflation(sol.fun, len(recs)) * np.linalg.pinv(sol.jac.T @ sol.jac)
+    cov = s2 * correlation_inflation(sol.fun, len(sizes)) * np.linalg.pinv(sol.jac.T @ sol.jac)
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     scale = {"J": jscale, "coulomb": k, "viscous": bscale}
     vals = {"J": J, "coulomb": tc, "viscous": b}
@@ -522,7 +564,7 @@ def _refine_electrical(recs: list[Record], md: MotorData, current_regs: Mapping[
     ci.setdefault("viscous", (0.0, 0.0))
     ci["kvout"] = (ci["J"][0] / md.J_m, ci["J"][1] / md.J_m)
     fitted_v = [np.diff(np.r_[0.0, ph]) for ph in predict(sol.x)]
-    v_all = np.concatenate([r.output for r in recs])
+    v_all = np.concatenate([np.diff(np.r_[p[0], p]) for p in pos])
     vh = np.concatenate(fitted_v)
     den = float(np.linalg.norm(v_all - v_all.mean()))
     fit = 100.0 * (1 - float(np.linalg.norm(v_all - vh)) / den) if den > 0 else math.nan

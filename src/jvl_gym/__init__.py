@@ -25,15 +25,15 @@ def __getattr__(name: str) -> Any:
 def _register() -> None:
     # Gymnasium ids (jvl_gym/...-v0); registering imports no kernel code. Before any jvl_gym
     # function can compile, stale compile caches are dropped (jvl_gym.engine.cache) and the
-    # compile notice (jvl_gym.engine.notice) is installed.
+    # compile notice (jvl_gym.engine.notice) is installed (when the compiler is loaded).
     from pathlib import Path
 
     from .engine.cache import drop_stale_caches
-    from .engine.notice import install
+    from .engine.notice import install_on_import
     from .envs.registration import register_envs
 
     drop_stale_caches(Path(__file__).resolve().parent)
-    install()
+    install_on_import()
     register_envs()
 
 

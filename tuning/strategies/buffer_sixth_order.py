@@ -33,6 +33,7 @@ from ..design_sixth_order import (
     verify_sixth_order,
 )
 from ..identify_buffer import BufferIdentification, identify_from_buffer
+from ..identify_mechanics import electrical_position
 from ..models import MotorData
 from ..pipeline import DEFAULT_NAME, Candidate, Move, Result
 from ..sixth_order import CURRENT_KEYS, MAIN_KEYS, default_registers
@@ -43,7 +44,7 @@ __all__ = ["BufferSixthOrderStrategy", "MOVE_DISTANCE", "MOVE_V_SOLL", "move_acc
 
 MOVE_DISTANCE: int = 20000  #: acceptance move [counts] (2.5 revolutions)
 MOVE_V_SOLL: int = 2000  #: its velocity [1/16 count/sample] (722 RPM, register 5)
-REPEATS: int = 2  #: repetitions of the two torque levels
+REPEATS: int = 4  #: repetitions of the two torque levels (Student t with 3 dof)
 
 
 def move_acceleration(ident: BufferIdentification) -> int:
@@ -59,6 +60,25 @@ def _verification(candidate: Candidate, motor: MotorData, J: float) -> SixthOrde
     if candidate.design is not None:
         return candidate.design.verification
     return verify_sixth_order(motor, {**default_registers(motor.name), **candidate.registers}, J)
+
+
+def _step_response(ident: BufferIdentification, vf: float, n: int) -> np.ndarray:
+    """Position [counts] of a torque step of VF_OUT ``vf`` from rest on the identified motor,
+    ``n`` servo samples: the model the mechanics were fitted with (electrical: the current loop
+    and the back-EMF, :func:`tuning.identify_mechanics.electrical_position`; else the rigid
+    rotor)."""
+    md, mech, fam = ident.motor, ident.mechanics, ident.motor.family
+    if mech.model == "electrical":
+        return electrical_position(n, vf, mech.J, mech.viscous, mech.coulomb, md,
+                                   ident.current_registers, mech.phase_comp / 256.0)
+    omega, theta = 0.0, 0.0
+    out = np.zeros(n)
+    for k in range(1, n):
+        acc = (md.torque_per_vf * vf - mech.coulomb - mech.viscous * omega) / mech.J
+        theta += omega * fam.outer_dt + 0.5 * acc * fam.outer_dt**2
+        omega += acc * fam.outer_dt
+        out[k] = theta * fam.counts_per_rad
+    return out
 
 
 class BufferSixthOrderStrategy(ServoLoops):
@@ -200,29 +220,38 @@ class BufferSixthOrderStrategy(ServoLoops):
 
     # ------------------------------------------------------------------ report
     def identified_rows(self, ident: BufferIdentification) -> list[Any]:
-        """Coil (per-phase R, L, PWM delay) and mechanics (J with its interval, KVOUT, T_c,
-        b)."""
+        """Coil (per-phase R, L, PWM delay) and mechanics (J, KVOUT, b, T_c with their
+        intervals), a friction or J whose interval reaches 0 flagged "not detected"."""
         c, m, md = ident.coil, ident.mechanics, ident.motor
         lo, hi = m.ci_J
-        return [("R phase [ohm]", c.R_phase, None, "R_phase", ""),
-                ("L phase [mH]", 1e3 * c.L_phase, None, "L_phase_mH", ""),
-                ("PWM delay [samples]", c.delay, None, "delay", ""),
-                ("J total [kg m^2]", m.J, (lo, hi), "J", ""),
-                ("KVOUT = J/J_m", m.J / md.J_m, (lo / md.J_m, hi / md.J_m), "kvout", ""),
-                ("viscous b [N m s/rad]", m.viscous, None, "viscous", ""),
-                ("Coulomb Tc [N m]", m.coulomb, None, "coulomb", "")]
+        rows: list[Any] = [("R phase [ohm]", c.R_phase, None, "R_phase", ""),
+                           ("L phase [mH]", 1e3 * c.L_phase, None, "L_phase_mH", ""),
+                           ("PWM delay [samples]", c.delay, None, "delay", "")]
+        for label, val, key in (("J total [kg m^2]", m.J, "J"),
+                                ("KVOUT = J/J_m", m.J / md.J_m, "kvout"),
+                                ("viscous b [N m s/rad]", m.viscous, "viscous"),
+                                ("Coulomb Tc [N m]", m.coulomb, "coulomb")):
+            ci = (lo / md.J_m, hi / md.J_m) if key == "kvout" else m.ci.get(key)
+            flag = ("  not detected (interval reaches 0)"
+                    if key != "kvout" and not m.detected.get(key, True) else "")
+            rows.append((label, val, ci, key, flag))
+        return rows
 
     def identification_lines(self, ident: BufferIdentification) -> list[str]:
         """The fits' NRMSE and how J's interval was computed."""
         m = ident.mechanics
+        model = ("current loop and back-EMF modelled" if m.model == "electrical"
+                 else "rigid model")
         return [f"coil step fit {ident.coil.nrmse:.2f} % NRMSE; torque-step fit "
-                f"{m.nrmse:.3f} % NRMSE",
-                f"J interval: spread of {len(m.repeats)} repeated two-level steps (Student t, "
-                "K-1 dof); J of each: " + ", ".join(f"{j:.5g}" for j in m.repeats)]
+                f"{m.nrmse:.3f} % NRMSE (rigid model, the start of the fit)",
+                f"mechanics: {model}; intervals: spread of {len(m.repeats)} repeated two-level "
+                "steps (Student t, K-1 dof) + quantisation; J of each: "
+                + ", ".join(f"{j:.5g}" for j in m.repeats)]
 
     def fit_figure(self, ident: BufferIdentification) -> Any:
         """The coil step with the identified coil's response (back-EMF left out), and the
-        torque steps with the identified rigid rotor's response from rest."""
+        torque steps with the identified motor's response from rest in the model the
+        mechanics were fitted with (:func:`_step_response`)."""
         import matplotlib.pyplot as plt
 
         md, fam, mech = ident.motor, ident.motor.family, ident.mechanics
@@ -239,27 +268,22 @@ class BufferSixthOrderStrategy(ServoLoops):
                     model[k + 1] = a * model[k] + g * (1 - a) * (u[k - d] if k >= d else 0.0)
                 line = ax[0].plot(cur, "o", ms=3, label=f"{label} measured")[0]
                 ax[0].plot(model, "-", color=line.get_color(), label=f"model, d = {d}")
-        ax[0].set(xlabel=f"inner sample ({1e6 * fam.inner_dt:.0f} us)", ylabel="ADC counts",
-                  title="coil step fit")
+        ax[0].set(xlabel=f"inner sample ({1e6 * fam.inner_dt:.0f} us)",
+                  ylabel="phase current [ADC counts]", title="coil step fit")
         ax[0].legend(fontsize=8)
         seen: set[float] = set()
         for rec in ident.torque_records:
             vf = float(np.median(rec.vf_out))
             first = vf not in seen  # repetitions of a level: unlabelled, lighter
             seen.add(vf)
-            omega, theta = 0.0, 0.0
-            model = np.zeros(rec.position.size)
-            for k in range(1, rec.position.size):
-                acc = (md.torque_per_vf * vf - mech.coulomb - mech.viscous * omega) / mech.J
-                theta += omega * fam.outer_dt + 0.5 * acc * fam.outer_dt**2
-                omega += acc * fam.outer_dt
-                model[k] = theta * fam.counts_per_rad
+            model = _step_response(ident, vf, rec.position.size)
             line = ax[1].plot(rec.position - rec.position[0], "o", ms=3,
                               alpha=1.0 if first else 0.3,
                               label=f"P_IST, VF_OUT {vf:.0f}" if first else None)[0]
             ax[1].plot(model, "-", color=line.get_color(), alpha=1.0 if first else 0.3)
-        ax[1].set(xlabel=f"outer sample ({1e3 * fam.outer_dt:.2f} ms)", ylabel="counts",
-                  title="torque-step fit")
+        ax[1].set(xlabel=f"outer sample ({1e3 * fam.outer_dt:.2f} ms)",
+                  ylabel="position from the step [counts]",
+                  title=f"torque-step fit ({mech.model} model)")
         ax[1].legend(fontsize=8)
         fig.tight_layout()
         return fig

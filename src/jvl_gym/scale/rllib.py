@@ -135,10 +135,13 @@ def train_ppo(env_id: str = "jvl_gym/GearSync-v0", iterations: int = 20,
                      f"episode return {row['episode_return_mean']:.2f}, "
                      f"{row['time_s']:.0f} s")
 
+    cfg = ppo_config(env_id, **config)
     with tempfile.TemporaryDirectory(prefix="jvl-rllib-") as tmp:
         root = Path(out).resolve() if out is not None else Path(tmp)
+        # the algorithm's class, not its name: a name makes Tune import every RLlib algorithm,
+        # and one of them builds a debugging env at import that trips gymnasium's checks
         tuner = tune.Tuner(
-            "PPO", param_space=ppo_config(env_id, **config),
+            cfg.algo_class, param_space=cfg,
             run_config=tune.RunConfig(
                 name="ppo", storage_path=str(root), verbose=0, callbacks=[_Rows()],
                 stop={"training_iteration": int(iterations)},
