@@ -7,6 +7,12 @@ Cases per family: a mixed array of 40 motors (every motor type of the family in 
 threaded driver and partly filled blocks run; each motor in another mode, where the family
 accepts it, with a velocity and position target and the recording bits of some motors set),
 and one single motor of each of the first two types in the same setting as motor 0.
+
+Env cases per family (the first motor type of the family): every env with a compiled step
+(:data:`ENV_IDS`) that runs on the family, as a vector env of 40 copies (threaded, partly
+filled blocks, autoreset) and as a single env (reset when its episode ends), stepped with
+seeded random actions; the digest covers observations, rewards, episode ends and the motors'
+registers and state.
 """
 
 from __future__ import annotations
@@ -20,6 +26,10 @@ from jvl_gym import MotorArray
 from jvl_gym.families import families, family
 
 STEPS = 300
+#: the envs whose step is compiled (FilterTuning's step is a commissioning trial in numpy)
+ENV_IDS = ("jvl_gym/Positioning-v0", "jvl_gym/GearSync-v0", "jvl_gym/CoilWinding-v0",
+           "jvl_gym/StepperIndexing-v0")
+ENV_STEPS = 60
 TRIES = {"V_SOLL": 800, "P_SOLL": 20000, "A_SOLL": 500, "T_SOLL": 300}
 
 
@@ -47,6 +57,49 @@ def _digest(m: MotorArray) -> str:
     return h.hexdigest()[:16]
 
 
+def _env_digest(env_id: str, motor_type: str, copies: int) -> str | None:
+    """Digest of ``ENV_STEPS`` steps of ``env_id`` on ``motor_type`` (``copies`` = 0: the single
+    env), or None when the env does not run on that motor type."""
+    import gymnasium as gym
+
+    import jvl_gym  # noqa: F401  (registers the envs)
+
+    try:
+        if copies:
+            env = gym.make_vec(env_id, num_envs=copies, vectorization_mode="vector_entry_point",
+                               motor_type=motor_type)
+        else:
+            env = gym.make(env_id, motor_type=motor_type).unwrapped
+    except Exception:  # noqa: BLE001  (the task refuses the family)
+        return None
+    shape = env.action_space.shape
+    acts = np.random.default_rng(7).uniform(-1.2, 1.2, (ENV_STEPS, *shape))
+    h = hashlib.sha256()
+    obs, _ = env.reset(seed=3)
+    h.update(np.asarray(obs).tobytes())
+    for a in acts:
+        obs, reward, term, trunc, _ = env.step(a)
+        for x in (obs, reward, term, trunc):
+            h.update(np.asarray(x).tobytes())
+        if not copies and (term or trunc):
+            obs, _ = env.reset()
+            h.update(np.asarray(obs).tobytes())
+    for a in (env.motors.regs, env.motors.state):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()[:16]
+
+
+def env_cases(key: str) -> None:
+    """Print the env digests of family ``key``."""
+    motor_type = family(key).motor_types()[0]
+    for env_id in ENV_IDS:
+        for copies in (40, 0):
+            digest = _env_digest(env_id, motor_type, copies)
+            if digest is not None:
+                what = f"x{copies}" if copies else "single"
+                print(f"{key} {env_id} {motor_type} {what}: {digest}", flush=True)
+
+
 def main() -> None:
     for key in sys.argv[1:] or families():
         types = family(key).motor_types()
@@ -55,13 +108,14 @@ def main() -> None:
         _setting(m, 0)
         for _ in range(STEPS // 50):
             m.step(50)
-        print(f"{key} mixed x40: {_digest(m)}")
+        print(f"{key} mixed x40: {_digest(m)}", flush=True)
         for t in types[:2]:
             one = MotorArray(t, n=1, seed=1)
             _setting(one, 0)
             for _ in range(STEPS // 50):
                 one.step(50)
-            print(f"{key} {t} x1: {_digest(one)}")
+            print(f"{key} {t} x1: {_digest(one)}", flush=True)
+        env_cases(key)
 
 
 if __name__ == "__main__":
