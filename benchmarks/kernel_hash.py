@@ -9,10 +9,10 @@ accepts it, with a velocity and position target and the recording bits of some m
 and one single motor of each of the first two types in the same setting as motor 0.
 
 Env cases per family (the first motor type of the family): every env with a compiled step
-(:data:`ENV_IDS`) that runs on the family, as a vector env of 40 copies (threaded, partly
-filled blocks, autoreset) and as a single env (reset when its episode ends), stepped with
-seeded random actions; the digest covers observations, rewards, episode ends and the motors'
-registers and state.
+(:data:`ENV_IDS`; "refused" where the task does not run on the family), as a vector env of 40
+copies (threaded, partly filled blocks, autoreset) and as a single env (reset when its episode
+ends), stepped with seeded random actions; the digest covers observations, rewards, episode
+ends and the motors' registers and state.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from __future__ import annotations
 import hashlib
 import sys
 
+import gymnasium as gym
 import numpy as np
 
 from jvl_gym import MotorArray
@@ -57,21 +58,18 @@ def _digest(m: MotorArray) -> str:
     return h.hexdigest()[:16]
 
 
-def _env_digest(env_id: str, motor_type: str, copies: int) -> str | None:
+def _env_digest(env_id: str, motor_type: str, copies: int) -> str:
     """Digest of ``ENV_STEPS`` steps of ``env_id`` on ``motor_type`` (``copies`` = 0: the single
-    env), or None when the env does not run on that motor type."""
-    import gymnasium as gym
-
-    import jvl_gym  # noqa: F401  (registers the envs)
-
+    env), or the name of the error the env's constructor raised (a task that does not run on
+    the family)."""
     try:
         if copies:
             env = gym.make_vec(env_id, num_envs=copies, vectorization_mode="vector_entry_point",
                                motor_type=motor_type)
         else:
             env = gym.make(env_id, motor_type=motor_type).unwrapped
-    except Exception:  # noqa: BLE001  (the task refuses the family)
-        return None
+    except Exception as exc:  # noqa: BLE001  (printed: the two trees' lines show it)
+        return f"refused ({type(exc).__name__})"
     shape = env.action_space.shape
     acts = np.random.default_rng(7).uniform(-1.2, 1.2, (ENV_STEPS, *shape))
     h = hashlib.sha256()
@@ -94,10 +92,9 @@ def env_cases(key: str) -> None:
     motor_type = family(key).motor_types()[0]
     for env_id in ENV_IDS:
         for copies in (40, 0):
-            digest = _env_digest(env_id, motor_type, copies)
-            if digest is not None:
-                what = f"x{copies}" if copies else "single"
-                print(f"{key} {env_id} {motor_type} {what}: {digest}", flush=True)
+            what = f"x{copies}" if copies else "single"
+            print(f"{key} {env_id} {motor_type} {what}: {_env_digest(env_id, motor_type, copies)}",
+                  flush=True)
 
 
 def main() -> None:
