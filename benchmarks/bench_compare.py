@@ -4,9 +4,12 @@ Runs the headline figures of ``bench_sim.py`` and ``bench_envs.py`` — motor-in
 N = 4096, outer steps/s at N = 1 (one ``step(1)`` call each), and each compiled env's single
 steps/s and 1024-copy env-steps/s — for both trees, alternating them ``--rounds`` times so that
 a drift of the machine affects both alike, and prints the best of each with the ratio new/old.
-Each measurement runs in a fresh process of its tree (``PYTHONPATH``) after a warm-up that
-compiles what it needs (numba's cache of each tree is its own). The revision is checked out
-once into ``.bench/<revision>`` (git worktree) and kept, so that its compiled cache is reused.
+Each rate is the best of ``--windows`` equal windows of its measuring time (``best_rate``, the
+same in both trees): on a loaded machine, more and shorter windows make it likelier that the
+best of each tree saw a quiet moment. Each measurement runs in a fresh process of its tree
+(``PYTHONPATH``) after a warm-up that compiles what it needs (numba's cache of each tree is its
+own). The revision is checked out once into ``.bench/<revision>`` (git worktree) and kept, so
+that its compiled cache is reused.
 """
 
 from __future__ import annotations
@@ -22,6 +25,8 @@ ROOT = Path(__file__).resolve().parents[1]
 FIGURES = """
 import json, sys
 sys.path.insert(0, "benchmarks")
+import best_rate
+best_rate.WINDOWS = WINDOWS
 import bench_sim, bench_envs
 out = {"motor-inner-steps/s, N=4096": bench_sim.inner_steps_per_second(4096),
        "outer steps/s, N=1 (calls)": bench_sim.outer_steps_per_second_single(True)}
@@ -33,11 +38,13 @@ print(json.dumps(out))
 """
 
 
-def figures(tree: Path) -> dict[str, float]:
-    """The figures of the source tree ``tree``, measured in a new process."""
+def figures(tree: Path, windows: int) -> dict[str, float]:
+    """The figures of the source tree ``tree``, measured in a new process, each the best of
+    ``windows`` windows."""
     env = {**os.environ, "PYTHONPATH": f"{tree / 'src'}{os.pathsep}{tree}",
            "JVL_QUIET_COMPILE": "1"}
-    out = subprocess.run([sys.executable, "-c", FIGURES], capture_output=True, text=True,
+    code = FIGURES.replace("= WINDOWS", f"= {int(windows)}")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, env=env, cwd=tree)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -46,7 +53,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("baseline", help="git revision to compare with")
     parser.add_argument("--rounds", type=int, default=2, help="alternations (best of each)")
+    parser.add_argument("--windows", type=int, default=20,
+                        help="windows per rate (best of; more and shorter on a loaded machine)")
     args = parser.parse_args()
+    if args.rounds < 1 or args.windows < 1:
+        parser.error("--rounds and --windows must be at least 1")
     base = ROOT / ".bench" / args.baseline.replace("/", "_")
     if not base.exists():
         subprocess.run(["git", "-C", str(ROOT), "worktree", "add", "--detach", "-q", str(base),
@@ -54,7 +65,7 @@ def main() -> None:
     best: dict[str, dict[str, float]] = {"old": {}, "new": {}}
     for _ in range(args.rounds):
         for label, tree in (("old", base), ("new", ROOT)):
-            for key, value in figures(tree).items():
+            for key, value in figures(tree, args.windows).items():
                 best[label][key] = max(value, best[label].get(key, 0.0))
     print(f"{'figure':36s} {args.baseline[:10]:>14s} {'this tree':>14s} {'new/old':>8s}")
     for key, old in best["old"].items():
