@@ -80,6 +80,8 @@ _NP = len(LANE_PARAMS)
 _PCOLS = np.array(LANE_PARAMS, dtype=np.int64)
 _PLANE_OF = np.full(L.N_PARAM, -1, dtype=np.int64)
 _PLANE_OF[_PCOLS] = np.arange(_NS, _NS + _NP)
+# the lane fields after the state and parameter columns, as int64 scalars: numba types a plain
+# int global as a literal and would compile ``_get`` and ``_put`` once for each field
 (
     F_J, F_LOAD, F_SUPPLY, F_ACTIVE, F_VF_OUT, F_AMPLITUDE, F_PHASE_COMP, F_KIB1, F_KIB0,
     F_KIFX2, F_KIFX1, F_KIFY1, F_KIFY0, F_MOTOR,
@@ -87,7 +89,7 @@ _PLANE_OF[_PCOLS] = np.arange(_NS, _NS + _NP)
     F_ELDEG_IST, F_V_ELDEG, F_IA_IST, F_IB_IST, F_IC_IST, F_I_NOM, F_PHI_SOLL, F_IA_SOLL,
     F_IB_SOLL, F_IC_SOLL, F_UA_VAL, F_UB_VAL, F_UC_VAL, F_EMK_A, F_EMK_B, F_EMK_C,
     N_FIELDS,
-) = range(_NS + _NP, _NS + _NP + 31)
+) = np.arange(_NS + _NP, _NS + _NP + 31)
 #: the register values of the last sample, in the order of their fields
 _OUT_REGS = np.array([R.ELDEG_IST, R.V_ELDEG, R.IA_IST, R.IA_IST + 1, R.IA_IST + 2, R.I_NOM,
                       R.PHI_SOLL, R.IA_SOLL, R.IA_SOLL + 1, R.IA_SOLL + 2, R.UA_VAL,
