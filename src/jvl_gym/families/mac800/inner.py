@@ -22,9 +22,8 @@ within the sample through the free-wheeling diodes (decision: a simplification o
 conduction, which lasts a fraction of a millisecond), the loops hold no history, no power
 reaches the bus.
 
-Every lane does the same arithmetic, with selects for the passive case, so the loop over lanes
-runs in SIMD registers and a motor's result does not depend on its block: an N-motor array is
-bit-for-bit equal to N one-motor arrays.
+Every lane does the same arithmetic, with selects for the passive case, and a motor's result
+does not depend on its block: an N-motor array is bit-for-bit equal to N one-motor arrays.
 """
 
 from __future__ import annotations
@@ -102,8 +101,9 @@ def lane_scratch(n_motors: int) -> np.ndarray:
     return np.zeros((-(-int(n_motors) // LANES), N_FIELDS * LANES))
 
 
-# The lane accessors below are compiled once, as functions of their own, and LLVM inlines them
-# into the lane loops; numba's IR inliner would copy them into each of their many call sites.
+# The lane accessors and the stages of a sample below are compiled once, as functions of their
+# own, and LLVM inlines them into the lane loop; numba's IR inliner would copy each of them, and
+# every function it inlines in turn, into each of their call sites.
 @njit(**KERNEL)
 def _get(sc: np.ndarray, f: int, j: int) -> float:
     return sc[f * LANES + j]
