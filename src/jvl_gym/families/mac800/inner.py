@@ -22,8 +22,9 @@ within the sample through the free-wheeling diodes (decision: a simplification o
 conduction, which lasts a fraction of a millisecond), the loops hold no history, no power
 reaches the bus.
 
-Every lane does the same arithmetic, with selects for the passive case, and a motor's result
-does not depend on its block: an N-motor array is bit-for-bit equal to N one-motor arrays.
+Every lane does the same arithmetic, with selects for the passive case, so the loop over lanes
+runs in SIMD registers and a motor's result does not depend on its block: an N-motor array is
+bit-for-bit equal to N one-motor arrays.
 """
 
 from __future__ import annotations
@@ -101,9 +102,8 @@ def lane_scratch(n_motors: int) -> np.ndarray:
     return np.zeros((-(-int(n_motors) // LANES), N_FIELDS * LANES))
 
 
-# The lane accessors and the stages of a sample below are compiled once, as functions of their
-# own, and LLVM inlines them into the lane loop; numba's IR inliner would copy each of them, and
-# every function it inlines in turn, into each of their call sites.
+# The lane accessors below are compiled once, as functions of their own, and LLVM inlines them
+# into the lane loops; numba's IR inliner would copy them into each of their many call sites.
 @njit(**KERNEL)
 def _get(sc: np.ndarray, f: int, j: int) -> float:
     return sc[f * LANES + j]
@@ -170,7 +170,7 @@ def _scatter(sc: np.ndarray, j: int, r: np.ndarray, s: np.ndarray) -> None:
     _store_regs(sc, j, r)
 
 
-@njit(**LANE_KERNEL)
+@njit(cache=True, inline="always")
 def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float, on: bool) -> float:
     """Phase ``k``'s current filter in lane ``j``; passive (``on`` False): U = 0, no history."""
     e1 = _get(sc, _sf(L.S_IE1_A) + k, j)
@@ -190,7 +190,7 @@ def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float, on: bool
     return u
 
 
-@njit(**LANE_KERNEL)
+@njit(cache=True, inline="always")
 def _pwm(sc: np.ndarray, j: int, k: int, u: float) -> float:
     """PWM value applied in phase ``k``: ``u``, or the last sample's with a PWM delay."""
     pending = _get(sc, _sf(L.S_UPEND_A) + k, j)
@@ -198,79 +198,15 @@ def _pwm(sc: np.ndarray, j: int, k: int, u: float) -> float:
     return pending if _get(sc, _pf(L.P_PWM_DELAY), j) > 0.5 else u
 
 
-@njit(**LANE_KERNEL)
+@njit(cache=True, inline="always")
 def _adc(x: float) -> float:
     return clamp(rnd(x), -1023.0, 1023.0) + 0.0
 
 
-@njit(**LANE_KERNEL)
-def _command(sc: np.ndarray, j: int, el: float, dv: float
-             ) -> tuple[float, float, float, float, float]:
-    """Step 3, commutation: (I_NOM unrounded, PHI_SOLL, IA/IB/IC_SOLL) of lane ``j``."""
-    vf = _get(sc, F_VF_OUT, j)
-    amp = abs(vf) * _get(sc, F_AMPLITUDE, j) * (1.0 / 1023.0)
-    phi = el + (_QUARTER if vf >= 0.0 else -_QUARTER) + rnd(
-        dv * _get(sc, F_PHASE_COMP, j) * (1.0 / 256.0))
-    phi -= c.ELDEG_PER_TURN * np.floor(phi * _PER_ELDEG_TURN)
-    sa, ca = sincos(phi * _RAD_PER_ELDEG)
-    isa = clamp(rnd(amp * sa), -1023.0, 1023.0) + 0.0
-    isb = clamp(rnd(amp * (-0.5 * sa + _HALF_SQRT3 * ca)), -1023.0, 1023.0) + 0.0
-    isc = clamp(rnd(amp * (-0.5 * sa - _HALF_SQRT3 * ca)), -1023.0, 1023.0) + 0.0
-    return amp, phi, isa, isb, isc
-
-
-@njit(**LANE_KERNEL)
-def _coil(sc: np.ndarray, j: int, i_re: float, i_im: float, s_u: complex, theta_e: float,
-          omega_e: float, pp: float) -> tuple[complex, float, float, float]:
-    """Step 5's winding of lane ``j`` over the sample (``coil_step_prepared``)."""
-    k_coil = (_get(sc, _pf(L.P_KC0), j), _get(sc, _pf(L.P_KC1), j),
-              _get(sc, _pf(L.P_KC2), j), _get(sc, _pf(L.P_KC3), j))
-    return coil_step_prepared(complex(i_re, i_im), s_u, theta_e, omega_e,
-                              _get(sc, _pf(L.P_R), j), _get(sc, _pf(L.P_LAMBDA), j), pp, _H,
-                              k_coil)
-
-
-@njit(**LANE_KERNEL)
-def _shaft(sc: np.ndarray, j: int, theta: float, omega: float, torque: float, load: float
-           ) -> tuple[float, float, float]:
-    """Step 5's rigid shaft of lane ``j`` over the sample: (θ, ω, friction energy)."""
-    drive = torque - load + end_stop_torque(
-        theta, omega, _get(sc, _pf(L.P_STOP_LO), j), _get(sc, _pf(L.P_STOP_HI), j),
-        _get(sc, _pf(L.P_STOP_K), j), _get(sc, _pf(L.P_STOP_D), j))
-    # a rigid shaft: the load follows the rotor, its torque is part of ``drive``
-    theta1, omega1, _theta_l, _omega_l, e_fric = mech_step_prepared(
-        theta, omega, theta, omega, drive, 0.0, _get(sc, F_J, j),
-        _get(sc, _pf(L.P_COULOMB), j), _H,
-        (_get(sc, _pf(L.P_KM0), j), _get(sc, _pf(L.P_KM1), j), 0.0, 0.0, 0.0, 0.0))
-    return theta1, omega1, e_fric
-
-
-@njit(**LANE_KERNEL)
-def _bus(sc: np.ndarray, j: int, ubus: float, p_el: float
-         ) -> tuple[float, float, float, float]:
-    """Step 5's DC bus of lane ``j`` over the sample (``bus_step_prepared``)."""
-    return bus_step_prepared(
-        ubus, p_el, _get(sc, F_SUPPLY, j), _get(sc, _pf(L.P_U_DUMP), j),
-        _get(sc, _sf(L.S_DUMP_ON), j), _H,
-        (_get(sc, _pf(L.P_KB0), j), _get(sc, _pf(L.P_KB1), j), _get(sc, _pf(L.P_KB2), j),
-         _get(sc, _pf(L.P_KB3), j), _get(sc, _pf(L.P_KB4), j), _get(sc, _pf(L.P_KB5), j),
-         _get(sc, _pf(L.P_KB6), j)))
-
-
-@njit(**LANE_KERNEL)
-def _emf(sc: np.ndarray, j: int, theta_e: float, w: float) -> None:
-    """EMK_A/B/C of lane ``j``: the back-EMF ``w`` = λ·pp·ω at the electrical angle
-    ``theta_e``, per phase, rounded."""
-    se, ce = sincos(theta_e)
-    _put(sc, F_EMK_A, j, rnd(w * ce) + 0.0)
-    _put(sc, F_EMK_B, j, rnd(w * (-0.5 * ce - _HALF_SQRT3 * se)) + 0.0)
-    _put(sc, F_EMK_C, j, rnd(w * (-0.5 * ce + _HALF_SQRT3 * se)) + 0.0)
-
-
 @njit(cache=True, inline="always")
 def _sample(sc: np.ndarray, j: int, last: bool) -> None:
-    """One current-loop sample of lane ``j`` (module docstring); ``last``: it also keeps the
-    sample's registers."""
+    """One current-loop sample of lane ``j`` (module docstring); ``last`` (a constant at each
+    call) also keeps the sample's registers."""
     theta = _get(sc, _sf(L.S_THETA), j)
     omega = _get(sc, _sf(L.S_OMEGA), j)
     pp = _get(sc, _pf(L.P_POLE_PAIRS), j)
@@ -288,7 +224,15 @@ def _sample(sc: np.ndarray, j: int, last: bool) -> None:
     xb = _adc(ib * cpa)
     xc = _adc(ic * cpa)
     over = abs(xa) >= 1023.0 or abs(xb) >= 1023.0 or abs(xc) >= 1023.0
-    amp, phi, isa, isb, isc = _command(sc, j, el, dv)
+    vf = _get(sc, F_VF_OUT, j)
+    amp = abs(vf) * _get(sc, F_AMPLITUDE, j) * (1.0 / 1023.0)
+    phi = el + (_QUARTER if vf >= 0.0 else -_QUARTER) + rnd(
+        dv * _get(sc, F_PHASE_COMP, j) * (1.0 / 256.0))
+    phi -= c.ELDEG_PER_TURN * np.floor(phi * _PER_ELDEG_TURN)
+    sa, ca = sincos(phi * _RAD_PER_ELDEG)
+    isa = clamp(rnd(amp * sa), -1023.0, 1023.0) + 0.0
+    isb = clamp(rnd(amp * (-0.5 * sa + _HALF_SQRT3 * ca)), -1023.0, 1023.0) + 0.0
+    isc = clamp(rnd(amp * (-0.5 * sa - _HALF_SQRT3 * ca)), -1023.0, 1023.0) + 0.0
     ua = _phase(sc, j, 0, isa, xa, on)
     ub = _phase(sc, j, 1, isb, xb, on)
     uc = _phase(sc, j, 2, isc, xc, on)
@@ -297,15 +241,32 @@ def _sample(sc: np.ndarray, j: int, last: bool) -> None:
     s_u = phase_to_vector(_pwm(sc, j, 0, ua) * kv, _pwm(sc, j, 1, ub) * kv,
                           _pwm(sc, j, 2, uc) * kv)
     omega_mid = omega + 0.5 * _H * _get(sc, _sf(L.S_ACC), j)
-    s1, torque, p_el, p_cu = _coil(sc, j, i_re, i_im, s_u, theta_e, pp * omega_mid, pp)
+    lam = _get(sc, _pf(L.P_LAMBDA), j)
+    k_coil = (_get(sc, _pf(L.P_KC0), j), _get(sc, _pf(L.P_KC1), j),
+              _get(sc, _pf(L.P_KC2), j), _get(sc, _pf(L.P_KC3), j))
+    s1, torque, p_el, p_cu = coil_step_prepared(complex(i_re, i_im), s_u, theta_e,
+                                                pp * omega_mid, _get(sc, _pf(L.P_R), j), lam,
+                                                pp, _H, k_coil)
     i_re1 = s1.real if on else 0.0
     i_im1 = s1.imag if on else 0.0
     torque = torque if on else 0.0
     p_el = p_el if on else 0.0
     p_cu = p_cu if on else 0.0
     load = _get(sc, F_LOAD, j)
-    theta1, omega1, e_fric = _shaft(sc, j, theta, omega, torque, load)
-    ubus1, dump_on, e_dump, e_sup = _bus(sc, j, ubus, p_el)
+    drive = torque - load + end_stop_torque(
+        theta, omega, _get(sc, _pf(L.P_STOP_LO), j), _get(sc, _pf(L.P_STOP_HI), j),
+        _get(sc, _pf(L.P_STOP_K), j), _get(sc, _pf(L.P_STOP_D), j))
+    # a rigid shaft: the load follows the rotor, its torque is part of ``drive``
+    theta1, omega1, _theta_l, _omega_l, e_fric = mech_step_prepared(
+        theta, omega, theta, omega, drive, 0.0, _get(sc, F_J, j),
+        _get(sc, _pf(L.P_COULOMB), j), _H,
+        (_get(sc, _pf(L.P_KM0), j), _get(sc, _pf(L.P_KM1), j), 0.0, 0.0, 0.0, 0.0))
+    ubus1, dump_on, e_dump, e_sup = bus_step_prepared(
+        ubus, p_el, _get(sc, F_SUPPLY, j), _get(sc, _pf(L.P_U_DUMP), j),
+        _get(sc, _sf(L.S_DUMP_ON), j), _H,
+        (_get(sc, _pf(L.P_KB0), j), _get(sc, _pf(L.P_KB1), j), _get(sc, _pf(L.P_KB2), j),
+         _get(sc, _pf(L.P_KB3), j), _get(sc, _pf(L.P_KB4), j), _get(sc, _pf(L.P_KB5), j),
+         _get(sc, _pf(L.P_KB6), j)))
     if last:
         _put(sc, F_ELDEG_IST, j, el)
         _put(sc, F_V_ELDEG, j, dv)
@@ -320,7 +281,11 @@ def _sample(sc: np.ndarray, j: int, last: bool) -> None:
         _put(sc, F_UA_VAL, j, ua)
         _put(sc, F_UB_VAL, j, ub)
         _put(sc, F_UC_VAL, j, uc)
-        _emf(sc, j, theta_e, _get(sc, _pf(L.P_LAMBDA), j) * pp * omega)
+        se, ce = sincos(theta_e)
+        w = lam * pp * omega
+        _put(sc, F_EMK_A, j, rnd(w * ce) + 0.0)
+        _put(sc, F_EMK_B, j, rnd(w * (-0.5 * ce - _HALF_SQRT3 * se)) + 0.0)
+        _put(sc, F_EMK_C, j, rnd(w * (-0.5 * ce + _HALF_SQRT3 * se)) + 0.0)
     _put(sc, _sf(L.S_THETA), j, theta1)
     _put(sc, _sf(L.S_OMEGA), j, omega1)
     _put(sc, _sf(L.S_ACC), j, (omega1 - omega) * c.INNER_HZ)
@@ -347,34 +312,30 @@ def _records_inner(r: np.ndarray) -> bool:
 
 
 @njit(**LANE_KERNEL)
-def _lanes(sc: np.ndarray, n: int, last: bool) -> None:
-    """One current-loop sample of lanes ``0 … n − 1``; ``last``: it keeps the sample's
-    registers. The lane loop is compiled once, as a function of its own: numba's IR inliner
-    would copy the whole sample into each of its call sites in ``inner_samples``."""
-    for j in range(n):
-        _sample(sc, j, last)
-
-
-@njit(**LANE_KERNEL)
 def inner_samples(regs, state, params, inputs, buf, rec, i0, n, scratch):
     """The current-loop samples of one servo sample of motors ``i0 … i0 + n − 1`` (one
-    block, ``n ≤ LANES``); ``scratch`` is the block's row of :func:`lane_scratch`."""
+    block, ``n ≤ LANES``); ``scratch`` is the block's row of :func:`lane_scratch`.
+
+    The sample is written out twice, as a lane loop that keeps no registers and one that keeps
+    them (the last sample, or every sample while a motor of the block records at the
+    current-loop rate): each copy is inlined whole into the lane loop, which LLVM vectorises."""
     inner_rec = False
     for j in range(n):
         i = i0 + j
         _gather(scratch, j, i, regs[i], state[i], params[i], inputs[i])
         inner_rec = inner_rec or _records_inner(regs[i])
-    if inner_rec:  # the sample buffer at the current-loop rate: registers every sample
-        for _k in range(c.INNER_PER_OUTER):
-            _lanes(scratch, n, True)
+    for k in range(c.INNER_PER_OUTER):
+        if inner_rec or k == c.INNER_PER_OUTER - 1:
+            for j in range(n):
+                _sample(scratch, j, True)
+        else:
+            for j in range(n):
+                _sample(scratch, j, False)
+        if inner_rec:  # the sample buffer at the current-loop rate: registers every sample
             for j in range(n):
                 r = regs[i0 + j]
                 if _records_inner(r):
                     _store_regs(scratch, j, r)
                     record(r, buf[i0 + j] if rec else buf[0], rec)
-    else:
-        for _k in range(c.INNER_PER_OUTER - 1):
-            _lanes(scratch, n, False)
-        _lanes(scratch, n, True)
     for j in range(n):
         _scatter(scratch, j, regs[i0 + j], state[i0 + j])
