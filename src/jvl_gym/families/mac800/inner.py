@@ -102,8 +102,10 @@ def lane_scratch(n_motors: int) -> np.ndarray:
     return np.zeros((-(-int(n_motors) // LANES), N_FIELDS * LANES))
 
 
-# The lane accessors below are compiled once, as functions of their own, and LLVM inlines them
-# into the lane loops; numba's IR inliner would copy them into each of their many call sites.
+# The lane accessors and the small stages of a sample (a phase's current filter, its PWM value,
+# an ADC reading) are compiled once, as functions of their own, and LLVM inlines them into the
+# lane loops (which it still vectorises); numba's IR inliner would copy each of them into each
+# of their many call sites.
 @njit(**KERNEL)
 def _get(sc: np.ndarray, f: int, j: int) -> float:
     return sc[f * LANES + j]
@@ -170,7 +172,7 @@ def _scatter(sc: np.ndarray, j: int, r: np.ndarray, s: np.ndarray) -> None:
     _store_regs(sc, j, r)
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL)
 def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float, on: bool) -> float:
     """Phase ``k``'s current filter in lane ``j``; passive (``on`` False): U = 0, no history."""
     e1 = _get(sc, _sf(L.S_IE1_A) + k, j)
@@ -190,7 +192,7 @@ def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float, on: bool
     return u
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL)
 def _pwm(sc: np.ndarray, j: int, k: int, u: float) -> float:
     """PWM value applied in phase ``k``: ``u``, or the last sample's with a PWM delay."""
     pending = _get(sc, _sf(L.S_UPEND_A) + k, j)
@@ -198,7 +200,7 @@ def _pwm(sc: np.ndarray, j: int, k: int, u: float) -> float:
     return pending if _get(sc, _pf(L.P_PWM_DELAY), j) > 0.5 else u
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL)
 def _adc(x: float) -> float:
     return clamp(rnd(x), -1023.0, 1023.0) + 0.0
 
