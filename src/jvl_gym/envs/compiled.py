@@ -28,12 +28,19 @@ def action(actions: np.ndarray, i: int, k: int) -> float:  # pragma: no cover - 
     return min(max(actions[i, k], -1.0), 1.0)
 
 
+@njit(**KERNEL)
+def obs_normal(key: np.uint64, counter: int, k: int, n: int) -> float:  # pragma: no cover
+    """:func:`jvl_gym.noise.normal` compiled once, as a function of its own: numba's IR inliner
+    would copy it (and the generator it inlines) into each observation component's store."""
+    return normal(key, counter, k, n)
+
+
 @njit(cache=True, inline="always")
 def put_obs(obs: np.ndarray, i: int, k: int, x: float, key: np.uint64, counter: int,
             noise: float) -> None:  # pragma: no cover - compiled
     """Store observation component ``k`` of copy ``i``: add noise, clip to ±OBS_BOUND."""
-    if noise > 0.0:
-        x += noise * normal(key, counter, k, obs.shape[1])
+    if noise > 0.0:  # ``k`` as int64: one compile for every component, not one per literal
+        x += noise * obs_normal(key, counter, np.int64(k), obs.shape[1])
     obs[i, k] = min(max(x, -OBS_BOUND), OBS_BOUND)
 
 

@@ -80,6 +80,8 @@ _NP = len(LANE_PARAMS)
 _PCOLS = np.array(LANE_PARAMS, dtype=np.int64)
 _PLANE_OF = np.full(L.N_PARAM, -1, dtype=np.int64)
 _PLANE_OF[_PCOLS] = np.arange(_NS, _NS + _NP)
+# the lane fields after the state and parameter columns, as int64 scalars: numba types a plain
+# int global as a literal and would compile ``_get`` and ``_put`` once for each field
 (
     F_J, F_LOAD, F_SUPPLY, F_ACTIVE, F_VF_OUT, F_AMPLITUDE, F_PHASE_COMP, F_KIB1, F_KIB0,
     F_KIFX2, F_KIFX1, F_KIFY1, F_KIFY0, F_MOTOR,
@@ -87,7 +89,7 @@ _PLANE_OF[_PCOLS] = np.arange(_NS, _NS + _NP)
     F_ELDEG_IST, F_V_ELDEG, F_IA_IST, F_IB_IST, F_IC_IST, F_I_NOM, F_PHI_SOLL, F_IA_SOLL,
     F_IB_SOLL, F_IC_SOLL, F_UA_VAL, F_UB_VAL, F_UC_VAL, F_EMK_A, F_EMK_B, F_EMK_C,
     N_FIELDS,
-) = range(_NS + _NP, _NS + _NP + 31)
+) = np.arange(_NS + _NP, _NS + _NP + 31)
 #: the register values of the last sample, in the order of their fields
 _OUT_REGS = np.array([R.ELDEG_IST, R.V_ELDEG, R.IA_IST, R.IA_IST + 1, R.IA_IST + 2, R.I_NOM,
                       R.PHI_SOLL, R.IA_SOLL, R.IA_SOLL + 1, R.IA_SOLL + 2, R.UA_VAL,
@@ -100,8 +102,10 @@ def lane_scratch(n_motors: int) -> np.ndarray:
     return np.zeros((-(-int(n_motors) // LANES), N_FIELDS * LANES))
 
 
-# The lane accessors below are compiled once, as functions of their own, and LLVM inlines them
-# into the lane loops; numba's IR inliner would copy them into each of their many call sites.
+# The lane accessors and the small stages of a sample (a phase's current filter, its PWM value,
+# an ADC reading) are compiled once, as functions of their own, and LLVM inlines them into the
+# lane loops (which it still vectorises); numba's IR inliner would copy each of them into each
+# of their many call sites.
 @njit(**KERNEL)
 def _get(sc: np.ndarray, f: int, j: int) -> float:
     return sc[f * LANES + j]
@@ -168,7 +172,7 @@ def _scatter(sc: np.ndarray, j: int, r: np.ndarray, s: np.ndarray) -> None:
     _store_regs(sc, j, r)
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL)
 def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float, on: bool) -> float:
     """Phase ``k``'s current filter in lane ``j``; passive (``on`` False): U = 0, no history."""
     e1 = _get(sc, _sf(L.S_IE1_A) + k, j)
@@ -188,7 +192,7 @@ def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float, on: bool
     return u
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL)
 def _pwm(sc: np.ndarray, j: int, k: int, u: float) -> float:
     """PWM value applied in phase ``k``: ``u``, or the last sample's with a PWM delay."""
     pending = _get(sc, _sf(L.S_UPEND_A) + k, j)
@@ -196,7 +200,7 @@ def _pwm(sc: np.ndarray, j: int, k: int, u: float) -> float:
     return pending if _get(sc, _pf(L.P_PWM_DELAY), j) > 0.5 else u
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL)
 def _adc(x: float) -> float:
     return clamp(rnd(x), -1023.0, 1023.0) + 0.0
 
@@ -312,26 +316,28 @@ def _records_inner(r: np.ndarray) -> bool:
 @njit(**LANE_KERNEL)
 def inner_samples(regs, state, params, inputs, buf, rec, i0, n, scratch):
     """The current-loop samples of one servo sample of motors ``i0 … i0 + n − 1`` (one
-    block, ``n ≤ LANES``); ``scratch`` is the block's row of :func:`lane_scratch`."""
+    block, ``n ≤ LANES``); ``scratch`` is the block's row of :func:`lane_scratch`.
+
+    The sample is written out twice, as a lane loop that keeps no registers and one that keeps
+    them (the last sample, or every sample while a motor of the block records at the
+    current-loop rate): each copy is inlined whole into the lane loop, which LLVM vectorises."""
     inner_rec = False
     for j in range(n):
         i = i0 + j
         _gather(scratch, j, i, regs[i], state[i], params[i], inputs[i])
         inner_rec = inner_rec or _records_inner(regs[i])
-    if inner_rec:  # the sample buffer at the current-loop rate: registers every sample
-        for _k in range(c.INNER_PER_OUTER):
+    for k in range(c.INNER_PER_OUTER):
+        if inner_rec or k == c.INNER_PER_OUTER - 1:
             for j in range(n):
                 _sample(scratch, j, True)
+        else:
+            for j in range(n):
+                _sample(scratch, j, False)
+        if inner_rec:  # the sample buffer at the current-loop rate: registers every sample
             for j in range(n):
                 r = regs[i0 + j]
                 if _records_inner(r):
                     _store_regs(scratch, j, r)
                     record(r, buf[i0 + j] if rec else buf[0], rec)
-    else:
-        for _k in range(c.INNER_PER_OUTER - 1):
-            for j in range(n):
-                _sample(scratch, j, False)
-        for j in range(n):
-            _sample(scratch, j, True)
     for j in range(n):
         _scatter(scratch, j, regs[i0 + j], state[i0 + j])

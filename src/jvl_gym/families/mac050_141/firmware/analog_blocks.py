@@ -11,6 +11,7 @@ from numba import njit
 
 from ....jit import KERNEL
 from ....physics.fixed import wrap32
+from ....physics.levels import hysteresis_level
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
@@ -61,11 +62,7 @@ def a2pos_update(r: np.ndarray, s: np.ndarray, entering: bool) -> None:
         if (r[R.ERR_STAT] & (c.RELPOSPSOLL | c.RELPOSPFNC)) == 0:
             r[R.P_SOLL] = r[R.P2] if level > 0.5 else r[R.P1]
         return
-    new = level
-    if level < 0.5 and a > _A2POS_HIGH:
-        new = 1.0
-    elif level > 0.5 and a < _A2POS_LOW:
-        new = 0.0
+    new = hysteresis_level(level, a, _A2POS_HIGH, _A2POS_LOW)
     if new == level:
         return
     s[L.S_AUX3] = new

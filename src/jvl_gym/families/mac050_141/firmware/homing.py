@@ -21,6 +21,7 @@ from numba import njit
 
 from ....jit import KERNEL
 from ....physics.fixed import wrap32
+from ....physics.levels import sensor_edge
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
@@ -76,13 +77,7 @@ def home_check(r: np.ndarray, s: np.ndarray, mode: int) -> bool:
         found = s[L.S_AUX4] >= DETECTIONS
     else:
         active = sensor_active(r)
-        was = s[L.S_AUX5] > 0.5
-        if s[L.S_AUX5] < 0.0:  # first sample of the search: no edge yet
-            was = active
-        if mode == c.HOME2_MODE:
-            found = active and not was
-        else:
-            found = s[L.S_AUX4] > 0.5 and was and not active
+        found = sensor_edge(active, s[L.S_AUX5], mode == c.HOME2_MODE, s[L.S_AUX4] > 0.5)
         s[L.S_AUX5] = 1.0 if active else 0.0
     if found:
         set_home_position(r, s)

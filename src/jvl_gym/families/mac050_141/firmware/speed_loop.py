@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
+from ....physics.correction import corrected_profile, held_output, vf_output
 from ....physics.fixed import clamp, fx4, fx8, rnd, sat16
 from .. import layout as L
 from . import regs as R
@@ -66,24 +67,18 @@ def speed_regulator(r: np.ndarray, s: np.ndarray, f: float, correcting: bool,
             + fx4(r[R.KVFY0]) * s[L.S_Y4])
     kvout = fx8(r[R.KVOUT])
     ff = _ff(r, s, f)
-    e = ff - vb
-    y = x4 * e + rest
-    vf = kvout * y
+    e, y, vf = vf_output(ff, vb, x4, rest, kvout)
     correction = 0.0
     if abs(vf) > t_limit:
-        target = t_limit if vf > 0.0 else -t_limit
         gain = kvout * x4 * fx8(r[R.KFF3])
         if correcting and gain != 0.0:
-            f_new = rnd(f + (target - vf) / gain)
+            f_new = corrected_profile(f, vf, t_limit, gain)
             ff = _ff(r, s, f_new)
-            e = ff - vb
-            y = x4 * e + rest
-            vf = kvout * y
+            e, y, vf = vf_output(ff, vb, x4, rest, kvout)
             correction = f_new - f
             f = f_new
         if abs(vf) > t_limit:
-            vf = clamp(vf, -t_limit, t_limit)
-            y = vf / kvout if kvout != 0.0 else 0.0
+            vf, y = held_output(vf, t_limit, kvout)
     vf_out = clamp(rnd(vf), -1023.0, 1023.0)
     r[R.FNC_OUT] = int(clamp(f, -32767.0, 32767.0))
     r[R.FF_OUT] = int(ff)

@@ -25,6 +25,7 @@ from numba import njit
 
 from ....jit import KERNEL
 from ....physics.fixed import clamp, rnd, wrap32
+from ....physics.levels import hysteresis_level
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
@@ -84,11 +85,7 @@ def analog_position(r: np.ndarray, s: np.ndarray) -> None:
         if not relative:
             r[R.P_SOLL] = r[R.POS0 + 2] if level > 0.5 else r[R.POS0]
         return
-    new = level
-    if level < 0.5 and a > _HIGH:
-        new = 1.0
-    elif level > 0.5 and a < _LOW:
-        new = 0.0
+    new = hysteresis_level(level, a, _HIGH, _LOW)
     if new == level:
         return
     s[L.S_A2P_LEVEL] = new

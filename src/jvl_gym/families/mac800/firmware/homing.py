@@ -26,6 +26,7 @@ from numba import njit
 
 from ....jit import KERNEL
 from ....physics.fixed import wrap32
+from ....physics.levels import sensor_edge
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
@@ -78,11 +79,8 @@ def home_found(r: np.ndarray, s: np.ndarray, mode: int, from_index: float) -> bo
         found = s[L.S_HOME_PHASE] >= DETECTIONS
     else:
         active = sensor_active(r)
-        was = active if s[L.S_HOME_LEVEL] < 0.0 else s[L.S_HOME_LEVEL] > 0.5
-        if mode == c.SENSOR1_ZERO_SEARCH:
-            found = active and not was
-        else:
-            found = s[L.S_HOME_PHASE] > 0.5 and was and not active
+        found = sensor_edge(active, s[L.S_HOME_LEVEL], mode == c.SENSOR1_ZERO_SEARCH,
+                            s[L.S_HOME_PHASE] > 0.5)
         s[L.S_HOME_LEVEL] = 1.0 if active else 0.0
     if found:
         r[R.INDEX_OFFSET] = int(from_index)

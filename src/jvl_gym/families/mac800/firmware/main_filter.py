@@ -33,6 +33,7 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
+from ....physics.correction import corrected_profile, held_output, vf_output
 from ....physics.fixed import clamp, rnd
 from .. import layout as L
 from . import regs as R
@@ -59,18 +60,10 @@ def _ff(r: np.ndarray, s: np.ndarray, f: float, order: int) -> float:
 @njit(**KERNEL)
 def main_filter(r: np.ndarray, s: np.ndarray, f: float, correcting: bool,
                 t_limit: float) -> tuple[float, float]:
-    """One sample of the main filter: FF_OUT, VB_OUT, VF_OUT stored in ``r``.
-
-    Parameters
-    ----------
-    r, s : ndarray
-        The motor's register row and state row.
-    f : float
-        FNC_OUT of the function block [1/16 count/sample].
-    correcting : bool
-        Function correction active.
-    t_limit : float
-        Torque limit [0 … 1023 of peak torque].
+    """One sample of the main filter for the profile ``f`` (FNC_OUT of the function block,
+    1/16 count/sample) on the motor's register row ``r`` and state row ``s``: FF_OUT, VB_OUT
+    and VF_OUT stored in ``r``, VF_OUT limited to ``±t_limit`` (0 … 1023 of peak torque), with
+    the function correction when ``correcting``.
 
     Returns
     -------
@@ -96,24 +89,18 @@ def main_filter(r: np.ndarray, s: np.ndarray, f: float, correcting: bool,
             rest += r[R.KVFY5 + d - 1] * _FX16 * s[L.S_Y1 + d - 1]
     scale = r[R.KVOUT] * _FX16 * _POW2_NEG[int(r[R.MODEL_POT])]
     ff = _ff(r, s, f, order)
-    e = ff - vb
-    y = x0 * e + rest
-    vf = scale * y
+    e, y, vf = vf_output(ff, vb, x0, rest, scale)
     correction = 0.0
     if abs(vf) > t_limit:
-        target = t_limit if vf > 0.0 else -t_limit
         gain = scale * x0 * r[R.KFF5] * _FX24
         if correcting and gain != 0.0:
-            f_new = rnd(f + (target - vf) / gain)
+            f_new = corrected_profile(f, vf, t_limit, gain)
             ff = _ff(r, s, f_new, order)
-            e = ff - vb
-            y = x0 * e + rest
-            vf = scale * y
+            e, y, vf = vf_output(ff, vb, x0, rest, scale)
             correction = f_new - f
             f = f_new
         if abs(vf) > t_limit:
-            vf = clamp(vf, -t_limit, t_limit)
-            y = vf / scale if scale != 0.0 else 0.0
+            vf, y = held_output(vf, t_limit, scale)
     r[R.FNC_OUT] = int(clamp(f * _FNC_RAW, -_INT32, _INT32))
     r[R.FF_OUT] = int(ff)
     r[R.VB_OUT] = int(vb)
