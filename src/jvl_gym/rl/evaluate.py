@@ -126,10 +126,11 @@ def run_episodes(env_id: str, policy: Policy, seed: int, n_episodes: int,
         ret += np.where(alive, reward, 0.0)
         length += alive
         ended = alive & (terminated | truncated)
-        for i in np.flatnonzero(ended):
-            reasons[i] = str(info["termination_reason"][i])
-        for name in names:
-            stats[name][ended] = info[name][ended]
+        if ended.any():
+            for i in np.flatnonzero(ended):
+                reasons[i] = str(info["termination_reason"][i])
+            for name in names:
+                stats[name][ended] = info[name][ended]
         alive &= ~ended
     env.close()
     return Episodes(ret, length, reasons, stats)
