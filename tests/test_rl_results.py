@@ -82,7 +82,7 @@ def test_the_page_has_every_env_and_family_with_baseline_and_random(pages):
             # a column per episode statistic, a value in it for every controller that ran
             stats = vector_class(env_id).episode_stats
             header = next(line for line in block.splitlines() if line.startswith("| controller"))
-            assert header.endswith("| ended | " + "".join(f"{s} | " for s in stats.values()))
+            assert header.endswith("| ended |" + "".join(f" {s} |" for s in stats.values()))
             baseline = next(line for line in block.splitlines() if line.startswith("| baseline"))
             assert "—" not in baseline.split("|")[-2]
             shipped = [a for e, f, a in rl_runs() if (e, f) == (env_id, key)

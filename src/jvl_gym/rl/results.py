@@ -204,8 +204,8 @@ def write_page(rows: list[Row], out_dir: str | Path, runs: str | Path = "runs",
             lines += [f"### {row.family}", "",
                       f"Motor type: {row.motor_type}. Seeds {', '.join(map(str, row.seeds))}, "
                       f"{len(base.lengths) // n} episodes each.", "",
-                      "| controller | return | seeds won | episode [s] | ended | "
-                      + "".join(f"{label} | " for label in stats.values()),
+                      "| controller | return | seeds won | episode [s] | ended |"
+                      + "".join(f" {label} |" for label in stats.values()),
                       "|---|---|---|---|---|" + "---|" * len(stats)]
             for label, res in row.results.items():
                 m, s = res.mean_std
@@ -213,8 +213,8 @@ def write_page(rows: list[Row], out_dir: str | Path, runs: str | Path = "runs",
                 won = "—" if label == "baseline" else f"{res.seeds_won(base)}/{n}"
                 secs = float(np.mean(res.lengths)) * row.step_seconds
                 lines.append(f"| {name} | {m:.2f} ± {s:.2f} | {won} | {secs:.3f} | "
-                             f"{_outcomes(res.reasons)} | "
-                             + "".join(f"{_mean(res.stats.get(k, []))} | " for k in stats))
+                             f"{_outcomes(res.reasons)} |"
+                             + "".join(f" {_mean(res.stats.get(k, []))} |" for k in stats))
             for algo in row.untrained:
                 lines.append(f"| {algo}: no trained policy (train one: `jvl-gym train "
                              f"{row.env_id} --family {row.family} --algo {algo.lower()}`) "
