@@ -256,8 +256,8 @@ class GearSyncVectorEnv(MotorVectorEnv):
     default_decimation = 2
     default_max_episode_steps = 1500
     scope_channels = ("tension [N]", "tension ref [N]", "analogue input [V]", "winder rpm")
-    episode_stats = {"tension_error": "mean |tension error| [%]",
-                     "tension_error_max": "max |tension error| [%]",
+    episode_stats = {"tension_error": "mean tension error (abs.) [%]",
+                     "tension_error_max": "max tension error (abs.) [%]",
                      "copper_loss": "copper loss [J]"}
 
     def __init__(self, num_envs: int = 1, *, gear_ratio: float | None = None,

@@ -125,7 +125,7 @@ class PositioningVectorEnv(MotorVectorEnv):
     default_decimation = 1
     default_max_episode_steps = 300
     scope_channels = ("position error [turns]", "speed [rpm]", "torque command [1]")
-    episode_stats = {"settle_time": "settle time [s]", "final_error": "final |error| [turns]",
+    episode_stats = {"settle_time": "settle time [s]", "final_error": "final error (abs.) [turns]",
                      "overshoot": "overshoot [turns]", "copper_loss": "copper loss [J]"}
 
     def __init__(self, num_envs: int = 1, *, baseline: bool = False, overshoot_weight: float = 2.0,
