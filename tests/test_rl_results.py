@@ -12,6 +12,7 @@ pytest.importorskip("stable_baselines3")
 from cli_checks import one_line_error, run_cli  # noqa: E402
 from jvl_gym.cli import app as gym_cli  # noqa: E402
 from jvl_gym.envs import ENV_IDS  # noqa: E402
+from jvl_gym.envs.registration import vector_class  # noqa: E402
 from jvl_gym.families import family  # noqa: E402
 from jvl_gym.rl.config import env_families, rl_config, rl_runs  # noqa: E402
 from jvl_gym.rl.train import SHIPPED_DIR, log_path, model_path  # noqa: E402
@@ -78,6 +79,12 @@ def test_the_page_has_every_env_and_family_with_baseline_and_random(pages):
             assert f"### {key}\n" in section
             block = section.split(f"### {key}\n", 1)[1].split("\n### ", 1)[0]
             assert "\n| baseline |" in block and "\n| random |" in block
+            # a column per episode statistic, a value in it for every controller that ran
+            stats = vector_class(env_id).episode_stats
+            header = next(line for line in block.splitlines() if line.startswith("| controller"))
+            assert header.endswith("| ended |" + "".join(f" {s} |" for s in stats.values()))
+            baseline = next(line for line in block.splitlines() if line.startswith("| baseline"))
+            assert "—" not in baseline.split("|")[-2]
             shipped = [a for e, f, a in rl_runs() if (e, f) == (env_id, key)
                        and model_path(SHIPPED_DIR, e, f, a).is_file()]
             for algo in shipped:
@@ -110,3 +117,31 @@ def test_bad_options_are_one_line_errors(capsys, tmp_path, monkeypatch, args, wo
     code, _, err = _run(args, capsys)
     assert words in _one_line_error(code, err)
     assert not (tmp_path / "x").exists()
+
+
+def test_a_checkpoint_is_the_model_of_a_training_that_long(tmp_path):
+    """The checkpoint after n steps of a longer training equals a training of n steps."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from jvl_gym.rl.train import checkpoint_path, train
+
+    env = "jvl_gym/Positioning-v0"
+    cfg = tmp_path / "cfg"
+    cfg.mkdir()
+    (cfg / "p.yml").write_text(
+        f"{env}:\n  n_envs: 4\n  total_timesteps: 384\n"
+        "  env_kwargs: {max_episode_steps: 20}\n"
+        "  hyperparams: {n_steps: 32, batch_size: 64, n_epochs: 1, "
+        "policy_kwargs: {net_arch: [8]}}\n")
+    long = train(env, tmp_path / "long", progress_bar=False, config_dir=cfg,
+                 checkpoint_every=256)
+    short = train(env, tmp_path / "short", total_timesteps=256,
+                  progress_bar=False, config_dir=cfg)
+    ckpt = checkpoint_path(long, 256)
+    assert ckpt.is_file() and not checkpoint_path(long, 128).exists()
+    a = PPO.load(ckpt, device="cpu").policy.state_dict()
+    b = PPO.load(short, device="cpu").policy.state_dict()
+    c = PPO.load(long, device="cpu").policy.state_dict()
+    assert all(torch.equal(a[k], b[k]) for k in a)
+    assert not all(torch.equal(a[k], c[k]) for k in a)

@@ -63,7 +63,10 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
           family: Annotated[str | None, typer.Option(
               help="motor family key (default: the env's first)")] = None,
           algo: Annotated[str | None, typer.Option(
-              help="algorithm of the config (default: its algo, e.g. ppo; or sac)")] = None
+              help="algorithm of the config (default: its algo, e.g. ppo; or sac)")] = None,
+          checkpoint_every: Annotated[int | None, typer.Option(
+              help="also save the model every N steps (OUT/<Env>-<family>-<algo>-<steps>.zip)",
+              min=1)] = None
           ) -> None:
     """Train the configured algorithm (configs/rl/*.yml) on ENV_ID and save the model
     (OUT/<Env>-<family>-<algo>.zip, its training log beside it)."""
@@ -79,7 +82,7 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
         raise typer.BadParameter(f"{exc.args[0]}: add it to configs/rl/*.yml or pick another "
                                  "--family/--algo") from None
     run(env_id, out, timesteps, seed, progress_bar=True, threads=threads,
-        config_dir=config_dir, family=family, algo=algo)
+        config_dir=config_dir, family=family, algo=algo, checkpoint_every=checkpoint_every)
 
 
 @app.command()

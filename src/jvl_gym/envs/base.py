@@ -33,7 +33,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
-from ..families import Family, family
+from ..families import Capability, Family, family
 from .compiled import OBS_BOUND
 from .randomisation import Randomisation
 from .rendering import Rendering
@@ -261,6 +261,14 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
     def peak_torque(self, idx: np.ndarray) -> np.ndarray:
         """Peak torque (T_SOLL = 1023) [N·m] of the motor types of copies ``idx``."""
         return np.array([cfg.peak_torque for cfg in self._type_configs(idx)])
+
+    def copper_loss(self, idx: np.ndarray) -> np.ndarray:
+        """Copper loss of copies ``idx`` since their last reset [J], (M,): the motors' "copper"
+        energy account (kept from power-on; a reset powers a copy's motor on), NaN on a family
+        without energy accounts (:attr:`~jvl_gym.families.Capability.ENERGY`)."""
+        if not self.fam.supports(Capability.ENERGY):
+            return np.full(idx.size, np.nan)
+        return self.motors.energy["copper"][idx]
 
     def _kvout_for_load(self, idx: np.ndarray, inertia_ratio: np.ndarray) -> None:
         """Set KVOUT = 1 + ``inertia_ratio`` (J_load/J_m, (M,)) of copies ``idx`` when the

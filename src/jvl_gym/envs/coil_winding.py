@@ -51,7 +51,7 @@ COIL = record(d0=float, d_mean=float, d_var=float, d_freq=float, d_phase=float, 
               layer_void=float, layer_piles=float, step_penalty=float, gear0=float,
               half_d_counts=float, direction=float, layer=float, prev_x=float,
               laid_pitch=float, laid_gap=float, laid_slide=float, v=float, x0=float,
-              profile_changed=float)
+              profile_changed=float, voids=float)
 
 
 class CoilWindingState(NamedTuple):
@@ -95,6 +95,7 @@ def _lay_turn(x, t, h, centres, w, k):  # pragma: no cover - compiled
         w.laid_gap += _TURN_EMA * ((spacing - d / d0) - w.laid_gap)
     w.prev_x = x_laid
     w.layer_void += void / (d * d)
+    w.voids += void / (d * d)
     if base > w.floor + 0.5 * d:
         w.layer_piles += 1.0
     w.step_penalty += k.void_weight * void / (d * d)
@@ -284,6 +285,7 @@ class CoilWindingVectorEnv(MotorVectorEnv):
     laid_pitch = Field("coil")  #: average laid turn spacing / d0 − 1
     laid_gap = Field("coil")  #: average gap between laid turns / d0
     laid_slide = Field("coil")  #: slide of the last turn from the guide / d0
+    voids = Field("coil")  #: voids of the episode [wire cross-sections]
 
     obs_labels = ("traverse_position", "traverse_speed", "spindle_speed", "layer",
                   "direction", *(f"profile_{k}" for k in range(_GROUPS)), "last_flatness",
@@ -305,6 +307,8 @@ class CoilWindingVectorEnv(MotorVectorEnv):
     default_decimation = 4
     default_max_episode_steps = 1500
     scope_channels = ("traverse x [mm]", "spindle [rpm]", "layer", "flatness std/d")
+    episode_stats = {"layers": "layers wound", "flatness": "flatness [std/d0]",
+                     "voids": "voids [d²]", "copper_loss": "copper loss [J]"}
 
     def __init__(self, num_envs: int = 1, *, coil_width: float = 20e-3,
                  screw_pitch: float = 2e-3, spindle_counts_per_rev: int = 1024,
@@ -366,6 +370,13 @@ class CoilWindingVectorEnv(MotorVectorEnv):
             "GEARF1": gearf1, "GEARF2": _GEARF2, "V_SOLL": round(fam.task.rpm_to_v_soll(3000.0)),
             "A_SOLL": a_soll, "P1": 0, "P2": half, "P3": self.p4 - half, "P4": self.p4,
             "P5": half, "P6": 1, "MODE_REG": fam.constants.COIL_MODE}, idx)
+
+    def _episode_stats(self, idx: np.ndarray) -> dict[str, np.ndarray]:
+        """Layers wound, flatness of the final surface, voids, copper loss (see "Episode
+        End")."""
+        flat = np.array([dep.flatness_row(self.h[i], self.d0[i])[0] for i in idx.tolist()])
+        return {"layers": self.layer[idx].copy(), "flatness": flat.reshape(idx.size),
+                "voids": self.voids[idx].copy(), "copper_loss": self.copper_loss(idx)}
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
         """The coil is complete (all layers wound) or a motor error bit is set."""
@@ -437,7 +448,11 @@ class CoilWindingEnv(MotorEnv):
 
     ## Episode End
     Terminated when ``n_layers`` (4) layers are wound or on a motor error bit; truncated after
-    ``max_episode_steps`` (1500 steps = 11.5 s at the default decimation 4).
+    ``max_episode_steps`` (1500 steps = 11.5 s at the default decimation 4). The last step's
+    ``info`` holds the episode's statistics: ``layers`` wound, ``flatness`` (std of the final
+    surface's height / d0), ``voids`` (void area under every turn laid, in wire
+    cross-sections d²) and ``copper_loss`` [J], the traverse motor's copper loss in the
+    episode.
 
     ## Families
     MAC050–141 only: ``motor_type="MAC800"`` (or ``"MAC400"``) is refused, since the MAC800

@@ -50,6 +50,9 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
     default_decimation = 1
     default_max_episode_steps = 1
     scope_channels = ("position error [counts]", "speed [rpm]", "VF_OUT")
+    episode_stats = {"design_cost": "design cost", "settling_time": "settling time [s]",
+                     "overshoot": "overshoot [%]", "speed_dip": "speed dip [%]",
+                     "unstable": "unstable"}
 
     def __init__(self, num_envs: int = 1, *, motor_type: str | tuple[str, ...] | None = None,
                  baseline: bool = False, estimate_error: float = 0.1,
@@ -213,8 +216,17 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
                 + mt["flwerr_rms"] / self._flw_scale + 2.0 * mt["speed_dip"]
                 + 20.0 * mt["speed_ripple"] + mt["fncerr"] / self._fnc_scale)
         cost = np.minimum(cost, self.instability_penalty)
-        cost = np.where(mt["unstable"], self.instability_penalty, cost)
-        return -cost, np.ones(self.num_envs, dtype=np.bool_)
+        mt["cost"] = np.where(mt["unstable"], self.instability_penalty, cost)
+        return -mt["cost"], np.ones(self.num_envs, dtype=np.bool_)
+
+    def _episode_stats(self, idx: np.ndarray) -> dict[str, np.ndarray]:
+        """The trial's design cost, settling time, overshoot, speed dip and whether the design
+        was unstable (see "Episode End")."""
+        mt = self.metrics
+        return {"design_cost": mt["cost"][idx], "settling_time": mt["settling_time"][idx],
+                "overshoot": 100.0 * mt["overshoot"][idx],
+                "speed_dip": 100.0 * mt["speed_dip"][idx],
+                "unstable": mt["unstable"][idx].astype(np.float64)}
 
     def _observe(self) -> np.ndarray:
         onehot = np.array([[1.0 if name == t else 0.0 for t in self._types]
@@ -260,7 +272,11 @@ class FilterTuningEnv(MotorEnv):
     The motor powers on at rest with the default setup of its type.
 
     ## Episode End
-    Every episode is one step (terminated after the trial).
+    Every episode is one step (terminated after the trial). Its ``info`` holds the trial's
+    figures: ``design_cost`` (the cost above, the negated reward), ``settling_time`` [s] (until
+    the position stays within 20 counts per 4096 of the target), ``overshoot`` [% of the
+    step], ``speed_dip`` [% of 1000 rpm] at the load step, ``unstable`` (1 for an unstable
+    design, else 0).
 
     ## Families
     MAC050–141 (default: all four types) and MAC800 (``motor_type="MAC800"``, ``"MAC400"`` or

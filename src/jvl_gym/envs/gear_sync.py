@@ -46,11 +46,13 @@ CONSTS = record(noise=float, max_steps=float, decimation=float, t_change=float,
                 loadcell_noise=float, tension_tolerance=float, action_rate_weight=float,
                 break_ratio=float, slack_samples=float, failure_penalty=float)
 #: a copy's line (``v1`` and ``theta0`` carry the master speed and the motor angle of the
-#: present outer sample from before to after the block's inner samples)
+#: present outer sample from before to after the block's inner samples; ``error_sum`` and
+#: ``error_max``: sum and largest of the |tension error| / reference at the episode's steps)
 LINE = record(ea=float, thickness=float, r0=float, span=float, tension_ref=float, strain=float,
               wound=float, radius=float, force=float, measured=float, master_theta=float,
               time=float, count_acc=float, prev_measured=float, pulses=float,
-              error_integral=float, slack_count=float, v1=float, theta0=float)
+              error_integral=float, slack_count=float, v1=float, theta0=float, error_sum=float,
+              error_max=float)
 
 
 class GearSyncState(NamedTuple):
@@ -158,6 +160,8 @@ def _step_end(i, view, episode, s, actions):  # pragma: no cover - compiled
     w.error_integral += decimation * _DT * (e_meas - w.error_integral / _INTEGRAL_TAU)
     t[i] += 1
     e = (w.force - ref) / ref
+    w.error_sum += abs(e)
+    w.error_max = max(w.error_max, abs(e))
     da = a - prev[i, 0]
     r = 1.0 - min(abs(e) / k.tension_tolerance, 2.0) - k.action_rate_weight * da * da
     failed = (w.force > k.break_ratio * ref or w.slack_count >= k.slack_samples
@@ -229,6 +233,8 @@ class GearSyncVectorEnv(MotorVectorEnv):
     pulses = Field("line")  #: master counts in the last step
     error_integral = Field("line")  #: leaky tension-error integral [s]
     slack_count = Field("line")  #: outer samples the web has been slack
+    error_sum = Field("line")  #: sum of |tension error| / reference over the episode's steps
+    error_max = Field("line")  #: largest |tension error| / reference at a step
 
     obs_labels = ("tension_error", "tension_rate", "tension_error_integral", "master_speed",
                   "motor_speed", "flwerr", "fncerr", "previous_action")
@@ -250,6 +256,9 @@ class GearSyncVectorEnv(MotorVectorEnv):
     default_decimation = 2
     default_max_episode_steps = 1500
     scope_channels = ("tension [N]", "tension ref [N]", "analogue input [V]", "winder rpm")
+    episode_stats = {"tension_error": "mean tension error (abs.) [%]",
+                     "tension_error_max": "max tension error (abs.) [%]",
+                     "copper_loss": "copper loss [J]"}
 
     def __init__(self, num_envs: int = 1, *, gear_ratio: float | None = None,
                  master_radius: float = 0.05,
@@ -337,6 +346,13 @@ class GearSyncVectorEnv(MotorVectorEnv):
             out.append("; ".join(why) or "terminated by the task")
         return out
 
+    def _episode_stats(self, idx: np.ndarray) -> dict[str, np.ndarray]:
+        """Mean and largest |tension error| over the episode's steps in % of the reference,
+        copper loss (see "Episode End")."""
+        return {"tension_error": 100.0 * self.error_sum[idx] / np.maximum(self._t[idx], 1),
+                "tension_error_max": 100.0 * self.error_max[idx],
+                "copper_loss": self.copper_loss(idx)}
+
     def _scope_values(self) -> np.ndarray:
         task = self.fam.task
         volts = task.AG_CENTRE_VOLTS + task.AG_SPAN_VOLTS * self._prev_action[:, 0]
@@ -385,7 +401,10 @@ class GearSyncEnv(MotorEnv):
     ## Episode End
     Terminated on a web break (tension > ``break_ratio`` × reference), slack longer than
     ``slack_time`` (10 ms) or a motor error bit; truncated after ``max_episode_steps`` (1500
-    steps = 5.76 s at the default decimation 2).
+    steps = 5.76 s at the default decimation 2). The last step's ``info`` holds the episode's
+    statistics: ``tension_error`` and ``tension_error_max``, the mean and the largest true
+    |tension error| at the episode's steps in % of the reference, and ``copper_loss`` [J], the
+    motor's copper loss in the episode.
 
     ## Families
     MAC050–141 (default MAC140) and MAC800 (``motor_type="MAC800"`` or ``"MAC400"``): mode 18,

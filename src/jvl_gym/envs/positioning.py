@@ -23,8 +23,9 @@ _BASELINE_RPM = 3000.0
 #: the env's constants of the compiled step
 CONSTS = record(noise=float, max_steps=float, decimation=float, overshoot_weight=float,
                 effort_weight=float, baseline=float)
-#: a copy's move: the target [counts] and the direction of the move (+1 or −1)
-COPY = record(target=np.int64, direction=float)
+#: a copy's move: the target [counts], the direction of the move (+1 or −1), the last step
+#: that ended outside the in-position window, the largest overshoot past the target [turns]
+COPY = record(target=np.int64, direction=float, unsettled=np.int64, overshoot=float)
 
 
 class PositioningState(NamedTuple):
@@ -73,8 +74,12 @@ def _step_end(i, view, episode, s, actions):  # pragma: no cover - compiled
     a = action(actions, i, 0)
     baseline = k.baseline > 0.5
     t[i] += 1
-    e = (row.target - reg(view, i, R.P_IST)) / c.COUNTS_PER_REV
+    e_counts = row.target - reg(view, i, R.P_IST)
+    if abs(e_counts) > reg(view, i, R.INPOSWIN):
+        row.unsettled = t[i]
+    e = e_counts / c.COUNTS_PER_REV
     overshoot = max(-e * row.direction, 0.0)
+    row.overshoot = max(row.overshoot, overshoot)
     effort = a * a if not baseline else (reg(view, i, R.VF_OUT) / c.VF_FULL) ** 2
     episode.reward[i] = -abs(e) - k.overshoot_weight * overshoot - k.effort_weight * effort
     end_step(i, (reg(view, i, R.ERR_STAT) & ERROR_BITS) != 0, t, int(k.max_steps),
@@ -105,6 +110,8 @@ class PositioningVectorEnv(MotorVectorEnv):
     task = TASK
     target = Field()  #: the target [counts]
     direction = Field()  #: the direction of the move (+1 or −1)
+    unsettled = Field()  #: the last step that ended outside the in-position window
+    overshoot = Field()  #: the largest overshoot past the target [turns]
 
     obs_labels = ("position_error", "position_error_fine", "speed", "previous_action")
     act_labels = ("torque",)
@@ -118,6 +125,8 @@ class PositioningVectorEnv(MotorVectorEnv):
     default_decimation = 1
     default_max_episode_steps = 300
     scope_channels = ("position error [turns]", "speed [rpm]", "torque command [1]")
+    episode_stats = {"settle_time": "settle time [s]", "final_error": "final error (abs.) [turns]",
+                     "overshoot": "overshoot [turns]", "copper_loss": "copper loss [J]"}
 
     def __init__(self, num_envs: int = 1, *, baseline: bool = False, overshoot_weight: float = 2.0,
                  effort_weight: float = 0.01, **kwargs: Any) -> None:
@@ -146,12 +155,22 @@ class PositioningVectorEnv(MotorVectorEnv):
         self._kvout_for_load(idx, draws["inertia_ratio"])
         _reset_rows(idx, draws["target_turns"], self.target, self.direction,
                     fam.constants.COUNTS_PER_REV)
+        self.unsettled[idx] = 0
+        self.overshoot[idx] = 0.0
         if self.baseline:
             self.motors.write_many({"V_SOLL": round(fam.task.rpm_to_v_soll(_BASELINE_RPM)),
                                      "P_SOLL": self.target[idx],
                                      "MODE_REG": fam.task.POSITION_MODE}, idx)
         else:
             self.motors.write("MODE_REG", fam.task.ANALOG_TORQUE_MODE, index=idx)
+
+    def _episode_stats(self, idx: np.ndarray) -> dict[str, np.ndarray]:
+        """Settle time (steps until the error stays within INPOSWIN, the episode's length when
+        it ends outside), final |error|, largest overshoot, copper loss (see "Episode End")."""
+        k = self.fam.constants
+        return {"settle_time": self.unsettled[idx] * self.decimation * k.OUTER_DT,
+                "final_error": np.abs(self._error_counts()[idx]) / k.COUNTS_PER_REV,
+                "overshoot": self.overshoot[idx].copy(), "copper_loss": self.copper_loss(idx)}
 
     def _error_counts(self) -> np.ndarray:
         return (self.target - self.motors.read_raw("P_IST")).astype(np.float64)
@@ -193,7 +212,13 @@ class PositioningEnv(MotorEnv):
 
     ## Episode End
     Terminated when an error bit (I2T, FLW, FNC, UIT, position limit) is set; truncated after
-    ``max_episode_steps`` steps (default 300 ≈ 0.58 s at decimation 1).
+    ``max_episode_steps`` steps (default 300 ≈ 0.58 s at decimation 1). The last step's
+    ``info`` holds the episode's statistics: ``settle_time`` [s], the motor time until the
+    position error stays within the in-position window INPOSWIN (MAC050–141 manual
+    "INPOSWIN - Register 33", MAC800 manual register 33; 10 counts in the default setups) to
+    the episode's end (its whole length when it ends outside); ``final_error`` [turns];
+    ``overshoot`` [turns], the largest past the target; ``copper_loss`` [J], the motor's
+    copper loss in the episode.
 
     ## Families
     MAC050–141 (default MAC140) and MAC800 (``motor_type="MAC800"`` or ``"MAC400"``: mode 4,

@@ -46,7 +46,8 @@ class MotorEnv(gym.Env):
     def step(self, action: Any) -> tuple[np.ndarray, float, bool, bool, dict[str, Any]]:
         """Advance by ``decimation`` outer samples with ``action`` (see "Action Space").
 
-        When the episode ends, ``info["termination_reason"]`` says why. Stepping an ended
+        When the episode ends, ``info["termination_reason"]`` says why and ``info[name]`` gives
+        each of the task's episode statistics (``episode_stats``) as a float. Stepping an ended
         episode raises RuntimeError (call :meth:`reset`), as the vector env does.
         """
         if self._ended:
@@ -59,9 +60,10 @@ class MotorEnv(gym.Env):
         info: dict[str, Any] = {}
         if terminated[0] or truncated[0]:
             self._ended = True
-            ended = np.ones(1, dtype=np.bool_)
-            info["termination_reason"] = str(self.core._end_info(ended, terminated)[
-                "termination_reason"][0])
+            end = self.core._end_info(np.ones(1, dtype=np.bool_), terminated)
+            info["termination_reason"] = str(end.pop("termination_reason")[0])
+            info.update({name: float(values[0]) for name, values in end.items()
+                         if not name.startswith("_")})
         return obs[0].copy(), float(reward[0]), bool(terminated[0]), bool(truncated[0]), info
 
     def render(self) -> np.ndarray | None:

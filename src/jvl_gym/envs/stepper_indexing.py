@@ -159,6 +159,8 @@ class StepperIndexingVectorEnv(MotorVectorEnv):
     default_decimation = 2
     default_max_episode_steps = 1000
     scope_channels = ("distance to go [turns]", "speed [rpm]", "lag [full steps]")
+    episode_stats = {"lost_steps": "lost full steps", "moves_done": "moves done",
+                     "copper_loss": "copper loss [J]"}
 
     def __init__(self, num_envs: int = 1, *, baseline: bool = False, n_moves: int = 3,
                  time_weight: float = 0.05, copper_weight: float = 0.1, move_bonus: float = 1.0,
@@ -204,6 +206,12 @@ class StepperIndexingVectorEnv(MotorVectorEnv):
         # the agent's acceleration shapes the whole trapezoid
         self.motors.write_many({"D_SOLL": 0, "P_SOLL": self.target[idx],
                                 "MODE_REG": self.fam.constants.POSITION}, idx)
+
+    def _episode_stats(self, idx: np.ndarray) -> dict[str, np.ndarray]:
+        """Full steps lost, moves done, copper loss (see "Episode End")."""
+        return {"lost_steps": np.abs(self.motors.lost_steps[idx]).astype(np.float64),
+                "moves_done": (self.n_moves - self.moves_left[idx]).astype(np.float64),
+                "copper_loss": self.copper_loss(idx)}
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
         lost = self.motors.lost_steps[idx]
@@ -260,7 +268,10 @@ class StepperIndexingEnv(MotorEnv):
     ## Episode End
     Terminated when every move is done, when the rotor has lost steps, or on an ERR_BITS error
     (follow error, position limit, low bus voltage); truncated after ``max_episode_steps``
-    steps (default 1000 = 2 s at decimation 2). ``info["termination_reason"]`` says which.
+    steps (default 1000 = 2 s at decimation 2). ``info["termination_reason"]`` says which;
+    the last step's ``info`` also holds the episode's statistics: ``lost_steps``, the full
+    steps the rotor lost (its lag behind P_IST in whole electrical turns of 4 full steps),
+    ``moves_done`` and ``copper_loss`` [J], the motor's copper loss in the episode.
 
     ## Arguments
     ``motor_type`` (an MIS/SMC type or a list drawn per episode), ``randomization`` (overrides

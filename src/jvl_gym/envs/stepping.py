@@ -5,7 +5,9 @@ Autoreset (``gymnasium.vector.AutoresetMode``): ``NEXT_STEP`` resets a finished 
 step (its actions ignored, reward 0); ``SAME_STEP`` resets it in the step that ended it and
 reports the final observation in ``info["final_obs"]``; ``DISABLED`` refuses to step a finished
 copy until it is reset (``reset_mask``). ``info["termination_reason"]`` says why each episode
-that ended in a step ended.
+that ended in a step ended, and the task's episode statistics (``episode_stats``: settle time,
+tension error, lost steps, copper loss …) say how it went, one ``info[name]`` each, read from the
+task's state and the motors when the episode ends.
 """
 
 from __future__ import annotations
@@ -33,6 +35,9 @@ class Stepping:
     render_mode: str | None
     terminal_errors: tuple[tuple[str, int], ...]
     error_register: str
+    #: the statistics of an ended episode a task reports in ``info`` (:meth:`_episode_stats`):
+    #: name -> what it is, with its unit
+    episode_stats: dict[str, str] = {}
     motors: Any
     _action_shape: tuple[int, int]
     _has_reset: bool
@@ -137,10 +142,18 @@ class Stepping:
             text = texts[bits] = f"motor error {names} ({self.error_register})" if bits else ""
         return text
 
+    def _episode_stats(self, idx: np.ndarray) -> dict[str, np.ndarray]:
+        """The statistics (:attr:`episode_stats`) of the episodes of copies ``idx`` that ended
+        with the last step, name -> (M,) float64; read before the copies are reset. Here:
+        none; a task reports its own."""
+        return {}
+
     def _end_info(self, ended: np.ndarray, terminated: np.ndarray) -> dict[str, np.ndarray]:
         """``{"termination_reason": (N,) object array, "_termination_reason": ended}`` for the
         copies ``ended`` (bool (N,)) whose episode ended with the last step: the task's reason
-        when terminated (:meth:`_termination_reasons`), :data:`TIME_LIMIT` when truncated."""
+        when terminated (:meth:`_termination_reasons`), :data:`TIME_LIMIT` when truncated;
+        and per episode statistic ``name`` (:meth:`_episode_stats`) ``info[name]``, (N,)
+        float64 (0 for copies that did not end), with its mask ``info["_" + name]``."""
         reasons = np.empty(self.num_envs, dtype=object)
         reasons.fill("")
         idx = np.flatnonzero(ended)
@@ -148,7 +161,12 @@ class Stepping:
         if term.size:
             reasons[term] = self._termination_reasons(term)
         reasons[idx[~terminated[idx]]] = TIME_LIMIT
-        return {"termination_reason": reasons, "_termination_reason": ended.copy()}
+        out = {"termination_reason": reasons, "_termination_reason": ended.copy()}
+        for name, values in self._episode_stats(idx).items():
+            column = np.zeros(self.num_envs)
+            column[idx] = values
+            out[name], out["_" + name] = column, ended.copy()
+        return out
 
     def error_bits(self) -> np.ndarray:
         """The error bits that end an episode (:attr:`terminal_errors` of

@@ -37,27 +37,33 @@ class Episodes:
         Steps.
     reasons : list of str
         ``info["termination_reason"]`` of each copy's last step.
+    stats : dict of str to ndarray, shape (N,)
+        The env's episode statistics (its ``episode_stats``) of each copy's last step.
     """
 
     returns: np.ndarray
     lengths: np.ndarray
     reasons: list[str]
+    stats: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 @dataclass
 class ControllerResult:
     """One controller on every held-out seed: the per-seed mean returns and every episode's
-    length [steps] and end reason."""
+    length [steps], end reason and statistics (name -> one value per episode)."""
 
     seed_means: list[float] = field(default_factory=list)
     lengths: list[int] = field(default_factory=list)
     reasons: list[str] = field(default_factory=list)
+    stats: dict[str, list[float]] = field(default_factory=dict)
 
     def add(self, episodes: Episodes) -> None:
         """Append one seed's episodes."""
         self.seed_means.append(float(episodes.returns.mean()))
         self.lengths.extend(int(n) for n in episodes.lengths)
         self.reasons.extend(episodes.reasons)
+        for name, values in episodes.stats.items():
+            self.stats.setdefault(name, []).extend(float(v) for v in values)
 
     @property
     def mean_std(self) -> tuple[float, float]:
@@ -102,6 +108,10 @@ def run_episodes(env_id: str, policy: Policy, seed: int, n_episodes: int,
 
     import jvl_gym  # noqa: F401
 
+    from ..envs.registration import vector_class
+
+    names = tuple(vector_class(env_id).episode_stats)
+    stats = {name: np.zeros(n_episodes) for name in names}
     env = gym.make_vec(env_id, num_envs=n_episodes, vectorization_mode="vector_entry_point",
                        autoreset_mode=AutoresetMode.SAME_STEP, **(env_kwargs or {}))
     obs, _ = env.reset(seed=seed)
@@ -116,11 +126,14 @@ def run_episodes(env_id: str, policy: Policy, seed: int, n_episodes: int,
         ret += np.where(alive, reward, 0.0)
         length += alive
         ended = alive & (terminated | truncated)
-        for i in np.flatnonzero(ended):
-            reasons[i] = str(info["termination_reason"][i])
+        if ended.any():
+            for i in np.flatnonzero(ended):
+                reasons[i] = str(info["termination_reason"][i])
+            for name in names:
+                stats[name][ended] = info[name][ended]
         alive &= ~ended
     env.close()
-    return Episodes(ret, length, reasons)
+    return Episodes(ret, length, reasons, stats)
 
 
 def episode_returns(env_id: str, policy: Policy, seed: int, n_episodes: int,

@@ -117,6 +117,12 @@ def _outcomes(reasons: list[str]) -> str:
                      sorted(counts.items(), key=lambda kv: (-kv[1], kv[0])))
 
 
+def _mean(values: list[float]) -> str:
+    """The mean of an episode statistic's values to 3 significant digits ("—" for none)."""
+    finite = [v for v in values if np.isfinite(v)]
+    return f"{np.mean(finite):.3g}" if finite else "—"
+
+
 def plot_curve(log: str | Path, out: str | Path, title: str) -> Path:
     """Episode return against environment steps from a training log (:func:`.train.log_path`):
     each episode and the running mean of 100; written as PNG to ``out``."""
@@ -163,6 +169,8 @@ def write_page(rows: list[Row], out_dir: str | Path, runs: str | Path = "runs",
                ) -> Path:
     """Write ``out_dir/results.md`` and ``out_dir/results/<model>.png`` (one learning curve per
     training whose log exists); returns the page's path."""
+    from ..envs.registration import vector_class
+
     out_dir = Path(out_dir)
     notes = read_notes() if notes is None else notes
     lines = ["# Results", "",
@@ -177,15 +185,16 @@ def write_page(rows: list[Row], out_dir: str | Path, runs: str | Path = "runs",
              "Return: mean ± std over the held-out seeds of the per-seed mean episode return. "
              "Seeds won: seeds on which the controller's mean return is above the baseline's. "
              "Episode: mean length in seconds of motor time. Ended: the envs' "
-             "`info[\"termination_reason\"]` of every episode (numbers shown as N); the envs "
-             "report no other episode statistic in `info` (settle time, tension error, copper "
-             "loss are in the rewards, not reported apart).",
+             "`info[\"termination_reason\"]` of every episode (numbers shown as N). The "
+             "columns after it: the mean over the episodes of each statistic the env reports "
+             "in `info` at an episode's end (its `episode_stats`, docs/envs.md).",
              "", "| env | family | best trained policy |", "|---|---|---|"]
     for row in rows:
         lines.append(f"| {row.env_id} | {row.family} | {_verdict(row)} |")
     lines.append("")
     curves: dict[str, list[str]] = {}
     for env_id in dict.fromkeys(r.env_id for r in rows):
+        stats = vector_class(env_id).episode_stats
         lines += [f"## {env_id}", ""]
         if notes.get(env_id):
             lines += [notes[env_id], ""]
@@ -195,19 +204,21 @@ def write_page(rows: list[Row], out_dir: str | Path, runs: str | Path = "runs",
             lines += [f"### {row.family}", "",
                       f"Motor type: {row.motor_type}. Seeds {', '.join(map(str, row.seeds))}, "
                       f"{len(base.lengths) // n} episodes each.", "",
-                      "| controller | return | seeds won | episode [s] | ended |",
-                      "|---|---|---|---|---|"]
+                      "| controller | return | seeds won | episode [s] | ended |"
+                      + "".join(f" {label} |" for label in stats.values()),
+                      "|---|---|---|---|---|" + "---|" * len(stats)]
             for label, res in row.results.items():
                 m, s = res.mean_std
                 name = f"{label} ({row.sources[label]})" if label in row.sources else label
                 won = "—" if label == "baseline" else f"{res.seeds_won(base)}/{n}"
                 secs = float(np.mean(res.lengths)) * row.step_seconds
                 lines.append(f"| {name} | {m:.2f} ± {s:.2f} | {won} | {secs:.3f} | "
-                             f"{_outcomes(res.reasons)} |")
+                             f"{_outcomes(res.reasons)} |"
+                             + "".join(f" {_mean(res.stats.get(k, []))} |" for k in stats))
             for algo in row.untrained:
                 lines.append(f"| {algo}: no trained policy (train one: `jvl-gym train "
                              f"{row.env_id} --family {row.family} --algo {algo.lower()}`) "
-                             "| — | — | — | — |")
+                             "| — | — | — | — |" + " — |" * len(stats))
             lines.append("")
             for algo in (*row.sources, *row.untrained):
                 for base_dir in (Path(runs), SHIPPED_DIR):

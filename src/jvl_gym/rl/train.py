@@ -8,7 +8,8 @@ from typing import Any
 
 from .config import rl_config
 
-__all__ = ["train", "model_path", "log_path", "shipped_model", "algo_class", "SHIPPED_DIR"]
+__all__ = ["train", "checkpoint_path", "model_path", "log_path", "shipped_model", "algo_class",
+           "SHIPPED_DIR"]
 
 def algo_class(name: str) -> Any:
     """The stable-baselines3 class of an algorithm name (``PPO``, ``SAC``, ``TD3``)."""
@@ -48,10 +49,40 @@ def shipped_model(env_id: str, family: str | None = None, algo: str = "PPO") -> 
     return path if path.is_file() else None
 
 
+def checkpoint_path(model: str | Path, steps: int) -> Path:
+    """The checkpoint of a training after ``steps`` environment steps, beside its model:
+    ``<model stem>-<steps>.zip``."""
+    model = Path(model)
+    return model.with_name(f"{model.stem}-{int(steps)}.zip")
+
+
+def _checkpoints(path: Path, every: int) -> Any:
+    """An SB3 callback that saves the model (:func:`checkpoint_path`) at the start of the
+    first rollout after each further ``every`` steps: after the update of the rollout before,
+    so the checkpoint of ``n`` steps is the model a training of ``n`` steps in all saves
+    (``n`` a whole number of rollouts; the algorithms' schedules are constant)."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    class Checkpoints(BaseCallback):
+        def __init__(self) -> None:
+            super().__init__()
+            self.due = every
+
+        def _on_rollout_start(self) -> None:
+            if self.num_timesteps >= self.due:
+                self.model.save(checkpoint_path(path, self.num_timesteps))
+                self.due = (self.num_timesteps // every + 1) * every
+
+        def _on_step(self) -> bool:
+            return True
+
+    return Checkpoints()
+
+
 def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None = None,
           seed: int | None = None, progress_bar: bool = True, threads: int = 1,
           config_dir: str | Path | None = None, family: str | None = None,
-          algo: str | None = None) -> Path:
+          algo: str | None = None, checkpoint_every: int | None = None) -> Path:
     """Train the configured algorithm on ``env_id`` and save it (:func:`model_path`, with the
     training log beside it, :func:`log_path`); returns the model path.
 
@@ -72,6 +103,8 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
         Directory of the RL ``*.yml`` (default ``configs/rl``).
     family, algo : str, optional
         Motor family key and algorithm (default: the config's first family and its ``algo``).
+    checkpoint_every : int, optional
+        Also save the model every this many steps (:func:`checkpoint_path`).
     """
     import numba
     import torch
@@ -94,7 +127,8 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
     model = algo_class(cfg["algo"])(cfg["policy"], venv, seed=seed, verbose=0, device="cpu",
                                     **hyper)
     t0 = time.perf_counter()
-    model.learn(total_timesteps=steps, progress_bar=progress_bar)
+    callback = None if checkpoint_every is None else _checkpoints(path, int(checkpoint_every))
+    model.learn(total_timesteps=steps, progress_bar=progress_bar, callback=callback)
     model.save(path)
     print(f"{env_id}: {steps} steps in {time.perf_counter() - t0:.0f} s -> {path}")
     venv.close()
