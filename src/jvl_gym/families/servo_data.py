@@ -17,6 +17,7 @@ import numpy as np
 
 __all__ = ["SERVO_CONFIG_COLUMNS", "servo_parameters"]
 
+
 #: layout column → the motor config field it holds (SI units)
 SERVO_CONFIG_COLUMNS: dict[str, str] = {
     "P_J_MOTOR": "rotor_inertia",  # kg·m²

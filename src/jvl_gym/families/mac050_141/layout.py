@@ -17,6 +17,9 @@ Only this module defines the column numbers.
 
 from __future__ import annotations
 
+from ..servo_layout import *  # noqa: F403  (P_J_MOTOR … P_PWM_DELAY: the servo columns)
+from ..servo_layout import N_SERVO_PARAM
+
 N_REGS = 165
 
 # --- state -----------------------------------------------------------------------------------
@@ -89,16 +92,6 @@ LANE_STATE = (
 
 # --- parameters ------------------------------------------------------------------------------
 (
-    P_J_MOTOR,  # rotor inertia [kg·m²]
-    P_J_LOAD,  # load inertia [kg·m²] (behind the coupling when P_K_COUPLING > 0)
-    P_VISCOUS,  # viscous friction [N·m·s/rad]
-    P_COULOMB,  # Coulomb friction [N·m]
-    P_R,  # phase resistance [Ω]
-    P_L,  # phase inductance [H]
-    P_LAMBDA,  # flux linkage [V·s]
-    P_AMPS_PER_COUNT,  # [A per ADC count]
-    P_POLE_PAIRS,
-    P_PWM_DELAY,  # 0 or 1 inner samples
     P_K_THERMAL,  # I2T filter gain per outer sample, monitor.filter_gain(thermal time constant)
     P_K_REGEN,  # UIT filter gain per outer sample, monitor.filter_gain(regen time constant)
     P_C_BUS,  # [F]
@@ -119,7 +112,7 @@ LANE_STATE = (
     P_K_COUPLING,  # stiffness of the coupling to the load [N·m/rad] (0: rigid)
     P_D_COUPLING,  # damping of the coupling to the load [N·m·s/rad]
     N_PARAM,
-) = range(30)
+) = range(N_SERVO_PARAM, 30)
 
 # --- inputs ----------------------------------------------------------------------------------
 (

@@ -9,6 +9,9 @@
 
 from __future__ import annotations
 
+from ..servo_layout import *  # noqa: F403  (P_J_MOTOR … P_PWM_DELAY: the servo columns)
+from ..servo_layout import N_SERVO_PARAM
+
 # --- state -----------------------------------------------------------------------------------
 (
     S_THETA,  # mechanical angle [rad]
@@ -74,16 +77,6 @@ S_Y = (S_Y1, S_Y2, S_Y3, S_Y4, S_Y5, S_Y6)
 
 # --- parameters ------------------------------------------------------------------------------
 (
-    P_J_MOTOR,  # rotor inertia [kg·m²]
-    P_J_LOAD,  # load inertia [kg·m²]
-    P_VISCOUS,  # viscous friction [N·m·s/rad]
-    P_COULOMB,  # Coulomb friction [N·m]
-    P_R,  # phase resistance [Ω]
-    P_L,  # phase inductance [H]
-    P_LAMBDA,  # flux linkage [V·s]
-    P_AMPS_PER_COUNT,  # [A per ADC count]
-    P_POLE_PAIRS,
-    P_PWM_DELAY,  # 0 or 1 inner samples
     P_I2T_SCALE,  # 65536 / rated phase current amplitude² [1/A²] (I2T's 100 %)
     P_K_I2T,  # I2T filter gain per outer sample
     P_UIT_SCALE,  # 65536 / continuous regenerative power of the dump [1/W] (UIT's 100 %)
@@ -107,7 +100,7 @@ S_Y = (S_Y1, S_Y2, S_Y3, S_Y4, S_Y5, S_Y6)
     P_KM0, P_KM1,  # mech_constants(J, 0, b, 0, 0, h)[:2] (a rigid shaft)
     P_KB0, P_KB1, P_KB2, P_KB3, P_KB4, P_KB5, P_KB6,  # bus_constants(C, R_src, R_dump, h)
     N_PARAM,
-) = range(42)
+) = range(N_SERVO_PARAM, 42)
 
 # --- inputs ----------------------------------------------------------------------------------
 (
