@@ -117,6 +117,10 @@ from .scratch import (
 _H = c.INNER_DT
 
 
+# The stages of a sample below, and the commutation, ADC, plant, encoder and hall functions
+# they and inner_sample call, are compiled once, as functions of their own, with forceinline:
+# LLVM inlines them into each caller (into the lane loops too, which it still vectorises);
+# numba's IR inliner would copy each of them into every inlined copy of the sample.
 @njit(**LANE_KERNEL, forceinline=True)
 def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float) -> float:
     """Phase ``k``'s current loop in lane ``j`` (4.3.1, :func:`current_loop.phase_step`):
