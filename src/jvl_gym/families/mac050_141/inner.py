@@ -117,7 +117,11 @@ from .scratch import (
 _H = c.INNER_DT
 
 
-@njit(cache=True, inline="always")
+# The stages of a sample below, and the commutation, ADC, plant, encoder and hall functions
+# they and inner_sample call, are compiled once, as functions of their own, with forceinline:
+# LLVM inlines them into each caller (into the lane loops too, which it still vectorises);
+# numba's IR inliner would copy each of them into every inlined copy of the sample.
+@njit(**LANE_KERNEL, forceinline=True)
 def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float) -> float:
     """Phase ``k``'s current loop in lane ``j`` (4.3.1, :func:`current_loop.phase_step`):
     U, and the histories e(k−1), U(k−1), U(k−2), I_IST(k−1) moved on."""
@@ -134,7 +138,7 @@ def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float) -> float
     return u
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def _at_rest(sc: np.ndarray, j: int, k: int, i_ist: float) -> None:
     """Phase ``k``'s loop held at rest while the current regulator is passive (4.4.1, 4.4.9):
     no history but the measured current."""
@@ -144,7 +148,7 @@ def _at_rest(sc: np.ndarray, j: int, k: int, i_ist: float) -> None:
     sc[LANE_BASE[L.S_IIST1_A + k] + j] = i_ist
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def _pwm(sc: np.ndarray, j: int, k: int, u: float) -> float:
     """PWM value applied in phase ``k`` of lane ``j``: ``u`` itself, or the value computed one
     sample earlier when the motor has a PWM delay (docs/model.md §2). ``u`` is kept either
@@ -155,7 +159,7 @@ def _pwm(sc: np.ndarray, j: int, k: int, u: float) -> float:
     return pending if sc[F_PWM_DELAY * LANES + j] > 0.5 else u
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def _commutation(sc: np.ndarray, j: int, el: float, dv: float
                  ) -> tuple[float, float, float, float, float]:
     """Commutation of lane ``j`` (4.3.1): (I_NOM, PHI_SOLL, IA_SOLL, IB_SOLL, IC_SOLL)."""
@@ -163,7 +167,7 @@ def _commutation(sc: np.ndarray, j: int, el: float, dv: float
                       sc[F_AMPLITUDE * LANES + j])
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def _loops(sc: np.ndarray, j: int, isa: float, isb: float, isc: float, xa: float, xb: float,
            xc: float) -> tuple[float, float, float]:
     """The three current loops of lane ``j`` (4.3.1): (UA, UB, UC)."""

@@ -26,7 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ...jit import KERNEL
+from ...jit import KERNEL, LANE_KERNEL
 from ...noise import gauss
 from ...physics.bus import bus_constants, bus_step_prepared
 from ...physics.coil import coil_constants, coil_step_prepared, phase_to_vector
@@ -248,7 +248,7 @@ def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, k
             s[L.S_PENDING_MODE] = c.INIT_MODE
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def adc_count(x: float) -> tuple[float, bool]:
     """A phase current reading of ``x`` ADC counts (before rounding): the stored IX_IST value,
     rounded and limited to ±1023, and whether the converter saturated (IX_ERR, 3.2.147).
@@ -260,7 +260,7 @@ def adc_count(x: float) -> tuple[float, bool]:
     return clamp(x, -1023.0, 1023.0) + 0.0, x >= 1023.0 or x <= -1023.0
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def plant_sample(theta: float, omega: float, theta_l: float, omega_l: float, acc: float,
                  i_re: float, i_im: float, ubus: float, dump_on: float, ua: float, ub: float,
                  uc: float, theta_e: float, pp: float, r_phase: float, lam: float, j: float,

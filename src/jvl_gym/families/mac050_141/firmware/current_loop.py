@@ -17,6 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ....jit import LANE_KERNEL
 from ....physics.fixed import clamp, fx8, rnd
 from ....trig import fma, sincos
 from .. import constants as c
@@ -28,7 +29,7 @@ _PER_TURN = 1.0 / c.ELDEG_PER_TURN  #: exact (a power of two)
 RAD_PER_UNIT = 2.0 * math.pi / c.ELDEG_PER_TURN
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def references(vf: float, eldeg: float, v_eldeg: float, phase_comp: float, amplitude: float
                ) -> tuple[float, float, float, float, float]:
     """Commutation (4.3.1, 3.2.126): ``(I_NOM, PHI_SOLL, IA_SOLL, IB_SOLL, IC_SOLL)`` from
@@ -45,7 +46,7 @@ def references(vf: float, eldeg: float, v_eldeg: float, phase_comp: float, ampli
     return i_nom, phi, ia, ib, ic
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def phase_references(amp: float, phi: float) -> tuple[float, float, float]:
     """IA/IB/IC_SOLL = amp·sin(PHI + k·120°) for ``phi`` in 0..2047, stored in −850..850 (3.2.133).
 
@@ -63,7 +64,7 @@ def phase_references(amp: float, phi: float) -> tuple[float, float, float]:
             clamp(rnd(amp * (-0.5 * sa - _HALF_SQRT3 * ca)), -850.0, 850.0) + 0.0)
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def store_references(r: np.ndarray, i_nom: float, phi: float, ia: float, ib: float,
                      ic: float) -> None:
     """Store I_NOM, PHI_SOLL and IA/IB/IC_SOLL (consecutive registers, 3.2.133)."""
@@ -74,7 +75,7 @@ def store_references(r: np.ndarray, i_nom: float, phi: float, ia: float, ib: flo
     r[R.IC_SOLL] = int(ic)
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def phase_step(i_soll: float, i_ist: float, e1: float, u1: float, u2: float, i_ist1: float,
                kib1: float, kib0: float, kifx2: float, kifx1: float, kify1: float,
                kify0: float) -> tuple[float, float]:
@@ -89,7 +90,7 @@ def phase_step(i_soll: float, i_ist: float, e1: float, u1: float, u2: float, i_i
     return clamp(rnd(u), -1023.0, 1023.0) + 0.0, e
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def manual_references(man_i_nom: float, man_alpha: int, amplitude: float
                       ) -> tuple[float, float, float]:
     """IA/IB/IC_SOLL of MANI_MODE (3.2.128): a stator field of MAN_I_NOM at the angle

@@ -13,6 +13,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ....jit import LANE_KERNEL
 from ..constants import COUNTS_PER_REV, ELDEG_PER_TURN
 
 _COUNTS_PER_RAD = COUNTS_PER_REV / (2.0 * math.pi)
@@ -20,13 +21,13 @@ _ELDEG_PER_RAD = ELDEG_PER_TURN / (2.0 * math.pi)
 _PER_TURN = 1.0 / ELDEG_PER_TURN  #: exact (a power of two)
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def encoder_count(theta: float) -> float:
     """Absolute encoder count of a mechanical angle [rad] (an integer, as float64)."""
     return np.floor(theta * _COUNTS_PER_RAD)
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def eldeg(theta_e: float) -> float:
     """ELDEG_IST of an electrical angle [rad], in 0..2047 (a float holding the integer; the
     ``mod 2048`` by ``floor``, exact, so that it runs in SIMD lanes, ``mac050_141.lanes``)."""

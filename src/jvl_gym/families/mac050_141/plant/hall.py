@@ -18,25 +18,27 @@ import math
 import numpy as np
 from numba import njit
 
+from ....jit import LANE_KERNEL
+
 SECTOR = math.pi / 3.0
 _PER_SECTOR = 1.0 / SECTOR  #: a multiplication, not a division, in every inner sample
 #: hall code (bits 15..13 of CNTRL_BITS) of sectors 0..5: one sensor changes per sector
 HALL_CODES = np.array([5, 1, 3, 2, 6, 4], dtype=np.int64)
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def sector_index(theta_e: float, hall_angle: float) -> float:
     """Unwrapped sector index ``floor((θe − hall angle)/60°)`` (its change gives the direction)."""
     return np.floor((theta_e - hall_angle) * _PER_SECTOR)
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def hall_code(sector: float) -> int:
     """3-bit hall code of an (unwrapped) sector index."""
     return HALL_CODES[int(sector) % 6]
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def zero_crossing(prev: float, now: float) -> int:
     """+1 / −1 when the zero transition (sector 5 ↔ 0) was crossed upwards / downwards, else 0."""
     if now > prev and int(now) % 6 == 0:
