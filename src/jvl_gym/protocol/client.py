@@ -42,23 +42,11 @@ class MacTalkClient(RegisterMaster):
 
     Parameters
     ----------
-    port : str
-        Device path or pyserial URL.
-    address : int
-        Unit address (MYADDR, 1..254) or 255 (broadcast, point-to-point links only).
-    timeout : float
-        Seconds to wait for a reply.
-    retries : int
-        Extra attempts after a timeout or a garbled reply.
-    baudrate : int
-        Serial speed (ignored by socket URLs).
+    port, address, timeout, retries, baudrate, serial, serial_kwargs
+        As :class:`~.master.SerialMaster` (address: MYADDR).
     table : RegisterTable, optional
         Register table for typed access (default: the table of the first registered family
         that speaks the 16-bit MacTalk, the MAC050–141).
-    serial : serial.SerialBase, optional
-        An open port to share.
-    serial_kwargs
-        Passed to ``serial.serial_for_url``.
     """
 
     dialect = MACTALK16
@@ -144,9 +132,6 @@ class MacTalkClient(RegisterMaster):
                       f"WRITE {register} = {value}", "accept")
 
     # ------------------------------------------------------------------ typed access
-    def _reg(self, key: str | int) -> Any:
-        return self.table.lookup(key)
-
     def read_raw(self, key: str | int) -> int:
         """Stored integer of a register (a LongInt's full 32-bit value; Fixed as integer)."""
         from ..registers import Format, from_word16, join_longint
@@ -177,12 +162,7 @@ class MacTalkClient(RegisterMaster):
         read-only) so that a bad value raises at once instead of timing out."""
         from ..registers import Format, to_raw, to_word16
 
-        reg = self._reg(key)
-        if reg.access.value != "rw":
-            from ..registers import ReadOnlyRegisterError
-
-            raise ReadOnlyRegisterError(f"{reg.name} (register {reg.number}) is "
-                                        f"{reg.access.value}; it cannot be written")
+        reg = self._writable(key)
         raw = int(to_raw(reg, value))
         if reg.format == Format.LONGINT:
             self.write_long(reg.number, raw)

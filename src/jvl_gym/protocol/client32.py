@@ -35,22 +35,10 @@ class MacTalk32Client(RegisterMaster):
 
     Parameters
     ----------
-    port : str
-        Device path or pyserial URL.
-    address : int
-        Unit address (MY_ADDR, 1..254) or 255 (broadcast, point-to-point links only).
+    port, address, timeout, retries, baudrate, serial, serial_kwargs
+        As :class:`~.master.SerialMaster` (address: MY_ADDR).
     table : RegisterTable
         The register table of the unit's family (typed access).
-    timeout : float
-        Seconds to wait for a reply.
-    retries : int
-        Extra attempts after a timeout or a garbled reply.
-    baudrate : int
-        Serial speed (ignored by socket URLs).
-    serial : serial.SerialBase, optional
-        An open port to share.
-    serial_kwargs
-        Passed to ``serial.serial_for_url``.
     """
 
     dialect = MACTALK32
@@ -133,9 +121,6 @@ class MacTalk32Client(RegisterMaster):
                       f"WRITE {register} = {value}", "accept")
 
     # ------------------------------------------------------------------ typed access
-    def _reg(self, key: str | int) -> Any:
-        return self.table.lookup(key)
-
     def read_raw(self, key: str | int) -> int:
         """Stored integer of a register, signed unless its format is unsigned."""
         reg = self._reg(key)
@@ -152,12 +137,9 @@ class MacTalk32Client(RegisterMaster):
     def write(self, key: str | int, value: float) -> None:
         """Write a register in user units; validated against the table first (range,
         read-only), so that a bad value raises at once and nothing is sent."""
-        from ..registers import ReadOnlyRegisterError, to_raw
+        from ..registers import to_raw
 
-        reg = self._reg(key)
-        if reg.access.value != "rw":
-            raise ReadOnlyRegisterError(f"{reg.name} (register {reg.number}) is "
-                                        f"{reg.access.value}; it cannot be written")
+        reg = self._writable(key)
         self.write_value(reg.number, int(to_raw(reg, value)))
 
     # ------------------------------------------------------------------ commands

@@ -189,6 +189,21 @@ class RegisterMaster(SerialMaster):
     def read_sample(self) -> bytes:
         """One read-sample request: 16 bytes of a sample, or b"" after the last."""
 
+    def _reg(self, key: str | int) -> Any:
+        """The table's register ``key`` (name or number)."""
+        return self.table.lookup(key)
+
+    def _writable(self, key: str | int) -> Any:
+        """The table's register ``key``; :class:`~jvl_gym.registers.ReadOnlyRegisterError` if
+        it cannot be written (checked before anything is sent)."""
+        from ..registers import ReadOnlyRegisterError
+
+        reg = self._reg(key)
+        if reg.access.value != "rw":
+            raise ReadOnlyRegisterError(f"{reg.name} (register {reg.number}) is "
+                                        f"{reg.access.value}; it cannot be written")
+        return reg
+
     def write_registers(self, values: dict[str, float], verify: bool = True) -> None:
         """Write several registers (e.g. synthesised filter coefficients) and read them back."""
         from ..registers import to_raw

@@ -1,8 +1,9 @@
 """Speed profiles of a master axis or a spindle, vectorised over N motors [rev/s].
 
 A profile is a function of time t [s] (scalar) returning an (N,) array of speeds. Profiles
-compose by addition and multiplication; the constructors cover the cases of TASKS.md: run-up
-ramp, constant, speed changes, stops, ripple from an eccentric roll, random walk, recorded data.
+compose by addition and multiplication; the constructors cover what a master axis or a
+spindle does in a line: run-up ramp, constant, speed changes, stops, ripple from an eccentric
+roll, random walk, recorded data.
 """
 
 from __future__ import annotations
@@ -84,7 +85,7 @@ class SpeedProfile:
     @staticmethod
     def ripple(amplitude: float | Sequence[float], base: SpeedProfile,
                per_rev: float = 1.0) -> SpeedProfile:
-        """Eccentric-roll ripple: ``v(t)·(1 + a·sin θ(t))`` with θ the roll angle (TASKS.md).
+        """Eccentric-roll ripple: ``v(t)·(1 + a·sin θ(t))`` with θ the roll angle.
 
         The angle is integrated from ``base`` on a grid of :data:`GRID_DT`.
         """
