@@ -170,7 +170,7 @@ class RegisterBank(ABC):
         conf = self.CONFORMANCE
         if conf is None or not conf.warn_rules:
             return
-        warned = self.__dict__.setdefault("_not_modelled_warned", set())
+        warned = self._not_modelled_warned
         for reg, raw in zip(regs, raws):
             num = reg.number
             if num in conf.warn_rules and num not in warned and conf.not_modelled_change(

@@ -186,6 +186,8 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         self._flash: np.ndarray | None = None
         self._has_flash = np.zeros(self.n, dtype=np.bool_)
         self._fmt = self.table.fmt_code_array
+        #: register numbers whose not-modelled warning has been given (``_note_not_modelled``)
+        self._not_modelled_warned: set[int] = set()
         self._before_reset()
         self.reset(**params)
 

@@ -201,8 +201,9 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         self._scope = None
         self._scope_count = np.zeros(n, dtype=np.int64)
         self._figures = {}
+        self._error_texts: dict[int, str] = {}
         self._build()
-        self.__dict__.update(self._transient())
+        self._set_transient()
 
     # ------------------------------------------------------------------ the task's parts
     def _build(self) -> None:
@@ -293,5 +294,12 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         return state
 
     def __setstate__(self, state: dict[str, Any]) -> None:
-        self.__dict__.update(state)
-        self.__dict__.update(self._transient())
+        for name, value in state.items():
+            setattr(self, name, value)
+        self._set_transient()
+
+    def _set_transient(self) -> None:
+        """Set the attributes of :meth:`_transient` (as attributes: the instance keeps the
+        interpreter's fast attribute layout, which touching ``__dict__`` would give up)."""
+        for name, value in self._transient().items():
+            setattr(self, name, value)

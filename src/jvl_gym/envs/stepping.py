@@ -135,7 +135,7 @@ class Stepping:
     def _error_text(self, bits: int) -> str:
         """``bits`` of :attr:`error_register` as text (kept per value: a step may end many
         copies)."""
-        texts = self.__dict__.setdefault("_error_texts", {})
+        texts = self._error_texts
         text = texts.get(bits)
         if text is None:
             names = "+".join(name for name, bit in self.terminal_errors if bits & bit)
