@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import re
 import struct
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
 from ..table import TABLE
@@ -49,21 +50,24 @@ def _int(text: str, lo: int, hi: int) -> int:
 
 
 @dataclass(frozen=True)
-class Field:
-    """A field type (abstract): ``parse`` text → value, ``show`` value → text, ``pack`` and
-    ``unpack`` for the flash bytes."""
+class Field(ABC):
+    """A field type: ``parse`` text → value, ``show`` value → text, ``pack`` and ``unpack``
+    for the flash bytes (each field type defines all but ``show``)."""
 
-    def parse(self, text: str) -> object:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abstractmethod
+    def parse(self, text: str) -> object:
+        """The value of the field's text; :class:`FieldError` if malformed or out of range."""
 
     def show(self, value: object) -> str:
         return str(value)
 
-    def pack(self, value: object) -> bytes:  # pragma: no cover - abstract
-        raise NotImplementedError
+    @abstractmethod
+    def pack(self, value: object) -> bytes:
+        """The value's bytes in the program's flash image."""
 
-    def unpack(self, data: bytes, k: int) -> tuple[object, int]:  # pragma: no cover
-        raise NotImplementedError
+    @abstractmethod
+    def unpack(self, data: bytes, k: int) -> tuple[object, int]:
+        """The value stored at byte ``k`` of ``data`` and the index after it."""
 
 
 @dataclass(frozen=True)
