@@ -36,7 +36,7 @@ import numpy as np
 import yaml
 
 from jvl_gym.scale.distributions import parse_distribution
-from jvl_gym.scale.errors import UserError, file_flag, file_number, read_yaml
+from jvl_gym.scale.errors import UserError, file_flag, file_mapping, file_number, read_yaml
 
 __all__ = ["FleetMotor", "FleetSpec", "load_fleet", "parse_fleet", "fleet_from_records"]
 
@@ -144,11 +144,9 @@ def parse_fleet(data: Any, path: Path | None = None) -> FleetSpec:
     from .models import MotorData
 
     where = str(path) if path is not None else "fleet"
-    if not isinstance(data, dict):
+    if data is None:
         raise UserError(f"{where}: expected a mapping with keys {sorted(_KEYS)}")
-    unknown = set(data) - _KEYS
-    if unknown:
-        raise UserError(f"{where}: unknown keys {sorted(unknown)}; allowed: {sorted(_KEYS)}")
+    data = file_mapping(data, where, _KEYS)
     groups = data.get("motors")
     if not isinstance(groups, list) or not groups:
         raise UserError(f"{where}: motors: expected a list of groups "
@@ -167,11 +165,9 @@ def parse_fleet(data: Any, path: Path | None = None) -> FleetSpec:
     motors: list[FleetMotor] = []
     for g, group in enumerate(groups):
         gw = f"{where}: motors[{g}]"
-        if not isinstance(group, dict):
+        if group is None:
             raise UserError(f"{gw}: expected a mapping with keys {sorted(_GROUP)}")
-        bad = set(group) - _GROUP
-        if bad:
-            raise UserError(f"{gw}: unknown keys {sorted(bad)}; allowed: {sorted(_GROUP)}")
+        group = file_mapping(group, gw, _GROUP)
         mtype = group.get("type")
         if mtype not in types:
             raise UserError(f"{gw}: type: {mtype!r} is not a motor type; use one of "

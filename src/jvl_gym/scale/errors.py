@@ -17,13 +17,27 @@ import yaml
 
 from .extra import MissingExtraError
 
-__all__ = ["UserError", "run_cli", "read_yaml", "file_number", "file_integer", "file_flag"]
+__all__ = ["UserError", "run_cli", "read_yaml", "file_mapping", "file_number", "file_integer",
+           "file_flag"]
 
 T = TypeVar("T")
 
 
 class UserError(ValueError):
     """Bad input: a malformed sweep or fleet file, an unknown env id, a bad path."""
+
+
+def file_mapping(value: Any, where: str, allowed: set[str]) -> dict[str, Any]:
+    """``value`` of the file key ``where`` as a mapping whose keys are all in ``allowed``
+    (None: an empty one); UserError naming the key and the allowed keys otherwise."""
+    if value is None:
+        return {}
+    if not isinstance(value, dict):
+        raise UserError(f"{where}: expected a mapping with keys {sorted(allowed)}")
+    unknown = set(value) - allowed
+    if unknown:
+        raise UserError(f"{where}: unknown keys {sorted(unknown)}; allowed: {sorted(allowed)}")
+    return value
 
 
 def file_number(value: Any, where: str, low: float | None = None,

@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 
 from .distributions import Distribution, parse_distribution
-from .errors import UserError, file_integer, file_number, read_yaml
+from .errors import UserError, file_integer, file_mapping, file_number, read_yaml
 
 __all__ = ["SweepSpec", "Trial", "load_sweep", "parse_sweep", "trial_config"]
 
@@ -140,17 +140,6 @@ class SweepSpec:
         return hashlib.sha256(text.encode()).hexdigest()[:8]
 
 
-def _mapping(data: Any, where: str, allowed: set[str]) -> dict[str, Any]:
-    if data is None:
-        return {}
-    if not isinstance(data, dict):
-        raise UserError(f"{where}: expected a mapping with keys {sorted(allowed)}")
-    unknown = set(data) - allowed
-    if unknown:
-        raise UserError(f"{where}: unknown keys {sorted(unknown)}; allowed: {sorted(allowed)}")
-    return data
-
-
 def _positive_int(value: Any, where: str) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or value < 1:
         raise UserError(f"{where}: expected a positive integer, got {value!r}")
@@ -217,7 +206,7 @@ def parse_sweep(data: Any, path: Path | None = None) -> SweepSpec:
         On any malformed or unknown entry; the message names the file and the key.
     """
     where = str(path) if path is not None else "sweep"
-    data = _mapping(data, where, _KEYS)
+    data = file_mapping(data, where, _KEYS)
     if "env" not in data:
         raise UserError(f"{where}: missing 'env' (a registered id, e.g. jvl_gym/GearSync-v0)")
     env = str(data["env"])
@@ -251,9 +240,9 @@ def parse_sweep(data: Any, path: Path | None = None) -> SweepSpec:
         raise UserError(f"{where}: seeds: expected a list of integers")
     if len(set(seeds)) != len(seeds):
         raise UserError(f"{where}: seeds: {seeds} repeats a seed")
-    budget = _mapping(data.get("budget"), f"{where}: budget", _BUDGET)
-    res = _mapping(data.get("resources"), f"{where}: resources", _RESOURCES)
-    ev = _mapping(data.get("eval"), f"{where}: eval", _EVAL)
+    budget = file_mapping(data.get("budget"), f"{where}: budget", _BUDGET)
+    res = file_mapping(data.get("resources"), f"{where}: resources", _RESOURCES)
+    ev = file_mapping(data.get("eval"), f"{where}: eval", _EVAL)
     cpus = file_number(res.get("cpus_per_trial", 1), f"{where}: resources.cpus_per_trial",
                        positive=True)
     mc = res.get("max_concurrent")
