@@ -502,16 +502,21 @@ class Family:
     @classmethod
     def of_package(cls, package: str, **fields: Any) -> Family:
         """The record of the family package ``package`` laid out as every family folder is:
-        its ``compiled``, ``constants``, ``units``, ``config`` and ``task`` modules, and the
-        ``TABLE`` and ``CONFORMANCE`` of its ``table`` module; ``fields`` give the rest (key,
-        title, array class, twin, capabilities, …)."""
+        its ``compiled``, ``constants``, ``units``, ``config`` and ``task`` modules, the
+        ``TABLE`` and ``CONFORMANCE`` of its ``table`` module, and the plain facts of its
+        ``family.yaml`` (key, title, capabilities, twin, J1939 NAME: :mod:`.record_file`);
+        ``fields`` give the objects (array class, tuning, programs, …)."""
         import importlib
+
+        from .record_file import record_fields
 
         modules = {name: importlib.import_module(f"{package}.{name}")
                    for name in ("compiled", "constants", "units", "config", "task", "table")}
         table = modules.pop("table")
+        folder = Path(importlib.import_module(package).__file__ or "").parent
+        facts = record_fields(folder, modules["constants"])
         return cls(**modules, table=table.TABLE,
-                   conformance=getattr(table, "CONFORMANCE", None), **fields)
+                   conformance=getattr(table, "CONFORMANCE", None), **facts, **fields)
 
     def motor_types(self) -> list[str]:
         """Names of the family's motor types (each with a motor config)."""

@@ -21,6 +21,7 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
+from ....registers.fill import fill
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
@@ -91,27 +92,26 @@ def fncerr_is_position(mode: int) -> bool:
     return mode == c.GP_MODE or mode == c.GF_MODE or mode == c.AG_MODE
 
 
+#: state a regulated mode's entry clears: the FF (F), speed error (E) and VF output (Y)
+#: histories, the follow error's fraction and the IN_POS counter
+_SPEED_LOOP_CLEARED = (L.S_F1, L.S_F2, L.S_F3, L.S_E1, L.S_E2, L.S_E3, L.S_Y1, L.S_Y2, L.S_Y3,
+                       L.S_Y4, L.S_FLW16, L.S_INPOS_CNT)
+_SPEED_HISTORY = (L.S_V1, L.S_V2, L.S_V3)  #: the VB filter's V_IST history
+_ERRORS = (R.FNCERR, R.FLWERR)  #: the function and follow errors
+#: registers INIT and SAFE clear: the errors and the speed loop's and function block's outputs
+_PASSIVE_REGISTERS = _ERRORS + (R.VF_OUT, R.FNC_OUT)
+#: state INIT and SAFE clear: the profile speed, the follow error's fraction, an emergency stop
+#: and an AT_MODE exit under way
+_PASSIVE_CLEARED = (L.S_V_OLD, L.S_FLW16, L.S_EMERG, L.S_AT_EXIT)
+
+
 @njit(**KERNEL)
 def reset_speed_loop(r: np.ndarray, s: np.ndarray) -> None:
-    """Clear the FF/VB/VF histories and the profile memory (entry into a regulated mode)."""
-    v = float(r[R.V_IST])
-    s[L.S_F1] = 0.0
-    s[L.S_F2] = 0.0
-    s[L.S_F3] = 0.0
-    s[L.S_V1] = v
-    s[L.S_V2] = v
-    s[L.S_V3] = v
-    s[L.S_E1] = 0.0
-    s[L.S_E2] = 0.0
-    s[L.S_E3] = 0.0
-    s[L.S_Y1] = 0.0
-    s[L.S_Y2] = 0.0
-    s[L.S_Y3] = 0.0
-    s[L.S_Y4] = 0.0
-    s[L.S_FLW16] = 0.0
-    s[L.S_INPOS_CNT] = 0.0
-    r[R.FNCERR] = 0
-    r[R.FLWERR] = 0
+    """Clear the FF/VB/VF histories and the profile memory (entry into a regulated mode); the
+    speed history starts at V_IST."""
+    fill(s, _SPEED_LOOP_CLEARED, 0.0)
+    fill(s, _SPEED_HISTORY, float(r[R.V_IST]))
+    fill(r, _ERRORS, 0)
 
 
 @njit(**KERNEL)
@@ -120,15 +120,9 @@ def enter_mode(r: np.ndarray, s: np.ndarray, new: int) -> None:
     old = int(r[R.MODE_REG])
     r[R.MODE_REG] = new
     if new == c.INIT_MODE or new == c.SAFE_MODE:
-        s[L.S_V_OLD] = 0.0
-        s[L.S_FLW16] = 0.0
+        fill(s, _PASSIVE_CLEARED, 0.0)
         s[L.S_PENDING_MODE] = -1.0
-        s[L.S_EMERG] = 0.0
-        s[L.S_AT_EXIT] = 0.0
-        r[R.FLWERR] = 0
-        r[R.FNCERR] = 0
-        r[R.VF_OUT] = 0
-        r[R.FNC_OUT] = 0
+        fill(r, _PASSIVE_REGISTERS, 0)
         r[R.ERR_STAT] &= ~(c.IN_POS | c.ACC_FLAG | c.DEC_FLAG)
         return
     old_regulated = old < N_MODES and REGULATED[old]

@@ -20,6 +20,7 @@ from numba import njit
 
 from ....jit import KERNEL
 from ....physics.fixed import clamp, rnd
+from ....registers.uv_handle import UvHandle, uv_handle_reaction
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
@@ -110,6 +111,10 @@ def in_position(r: np.ndarray, s: np.ndarray, mode: int) -> None:
 
 
 _UV_TIMER_SAMPLES = round(1.0 * c.OUTER_HZ)  #: 1 s undervoltage timer (4.5.6)
+#: UV_HANDLE's bits (3.2.160)
+_UV_HANDLE = UvHandle(handle=R.UV_HANDLE, err_stat=R.ERR_STAT, uv_err=c.UV_ERR, v_soll=R.V_SOLL,
+                      set_uv_err=c.SET_UV_ERR, stop_profile=c.UV_SOLL0,
+                      go_passive=c.UV_GO_PASSIVE)
 
 
 @njit(**KERNEL)
@@ -139,12 +144,7 @@ def undervoltage(r: np.ndarray, s: np.ndarray) -> None:
     if u < umin:
         s[L.S_UV_TIMER] = _UV_TIMER_SAMPLES
         r[R.ERR_STAT] |= c.UV_DETECT
-        h = r[R.UV_HANDLE]
-        if h & c.SET_UV_ERR:
-            r[R.ERR_STAT] |= c.UV_ERR
-        if h & c.UV_SOLL0:
-            r[R.V_SOLL] = 0
-        if h & c.UV_GO_PASSIVE:
+        if uv_handle_reaction(r, _UV_HANDLE):
             stop_to(r, s, c.INIT_MODE, True)
     elif u > 1.25 * umin and s[L.S_UV_TIMER] <= 0.0:
         r[R.ERR_STAT] &= ~c.UV_DETECT

@@ -18,6 +18,7 @@ import numpy as np
 from numba import njit
 
 from ....jit import KERNEL
+from ....registers.fill import fill
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
@@ -57,16 +58,18 @@ def following(mode: int) -> bool:
     return 0 <= mode < 32 and _FOLLOWING[mode]
 
 
+#: registers passive mode clears: the speed loop's output, the function block's, the follow error
+_PASSIVE_REGISTERS = (R.VF_OUT, R.FNC_OUT, R.FLWERR)
+#: state passive mode clears: an emergency stop, the profile speed, the follow error's fraction
+_PASSIVE_STATE = (L.S_EMERG, L.S_V_OLD, L.S_FLW16)
+
+
 @njit(**KERNEL)
 def go_passive(r: np.ndarray, s: np.ndarray) -> None:
     """MODE_REG = 0: no function block, VF_OUT = 0, the power stage off."""
     r[R.MODE_REG] = c.PASSIVE_MODE
-    r[R.VF_OUT] = 0
-    r[R.FNC_OUT] = 0
-    s[L.S_EMERG] = 0.0
-    s[L.S_V_OLD] = 0.0
-    s[L.S_FLW16] = 0.0
-    r[R.FLWERR] = 0
+    fill(r, _PASSIVE_REGISTERS, 0)
+    fill(s, _PASSIVE_STATE, 0.0)
     s[L.S_HOME_AFTER] = -1.0
 
 

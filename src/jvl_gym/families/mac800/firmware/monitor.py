@@ -41,6 +41,7 @@ from numba import njit
 
 from ....jit import KERNEL
 from ....physics.fixed import clamp, rnd
+from ....registers.uv_handle import UvHandle, uv_handle_reaction
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
@@ -51,6 +52,10 @@ _DEGC_PER_CELSIUS = 1.0 / c.DEGC_CELSIUS
 _OV_UNITS = c.OVERVOLTAGE / c.U_BUS_VOLTS
 _UV_UNITS = c.UV_BUS_VOLTS / c.U_BUS_VOLTS
 _U24_UNITS = c.U24V_MIN_VOLTS / c.U_24V_VOLTS
+#: UV_HANDLE's bits (register 23)
+_UV_HANDLE = UvHandle(handle=R.UV_HANDLE, err_stat=R.ERR_STAT, uv_err=c.UV_ERR, v_soll=R.V_SOLL,
+                      set_uv_err=c.SET_UV_ERR, stop_profile=c.UV_VSOLL0,
+                      go_passive=c.UV_GO_PASSIVE)
 
 
 def filter_gain(tau: float) -> float:
@@ -89,14 +94,9 @@ def check_errors(r: np.ndarray, s: np.ndarray) -> None:
         trip(r, s, c.OLD_FILT_ERR)
     if r[R.U_BUS] < _UV_UNITS:
         r[R.ERR_STAT] |= c.UV_DETECT
-        if regulated(mode) or mode == c.ANALOG_TORQUE_MODE:
-            h = r[R.UV_HANDLE]
-            if h & c.SET_UV_ERR:
-                r[R.ERR_STAT] |= c.UV_ERR
-            if h & c.UV_VSOLL0:
-                r[R.V_SOLL] = 0
-            if h & c.UV_GO_PASSIVE:
-                go_passive(r, s)
+        if (regulated(mode) or mode == c.ANALOG_TORQUE_MODE) and uv_handle_reaction(
+                r, _UV_HANDLE):
+            go_passive(r, s)
     else:
         r[R.ERR_STAT] &= ~c.UV_DETECT
     if r[R.I2T] >= r[R.I2TLIM]:
