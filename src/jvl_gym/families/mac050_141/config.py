@@ -14,53 +14,26 @@ import re
 from pathlib import Path
 from typing import ClassVar
 
-from pydantic import Field
-
-from ...config import MotorConfigs, MotorData, Real, Text, Whole, bounded_by
+from ...config import MotorConfigs
+from ..servo_config import bounded_servo_data
 
 __all__ = ["MotorConfig", "MOTORS_DIR", "SETUPS_DIR", "canonical_motor_name", "load_motor",
            "load_setup", "motor_types", "setup_path"]
 
 
-class MotorConfig(MotorData):
+_CONFIGS_DIR = Path(__file__).resolve().with_name("configs")
+
+
+class MotorConfig(bounded_servo_data(_CONFIGS_DIR / "limits.yaml", "MotorConfig")):
     """Physical data of one motor type (SI units), representative values (docs/model.md §15).
 
     Every physical value must be a finite number of its type (a bool, a string or an infinity
-    is refused) inside the interval given here: physically plausible for an integrated servo of
-    this class and inside the region where the simulation's integration is stable. The DC bus
-    takes the motor power explicitly over an inner sample (``jvl_gym.physics.bus``): a bus
-    capacitance of a few µF lets the bus voltage diverge, so at least 100 µF is required. The
-    end stops' damping (0.05 N·m·s/rad by default, ``jvl_gym.physics.mechanics``) is explicit
-    over an inner sample of 128 µs and diverges for a total inertia below about 3.2e-6 kg·m²,
-    so the rotor inertia is at least 5e-6 kg·m².
+    is refused) inside the interval of ``configs/limits.yaml``: physically plausible for an
+    integrated servo of this class and inside the region where the simulation's integration is
+    stable (the file says why each stability bound is where it is).
     """
 
     FAMILY_KEY: ClassVar[str] = "mac050_141"
-
-    name: Text
-    motor_type_code: Whole = Field(ge=0, le=65535, description="MOTOR_TYPE register (3.2.153)")
-    rated_torque: Real = Field(gt=0, le=100.0, description="N·m")
-    peak_torque: Real = Field(gt=0, le=300.0, description="N·m at T_SOLL = 1023, >= rated")
-    rated_speed_rpm: Real = Field(gt=0, le=20000.0)
-    rotor_inertia: Real = Field(ge=5e-6, lt=1.0, description="J_m, kg·m²")
-    flux_linkage: Real = Field(ge=1e-4, le=0.2, description="λ, V·s")
-    phase_resistance: Real = Field(ge=1e-3, lt=100.0, description="Ω per phase")
-    phase_inductance: Real = Field(ge=1e-6, lt=1.0, description="H per phase")
-    amps_per_count: Real = Field(ge=1e-5, lt=1.0, description="A per ADC count")
-    pole_pairs: Whole = Field(2, ge=1, le=16)
-    supply_voltage: Real = Field(48.0, ge=12.0, le=60.0, description="V, nominal")
-    pwm_delay_samples: Whole = Field(1, ge=0, le=1)
-    thermal_time_constant: Real = Field(10.0, ge=0.01, le=1e5, description="s")
-    regen_time_constant: Real = Field(2.0, ge=0.01, le=1e5, description="s")
-    bus_capacitance: Real = Field(2.0e-3, ge=1e-4, le=10.0, description="F")
-    supply_resistance: Real = Field(0.05, ge=1e-3, le=100.0, description="Ω")
-    dump_voltage: Real = Field(52.0, le=100.0, description="V, above supply_voltage")
-    dump_resistance: Real = Field(3.0, ge=0.1, le=1e4, description="Ω")
-    setup: Text
-
-    _peak_at_least_rated = bounded_by("peak_torque", "rated_torque")
-    _dump_above_supply = bounded_by("dump_voltage", "supply_voltage", strict=True, unit="V",
-                                    why="the power dump would burn the supply's power")
 
     @property
     def torque_per_vf(self) -> float:
@@ -75,7 +48,7 @@ def canonical_motor_name(name: str) -> str:
     return f"MAC{int(match.group(1)):03d}" if match else name
 
 
-_CONFIGS = MotorConfigs(MotorConfig, Path(__file__).resolve().with_name("configs"), "motor type",
+_CONFIGS = MotorConfigs(MotorConfig, _CONFIGS_DIR, "motor type",
                         canonical=canonical_motor_name)
 #: the motor configs of the family's types
 MOTORS_DIR = _CONFIGS.motors_dir
