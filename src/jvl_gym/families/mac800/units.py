@@ -22,7 +22,9 @@ example is followed.
 
 from __future__ import annotations
 
-from ...registers.scaling import linear_unit
+from pathlib import Path
+
+from ...registers.scaling import linear_units
 
 __all__ = [
     "V_SOLL_UNITS_PER_RPM",
@@ -40,18 +42,8 @@ __all__ = [
     "OVERVOLTAGE_VOLTS",
     "OVERSPEED_RPM",
     "derive_sample_rate_and_counts",
-    "rpm_to_v_soll",
-    "v_soll_to_rpm",
     "rpm_per_s_to_a_soll",
     "a_soll_to_rpm_per_s",
-    "rpm_to_v_ist",
-    "v_ist_to_rpm",
-    "u_24v_to_volts",
-    "degc_to_celsius",
-    "celsius_to_degc",
-    "u_bus_to_volts",
-    "volts_to_u_bus",
-    "aninp_to_volts",
     "t_soll_to_percent_of_nominal",
 ]
 
@@ -107,11 +99,6 @@ OVERVOLTAGE_VOLTS = 450.0  #: ERR_STAT bit 11 OV_ERR: "UB>450V"
 OVERSPEED_RPM = 3600.0  #: ERR_STAT bit 13 SPEED_ERR: ">3600RPM"
 
 
-v_soll_to_rpm, rpm_to_v_soll = linear_unit(
-    "V_SOLL (also V_HOME, VELn, V_IST16)", "velocity [RPM]", "register 5: 100 RPM → 277.056",
-    units_per_quantity=V_SOLL_UNITS_PER_RPM)
-
-
 def rpm_per_s_to_a_soll(rpm_per_s: float) -> float:
     """Acceleration [RPM/s] → A_SOLL units (1/16 count/sample²): 100 000 → 359.81 (register 6);
     also ACC_EMERG and ACCn."""
@@ -123,21 +110,12 @@ def a_soll_to_rpm_per_s(a_soll: float) -> float:
     return a_soll * 1000.0 / A_SOLL_UNITS_PER_1000_RPM_S
 
 
-v_ist_to_rpm, rpm_to_v_ist = linear_unit(
-    "V_IST (counts/sample)", "velocity [RPM]", "register 12: 1 RPM = 0.17316",
-    units_per_quantity=V_IST_COUNTS_PER_RPM)
-u_24v_to_volts = linear_unit("U_24V", "control supply voltage [V]", "register 21",
-                             quantity_per_unit=U_24V_VOLTS_PER_UNIT)[0]
-degc_to_celsius, celsius_to_degc = linear_unit(
-    "DEGC / DEGCMAX", "temperature [°C]", "registers 29, 31: 90 °C ↔ 737.3",
-    quantity_per_unit=DEGC_CELSIUS_PER_UNIT)
-u_bus_to_volts, volts_to_u_bus = linear_unit(
-    "U_BUS", "DC bus voltage [V]", "register 198: 366 → 325.3 V",
-    quantity_per_unit=U_BUS_VOLTS_PER_UNIT)
-aninp_to_volts = linear_unit("ANINP / ANINP_OFFSET", "analogue input voltage [V]",
-                             "registers 170, 171", quantity_per_unit=ANINP_VOLTS_PER_UNIT)[0]
-
-
 def t_soll_to_percent_of_nominal(t_soll: float) -> float:
     """T_SOLL / VF_OUT units → torque in % of nominal (register 7: 1023 = 300 %)."""
     return t_soll / T_SOLL_FULL * T_SOLL_FULL_PERCENT_OF_NOMINAL
+
+
+#: the register unit conversions of ``units.csv`` by name, each also a name of this module
+CONVERSIONS = linear_units(Path(__file__).with_name("units.csv"), globals())
+globals().update(CONVERSIONS)
+__all__ += list(CONVERSIONS)

@@ -16,7 +16,9 @@ inputs (§8.2.46); :data:`OUTER_DT` = 1 ms is the simulator's decision built on 
 
 from __future__ import annotations
 
-from ...registers.scaling import linear_unit
+from pathlib import Path
+
+from ...registers.scaling import linear_units
 
 __all__ = [
     "COUNTS_PER_REV",
@@ -48,17 +50,6 @@ __all__ = [
     "ZERO_SEARCH_TIMEOUT_DEFAULT_S",
     "MOTOR_TYPE_CODES",
     "ENCODER_TYPES",
-    "rpm_to_v_soll",
-    "v_soll_to_rpm",
-    "counts_to_rev",
-    "rev_to_counts",
-    "run_current_to_amps",
-    "amps_to_run_current",
-    "analogue_to_volts",
-    "busvol_to_volts",
-    "volts_to_busvol",
-    "cvi_to_volts",
-    "temp_to_celsius",
     "cur_scale_inc_step_s",
     "cur_scale_dec_step_s",
 ]
@@ -137,27 +128,6 @@ ENCODER_TYPES: dict[int, tuple[str, int]] = {
 }
 
 
-v_soll_to_rpm, rpm_to_v_soll = linear_unit(
-    "V_SOLL (and every 0.01 RPM register)", "velocity [RPM]", "§8.2.5: 250 RPM → 25000",
-    quantity_per_unit=VELOCITY_RPM_PER_UNIT)
-counts_to_rev, rev_to_counts = linear_unit(
-    "position counts", "revolutions", "409600 counts per revolution, §8.2.4",
-    units_per_quantity=COUNTS_PER_REV)
-run_current_to_amps, amps_to_run_current = linear_unit(
-    "RUN_CURRENT / STANDBY_CURRENT / Tn", "phase current [A RMS]", "§8.2.7: 100 → 0.587 A",
-    quantity_per_unit=CURRENT_AMPS_PER_UNIT)
-analogue_to_volts = linear_unit("analogue input (81–96, AFZUP limits)", "voltage [V]",
-                                "§8.2.45: 4095 → 5.00 V",
-                                quantity_per_unit=ANALOGUE_VOLTS_PER_UNIT)[0]
-busvol_to_volts, volts_to_busvol = linear_unit("BUSVOL / MIN_BUSVOL", "bus voltage [V]",
-                                               "§8.2.47", quantity_per_unit=BUSVOL_VOLTS_PER_UNIT)
-cvi_to_volts = linear_unit("ACCEPT_VOLTAGE / SAVE_VOLTAGE / CVI_VOLT", "control voltage [V]",
-                           "2052 → 17.98 V", quantity_per_unit=CVI_VOLTS_PER_UNIT)[0]
-temp_to_celsius = linear_unit("TEMP", "approximate temperature [°C]",
-                              "§8.2.25: Tc = 2.27 · value",
-                              quantity_per_unit=TEMP_CELSIUS_PER_UNIT)[0]
-
-
 def cur_scale_inc_step_s(cur_scale_inc: float) -> float:
     """Time of one current step up in closed loop [s]: 2000 → 55.56 µs (§5.3.7).
 
@@ -194,3 +164,9 @@ def cur_scale_dec_step_s(rpm: float, cur_scale_dec: float, cur_scale_factor: flo
     """
     dec_cnt = abs(rpm) * 100.0 / 4096.0 * cur_scale_factor + cur_scale_dec
     return dec_cnt / CUR_SCALE_CLOCK_HZ
+
+
+#: the register unit conversions of ``units.csv`` by name, each also a name of this module
+CONVERSIONS = linear_units(Path(__file__).with_name("units.csv"), globals())
+globals().update(CONVERSIONS)
+__all__ += list(CONVERSIONS)
