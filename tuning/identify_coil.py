@@ -28,6 +28,7 @@ import control as ct
 import numpy as np
 from scipy import optimize, stats
 
+from .fit_report import FitReport
 from .intervals import (
     LEVEL,
     QUANTISATION_VARIANCE,
@@ -44,8 +45,8 @@ __all__ = ["CoilEstimate", "identify_coil", "residual_check"]
 
 
 @dataclass
-class CoilEstimate:
-    """Identified coil.
+class CoilEstimate(FitReport):
+    """Identified coil, with its fit report (:class:`tuning.fit_report.FitReport`).
 
     Attributes
     ----------
@@ -57,19 +58,12 @@ class CoilEstimate:
         Per-phase resistance [Ω] and inductance [H] (through k_u and A_count of the motor type).
     R_line, L_line : float
         Line-to-line values 2R [Ω], 2L [H].
-    ci : dict
-        95 % confidence intervals (lo, hi) of "pole", "gain", "R_phase", "L_phase", "R_line",
-        "L_line" and "delay" (the plausible delays, inner samples).
-    nrmse_fit : float
-        NRMSE fit [%] (100 = perfect), over all records.
-    residual : dict
-        Residual check: "sigma" [counts], "box_pierce_p", "max_autocorr", "white" (bool).
-    n_samples : int
-        Samples used.
     fitted : list of ndarray
         Model IC_IST [ADC counts] of each record, shape (n_r,).
-    detected : dict
-        "R_phase", "L_phase": whether the interval lies above 0 (:func:`tuning.intervals.positive`).
+    ci, nrmse_fit, residual, n_samples, detected
+        The fit report: intervals of "pole", "gain", "R_phase", "L_phase", "R_line",
+        "L_line" and "delay" (the plausible delays, inner samples); the residual's "sigma"
+        in ADC counts; "R_phase", "L_phase" detected or not.
     """
 
     pole: float
@@ -77,12 +71,7 @@ class CoilEstimate:
     delay: int
     R_phase: float
     L_phase: float
-    ci: dict[str, tuple[float, float]]
-    nrmse_fit: float
-    residual: dict[str, float]
-    n_samples: int
     fitted: list[np.ndarray] = field(default_factory=list, repr=False)
-    detected: dict[str, bool] = field(default_factory=dict)
 
     @property
     def R_line(self) -> float:

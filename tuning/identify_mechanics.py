@@ -35,6 +35,7 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
+from .fit_report import FitReport
 from .identify_coil import correlation_inflation, residual_check
 from .intervals import (
     QUANTISATION_VARIANCE,
@@ -56,8 +57,8 @@ _CURRENT_KEYS = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
 
 
 @dataclass
-class MechanicsEstimate:
-    """Identified mechanics.
+class MechanicsEstimate(FitReport):
+    """Identified mechanics, with its fit report (:class:`tuning.fit_report.FitReport`).
 
     Attributes
     ----------
@@ -71,21 +72,17 @@ class MechanicsEstimate:
         T_c [N·m].
     delay : float
         Torque onset δ [outer samples].
-    ci : dict
-        95 % intervals (lo, hi) of "J", "kvout", "viscous", "coulomb".
-    nrmse_fit : float
-        NRMSE fit of V_IST [%] over all records (the fitted position differenced).
-    residual : dict
-        Residual check of the position fit (see :func:`tuning.identify_coil.residual_check`).
-    n_samples : int
-        Samples used.
+    ci, nrmse_fit, residual, n_samples, detected
+        The fit report: intervals of "J", "kvout", "viscous", "coulomb"; the fit of V_IST
+        over all records (the fitted position differenced); the position fit's residual
+        check; "J", "coulomb", "viscous" detected or not (one not detected is reported as 0
+        with the interval [0, hi]).
+    fitted_velocity : list of ndarray
+        Model V_IST [counts/sample] of each record.
     repeats : int
         K, the number of repeated sets the estimate averages (1: one fit).
     J_repeats : list of float
         J [kg·m²] of each repeated set (K > 1).
-    detected : dict
-        "J", "coulomb", "viscous": the interval lies above 0. A quantity that is not detected
-        is reported as 0 with the interval [0, hi] (:func:`tuning.intervals.positive`).
     raw : dict
         "J", "coulomb", "viscous" before the detection rule (may be negative) [SI].
     quantisation_var : dict
@@ -102,14 +99,9 @@ class MechanicsEstimate:
     viscous: float
     coulomb: float
     delay: float
-    ci: dict[str, tuple[float, float]]
-    nrmse_fit: float
-    residual: dict[str, float]
-    n_samples: int
     fitted_velocity: list[np.ndarray] = field(default_factory=list, repr=False)
     repeats: int = 1
     J_repeats: list[float] = field(default_factory=list)
-    detected: dict[str, bool] = field(default_factory=dict)
     raw: dict[str, float] = field(default_factory=dict)
     quantisation_var: dict[str, float] = field(default_factory=dict, repr=False)
     coil_var: dict[str, float] = field(default_factory=dict, repr=False)

@@ -101,11 +101,11 @@ class MotorData:
     R_phase: float
     L_phase: float
     amps_per_count: float
-    pole_pairs: int = 2
-    supply_voltage: float = 48.0
-    pwm_delay: int = 1
-    amplitude: float = 0.83
-    family: TuningSpec = field(kw_only=True, repr=False)
+    pole_pairs: int
+    supply_voltage: float
+    pwm_delay: int
+    amplitude: float
+    family: TuningSpec = field(repr=False)
 
     @classmethod
     def from_config(cls, motor: Any, amplitude: float | None = None) -> MotorData:

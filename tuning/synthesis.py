@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -195,15 +196,24 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
     if bandwidth_hz is None:
         best = max(feasible, key=lambda f: f[1])
     else:
-        near = [f for f in feasible if abs(f[2].bandwidth_hz / bandwidth_hz - 1) <= 0.1]
-        if near:
-            best = max(near, key=lambda f: f[1])
-        else:
-            best = min(feasible, key=lambda f: abs(math.log(f[2].bandwidth_hz / bandwidth_hz)))
-            notes.append(f"current-loop bandwidth target {bandwidth_hz:.0f} Hz not reachable "
-                         f"within the margins; got {best[2].bandwidth_hz:.0f} Hz")
+        best = _at_bandwidth(feasible, 2, bandwidth_hz, "current-loop", 0, notes)
     kpn, kin, m, rpm = best
     return CurrentDesign(current_registers(motor, kpn, kin), kpn, m, rpm, notes, kin)
+
+
+def _at_bandwidth(feasible: list[tuple[Any, ...]], metrics: int, bandwidth_hz: float, loop: str,
+                  digits: int, notes: list[str]) -> tuple[Any, ...]:
+    """The feasible design (a tuple: integral gain at index 1, the loop's metrics at index
+    ``metrics``) with the largest integral gain among those whose bandwidth is within 10 % of
+    ``bandwidth_hz`` [Hz]; if there is none, the one nearest to it on a log scale, with a note
+    (``digits`` decimals) appended to ``notes``."""
+    near = [f for f in feasible if abs(f[metrics].bandwidth_hz / bandwidth_hz - 1) <= 0.1]
+    if near:
+        return max(near, key=lambda f: f[1])
+    best = min(feasible, key=lambda f: abs(math.log(f[metrics].bandwidth_hz / bandwidth_hz)))
+    notes.append(f"{loop} bandwidth target {bandwidth_hz:.{digits}f} Hz not reachable within "
+                 f"the margins; got {best[metrics].bandwidth_hz:.{digits}f} Hz")
+    return best
 
 
 # ----------------------------------------------------------------------------- speed loop
@@ -342,13 +352,7 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
         top = max(f[1] for f in feasible)
         best = max((f for f in feasible if f[1] >= 0.98 * top), key=lambda f: f[0])
     else:
-        near = [f for f in feasible if abs(f[4].bandwidth_hz / bandwidth_hz - 1) <= 0.1]
-        if near:
-            best = max(near, key=lambda f: f[1])
-        else:
-            best = min(feasible, key=lambda f: abs(math.log(f[4].bandwidth_hz / bandwidth_hz)))
-            notes.append(f"speed-loop bandwidth target {bandwidth_hz:.1f} Hz not reachable "
-                         f"within the margins; got {best[4].bandwidth_hz:.1f} Hz")
+        best = _at_bandwidth(feasible, 4, bandwidth_hz, "speed-loop", 1, notes)
     kpn, kin, kp, ki, m, rpm = best
     kvout = J_total / motor.J_m
     kii = 0.0
