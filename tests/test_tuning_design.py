@@ -13,10 +13,14 @@ from tuning.models import (
     speed_plant,
 )
 from tuning.quantize import QuantizationError, quantize_registers, quantize_value
-from tuning.testmode_facts import TS_O
+from tuning.testmode_facts import record_facts
 from tuning.verify import loop_metrics
 
+from jvl_gym.families import family
+
 TYPES = ["MAC050", "MAC095", "MAC140", "MAC141"]
+MAC = record_facts(family("mac050_141"))  #: the MAC050–141's TESTU/TESTA facts
+TS_O = MAC.ts_o
 
 
 def test_lifted_speed_plant_tends_to_the_rigid_body_model():
@@ -71,12 +75,12 @@ def test_pole_radius_decides_stability_not_margins():
 
 def test_quantisation_range_errors_and_exact_sums():
     with pytest.raises(QuantizationError, match="KVFX4"):
-        quantize_value("KVFX4", 9.0)
+        quantize_value("KVFX4", 9.0, MAC.table)
     with pytest.raises(QuantizationError, match="KFF3"):
-        quantize_value("KFF3", 200.0)
+        quantize_value("KFF3", 200.0, MAC.table)
     q = quantize_registers({"KVFX4": 0.123456, "KVFX3": -0.1, "KVFX2": 0.0, "KVFX1": 0.0,
                             "KVFY3": 0.3333333, "KVFY2": 0.3333333, "KVFY1": 0.3333334,
-                            "KVFY0": 0.0, "KVOUT": 3.9})
+                            "KVFY0": 0.0, "KVOUT": 3.9}, MAC.table)
     assert q["KVFY3"] + q["KVFY2"] + q["KVFY1"] + q["KVFY0"] == 1.0
     assert round((q["KVFX4"] + q["KVFX3"]) * 4096) == round(0.023456 * 4096)
     assert q["KVOUT"] * 256 == round(3.9 * 256)

@@ -8,7 +8,6 @@ from tuning.identify_coil import identify_coil
 from tuning.identify_mechanics import coil_uncertainty, identify_mechanics, two_level_torques
 from tuning.models import MotorData
 from tuning.records import (
-    RATES,
     Record,
     RecordError,
     load_csv,
@@ -17,6 +16,7 @@ from tuning.records import (
     simulate_testu,
     validate,
 )
+from tuning.testmode_facts import record_facts_of
 
 MD = MotorData.from_config("MAC140")
 
@@ -83,14 +83,15 @@ def test_two_level_procedure_with_friction_and_noise():
 
 def test_record_validation_errors(tmp_path):
     good = simulate_testu(MD, 100, 20)
+    RATES = record_facts_of(MD).rates
     with pytest.raises(RecordError, match="too short"):
-        validate(Record("TESTU", RATES["TESTU"], good.input[:5], good.output[:5]))
+        validate(Record("TESTU", RATES["TESTU"], good.input[:5], good.output[:5], MD.name))
     with pytest.raises(RecordError, match="wrong sample rate"):
-        validate(Record("TESTU", RATES["TESTA"], good.input, good.output))
+        validate(Record("TESTU", RATES["TESTA"], good.input, good.output, MD.name))
     with pytest.raises(RecordError, match="saturated"):
-        validate(Record("TESTU", RATES["TESTU"], good.input, good.output * 10))
+        validate(Record("TESTU", RATES["TESTU"], good.input, good.output * 10, MD.name))
     with pytest.raises(RecordError, match="did not move"):
-        validate(Record("TESTA", RATES["TESTA"], np.full(11, 5.0), np.zeros(11)))
+        validate(Record("TESTA", RATES["TESTA"], np.full(11, 5.0), np.zeros(11), MD.name))
     path = save_csv(good, tmp_path / "u.csv")
     back = load_csv(path)
     np.testing.assert_array_equal(back.output, good.output)

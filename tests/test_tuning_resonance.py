@@ -34,9 +34,13 @@ from tuning.resonance_design import (
     two_mass_metrics,
     with_section,
 )
-from tuning.testmode_facts import TS_O
+from tuning.testmode_facts import record_facts
 
 from jvl_gym import MotorArray
+from jvl_gym.families import family
+
+MAC = record_facts(family("mac050_141"))  #: the MAC050–141's TESTU/TESTA facts
+TS_O, TS_I = MAC.ts_o, MAC.ts_i
 
 #: (type, resonance [Hz], load ratio J_l/J_m, damping ratio): one low resonance (the long
 #: record) and one above the speed loop's Nyquist frequency (the short record, alias 211 Hz)
@@ -81,25 +85,25 @@ def test_step_record_starts_at_the_step_and_ends_at_the_brake() -> None:
     x[k0:k1] = 0.5 * t**2 + 3.0 * np.sin(0.2 * t)  # angle after the step [counts]
     x[:k0] = 0.0
     x[k1:] = x[k1 - 1]
-    rec = step_record(np.floor(x + 100.0) % ELDEG_TURN, vf)
+    rec = step_record(np.floor(x + 100.0) % ELDEG_TURN, vf, TS_I)
     assert rec.size == k1 - k0
     np.testing.assert_allclose(rec, np.floor(x[k0:k1] + 100.0) - np.floor(x[k0] + 100.0))
     with pytest.raises(RecordError, match="not in the sample buffer"):
-        step_record(x % ELDEG_TURN, np.zeros(n))
+        step_record(x % ELDEG_TURN, np.zeros(n), TS_I)
     late = np.zeros(n)
     late[n - 20:] = 300.0
     with pytest.raises(RecordError, match="came late"):
-        step_record(x % ELDEG_TURN, late)
+        step_record(x % ELDEG_TURN, late, TS_I)
 
 
 def test_sections_have_unity_dc_gain_and_fit_the_free_order() -> None:
-    assert alias_hz(310.0) == pytest.approx(1 / TS_O - 310.0)
-    assert alias_hz(100.0) == 100.0
-    for num, den in (notch_section(310.0, 0.5), lowpass_section(0.4)):
+    assert alias_hz(310.0, 1 / TS_O) == pytest.approx(1 / TS_O - 310.0)
+    assert alias_hz(100.0, 1 / TS_O) == 100.0
+    for num, den in (notch_section(310.0, 0.5, TS_O), lowpass_section(0.4)):
         assert num.sum() == pytest.approx(den.sum())
     md = MotorData.from_config("MAC140")
     pi = synthesize(md, 5 * md.J_m, structure="pi", position_integral=False).registers
-    out = with_section(pi, notch_section(100.0, 0.6))
+    out = with_section(pi, notch_section(100.0, 0.6, TS_O))
     # VF·N: the PI's integrator kept, the notch's zeros on the unit circle at 100 Hz
     den = [1.0, -out["KVFY3"], -out["KVFY2"], -out["KVFY1"], -out["KVFY0"]]
     assert np.polyval(den, 1.0) == pytest.approx(0.0, abs=1e-12)
@@ -132,7 +136,7 @@ def test_notch_design_has_the_margins_after_quantisation_and_the_plain_one_not()
     for c in cands:
         m = two_mass_metrics(md, c.registers, cp)
         assert m.stable and m.pm_deg >= PM_MIN
-        assert all(quantize_value(k, v) == v for k, v in c.registers.items()
+        assert all(quantize_value(k, v, MAC.table) == v for k, v in c.registers.items()
                    if k.startswith("KVF"))
     # the acceptance step on the two-mass motor: the kept design settles, without sustained
     # oscillation, where the plain design oscillates or is slower
@@ -152,7 +156,7 @@ def test_two_mass_bode_marks_crossover_margins_and_resonance() -> None:
     md = MotorData.from_config(t)
     plain = synthesize(md, md.J_m * (1 + r), structure="pi", position_integral=False)
     cp = coupling_of(md.J_m, r, f, z)
-    notch = with_section(plain.registers, notch_section(f, 0.5))
+    notch = with_section(plain.registers, notch_section(f, 0.5, TS_O))
     fig = two_mass_bode_figure(md, [("plain", plain.registers), ("notch", notch)], cp, f,
                                f / math.sqrt(1 + r))
     labels = [t.get_text() for t in fig.axes[1].get_legend().get_texts()]
@@ -176,7 +180,7 @@ def test_current_loop_lowers_the_recorded_resonance_and_the_correction_undoes_it
 def test_balanced_keeps_the_loop_and_the_integral_gain_through_quantisation() -> None:
     md = MotorData.from_config("MAC140")
     pi = synthesize(md, 8 * md.J_m, structure="pi", position_integral=False).registers
-    low = with_section(scaled_gains(pi, 0.1), notch_section(35.0, 0.65))
+    low = with_section(scaled_gains(pi, 0.1), notch_section(35.0, 0.65, TS_O))
     b = balanced(low)
     keys = ("KVFX4", "KVFX3", "KVFX2", "KVFX1")
     np.testing.assert_allclose([b["KVOUT"] * b[k] for k in keys],
@@ -185,8 +189,8 @@ def test_balanced_keeps_the_loop_and_the_integral_gain_through_quantisation() ->
     def integral(r: dict[str, float]) -> float:
         return r["KVOUT"] * sum(r[k] for k in keys)
 
-    plain_err = abs(integral(quantize_registers(low)) / integral(low) - 1)
-    bal_err = abs(integral(quantize_registers(b)) / integral(low) - 1)
+    plain_err = abs(integral(quantize_registers(low, MAC.table)) / integral(low) - 1)
+    bal_err = abs(integral(quantize_registers(b, MAC.table)) / integral(low) - 1)
     assert plain_err > 0.5  # rounded to (almost) no integral action
     assert bal_err < 0.03
 
@@ -209,4 +213,4 @@ def test_low_resonance_with_a_large_load_ratio_gets_a_design_with_the_margins() 
         for f_c, r_c, z_c in cases:
             m = two_mass_metrics(md, c.registers, coupling_of(md.J_m, r_c, f_c, z_c))
             assert m.stable and m.pm_deg >= PM_MIN and m.gm_db >= GM_MIN
-        assert c.registers == quantize_registers(c.registers)
+        assert c.registers == quantize_registers(c.registers, MAC.table)

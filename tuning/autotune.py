@@ -46,7 +46,7 @@ from .synthesis import (
     design_speed_loop,
     torque_guidance,
 )
-from .testmode_facts import COUNTS_PER_RAD, TS_O
+from .testmode_facts import record_facts_of
 from .verify import CurrentLoopReport, SpeedLoopReport, verify_current_loop, verify_speed_loop
 
 __all__ = ["RECOMMENDED_COIL_SAMPLES", "RECOMMENDED_MECH_SAMPLES", "RECOMMENDED_TESTA_REPEATS",
@@ -137,7 +137,7 @@ def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,
     progress("current loop: designing from the identified coils")
     cur_regs = []
     for i, md in enumerate(motors):
-        regs = quantize_registers(design_current_loop(md).registers)
+        regs = quantize_registers(design_current_loop(md).registers, record_facts_of(md).table)
         m.load_setup({"registers": regs}, index=[i])
         cur_regs.append(regs)
     phase_comp = np.asarray(m.read("PHASE_COMP"), dtype=float)
@@ -152,9 +152,9 @@ def identify_motors(m: Any, n_coil: int = RECOMMENDED_COIL_SAMPLES,
     levels = []
     for r, md, tp in zip(pilot, motors, t_pilot):
         p = np.cumsum(r.output)
-        t = np.arange(r.n) * TS_O
+        t = np.arange(r.n) * md.family.outer_dt
         c2 = np.polyfit(t[2:], p[2:], 2)[0] if r.n > 4 else 0.0
-        alpha = max(2 * c2 / COUNTS_PER_RAD, 1e-9)
+        alpha = max(2 * c2 / md.family.counts_per_rad, 1e-9)
         j_guess = md.torque_per_vf * tp / alpha  # includes friction: an upper bound on J
         t1, t2 = two_level_torques(j_guess, md, n_mech, final_speed_counts)
         # keep the lower level well above the friction torque seen in the pilot
@@ -249,7 +249,7 @@ def synthesize(motor: MotorData, J_total: float, coulomb: float = 0.0,
                             gains=speed_gains, coulomb=coulomb,
                             position_integral=position_integral)
     ideal = {**cur.registers, **spd.registers}
-    regs = quantize_registers(ideal)
+    regs = quantize_registers(ideal, record_facts_of(motor).table)
     crep = verify_current_loop(motor, regs, robust)
     srep = verify_speed_loop(motor, regs, J_total, robust)
     ci = verify_current_loop(motor, ideal, robust=False).nominal

@@ -131,13 +131,13 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
     md = MotorData.from_config(motor)
     bad: list[str] = []
     if testu:
-        c = identify_coil([load_csv(p) for p in testu], md)
+        c = identify_coil([load_csv(p, motor) for p in testu], md)
         typer.echo(f"R_line {c.R_line:.5g} ohm {c.ci['R_line']}, L_line {c.L_line:.5g} H "
                    f"{c.ci['L_line']}, delay {c.delay}, fit {c.nrmse_fit:.2f} %")
         bad += problems(md, coil=c)
         md = c.motor(md)
     if testa:
-        recs = [load_csv(p) for p in testa]
+        recs = [load_csv(p, motor) for p in testa]
         cur = pc = None
         if setup is not None:
             from jvl_gym.config import load_setup
@@ -286,13 +286,11 @@ def autotune(motor: str = typer.Option("MAC140"),
     sections: list[tuple[str, Path]] = []
     if port is not None:
         from .serial_source import autotune_over_serial
-        from .testmode_facts import TEST_RECORD_SAMPLES
 
         two_mass = ((lambda sm, res: sections.append(_two_mass_step(sm, res, out)))
                     if resonance else None)
         ident, res = autotune_over_serial(port, motor, address, time_scale,
-                                          n_coil or TEST_RECORD_SAMPLES,
-                                          n_mech or TEST_RECORD_SAMPLES, structure, write,
+                                          n_coil, n_mech, structure, write,
                                           progress=_say, two_mass=two_mass)
         truth, step, note = None, (None, None), f"jvl-tune autotune --port {port}: " \
             f"identified J = {ident.mechanics.J:.4g}"
@@ -456,13 +454,23 @@ def fleet(spec: Path = typer.Argument(..., help="fleet file (configs/fleets/*.ym
 
 @app.command()
 def defaults(out: Path = typer.Option(
-        None, help="directory (default: the family's configs/setups)")) -> None:
+        None, help="directory (default: the family's configs/setups)"),
+             family_key: str = typer.Option(
+        None, "--family", help="family key (default: every family with TESTU/TESTA test "
+        "modes)")) -> None:
     """Regenerate the default setups (the family's configs/setups/<TYPE>.yaml) from the motor
     configs."""
+    from jvl_gym.families import Capability, UnsupportedOperation, families_with, family
+
     from .defaults import write_default_setups
 
-    for p in write_default_setups(out):
-        typer.echo(f"wrote {p}")
+    try:
+        fams = [family(family_key)] if family_key else list(families_with(Capability.TEST_MODES))
+        for fam in fams:
+            for p in write_default_setups(fam, out):
+                typer.echo(f"wrote {p}")
+    except (KeyError, UnsupportedOperation) as exc:
+        raise typer.BadParameter(str(exc).strip("'\""), param_hint="'--family'") from None
 
 
 if __name__ == "__main__":

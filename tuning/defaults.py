@@ -19,8 +19,11 @@ from pathlib import Path
 
 import yaml
 
+from jvl_gym.families import Family
+
 from .autotune import CURRENT_KEYS, SPEED_KEYS, synthesize
 from .models import MotorData
+from .testmode_facts import record_facts
 from .verify import verify_speed_loop
 
 __all__ = ["BASE_REGISTERS", "DEFAULT_CURRENT_GAINS", "DEFAULT_SPEED_GAINS", "default_registers",
@@ -79,16 +82,22 @@ def render_setup(motor_type: str) -> str:
     return "".join(f"# {ln}\n" for ln in header.splitlines()) + body
 
 
-def write_default_setups(directory: str | os.PathLike[str] | None = None,
+def write_default_setups(fam: Family, directory: str | os.PathLike[str] | None = None,
                          motor_types: list[str] | None = None) -> list[Path]:
-    """Write ``<directory>/<TYPE>.yaml`` for every motor type (default: ``configs/setups``)."""
-    from .testmode_facts import TEST_FAMILY
+    """Write ``<directory>/<TYPE>.yaml`` for every motor type of family ``fam`` (default
+    directory: its ``configs/setups``), a family with TESTU/TESTA test modes.
 
-    setups = TEST_FAMILY.config.SETUPS_DIR
+    Raises
+    ------
+    UnsupportedOperation
+        ``fam`` has no test modes (:func:`tuning.testmode_facts.record_facts`).
+    """
+    record_facts(fam)
+    setups = fam.config.SETUPS_DIR
     out_dir = Path(directory) if directory is not None else setups
     out_dir.mkdir(parents=True, exist_ok=True)
     paths = []
-    for t in motor_types or TEST_FAMILY.motor_types():
+    for t in motor_types or fam.motor_types():
         p = out_dir / f"{t}.yaml"
         p.write_text(render_setup(t))
         paths.append(p)

@@ -81,9 +81,9 @@ def _identify_records(motor: FleetMotor) -> Any:
             for name, data in sorted(motor.record_data.items()):
                 paths.append(Path(tmp) / name)
                 paths[-1].write_bytes(data)
-            recs = [load_csv(p) for p in paths]
+            recs = [load_csv(p, motor.type) for p in paths]
     else:
-        recs = [load_csv(p) for p in motor.records]
+        recs = [load_csv(p, motor.type) for p in motor.records]
     testu = [r for r in recs if r.kind == "TESTU"]
     testa = [r for r in recs if r.kind == "TESTA"]
     regs = record_registers(testa) or {}

@@ -231,7 +231,7 @@ def fleet_from_records(folder: Path, structure: str = "pi") -> FleetSpec:
         found: set[str] = set()
         for f in files:
             try:
-                rec = load_csv(f)
+                rec = load_csv(f, meta.get("type"))
             except RecordError as exc:
                 raise UserError(f"{exc}; fix or remove the file") from None
             kinds[rec.kind] += 1

@@ -39,7 +39,7 @@ from .intervals import (
 )
 from .models import MotorData
 from .records import Record, RecordError, validate
-from .testmode_facts import TS_I
+from .testmode_facts import record_facts_of
 
 __all__ = ["CoilEstimate", "identify_coil", "residual_check"]
 
@@ -58,6 +58,8 @@ class CoilEstimate(FitReport):
         Per-phase resistance [Ω] and inductance [H] (through k_u and A_count of the motor type).
     R_line, L_line : float
         Line-to-line values 2R [Ω], 2L [H].
+    ts_i : float
+        The records' sample time, the family's current-loop sample time [s].
     fitted : list of ndarray
         Model IC_IST [ADC counts] of each record, shape (n_r,).
     ci, nrmse_fit, residual, n_samples, detected
@@ -71,6 +73,7 @@ class CoilEstimate(FitReport):
     delay: int
     R_phase: float
     L_phase: float
+    ts_i: float
     fitted: list[np.ndarray] = field(default_factory=list, repr=False)
 
     @property
@@ -84,9 +87,10 @@ class CoilEstimate(FitReport):
         return 2.0 * self.L_phase
 
     def model(self) -> ct.TransferFunction:
-        """Per-phase U [PWM counts] → I_IST [ADC counts]: ``g(1−a)/(z^d (z−a))`` at TS_I."""
+        """Per-phase U [PWM counts] → I_IST [ADC counts]: ``g(1−a)/(z^d (z−a))`` at
+        :attr:`ts_i`."""
         den = np.polymul([1.0, -self.pole], np.r_[1.0, np.zeros(self.delay)])
-        return ct.tf([self.gain * (1 - self.pole)], den, TS_I)
+        return ct.tf([self.gain * (1 - self.pole)], den, self.ts_i)
 
     def motor(self, base: MotorData) -> MotorData:
         """``base`` with the identified R, L and delay."""
@@ -179,9 +183,9 @@ def _fit(recs: Sequence[Record], d: int, scale: float) -> optimize.OptimizeResul
 
 def _phys(a: float, g: float, md: MotorData) -> tuple[float, float]:
     """(R, L) per phase [Ω, H] from the register-unit model: ``R = k_u/(g·A_count)``,
-    ``L = −R·TS_I/ln a`` (module docstring)."""
+    ``L = −R·TS_I/ln a`` with the family's TS_I (module docstring)."""
     R = md.volts_per_count / (g * md.amps_per_count)
-    return R, -R * TS_I / math.log(a)
+    return R, -R * md.family.inner_dt / math.log(a)
 
 
 def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
@@ -215,11 +219,12 @@ def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
     recs = [records] if isinstance(records, Record) else list(records)
     if not recs:
         raise RecordError("identify_coil needs at least one TESTU record")
+    md = motor if isinstance(motor, MotorData) else MotorData.from_config(motor)
+    facts = record_facts_of(md)
     for r in recs:
-        validate(r)
+        validate(r, facts)
         if r.kind != "TESTU":
             raise RecordError(f"identify_coil needs TESTU records, got {r.kind}")
-    md = motor if isinstance(motor, MotorData) else MotorData.from_config(motor)
     y_all = np.concatenate([r.output for r in recs])
     scale = max(1.0, float(np.max(np.abs(y_all))))
 
@@ -244,7 +249,7 @@ def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
     ln_a = math.log(a)
     # delta method: x = (a, g) → (R, L)
     jr = np.array([0.0, -R / g])
-    jl = np.array([R * TS_I / (a * ln_a**2), (L / R) * (-R / g)])
+    jl = np.array([R * facts.ts_i / (a * ln_a**2), (L / R) * (-R / g)])
     val = {"pole": a, "gain": g, "R_phase": R, "L_phase": L}
     grads = {"pole": np.array([1.0, 0.0]), "gain": np.array([0.0, 1.0]), "R_phase": jr,
              "L_phase": jl}
@@ -286,6 +291,6 @@ def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
     yhat = np.concatenate(fitted)
     den = float(np.linalg.norm(y_all - y_all.mean()))
     fit = 100.0 * (1.0 - float(np.linalg.norm(y_all - yhat)) / den) if den > 0 else math.nan
-    return CoilEstimate(pole=a, gain=g, delay=int(d), R_phase=R, L_phase=L, ci=ci,
+    return CoilEstimate(pole=a, gain=g, delay=int(d), R_phase=R, L_phase=L, ts_i=facts.ts_i, ci=ci,
                         nrmse_fit=fit, residual=residual_check(y_all - yhat, p), n_samples=n,
                         fitted=fitted, detected=detected)

@@ -35,6 +35,8 @@ from typing import Any
 import numpy as np
 from scipy import optimize
 
+from jvl_gym.families import TuningSpec
+
 from .fit_report import FitReport
 from .identify_coil import correlation_inflation, residual_check
 from .intervals import (
@@ -46,7 +48,7 @@ from .intervals import (
 )
 from .models import MotorData
 from .records import Record, RecordError, record_registers, validate
-from .testmode_facts import COUNTS_PER_RAD, TS_O
+from .testmode_facts import record_facts_of
 
 __all__ = ["MechanicsEstimate", "identify_mechanics", "position_model", "two_level_torques",
            "electrical_position", "refine_electrical", "repeat_sets", "coil_uncertainty",
@@ -107,14 +109,16 @@ class MechanicsEstimate(FitReport):
     coil_var: dict[str, float] = field(default_factory=dict, repr=False)
 
 
-def position_model(t: np.ndarray, alpha: float, beta: float, delay: float) -> np.ndarray:
-    """Position [counts] at times ``t`` [s] from rest: module docstring (without C)."""
-    tp = np.maximum(np.asarray(t, dtype=float) - delay * TS_O, 0.0)
+def position_model(t: np.ndarray, alpha: float, beta: float, delay: float, *,
+                   spec: TuningSpec) -> np.ndarray:
+    """Position [counts] at times ``t`` [s] from rest: module docstring (without C); ``delay``
+    in servo samples and the counts of the family's ``spec``."""
+    tp = np.maximum(np.asarray(t, dtype=float) - delay * spec.outer_dt, 0.0)
     if abs(beta) * float(np.max(tp, initial=0.0)) < 1e-6:
         term = 0.5 * tp**2 - beta * tp**3 / 6.0
     else:
         term = (tp + np.expm1(-beta * tp) / beta) / beta
-    return COUNTS_PER_RAD * alpha * term
+    return spec.counts_per_rad * alpha * term
 
 
 def electrical_position(n: int, t_soll: float, J: float, b: float, tc: float,
@@ -182,7 +186,8 @@ def two_level_torques(J_guess: float, motor: MotorData, n_samples: int,
                       final_speed_counts: float = 60.0, ratio: float = 0.5) -> tuple[int, int]:
     """T_SOLL levels (T₁, T₂ = ratio·T₁) reaching ``final_speed_counts`` [counts/sample] at the
     end of the record for inertia ``J_guess`` (e.g. from a short pilot record)."""
-    alpha = final_speed_counts / COUNTS_PER_RAD / TS_O / (n_samples * TS_O)
+    ts_o = motor.family.outer_dt
+    alpha = final_speed_counts / motor.family.counts_per_rad / ts_o / (n_samples * ts_o)
     t1 = alpha * J_guess / motor.torque_per_vf
     t1 = int(np.clip(round(t1), 4, 1023))
     return t1, int(max(2, round(ratio * t1)))
@@ -238,11 +243,12 @@ def identify_mechanics(records: Record | Sequence[Record], motor: MotorData | st
         Invalid records, or one torque level with ``coulomb=True``.
     """
     recs = [records] if isinstance(records, Record) else list(records)
+    md = motor if isinstance(motor, MotorData) else MotorData.from_config(motor)
+    facts = record_facts_of(md)
     for r in recs:
-        validate(r)
+        validate(r, facts)
         if r.kind != "TESTA":
             raise RecordError(f"identify_mechanics needs TESTA records, got {r.kind}")
-    md = motor if isinstance(motor, MotorData) else MotorData.from_config(motor)
     carried = record_registers(recs) or {}
     if current_regs is None and all(k in carried for k in _CURRENT_KEYS):
         current_regs = {k: carried[k] for k in _CURRENT_KEYS}
@@ -355,8 +361,10 @@ def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: boo
             "(K·T − T_c)/J is observable): record TESTA at two T_SOLL levels (e.g. T and T/2, "
             "see two_level_torques) or pass coulomb=False if friction is negligible")
     k = md.torque_per_vf
+    spec = md.family
+    ts_o = spec.outer_dt
     pos = [np.cumsum(r.output) for r in recs]
-    times = [np.arange(r.n) * TS_O for r in recs]
+    times = [np.arange(r.n) * ts_o for r in recs]
     torques = [k * float(np.median(r.input)) for r in recs]
 
     # start: parabola per record → α_r, δ; then J, T_c from α_r = (K T_r − T_c)/J
@@ -364,9 +372,9 @@ def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: boo
     for p, t in zip(pos, times):
         sel = slice(2, None)
         c = np.polyfit(t[sel], p[sel], 2)
-        a = 2 * c[0] / COUNTS_PER_RAD
+        a = 2 * c[0] / spec.counts_per_rad
         alphas.append(a)
-        delays.append(float(np.clip(-c[1] / (2 * c[0]) / TS_O, 0.0, 3.0)) if c[0] > 0 else 0.5)
+        delays.append(float(np.clip(-c[1] / (2 * c[0]) / ts_o, 0.0, 3.0)) if c[0] > 0 else 0.5)
     if coulomb:
         A = np.array([[tq, -1.0] for tq in torques])
         inv_j, tcj = np.linalg.lstsq(A, np.array(alphas), rcond=None)[0]
@@ -401,13 +409,13 @@ def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: boo
             tc = x[i] * k
             i += 1
         if viscous:
-            b = x[i] * jscale / TS_O
+            b = x[i] * jscale / ts_o
         return J, float(x[1]), tc, b
 
     def predict(x: np.ndarray) -> list[np.ndarray]:
         J, dl, tc, b = unpack(x)
         off = len(names)
-        return [x[off + j] + position_model(t, (tq - tc) / J, b / J, dl)
+        return [x[off + j] + position_model(t, (tq - tc) / J, b / J, dl, spec=spec)
                 for j, (t, tq) in enumerate(zip(times, torques))]
 
     def resid(x: np.ndarray) -> np.ndarray:
@@ -431,7 +439,7 @@ def _identify_set(recs: list[Record], md: MotorData, coulomb: bool, viscous: boo
         cov = np.full((p, p), np.inf)
     sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
     ci: dict[str, tuple[float, float]] = {}
-    scale = {"J": jscale, "coulomb": k, "viscous": jscale / TS_O, "delay": 1.0}
+    scale = {"J": jscale, "coulomb": k, "viscous": jscale / ts_o, "delay": 1.0}
     vals = {"J": J, "coulomb": tc, "viscous": b, "delay": dl}
     for i, nm in enumerate(names):
         h = student_halfwidth(sd[i] * scale[nm], dof)

@@ -63,9 +63,7 @@ from .identify_coil import correlation_inflation
 from .intervals import LEVEL
 from .models import MotorData, inner_modes
 from .records import RecordError
-from .testmode_facts import TABLE, TEST_FAMILY, TS_I, TS_O
-
-C = TEST_FAMILY.constants  #: AT_MODE and the sample buffer's control bits
+from .testmode_facts import record_facts_of
 
 __all__ = ["ResonanceEstimate", "ResonanceFit", "acquire_step_records", "fit_resonance",
            "identify_resonance", "step_record", "step_torques", "estimate_from_fits",
@@ -167,15 +165,15 @@ def _step_until(m: Any, done: Any, max_samples: int) -> None:
         m.step(1)
 
 
-def _brake_and_rest(m: Any, sign: np.ndarray, rest_s: float) -> None:
+def _brake_and_rest(m: Any, sign: np.ndarray, rest_s: float, ts_o: float) -> None:
     """Reverse the torque until every motor's V_IST has reached zero, leave AT_MODE (4.4.5:
-    any mode request goes to INIT below 300 rpm) and rest ``rest_s`` [s]. Over a serial link
-    the motor may not have started when this begins: it first waits until every motor
-    moves (at most 0.2 s)."""
+    any mode request goes to INIT below 300 rpm) and rest ``rest_s`` [s] (servo sample time
+    ``ts_o`` [s]). Over a serial link the motor may not have started when this begins: it
+    first waits until every motor moves (at most 0.2 s)."""
     _step_until(m, lambda: bool(np.all(np.asarray(m.read("V_IST"), dtype=float) * sign > 0)),
-                int(0.2 / TS_O))
+                int(0.2 / ts_o))
     braking = np.ones(m.n, dtype=bool)
-    for _ in range(int(1.0 / TS_O)):
+    for _ in range(int(1.0 / ts_o)):
         v = np.asarray(m.read("V_IST"), dtype=float)
         braking &= v * sign > 0
         if not braking.any():
@@ -185,7 +183,7 @@ def _brake_and_rest(m: Any, sign: np.ndarray, rest_s: float) -> None:
     m.write("ANINP_OFFSET", 0)
     m.write("MODE_REG", 0)
     _step_until(m, lambda: bool(np.all(np.asarray(m.read("MODE_REG")) == 0)), 5000)
-    m.step(int(rest_s / TS_O))
+    m.step(int(rest_s / ts_o))
 
 
 def acquire_step_records(m: Any, t_soll: np.ndarray | float, duration_s: float,
@@ -205,31 +203,34 @@ def acquire_step_records(m: Any, t_soll: np.ndarray | float, duration_s: float,
         A motor's record does not hold the step and :data:`MIN_RECORD_S` after it (over a slow
         serial link the mode change can arrive after the buffer is full).
     """
+    facts = record_facts_of(m)
+    c = facts.constants  # AT_MODE and the sample buffer's control bits
     t = np.broadcast_to(np.abs(np.asarray(t_soll, dtype=float)), (m.n,)).round()
     saved = {k: np.asarray(m.read(k)).copy()
              for k in ("T_SOLL", "ANINP_OFFSET", "SAMPLE1", "SAMPLE2", "CNTRL_BITS")}
     sign = np.ones(m.n)
     m.write("T_SOLL", t)
-    m.write("SAMPLE1", TABLE.lookup("ELDEG_IST").number)
-    m.write("SAMPLE2", TABLE.lookup("VF_OUT").number)
+    m.write("SAMPLE1", facts.table.lookup("ELDEG_IST").number)
+    m.write("SAMPLE2", facts.table.lookup("VF_OUT").number)
     m.write("ANINP_OFFSET", (sign * ANINP_FULL).astype(int))
-    rec_bits = C.RECORDBIT | C.REWINDBIT | C.RECINNERBIT
+    rec_bits = c.RECORDBIT | c.REWINDBIT | c.RECINNERBIT
     cb = np.asarray(m.read("CNTRL_BITS")).astype(np.int64) & ~rec_bits
     m.write("CNTRL_BITS", cb | rec_bits)
     m.step(LEAD_OUTER)
-    m.write("MODE_REG", C.AT_MODE)
-    m.step(max(int(round(duration_s / TS_O)), 1))
-    _brake_and_rest(m, sign, rest_s)
+    m.write("MODE_REG", c.AT_MODE)
+    m.step(max(int(round(duration_s / facts.ts_o)), 1))
+    _brake_and_rest(m, sign, rest_s, facts.ts_o)
     buf = m.sample_buffer()
     for k in ("T_SOLL", "ANINP_OFFSET", "SAMPLE1", "SAMPLE2", "CNTRL_BITS"):
         m.write(k, saved[k])
-    return [step_record(buf["ELDEG_IST"][i], buf["VF_OUT"][i]) for i in range(m.n)]
+    return [step_record(buf["ELDEG_IST"][i], buf["VF_OUT"][i], facts.ts_i) for i in range(m.n)]
 
 
-def step_record(eldeg: np.ndarray, vf_out: np.ndarray) -> np.ndarray:
+def step_record(eldeg: np.ndarray, vf_out: np.ndarray, dt: float) -> np.ndarray:
     """The motor angle [counts] from the torque step on, 0 at the step, from the recorded
-    ELDEG_IST (modulo 2048, unwrapped here) and VF_OUT of one motor: from the first sample with
-    VF_OUT > 0 to the last before VF_OUT changes again (the brake) or the record ends.
+    ELDEG_IST (modulo 2048, unwrapped here) and VF_OUT of one motor, sampled every ``dt`` [s]
+    (the family's current-loop sample time): from the first sample with VF_OUT > 0 to the last
+    before VF_OUT changes again (the brake) or the record ends.
 
     Raises
     ------
@@ -238,7 +239,7 @@ def step_record(eldeg: np.ndarray, vf_out: np.ndarray) -> np.ndarray:
     """
     vf = np.asarray(vf_out, dtype=float)
     on = np.flatnonzero(vf > 0)
-    n_min = int(round(MIN_RECORD_S / TS_I))
+    n_min = int(round(MIN_RECORD_S / dt))
     if on.size == 0:
         raise RecordError("the torque step is not in the sample buffer (VF_OUT never turned "
                           "on): the mode change came after the record ended; the link (or the "
@@ -248,7 +249,7 @@ def step_record(eldeg: np.ndarray, vf_out: np.ndarray) -> np.ndarray:
     change = np.flatnonzero(vf[k0:] != vf[k0])
     k1 = k0 + int(change[0]) if change.size else vf.size
     if k1 - k0 < n_min:
-        raise RecordError(f"only {(k1 - k0) * TS_I * 1e3:.1f} ms of the torque step are in the "
+        raise RecordError(f"only {(k1 - k0) * dt * 1e3:.1f} ms of the torque step are in the "
                           f"sample buffer, {MIN_RECORD_S * 1e3:.0f} ms needed: the mode change "
                           "came late in the record (slow link)")
     x = np.unwrap(np.asarray(eldeg, dtype=float)[k0:k1], period=ELDEG_TURN)
@@ -262,7 +263,7 @@ def _basis(t: np.ndarray, w: float, sigma: float, order: int) -> np.ndarray:
                            + [e * np.cos(w * t), e * np.sin(w * t)])
 
 
-def fit_resonance(x: np.ndarray, dt: float = TS_I, skip_s: float = SKIP_S,
+def fit_resonance(x: np.ndarray, dt: float, skip_s: float = SKIP_S,
                   order: int = 3) -> ResonanceFit:
     """Fit the polynomial-plus-damped-oscillation model (module docstring; polynomial of
     ``order``) to the angle record ``x`` [counts] sampled every ``dt`` [s] from the step on."""
@@ -413,8 +414,9 @@ def identify_resonance(m: Any, idents: Sequence[Any], short_s: float = SHORT_S,
     J = np.array([i.mechanics.J for i in idents])
     kvf = np.array([i.motor.torque_per_vf for i in idents])
     fits: list[list[ResonanceFit]] = [[] for _ in idents]
+    ts_i = record_facts_of(m).ts_i
     for dur, order in zip((short_s, long_s), FIT_ORDERS):
         for i, x in enumerate(acquire_step_records(m, step_torques(J, kvf, dur), dur)):
-            fits[i].append(fit_resonance(x, order=order))
+            fits[i].append(fit_resonance(x, ts_i, order=order))
     return [estimate_from_fits(f, idn.mechanics.J, idn.mechanics.ci["J"], idn.motor, r)
             for f, idn, r in zip(fits, idents, regs)]

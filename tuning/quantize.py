@@ -1,14 +1,13 @@
 """Quantisation of filter coefficients to their register formats (manual 3.1, 3.2.89–3.2.111,
 3.2.13, 3.2.126, 3.2.127).
 
-Formats, scales, ranges and manual sections come from the family's register table
-(by default the table of the family with the TESTU/TESTA test modes,
-:data:`tuning.testmode_facts.TABLE`, the MAC050–141's, docs/registers.md; another family's
-table with the ``table`` argument, e.g. the MAC800's Fixed16 = raw/65536 and Fixed24 =
-raw/16777216 of its register overview §1.2), the one source of these facts:
-Fixed4 = raw/4096 and Fixed8 = raw/256 with the raw range of the table (±32767, so Fixed4
-±7.999756, Fixed8 ±127.996; AMPLITUDE 0 … 0.83). A value outside its register's range raises
-:class:`QuantizationError` naming the register and its section (nothing is silently saturated).
+Formats, scales, ranges and manual sections come from the register table of the family the
+registers are for (the ``table`` argument: the MAC050–141's, docs/registers.md, or e.g. the
+MAC800's Fixed16 = raw/65536 and Fixed24 = raw/16777216 of its register overview §1.2), the
+one source of these facts: on the MAC050–141 Fixed4 = raw/4096 and Fixed8 = raw/256 with the
+raw range of the table (±32767, so Fixed4 ±7.999756, Fixed8 ±127.996; AMPLITUDE 0 … 0.83).
+A value outside its register's range raises :class:`QuantizationError` naming the register and
+its section (nothing is silently saturated).
 Integrators stay exact: a filter whose denominator coefficients sum to 1 (``KIFY1 + KIFY0 = 1``,
 ``KVFY3 + … + KVFY0 = 1``) is quantised so that the stored values still sum to exactly 1 (the
 largest-remainder rounding of the sum), and the sum of a PI numerator (the integral gain
@@ -24,11 +23,8 @@ import numpy as np
 
 from jvl_gym.registers import Format, RegisterTable, round_half_away
 
-from .testmode_facts import TABLE as MAC050_141
-
 __all__ = [
     "FILTER_REGISTERS",
-    "FORMATS",
     "QuantizationError",
     "register_format",
     "quantize_value",
@@ -53,46 +49,34 @@ MAC050_141_GROUPS: tuple[tuple[str, ...], ...] = (
     ("KVFX4", "KVFX3", "KVFX2", "KVFX1"))
 
 
-def _table_format(name: str, table: RegisterTable = MAC050_141) -> tuple[str, int, int, int]:
-    reg = table.lookup(name)
+class QuantizationError(ValueError):
+    """A coefficient does not fit its register format."""
+
+
+def register_format(name: str, table: RegisterTable) -> tuple[str, int, int, int]:
+    """(format name, scale, raw min, raw max) of a filter register of the family's register
+    ``table``; KeyError for a register it does not have, ValueError for one that is not of a
+    quantised format."""
+    try:
+        reg = table.lookup(name)
+    except KeyError:
+        raise KeyError(f"{name} is not a register of the family's table") from None
     if reg.format not in _QUANTISED:
         raise ValueError(f"{name} is {reg.format.value}, not a Fixed filter register")
     return reg.format.value, reg.scale, reg.raw_min, reg.raw_max
 
 
-#: name → (format, scale, raw min, raw max), read from the register table
-FORMATS: dict[str, tuple[str, int, int, int]] = {n: _table_format(n) for n in FILTER_REGISTERS}
-
-
-class QuantizationError(ValueError):
-    """A coefficient does not fit its register format."""
-
-
-def register_format(name: str, table: RegisterTable | None = None) -> tuple[str, int, int, int]:
-    """(format name, scale, raw min, raw max) of a filter register (from the register table;
-    ``table`` another family's table, default the MAC050–141's)."""
-    if table is not None and table is not MAC050_141:
-        try:
-            return _table_format(name, table)
-        except KeyError:
-            raise KeyError(f"{name} is not a register of the family's table") from None
-    try:
-        return FORMATS[name]
-    except KeyError:
-        raise KeyError(f"{name} is not a filter register known to the tuning toolkit") from None
-
-
-def quantize_value(name: str, value: float, table: RegisterTable | None = None) -> float:
+def quantize_value(name: str, value: float, table: RegisterTable) -> float:
     """Round ``value`` to register ``name``'s format; raise if it does not fit.
 
     Parameters
     ----------
     name : str
-        A register of :data:`FILTER_REGISTERS`.
+        A register of a quantised format (the MAC050–141's :data:`FILTER_REGISTERS`).
     value : float
         Ideal value in user units.
-    table : RegisterTable, optional
-        The family's register table (default the MAC050–141's).
+    table : RegisterTable
+        The family's register table.
 
     Returns
     -------
@@ -109,7 +93,7 @@ def quantize_value(name: str, value: float, table: RegisterTable | None = None) 
     fmt, scale, lo, hi = register_format(name, table)
     raw = int(round_half_away(float(value) * scale))
     if not lo <= raw <= hi:
-        sec = (table or MAC050_141).lookup(name).section
+        sec = table.lookup(name).section
         raise QuantizationError(
             f"{name} = {value:.6g} does not fit {fmt} (range {lo / scale:.6g} … {hi / scale:.6g}, "
             f"manual {sec}); reduce the target bandwidth or change the design")
@@ -119,7 +103,7 @@ def quantize_value(name: str, value: float, table: RegisterTable | None = None) 
 
 
 def _exact_sum(names: list[str], regs: dict[str, float], out: dict[str, float],
-               table: RegisterTable | None = None) -> None:
+               table: RegisterTable) -> None:
     """Quantise ``names`` so their stored sum equals the rounded sum of the ideal values."""
     _, scale, _, _ = register_format(names[0], table)
     ideal = np.array([regs[n] for n in names]) * scale
@@ -134,7 +118,7 @@ def _exact_sum(names: list[str], regs: dict[str, float], out: dict[str, float],
         out[n] = quantize_value(n, r / scale, table)
 
 
-def quantize_registers(regs: Mapping[str, float], table: RegisterTable | None = None,
+def quantize_registers(regs: Mapping[str, float], table: RegisterTable,
                        groups: Sequence[Sequence[str]] = MAC050_141_GROUPS
                        ) -> dict[str, float]:
     """Quantise a register set (name → value); non-filter registers are passed through.
@@ -143,10 +127,9 @@ def quantize_registers(regs: Mapping[str, float], table: RegisterTable | None = 
     ----------
     regs : mapping
         Ideal (float) register values.
-    table : RegisterTable, optional
-        The family's register table (default the MAC050–141's, whose filter registers are
-        :data:`FILTER_REGISTERS`); with another table every register of a quantised format is
-        quantised.
+    table : RegisterTable
+        The family's register table: every register of a quantised format is quantised (on
+        the MAC050–141 the filter registers :data:`FILTER_REGISTERS` and L1–L4).
     groups : sequence of sequence of str
         Registers whose stored sum is kept exact (integrators, integral gains), in order;
         default :data:`MAC050_141_GROUPS`.
@@ -164,8 +147,7 @@ def quantize_registers(regs: Mapping[str, float], table: RegisterTable | None = 
     """
     src = dict(regs)
     out: dict[str, float] = {}
-    known = FORMATS if table is None or table is MAC050_141 else {
-        r.name for r in table if r.format in _QUANTISED}
+    known = {r.name for r in table if r.format in _QUANTISED}
     for g in groups:
         if all(n in src for n in g):
             _exact_sum(list(g), src, out, table)

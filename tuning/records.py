@@ -45,14 +45,15 @@ from typing import Any
 
 import numpy as np
 
+from jvl_gym.families import UnsupportedOperation
+
 from .models import MotorData
-from .testmode_facts import ADC_FULL, COUNTS_PER_RAD, PWM_FULL, TS_I, TS_O
+from .testmode_facts import RecordFacts, record_facts_of
 
 __all__ = [
     "Record",
     "RecordError",
     "CHANNELS",
-    "RATES",
     "MIN_SAMPLES",
     "validate",
     "save_csv",
@@ -67,7 +68,6 @@ __all__ = [
 ]
 
 CHANNELS: dict[str, tuple[str, str]] = {"TESTU": ("UA_VAL", "IC_IST"), "TESTA": ("T_SOLL", "V_IST")}
-RATES: dict[str, float] = {"TESTU": 1.0 / TS_I, "TESTA": 1.0 / TS_O}
 MIN_SAMPLES: dict[str, int] = {"TESTU": 8, "TESTA": 6}
 MAX_TESTA_SPEED: int = 400  #: |V_IST| above this (3052 rpm) leaves the constant-torque region
 #: registers a TESTA record is taken with that the electrical model needs (manual 3.2.106–111,
@@ -88,13 +88,15 @@ class Record:
     ----------
     kind : {"TESTU", "TESTA"}
     rate_hz : float
-        Sample rate [Hz]: 7812.5 (TESTU) or 520.833 (TESTA).
+        Sample rate [Hz]: the family's current-loop rate (TESTU) or servo rate (TESTA),
+        7812.5 or 520.833 on the MAC050–141 (:attr:`RecordFacts.rates`).
     input : ndarray, shape (n,)
         UA_VAL [PWM counts] or T_SOLL [0..1023].
     output : ndarray, shape (n,)
         IC_IST [ADC counts] or V_IST [counts/sample].
     motor : str or None
-        Motor type, used for the physical scales.
+        Motor type, used for the physical scales and the family's rates (a record without one
+        is validated with the facts its user gives).
     meta : dict
         Free-form information (source, seed, UMEAS …).
     """
@@ -121,14 +123,32 @@ class Record:
         return CHANNELS[self.kind]
 
 
-def validate(rec: Record) -> Record:
-    """Check a record and return it; raise :class:`RecordError` if it cannot be used."""
+def facts_of_record(rec: Record) -> RecordFacts:
+    """The TESTU/TESTA facts of the family of the record's motor type; :class:`RecordError`
+    where the record names none or one of a family without test modes."""
+    if not rec.motor:
+        raise RecordError(f"{rec.kind}: the record names no motor type, so its family's sample "
+                          "rates and scales are unknown; add a '# motor:' header line or give "
+                          "the motor")
+    try:
+        return record_facts_of(rec.motor)
+    except (ValueError, UnsupportedOperation) as exc:
+        raise RecordError(f"{rec.kind}: motor {rec.motor!r}: {exc}") from exc
+
+
+def validate(rec: Record, facts: RecordFacts | None = None) -> Record:
+    """Check a record and return it; raise :class:`RecordError` if it cannot be used.
+
+    ``facts`` are those of the motor the record is used with; None: those of the record's own
+    motor type (:func:`facts_of_record`)."""
+    if facts is None:
+        facts = facts_of_record(rec)
     if rec.kind not in CHANNELS:
         raise RecordError(f"record kind must be TESTU or TESTA, got {rec.kind!r}")
     if rec.input.shape != rec.output.shape:
         raise RecordError(f"{rec.kind}: input and output lengths differ "
                           f"({rec.input.size} vs {rec.output.size})")
-    want = RATES[rec.kind]
+    want = facts.rates[rec.kind]
     if not math.isfinite(rec.rate_hz) or abs(rec.rate_hz / want - 1.0) > 1e-3:
         hint = " (inner rate, RECINNERBIT = 1)" if rec.kind == "TESTU" else " (outer rate)"
         raise RecordError(f"{rec.kind}: wrong sample rate {rec.rate_hz:.6g} Hz; the record must "
@@ -141,10 +161,11 @@ def validate(rec: Record) -> Record:
         raise RecordError(f"{rec.kind}: the record contains NaN or infinite values")
     a_in, a_out = CHANNELS[rec.kind]
     if rec.kind == "TESTU":
-        if np.any(np.abs(rec.output) >= ADC_FULL):
-            raise RecordError(f"TESTU: {a_out} saturated at ±{ADC_FULL} ADC counts; lower UMEAS")
-        if np.any(np.abs(rec.input) >= PWM_FULL):
-            raise RecordError(f"TESTU: {a_in} saturated at ±{PWM_FULL}; lower UMEAS")
+        if np.any(np.abs(rec.output) >= facts.adc_full):
+            raise RecordError(f"TESTU: {a_out} saturated at ±{facts.adc_full} ADC counts; "
+                              "lower UMEAS")
+        if np.any(np.abs(rec.input) >= facts.pwm_full):
+            raise RecordError(f"TESTU: {a_in} saturated at ±{facts.pwm_full}; lower UMEAS")
         if np.all(rec.input == 0):
             raise RecordError("TESTU: no excitation (UA_VAL = 0 throughout); set UMEAS > 0")
         if np.max(np.abs(rec.output)) < 5:
@@ -181,12 +202,10 @@ def save_csv(rec: Record, path: str | os.PathLike[str]) -> Path:
     return path
 
 
-def _registers_header(path: Path, ln: int, text: str) -> dict[str, float]:
+def _registers_header(path: Path, ln: int, text: str, facts: RecordFacts) -> dict[str, float]:
     """The ``# registers:`` line ``text`` (line ``ln`` of ``path``): NAME=value pairs of
-    distinct writable registers of the MAC050–141 table, each value finite and in its range."""
+    distinct writable registers of the family's table, each value finite and in its range."""
     from jvl_gym.registers import Access, RegisterError, to_raw
-
-    from .testmode_facts import TABLE as MAC050_141
 
     out: dict[str, float] = {}
     for item in text.split():
@@ -197,7 +216,7 @@ def _registers_header(path: Path, ln: int, text: str) -> dict[str, float]:
         if name in out:
             raise RecordError(f"{where}: {name} is given more than once")
         try:
-            reg = MAC050_141.lookup(name)
+            reg = facts.table.lookup(name)
             number = float(value)
             if reg.access != Access.RW:
                 raise RecordError(f"{where}: {name} is not a parameter register")
@@ -208,8 +227,11 @@ def _registers_header(path: Path, ln: int, text: str) -> dict[str, float]:
     return out
 
 
-def load_csv(path: str | os.PathLike[str]) -> Record:
+def load_csv(path: str | os.PathLike[str], motor: str | None = None) -> Record:
     """Read and validate a record CSV; :class:`RecordError` on any format problem.
+
+    The record is of the motor type of its ``# motor:`` header line, else of ``motor``; its
+    family's rates, scales and register table apply.
 
     The error names the file and, for a problem of one line, the line: a file that is not
     UTF-8 text, a repeated header key or column name, a row with the wrong number of fields or
@@ -281,14 +303,17 @@ def load_csv(path: str | os.PathLike[str]) -> Record:
                           f"{header['rate_hz']!r}") from exc
     meta: dict[str, Any] = {k: v for k, v in header.items()
                             if k not in ("kind", "rate_hz", "motor")}
-    if "registers" in meta:
-        meta["registers"] = _registers_header(path, header_line["registers"], meta["registers"])
     rec = Record(kind, rate, data[:, columns.index(a_in)], data[:, columns.index(a_out)],
-                 header.get("motor"), meta)
+                 header.get("motor") or motor, meta)
     try:
-        return validate(rec)
+        facts = facts_of_record(rec)
+        if "registers" in meta:
+            meta["registers"] = _registers_header(path, header_line["registers"],
+                                                  meta["registers"], facts)
+        return validate(rec, facts)
     except RecordError as exc:
-        raise RecordError(f"{path}: {exc}") from exc
+        text = str(exc)
+        raise RecordError(text if text.startswith(str(path)) else f"{path}: {text}") from exc
 
 
 def record_registers(recs: Record | Sequence[Record]) -> dict[str, float] | None:
@@ -327,6 +352,7 @@ def simulate_testu(motor: MotorData, umeas: float = 100.0, n: int = 11, quantize
     optionally plus Gaussian noise of ``noise_std`` counts and rounded to integers.
     """
     rng = np.random.default_rng(rng)
+    facts = record_facts_of(motor)
     a, g, d = motor.coil_pole, motor.coil_gain, int(motor.pwm_delay)
     u = np.full(n, float(umeas))
     i = np.zeros(n)
@@ -334,8 +360,8 @@ def simulate_testu(motor: MotorData, umeas: float = 100.0, n: int = 11, quantize
         i[k + 1] = a * i[k] + g * (1 - a) * (u[k - d] if k - d >= 0 else 0.0)
     y = -i + noise_std * rng.standard_normal(n)
     if quantize:
-        y = np.clip(np.round(y), -ADC_FULL, ADC_FULL)
-    return Record("TESTU", RATES["TESTU"], u, y, motor.name,
+        y = np.clip(np.round(y), -facts.adc_full, facts.adc_full)
+    return Record("TESTU", facts.rates["TESTU"], u, y, motor.name,
                   {"source": "simulate_testu", "UMEAS": umeas})
 
 
@@ -349,7 +375,8 @@ def simulate_testa(motor: MotorData, J: float, t_soll: float, n: int = 11, visco
     ``V_IST(k) = P(k) − P(k−1)`` with V_IST(0) = 0.
     """
     rng = np.random.default_rng(rng)
-    t = np.arange(n) * TS_O
+    facts = record_facts_of(motor)
+    t = np.arange(n) * facts.ts_o
     drive = motor.torque_per_vf * t_soll - coulomb
     if drive <= 0:
         theta = np.zeros(n)
@@ -358,14 +385,14 @@ def simulate_testa(motor: MotorData, J: float, t_soll: float, n: int = 11, visco
         theta = drive / viscous * (t + np.expm1(-beta * t) / beta)
     else:
         theta = 0.5 * drive / J * t**2
-    p = theta * COUNTS_PER_RAD
+    p = theta * facts.counts_per_rad
     if quantize:
         p = np.floor(p)
     p = p + position_noise * rng.standard_normal(n) * (np.arange(n) > 0)
     if quantize:
         p = np.round(p)
     v = np.diff(np.r_[p[0], p])
-    return Record("TESTA", RATES["TESTA"], np.full(n, float(t_soll)), v, motor.name,
+    return Record("TESTA", facts.rates["TESTA"], np.full(n, float(t_soll)), v, motor.name,
                   {"source": "simulate_testa", "T_SOLL": t_soll})
 
 
@@ -395,6 +422,7 @@ def align_rotor(m: Any, timeout_s: float = 3.0) -> None:
     MANI_MODE with the field on that axis (MAN_ALPHA = 341 ≙ 60° el.). Restores P_SOLL, V_SOLL,
     A_SOLL, MAN_I_NOM and leaves the motor in INIT_MODE.
     """
+    ts_o = record_facts_of(m).ts_o
     saved = {k: np.asarray(m.read(k)).copy() for k in ("P_SOLL", "V_SOLL", "A_SOLL")}
     el = np.asarray(m.read("ELDEG_IST"))
     d = ((ALIGN_ELDEG - el + 1024) % 2048) - 1024
@@ -410,7 +438,7 @@ def align_rotor(m: Any, timeout_s: float = 3.0) -> None:
         quiet[:] = np.where((v == 0) & (err <= 1), quiet + 1, 0)
         return bool(np.all(quiet >= 4))
 
-    _step_until(m, settled, int(timeout_s / TS_O))
+    _step_until(m, settled, int(timeout_s / ts_o))
     _to_init(m)
     # Friction can stop the position loop short of the angle. Finish with the stator field
     # itself (MANI_MODE, 3.2.128/129) on the TESTU axis, stronger than the TESTU current: the
@@ -420,9 +448,9 @@ def align_rotor(m: Any, timeout_s: float = 3.0) -> None:
     m.write("MAN_I_NOM", MANI_CURRENT)
     m.write("MAN_ALPHA", ALIGN_ELDEG)
     m.write("MODE_REG", 7)
-    m.step(int(0.3 / TS_O))
+    m.step(int(0.3 / ts_o))
     _to_init(m)
-    m.step(int(0.05 / TS_O))  # let the MANI current decay (L/R ≈ 1 ms) before TESTU
+    m.step(int(0.05 / ts_o))  # let the MANI current decay (L/R ≈ 1 ms) before TESTU
     m.write("MAN_I_NOM", man)
     for k, v in saved.items():
         m.write(k, v)
@@ -448,17 +476,18 @@ def acquire_testu(m: Any, umeas: int = 100, n_samples: int = 64, align: bool = T
     align : bool
         Turn the rotor to the zero-torque angle first (:func:`align_rotor`).
     """
+    facts = record_facts_of(m)
     if align:
         align_rotor(m)
     m.set_record_length(n_samples)
     m.write("UMEAS", umeas)
     m.write("MODE_REG", 8)
-    m.step(int(math.ceil(n_samples / 15)) + 2)
+    m.step(int(math.ceil(n_samples / facts.inner_per_outer)) + 2)
     buf = m.sample_buffer()
     names = [cfg.name for cfg in getattr(m, "motor_configs", [None] * m.n)]
-    return [validate(Record("TESTU", RATES["TESTU"], buf["UA_VAL"][i, :n_samples],
+    return [validate(Record("TESTU", facts.rates["TESTU"], buf["UA_VAL"][i, :n_samples],
                             buf["IC_IST"][i, :n_samples], names[i],
-                            {"source": "MotorArray", "UMEAS": umeas}))
+                            {"source": "MotorArray", "UMEAS": umeas}), facts)
             for i in range(m.n)]
 
 
@@ -483,7 +512,8 @@ def acquire_testa(m: Any, t_soll: Sequence[float] | np.ndarray | float, n_sample
     m.write("T_SOLL", old)
     names = [cfg.name for cfg in getattr(m, "motor_configs", [None] * m.n)]
     regs = {k: np.broadcast_to(np.asarray(m.read(k), dtype=float), (m.n,)) for k in TESTA_REGISTERS}
-    return [Record("TESTA", RATES["TESTA"], buf["T_SOLL"][i, :n_samples],
+    rate = record_facts_of(m).rates["TESTA"]
+    return [Record("TESTA", rate, buf["T_SOLL"][i, :n_samples],
                    buf["V_IST"][i, :n_samples], names[i],
                    {"source": "MotorArray", "T_SOLL": float(t[i]),
                     "registers": {k: float(v[i]) for k, v in regs.items()}})

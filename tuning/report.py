@@ -172,7 +172,8 @@ def two_mass_bode_figure(motor: Any, loops: Sequence[tuple[str, Mapping[str, flo
         f180 = _phase_crossing_hz(f, mag, phase)
         if math.isfinite(f180) and math.isfinite(m.gm_db):
             ax[0].vlines(f180, -m.gm_db, 0, color=color, lw=2)
-    marks = [(f_res, "resonance"), (alias_hz(f_res), "resonance alias")]
+    marks = [(f_res, "resonance"), (alias_hz(f_res, 1.0 / motor.family.outer_dt),
+                                     "resonance alias")]
     if f_anti is not None:
         marks.append((f_anti, "anti-resonance"))
     for k, (fm, label) in enumerate(marks):

@@ -40,7 +40,7 @@ from jvl_gym.families import TuningSpec
 from .identify_resonance import apparent_resonance, coupling_of
 from .models import MotorData, freqresp, speed_open_loop, speed_plant
 from .quantize import quantize_registers
-from .testmode_facts import TS_O
+from .testmode_facts import record_facts_of
 from .verify import LoopMetrics, frequency_grid, metrics_from_response
 
 __all__ = ["FilteredDesign", "TwoMassChoice", "choose", "move_on", "scaled_gains", "alias_hz",
@@ -88,14 +88,16 @@ class FilteredDesign:
     section: tuple[np.ndarray, np.ndarray]
 
 
-def alias_hz(f_hz: float, fs: float = 1.0 / TS_O) -> float:
-    """The frequency [Hz] at which a sampled loop at ``fs`` [Hz] sees ``f_hz``."""
+def alias_hz(f_hz: float, fs: float) -> float:
+    """The frequency [Hz] at which a sampled loop at ``fs`` [Hz] (the family's servo rate)
+    sees ``f_hz``."""
     return abs(f_hz - round(f_hz / fs) * fs)
 
 
-def notch_section(f_hz: float, radius: float) -> tuple[np.ndarray, np.ndarray]:
-    """Notch at the alias of ``f_hz`` with pole radius ``radius``, unity DC gain (z⁻¹ powers)."""
-    w0 = 2 * math.pi * alias_hz(f_hz) * TS_O
+def notch_section(f_hz: float, radius: float, ts_o: float) -> tuple[np.ndarray, np.ndarray]:
+    """Notch at the alias of ``f_hz`` with pole radius ``radius`` in a loop sampled every
+    ``ts_o`` [s] (the family's servo sample time), unity DC gain (z⁻¹ powers)."""
+    w0 = 2 * math.pi * alias_hz(f_hz, 1.0 / ts_o) * ts_o
     num = np.array([1.0, -2 * math.cos(w0), 1.0])
     den = np.array([1.0, -2 * radius * math.cos(w0), radius**2])
     return num * den.sum() / num.sum(), den
@@ -231,8 +233,10 @@ def resonance_designs(motor: MotorData, regs: Mapping[str, float], f_res: float,
     f_notch = apparent_resonance(motor, regs, load_ratio, f_res, zeta)[0]
     sections: list[tuple[str, str, tuple[np.ndarray, np.ndarray]]] = [
         ("none", "no filter", (np.array([1.0, 0.0, 0.0]), np.array([1.0, 0.0, 0.0])))]
-    sections += [("notch", f"notch {alias_hz(f_notch):.0f} Hz r={r}",
-                  notch_section(f_notch, r)) for r in NOTCH_RADII]
+    ts_o = motor.family.outer_dt
+    table = record_facts_of(motor).table
+    sections += [("notch", f"notch {alias_hz(f_notch, 1.0 / ts_o):.0f} Hz r={r}",
+                  notch_section(f_notch, r, ts_o)) for r in NOTCH_RADII]
     sections += [("lowpass", f"low-pass p={p}", lowpass_section(p)) for p in LOWPASS_POLES]
     best: dict[str, FilteredDesign] = {}
     for kind, name, sec in sections:
@@ -240,7 +244,7 @@ def resonance_designs(motor: MotorData, regs: Mapping[str, float], f_res: float,
             if kind in best and best[kind].gain >= g:
                 break
             try:
-                q = quantize_registers(balanced(with_section(scaled_gains(regs, g), sec)))
+                q = quantize_registers(balanced(with_section(scaled_gains(regs, g), sec)), table)
             except ValueError:
                 break
             ms = []
@@ -291,7 +295,7 @@ def move_on(motor_type: str, params: Mapping[str, float], setups: list[Mapping[s
         if regs:
             m.load_setup({"registers": dict(regs)}, index=[j])
     mv = position_move(m, distance, v_soll, a_soll, seconds=seconds)
-    tail = mv.position[-int(round(0.3 / TS_O)):]
+    tail = mv.position[-int(round(0.3 / record_facts_of(m).ts_o)):]
     return mv.settle_s, tail.max(axis=0) - tail.min(axis=0)
 
 

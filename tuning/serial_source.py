@@ -22,7 +22,7 @@ import numpy as np
 
 from .family import tuned_family
 from .records import RecordError
-from .testmode_facts import TEST_RECORD_SAMPLES
+from .testmode_facts import record_facts_of
 
 
 class SerialMotor:
@@ -104,13 +104,14 @@ class SerialMotor:
 
 
 def autotune_over_serial(port: str, motor: str, address: int = 1, time_scale: float = 1.0,
-                         n_coil: int = TEST_RECORD_SAMPLES, n_mech: int = TEST_RECORD_SAMPLES,
+                         n_coil: int | None = None, n_mech: int | None = None,
                          structure: str = "pi", write: bool = False, progress: Any = None,
                          two_mass: Any = None) -> tuple[Any, Any]:
     """Identify and design on a motor behind ``port`` (device path or pyserial URL).
 
     Runs TESTU and the two-level TESTA through MacTalk with the firmware's record length
-    (``n_coil``, ``n_mech``: 11 samples, manual 4.4.9/4.4.10; several records are combined,
+    (``n_coil``, ``n_mech``; None: the family's, 11 samples, manual 4.4.9/4.4.10; several
+    records are combined,
     :func:`tuning.autotune.testa_repeats`, :func:`tuning.autotune.testu_repeats`),
     synthesises and quantises the filters, keeps the best candidate by the acceptance step
     (simulated on the identified motor, :func:`tuning.pipeline.design_and_accept`), and, with
@@ -130,6 +131,8 @@ def autotune_over_serial(port: str, motor: str, address: int = 1, time_scale: fl
 
     say = progress or (lambda _msg: None)
     strategy = strategy_of(motor)
+    samples = record_facts_of(motor).test_record_samples
+    n_coil, n_mech = n_coil or samples, n_mech or samples
     with MacTalkClient(port, address=address) as client:
         m = SerialMotor(client, motor, time_scale)
         if int(m.read("MODE_REG")[0]) != 0:
