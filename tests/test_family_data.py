@@ -164,3 +164,13 @@ def test_a_second_family_with_test_modes_gets_its_own_rates() -> None:
     with pytest.raises(RecordError, match="names no motor type"):
         validate(Record("TESTU", good.rate_hz, good.input, good.output))
     assert np.all(np.abs(good.output) < facts.adc_full)
+
+
+def test_jvl_tune_defaults_refuses_a_family_without_test_modes(tmp_path: Path) -> None:
+    from tuning.cli import app
+    from typer.testing import CliRunner
+
+    for key, needle in (("mac800", "TEST_MODES"), ("no_such_family", "unknown motor family")):
+        res = CliRunner().invoke(app, ["defaults", "--family", key, "--out", str(tmp_path / key)])
+        assert res.exit_code != 0 and needle in res.output, res.output
+        assert not (tmp_path / key).exists()

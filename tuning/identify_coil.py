@@ -38,8 +38,7 @@ from .intervals import (
     student_halfwidth,
 )
 from .models import MotorData
-from .records import Record, RecordError, validate
-from .testmode_facts import record_facts_of
+from .records import Record, validated
 
 __all__ = ["CoilEstimate", "identify_coil", "residual_check"]
 
@@ -216,15 +215,9 @@ def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
     RecordError
         A record is not a valid TESTU record (:func:`tuning.records.validate`).
     """
-    recs = [records] if isinstance(records, Record) else list(records)
-    if not recs:
-        raise RecordError("identify_coil needs at least one TESTU record")
     md = motor if isinstance(motor, MotorData) else MotorData.from_config(motor)
-    facts = record_facts_of(md)
-    for r in recs:
-        validate(r, facts)
-        if r.kind != "TESTU":
-            raise RecordError(f"identify_coil needs TESTU records, got {r.kind}")
+    recs = validated(records, "TESTU", md, "identify_coil")
+    ts_i = md.family.inner_dt
     y_all = np.concatenate([r.output for r in recs])
     scale = max(1.0, float(np.max(np.abs(y_all))))
 
@@ -249,7 +242,7 @@ def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
     ln_a = math.log(a)
     # delta method: x = (a, g) → (R, L)
     jr = np.array([0.0, -R / g])
-    jl = np.array([R * facts.ts_i / (a * ln_a**2), (L / R) * (-R / g)])
+    jl = np.array([R * ts_i / (a * ln_a**2), (L / R) * (-R / g)])
     val = {"pole": a, "gain": g, "R_phase": R, "L_phase": L}
     grads = {"pole": np.array([1.0, 0.0]), "gain": np.array([0.0, 1.0]), "R_phase": jr,
              "L_phase": jl}
@@ -291,6 +284,6 @@ def identify_coil(records: Record | Sequence[Record], motor: MotorData | str,
     yhat = np.concatenate(fitted)
     den = float(np.linalg.norm(y_all - y_all.mean()))
     fit = 100.0 * (1.0 - float(np.linalg.norm(y_all - yhat)) / den) if den > 0 else math.nan
-    return CoilEstimate(pole=a, gain=g, delay=int(d), R_phase=R, L_phase=L, ts_i=facts.ts_i, ci=ci,
+    return CoilEstimate(pole=a, gain=g, delay=int(d), R_phase=R, L_phase=L, ts_i=ts_i, ci=ci,
                         nrmse_fit=fit, residual=residual_check(y_all - yhat, p), n_samples=n,
                         fitted=fitted, detected=detected)

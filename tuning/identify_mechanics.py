@@ -47,8 +47,7 @@ from .intervals import (
     student_halfwidth,
 )
 from .models import MotorData
-from .records import Record, RecordError, record_registers, validate
-from .testmode_facts import record_facts_of
+from .records import Record, RecordError, record_registers, validated
 
 __all__ = ["MechanicsEstimate", "identify_mechanics", "position_model", "two_level_torques",
            "electrical_position", "refine_electrical", "repeat_sets", "coil_uncertainty",
@@ -242,13 +241,8 @@ def identify_mechanics(records: Record | Sequence[Record], motor: MotorData | st
     RecordError
         Invalid records, or one torque level with ``coulomb=True``.
     """
-    recs = [records] if isinstance(records, Record) else list(records)
     md = motor if isinstance(motor, MotorData) else MotorData.from_config(motor)
-    facts = record_facts_of(md)
-    for r in recs:
-        validate(r, facts)
-        if r.kind != "TESTA":
-            raise RecordError(f"identify_mechanics needs TESTA records, got {r.kind}")
+    recs = validated(records, "TESTA", md, "identify_mechanics")
     carried = record_registers(recs) or {}
     if current_regs is None and all(k in carried for k in _CURRENT_KEYS):
         current_regs = {k: carried[k] for k in _CURRENT_KEYS}

@@ -56,6 +56,7 @@ __all__ = [
     "CHANNELS",
     "MIN_SAMPLES",
     "validate",
+    "validated",
     "save_csv",
     "load_csv",
     "simulate_testu",
@@ -181,6 +182,21 @@ def validate(rec: Record, facts: RecordFacts | None = None) -> Record:
             raise RecordError("TESTA: the motor did not move; T_SOLL is below the static "
                               "friction torque or the record is too short")
     return rec
+
+
+def validated(records: Record | Sequence[Record], kind: str, motor: MotorData,
+              user: str) -> list[Record]:
+    """``records`` as a list, at least one, each valid for ``motor``'s family (:func:`validate`)
+    and of ``kind``; :class:`RecordError` naming ``user`` (the fit) otherwise."""
+    recs = [records] if isinstance(records, Record) else list(records)
+    if not recs:
+        raise RecordError(f"{user} needs at least one {kind} record")
+    facts = record_facts_of(motor)
+    for r in recs:
+        validate(r, facts)
+        if r.kind != kind:
+            raise RecordError(f"{user} needs {kind} records, got {r.kind}")
+    return recs
 
 
 # ----------------------------------------------------------------------------- CSV
