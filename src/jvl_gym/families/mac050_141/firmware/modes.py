@@ -115,6 +115,19 @@ def reset_speed_loop(r: np.ndarray, s: np.ndarray) -> None:
 
 
 @njit(**KERNEL)
+def start_test_record(r: np.ndarray, s: np.ndarray, inner: bool) -> None:
+    """Start a test mode's record into the sample buffer (4.4.9, 4.4.10): REC_CNT = 0,
+    RECORDBIT set, RECINNERBIT set for a record at the current-loop rate (``inner``) and
+    cleared for one at the servo rate, REWINDBIT cleared, the test's sample counter at 0."""
+    r[R.REC_CNT] = 0
+    if inner:
+        r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] | c.RECINNERBIT | c.RECORDBIT) & ~c.REWINDBIT
+    else:
+        r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] | c.RECORDBIT) & ~(c.RECINNERBIT | c.REWINDBIT)
+    s[L.S_TEST_CNT] = 0.0
+
+
+@njit(**KERNEL)
 def enter_mode(r: np.ndarray, s: np.ndarray, new: int) -> None:
     """Set MODE_REG and perform the entry actions of ``new`` (manual 4.4)."""
     old = int(r[R.MODE_REG])
@@ -132,15 +145,11 @@ def enter_mode(r: np.ndarray, s: np.ndarray, new: int) -> None:
     if new == c.TESTU_MODE:
         r[R.SAMPLE1] = R.UA_VAL
         r[R.SAMPLE2] = R.IC_IST
-        r[R.REC_CNT] = 0
-        r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] | c.RECINNERBIT | c.RECORDBIT) & ~c.REWINDBIT
-        s[L.S_TEST_CNT] = 0.0
+        start_test_record(r, s, True)
     elif new == c.TESTA_MODE:
         r[R.SAMPLE1] = R.T_SOLL
         r[R.SAMPLE2] = R.V_IST
-        r[R.REC_CNT] = 0
-        r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] | c.RECORDBIT) & ~(c.RECINNERBIT | c.REWINDBIT)
-        s[L.S_TEST_CNT] = 0.0
+        start_test_record(r, s, False)
     elif new == c.BREAK_MODE:
         d = s[L.S_OMEGA]
         s[L.S_BREAK_DIR] = 1.0 if d > 0.0 else (-1.0 if d < 0.0 else 0.0)
@@ -148,15 +157,11 @@ def enter_mode(r: np.ndarray, s: np.ndarray, new: int) -> None:
         r[R.SAMPLE1] = R.IA_IST
         r[R.SAMPLE2] = R.IB_IST
         r[R.SAMPLE3] = R.IC_IST
-        r[R.REC_CNT] = 0
-        r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] | c.RECINNERBIT | c.RECORDBIT) & ~c.REWINDBIT
-        s[L.S_TEST_CNT] = 0.0
+        start_test_record(r, s, True)
     elif new == c.TESTTQ_MODE:  # documented measurement: torque at +V_SOLL then -V_SOLL
         r[R.SAMPLE1] = R.VF_OUT
         r[R.SAMPLE2] = R.V_IST
-        r[R.REC_CNT] = 0
-        r[R.CNTRL_BITS] = (r[R.CNTRL_BITS] | c.RECORDBIT) & ~(c.RECINNERBIT | c.REWINDBIT)
-        s[L.S_TEST_CNT] = 0.0
+        start_test_record(r, s, False)
     elif new == c.COIL_MODE:
         coil_entry(r, s)
     elif new == c.HOME1_MODE or new == c.HOME2_MODE or new == c.HOME3_MODE:
