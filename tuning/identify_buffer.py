@@ -58,6 +58,7 @@ import numpy as np
 from .design_sixth_order import design_current_filter
 from .identify_mechanics import MechanicsEstimate, combine_sets, refine_electrical
 from .intervals import batch_means, positive, student_halfwidth
+from .loop_quantisation import quantisation_error
 from .models import MotorData
 from .sixth_order import CONSTANTS as _c
 from .sixth_order import COUNTS_PER_RAD, CURRENT_KEYS, TS_I, TS_O
@@ -348,7 +349,10 @@ def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], mo
         raise ValueError(f"the torque steps give no positive inertia (J = {J:.4g} kg m^2)")
     rigid = [_fit_rigid(list(p), k_vf) for p in pairs]
     if current_regs is not None:
-        ests = [_electrical(p, motor, current_regs, phase_comp, fit)
+        errors = {(lv, r.position.size): quantisation_error(r.position.size, lv, J, motor,
+                                                           current_regs, phase_comp)
+                  for r in recs for lv in [float(np.median(r.vf_out))]}
+        ests = [_electrical(p, motor, current_regs, phase_comp, fit, errors)
                 for p, fit in zip(pairs, rigid)]
         if len(ests) >= 2:
             est = combine_sets(ests, [[2 * i, 2 * i + 1] for i in range(len(pairs))],
@@ -378,10 +382,14 @@ def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], mo
 
 def _electrical(pair: tuple[TorqueRecord, TorqueRecord], motor: MotorData,
                 current_regs: Mapping[str, float], phase_comp: float,
-                start: tuple[float, float, float, float]) -> MechanicsEstimate:
-    """The electrical fit of one repetition from its rigid fit ``start`` (J, T_c, b, …)."""
+                start: tuple[float, float, float, float],
+                errors: Mapping[tuple[float, int], np.ndarray]) -> MechanicsEstimate:
+    """The electrical fit of one repetition from its rigid fit ``start`` (J, T_c, b, …), on
+    the positions less the integer current loop's mean error ``errors`` (by level and length,
+    :func:`tuning.loop_quantisation.quantisation_error`)."""
     levels = [float(np.median(r.vf_out)) for r in pair]
-    pos = [r.position - r.position[0] for r in pair]
+    pos = [r.position - r.position[0] - errors[(lv, r.position.size)]
+           for r, lv in zip(pair, levels)]
     return refine_electrical(levels, pos, motor, current_regs, phase_comp / 256.0, start[0],
                              start[1], start[2], free_terms=2)
 
