@@ -65,7 +65,7 @@ from .sixth_order import COUNTS_PER_RAD, CURRENT_KEYS, TS_I, TS_O
 
 __all__ = ["CoilRecord", "TorqueRecord", "CoilStepEstimate", "TorqueStepEstimate",
            "BufferIdentification", "record_coil", "record_torque_steps", "identify_coil_step",
-           "identify_torque_steps", "identify_from_buffer"]
+           "combine_coil_steps", "identify_torque_steps", "identify_from_buffer"]
 
 Progress = Callable[[str], None]
 
@@ -74,6 +74,7 @@ COIL_CHANNELS = ("IA_IST", "IB_IST", "UA_VAL", "UB_VAL")
 STEP_CHANNELS = ("P_IST", "VF_OUT", "V_IST")
 COIL_VF: int = 100  #: VF_OUT of the coil step (about 10 % of peak torque)
 COIL_SAMPLES: int = 60  #: current-loop samples of the coil fit (5.2 ms, 1.7 L/R)
+COIL_REPEATS: int = 4  #: coil steps per motor (R and L intervals from their spread)
 PILOT_VF: int = 50  #: VF_OUT of the pilot step that sizes the levels
 MECH_SAMPLES: int = 100  #: servo samples per torque step (130 ms)
 #: V_IST at the end of the higher step [counts/sample] (173 = 1000 RPM, register 12)
@@ -102,12 +103,23 @@ class TorqueRecord:
 
 @dataclass
 class CoilStepEstimate:
-    """Identified coil: per-phase R [Ω], L [H], the PWM delay, the fit's NRMSE [%]."""
+    """Identified coil: per-phase R [Ω], L [H], the PWM delay, the fit's NRMSE [%].
+
+    Attributes
+    ----------
+    ci : dict
+        95 % intervals (lo, hi) of "R_phase" [Ω] and "L_phase" [H] from the spread of the
+        repeated coil steps (:func:`combine_coil_steps`); empty for one step.
+    repeats : list of (float, float)
+        (R, L) of each coil step.
+    """
 
     R_phase: float
     L_phase: float
     delay: int
     nrmse: float
+    ci: dict[str, tuple[float, float]] = field(default_factory=dict)
+    repeats: list[tuple[float, float]] = field(default_factory=list)
 
     def motor(self, base: MotorData) -> MotorData:
         """``base`` with the identified coil."""
@@ -289,6 +301,26 @@ def identify_coil_step(rec: CoilRecord, base: MotorData) -> CoilStepEstimate:
     return CoilStepEstimate(R, L, d, nrmse)
 
 
+def combine_coil_steps(ests: Sequence[CoilStepEstimate]) -> CoilStepEstimate:
+    """The mean of K ≥ 2 coil-step fits with 95 % intervals of R and L from their spread
+    (batch means, Student t with K − 1 degrees of freedom, :mod:`tuning.intervals`): each step
+    starts at another rotor angle, so the current loop's rounding and the ADC's quantisation
+    differ from step to step. The PWM delay is the one most steps give.
+    """
+    if len(ests) < 2:
+        raise ValueError("combining coil steps needs at least two")
+    out: dict[str, float] = {}
+    ci: dict[str, tuple[float, float]] = {}
+    for key in ("R_phase", "L_phase"):
+        mean, var, dof = batch_means([getattr(e, key) for e in ests])
+        h = student_halfwidth(math.sqrt(var), dof)
+        out[key], ci[key] = mean, (mean - h, mean + h)
+    delays = [e.delay for e in ests]
+    return CoilStepEstimate(out["R_phase"], out["L_phase"], max(set(delays), key=delays.count),
+                            float(np.mean([e.nrmse for e in ests])), ci,
+                            [(e.R_phase, e.L_phase) for e in ests])
+
+
 def _fit_rigid(recs: Sequence[TorqueRecord], k_vf: float
                ) -> tuple[float, float, float, float]:
     """J, T_c, b and the NRMSE [%] of the position fit (module docstring)."""
@@ -413,9 +445,12 @@ def identify_from_buffer(m: Any, repeats: int = 2, progress: Progress = lambda _
     amp = np.asarray(m.read("AMPLITUDE"), dtype=float)
     base = [MotorData.from_config(cfg, amplitude=float(amp[i]))
             for i, cfg in enumerate(m.motor_configs)]
-    progress("coil: torque step in analogue torque mode 4, recorded at 11550 Hz")
-    coil_recs = record_coil(m)
-    coils = [identify_coil_step(r, md) for r, md in zip(coil_recs, base)]
+    progress(f"coil: {COIL_REPEATS} torque steps in analogue torque mode 4, recorded at "
+             "11550 Hz")
+    coil_sets = [record_coil(m) for _ in range(COIL_REPEATS)]
+    coil_recs = coil_sets[0]
+    coils = [combine_coil_steps([identify_coil_step(rs[i], md) for rs in coil_sets])
+             for i, md in enumerate(base)]
     motors = [c.motor(md).with_(supply_voltage=r.bus_voltage)
               for c, md, r in zip(coils, base, coil_recs)]
     progress("current loop: designed for the identified coils and written")
