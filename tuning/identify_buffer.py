@@ -19,7 +19,8 @@ corrects) is the same in both phases, one shared constant ``−β·U_n``; the lo
 empty history (passive mode before the step) so it stays nearly constant. The fit is linear
 least squares in (a, β, β·U_n) shared by both phases and the cubics; d ∈ {0, 1} is the one
 with the smaller residual. Then ``R = k_u(1 − a)/(β·A_count)``, ``L = −R·TS_I/ln a`` with
-k_u from U_BUS (register 198).
+k_u from U_BUS (register 198). The step is taken :data:`COIL_REPEATS` times; R and L are the
+means and their 95 % intervals come from the spread (:func:`combine_coil_steps`).
 
 *Mechanics*: steps at two levels VF₁ and VF₂ ≈ VF₁/2, each recorded ``repeats`` times at the
 servo rate (770 Hz), channels P_IST, VF_OUT, V_IST, each from rest. With the rigid rotor
@@ -39,9 +40,13 @@ an output-error fit with the current loop, the coil and the back-EMF modelled
 (:func:`tuning.identify_mechanics.refine_electrical`, the model of
 :func:`tuning.identify_mechanics.electrical_position`, whose current filter structure is the
 MAC800's, registers 144–149), per record free in the position offset and the initial speed as
-above. Each repetition of the two levels is fitted on its own; the values are their mean and the
-95 % intervals of J, T_c and b come from the spread between the repetitions (batch means,
-Student t with K − 1 degrees of freedom) and the encoder quantisation floor
+above. The smooth model computes in real numbers where the firmware rounds (current readings,
+setpoints, PWM values, the electrical angle): the records are first corrected by that
+rounding's mean effect over the rotor's start angle (:mod:`tuning.loop_quantisation`), which
+would otherwise read as Coulomb friction and an inertia off by a few 0.1 %. Each repetition
+of the two levels is fitted on its own; the values are their mean and the 95 % intervals of J,
+T_c and b come from the spread between the repetitions (batch means, Student t with K − 1
+degrees of freedom) and the encoder quantisation floor
 (:func:`tuning.identify_mechanics.combine_sets`); a friction whose interval reaches 0 is
 reported as 0 (not detected).
 """
@@ -75,6 +80,7 @@ STEP_CHANNELS = ("P_IST", "VF_OUT", "V_IST")
 COIL_VF: int = 100  #: VF_OUT of the coil step (about 10 % of peak torque)
 COIL_SAMPLES: int = 60  #: current-loop samples of the coil fit (5.2 ms, 1.7 L/R)
 COIL_REPEATS: int = 4  #: coil steps per motor (R and L intervals from their spread)
+REPEAT_BRAKE: float = 0.5  #: longest brake [s] around the repeated coil steps
 PILOT_VF: int = 50  #: VF_OUT of the pilot step that sizes the levels
 MECH_SAMPLES: int = 100  #: servo samples per torque step (130 ms)
 #: V_IST at the end of the higher step [counts/sample] (173 = 1000 RPM, register 12)
@@ -216,10 +222,12 @@ def brake(m: Any, seconds: float = 4.0) -> None:
     m.step(5)
 
 
-def record_coil(m: Any, vf: float = COIL_VF, n: int = COIL_SAMPLES) -> list[CoilRecord]:
+def record_coil(m: Any, vf: float = COIL_VF, n: int = COIL_SAMPLES,
+                brake_seconds: float = 4.0) -> list[CoilRecord]:
     """A torque step of VF_OUT = ``vf`` from rest in mode 4, recorded at the current-loop rate
-    (RECINNERBIT) for ``n`` samples; one record per motor. Leaves the motors braked."""
-    brake(m)
+    (RECINNERBIT) for ``n`` samples; one record per motor. The motors are braked for at most
+    ``brake_seconds`` [s] before the step and after it (:func:`brake`)."""
+    brake(m, brake_seconds)
     m.write("MODE_REG", _c.PASSIVE_MODE)  # the current filters' histories cleared
     m.step(3)
     m.write("MODE_REG", _c.ANALOG_TORQUE_MODE)
@@ -235,7 +243,7 @@ def record_coil(m: Any, vf: float = COIL_VF, n: int = COIL_SAMPLES) -> list[Coil
         buf = m.sample_buffer(i)
         out.append(CoilRecord(*(np.asarray(buf[ch], dtype=float) for ch in COIL_CHANNELS),
                               bus_voltage=float(bus[i])))
-    brake(m)
+    brake(m, brake_seconds)
     return out
 
 
@@ -447,7 +455,10 @@ def identify_from_buffer(m: Any, repeats: int = 2, progress: Progress = lambda _
             for i, cfg in enumerate(m.motor_configs)]
     progress(f"coil: {COIL_REPEATS} torque steps in analogue torque mode 4, recorded at "
              "11550 Hz")
-    coil_sets = [record_coil(m) for _ in range(COIL_REPEATS)]
+    # a coil step leaves the rotor at a few rad/s, which velocity mode stops within
+    # milliseconds: the repeats are braked for REPEAT_BRAKE instead of the full brake
+    coil_sets = [record_coil(m, brake_seconds=4.0 if k == 0 else REPEAT_BRAKE)
+                 for k in range(COIL_REPEATS)]
     coil_recs = coil_sets[0]
     coils = [combine_coil_steps([identify_coil_step(rs[i], md) for rs in coil_sets])
              for i, md in enumerate(base)]
