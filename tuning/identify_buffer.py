@@ -389,9 +389,9 @@ def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], mo
         raise ValueError(f"the torque steps give no positive inertia (J = {J:.4g} kg m^2)")
     rigid = [_fit_rigid(list(p), k_vf) for p in pairs]
     if current_regs is not None:
-        errors = {(lv, r.position.size): quantisation_error(r.position.size, lv, J, motor,
-                                                           current_regs, phase_comp)
-                  for r in recs for lv in [float(np.median(r.vf_out))]}
+        steps = {(float(np.median(r.vf_out)), r.position.size) for r in recs}
+        errors = {(lv, n): quantisation_error(n, lv, J, motor, current_regs, phase_comp)
+                  for lv, n in steps}
         ests = [_electrical(p, motor, current_regs, phase_comp, fit, errors)
                 for p, fit in zip(pairs, rigid)]
         if len(ests) >= 2:

@@ -14,10 +14,11 @@ records before its electrical fit (:func:`tuning.identify_buffer.identify_torque
 
 :func:`quantised_position` runs the per-phase loop (the smooth model's coil, back-EMF and rotor,
 the same sample times and scales) for a batch of start angles at once, with the rounding
-(round half away from zero, ELDEG_IST = floor of the angle) or without it;
-:func:`quantisation_error` is the mean over start angles of the difference. The rounding mode,
-the 12-bit angle and the ±1023 ranges are the simulator's decisions (``families/mac800``
-constants), which the firmware's register formats leave open.
+(round half away from zero, ELDEG_IST = floor of the angle) or without it (then it is the
+smooth model); :func:`quantisation_error` is the mean over start angles of the difference.
+The register overview gives the registers as integers but not how the firmware rounds: the
+rounding mode, the 12-bit angle and the ±1023 ranges are the MAC800 family's decisions (its
+``constants``), taken here from the family.
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
+from .identify_mechanics import electrical_position
 from .models import MotorData
 from .sixth_order import CONSTANTS as _c
 
@@ -137,9 +139,11 @@ def quantisation_error(n: int, vf: float, J: float, motor: MotorData,
                        current_regs: Mapping[str, float], phase_comp: float = 0.0,
                        angles: int = START_ANGLES) -> np.ndarray:
     """Mean position error [counts] the rounding adds to a torque step of VF_OUT ``vf`` from
-    rest over ``angles`` start angles spread evenly over one electrical turn, shape (n,)."""
-    start = (np.arange(angles) + 0.5) * (_c.ELDEG_PER_TURN / angles)
-    start = np.floor(start)
+    rest over ``angles`` start angles spread evenly over one electrical turn, shape (n,): the
+    mean of :func:`quantised_position` less the smooth model
+    (:func:`tuning.identify_mechanics.electrical_position`, the same loop without rounding,
+    which does not depend on the start angle)."""
+    start = np.floor((np.arange(angles) + 0.5) * (_c.ELDEG_PER_TURN / angles))
     with_r = quantised_position(n, vf, J, motor, current_regs, phase_comp, start, True)
-    without = quantised_position(n, vf, J, motor, current_regs, phase_comp, start, False)
-    return (with_r - without).mean(axis=0)
+    smooth = electrical_position(n, vf, J, 0.0, 0.0, motor, current_regs, phase_comp / 256.0)
+    return with_r.mean(axis=0) - smooth
