@@ -19,7 +19,8 @@ corrects) is the same in both phases, one shared constant ``−β·U_n``; the lo
 empty history (passive mode before the step) so it stays nearly constant. The fit is linear
 least squares in (a, β, β·U_n) shared by both phases and the cubics; d ∈ {0, 1} is the one
 with the smaller residual. Then ``R = k_u(1 − a)/(β·A_count)``, ``L = −R·TS_I/ln a`` with
-k_u from U_BUS (register 198).
+k_u from U_BUS (register 198). The step is taken :data:`COIL_REPEATS` times; R and L are the
+means and their 95 % intervals come from the spread (:func:`combine_coil_steps`).
 
 *Mechanics*: steps at two levels VF₁ and VF₂ ≈ VF₁/2, each recorded ``repeats`` times at the
 servo rate (770 Hz), channels P_IST, VF_OUT, V_IST, each from rest. With the rigid rotor
@@ -39,9 +40,13 @@ an output-error fit with the current loop, the coil and the back-EMF modelled
 (:func:`tuning.identify_mechanics.refine_electrical`, the model of
 :func:`tuning.identify_mechanics.electrical_position`, whose current filter structure is the
 MAC800's, registers 144–149), per record free in the position offset and the initial speed as
-above. Each repetition of the two levels is fitted on its own; the values are their mean and the
-95 % intervals of J, T_c and b come from the spread between the repetitions (batch means,
-Student t with K − 1 degrees of freedom) and the encoder quantisation floor
+above. The smooth model computes in real numbers where the firmware rounds (current readings,
+setpoints, PWM values, the electrical angle): the records are first corrected by that
+rounding's mean effect over the rotor's start angle (:mod:`tuning.loop_quantisation`), which
+would otherwise read as Coulomb friction and an inertia off by a few 0.1 %. Each repetition
+of the two levels is fitted on its own; the values are their mean and the 95 % intervals of J,
+T_c and b come from the spread between the repetitions (batch means, Student t with K − 1
+degrees of freedom) and the encoder quantisation floor
 (:func:`tuning.identify_mechanics.combine_sets`); a friction whose interval reaches 0 is
 reported as 0 (not detected).
 """
@@ -58,13 +63,14 @@ import numpy as np
 from .design_sixth_order import design_current_filter
 from .identify_mechanics import MechanicsEstimate, combine_sets, refine_electrical
 from .intervals import batch_means, positive, student_halfwidth
+from .loop_quantisation import quantisation_error
 from .models import MotorData
 from .sixth_order import CONSTANTS as _c
 from .sixth_order import COUNTS_PER_RAD, CURRENT_KEYS, TS_I, TS_O
 
 __all__ = ["CoilRecord", "TorqueRecord", "CoilStepEstimate", "TorqueStepEstimate",
            "BufferIdentification", "record_coil", "record_torque_steps", "identify_coil_step",
-           "identify_torque_steps", "identify_from_buffer"]
+           "combine_coil_steps", "identify_torque_steps", "identify_from_buffer"]
 
 Progress = Callable[[str], None]
 
@@ -73,6 +79,8 @@ COIL_CHANNELS = ("IA_IST", "IB_IST", "UA_VAL", "UB_VAL")
 STEP_CHANNELS = ("P_IST", "VF_OUT", "V_IST")
 COIL_VF: int = 100  #: VF_OUT of the coil step (about 10 % of peak torque)
 COIL_SAMPLES: int = 60  #: current-loop samples of the coil fit (5.2 ms, 1.7 L/R)
+COIL_REPEATS: int = 4  #: coil steps per motor (R and L intervals from their spread)
+REPEAT_BRAKE: float = 0.5  #: longest brake [s] around the repeated coil steps
 PILOT_VF: int = 50  #: VF_OUT of the pilot step that sizes the levels
 MECH_SAMPLES: int = 100  #: servo samples per torque step (130 ms)
 #: V_IST at the end of the higher step [counts/sample] (173 = 1000 RPM, register 12)
@@ -101,12 +109,23 @@ class TorqueRecord:
 
 @dataclass
 class CoilStepEstimate:
-    """Identified coil: per-phase R [Ω], L [H], the PWM delay, the fit's NRMSE [%]."""
+    """Identified coil: per-phase R [Ω], L [H], the PWM delay, the fit's NRMSE [%].
+
+    Attributes
+    ----------
+    ci : dict
+        95 % intervals (lo, hi) of "R_phase" [Ω] and "L_phase" [H] from the spread of the
+        repeated coil steps (:func:`combine_coil_steps`); empty for one step.
+    repeats : list of (float, float)
+        (R, L) of each coil step.
+    """
 
     R_phase: float
     L_phase: float
     delay: int
     nrmse: float
+    ci: dict[str, tuple[float, float]] = field(default_factory=dict)
+    repeats: list[tuple[float, float]] = field(default_factory=list)
 
     def motor(self, base: MotorData) -> MotorData:
         """``base`` with the identified coil."""
@@ -203,10 +222,12 @@ def brake(m: Any, seconds: float = 4.0) -> None:
     m.step(5)
 
 
-def record_coil(m: Any, vf: float = COIL_VF, n: int = COIL_SAMPLES) -> list[CoilRecord]:
+def record_coil(m: Any, vf: float = COIL_VF, n: int = COIL_SAMPLES,
+                brake_seconds: float = 4.0) -> list[CoilRecord]:
     """A torque step of VF_OUT = ``vf`` from rest in mode 4, recorded at the current-loop rate
-    (RECINNERBIT) for ``n`` samples; one record per motor. Leaves the motors braked."""
-    brake(m)
+    (RECINNERBIT) for ``n`` samples; one record per motor. The motors are braked for at most
+    ``brake_seconds`` [s] before the step and after it (:func:`brake`)."""
+    brake(m, brake_seconds)
     m.write("MODE_REG", _c.PASSIVE_MODE)  # the current filters' histories cleared
     m.step(3)
     m.write("MODE_REG", _c.ANALOG_TORQUE_MODE)
@@ -222,7 +243,7 @@ def record_coil(m: Any, vf: float = COIL_VF, n: int = COIL_SAMPLES) -> list[Coil
         buf = m.sample_buffer(i)
         out.append(CoilRecord(*(np.asarray(buf[ch], dtype=float) for ch in COIL_CHANNELS),
                               bus_voltage=float(bus[i])))
-    brake(m)
+    brake(m, brake_seconds)
     return out
 
 
@@ -288,6 +309,26 @@ def identify_coil_step(rec: CoilRecord, base: MotorData) -> CoilStepEstimate:
     return CoilStepEstimate(R, L, d, nrmse)
 
 
+def combine_coil_steps(ests: Sequence[CoilStepEstimate]) -> CoilStepEstimate:
+    """The mean of K ≥ 2 coil-step fits with 95 % intervals of R and L from their spread
+    (batch means, Student t with K − 1 degrees of freedom, :mod:`tuning.intervals`): each step
+    starts at another rotor angle, so the current loop's rounding and the ADC's quantisation
+    differ from step to step. The PWM delay is the one most steps give.
+    """
+    if len(ests) < 2:
+        raise ValueError("combining coil steps needs at least two")
+    out: dict[str, float] = {}
+    ci: dict[str, tuple[float, float]] = {}
+    for key in ("R_phase", "L_phase"):
+        mean, var, dof = batch_means([getattr(e, key) for e in ests])
+        h = student_halfwidth(math.sqrt(var), dof)
+        out[key], ci[key] = mean, (mean - h, mean + h)
+    delays = [e.delay for e in ests]
+    return CoilStepEstimate(out["R_phase"], out["L_phase"], max(set(delays), key=delays.count),
+                            float(np.mean([e.nrmse for e in ests])), ci,
+                            [(e.R_phase, e.L_phase) for e in ests])
+
+
 def _fit_rigid(recs: Sequence[TorqueRecord], k_vf: float
                ) -> tuple[float, float, float, float]:
     """J, T_c, b and the NRMSE [%] of the position fit (module docstring)."""
@@ -348,7 +389,10 @@ def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], mo
         raise ValueError(f"the torque steps give no positive inertia (J = {J:.4g} kg m^2)")
     rigid = [_fit_rigid(list(p), k_vf) for p in pairs]
     if current_regs is not None:
-        ests = [_electrical(p, motor, current_regs, phase_comp, fit)
+        steps = {(float(np.median(r.vf_out)), r.position.size) for r in recs}
+        errors = {(lv, n): quantisation_error(n, lv, J, motor, current_regs, phase_comp)
+                  for lv, n in steps}
+        ests = [_electrical(p, motor, current_regs, phase_comp, fit, errors)
                 for p, fit in zip(pairs, rigid)]
         if len(ests) >= 2:
             est = combine_sets(ests, [[2 * i, 2 * i + 1] for i in range(len(pairs))],
@@ -378,10 +422,14 @@ def identify_torque_steps(pairs: Sequence[tuple[TorqueRecord, TorqueRecord]], mo
 
 def _electrical(pair: tuple[TorqueRecord, TorqueRecord], motor: MotorData,
                 current_regs: Mapping[str, float], phase_comp: float,
-                start: tuple[float, float, float, float]) -> MechanicsEstimate:
-    """The electrical fit of one repetition from its rigid fit ``start`` (J, T_c, b, …)."""
+                start: tuple[float, float, float, float],
+                errors: Mapping[tuple[float, int], np.ndarray]) -> MechanicsEstimate:
+    """The electrical fit of one repetition from its rigid fit ``start`` (J, T_c, b, …), on
+    the positions less the integer current loop's mean error ``errors`` (by level and length,
+    :func:`tuning.loop_quantisation.quantisation_error`)."""
     levels = [float(np.median(r.vf_out)) for r in pair]
-    pos = [r.position - r.position[0] for r in pair]
+    pos = [r.position - r.position[0] - errors[(lv, r.position.size)]
+           for r, lv in zip(pair, levels)]
     return refine_electrical(levels, pos, motor, current_regs, phase_comp / 256.0, start[0],
                              start[1], start[2], free_terms=2)
 
@@ -405,9 +453,15 @@ def identify_from_buffer(m: Any, repeats: int = 2, progress: Progress = lambda _
     amp = np.asarray(m.read("AMPLITUDE"), dtype=float)
     base = [MotorData.from_config(cfg, amplitude=float(amp[i]))
             for i, cfg in enumerate(m.motor_configs)]
-    progress("coil: torque step in analogue torque mode 4, recorded at 11550 Hz")
-    coil_recs = record_coil(m)
-    coils = [identify_coil_step(r, md) for r, md in zip(coil_recs, base)]
+    progress(f"coil: {COIL_REPEATS} torque steps in analogue torque mode 4, recorded at "
+             "11550 Hz")
+    # a coil step leaves the rotor at a few rad/s, which velocity mode stops within
+    # milliseconds: the repeats are braked for REPEAT_BRAKE instead of the full brake
+    coil_sets = [record_coil(m, brake_seconds=4.0 if k == 0 else REPEAT_BRAKE)
+                 for k in range(COIL_REPEATS)]
+    coil_recs = coil_sets[0]
+    coils = [combine_coil_steps([identify_coil_step(rs[i], md) for rs in coil_sets])
+             for i, md in enumerate(base)]
     motors = [c.motor(md).with_(supply_voltage=r.bus_voltage)
               for c, md, r in zip(coils, base, coil_recs)]
     progress("current loop: designed for the identified coils and written")

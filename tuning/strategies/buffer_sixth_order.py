@@ -220,12 +220,16 @@ class BufferSixthOrderStrategy(ServoLoops):
 
     # ------------------------------------------------------------------ report
     def identified_rows(self, ident: BufferIdentification) -> list[Any]:
-        """Coil (per-phase R, L, PWM delay) and mechanics (J, KVOUT, b, T_c with their
-        intervals), a friction or J whose interval reaches 0 flagged "not detected"."""
+        """Coil (per-phase R, L with their intervals, PWM delay) and mechanics (J, KVOUT, b,
+        T_c with their intervals), a friction or J whose interval reaches 0 flagged "not
+        detected"."""
         c, m, md = ident.coil, ident.mechanics, ident.motor
         lo, hi = m.ci_J
-        rows: list[Any] = [("R phase [ohm]", c.R_phase, None, "R_phase", ""),
-                           ("L phase [mH]", 1e3 * c.L_phase, None, "L_phase_mH", ""),
+        ci_r, ci_l = c.ci.get("R_phase"), c.ci.get("L_phase")
+        rows: list[Any] = [("R phase [ohm]", c.R_phase, ci_r, "R_phase", ""),
+                           ("L phase [mH]", 1e3 * c.L_phase,
+                            None if ci_l is None else (1e3 * ci_l[0], 1e3 * ci_l[1]),
+                            "L_phase_mH", ""),
                            ("PWM delay [samples]", c.delay, None, "delay", "")]
         for label, val, key in (("J total [kg m^2]", m.J, "J"),
                                 ("KVOUT = J/J_m", m.J / md.J_m, "kvout"),
@@ -238,12 +242,13 @@ class BufferSixthOrderStrategy(ServoLoops):
         return rows
 
     def identification_lines(self, ident: BufferIdentification) -> list[str]:
-        """The fits' NRMSE and how J's interval was computed."""
-        m = ident.mechanics
-        model = ("current loop and back-EMF modelled" if m.model == "electrical"
-                 else "rigid model")
-        return [f"coil step fit {ident.coil.nrmse:.2f} % NRMSE; torque-step fit "
+        """The fits' NRMSE and how the intervals were computed."""
+        m, c = ident.mechanics, ident.coil
+        model = ("current loop (its rounding averaged) and back-EMF modelled"
+                 if m.model == "electrical" else "rigid model")
+        return [f"coil step fit {c.nrmse:.2f} % NRMSE; torque-step fit "
                 f"{m.nrmse:.3f} % NRMSE (rigid model, the start of the fit)",
+                f"coil: intervals: spread of {len(c.repeats)} coil steps (Student t, K-1 dof)",
                 f"mechanics: {model}; intervals: spread of {len(m.repeats)} repeated two-level "
                 "steps (Student t, K-1 dof) + quantisation; J of each: "
                 + ", ".join(f"{j:.5g}" for j in m.repeats)]
