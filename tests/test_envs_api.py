@@ -6,6 +6,7 @@ import pickle
 import warnings
 
 import gymnasium as gym
+import numba
 import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
@@ -86,6 +87,10 @@ def test_pickled_env_continues_identically(env_id: str) -> None:
     if SHORT.get(env_id) != 1:
         env.step(a)
     clone = pickle.loads(pickle.dumps(env))
+    # the same argument types for the compiled step (a writable copy of a read-only array
+    # would compile the step again)
+    views = [e.unwrapped.core.motors.engine_view() for e in (env, clone)]
+    assert [numba.typeof(x) for x in views[0]] == [numba.typeof(x) for x in views[1]]
     o1, r1, *_ = env.step(a)
     o2, r2, *_ = clone.step(a)
     np.testing.assert_array_equal(o1, o2)

@@ -13,14 +13,6 @@ pytest.importorskip("ray.rllib")
 from jvl_gym.scale.rllib import train_ppo  # noqa: E402
 
 
-@pytest.fixture(scope="module")
-def local_ray():
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False,
-             object_store_memory=256 * 1024 * 1024)
-    yield
-    ray.shutdown()
-
-
 # any gymnasium warning (observation dtype or bounds, a space's precision) fails the test
 @pytest.mark.filterwarnings("error::UserWarning:gymnasium")
 def test_ppo_two_iterations_on_gearsync(tmp_path: Path, local_ray: None) -> None:

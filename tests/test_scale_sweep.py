@@ -28,14 +28,6 @@ eval: {n_seeds: 2, episodes_per_seed: 2}
 """
 
 
-@pytest.fixture(scope="module")
-def local_ray():
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False,
-             object_store_memory=256 * 1024 * 1024)
-    yield
-    ray.shutdown()
-
-
 def test_sweep_stops_resumes_and_reports(tmp_path: Path, local_ray: None) -> None:
     cfg = tmp_path / "sweep.yml"
     cfg.write_text(SWEEP)

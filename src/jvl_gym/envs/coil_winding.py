@@ -76,9 +76,11 @@ def _figures(fam: Family) -> dict[str, float]:
 _DT = _V_TRAVERSE_NORM = 1.0  # bound per family by ``_figures``
 
 
+@njit(**KERNEL)
 def _lay_turn(x, t, h, centres, w, k):  # pragma: no cover - compiled
     """Lay a copy's turn at traverse position ``x`` [m] and time ``t`` [s] on its heights ``h``
-    (its coil record ``w``, the env's constants ``k``)."""
+    (its coil record ``w``, the env's constants ``k``): once per spindle revolution, so a
+    function of its own, called from the step."""
     d = w.d_mean * (1.0 + w.d_var * math.sin(
         2.0 * math.pi * w.d_freq * t + w.d_phase))
     base, void, x_laid = lay_turn_row(h, centres, x, d, k.width, k.nest > 0.5)
@@ -135,7 +137,7 @@ def _spindle_after(i, view, episode, s):  # pragma: no cover - compiled
 
 def _track_layer(i, view, w, h):  # pragma: no cover - compiled
     """A reversal of the COIL block of copy ``i`` (its coil record ``w``, its heights ``h``)
-    closes a layer: its flatness is booked and scored."""
+    closes a layer (:func:`_close_layer`); returns its flatness, else 0."""
     direction = coil_direction(view, i)
     if direction == 0.0:
         return 0.0
@@ -143,6 +145,13 @@ def _track_layer(i, view, w, h):  # pragma: no cover - compiled
     w.direction = direction
     if not flipped:
         return 0.0
+    return _close_layer(w, h)
+
+
+@njit(**KERNEL)
+def _close_layer(w, h):  # pragma: no cover - compiled
+    """Book and score the flatness of the layer closed on the heights ``h`` (coil record
+    ``w``): once per layer, so a function of its own, called from the step."""
     std, _, _ = flatness_row(h, w.d0)
     w.last_std = std
     w.floor = h.mean()
@@ -154,33 +163,43 @@ def _track_layer(i, view, w, h):  # pragma: no cover - compiled
 
 
 def _observe_row(i, view, episode, s):  # pragma: no cover - compiled
-    """Observation of copy ``i`` (see the env docstring, "Observation Space")."""
+    """Observation of copy ``i`` (see the env docstring, "Observation Space"): the traverse's
+    position and speed here (family names), the rest in :func:`_put_observation`."""
     k = s.consts[0]
-    w = s.coil[i]
-    obs, prev, t = episode.obs, episode.prev_action, episode.t
-    key = episode.noise_key[i]
-    noise = k.noise
     x = shaft_angle(view, i) * k.metres_per_rad
-    spindle_norm = 2000.0 / 60.0 * k.spindle_cpr * _DT
-    put_obs(obs, i, 0, 2.0 * x / k.width - 1.0, key, t[i], noise)
-    put_obs(obs, i, 1, reg(view, i, R.V_IST) / _V_TRAVERSE_NORM, key, t[i], noise)
-    put_obs(obs, i, 2, w.pulses / k.decimation / spindle_norm, key, t[i], noise)
-    put_obs(obs, i, 3, w.layer / k.n_layers, key, t[i], noise)
-    put_obs(obs, i, 4, w.direction, key, t[i], noise)
-    if w.profile_changed != 0.0:  # else summary[i] is still that of h[i]
-        profile_summary_row(s.h[i], _GROUPS, w.d0, s.summary[i])
+    _put_observation(episode.obs, episode.prev_action, i, episode.t[i], episode.noise_key[i],
+                     k, s.coil[i], s.h[i], s.summary[i], 2.0 * x / k.width - 1.0,
+                     reg(view, i, R.V_IST) / _V_TRAVERSE_NORM,
+                     2000.0 / 60.0 * k.spindle_cpr * _DT)
+
+
+@njit(**KERNEL)
+def _put_observation(obs, prev, i, counter, key, k, w, h, summary, position, speed,
+                     spindle_norm):  # pragma: no cover - compiled
+    """Store copy ``i``'s observation in ``obs`` (N, obs) with noise (``key``, ``counter``)
+    and clipping: the normalised traverse ``position`` and ``speed``, the spindle speed (its
+    pulses per step over ``spindle_norm``), the coil record ``w`` and profile summary
+    ``summary`` (groups,) of the heights ``h`` (recomputed when a turn was laid), the
+    previous action ``prev[i]`` (env constants ``k``). Compiled once and called from the end
+    of a step and after a reset."""
+    noise = k.noise
+    head = (position, speed, w.pulses / k.decimation / spindle_norm, w.layer / k.n_layers,
+            w.direction)
+    for c in range(_N_FIXED_OBS):
+        put_obs(obs, i, c, head[c], key, counter, noise)
+    if w.profile_changed != 0.0:  # else summary is still that of h
+        profile_summary_row(h, _GROUPS, w.d0, summary)
         w.profile_changed = 0.0
     for g in range(_GROUPS):
-        put_obs(obs, i, _N_FIXED_OBS + g, s.summary[i, g], key, t[i], noise)
+        put_obs(obs, i, _N_FIXED_OBS + g, summary[g], key, counter, noise)
     j = _N_FIXED_OBS + _GROUPS
-    put_obs(obs, i, j, w.last_std, key, t[i], noise)
-    put_obs(obs, i, j + 1, w.layer_void / 5.0, key, t[i], noise)
-    put_obs(obs, i, j + 2, w.layer_piles / 5.0, key, t[i], noise)
-    put_obs(obs, i, j + 3, _TURN_OBS_SCALE * w.laid_pitch, key, t[i], noise)
-    put_obs(obs, i, j + 4, _TURN_OBS_SCALE * w.laid_gap, key, t[i], noise)
-    put_obs(obs, i, j + 5, 2.0 * w.laid_slide, key, t[i], noise)
+    turns = (w.last_std, w.layer_void / 5.0, w.layer_piles / 5.0,
+             _TURN_OBS_SCALE * w.laid_pitch, _TURN_OBS_SCALE * w.laid_gap, 2.0 * w.laid_slide)
+    for c in range(len(turns)):
+        put_obs(obs, i, j + c, turns[c], key, counter, noise)
+    j += len(turns)
     for a in range(prev.shape[1]):
-        put_obs(obs, i, j + 6 + a, prev[i, a], key, t[i], noise)
+        put_obs(obs, i, j + a, prev[i, a], key, counter, noise)
 
 
 def _step_begin(i, view, episode, s, actions):  # pragma: no cover - compiled
@@ -220,7 +239,7 @@ def _step_end(i, view, episode, s, actions):  # pragma: no cover - compiled
 
 
 TASK = Task("coil_winding", __file__, needs={Capability.COIL_MODE}, state=CoilWindingState,
-            figures=_figures, helpers={"_lay_turn": _lay_turn, "_track_layer": _track_layer},
+            figures=_figures, helpers={"_track_layer": _track_layer},
             begin=_step_begin, before=_spindle_before, after=_spindle_after, end=_step_end,
             observe=_observe_row)
 

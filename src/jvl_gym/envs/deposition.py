@@ -106,29 +106,33 @@ def lay_turn_row(h: np.ndarray, centres: np.ndarray, x: float, d: float, width: 
     bin_width = centres[1] - centres[0] if centres.size > 1 else width
     half = 0.5 * d
     xc = min(max(x, half), width - half)
-    if nest:
-        k_max = int(math.ceil(half / bin_width))
-        best = math.inf
-        best_x = xc
-        for j in range(2 * k_max + 1):  # shifts 0, −1, +1, −2, +2, …: ties to the nearest
-            k = (j + 1) // 2 * (1 if j % 2 == 0 else -1)
-            shift = k * bin_width
-            if abs(shift) > half + 1e-12:
-                continue
-            cand = min(max(xc + shift, half), width - half)
-            lo, hi = _span(centres, cand, half)
-            b = _top(h, lo, hi)
-            if b < best - 1e-9 * d:
-                best = b
-                best_x = cand
-        xc = best_x
-    lo, hi = _span(centres, xc, half)
-    base = _top(h, lo, hi)
+    # the places tried: the place itself and, with nesting, the shifts −1, +1, −2, +2, … bins
+    # within ±d/2 (ties to the nearest); the turn goes to the lowest, to the place itself when
+    # no height is below infinity
+    k_max = int(math.ceil(half / bin_width)) if nest else 0
+    best = math.inf
+    lo = hi = 0
+    base = math.inf
+    x_laid = xc
+    for j in range(2 * k_max + 1):
+        k = (j + 1) // 2 * (1 if j % 2 == 0 else -1)
+        shift = k * bin_width
+        if abs(shift) > half + 1e-12:
+            continue
+        cand = min(max(xc + shift, half), width - half)
+        c_lo, c_hi = _span(centres, cand, half)
+        top = _top(h, c_lo, c_hi)
+        lower = top < best - 1e-9 * d
+        if lower or j == 0:
+            lo, hi, base = c_lo, c_hi, top
+        if lower:
+            best = top
+            x_laid = cand
     void = 0.0
     for b in range(lo, hi):
         void += base - h[b]
         h[b] = base + d
-    return base, void * bin_width, xc
+    return base, void * bin_width, x_laid
 
 
 @njit(**KERNEL)

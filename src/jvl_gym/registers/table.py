@@ -286,9 +286,20 @@ class RegisterTable:
             self.raw_min_array[r.number] = r.raw_min
             self.raw_max_array[r.number] = r.raw_max
             self.default_raw_array[r.number] = r.default_raw
+        self._freeze()
+
+    def _freeze(self) -> None:
+        """Make the per-number arrays read-only."""
         for arr in (self.raw_min_array, self.raw_max_array, self.default_raw_array,
                     self.fmt_code_array):
             arr.flags.writeable = False
+
+    def __setstate__(self, state: dict) -> None:
+        """Unpickle (a pickled motor array or env carries its table): the arrays read-only
+        again, since pickle restores them writable and numba types a read-only array apart,
+        so every compiled step that reads one would compile a second time."""
+        self.__dict__.update(state)
+        self._freeze()
 
     @property
     def last(self) -> int:
