@@ -25,6 +25,7 @@ from .task import (
     set_load_torque,
     set_pulse_counts,
     shaft_angle,
+    zero_rows,
 )
 from .web import load_cell_s, span_step_s, tension_s, winder_radius_s
 
@@ -316,7 +317,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
         m = self.motors
         fam = self.fam
         gearf1, load = np.empty(idx.size), np.empty(idx.size)
-        self.state.line[idx] = 0
+        zero_rows(self.state.line, idx)
         _reset_rows(idx, self.state.line, self.gear, draws["ea"], draws["thickness"],
                     draws["r0"], draws["span"], draws["tension_ref"], self.master_radius,
                     self.gear_ratio, self.master_counts_per_rev, fam.constants.COUNTS_PER_REV,
