@@ -24,8 +24,7 @@ __all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BI
            "set_reg", "shaft_angle", "set_analog_volts", "set_load_torque", "set_pulse_counts",
            "POSITION_MODE", "VELOCITY_MODE", "ANALOG_TORQUE_MODE", "ANALOG_GEAR_MODE",
            "rpm_to_v_soll", "SPEED_PI", "SPEED_FEEDBACK", "GEARF", "AG_CENTRE_VOLTS",
-           "AG_SPAN_VOLTS", "AG_CENTRE_FACTOR", "KVOUT_FROM_LOAD",
-           "COPPER_COLUMN"]
+           "AG_SPAN_VOLTS", "AG_CENTRE_FACTOR", "KVOUT_FROM_LOAD", "COPPER_COLUMN"]
 
 #: the family's key, and the motor type of a task when none is given
 FAMILY_KEY = "mac800"
