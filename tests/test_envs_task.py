@@ -15,7 +15,7 @@ import pytest
 import jvl_gym  # noqa: F401
 from jvl_gym.envs import ENV_IDS
 from jvl_gym.envs.registration import vector_class
-from jvl_gym.envs.task import Task, record, zero_rows
+from jvl_gym.envs.task import Task, record
 from jvl_gym.families import Capability, UnsupportedOperation, families, family, register_family
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
@@ -57,16 +57,6 @@ def test_a_record_names_its_fields_in_order() -> None:
     dtype = record(target=np.int64, direction=float)
     assert dtype.names == ("target", "direction")
     assert dtype["target"] == np.int64 and dtype["direction"] == np.float64
-
-
-def test_zero_rows_zeroes_every_field_of_those_rows_as_numpy_does() -> None:
-    table = np.zeros(4, dtype=record(count=np.int64, level=float, flag=np.bool_))
-    table["count"], table["level"], table["flag"] = [1, 2, 3, 4], [-0.5, 1.5, 2.5, 3.5], True
-    expected = table.copy()
-    expected[[0, 2]] = 0
-    zero_rows(table, np.array([2, 0]))
-    assert table.tobytes() == expected.tobytes()
-    assert table["count"].tolist() == [0, 2, 0, 4]
 
 
 def test_the_env_reads_and_writes_the_state_the_compiled_step_sees() -> None:

@@ -26,7 +26,6 @@ from .task import (
     set_pulse_counts,
     set_reg,
     shaft_angle,
-    zero_rows,
 )
 
 __all__ = ["CoilWindingEnv", "CoilWindingVectorEnv", "CoilWindingState"]
@@ -361,7 +360,7 @@ class CoilWindingVectorEnv(MotorVectorEnv):
                            np.zeros(idx.size))
         gearf1, a_soll = np.empty(idx.size), np.empty(idx.size)
         half = np.empty(idx.size, dtype=np.int64)
-        zero_rows(self.state.coil, idx)
+        self.state.coil[idx] = 0
         self.h[idx] = 0.0
         _reset_rows(idx, self.state.coil, self.h, draws["wire_diameter"], draws["diameter_bias"],
                     draws["diameter_variation"], draws["a_soll"], u, self._counts_per_m,

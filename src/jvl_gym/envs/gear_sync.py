@@ -25,7 +25,6 @@ from .task import (
     set_load_torque,
     set_pulse_counts,
     shaft_angle,
-    zero_rows,
 )
 from .web import load_cell_s, span_step_s, tension_s, winder_radius_s
 
@@ -317,7 +316,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
         m = self.motors
         fam = self.fam
         gearf1, load = np.empty(idx.size), np.empty(idx.size)
-        zero_rows(self.state.line, idx)
+        self.state.line[idx] = 0
         _reset_rows(idx, self.state.line, self.gear, draws["ea"], draws["thickness"],
                     draws["r0"], draws["span"], draws["tension_ref"], self.master_radius,
                     self.gear_ratio, self.master_counts_per_rev, fam.constants.COUNTS_PER_REV,

@@ -39,9 +39,9 @@ from ..engine import TaskDriver
 from ..engine.specialize import specialise
 from ..families import Capability, Family, UnsupportedOperation, families, family
 
-__all__ = ["Task", "record", "zero_rows", "c", "R", "reg", "set_reg", "shaft_angle",
-           "set_analog_volts", "set_load_torque", "set_pulse_counts", "coil_direction",
-           "rotor_speed", "copper_energy", "lost_steps", "ERROR_BITS"]
+__all__ = ["Task", "record", "c", "R", "reg", "set_reg", "shaft_angle", "set_analog_volts",
+           "set_load_torque", "set_pulse_counts", "coil_direction", "rotor_speed",
+           "copper_energy", "lost_steps", "ERROR_BITS"]
 
 # names bound per family by ``Task``; defined here only for linters and readers
 c: Any = None
@@ -68,13 +68,6 @@ def record(**fields: Any) -> np.dtype:
     write by name (``state.copies[i].target``) and the Python side by column
     (``state.copies["target"]``)."""
     return np.dtype([(name, np.dtype(kind)) for name, kind in fields.items()])
-
-
-def zero_rows(table: np.ndarray, idx: np.ndarray) -> None:
-    """Set every field of rows ``idx`` (M,) of the (N,) :func:`record` array ``table`` to 0,
-    through a byte view of its rows (numpy assigns a scalar to each field of a structured
-    array in turn)."""
-    table.view(np.uint8).reshape(table.shape[0], table.dtype.itemsize)[idx] = 0
 
 
 def _as_state(args):  # pragma: no cover - compiled
