@@ -80,6 +80,20 @@ def test_single_and_vector_envs_report_the_same_statistics(env_id: str) -> None:
         env.close()
 
 
+@pytest.mark.parametrize("env_id", [env_id for env_id in ENV_IDS
+                                    if "copper_loss" in vector_class(env_id).episode_stats])
+def test_copper_loss_is_the_motors_copper_energy_account(env_id: str) -> None:
+    venv = gym.make_vec(env_id, num_envs=3, vectorization_mode="vector_entry_point")
+    venv.reset(seed=4)
+    for a in np.random.default_rng(4).uniform(-1, 1, (10, *venv.action_space.shape)):
+        venv.step(a)
+    env = venv.unwrapped
+    idx = np.array([2, 0])
+    expected = env.motors.energy["copper"][idx]
+    assert (expected > 0).all()
+    assert env.copper_loss(idx).tolist() == expected.tolist()
+
+
 def test_positioning_firmware_loop_settles_and_no_torque_never_does() -> None:
     env_id = "jvl_gym/Positioning-v0"
     n = 4

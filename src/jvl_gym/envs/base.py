@@ -266,10 +266,12 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
     def copper_loss(self, idx: np.ndarray) -> np.ndarray:
         """Copper loss of copies ``idx`` since their last reset [J], (M,): the motors' "copper"
         energy account (kept from power-on; a reset powers a copy's motor on), NaN on a family
-        without energy accounts (:attr:`~jvl_gym.families.Capability.ENERGY`)."""
+        without energy accounts (:attr:`~jvl_gym.families.Capability.ENERGY`). Read from the
+        account's column (the family's task interface, ``COPPER_COLUMN``) for these copies
+        alone: ``MotorArray.energy`` copies every account of every motor."""
         if not self.fam.supports(Capability.ENERGY):
             return np.full(idx.size, np.nan)
-        return self.motors.energy["copper"][idx]
+        return self.motors.state[idx, self.fam.task.COPPER_COLUMN]
 
     def _kvout_for_load(self, idx: np.ndarray, inertia_ratio: np.ndarray) -> None:
         """Set KVOUT = 1 + ``inertia_ratio`` (J_load/J_m, (M,)) of copies ``idx`` when the

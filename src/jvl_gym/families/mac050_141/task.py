@@ -26,7 +26,8 @@ __all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BI
            "set_reg", "shaft_angle", "coil_direction", "set_analog_volts",
            "set_load_torque", "set_pulse_counts", "POSITION_MODE", "VELOCITY_MODE",
            "ANALOG_TORQUE_MODE", "ANALOG_GEAR_MODE", "rpm_to_v_soll", "SPEED_PI", "GEARF",
-           "AG_CENTRE_VOLTS", "AG_SPAN_VOLTS", "AG_CENTRE_FACTOR", "KVOUT_FROM_LOAD"]
+           "AG_CENTRE_VOLTS", "AG_SPAN_VOLTS", "AG_CENTRE_FACTOR", "KVOUT_FROM_LOAD",
+           "COPPER_COLUMN"]
 
 
 #: the family's key, and the motor type of a task when none is given
@@ -56,6 +57,9 @@ AG_SPAN_VOLTS = _c.ANINP_VOLTS
 #: whether a task sets KVOUT = (J_m + J_load)/J_m for its load (manual 3.2.13): no, the tasks
 #: run the default setups as they are
 KVOUT_FROM_LOAD = False
+#: the motors' state column of the copper energy account (``MotorArray.energy["copper"]``),
+#: which an env reads alone for the copies whose episode ends
+COPPER_COLUMN = _L.S_E_COPPER
 #: the AG factor at AG_CENTRE_VOLTS, as the firmware computes it (ANINP = 0)
 AG_CENTRE_FACTOR = float(_analog_gear_factor.py_func(_np.zeros(_TABLE.last + 1, dtype=_np.int64)))
 

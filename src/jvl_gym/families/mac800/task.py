@@ -24,7 +24,7 @@ __all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BI
            "set_reg", "shaft_angle", "set_analog_volts", "set_load_torque", "set_pulse_counts",
            "POSITION_MODE", "VELOCITY_MODE", "ANALOG_TORQUE_MODE", "ANALOG_GEAR_MODE",
            "rpm_to_v_soll", "SPEED_PI", "SPEED_FEEDBACK", "GEARF", "AG_CENTRE_VOLTS",
-           "AG_SPAN_VOLTS", "AG_CENTRE_FACTOR", "KVOUT_FROM_LOAD"]
+           "AG_SPAN_VOLTS", "AG_CENTRE_FACTOR", "KVOUT_FROM_LOAD", "COPPER_COLUMN"]
 
 #: the family's key, and the motor type of a task when none is given
 FAMILY_KEY = "mac800"
@@ -61,6 +61,9 @@ AG_SPAN_VOLTS = 1.0
 #: (configs/setups/MAC800.yaml) and is too slow to follow a gear under a load of several rotor
 #: inertias without it (decision)
 KVOUT_FROM_LOAD = True
+#: the motors' state column of the copper energy account (``MotorArray.energy["copper"]``),
+#: which an env reads alone for the copies whose episode ends
+COPPER_COLUMN = _L.S_E_COPPER
 
 
 def _ag_centre_factor() -> float:

@@ -25,7 +25,7 @@ from .units import COUNTS_PER_REV as _CPR
 __all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BITS", "reg",
            "set_reg", "rotor_angle", "rotor_speed", "lost_steps", "copper_energy",
            "load_energy", "set_load_torque", "set_load_inertia", "set_supply_volts",
-           "set_pulse_counts", "set_digital_inputs"]
+           "set_pulse_counts", "set_digital_inputs", "COPPER_COLUMN"]
 
 #: the family's key, and the motor type of a task when none is given
 FAMILY_KEY = "mis"
@@ -34,6 +34,9 @@ DEFAULT_MOTOR_TYPE = "MIS232"
 TERMINAL_ERRORS = (("FOLLOW", _c.ERR_FOLLOW), ("POSITION_LIMIT", _c.ERR_POSITION_LIMIT),
                    ("LOW_BUS", _c.ERR_LOW_BUS))
 ERROR_BITS = _c.ERR_FOLLOW | _c.ERR_POSITION_LIMIT | _c.ERR_LOW_BUS
+#: the motors' state column of the copper energy account (``MotorArray.energy["copper"]``),
+#: which an env reads alone for the copies whose episode ends
+COPPER_COLUMN = _L.S_E_COPPER
 
 
 #: register values, saturated stores (P_SOLL in a turn-table mode, COMMAND … go through
