@@ -30,7 +30,7 @@ import cmath
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from scipy import optimize
@@ -120,6 +120,40 @@ def position_model(t: np.ndarray, alpha: float, beta: float, delay: float, *,
     return spec.counts_per_rad * alpha * term
 
 
+class CurrentLoopModel(NamedTuple):
+    """The coefficients of the current loop, coil and rotor model that
+    :func:`electrical_position` steps (and the rounded loop of
+    :mod:`tuning.loop_quantisation`), from the motor data and the current filter registers."""
+
+    h: float  #: inner (current-loop) sample time [s]
+    per_outer: int  #: inner samples per outer sample
+    R: float  #: phase resistance [ohm]
+    decay: float  #: the coil's decay per inner sample, exp(−R·h/L)
+    k_u: float  #: phase volts per PWM count [V]
+    amps: float  #: phase amperes per current count [A]
+    pp: int  #: pole pairs
+    lam: float  #: flux linkage [V·s/rad]
+    kt: float  #: torque constant [N·m/A]
+    x2: float  #: KIFX2
+    x1: float  #: KIFX1
+    y1: float  #: KIFY1
+    y0: float  #: KIFY0
+    b1: float  #: KIB1
+    b0: float  #: KIB0
+
+
+def current_loop_model(motor: MotorData, current_regs: Mapping[str, float]) -> CurrentLoopModel:
+    """The :class:`CurrentLoopModel` of ``motor`` (its family's sample times) with the current
+    filter registers ``current_regs`` (KIFX2, KIFX1, KIFY1, KIFY0, KIB1, KIB0)."""
+    fam = motor.family
+    h = fam.inner_dt
+    R, L = motor.R_phase, motor.L_phase
+    return CurrentLoopModel(
+        h, int(round(fam.outer_dt / h)), R, math.exp(-R * h / L), motor.volts_per_count,
+        motor.amps_per_count, motor.pole_pairs, motor.flux_linkage, motor.torque_constant,
+        *(float(current_regs[k]) for k in ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")))
+
+
 def electrical_position(n: int, t_soll: float, J: float, b: float, tc: float,
                         motor: MotorData, current_regs: Mapping[str, float],
                         phase_comp: float = 0.0) -> np.ndarray:
@@ -138,16 +172,9 @@ def electrical_position(n: int, t_soll: float, J: float, b: float, tc: float,
     Returns P(k) − P(0) at the n outer samples, shape (n,).
     """
     fam = motor.family
-    h = fam.inner_dt
-    per_outer = int(round(fam.outer_dt / fam.inner_dt))
     counts_per_rad = fam.counts_per_rad
-    R, L = motor.R_phase, motor.L_phase
-    a = math.exp(-R * h / L)
-    k_u, amps, pp = motor.volts_per_count, motor.amps_per_count, motor.pole_pairs
-    lam, kt = motor.flux_linkage, motor.torque_constant
-    x2, x1 = current_regs["KIFX2"], current_regs["KIFX1"]
-    y1, y0 = current_regs["KIFY1"], current_regs["KIFY0"]
-    b1, b0 = current_regs["KIB1"], current_regs["KIB0"]
+    (h, per_outer, R, a, k_u, amps, pp, lam, kt,
+     x2, x1, y1, y0, b1, b0) = current_loop_model(motor, current_regs)
     d = int(motor.pwm_delay)
     amp = motor.amplitude * t_soll / fam.amplitude_vf
     adv_per_rad_s = pp * h * phase_comp  # electrical advance [rad] per rad/s of shaft speed

@@ -28,7 +28,7 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from .identify_mechanics import electrical_position
+from .identify_mechanics import current_loop_model, electrical_position
 from .models import MotorData
 from .sixth_order import CONSTANTS as _c
 
@@ -75,18 +75,11 @@ def quantised_position(n: int, vf: float, J: float, motor: MotorData,
         P(k) − P(0), shape (K, n).
     """
     fam = motor.family
-    h = fam.inner_dt
-    per_outer = int(round(fam.outer_dt / h))
     turn = float(_c.ELDEG_PER_TURN)
     adc, pwm = float(_c.ADC_FULL), float(_c.PWM_FULL)
     q = _rnd if rounding else (lambda x: x)
-    R, L = motor.R_phase, motor.L_phase
-    a = math.exp(-R * h / L)
-    k_u, amps, pp = motor.volts_per_count, motor.amps_per_count, motor.pole_pairs
-    lam, kt = motor.flux_linkage, motor.torque_constant
-    x2, x1 = current_regs["KIFX2"], current_regs["KIFX1"]
-    y1, y0 = current_regs["KIFY1"], current_regs["KIFY0"]
-    b1, b0 = current_regs["KIB1"], current_regs["KIB0"]
+    (h, per_outer, R, a, k_u, amps, pp, lam, kt,
+     x2, x1, y1, y0, b1, b0) = current_loop_model(motor, current_regs)
     delay = int(motor.pwm_delay) > 0
     amp = abs(vf) * motor.amplitude / fam.amplitude_vf
     quarter = (turn / 4.0) if vf >= 0 else -(turn / 4.0)
