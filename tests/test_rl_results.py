@@ -34,10 +34,10 @@ def test_every_env_and_family_is_configured_and_families_come_from_the_env():
             cfg = rl_config(env_id, family=key)
             assert cfg["eval"]["n_seeds"] >= 5
             assert (env_id, key, cfg["algo"]) in runs
-    # the second algorithm on every task with more than one step per episode
+    # a second algorithm on every task and family (every action space is continuous)
     for env_id in ENV_IDS:
-        if env_id != "jvl_gym/FilterTuning-v0":
-            assert (env_id, env_families(env_id)[0], "SAC") in runs
+        for key in env_families(env_id):
+            assert (env_id, key, "SAC") in runs
     # a family other than the env's first runs that family's default motor type
     assert rl_config("jvl_gym/GearSync-v0", family="mac800")["env_kwargs"] == {
         "motor_type": "MAC800"}
@@ -110,13 +110,42 @@ def test_the_page_is_deterministic(pages):
     (["evaluate", "--all", "--out", "x", "--max-steps", "0"], "max-steps"),
     (["evaluate", "jvl_gym/CoilWinding-v0", "--family", "mac800"], "mac050_141"),
     (["train", "jvl_gym/Positioning-v0", "--family", "mis"], "mac800"),
-    (["train", "jvl_gym/FilterTuning-v0", "--algo", "sac"], "PPO"),
+    (["train", "jvl_gym/FilterTuning-v0", "--algo", "td3"], "PPO, SAC"),
 ])
 def test_bad_options_are_one_line_errors(capsys, tmp_path, monkeypatch, args, words):
     monkeypatch.chdir(tmp_path)
     code, _, err = _run(args, capsys)
     assert words in _one_line_error(code, err)
     assert not (tmp_path / "x").exists()
+
+
+def test_a_family_overrides_an_algorithm_for_itself_alone(tmp_path):
+    """Entry, then its ``algos`` section, then the family's overrides, then the family's own
+    ``algos`` section; a bad ``algos`` section is refused with the file and place named."""
+    env = "jvl_gym/GearSync-v0"
+    (tmp_path / "g.yml").write_text(
+        f"{env}:\n  total_timesteps: 100\n  n_envs: 2\n  hyperparams: {{n_steps: 8}}\n"
+        "  families:\n    mac050_141: {}\n"
+        "    mac800:\n      total_timesteps: 300\n"
+        "      algos: {SAC: {total_timesteps: 400, hyperparams: {buffer_size: 50}}}\n"
+        "  algos: {SAC: {total_timesteps: 200, n_envs: 4, hyperparams: {buffer_size: 10}}}\n")
+    got = {(f, a): rl_config(env, tmp_path, family=f, algo=a)
+           for f in ("mac050_141", "mac800") for a in ("PPO", "SAC")}
+    assert {k: (c["total_timesteps"], c["n_envs"], c["hyperparams"]) for k, c in got.items()} == {
+        ("mac050_141", "PPO"): (100, 2, {"n_steps": 8}),
+        ("mac050_141", "SAC"): (200, 4, {"buffer_size": 10}),
+        ("mac800", "PPO"): (300, 2, {"n_steps": 8}),
+        ("mac800", "SAC"): (400, 4, {"buffer_size": 50})}
+    assert got[("mac800", "SAC")]["env_kwargs"] == {"motor_type": "MAC800"}
+    for bad, words in [("{TD3: {}}", "TD3 is not one of PPO, SAC"),
+                       ("{SAC: {gamma: 0.9}}", "unknown keys ['gamma']"),
+                       ("[SAC]", "expected a mapping")]:
+        (tmp_path / "g.yml").write_text(
+            f"{env}:\n  families:\n    mac800:\n      algos: {bad}\n"
+            "  algos: {SAC: {}}\n")
+        with pytest.raises(ValueError, match="families: mac800") as info:
+            rl_config(env, tmp_path, family="mac800")
+        assert words in str(info.value)
 
 
 def test_a_checkpoint_is_the_model_of_a_training_that_long(tmp_path):
