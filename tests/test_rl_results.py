@@ -148,29 +148,32 @@ def test_a_family_overrides_an_algorithm_for_itself_alone(tmp_path):
         assert words in str(info.value)
 
 
-def test_a_checkpoint_is_the_model_of_a_training_that_long(tmp_path):
+@pytest.mark.parametrize("algo, hyper", [
+    ("PPO", "{n_steps: 32, batch_size: 64, n_epochs: 1, policy_kwargs: {net_arch: [8]}}"),
+    ("SAC", "{learning_starts: 32, batch_size: 16, buffer_size: 1000, gradient_steps: 2, "
+            "policy_kwargs: {net_arch: [8]}}"),
+])
+def test_a_checkpoint_is_the_model_of_a_training_that_long(tmp_path, algo, hyper):
     """The checkpoint after n steps of a longer training equals a training of n steps."""
     import torch
-    from stable_baselines3 import PPO
 
-    from jvl_gym.rl.train import checkpoint_path, train
+    from jvl_gym.rl.train import algo_class, checkpoint_path, train
 
     env = "jvl_gym/Positioning-v0"
     cfg = tmp_path / "cfg"
     cfg.mkdir()
     (cfg / "p.yml").write_text(
-        f"{env}:\n  n_envs: 4\n  total_timesteps: 384\n"
-        "  env_kwargs: {max_episode_steps: 20}\n"
-        "  hyperparams: {n_steps: 32, batch_size: 64, n_epochs: 1, "
-        "policy_kwargs: {net_arch: [8]}}\n")
+        f"{env}:\n  algo: {algo}\n  n_envs: 4\n  total_timesteps: 384\n"
+        f"  env_kwargs: {{max_episode_steps: 20}}\n  hyperparams: {hyper}\n")
     long = train(env, tmp_path / "long", progress_bar=False, config_dir=cfg,
                  checkpoint_every=256)
     short = train(env, tmp_path / "short", total_timesteps=256,
                   progress_bar=False, config_dir=cfg)
     ckpt = checkpoint_path(long, 256)
     assert ckpt.is_file() and not checkpoint_path(long, 128).exists()
-    a = PPO.load(ckpt, device="cpu").policy.state_dict()
-    b = PPO.load(short, device="cpu").policy.state_dict()
-    c = PPO.load(long, device="cpu").policy.state_dict()
+    load = algo_class(algo).load
+    a = load(ckpt, device="cpu").policy.state_dict()
+    b = load(short, device="cpu").policy.state_dict()
+    c = load(long, device="cpu").policy.state_dict()
     assert all(torch.equal(a[k], b[k]) for k in a)
     assert not all(torch.equal(a[k], c[k]) for k in a)
