@@ -34,10 +34,10 @@ def test_every_env_and_family_is_configured_and_families_come_from_the_env():
             cfg = rl_config(env_id, family=key)
             assert cfg["eval"]["n_seeds"] >= 5
             assert (env_id, key, cfg["algo"]) in runs
-    # the second algorithm on every task with more than one step per episode
+    # a second algorithm on every task and family (every action space is continuous)
     for env_id in ENV_IDS:
-        if env_id != "jvl_gym/FilterTuning-v0":
-            assert (env_id, env_families(env_id)[0], "SAC") in runs
+        for key in env_families(env_id):
+            assert (env_id, key, "SAC") in runs
     # a family other than the env's first runs that family's default motor type
     assert rl_config("jvl_gym/GearSync-v0", family="mac800")["env_kwargs"] == {
         "motor_type": "MAC800"}
@@ -110,7 +110,7 @@ def test_the_page_is_deterministic(pages):
     (["evaluate", "--all", "--out", "x", "--max-steps", "0"], "max-steps"),
     (["evaluate", "jvl_gym/CoilWinding-v0", "--family", "mac800"], "mac050_141"),
     (["train", "jvl_gym/Positioning-v0", "--family", "mis"], "mac800"),
-    (["train", "jvl_gym/FilterTuning-v0", "--algo", "sac"], "PPO"),
+    (["train", "jvl_gym/FilterTuning-v0", "--algo", "td3"], "PPO, SAC"),
 ])
 def test_bad_options_are_one_line_errors(capsys, tmp_path, monkeypatch, args, words):
     monkeypatch.chdir(tmp_path)
@@ -119,29 +119,61 @@ def test_bad_options_are_one_line_errors(capsys, tmp_path, monkeypatch, args, wo
     assert not (tmp_path / "x").exists()
 
 
-def test_a_checkpoint_is_the_model_of_a_training_that_long(tmp_path):
+def test_a_family_overrides_an_algorithm_for_itself_alone(tmp_path):
+    """Entry, then its ``algos`` section, then the family's overrides, then the family's own
+    ``algos`` section; a bad ``algos`` section is refused with the file and place named."""
+    env = "jvl_gym/GearSync-v0"
+    (tmp_path / "g.yml").write_text(
+        f"{env}:\n  total_timesteps: 100\n  n_envs: 2\n  hyperparams: {{n_steps: 8}}\n"
+        "  families:\n    mac050_141: {}\n"
+        "    mac800:\n      total_timesteps: 300\n"
+        "      algos: {SAC: {total_timesteps: 400, hyperparams: {buffer_size: 50}}}\n"
+        "  algos: {SAC: {total_timesteps: 200, n_envs: 4, hyperparams: {buffer_size: 10}}}\n")
+    got = {(f, a): rl_config(env, tmp_path, family=f, algo=a)
+           for f in ("mac050_141", "mac800") for a in ("PPO", "SAC")}
+    assert {k: (c["total_timesteps"], c["n_envs"], c["hyperparams"]) for k, c in got.items()} == {
+        ("mac050_141", "PPO"): (100, 2, {"n_steps": 8}),
+        ("mac050_141", "SAC"): (200, 4, {"buffer_size": 10}),
+        ("mac800", "PPO"): (300, 2, {"n_steps": 8}),
+        ("mac800", "SAC"): (400, 4, {"buffer_size": 50})}
+    assert got[("mac800", "SAC")]["env_kwargs"] == {"motor_type": "MAC800"}
+    for bad, words in [("{TD3: {}}", "TD3 is not one of PPO, SAC"),
+                       ("{SAC: {gamma: 0.9}}", "unknown keys ['gamma']"),
+                       ("[SAC]", "expected a mapping")]:
+        (tmp_path / "g.yml").write_text(
+            f"{env}:\n  families:\n    mac800:\n      algos: {bad}\n"
+            "  algos: {SAC: {}}\n")
+        with pytest.raises(ValueError, match="families: mac800") as info:
+            rl_config(env, tmp_path, family="mac800")
+        assert words in str(info.value)
+
+
+@pytest.mark.parametrize("algo, hyper", [
+    ("PPO", "{n_steps: 32, batch_size: 64, n_epochs: 1, policy_kwargs: {net_arch: [8]}}"),
+    ("SAC", "{learning_starts: 32, batch_size: 16, buffer_size: 1000, gradient_steps: 2, "
+            "policy_kwargs: {net_arch: [8]}}"),
+])
+def test_a_checkpoint_is_the_model_of_a_training_that_long(tmp_path, algo, hyper):
     """The checkpoint after n steps of a longer training equals a training of n steps."""
     import torch
-    from stable_baselines3 import PPO
 
-    from jvl_gym.rl.train import checkpoint_path, train
+    from jvl_gym.rl.train import algo_class, checkpoint_path, train
 
     env = "jvl_gym/Positioning-v0"
     cfg = tmp_path / "cfg"
     cfg.mkdir()
     (cfg / "p.yml").write_text(
-        f"{env}:\n  n_envs: 4\n  total_timesteps: 384\n"
-        "  env_kwargs: {max_episode_steps: 20}\n"
-        "  hyperparams: {n_steps: 32, batch_size: 64, n_epochs: 1, "
-        "policy_kwargs: {net_arch: [8]}}\n")
+        f"{env}:\n  algo: {algo}\n  n_envs: 4\n  total_timesteps: 384\n"
+        f"  env_kwargs: {{max_episode_steps: 20}}\n  hyperparams: {hyper}\n")
     long = train(env, tmp_path / "long", progress_bar=False, config_dir=cfg,
                  checkpoint_every=256)
     short = train(env, tmp_path / "short", total_timesteps=256,
                   progress_bar=False, config_dir=cfg)
     ckpt = checkpoint_path(long, 256)
     assert ckpt.is_file() and not checkpoint_path(long, 128).exists()
-    a = PPO.load(ckpt, device="cpu").policy.state_dict()
-    b = PPO.load(short, device="cpu").policy.state_dict()
-    c = PPO.load(long, device="cpu").policy.state_dict()
+    load = algo_class(algo).load
+    a = load(ckpt, device="cpu").policy.state_dict()
+    b = load(short, device="cpu").policy.state_dict()
+    c = load(long, device="cpu").policy.state_dict()
     assert all(torch.equal(a[k], b[k]) for k in a)
     assert not all(torch.equal(a[k], c[k]) for k in a)

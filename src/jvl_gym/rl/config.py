@@ -13,6 +13,11 @@ Each entry holds ``algo`` (PPO, SAC or TD3), ``n_envs``, ``total_timesteps``, ``
 - ``algos``: algorithm name (one of :data:`ALGOS`) -> overrides of the entry for that
   algorithm (its ``hyperparams``, ``n_envs`` ...), trained on every configured family; the
   entry's own ``algo`` is the default one.
+
+A family's overrides may hold ``algos`` of their own: overrides for that algorithm on that
+family only. They apply in this order, each over the one before: the entry, its ``algos``
+section of the algorithm, the family's overrides, the family's ``algos`` section of the
+algorithm.
 """
 
 from __future__ import annotations
@@ -67,6 +72,18 @@ def _check_keys(where: str, cfg: Any, allowed: set[str]) -> None:
         raise ValueError(f"{where}: unknown keys {sorted(unknown)}")
 
 
+def _check_algos(where: str, algos: Any, names: tuple[str, ...] = ALGOS) -> None:
+    """An ``algos`` section: algorithm names (of ``names``) -> overrides."""
+    if algos is None:
+        return
+    if not isinstance(algos, dict):
+        raise ValueError(f"{where}: algos: expected a mapping, got {type(algos).__name__}")
+    for name, over in algos.items():
+        if str(name).upper() not in names:
+            raise ValueError(f"{where}: algos: {name} is not one of {', '.join(names)}")
+        _check_keys(f"{where}: algos: {name}", over or {}, set(_DEFAULTS))
+
+
 def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
     out = {**base, **over}
     out["eval"] = {**base.get("eval", {}), **over.get("eval", {})}
@@ -86,13 +103,13 @@ def load_rl_configs(directory: str | Path | None = None) -> dict[str, dict[str, 
             if env_id in out:
                 raise ValueError(f"{path}: {env_id} is configured twice")
             _check_keys(f"{path}: {env_id}", cfg, set(_DEFAULTS) | set(_NESTED))
-            for name in _NESTED:
-                for key, over in (cfg.get(name) or {}).items():
-                    _check_keys(f"{path}: {env_id}: {name}: {key}", over or {}, set(_DEFAULTS))
-            for name in cfg.get("algos") or {}:
-                if str(name).upper() not in ALGOS:
-                    raise ValueError(f"{path}: {env_id}: algos: {name} is not one of "
-                                     f"{', '.join(ALGOS)}")
+            _check_algos(f"{path}: {env_id}", cfg.get("algos"))
+            trained = tuple(str(a).upper() for a in
+                            (cfg.get("algo", _DEFAULTS["algo"]), *(cfg.get("algos") or {})))
+            for key, over in (cfg.get("families") or {}).items():
+                where = f"{path}: {env_id}: families: {key}"
+                _check_keys(where, over or {}, set(_DEFAULTS) | {"algos"})
+                _check_algos(where, (over or {}).get("algos"), trained)
             if cfg.get("algo", _DEFAULTS["algo"]) not in ALGOS:
                 raise ValueError(f"{path}: {env_id}: algo must be one of {', '.join(ALGOS)}")
             out[env_id] = _merge(_DEFAULTS, cfg)
@@ -129,8 +146,10 @@ def rl_config(env_id: str, directory: str | Path | None = None, *, family: str |
     if name not in algos:
         raise KeyError(f"no {name} config for {env_id}; configured: {', '.join(algos)}")
     base = {k: v for k, v in entry.items() if k not in _NESTED}
-    cfg = _merge(_merge(base, {**algos[name], "algo": name}),
-                 (entry.get("families") or {}).get(key) or {})
+    fam = dict((entry.get("families") or {}).get(key) or {})
+    fam_algos = {str(a).upper(): over or {} for a, over in (fam.pop("algos", None) or {}).items()}
+    cfg = _merge(_merge(_merge(base, {**algos[name], "algo": name}), fam),
+                 fam_algos.get(name, {}))
     kwargs = dict(cfg["env_kwargs"])
     if kwargs.get("motor_type") == "all":
         from ..families import family as family_record
