@@ -15,7 +15,7 @@ from jvl_gym.envs import ENV_IDS  # noqa: E402
 from jvl_gym.envs.registration import vector_class  # noqa: E402
 from jvl_gym.families import family  # noqa: E402
 from jvl_gym.rl.config import env_families, rl_config, rl_runs  # noqa: E402
-from jvl_gym.rl.train import SHIPPED_DIR, log_path, model_path  # noqa: E402
+from jvl_gym.rl.train import SHIPPED_DIR, log_path, model_path, training_log  # noqa: E402
 
 TINY = ["--seeds", "1", "--episodes", "2", "--max-steps", "6"]
 
@@ -96,6 +96,16 @@ def test_the_page_has_every_env_and_family_with_baseline_and_random(pages):
     assert "](results/StepperIndexing-v0-mis-ppo.monitor.png)" in page
     assert "episodes cut at 6 steps" in page
     assert "time limit" in page  # every 6-step episode of the longer tasks is truncated
+
+
+def test_every_shipped_policy_has_its_learning_curve_on_the_page(pages):
+    shipped = [model_path(SHIPPED_DIR, e, f, a) for e, f, a in rl_runs()]
+    shipped = [m for m in shipped if m.is_file()]
+    assert len(shipped) >= 16
+    for model in shipped:
+        log = training_log(model)
+        assert log is not None and log.name.endswith(".monitor.csv.gz"), model
+        assert f"](results/{log_path(model).stem}.png)" in pages[0], model
 
 
 def test_the_page_is_deterministic(pages):

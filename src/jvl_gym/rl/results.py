@@ -4,7 +4,8 @@ learning-curve plot per training whose log exists.
 
 The envs come from the registration (``jvl_gym.envs.ENV_IDS``), their families from each env's
 ``supported_families()``, the trainings from ``configs/rl`` (:func:`.config.rl_runs`), the
-models from ``RUNS`` (what ``jvl-gym train`` writes) or else the package's shipped policies.
+models from ``RUNS`` (what ``jvl-gym train`` writes) or else the package's shipped policies,
+whose training logs are shipped beside them.
 Per task, ``configs/rl/notes.md`` (a ``## <env id>`` section each) gives the notes. The page
 holds nothing but what the evaluation computes from the seeds, so two runs on the same models
 write the same page.
@@ -22,7 +23,7 @@ import numpy as np
 from ..config import configs_dir
 from .config import env_families, rl_config, rl_runs
 from .evaluate import ControllerResult, evaluate_controllers, held_out_seeds
-from .train import SHIPPED_DIR, log_path, model_path
+from .train import SHIPPED_DIR, log_path, model_path, training_log
 
 __all__ = ["Row", "evaluate_all", "write_page", "plot_curve", "read_notes"]
 
@@ -124,7 +125,8 @@ def _mean(values: list[float]) -> str:
 
 
 def plot_curve(log: str | Path, out: str | Path, title: str) -> Path:
-    """Episode return against environment steps from a training log (:func:`.train.log_path`):
+    """Episode return against environment steps from a training log (:func:`.train.log_path`,
+    plain or gzipped):
     each episode and the running mean of 100; written as PNG to ``out``."""
     import matplotlib
 
@@ -222,9 +224,10 @@ def write_page(rows: list[Row], out_dir: str | Path, runs: str | Path = "runs",
             lines.append("")
             for algo in (*row.sources, *row.untrained):
                 for base_dir in (Path(runs), SHIPPED_DIR):
-                    log = log_path(model_path(base_dir, row.env_id, row.family, algo))
-                    if log.is_file():
-                        png = plot_curve(log, out_dir / "results" / f"{log.stem}.png",
+                    model = model_path(base_dir, row.env_id, row.family, algo)
+                    log = training_log(model)
+                    if log is not None:
+                        png = plot_curve(log, out_dir / "results" / f"{log_path(model).stem}.png",
                                          f"{row.env_id} {row.family} {algo}")
                         curves.setdefault(env_id, []).append(
                             f"![{row.family} {algo}](results/{png.name})")

@@ -8,8 +8,8 @@ from typing import Any
 
 from .config import rl_config
 
-__all__ = ["train", "checkpoint_path", "model_path", "log_path", "shipped_model", "algo_class",
-           "SHIPPED_DIR"]
+__all__ = ["train", "checkpoint_path", "model_path", "log_path", "training_log", "shipped_model",
+           "algo_class", "SHIPPED_DIR"]
 
 def algo_class(name: str) -> Any:
     """The stable-baselines3 class of an algorithm name (``PPO``, ``SAC``, ``TD3``)."""
@@ -18,7 +18,8 @@ def algo_class(name: str) -> Any:
     return getattr(stable_baselines3, name.upper())
 
 
-#: trained policies shipped with the package: the models behind docs/results.md
+#: trained policies shipped with the package: the models behind docs/results.md, each with its
+#: training log gzipped beside it
 SHIPPED_DIR = Path(__file__).resolve().parent / "policies"
 
 
@@ -40,6 +41,16 @@ def log_path(model: str | Path) -> Path:
     episode) beside a model file."""
     model = Path(model)
     return model.with_name(model.stem + ".monitor.csv")
+
+
+def training_log(model: str | Path) -> Path | None:
+    """The training log of ``model``, if it has one: :func:`log_path` or that file gzipped
+    (``….monitor.csv.gz``, as the shipped policies keep theirs); ``None`` otherwise."""
+    plain = log_path(model)
+    for log in (plain, plain.with_name(plain.name + ".gz")):
+        if log.is_file():
+            return log
+    return None
 
 
 def shipped_model(env_id: str, family: str | None = None, algo: str = "PPO") -> Path | None:
