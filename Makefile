@@ -13,10 +13,14 @@ $(STAMP): pyproject.toml
 	$(BIN)/python -m pip install -q -e ".[dev]"
 	touch $@
 
+# numba compiles every environment's step (once per machine, cached) while pip installs the
+# extras: the compile needs only the core, and the extras change no core package.
 $(STAMP_RL): $(STAMP)
-	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks,test,scale,canopen,studio]"
-	$(BIN)/python -m pip install -q --no-deps "jvlmotor==0.1.3"  # JVL's MacTalk client, tests/test_protocol_jvlmotor.py
-	$(BIN)/jvl-gym compile  # numba: every environment's step, once per machine (cached)
+	$(BIN)/jvl-gym compile & compile=$$!; \
+	$(BIN)/python -m pip install -q -e ".[dev,rl,notebooks,test,scale,canopen,studio]" \
+	  && $(BIN)/python -m pip install -q --no-deps "jvlmotor==0.1.3" \
+	  || { kill $$compile; exit 1; }; \
+	wait $$compile
 	touch $@
 
 setup: $(STAMP)
@@ -32,8 +36,10 @@ demo: $(STAMP)
 results: $(STAMP_RL)
 	MPLBACKEND=Agg $(BIN)/jvl-gym evaluate --all --out docs
 
+# three workers on two cores: many tests wait on twins running in real time, on Chromium or on
+# Ray; worksteal moves queued tests to whichever worker is idle
 test: $(STAMP_RL)
-	JVL_FAST=1 MPLBACKEND=Agg $(BIN)/python -m pytest -n 2 --nbmake tests notebooks
+	JVL_FAST=1 MPLBACKEND=Agg $(BIN)/python -m pytest -n 3 --dist worksteal --nbmake tests notebooks
 
 bench: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_sim.py
