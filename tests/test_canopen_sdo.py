@@ -208,3 +208,28 @@ def test_store_survives_power_on(tmp_path: object) -> None:
         assert again.node().sdo[0x2012][6].raw == 4321
     finally:
         again.close()
+
+
+def test_the_eds_says_which_register_objects_take_writes(rig: Rig) -> None:
+    """§11.4.6 objects as the EDS describes them: a sub-index the EDS marks ``rw`` takes a
+    write of its own value back; one it marks ``ro`` (a read-only, reserved or absent
+    register) is refused with 0601 0002h and keeps its value. (A 16-bit value with bit 15 set
+    is not written back: the motor reads a 16-bit write as signed.)"""
+    node = rig.node()
+    kinds = {"rw": 0, "ro": 0}
+    for index in (0x2012, 0x2014, 0x2018, 0x201A):
+        for sub in range(1, 255):
+            var = node.object_dictionary[index][sub]
+            before = node.sdo.upload(index, sub)
+            if len(before) == 2 and before[1] & 0x80:
+                continue
+            if var.access_type == "ro":
+                with pytest.raises(canopen.SdoAbortedError) as info:
+                    node.sdo.download(index, sub, before)
+                assert info.value.code == 0x06010002, (hex(index), sub, var.name)
+            else:
+                assert var.access_type == "rw"
+                node.sdo.download(index, sub, before)
+            assert node.sdo.upload(index, sub) == before, (hex(index), sub, var.name)
+            kinds[var.access_type] += 1
+    assert kinds["rw"] > 200 and kinds["ro"] > 200

@@ -31,6 +31,7 @@ from canopen import ObjectDictionary
 from canopen.objectdictionary import ODArray, ODRecord, ODVariable
 from canopen.objectdictionary import datatypes as dt
 
+from ...registers.table import Access
 from .facts import CanopenFacts
 
 __all__ = ["build_dictionary", "RPDOS", "TPDOS", "DEFAULT_RPDO_MAP", "DEFAULT_TPDO_MAP",
@@ -214,8 +215,11 @@ def _registers(od: ObjectDictionary, table: Any) -> None:
         subs = [_var("Number of entries", index, 0, u8, "ro", 254)]
         for k in range(1, 255):
             number = base + k
-            name = table.lookup(number).name if number in table else f"Register {number}"
-            subs.append(_var(name, index, k, u32 if bits == 32 else u16, "rw", 0, pdo=True))
+            reg = table.lookup(number) if number in table else None
+            name = reg.name if reg is not None else f"Register {number}"
+            # the slave refuses a write to a read-only, reserved or absent register (0601 0002h)
+            access = "rw" if reg is not None and reg.access == Access.RW else "ro"
+            subs.append(_var(name, index, k, u32 if bits == 32 else u16, access, 0, pdo=True))
         _record(od, titles[index], index, subs)
     _record(od, "Execute fast command", 0x2013, [
         _var("Number of entries", 0x2013, 0, u8, "ro", 2),
