@@ -654,3 +654,57 @@ def test_actions_follow_the_family_capabilities():
     assert set(m.actions()) == {"passive", "clear errors"}
     assert facts_of("MIS232").test_modes() == {} and set(facts_of("MAC140").test_modes()) == {
         "TESTU", "TESTA"}
+
+
+# ---------------------------------------------------------------------- page timers
+@pytest.mark.parametrize("seconds", [0.0, -1.0, float("nan")])
+def test_a_page_timer_needs_a_positive_interval(seconds):
+    from jvl_gym.studio.ui.common import Page
+
+    with pytest.raises(ValueError, match="interval > 0"):
+        Page(Session([SimMotor("MAC140", 1)]), SimMotor("MAC140", 1)).every(seconds, print)
+
+
+def test_a_page_timer_runs_only_while_its_tab_is_connected():
+    """``Page.every``: the callback runs while the tab's websocket is connected, not after it
+    disconnects (a tab closed or navigated away), and again when it reconnects."""
+    import asyncio
+    import uuid
+
+    from nicegui import Client
+    from nicegui.testing.user_simulation import user_simulation
+
+    from jvl_gym.studio.ui.common import Page
+
+    calls: list[float] = []
+    timers: list = []
+
+    def root() -> None:
+        motor = SimMotor("MAC140", 1)
+        timers.append(Page(Session([motor]), motor).every(0.01, lambda: calls.append(1)))
+
+    async def grows(seconds: float = 10.0) -> bool:
+        n = len(calls)
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            await asyncio.sleep(0.01)
+            if len(calls) > n + 2:
+                return True
+        return False
+
+    async def scenario() -> None:
+        async with user_simulation(root) as user:
+            client: Client = await user.open("/")
+            assert await grows() and timers[0].active
+            (socket,) = list(client._socket_to_document_id)
+            client.handle_disconnect(socket)
+            assert not timers[0].active
+            await asyncio.sleep(0.05)  # a call under way when the tab went may still end
+            n = len(calls)
+            await asyncio.sleep(0.2)  # twenty intervals
+            assert len(calls) == n
+            await client.handle_handshake(f"test-{uuid.uuid4()}", user.tab_id, None,
+                                          str(uuid.uuid4()), None)
+            assert timers[0].active and await grows()
+
+    asyncio.run(scenario())

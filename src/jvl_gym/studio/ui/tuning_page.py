@@ -62,7 +62,7 @@ def build(session: Any, m: int) -> None:
         if tr.result is not None and not shown["result"]:
             shown["result"] = True
             _show(out, tr, page)
-    ui.timer(0.3, page.guard(poll))
+    page.every(0.3, page.guard(poll))
 
 
 def _show(out: Any, tr: TuningRun, page: Any) -> None:
