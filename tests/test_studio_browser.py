@@ -2,9 +2,9 @@
 registers view and seen running on the scope, a refused value with its reason, a setup saved
 and loaded, a sample buffer captured, the tuning page run to the written result, the episodes
 page, and twins served as ``jvl-gym serve`` serves them (in this process, on a free port) whose
-value written by another client appears (and whose line comes back after the twin restarts). Each view is saved as a screenshot in the artefacts
-folder (``$JVL_ARTEFACTS``, default the test run's temporary folder), and in ``docs/img/studio``
-with ``JVL_STUDIO_DOCS=1``."""
+value written by another client appears (and whose line comes back after the twin restarts).
+Each view is saved as a screenshot in the artefacts folder (``$JVL_ARTEFACTS``, default the
+test run's temporary folder), and in ``docs/img/studio`` with ``JVL_STUDIO_DOCS=1``."""
 
 from __future__ import annotations
 

@@ -452,6 +452,57 @@ def test_tuning_refuses_what_it_cannot_tune():
         tr.write()
 
 
+class LineToolkit:
+    """A toolkit that records what the run gives its ``autotune_line`` (the only method a run
+    on a line calls)."""
+
+    def __init__(self):
+        self.calls = []
+
+    def autotune_line(self, port, motor, address, progress, time_scale=1.0):
+        from jvl_gym.studio.toolkit import TuningOutcome
+
+        self.calls.append((port, motor, address, time_scale))
+        return TuningOutcome(motor, "report", {"KVOUT": 1.0}, ["kept"], "note")
+
+
+def test_a_line_run_passes_the_twins_speed_to_the_toolkit(mixed_line):
+    """A motor on a line is tuned with the other end's time scale (``jvl-tune autotune
+    --time-scale``), which the session of a twin at ``--speed`` holds as its speed."""
+    from jvl_gym.studio.tuning_run import TuningRun
+
+    url, _ = mixed_line
+    s = Session.on_line(url, ["MAC140"], [8], speed=25.0)
+    kit = LineToolkit()
+    try:
+        tr = TuningRun(s.motors[0], kit, time_scale=s.speed)
+        tr.start()
+        tr.join(60)
+        assert tr.error is None and tr.result is not None, tr.progress
+    finally:
+        s.stop()
+    assert kit.calls == [(url, "MAC140", 8, 25.0)]
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.floats(allow_nan=True, allow_infinity=True))
+def test_a_tuning_run_takes_a_finite_positive_time_scale(mac, time_scale):
+    """A time scale or a line's speed that is not a finite number > 0 is refused before
+    anything starts (the line is not opened)."""
+    from tuning.studio_adapter import TOOLKIT
+
+    from jvl_gym.studio.tuning_run import TuningRun
+
+    if 0 < time_scale < float("inf"):
+        assert TuningRun(mac, TOOLKIT, time_scale=time_scale).time_scale == time_scale
+    else:
+        with pytest.raises(ValueError, match="time_scale"):
+            TuningRun(mac, TOOLKIT, time_scale=time_scale)
+    with pytest.raises(ValueError, match="speed must be > 0"):
+        Session.on_line("socket://127.0.0.1:9", ["MAC140"], [1], speed=-abs(time_scale))
+
+
 def test_tuning_toolkit_from_the_entry_point(tmp_path, monkeypatch):
     """The entry point pyproject.toml declares is what the studio finds when none is given."""
     from pathlib import Path
@@ -504,10 +555,11 @@ def test_tuning_run_writes_the_setup_file_it_shows(tmp_path):
 
 
 def test_tuning_a_motor_on_a_line_writes_the_result_to_the_twin(tmp_path):
-    """The tuning page on a MAC140 behind `jvl-gym serve` (in-process, a free port): the
-    pipeline of `jvl-tune autotune --port … --address …` through the toolkit, then the kept
-    registers written as `--write` writes them (the client's write_registers, read back): the
-    twin's registers hold the result's values."""
+    """The tuning page on a MAC140 behind `jvl-gym serve --speed 25` (in-process, a free
+    port) with a studio told that speed: the pipeline of `jvl-tune autotune --port …
+    --address … --time-scale 25` through the toolkit, then the kept registers written as
+    `--write` writes them (the client's write_registers, read back): the twin's registers hold
+    the result's values."""
     from tuning.studio_adapter import TOOLKIT
 
     from jvl_gym.cli_serve import build_line
@@ -515,11 +567,11 @@ def test_tuning_a_motor_on_a_line_writes_the_result_to_the_twin(tmp_path):
     from jvl_gym.studio.tuning_run import TuningRun
 
     twin, _ = build_line(["MAC140"], [19])
-    server = TwinServer(twin, tcp=("127.0.0.1", 0)).start()
+    server = TwinServer(twin, speed=25.0, tcp=("127.0.0.1", 0)).start()
     s = Session.on_line(server.endpoint("mactalk", "tcp").url, ["MAC140"], [19],
-                        toolkit=TOOLKIT)
+                        toolkit=TOOLKIT, speed=25.0)
     try:
-        tr = TuningRun(s.motors[0], s.toolkit)
+        tr = TuningRun(s.motors[0], s.toolkit, time_scale=s.speed)
         tr.start()
         tr.join(600)
         assert tr.error is None and tr.result is not None, (tr.progress, twin.last_refusal)
@@ -555,7 +607,7 @@ class NamedToolkit:
     def autotune(self, m, seed, progress):
         raise NotImplementedError
 
-    def autotune_line(self, port, motor, address, progress):
+    def autotune_line(self, port, motor, address, progress, time_scale=1.0):
         raise NotImplementedError
 
     def write_setup(self, path, motor, registers, note):

@@ -39,7 +39,7 @@ def build(session: Any, m: int) -> None:
         if motor.label in RUNS and RUNS[motor.label].running:
             page.say("a run is going on")
             return
-        tr = TuningRun(motor, session.toolkit)
+        tr = TuningRun(motor, session.toolkit, time_scale=session.speed)
         RUNS[motor.label] = tr
         shown.update(lines=0, result=False)
         out.clear()
