@@ -205,7 +205,10 @@ def test_capture_the_sample_buffer_of_both_families(running):
     mac.write("MODE_REG", 1)
     mis.write("V_SOLL", 5000)  # 50 rpm (0.01 rpm units, MIS manual §8.2.6)
     mis.write("MODE_REG", 1)
-    time.sleep(1.0)
+    end = time.monotonic() + 20.0  # the clock brings both to speed
+    while not (abs(mac.read("V_IST") - 20) <= 2 and mis.read("V_IST") == 5000):
+        assert time.monotonic() < end, (mac.read("V_IST"), mis.read("V_IST"))
+        time.sleep(0.02)
     a = capture.capture(mac, ["V_IST", "P_IST"], 100)
     assert list(a) == ["t [s]", "V_IST [counts/sample]", "P_IST [counts]"]
     assert len(a["P_IST [counts]"]) == 100
