@@ -4,9 +4,9 @@ family's strategy from the contract, :func:`tuning.strategy.strategy_of`), its r
 (:func:`tuning.report.write_report`) and its setup writer (:func:`tuning.pipeline.write_setup`).
 
 Announced as the entry point ``studio_tuning`` of the group ``jvl_gym.toolkits``
-(pyproject.toml): :data:`TOOLKIT`. The pipeline (and SciPy, python-control, Matplotlib under
-it) is imported by the first method called, so that the studio, which loads the entry point as
-it starts, starts without it.
+(pyproject.toml): :data:`TOOLKIT`. The methods import the pipeline (and SciPy, python-control
+and Matplotlib under it) when they run, so that loading the entry point, which the studio does
+as it starts, does not.
 """
 
 from __future__ import annotations
