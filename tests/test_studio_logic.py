@@ -5,6 +5,7 @@ client (with a twin that goes away and comes back), tuning through the toolkit i
 
 from __future__ import annotations
 
+import threading
 import time
 
 import numpy as np
@@ -762,4 +763,19 @@ def test_a_page_timer_runs_only_while_its_tab_is_connected():
                                           str(uuid.uuid4()), None)
             assert timers[0].active and await grows()
 
-    asyncio.run(scenario())
+    # in a thread of its own: pytest-playwright's sync API may run an event loop in this one
+    failed: list[BaseException] = []
+    worker = threading.Thread(target=lambda: _catch(failed, asyncio.run, scenario()))
+    worker.start()
+    worker.join(120)
+    assert not worker.is_alive(), "the simulated page did not finish within 120 s"
+    if failed:
+        raise failed[0]
+
+
+def _catch(failed: list[BaseException], fn, *args) -> None:
+    """``fn(*args)``, its exception appended to ``failed``."""
+    try:
+        fn(*args)
+    except BaseException as exc:  # noqa: BLE001 - handed to the test's thread
+        failed.append(exc)
