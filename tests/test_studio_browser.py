@@ -1,10 +1,10 @@
 """The studio in Chromium (pytest-playwright): a simulated MAC140 and MIS232 driven from the
 registers view and seen running on the scope, a refused value with its reason, a setup saved
 and loaded, a sample buffer captured, the tuning page run to the written result, the episodes
-page, and a ``jvl-gym serve`` twin whose value written by another client appears (and whose
-line comes back after the twin restarts). Each view is saved as a screenshot in the artefacts
-folder (``$JVL_ARTEFACTS``, default the test run's temporary folder), and in ``docs/img/studio``
-with ``JVL_STUDIO_DOCS=1``."""
+page, and twins served as ``jvl-gym serve`` serves them (in this process, on a free port) whose
+value written by another client appears (and whose line comes back after the twin restarts).
+Each view is saved as a screenshot in the artefacts folder (``$JVL_ARTEFACTS``, default the
+test run's temporary folder), and in ``docs/img/studio`` with ``JVL_STUDIO_DOCS=1``."""
 
 from __future__ import annotations
 
@@ -246,22 +246,21 @@ def test_episodes_page(page, studio, artefacts):
     shoot(page, artefacts, "episodes")
 
 
+def start_twin(types: list[str], addresses: list[int], port: int = 0):
+    """The twins of ``types`` at ``addresses`` served in-process (what ``jvl-gym serve --tcp``
+    serves) on ``port`` (0: a free one); a fresh line each time, as a restarted server."""
+    from jvl_gym.cli_serve import build_line
+    from jvl_gym.protocol.transport import TwinServer
+
+    line, _ = build_line(types, addresses)
+    return TwinServer(line, tcp=("127.0.0.1", port)).start()
+
+
 def test_a_twin_shows_what_another_client_writes(page, artefacts):
     from jvl_gym.protocol.client import MacTalkClient
 
-    tcp = free_port()
-    serve = [sys.executable, "-m", "jvl_gym.cli", "serve", "--motor", "MAC140", "--address",
-             "19", "--tcp", f"127.0.0.1:{tcp}"]
-
-    def start_twin() -> subprocess.Popen:
-        proc = subprocess.Popen(serve, env=_env(), cwd=ROOT, stdout=subprocess.PIPE,
-                                stderr=subprocess.STDOUT, text=True)
-        for line in proc.stdout:
-            if "running at speed" in line:
-                return proc
-        raise RuntimeError("jvl-gym serve did not start")
-
-    twin = start_twin()
+    twin = start_twin(["MAC140"], [19])
+    tcp = twin.endpoint("mactalk", "tcp").port
     proc = None
     try:
         proc, url = start_studio("--connect", f"socket://127.0.0.1:{tcp}", "--scan", "18-20")
@@ -271,9 +270,9 @@ def test_a_twin_shows_what_another_client_writes(page, artefacts):
             other.write("V_SOLL", 321)
         expect(field).to_have_value("321")
         shoot(page, artefacts, "registers_twin")
-        _stop(twin)
+        twin.stop()
         expect(page.get_by_test_id("line-state")).to_contain_text("127.0.0.1", timeout=10000)
-        twin = start_twin()
+        twin = start_twin(["MAC140"], [19], tcp)
         with MacTalkClient(f"socket://127.0.0.1:{tcp}", 19) as other:
             other.write("V_SOLL", 123)
         expect(field).to_have_value("123", timeout=10000)
@@ -281,7 +280,7 @@ def test_a_twin_shows_what_another_client_writes(page, artefacts):
     finally:
         if proc is not None:
             _stop(proc)
-        _stop(twin)
+        twin.stop()
 
 
 def test_a_line_of_mis_and_mac800_twins(page, artefacts):
@@ -292,17 +291,10 @@ def test_a_line_of_mis_and_mac800_twins(page, artefacts):
     from jvl_gym.families import family_of_motor
     from jvl_gym.protocol.client32 import MacTalk32Client
 
-    tcp = free_port()
-    serve = [sys.executable, "-m", "jvl_gym.cli", "serve", "--motor", "MIS232", "--address",
-             "7", "--motor", "MAC800", "--address", "8", "--tcp", f"127.0.0.1:{tcp}"]
-    twin = subprocess.Popen(serve, env=_env(), cwd=ROOT, stdout=subprocess.PIPE,
-                            stderr=subprocess.STDOUT, text=True)
+    twin = start_twin(["MIS232", "MAC800"], [7, 8])
+    line = f"socket://127.0.0.1:{twin.endpoint('mactalk', 'tcp').port}"
     proc = None
-    line = f"socket://127.0.0.1:{tcp}"
     try:
-        for out in twin.stdout:
-            if "running at speed" in out:
-                break
         proc, url = start_studio("--connect", line, "--motor", "MIS232", "--address", "7",
                                  "--motor", "MAC800", "--address", "8")
         page.goto(url + "/registers?m=0")
@@ -323,4 +315,4 @@ def test_a_line_of_mis_and_mac800_twins(page, artefacts):
     finally:
         if proc is not None:
             _stop(proc)
-        _stop(twin)
+        twin.stop()

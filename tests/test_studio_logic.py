@@ -5,6 +5,7 @@ client (with a twin that goes away and comes back), tuning through the toolkit i
 
 from __future__ import annotations
 
+import threading
 import time
 
 import numpy as np
@@ -205,7 +206,10 @@ def test_capture_the_sample_buffer_of_both_families(running):
     mac.write("MODE_REG", 1)
     mis.write("V_SOLL", 5000)  # 50 rpm (0.01 rpm units, MIS manual §8.2.6)
     mis.write("MODE_REG", 1)
-    time.sleep(1.0)
+    end = time.monotonic() + 20.0  # the clock brings both to speed
+    while not (abs(mac.read("V_IST") - 20) <= 2 and mis.read("V_IST") == 5000):
+        assert time.monotonic() < end, (mac.read("V_IST"), mis.read("V_IST"))
+        time.sleep(0.02)
     a = capture.capture(mac, ["V_IST", "P_IST"], 100)
     assert list(a) == ["t [s]", "V_IST [counts/sample]", "P_IST [counts]"]
     assert len(a["P_IST [counts]"]) == 100
@@ -452,6 +456,57 @@ def test_tuning_refuses_what_it_cannot_tune():
         tr.write()
 
 
+class LineToolkit:
+    """A toolkit that records what the run gives its ``autotune_line`` (the only method a run
+    on a line calls)."""
+
+    def __init__(self):
+        self.calls = []
+
+    def autotune_line(self, port, motor, address, progress, time_scale=1.0):
+        from jvl_gym.studio.toolkit import TuningOutcome
+
+        self.calls.append((port, motor, address, time_scale))
+        return TuningOutcome(motor, "report", {"KVOUT": 1.0}, ["kept"], "note")
+
+
+def test_a_line_run_passes_the_twins_speed_to_the_toolkit(mixed_line):
+    """A motor on a line is tuned with the other end's time scale (``jvl-tune autotune
+    --time-scale``), which the session of a twin at ``--speed`` holds as its speed."""
+    from jvl_gym.studio.tuning_run import TuningRun
+
+    url, _ = mixed_line
+    s = Session.on_line(url, ["MAC140"], [8], speed=25.0)
+    kit = LineToolkit()
+    try:
+        tr = TuningRun(s.motors[0], kit, time_scale=s.speed)
+        tr.start()
+        tr.join(60)
+        assert tr.error is None and tr.result is not None, tr.progress
+    finally:
+        s.stop()
+    assert kit.calls == [(url, "MAC140", 8, 25.0)]
+
+
+@settings(max_examples=40, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(st.floats(allow_nan=True, allow_infinity=True))
+def test_a_tuning_run_takes_a_finite_positive_time_scale(mac, time_scale):
+    """A time scale or a line's speed that is not a finite number > 0 is refused before
+    anything starts (the line is not opened)."""
+    from tuning.studio_adapter import TOOLKIT
+
+    from jvl_gym.studio.tuning_run import TuningRun
+
+    if 0 < time_scale < float("inf"):
+        assert TuningRun(mac, TOOLKIT, time_scale=time_scale).time_scale == time_scale
+    else:
+        with pytest.raises(ValueError, match="time_scale"):
+            TuningRun(mac, TOOLKIT, time_scale=time_scale)
+    with pytest.raises(ValueError, match="speed must be > 0"):
+        Session.on_line("socket://127.0.0.1:9", ["MAC140"], [1], speed=-abs(time_scale))
+
+
 def test_tuning_toolkit_from_the_entry_point(tmp_path, monkeypatch):
     """The entry point pyproject.toml declares is what the studio finds when none is given."""
     from pathlib import Path
@@ -504,10 +559,11 @@ def test_tuning_run_writes_the_setup_file_it_shows(tmp_path):
 
 
 def test_tuning_a_motor_on_a_line_writes_the_result_to_the_twin(tmp_path):
-    """The tuning page on a MAC140 behind `jvl-gym serve` (in-process, a free port): the
-    pipeline of `jvl-tune autotune --port … --address …` through the toolkit, then the kept
-    registers written as `--write` writes them (the client's write_registers, read back): the
-    twin's registers hold the result's values."""
+    """The tuning page on a MAC140 behind `jvl-gym serve --speed 25` (in-process, a free
+    port) with a studio told that speed: the pipeline of `jvl-tune autotune --port …
+    --address … --time-scale 25` through the toolkit, then the kept registers written as
+    `--write` writes them (the client's write_registers, read back): the twin's registers hold
+    the result's values."""
     from tuning.studio_adapter import TOOLKIT
 
     from jvl_gym.cli_serve import build_line
@@ -515,11 +571,11 @@ def test_tuning_a_motor_on_a_line_writes_the_result_to_the_twin(tmp_path):
     from jvl_gym.studio.tuning_run import TuningRun
 
     twin, _ = build_line(["MAC140"], [19])
-    server = TwinServer(twin, tcp=("127.0.0.1", 0)).start()
+    server = TwinServer(twin, speed=25.0, tcp=("127.0.0.1", 0)).start()
     s = Session.on_line(server.endpoint("mactalk", "tcp").url, ["MAC140"], [19],
-                        toolkit=TOOLKIT)
+                        toolkit=TOOLKIT, speed=25.0)
     try:
-        tr = TuningRun(s.motors[0], s.toolkit)
+        tr = TuningRun(s.motors[0], s.toolkit, time_scale=s.speed)
         tr.start()
         tr.join(600)
         assert tr.error is None and tr.result is not None, (tr.progress, twin.last_refusal)
@@ -555,7 +611,7 @@ class NamedToolkit:
     def autotune(self, m, seed, progress):
         raise NotImplementedError
 
-    def autotune_line(self, port, motor, address, progress):
+    def autotune_line(self, port, motor, address, progress, time_scale=1.0):
         raise NotImplementedError
 
     def write_setup(self, path, motor, registers, note):
@@ -654,3 +710,72 @@ def test_actions_follow_the_family_capabilities():
     assert set(m.actions()) == {"passive", "clear errors"}
     assert facts_of("MIS232").test_modes() == {} and set(facts_of("MAC140").test_modes()) == {
         "TESTU", "TESTA"}
+
+
+# ---------------------------------------------------------------------- page timers
+@pytest.mark.parametrize("seconds", [0.0, -1.0, float("nan")])
+def test_a_page_timer_needs_a_positive_interval(seconds):
+    from jvl_gym.studio.ui.common import Page
+
+    with pytest.raises(ValueError, match="interval > 0"):
+        Page(Session([SimMotor("MAC140", 1)]), SimMotor("MAC140", 1)).every(seconds, print)
+
+
+def test_a_page_timer_runs_only_while_its_tab_is_connected():
+    """``Page.every``: the callback runs while the tab's websocket is connected, not after it
+    disconnects (a tab closed or navigated away), and again when it reconnects."""
+    import asyncio
+    import uuid
+
+    from nicegui import Client
+    from nicegui.testing.user_simulation import user_simulation
+
+    from jvl_gym.studio.ui.common import Page
+
+    calls: list[float] = []
+    timers: list = []
+
+    def root() -> None:
+        motor = SimMotor("MAC140", 1)
+        timers.append(Page(Session([motor]), motor).every(0.01, lambda: calls.append(1)))
+
+    async def grows(seconds: float = 10.0) -> bool:
+        n = len(calls)
+        end = time.monotonic() + seconds
+        while time.monotonic() < end:
+            await asyncio.sleep(0.01)
+            if len(calls) > n + 2:
+                return True
+        return False
+
+    async def scenario() -> None:
+        async with user_simulation(root) as user:
+            client: Client = await user.open("/")
+            assert await grows() and timers[0].active
+            (socket,) = list(client._socket_to_document_id)
+            client.handle_disconnect(socket)
+            assert not timers[0].active
+            await asyncio.sleep(0.05)  # a call under way when the tab went may still end
+            n = len(calls)
+            await asyncio.sleep(0.2)  # twenty intervals
+            assert len(calls) == n
+            await client.handle_handshake(f"test-{uuid.uuid4()}", user.tab_id, None,
+                                          str(uuid.uuid4()), None)
+            assert timers[0].active and await grows()
+
+    # in a thread of its own: pytest-playwright's sync API may run an event loop in this one
+    failed: list[BaseException] = []
+    worker = threading.Thread(target=lambda: _catch(failed, asyncio.run, scenario()))
+    worker.start()
+    worker.join(120)
+    assert not worker.is_alive(), "the simulated page did not finish within 120 s"
+    if failed:
+        raise failed[0]
+
+
+def _catch(failed: list[BaseException], fn, *args) -> None:
+    """``fn(*args)``, its exception appended to ``failed``."""
+    try:
+        fn(*args)
+    except BaseException as exc:  # noqa: BLE001 - handed to the test's thread
+        failed.append(exc)

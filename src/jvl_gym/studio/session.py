@@ -77,6 +77,12 @@ def pair_scanned(found: Mapping[int, str], motors: Sequence[str]) -> list[tuple[
     return plan
 
 
+def _check_speed(speed: float) -> None:
+    """Refuse a ``speed`` (simulated seconds per wall-clock second) that is not > 0."""
+    if not speed > 0:
+        raise ValueError(f"speed must be > 0, got {speed}")
+
+
 class Session:
     """The studio's motors.
 
@@ -85,7 +91,9 @@ class Session:
     motors : list of StudioMotor
         The motors, in the order the pages list them.
     speed : float
-        Simulated seconds per wall-clock second of the simulated motors.
+        Simulated seconds per wall-clock second: of the simulated motors' clock, or of the
+        other end of the line (a twin's ``--speed``; 1 for real motors), which the tuning page
+        gives the tuning run.
     line : Line, optional
         The line the line motors share.
     toolkit : TuningToolkit, optional
@@ -95,8 +103,7 @@ class Session:
 
     def __init__(self, motors: list[StudioMotor], speed: float = 1.0,
                  line: Line | None = None, toolkit: TuningToolkit | None = None) -> None:
-        if not speed > 0:
-            raise ValueError(f"speed must be > 0, got {speed}")
+        _check_speed(speed)
         self.motors = motors
         self.speed = float(speed)
         self.line = line
@@ -117,10 +124,12 @@ class Session:
     @classmethod
     def on_line(cls, port: str, motors: Sequence[str], addresses: Sequence[int] = (),
                 scan_range: Sequence[int] | None = None,
-                toolkit: TuningToolkit | None = None) -> Session:
+                toolkit: TuningToolkit | None = None, speed: float = 1.0) -> Session:
         """Motors on the line at ``port``: the ``addresses`` given, or those of ``scan_range``
         that answer, each of the ``motors`` type whose family speaks the dialect its reply
-        is in (:func:`pair_scanned`)."""
+        is in (:func:`pair_scanned`); ``speed``: the other end's simulated seconds per
+        wall-clock second (a twin's ``--speed``; 1 for real motors)."""
+        _check_speed(speed)
         line = Line(port)
         if scan_range is not None and not addresses:
             found = scan(line, scan_range)
@@ -130,7 +139,7 @@ class Session:
             plan = pair_scanned(found, motors)
         else:
             plan = plan_motors(motors, addresses, DEFAULT_MOTOR)
-        return cls([LineMotor(line, t, a) for t, a in plan], line=line, toolkit=toolkit)
+        return cls([LineMotor(line, t, a) for t, a in plan], speed, line=line, toolkit=toolkit)
 
     def motor(self, label: str) -> StudioMotor:
         """The motor shown as ``label`` (``"MAC140 @ 1"``)."""

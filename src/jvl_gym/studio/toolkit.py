@@ -67,9 +67,12 @@ class TuningToolkit(Protocol):
         its family's strategy, as ``jvl-tune autotune`` does."""
 
     def autotune_line(self, port: str, motor: str, address: int,
-                      progress: Callable[[str], None]) -> TuningOutcome:
+                      progress: Callable[[str], None], time_scale: float = 1.0
+                      ) -> TuningOutcome:
         """Autotune motor type ``motor`` at unit ``address`` on the line at ``port`` (the
-        line closed), as ``jvl-tune autotune --port`` does, without writing."""
+        line closed), as ``jvl-tune autotune --port --time-scale`` does, without writing;
+        ``time_scale``: simulated seconds per wall-clock second of the other end (a twin's
+        ``--speed``, 1 for a real motor)."""
 
     def write_setup(self, path: Path, motor: str, registers: dict[str, float],
                     note: str) -> Path:

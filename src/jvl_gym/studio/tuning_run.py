@@ -59,6 +59,18 @@ class TuningResult:
 class TuningRun:
     """One autotune run on ``motor`` with ``toolkit`` in a background thread.
 
+    Parameters
+    ----------
+    motor : StudioMotor
+        The motor to tune (simulated, or on a line).
+    toolkit : TuningToolkit or None
+        The tuning toolkit.
+    seed : int
+        Noise seed of a simulated motor's acceptance step.
+    time_scale : float
+        For a motor on a line: simulated seconds per wall-clock second of the other end (the
+        twin's ``--speed``; 1 for a real motor), finite and > 0.
+
     Attributes
     ----------
     progress : list of str
@@ -73,17 +85,22 @@ class TuningRun:
     Raises
     ------
     ValueError
-        The motor cannot be tuned (:func:`tuning_problem`).
+        The motor cannot be tuned (:func:`tuning_problem`), or ``time_scale`` is not a finite
+        number > 0.
     """
 
-    def __init__(self, motor: StudioMotor, toolkit: TuningToolkit | None, seed: int = 0) -> None:
+    def __init__(self, motor: StudioMotor, toolkit: TuningToolkit | None, seed: int = 0,
+                 time_scale: float = 1.0) -> None:
         problem = tuning_problem(motor, toolkit)
         if problem:
             raise ValueError(problem)
+        if not 0 < time_scale < float("inf"):
+            raise ValueError(f"time_scale must be a finite number > 0, got {time_scale}")
         assert toolkit is not None
         self.motor = motor
         self.toolkit = toolkit
         self.seed = seed
+        self.time_scale = float(time_scale)
         self.progress: list[str] = []
         self.result: TuningResult | None = None
         self.error: str | None = None
@@ -135,7 +152,8 @@ class TuningRun:
         line = m.line  # type: ignore[attr-defined]
         with line.lock:
             line.close()
-            return self.toolkit.autotune_line(line.port, m.motor_type, m.address, self._say)
+            return self.toolkit.autotune_line(line.port, m.motor_type, m.address, self._say,
+                                              self.time_scale)
 
     def write(self, folder: Path | None = None) -> str:
         """Write the kept registers as a setup file into ``folder`` (default: a new temporary

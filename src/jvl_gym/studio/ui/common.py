@@ -1,5 +1,6 @@
 """What every page shares: the header with the views and the motor choice, the message line,
-and the guard that turns an error into a message on the page."""
+the guard that turns an error into a message on the page, and the page's timers, which run only
+while its tab is connected."""
 
 from __future__ import annotations
 
@@ -52,6 +53,43 @@ class Page:
         if not ok:
             ui.notify(text, type="negative", multi_line=True)
 
+    def every(self, seconds: float, callback: Callable[[], Any]) -> Any:
+        """Call ``callback`` (sync or async) every ``seconds`` s while the page's tab is
+        connected.
+
+        The timer starts when the tab's websocket connects, pauses when it disconnects and
+        resumes when it reconnects (within the reconnect timeout,
+        :data:`~jvl_gym.studio.ui.app.RECONNECT_S`); NiceGUI cancels it when it deletes the
+        page. A tab that was closed or navigated away thus polls nothing.
+
+        Parameters
+        ----------
+        seconds : float
+            Interval between two calls [s], > 0.
+        callback : callable
+            Called without arguments; wrap it in :meth:`guard` to show its errors.
+
+        Returns
+        -------
+        ui.timer
+            The timer (``active`` while the tab is connected).
+
+        Raises
+        ------
+        ValueError
+            ``seconds`` is not > 0.
+        """
+        if not seconds > 0:
+            raise ValueError(f"a page timer needs an interval > 0 s, got {seconds}")
+        client = ui.context.client
+        timer = ui.timer(seconds, callback)
+
+        def follow() -> None:
+            timer.active = client.has_socket_connection
+        client.on_connect(follow)
+        client.on_disconnect(follow)
+        return timer
+
     def guard(self, fn: Callable[..., Any]) -> Callable[..., Any]:
         """``fn`` (sync or async) with its exceptions shown on the message line."""
         if inspect.iscoroutinefunction(fn):
@@ -98,6 +136,6 @@ def frame(session: Session, path: str, m: int = 0) -> Page:
                                 session.line.problem if session.line else None) if p]
         state.set_text("; ".join(problems))
 
-    ui.timer(1.0, show_state)
+    page.every(1.0, show_state)
     page.message = ui.label("").props(tid("message"))
     return page

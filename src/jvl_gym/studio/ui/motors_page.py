@@ -51,7 +51,7 @@ def _card(page: Page, motor, k: int) -> None:
                     await run.io_bound(action)
                     page.say(f"{motor.label}: {name} done")
                 ui.button(name, on_click=page.guard(do)).props("outline dense")
-        ui.timer(0.25, page.guard(refresh))
+        page.every(0.25, page.guard(refresh))
 
 
 def build(session: Session, m: int) -> None:

@@ -109,4 +109,4 @@ def build(session: Session, m: int) -> None:
             if n not in editing:
                 field.value = value_text(reg, raws[n])
 
-    ui.timer(REFRESH_S, page.guard(refresh))
+    page.every(REFRESH_S, page.guard(refresh))

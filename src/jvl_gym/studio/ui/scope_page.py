@@ -97,7 +97,7 @@ def _scope_block(page: Page) -> None:
         counter.set_text(f"update {state['updates']}: {len(sc.t)} points, t = {sc.t[-1]:.2f} s")
         last.set_text("; ".join(f"{sc.label(c)} = {b[-1]:.6g}"
                                 for c, b in zip(sc.channels, sc.values)))
-    ui.timer(PERIOD_S, page.guard(tick))
+    page.every(PERIOD_S, page.guard(tick))
 
 
 def _buffer_block(page: Page) -> None:

@@ -39,7 +39,7 @@ def build(session: Any, m: int) -> None:
         if motor.label in RUNS and RUNS[motor.label].running:
             page.say("a run is going on")
             return
-        tr = TuningRun(motor, session.toolkit)
+        tr = TuningRun(motor, session.toolkit, time_scale=session.speed)
         RUNS[motor.label] = tr
         shown.update(lines=0, result=False)
         out.clear()
@@ -62,7 +62,7 @@ def build(session: Any, m: int) -> None:
         if tr.result is not None and not shown["result"]:
             shown["result"] = True
             _show(out, tr, page)
-    ui.timer(0.3, page.guard(poll))
+    page.every(0.3, page.guard(poll))
 
 
 def _show(out: Any, tr: TuningRun, page: Any) -> None:
