@@ -651,6 +651,36 @@ def test_a_toolkit_named_on_the_command_line(monkeypatch, capsys):
     assert code == 1 and "--toolkit no_such_toolkit_module" in line
 
 
+def test_cli_speed_reaches_a_line_and_must_be_finite(monkeypatch, capsys):
+    """``jvl-gym studio --connect PORT --speed S``: the line's session runs tuning with the
+    twin's time scale S; a speed that is not a finite number > 0 is a usage error."""
+    import jvl_gym.studio.ui.app as app_module
+    from jvl_gym.studio.session import Session
+
+    seen = {}
+
+    def on_line(port, motors, addresses=(), scan_range=None, toolkit=None, speed=1.0):
+        seen.update(port=port, speed=speed)
+        return Session.simulated(["MAC140"], [1], speed=speed)
+
+    monkeypatch.setattr(Session, "on_line", staticmethod(on_line))
+    monkeypatch.setattr(app_module, "serve", lambda session, *a, **k: seen.update(s=session))
+    from jvl_gym.cli import app
+
+    with __import__("socket").socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        port = str(sock.getsockname()[1])
+    with pytest.raises(SystemExit) as info:
+        app(["studio", "--connect", "socket://127.0.0.1:9", "--speed", "7", "--no-browser",
+             "--port", port])
+    assert info.value.code in (0, None)
+    assert seen["port"] == "socket://127.0.0.1:9" and seen["speed"] == 7.0
+    assert seen["s"].speed == 7.0
+    for bad in ("inf", "nan", "0", "-2"):
+        code, line = _cli(["--speed", bad, "--no-browser", "--port", port], capsys)
+        assert code == 2 and "--speed" in line
+
+
 def _cli(args, capsys):
     from jvl_gym.cli import app
 

@@ -63,7 +63,9 @@ def studio(
     = 8080,
     no_browser: Annotated[bool, typer.Option("--no-browser", help="Do not open a browser.")]
     = False,
-    speed: Annotated[float, typer.Option(help="Simulated seconds per wall-clock second.")]
+    speed: Annotated[float, typer.Option(
+        help="Simulated seconds per wall-clock second: of the simulated motors, or with "
+        "--connect of the twin at the other end (its own --speed; 1 for real motors).")]
     = 1.0,
     seed: Annotated[int, typer.Option(help="Noise seed of the simulated motors.")] = 0,
     toolkit: Annotated[str | None, typer.Option(
@@ -81,8 +83,8 @@ def studio(
 
     if scan is not None and connect is None:
         raise typer.BadParameter("--scan needs --connect (a line to scan)")
-    if not speed > 0:
-        raise typer.BadParameter(f"--speed must be > 0, got {speed}")
+    if not 0 < speed < float("inf"):
+        raise typer.BadParameter(f"--speed must be a finite number > 0, got {speed}")
     _port_free(host, port)
     try:
         kit = load_toolkit(toolkit) if toolkit is not None else None
@@ -94,7 +96,8 @@ def studio(
                                         toolkit=kit)
         else:
             session = Session.on_line(connect, motor or [], address or [],
-                                      parse_range(scan) if scan else None, toolkit=kit)
+                                      parse_range(scan) if scan else None, toolkit=kit,
+                                      speed=speed)
     except (ValueError, ConnectionError) as exc:
         raise CliError(str(exc)) from None
     typer.echo(f"jvl-gym studio on http://{host}:{port} with "
