@@ -65,7 +65,8 @@ def test_communication_objects_take_writes(rig: Rig) -> None:
 
 
 @pytest.mark.parametrize("index, sub", [(0x1000, 0), (0x1001, 0), (0x1008, 0), (0x1018, 1),
-                                        (0x1018, 4), (0x6041, 0), (0x6064, 0)])
+                                        (0x1018, 4), (0x6041, 0), (0x6064, 0),
+                                        (0x6074, 0), (0x6077, 0)])
 def test_read_only_objects_refuse_writes(rig: Rig, index: int, sub: int) -> None:
     node = rig.node()
     before = node.sdo.upload(index, sub)
