@@ -55,6 +55,26 @@ def test_unwritable_out_is_refused_before_the_run(capsys, args):
     assert "/proc/x" in line and "--out" in line and "writable directory" in line
 
 
+@pytest.mark.parametrize(("cli", "args"), [
+    pytest.param(gym_cli, ["train", "jvl_gym/GearSync-v0"], id="train"),
+    pytest.param(gym_cli, ["evaluate", "--all"], id="evaluate"),
+    pytest.param(gym_cli, ["sweep", "configs/sweeps/none.yml"], id="sweep"),
+    pytest.param(gym_cli, ["program", "run", "program.txt"], id="program"),
+    pytest.param(tune, ["defaults"], id="defaults"),
+])
+@pytest.mark.parametrize("where", ["/proc/x", "/proc/x/y", "file"])
+def test_every_output_directory_is_checked_before_the_run(tmp_path, capsys, cli, args, where):
+    """Every command that writes an output directory refuses one it cannot write (a usage
+    error naming it) before doing anything, and creates nothing."""
+    if where == "file":
+        where = str(tmp_path / "plain")
+        (tmp_path / "plain").write_text("")
+    code, _, err = _run(cli, [*args, "--out", where], capsys)
+    line = _one_line_error(code, err)
+    assert code == 2 and where in line and "--out" in line and "directory" in line
+    assert [p.name for p in tmp_path.iterdir()] == (["plain"] if "plain" in where else [])
+
+
 def test_list_shaped_and_partial_setups(tmp_path, capsys):
     bad = tmp_path / "list.yaml"
     bad.write_text("- 1\n- 2\n")

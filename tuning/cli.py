@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING
 import typer
 import yaml
 
-from jvl_gym.cli_app import App
+from jvl_gym.cli_app import App, writable_dir
 
 from .record_lengths import RECOMMENDED_COIL_SAMPLES, RECOMMENDED_MECH_SAMPLES
 
@@ -61,26 +61,6 @@ def _nonnegative(value: float | None) -> float | None:
     """Option callback: a finite number >= 0 (or not given)."""
     if _finite(value) is not None and value < 0:
         raise typer.BadParameter(f"must be >= 0, got {value}")
-    return value
-
-
-def _writable_dir(value: Path) -> Path:
-    """Option callback: a directory that exists and is writable, or that can be created in a
-    writable directory (checked before any work starts; nothing is created here)."""
-    import tempfile
-
-    probe = value.absolute()
-    while not probe.exists() and probe != probe.parent:
-        probe = probe.parent
-    if probe == value.absolute() and not probe.is_dir():
-        raise typer.BadParameter(f"{value} exists and is not a directory; give a directory")
-    try:
-        if not probe.is_dir():
-            raise OSError(f"{probe} is not a directory")
-        tempfile.TemporaryFile(dir=probe).close()  # what the run would do: make a file there
-    except OSError as exc:
-        raise typer.BadParameter(f"{value} cannot be written ({exc.strerror or exc} in "
-                                 f"{probe}); give a writable directory") from None
     return value
 
 
@@ -248,7 +228,7 @@ def autotune(motor: str = typer.Option("MAC140"),
              n_mech: int = typer.Option(None, help="TESTA samples per record (default: "
                                         f"{RECOMMENDED_MECH_SAMPLES}; with --port 11)"),
              structure: str = typer.Option("pi", help="speed loop structure: pi or ip"),
-             out: Path = typer.Option(Path("autotune_out"), callback=_writable_dir,
+             out: Path = typer.Option(Path("autotune_out"), callback=writable_dir,
                                       help="output directory of setup.yaml, the report and "
                                       "the plots (also with --port)"),
              port: str = typer.Option(None, help="serial device or pyserial URL of a real motor "
@@ -437,7 +417,7 @@ def _check_credible(strategy: Strategy, ident: object, accept: bool) -> None:
 def fleet(spec: Path = typer.Argument(..., help="fleet file (configs/fleets/*.yml) or a folder "
                                       "with one subfolder of record CSVs per motor"),
           out: Path = typer.Option(Path("fleet_out"), help="output directory",
-                                   callback=_writable_dir),
+                                   callback=writable_dir),
           address: str = typer.Option(None, help="Ray cluster: auto, HOST:PORT or "
                                       "ray://HOST:10001 (default: local Ray)"),
           num_cpus: int = typer.Option(None, help="CPUs of the local Ray"),
@@ -454,7 +434,7 @@ def fleet(spec: Path = typer.Argument(..., help="fleet file (configs/fleets/*.ym
 
 @app.command()
 def defaults(out: Path = typer.Option(
-        None, help="directory (default: the family's configs/setups)"),
+        None, help="directory (default: the family's configs/setups)", callback=writable_dir),
              family_key: str = typer.Option(
         None, "--family", help="family key (default: every family with TESTU/TESTA test "
         "modes)")) -> None:

@@ -15,7 +15,7 @@ from typing import Annotated, Any
 
 import typer
 
-from .cli_app import CliError
+from .cli_app import CliError, writable_dir
 from .families import UnsupportedOperation
 
 __all__ = ["program_app"]
@@ -41,7 +41,8 @@ def run(program: Annotated[Path, typer.Argument(help="program text file (one com
                                                      "sensors, load, registers")] = None,
         register: Annotated[list[str] | None, typer.Option(
             help="another register to trace (repeat)")] = None,
-        out: Annotated[Path, typer.Option(help="output directory")] = Path("program_out"),
+        out: Annotated[Path, typer.Option(help="output directory",
+                                          callback=writable_dir)] = Path("program_out"),
         seed: Annotated[int, typer.Option(help="noise seed")] = 0) -> None:
     """Run PROGRAM on a simulated motor and write its trace (CSV and plot) to OUT."""
     from . import MotorArray
