@@ -8,6 +8,8 @@ import sys
 
 import pytest
 import yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from tuning.cli import app as tune
 
 from cli_checks import one_line_error, run_cli
@@ -253,3 +255,13 @@ def test_report_prints_negative_friction_as_not_detected():
     table = identification_table(strategy_of("MAC140"), ident)
     row = [ln for ln in table if ln.startswith("Coulomb Tc")][0]
     assert "not detected" in row
+
+
+@settings(max_examples=20, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(option=st.sampled_from(["--n-coil", "--n-mech"]), value=st.integers(-2**70, 0))
+def test_record_lengths_below_one_are_usage_errors(capsys, option, value):
+    """A record of no samples or fewer is refused before the motor is touched (not taken as
+    "the default")."""
+    code, _, err = _run(tune, ["autotune", option, str(value)], capsys)
+    assert code == 2 and option in _one_line_error(code, err)

@@ -224,9 +224,10 @@ def autotune(motor: str = typer.Option("MAC140"),
                                       "draw of the measurement noise)"),
              n_coil: int = typer.Option(None, help="TESTU samples per record (default: "
                                         f"{RECOMMENDED_COIL_SAMPLES}; with --port the "
-                                        "firmware's 11, several records combined)"),
+                                        "firmware's 11, several records combined)", min=1),
              n_mech: int = typer.Option(None, help="TESTA samples per record (default: "
-                                        f"{RECOMMENDED_MECH_SAMPLES}; with --port 11)"),
+                                        f"{RECOMMENDED_MECH_SAMPLES}; with --port 11)",
+                                        min=1),
              structure: str = typer.Option("pi", help="speed loop structure: pi or ip"),
              out: Path = typer.Option(Path("autotune_out"), callback=writable_dir,
                                       help="output directory of setup.yaml, the report and "
