@@ -265,3 +265,44 @@ def test_record_lengths_below_one_are_usage_errors(capsys, option, value):
     "the default")."""
     code, _, err = _run(tune, ["autotune", option, str(value)], capsys)
     assert code == 2 and option in _one_line_error(code, err)
+
+
+_BAD_SETUPS = {
+    "yaml": "motor: MAC140\nregisters: {KVOUT: [1\n",
+    "bytes": b"\xff\xfe motor",
+    "list": "- 1\n",
+    "registers": "motor: MAC140\nregisters: 5\n",
+    "key": "motor: MAC140\nfoo: 1\nregisters: {}\n",
+    "value": "motor: MAC800\nregisters: {KVOUT: abc}\n",
+}
+
+
+@pytest.mark.parametrize("motor", [[], ["--motor", "MAC140"], ["--motor", "MAC800"]])
+@pytest.mark.parametrize("kind", [*_BAD_SETUPS, "missing", "folder"])
+def test_verify_reads_the_setup_through_the_config_loader(tmp_path, capsys, kind, motor):
+    """A malformed setup file is a usage error naming the file and --setup, whatever the
+    motor (the loader of jvl_gym.config reads it, as everywhere else)."""
+    setup = tmp_path / "s.yaml"
+    if kind == "folder":
+        setup.mkdir()
+    elif kind != "missing":
+        data = _BAD_SETUPS[kind]
+        if isinstance(data, bytes):
+            setup.write_bytes(data)
+        else:
+            setup.write_text(data)
+    code, _, err = _run(tune, ["verify", *motor, "--setup", str(setup)], capsys)
+    line = _one_line_error(code, err)
+    assert code == 2 and "s.yaml" in line and "--setup" in line, line
+
+
+@settings(max_examples=25, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(text=st.text(max_size=60))
+def test_verify_of_any_setup_text_is_a_result_or_one_line(tmp_path, capsys, text):
+    setup = tmp_path / "any.yaml"
+    setup.write_text(text, encoding="utf-8")
+    code, _, err = _run(tune, ["verify", "--motor", "MAC140", "--setup", str(setup)], capsys)
+    if code not in (0, None):
+        line = _one_line_error(code, err)
+        assert "any.yaml" in line or "--setup" in line, line

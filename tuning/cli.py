@@ -28,9 +28,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import typer
-import yaml
 
-from jvl_gym.cli_app import App, writable_dir
+from jvl_gym.cli_app import App, one_line, writable_dir
 
 from .record_lengths import RECOMMENDED_COIL_SAMPLES, RECOMMENDED_MECH_SAMPLES
 
@@ -191,7 +190,13 @@ def verify(motor: str = typer.Option(None, help="motor type (default: the setup'
                                          callback=_positive)
            ) -> None:
     """Margins, bandwidths, pole radii and robustness of a setup file's filters."""
-    strategy = _strategy(motor if motor is not None else _setup_motor(setup))
+    from jvl_gym.config import ConfigError, load_setup
+
+    try:  # the project's setup loader: the file, its YAML, its keys and values checked
+        named = load_setup(setup).motor
+    except ConfigError as exc:
+        raise typer.BadParameter(one_line(exc), param_hint="'--setup'") from None
+    strategy = _strategy(motor if motor is not None else named)
     notes, lines, stable = strategy.verify_setup(motor, setup, inertia)
     for note in notes:
         _say(note)
@@ -335,17 +340,6 @@ def _refuse(strategy: Strategy, given: dict[str, bool]) -> None:
     if bad:
         raise typer.BadParameter(f"not available for the {strategy.family.title}: "
                                  f"{', '.join(bad)}", param_hint="'--motor'")
-
-
-def _setup_motor(setup: Path) -> str | None:
-    """The ``motor:`` of a setup file (None when it has none or cannot be read: the family's
-    loader then says what is wrong)."""
-    try:
-        data = yaml.safe_load(setup.read_text())
-    except (OSError, yaml.YAMLError):
-        return None
-    name = data.get("motor") if isinstance(data, dict) else None
-    return name if isinstance(name, str) else None
 
 
 def _two_mass_step(m: object, res: Result, out: Path) -> tuple[str, Path]:
