@@ -63,6 +63,14 @@ def _nonnegative(value: float | None) -> float | None:
     return value
 
 
+def _samples(value: int | None) -> int | None:
+    """Option callback: a record length, 1 or more samples (or not given: the default)."""
+    if value is not None and value < 1:
+        raise typer.BadParameter(f"a record holds 1 or more samples, got {value}; leave the "
+                                 "option out for the default")
+    return value
+
+
 def _positive(value: float | None) -> float | None:
     """Option callback: a finite number > 0 (or not given)."""
     if _finite(value) is not None and value <= 0:
@@ -229,10 +237,11 @@ def autotune(motor: str = typer.Option("MAC140"),
                                       "draw of the measurement noise)"),
              n_coil: int = typer.Option(None, help="TESTU samples per record (default: "
                                         f"{RECOMMENDED_COIL_SAMPLES}; with --port the "
-                                        "firmware's 11, several records combined)", min=1),
+                                        "firmware's 11, several records combined)",
+                                        callback=_samples),
              n_mech: int = typer.Option(None, help="TESTA samples per record (default: "
                                         f"{RECOMMENDED_MECH_SAMPLES}; with --port 11)",
-                                        min=1),
+                                        callback=_samples),
              structure: str = typer.Option("pi", help="speed loop structure: pi or ip"),
              out: Path = typer.Option(Path("autotune_out"), callback=writable_dir,
                                       help="output directory of setup.yaml, the report and "
