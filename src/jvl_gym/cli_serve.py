@@ -293,9 +293,9 @@ def serve(
     _check_distinct(address, types, "--address")
     if user_tcp is not None and user_tcp != 0 and not 1 <= user_tcp <= 65536 - len(address):
         raise typer.BadParameter(
-            f"--user-tcp {user_tcp}: motor i listens on port {user_tcp}+i, so give a base port "
-            f"in 1..{65536 - len(address)} for {len(address)} motor(s) (TCP ports are "
-            "1..65535), or 0 for free ports")
+            f"{user_tcp}: motor i listens on port {user_tcp}+i, so give a base port in "
+            f"1..{65536 - len(address)} for {len(address)} motor(s) (TCP ports are 1..65535), "
+            "or 0 for free ports", param_hint="'--user-tcp'")
     code = {"example": fm.EXAMPLE_CODE, "table": fm.TABLE_CODE}.get(fastmac_code)
     if code is None:
         raise typer.BadParameter("--fastmac-code is 'example' or 'table'")
@@ -379,11 +379,10 @@ def _check_distinct(addresses: Sequence[int], types: Sequence[str], option: str)
     for k, a in enumerate(addresses):
         if a in seen:
             j = seen[a]
-            where = ("the flash files give" if option == "--flash-dir"
-                     else "--address gives")
+            verb = "get from the flash files" if option == "--flash-dir" else "are given"
             raise typer.BadParameter(
-                f"{where} motor {j} ({types[j]}) and motor {k} ({types[k]}) the same address "
-                f"{a}; give every motor its own address", param_hint=f"'{option}'")
+                f"motor {j} ({types[j]}) and motor {k} ({types[k]}) {verb} the same "
+                f"address {a}; give every motor its own address", param_hint=f"'{option}'")
         seen[a] = k
 
 
