@@ -4,9 +4,12 @@ plot; errors one line with exit status 2."""
 from __future__ import annotations
 
 import csv
+import math
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from jvl_gym.cli import app
 from jvl_gym.families import Capability, families_with
@@ -104,3 +107,46 @@ def test_the_motor_defaults_to_a_family_that_runs_programs(
     first = families_with(Capability.PROGRAMS)[0]
     assert code == 0 and f" on {first.motor_types()[0]}, " in out
     assert first.programs is not None and first.programs.ProgramError.__name__ == "ProgramError"
+
+
+_FEW = settings(max_examples=25, deadline=None,
+                suppress_health_check=[HealthCheck.function_scoped_fixture])
+
+
+@_FEW
+@given(seconds=st.one_of(st.sampled_from([math.nan, math.inf, -math.inf, 0.0]),
+                         st.floats(max_value=0.000999), st.floats(min_value=3600.001)))
+def test_seconds_out_of_range_say_the_range(tmp_path: Path, capsys: pytest.CaptureFixture[str],
+                                            seconds: float) -> None:
+    """A time that is not 0.001 … 3600 s (NaN too) is a usage error that names it and the
+    range, and nothing is written."""
+    prog, io = _files(tmp_path)
+    out = tmp_path / "o"
+    code, _, err = _run(["program", "run", str(prog), "--seconds", repr(seconds), "--out",
+                         str(out)], capsys)
+    assert code == 2 and err.count("\n") == 1, err
+    assert "--seconds" in err and "0.001 to 3600" in err and not out.exists()
+
+
+@_FEW
+@given(number=st.one_of(st.integers(max_value=0), st.integers(min_value=254)))
+def test_a_register_number_the_motor_has_not_is_named(tmp_path: Path,
+                                                      capsys: pytest.CaptureFixture[str],
+                                                      number: int) -> None:
+    prog, io = _files(tmp_path)
+    out = tmp_path / "o"
+    code, _, err = _run(["program", "run", str(prog), "--motor", "MIS232", "--seconds", "0.01",
+                         "--register", str(number), "--out", str(out)], capsys)
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"--register {number}: no register number {number}" in err
+    assert "mis-registers.md" in err and not out.exists()
+
+
+def test_a_register_to_trace_by_number(tmp_path: Path, capsys: pytest.CaptureFixture[str]
+                                       ) -> None:
+    prog, io = _files(tmp_path)
+    code, _, err = _run(["program", "run", str(prog), "--motor", "MIS232", "--seconds", "0.01",
+                         "--register", "51", "--out", str(tmp_path / "o")], capsys)
+    assert code == 0, err
+    header = (tmp_path / "o" / "trace.csv").read_text().splitlines()[0]
+    assert "P2" in header.split(",")

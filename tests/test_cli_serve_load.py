@@ -193,3 +193,60 @@ def test_load_per_motor_takes_one_value_or_one_per_address(n: int,
             assert load[LOAD_OPTIONS[option]] == (values if len(values) == n else values * n)
         else:
             assert LOAD_OPTIONS[option] not in load
+
+
+# ------------------------------------------------------------------ addresses and ports
+def _error_line(capsys: pytest.CaptureFixture[str]) -> str:
+    err = [line for line in capsys.readouterr().err.strip().splitlines()
+           if not line.startswith("jvl_gym: compil")]  # first-use compile notices
+    assert len(err) == 1, err
+    return err[0]
+
+
+@pytest.mark.parametrize("motors", [("MIS232", "MIS232"), ("MAC140", "MAC140"),
+                                    ("MAC140", "MIS232")])
+def test_two_motors_at_one_address_are_refused_before_anything_is_served(
+        served: Any, capsys: pytest.CaptureFixture[str], motors: tuple[str, str]) -> None:
+    line, code = served("-m", motors[0], "-a", "3", "-m", motors[1], "-a", "3")
+    assert line is None and code == 2
+    text = _error_line(capsys)
+    assert "--address" in text and "same address 3" in text and motors[1] in text
+
+
+def test_two_flash_files_at_one_address_are_refused(
+        served: Any, capsys: pytest.CaptureFixture[str], tmp_path: Any) -> None:
+    """The flash files of a --flash-dir set MYADDR at power-on: two motors given one address
+    there are refused as two --address values would be."""
+    from jvl_gym.families.mis.table import TABLE
+
+    myaddr = TABLE.lookup("MY_ADDR").number
+    for i in range(2):
+        (tmp_path / f"flash_{i}.json").write_text(
+            f'{{"motor": {i}, "registers": {{"{myaddr}": 9}}}}')
+    line, code = served("-m", "MIS232", "-a", "3", "-a", "4", "--flash-dir", str(tmp_path))
+    assert line is None and code == 2
+    text = _error_line(capsys)
+    assert "--flash-dir" in text and "same address 9" in text
+
+
+@settings(max_examples=30, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(base=st.one_of(st.integers(-2**40, 3), st.integers(65530, 2**40)),
+       n=st.integers(1, 3))
+def test_user_tcp_base_port_is_a_tcp_port_for_every_motor(
+        served: Any, capsys: pytest.CaptureFixture[str], base: int, n: int) -> None:
+    """Motor i's user interface listens on BASE+i: every one of them a port 1..65535, or
+    BASE 0 (free ports); anything else is a usage error before anything is served."""
+    argv = [a for k in range(n) for a in ("-a", str(k + 1))]
+    line, code = served("-m", "MAC050", *argv, "--user-tcp", str(base))
+    err = capsys.readouterr().err.strip().splitlines()
+    if base == 0 or 1 <= base <= 65536 - n:
+        assert code == 1 and line is not None  # up to the (stand-in) server's start
+        return
+    assert line is None and code == 2 and len(err) == 1 and "--user-tcp" in err[0], err
+
+
+def test_a_record_length_below_one_is_a_usage_error(
+        served: Any, capsys: pytest.CaptureFixture[str]) -> None:
+    line, code = served("--record-length", "0")
+    assert line is None and code == 2 and "--record-length" in _error_line(capsys)

@@ -8,6 +8,8 @@ import sys
 
 import pytest
 import yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from tuning.cli import app as tune
 
 from cli_checks import one_line_error, run_cli
@@ -53,6 +55,26 @@ def test_unwritable_out_is_refused_before_the_run(capsys, args):
     code, _, err = _run(tune, args, capsys)
     line = _one_line_error(code, err)
     assert "/proc/x" in line and "--out" in line and "writable directory" in line
+
+
+@pytest.mark.parametrize(("cli", "args"), [
+    pytest.param(gym_cli, ["train", "jvl_gym/GearSync-v0"], id="train"),
+    pytest.param(gym_cli, ["evaluate", "--all"], id="evaluate"),
+    pytest.param(gym_cli, ["sweep", "configs/sweeps/none.yml"], id="sweep"),
+    pytest.param(gym_cli, ["program", "run", "program.txt"], id="program"),
+    pytest.param(tune, ["defaults"], id="defaults"),
+])
+@pytest.mark.parametrize("where", ["/proc/x", "/proc/x/y", "file"])
+def test_every_output_directory_is_checked_before_the_run(tmp_path, capsys, cli, args, where):
+    """Every command that writes an output directory refuses one it cannot write (a usage
+    error naming it) before doing anything, and creates nothing."""
+    if where == "file":
+        where = str(tmp_path / "plain")
+        (tmp_path / "plain").write_text("")
+    code, _, err = _run(cli, [*args, "--out", where], capsys)
+    line = _one_line_error(code, err)
+    assert code == 2 and where in line and "--out" in line and "directory" in line
+    assert [p.name for p in tmp_path.iterdir()] == (["plain"] if "plain" in where else [])
 
 
 def test_list_shaped_and_partial_setups(tmp_path, capsys):
@@ -233,3 +255,54 @@ def test_report_prints_negative_friction_as_not_detected():
     table = identification_table(strategy_of("MAC140"), ident)
     row = [ln for ln in table if ln.startswith("Coulomb Tc")][0]
     assert "not detected" in row
+
+
+@settings(max_examples=20, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(option=st.sampled_from(["--n-coil", "--n-mech"]), value=st.integers(-2**70, 0))
+def test_record_lengths_below_one_are_usage_errors(capsys, option, value):
+    """A record of no samples or fewer is refused before the motor is touched (not taken as
+    "the default")."""
+    code, _, err = _run(tune, ["autotune", option, str(value)], capsys)
+    assert code == 2 and option in _one_line_error(code, err)
+
+
+_BAD_SETUPS = {
+    "yaml": "motor: MAC140\nregisters: {KVOUT: [1\n",
+    "bytes": b"\xff\xfe motor",
+    "list": "- 1\n",
+    "registers": "motor: MAC140\nregisters: 5\n",
+    "key": "motor: MAC140\nfoo: 1\nregisters: {}\n",
+    "value": "motor: MAC800\nregisters: {KVOUT: abc}\n",
+}
+
+
+@pytest.mark.parametrize("motor", [[], ["--motor", "MAC140"], ["--motor", "MAC800"]])
+@pytest.mark.parametrize("kind", [*_BAD_SETUPS, "missing", "folder"])
+def test_verify_reads_the_setup_through_the_config_loader(tmp_path, capsys, kind, motor):
+    """A malformed setup file is a usage error naming the file and --setup, whatever the
+    motor (the loader of jvl_gym.config reads it, as everywhere else)."""
+    setup = tmp_path / "s.yaml"
+    if kind == "folder":
+        setup.mkdir()
+    elif kind != "missing":
+        data = _BAD_SETUPS[kind]
+        if isinstance(data, bytes):
+            setup.write_bytes(data)
+        else:
+            setup.write_text(data)
+    code, _, err = _run(tune, ["verify", *motor, "--setup", str(setup)], capsys)
+    line = _one_line_error(code, err)
+    assert code == 2 and "s.yaml" in line and "--setup" in line, line
+
+
+@settings(max_examples=25, deadline=None,
+          suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(text=st.text(max_size=60))
+def test_verify_of_any_setup_text_is_a_result_or_one_line(tmp_path, capsys, text):
+    setup = tmp_path / "any.yaml"
+    setup.write_text(text, encoding="utf-8")
+    code, _, err = _run(tune, ["verify", "--motor", "MAC140", "--setup", str(setup)], capsys)
+    if code not in (0, None):
+        line = _one_line_error(code, err)
+        assert "any.yaml" in line or "--setup" in line, line

@@ -31,6 +31,47 @@ def test_corrupt_flash_file_is_named(tmp_path, text):
         _twin(tmp_path)
 
 
+@pytest.mark.parametrize(("text", "words"), [
+    ('{"motor": 0}', 'no "registers" key'),
+    ("{}", 'no "registers" key'),
+    ('{"registers": [1]}', '"registers" is not a mapping'),
+])
+def test_flash_file_without_registers_says_so(tmp_path, text, words):
+    (tmp_path / "flash_0.json").write_text(text)
+    with pytest.raises(ValueError) as info:
+        _twin(tmp_path)
+    message = str(info.value)
+    assert "flash_0.json" in message and words in message and "fix or delete it" in message
+    assert len(message.splitlines()) == 1
+
+
+@pytest.mark.parametrize("second", ['{"motor": 1}', '{"registers": {"13": 99999999}}',
+                                    '{"registers": {"12": 5}}'])
+def test_a_bad_flash_file_loads_no_motor_and_changes_no_file(tmp_path, second):
+    """Motor 0's file is good, motor 1's is not: the twin is refused naming motor 1's file,
+    motor 0's flash and registers are as they were, and both files are unchanged."""
+    (tmp_path / "flash_0.json").write_text('{"motor": 0, "registers": {"13": 700}}')
+    (tmp_path / "flash_1.json").write_text(second)
+    files = {p.name: p.read_text() for p in tmp_path.iterdir()}
+    m = MotorArray("MAC140", n=2, seed=0)
+    regs = m.regs.copy()
+    with pytest.raises(ValueError, match="flash_1.json"):
+        Twin(m, [19, 20], flash_dir=tmp_path)
+    assert m.flash_image(0) == {} and m.flash_image(1) == {} and (m.regs == regs).all()
+    assert {p.name: p.read_text() for p in tmp_path.iterdir()} == files
+
+
+def test_serve_with_a_flash_file_without_registers_is_one_line(tmp_path, capsys):
+    from jvl_gym.cli import app
+
+    (tmp_path / "flash_0.json").write_text('{"motor": 0}')
+    with pytest.raises(SystemExit) as info:
+        app(["serve", "--tcp", "127.0.0.1:0", "--flash-dir", str(tmp_path)])
+    assert info.value.code not in (0, None)
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "flash_0.json" in err[0] and '"registers"' in err[0]
+
+
 def test_non_utf8_flash_file_is_named(tmp_path):
     (tmp_path / "flash_0.json").write_bytes(b"\xff\xfe{")
     with pytest.raises(ValueError, match="flash_0.json"):

@@ -5,11 +5,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from jvl_gym import MotorArray
 from jvl_gym.families.mis import constants as c
 from jvl_gym.families.mis.program import SPECS, ProgramError, parse_program
 from jvl_gym.families.mis.program.binary import encode_command
+from jvl_gym.registers import RegisterError
 
 REV = 409600
 
@@ -534,3 +537,71 @@ def test_program_image_round_trip_and_flash_errors() -> None:
         other.load_program_image(0, b"\x00")
     with pytest.raises(ValueError, match="no stored program"):
         MotorArray("MIS232").program_start()
+
+
+# --- user command 342 (§8.2.22: "Clear all flash sectors in the RXP area") ----------------
+_KEPT = _end("set_register register=P2 value=1\n")
+
+
+def _stored(n: int = 2, running: bool = True) -> MotorArray:
+    m = MotorArray("MIS232", n=n, seed=0)
+    m.store_program(_KEPT)
+    if running:
+        m.program_start()
+        m.step(2)
+    return m
+
+
+def _program_of(m: MotorArray, i: int = 0) -> tuple[str | None, tuple]:
+    s = m.program_status(i)
+    return m.program_text(i), (s.state, s.line, s.error, s.checksum)
+
+
+def test_command_342_erases_the_stored_program() -> None:
+    """Writing COMMAND 342 erases the program of the motors written (it stops, a reset no
+    longer starts it); COMMAND reads 0 and the other motors keep theirs."""
+    m = _stored()
+    kept = _program_of(m, 1)
+    m.write("COMMAND", 342, index=0)
+    assert m.program_text(0) is None and m.program_status(0).name == "passive"
+    assert m.program_image(0) == b"" and _reg(m, "COMMAND") == 0
+    assert _program_of(m, 1) == kept
+    m.write("MODE_REG", 0)
+    m.write("COMMAND", c.CMD_RESET, index=0)
+    assert m.program_text(0) is None and _reg(m, "MODE_REG") != c.POSITION
+
+
+def test_command_342_refused_as_a_whole_keeps_the_program() -> None:
+    """A transaction whose later register the firmware refuses (an active mode while ERR_BITS
+    ≠ 0, §8.2.31) leaves the program stored and running as it was."""
+    m = _stored()
+    m.write("ERR_BITS", 1)
+    before = _program_of(m, 0), m.regs.copy()
+    for write in (m.write_many, m.write_raw_many):
+        with pytest.raises(RegisterError):
+            write({"COMMAND": 342, "MODE_REG": 2})
+        assert _program_of(m, 0) == before[0] and np.array_equal(m.regs, before[1])
+    m.step(1)  # the kept program still runs
+    assert m.program_status(0).name == "running"
+
+
+@settings(max_examples=30, deadline=None)
+@given(command=st.sampled_from([0, 97, 267, 268, 269, 342, 399, 500]),
+       mode=st.sampled_from([None, 0, 1, 2]), errors=st.booleans(), running=st.booleans())
+def test_command_342_in_a_transaction_erases_all_or_nothing(command: int, mode: int | None,
+                                                             errors: bool,
+                                                             running: bool) -> None:
+    """A transaction of a command and a mode request either goes through, and the program is
+    gone exactly when the command was 342, or is refused and the program and the registers
+    are as they were."""
+    m = _stored(n=1, running=running)
+    if errors:
+        m.write("ERR_BITS", 1)
+    before, regs = _program_of(m), m.regs.copy()
+    values = {"COMMAND": command} if mode is None else {"COMMAND": command, "MODE_REG": mode}
+    try:
+        m.write_many(values)
+    except RegisterError:
+        assert _program_of(m) == before and np.array_equal(m.regs, regs)
+        return
+    assert (m.program_text() is None) == (command == 342)

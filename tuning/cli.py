@@ -28,9 +28,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 import typer
-import yaml
 
-from jvl_gym.cli_app import App
+from jvl_gym.cli_app import App, one_line, writable_dir
 
 from .record_lengths import RECOMMENDED_COIL_SAMPLES, RECOMMENDED_MECH_SAMPLES
 
@@ -64,23 +63,11 @@ def _nonnegative(value: float | None) -> float | None:
     return value
 
 
-def _writable_dir(value: Path) -> Path:
-    """Option callback: a directory that exists and is writable, or that can be created in a
-    writable directory (checked before any work starts; nothing is created here)."""
-    import tempfile
-
-    probe = value.absolute()
-    while not probe.exists() and probe != probe.parent:
-        probe = probe.parent
-    if probe == value.absolute() and not probe.is_dir():
-        raise typer.BadParameter(f"{value} exists and is not a directory; give a directory")
-    try:
-        if not probe.is_dir():
-            raise OSError(f"{probe} is not a directory")
-        tempfile.TemporaryFile(dir=probe).close()  # what the run would do: make a file there
-    except OSError as exc:
-        raise typer.BadParameter(f"{value} cannot be written ({exc.strerror or exc} in "
-                                 f"{probe}); give a writable directory") from None
+def _samples(value: int | None) -> int | None:
+    """Option callback: a record length, 1 or more samples (or not given: the default)."""
+    if value is not None and value < 1:
+        raise typer.BadParameter(f"a record holds 1 or more samples, got {value}; leave the "
+                                 "option out for the default")
     return value
 
 
@@ -211,7 +198,13 @@ def verify(motor: str = typer.Option(None, help="motor type (default: the setup'
                                          callback=_positive)
            ) -> None:
     """Margins, bandwidths, pole radii and robustness of a setup file's filters."""
-    strategy = _strategy(motor if motor is not None else _setup_motor(setup))
+    from jvl_gym.config import ConfigError, load_setup
+
+    try:  # the project's setup loader: the file, its YAML, its keys and values checked
+        named = load_setup(setup).motor
+    except ConfigError as exc:
+        raise typer.BadParameter(one_line(exc), param_hint="'--setup'") from None
+    strategy = _strategy(motor if motor is not None else named)
     notes, lines, stable = strategy.verify_setup(motor, setup, inertia)
     for note in notes:
         _say(note)
@@ -244,11 +237,13 @@ def autotune(motor: str = typer.Option("MAC140"),
                                       "draw of the measurement noise)"),
              n_coil: int = typer.Option(None, help="TESTU samples per record (default: "
                                         f"{RECOMMENDED_COIL_SAMPLES}; with --port the "
-                                        "firmware's 11, several records combined)"),
+                                        "firmware's 11, several records combined)",
+                                        callback=_samples),
              n_mech: int = typer.Option(None, help="TESTA samples per record (default: "
-                                        f"{RECOMMENDED_MECH_SAMPLES}; with --port 11)"),
+                                        f"{RECOMMENDED_MECH_SAMPLES}; with --port 11)",
+                                        callback=_samples),
              structure: str = typer.Option("pi", help="speed loop structure: pi or ip"),
-             out: Path = typer.Option(Path("autotune_out"), callback=_writable_dir,
+             out: Path = typer.Option(Path("autotune_out"), callback=writable_dir,
                                       help="output directory of setup.yaml, the report and "
                                       "the plots (also with --port)"),
              port: str = typer.Option(None, help="serial device or pyserial URL of a real motor "
@@ -356,17 +351,6 @@ def _refuse(strategy: Strategy, given: dict[str, bool]) -> None:
                                  f"{', '.join(bad)}", param_hint="'--motor'")
 
 
-def _setup_motor(setup: Path) -> str | None:
-    """The ``motor:`` of a setup file (None when it has none or cannot be read: the family's
-    loader then says what is wrong)."""
-    try:
-        data = yaml.safe_load(setup.read_text())
-    except (OSError, yaml.YAMLError):
-        return None
-    name = data.get("motor") if isinstance(data, dict) else None
-    return name if isinstance(name, str) else None
-
-
 def _two_mass_step(m: object, res: Result, out: Path) -> tuple[str, Path]:
     """The two-mass step of ``autotune --resonance``: the resonance from AT_MODE step records
     on ``m``, the notch/low-pass candidates of the plain PI, the choice by simulation on the
@@ -437,7 +421,7 @@ def _check_credible(strategy: Strategy, ident: object, accept: bool) -> None:
 def fleet(spec: Path = typer.Argument(..., help="fleet file (configs/fleets/*.yml) or a folder "
                                       "with one subfolder of record CSVs per motor"),
           out: Path = typer.Option(Path("fleet_out"), help="output directory",
-                                   callback=_writable_dir),
+                                   callback=writable_dir),
           address: str = typer.Option(None, help="Ray cluster: auto, HOST:PORT or "
                                       "ray://HOST:10001 (default: local Ray)"),
           num_cpus: int = typer.Option(None, help="CPUs of the local Ray"),
@@ -454,7 +438,7 @@ def fleet(spec: Path = typer.Argument(..., help="fleet file (configs/fleets/*.ym
 
 @app.command()
 def defaults(out: Path = typer.Option(
-        None, help="directory (default: the family's configs/setups)"),
+        None, help="directory (default: the family's configs/setups)", callback=writable_dir),
              family_key: str = typer.Option(
         None, "--family", help="family key (default: every family with TESTU/TESTA test "
         "modes)")) -> None:

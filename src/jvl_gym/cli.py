@@ -14,7 +14,7 @@ from typing import Annotated
 
 import typer
 
-from .cli_app import RL_EXTRA_HINT, App, CliError
+from .cli_app import RL_EXTRA_HINT, App, CliError, writable_dir
 from .cli_program import program_app
 
 app = App(prog="jvl-gym",
@@ -53,7 +53,8 @@ def _need_rl_extra(command: str) -> None:
 
 @app.command()
 def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")],
-          out: Annotated[Path, typer.Option(help="directory for the model")] = Path("runs"),
+          out: Annotated[Path, typer.Option(help="directory for the model",
+                                            callback=writable_dir)] = Path("runs"),
           timesteps: Annotated[int | None, typer.Option(help="override total_timesteps",
                                                         min=1)] = None,
           seed: Annotated[int | None, typer.Option(help="override the config's seed")] = None,
@@ -102,7 +103,8 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
                  "--all", help="every env × family × {trained, baseline, random}: the results "
                  "page")] = False,
              out: Annotated[Path | None, typer.Option(
-                 help="with --all: directory for results.md and its plots")] = None,
+                 help="with --all: directory for results.md and its plots",
+                 callback=writable_dir)] = None,
              max_steps: Annotated[int | None, typer.Option(
                  help="cut the episodes at this many steps", min=1)] = None) -> None:
     """Print policy vs baseline (mean ± std over held-out seeds) for each ENV_ID, or with
@@ -185,8 +187,8 @@ def compile_(motors_only: Annotated[bool, typer.Option(
 
 @app.command()
 def sweep(config: Annotated[Path, typer.Argument(help="sweep file (configs/sweeps/*.yml)")],
-          out: Annotated[Path, typer.Option(help="output directory (run again to resume)")]
-          = Path("sweep_out"),
+          out: Annotated[Path, typer.Option(help="output directory (run again to resume)",
+                                            callback=writable_dir)] = Path("sweep_out"),
           address: Annotated[str | None, typer.Option(
               help="Ray cluster: auto, HOST:PORT or ray://HOST:10001 (default: local Ray)")]
           = None,

@@ -10,12 +10,14 @@ from __future__ import annotations
 
 import os
 import sys
+import tempfile
+from pathlib import Path
 from typing import Any
 
 import typer
 from typer.exceptions import TyperException
 
-__all__ = ["App", "CliError", "one_line", "RL_EXTRA_HINT"]
+__all__ = ["App", "CliError", "one_line", "writable_dir", "RL_EXTRA_HINT"]
 
 #: what to do when the RL extra (torch, stable-baselines3) is missing
 RL_EXTRA_HINT = ("needs the RL extra (torch, stable-baselines3): run `make setup-rl` or "
@@ -33,6 +35,33 @@ def one_line(exc: BaseException | str) -> str:
     if not text or isinstance(exc, (OSError, KeyError, TypeError, AttributeError)):
         text = f"{type(exc).__name__}: {text}" if text else type(exc).__name__
     return text
+
+
+def writable_dir(value: Path | None) -> Path | None:
+    """Option callback of an output directory (``--out``): one that exists and is writable,
+    or that can be created in a writable directory (checked before any work starts; nothing
+    is created here). None (not given) passes.
+
+    Raises
+    ------
+    typer.BadParameter
+        The path is a file, or no file can be made where the directory would be.
+    """
+    if value is None:
+        return None
+    probe = value.absolute()
+    while not probe.exists() and probe != probe.parent:
+        probe = probe.parent
+    if probe == value.absolute() and not probe.is_dir():
+        raise typer.BadParameter(f"{value} exists and is not a directory; give a directory")
+    try:
+        if not probe.is_dir():
+            raise OSError(f"{probe} is not a directory")
+        tempfile.TemporaryFile(dir=probe).close()  # what the run would do: make a file there
+    except OSError as exc:
+        raise typer.BadParameter(f"{value} cannot be written ({exc.strerror or exc} in "
+                                 f"{probe}); give a writable directory") from None
+    return value
 
 
 class App(typer.Typer):

@@ -10,12 +10,13 @@ stderr and exit status 2.
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
-from .cli_app import CliError
+from .cli_app import CliError, writable_dir
 from .families import UnsupportedOperation
 
 __all__ = ["program_app"]
@@ -30,18 +31,48 @@ class UsageError(CliError):
     exit_code = 2
 
 
+#: the simulated time a run may take [s]
+SECONDS_RANGE = (0.001, 3600.0)
+
+
+def _seconds(value: float) -> float:
+    """Option callback of ``--seconds``: a finite time in :data:`SECONDS_RANGE`."""
+    lo, hi = SECONDS_RANGE
+    if not (math.isfinite(value) and lo <= value <= hi):
+        raise typer.BadParameter(f"{value} is no simulated time: give seconds from {lo:g} to "
+                                 f"{hi:g}")
+    return value
+
+
+def _traced(m: Any, registers: list[str], where: str) -> list[str]:
+    """The names of the registers ``--register`` gives (each a name or a number) of the motor
+    ``m``; a usage error naming the first it has not and ``where`` its registers are listed."""
+    from .registers import RegisterError
+
+    names = []
+    for text in registers:
+        key: str | int = int(text) if text.strip().lstrip("+-").isdigit() else text
+        try:
+            names.append(m.table.lookup(key).name)
+        except RegisterError as exc:
+            raise UsageError(f"--register {text}: {exc}; give a register name or number of "
+                             f"the motor ({where})") from None
+    return names
+
+
 @program_app.command("run")
 def run(program: Annotated[Path, typer.Argument(help="program text file (one command a line)")],
         motor: Annotated[str | None, typer.Option(
             help="motor type (default: the first of the first family with stored "
                  "programs)")] = None,
-        seconds: Annotated[float, typer.Option(help="simulated time [s]", min=0.001,
-                                               max=3600.0)] = 5.0,
+        seconds: Annotated[float, typer.Option(help="simulated time [s], 0.001 … 3600",
+                                               callback=_seconds)] = 5.0,
         io: Annotated[Path | None, typer.Option(help="I/O script (YAML): inputs over time, "
                                                      "sensors, load, registers")] = None,
         register: Annotated[list[str] | None, typer.Option(
             help="another register to trace (repeat)")] = None,
-        out: Annotated[Path, typer.Option(help="output directory")] = Path("program_out"),
+        out: Annotated[Path, typer.Option(help="output directory",
+                                          callback=writable_dir)] = Path("program_out"),
         seed: Annotated[int, typer.Option(help="noise seed")] = 0) -> None:
     """Run PROGRAM on a simulated motor and write its trace (CSV and plot) to OUT."""
     from . import MotorArray
@@ -70,13 +101,14 @@ def run(program: Annotated[Path, typer.Argument(help="program text file (one com
         m: Any = MotorArray(motor, seed=seed)  # its family runs programs: store_program …
     except (ValueError, KeyError, OSError) as exc:
         raise UsageError(f"--motor {motor}: {exc}") from None
+    traced = _traced(m, register or [], f"{motor}: docs/families/{fam.key}-registers.md")
     try:
         m.store_program(text)
     except progs.ProgramError as exc:
         raise UsageError(f"{program}: {exc}") from None
     try:
         script = progs.load_io_script(io)
-        trace = progs.run_bench(m, seconds, script, register or ())
+        trace = progs.run_bench(m, seconds, script, traced)
     except progs.IoScriptError as exc:
         raise UsageError(f"{io}: {exc}") from None
     except RegisterError as exc:

@@ -224,7 +224,8 @@ def serve(
         "--j1939-address", help="J1939 node address 1..252 of each motor (repeat; default "
         "the motor's FBUS_NODE_ID, 5).")] = None,
     user_tcp: Annotated[int | None, typer.Option(
-        help="FastMAC/FlexMAC user interface of motor i on TCP port BASE+i.")] = None,
+        help="FastMAC/FlexMAC user interface of motor i on TCP port BASE+i (0: free ports).")
+    ] = None,
     user_pty: Annotated[bool, typer.Option(
         "--user-pty", help="FastMAC/FlexMAC user interfaces on pseudo-terminals.")] = False,
     speed: Annotated[float, typer.Option(help="Simulated seconds per wall-clock second.")] = 1.0,
@@ -232,7 +233,7 @@ def serve(
     flash_dir: Annotated[Path | None, typer.Option(
         help="Directory of the flash files (persist 'write to flash' across runs).")] = None,
     record_length: Annotated[int | None, typer.Option(
-        help="TESTU/TESTA record length of the MAC050–141 (manual: 11).")] = None,
+        help="TESTU/TESTA record length of the MAC050–141 (manual: 11).", min=1)] = None,
     fastmac_code: Annotated[str, typer.Option(
         help="FastMAC register code: 'example' (manual 5.2.1.5) or 'table' (5.2.1.4).")
     ] = "example",
@@ -289,6 +290,12 @@ def serve(
     types = motor if len(motor) == len(address) else [motor[0]] * len(address)
     if len(motor) not in (1, len(address)):
         raise typer.BadParameter("give one --motor, or one per --address")
+    _check_distinct(address, types, "--address")
+    if user_tcp is not None and user_tcp != 0 and not 1 <= user_tcp <= 65536 - len(address):
+        raise typer.BadParameter(
+            f"{user_tcp}: motor i listens on port {user_tcp}+i, so give a base port in "
+            f"1..{65536 - len(address)} for {len(address)} motor(s) (TCP ports are 1..65535), "
+            "or 0 for free ports", param_hint="'--user-tcp'")
     code = {"example": fm.EXAMPLE_CODE, "table": fm.TABLE_CODE}.get(fastmac_code)
     if code is None:
         raise typer.BadParameter("--fastmac-code is 'example' or 'table'")
@@ -304,6 +311,7 @@ def serve(
                                  fastmac_code=code, load=load, **array_kw)
     except LoadError as exc:
         raise typer.BadParameter(str(exc)) from None
+    _check_distinct(line.addresses(), [types[k] for k in order], "--flash-dir")
     endpoint = parse_tcp(tcp) if tcp else None
     can_server = None
     if canopen:
@@ -361,6 +369,21 @@ def serve(
             node.bus.shutdown()
         stats = server.bus.stats if modbus and server is not None else line.stats
         typer.echo(f"stopped; {dict(stats)}")
+
+
+def _check_distinct(addresses: Sequence[int], types: Sequence[str], option: str) -> None:
+    """Nothing if every motor has an address of its own; a one-line BadParameter naming the
+    address, the two motors and ``option`` (where the addresses come from) otherwise: two
+    motors at one address would both answer the requests to it."""
+    seen: dict[int, int] = {}
+    for k, a in enumerate(addresses):
+        if a in seen:
+            j = seen[a]
+            verb = "get from the flash files" if option == "--flash-dir" else "are given"
+            raise typer.BadParameter(
+                f"motor {j} ({types[j]}) and motor {k} ({types[k]}) {verb} the same "
+                f"address {a}; give every motor its own address", param_hint=f"'{option}'")
+        seen[a] = k
 
 
 def canopen_server(line: Any, interface: str, channel: str, node_ids: list[int] | None,

@@ -97,6 +97,26 @@ class FlashStorage:
             (:class:`~jvl_gym.registers.RegisterRangeError`).
         """
         i = motor_index(index, self.n, "load_flash_image")
+        staged = self._staged_flash_image(i, image)
+        if self._flash is None:
+            self._flash = np.zeros_like(self.regs)
+        self._flash[i] = staged
+        self._has_flash[i] = True
+
+    def check_flash_image(self, index: int, image: Mapping[int, int]) -> None:
+        """Check ``image`` as :meth:`load_flash_image` does, storing nothing (to check the
+        images of several motors before any is loaded).
+
+        Raises
+        ------
+        RegisterShapeError, RegisterError
+            As :meth:`load_flash_image`.
+        """
+        self._staged_flash_image(motor_index(index, self.n, "load_flash_image"), image)
+
+    def _staged_flash_image(self, i: int, image: Mapping[int, int]) -> np.ndarray:
+        """The flash row of motor ``i`` that ``image`` gives (ROM defaults where it gives
+        nothing), every entry checked (:meth:`load_flash_image`)."""
         if not isinstance(image, Mapping):
             raise RegisterError(f"load_flash_image: the image must be a mapping register number "
                                 f"→ stored integer (as flash_image returns), got {image!r}. "
@@ -124,7 +144,4 @@ class FlashStorage:
                     "image holds stored integers. Nothing was changed.")
             to_raw(reg, float(np.clip(int(raw), -2.0**63, 2.0**63)) / reg.scale)  # range
             staged[reg.number] = int(raw)
-        if self._flash is None:
-            self._flash = np.zeros_like(self.regs)
-        self._flash[i] = staged
-        self._has_flash[i] = True
+        return staged

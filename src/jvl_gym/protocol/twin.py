@@ -220,9 +220,17 @@ class Twin:
                 if not 1 <= a <= 254:
                     raise ValueError(f"a unit address is 1..254 (manual 3.2.156), got {a}")
         self._check_flash_dir()
-        images = [self._load_flash_file(i) for i in range(motors.n)]
+        # every flash file is read, and checked where the motors can check an image without
+        # loading it (MotorArray.check_flash_image), before any is loaded: a bad one changes
+        # nothing
+        images = [self._read_flash_file(i) for i in range(motors.n)]
+        check = getattr(motors, "check_flash_image", None)
+        for i, image in enumerate(images):
+            if image is not None and check is not None:
+                self._flash_file_call(i, check, image)
         for i, image in enumerate(images):
             if image is not None:
+                self._flash_file_call(i, motors.load_flash_image, image)
                 self._power_on(i)
             elif addresses is not None:
                 motors.load_flash_image(i, {self.reg.MYADDR: addresses[i]})
@@ -268,30 +276,46 @@ class Twin:
             raise ValueError(f"flash directory {self.flash_dir} is not writable; give a "
                              "writable --flash-dir")
 
-    def _load_flash_file(self, i: int) -> dict[int, int] | None:
-        """The flash image in motor ``i``'s flash file, loaded into the motor's flash (which
-        checks every register); None if there is no file. ValueError naming the file if it is
-        not a flash image the motor takes (the motor's flash is then unchanged)."""
+    def _read_flash_file(self, i: int) -> dict[int, int] | None:
+        """The flash image in motor ``i``'s flash file (register number → raw), None if there
+        is no file; the motor is not touched. ValueError naming the file if it is not a flash
+        image: not JSON, or no ``"registers"`` mapping of register numbers to integers."""
         path = self._flash_path(i)
         if path is None or not path.exists():
             return None
         try:
             data = json.loads(path.read_text(encoding="utf-8"))
-            regs = data["registers"] if isinstance(data, dict) else None
+            if not isinstance(data, dict) or "registers" not in data:
+                raise ValueError('it has no "registers" key: expected {"registers": '
+                                 '{"<number>": <raw>, ...}}')
+            regs = data["registers"]
             if not isinstance(regs, dict):
-                raise ValueError("expected {\"registers\": {\"<number>\": <raw>, ...}}")
+                raise ValueError('"registers" is not a mapping: expected {"registers": '
+                                 '{"<number>": <raw>, ...}}')
             image = {}
             for k, v in regs.items():
                 if not k.isdigit() or type(v) is not int:
                     raise ValueError(f"entry {k!r}: {v!r} is not register number: integer")
                 image[int(k)] = v
-            self.m.load_flash_image(i, image)
-        except (OSError, UnicodeDecodeError, ValueError, KeyError) as exc:
-            reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-            raise ValueError(f"flash file {path} is not a flash image of motor {i}: {reason}; "
-                             "fix or delete it (the twin writes it on 'write flash', 56h)"
-                             ) from exc
+        except (OSError, UnicodeDecodeError, ValueError) as exc:
+            raise self._flash_file_error(i, exc) from exc
         return image
+
+    def _flash_file_call(self, i: int, method: Any, image: dict[int, int]) -> None:
+        """``method(i, image)``: check or load the image of motor ``i``'s flash file (the motor
+        checks every register); ValueError naming the file if the motor refuses it (its flash
+        is then unchanged)."""
+        try:
+            method(i, image)
+        except (ValueError, KeyError) as exc:
+            raise self._flash_file_error(i, exc) from exc
+
+    def _flash_file_error(self, i: int, exc: BaseException) -> ValueError:
+        """The error of a flash file the twin cannot take: what, which file, what to do."""
+        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        return ValueError(f"flash file {self._flash_path(i)} is not a flash image of motor {i}: "
+                          f"{reason}; fix or delete it (the twin writes it on 'write flash', "
+                          "56h)")
 
     def _save_flash_file(self, i: int) -> None:
         """Write motor ``i``'s flash to its file; a file that cannot be written is logged and

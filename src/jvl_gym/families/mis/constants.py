@@ -121,6 +121,7 @@ CMD_RESYNC = 257  #: P_IST := encoder position
 CMD_RESET = 267  #: reset the CPU
 CMD_SAVE_RESET = 268  #: save to flash, then reset
 CMD_SAVE = 269  #: save to flash, continue
+CMD_ERASE_PROGRAM = 342  #: clear all flash sectors in the RXP area: erase the stored program
 CMD_EMERGENCY_STOP = 398  #: emergency stop with deceleration (ACC_EMERG)
 CMD_EMERGENCY_HALT = 399  #: emergency stop without deceleration
 #: user commands only a passive or safe motor takes

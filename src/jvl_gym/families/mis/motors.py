@@ -371,9 +371,11 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         self.regs[i, R.ENCODER_POS] = value
 
     def _commands(self, idx: np.ndarray, raw: np.ndarray) -> None:
-        """FastMac commands (§8.2.21) and the user commands 257, 267–269, 398, 399
+        """FastMac commands (§8.2.21) and the user commands 257, 267–269, 342, 398, 399
         (§8.2.22; reset and save only in passive or safe mode, which "allows the save in flash
-        and reset commands", §8.2.3); other numbers do nothing. COMMAND reads 0 afterwards."""
+        and reset commands", §8.2.3; 342 erases the stored program,
+        :meth:`~.program.api.ProgramMixin.erase_program`); other numbers do nothing. COMMAND
+        reads 0 afterwards."""
         regs = self.regs
         for i, cmd in zip(idx.tolist(), raw.tolist()):
             if cmd in c.CMD_PASSIVE_ONLY and regs[i, R.MODE_REG] not in (c.PASSIVE, c.SAFE):
@@ -420,6 +422,8 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
                 self.state[i, L.S_FRAC] = 0.0
             elif cmd in (c.CMD_SAVE, c.CMD_SAVE_RESET):
                 self._save_flash(np.array([i]))
+            elif cmd == c.CMD_ERASE_PROGRAM:
+                self.erase_program(i)
             elif cmd == c.CMD_EMERGENCY_STOP and regs[i, R.MODE_REG] not in (c.PASSIVE,
                                                                               c.SAFE):
                 self.state[i, L.S_EMERGENCY] = 1.0

@@ -11,6 +11,7 @@ without a running program step in one compiled call as before.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -215,6 +216,22 @@ class ProgramMixin:
         return [r for r in runners if r is not None]
 
     # ------------------------------------------------------------------ hooks
+    def _snapshot(self, idx: np.ndarray) -> tuple[Any, ...]:
+        """What a register transaction on motors ``idx`` may change
+        (:meth:`~jvl_gym.bank.RegisterBank._snapshot`) and their stored programs: COMMAND 342
+        erases a program and a reset (267, 268) restarts it, each by replacing the motor's
+        runner, so the runners as they are now are what a refused transaction puts back."""
+        runners = None if self._runners is None else list(self._runners)
+        return super()._snapshot(idx), runners  # type: ignore[misc]
+
+    def _restore(self, idx: np.ndarray, saved: tuple[Any, ...]) -> None:
+        """Put back what :meth:`_snapshot` saved, the stored programs of motors ``idx`` too."""
+        rows, runners = saved
+        super()._restore(idx, rows)  # type: ignore[misc]
+        if runners is not None and self._runners is not None:
+            for i in idx.tolist():
+                self._runners[i] = runners[i]
+
     def _program_power_on(self, idx: np.ndarray) -> None:
         """Power-on of the motors ``idx``: a stored program restarts from line 1 in position
         mode unless SETUP_BITS says not to (module docstring)."""
