@@ -342,3 +342,30 @@ def test_record_files_load_valid_or_raise_record_error(edits, reverse, raw):
     assert isinstance(rec, Record)
     assert np.all(np.isfinite(rec.input)) and np.all(np.isfinite(rec.output))
     assert rec.input.shape == rec.output.shape
+
+
+@settings(max_examples=30, deadline=None)
+@given(motor=st.sampled_from(["MAC140", "MAC800", "MIS232"]),
+       value=st.integers(2**63, 2**200) | st.integers(-(2**200), -(2**63) - 1))
+def test_an_integer_beyond_64_bits_is_refused_by_its_own_digits(motor: str, value: int) -> None:
+    """An int no register can hold is refused with the integer as given (not "inf"), by
+    ``write``, ``write_many`` and ``write_raw``; nothing changes."""
+    m = _arrays()[motor]
+    before = m.read_raw("P_SOLL").copy()
+    for write in (lambda: m.write("P_SOLL", value), lambda: m.write_many({"P_SOLL": value}),
+                  lambda: m.write_raw("P_SOLL", value)):
+        with pytest.raises(RegisterError) as info:
+            write()
+        assert "inf" not in str(info.value)
+    with pytest.raises(RegisterError, match=str(value)):
+        m.write("P_SOLL", value)
+    np.testing.assert_array_equal(m.read_raw("P_SOLL"), before)
+
+
+_ARRAYS: dict[str, MotorArray] = {}
+
+
+def _arrays() -> dict[str, MotorArray]:
+    if not _ARRAYS:
+        _ARRAYS.update({t: MotorArray(t, n=2, seed=0) for t in ("MAC140", "MAC800", "MIS232")})
+    return _ARRAYS

@@ -140,12 +140,15 @@ def real_values(reg: Register, value: Any) -> np.ndarray:
     ------
     RegisterRangeError
         For a str, bytes, bool, complex, None or any other non-numeric value (also inside an
-        array: an array's dtype must be an integer or float type).
+        array: an array's dtype must be an integer or float type), and for a Python int beyond
+        64 bits (outside every register's range; the message quotes it exactly).
     """
     if isinstance(value, (str, bytes, bytearray, bool, np.bool_, complex, np.complexfloating)):
         raise _not_a_number(reg, value)
-    if type(value) is int and abs(value) >= 2**63:  # beyond int64 and maybe float: out of range
-        return np.asarray(math.copysign(math.inf, value))
+    if type(value) is int and abs(value) >= 2**63:  # beyond int64, so beyond every register
+        raise RegisterRangeError(
+            f"{reg.name} (register {reg.number}): value {value} is outside the range "
+            f"{reg.range_text} ({reg.format.value}, manual {reg.section})")
     try:
         arr = np.asarray(value)
     except (TypeError, ValueError) as exc:  # a ragged sequence
