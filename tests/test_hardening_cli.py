@@ -77,6 +77,21 @@ def test_every_output_directory_is_checked_before_the_run(tmp_path, capsys, cli,
     assert [p.name for p in tmp_path.iterdir()] == (["plain"] if "plain" in where else [])
 
 
+@pytest.mark.parametrize("where", ["/proc/x", "/proc/x/y/setup.yaml", "dir"])
+def test_synthesize_output_file_is_checked_before_the_design(tmp_path, capsys, where):
+    """``jvl-tune synthesize --out FILE`` refuses a file it could not write (a directory, a
+    place no file can be made) before designing, and creates nothing."""
+    if where == "dir":
+        where = str(tmp_path / "d")
+        (tmp_path / "d").mkdir()
+    code, _, err = _run(tune, ["synthesize", "--motor", "MAC140", "--inertia", "1e-4",
+                               "--out", where], capsys)
+    line = _one_line_error(code, err)
+    assert code == 2 and where in line and "--out" in line
+    assert [p.name for p in tmp_path.iterdir()] == (["d"] if where.endswith("/d") else [])
+    assert not any((tmp_path / "d").iterdir()) if where.endswith("/d") else True
+
+
 def test_list_shaped_and_partial_setups(tmp_path, capsys):
     bad = tmp_path / "list.yaml"
     bad.write_text("- 1\n- 2\n")

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
-from jvl_gym.cli_app import App, one_line, writable_dir
+from jvl_gym.cli_app import App, one_line, writable_dir, writable_file
 
 from .record_lengths import RECOMMENDED_COIL_SAMPLES, RECOMMENDED_MECH_SAMPLES
 
@@ -171,7 +171,7 @@ def synthesize_cmd(motor: str = typer.Option(...), inertia: float = typer.Option
         coulomb: float = typer.Option(0.0, help="identified Coulomb friction [N m] (pi: adds a "
                                       "position integral when its dead band exceeds 5 counts)",
                                       callback=_nonnegative),
-        out: Path = typer.Option(Path("setup.yaml"))) -> None:
+        out: Path = typer.Option(Path("setup.yaml"), callback=writable_file)) -> None:
     """Design and quantise all filters for given motor data; write a setup YAML."""
     from .pipeline import write_setup
     from .report import design_table

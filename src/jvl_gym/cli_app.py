@@ -64,6 +64,27 @@ def writable_dir(value: Path | None) -> Path | None:
     return value
 
 
+def writable_file(value: Path | None) -> Path | None:
+    """Option callback of an output file (``--out FILE``): not a directory, and in a directory
+    :func:`writable_dir` accepts (checked before any work starts; nothing is created here).
+    None (not given) passes.
+
+    Raises
+    ------
+    typer.BadParameter
+        The path is a directory, or its directory cannot be written.
+    """
+    if value is None:
+        return None
+    if value.is_dir():
+        raise typer.BadParameter(f"{value} is a directory; give a file name")
+    try:
+        writable_dir(value.absolute().parent)
+    except typer.BadParameter as exc:
+        raise typer.BadParameter(f"{value} cannot be written: {exc.message}") from None
+    return value
+
+
 class App(typer.Typer):
     """A :class:`typer.Typer` whose errors are one line on stderr with a non-zero exit status.
 
