@@ -38,6 +38,7 @@ import numpy as np
 from .models import (
     MotorData,
     freqresp,
+    polymul,
     rigid_gain,
     speed_plant,
 )
@@ -120,16 +121,17 @@ def current_registers(motor: MotorData, kp_norm: float, ki_norm: float | None = 
 def _current_loop_poly(motor: MotorData, regs: Mapping[str, float]
                        ) -> tuple[np.ndarray, np.ndarray]:
     a, g, d = motor.coil_pole, motor.coil_gain, int(motor.pwm_delay)
-    num = np.polymul([regs["KIFX2"], regs["KIFX1"], 0.0], [g * (1 - a)])
-    num = np.polymul(num, [regs["KIB1"], regs["KIB0"]])
-    den = np.polymul([1.0, -regs["KIFY1"], -regs["KIFY0"]], [1.0, -a])
-    den = np.polymul(den, np.r_[1.0, np.zeros(d)])
-    den = np.polymul(den, [1.0, 0.0])
+    num = polymul([regs["KIFX2"], regs["KIFX1"], 0.0], [g * (1 - a)])
+    num = polymul(num, [regs["KIB1"], regs["KIB0"]])
+    den = polymul([1.0, -regs["KIFY1"], -regs["KIFY0"]], [1.0, -a])
+    den = polymul(den, np.r_[1.0, np.zeros(d)])
+    den = polymul(den, [1.0, 0.0])
     return num, den
 
 
-def _metrics_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, dt: float) -> LoopMetrics:
-    z = np.exp(1j * w * dt)
+def _metrics_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, z: np.ndarray
+                  ) -> LoopMetrics:
+    """Metrics of the loop ``num/den`` on the grid ``w`` [rad/s], ``z = exp(jωT)``."""
     lw = np.polyval(num, z) / np.polyval(den, z)
     return metrics_from_response(lw, w, np.polyadd(den, num))
 
@@ -166,12 +168,13 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
     """
     dt = motor.family.inner_dt if dt is None else dt
     w = frequency_grid(dt, 1500)
+    z = np.exp(1j * w * dt)
     if gains is not None:
         regs = current_registers(motor, *gains)
-        m = _metrics_poly(*_current_loop_poly(motor, regs), w, dt)
+        m = _metrics_poly(*_current_loop_poly(motor, regs), w, z)
         rpm = min(_metrics_poly(*_current_loop_poly(
             motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl), regs), w,
-            dt).pm_deg for fr in (0.7, 1.3) for fl in (0.7, 1.3))
+            z).pm_deg for fr in (0.7, 1.3) for fl in (0.7, 1.3))
         return CurrentDesign(regs, gains[0], m, rpm, [], gains[1])
     feasible = []
     corners = [motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
@@ -179,13 +182,13 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
     for kpn in np.linspace(0.05, 0.8, 31):
         for kin in np.geomspace(0.005, 0.25, 31):
             regs = current_registers(motor, float(kpn), float(kin))
-            m = _metrics_poly(*_current_loop_poly(motor, regs), w, dt)
+            m = _metrics_poly(*_current_loop_poly(motor, regs), w, z)
             if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
                 continue
             rpm = math.inf
             ok = True
             for mm in corners:
-                r = _metrics_poly(*_current_loop_poly(mm, regs), w, dt)
+                r = _metrics_poly(*_current_loop_poly(mm, regs), w, z)
                 ok &= r.stable
                 rpm = min(rpm, r.pm_deg)
             if ok and rpm >= robust_pm_min:
@@ -315,6 +318,7 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
     z = np.exp(1j * w * ts_o)
     pn, pd, pw, rl = _speed_candidates(motor, current_regs, w)
     kpl16 = 16.0 * rigid_gain(motor)
+    integrated = polymul([1.0, -1.0], pd)
     feasible = []
     grid_p = [gains[0]] if gains else np.geomspace(0.03, 1.2, 64)
     grid_i = [gains[1]] if gains else np.geomspace(0.002, 0.3, 64)
@@ -324,7 +328,8 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
             cw = 16.0 * (kp + ki * z / (z - 1.0))
             lw = cw * pw
             cnum = 16.0 * np.array([kp + ki, -kp])
-            char = np.polyadd(np.polymul([1.0, -1.0], pd), np.polymul(cnum, pn))
+            ctrl = polymul(cnum, pn)
+            char = np.polyadd(integrated, ctrl)
             # L = 16(kp + ki z/(z-1)) P = 16((kp+ki) z - kp)/(z-1) · pn/pd
             m = metrics_from_response(lw, w, char)
             if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
@@ -339,8 +344,7 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
             if rpm < robust_pm_min:
                 continue
             # the doubled-gain case must be stable too
-            char2 = np.polyadd(np.polymul([1.0, -1.0], pd),
-                               max(robust_gains) * np.polymul(cnum, pn))
+            char2 = np.polyadd(integrated, max(robust_gains) * ctrl)
             if np.max(np.abs(np.roots(char2))) >= 0.999:
                 continue
             feasible.append((kpn, kin, kp, ki, m, rpm))
@@ -396,13 +400,14 @@ def _position_integral(pn: np.ndarray, pd: np.ndarray, pw: np.ndarray, rl: list[
         cw = 16.0 * (kp + ki * z / (z - 1.0) + kii * z**2 / (z - 1.0) ** 2)
         lw = cw * pw
         cnum = 16.0 * np.array([kp + ki + kii, -2.0 * kp - ki, kp])
-        dd = np.polymul([1.0, -2.0, 1.0], pd)
-        m = metrics_from_response(lw, w, np.polyadd(dd, np.polymul(cnum, pn)))
+        dd = polymul([1.0, -2.0, 1.0], pd)
+        ctrl = polymul(cnum, pn)
+        m = metrics_from_response(lw, w, np.polyadd(dd, ctrl))
         if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
             break
         rpm = min(metrics_from_response(lw * g, w).pm_deg for g in robust_gains)
         rpm = min([rpm] + [metrics_from_response(cw * prl, w).pm_deg for prl in rl])
-        char2 = np.polyadd(dd, max(robust_gains) * np.polymul(cnum, pn))
+        char2 = np.polyadd(dd, max(robust_gains) * ctrl)
         if rpm < robust_pm_min or np.max(np.abs(np.roots(char2))) >= 0.999:
             break
         best = (kii, m, rpm)

@@ -88,6 +88,15 @@ def _crossings(x: np.ndarray) -> np.ndarray:
     return np.flatnonzero(s[:-1] * s[1:] < 0)
 
 
+def _crossed_integers(f: np.ndarray, candidates: range) -> list[int]:
+    """The integers j of ``candidates`` that ``f`` can cross (``min f < j < max f``): f − j
+    changes sign only for those; all of them when ``f`` holds a NaN."""
+    lo, hi = float(np.min(f)), float(np.max(f))
+    if math.isnan(lo) or math.isnan(hi):
+        return list(candidates)
+    return [j for j in candidates if lo < j < hi]
+
+
 def metrics_from_response(lw: np.ndarray, w: np.ndarray, char_poly: np.ndarray | None = None
                           ) -> LoopMetrics:
     """Margins and bandwidth from a sampled open-loop response.
@@ -117,7 +126,7 @@ def metrics_from_response(lw: np.ndarray, w: np.ndarray, char_poly: np.ndarray |
     gm_low = math.inf
     k = (ph / math.pi + 1.0) / 2.0  # integer when the phase is an odd multiple of 180°
     f = k - np.floor(k[0] + 0.5)
-    for j in range(-3, 4):
+    for j in _crossed_integers(f, range(-3, 4)):
         for i in _crossings(f - j):
             t = (f[i] - j) / (f[i] - f[i + 1])
             lm = logm[i] + t * (logm[i + 1] - logm[i])
