@@ -66,6 +66,7 @@ from .verify import (
     frequency_grid,
     loop_metrics,
     metrics_from_response,
+    with_pole_radius,
 )
 
 __all__ = ["EXACT_SUMS", "LOWPASS_PER_CROSSOVER", "LOWPASS_DAMPING", "NOTCH_WIDTH",
@@ -263,10 +264,12 @@ def _search(motor: MotorData, cur: Mapping[str, float], f_lp: float | None,
             kp, ki = kpn / kpl16, kin / kpl16
             cw = 16.0 * (kp + ki * z / (z - 1.0)) * fw
             lw = cw * pw
+            m = metrics_from_response(lw, w)
+            if not (m.pm_deg >= 50 and m.gm_db >= 10):
+                continue
             loop_num = polymul(polymul(16.0 * np.array([kp + ki, -kp]), ln_z), pn)
-            char = np.polyadd(loop_den, loop_num)
-            m = metrics_from_response(lw, w, char)
-            if not (m.stable and m.pm_deg >= 50 and m.gm_db >= 10):
+            m = with_pole_radius(m, np.polyadd(loop_den, loop_num))
+            if not m.stable:
                 continue
             if min(metrics_from_response(lw * s, w).pm_deg for s in (0.5, 2.0)) < 35:
                 continue

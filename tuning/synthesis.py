@@ -42,7 +42,7 @@ from .models import (
     rigid_gain,
     speed_plant,
 )
-from .verify import LoopMetrics, frequency_grid, metrics_from_response
+from .verify import LoopMetrics, frequency_grid, metrics_from_response, with_pole_radius
 
 __all__ = [
     "CurrentDesign",
@@ -129,11 +129,19 @@ def _current_loop_poly(motor: MotorData, regs: Mapping[str, float]
     return num, den
 
 
-def _metrics_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, z: np.ndarray
+def _margins_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, z: np.ndarray
                   ) -> LoopMetrics:
-    """Metrics of the loop ``num/den`` on the grid ``w`` [rad/s], ``z = exp(jωT)``."""
-    lw = np.polyval(num, z) / np.polyval(den, z)
-    return metrics_from_response(lw, w, np.polyadd(den, num))
+    """Margins and bandwidth of the loop ``num/den`` on the grid ``w`` [rad/s], ``z =
+    exp(jωT)``, without the pole radius (:func:`_metrics_poly`)."""
+    return metrics_from_response(np.polyval(num, z) / np.polyval(den, z), w)
+
+
+def _metrics_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, z: np.ndarray,
+                  margins: LoopMetrics | None = None) -> LoopMetrics:
+    """Metrics of the loop ``num/den`` with the pole radius of ``den + num``; ``margins``: its
+    :func:`_margins_poly`, when already computed."""
+    m = _margins_poly(num, den, w, z) if margins is None else margins
+    return with_pole_radius(m, np.polyadd(den, num))
 
 
 def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
@@ -172,7 +180,7 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
     if gains is not None:
         regs = current_registers(motor, *gains)
         m = _metrics_poly(*_current_loop_poly(motor, regs), w, z)
-        rpm = min(_metrics_poly(*_current_loop_poly(
+        rpm = min(_margins_poly(*_current_loop_poly(
             motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl), regs), w,
             z).pm_deg for fr in (0.7, 1.3) for fl in (0.7, 1.3))
         return CurrentDesign(regs, gains[0], m, rpm, [], gains[1])
@@ -182,16 +190,18 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
     for kpn in np.linspace(0.05, 0.8, 31):
         for kin in np.geomspace(0.005, 0.25, 31):
             regs = current_registers(motor, float(kpn), float(kin))
-            m = _metrics_poly(*_current_loop_poly(motor, regs), w, z)
-            if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
+            poly = _current_loop_poly(motor, regs)
+            m = _margins_poly(*poly, w, z)
+            if not (m.pm_deg >= pm_min and m.gm_db >= gm_min):
                 continue
-            rpm = math.inf
-            ok = True
-            for mm in corners:
-                r = _metrics_poly(*_current_loop_poly(mm, regs), w, z)
-                ok &= r.stable
-                rpm = min(rpm, r.pm_deg)
-            if ok and rpm >= robust_pm_min:
+            m = _metrics_poly(*poly, w, z, m)
+            if not m.stable:
+                continue
+            polys = [_current_loop_poly(mm, regs) for mm in corners]
+            rm = [_margins_poly(*p, w, z) for p in polys]
+            rpm = min([math.inf] + [r.pm_deg for r in rm])
+            if rpm >= robust_pm_min and all(_metrics_poly(*p, w, z, r).stable
+                                            for p, r in zip(polys, rm)):
                 feasible.append((float(kpn), float(kin), m, rpm))
     if not feasible:
         raise ValueError("no current-loop gains meet the margin constraints; relax them")
@@ -328,11 +338,13 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
             cw = 16.0 * (kp + ki * z / (z - 1.0))
             lw = cw * pw
             cnum = 16.0 * np.array([kp + ki, -kp])
+            m = metrics_from_response(lw, w)
+            if not (m.pm_deg >= pm_min and m.gm_db >= gm_min):
+                continue
             ctrl = polymul(cnum, pn)
-            char = np.polyadd(integrated, ctrl)
             # L = 16(kp + ki z/(z-1)) P = 16((kp+ki) z - kp)/(z-1) · pn/pd
-            m = metrics_from_response(lw, w, char)
-            if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
+            m = with_pole_radius(m, np.polyadd(integrated, ctrl))
+            if not m.stable:
                 continue
             rpm = math.inf
             for scale in robust_gains:
@@ -402,8 +414,11 @@ def _position_integral(pn: np.ndarray, pd: np.ndarray, pw: np.ndarray, rl: list[
         cnum = 16.0 * np.array([kp + ki + kii, -2.0 * kp - ki, kp])
         dd = polymul([1.0, -2.0, 1.0], pd)
         ctrl = polymul(cnum, pn)
-        m = metrics_from_response(lw, w, np.polyadd(dd, ctrl))
-        if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
+        m = metrics_from_response(lw, w)
+        if not (m.pm_deg >= pm_min and m.gm_db >= gm_min):
+            break
+        m = with_pole_radius(m, np.polyadd(dd, ctrl))
+        if not m.stable:
             break
         rpm = min(metrics_from_response(lw * g, w).pm_deg for g in robust_gains)
         rpm = min([rpm] + [metrics_from_response(cw * prl, w).pm_deg for prl in rl])
