@@ -184,25 +184,29 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
             motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl), regs), w,
             z).pm_deg for fr in (0.7, 1.3) for fl in (0.7, 1.3))
         return CurrentDesign(regs, gains[0], m, rpm, [], gains[1])
-    feasible = []
     corners = [motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
                for fr in (0.7, 1.3) for fl in (0.7, 1.3)]
-    for kpn in np.linspace(0.05, 0.8, 31):
-        for kin in np.geomspace(0.005, 0.25, 31):
-            regs = current_registers(motor, float(kpn), float(kin))
-            poly = _current_loop_poly(motor, regs)
-            m = _margins_poly(*poly, w, z)
-            if not (m.pm_deg >= pm_min and m.gm_db >= gm_min):
-                continue
-            m = _metrics_poly(*poly, w, z, m)
-            if not m.stable:
-                continue
-            polys = [_current_loop_poly(mm, regs) for mm in corners]
-            rm = [_margins_poly(*p, w, z) for p in polys]
-            rpm = min([math.inf] + [r.pm_deg for r in rm])
-            if rpm >= robust_pm_min and all(_metrics_poly(*p, w, z, r).stable
-                                            for p, r in zip(polys, rm)):
-                feasible.append((float(kpn), float(kin), m, rpm))
+
+    def candidate(kpn: float, kin: float) -> tuple[Any, ...] | None:
+        regs = current_registers(motor, float(kpn), float(kin))
+        poly = _current_loop_poly(motor, regs)
+        m = _margins_poly(*poly, w, z)
+        if not (m.pm_deg >= pm_min and m.gm_db >= gm_min):
+            return None
+        m = _metrics_poly(*poly, w, z, m)
+        if not m.stable:
+            return None
+        polys = [_current_loop_poly(mm, regs) for mm in corners]
+        rm = [_margins_poly(*p, w, z) for p in polys]
+        rpm = min([math.inf] + [r.pm_deg for r in rm])
+        if rpm >= robust_pm_min and all(_metrics_poly(*p, w, z, r).stable
+                                        for p, r in zip(polys, rm)):
+            return (float(kpn), float(kin), m, rpm)
+        return None
+
+    # without a bandwidth only the largest feasible integral gain counts
+    feasible = _feasible(np.linspace(0.05, 0.8, 31), np.geomspace(0.005, 0.25, 31), candidate,
+                         1.0 if bandwidth_hz is None else None)
     if not feasible:
         raise ValueError("no current-loop gains meet the margin constraints; relax them")
     notes: list[str] = []
@@ -212,6 +216,30 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
         best = _at_bandwidth(feasible, 2, bandwidth_hz, "current-loop", 0, notes)
     kpn, kin, m, rpm = best
     return CurrentDesign(current_registers(motor, kpn, kin), kpn, m, rpm, notes, kin)
+
+
+def _feasible(grid_p: Any, grid_i: Any, candidate: Any, within: float | None
+              ) -> list[tuple[Any, ...]]:
+    """The feasible designs ``candidate(kpn, kin)`` (None: not feasible) of the grid
+    ``grid_p`` × ``grid_i`` of normalised proportional and integral gains, in the grid's order
+    (``grid_p`` outer, ``grid_i`` inner).
+
+    With ``within`` None every point is tried. Otherwise only those a choice among the
+    largest integral gains needs: the integral gains are tried from the largest down, and
+    the search stops at the first one below ``within`` times the largest feasible one."""
+    if within is None:
+        return [f for kpn in grid_p for kin in grid_i if (f := candidate(kpn, kin)) is not None]
+    found: list[tuple[int, int, tuple[Any, ...]]] = []
+    top = None
+    for j in sorted(range(len(grid_i)), key=lambda j: -grid_i[j]):
+        if top is not None and not grid_i[j] >= within * top:
+            break
+        for i in range(len(grid_p)):
+            f = candidate(grid_p[i], grid_i[j])
+            if f is not None:
+                found.append((i, j, f))
+                top = grid_i[j] if top is None else top
+    return [f for _, _, f in sorted(found, key=lambda t: (t[0], t[1]))]
 
 
 def _at_bandwidth(feasible: list[tuple[Any, ...]], metrics: int, bandwidth_hz: float, loop: str,
@@ -329,37 +357,39 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
     pn, pd, pw, rl = _speed_candidates(motor, current_regs, w)
     kpl16 = 16.0 * rigid_gain(motor)
     integrated = polymul([1.0, -1.0], pd)
-    feasible = []
     grid_p = [gains[0]] if gains else np.geomspace(0.03, 1.2, 64)
     grid_i = [gains[1]] if gains else np.geomspace(0.002, 0.3, 64)
-    for kpn in grid_p:
-        for kin in grid_i:
-            kp, ki = kpn / kpl16, kin / kpl16
-            cw = 16.0 * (kp + ki * z / (z - 1.0))
-            lw = cw * pw
-            cnum = 16.0 * np.array([kp + ki, -kp])
-            m = metrics_from_response(lw, w)
-            if not (m.pm_deg >= pm_min and m.gm_db >= gm_min):
-                continue
-            ctrl = polymul(cnum, pn)
-            # L = 16(kp + ki z/(z-1)) P = 16((kp+ki) z - kp)/(z-1) · pn/pd
-            m = with_pole_radius(m, np.polyadd(integrated, ctrl))
-            if not m.stable:
-                continue
-            rpm = math.inf
-            for scale in robust_gains:
-                rpm = min(rpm, metrics_from_response(lw * scale, w).pm_deg)
-            if rpm < robust_pm_min:
-                continue
-            for prl in rl:
-                rpm = min(rpm, metrics_from_response(cw * prl, w).pm_deg)
-            if rpm < robust_pm_min:
-                continue
-            # the doubled-gain case must be stable too
-            char2 = np.polyadd(integrated, max(robust_gains) * ctrl)
-            if np.max(np.abs(np.roots(char2))) >= 0.999:
-                continue
-            feasible.append((kpn, kin, kp, ki, m, rpm))
+
+    def candidate(kpn: float, kin: float) -> tuple[Any, ...] | None:
+        kp, ki = kpn / kpl16, kin / kpl16
+        cw = 16.0 * (kp + ki * z / (z - 1.0))
+        lw = cw * pw
+        cnum = 16.0 * np.array([kp + ki, -kp])
+        m = metrics_from_response(lw, w)
+        if not (m.pm_deg >= pm_min and m.gm_db >= gm_min):
+            return None
+        ctrl = polymul(cnum, pn)
+        # L = 16(kp + ki z/(z-1)) P = 16((kp+ki) z - kp)/(z-1) · pn/pd
+        m = with_pole_radius(m, np.polyadd(integrated, ctrl))
+        if not m.stable:
+            return None
+        rpm = math.inf
+        for scale in robust_gains:
+            rpm = min(rpm, metrics_from_response(lw * scale, w).pm_deg)
+        if rpm < robust_pm_min:
+            return None
+        for prl in rl:
+            rpm = min(rpm, metrics_from_response(cw * prl, w).pm_deg)
+        if rpm < robust_pm_min:
+            return None
+        # the doubled-gain case must be stable too
+        char2 = np.polyadd(integrated, max(robust_gains) * ctrl)
+        if np.max(np.abs(np.roots(char2))) >= 0.999:
+            return None
+        return (kpn, kin, kp, ki, m, rpm)
+
+    # without a bandwidth only the integral gains within 2 % of the largest feasible one count
+    feasible = _feasible(grid_p, grid_i, candidate, 0.98 if bandwidth_hz is None else None)
     if not feasible:
         raise ValueError("no speed-loop gains meet the margin constraints; relax them")
     notes: list[str] = []
