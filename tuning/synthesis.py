@@ -120,20 +120,31 @@ def current_registers(motor: MotorData, kp_norm: float, ki_norm: float | None = 
 
 def _current_loop_poly(motor: MotorData, regs: Mapping[str, float]
                        ) -> tuple[np.ndarray, np.ndarray]:
-    a, g, d = motor.coil_pole, motor.coil_gain, int(motor.pwm_delay)
+    """Numerator and denominator (descending powers of z) of the current open loop."""
+    return _current_loop_num(motor, regs), _current_loop_den(motor, regs)
+
+
+def _current_loop_num(motor: MotorData, regs: Mapping[str, float]) -> np.ndarray:
+    a, g = motor.coil_pole, motor.coil_gain
     num = polymul([regs["KIFX2"], regs["KIFX1"], 0.0], [g * (1 - a)])
-    num = polymul(num, [regs["KIB1"], regs["KIB0"]])
+    return polymul(num, [regs["KIB1"], regs["KIB0"]])
+
+
+def _current_loop_den(motor: MotorData, regs: Mapping[str, float]) -> np.ndarray:
+    """The denominator: the coil, its PWM delay and IF's denominator (KIFY1, KIFY0)."""
+    a, d = motor.coil_pole, int(motor.pwm_delay)
     den = polymul([1.0, -regs["KIFY1"], -regs["KIFY0"]], [1.0, -a])
     den = polymul(den, np.r_[1.0, np.zeros(d)])
-    den = polymul(den, [1.0, 0.0])
-    return num, den
+    return polymul(den, [1.0, 0.0])
 
 
-def _margins_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, z: np.ndarray
-                  ) -> LoopMetrics:
+def _margins_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, z: np.ndarray,
+                  den_z: np.ndarray | None = None) -> LoopMetrics:
     """Margins and bandwidth of the loop ``num/den`` on the grid ``w`` [rad/s], ``z =
-    exp(jωT)``, without the pole radius (:func:`_metrics_poly`)."""
-    return metrics_from_response(np.polyval(num, z) / np.polyval(den, z), w)
+    exp(jωT)``, without the pole radius (:func:`_metrics_poly`); ``den_z``: ``den`` on ``z``,
+    when already computed."""
+    dz = np.polyval(den, z) if den_z is None else den_z
+    return metrics_from_response(np.polyval(num, z) / dz, w)
 
 
 def _metrics_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, z: np.ndarray,
@@ -184,22 +195,33 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
             motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl), regs), w,
             z).pm_deg for fr in (0.7, 1.3) for fl in (0.7, 1.3))
         return CurrentDesign(regs, gains[0], m, rpm, [], gains[1])
-    corners = [motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
-               for fr in (0.7, 1.3) for fl in (0.7, 1.3)]
+    # the nominal coil, then R, L x {0.7, 1.3}
+    coils = [motor] + [motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
+                       for fr in (0.7, 1.3) for fl in (0.7, 1.3)]
+    dens: dict[tuple[int, str, str], tuple[np.ndarray, np.ndarray]] = {}
+
+    def loop(i: int, regs: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Numerator, denominator and the denominator on ``z`` of the loop on ``coils[i]``;
+        the denominator (the coil's and KIFY1, KIFY0's) is computed once per coil."""
+        key = (i, float(regs["KIFY1"]).hex(), float(regs["KIFY0"]).hex())
+        if key not in dens:
+            den = _current_loop_den(coils[i], regs)
+            dens[key] = (den, np.polyval(den, z))
+        return (_current_loop_num(coils[i], regs), *dens[key])
 
     def candidate(kpn: float, kin: float) -> tuple[Any, ...] | None:
         regs = current_registers(motor, float(kpn), float(kin))
-        poly = _current_loop_poly(motor, regs)
-        m = _margins_poly(*poly, w, z)
+        num, den, den_z = loop(0, regs)
+        m = _margins_poly(num, den, w, z, den_z)
         if not (m.pm_deg >= pm_min and m.gm_db >= gm_min):
             return None
-        m = _metrics_poly(*poly, w, z, m)
+        m = _metrics_poly(num, den, w, z, m)
         if not m.stable:
             return None
-        polys = [_current_loop_poly(mm, regs) for mm in corners]
-        rm = [_margins_poly(*p, w, z) for p in polys]
+        polys = [loop(i, regs) for i in range(1, len(coils))]
+        rm = [_margins_poly(*p[:2], w, z, p[2]) for p in polys]
         rpm = min([math.inf] + [r.pm_deg for r in rm])
-        if rpm >= robust_pm_min and all(_metrics_poly(*p, w, z, r).stable
+        if rpm >= robust_pm_min and all(_metrics_poly(*p[:2], w, z, r).stable
                                         for p, r in zip(polys, rm)):
             return (float(kpn), float(kin), m, rpm)
         return None
