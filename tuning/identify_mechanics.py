@@ -189,10 +189,9 @@ def electrical_position(n: int, t_soll: float, J: float, b: float, tc: float,
     # quantities they reach NumPy scalars, and NumPy divides a complex number by a real one
     # by multiplying with the reciprocal. The n_* flags say which quantities those are; where
     # the coil current is one, meas = s/amps is divided as NumPy divides.
-    n_ref, n_coil, n_emf, n_kt, n_acc, n_h = (
+    n_ref, n_coil, n_emf, n_kt, n_acc, n_tc = (
         _numpy(amp), _numpy(a) or _numpy(coil_in) or _numpy(k_u), _numpy(pp) or _numpy(lam),
-        _numpy(kt), _numpy(b) or _numpy(J), _numpy(h))
-    n_tc, n_b = _numpy(tc), _numpy(b)
+        _numpy(kt), _numpy(b) or _numpy(J) or _numpy(h), _numpy(tc))
     amp, a, coil_in, k_u, lam, kt, amps, h = (float(v) for v in (amp, a, coil_in, k_u, lam,
                                                                     kt, amps, h))
     J, b, tc, adv_per_rad_s = float(J), float(b), float(tc), float(adv_per_rad_s)
@@ -241,7 +240,7 @@ def electrical_position(n: int, t_soll: float, J: float, b: float, tc: float,
             else:
                 friction, n_friction = torque, n_torque
             acc = (torque - b * omega - friction) / J
-            n_omega = (n_omega or n_h or n_acc or n_torque or n_b or n_friction)
+            n_omega = n_omega or n_acc or n_torque or n_friction
             omega_new = omega + acc * h
             if 0.0 > omega_new:  # the rotor does not turn backwards
                 omega_new, n_omega = 0.0, False
