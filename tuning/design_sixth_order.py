@@ -49,7 +49,14 @@ from dataclasses import dataclass, field
 import control as ct
 import numpy as np
 
-from .models import MotorData, current_open_loop, rigid_gain, speed_open_loop, speed_plant
+from .models import (
+    MotorData,
+    current_open_loop,
+    polymul,
+    rigid_gain,
+    speed_open_loop,
+    speed_plant,
+)
 from .quantize import quantize_registers
 from .sixth_order import CURRENT_KEYS, FAMILY_RECORD, TS_O, VFX_KEYS, VFY_KEYS
 from .synthesis import design_current_loop
@@ -59,6 +66,7 @@ from .verify import (
     frequency_grid,
     loop_metrics,
     metrics_from_response,
+    with_pole_radius,
 )
 
 __all__ = ["EXACT_SUMS", "LOWPASS_PER_CROSSOVER", "LOWPASS_DAMPING", "NOTCH_WIDTH",
@@ -249,21 +257,23 @@ def _search(motor: MotorData, cur: Mapping[str, float], f_lp: float | None,
     ld_z = np.r_[ld, np.zeros(deg - ld.size)]
     fw = np.polyval(ln_z, z) / np.polyval(ld_z, z)
     kpl16 = 16.0 * rigid_gain(motor)
+    loop_den = polymul(polymul([1.0, -1.0], ld_z), pd)
     best: tuple[float, float, LoopMetrics] | None = None
     for kin in np.geomspace(0.3, 0.002, 48):
         for kpn in np.geomspace(1.2, 0.03, 48):
             kp, ki = kpn / kpl16, kin / kpl16
             cw = 16.0 * (kp + ki * z / (z - 1.0)) * fw
             lw = cw * pw
-            cnum = np.polymul(16.0 * np.array([kp + ki, -kp]), ln_z)
-            cden = np.polymul([1.0, -1.0], ld_z)
-            char = np.polyadd(np.polymul(cden, pd), np.polymul(cnum, pn))
-            m = metrics_from_response(lw, w, char)
-            if not (m.stable and m.pm_deg >= 50 and m.gm_db >= 10):
+            m = metrics_from_response(lw, w)
+            if not (m.pm_deg >= 50 and m.gm_db >= 10):
+                continue
+            loop_num = polymul(polymul(16.0 * np.array([kp + ki, -kp]), ln_z), pn)
+            m = with_pole_radius(m, np.polyadd(loop_den, loop_num))
+            if not m.stable:
                 continue
             if min(metrics_from_response(lw * s, w).pm_deg for s in (0.5, 2.0)) < 35:
                 continue
-            char2 = np.polyadd(np.polymul(cden, pd), 2.0 * np.polymul(cnum, pn))
+            char2 = np.polyadd(loop_den, 2.0 * loop_num)
             if np.max(np.abs(np.roots(char2))) >= POLE_RADIUS_MAX:
                 continue
             if min(metrics_from_response(cw * pc, w).pm_deg for pc in corners) < 35:

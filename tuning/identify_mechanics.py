@@ -154,6 +154,11 @@ def current_loop_model(motor: MotorData, current_regs: Mapping[str, float]) -> C
         *(float(current_regs[k]) for k in ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")))
 
 
+def _numpy(x: Any) -> bool:
+    """Whether ``x`` is a NumPy scalar or array (its arithmetic is NumPy's)."""
+    return isinstance(x, (np.generic, np.ndarray))
+
+
 def electrical_position(n: int, t_soll: float, J: float, b: float, tc: float,
                         motor: MotorData, current_regs: Mapping[str, float],
                         phase_comp: float = 0.0) -> np.ndarray:
@@ -178,31 +183,67 @@ def electrical_position(n: int, t_soll: float, J: float, b: float, tc: float,
     d = int(motor.pwm_delay)
     amp = motor.amplitude * t_soll / fam.amplitude_vf
     adv_per_rad_s = pp * h * phase_comp  # electrical advance [rad] per rad/s of shaft speed
+    coil_in = (1.0 - a) / R
+    # The loop runs on Python numbers, with the numbers of the same loop run on the argument
+    # types: NumPy scalars among them (the optimiser's J, b, T_c, an identified R) make the
+    # quantities they reach NumPy scalars, and NumPy divides a complex number by a real one
+    # by multiplying with the reciprocal. The n_* flags say which quantities those are; where
+    # the coil current is one, meas = s/amps is divided as NumPy divides.
+    n_ref, n_coil, n_emf, n_kt, n_acc, n_tc = (
+        _numpy(amp), _numpy(a) or _numpy(coil_in) or _numpy(k_u), _numpy(pp) or _numpy(lam),
+        _numpy(kt), _numpy(b) or _numpy(J) or _numpy(h), _numpy(tc))
+    amp, a, coil_in, k_u, lam, kt, amps, h = (float(v) for v in (amp, a, coil_in, k_u, lam,
+                                                                    kt, amps, h))
+    J, b, tc, adv_per_rad_s = float(J), float(b), float(tc), float(adv_per_rad_s)
+    rat = 0.0 / amps  # NumPy's division by amps + 0j: (re + im·rat)·scl, (im − re·rat)·scl
+    scl = 1.0 / (amps + 0.0 * rat)
+    half_pp = 0.5 * pp
+    exp = cmath.exp
     s = 0j
     m_prev = 0j
     e1 = 0j
     u1 = u2 = 0j
-    pend = [0j] * d  # the PWM values computed d samples earlier (d = 0: the present one)
+    # the PWM values computed d samples earlier (d = 0: the present one), with their flags
+    pend = [(0j, False)] * d
+    n_s = n_m_prev = n_e1 = n_u1 = n_u2 = n_omega = False
     theta = omega = 0.0
     out = np.empty(n)
     for k in range(n):
         out[k] = theta * counts_per_rad
         for _ in range(per_outer):
             th_e = pp * theta
-            meas = s / amps
-            ref = amp * cmath.exp(1j * (th_e + adv_per_rad_s * omega))
+            if n_s:
+                meas = complex((s.real + s.imag * rat) * scl, (s.imag - s.real * rat) * scl)
+            else:
+                meas = s / amps
+            ref = amp * exp(1j * (th_e + adv_per_rad_s * omega))
             e = ref - (b1 * meas + b0 * m_prev)
+            n_e = n_ref or n_s or n_m_prev
             u = x2 * e + x1 * e1 + y1 * u1 + y0 * u2
+            n_u = n_e or n_e1 or n_u1 or n_u2
             e1, u2, u1, m_prev = e, u1, u, meas
-            pend.append(u)
-            ua = pend.pop(0)
-            th_mid = th_e + 0.5 * pp * omega * h
-            emf = pp * omega * lam * cmath.exp(1j * th_mid)
-            s_new = a * s + (1.0 - a) / R * (k_u * ua - emf)
-            torque = kt * ((0.5 * (s + s_new)) * cmath.exp(-1j * th_mid)).real
+            n_e1, n_u2, n_u1, n_m_prev = n_e, n_u1, n_u, n_s
+            if d:
+                pend.append((u, n_u))
+                ua, n_ua = pend.pop(0)
+            else:
+                ua, n_ua = u, n_u
+            th_mid = th_e + half_pp * omega * h
+            emf = pp * omega * lam * exp(1j * th_mid)
+            s_new = a * s + coil_in * (k_u * ua - emf)
+            n_s = n_s or n_coil or n_ua or n_emf or n_omega
+            torque = kt * ((0.5 * (s + s_new)) * exp(-1j * th_mid)).real
+            n_torque = n_kt or n_s
             s = s_new
-            acc = (torque - b * omega - (tc if omega > 0 or torque > tc else torque)) / J
-            omega_new = max(omega + acc * h, 0.0)
+            if omega > 0 or torque > tc:
+                friction, n_friction = tc, n_tc
+            else:
+                friction, n_friction = torque, n_torque
+            acc = (torque - b * omega - friction) / J
+            n_omega = n_omega or n_acc or n_torque or n_friction
+            omega_new = omega + acc * h
+            if 0.0 > omega_new:  # the rotor does not turn backwards
+                omega_new, n_omega = 0.0, False
             theta += 0.5 * (omega + omega_new) * h
             omega = omega_new
     return out - out[0]

@@ -59,6 +59,7 @@ __all__ = [
     "speed_open_loop",
     "speed_closed_loop",
     "freqresp",
+    "polymul",
 ]
 
 
@@ -334,9 +335,43 @@ def speed_plant(motor: MotorData, regs: Mapping[str, float], J: float | None = N
     TransferFunction
         Exact lift to the outer rate: VF_OUT is held for 15 inner samples (I_SOLL =
         AMPLITUDE·VF_OUT/amplitude_vf from inner sample 15m on), the encoder is read at the
-        start of each outer sample, V_IST = (1 − z⁻¹)·P.
+        start of each outer sample, V_IST = (1 − z⁻¹)·P. The same arguments give the same
+        object (the last :data:`PLANT_CACHE_SIZE` plants are kept): do not modify it.
     """
     J = motor.J_m if J is None else J
+    key = _plant_key(motor, regs, J, b, coupling, back_emf)
+    plant = _PLANTS.get(key)
+    if plant is None:
+        plant = _lifted_speed_plant(motor, regs, J, b, coupling, back_emf)
+        if len(_PLANTS) >= PLANT_CACHE_SIZE:
+            _PLANTS.pop(next(iter(_PLANTS)))
+        _PLANTS[key] = plant
+    return plant
+
+
+PLANT_CACHE_SIZE: int = 256  #: speed plants :func:`speed_plant` keeps (oldest dropped first)
+_PLANTS: dict[tuple[Any, ...], ct.TransferFunction] = {}
+_CURRENT_LOOP_KEYS = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
+
+
+def _plant_key(motor: MotorData, regs: Mapping[str, float], J: float, b: float,
+               coupling: tuple[float, float, float] | None, back_emf: bool) -> tuple[Any, ...]:
+    """What :func:`speed_plant` depends on, every number as its exact bits (``float.hex``, so
+    that −0.0 and 0.0 are different keys): the motor's data and family, the current-loop
+    registers, J, b, the coupling and ``back_emf``."""
+    data = tuple(float(getattr(motor, f)).hex() for f in
+                 ("J_m", "flux_linkage", "R_phase", "L_phase", "amps_per_count", "pole_pairs",
+                  "supply_voltage", "pwm_delay", "amplitude"))
+    return (motor.name, motor.family, data,
+            tuple(float(regs[k]).hex() for k in _CURRENT_LOOP_KEYS), float(J).hex(),
+            float(b).hex(), None if coupling is None else tuple(float(x).hex() for x in coupling),
+            bool(back_emf))
+
+
+def _lifted_speed_plant(motor: MotorData, regs: Mapping[str, float], J: float, b: float,
+                        coupling: tuple[float, float, float] | None,
+                        back_emf: bool) -> ct.TransferFunction:
+    """:func:`speed_plant` computed (the exact lift of :func:`_inner_position_ss`)."""
     fam = motor.family
     a, bb, c = _inner_position_ss(motor, regs, J, b, coupling, back_emf)
     n = fam.inner_per_outer
@@ -382,6 +417,20 @@ def speed_closed_loop(plant: ct.TransferFunction, regs: Mapping[str, float],
     """FNC_OUT [1/16 count/sample] → 16·V_IST [1/16 count/sample]: ``16·FF·KVOUT·VF·P/(1+L)``."""
     fwd = vf_tf(regs, family) * plant
     return ff_tf(regs, family) * ct.feedback(fwd, vb_tf(regs, family)) * family.speed_units
+
+
+def polymul(a: Any, b: Any) -> np.ndarray:
+    """``np.polymul`` of two coefficient sequences (descending powers) as a plain array: the
+    same leading-zero trimming and convolution, the same numbers, without ``np.poly1d``."""
+    return np.convolve(_trimmed(a), _trimmed(b))
+
+
+def _trimmed(p: Any) -> np.ndarray:
+    """Coefficients without leading zeros (``[0]`` when all are zero), as ``np.poly1d``
+    keeps them."""
+    p = np.atleast_1d(np.asarray(p))
+    nz = np.flatnonzero(p)
+    return p[nz[0]:] if nz.size else np.array([0], dtype=p.dtype)
 
 
 def freqresp(sys: ct.TransferFunction, w: np.ndarray) -> np.ndarray:

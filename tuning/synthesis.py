@@ -38,10 +38,11 @@ import numpy as np
 from .models import (
     MotorData,
     freqresp,
+    polymul,
     rigid_gain,
     speed_plant,
 )
-from .verify import LoopMetrics, frequency_grid, metrics_from_response
+from .verify import LoopMetrics, frequency_grid, metrics_from_response, with_pole_radius
 
 __all__ = [
     "CurrentDesign",
@@ -119,19 +120,39 @@ def current_registers(motor: MotorData, kp_norm: float, ki_norm: float | None = 
 
 def _current_loop_poly(motor: MotorData, regs: Mapping[str, float]
                        ) -> tuple[np.ndarray, np.ndarray]:
-    a, g, d = motor.coil_pole, motor.coil_gain, int(motor.pwm_delay)
-    num = np.polymul([regs["KIFX2"], regs["KIFX1"], 0.0], [g * (1 - a)])
-    num = np.polymul(num, [regs["KIB1"], regs["KIB0"]])
-    den = np.polymul([1.0, -regs["KIFY1"], -regs["KIFY0"]], [1.0, -a])
-    den = np.polymul(den, np.r_[1.0, np.zeros(d)])
-    den = np.polymul(den, [1.0, 0.0])
-    return num, den
+    """Numerator and denominator (descending powers of z) of the current open loop."""
+    return _current_loop_num(motor, regs), _current_loop_den(motor, regs)
 
 
-def _metrics_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, dt: float) -> LoopMetrics:
-    z = np.exp(1j * w * dt)
-    lw = np.polyval(num, z) / np.polyval(den, z)
-    return metrics_from_response(lw, w, np.polyadd(den, num))
+def _current_loop_num(motor: MotorData, regs: Mapping[str, float]) -> np.ndarray:
+    a, g = motor.coil_pole, motor.coil_gain
+    num = polymul([regs["KIFX2"], regs["KIFX1"], 0.0], [g * (1 - a)])
+    return polymul(num, [regs["KIB1"], regs["KIB0"]])
+
+
+def _current_loop_den(motor: MotorData, regs: Mapping[str, float]) -> np.ndarray:
+    """The denominator: the coil, its PWM delay and IF's denominator (KIFY1, KIFY0)."""
+    a, d = motor.coil_pole, int(motor.pwm_delay)
+    den = polymul([1.0, -regs["KIFY1"], -regs["KIFY0"]], [1.0, -a])
+    den = polymul(den, np.r_[1.0, np.zeros(d)])
+    return polymul(den, [1.0, 0.0])
+
+
+def _margins_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, z: np.ndarray,
+                  den_z: np.ndarray | None = None) -> LoopMetrics:
+    """Margins and bandwidth of the loop ``num/den`` on the grid ``w`` [rad/s], ``z =
+    exp(jωT)``, without the pole radius (:func:`_metrics_poly`); ``den_z``: ``den`` on ``z``,
+    when already computed."""
+    dz = np.polyval(den, z) if den_z is None else den_z
+    return metrics_from_response(np.polyval(num, z) / dz, w)
+
+
+def _metrics_poly(num: np.ndarray, den: np.ndarray, w: np.ndarray, z: np.ndarray,
+                  margins: LoopMetrics | None = None) -> LoopMetrics:
+    """Metrics of the loop ``num/den`` with the pole radius of ``den + num``; ``margins``: its
+    :func:`_margins_poly`, when already computed."""
+    m = _margins_poly(num, den, w, z) if margins is None else margins
+    return with_pole_radius(m, np.polyadd(den, num))
 
 
 def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
@@ -166,30 +187,48 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
     """
     dt = motor.family.inner_dt if dt is None else dt
     w = frequency_grid(dt, 1500)
+    z = np.exp(1j * w * dt)
     if gains is not None:
         regs = current_registers(motor, *gains)
-        m = _metrics_poly(*_current_loop_poly(motor, regs), w, dt)
-        rpm = min(_metrics_poly(*_current_loop_poly(
+        m = _metrics_poly(*_current_loop_poly(motor, regs), w, z)
+        rpm = min(_margins_poly(*_current_loop_poly(
             motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl), regs), w,
-            dt).pm_deg for fr in (0.7, 1.3) for fl in (0.7, 1.3))
+            z).pm_deg for fr in (0.7, 1.3) for fl in (0.7, 1.3))
         return CurrentDesign(regs, gains[0], m, rpm, [], gains[1])
-    feasible = []
-    corners = [motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
-               for fr in (0.7, 1.3) for fl in (0.7, 1.3)]
-    for kpn in np.linspace(0.05, 0.8, 31):
-        for kin in np.geomspace(0.005, 0.25, 31):
-            regs = current_registers(motor, float(kpn), float(kin))
-            m = _metrics_poly(*_current_loop_poly(motor, regs), w, dt)
-            if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
-                continue
-            rpm = math.inf
-            ok = True
-            for mm in corners:
-                r = _metrics_poly(*_current_loop_poly(mm, regs), w, dt)
-                ok &= r.stable
-                rpm = min(rpm, r.pm_deg)
-            if ok and rpm >= robust_pm_min:
-                feasible.append((float(kpn), float(kin), m, rpm))
+    # the nominal coil, then R, L x {0.7, 1.3}
+    coils = [motor] + [motor.with_(R_phase=motor.R_phase * fr, L_phase=motor.L_phase * fl)
+                       for fr in (0.7, 1.3) for fl in (0.7, 1.3)]
+    dens: dict[tuple[int, str, str], tuple[np.ndarray, np.ndarray]] = {}
+
+    def loop(i: int, regs: Mapping[str, float]) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Numerator, denominator and the denominator on ``z`` of the loop on ``coils[i]``;
+        the denominator (the coil's and KIFY1, KIFY0's) is computed once per coil."""
+        key = (i, float(regs["KIFY1"]).hex(), float(regs["KIFY0"]).hex())
+        if key not in dens:
+            den = _current_loop_den(coils[i], regs)
+            dens[key] = (den, np.polyval(den, z))
+        return (_current_loop_num(coils[i], regs), *dens[key])
+
+    def candidate(kpn: float, kin: float) -> tuple[Any, ...] | None:
+        regs = current_registers(motor, float(kpn), float(kin))
+        num, den, den_z = loop(0, regs)
+        m = _margins_poly(num, den, w, z, den_z)
+        if not (m.pm_deg >= pm_min and m.gm_db >= gm_min):
+            return None
+        m = _metrics_poly(num, den, w, z, m)
+        if not m.stable:
+            return None
+        polys = [loop(i, regs) for i in range(1, len(coils))]
+        rm = [_margins_poly(*p[:2], w, z, p[2]) for p in polys]
+        rpm = min([math.inf] + [r.pm_deg for r in rm])
+        if rpm >= robust_pm_min and all(_metrics_poly(*p[:2], w, z, r).stable
+                                        for p, r in zip(polys, rm)):
+            return (float(kpn), float(kin), m, rpm)
+        return None
+
+    # without a bandwidth only the largest feasible integral gain counts
+    feasible = _feasible(np.linspace(0.05, 0.8, 31), np.geomspace(0.005, 0.25, 31), candidate,
+                         1.0 if bandwidth_hz is None else None)
     if not feasible:
         raise ValueError("no current-loop gains meet the margin constraints; relax them")
     notes: list[str] = []
@@ -199,6 +238,30 @@ def design_current_loop(motor: MotorData, bandwidth_hz: float | None = None,
         best = _at_bandwidth(feasible, 2, bandwidth_hz, "current-loop", 0, notes)
     kpn, kin, m, rpm = best
     return CurrentDesign(current_registers(motor, kpn, kin), kpn, m, rpm, notes, kin)
+
+
+def _feasible(grid_p: Any, grid_i: Any, candidate: Any, within: float | None
+              ) -> list[tuple[Any, ...]]:
+    """The feasible designs ``candidate(kpn, kin)`` (None: not feasible) of the grid
+    ``grid_p`` × ``grid_i`` of normalised proportional and integral gains, in the grid's order
+    (``grid_p`` outer, ``grid_i`` inner).
+
+    With ``within`` None every point is tried. Otherwise only those a choice among the
+    largest integral gains needs: the integral gains are tried from the largest down, and
+    the search stops at the first one below ``within`` times the largest feasible one."""
+    if within is None:
+        return [f for kpn in grid_p for kin in grid_i if (f := candidate(kpn, kin)) is not None]
+    found: list[tuple[int, int, tuple[Any, ...]]] = []
+    top = None
+    for j in sorted(range(len(grid_i)), key=lambda j: -grid_i[j]):
+        if top is not None and not grid_i[j] >= within * top:
+            break
+        for i in range(len(grid_p)):
+            f = candidate(grid_p[i], grid_i[j])
+            if f is not None:
+                found.append((i, j, f))
+                top = grid_i[j] if top is None else top
+    return [f for _, _, f in sorted(found, key=lambda t: (t[0], t[1]))]
 
 
 def _at_bandwidth(feasible: list[tuple[Any, ...]], metrics: int, bandwidth_hz: float, loop: str,
@@ -315,35 +378,40 @@ def design_speed_loop(motor: MotorData, current_regs: Mapping[str, float], J_tot
     z = np.exp(1j * w * ts_o)
     pn, pd, pw, rl = _speed_candidates(motor, current_regs, w)
     kpl16 = 16.0 * rigid_gain(motor)
-    feasible = []
+    integrated = polymul([1.0, -1.0], pd)
     grid_p = [gains[0]] if gains else np.geomspace(0.03, 1.2, 64)
     grid_i = [gains[1]] if gains else np.geomspace(0.002, 0.3, 64)
-    for kpn in grid_p:
-        for kin in grid_i:
-            kp, ki = kpn / kpl16, kin / kpl16
-            cw = 16.0 * (kp + ki * z / (z - 1.0))
-            lw = cw * pw
-            cnum = 16.0 * np.array([kp + ki, -kp])
-            char = np.polyadd(np.polymul([1.0, -1.0], pd), np.polymul(cnum, pn))
-            # L = 16(kp + ki z/(z-1)) P = 16((kp+ki) z - kp)/(z-1) · pn/pd
-            m = metrics_from_response(lw, w, char)
-            if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
-                continue
-            rpm = math.inf
-            for scale in robust_gains:
-                rpm = min(rpm, metrics_from_response(lw * scale, w).pm_deg)
-            if rpm < robust_pm_min:
-                continue
-            for prl in rl:
-                rpm = min(rpm, metrics_from_response(cw * prl, w).pm_deg)
-            if rpm < robust_pm_min:
-                continue
-            # the doubled-gain case must be stable too
-            char2 = np.polyadd(np.polymul([1.0, -1.0], pd),
-                               max(robust_gains) * np.polymul(cnum, pn))
-            if np.max(np.abs(np.roots(char2))) >= 0.999:
-                continue
-            feasible.append((kpn, kin, kp, ki, m, rpm))
+
+    def candidate(kpn: float, kin: float) -> tuple[Any, ...] | None:
+        kp, ki = kpn / kpl16, kin / kpl16
+        cw = 16.0 * (kp + ki * z / (z - 1.0))
+        lw = cw * pw
+        cnum = 16.0 * np.array([kp + ki, -kp])
+        m = metrics_from_response(lw, w)
+        if not (m.pm_deg >= pm_min and m.gm_db >= gm_min):
+            return None
+        ctrl = polymul(cnum, pn)
+        # L = 16(kp + ki z/(z-1)) P = 16((kp+ki) z - kp)/(z-1) · pn/pd
+        m = with_pole_radius(m, np.polyadd(integrated, ctrl))
+        if not m.stable:
+            return None
+        rpm = math.inf
+        for scale in robust_gains:
+            rpm = min(rpm, metrics_from_response(lw * scale, w).pm_deg)
+        if rpm < robust_pm_min:
+            return None
+        for prl in rl:
+            rpm = min(rpm, metrics_from_response(cw * prl, w).pm_deg)
+        if rpm < robust_pm_min:
+            return None
+        # the doubled-gain case must be stable too
+        char2 = np.polyadd(integrated, max(robust_gains) * ctrl)
+        if np.max(np.abs(np.roots(char2))) >= 0.999:
+            return None
+        return (kpn, kin, kp, ki, m, rpm)
+
+    # without a bandwidth only the integral gains within 2 % of the largest feasible one count
+    feasible = _feasible(grid_p, grid_i, candidate, 0.98 if bandwidth_hz is None else None)
     if not feasible:
         raise ValueError("no speed-loop gains meet the margin constraints; relax them")
     notes: list[str] = []
@@ -396,13 +464,17 @@ def _position_integral(pn: np.ndarray, pd: np.ndarray, pw: np.ndarray, rl: list[
         cw = 16.0 * (kp + ki * z / (z - 1.0) + kii * z**2 / (z - 1.0) ** 2)
         lw = cw * pw
         cnum = 16.0 * np.array([kp + ki + kii, -2.0 * kp - ki, kp])
-        dd = np.polymul([1.0, -2.0, 1.0], pd)
-        m = metrics_from_response(lw, w, np.polyadd(dd, np.polymul(cnum, pn)))
-        if not (m.stable and m.pm_deg >= pm_min and m.gm_db >= gm_min):
+        dd = polymul([1.0, -2.0, 1.0], pd)
+        ctrl = polymul(cnum, pn)
+        m = metrics_from_response(lw, w)
+        if not (m.pm_deg >= pm_min and m.gm_db >= gm_min):
+            break
+        m = with_pole_radius(m, np.polyadd(dd, ctrl))
+        if not m.stable:
             break
         rpm = min(metrics_from_response(lw * g, w).pm_deg for g in robust_gains)
         rpm = min([rpm] + [metrics_from_response(cw * prl, w).pm_deg for prl in rl])
-        char2 = np.polyadd(dd, max(robust_gains) * np.polymul(cnum, pn))
+        char2 = np.polyadd(dd, max(robust_gains) * ctrl)
         if rpm < robust_pm_min or np.max(np.abs(np.roots(char2))) >= 0.999:
             break
         best = (kii, m, rpm)

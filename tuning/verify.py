@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import control as ct
 import numpy as np
@@ -31,6 +31,7 @@ __all__ = [
     "LoopMetrics",
     "loop_metrics",
     "metrics_from_response",
+    "with_pole_radius",
     "frequency_grid",
     "CurrentLoopReport",
     "SpeedLoopReport",
@@ -88,6 +89,15 @@ def _crossings(x: np.ndarray) -> np.ndarray:
     return np.flatnonzero(s[:-1] * s[1:] < 0)
 
 
+def _crossed_integers(f: np.ndarray, candidates: range) -> list[int]:
+    """The integers j of ``candidates`` that ``f`` can cross (``min f < j < max f``): f − j
+    changes sign only for those; all of them when ``f`` holds a NaN."""
+    lo, hi = float(np.min(f)), float(np.max(f))
+    if math.isnan(lo) or math.isnan(hi):
+        return list(candidates)
+    return [j for j in candidates if lo < j < hi]
+
+
 def metrics_from_response(lw: np.ndarray, w: np.ndarray, char_poly: np.ndarray | None = None
                           ) -> LoopMetrics:
     """Margins and bandwidth from a sampled open-loop response.
@@ -117,7 +127,7 @@ def metrics_from_response(lw: np.ndarray, w: np.ndarray, char_poly: np.ndarray |
     gm_low = math.inf
     k = (ph / math.pi + 1.0) / 2.0  # integer when the phase is an odd multiple of 180°
     f = k - np.floor(k[0] + 0.5)
-    for j in range(-3, 4):
+    for j in _crossed_integers(f, range(-3, 4)):
         for i in _crossings(f - j):
             t = (f[i] - j) / (f[i] - f[i + 1])
             lm = logm[i] + t * (logm[i + 1] - logm[i])
@@ -130,14 +140,20 @@ def metrics_from_response(lw: np.ndarray, w: np.ndarray, char_poly: np.ndarray |
     t0 = abs(tw[0])
     below = np.flatnonzero(np.abs(tw) < t0 / math.sqrt(2.0))
     bw = w[below[0]] / (2 * math.pi) if below.size else w[-1] / (2 * math.pi)
-    radius = math.nan
-    if char_poly is not None:
-        roots = np.roots(np.trim_zeros(np.asarray(char_poly, dtype=float), "f"))
-        radius = float(np.max(np.abs(roots))) if roots.size else 0.0
     wc_hz = wc / (2 * math.pi) if not math.isnan(wc) else math.nan
-    return LoopMetrics(pm_deg=pm, gm_db=gm, gm_low_db=gm_low, crossover_hz=wc_hz,
-                       bandwidth_hz=bw, pole_radius=radius,
-                       stable=bool(radius < POLE_RADIUS_MAX) if not math.isnan(radius) else False)
+    m = LoopMetrics(pm_deg=pm, gm_db=gm, gm_low_db=gm_low, crossover_hz=wc_hz,
+                    bandwidth_hz=bw, pole_radius=math.nan, stable=False)
+    return m if char_poly is None else with_pole_radius(m, char_poly)
+
+
+def with_pole_radius(m: LoopMetrics, char_poly: np.ndarray) -> LoopMetrics:
+    """``m`` with the pole radius and stability of the closed-loop characteristic polynomial
+    ``char_poly`` (descending powers of z): what :func:`metrics_from_response` gives with it, so
+    that a search can screen on the margins before it computes the roots."""
+    roots = np.roots(np.trim_zeros(np.asarray(char_poly, dtype=float), "f"))
+    radius = float(np.max(np.abs(roots))) if roots.size else 0.0
+    return replace(m, pole_radius=radius,
+                   stable=bool(radius < POLE_RADIUS_MAX) if not math.isnan(radius) else False)
 
 
 def char_poly(loop: ct.TransferFunction) -> np.ndarray:
