@@ -111,7 +111,10 @@ class RegisterArray:
         return {reg.number: int(self.regs[index, reg.number]) for reg in self.table
                 if reg.access == Access.RW and reg.number != self.mode_number}
 
-    def load_flash_image(self, index: int, image: dict[int, int]) -> None:
+    def check_flash_image(self, index: int, image: dict[int, int]) -> None:
         for number, raw in image.items():
             self._check(number, raw)
+
+    def load_flash_image(self, index: int, image: dict[int, int]) -> None:
+        self.check_flash_image(index, image)
         self.flash[index] = {**self.flash[index], **image}

@@ -139,6 +139,7 @@ class MotorBackend(Protocol):
     def reset(self, index: Any = None) -> None: ...
     def flash_image(self, index: int) -> dict[int, int]: ...
     def load_flash_image(self, index: int, image: dict[int, int]) -> None: ...
+    def check_flash_image(self, index: int, image: dict[int, int]) -> None: ...
     def sample_buffer_raw(self, index: int) -> np.ndarray: ...
 
     @property
@@ -220,14 +221,12 @@ class Twin:
                 if not 1 <= a <= 254:
                     raise ValueError(f"a unit address is 1..254 (manual 3.2.156), got {a}")
         self._check_flash_dir()
-        # every flash file is read, and checked where the motors can check an image without
-        # loading it (MotorArray.check_flash_image), before any is loaded: a bad one changes
-        # nothing
+        # every flash file is read and checked (MotorArray.check_flash_image) before any is
+        # loaded: a bad one changes nothing
         images = [self._read_flash_file(i) for i in range(motors.n)]
-        check = getattr(motors, "check_flash_image", None)
         for i, image in enumerate(images):
-            if image is not None and check is not None:
-                self._flash_file_call(i, check, image)
+            if image is not None:
+                self._flash_file_call(i, motors.check_flash_image, image)
         for i, image in enumerate(images):
             if image is not None:
                 self._flash_file_call(i, motors.load_flash_image, image)
