@@ -250,3 +250,13 @@ def test_a_record_length_below_one_is_a_usage_error(
         served: Any, capsys: pytest.CaptureFixture[str]) -> None:
     line, code = served("--record-length", "0")
     assert line is None and code == 2 and "--record-length" in _error_line(capsys)
+
+
+@pytest.mark.parametrize(("motor", "length"), [("MAC140", "896"), ("MIS232", "10")])
+def test_a_record_length_the_motor_refuses_is_a_usage_error(
+        served: Any, capsys: pytest.CaptureFixture[str], motor: str, length: str) -> None:
+    """Beyond the sample buffer's depth, or on a motor type without a TESTU/TESTA record
+    length, ``--record-length`` is a one-line usage error naming the option and the type."""
+    line, code = served("-m", motor, "--record-length", length)
+    err = _error_line(capsys)
+    assert line is None and code == 2 and "--record-length" in err and motor in err

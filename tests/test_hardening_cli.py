@@ -15,7 +15,9 @@ from tuning.cli import app as tune
 from cli_checks import one_line_error, run_cli
 from jvl_gym.cli import app as gym_cli
 from jvl_gym.config import ConfigError
+from jvl_gym.demo import main as demo_main
 from jvl_gym.families.mac050_141.config import SETUPS_DIR
+from jvl_gym.scale.rllib import main as rllib_main
 
 _run = run_cli
 _one_line_error = one_line_error
@@ -75,6 +77,29 @@ def test_every_output_directory_is_checked_before_the_run(tmp_path, capsys, cli,
     line = _one_line_error(code, err)
     assert code == 2 and where in line and "--out" in line and "directory" in line
     assert [p.name for p in tmp_path.iterdir()] == (["plain"] if "plain" in where else [])
+
+
+@pytest.mark.parametrize("main", [demo_main, rllib_main], ids=["demo", "rllib"])
+@pytest.mark.parametrize("where", ["/proc/x", "/proc/x/y", "file"])
+def test_module_entry_points_check_their_output_directory_first(tmp_path, capsys, main, where):
+    """``python -m jvl_gym.demo`` and ``python -m jvl_gym.scale.rllib`` refuse an ``--out``
+    they cannot write as a one-line usage error (exit status 2) before any motor or Ray runs,
+    and create nothing."""
+    if where == "file":
+        where = str(tmp_path / "plain")
+        (tmp_path / "plain").write_text("")
+    with pytest.raises(SystemExit) as exc:
+        main(["--out", where])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert exc.value.code == 2 and "--out" in err[-1] and where in err[-1]
+    assert [p.name for p in tmp_path.iterdir()] == (["plain"] if "plain" in where else [])
+
+
+def test_errors_name_the_whole_subcommand(tmp_path, capsys):
+    """An error of a nested command names the command as typed (``jvl-gym program run``)."""
+    code, _, err = _run(gym_cli, ["program", "run", str(tmp_path / "missing.txt")], capsys)
+    line = _one_line_error(code, err)
+    assert line.startswith("jvl-gym program run: error:") and "missing.txt" in line
 
 
 @pytest.mark.parametrize("where", ["/proc/x", "/proc/x/y/setup.yaml", "dir"])

@@ -8,6 +8,7 @@ command line, or ``JVL_DEBUG=1``, lets the exception through with its traceback.
 
 from __future__ import annotations
 
+import argparse
 import os
 import sys
 import tempfile
@@ -17,7 +18,8 @@ from typing import Any
 import typer
 from typer.exceptions import TyperException
 
-__all__ = ["App", "CliError", "one_line", "writable_dir", "RL_EXTRA_HINT"]
+__all__ = ["App", "CliError", "one_line", "writable_dir", "writable_dir_arg", "writable_file",
+           "RL_EXTRA_HINT"]
 
 #: what to do when the RL extra (torch, stable-baselines3) is missing
 RL_EXTRA_HINT = ("needs the RL extra (torch, stable-baselines3): run `make setup-rl` or "
@@ -64,6 +66,23 @@ def writable_dir(value: Path | None) -> Path | None:
     return value
 
 
+def writable_dir_arg(text: str) -> Path:
+    """argparse ``type`` of an output directory (``--out`` of ``python -m`` entry points):
+    :func:`writable_dir`, its refusal as argparse's one-line usage error.
+
+    Raises
+    ------
+    argparse.ArgumentTypeError
+        What :func:`writable_dir` refuses.
+    """
+    try:
+        path = writable_dir(Path(text))
+    except typer.BadParameter as exc:
+        raise argparse.ArgumentTypeError(exc.message) from None
+    assert path is not None
+    return path
+
+
 def writable_file(value: Path | None) -> Path | None:
     """Option callback of an output file (``--out FILE``): not a directory, and in a directory
     :func:`writable_dir` accepts (checked before any work starts; nothing is created here).
@@ -108,7 +127,7 @@ class App(typer.Typer):
         argv = [a for a in argv if a != "--debug"]
         if not argv:
             argv = ["--help"]
-        command = " ".join([self.prog, *[a for a in argv[:1] if not a.startswith("-")]])
+        command = self._command_path(argv)
         try:
             code = super().__call__(args=argv, prog_name=prog_name or self.prog,
                                     standalone_mode=False, **extra)
@@ -130,3 +149,15 @@ class App(typer.Typer):
                   file=sys.stderr)
             sys.exit(1)
         sys.exit(code if isinstance(code, int) else 0)
+
+    def _command_path(self, argv: list[str]) -> str:
+        """The program and the subcommand names that ``argv`` begins with
+        (``"jvl-gym program run"``), as the messages name the command."""
+        words = [self.prog]
+        command: Any = typer.main.get_command(self)
+        for arg in argv:
+            command = getattr(command, "commands", {}).get(arg)
+            if command is None:
+                break
+            words.append(arg)
+        return " ".join(words)

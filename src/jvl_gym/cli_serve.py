@@ -311,6 +311,13 @@ def serve(
                                  fastmac_code=code, load=load, **array_kw)
     except LoadError as exc:
         raise typer.BadParameter(str(exc)) from None
+    except (TypeError, ValueError) as exc:  # the arrays' own check of the record length
+        if record_length is None or not any(w in str(exc) for w in ("record_length",
+                                                                    "record length")):
+            raise
+        kinds = ", ".join(dict.fromkeys(types))
+        raise typer.BadParameter(f"{record_length} refused for {kinds}: {exc}",
+                                 param_hint="'--record-length'") from None
     _check_distinct(line.addresses(), [types[k] for k in order], "--flash-dir")
     endpoint = parse_tcp(tcp) if tcp else None
     can_server = None

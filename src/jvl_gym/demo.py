@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from .cli_app import writable_dir_arg
 from .families import family_of_motor
 from .sim import MotorArray
 
@@ -142,10 +143,12 @@ def _plot(log: dict[str, list], path: Path) -> None:
     plt.close(fig)
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
+    """``python -m jvl_gym.demo [--out DIR]`` (``argv`` default: the command line)."""
     parser = argparse.ArgumentParser(description=__doc__)
-    parser.add_argument("--out", default="demo_out", type=Path)
-    args = parser.parse_args()
+    parser.add_argument("--out", default="demo_out", type=writable_dir_arg,
+                        help="output directory (made if missing; checked writable first)")
+    args = parser.parse_args(argv)
     print(run_demo(args.out))
     print(f"wrote {args.out / 'scope.png'} and {args.out / 'summary.txt'}")
 

@@ -27,6 +27,8 @@ import math
 from pathlib import Path
 from typing import Any
 
+from ..cli_app import writable_dir_arg
+
 __all__ = ["rllib_env_id", "ppo_config", "train_ppo", "main"]
 
 
@@ -162,7 +164,8 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument("--runners", type=int, default=1, help="remote env runners")
     p.add_argument("--envs-per-runner", type=int, default=16)
     p.add_argument("--batch", type=int, default=4096, help="train batch [env steps]")
-    p.add_argument("--out", default=None, help="Ray Tune's directory (with the checkpoint)")
+    p.add_argument("--out", default=None, type=writable_dir_arg,
+                   help="Ray Tune's directory (with the checkpoint; checked writable first)")
     p.add_argument("--address", default=None, help="Ray cluster (default: local Ray)")
     a = p.parse_args(argv)
     train_ppo(a.env, a.iterations, a.out, a.address, num_env_runners=a.runners,
