@@ -172,3 +172,52 @@ def test_hall_synchronisation_of_the_electrical_angle():
     lag = abs(m.read("V_ELDEG")[1])  # ELDEG_IST is sampled at the start of the last inner sample
     assert abs(int(m.read("ELDEG_IST")[1]) - true_eldeg) <= lag + 1
     assert (int(m.read("CNTRL_BITS")[1]) >> 13) in (1, 2, 3, 4, 5, 6)
+
+
+def _eldeg_error(m: MotorArray, offset: np.ndarray) -> np.ndarray:
+    """How far ELDEG_IST is from the rotor's true electrical angle plus ``offset`` [1/2048
+    electrical turn, wrapped], beyond what its sampling allows (≤ 0: within): the reading is
+    taken at the start of the last inner sample, so it lags by up to V_ELDEG, and each side
+    rounds by up to one count."""
+    true_eldeg = ((2 * m.position_rad) % (2 * math.pi)) * 2048 / (2 * math.pi)
+    error = (m.read("ELDEG_IST").astype(float) - true_eldeg - offset + 1024) % 2048 - 1024
+    return np.abs(error) - (np.abs(m.read("V_ELDEG")) + 2)
+
+
+def _turn(m: MotorArray, direction: int, steps: int) -> None:
+    """AT_MODE at 40 % torque in ``direction`` for ``steps`` outer samples."""
+    m.write("T_SOLL", 400)
+    m.set_input(analog_volts=5.0 * direction)
+    m.write("MODE_REG", c.AT_MODE)
+    m.step(steps)
+
+
+@pytest.mark.parametrize("direction", [1, -1])
+def test_the_hall_offset_of_the_direction_is_written_to_eldeg_ist(direction):
+    """3.2.124/125: at the hall zero transition the firmware writes ELDEGP_OFFSET to
+    ELDEG_IST when the rotor turns positive and ELDEGN_OFFSET when it turns negative; the
+    register of the other direction has no effect. Motors that start from their hall sector
+    (hall_start = 1), offsets 0 / 300 in the register of the direction / 300 in the other."""
+    m = MotorArray("MAC140", n=3, seed=0, hall_start=1, load_inertia=100e-6)
+    this, other = ("ELDEGP_OFFSET", "ELDEGN_OFFSET")[::direction]
+    m.write(this, [0, 300, 0])
+    m.write(other, [0, 0, 300])
+    _turn(m, direction, 63)  # past one electrical turn from angle 0: a zero transition
+    assert np.all(np.sign(m.speed_rpm) == direction)
+    assert np.all(_eldeg_error(m, np.array([0.0, 300.0, 0.0])) <= 0)
+    assert np.all(_eldeg_error(m, np.array([300.0, 0.0, 300.0])) > 0)
+
+
+def test_hall_int_keeps_the_hall_correction_after_the_first():
+    """CNTRL_BITS HALL_INT (3.2.36 bit 5): the first hall zero transition after power-on
+    corrects ELDEG_IST; later ones only while HALL_INT is set, so a new ELDEGN_OFFSET takes
+    effect at the next transition with HALL_INT and never without it."""
+    m = MotorArray("MAC140", n=2, seed=0, hall_start=1, load_inertia=100e-6)
+    m.write("CNTRL_BITS", m.read("CNTRL_BITS") | np.array([0, c.HALL_INT]))
+    _turn(m, -1, 10)  # the first transition, at once below angle 0: ELDEGN_OFFSET = 0
+    assert np.all(_eldeg_error(m, np.zeros(2)) <= 0)
+    m.write("ELDEGN_OFFSET", 300)
+    m.step(63)  # a further electrical turn, so another zero transition
+    assert np.all(np.sign(m.speed_rpm) == -1)
+    assert _eldeg_error(m, np.zeros(2))[0] <= 0 < _eldeg_error(m, np.full(2, 300.0))[0]
+    assert _eldeg_error(m, np.full(2, 300.0))[1] <= 0 < _eldeg_error(m, np.zeros(2))[1]
