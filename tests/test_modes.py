@@ -488,3 +488,24 @@ def test_every_hand_over_between_moving_modes_is_bumpless_and_error_free(first):
         errors = c.I2T_ERR | c.FLW_ERR | c.FNC_ERR | c.UIT_ERR | c.PLIM_ERR
         assert int(m.read("ERR_STAT")[0]) & errors == 0, (first, second)
         assert int(m.read("MODE_REG")[0]) == second, (first, second)
+
+
+@pytest.mark.parametrize("edge", [1.0, 2.0])
+def test_index_home_puts_the_zero_on_the_nearest_index_marker(edge):
+    """CNTRL_BITS INDEX_HOME (3.2.36 bit 11): in a homing mode the home position is rounded to
+    the nearest index marker, the hall transition at the electrical zero (two per revolution:
+    θ = 0 and π rad with two pole pairs). HOME2 on a sensor edge at ``edge`` rad, without the
+    bit (motor 0: the zero at the edge) and with it (motor 1: at the marker nearest the edge)."""
+    m = MotorArray("MAC140", n=2, seed=0, home_position=edge)
+    m.write_many({"V_HOME": 400, "T_HOME": 1, "P_HOME": 0, "STARTMODE": c.P_MODE})
+    m.write("CNTRL_BITS", m.read("CNTRL_BITS") | np.array([0, c.INDEX_HOME]))
+    m.write("MODE_REG", c.HOME2_MODE)
+    for _ in range(5000):
+        m.step()
+        if (m.read("MODE_REG") == c.P_MODE).all():
+            break
+    zero_rad = m.position_rad - m.read("P_IST") * c.RAD_PER_COUNT
+    marker = round(edge / np.pi) * np.pi
+    one_sample = 400 / 16 * c.RAD_PER_COUNT * 2  # V_HOME's travel in two outer samples
+    assert zero_rad[0] == pytest.approx(edge, abs=one_sample)
+    assert zero_rad[1] == pytest.approx(marker, abs=one_sample)
