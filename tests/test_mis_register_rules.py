@@ -373,3 +373,44 @@ def test_setup_bit_16_inverts_the_external_encoder_count() -> None:
         m.set_input(pulse_counts=5)
         m.step(10)
         assert m.read("EXT_ENCODER")[0] == sign * 50 and m.read("P_SOLL")[0] == sign * 50
+
+
+# --- §8.2.67 bits 2 and 4: the back side of the sensor, no sensor -------------------------
+_SENSOR = (30_000, 90_000)  #: rotor counts where the zero-search sensor (input 3) is active
+
+
+def _search_over_a_sensor(mode: int, bits: int, start_input: bool = False) -> tuple[float, int]:
+    """A zero search of ``mode`` with ZERO_SEARCH_BITS ``bits`` from the rotor at 0 upwards
+    over a sensor on input 3 active between the counts of :data:`_SENSOR`: where on the shaft
+    P_IST = 0 ended up [rotor counts], and the MODE_REG after it (STARTMODE 1 when done)."""
+    m = _motor(HOME_MASK=0b100, V_HOME=3000, V_HOME_CRAWL=300, P_HOME=0, STARTMODE=1,
+               V_SOLL=0, IN_POSITION_COUNT=0, ZERO_SEARCH_BITS=bits)
+    m.write("MODE_REG", mode)
+    for _ in range(20_000):
+        rotor = m.rotor_counts[0]
+        m.set_input(digital_inputs=0b100 if _SENSOR[0] <= rotor <= _SENSOR[1] or (
+            start_input and rotor < _SENSOR[0]) else 0)
+        m.step()
+        if m.read("MODE_REG")[0] != mode:
+            break
+    return float(m.rotor_counts[0] - m.read("P_IST")[0]), int(m.read("MODE_REG")[0])
+
+
+@pytest.mark.parametrize(("mode", "near"), [(c.ZERO_SEARCH_1, 200.0), (c.ZERO_SEARCH_2, 50.0)])
+def test_zero_search_bit_2_finds_the_back_side_of_the_sensor(mode: int, near: float) -> None:
+    """ZERO_SEARCH_BITS bit 2, "Search for opposite side of sensor": the zero is on the
+    sensor's back side instead of its front side, in both types; type 2 takes the edge at its
+    crawl velocity, so closer."""
+    front, done = _search_over_a_sensor(mode, 0)
+    assert done == 1 and front == pytest.approx(_SENSOR[0], abs=near)
+    back, done = _search_over_a_sensor(mode, c.ZS_OPPOSITE_SIDE)
+    assert done == 1 and back == pytest.approx(_SENSOR[1], abs=near)
+
+
+@pytest.mark.parametrize("mode", [c.ZERO_SEARCH_1, c.ZERO_SEARCH_2])
+def test_zero_search_bit_4_takes_the_position_where_the_motor_is(mode: int) -> None:
+    """ZERO_SEARCH_BITS bit 4, "Ignore switch": the sensor input is not looked at, the actual
+    position becomes the zero at once (here with the input active from the start, which would
+    otherwise make type 2 leave the sensor first)."""
+    zero, done = _search_over_a_sensor(mode, c.ZS_IGNORE_SWITCH, start_input=True)
+    assert done == 1 and zero == 0.0

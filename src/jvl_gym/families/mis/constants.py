@@ -91,6 +91,11 @@ WARN_POS_LIMIT_SEEN = 1 << 2
 WARN_NEG_LIMIT_SEEN = 1 << 3
 WARN_LOW_BUS = 1 << 4
 
+# --- ZERO_SEARCH_BITS (§8.2.67) --------------------------------------------------------------
+ZS_OPPOSITE_SIDE = 1 << 2  #: the zero on the sensor's back side
+ZS_IGNORE_SWITCH = 1 << 4  #: the zero where the motor is, no input looked at
+ZS_NO_TIME_OUT = 1 << 5
+
 # --- SETUP_BITS (§5.3.6, §8.2.68) ------------------------------------------------------------
 SETUP_INVERT_DIRECTION = 1 << 0
 SETUP_SYNC_ENCODER = 1 << 5

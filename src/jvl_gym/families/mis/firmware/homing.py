@@ -7,7 +7,17 @@ motor stops (D_SOLL / A_SOLL), moves to position 0 if P_HOME ≠ 0 (§6.5.8 step
 STATUSBITS bit 7 and changes to STARTMODE (§8.2.3). ENCODER_POS is set with P_IST at the zero
 (§8.2.15). After V_HOME_TIMEOUT ms (0: 60 s; none with ZERO_SEARCH_BITS bit 5) the search ends
 with ERR_BITS bit 16 and the motor returns to STARTMODE (§6.5.9), where the error stop makes it
-passive. Phases (``S_HOME_PHASE``): 0 start, 1 seek, 2 leave the sensor, 3 stop, 4 move to 0.
+passive.
+
+ZERO_SEARCH_BITS (§8.2.67; MacTalk's texts in §6.5.4): bit 2 "Search for opposite side of
+sensor", the zero on the sensor's "back side": type 1 runs on through the sensor at V_HOME
+and the zero is where the input is released; type 2 runs through likewise, then comes back at
+the crawl velocity until the input is active again, and that point is the zero (the mirror of
+its front-side search, so that the edge is again taken at crawl speed: a decision, the manual
+names the bit only). Bit 4 "Ignore switch": no input is looked at, "the actual position [is
+used] as zero" at once, in either type. Phases (``S_HOME_PHASE``): 0 start, 1 seek, 2 leave the
+sensor, 3 stop, 4 move to 0, 6 run through the sensor (bit 2), 7 come back onto it (bit 2,
+type 2).
 
 Torque zero search (§6.5.7, "only available with H2/H4 encoder … Closed loop and Current
 control enabled"): the register list gives it no MODE_REG or HOMEMODE number (HOMEMODE takes
@@ -55,7 +65,7 @@ def zero_search(regs, s, p, mode: int) -> tuple[float, bool]:  # pragma: no cove
     s[L.S_HOME_MS] += 1.0
     limit = regs[R.V_HOME_TIMEOUT]
     limit_ms = limit if limit > 0 else ZERO_SEARCH_TIMEOUT_DEFAULT_S * 1000.0
-    if not regs[R.ZERO_SEARCH_BITS] & (1 << 5) and s[L.S_HOME_MS] > limit_ms:
+    if not regs[R.ZERO_SEARCH_BITS] & c.ZS_NO_TIME_OUT and s[L.S_HOME_MS] > limit_ms:
         regs[R.ERR_BITS] |= c.ERR_ZERO_SEARCH_TIMEOUT | c.ERR_GENERAL
         s[L.S_HOME_PHASE] = 0.0
         regs[R.MODE_REG] = regs[R.STARTMODE]
@@ -72,24 +82,46 @@ def zero_search(regs, s, p, mode: int) -> tuple[float, bool]:  # pragma: no cove
     if phase == 0.0:
         regs[R.STATUSBITS] &= ~c.ST_ZERO_SEARCH_DONE
         s[L.S_HOME_PHASE] = phase = 1.0
+    bits = regs[R.ZERO_SEARCH_BITS]
+    crawl = regs[R.V_HOME_CRAWL] * c.VEL_UNIT_TO_COUNTS
+    crawl = crawl if crawl > 0.0 else abs(vh) / 64.0
+    back = -math.copysign(crawl, vh)  # the crawl velocity, against the search direction
+    reversed_ = s[L.S_VEL] == 0.0 or (s[L.S_VEL] > 0.0) != (vh > 0.0)
     if phase == 1.0:
-        if home:
-            if mode == c.ZERO_SEARCH_1 or torque_search:
+        if bits & c.ZS_IGNORE_SWITCH and not torque_search:
+            _set_zero(regs, s, p, False)
+            s[L.S_HOME_PHASE] = 3.0
+        elif home:
+            if torque_search or (mode == c.ZERO_SEARCH_1 and not bits & c.ZS_OPPOSITE_SIDE):
                 _set_zero(regs, s, p, torque_search)
                 s[L.S_VEL] = 0.0 if torque_search else s[L.S_VEL]
                 s[L.S_HOME_PHASE] = 3.0
+            elif bits & c.ZS_OPPOSITE_SIDE:
+                s[L.S_HOME_PHASE] = 6.0
+                return velocity_step(regs, s, vh, s[L.S_DEC]), False
             else:
                 s[L.S_HOME_PHASE] = 2.0
         else:
             return velocity_step(regs, s, vh, s[L.S_DEC]), False
-    if s[L.S_HOME_PHASE] == 2.0:
-        crawl = regs[R.V_HOME_CRAWL] * c.VEL_UNIT_TO_COUNTS
-        crawl = crawl if crawl > 0.0 else abs(vh) / 64.0
-        if not home and (s[L.S_VEL] == 0.0 or (s[L.S_VEL] > 0.0) != (vh > 0.0)):
+    if s[L.S_HOME_PHASE] == 6.0:
+        if home:
+            return velocity_step(regs, s, vh, s[L.S_DEC]), False
+        if mode == c.ZERO_SEARCH_1:
             _set_zero(regs, s, p, False)
             s[L.S_HOME_PHASE] = 3.0
         else:
-            return velocity_step(regs, s, -math.copysign(crawl, vh), s[L.S_DEC]), False
+            s[L.S_HOME_PHASE] = 7.0
+    if s[L.S_HOME_PHASE] == 7.0:
+        if not (home and reversed_):
+            return velocity_step(regs, s, back, s[L.S_DEC]), False
+        _set_zero(regs, s, p, False)
+        s[L.S_HOME_PHASE] = 3.0
+    if s[L.S_HOME_PHASE] == 2.0:
+        if not home and reversed_:
+            _set_zero(regs, s, p, False)
+            s[L.S_HOME_PHASE] = 3.0
+        else:
+            return velocity_step(regs, s, back, s[L.S_DEC]), False
     if s[L.S_HOME_PHASE] == 3.0:
         v = velocity_step(regs, s, 0.0, s[L.S_DEC])
         if v != 0.0:
