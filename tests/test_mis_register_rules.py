@@ -379,21 +379,27 @@ def test_setup_bit_16_inverts_the_external_encoder_count() -> None:
 _SENSOR = (30_000, 90_000)  #: rotor counts where the zero-search sensor (input 3) is active
 
 
-def _search_over_a_sensor(mode: int, bits: int, start_input: bool = False) -> tuple[float, int]:
+def _search_over_a_sensor(mode: int, bits: int, start_input: bool = False,
+                          sensor: tuple[int, int] = _SENSOR,
+                          limit: int | None = None) -> tuple[float, int, int]:
     """A zero search of ``mode`` with ZERO_SEARCH_BITS ``bits`` from the rotor at 0 upwards
-    over a sensor on input 3 active between the counts of :data:`_SENSOR`: where on the shaft
-    P_IST = 0 ended up [rotor counts], and the MODE_REG after it (STARTMODE 1 when done)."""
-    m = _motor(HOME_MASK=0b100, V_HOME=3000, V_HOME_CRAWL=300, P_HOME=0, STARTMODE=1,
-               V_SOLL=0, IN_POSITION_COUNT=0, ZERO_SEARCH_BITS=bits)
+    over a sensor on input 3 active between the rotor counts ``sensor`` (and below them with
+    ``start_input``), with a positive limit switch on input 1 from the count ``limit`` up:
+    where on the shaft P_IST = 0 ended up [rotor counts], the MODE_REG after it (STARTMODE 1
+    when done) and ERR_BITS."""
+    m = _motor(HOME_MASK=0b100, PL_MASK=0b1, V_HOME=3000, V_HOME_CRAWL=300, P_HOME=0,
+               STARTMODE=1, V_SOLL=0, IN_POSITION_COUNT=0, ZERO_SEARCH_BITS=bits)
     m.write("MODE_REG", mode)
     for _ in range(20_000):
         rotor = m.rotor_counts[0]
-        m.set_input(digital_inputs=0b100 if _SENSOR[0] <= rotor <= _SENSOR[1] or (
-            start_input and rotor < _SENSOR[0]) else 0)
+        on_sensor = sensor[0] <= rotor <= sensor[1] or (start_input and rotor < sensor[0])
+        on_limit = limit is not None and rotor >= limit
+        m.set_input(digital_inputs=(0b100 if on_sensor else 0) | (0b1 if on_limit else 0))
         m.step()
         if m.read("MODE_REG")[0] != mode:
             break
-    return float(m.rotor_counts[0] - m.read("P_IST")[0]), int(m.read("MODE_REG")[0])
+    return (float(m.rotor_counts[0] - m.read("P_IST")[0]), int(m.read("MODE_REG")[0]),
+            int(m.read("ERR_BITS")[0]))
 
 
 @pytest.mark.parametrize(("mode", "near"), [(c.ZERO_SEARCH_1, 200.0), (c.ZERO_SEARCH_2, 50.0)])
@@ -401,9 +407,9 @@ def test_zero_search_bit_2_finds_the_back_side_of_the_sensor(mode: int, near: fl
     """ZERO_SEARCH_BITS bit 2, "Search for opposite side of sensor": the zero is on the
     sensor's back side instead of its front side, in both types; type 2 takes the edge at its
     crawl velocity, so closer."""
-    front, done = _search_over_a_sensor(mode, 0)
+    front, done, _ = _search_over_a_sensor(mode, 0)
     assert done == 1 and front == pytest.approx(_SENSOR[0], abs=near)
-    back, done = _search_over_a_sensor(mode, c.ZS_OPPOSITE_SIDE)
+    back, done, _ = _search_over_a_sensor(mode, c.ZS_OPPOSITE_SIDE)
     assert done == 1 and back == pytest.approx(_SENSOR[1], abs=near)
 
 
@@ -412,5 +418,19 @@ def test_zero_search_bit_4_takes_the_position_where_the_motor_is(mode: int) -> N
     """ZERO_SEARCH_BITS bit 4, "Ignore switch": the sensor input is not looked at, the actual
     position becomes the zero at once (here with the input active from the start, which would
     otherwise make type 2 leave the sensor first)."""
-    zero, done = _search_over_a_sensor(mode, c.ZS_IGNORE_SWITCH, start_input=True)
+    zero, done, _ = _search_over_a_sensor(mode, c.ZS_IGNORE_SWITCH, start_input=True)
     assert done == 1 and zero == 0.0
+
+
+@pytest.mark.parametrize("mode", [c.ZERO_SEARCH_1, c.ZERO_SEARCH_2])
+def test_zero_search_bit_1_turns_at_a_limit_switch(mode: int) -> None:
+    """ZERO_SEARCH_BITS bit 1, "Change direction on limit": a search that meets the limit
+    switch ahead before its sensor turns and finds the sensor behind it, from the other side
+    (its front side is then the upper edge); without the bit the limit stops the motor with
+    the position-limit error (ERR_BITS bit 3) and it goes passive."""
+    behind = (-90_000, -30_000)
+    zero, done, err = _search_over_a_sensor(mode, c.ZS_TURN_AT_LIMIT, sensor=behind,
+                                            limit=50_000)
+    assert done == 1 and err == 0 and zero == pytest.approx(behind[1], abs=200)
+    _, done, err = _search_over_a_sensor(mode, 0, sensor=behind, limit=50_000)
+    assert done == c.PASSIVE and err & c.ERR_POSITION_LIMIT

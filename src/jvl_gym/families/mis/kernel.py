@@ -197,7 +197,7 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
         if v == 0.0:
             regs[R.MODE_REG] = c.PASSIVE
     elif mode == c.ZERO_SEARCH_1 or mode == c.ZERO_SEARCH_2:
-        v, arrive = zero_search(regs, s, p, mode)
+        v, arrive = zero_search(regs, s, p, mode, limits)
     s[L.S_VEL] = 0.0 if arrive else v
     _advance(regs, s, v, arrive, tt)
     regs[R.V_IST] = int(np.floor(s[L.S_VEL] / c.VEL_UNIT_TO_COUNTS + 0.5))

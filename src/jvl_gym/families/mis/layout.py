@@ -30,8 +30,9 @@ from __future__ import annotations
     S_ENC_OFFSET,  # ENCODER_POS minus the quantised rotor position [counts]
     S_ENC_PREV,  # ENCODER_POS of the last sample (V_ENCODER)
     S_EMERGENCY,  # 1 while the error stop decelerates
-    S_HOME_PHASE,  # zero search: 0 idle, 1 seek, 2 leave sensor, 3 move to 0
+    S_HOME_PHASE,  # zero search phase (firmware.homing), 0 before it starts
     S_HOME_MS,  # zero search time [outer samples]
+    S_HOME_DIR,  # zero search direction: +1 as V_HOME, −1 turned at a limit
     S_AC_LEFT,  # auto-correction retries left
     S_AC_WAIT,  # auto-correction settling time left [outer samples]
     S_SEEN_PSOLL,  # P_SOLL as the firmware last saw it (a change reloads auto-correction)
@@ -45,8 +46,8 @@ from __future__ import annotations
     S_DIN_STATE,  # filtered digital inputs (bits 0-7)
     S_FIELD,  # closed loop: the position the currents are commutated to [counts]
     S_FIELD_STEP,  # closed loop: its largest advance per inner sample [counts]
-) = range(36)
-S_AF0 = 36  #: analogue filtered values of IO1 … IO8 (units of 1.221 mV, fractional)
+) = range(37)
+S_AF0 = 37  #: analogue filtered values of IO1 … IO8 (units of 1.221 mV, fractional)
 S_DIN0 = S_AF0 + 8  #: input filter: ms the raw level of IO1 … IO8 has differed from the state
 #: counts run since MOTOR_REV last counted a revolution (§8.2.122)
 S_REV_ACC = S_DIN0 + 8

@@ -15,9 +15,12 @@ and the zero is where the input is released; type 2 runs through likewise, then 
 the crawl velocity until the input is active again, and that point is the zero (the mirror of
 its front-side search, so that the edge is again taken at crawl speed: a decision, the manual
 names the bit only). Bit 4 "Ignore switch": no input is looked at, "the actual position [is
-used] as zero" at once, in either type. Phases (``S_HOME_PHASE``): 0 start, 1 seek, 2 leave the
-sensor, 3 stop, 4 move to 0, 6 run through the sensor (bit 2), 7 come back onto it (bit 2,
-type 2).
+used] as zero" at once, in either type. Bit 1 "Change direction on limit": while the search
+seeks its sensor, a limit input ahead (PL_MASK/NL_MASK, MIN_P_IST/MAX_P_IST) turns it
+(``S_HOME_DIR``) instead of stopping it with the position-limit error; every later phase runs in
+the turned direction, and a limit met again turns it again until the time-out. Phases
+(``S_HOME_PHASE``): 0 start, 1 seek, 2 leave the sensor, 3 stop, 4 move to 0, 6 run through the
+sensor (bit 2), 7 come back onto it (bit 2, type 2).
 
 Torque zero search (§6.5.7, "only available with H2/H4 encoder … Closed loop and Current
 control enabled"): the register list gives it no MODE_REG or HOMEMODE number (HOMEMODE takes
@@ -41,7 +44,7 @@ from .. import constants as c
 from .. import layout as L
 from ..units import ZERO_SEARCH_TIMEOUT_DEFAULT_S
 from . import regs as R
-from .monitor import COUNTS_PER_RAD, set_encoder
+from .monitor import COUNTS_PER_RAD, seeking_turns, set_encoder
 from .profile import position_step, velocity_step
 
 
@@ -59,8 +62,10 @@ def _set_zero(regs, s, p, at_rotor: bool) -> None:  # pragma: no cover - compile
 
 
 @njit(cache=True)
-def zero_search(regs, s, p, mode: int) -> tuple[float, bool]:  # pragma: no cover - compiled
-    """The profile velocity of this sample of a zero search, and whether it lands exactly."""
+def zero_search(regs, s, p, mode: int,
+                limits: int) -> tuple[float, bool]:  # pragma: no cover - compiled
+    """The profile velocity of this sample of a zero search, and whether it lands exactly;
+    ``limits``: the active limit inputs (1: positive, 2: negative; ``monitor.check_errors``)."""
     phase = s[L.S_HOME_PHASE]
     s[L.S_HOME_MS] += 1.0
     limit = regs[R.V_HOME_TIMEOUT]
@@ -78,11 +83,15 @@ def zero_search(regs, s, p, mode: int) -> tuple[float, bool]:  # pragma: no cove
         home = regs[R.ACTUAL_TORQUE] >= regs[R.T_HOME] and demand >= regs[R.T_HOME]
     else:
         home = (regs[R.INPUTS] & regs[R.HOME_MASK]) != 0
-    vh = regs[R.V_HOME] * c.VEL_UNIT_TO_COUNTS
     if phase == 0.0:
         regs[R.STATUSBITS] &= ~c.ST_ZERO_SEARCH_DONE
         s[L.S_HOME_PHASE] = phase = 1.0
+        s[L.S_HOME_DIR] = 1.0
     bits = regs[R.ZERO_SEARCH_BITS]
+    vh = regs[R.V_HOME] * c.VEL_UNIT_TO_COUNTS * s[L.S_HOME_DIR]
+    if phase == 1.0 and seeking_turns(regs, s, mode) and limits & (1 if vh > 0.0 else 2):
+        s[L.S_HOME_DIR] = -s[L.S_HOME_DIR]
+        vh = -vh
     crawl = regs[R.V_HOME_CRAWL] * c.VEL_UNIT_TO_COUNTS
     crawl = crawl if crawl > 0.0 else abs(vh) / 64.0
     back = -math.copysign(crawl, vh)  # the crawl velocity, against the search direction

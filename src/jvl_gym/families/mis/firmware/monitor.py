@@ -141,7 +141,8 @@ def check_errors(regs, s, u, active: bool, has_encoder: bool,
     ahead = wrap32(regs[R.P_SOLL] - regs[R.P_IST]) if (
         mode == c.POSITION or mode == c.GEAR) else 0
     passing = (pos_hit and v > 0.0) or (neg_hit and v < 0.0)
-    if active and (passing or (soft_pos and ahead > 0) or (soft_neg and ahead < 0)):
+    if active and not seeking_turns(regs, s, mode) and (
+            passing or (soft_pos and ahead > 0) or (soft_neg and ahead < 0)):
         if not setup & c.SETUP_NO_LIMIT_ERROR:
             err |= c.ERR_POSITION_LIMIT
         elif passing:
@@ -151,6 +152,16 @@ def check_errors(regs, s, u, active: bool, has_encoder: bool,
     regs[R.ERR_BITS] = err
     regs[R.WARN_BITS] = warn
     return (1 if pos_hit else 0) | (2 if neg_hit else 0)
+
+
+@njit(cache=True)
+def seeking_turns(regs, s, mode: int) -> bool:  # pragma: no cover - compiled
+    """A zero search still seeking its sensor with ZERO_SEARCH_BITS bit 1 (§8.2.67, "change
+    direction on limit"): a limit input turns it (``firmware.homing``) instead of stopping the
+    motor with the position-limit error."""
+    return ((mode == c.ZERO_SEARCH_1 or mode == c.ZERO_SEARCH_2)
+            and (regs[R.ZERO_SEARCH_BITS] & c.ZS_TURN_AT_LIMIT) != 0
+            and s[L.S_HOME_PHASE] <= 1.0)
 
 
 @njit(cache=True)
