@@ -95,7 +95,7 @@ WARN_LOW_BUS = 1 << 4
 ZS_TURN_AT_LIMIT = 1 << 1  #: the search turns at a limit input instead of stopping
 ZS_OPPOSITE_SIDE = 1 << 2  #: the zero on the sensor's back side
 ZS_IGNORE_SWITCH = 1 << 4  #: the zero where the motor is, no input looked at
-ZS_NO_TIME_OUT = 1 << 5
+ZS_NO_TIME_OUT = 1 << 5  #: no zero-search time-out
 
 # --- SETUP_BITS (§5.3.6, §8.2.68) ------------------------------------------------------------
 SETUP_INVERT_DIRECTION = 1 << 0
