@@ -375,7 +375,7 @@ def test_setup_bit_16_inverts_the_external_encoder_count() -> None:
         assert m.read("EXT_ENCODER")[0] == sign * 50 and m.read("P_SOLL")[0] == sign * 50
 
 
-# --- §8.2.67 bits 2 and 4: the back side of the sensor, no sensor -------------------------
+# --- §8.2.67 bits 1, 2 and 4: turn at a limit, the back side of the sensor, no sensor ---
 _SENSOR = (30_000, 90_000)  #: rotor counts where the zero-search sensor (input 3) is active
 
 
