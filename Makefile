@@ -29,8 +29,8 @@ setup: $(STAMP)
 setup-rl: $(STAMP_RL)
 
 demo: $(STAMP)
-	$(BIN)/jvl-gym compile --motor MAC140  # numba: only the family of the demo's motor (jvl_gym.demo.MOTOR)
-	MPLBACKEND=Agg $(BIN)/python -m jvl_gym.demo --out demo_out
+	$(BIN)/jvl-gym compile --motor MAC140  # numba: only the family of the demo's motor (jvl_gym.cli.demo.MOTOR)
+	MPLBACKEND=Agg $(BIN)/python -m jvl_gym.cli.demo --out demo_out
 
 # every env × family × {trained policies, baseline, random}: docs/results.md and its plots
 results: $(STAMP_RL)

@@ -52,7 +52,9 @@ CASES: list[tuple[str, str]] = [
       for name in ENVS for kind in ("single", "vector")],
     ("MotorArray step, cache filled", MOTORS),
 ]
-PRECOMPILE = "from jvl_gym.precompile import compile_all\ncompile_all()"
+PRECOMPILE = ("try:\n    from jvl_gym.cli.precompile import compile_all\n"
+              "except ImportError:  # a tree from before the command line was a package\n"
+              "    from jvl_gym.precompile import compile_all\ncompile_all()")
 AFTER_PRECOMPILE: list[tuple[str, str]] = [
     ("jvl-gym compile (empty cache)", PRECOMPILE),
     ("MotorArray first step after it", MOTORS),
@@ -129,10 +131,11 @@ def print_profile(label: str, profiles: dict[str, dict]) -> None:
 
 def measure(tree: Path) -> list[float]:
     """Wall times [s] of :data:`CASES`, then of :data:`AFTER_PRECOMPILE` (NaN where the tree
-    has no ``jvl_gym.precompile``), for the source tree ``tree``, each list in one cache."""
+    has no ``jvl_gym.cli.precompile``), for the source tree ``tree``, each list in one cache."""
     with tempfile.TemporaryDirectory(prefix="jvl-numba-") as cache_dir:
         times = [seconds(code, tree, cache_dir) for _, code in CASES]
-    if not (tree / "src" / "jvl_gym" / "precompile.py").exists():
+    package = tree / "src" / "jvl_gym"
+    if not any((package / p).exists() for p in ("cli/precompile.py", "precompile.py")):
         return times + [math.nan] * len(AFTER_PRECOMPILE)
     with tempfile.TemporaryDirectory(prefix="jvl-numba-") as cache_dir:
         return times + [seconds(code, tree, cache_dir) for _, code in AFTER_PRECOMPILE]

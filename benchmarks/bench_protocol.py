@@ -33,8 +33,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_page import page_path, table, update_section  # noqa: E402
 
 from jvl_gym.protocol import MacTalkClient, NoAnswerError  # noqa: E402
-from jvl_gym.protocol.transport import TwinServer  # noqa: E402
-from jvl_gym.protocol.twin import Twin  # noqa: E402
+from jvl_gym.protocol.mactalk.twin16 import Twin  # noqa: E402
+from jvl_gym.protocol.serving.transport import TwinServer  # noqa: E402
 
 _WRITABLE = ([(f"P{k}", -67_000_000, 67_000_000) for k in range(1, 9)]
              + [(f"V{k}", -32767, 32767) for k in range(1, 9)]

@@ -116,8 +116,8 @@ def browser_rate(seconds: float = 5.0) -> tuple[float, float] | None:
 def refresh_seconds(motor: str = "MAC140", repeats: int = 20) -> tuple[float, int]:
     """Median seconds to read every register the view shows of a twin ``motor`` over TCP,
     and the number of registers."""
-    from jvl_gym.cli_serve import build_line
-    from jvl_gym.protocol.transport import TwinServer
+    from jvl_gym.cli.serve import build_line
+    from jvl_gym.protocol.serving.transport import TwinServer
     from jvl_gym.studio.groups import visible
     from jvl_gym.studio.session import Session
 

@@ -205,15 +205,15 @@ def run_port(loads: list[float], record_length: int = 11, speed: float = 25.0,
              seed: int = 0) -> list[dict[str, float]]:
     """``jvl-tune autotune --port`` against the digital twin with its default record length.
 
-    For each load inertia [kg·m²] a MAC140 twin (``jvl_gym.protocol.transport.TwinServer``,
+    For each load inertia [kg·m²] a MAC140 twin (``jvl_gym.protocol.serving.transport.TwinServer``,
     the server of ``jvl-gym serve``, MacTalk over TCP, ``speed`` × real time) is identified
     and designed through :func:`tuning.serial_source.autotune_over_serial` with
     ``record_length``-sample TESTU/TESTA records. Returns the identified values and errors.
     """
     from tuning.serial_source import autotune_over_serial
 
-    from jvl_gym.protocol.transport import TwinServer
-    from jvl_gym.protocol.twin import Twin
+    from jvl_gym.protocol.mactalk.twin16 import Twin
+    from jvl_gym.protocol.serving.transport import TwinServer
 
     out = []
     for load in loads:

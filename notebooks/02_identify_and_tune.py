@@ -127,8 +127,8 @@ print((out / "setup.yaml").read_text()[:400])
 # shell; pointed at `/dev/ttyUSB0` it commissions a real motor.
 
 # %%
-from jvl_gym.protocol.transport import TwinServer  # noqa: E402
-from jvl_gym.protocol.twin import Twin  # noqa: E402
+from jvl_gym.protocol.serving.transport import TwinServer  # noqa: E402
+from jvl_gym.protocol.mactalk.twin16 import Twin  # noqa: E402
 from tuning.serial_source import autotune_over_serial  # noqa: E402
 
 twin_motor = MotorArray("MAC140", n=1, seed=3, record_length=N_SAMPLES, **truth)

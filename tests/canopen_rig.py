@@ -21,7 +21,7 @@ import canopen
 from jvl_gym import MotorArray
 from jvl_gym.protocol.canopen.eds import shipped_path
 from jvl_gym.protocol.canopen.server import CanopenServer, open_bus
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk.twin16 import Twin
 
 _channels = itertools.count()
 

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from jvl_gym.families import Capability, TwinSpec
-from jvl_gym.protocol.dialect import MACTALK16
+from jvl_gym.protocol.mactalk.dialect import MACTALK16
 from jvl_gym.registers import Access, ReadOnlyRegisterError, RegisterError
 from jvl_gym.registers.formats import to_raw
 

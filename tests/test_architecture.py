@@ -2,9 +2,12 @@
 generic code (every module of ``src/jvl_gym`` outside a family folder, and ``tuning``) imports
 no family module (``importlib`` loads included), compares against no family key or motor-type
 name (the registry's data aside) and uses no private ``MotorArray`` member; no family imports
-another family; nothing of ``jvl_gym`` imports ``tuning``. The rules are
-``tests/architecture_rules.py``; a planted violation under ``tests/fixtures/architecture`` shows
-that each one fires."""
+another family; nothing of ``jvl_gym`` imports ``tuning``. The layout is by concept: the top of
+``src/jvl_gym`` holds packages only; no bus's folder imports another bus's; the motor array's
+package imports none of the layers that use it; and there is no import circle in ``src`` and
+``tuning`` (every import counts: in a function, under ``TYPE_CHECKING``, by ``importlib``). The
+rules are ``tests/architecture_rules.py``; a planted violation under
+``tests/fixtures/architecture`` shows that each one fires."""
 
 from __future__ import annotations
 
@@ -14,16 +17,24 @@ import pytest
 
 from architecture_rules import (
     ARRAY_PARTS,
+    MOTOR,
+    PACKAGE,
     REGISTRY,
     ROOT,
     Violation,
+    bus_files,
+    check_bus_imports,
     check_family_imports,
     check_generic_imports,
+    check_motor_imports,
     check_names,
     check_private_members,
     family_files,
     family_keys,
     generic_files,
+    import_cycles,
+    import_graph,
+    source_files,
 )
 from jvl_gym.families import families, family
 
@@ -77,14 +88,62 @@ def test_the_pending_list_holds_only_files_that_break_a_rule() -> None:
 def test_the_tree_is_covered() -> None:
     """Every package of jvl_gym outside the family folders is scanned, and tuning."""
     scanned = {p.relative_to(ROOT).parts[:3] for p in generic_files()}
-    for layer in ("envs", "protocol", "scale", "rl", "world", "engine", "registers", "physics"):
+    for layer in ("envs", "protocol", "scale", "rl", "world", "engine", "registers", "physics",
+                  "motor", "cli", "studio"):
         assert ("src", "jvl_gym", layer) in scanned, layer
-    assert any(p.name == "sim.py" for p in generic_files())
+    assert MOTOR / "array.py" in generic_files()
     assert any(p.parts[-2] == "tuning" for p in generic_files())
     assert not any("mac050_141" in p.parts for p in generic_files())
 
 
+def test_the_top_level_holds_packages_only() -> None:
+    """``src/jvl_gym`` holds ``__init__.py`` and packages (docs/architecture.md)."""
+    assert sorted(p.name for p in PACKAGE.glob("*.py")) == ["__init__.py"]
+    assert all((p / "__init__.py").is_file() for p in PACKAGE.iterdir()
+               if p.is_dir() and p.name != "__pycache__")
+
+
+def test_no_import_circles() -> None:
+    cycles = import_cycles(import_graph(source_files()))
+    assert not cycles, "import circles:\n" + "\n".join(" ↔ ".join(c) for c in cycles)
+
+
+@pytest.mark.parametrize("path", bus_files(), ids=_rel)
+def test_no_bus_imports_another_bus(path: Path) -> None:
+    found = check_bus_imports(path)
+    assert not found, "\n".join(map(str, found))
+
+
+@pytest.mark.parametrize("path", sorted(MOTOR.rglob("*.py")), ids=_rel)
+def test_the_motor_array_is_below_its_users(path: Path) -> None:
+    found = check_motor_imports(path)
+    assert not found, "\n".join(map(str, found))
+
+
 # ------------------------------------------------------------------ the rules fire
+def test_a_planted_import_circle_is_caught() -> None:
+    circle = sorted((FIXTURES / "circle").glob("*.py"))
+    graph = import_graph(circle)
+    assert import_cycles(graph) == [[f"tests.fixtures.architecture.circle.{m}"
+                                     for m in ("a", "b", "c")]]
+    # without the module that closes it, no circle
+    assert import_cycles(import_graph([p for p in circle if p.stem != "c"])) == []
+
+
+def test_a_planted_bus_and_motor_violation_is_caught() -> None:
+    bad = FIXTURES / "bad_bus.py"
+    found = [v.what for v in check_bus_imports(bad, "jvl_gym.protocol.modbus")]
+    assert found == ["imports jvl_gym.protocol.mactalk.twin32.MacTalk32Unit: bus modbus imports "
+                     "bus mactalk"]
+    found = [v.what for v in check_motor_imports(bad, "jvl_gym.motor")]
+    assert found == ["imports jvl_gym.protocol.errors.FrameError: the motor array is below "
+                     "jvl_gym.protocol, which uses it",
+                     "imports jvl_gym.protocol.mactalk.twin32.MacTalk32Unit: the motor array is "
+                     "below jvl_gym.protocol, which uses it",
+                     "imports jvl_gym.protocol.serving.twin.MotorTwin: the motor array is below "
+                     "jvl_gym.protocol, which uses it",
+                     "imports jvl_gym.envs.base.MotorVectorEnv: the motor array is below "
+                     "jvl_gym.envs, which uses it"]
 def test_a_planted_generic_violation_is_caught() -> None:
     bad = FIXTURES / "bad_layer.py"
     found = {v.what for v in check_generic_imports(bad, "jvl_gym.envs")}

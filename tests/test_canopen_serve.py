@@ -13,10 +13,10 @@ from pathlib import Path
 import canopen
 import pytest
 
-from jvl_gym.cli import app
-from jvl_gym.cli_serve import build_line, canopen_server
-from jvl_gym.protocol import mactalk32 as m32
+from jvl_gym.cli.main import app
+from jvl_gym.cli.serve import build_line, canopen_server
 from jvl_gym.protocol.canopen.eds import shipped_path
+from jvl_gym.protocol.mactalk import codec32 as m32
 
 
 @pytest.mark.parametrize("argv, words", [

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from jvl_gym.cli import app
+from jvl_gym.cli.main import app
 from jvl_gym.families import Capability, families_with
 from jvl_gym.families.mis.program.bench import IoScriptError, load_io_script
 

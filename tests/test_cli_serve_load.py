@@ -11,10 +11,10 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from jvl_gym.cli import app
-from jvl_gym.cli_serve import LOAD_OPTIONS, LoadError, load_per_motor
+from jvl_gym.cli.main import app
+from jvl_gym.cli.serve import LOAD_OPTIONS, LoadError, load_per_motor
 from jvl_gym.families.mac050_141 import constants as c
-from jvl_gym.protocol import mactalk as mt
+from jvl_gym.protocol.mactalk import codec16 as mt
 
 J_M = 17.3e-6  #: MAC140 rotor inertia [kg·m²] (families/mac050_141/configs/motors/MAC140.yaml)
 RIGID = ["--coulomb-friction", "0", "--viscous-friction", "0"]
@@ -29,7 +29,7 @@ def served(monkeypatch: pytest.MonkeyPatch) -> Any:
     """``served(*argv)``: run ``jvl-gym serve --tcp 127.0.0.1:0 *argv`` up to the start of the
     server and return the line it would serve (None when serve stopped before) and the exit
     code; the server is a stand-in that raises on ``start``."""
-    from jvl_gym.protocol import transport
+    from jvl_gym.protocol.serving import transport
 
     lines: list[Any] = []
 

@@ -6,7 +6,7 @@ import pytest
 import yaml
 
 from jvl_gym import MotorArray
-from jvl_gym.config import ConfigError
+from jvl_gym.families.config import ConfigError
 from jvl_gym.families.mac050_141.config import MOTORS_DIR, load_motor, load_setup, motor_types
 from jvl_gym.registers import RegisterError
 

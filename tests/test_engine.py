@@ -72,12 +72,12 @@ def test_a_compile_says_so_on_stderr_first_and_a_cached_start_does_not(tmp_path:
     code = """
     import numpy as np
     import jvl_gym
-    from jvl_gym.keywords import first_bad_value
+    from jvl_gym.motor.keywords import first_bad_value
     first_bad_value(np.zeros((1, 2)), np.zeros(1, dtype=np.int64))
     """
     cold = _python(code, tmp_path)
     assert "jvl_gym: compiling numba code for this machine" in cold.stderr
-    assert "compiling jvl_gym.keywords.first_bad_value" in cold.stderr
+    assert "compiling jvl_gym.motor.keywords.first_bad_value" in cold.stderr
     warm = _python(code, tmp_path)
     assert "compiling" not in warm.stderr
     quiet = _python(code, tmp_path / "other", JVL_QUIET_COMPILE="1")

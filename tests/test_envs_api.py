@@ -253,7 +253,7 @@ def _splitmix_normals(keys: np.ndarray, counters: np.ndarray, k: int) -> np.ndar
 
 
 def test_observation_noise_is_the_splitmix64_stream() -> None:
-    from jvl_gym.noise import normals
+    from jvl_gym.motor.noise import normals
 
     keys = np.array([1, 2**63 + 5, 12345678901234567], dtype=np.uint64)
     counters = np.array([0, 7, 123456], dtype=np.int64)

@@ -7,7 +7,7 @@ import pytest
 from typer.testing import CliRunner
 
 import jvl_gym  # noqa: F401
-from jvl_gym.cli import app
+from jvl_gym.cli.main import app
 from jvl_gym.envs import ENV_IDS
 from jvl_gym.envs.baselines import BASELINES, PITension, make_baseline
 from jvl_gym.rl.config import load_rl_configs

@@ -8,7 +8,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from jvl_gym.coupling import coupling_for
+from jvl_gym.physics.coupling import coupling_for
 
 
 def _vec(env_id: str, **kw):

@@ -191,8 +191,8 @@ def test_a_non_default_write_to_a_not_modelled_register_warns_once_logs_and_is_s
 
 
 def test_the_twin_logs_a_not_modelled_write(caplog) -> None:
-    from jvl_gym.protocol import mactalk32 as m32
-    from jvl_gym.protocol.twin import Twin
+    from jvl_gym.protocol.mactalk import codec32 as m32
+    from jvl_gym.protocol.mactalk.twin16 import Twin
 
     m = MotorArray("MIS232", n=1, seed=0)
     twin = Twin(m)

@@ -229,7 +229,7 @@ def test_mis_access_and_formats():
 
 
 def test_mis_table_holds_the_registers_the_modbus_slave_uses():  # MIS manual §12.1
-    from jvl_gym.protocol.modbus_server import MIS_REGISTERS
+    from jvl_gym.protocol.modbus.server import MIS_REGISTERS
 
     names = {"setup": "MODBUS_SETUP", "baud": "BAUD_RATE", "timeout": "MODBUS_TIMEOUT",
              "timeout_action": "MODBUS_TIMEOUT_RESPONSE", "frame_delay": "MODBUS_FRAME_DELAY",

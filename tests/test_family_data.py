@@ -18,8 +18,8 @@ from tuning.records import Record, RecordError, simulate_testu, validate
 from tuning.testmode_facts import record_facts, record_facts_of
 
 from jvl_gym import MotorArray
-from jvl_gym.config import ConfigError
 from jvl_gym.families import Capability, UnsupportedOperation, family
+from jvl_gym.families.config import ConfigError
 from jvl_gym.families.record_file import record_fields
 from jvl_gym.families.servo_config import ServoMotorData, bounded_servo_data
 from jvl_gym.registers.scaling import UNIT_COLUMNS, linear_units

@@ -15,8 +15,8 @@ from gymnasium.utils.env_checker import check_env
 
 from jvl_gym import MotorArray
 from jvl_gym.families import Capability, UnsupportedOperation, family_of_motor, register_family
-from jvl_gym.protocol import mactalk as mt
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk import codec16 as mt
+from jvl_gym.protocol.mactalk.twin16 import Twin
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
 
@@ -159,7 +159,7 @@ def test_programs_and_fieldbuses_the_toy_does_not_declare_are_refused_by_name(
     """The program CLI and the CANopen slave ask the family record: the toy, declaring neither
     Capability.PROGRAMS nor Capability.CANOPEN, is refused by name; the program CLI lists the
     motor types of the registered families that run programs."""
-    from jvl_gym.cli import app
+    from jvl_gym.cli.main import app
     from jvl_gym.families import families_with
     from jvl_gym.protocol.canopen.facts import facts_of, has_canopen
 

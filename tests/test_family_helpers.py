@@ -9,8 +9,8 @@ import pytest
 import yaml
 from pydantic import BaseModel
 
-from jvl_gym.config import ConfigError, MotorConfigs, MotorData, Real, bounded_by
 from jvl_gym.families import families, family
+from jvl_gym.families.config import ConfigError, MotorConfigs, MotorData, Real, bounded_by
 from jvl_gym.registers.bits import bit_masks, mask_of
 from jvl_gym.registers.scaling import linear_unit
 

@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from jvl_gym import ModeError, MotorArray
-from jvl_gym.config import ConfigError
+from jvl_gym.families.config import ConfigError
 from jvl_gym.families.mac050_141.config import MOTORS_DIR, load_motor
 from jvl_gym.registers import (
     ReadOnlyRegisterError,

@@ -13,9 +13,9 @@ from hypothesis import strategies as st
 from tuning.cli import app as tune
 
 from cli_checks import one_line_error, run_cli
-from jvl_gym.cli import app as gym_cli
-from jvl_gym.config import ConfigError
-from jvl_gym.demo import main as demo_main
+from jvl_gym.cli.demo import main as demo_main
+from jvl_gym.cli.main import app as gym_cli
+from jvl_gym.families.config import ConfigError
 from jvl_gym.families.mac050_141.config import SETUPS_DIR
 from jvl_gym.scale.rllib import main as rllib_main
 

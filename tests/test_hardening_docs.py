@@ -30,7 +30,7 @@ def _shell_lines() -> list[str]:
 def _command(words: list[str]):
     from tuning.cli import app as tune
 
-    from jvl_gym.cli import app as gym_cli
+    from jvl_gym.cli.main import app as gym_cli
 
     app = {"jvl-tune": tune, "jvl-gym": gym_cli}[words[0].split("/")[-1]]
     import typer.main

@@ -9,7 +9,7 @@ import pytest
 
 
 def test_demo_scope_names_phases_on_a_top_axis_and_plots_the_current_magnitude():
-    from jvl_gym.demo import _figure
+    from jvl_gym.cli.demo import _figure
 
     t = np.arange(300) * 1.92e-3
     log = {"t": t.tolist(), "rpm": np.sin(t).tolist(), "profile_rpm": np.sin(t).tolist(),

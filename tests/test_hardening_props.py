@@ -19,7 +19,7 @@ from tuning.models import MotorData
 from tuning.records import Record, RecordError, load_csv, save_csv, simulate_testu
 
 from jvl_gym import MotorArray
-from jvl_gym.config import ConfigError
+from jvl_gym.families.config import ConfigError
 from jvl_gym.families.mac050_141.config import MOTORS_DIR, MotorConfig, load_motor, load_setup
 from jvl_gym.families.mac050_141.firmware import write_rules as W
 from jvl_gym.families.mac050_141.table import TABLE as MAC050_141

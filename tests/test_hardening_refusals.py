@@ -16,11 +16,11 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from jvl_gym import MotorArray
-from jvl_gym.protocol import mactalk as mt
-from jvl_gym.protocol import mactalk32 as m32
-from jvl_gym.protocol import modbus as mb
-from jvl_gym.protocol.modbus_twin import modbus_bus
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk import codec16 as mt
+from jvl_gym.protocol.mactalk import codec32 as m32
+from jvl_gym.protocol.mactalk.twin16 import Twin
+from jvl_gym.protocol.modbus import codec as mb
+from jvl_gym.protocol.modbus.twin import modbus_bus
 from jvl_gym.registers import RegisterError
 
 FEW = settings(max_examples=25, deadline=None,

@@ -12,9 +12,9 @@ from pathlib import Path
 import pytest
 
 from jvl_gym import MotorArray
-from jvl_gym.protocol import mactalk as mt
-from jvl_gym.protocol.transport import TwinServer
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk import codec16 as mt
+from jvl_gym.protocol.mactalk.twin16 import Twin
+from jvl_gym.protocol.serving.transport import TwinServer
 
 
 def _twin(tmp_path: Path | None = None, addresses=(19,)) -> Twin:
@@ -62,7 +62,7 @@ def test_a_bad_flash_file_loads_no_motor_and_changes_no_file(tmp_path, second):
 
 
 def test_serve_with_a_flash_file_without_registers_is_one_line(tmp_path, capsys):
-    from jvl_gym.cli import app
+    from jvl_gym.cli.main import app
 
     (tmp_path / "flash_0.json").write_text('{"motor": 0}')
     with pytest.raises(SystemExit) as info:
@@ -86,7 +86,7 @@ def test_flash_dir_that_is_a_file_is_refused_at_start(tmp_path):
 
 
 def test_serve_with_a_corrupt_flash_file_is_one_line(tmp_path, capsys):
-    from jvl_gym.cli import app
+    from jvl_gym.cli.main import app
 
     (tmp_path / "flash_0.json").write_text("{not json")
     with pytest.raises(SystemExit) as info:
@@ -114,7 +114,7 @@ def test_unwritable_flash_dir_keeps_state_and_session(tmp_path):
 
 
 def test_banner_shows_the_flashed_address(tmp_path):
-    from jvl_gym.cli_serve import banner
+    from jvl_gym.cli.serve import banner
 
     (tmp_path / "flash_0.json").write_text(json.dumps({"motor": 0, "registers": {"156": 33}}))
     twin = _twin(tmp_path)
@@ -183,7 +183,7 @@ def test_a_port_in_use_is_named():
 
 
 def test_serve_on_a_port_in_use_is_one_line(capsys):
-    from jvl_gym.cli import app
+    from jvl_gym.cli.main import app
 
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))

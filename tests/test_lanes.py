@@ -7,15 +7,15 @@ import numpy as np
 from numba import njit
 
 from jvl_gym import MotorArray
+from jvl_gym.engine.jit import KERNEL
 from jvl_gym.families.mac050_141 import constants as c
 from jvl_gym.families.mac050_141 import layout as L
 from jvl_gym.families.mac050_141.firmware import regs as R
 from jvl_gym.families.mac050_141.inner import inner_samples_one
 from jvl_gym.families.mac050_141.kernel import outer_firmware
 from jvl_gym.families.mac050_141.lanes import LANES, in_lanes, lane_scratch
-from jvl_gym.jit import KERNEL
-from jvl_gym.sim import driver
-from jvl_gym.trig import fma, sincos
+from jvl_gym.motor.array import driver
+from jvl_gym.physics.trig import fma, sincos
 
 
 @njit(**KERNEL)

@@ -39,7 +39,7 @@ def test_n_motors_equal_one_motor_arrays() -> None:
 
 
 def test_threads_equal_serial() -> None:
-    from jvl_gym.stepping import driver
+    from jvl_gym.motor.stepping import driver
 
     a = MotorArray("MAC800", n=N, seed=3)
     b = MotorArray("MAC800", n=N, seed=3)

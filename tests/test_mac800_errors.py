@@ -9,7 +9,7 @@ import pytest
 from jvl_gym import MotorArray
 from jvl_gym.families.mac800 import constants as c
 from jvl_gym.families.mac800 import units as u
-from jvl_gym.sim import ModeError
+from jvl_gym.motor.array import ModeError
 
 RPM_1000 = round(u.rpm_to_v_soll(1000))
 

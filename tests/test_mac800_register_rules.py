@@ -9,8 +9,8 @@ import pytest
 from jvl_gym import MotorArray
 from jvl_gym.families.mac800 import constants as c
 from jvl_gym.families.mac800 import units as u
+from jvl_gym.motor.array import ModeError
 from jvl_gym.registers import RegisterError
-from jvl_gym.sim import ModeError
 
 
 @pytest.mark.parametrize("mode", [7, 8, 9, 10, 11, 15])

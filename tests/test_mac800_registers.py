@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from jvl_gym import MotorArray
-from jvl_gym.config import ConfigError
+from jvl_gym.families.config import ConfigError
 from jvl_gym.families.mac800 import constants as c
 from jvl_gym.families.mac800 import units as u
 from jvl_gym.families.mac800.config import CONFIGS, load_motor, motor_types
@@ -111,7 +111,7 @@ def test_register_set_selectors() -> None:
 
 
 def test_unrunnable_modes_are_refused() -> None:
-    from jvl_gym.sim import ModeError
+    from jvl_gym.motor.array import ModeError
 
     m = MotorArray("MAC800", n=1, seed=0)
     for mode in (7, 19, 20):

@@ -9,8 +9,8 @@ import pytest
 import yaml
 
 from jvl_gym import MotorArray
-from jvl_gym.config import ConfigError
 from jvl_gym.families import family_of_motor
+from jvl_gym.families.config import ConfigError
 from jvl_gym.families.mis.config import MOTORS_DIR, load_motor, motor_types
 from jvl_gym.families.mis.units import MOTOR_TYPE_CODES
 

@@ -4,10 +4,10 @@ read over the line as 32-bit values, refusals as exception replies that change n
 from __future__ import annotations
 
 from jvl_gym import MotorArray
-from jvl_gym.protocol import modbus as mb
-from jvl_gym.protocol.modbus_server import ModbusBus
-from jvl_gym.protocol.modbus_twin import modbus_bus
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk.twin16 import Twin
+from jvl_gym.protocol.modbus import codec as mb
+from jvl_gym.protocol.modbus.server import ModbusBus
+from jvl_gym.protocol.modbus.twin import modbus_bus
 
 
 def _exchange(bus: ModbusBus, frame: bytes) -> mb.Response:

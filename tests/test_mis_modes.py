@@ -11,8 +11,8 @@ from hypothesis import strategies as st
 
 from jvl_gym import MotorArray
 from jvl_gym.families.mis import constants as c
+from jvl_gym.motor.array import ModeError
 from jvl_gym.registers import RegisterError
-from jvl_gym.sim import ModeError
 
 
 def _motor(**regs: int) -> MotorArray:

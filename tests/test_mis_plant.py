@@ -133,7 +133,7 @@ def test_one_array_equals_one_motor_arrays_bit_for_bit() -> None:
 
 
 def test_threads_equal_serial_and_a_seed_repeats() -> None:
-    from jvl_gym.sim import driver
+    from jvl_gym.motor.array import driver
 
     a, b = _mixed(64, 7), _mixed(64, 7)
     a.step(200)  # 64 motors ≥ PARALLEL_MIN: threads

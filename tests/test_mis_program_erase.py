@@ -10,10 +10,10 @@ import pytest
 
 from canopen_rig import Rig
 from jvl_gym import MotorArray
-from jvl_gym.protocol import mactalk32 as m32
-from jvl_gym.protocol import modbus as mb
-from jvl_gym.protocol.modbus_twin import modbus_bus
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk import codec32 as m32
+from jvl_gym.protocol.mactalk.twin16 import Twin
+from jvl_gym.protocol.modbus import codec as mb
+from jvl_gym.protocol.modbus.twin import modbus_bus
 
 ADDRESS = 7
 COMMAND = 24  #: the COMMAND register (§8.2.20)

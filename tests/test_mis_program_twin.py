@@ -6,8 +6,8 @@ from __future__ import annotations
 import pytest
 
 from jvl_gym import MotorArray
-from jvl_gym.protocol import mactalk32 as m32
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk import codec32 as m32
+from jvl_gym.protocol.mactalk.twin16 import Twin
 
 PROGRAM = ("set_register register=P2 value=1\nset_register register=P2 value=2\n"
            "set_register register=P2 value=3\njump line=4\n")

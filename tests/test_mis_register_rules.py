@@ -10,9 +10,9 @@ import pytest
 
 from jvl_gym import MotorArray
 from jvl_gym.families.mis import constants as c
-from jvl_gym.protocol import modbus as mb
-from jvl_gym.protocol.modbus_twin import modbus_bus
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk.twin16 import Twin
+from jvl_gym.protocol.modbus import codec as mb
+from jvl_gym.protocol.modbus.twin import modbus_bus
 
 #: 0.01 RPM per ms per RPM/s: a ramp of A RPM/s changes V_IST by A/10 units per ms
 _UNITS_PER_MS = 0.1

@@ -394,7 +394,7 @@ def _setup_for(m: MotorArray, mode: int, index) -> None:
 
 
 def test_every_mode_in_a_mixed_array_equals_separate_runs():
-    from jvl_gym.noise import motor_keys
+    from jvl_gym.motor.noise import motor_keys
 
     n = len(ALL_MODES)
     keys = motor_keys(3, n)

@@ -8,11 +8,11 @@ import json
 
 import pytest
 
-from jvl_gym import precompile
-from jvl_gym.config import ConfigError
+from jvl_gym.cli import precompile
+from jvl_gym.cli.precompile import Unit
 from jvl_gym.envs.registration import ENV_IDS
 from jvl_gym.families import families, family_of_motor
-from jvl_gym.precompile import Unit
+from jvl_gym.families.config import ConfigError
 
 
 def test_motor_units_every_family_by_default() -> None:

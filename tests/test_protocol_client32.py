@@ -13,14 +13,14 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from jvl_gym.families import family, mis
-from jvl_gym.protocol import mactalk32 as m32
-from jvl_gym.protocol.bus import Bus
-from jvl_gym.protocol.client import MacTalkClient
-from jvl_gym.protocol.client32 import MacTalk32Client
-from jvl_gym.protocol.dialect import MACTALK16, MACTALK32, client_class
 from jvl_gym.protocol.errors import NoAnswerError, RefusedError
-from jvl_gym.protocol.probe import PROBE_REGISTER, DialectProbe
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk import codec32 as m32
+from jvl_gym.protocol.mactalk.client16 import MacTalkClient
+from jvl_gym.protocol.mactalk.client32 import MacTalk32Client
+from jvl_gym.protocol.mactalk.dialect import MACTALK16, MACTALK32, client_class
+from jvl_gym.protocol.mactalk.line import Bus
+from jvl_gym.protocol.mactalk.probe import PROBE_REGISTER, DialectProbe
+from jvl_gym.protocol.mactalk.twin16 import Twin
 from jvl_gym.registers import ReadOnlyRegisterError, RegisterError, to_raw
 from protocol_fakes import SAFE_MODE, RegisterArray
 from test_protocol_mactalk32 import READ_EXAMPLES, WRITE_EXAMPLES, h

@@ -21,7 +21,7 @@ from jvl_gym.protocol.dmx512 import (
     encode_packet,
 )
 from jvl_gym.protocol.dmx512.server import DmxLine, DmxServer
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk.twin16 import Twin
 
 
 # --- the byte stream -------------------------------------------------------------------------

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from jvl_gym.protocol import FrameError
-from jvl_gym.protocol import fastmac as fm
+from jvl_gym.protocol.mactalk import fastmac as fm
 
 # the example of manual 5.2.1.5: byte → (mode, register or command, toggle)
 EXAMPLE = [

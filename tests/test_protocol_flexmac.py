@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from jvl_gym.protocol import FrameError
-from jvl_gym.protocol import flexmac as fx
+from jvl_gym.protocol.mactalk import flexmac as fx
 
 
 def h(text: str) -> bytes:

@@ -13,9 +13,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from jvl_gym.protocol import FrameError
-from jvl_gym.protocol import fastmac as fm
-from jvl_gym.protocol import flexmac as fx
-from jvl_gym.protocol import mactalk as mt
+from jvl_gym.protocol.mactalk import codec16 as mt
+from jvl_gym.protocol.mactalk import fastmac as fm
+from jvl_gym.protocol.mactalk import flexmac as fx
 
 TRIED: Counter[str] = Counter()
 FAST = settings(max_examples=400, deadline=None,
@@ -175,7 +175,7 @@ def twin():
     import numpy as np  # noqa: F401
 
     from jvl_gym import MotorArray
-    from jvl_gym.protocol.twin import Twin
+    from jvl_gym.protocol.mactalk.twin16 import Twin
 
     t = Twin(MotorArray("MAC140", n=2, seed=0), [19, 20])
     m = t.m

@@ -12,10 +12,10 @@ import pytest
 
 from jvl_gym import MotorArray
 from jvl_gym.families import UnsupportedOperation
+from jvl_gym.protocol.mactalk.twin16 import Twin
 from jvl_gym.protocol.sae_j1939 import J1939Device, Name
 from jvl_gym.protocol.sae_j1939.frames import Dm14, can_id, split_id
 from jvl_gym.protocol.sae_j1939.node import J1939Node
-from jvl_gym.protocol.twin import Twin
 
 TOOL = 0xF9
 H = bytes.fromhex

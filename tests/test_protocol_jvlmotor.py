@@ -17,9 +17,9 @@ import pytest
 
 from jvl_gym import MotorArray
 from jvl_gym.families import families, mis
-from jvl_gym.protocol.dialect import MACTALK32
-from jvl_gym.protocol.transport import TwinServer
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk.dialect import MACTALK32
+from jvl_gym.protocol.mactalk.twin16 import Twin
+from jvl_gym.protocol.serving.transport import TwinServer
 from protocol_fakes import RegisterArray
 
 mactalk = pytest.importorskip("JVLMotor.Protocols.MacTalkProtocol",

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 
 from jvl_gym.protocol import FrameError
-from jvl_gym.protocol import mactalk as mt
+from jvl_gym.protocol.mactalk import codec16 as mt
 
 
 def h(text: str) -> bytes:

@@ -9,7 +9,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from jvl_gym.protocol import FrameError
-from jvl_gym.protocol import mactalk32 as m32
+from jvl_gym.protocol.mactalk import codec32 as m32
 
 FAST = settings(max_examples=300, deadline=None, derandomize=True,
                 suppress_health_check=[HealthCheck.too_slow])

@@ -16,8 +16,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from jvl_gym.protocol import FrameError
-from jvl_gym.protocol import modbus as mb
-from jvl_gym.protocol.modbus_server import (
+from jvl_gym.protocol.modbus import codec as mb
+from jvl_gym.protocol.modbus.server import (
     MIS_REGISTERS,
     ActiveProtocol,
     ModbusBus,

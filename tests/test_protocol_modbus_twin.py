@@ -18,11 +18,11 @@ import pytest
 
 from jvl_gym import MotorArray
 from jvl_gym.families import families, mis
-from jvl_gym.protocol import modbus as mb
-from jvl_gym.protocol.dialect import MACTALK32
-from jvl_gym.protocol.modbus_server import MIS_REGISTERS, ModbusServer
-from jvl_gym.protocol.modbus_twin import MotorRegisters, modbus_bus, modbus_registers
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk.dialect import MACTALK32
+from jvl_gym.protocol.mactalk.twin16 import Twin
+from jvl_gym.protocol.modbus import codec as mb
+from jvl_gym.protocol.modbus.server import MIS_REGISTERS, ModbusServer
+from jvl_gym.protocol.modbus.twin import MotorRegisters, modbus_bus, modbus_registers
 from jvl_gym.registers import ReadOnlyRegisterError, RegisterRangeError, UnknownRegisterError
 from protocol_fakes import RegisterArray
 
@@ -167,7 +167,7 @@ HAVE_PTY = _pty_available()
 @pytest.fixture
 def served():
     pytest.importorskip("pymodbus")
-    from jvl_gym.cli_serve import _modbus_server
+    from jvl_gym.cli.serve import _modbus_server
 
     twin = mis_twin()
     twin.m.write_raw(P_IST, 123456789, index=0)
@@ -262,7 +262,7 @@ def test_manual_frames_over_a_pty(served) -> None:
 
 # ----------------------------------------------------------------------------- the CLI
 def test_serve_modbus_refuses_what_it_cannot_serve(capsys) -> None:
-    from jvl_gym.cli import app
+    from jvl_gym.cli.main import app
 
     with pytest.raises(SystemExit) as info:
         app(["serve", "--motor", "MAC140", "--address", "42", "--modbus", "--tcp",
@@ -274,7 +274,7 @@ def test_serve_modbus_refuses_what_it_cannot_serve(capsys) -> None:
 def test_modbus_server_refuses_addresses_modbus_has_not() -> None:
     import typer
 
-    from jvl_gym.cli_serve import _modbus_server
+    from jvl_gym.cli.serve import _modbus_server
 
     with pytest.raises(typer.BadParameter, match="1..247"):
         _modbus_server(mis_twin((42, 250)), ("127.0.0.1", 0), False, 1.0)
@@ -301,8 +301,8 @@ def test_serve_modbus_switch_follows_register_121(enable: int) -> None:
     register 121 is set then, else MacTalk goes on."""
     import socket
 
-    from jvl_gym.cli_serve import _modbus_server
-    from jvl_gym.protocol import mactalk32 as m32
+    from jvl_gym.cli.serve import _modbus_server
+    from jvl_gym.protocol.mactalk import codec32 as m32
 
     twin = mis_twin()
     twin.m.write_raw(P_IST, 123456789, index=0)

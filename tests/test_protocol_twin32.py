@@ -17,12 +17,12 @@ from hypothesis import strategies as st
 
 from jvl_gym import MotorArray
 from jvl_gym.families import mac800, mis
-from jvl_gym.protocol import mactalk as mt
-from jvl_gym.protocol import mactalk32 as m32
-from jvl_gym.protocol.bus import Bus
-from jvl_gym.protocol.dialect import MACTALK16, MACTALK32, dialect_of
-from jvl_gym.protocol.transport import TwinServer
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk import codec16 as mt
+from jvl_gym.protocol.mactalk import codec32 as m32
+from jvl_gym.protocol.mactalk.dialect import MACTALK16, MACTALK32, dialect_of
+from jvl_gym.protocol.mactalk.line import Bus
+from jvl_gym.protocol.mactalk.twin16 import Twin
+from jvl_gym.protocol.serving.transport import TwinServer
 from protocol_fakes import SAFE_MODE, RegisterArray
 from test_protocol_mactalk32 import READ_EXAMPLES, WRITE_EXAMPLES, h
 
@@ -363,7 +363,7 @@ def toy_family():
 
 
 def test_serve_builds_one_twin_per_family_on_one_line(toy_family, tmp_path) -> None:
-    from jvl_gym.cli_serve import banner, build_line
+    from jvl_gym.cli.serve import banner, build_line
 
     types, addresses = ["MAC140", "TOY1", "MAC140"], [19, 5, 20]
     line, order = build_line(types, addresses, seed=0, flash_dir=tmp_path)

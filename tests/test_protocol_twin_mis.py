@@ -5,10 +5,10 @@ from __future__ import annotations
 
 from jvl_gym import MotorArray
 from jvl_gym.families.mis import constants as c
-from jvl_gym.protocol import mactalk as mt
-from jvl_gym.protocol import mactalk32 as m32
-from jvl_gym.protocol.bus import Bus
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk import codec16 as mt
+from jvl_gym.protocol.mactalk import codec32 as m32
+from jvl_gym.protocol.mactalk.line import Bus
+from jvl_gym.protocol.mactalk.twin16 import Twin
 
 
 def ask(twin: Twin | Bus, raw: bytes) -> bytes:

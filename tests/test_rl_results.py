@@ -10,7 +10,7 @@ import pytest
 pytest.importorskip("stable_baselines3")
 
 from cli_checks import one_line_error, run_cli  # noqa: E402
-from jvl_gym.cli import app as gym_cli  # noqa: E402
+from jvl_gym.cli.main import app as gym_cli  # noqa: E402
 from jvl_gym.envs import ENV_IDS  # noqa: E402
 from jvl_gym.envs.registration import vector_class  # noqa: E402
 from jvl_gym.families import family  # noqa: E402

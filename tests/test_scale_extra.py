@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 from tuning.cli import app as tune_app
 
-from jvl_gym.cli import app as gym_app
-from jvl_gym.cli_app import CliError
+from jvl_gym.cli.app import CliError
+from jvl_gym.cli.main import app as gym_app
 from jvl_gym.scale.errors import UserError
 from jvl_gym.scale.sweep_spec import parse_sweep
 

@@ -12,7 +12,7 @@ ray = pytest.importorskip("ray")
 
 from typer.testing import CliRunner  # noqa: E402
 
-from jvl_gym.cli import app  # noqa: E402
+from jvl_gym.cli.main import app  # noqa: E402
 from jvl_gym.scale.sweep import run_sweep  # noqa: E402
 from jvl_gym.scale.sweep_spec import load_sweep  # noqa: E402
 

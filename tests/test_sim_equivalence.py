@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from jvl_gym import MotorArray
-from jvl_gym.noise import motor_keys
+from jvl_gym.motor.noise import motor_keys
 
 TYPES = ["MAC050", "MAC095", "MAC140", "MAC141"]
 LOADS = [0.0, 20e-6, 60e-6, 5e-6]
@@ -49,7 +49,7 @@ def test_parallel_kernel_equals_serial_kernel():
         m.write("V_SOLL", np.linspace(-3000, 3000, n).round())
         m.write("MODE_REG", 1)
     a.step(50)
-    from jvl_gym.sim import driver
+    from jvl_gym.motor.array import driver
 
     driver(b.family.key).serial(*b.engine_view(), 50)
     np.testing.assert_array_equal(a.regs, b.regs)

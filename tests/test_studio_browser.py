@@ -249,15 +249,15 @@ def test_episodes_page(page, studio, artefacts):
 def start_twin(types: list[str], addresses: list[int], port: int = 0):
     """The twins of ``types`` at ``addresses`` served in-process (what ``jvl-gym serve --tcp``
     serves) on ``port`` (0: a free one); a fresh line each time, as a restarted server."""
-    from jvl_gym.cli_serve import build_line
-    from jvl_gym.protocol.transport import TwinServer
+    from jvl_gym.cli.serve import build_line
+    from jvl_gym.protocol.serving.transport import TwinServer
 
     line, _ = build_line(types, addresses)
     return TwinServer(line, tcp=("127.0.0.1", port)).start()
 
 
 def test_a_twin_shows_what_another_client_writes(page, artefacts):
-    from jvl_gym.protocol.client import MacTalkClient
+    from jvl_gym.protocol.mactalk.client16 import MacTalkClient
 
     twin = start_twin(["MAC140"], [19])
     tcp = twin.endpoint("mactalk", "tcp").port
@@ -289,7 +289,7 @@ def test_a_line_of_mis_and_mac800_twins(page, artefacts):
     client, one the other client writes appears on the page, and a value the motor refuses
     (safe mode by MODE_REG: only by its command, MIS manual §8.2.3, §18.2.5) shows why."""
     from jvl_gym.families import family_of_motor
-    from jvl_gym.protocol.client32 import MacTalk32Client
+    from jvl_gym.protocol.mactalk.client32 import MacTalk32Client
 
     twin = start_twin(["MIS232", "MAC800"], [7, 8])
     line = f"socket://127.0.0.1:{twin.endpoint('mactalk', 'tcp').port}"

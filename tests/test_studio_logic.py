@@ -240,8 +240,8 @@ def test_testu_where_the_family_has_it(running):
 # ---------------------------------------------------------------------- a line
 @pytest.fixture()
 def twin_server():
-    from jvl_gym.cli_serve import build_line
-    from jvl_gym.protocol.transport import TwinServer
+    from jvl_gym.cli.serve import build_line
+    from jvl_gym.protocol.serving.transport import TwinServer
 
     line, _ = build_line(["MAC140"], [19])
     server = TwinServer(line, tcp=("127.0.0.1", 0)).start()
@@ -250,7 +250,7 @@ def twin_server():
 
 
 def test_a_line_motor_reads_what_another_client_writes(twin_server):
-    from jvl_gym.protocol.client import MacTalkClient
+    from jvl_gym.protocol.mactalk.client16 import MacTalkClient
 
     twin, server = twin_server
     port = server.endpoint("mactalk", "tcp").port
@@ -275,8 +275,8 @@ def test_a_line_motor_reads_what_another_client_writes(twin_server):
 
 @pytest.mark.parametrize("motor_type, address", [("MAC140", 19), ("MIS232", 7)])
 def test_a_line_survives_a_twin_that_goes_and_comes_back(motor_type, address):
-    from jvl_gym.cli_serve import build_line
-    from jvl_gym.protocol.transport import TwinServer
+    from jvl_gym.cli.serve import build_line
+    from jvl_gym.protocol.serving.transport import TwinServer
     from jvl_gym.studio.line import LineDown
 
     line, _ = build_line([motor_type], [address])
@@ -302,8 +302,8 @@ def test_a_line_survives_a_twin_that_goes_and_comes_back(motor_type, address):
 def mixed_line():
     """`jvl-gym serve -m MIS232 -a 7 -m MAC140 -a 8 -m MAC800 -a 9` in-process on a free
     port: the twins of three families on one line, two dialects."""
-    from jvl_gym.cli_serve import build_line
-    from jvl_gym.protocol.transport import TwinServer
+    from jvl_gym.cli.serve import build_line
+    from jvl_gym.protocol.serving.transport import TwinServer
 
     line, _ = build_line(["MIS232", "MAC140", "MAC800"], [7, 8, 9])
     server = TwinServer(line, tcp=("127.0.0.1", 0)).start()
@@ -342,7 +342,7 @@ def test_a_scan_finds_motors_of_both_dialects(mixed_line):
 ])
 def test_a_32_bit_line_motor_reads_writes_and_refuses(mixed_line, motor_type, address,
                                                       register, value, bad, refused):
-    from jvl_gym.protocol.client32 import MacTalk32Client
+    from jvl_gym.protocol.mactalk.client32 import MacTalk32Client
 
     url, twins = mixed_line
     twin = twins[address]
@@ -566,8 +566,8 @@ def test_tuning_a_motor_on_a_line_writes_the_result_to_the_twin(tmp_path):
     the result's values."""
     from tuning.studio_adapter import TOOLKIT
 
-    from jvl_gym.cli_serve import build_line
-    from jvl_gym.protocol.transport import TwinServer
+    from jvl_gym.cli.serve import build_line
+    from jvl_gym.protocol.serving.transport import TwinServer
     from jvl_gym.studio.tuning_run import TuningRun
 
     twin, _ = build_line(["MAC140"], [19])
@@ -638,7 +638,7 @@ def test_a_toolkit_named_on_the_command_line(monkeypatch, capsys):
         load_toolkit("jvl_gym.studio.toolkit:GROUP")
     started = []
     monkeypatch.setattr(app_module, "serve", lambda session, *a, **k: started.append(session))
-    from jvl_gym.cli import app
+    from jvl_gym.cli.main import app
 
     with __import__("socket").socket() as sock:
         sock.bind(("127.0.0.1", 0))
@@ -665,7 +665,7 @@ def test_cli_speed_reaches_a_line_and_must_be_finite(monkeypatch, capsys):
 
     monkeypatch.setattr(Session, "on_line", staticmethod(on_line))
     monkeypatch.setattr(app_module, "serve", lambda session, *a, **k: seen.update(s=session))
-    from jvl_gym.cli import app
+    from jvl_gym.cli.main import app
 
     with __import__("socket").socket() as sock:
         sock.bind(("127.0.0.1", 0))
@@ -682,7 +682,7 @@ def test_cli_speed_reaches_a_line_and_must_be_finite(monkeypatch, capsys):
 
 
 def _cli(args, capsys):
-    from jvl_gym.cli import app
+    from jvl_gym.cli.main import app
 
     with pytest.raises(SystemExit) as info:
         app(["studio", *args])

@@ -8,8 +8,8 @@ from tuning.records import RecordError
 from tuning.serial_source import SerialMotor, autotune_over_serial
 
 from jvl_gym import MotorArray
-from jvl_gym.protocol.transport import TwinServer
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk.twin16 import Twin
+from jvl_gym.protocol.serving.transport import TwinServer
 
 
 @pytest.fixture()

@@ -13,7 +13,7 @@ from tuning.identify_buffer import identify_torque_steps
 from tuning.strategy import strategy_of
 
 from jvl_gym import MotorArray
-from jvl_gym.noise import motor_keys
+from jvl_gym.motor.noise import motor_keys
 
 SEEDS = range(12)
 #: fewest motors out of 12 whose calibrated 95 % interval holds the truth, but for 0.5 % of draws

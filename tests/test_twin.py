@@ -18,11 +18,11 @@ import pytest
 from jvl_gym import MotorArray
 from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
 from jvl_gym.protocol import MacTalkClient, NoAnswerError
-from jvl_gym.protocol import fastmac as fm
-from jvl_gym.protocol import flexmac as fx
-from jvl_gym.protocol import mactalk as mt
-from jvl_gym.protocol.transport import TwinServer
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk import codec16 as mt
+from jvl_gym.protocol.mactalk import fastmac as fm
+from jvl_gym.protocol.mactalk import flexmac as fx
+from jvl_gym.protocol.mactalk.twin16 import Twin
+from jvl_gym.protocol.serving.transport import TwinServer
 from jvl_gym.registers import Access, Format, ReadOnlyRegisterError, RegisterError
 
 try:

@@ -18,7 +18,7 @@ family's tuning strategy from the motor type, :func:`tuning.strategy.strategy_of
 ``jvl-tune fleet configs/fleets/example.yml --out DIR``  (Ray: the ``scale`` extra)
 
 Errors are one line on stderr with a non-zero exit status; ``--debug`` shows the traceback
-(:class:`jvl_gym.cli_app.App`).
+(:class:`jvl_gym.cli.app.App`).
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
-from jvl_gym.cli_app import App, one_line, writable_dir, writable_file
+from jvl_gym.cli.app import App, one_line, writable_dir, writable_file
 
 from .record_lengths import RECOMMENDED_COIL_SAMPLES, RECOMMENDED_MECH_SAMPLES
 
@@ -127,7 +127,7 @@ def identify(motor: str = typer.Option(..., help="motor type, e.g. MAC140"),
         recs = [load_csv(p, motor) for p in testa]
         cur = pc = None
         if setup is not None:
-            from jvl_gym.config import load_setup
+            from jvl_gym.families.config import load_setup
 
             regs = load_setup(setup).registers
             keys = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
@@ -198,7 +198,7 @@ def verify(motor: str = typer.Option(None, help="motor type (default: the setup'
                                          callback=_positive)
            ) -> None:
     """Margins, bandwidths, pole radii and robustness of a setup file's filters."""
-    from jvl_gym.config import ConfigError, load_setup
+    from jvl_gym.families.config import ConfigError, load_setup
 
     try:  # the project's setup loader: the file, its YAML, its keys and values checked
         named = load_setup(setup).motor
@@ -326,7 +326,7 @@ def autotune(motor: str = typer.Option("MAC140"),
 
 def _strategy(motor: str | None) -> Strategy:
     """The tuning strategy of a motor type's family (:func:`tuning.strategy.strategy_of`)."""
-    from jvl_gym.config import ConfigError
+    from jvl_gym.families.config import ConfigError
 
     from .strategy import strategy_of
 

@@ -57,7 +57,7 @@ from typing import Any
 import numpy as np
 from scipy import optimize, stats
 
-from jvl_gym.coupling import coupling_for
+from jvl_gym.physics.coupling import coupling_for
 
 from .identify_coil import correlation_inflation
 from .intervals import LEVEL
@@ -326,7 +326,7 @@ def _usable(fit: ResonanceFit, min_periods: float) -> bool:
 def coupling_of(J_m: float, load_ratio: float, f_res: float, zeta: float
                 ) -> tuple[float, float, float]:
     """``(J_l, k, d)`` of the two-mass plant with resonance ``f_res`` [Hz], load ratio J_l/J_m
-    (> 0) and modal damping ratio ``zeta`` (:func:`jvl_gym.coupling.coupling_for`)."""
+    (> 0) and modal damping ratio ``zeta`` (:func:`jvl_gym.physics.coupling.coupling_for`)."""
     j_l = load_ratio * J_m
     k, d = coupling_for(J_m, j_l, f_res, zeta)
     return j_l, float(k), float(d)

@@ -26,7 +26,6 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -34,9 +33,10 @@ import numpy as np
 import yaml
 
 from jvl_gym.families import family_of_motor
-from jvl_gym.noise import motor_keys
+from jvl_gym.motor.noise import motor_keys
 from jvl_gym.registers import Format
 
+from .trial_types import DEFAULT_NAME, Candidate, Move, Result
 from .verify import position_move
 
 if TYPE_CHECKING:  # pragma: no cover
@@ -45,7 +45,6 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = ["DEFAULT_NAME", "Candidate", "Move", "Result", "Progress", "position_trial", "accept",
            "design_and_accept", "autotune", "settle_text", "setup_text", "write_setup"]
 
-DEFAULT_NAME: str = "default setup"  #: the candidate of the motor type's default setup
 _FIXED = (Format.FIXED4, Format.FIXED8, Format.FIXED16, Format.FIXED24)
 
 Progress = Callable[[str], None]
@@ -53,46 +52,6 @@ Progress = Callable[[str], None]
 
 def _quiet(_: str) -> None:
     return None
-
-
-@dataclass
-class Candidate:
-    """One setup the acceptance step tries.
-
-    Attributes
-    ----------
-    name : str
-        What it is (``"pi"``, ``"pi + low-pass"``, :data:`DEFAULT_NAME`, …).
-    registers : dict
-        Filter registers (name → value, quantised).
-    design : object or None
-        The strategy's design with its verification (None where there is none, e.g. a default
-        setup the strategy does not verify).
-    """
-
-    name: str
-    registers: dict[str, float]
-    design: Any = None
-
-
-@dataclass(frozen=True)
-class Move:
-    """The acceptance move of one motor: ``distance`` [counts] at ``v_soll`` [1/16
-    count/sample] with ``a_soll`` [1/16 count/sample²], settled within ``window`` counts
-    (INPOSWIN), simulated for ``seconds``; ``kind`` names it in the report (the strategy's
-    :meth:`~tuning.strategy.Strategy.trial` runs it)."""
-
-    distance: int
-    v_soll: int
-    a_soll: int
-    window: int = 10
-    seconds: float = 2.0
-    kind: str = "position-mode move"
-
-    def describe(self) -> str:
-        """The move in words, for the report."""
-        return (f"{self.kind} of {self.distance} counts, V_SOLL {self.v_soll}, A_SOLL "
-                f"{self.a_soll}")
 
 
 def position_trial(m: Any, move: Move) -> tuple[np.ndarray, np.ndarray]:
@@ -105,38 +64,6 @@ def position_trial(m: Any, move: Move) -> tuple[np.ndarray, np.ndarray]:
     tail = max(1, int(round(0.2 / dt)))
     target = np.asarray(m.read("P_SOLL"), dtype=float)
     return res.settle_s, np.max(np.abs(res.position[-tail:] - target), axis=0)
-
-
-@dataclass
-class Result:
-    """The autotune result of one motor.
-
-    Attributes
-    ----------
-    ident : object
-        The strategy's identification (``motor``: :class:`tuning.models.MotorData`,
-        ``mechanics.J``: the identified total inertia [kg·m²]).
-    chosen : Candidate
-        The candidate kept.
-    settle_s : dict
-        Candidate name → settle time of the move on the identified motor [s] (inf: never).
-    final_error : dict
-        Candidate name → largest |P_IST − P_SOLL| over the last 0.2 s [counts].
-    move : Move
-        The acceptance move.
-    reason : str
-        One line for the report: why ``chosen`` was kept.
-    candidates : list of Candidate
-        Everything simulated, the preferred design first and the default setup last.
-    """
-
-    ident: Any
-    chosen: Candidate
-    settle_s: dict[str, float]
-    final_error: dict[str, float]
-    move: Move
-    reason: str
-    candidates: list[Candidate] = field(default_factory=list)
 
 
 def settle_text(t: float, seconds: float = 2.0) -> str:

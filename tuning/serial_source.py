@@ -93,7 +93,7 @@ class SerialMotor:
             if count > 0 and not recording:
                 break
             time.sleep(0.005)
-        buf = self.client.read_sample_buffer()
+        buf = self.client.sample_buffer()
         got = min((len(v) for v in buf.values()), default=0)
         if got < self._wanted:
             raise RecordError(

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import typer
 
-from jvl_gym.config import load_setup
+from jvl_gym.families.config import load_setup
 
 from .family import tuned_family
 

@@ -19,7 +19,7 @@ from typing import Any, Protocol, runtime_checkable
 from jvl_gym.families import Family
 
 from .family import tuned_family
-from .pipeline import Candidate, Move, Result
+from .trial_types import Candidate, Move, Result
 
 __all__ = ["Strategy", "Row", "BUILT_IN", "load_strategy", "strategy_of"]
 

@@ -16,7 +16,7 @@ __version__ = "0.1.0"
 def __getattr__(name: str) -> Any:
     # Lazy: importing a submodule (plant, protocol codecs, ...) does not compile the kernel.
     if name in ("MotorArray", "ModeError"):
-        from . import sim
+        from .motor import array as sim
 
         return getattr(sim, name)
     raise AttributeError(f"module 'jvl_gym' has no attribute {name!r}")
@@ -25,13 +25,16 @@ def __getattr__(name: str) -> Any:
 def _register() -> None:
     # Gymnasium ids (jvl_gym/...-v0); registering imports no kernel code. Before any jvl_gym
     # function can compile, stale compile caches are dropped (jvl_gym.engine.cache) and the
-    # compile notice (jvl_gym.engine.notice) is installed (when the compiler is loaded).
+    # compile notice (jvl_gym.engine.notice) is installed (when the compiler is loaded). The
+    # previous layout's module names import as deprecated aliases (jvl_gym.compat).
     from pathlib import Path
 
+    from .compat import install as install_old_names
     from .engine.cache import drop_stale_caches
     from .engine.notice import install_on_import
     from .envs.registration import register_envs
 
+    install_old_names()
     drop_stale_caches(Path(__file__).resolve().parent)
     install_on_import()
     register_envs()

@@ -38,7 +38,7 @@ from typing import Any
 import numpy as np
 from numba import njit, prange
 
-from ..jit import KERNEL, KERNEL_PARALLEL
+from .jit import KERNEL, KERNEL_PARALLEL
 from .specialize import specialise
 from .view import EngineView, Episode
 

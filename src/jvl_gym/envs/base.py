@@ -140,7 +140,7 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
                  max_episode_steps: int | None = None, render_mode: str | None = None,
                  autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
                  **unknown: Any) -> None:
-        from ..sim import MotorArray  # lazy: building an env compiles/loads the kernel
+        from ..motor.array import MotorArray  # lazy: building an env compiles/loads the kernel
 
         if unknown:
             names = ", ".join(repr(k) for k in sorted(unknown))

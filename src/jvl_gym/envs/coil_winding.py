@@ -8,8 +8,8 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
+from ..engine.jit import KERNEL
 from ..families import Capability, Family
-from ..jit import KERNEL
 from . import deposition as dep
 from .base import Field, MotorVectorEnv
 from .compiled import action, end_step, put_obs

@@ -4,7 +4,7 @@ A task with a compiled step runs its whole env step in one compiled call: the en
 driver (``jvl_gym.engine.TaskDriver``) advances the copies block by block and calls the task's
 hooks (action, process model, reward, termination, truncation, the observation with its noise
 and clipping). These helpers are the task-independent parts of the hooks; observation noise
-comes from the one counter-based generator, :mod:`jvl_gym.noise`, as in the numpy-stepped
+comes from the one counter-based generator, :mod:`jvl_gym.motor.noise`, as in the numpy-stepped
 tasks.
 """
 
@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..jit import KERNEL
-from ..noise import normal
+from ..engine.jit import KERNEL
+from ..motor.noise import normal
 
 __all__ = ["OBS_BOUND", "action", "put_obs", "end_step", "reset_counters"]
 
@@ -30,8 +30,8 @@ def action(actions: np.ndarray, i: int, k: int) -> float:  # pragma: no cover - 
 
 @njit(**KERNEL)
 def obs_normal(key: np.uint64, counter: int, k: int, n: int) -> float:  # pragma: no cover
-    """:func:`jvl_gym.noise.normal` compiled once, as a function of its own: numba's IR inliner
-    would copy it (and the generator it inlines) into each observation component's store."""
+    """:func:`jvl_gym.motor.noise.normal` compiled once, as a function of its own: numba's IR
+    inliner would copy it (and the generator it inlines) into each observation component's store."""
     return normal(key, counter, k, n)
 
 

@@ -26,7 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..jit import KERNEL
+from ..engine.jit import KERNEL
 
 __all__ = ["bin_centres", "lay_turn_row", "profile_summary_row", "flatness_row", "lay_turns",
            "profile_summary", "layer_flatness"]

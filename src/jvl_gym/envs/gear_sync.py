@@ -8,9 +8,9 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
+from ..engine.jit import KERNEL
 from ..families import Capability, Family
-from ..jit import KERNEL
-from ..noise import normal
+from ..motor.noise import normal
 from .base import Field, MotorVectorEnv
 from .compiled import action, end_step, put_obs
 from .profiles import SpeedProfile, row_speed

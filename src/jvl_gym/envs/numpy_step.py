@@ -13,7 +13,7 @@ from abc import abstractmethod
 import numpy as np
 
 from ..engine.driver import all_finite
-from ..noise import normals
+from ..motor.noise import normals
 from .base import MotorVectorEnv
 from .compiled import OBS_BOUND
 

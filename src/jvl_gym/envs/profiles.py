@@ -21,8 +21,8 @@ import math
 import numpy as np
 from numba import njit
 
-from ..jit import KERNEL
-from ..trig import sincos
+from ..engine.jit import KERNEL
+from ..physics.trig import sincos
 
 __all__ = ["SpeedProfile", "row_speed"]
 
@@ -37,7 +37,7 @@ def row_speed(p: np.ndarray, t: float, theta: float,
     """Speed of one copy from its parameter row ``p`` (compiled callers)."""
     ramp = min(t / p[T_RAMP], 1.0)
     change = p[STEP] * min(max((t - p[T_STEP]) / t_change, 0.0), 1.0)
-    # sines by jvl_gym.trig (no library call, which the compiled step cannot inline), and
+    # sines by jvl_gym.physics.trig (no library call, which the compiled step cannot inline), and
     # none for a zero amplitude (the factor 1 + (±0) is 1 either way)
     w = 0.0
     if p[WALK] != 0.0:

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from ..coupling import coupling_for
+from ..physics.coupling import coupling_for
 from .compiled import reset_counters
 
 __all__ = ["Randomisation", "seed_list"]

@@ -14,8 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from ..coupling import coupling_for
 from ..families import families, family
+from ..physics.coupling import coupling_for
 
 __all__ = ["Validation", "env_name", "keywords", "whole", "real"]
 

@@ -22,7 +22,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..jit import KERNEL
+from ..engine.jit import KERNEL
 
 __all__ = ["span_step", "steady_strain", "tension", "winder_radius", "load_cell_step",
            "span_step_s", "tension_s", "winder_radius_s", "load_cell_s"]

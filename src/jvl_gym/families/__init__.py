@@ -101,7 +101,7 @@ def family_of_motor(motor: Any) -> Family:
 def unknown_motor_type(name: Any) -> ValueError:
     """The error for ``name``, a motor type no registered family lists or no motor at all: a
     ConfigError that lists every family's types."""
-    from ..config import ConfigError
+    from .config import ConfigError
 
     known = "; ".join(f"{', '.join(family(k).motor_types())} ({family(k).title})"
                       for k in _MODULES)

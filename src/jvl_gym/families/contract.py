@@ -31,14 +31,15 @@ naming the :class:`Capability`.
 
 from __future__ import annotations
 
-import enum
 import math
 import re
-from collections.abc import Mapping
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
+
+from .capability import Capability, UnsupportedOperation
+from .twin_spec import TwinSpec
 
 if TYPE_CHECKING:
     from ..registers import RegisterTable
@@ -49,69 +50,6 @@ __all__ = ["Capability", "UnsupportedOperation", "FamilyConfig", "TwinSpec", "Tu
 
 #: the public modules of a family package, by the :class:`Family` field that holds each
 MODULES = ("compiled", "constants", "units", "config", "task", "table", "programs")
-
-
-class Capability(enum.Enum):
-    """What a family may support, declared in :attr:`Family.capabilities`.
-
-    The operations (the first group) are methods of :class:`~jvl_gym.MotorArray`; the others
-    are firmware features that tasks and tuning ask for.
-    """
-
-    #: ``enter_safe_mode`` / ``exit_safe_mode``: the bridge off, flash and reset allowed
-    #: (MAC050–141 manual 4.4.16, MIS manual §8.2.3)
-    SAFE_MODE = "safe mode"
-    #: ``go_init_mode``: the MacTalk "go init mode" path to INIT_MODE (MAC050–141 manual 5.1)
-    INIT_MODE = "init mode"
-    #: ``software_reset``: the firmware restarts from flash, the rotor keeps moving
-    SOFTWARE_RESET = "software reset"
-    #: ``write_flash``: save the register set in flash (in safe mode), then restart from it
-    FLASH = "flash save"
-    #: ``sample_buffer`` / ``sample_buffer_raw``: the registers SAMPLE1 … SAMPLE4 recorded
-    SAMPLE_BUFFER = "sample buffer"
-    #: ``torque``: the electromagnetic torque of the plant
-    TORQUE = "torque observable"
-    #: ``energy``: the energy accounts of the plant
-    ENERGY = "energy accounts"
-    #: the TESTU/TESTA test modes (MAC050–141 manual 4.4.9, 4.4.10)
-    TEST_MODES = "TESTU/TESTA test modes"
-    #: FastMAC/FlexMAC on the user interface (``interface_bits``; MAC050–141 manual 5.2)
-    USER_INTERFACE = "FastMAC/FlexMAC user interface"
-    #: an analogue torque mode (MAC050–141 manual 4.4.4; MAC800 mode 4)
-    ANALOG_TORQUE = "analogue torque mode"
-    #: an analogue gear mode (MAC050–141 manual 4.4.7; MAC800 mode 18)
-    ANALOG_GEAR = "analogue gear mode"
-    #: a speed-loop filter of registers to design (MAC050–141 manual 3.2.89–3.2.111)
-    SPEED_FILTER = "speed-loop filter"
-    #: a COIL mode with the registers that drive it (MAC050–141 manual 4.4.13)
-    COIL_MODE = "COIL mode"
-    #: a step motor's microstep indexing (MIS manual §8.2)
-    STEP_INDEXING = "step-motor indexing"
-    #: stored programs run by the firmware (MIS manual chapter 9): :attr:`Family.programs`
-    PROGRAMS = "stored programs"
-    #: a CANopen slave, CiA DS-301/DSP-402 (MIS manual §11): :attr:`Family.canopen`
-    CANOPEN = "CANopen interface"
-    #: DMX512 reception on the RS485 line (MIS manual §13)
-    DMX512 = "DMX512 interface"
-    #: an SAE J1939 node on the CAN bus (MIS manual §11.8)
-    J1939 = "SAE J1939 interface"
-
-
-class UnsupportedOperation(NotImplementedError):
-    """An operation the motors' family does not support; nothing was changed.
-
-    Parameters
-    ----------
-    family_title : str
-        The family's human name.
-    capability : Capability
-        What the operation needs.
-    """
-
-    def __init__(self, family_title: str, capability: Capability) -> None:
-        self.capability = capability
-        super().__init__(f"{family_title} motors have no {capability.value} "
-                         f"(the family does not declare Capability.{capability.name})")
 
 
 @runtime_checkable
@@ -142,76 +80,6 @@ class FamilyConfig(Protocol):
 
     def setup_path(self, name: str) -> Path:
         """The file of the default setup ``name`` (a motor config's ``setup``)."""
-
-
-@dataclass(frozen=True)
-class TwinSpec:
-    """What the digital twin needs of a family beyond its register table.
-
-    Attributes
-    ----------
-    dialects : tuple of str
-        The MacTalk dialects the motors speak (``jvl_gym.protocol.dialect``), the default
-        first.
-    safe_mode : int or None
-        MODE_REG value of safe mode, None where the family has none.
-    init_mode : int or None
-        MODE_REG value of the mode "go init mode" and "exit safe mode" lead to, or None.
-    passive_mode : int or None
-        MODE_REG value of the passive mode (the power stage off), which a bus time-out may
-        command; None where the family has none.
-    status_register : str
-        The register whose bits :attr:`status_bits` names (the status a FastMAC status byte
-        or a CANopen status word is built from).
-    status_bits : Mapping[int, str]
-        Bit mask → name of the status register's bits.
-    error_bits : tuple of str
-        Names (in :attr:`status_bits`) of the bits that report an error.
-    clearable_bits : tuple of str
-        Names of the bits a "reset errors" command clears.
-    commands : Mapping[str, int]
-        User command numbers by meaning (``"reset"``, ``"save_reset"``, ``"save"``, …) for
-        families with a command register; empty otherwise.
-    """
-
-    dialects: tuple[str, ...]
-    safe_mode: int | None = None
-    init_mode: int | None = None
-    passive_mode: int | None = None
-    status_register: str = "ERR_STAT"
-    status_bits: Mapping[int, str] = field(default_factory=dict)
-    error_bits: tuple[str, ...] = ()
-    clearable_bits: tuple[str, ...] = ()
-    commands: Mapping[str, int] = field(default_factory=dict)
-
-    @property
-    def dialect(self) -> str:
-        """The default MacTalk dialect."""
-        return self.dialects[0]
-
-    def bit(self, name: str) -> int:
-        """The mask of status bit ``name``; KeyError naming the known bits if there is none."""
-        for mask, known in self.status_bits.items():
-            if known == name:
-                return mask
-        raise KeyError(f"no status bit {name!r} in {self.status_register}; known: "
-                       f"{', '.join(self.status_bits.values())}")
-
-    @staticmethod
-    def named_bits(constants: Any, names: tuple[str, ...]) -> dict[int, str]:
-        """Bit mask → name of the bits ``names``, each a constant of ``constants``."""
-        return {int(getattr(constants, name)): name for name in names}
-
-    def has_bit(self, name: str) -> bool:
-        """Whether the status register has a bit ``name``."""
-        return name in self.status_bits.values()
-
-    def mask(self, names: tuple[str, ...]) -> int:
-        """The OR of the masks of the status bits ``names``."""
-        out = 0
-        for name in names:
-            out |= self.bit(name)
-        return out
 
 
 def filter_taps(table: RegisterTable, prefix: str) -> tuple[str, ...]:

@@ -31,7 +31,8 @@ from typing import Any
 
 import yaml
 
-from .contract import Capability, TwinSpec
+from .capability import Capability
+from .twin_spec import TwinSpec
 
 __all__ = ["FAMILY_FILE", "record_fields"]
 
@@ -55,8 +56,8 @@ def record_fields(folder: Path, constants: ModuleType) -> dict[str, Any]:
     Returns
     -------
     dict
-        ``key``, ``title``, ``capabilities`` (frozenset of :class:`~.contract.Capability`),
-        ``twin`` (:class:`~.contract.TwinSpec`) and ``j1939_name`` where the file has them.
+        ``key``, ``title``, ``capabilities`` (frozenset of :class:`~.capability.Capability`),
+        ``twin`` (:class:`~.twin_spec.TwinSpec`) and ``j1939_name`` where the file has them.
 
     Raises
     ------

@@ -20,7 +20,7 @@ from typing import Any
 
 from pydantic import Field, create_model
 
-from ..config import ConfigError, MotorData, Real, Text, Whole, bounded_by, read_config_file
+from .config import ConfigError, MotorData, Real, Text, Whole, bounded_by, read_config_file
 
 __all__ = ["ServoMotorData", "bounded_servo_data"]
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..jit import KERNEL
+from ..engine.jit import KERNEL
 
 
 @njit(cache=True, inline="always")

@@ -20,8 +20,8 @@ import math
 
 from numba import njit
 
-from ..jit import KERNEL
-from ..trig import fma, sincos
+from ..engine.jit import KERNEL
+from .trig import fma, sincos
 
 SQRT3 = math.sqrt(3.0)
 # Divisions are the slowest arithmetic of the inner sample (long latency, one divider per core):
@@ -65,7 +65,7 @@ def _current_at(s0: complex, s_u: complex, k_emf_over_c: complex, inv_r: float, 
 
 @njit(cache=True, inline="always")
 def expi(x: float) -> complex:
-    """``e^{jx}`` (:func:`jvl_gym.trig.sincos`)."""
+    """``e^{jx}`` (:func:`jvl_gym.physics.trig.sincos`)."""
     s, co = sincos(x)
     return complex(co, s)
 

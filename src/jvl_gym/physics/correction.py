@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..jit import KERNEL
+from ..engine.jit import KERNEL
 from .fixed import clamp, rnd
 
 

@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..jit import KERNEL
+from ..engine.jit import KERNEL
 
 
 @njit(**KERNEL)

@@ -26,7 +26,7 @@ import math
 
 from numba import njit
 
-from ..jit import KERNEL
+from ..engine.jit import KERNEL
 
 #: largest ``ω_n·h`` of the coupling (ω_n = √(k (1/J_m + 1/J_l)), h the inner step): the
 #: implicit midpoint rule's frequency ``(2/h)·atan(ω_n h/2)`` is then within 2.1 % of ω_n

@@ -1,31 +1,33 @@
-"""Serial protocols of the JVL motors: codecs, a client and a digital twin.
+"""The motors' buses: one folder per bus, each holding its codec, its client where there is
+one, and its serving side; the serving side they share stands apart.
 
-* :mod:`.mactalk` — MacTalk (MAC050–141 manual 5.1), :mod:`.fastmac` — FastMAC (5.2.1),
-  :mod:`.flexmac` — FlexMAC (5.2.2), :mod:`.mactalk32` — the MacTalk of the 32-bit register
-  families (MAC800 serial quick guide §1.3, MIS manual §18.2): pure functions, bytes in / bytes
-  out, streaming decoders that resynchronise; :mod:`.dialect` — which MacTalk a family speaks.
-* :class:`MacTalkClient` — pyserial client (device path or any pyserial URL such as
-  ``socket://127.0.0.1:5000``), typed read/write by register name; :class:`MacTalk32Client`
-  the same in the 32-bit MacTalk; both on :mod:`.master` (the port, timeout, retries);
-  :mod:`.probe` — which dialect a unit on a line speaks.
-* :mod:`.twin` (:mod:`.twin32` for the 32-bit families) and :mod:`.transport` — a simulated
-  motor (or several on one bus; :mod:`.bus`: motors of several families on one line) served over
-  a pseudo-terminal or TCP on localhost (``jvl-gym serve``).
-* :mod:`.modbus` — Modbus RTU of the MIS/SMC motors (MIS manual §12): codec, addressing, PDO
-  remapping, RTU framing; :mod:`.modbus_server` — a Modbus RTU slave for any device of 32-bit
-  registers over the same transports, with the Modbus timeout and the MacTalk → Modbus switch;
-  :mod:`.modbus_twin` — a twin's motors as Modbus slaves (``jvl-gym serve --modbus``).
+=====================  ====================================================================
+:mod:`.mactalk`        MacTalk in both dialects, FastMAC and FlexMAC: codecs, the serial
+                       master and clients (:class:`MacTalkClient`, :class:`MacTalk32Client`;
+                       a device path or any pyserial URL such as ``socket://127.0.0.1:5000``),
+                       the dialect probe, and the twin's MacTalk units and line
+:mod:`.modbus`         Modbus RTU of the MIS/SMC motors (MIS manual §12): codec, server, twin
+:mod:`.canopen`        CANopen with DSP-402 (MIS manual §11): dictionary, slave, server, EDS
+:mod:`.sae_j1939`      SAE J1939: frames, device, node
+:mod:`.dmx512`         DMX512: frames, receiver, server
+:mod:`.serving`        what every bus's serving side shares: the twin it wraps and the
+                       transport (pseudo-terminals, TCP on loopback, the real-time clock)
+:mod:`.errors`         the errors every bus raises
+=====================  ====================================================================
 
-See ``docs/protocol.md`` for the frame formats and the decisions taken where the manual is
-ambiguous.
+``mactalk``, ``mactalk32``, ``fastmac``, ``flexmac`` and ``modbus`` stay names of this package
+(the codecs), as before the buses became folders. See ``docs/protocol.md`` for the frame formats
+and the decisions taken where the manual is ambiguous.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
-from . import fastmac, flexmac, mactalk, mactalk32, modbus
+from . import mactalk, modbus
 from .errors import FrameError, NoAnswerError, ProtocolError, RefusedError, UnexpectedReplyError
+from .mactalk import codec32 as mactalk32
+from .mactalk import fastmac, flexmac
 
 __all__ = [
     "FrameError",
@@ -45,11 +47,11 @@ __all__ = [
 
 def __getattr__(name: str) -> Any:  # the clients need pyserial: import them on first use
     if name == "MacTalkClient":
-        from .client import MacTalkClient
+        from .mactalk.client16 import MacTalkClient
 
         return MacTalkClient
     if name == "MacTalk32Client":
-        from .client32 import MacTalk32Client
+        from .mactalk.client32 import MacTalk32Client
 
         return MacTalk32Client
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

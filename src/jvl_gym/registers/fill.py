@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..jit import KERNEL
+from ..engine.jit import KERNEL
 
 __all__ = ["fill"]
 

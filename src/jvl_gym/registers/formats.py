@@ -51,7 +51,7 @@ from typing import Any
 import numpy as np
 from numba import njit
 
-from ..jit import KERNEL
+from ..engine.jit import KERNEL
 from .errors import ReadOnlyRegisterError, RegisterRangeError, RegisterShapeError
 from .table import FORMAT_RAW_RANGE, FORMATS_32_ONE_NUMBER, Access, Format, Register
 

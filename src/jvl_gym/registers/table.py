@@ -48,6 +48,7 @@ __all__ = [
     "FORMAT_RAW_RANGE",
     "FORMATS_32_ONE_NUMBER",
     "format_value_range",
+    "is_signed",
 ]
 
 #: highest register number of the MAC50–141 (index length of the arrays is this + 1)
@@ -114,6 +115,11 @@ FORMAT_RAW_RANGE: dict[Format, tuple[int, int]] = {
     Format.FIXED16: (-(2**31), 2**31 - 1),
     Format.FIXED24: (-(2**31), 2**31 - 1),
 }
+
+
+def is_signed(fmt: object) -> bool:
+    """Whether a register of format ``fmt`` holds a signed number (all but Word and Word32)."""
+    return fmt not in (Format.WORD32, Format.WORD)
 
 
 def format_value_range(fmt: Format) -> tuple[float, float]:
@@ -360,6 +366,12 @@ class RegisterTable:
 
     def __iter__(self) -> Iterator[Register]:
         return iter(self.registers)
+
+    @property
+    def wide_registers(self) -> bool:
+        """Whether every register is 32 bits wide at one number (the MAC800 and MIS tables),
+        as against 16-bit registers with LongInts at two numbers (MAC050–141 manual 3.1)."""
+        return all(reg.format in FORMATS_32_ONE_NUMBER for reg in self.registers)
 
     def __len__(self) -> int:
         return len(self.registers)

@@ -16,7 +16,7 @@ from typing import NamedTuple
 import numpy as np
 from numba import njit
 
-from ..jit import KERNEL
+from ..engine.jit import KERNEL
 
 __all__ = ["UvHandle", "uv_handle_reaction"]
 

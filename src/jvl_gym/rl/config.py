@@ -28,7 +28,7 @@ from typing import Any
 
 import yaml
 
-from ..config import configs_dir
+from ..families.config import configs_dir
 
 __all__ = ["ALGOS", "load_rl_configs", "rl_config", "rl_runs", "env_families",
            "family_motor_type"]

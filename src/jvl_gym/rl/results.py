@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..config import configs_dir
+from ..families.config import configs_dir
 from .config import env_families, rl_config, rl_runs
 from .evaluate import ControllerResult, evaluate_controllers, held_out_seeds
 from .train import SHIPPED_DIR, log_path, model_path, training_log

@@ -3,7 +3,7 @@
 
 It checks for Ray first (without the ``scale`` extra they print one line saying how to
 install it and exit with status 1), then read and validate their file, then run. Errors are
-:class:`jvl_gym.cli_app.CliError` (one line, ``--debug`` for the traceback).
+:class:`jvl_gym.cli.app.CliError` (one line, ``--debug`` for the traceback).
 """
 
 from __future__ import annotations
@@ -54,7 +54,7 @@ def sweep_command(config: Path, out: Path, address: str | None = None,
             import stable_baselines3  # noqa: F401
             import torch  # noqa: F401
         except ImportError as exc:
-            from ..cli_app import RL_EXTRA_HINT
+            from ..cli.app import RL_EXTRA_HINT
 
             raise UserError(f"jvl-gym sweep {RL_EXTRA_HINT}") from exc
         from .sweep import run_sweep

@@ -2,7 +2,7 @@
 
 A :class:`UserError` says what is wrong, where (file and key), and what to do. :func:`run_cli`
 runs a command body and turns a :class:`UserError`, and the missing ``scale`` extra, into a
-:class:`jvl_gym.cli_app.CliError`: the command-line application prints it as one line on stderr
+:class:`jvl_gym.cli.app.CliError`: the command-line application prints it as one line on stderr
 and exits with status 1 (``--debug`` lets it through with its traceback).
 """
 
@@ -83,7 +83,7 @@ def run_cli(body: Callable[[], T]) -> T:
     object
         What ``body`` returns.
     """
-    from ..cli_app import CliError
+    from ..cli.app import CliError
 
     try:
         return body()

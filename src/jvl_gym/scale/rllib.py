@@ -27,7 +27,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from ..cli_app import writable_dir_arg
+from ..cli.app import writable_dir_arg
 
 __all__ = ["rllib_env_id", "ppo_config", "train_ppo", "main"]
 

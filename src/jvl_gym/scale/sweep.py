@@ -29,7 +29,7 @@ from typing import Any
 
 from .ledger import Ledger
 from .ray_session import connect
-from .sweep_report import write_results
+from .sweep_report import fmt_params, write_results
 from .sweep_spec import SweepSpec, Trial, trial_config
 
 __all__ = ["run_sweep", "SweepOutcome", "fmt_params"]
@@ -68,27 +68,6 @@ class SweepOutcome:
     def complete(self) -> bool:
         """Every trial of the sweep has an entry."""
         return len(self.skipped) + len(self.finished) == self.total
-
-
-def fmt_params(params: dict[str, Any]) -> str:
-    """``learning_rate=0.0003 n_epochs=5``: dotted keys shortened to their last part.
-
-    Parameters
-    ----------
-    params : dict
-        Dotted key -> value.
-
-    Returns
-    -------
-    str
-        Space-separated ``name=value`` pairs (floats with 3 significant digits).
-    """
-    parts = []
-    for key, value in params.items():
-        name = key.split(".")[-1]
-        text = f"{value:.3g}" if isinstance(value, float) else str(value)
-        parts.append(f"{name}={text}".replace(" ", ""))
-    return " ".join(parts)
 
 
 def _callbacks(spec: SweepSpec, by_id: dict[str, Trial], ledger: Ledger, total: int,

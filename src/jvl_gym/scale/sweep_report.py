@@ -16,7 +16,28 @@ from typing import Any
 
 from .sweep_spec import SweepSpec
 
-__all__ = ["write_results", "markdown_table", "plot_curves"]
+__all__ = ["write_results", "markdown_table", "plot_curves", "fmt_params"]
+
+
+def fmt_params(params: dict[str, Any]) -> str:
+    """``learning_rate=0.0003 n_epochs=5``: dotted keys shortened to their last part.
+
+    Parameters
+    ----------
+    params : dict
+        Dotted key -> value.
+
+    Returns
+    -------
+    str
+        Space-separated ``name=value`` pairs (floats with 3 significant digits).
+    """
+    parts = []
+    for key, value in params.items():
+        name = key.split(".")[-1]
+        text = f"{value:.3g}" if isinstance(value, float) else str(value)
+        parts.append(f"{name}={text}".replace(" ", ""))
+    return " ".join(parts)
 
 
 def _param_keys(rows: list[dict[str, Any]]) -> list[str]:
@@ -46,8 +67,6 @@ def markdown_table(rows: list[dict[str, Any]]) -> str:
         Header, separator and one line per trial; returns are the env's reward units, wall
         time in seconds.
     """
-    from .sweep import fmt_params
-
     lines = ["| trial | parameters | seed | policy | baseline | better | seeds won | steps | "
              "wall time [s] |", "|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
@@ -83,8 +102,6 @@ def plot_curves(rows: list[dict[str, Any]], path: str | Path, title: str = "") -
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-
-    from .sweep import fmt_params
 
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True)
     for r in rows:

@@ -68,7 +68,7 @@ def _policy(env_id: str, controller: str, kwargs: dict[str, Any], act_dim: int) 
     try:
         from stable_baselines3 import PPO, SAC
     except ImportError as exc:
-        from ..cli_app import RL_EXTRA_HINT
+        from ..cli.app import RL_EXTRA_HINT
 
         raise ValueError(f"the shipped policy {RL_EXTRA_HINT}") from exc
     algo = {"PPO": PPO, "SAC": SAC}[rl_config(env_id)["algo"]]

@@ -2,8 +2,8 @@
 
 One :class:`Line` holds one open port (a device path or a pyserial URL such as
 ``socket://127.0.0.1:5000``) and one master per MacTalk dialect on it
-(:func:`~jvl_gym.protocol.dialect.client_class`: the 16-bit MacTalk of the MAC050–141, manual
-5.1; the 32-bit MacTalk of the MAC800 and MIS, quick guide §1.3, MIS manual §18.2), and
+(:func:`~jvl_gym.protocol.mactalk.dialect.client_class`: the 16-bit MacTalk of the MAC050–141,
+manual 5.1; the 32-bit MacTalk of the MAC800 and MIS, quick guide §1.3, MIS manual §18.2), and
 addresses each request to the motor that asks, in the dialect its family declares (one master,
 several units by MYADDR). A line that fails (the twin stopped, the cable pulled) is closed and
 opened again on the next request, so the studio keeps running and the motors come back when
@@ -18,8 +18,8 @@ import time
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
-from ..protocol.dialect import MACTALK16, client_class
 from ..protocol.errors import NoAnswerError, ProtocolError, RefusedError
+from ..protocol.mactalk.dialect import MACTALK16, client_class
 from ..registers import RegisterError, to_raw
 from .motor import ACTIONS, StudioMotor
 
@@ -62,7 +62,7 @@ class Line:
 
     def _port(self) -> Any:
         """The open port (opened if it is not)."""
-        from ..protocol.master import open_port
+        from ..protocol.mactalk.master import open_port
 
         if self._serial is None:
             try:
@@ -123,8 +123,8 @@ class Line:
 
     def probe(self, address: int) -> str | None:
         """The dialect of the unit at ``address``, None if none answers
-        (:class:`~jvl_gym.protocol.probe.DialectProbe`)."""
-        from ..protocol.probe import DialectProbe
+        (:class:`~jvl_gym.protocol.mactalk.probe.DialectProbe`)."""
+        from ..protocol.mactalk.probe import DialectProbe
 
         with self.lock:
             probe = DialectProbe(self.port, address, timeout=self.timeout,
@@ -202,8 +202,9 @@ class LineMotor(StudioMotor):
         def cmd(command: Callable[[Any], None]) -> Callable[[], None]:
             return lambda: self.call(command)
         commands: dict[str, Callable[[Any], None]] = {
-            "safe mode": lambda c: c.go_safe_mode(), "leave safe mode": lambda c: c.go_init_mode(),
-            "save in flash": lambda c: c.write_flash(), "reset": lambda c: c.reset()}
+            "safe mode": lambda c: c.enter_safe_mode(),
+            "leave safe mode": lambda c: c.exit_safe_mode(),
+            "save in flash": lambda c: c.write_flash(), "reset": lambda c: c.software_reset()}
         out: dict[str, Callable[[], None]] = {"passive": self.passive}
         for label, (capability, _) in ACTIONS.items():
             if self.family.supports(capability):
@@ -214,7 +215,7 @@ class LineMotor(StudioMotor):
     def sample_buffer(self) -> dict[str, Any]:
         """The motor's sample buffer in user units, read back with the read-sample command
         (MAC050–141 manual 3.2.112–3.2.116 and 5.1; MIS manual §8.2.60–§8.2.63)."""
-        return self.call(lambda c: c.read_sample_buffer())
+        return self.call(lambda c: c.sample_buffer())
 
 
 def scan(line: Line, addresses: Iterable[int]) -> dict[int, str]:

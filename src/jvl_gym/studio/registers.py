@@ -17,7 +17,7 @@ from pathlib import Path
 
 import yaml
 
-from ..config import ConfigError
+from ..families.config import ConfigError
 from ..registers import Access, Register, RegisterError, from_raw
 from ..registers.table import FORMAT_SCALE
 from .groups import family_ranges, register_groups, visible

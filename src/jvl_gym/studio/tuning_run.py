@@ -132,7 +132,7 @@ class TuningRun:
             self.result = TuningResult(outcome, present)
             self._say("done: review the registers and write them to the motor")
         except Exception as exc:  # noqa: BLE001 - shown on the page
-            from ..cli_app import one_line
+            from ..cli.app import one_line
 
             self.error = one_line(exc)
             self._say(f"failed: {self.error}")

@@ -11,7 +11,7 @@ from .pulse import PulseInput
 from .supply import SupplyEvents
 
 if TYPE_CHECKING:
-    from ..sim import MotorArray
+    from ..motor.array import MotorArray
 
 
 class World:

@@ -88,7 +88,7 @@ HALL_STATUS_SHIFT = 13
 #: UV_HANDLE bits by name, bit 0 first; each name is a constant of this module too
 UV_HANDLE_BITS = bit_masks("SET_UV_ERR UV_GO_PASSIVE - UV_SOLL0")
 globals().update(UV_HANDLE_BITS)
-MACTALK_DIALECT = "mactalk16"  #: MacTalk of manual 5.1, 16-bit registers (protocol.dialect)
+MACTALK_DIALECT = "mactalk16"  #: MacTalk of manual 5.1, 16-bit registers (protocol.mactalk.dialect)
 
 #: the manual's register groups, (title, first, last register number) (manual 3.2: "The
 #: Parameter and Data Registers can be categorised into the following groups")

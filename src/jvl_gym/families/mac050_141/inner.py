@@ -36,8 +36,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...jit import KERNEL, LANE_KERNEL
-from ...noise import gauss
+from ...engine.jit import KERNEL, LANE_KERNEL
+from ...motor.noise import gauss
 from ...physics.coil import vector_to_phases
 from . import constants as c
 from . import layout as L

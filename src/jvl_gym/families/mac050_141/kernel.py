@@ -26,8 +26,8 @@ import math
 import numpy as np
 from numba import njit
 
-from ...jit import KERNEL, LANE_KERNEL
-from ...noise import gauss
+from ...engine.jit import KERNEL, LANE_KERNEL
+from ...motor.noise import gauss
 from ...physics.bus import bus_constants, bus_step_prepared
 from ...physics.coil import coil_constants, coil_step_prepared, phase_to_vector
 from ...physics.fixed import clamp, rnd, sat16, wrap32

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...jit import LANE_KERNEL
+from ...engine.jit import LANE_KERNEL
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R

@@ -15,13 +15,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ...arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, real_array
-from ...bank import StorePlan
-from ...inputs import InputRule
-from ...keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
+from ...motor.arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, real_array
+from ...motor.array import ModeError, MotorArray
+from ...motor.bank import StorePlan
+from ...motor.inputs import InputRule
+from ...motor.keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
 from ...physics.mechanics import coupling_problem
 from ...registers import Format, Register, RegisterError
-from ...sim import ModeError, MotorArray
 from ..servo_data import servo_parameters
 from . import constants as c
 from . import layout as L

@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ...jit import KERNEL
+from ...engine.jit import KERNEL
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R

@@ -16,7 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ...jit import KERNEL
+from ...engine.jit import KERNEL
 from .firmware import regs as R
 from .firmware.modes import OK, apply_request, check_request
 from .firmware.write_rules import first_mode_refusal, first_write_refusal

@@ -10,16 +10,12 @@ twin's facts, the capabilities (``family.yaml``) and the tuning strategy.
 
 from __future__ import annotations
 
-from ...registers.table import RegisterTable, load_packaged_table
+from ..contract import Family, TuningSpec
+from . import constants
+from .motors import Mac800MotorArray
+from .table import TABLE as REGISTERS
 
 __all__ = ["REGISTERS", "FAMILY"]
-
-#: the MAC800 register table (registers 1 … 206)
-REGISTERS: RegisterTable = load_packaged_table(__name__)
-
-from ..contract import Family, TuningSpec  # noqa: E402  (table first)
-from . import constants  # noqa: E402
-from .motors import Mac800MotorArray  # noqa: E402
 
 FAMILY = Family.of_package(__name__, array_class=Mac800MotorArray,
                            tuning=TuningSpec.of("buffer_sixth_order", constants, REGISTERS))

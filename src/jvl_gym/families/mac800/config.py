@@ -4,7 +4,7 @@ A motor config is ``configs/motors/<TYPE>.yaml`` in this package (``family: mac8
 default register set is ``configs/setups/<setup>.yaml``. Every value must be a finite number of
 its type inside the interval of ``configs/limits.yaml`` (:mod:`..servo_config`; the file says
 why each bound is where it is) or given here. A malformed file raises
-:class:`jvl_gym.config.ConfigError` naming the file and the field.
+:class:`jvl_gym.families.config.ConfigError` naming the file and the field.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import ClassVar
 
 from pydantic import Field
 
-from ...config import MotorConfigs, Real, Text
+from ..config import MotorConfigs, Real, Text
 from ..servo_config import bounded_servo_data
 
 __all__ = ["Mac800Config", "CONFIGS", "MOTORS_DIR", "SETUPS_DIR", "canonical_motor_name",

@@ -127,5 +127,6 @@ DEGC_CELSIUS = DEGC_CELSIUS_PER_UNIT
 OVERVOLTAGE = OVERVOLTAGE_VOLTS
 
 # --- serial line (quick guide §1.3) ----------------------------------------------------------
-#: MacTalk of the 32-bit register families: data always 4 bytes, LSB first (protocol.dialect)
+#: MacTalk of the 32-bit register families: data always 4 bytes, LSB first
+#: (protocol.mactalk.dialect)
 MACTALK_DIALECT = "mactalk32"

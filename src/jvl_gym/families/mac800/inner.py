@@ -34,12 +34,12 @@ import math
 import numpy as np
 from numba import njit
 
-from ...jit import KERNEL, LANE_KERNEL
+from ...engine.jit import KERNEL, LANE_KERNEL
 from ...physics.bus import bus_step_prepared
 from ...physics.coil import coil_step_prepared, phase_to_vector, vector_to_phases
 from ...physics.fixed import clamp, rnd
 from ...physics.mechanics import end_stop_torque, mech_step_prepared
-from ...trig import fma, sincos
+from ...physics.trig import fma, sincos
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R

@@ -17,8 +17,8 @@ import math
 import numpy as np
 from numba import njit
 
-from ...jit import KERNEL
-from ...noise import gauss
+from ...engine.jit import KERNEL
+from ...motor.noise import gauss
 from ...physics.bus import bus_constants
 from ...physics.coil import coil_constants
 from ...physics.fixed import clamp, rnd, wrap32

@@ -13,12 +13,12 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ...arguments import InputValue, MotorIndex
-from ...bank import StorePlan
-from ...inputs import InputRule
-from ...keywords import BINARY, FINITE, NONNEGATIVE
+from ...motor.arguments import InputValue, MotorIndex
+from ...motor.array import ModeError, MotorArray
+from ...motor.bank import StorePlan
+from ...motor.inputs import InputRule
+from ...motor.keywords import BINARY, FINITE, NONNEGATIVE
 from ...registers import Register, RegisterRangeError
-from ...sim import ModeError, MotorArray
 from ..servo_data import servo_parameters
 from . import constants as c
 from . import layout as L

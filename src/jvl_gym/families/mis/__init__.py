@@ -12,17 +12,13 @@ procedure.
 
 from __future__ import annotations
 
-from ...registers.table import RegisterTable, load_packaged_table
+from ..contract import Family
+from . import program
+from .canopen import CANOPEN
+from .motors import MisMotorArray
+from .table import TABLE as REGISTERS
 
 __all__ = ["REGISTERS", "FAMILY"]
-
-#: the MIS/SMC register table (registers 1 … 253)
-REGISTERS: RegisterTable = load_packaged_table(__name__)
-
-from ..contract import Family  # noqa: E402  (the table first)
-from . import program  # noqa: E402
-from .canopen import CANOPEN  # noqa: E402
-from .motors import MisMotorArray  # noqa: E402
 
 FAMILY = Family.of_package(__name__, array_class=MisMotorArray, programs=program,
                            canopen=CANOPEN)

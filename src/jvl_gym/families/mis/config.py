@@ -20,7 +20,7 @@ from typing import ClassVar
 
 from pydantic import Field, model_validator
 
-from ...config import MotorConfigs, MotorData, Real, Text, Whole
+from ..config import MotorConfigs, MotorData, Real, Text, Whole
 from . import constants as c
 from .units import CURRENT_AMPS_PER_UNIT, ENCODER_TYPES, MOTOR_TYPE_CODES
 

@@ -138,7 +138,8 @@ CMD_PASSIVE_ONLY = (CMD_RESET, CMD_SAVE_RESET, CMD_SAVE)
 ENCODER_CPR = {code: cpr for code, (_, cpr) in ENCODER_TYPES.items()}
 
 # --- serial line (§18.2) ---------------------------------------------------------------------
-#: MacTalk of the 32-bit register families: registers 1–255, data always 4 bytes (protocol.dialect)
+#: MacTalk of the 32-bit register families: registers 1–255, data always 4 bytes
+#: (protocol.mactalk.dialect)
 MACTALK_DIALECT = "mactalk32"
 
 #: the J1939 NAME the motor claims its address with (§11.8.4): "Identity number: FFFFh,

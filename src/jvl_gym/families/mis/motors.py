@@ -15,13 +15,13 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ...arguments import InputValue, MotorIndex, as_index
-from ...bank import StorePlan
-from ...inputs import InputRule
-from ...keywords import FINITE, NONNEGATIVE, POSITIVE
+from ...motor.arguments import InputValue, MotorIndex, as_index
+from ...motor.array import ModeError, MotorArray
+from ...motor.bank import StorePlan
+from ...motor.inputs import InputRule
+from ...motor.keywords import FINITE, NONNEGATIVE, POSITIVE
 from ...physics.fixed import wrap32
 from ...registers import Register, RegisterError, RegisterRangeError
-from ...sim import ModeError, MotorArray
 from . import constants as c
 from . import layout as L
 from .config import MisMotorConfig, load_motor
@@ -125,7 +125,7 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         image = self.table.default_raw_array.astype(np.int64).copy()
         image[R.MOTORTYPE] = cfg.motor_type_code
         if setup is not None:
-            from ...config import load_setup
+            from ..config import load_setup
 
             row = image[None]
             for name, value in load_setup(setup).registers.items():

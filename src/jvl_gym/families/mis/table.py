@@ -7,9 +7,12 @@ undocumented are ``RESERVED_<n>`` rows. Loaded and validated once (the package's
 from __future__ import annotations
 
 from ...registers.conformance import Conformance, load_packaged_conformance
-from . import REGISTERS as TABLE
+from ...registers.table import RegisterTable, load_packaged_table
 
 __all__ = ["TABLE", "CONFORMANCE"]
+
+#: the register table, loaded and validated once (the package's ``REGISTERS``)
+TABLE: RegisterTable = load_packaged_table(__package__)
 
 #: what the simulator does with each register and documented bit (``conformance.yaml``)
 CONFORMANCE: Conformance = load_packaged_conformance(__package__, TABLE)

@@ -70,7 +70,7 @@ def shipped_path(family: Family | None = None) -> Path:
 
 def served_dictionary(family: Family | None = None) -> ObjectDictionary:
     """The object dictionary a slave of ``family``'s first motor type serves."""
-    from ...sim import MotorArray
+    from ...motor.array import MotorArray
     from .facts import facts_of
     from .objects import build_dictionary
 

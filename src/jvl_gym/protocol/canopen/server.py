@@ -11,7 +11,7 @@ motor of the twins it is given, sends their boot-up messages and then
   :meth:`~.slave.CanopenSlave.tick` (heartbeat, event timers, EMCY, the DSP-402 drive).
 
 **Clocks.** With ``run_clock`` a clock thread advances time at ``speed`` simulated seconds per
-wall-clock second, as the MacTalk twin's :class:`~jvl_gym.protocol.transport.TwinServer` does
+wall-clock second, as the twins' :class:`~jvl_gym.protocol.serving.transport.TwinServer` does
 (give that server ``run_clock=False`` when both serve the same twin: one clock). Without it the
 caller advances time: :meth:`CanopenServer.advance` first carries out every frame already
 received, then runs the milliseconds, so a test that sends frames and then advances is
@@ -59,7 +59,7 @@ class CanopenServer:
 
     Parameters
     ----------
-    twins : list of Twin
+    twins : list of MotorTwin
         Twins whose motors' family declares CANopen (:func:`~.facts.facts_of`).
     bus : can.BusABC
         An open python-can bus (:func:`open_bus`); closed by :meth:`stop`.
@@ -123,7 +123,7 @@ class CanopenServer:
                 k += 1
                 with twin.lock:
                     s = CanopenSlave(twin.m, i, od, f, self._send, node_id=nid,
-                                     on_store=lambda twin=twin, i=i: twin._save_flash_file(i))
+                                     on_store=lambda twin=twin, i=i: twin.save_flash_file(i))
                 self.slaves.append(s)
                 self._owner.append(twin)
 

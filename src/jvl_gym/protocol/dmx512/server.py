@@ -11,8 +11,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from ..transport import TwinServer, _Session
-from ..twin import Twin
+from ..serving.transport import Session, TwinServer
+from ..serving.twin import MotorTwin
 from .frames import DmxDecoder, DmxPacket
 from .receiver import DmxReceiver, DmxSettings
 
@@ -23,7 +23,7 @@ class DmxLine:
     """The DMX receivers of the motors of ``twin`` (one :class:`DmxSettings` each, default
     the MacTalk tab's with Start Address 1 = 1 + 3·i)."""
 
-    def __init__(self, twin: Twin, settings: Sequence[DmxSettings] | None = None) -> None:
+    def __init__(self, twin: MotorTwin, settings: Sequence[DmxSettings] | None = None) -> None:
         n = twin.m.n
         settings = list(settings) if settings is not None else [
             DmxSettings(start_address1=1 + 3 * i) for i in range(n)]
@@ -85,11 +85,11 @@ class DmxServer(TwinServer):
         self._spawn(self._poll, "dmx-poll")
         return self
 
-    def _session(self) -> _Session:
+    def _session(self) -> Session:
         assert self.line is not None
         s = DmxSession(self.line)
         self.sessions.append(s)
-        return _Session(s.feed, s.flush)
+        return Session(s.feed, s.flush)
 
     def _poll(self) -> None:
         assert self.line is not None

@@ -20,7 +20,7 @@ class J1939Node(can.Listener):
 
     Parameters
     ----------
-    twin : Twin
+    twin : MotorTwin
         Its motors and lock.
     bus : can.BusABC
         The CAN bus (any python-can interface: ``virtual``, ``socketcan`` …).

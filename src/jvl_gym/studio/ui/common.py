@@ -12,7 +12,7 @@ from typing import Any
 
 from nicegui import ui
 
-from ...cli_app import one_line
+from ...cli.app import one_line
 from ..motor import StudioMotor
 from ..session import Session
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ....jit import KERNEL
+from ....engine.jit import KERNEL
 from ....physics.fixed import clamp, wrap32
 from ....physics.profile import max_landing_speed
 from .. import constants as c

@@ -17,9 +17,9 @@ import math
 import numpy as np
 from numba import njit
 
-from ....jit import LANE_KERNEL
+from ....engine.jit import LANE_KERNEL
 from ....physics.fixed import clamp, fx8, rnd
-from ....trig import fma, sincos
+from ....physics.trig import fma, sincos
 from .. import constants as c
 from . import regs as R
 
@@ -51,7 +51,7 @@ def phase_references(amp: float, phi: float) -> tuple[float, float, float]:
     """IA/IB/IC_SOLL = amp·sin(PHI + k·120°) for ``phi`` in 0..2047, stored in −850..850 (3.2.133).
 
     The firmware's sine table holds sin and cos of the 2048 angle units; they are computed
-    here (:func:`jvl_gym.trig.sincos` of ``phi·2π/2048``, within an ulp of the exact
+    here (:func:`jvl_gym.physics.trig.sincos` of ``phi·2π/2048``, within an ulp of the exact
     values) rather than looked up: a table lookup needs an integer index, which made the
     compiler step the whole angle computation lane by lane instead of in SIMD registers
     (``jvl_gym.families.mac050_141.inner``). Then ``sin(φ + 120°) = −sin φ/2 + (√3/2)·cos φ`` and

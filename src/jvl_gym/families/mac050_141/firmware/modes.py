@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ....jit import KERNEL
+from ....engine.jit import KERNEL
 from ....registers.fill import fill
 from .. import constants as c
 from .. import layout as L

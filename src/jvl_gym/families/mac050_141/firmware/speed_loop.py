@@ -21,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ....jit import KERNEL
+from ....engine.jit import KERNEL
 from ....physics.correction import corrected_profile, held_output, vf_output
 from ....physics.fixed import clamp, fx4, fx8, rnd, sat16
 from .. import layout as L

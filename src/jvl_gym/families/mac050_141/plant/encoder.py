@@ -13,7 +13,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ....jit import LANE_KERNEL
+from ....engine.jit import LANE_KERNEL
 from ..constants import COUNTS_PER_REV, ELDEG_PER_TURN
 
 _COUNTS_PER_RAD = COUNTS_PER_REV / (2.0 * math.pi)

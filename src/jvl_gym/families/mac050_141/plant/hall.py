@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ....jit import LANE_KERNEL
+from ....engine.jit import LANE_KERNEL
 
 SECTOR = math.pi / 3.0
 _PER_SECTOR = 1.0 / SECTOR  #: a multiplication, not a division, in every inner sample

@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ....jit import KERNEL
+from ....engine.jit import KERNEL
 from ....physics.fixed import clamp, rnd, wrap32
 from ....physics.levels import hysteresis_level
 from .. import constants as c

@@ -32,7 +32,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ....jit import KERNEL
+from ....engine.jit import KERNEL
 from ....physics.correction import corrected_profile, held_output, vf_output
 from ....physics.fixed import clamp, rnd
 from .. import layout as L

@@ -39,7 +39,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ....jit import KERNEL
+from ....engine.jit import KERNEL
 from ....physics.fixed import clamp, rnd
 from ....registers.uv_handle import UvHandle, uv_handle_reaction
 from .. import constants as c

@@ -6,6 +6,6 @@ kernel sees them as compile-time constants, and no register number is written tw
 
 from __future__ import annotations
 
-from .. import REGISTERS as _TABLE
+from ..table import TABLE as _TABLE
 
 globals().update(_TABLE.numbers_by_name())

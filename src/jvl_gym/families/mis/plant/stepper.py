@@ -64,8 +64,8 @@ import math
 import numpy as np
 from numba import njit
 
-from ....jit import LANE_KERNEL
-from ....trig import sincos
+from ....engine.jit import LANE_KERNEL
+from ....physics.trig import sincos
 from .. import constants as c
 from .. import layout as L
 from ..units import COUNTS_PER_REV

@@ -15,8 +15,8 @@ from typing import Any
 
 import numpy as np
 
-from ....arguments import MotorIndex, as_index, motor_index, outer_count
-from ....stepping import driver
+from ....motor.arguments import MotorIndex, as_index, motor_index, outer_count
+from ....motor.stepping import driver
 from .. import constants as c
 from ..firmware import regs as R
 from .binary import FLASH_BYTES, encode_command
@@ -218,7 +218,7 @@ class ProgramMixin:
     # ------------------------------------------------------------------ hooks
     def _snapshot(self, idx: np.ndarray) -> tuple[Any, ...]:
         """What a register transaction on motors ``idx`` may change
-        (:meth:`~jvl_gym.bank.RegisterBank._snapshot`) and their stored programs: COMMAND 342
+        (:meth:`~jvl_gym.motor.bank.RegisterBank._snapshot`) and their stored programs: COMMAND 342
         erases a program and a reset (267, 268) restarts it, each by replacing the motor's
         runner, so the runners as they are now are what a refused transaction puts back."""
         runners = None if self._runners is None else list(self._runners)

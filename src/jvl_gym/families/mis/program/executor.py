@@ -28,7 +28,9 @@ from __future__ import annotations
 from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import Any, Protocol
+
+import numpy as np
 
 from ....physics.fixed import wrap32
 from ....registers import RegisterError
@@ -40,15 +42,23 @@ from .binary import checksum, decode_command, decode_program, encode_program
 from .commands import FASTMAC_GROUPS, Command, cost_us
 from .fields import INPUT_NAMES, FieldError
 
-if TYPE_CHECKING:
-    from ..motors import MisMotorArray
-
 __all__ = ["ProgramRunner", "ProgramStatus", "STATE_NAMES", "ERROR_STATES", "PASS_US",
            "SAMPLE_US"]
 
 REFUSALS_KEPT = 100  #: refused writes remembered (the latest)
 PASS_US = 30  #: one main-loop pass (§9.9: "approximately 30 microseconds")
 SAMPLE_US = 1000  #: main-loop time between two outer samples of the simulated firmware
+
+
+class ProgramHost(Protocol):
+    """What the executor uses of the MIS motor array (:class:`~..motors.MisMotorArray`, which
+    runs the executor): its register banks and state rows (N, ·), and a validated write."""
+
+    regs: np.ndarray
+    state: np.ndarray
+
+    def write_raw(self, key: Any, raw: Any, index: Any = None) -> None: ...
+
 
 STATE_NAMES = {0: "passive", 1: "running", 2: "single step", 3: "paused", 4: "stack overflow",
                5: "program overflow", 6: "invalid instruction", 7: "stopped",
@@ -186,7 +196,7 @@ class ProgramRunner:
                              self.state in ERROR_STATES, self.sum)
 
     # ------------------------------------------------------------------ main loop
-    def sample(self, m: MisMotorArray, i: int) -> None:
+    def sample(self, m: ProgramHost, i: int) -> None:
         """The main-loop passes before one outer sample of motor ``i``."""
         regs = m.regs[i]
         tick = int(m.state[i, L.S_TICK])
@@ -227,14 +237,14 @@ class ProgramRunner:
         else:
             self.carry = max(used - SAMPLE_US, 0)  # a line that ran past the outer sample
 
-    def _end_pulses(self, m: MisMotorArray, i: int, tick: int) -> None:
+    def _end_pulses(self, m: ProgramHost, i: int, tick: int) -> None:
         for bit, (end, level) in list(self.pulses.items()):
             if tick >= end:
                 self._output(m, i, bit, level)
                 del self.pulses[bit]
 
     # ------------------------------------------------------------------ registers
-    def _write(self, m: MisMotorArray, i: int, num: int, value: int) -> None:
+    def _write(self, m: ProgramHost, i: int, num: int, value: int) -> None:
         """A register write by the firmware's rules; a refused write changes nothing and the
         program goes on (the refusal is kept in :attr:`refusals`)."""
         reg = TABLE.lookup(num)
@@ -244,7 +254,7 @@ class ProgramRunner:
         except (RegisterError, ValueError) as exc:
             self.refusals.append(f"line {self.pc + 1}: {exc}")
 
-    def _output(self, m: MisMotorArray, i: int, bit: int, high: bool) -> None:
+    def _output(self, m: ProgramHost, i: int, bit: int, high: bool) -> None:
         out = int(m.regs[i, R.OUTPUTS])
         m.regs[i, R.OUTPUTS] = (out | bit) if high else (out & ~bit)
 
@@ -276,14 +286,14 @@ class ProgramRunner:
         else:
             self._next()
 
-    def _profile(self, m: MisMotorArray, i: int, cmd: Command) -> None:
+    def _profile(self, m: ProgramHost, i: int, cmd: Command) -> None:
         """V_SOLL and A_SOLL from a move's fields (0: keep, §9.7.4)."""
         if cmd["velocity"]:
             self._write(m, i, R.V_SOLL, int(cmd["velocity"]))  # type: ignore[call-overload]
         if cmd["acceleration"]:
             self._write(m, i, R.A_SOLL, int(cmd["acceleration"]))  # type: ignore[call-overload]
 
-    def _relative(self, m: MisMotorArray, i: int, regs, distance: int) -> None:
+    def _relative(self, m: ProgramHost, i: int, regs, distance: int) -> None:
         """P1 := distance; P_SOLL := P_IST + P1 (§9.7.4: "Register no. 49 (P1) is always
         overwritten by this command")."""
         regs[_P1] = distance
@@ -293,7 +303,7 @@ class ProgramRunner:
         self.wait = what
         self.wait_tick = tick + delay
 
-    def _run(self, m: MisMotorArray, i: int, cmd: Command, regs, tick: int, prev: int,
+    def _run(self, m: ProgramHost, i: int, cmd: Command, regs, tick: int, prev: int,
              word: int) -> None:
         k = cmd.keyword
         v = cmd.values
@@ -395,7 +405,7 @@ class ProgramRunner:
         else:  # pragma: no cover - every keyword of SPECS is handled above
             self.state = INVALID
 
-    def _set_outputs(self, m: MisMotorArray, i: int, pattern: object) -> None:
+    def _set_outputs(self, m: ProgramHost, i: int, pattern: object) -> None:
         for name, level in pattern:  # type: ignore[attr-defined]
             bit = 1 << (int(name) - 1)
             self.pulses.pop(bit, None)
@@ -404,7 +414,7 @@ class ProgramRunner:
     def _in_position(self, regs) -> bool:
         return bool(int(regs[R.STATUSBITS]) & c.ST_IN_POSITION)
 
-    def _waited(self, m: MisMotorArray, i: int, regs, tick: int, prev: int, word: int) -> bool:
+    def _waited(self, m: ProgramHost, i: int, regs, tick: int, prev: int, word: int) -> bool:
         """Test the wait of the line at pc; True (and the program goes on) when it ends."""
         what = self.wait
         cmd = self.cmds[self.pc]
@@ -444,7 +454,7 @@ class ProgramRunner:
             self._next()
         return done
 
-    def _sensor_hit(self, m: MisMotorArray, i: int, cmd: Command, regs) -> None:
+    def _sensor_hit(self, m: ProgramHost, i: int, cmd: Command, regs) -> None:
         """The sensor condition is met: stop ``distance`` further on, but not past the
         safety distance from the start (§9.7.8)."""
         self.search = 1

@@ -1,0 +1,5 @@
+"""``python -m jvl_gym.cli``: the ``jvl-gym`` command."""
+
+from .main import app
+
+app()

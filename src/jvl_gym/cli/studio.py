@@ -1,0 +1,105 @@
+"""``jvl-gym studio``: the motor workbench in the browser (docs/studio.md).
+
+Examples
+--------
+``jvl-gym studio --motor MAC140 --motor MIS232``  (two simulated motors, two families)
+``jvl-gym studio --connect socket://127.0.0.1:5000 --address 19``  (a ``jvl-gym serve`` twin)
+``jvl-gym studio --connect /dev/ttyUSB0 --scan 1-32 --motor MAC140``  (motors on a line)
+"""
+
+from __future__ import annotations
+
+import socket
+from typing import Annotated
+
+import typer
+
+from .app import CliError
+
+__all__ = ["studio", "parse_range", "STUDIO_EXTRA_HINT"]
+
+#: what to do when the studio extra (NiceGUI) is missing
+STUDIO_EXTRA_HINT = ("needs the studio extra (NiceGUI): run `make setup-rl` or "
+                     "`.venv/bin/pip install -e '.[studio]'`")
+
+
+def parse_range(text: str) -> range:
+    """``"1-32"`` → range(1, 33); ``"19"`` → range(19, 20); within the unit addresses 1..254."""
+    lo, _, hi = text.partition("-")
+    try:
+        a, b = int(lo), int(hi or lo)
+    except ValueError:
+        raise typer.BadParameter(f"--scan takes FIRST-LAST, e.g. 1-32, not {text!r}") from None
+    if not 1 <= a <= b <= 254:
+        raise typer.BadParameter(f"--scan {text}: addresses are 1..254 (MYADDR), first <= last")
+    return range(a, b + 1)
+
+
+def _port_free(host: str, port: int) -> None:
+    with socket.socket() as s:
+        s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as uvicorn binds
+        try:
+            s.bind((host, port))
+        except OSError as exc:
+            raise CliError(f"cannot listen on {host}:{port} ({exc.strerror}); "
+                           "give another --port") from None
+
+
+def studio(
+    motor: Annotated[list[str] | None, typer.Option(
+        "--motor", "-m", help="Motor type (repeat: several motors, any families; default "
+        "MAC140). Simulated in-process unless --connect.")] = None,
+    address: Annotated[list[int] | None, typer.Option(
+        "--address", "-a", help="Unit address (MYADDR) of each motor (repeat; default 1, 2, …).")
+    ] = None,
+    connect: Annotated[str | None, typer.Option(
+        help="A twin or a real line: pyserial URL (socket://127.0.0.1:5000) or serial device."
+    )] = None,
+    scan: Annotated[str | None, typer.Option(
+        help="With --connect: the addresses FIRST-LAST to scan for motors (instead of "
+        "--address).")] = None,
+    host: Annotated[str, typer.Option(help="Address the studio listens on.")] = "127.0.0.1",
+    port: Annotated[int, typer.Option(help="Port the studio listens on.", min=1, max=65535)]
+    = 8080,
+    no_browser: Annotated[bool, typer.Option("--no-browser", help="Do not open a browser.")]
+    = False,
+    speed: Annotated[float, typer.Option(
+        help="Simulated seconds per wall-clock second: of the simulated motors, or with "
+        "--connect of the twin at the other end (its own --speed; 1 for real motors).")]
+    = 1.0,
+    seed: Annotated[int, typer.Option(help="Noise seed of the simulated motors.")] = 0,
+    toolkit: Annotated[str | None, typer.Option(
+        help="The tuning toolkit, MODULE[:OBJECT] (default: the one installed as the entry "
+        "point jvl_gym.toolkits).")] = None,
+) -> None:
+    """Open the motor workbench in the browser: motors, registers, scope, tuning, episodes."""
+    try:
+        import nicegui  # noqa: F401
+    except ImportError as exc:
+        raise CliError(STUDIO_EXTRA_HINT) from exc
+    from ..studio.session import Session
+    from ..studio.toolkit import load_toolkit
+    from ..studio.ui.app import serve
+
+    if scan is not None and connect is None:
+        raise typer.BadParameter("--scan needs --connect (a line to scan)")
+    if not 0 < speed < float("inf"):
+        raise typer.BadParameter(f"--speed must be a finite number > 0, got {speed}")
+    _port_free(host, port)
+    try:
+        kit = load_toolkit(toolkit) if toolkit is not None else None
+    except (ValueError, TypeError) as exc:
+        raise CliError(str(exc)) from None
+    try:
+        if connect is None:
+            session = Session.simulated(motor or [], address or [], seed=seed, speed=speed,
+                                        toolkit=kit)
+        else:
+            session = Session.on_line(connect, motor or [], address or [],
+                                      parse_range(scan) if scan else None, toolkit=kit,
+                                      speed=speed)
+    except (ValueError, ConnectionError) as exc:
+        raise CliError(str(exc)) from None
+    typer.echo(f"jvl-gym studio on http://{host}:{port} with "
+               f"{', '.join(session.labels())}; Ctrl-C to stop")
+    serve(session, host, port, show=not no_browser)
