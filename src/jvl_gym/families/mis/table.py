@@ -7,9 +7,14 @@ undocumented are ``RESERVED_<n>`` rows. Loaded and validated once (the package's
 from __future__ import annotations
 
 from ...registers.conformance import Conformance, load_packaged_conformance
+from ...registers.statements import Statements, load_packaged_statements
 from . import REGISTERS as TABLE
 
-__all__ = ["TABLE", "CONFORMANCE"]
+__all__ = ["TABLE", "CONFORMANCE", "STATEMENTS"]
 
 #: what the simulator does with each register and documented bit (``conformance.yaml``)
 CONFORMANCE: Conformance = load_packaged_conformance(__package__, TABLE)
+
+#: the manual's statements about the registers, each with its status and tests
+#: (``statements.yaml``; empty until the family has one)
+STATEMENTS: Statements = load_packaged_statements(__package__, TABLE)
