@@ -172,7 +172,7 @@ def decision_problems(statements: Statements, docs: Path) -> list[str]:
         page, _, anchor = s.decision.partition("#")
         path = docs / page
         if not path.is_file():
-            out.append(f"{s.id}: decision page {path} does not exist")
+            out.append(f"{s.id}: decision page {page} does not exist")
         elif anchor not in anchors(path):
-            out.append(f"{s.id}: {path} has no heading with the anchor #{anchor}")
+            out.append(f"{s.id}: {page} has no heading with the anchor #{anchor}")
     return out
