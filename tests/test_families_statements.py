@@ -126,6 +126,7 @@ def _load(*statements: dict[str, Any], key: str = "mis") -> Statements:
     (_s("mis:8.2.13:1", section="8.2.14"), r"id must be 'mis:8\.2\.14:<ordinal>'"),
     (_s("mis:8.2.13:0"), "id must be"),
     (_s(section="§8.2"), "section must be a manual section"),
+    (_s("mis:8.2:1", section=8.2), "section must be a string"),
     (_s(line=0), "line must be a line number"),
     (_s(line="5123"), "line must be a line number"),
     (_s(registers=["NO_SUCH_REGISTER"]), r"\(mis:8\.2\.13:1\): .*NO_SUCH_REGISTER"),

@@ -109,7 +109,8 @@ def _text(raw: dict, key: str, where: str) -> str:
     if value is None or value == "":
         return ""
     if not isinstance(value, str):
-        raise StatementError(f"{where}: {key} must be a string, got {value!r}")
+        raise StatementError(f"{where}: {key} must be a string (quoted in YAML: '8.2' "
+                             f"unquoted is a number), got {value!r}")
     return value.strip()
 
 
