@@ -44,6 +44,7 @@ from .twin_spec import TwinSpec
 if TYPE_CHECKING:
     from ..registers import RegisterTable
     from ..registers.conformance import Conformance
+    from ..registers.statements import Statements
 
 __all__ = ["Capability", "UnsupportedOperation", "FamilyConfig", "TwinSpec", "TuningSpec",
            "CanopenSpec", "Family", "MODULES"]
@@ -336,6 +337,9 @@ class Family:
     conformance : Conformance or None
         The family's conformance matrix (:mod:`jvl_gym.registers.conformance`): for every
         register and documented bit, modelled, stored only or not modelled; None: none stated.
+    statements : Statements or None
+        The manual's statements about the family's registers, each with its status and tests
+        (:mod:`jvl_gym.registers.statements`); None or empty: none stated.
     programs : module or None
         The stored-program module of a family that declares :attr:`Capability.PROGRAMS`:
         ``ProgramError`` (a malformed program), ``IoScriptError``, ``load_io_script`` (an I/O
@@ -363,6 +367,7 @@ class Family:
     capabilities: frozenset[Capability] = frozenset()
     tuning: TuningSpec | None = None
     conformance: Conformance | None = None
+    statements: Statements | None = None
     programs: ModuleType | None = None
     canopen: CanopenSpec | None = None
     j1939_name: int | None = None
@@ -371,9 +376,10 @@ class Family:
     def of_package(cls, package: str, **fields: Any) -> Family:
         """The record of the family package ``package`` laid out as every family folder is:
         its ``compiled``, ``constants``, ``units``, ``config`` and ``task`` modules, the
-        ``TABLE`` and ``CONFORMANCE`` of its ``table`` module, and the plain facts of its
-        ``family.yaml`` (key, title, capabilities, twin, J1939 NAME: :mod:`.record_file`);
-        ``fields`` give the objects (array class, tuning, programs, …)."""
+        ``TABLE``, ``CONFORMANCE`` and ``STATEMENTS`` of its ``table`` module, and the plain
+        facts of its ``family.yaml`` (key, title, capabilities, twin, J1939 NAME:
+        :mod:`.record_file`); ``fields`` give the objects (array class, tuning, programs,
+        …)."""
         import importlib
 
         from .record_file import record_fields
@@ -384,7 +390,8 @@ class Family:
         folder = Path(importlib.import_module(package).__file__ or "").parent
         facts = record_fields(folder, modules["constants"])
         return cls(**modules, table=table.TABLE,
-                   conformance=getattr(table, "CONFORMANCE", None), **facts, **fields)
+                   conformance=getattr(table, "CONFORMANCE", None),
+                   statements=getattr(table, "STATEMENTS", None), **facts, **fields)
 
     def motor_types(self) -> list[str]:
         """Names of the family's motor types (each with a motor config)."""

@@ -41,7 +41,7 @@ def family_references() -> dict[str, str]:
         Output file name → Markdown text.
     """
     return {name: markdown_reference_32(family(key).table, title, note, _GENERATOR,
-                                        family(key).conformance)
+                                        family(key).conformance, family(key).statements)
             for name, (key, title, note) in FAMILY_REFERENCES.items()}
 
 

@@ -40,13 +40,16 @@ from .errors import RegisterError
 from .table import Access, Format, Register, RegisterTable
 
 __all__ = ["MODELLED", "STORED_ONLY", "NOT_MODELLED", "STATUSES", "Conformance",
-           "ConformanceError", "Entry", "NotModelledWarning", "load_packaged_conformance"]
+           "ConformanceError", "Entry", "NotModelledWarning", "load_packaged_conformance",
+           "packaged_yaml", "parse_test_ids"]
 
 MODELLED = "modelled"
 STORED_ONLY = "stored only"
 NOT_MODELLED = "not modelled"
 STATUSES = (MODELLED, STORED_ONLY, NOT_MODELLED)
 _FILE = "conformance.yaml"
+#: libyaml's safe loader where PyYAML has it (ten times faster: the files are read on import)
+_LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 
 class ConformanceError(RegisterError):
@@ -87,6 +90,46 @@ class Entry:
     values: dict[int, Entry] = field(default_factory=dict)
 
 
+def parse_test_ids(raw: Any, where: str, error: type[ConformanceError] = ConformanceError
+             ) -> tuple[str, ...]:
+    """The test ids of an entry (``file.py::test_name`` in ``tests/``; none if ``raw`` is
+    empty), or ``error`` naming ``where``."""
+    tests = raw or []
+    if not isinstance(tests, list) or not all(isinstance(t, str) and "::" in t for t in tests):
+        raise error(f"{where}: tests must be a list of 'file.py::test_name'")
+    return tuple(tests)
+
+
+def packaged_yaml(package: str, filename: str, error: type[ConformanceError] = ConformanceError,
+                  required: bool = True) -> tuple[Any, str]:
+    """The parsed YAML file ``filename`` of a family package, and its source name.
+
+    Parameters
+    ----------
+    package : str
+        Dotted name of the family package.
+    filename : str
+        File name inside the package.
+    error : type
+        The error raised (naming the file) when the file is not valid YAML.
+    required : bool
+        False: a missing file gives ``None`` as its data.
+
+    Returns
+    -------
+    tuple
+        The parsed data and ``"<package as a path>/<filename>"``.
+    """
+    source = f"{package.replace('.', '/')}/{filename}"
+    path = resources.files(package).joinpath(filename)
+    if not required and not path.is_file():
+        return None, source
+    try:
+        return yaml.load(path.read_text(encoding="utf-8"), Loader=_LOADER), source
+    except yaml.YAMLError as exc:
+        raise error(f"{source}: not valid YAML ({exc})") from exc
+
+
 def _entry(raw: Any, where: str, section: str, nested: bool) -> Entry:
     if not isinstance(raw, dict):
         raise ConformanceError(f"{where}: expected a mapping, got {raw!r}")
@@ -99,9 +142,7 @@ def _entry(raw: Any, where: str, section: str, nested: bool) -> Entry:
     if status not in STATUSES:
         raise ConformanceError(f"{where}: status must be one of {list(STATUSES)}, got "
                                f"{status!r}")
-    tests = raw.get("tests") or []
-    if not isinstance(tests, list) or not all(isinstance(t, str) and "::" in t for t in tests):
-        raise ConformanceError(f"{where}: tests must be a list of 'file.py::test_name'")
+    tests = parse_test_ids(raw.get("tests"), where)
     why = str(raw.get("why") or "")
     if status == MODELLED and not tests:
         raise ConformanceError(f"{where}: a modelled entry names its tests")
@@ -114,7 +155,7 @@ def _entry(raw: Any, where: str, section: str, nested: bool) -> Entry:
                 raise ConformanceError(f"{where}: {key} key {k!r} is not a "
                                        f"{'bit number 0 … 31' if key == 'bits' else 'value'}")
             subs[key][k] = _entry(sub, f"{where} {key[:-1]} {k}", section, True)
-    return Entry(status, tuple(tests), why, str(raw.get("name") or ""),
+    return Entry(status, tests, why, str(raw.get("name") or ""),
                  str(raw.get("section") or section), subs["bits"], subs["values"])
 
 
@@ -224,10 +265,5 @@ def load_packaged_conformance(package: str, table: RegisterTable) -> Conformance
     table : RegisterTable
         The family's register table.
     """
-    source = f"{package.replace('.', '/')}/{_FILE}"
-    text = resources.files(package).joinpath(_FILE).read_text(encoding="utf-8")
-    try:
-        data = yaml.safe_load(text)
-    except yaml.YAMLError as exc:
-        raise ConformanceError(f"{source}: not valid YAML ({exc})") from exc
+    data, source = packaged_yaml(package, _FILE)
     return Conformance(table, data, source)

@@ -9,6 +9,8 @@ from __future__ import annotations
 from collections.abc import Callable
 
 from .conformance import STATUSES, Conformance
+from .statements import STATUSES as STATEMENT_STATUSES
+from .statements import Statements
 from .table import FORMAT_SCALE, Access, Format, RegisterTable
 
 __all__ = ["markdown_reference", "markdown_reference_32"]
@@ -50,10 +52,70 @@ def _conformance_lines(conformance: Conformance | None) -> list[str]:
         ""]
 
 
+def _given(statements: Statements | None) -> Statements | None:
+    """``statements`` when the family has a statements file, None otherwise."""
+    return statements if statements is not None and statements.present else None
+
+
+def _statement_counts(statements: Statements | None) -> list[str]:
+    """The paragraph and table of the statement counts: per status, per chapter and derived
+    per register."""
+    if statements is None:
+        return []
+    head = " | ".join(STATEMENT_STATUSES)
+    lines = [
+        f"Statements (`{statements.source}`, from the {statements.manual}): each normative "
+        "statement of the manual, with whether the simulator does it (*modelled*: the named "
+        "tests assert it; *decision*: the manual reads two ways, the family's doc gives the "
+        "choice and the tests assert it), only stores the register, or does not do it, and "
+        "why. Every statement is listed under [Statements](#statements). Per chapter:",
+        "",
+        f"| chapter | {head} | all |",
+        "|---|" + "---:|" * (len(STATEMENT_STATUSES) + 1)]
+    for chapter, counts in (*statements.chapter_counts().items(), ("all", statements.counts())):
+        name = "all" if chapter == "all" else f"§{chapter}"
+        lines.append(f"| {name} | " + " | ".join(str(counts[k]) for k in STATEMENT_STATUSES)
+                     + f" | {sum(counts.values())} |")
+    derived = statements.derived_counts()
+    lines += [
+        "",
+        "The *statements* column derives a register's status from its statements: modelled "
+        "when each is modelled or a decision, not modelled when one is not modelled, stored "
+        "only otherwise. Registers: " + ", ".join(f"{n} {k}" for k, n in derived.items())
+        + f", {len(statements.uncovered())} without a statement.",
+        ""]
+    return lines
+
+
+def _statement_cell(statements: Statements, name: str) -> str:
+    status = statements.derived_status(name)
+    return "" if status is None else f"{status} ({len(statements.of_register(name))})"
+
+
+def _statement_list(statements: Statements | None) -> list[str]:
+    """The section listing every statement, by register in the table's order, then the
+    chapters' statements."""
+    if statements is None:
+        return []
+    lines = ["", "## Statements", "",
+             "| register | id | section | says | status | tests |",
+             "|---|---|---|---|---|---|"]
+    groups = [(r.name, statements.of_register(r.name)) for r in statements.table]
+    for name, group in (*groups, ("(chapter)", statements.chapter_statements())):
+        for s in group:
+            status = s.status + (f": {s.why}" if s.why else "") + (
+                f" (`{s.decision}`)" if s.decision else "")
+            tests = ", ".join(f"`{t}`" for t in s.tests)
+            lines.append(f"| {name} | {s.id} | {s.section} | {_cell(s.says)} | "
+                         f"{_cell(status)} | {_cell(tests)} |")
+    return lines
+
+
 def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
                        usage: Callable[[str], list[str]] | None = None,
                        generator: str = MAC_GENERATOR,
-                       conformance: Conformance | None = None) -> str:
+                       conformance: Conformance | None = None,
+                       statements: Statements | None = None) -> str:
     """Render a register table as a Markdown document.
 
     Parameters
@@ -68,6 +130,9 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
         The command that writes the page (named in its header).
     conformance : Conformance, optional
         The family's conformance matrix: adds a column with each register's status.
+    statements : Statements, optional
+        The family's statements: when it has a statements file, adds their counts, a column
+        with each register's status derived from them and the list of every statement.
 
     Returns
     -------
@@ -75,6 +140,7 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
         Markdown with one table row per register number: number, name, format, range, unit,
         access, default, section, description (and the optional columns).
     """
+    statements = _given(statements)
     lines = [
         f"# Register reference: {title}",
         "",
@@ -87,10 +153,12 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
         "`reserved` undocumented.",
         "",
         *_conformance_lines(conformance),
+        *_statement_counts(statements),
         "| no. | name | format | range | unit | access | default | section | description |"
-        + (" modes |" if usage else "") + (" conformance |" if conformance else ""),
+        + (" modes |" if usage else "") + (" conformance |" if conformance else "")
+        + (" statements |" if statements else ""),
         "|---:|---|---|---|---|---|---:|---|---|" + ("---|" if usage else "")
-        + ("---|" if conformance else ""),
+        + ("---|" if conformance else "") + ("---|" if statements else ""),
     ]
     for r in table:
         if r.access == Access.RESERVED:
@@ -102,12 +170,15 @@ def markdown_reference(table: RegisterTable, title: str = "MAC50/95/140/141",
             f"| {r.number} | {r.name} | {r.format.value} | {rng} | {_cell(r.unit)} | "
             f"{r.access.value} | {default} | {r.section} | {_cell(r.description)} |"
             + (f" {', '.join(usage(r.name))} |" if usage else "")
-            + (f" {_cell(conformance.cell(r))} |" if conformance else ""))
+            + (f" {_cell(conformance.cell(r))} |" if conformance else "")
+            + (f" {_statement_cell(statements, r.name)} |" if statements else ""))
+    lines += _statement_list(statements)
     return "\n".join(lines) + "\n"
 
 
 def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
-                          generator: str, conformance: Conformance | None = None) -> str:
+                          generator: str, conformance: Conformance | None = None,
+                          statements: Statements | None = None) -> str:
     """Render a table of 32-bit registers (one register number each) as a Markdown document.
 
     Parameters
@@ -122,6 +193,9 @@ def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
         The command that writes the document (named in its header).
     conformance : Conformance, optional
         The family's conformance matrix: adds a column with each register's status.
+    statements : Statements, optional
+        The family's statements: when it has a statements file, adds their counts, a column
+        with each register's status derived from them and the list of every statement.
 
     Returns
     -------
@@ -130,6 +204,7 @@ def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
         range, unit, access, default, whether the register is for the normal user, section and
         description.
     """
+    statements = _given(statements)
     lines = [
         f"# Register reference: {title}",
         "",
@@ -144,9 +219,12 @@ def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
         "not meant for the normal user.",
         "",
         *_conformance_lines(conformance),
+        *_statement_counts(statements),
         "| no. | name | MacTalk name | format | range | unit | access | default | user | section "
-        "| description |" + (" conformance |" if conformance else ""),
-        "|---:|---|---|---|---|---|---|---:|---|---|---|" + ("---|" if conformance else ""),
+        "| description |" + (" conformance |" if conformance else "")
+        + (" statements |" if statements else ""),
+        "|---:|---|---|---|---|---|---|---:|---|---|---|" + ("---|" if conformance else "")
+        + ("---|" if statements else ""),
     ]
     for r in table:
         if r.access == Access.RESERVED:
@@ -159,5 +237,7 @@ def markdown_reference_32(table: RegisterTable, title: str, source_note: str,
             f"| {r.number} | {r.name} | {_cell(r.alias)} | {r.format.value} | {rng} | "
             f"{_cell(r.unit)} | {r.access.value} | {default} | {user} | {_cell(r.section)} | "
             f"{_cell(r.description)} |" + (f" {_cell(conformance.cell(r))} |" if conformance
-                                           else ""))
+                                           else "")
+            + (f" {_statement_cell(statements, r.name)} |" if statements else ""))
+    lines += _statement_list(statements)
     return "\n".join(lines) + "\n"

@@ -12,7 +12,7 @@ from pathlib import Path
 
 from ...registers.reference import markdown_reference
 from .firmware.mode_table import markdown_mode_table, modes_using
-from .table import CONFORMANCE, TABLE
+from .table import CONFORMANCE, STATEMENTS, TABLE
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -21,8 +21,8 @@ def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else argv
     out = Path(args[0]) if args else Path("docs/registers.md")
     out.parent.mkdir(parents=True, exist_ok=True)
-    out.write_text(markdown_reference(TABLE, usage=modes_using, conformance=CONFORMANCE),
-                   encoding="utf-8")
+    out.write_text(markdown_reference(TABLE, usage=modes_using, conformance=CONFORMANCE,
+                                      statements=STATEMENTS), encoding="utf-8")
     (out.parent / "modes.md").write_text(markdown_mode_table(), encoding="utf-8")
     print(f"wrote {out} ({len(TABLE)} registers)")
     return 0
