@@ -88,3 +88,19 @@ def test_command_257_resyncs_p_ist_to_the_encoder_position() -> None:
     assert m.read("P_IST")[0] == m.read("ENCODER_POS")[0]
     m.step(1)
     assert m.read("FLWERR")[0] == 0
+
+
+@pytest.mark.statements("mis:8.2.22:2", "mis:8.2.22:4")
+def test_command_269_saves_and_continues_and_267_resets_from_flash() -> None:
+    """269: "Save to flash memory, then continue normal execution" — no reset (TICKS counts
+    on); 267: "Reset the CPU" — the registers come back from flash (the saved V_SOLL, not the
+    one written after the save) and TICKS starts at zero."""
+    m = _motor(V_SOLL=1234)
+    m.step(10)
+    m.write("COMMAND", 269)
+    assert m.read("TICKS")[0] == 10 and m.read("V_SOLL")[0] == 1234
+    m.write("V_SOLL", 999)
+    m.step(5)
+    assert m.read("TICKS")[0] == 15
+    m.write("COMMAND", 267)
+    assert m.read("V_SOLL")[0] == 1234 and m.read("TICKS")[0] == 0

@@ -62,3 +62,19 @@ def test_ext_encoder_counts_the_external_input_in_every_mode(mode: int) -> None:
         assert m.read("P_SOLL")[0] == 0
     else:
         assert m.read("P_SOLL")[0] == 70
+
+
+@pytest.mark.statements("mis:8.2.78:1", "mis:5.6.1:1")
+def test_error_output_is_set_while_an_error_is_present() -> None:
+    """The decision between §5.6.1 (the error output active in normal operation, passive on
+    an error) and §8.2.78 ("The Error Output will be set when any error is set"): §8.2.78 —
+    the ERROR_MASK pin (an output by IOSETUP bits 8–15) is set while ERR_BITS ≠ 0."""
+    m = _motor(IOSETUP=1 << 8, ERROR_MASK=1)
+    m.step(2)
+    assert m.read("OUTPUTS")[0] & 1 == 0
+    m.write("ERR_BITS", c.ERR_GENERAL | c.ERR_FOLLOW)
+    m.step(2)
+    assert m.read("OUTPUTS")[0] & 1 == 1
+    m.write("COMMAND", c.CMD_CLEAR_ERRORS)
+    m.step(2)
+    assert m.read("OUTPUTS")[0] & 1 == 0
