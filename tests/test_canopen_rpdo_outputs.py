@@ -26,7 +26,7 @@ def test_rpdo_24_default_mapping_is_the_output_register(rig: Rig) -> None:
     assert node.sdo[0x1617][1].raw == 0x20141310  # 2014h sub 13h (register 19), 16 bits
 
 
-@pytest.mark.statements("mis:11.4.9:1", "mis:11.4.8:1")
+@pytest.mark.statements("mis:11.4.9:1", "mis:11.4.9:2")
 def test_read_then_save_of_every_pdo_set_up_is_accepted(rig: Rig) -> None:
     """The default set-up of every receive and transmit PDO, read and written back in
     pre-operational by the library's own procedure, is accepted unchanged."""
