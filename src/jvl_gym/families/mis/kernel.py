@@ -20,7 +20,13 @@ are used up.
 
 Standby (§8.2.8, §8.2.9): STANDBY_CURRENT replaces RUN_CURRENT STANDBY_TIME ms after the last
 step; in closed loop with current control the current is ACTUAL_TORQUE/2047 of RUN_CURRENT and
-the standby current is not used (§5.3.3).
+the standby current is not used (§5.3.3). ACTUAL_TORQUE reads 0 in passive mode, 2047 in an
+active mode without current control (§8.2.112).
+
+TICKS counts on by one per sample from the value it holds, so a written value goes on counting
+(§8.2.107, R/W). EXT_ENCODER counts the pulse input in every mode (§8.2.101). A turn table
+keeps P_IST inside MIN_P_IST … MAX_P_IST in position mode only; in the other modes P_IST may
+leave the range (§5.12.6) and a return to position mode brings it back by whole turns.
 """
 
 from __future__ import annotations
@@ -44,17 +50,29 @@ from .units import COUNTS_PER_REV
 
 #: a motor's RUN_CURRENT unit [A RMS] → phase current amplitude [A peak] (sine microstepping)
 _SQRT2 = math.sqrt(2.0)
+#: ERR_BITS that do not make the motor passive: the zero-search time-out, an "Error" that sets
+#: the motor back in its previous mode (§7.2.19), with the general-error bit that comes with it;
+#: the motor holds still there until the errors are cleared (§8.2.31)
+_NOT_STOPPING = c.ERR_ZERO_SEARCH_TIMEOUT | c.ERR_GENERAL
 
 
-@njit(cache=True)
-def _gear_input(regs, s, u) -> None:  # pragma: no cover - compiled
-    """Pulse input → EXT_ENCODER and P_SOLL += counts × GEAR1 / GEAR2 with the remainder
-    carried (§8.2.3 gear mode, §8.2.13–14); GEAR2 = 0 moves nothing. SETUP_BITS bit 16 counts
-    the input the other way (§8.2.68)."""
+@njit(cache=True, inline="always")
+def _ext_encoder(regs, u) -> int:  # pragma: no cover - compiled
+    """The pulse input's counts of this sample, added to EXT_ENCODER in every mode ("counts the
+    external encoder input", §8.2.101, names no mode); SETUP_BITS bit 16 counts the input the
+    other way (§8.2.68)."""
     counts = int(u[L.I_PULSE_COUNTS])
     if regs[R.SETUP_BITS] & c.SETUP_EXT_ENCODER_INVERSE:
         counts = -counts
-    regs[R.EXT_ENCODER] = wrap32(regs[R.EXT_ENCODER] + counts)
+    if counts != 0:
+        regs[R.EXT_ENCODER] = wrap32(regs[R.EXT_ENCODER] + counts)
+    return counts
+
+
+@njit(cache=True)
+def _gear_input(regs, s, counts: int) -> None:  # pragma: no cover - compiled
+    """P_SOLL += the pulse input's ``counts`` × GEAR1 / GEAR2 with the remainder carried
+    (§8.2.3 gear mode, §8.2.13–14); GEAR2 = 0 moves nothing."""
     g2 = regs[R.GEAR2]
     if counts == 0 or g2 == 0:
         return
@@ -161,8 +179,10 @@ def _advance(regs, s, v: float, arrive: bool, tt: bool) -> None:  # pragma: no c
 def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover - compiled
     """One outer sample of one motor (module docstring); rows of the engine's arrays."""
     s[L.S_TICK] += 1.0
-    regs[R.TICKS] = int(s[L.S_TICK]) & 0xFFFFFFFF
+    # TICKS counts on from whatever it holds: a written value too (R/W, §8.2.107)
+    regs[R.TICKS] = (regs[R.TICKS] + 1) & 0xFFFFFFFF
     update_inputs(regs, s, p, u)
+    pulses = _ext_encoder(regs, u)
     has_encoder = read_encoder(regs, s, p)
     mode = regs[R.MODE_REG]
     active = mode != c.PASSIVE and mode != c.SAFE
@@ -173,7 +193,8 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
     target_v = 0.0
     v = 0.0
     arrive = False
-    if regs[R.ERR_BITS] != 0 and active:
+    err = regs[R.ERR_BITS]
+    if active and err != 0 and (err | c.ERR_GENERAL) != _NOT_STOPPING:
         s[L.S_EMERGENCY] = 1.0
     if s[L.S_EMERGENCY] != 0.0:
         v = velocity_step(regs, s, 0.0, regs[R.ACC_EMERG] * c.ACC_UNIT_TO_COUNTS)
@@ -182,12 +203,16 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
                 regs[R.MODE_REG] = c.PASSIVE
             s[L.S_EMERGENCY] = 0.0
             s[L.S_HOME_PHASE] = 0.0
+    elif active and err != 0:
+        # the zero-search time-out: in its previous mode, the motor "will not move until all
+        # the errors have been cleared" (§8.2.31); it brakes with its deceleration and holds
+        v = velocity_step(regs, s, 0.0, s[L.S_DEC])
     elif mode == c.VELOCITY:
         target_v = _unblocked(regs[R.V_SOLL] * c.VEL_UNIT_TO_COUNTS, limits)
         v = velocity_step(regs, s, target_v, s[L.S_DEC])
     elif mode == c.POSITION or mode == c.GEAR:
         if mode == c.GEAR:
-            _gear_input(regs, s, u)
+            _gear_input(regs, s, pulses)
         v, arrive = _move(regs, s, has_encoder, tt, v_prev)
         if _unblocked(v, limits) != v:
             v, arrive = velocity_step(regs, s, 0.0, s[L.S_DEC]), False
@@ -199,7 +224,8 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
     elif mode == c.ZERO_SEARCH_1 or mode == c.ZERO_SEARCH_2:
         v, arrive = zero_search(regs, s, p, mode, limits)
     s[L.S_VEL] = 0.0 if arrive else v
-    _advance(regs, s, v, arrive, tt)
+    # the turn table keeps P_IST in its range in position mode only (§5.12.6)
+    _advance(regs, s, v, arrive, tt and mode == c.POSITION)
     regs[R.V_IST] = int(np.floor(s[L.S_VEL] / c.VEL_UNIT_TO_COUNTS + 0.5))
     regs[R.V_IST_CALC] = regs[R.V_IST]  # "the theoretical actual velocity" (§8.2.121)
     mode = regs[R.MODE_REG]
@@ -217,7 +243,8 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
     else:
         s[L.S_CUR_SCALE] = 2047.0
         units = regs[R.STANDBY_CURRENT] if standby else regs[R.RUN_CURRENT]
-    regs[R.ACTUAL_TORQUE] = int(s[L.S_CUR_SCALE])
+    # "In passive mode = 0%", active without current control 100 % (§8.2.112)
+    regs[R.ACTUAL_TORQUE] = int(s[L.S_CUR_SCALE]) if active else 0
     s[L.S_FIELD_STEP] = field_step(regs, s, v) if closed_loop else 0.0
     s[L.S_I_AMP] = _SQRT2 * min(units, p[L.P_RUN_MAX]) * p[L.P_AMPS_PER_UNIT]
     s[L.S_BRIDGE] = (2.0 if closed_loop else 1.0) if active else 0.0

@@ -51,7 +51,9 @@ S_AF0 = 37  #: analogue filtered values of IO1 … IO8 (units of 1.221 mV, fract
 S_DIN0 = S_AF0 + 8  #: input filter: ms the raw level of IO1 … IO8 has differed from the state
 #: counts run since MOTOR_REV last counted a revolution (§8.2.122)
 S_REV_ACC = S_DIN0 + 8
-N_STATE = S_REV_ACC + 1
+#: the mode a zero search was started from, which a time-out sets back (§7.2.19)
+S_HOME_PREV = S_REV_ACC + 1
+N_STATE = S_HOME_PREV + 1
 
 # --- params ---------------------------------------------------------------------------------
 (

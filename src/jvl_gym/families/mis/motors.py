@@ -197,9 +197,11 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         s[idx, L.S_CMD] = s[idx, L.S_CMD_PREV] = 0.0
         home = regs[idx, R.HOMEMODE]
         start = regs[idx, R.STARTMODE]
+        start = np.where(np.isin(start, list(c.START_MODES)), start, c.PASSIVE)
         regs[idx, R.MODE_REG] = np.where(np.isin(home, (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2)),
-                                         home, np.where(np.isin(start, list(c.START_MODES)),
-                                                        start, c.PASSIVE))
+                                         home, start)
+        # a power-on zero search that times out goes on in STARTMODE (§6.5.9, §7.2.19)
+        s[idx, L.S_HOME_PREV] = start
         self._program_power_on(idx)
 
     @property
@@ -231,6 +233,10 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
             enter_home = changed & np.isin(raw, (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2))
             s[idx[enter_home], L.S_HOME_PHASE] = 0.0
             s[idx[enter_home], L.S_HOME_MS] = 0.0
+            # the mode a time-out sets back (§7.2.19): the one before the search started
+            searching = np.isin(regs[idx, R.MODE_REG], (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2))
+            first = enter_home & ~searching
+            s[idx[first], L.S_HOME_PREV] = regs[idx[first], R.MODE_REG]
             off = raw == c.PASSIVE
             # §5.11.2: "When changing to Passive mode the motor goes into Stop mode to
             # decelerate according to the 'Deceleration'-ramp" (an error stop keeps its own)

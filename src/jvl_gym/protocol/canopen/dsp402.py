@@ -3,7 +3,8 @@ the modes of operation and the factors, carried out with the motor's own registe
 
 **State machine** (DSP-402; statusword bits 0–6: ready to switch on, switched on, operation
 enabled, fault, voltage enabled, quick stop, switch on disabled (the state's value carries bits
-0–3, 5 and 6); bit 9 remote; bit 7, warning, is not used). Commands of the controlword: shutdown
+0–3, 5 and 6); bit 9 remote; bit 11 internal limit active (607Dh, below); bit 7, warning, is
+not used). Commands of the controlword: shutdown
 (xxxx x110), switch on (xxxx x111), disable voltage (xxxx xx0x), quick stop (xxxx x01x), disable
 operation (xxxx 0111), enable operation (xxxx 1111), fault reset (bit 7 rising). Every
 transition 2–16; after power-on the drive is SWITCH ON DISABLED. Entering OPERATION ENABLED puts
@@ -36,6 +37,14 @@ homing to profile position once the homing is done):
 9      cyclic sync velocity   60FFh at once, no ramp; polarity 607Eh bit 6 reverses it
 10     cyclic sync torque     velocity mode at 6080h (polarity) with the current of 6071h
 =====  =====================  =============================================================
+
+**Software position limit** (607Dh; §11.5.1 lists it, the manual says no more; CiA 402:
+the limits bound the position demand, every new target is checked against them): in the
+position modes (profile position, interpolated position, cyclic synchronous position) a
+target beyond sub 1 (min) or sub 2 (max), in user units, is limited to that limit — the move
+ends at the limit — and statusword bit 11 (internal limit active) is set while the target in
+force was limited. The velocity and torque modes are not limited by 607Dh (the motor's own
+MIN_P_IST/MAX_P_IST, §5.9, apply in every mode).
 
 **Factors** (§11.5.2): position in user units = counts × feed (6092h sub 1 / sub 2) / (gear
 6091h sub 1 / sub 2 × counts per revolution), so with the defaults (gear 1/1, feed 409 600/1)
@@ -101,6 +110,7 @@ class Drive:
         self.current = 0.0
         self.ip_enabled = False
         self.last_target_counts = 0
+        self.limited = False  # the target in force was limited by 607Dh
 
     # ------------------------------------------------------------------ registers
     def _r(self, reg: int) -> int:
@@ -135,6 +145,15 @@ class Drive:
     def user_velocity(self, v: int) -> int:
         return round(v / Fraction(self._v(0x6094, 1), self._v(0x6094, 2)))
 
+    def within_limits(self, goal: int) -> int:
+        """Position target ``goal`` [counts] limited to the software position limits 607Dh
+        (module text); notes whether it was."""
+        lo = self.counts(self._v(0x607D, 1))
+        hi = self.counts(self._v(0x607D, 2))
+        limited = min(max(goal, lo), hi) if lo <= hi else goal
+        self.limited = limited != goal
+        return limited
+
     def acceleration(self, user: int) -> int:
         a = round(user * Fraction(self._v(0x6097, 1), self._v(0x6097, 2)))
         return max(1, min(_A_MAX, a))
@@ -148,6 +167,8 @@ class Drive:
             sw |= STATUS_BITS["voltage"]
         if self.state != State.OPERATION_ENABLED:
             return sw | (STATUS_BITS["target"] if self.mode != _HM or self.homing else 0)
+        if self.limited and self.mode in (_PP, _IP, _CSP):
+            sw |= STATUS_BITS["limit"]
         if self.mode == _PP:
             sw |= STATUS_BITS["bit12"] if self.ack else 0
             sw |= STATUS_BITS["target"] if self._pp_reached() else 0
@@ -295,6 +316,7 @@ class Drive:
         self.halted = bool(self.controlword & 0x100)
         self.ack = False
         self.queued = None
+        self.limited = False
         self.last_target_counts = self._r(self.f.p_ist)
         if m in (_PP, _IP, _CSP, _HM, 0):
             self._w(self.f.p_soll, self.last_target_counts)
@@ -376,6 +398,7 @@ class Drive:
             self.ip_enabled = enabled
 
     def _start_move(self, goal: int) -> None:
+        goal = self.within_limits(goal)
         self.last_target_counts = goal
         self._w(self.f.v_soll, max(1, abs(self.velocity(self._v(0x6081)))))
         self._w(self.f.a_soll, self.acceleration(self._v(0x6083)))
@@ -405,7 +428,7 @@ class Drive:
 
     def _cyclic_move(self, counts: int, relative: bool) -> None:
         """Reach ``counts`` (or that much further) within one interpolation period."""
-        goal = self.last_target_counts + counts if relative else counts
+        goal = self.within_limits(self.last_target_counts + counts if relative else counts)
         period_ms = max(1, self._v(0x60C2, 1))
         delta = abs(goal - self._r(self.f.p_ist))
         # the speed that covers the step in the period less two samples (the motor's 1 ms

@@ -53,7 +53,10 @@ DEFAULT_RPDO_MAP: dict[int, tuple[tuple[int, int, int], ...]] = {
     21: ((0x2012, 3, 32), (0x2014, 5, 16), (0x2014, 6, 16)),
     22: ((0x2014, 7, 16), (0x2014, 2, 16)),
     23: ((0x2014, 0x18, 16),),
-    24: ((0x2014, 0x19, 16),),
+    # §11.4.9 prints "2014 Sub19h" for "Updates the output": register 25 (19h) is STATUSBITS,
+    # read-only; OUTPUTS is register 19 = 13h, as in the Beckhoff RPDO 4 of the same purpose
+    # (§11.4.13). The decimal 19 is taken (docs/protocol.md, CANopen decisions).
+    24: ((0x2014, 0x13, 16),),
 }
 #: default mappings of the transmit PDOs (§11.4.10)
 DEFAULT_TPDO_MAP: dict[int, tuple[tuple[int, int, int], ...]] = {

@@ -33,10 +33,15 @@ for _m in c.RUNNABLE_MODES - {c.PASSIVE_MODE, c.ANALOG_TORQUE_MODE}:
 _CORRECTING = np.zeros(32, dtype=np.bool_)
 for _m in (c.POSITION_MODE, c.GEAR_MODE, c.ANALOG_GEAR_MODE, c.ANALOG_POSITION_MODE):
     _CORRECTING[_m] = True
-#: modes with a follow error (FLWERR, register 20): the position, gear and zero-search modes
+#: modes with a follow error (FLWERR, register 20): the position, gear and zero-search modes,
+#: and the velocity modes, where the follow error accumulates the velocity errors so that
+#: FLWERRMAX stops a blocked or overloaded motor (the overview: "if the follow error passes this
+#: limit the motor will be stopped", no mode excepted; as the MAC050–141, its manual 3.2.20:
+#: "FLWERR is thus used here to detect abnormal loading of the motor or blockages")
 _FOLLOWING = np.zeros(32, dtype=np.bool_)
 for _m in (c.POSITION_MODE, c.GEAR_MODE, c.ANALOG_GEAR_MODE, c.ANALOG_POSITION_MODE,
-           c.ANALOG_VELOCITY_GEAR_MODE):
+           c.ANALOG_VELOCITY_GEAR_MODE, c.VELOCITY_MODE, c.ANALOG_VELOCITY_MODE,
+           c.ANALOG_VELOCITY_DEADBAND_MODE, c.VELOCITY_ANALOG_TORQUE_MODE):
     _FOLLOWING[_m] = True
 
 

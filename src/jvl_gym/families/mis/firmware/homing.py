@@ -6,8 +6,12 @@ V_HOME/64 when it is 0, §6.5.9) until the input is released, and that point is 
 motor stops (D_SOLL / A_SOLL), moves to position 0 if P_HOME ≠ 0 (§6.5.8 steps 2–3), sets
 STATUSBITS bit 7 and changes to STARTMODE (§8.2.3). ENCODER_POS is set with P_IST at the zero
 (§8.2.15). After V_HOME_TIMEOUT ms (0: 60 s; none with ZERO_SEARCH_BITS bit 5) the search ends
-with ERR_BITS bit 16 and the motor returns to STARTMODE (§6.5.9), where the error stop makes it
-passive.
+with ERR_BITS bit 16 and the motor is set back in the mode it was in before the search started
+(``S_HOME_PREV``; §7.2.19, "Error / Motor is set back in previous mode"; for the power-on search
+that is STARTMODE, §6.5.9). This error does not make the motor passive, as the other errors
+do; the motor holds still in that mode until the errors are cleared ("will not move until all
+the errors have been cleared", §8.2.31; ``kernel``). docs/families/mis-sim.md, "Zero search
+time-out", has the readings and the choice.
 
 ZERO_SEARCH_BITS (§8.2.67; MacTalk's texts in §6.5.4): bit 2 "Search for opposite side of
 sensor", the zero on the sensor's "back side": type 1 runs on through the sensor at V_HOME
@@ -73,7 +77,7 @@ def zero_search(regs, s, p, mode: int,
     if not regs[R.ZERO_SEARCH_BITS] & c.ZS_NO_TIME_OUT and s[L.S_HOME_MS] > limit_ms:
         regs[R.ERR_BITS] |= c.ERR_ZERO_SEARCH_TIMEOUT | c.ERR_GENERAL
         s[L.S_HOME_PHASE] = 0.0
-        regs[R.MODE_REG] = regs[R.STARTMODE]
+        regs[R.MODE_REG] = int(s[L.S_HOME_PREV])
         return velocity_step(regs, s, 0.0, s[L.S_DEC]), False
     setup = regs[R.SETUP_BITS]
     torque_search = (regs[R.HOME_MASK] == 0 and (setup & c.SETUP_CLOSED_LOOP) != 0

@@ -23,7 +23,10 @@ status bits (MIS manual §8.2.15, §8.2.18–19, §8.2.24, §8.2.31–32, §5.9,
   bit 28 (limits without memory, §5.9.6) a has-been-active warning clears when the motor moves
   away from its limit and the limit is no longer active.
 - An error (ERR_BITS ≠ 0) in an active mode stops the motor with ACC_EMERG and then makes it
-  passive (§8.2.28, §8.2.31: "will not move until all the errors have been cleared").
+  passive (§8.2.28, §8.2.31: "will not move until all the errors have been cleared"), except
+  the zero-search time-out (bit 16), which sets the motor back in its previous mode, where it
+  brakes with its deceleration and holds still until the errors are cleared (§7.2.19, §8.2.31;
+  ``kernel``, ``homing``).
 """
 
 from __future__ import annotations
