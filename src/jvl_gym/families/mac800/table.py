@@ -4,8 +4,8 @@ register number 1 … 206, every register 32 bits wide (MAC800 register overview
 from __future__ import annotations
 
 from ...registers.conformance import Conformance, load_packaged_conformance
-from ...registers.table import RegisterTable, load_packaged_table
 from ...registers.statements import Statements, load_packaged_statements
+from ...registers.table import RegisterTable, load_packaged_table
 
 __all__ = ["TABLE", "CONFORMANCE", "STATEMENTS"]
 

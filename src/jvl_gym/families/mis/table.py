@@ -7,8 +7,8 @@ undocumented are ``RESERVED_<n>`` rows. Loaded and validated once (the package's
 from __future__ import annotations
 
 from ...registers.conformance import Conformance, load_packaged_conformance
-from ...registers.table import RegisterTable, load_packaged_table
 from ...registers.statements import Statements, load_packaged_statements
+from ...registers.table import RegisterTable, load_packaged_table
 
 __all__ = ["TABLE", "CONFORMANCE", "STATEMENTS"]
 
