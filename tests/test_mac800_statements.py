@@ -15,7 +15,7 @@ from jvl_gym.protocol import mactalk32 as m32
 from jvl_gym.protocol.dialect import MACTALK32
 from jvl_gym.protocol.twin import Twin
 from jvl_gym.registers import RegisterError
-from test_protocol_mactalk32 import READ_EXAMPLES, WRITE_EXAMPLES, h
+from test_protocol_mactalk32 import READ_EXAMPLES, WRITE_EXAMPLES
 
 RPM_1000 = 2771  # quick guide §1.3.4: "1000 RPM = 2771"
 COUNTS_PER_REV = 8000
