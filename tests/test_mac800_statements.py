@@ -222,7 +222,7 @@ def test_in_position_at_the_velocity() -> None:
     assert st[-1] & c.IN_POS and abs(RPM_1000 / 16 - v[-1]) < 5
 
 
-@pytest.mark.statements("mac800:reg35:13")
+@pytest.mark.statements("mac800:reg35:15")
 def test_speed_err_is_above_3600_rpm() -> None:
     """ERR_STAT bit 13 SPEED_ERR: over 3600 RPM, not below."""
     for rpm, expected in ((3500.0, False), (3700.0, True)):
@@ -232,7 +232,7 @@ def test_speed_err_is_above_3600_rpm() -> None:
 
 
 # ------------------------------------------------------------------ Power + zero search
-@pytest.mark.statements("mac800:reg36:5")
+@pytest.mark.statements("mac800:reg36:7")
 def test_syncposauto_keeps_the_set_point_at_the_actual_position() -> None:
     """CNTRL_BITS bit 5 SYNCPOSAUTO: while passive, P_SOLL follows P_IST, so entering position
     mode does not pull the motor back; without the bit P_SOLL stays."""
@@ -317,7 +317,7 @@ def test_every_register_reads_over_the_serial_link_and_nothing_changes() -> None
     np.testing.assert_array_equal(m.state, state)
 
 
-@pytest.mark.statements("mac800:1.3.1:1")
+@pytest.mark.statements("mac800:1.3.1:1", "mac800:1.3.4:1", "mac800:1.3.4:4")
 def test_the_motor_is_run_by_register_writes_over_the_serial_link() -> None:
     """"The MAC motor is completely controlled by reading and writing to registers": the
     quick guide's frames set velocity mode and 1000 RPM, and the motor runs."""
@@ -357,10 +357,9 @@ def test_a_wrong_complement_is_refused() -> None:
     np.testing.assert_array_equal(m.regs, before)
 
 
-@pytest.mark.statements("mac800:1.3.2:1", "mac800:1.3.2:2", "mac800:1.3.2:3",
-                        "mac800:1.3.2:4", "mac800:1.3.4:1", "mac800:1.3.4:2",
-                        "mac800:1.3.4:4")
 @pytest.mark.parametrize("frame, address, register, value", WRITE_EXAMPLES)
+@pytest.mark.statements("mac800:1.3.2:1", "mac800:1.3.2:2", "mac800:1.3.2:3", "mac800:1.3.2:4",
+                        "mac800:1.3.4:1", "mac800:1.3.4:2", "mac800:1.3.4:4")
 def test_quick_guide_writes_are_taken_by_a_mac800(frame: bytes, address: int, register: int,
                                                   value: int) -> None:
     """The quick guide's write frames (§1.3.2 examples 1 and 2, §1.3.4), byte for byte, sent to
@@ -375,10 +374,10 @@ def test_quick_guide_writes_are_taken_by_a_mac800(frame: bytes, address: int, re
     assert m.read_raw(register)[1 - i] == before[1 - i]
 
 
-@pytest.mark.statements("mac800:1.3.3:1", "mac800:1.3.3:2", "mac800:1.3.3:3",
-                        "mac800:1.3.4:3", "mac800:1.3.4:5")
 @pytest.mark.parametrize("request_, reply, address, register, value",
                          [e for e in READ_EXAMPLES if e[2] == 8])
+@pytest.mark.statements("mac800:1.3.3:1", "mac800:1.3.3:2", "mac800:1.3.3:3", "mac800:1.3.4:3",
+                        "mac800:1.3.4:5")
 def test_quick_guide_reads_are_answered_by_a_mac800(request_: bytes, reply: bytes,
                                                     address: int, register: int,
                                                     value: int) -> None:
@@ -398,3 +397,21 @@ def test_quick_guide_reads_are_answered_by_a_mac800(request_: bytes, reply: byte
     assert ask(t, request_) == reply
     assert reply[3:5] == b"\x00\xff" and reply[7:9] == b"\x04\xfb"
 
+
+
+@pytest.mark.statements("mac800:reg16:3")
+def test_i2t_tends_to_100_percent_at_the_rated_torque() -> None:
+    """I2T's 100 % is the continuous rating: held at the nominal (rated) torque, I2T rises as
+    65536·(1 − e^(−t/τ)) towards 65536 (τ the motor's thermal time constant); at 1.2 times the
+    rated torque it heads for 144 %."""
+    m = MotorArray("MAC800", n=2, seed=0)
+    cfg = m.motor_configs[0]
+    m.write_many({"V_SOLL": 0, "MODE_REG": 1})
+    m.set_input(load_torque=np.array([1.0, 1.2]) * cfg.rated_torque)
+    m.run(0.2)
+    i0 = m.read("I2T").astype(float)
+    m.run(2.0)
+    decay = np.exp(-2.0 / cfg.thermal_time_constant)
+    final = (m.read("I2T") - i0 * decay) / (1.0 - decay)  # the level I2T is heading for
+    assert final[0] == pytest.approx(65536, rel=0.03)
+    assert final[1] == pytest.approx(1.44 * 65536, rel=0.03)
