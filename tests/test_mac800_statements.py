@@ -415,3 +415,48 @@ def test_i2t_tends_to_100_percent_at_the_rated_torque() -> None:
     final = (m.read("I2T") - i0 * decay) / (1.0 - decay)  # the level I2T is heading for
     assert final[0] == pytest.approx(65536, rel=0.03)
     assert final[1] == pytest.approx(1.44 * 65536, rel=0.03)
+
+
+@pytest.mark.statements("mac800:reg2:4", "mac800:reg5:3")
+def test_v_soll_is_the_top_speed_of_a_move_which_lands_without_overshoot() -> None:
+    """Position mode (MAC050–141 position function block): the profile is limited to ±V_SOLL
+    (MacTalk's "Max velocity") and A_SOLL, and reaches P_SOLL without passing it."""
+    m = MotorArray("MAC800", n=1, seed=0)
+    m.write_many({"V_SOLL": 1385, "A_SOLL": 360, "P_SOLL": 60000, "MODE_REG": 2})
+    tr = m.trace(["FNC_OUT", "P_FUNC", "P_IST"], 1500)
+    f = tr["FNC_OUT"][:, 0]
+    assert np.abs(f).max() == 1385 / 16  # 500 RPM, the top speed, reached and held
+    assert np.all(np.abs(np.diff(f)) <= 360 / 16 + 1e-9)
+    assert tr["P_FUNC"][:, 0].max() == 60000
+    assert tr["P_IST"][:, 0].max() <= 60000 + 5 and abs(tr["P_IST"][-1, 0] - 60000) <= 2
+
+
+@pytest.mark.statements("mac800:reg28:1")
+def test_min_p_ist_is_the_negative_limit() -> None:
+    """MIN_P_IST (register 28) limits the travel in the negative direction: below it PLIM_ERR
+    is set and the motor stops."""
+    m = MotorArray("MAC800", n=1, seed=0)
+    m.write_many({"MIN_P_IST": -3000, "MAX_P_IST": 1000000, "V_SOLL": -831, "MODE_REG": 1})
+    for _ in range(int(1.0 * c.OUTER_HZ)):
+        m.step()
+        if m.read("ERR_STAT")[0] & c.PLIM_ERR:
+            break
+    assert m.read("ERR_STAT")[0] & c.PLIM_ERR and m.read("P_IST")[0] < -3000
+    m.run(0.3)
+    assert m.read("MODE_REG")[0] == 0
+
+
+@pytest.mark.statements("mac800:reg2:21")
+def test_analogue_to_position_relative_to_p_soll() -> None:
+    """Mode 21 with CNTRL_BITS RELPOSPSOLL (MAC050–141 analogue 2 position block): a rising
+    level adds P2 (POS1) to P_SOLL, a falling one P1 (POS0)."""
+    m = MotorArray("MAC800", n=1, seed=0)
+    m.write_many({"POS0": -1000, "POS1": 5000, "P_SOLL": 0, "V_SOLL": RPM_1000,
+                  "CNTRL_BITS": c.RELPOSPSOLL, "MODE_REG": 21})
+    m.run(0.2)
+    assert m.read("P_SOLL")[0] == 0  # entry: the level without an edge
+    for volts, target in ((8.0, 5000), (2.0, 4000), (8.0, 9000)):
+        m.set_input(analog_volts=volts)
+        m.run(0.6)
+        assert m.read("P_SOLL")[0] == target
+    assert abs(m.read("P_IST")[0] - 9000) < 10
