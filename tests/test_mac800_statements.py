@@ -460,3 +460,15 @@ def test_analogue_to_position_relative_to_p_soll() -> None:
         m.run(0.6)
         assert m.read("P_SOLL")[0] == target
     assert abs(m.read("P_IST")[0] - 9000) < 10
+
+
+@pytest.mark.statements("mac800:reg2:20")
+def test_analogue_to_position_level_has_hysteresis() -> None:
+    """Mode 21 reads the input as a level with hysteresis: high above 5.4 V, low below 4.4 V;
+    between them the level stays (MAC050–141 analogue 2 position block)."""
+    m = MotorArray("MAC800", n=1, seed=0)
+    m.write_many({"POS0": 0, "POS1": 8000, "V_SOLL": RPM_1000, "MODE_REG": 21})
+    for volts, target in ((5.3, 0), (5.5, 8000), (4.5, 8000), (4.3, 0), (5.3, 0)):
+        m.set_input(analog_volts=volts)
+        m.run(0.05)
+        assert m.read("P_SOLL")[0] == target, volts
