@@ -51,12 +51,15 @@ def goes_passive(m: MotorArray) -> None:
     assert m.read("VF_OUT")[0] == 0
 
 
+@pytest.mark.statements("mac800:reg35:1")
 def test_no_error_in_a_normal_run() -> None:
     m = running(1000.0)
     m.run(1.0)
     assert m.read("ERR_STAT")[0] & c.BLOCKING_ERRORS == 0
 
 
+@pytest.mark.statements("mac800:reg16:1", "mac800:reg16:2", "mac800:reg17:1", "mac800:reg32:1",
+                        "mac800:reg35:2")
 def test_i2t_err() -> None:
     m = running(1000.0)
     m.write("I2TLIM", 6554)  # 10 % of the rated current's square
@@ -66,6 +69,7 @@ def test_i2t_err() -> None:
     stops_with_acc_emerg(m)
 
 
+@pytest.mark.statements("mac800:reg22:1", "mac800:reg35:3")
 def test_flw_err() -> None:
     m = MotorArray("MAC800", n=1, seed=0)
     m.write_many({"FLWERRMAX": 5, "V_SOLL": 2771, "P_SOLL": 0, "MODE_REG": 2})
@@ -77,6 +81,7 @@ def test_flw_err() -> None:
     stops_with_acc_emerg(m)
 
 
+@pytest.mark.statements("mac800:reg24:1", "mac800:reg26:1", "mac800:reg35:4")
 def test_fnc_err() -> None:
     m = MotorArray("MAC800", n=1, seed=0)
     m.write_many({"FNCERRMAX": 2000, "T_SOLL": 30, "V_SOLL": 8000, "A_SOLL": 2000,
@@ -86,6 +91,7 @@ def test_fnc_err() -> None:
     stops_with_acc_emerg(m)
 
 
+@pytest.mark.statements("mac800:reg18:1", "mac800:reg19:1", "mac800:reg35:5")
 def test_uit_err() -> None:
     m = running(3000.0, load_inertia=1e-3)
     m.run(1.0)
@@ -95,6 +101,7 @@ def test_uit_err() -> None:
     assert m.read("MODE_REG")[0] == 1  # stopping
 
 
+@pytest.mark.statements("mac800:reg28:1", "mac800:reg28:2", "mac800:reg35:9", "mac800:reg35:16")
 def test_plim_err_and_dis_p_lim() -> None:
     m = running(300.0)
     m.write_many({"MIN_P_IST": -1000, "MAX_P_IST": 20000, "ERR_STAT": c.DIS_P_LIM})
@@ -106,6 +113,7 @@ def test_plim_err_and_dis_p_lim() -> None:
     stops_with_acc_emerg(m)
 
 
+@pytest.mark.statements("mac800:reg31:1", "mac800:reg31:2", "mac800:reg35:10")
 def test_degc_err() -> None:
     m = running(500.0)
     assert m.read("DEGC")[0] == pytest.approx(25.0 / u.DEGC_CELSIUS_PER_UNIT, abs=2)
@@ -123,6 +131,8 @@ def test_degc_rises_with_copper_loss() -> None:
     assert m.temperature[0] > t0
 
 
+@pytest.mark.statements("mac800:reg23:1", "mac800:reg23:2", "mac800:reg23:4", "mac800:reg35:11",
+                        "mac800:reg35:12")
 def test_uv_detect_uv_err_and_uv_handle() -> None:
     m = running(1000.0)
     m.write("UV_HANDLE", c.SET_UV_ERR | c.UV_VSOLL0)
@@ -136,6 +146,7 @@ def test_uv_detect_uv_err_and_uv_handle() -> None:
     assert not bit(m, c.UV_DETECT) and bit(m, c.UV_ERR)
 
 
+@pytest.mark.statements("mac800:reg23:1", "mac800:reg23:2", "mac800:reg23:3")
 def test_uv_go_passive() -> None:
     m = running(1000.0)
     m.write("UV_HANDLE", c.UV_GO_PASSIVE)
@@ -145,6 +156,7 @@ def test_uv_go_passive() -> None:
     assert not bit(m, c.UV_ERR)
 
 
+@pytest.mark.statements("mac800:reg35:13")
 def test_ov_err() -> None:
     m = running(500.0)
     m.set_input(supply_volts=480.0)
@@ -153,6 +165,7 @@ def test_ov_err() -> None:
     goes_passive(m)
 
 
+@pytest.mark.statements("mac800:reg35:14")
 def test_ipeak_err() -> None:
     m = MotorArray("MAC800", n=1, seed=0)
     m.write_many({"KIB1": 0.0, "V_SOLL": RPM_1000, "MODE_REG": 1})  # no current feedback
@@ -162,6 +175,7 @@ def test_ipeak_err() -> None:
     assert m.torque[0] == 0.0  # power stage off: no winding current
 
 
+@pytest.mark.statements("mac800:reg35:15")
 def test_speed_err() -> None:
     m = MotorArray("MAC800", n=1, seed=0, initial_speed=4000 * 2 * np.pi / 60)
     m.step(2)  # passive, turning freely at 4000 RPM: the bit, no reaction
@@ -172,6 +186,7 @@ def test_speed_err() -> None:
     stops_with_acc_emerg(m)
 
 
+@pytest.mark.statements("mac800:reg35:17")
 def test_index_err() -> None:
     m = running(600.0)
     m.run(0.5)
@@ -181,6 +196,7 @@ def test_index_err() -> None:
     goes_passive(m)
 
 
+@pytest.mark.statements("mac800:reg35:18")
 def test_old_filt_err() -> None:
     m = MotorArray("MAC800", n=1, seed=0)
     m.write("KVFY5", 1.5)  # a pole at 1.5: the filter setting is not valid
@@ -190,6 +206,7 @@ def test_old_filt_err() -> None:
     goes_passive(m)
 
 
+@pytest.mark.statements("mac800:reg35:19")
 def test_u24v_err() -> None:
     m = running(500.0)
     m.set_input(control_volts=15.0)
@@ -201,6 +218,7 @@ def test_u24v_err() -> None:
     assert bit(m, c.U24V_ERR)  # "has been too low": kept until cleared
 
 
+@pytest.mark.statements("mac800:reg33:1", "mac800:reg35:6", "mac800:reg35:7", "mac800:reg35:8")
 def test_in_pos_acc_and_dec_flags() -> None:
     m = MotorArray("MAC800", n=1, seed=0)
     m.write_many({"V_SOLL": 2771, "A_SOLL": 100, "P_SOLL": 20000, "MODE_REG": 2})

@@ -40,6 +40,7 @@ def test_default_filter_is_well_damped(motor: str) -> None:
         assert np.all(np.abs(rpm[154:] - target) < 10.0)
 
 
+@pytest.mark.statements("mac800:reg2:4", "mac800:reg3:1", "mac800:reg8:1")
 def test_position_mode_reaches_p_soll() -> None:
     m = MotorArray("MAC800", n=1, seed=0, load_inertia=2e-4)
     m.write_many({"V_SOLL": 5541, "A_SOLL": 360, "P_SOLL": 100000, "MODE_REG": 2})
@@ -48,6 +49,8 @@ def test_position_mode_reaches_p_soll() -> None:
     assert m.read("P_FUNC")[0] == 100000
 
 
+@pytest.mark.statements("mac800:reg2:5", "mac800:reg8:1", "mac800:reg14:1", "mac800:reg14:2",
+                        "mac800:reg15:1", "mac800:reg39:1", "mac800:reg39:8", "mac800:reg163:1")
 def test_gear_mode_follows_the_pulse_input() -> None:
     m = MotorArray("MAC800", n=1, seed=0)
     m.write_many({"GEARF_1": 3, "GEARF_2": 2, "P_SOLL": 0, "MODE_REG": 3})
@@ -63,6 +66,8 @@ def test_gear_mode_follows_the_pulse_input() -> None:
     assert m.read("V_EXT")[0] == -10
 
 
+@pytest.mark.statements("mac800:reg2:1", "mac800:reg2:11", "mac800:reg38:1", "mac800:reg41:1",
+                        "mac800:reg42:2")
 def test_torque_zero_search_then_start_mode() -> None:
     m = MotorArray("MAC800", n=1, seed=0, end_stop_low=-0.5, end_stop_high=100.0)
     m.write_many({"V_HOME": -300, "T_HOME": 200, "P_HOME": 1000, "START_MODE": 2,
@@ -75,6 +80,7 @@ def test_torque_zero_search_then_start_mode() -> None:
 
 
 @pytest.mark.parametrize("mode", [13, 14])
+@pytest.mark.statements("mac800:reg2:12", "mac800:reg2:13", "mac800:reg42:2")
 def test_sensor_zero_search(mode: int) -> None:
     m = MotorArray("MAC800", n=1, seed=0, home_position=2.0, coulomb_friction=0.2)
     m.write_many({"V_HOME": 600, "T_HOME": 100, "P_HOME": 0, "MODE_REG": mode})
@@ -88,6 +94,7 @@ def test_sensor_zero_search(mode: int) -> None:
     assert zero_rad == pytest.approx(2.0, abs=2 * travel if mode == 13 else travel / 16)
 
 
+@pytest.mark.statements("mac800:reg9:1", "mac800:reg36:10")
 def test_index_home() -> None:
     m = MotorArray("MAC800", n=1, seed=0, home_position=2.0, index_angle=0.3,
                    coulomb_friction=0.2)
@@ -99,6 +106,7 @@ def test_index_home() -> None:
     assert m.read("INDEX_OFFSET")[0] == pytest.approx((2.0 - 0.3) / c.RAD_PER_COUNT, abs=80)
 
 
+@pytest.mark.statements("mac800:reg37:1", "mac800:reg42:1")
 def test_power_on_zero_search_and_start_mode() -> None:
     m = MotorArray("MAC800", n=1, seed=0, home_position=1.0,
                    setup={"HOME_MODE": 13, "START_MODE": 1, "V_HOME": 600, "V_SOLL": 277,
@@ -111,6 +119,7 @@ def test_power_on_zero_search_and_start_mode() -> None:
     assert m.speed_rpm[0] == pytest.approx(100.0, rel=0.05)
 
 
+@pytest.mark.statements("mac800:reg2:6", "mac800:reg2:7")
 def test_analog_torque_and_velocity_modes() -> None:
     m = MotorArray("MAC800", n=2, seed=0)
     m.set_input(analog_volts=[5.0, -5.0])
@@ -122,6 +131,7 @@ def test_analog_torque_and_velocity_modes() -> None:
     assert m.speed_rpm[1] == pytest.approx(-500.0 * 1024 / 2047 * 2, rel=0.02)
 
 
+@pytest.mark.statements("mac800:reg2:14", "mac800:reg2:15")
 def test_dead_band_and_velocity_torque_limit() -> None:
     m = MotorArray("MAC800", n=2, seed=0)
     m.set_input(analog_volts=[0.5, 2.0])
@@ -133,6 +143,7 @@ def test_dead_band_and_velocity_torque_limit() -> None:
     assert abs(m.read("VF_OUT")[1]) <= round(1000 * 410 / 2047) + 1
 
 
+@pytest.mark.statements("mac800:reg2:20")
 def test_analog_to_position() -> None:
     m = MotorArray("MAC800", n=1, seed=0)
     m.write_many({"POS0": 0, "POS1": 20000, "V_SOLL": 2771, "MODE_REG": 21})
@@ -143,6 +154,8 @@ def test_analog_to_position() -> None:
     assert m.read("P_SOLL")[0] == 20000 and abs(m.read("P_IST")[0] - 20000) < 10
 
 
+@pytest.mark.statements("mac800:reg36:1", "mac800:reg36:2", "mac800:reg36:3", "mac800:reg36:4",
+                        "mac800:reg158:1")
 def test_sample_buffer_and_rewind() -> None:
     m = MotorArray("MAC800", n=1, seed=0)
     m.write_many({"SAMPLE1": 10, "SAMPLE2": 12, "V_SOLL": 277, "MODE_REG": 1})
@@ -156,6 +169,7 @@ def test_sample_buffer_and_rewind() -> None:
     assert m.read("REC_CNT")[0] == 3 * c.INNER_PER_OUTER
 
 
+@pytest.mark.statements("mac800:reg4:1", "mac800:reg36:1", "mac800:reg36:8")
 def test_syncposman_and_syncposauto() -> None:
     m = MotorArray("MAC800", n=1, seed=0)
     m.write_many({"P_NEW": 5000, "CNTRL_BITS": c.SYNCPOSMAN})

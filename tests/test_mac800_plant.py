@@ -25,6 +25,7 @@ def test_energy_balance_in_a_regulated_run() -> None:
     assert e["electrical"][0] == pytest.approx(out[0], rel=2e-3)
 
 
+@pytest.mark.statements("mac800:reg7:3", "mac800:reg169:1")
 def test_current_loop_follows_its_reference_and_gives_the_torque() -> None:
     """Holding against 3 N·m: the phase currents reach their references, the torque the load."""
     m = MotorArray("MAC800", n=1, seed=0)
@@ -52,6 +53,7 @@ def test_braking_charges_the_bus_and_the_dump_holds_it() -> None:
     assert abs(m.speed_rpm[0]) < 5.0
 
 
+@pytest.mark.statements("mac800:reg2:2")
 def test_passive_turns_freely() -> None:
     m = MotorArray("MAC800", n=1, seed=0, initial_speed=100.0)
     m.run(0.2)

@@ -14,6 +14,7 @@ from jvl_gym.registers import RegisterError
 
 
 @pytest.mark.parametrize("mode", [7, 8, 9, 10, 11, 15])
+@pytest.mark.statements("mac800:reg2:10", "mac800:reg37:2")
 def test_start_mode_refuses_the_reserved_modes_mode_reg_refuses(mode: int) -> None:
     """START_MODE (register 37) is a MODE_REG value: 7–11 and 15 are reserved (register 2),
     refused as MODE_REG refuses them, and nothing changes."""
@@ -29,6 +30,7 @@ def test_start_mode_refuses_the_reserved_modes_mode_reg_refuses(mode: int) -> No
     assert m.read("START_MODE")[0] == c.VELOCITY_MODE
 
 
+@pytest.mark.statements("mac800:reg170:1")
 def test_aninp_reaches_the_table_minimum() -> None:
     """ANINP (register 170): range −2048 … 2047, V = ANINP × 0.0048828."""
     m = MotorArray("MAC800", n=1, seed=0)
@@ -51,6 +53,10 @@ def test_aninp_reaches_the_table_minimum() -> None:
     ("T_REG_P", "T_SOLL", ("TQ0", "TQ1", "TQ2", "TQ3")),
     ("L_REG_P", "KVOUT", ("LOAD0", "LOAD1", "LOAD2", "LOAD3")),
     ("Z_REG_P", "INPOSWIN", ("ZERO0", "ZERO1", "ZERO2", "ZERO3"))])
+@pytest.mark.statements("mac800:reg43:1", "mac800:reg44:1", "mac800:reg45:1", "mac800:reg46:1",
+                        "mac800:reg47:1", "mac800:reg48:1", "mac800:reg49:1", "mac800:reg65:1",
+                        "mac800:reg73:1", "mac800:reg77:1", "mac800:reg81:1", "mac800:reg85:1",
+                        "mac800:reg86:1")
 def test_every_register_of_a_set_is_selected_by_its_pointer(
         selector: str, target: str, names: tuple[str, ...]) -> None:
     """Writing k to a selector copies the k-th register of its set to the target."""
@@ -95,6 +101,7 @@ _VF = {"KVFX6": ("X", 0), "KVFX5": ("X", 1), "KVFX4": ("X", 2), "KVFX3": ("X", 3
 
 
 @pytest.mark.parametrize("name", list(_VF))
+@pytest.mark.statements("mac800:1.2:5")
 def test_each_servo_filter_tap_has_its_delay(name: str) -> None:
     """VF(z) = (KVFX6 + KVFX5 z⁻¹ + … + KVFX1 z⁻⁵)/(1 − KVFY5 z⁻¹ − … − KVFY0 z⁻⁶): a numerator
     tap passes an impulse of the speed error after its delay; a denominator tap feeds the
@@ -146,6 +153,7 @@ def test_loop_readouts_are_consistent_at_steady_speed() -> None:
     assert (lead - int(m.read("V_ELDEG")[0])) % 4096 in (1024, 3072)
 
 
+@pytest.mark.statements("mac800:reg163:1")
 def test_geared_velocity_and_function_term_in_gear_mode() -> None:
     """GV_EXT = 16·V_EXT·GEARF_1/GEARF_2 (the remainder carried); G_FNC is the geared input not
     yet followed (0 when FNC_OUT keeps up)."""
@@ -157,6 +165,7 @@ def test_geared_velocity_and_function_term_in_gear_mode() -> None:
     assert m.read("G_FNC")[0] == 0
 
 
+@pytest.mark.statements("mac800:reg171:1")
 def test_analogue_offset_is_subtracted() -> None:
     """ANINP_OFFSET (register 171): ANINP = the input − the offset."""
     m = MotorArray("MAC800", n=1, seed=0)
@@ -166,6 +175,7 @@ def test_analogue_offset_is_subtracted() -> None:
     assert m.read("ANINP")[0] == round(2.0 / u.ANINP_VOLTS_PER_UNIT) - 100
 
 
+@pytest.mark.statements("mac800:reg34:1", "mac800:reg35:6")
 def test_in_position_needs_inposcnt_samples() -> None:
     """ERR_STAT bit 4 IN_POS after INPOSCNT samples inside INPOSWIN (registers 33, 34)."""
     seen = []
@@ -178,6 +188,7 @@ def test_in_position_needs_inposcnt_samples() -> None:
     assert seen[1] - seen[0] >= 150
 
 
+@pytest.mark.statements("mac800:reg158:1")
 def test_sample_channels_3_and_4_record() -> None:
     m = MotorArray("MAC800", n=1, seed=0)
     m.write_many({"SAMPLE3": 10, "SAMPLE4": 12, "REC_CNT": 20, "V_SOLL": 300, "MODE_REG": 1})
@@ -187,12 +198,14 @@ def test_sample_channels_3_and_4_record() -> None:
     assert "P_IST" in buf and "V_IST" in buf and np.any(buf["P_IST"] != 0)
 
 
+@pytest.mark.statements("mac800:reg203:1")
 def test_motor_type_is_the_configs_code() -> None:
     for motor in ("MAC400", "MAC800"):
         m = MotorArray(motor, n=1, seed=0)
         assert m.read("MOTOR_TYPE")[0] == m.motor_configs[0].motor_type_code
 
 
+@pytest.mark.statements("mac800:reg2:16")
 def test_analog_gear_mode_scales_the_gear_by_aninp() -> None:
     """MODE_REG 18 (analogue gear): the gear factor GEARF_1/GEARF_2 times ANINP/2047."""
     m = MotorArray("MAC800", n=2, seed=0)
@@ -203,6 +216,7 @@ def test_analog_gear_mode_scales_the_gear_by_aninp() -> None:
     assert gv[0] == 16 * 8 and abs(gv[1] - 16 * 8 * m.read("ANINP")[1] / 2047) <= 1
 
 
+@pytest.mark.statements("mac800:reg36:6")
 def test_relposfnc_adds_the_selected_position_to_the_function_position() -> None:
     """CNTRL_BITS bit 4 RELPOSPFNC: a position selected by P_REG_P is added to the function
     position (P_FUNC)."""

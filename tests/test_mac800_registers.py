@@ -34,6 +34,7 @@ def test_read_write_by_name_alias_and_number() -> None:
 
 @SETTINGS
 @given(st.floats(-200.0, 200.0, allow_nan=False), st.sampled_from(["KFF5", "KVB2", "KIB1"]))
+@pytest.mark.statements("mac800:1.1:4", "mac800:1.1:5")
 def test_fixed24_write_path(value: float, name: str) -> None:
     before = M.regs.copy()
     if -128.0 <= value <= 127.99999994039536:
@@ -51,6 +52,7 @@ def test_fixed24_write_path(value: float, name: str) -> None:
 @SETTINGS
 @given(st.floats(-40000.0, 40000.0, allow_nan=False),
        st.sampled_from(["KVFX6", "KVFY0", "KIFX2", "KVOUT", "LOAD3"]))
+@pytest.mark.statements("mac800:1.1:3", "mac800:1.1:5")
 def test_fixed16_write_path(value: float, name: str) -> None:
     before = M.regs.copy()
     state = M.state.copy()
@@ -67,6 +69,7 @@ def test_fixed16_write_path(value: float, name: str) -> None:
 
 @SETTINGS
 @given(st.integers(-2**33, 2**33), st.sampled_from(["P_SOLL", "POS3", "FLWERRMAX", "T_SOLL"]))
+@pytest.mark.statements("mac800:1.1:2")
 def test_int32_write_path(value: int, name: str) -> None:
     before = M.regs.copy()
     reg = M.table.lookup(name)
@@ -97,6 +100,8 @@ def test_read_only_and_reserved_registers_are_refused() -> None:
     assert M.read("OUTLOOPDIV")[0] == c.INNER_PER_OUTER
 
 
+@pytest.mark.statements("mac800:reg36:5", "mac800:reg43:1", "mac800:reg44:1", "mac800:reg45:1",
+                        "mac800:reg46:1", "mac800:reg47:1", "mac800:reg48:1")
 def test_register_set_selectors() -> None:
     m = MotorArray("MAC800", n=1, seed=0)
     m.write_many({"POS2": 12345, "VEL5": 999, "ACC1": 77, "TQ3": 500, "LOAD2": 3.0,
@@ -110,6 +115,7 @@ def test_register_set_selectors() -> None:
     assert m.read("P_SOLL")[0] == 24690
 
 
+@pytest.mark.statements("mac800:reg2:10")
 def test_unrunnable_modes_are_refused() -> None:
     from jvl_gym.motor.array import ModeError
 
@@ -120,6 +126,7 @@ def test_unrunnable_modes_are_refused() -> None:
     assert m.read("MODE_REG")[0] == 0
 
 
+@pytest.mark.statements("mac800:reg7:3")
 def test_motor_configs_load() -> None:
     assert motor_types() == ["MAC400", "MAC800"]
     cfg = load_motor("MAC800")

@@ -21,6 +21,7 @@ def test_motor_array_of_the_family() -> None:
     assert isinstance(MotorArray("MAC400", n=1), Mac800MotorArray)
 
 
+@pytest.mark.statements("mac800:reg2:3", "mac800:reg5:1", "mac800:reg5:2")
 def test_v_soll_277_is_100_rpm_at_the_shaft() -> None:
     """Register 5: "To obtain 100 RPM, V_SOLL must be set to 277"."""
     m = MotorArray("MAC800", n=1, seed=0)
@@ -31,6 +32,7 @@ def test_v_soll_277_is_100_rpm_at_the_shaft() -> None:
     assert np.all(np.abs(rpm - 100.0) < 5.0)
 
 
+@pytest.mark.statements("mac800:reg2:3", "mac800:reg6:1", "mac800:reg6:2")
 def test_a_soll_360_ramps_the_profile_at_100000_rpm_per_s() -> None:
     """Register 6: "To obtain 100000 RPM/s, A_SOLL must be set to 360"; the velocity function
     block's output FNC_OUT ramps by A_SOLL per sample."""
@@ -42,6 +44,7 @@ def test_a_soll_360_ramps_the_profile_at_100000_rpm_per_s() -> None:
     assert np.all(rpm_per_s == pytest.approx(100000.0, rel=0.01))
 
 
+@pytest.mark.statements("mac800:reg12:1")
 def test_v_ist_reads_0_17316_counts_per_sample_per_rpm() -> None:
     """Register 12: "1RPM=0.17316 counts/sample"."""
     m = MotorArray("MAC800", n=1, seed=0)
@@ -52,6 +55,7 @@ def test_v_ist_reads_0_17316_counts_per_sample_per_rpm() -> None:
     assert ratio == pytest.approx(u.V_IST_COUNTS_PER_RPM, rel=0.002)
 
 
+@pytest.mark.statements("mac800:reg11:1")
 def test_v_ist16_is_the_sum_of_16_samples() -> None:
     """Register 11: V_IST measured over 16 samples, in V_SOLL's unit."""
     m = MotorArray("MAC800", n=1, seed=0)
@@ -61,6 +65,7 @@ def test_v_ist16_is_the_sum_of_16_samples() -> None:
     assert tr["V_IST16"][-1, 0] == tr["V_IST"][-16:, 0].sum()
 
 
+@pytest.mark.statements("mac800:reg198:1", "mac800:reg198:2")
 def test_u_bus_reads_the_bus_voltage(motor: MotorArray) -> None:
     """Register 198: U_BUS = 366 is 325 V."""
     assert motor.read("U_BUS")[0] == 366
