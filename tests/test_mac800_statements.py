@@ -11,9 +11,9 @@ from jvl_gym import MotorArray
 from jvl_gym.families import mac800
 from jvl_gym.families.mac800 import constants as c
 from jvl_gym.families.mac800 import units as u
-from jvl_gym.protocol import mactalk32 as m32
-from jvl_gym.protocol.dialect import MACTALK32
-from jvl_gym.protocol.twin import Twin
+from jvl_gym.protocol.mactalk import codec32 as m32
+from jvl_gym.protocol.mactalk.dialect import MACTALK32
+from jvl_gym.protocol.mactalk.twin16 import Twin
 from jvl_gym.registers import RegisterError
 from test_protocol_mactalk32 import READ_EXAMPLES, WRITE_EXAMPLES
 
@@ -332,7 +332,7 @@ def test_the_motor_is_run_by_register_writes_over_the_serial_link() -> None:
 @pytest.mark.statements("mac800:1.3.1:2")
 def test_the_serial_port_is_19200_baud_8_data_bits_no_parity() -> None:
     """RS232 at 19200 baud, 8 data bits, no parity."""
-    from jvl_gym.protocol.master import DEFAULT_BAUDRATE, open_port
+    from jvl_gym.protocol.mactalk.master import DEFAULT_BAUDRATE, open_port
 
     port = open_port("loop://", timeout=0.1)
     try:
