@@ -133,6 +133,12 @@ def _load(*statements: dict[str, Any], key: str = "mis") -> Statements:
     (_s(registers="ACTUAL_TORQUE"), "registers must be a list"),
     (_s(says=""), "says what the manual states"),
     (_s(note="x"), r"unknown keys \['note'\]"),
+    (_s(bit=32), r"bit must be a whole number 0 … 31, got 32"),
+    (_s(bit=True), r"bit must be a whole number"),
+    (_s(value=-1), r"value must be a whole number ≥ 0, got -1"),
+    (_s(bit=1, registers=["ACTUAL_TORQUE", "V_SOLL"]), "a statement about a bit names its one "
+                                                       "register"),
+    (_s(bit=1, value=2), "about a bit or a value, not both"),
     (["not", "a", "mapping"], "statement 2: expected a mapping"),
 ])
 def test_a_malformed_statement_is_refused_naming_the_file_and_entry(bad: Any,
@@ -330,6 +336,32 @@ def test_a_modelled_register_with_a_not_modelled_statement_is_reported() -> None
     stored = Conformance(TABLE, {"registers": {modelled: {"status": "stored only",
                                                           "why": "w"}}}, "<c>")
     assert st.conflicts(stored) == []
+
+
+def test_a_bit_or_value_statement_is_held_against_its_conformance_entry() -> None:
+    conformance = Conformance(TABLE, {"registers": {"MODE_REG": {
+        "status": "modelled", "tests": ["test_a.py::test_one"],
+        "values": {1: {"name": "Velocity", "status": "modelled", "tests": ["test_a.py::test_one"]},
+                   32: {"name": "CSP", "status": "not modelled", "why": "w"}}}}}, "<c>")
+    not_modelled = {"status": "not modelled", "why": "w", "tests": None}
+    # a value the matrix documents as not modelled: the register stays modelled
+    st = _load(_s("mis:8.2.3:1", registers=["MODE_REG"]),
+               _s("mis:8.2.3:2", registers=["MODE_REG"], value=32, **not_modelled))
+    assert st.conflicts(conformance) == []
+    assert st.derived_status("MODE_REG") == "modelled"
+    # a value the matrix calls modelled, a statement not modelled
+    st = _load(_s("mis:8.2.3:1", registers=["MODE_REG"], value=1, **not_modelled))
+    assert st.conflicts(conformance) == [
+        "MODE_REG value 1: MODE_REG value 1 modelled in <c>, but mis:8.2.3:1 is not modelled"]
+    # a value the matrix does not document: held against the register's entry
+    st = _load(_s("mis:8.2.3:1", registers=["MODE_REG"], value=2, **not_modelled))
+    assert st.conflicts(conformance) == [
+        "MODE_REG value 2: MODE_REG modelled in <c>, but mis:8.2.3:1 is not modelled"]
+    assert st.derived_status("MODE_REG") == "not modelled"  # its only statement
+    # a statement modelled where the matrix says the value is not
+    st = _load(_s("mis:8.2.3:1", registers=["MODE_REG"], value=32))
+    assert st.conflicts(conformance) == [
+        "MODE_REG value 32: not modelled in <c>, but mis:8.2.3:1 is modelled"]
 
 
 # --- the reference page -----------------------------------------------------------------------

@@ -9,7 +9,11 @@ and for every bit or value the manual documents, one of:
   on the simulation; ``why`` says why that is faithful enough;
 - ``not modelled``: the manual's behaviour is absent; ``why`` says why. Writing a value other
   than the default to such a register, or setting or clearing such a bit, warns once per
-  register (:class:`NotModelledWarning`) and is still stored and read back.
+  register (:class:`NotModelledWarning`) and is still stored and read back;
+- ``partly modelled`` (a register only): the simulator does what the manual says of it but for
+  the statements of the family's ``statements.yaml`` that are *not modelled* (a rule, a range,
+  a bit or a value); ``tests`` names the tests of what is modelled. Writing it does not warn
+  (its not-modelled bits and values, listed as such, do).
 
 The file's layout::
 
@@ -39,14 +43,19 @@ import yaml
 from .errors import RegisterError
 from .table import Access, Format, Register, RegisterTable
 
-__all__ = ["MODELLED", "STORED_ONLY", "NOT_MODELLED", "STATUSES", "Conformance",
+__all__ = ["MODELLED", "STORED_ONLY", "NOT_MODELLED", "PARTLY_MODELLED", "STATUSES",
+           "REGISTER_STATUSES", "Conformance",
            "ConformanceError", "Entry", "NotModelledWarning", "load_packaged_conformance",
            "packaged_yaml", "parse_test_ids"]
 
 MODELLED = "modelled"
 STORED_ONLY = "stored only"
 NOT_MODELLED = "not modelled"
+PARTLY_MODELLED = "partly modelled"
+#: the statuses of a bit or a value
 STATUSES = (MODELLED, STORED_ONLY, NOT_MODELLED)
+#: the statuses of a register
+REGISTER_STATUSES = (MODELLED, PARTLY_MODELLED, STORED_ONLY, NOT_MODELLED)
 _FILE = "conformance.yaml"
 #: libyaml's safe loader where PyYAML has it (ten times faster: the files are read on import)
 _LOADER = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
@@ -139,14 +148,15 @@ def _entry(raw: Any, where: str, section: str, nested: bool) -> Entry:
     if unknown:
         raise ConformanceError(f"{where}: unknown keys {sorted(unknown)}")
     status = raw.get("status")
-    if status not in STATUSES:
-        raise ConformanceError(f"{where}: status must be one of {list(STATUSES)}, got "
+    allowed_statuses = STATUSES if nested else REGISTER_STATUSES
+    if status not in allowed_statuses:
+        raise ConformanceError(f"{where}: status must be one of {list(allowed_statuses)}, got "
                                f"{status!r}")
     tests = parse_test_ids(raw.get("tests"), where)
     why = str(raw.get("why") or "")
-    if status == MODELLED and not tests:
-        raise ConformanceError(f"{where}: a modelled entry names its tests")
-    if status != MODELLED and not why:
+    if status in (MODELLED, PARTLY_MODELLED) and not tests:
+        raise ConformanceError(f"{where}: a {status} entry names its tests")
+    if status in (STORED_ONLY, NOT_MODELLED) and not why:
         raise ConformanceError(f"{where}: a {status} entry says why")
     subs: dict[str, dict[int, Entry]] = {"bits": {}, "values": {}}
     for key in ("bits", "values"):
@@ -215,7 +225,7 @@ class Conformance:
 
     def counts(self) -> dict[str, int]:
         """Registers per status (a LongInt's high word and the reserved rows not counted)."""
-        out = dict.fromkeys(STATUSES, 0)
+        out = dict.fromkeys(REGISTER_STATUSES, 0)
         for e in self.entries.values():
             out[e.status] += 1
         return out
@@ -235,7 +245,7 @@ class Conformance:
         if e is None:
             return ""
         text = e.status
-        if e.status != MODELLED:
+        if e.why and e.status != MODELLED:
             text += f": {e.why}"
         partial = [f"{kind} {k}" for kind, subs in (("bit", e.bits), ("value", e.values))
                    for k, sub in subs.items() if sub.status == NOT_MODELLED]

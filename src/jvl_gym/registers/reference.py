@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from .conformance import STATUSES, Conformance
+from .conformance import REGISTER_STATUSES, STATUSES, Conformance
 from .statements import STATUSES as STATEMENT_STATUSES
 from .statements import Statements
 from .table import FORMAT_SCALE, Access, Format, RegisterTable
@@ -44,10 +44,12 @@ def _conformance_lines(conformance: Conformance | None) -> list[str]:
     bits = conformance.bit_counts()
     return [
         f"Conformance (`{conformance.source}`): whether the simulator models the register "
-        "(the tests that exercise it are named there), only stores it (kept and read back, "
-        "no effect), or does not model it; a write of a value other than the default to a "
-        "register or bit it does not model warns (`NotModelledWarning`). Registers: "
-        + ", ".join(f"{counts[s]} {s}" for s in STATUSES) + "; documented bits and values: "
+        "(the tests that exercise it are named there), models it but for statements the "
+        "statements file names (partly), only stores it (kept and read back, no effect), or "
+        "does not model it; a write of a value other than the default to a register or bit "
+        "it does not model warns (`NotModelledWarning`). Registers: "
+        + ", ".join(f"{counts[s]} {s}" for s in REGISTER_STATUSES)
+        + "; documented bits and values: "
         + ", ".join(f"{bits[s]} {s}" for s in STATUSES) + ".",
         ""]
 
@@ -80,8 +82,9 @@ def _statement_counts(statements: Statements | None) -> list[str]:
     lines += [
         "",
         "The *statements* column derives a register's status from its statements: modelled "
-        "when each is modelled or a decision, not modelled when one is not modelled, stored "
-        "only otherwise. Registers: " + ", ".join(f"{n} {k}" for k, n in derived.items())
+        "when each is modelled or a decision, partly modelled when some are modelled and "
+        "some not, not modelled when one is not modelled and none is, stored only "
+        "otherwise. Registers: " + ", ".join(f"{n} {k}" for k, n in derived.items())
         + f", {len(statements.uncovered())} without a statement.",
         ""]
     return lines

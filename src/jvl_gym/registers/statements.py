@@ -11,6 +11,8 @@ manual's register descriptions and of the chapters they refer to::
         section: "8.2.13"         # the manual's section
         line: 5123                # the statement's line in the manual's text edition
         registers: [ACTUAL_TORQUE]   # the registers it is about; [] for a chapter's rule
+        bit: 3                    # optional, with one register: the statement is about this
+                                  # bit (0 … 31) of it; or value: 11, one documented value
         says: "In passive mode ACTUAL_TORQUE reads 0 %."    # in the project's own words
         status: modelled          # modelled | stored only | not modelled | decision
         tests: [test_file.py::test_name]   # modelled and decision: the tests asserting it
@@ -20,8 +22,13 @@ manual's register descriptions and of the chapters they refer to::
 
 A test named in ``tests`` carries the statement's id in a ``pytest.mark.statements`` marker
 (checked by ``tests/test_families_statements.py``). A register's status follows from its
-statements (:meth:`Statements.derived_status`): *modelled* when each is modelled or a decision,
-*not modelled* when one is not modelled, *stored only* otherwise.
+statements about the whole register (:meth:`Statements.derived_status`; those about a bit or a
+value where it has no other): *modelled* when each is modelled or a decision, *partly
+modelled* when some are and some are not modelled, *not modelled* when one is not modelled and
+none is modelled, *stored only* otherwise. A statement about a bit or a value is held
+against the conformance matrix's entry of that bit or value (its register's where the matrix
+documents none): the two never disagree on whether it is modelled
+(:meth:`Statements.conflicts`).
 
 A malformed file raises :class:`StatementError` naming the file and the entry; a family without
 the file has no statements (:attr:`Statements.present` is False).
@@ -37,6 +44,7 @@ from typing import Any
 from .conformance import (
     MODELLED,
     NOT_MODELLED,
+    PARTLY_MODELLED,
     STORED_ONLY,
     Conformance,
     ConformanceError,
@@ -53,7 +61,8 @@ DECISION = "decision"
 #: the statuses of a statement
 STATUSES = (MODELLED, STORED_ONLY, NOT_MODELLED, DECISION)
 _FILE = "statements.yaml"
-_KEYS = {"id", "section", "line", "registers", "says", "status", "tests", "why", "decision"}
+_KEYS = {"id", "section", "line", "registers", "bit", "value", "says", "status", "tests", "why",
+         "decision"}
 _SECTION = re.compile(r"[0-9A-Za-z]+(\.[0-9A-Za-z]+)*")
 _DECISION = re.compile(r"[\w./-]+\.md#[\w-]+")
 
@@ -76,6 +85,9 @@ class Statement:
         The statement's line in the manual's text edition.
     registers : tuple of str
         The registers it is about (names of the register table); empty for a chapter's rule.
+    bit, value : int or None
+        The bit (0 … 31) or the documented value of its one register the statement is about;
+        None for a statement about whole registers.
     says : str
         The statement in the project's words.
     status : str
@@ -97,6 +109,13 @@ class Statement:
     tests: tuple[str, ...] = ()
     why: str = ""
     decision: str = ""
+    bit: int | None = None
+    value: int | None = None
+
+    @property
+    def about_part(self) -> bool:
+        """Whether the statement is about one bit or one value of its register."""
+        return self.bit is not None or self.value is not None
 
     @property
     def chapter(self) -> str:
@@ -144,6 +163,20 @@ def _statement(raw: Any, key: str, table: RegisterTable, where: str) -> Statemen
         if reg.format == Format.LONGINT_HIGH:  # a LongInt's high word is its register's
             reg = table.lookup(reg.number - 1)
         registers.append(reg.name)
+    bit, value = raw.get("bit"), raw.get("value")
+    for name, part, top in (("bit", bit, 31), ("value", value, None)):
+        if part is None:
+            continue
+        if isinstance(part, bool) or not isinstance(part, int) or part < 0 or (
+                top is not None and part > top):
+            raise StatementError(f"{where}: {name} must be a whole number"
+                                 + (f" 0 … {top}" if top is not None else " ≥ 0")
+                                 + f", got {part!r}")
+        if len(registers) != 1:
+            raise StatementError(f"{where}: a statement about a {name} names its one register, "
+                                 f"got {names!r}")
+    if bit is not None and value is not None:
+        raise StatementError(f"{where}: a statement is about a bit or a value, not both")
     says = _text(raw, "says", where)
     if not says:
         raise StatementError(f"{where}: says what the manual states")
@@ -162,7 +195,7 @@ def _statement(raw: Any, key: str, table: RegisterTable, where: str) -> Statemen
     if decision and not _DECISION.fullmatch(decision):
         raise StatementError(f"{where}: decision must be 'file.md#anchor', got {decision!r}")
     return Statement(sid, section, line, tuple(dict.fromkeys(registers)), says, status, tests,
-                     why, decision)
+                     why, decision, bit, value)
 
 
 class Statements:
@@ -229,15 +262,21 @@ class Statements:
         return [s for s in self.statements if not s.registers]
 
     def derived_status(self, name: str) -> str | None:
-        """A register's status from its statements: *modelled* when each is modelled or a
-        decision, *not modelled* when one is not modelled, *stored only* otherwise; None when
-        no statement is about it."""
-        statuses = {s.status for s in self._of.get(name, [])}
+        """A register's status from its statements about the whole register (from those about
+        its bits and values where it has none): *modelled* when each is modelled or a
+        decision, *partly modelled* when some are modelled and some not, *not modelled* when
+        one is not modelled and none modelled, *stored only* otherwise; None when no statement
+        is about it."""
+        about = self._of.get(name, [])
+        whole = [s for s in about if not s.about_part]
+        statuses = {s.status for s in (whole or about)}
         if not statuses:
             return None
         if statuses <= {MODELLED, DECISION}:
             return MODELLED
-        return NOT_MODELLED if NOT_MODELLED in statuses else STORED_ONLY
+        if NOT_MODELLED in statuses:
+            return PARTLY_MODELLED if statuses & {MODELLED, DECISION} else NOT_MODELLED
+        return STORED_ONLY
 
     def uncovered(self) -> list[str]:
         """Registers of the table (reserved rows and a LongInt's high word aside) about which
@@ -246,15 +285,40 @@ class Statements:
                 and r.format != Format.LONGINT_HIGH and r.name not in self._of]
 
     def conflicts(self, conformance: Conformance) -> list[str]:
-        """Registers the conformance matrix calls *modelled* while one of their statements is
-        *not modelled*: one line each, naming those statements."""
+        """Where the statements and the conformance matrix disagree, one line each: a register
+        the matrix calls *modelled* while a statement about the whole register is *not
+        modelled* (it is *partly modelled*); a register the matrix calls *partly modelled*
+        with no statement about it, or a part of it, not modelled; a bit or a value whose
+        statement is *not modelled* while the matrix's entry of it (its register's where it
+        documents none) is *modelled*, or *modelled* while the matrix's entry of it is *not
+        modelled*."""
         out = []
         for name, statements in self._of.items():
             entry = conformance.entry(self.table.lookup(name))
-            bad = [s.id for s in statements if s.status == NOT_MODELLED]
-            if entry is not None and entry.status == MODELLED and bad:
+            if entry is None:
+                continue
+            bad = [s.id for s in statements if not s.about_part and s.status == NOT_MODELLED]
+            if entry.status == MODELLED and bad:
                 out.append(f"{name}: modelled in {conformance.source}, but not modelled in "
-                           f"{', '.join(bad)}")
+                           f"{', '.join(bad)} (partly modelled, then)")
+            if entry.status == PARTLY_MODELLED and not any(
+                    s.status == NOT_MODELLED for s in statements):
+                out.append(f"{name}: partly modelled in {conformance.source}, but no statement "
+                           "about it is not modelled")
+            for s in statements:
+                if not s.about_part:
+                    continue
+                what, number = ("bit", s.bit) if s.bit is not None else ("value", s.value)
+                parts = entry.bits if s.bit is not None else entry.values
+                part = parts.get(number)
+                status = part.status if part is not None else entry.status
+                place = f"{name} {what} {number}" if part is not None else name
+                if s.status == NOT_MODELLED and status == MODELLED:
+                    out.append(f"{name} {what} {number}: {place} modelled in "
+                               f"{conformance.source}, but {s.id} is not modelled")
+                elif s.status == MODELLED and part is not None and status == NOT_MODELLED:
+                    out.append(f"{name} {what} {number}: not modelled in {conformance.source}, "
+                               f"but {s.id} is modelled")
         return out
 
     def counts(self) -> dict[str, int]:
@@ -275,7 +339,7 @@ class Statements:
 
     def derived_counts(self) -> dict[str, int]:
         """Registers per derived status (registers with statements)."""
-        out = dict.fromkeys((MODELLED, STORED_ONLY, NOT_MODELLED), 0)
+        out = dict.fromkeys((MODELLED, PARTLY_MODELLED, STORED_ONLY, NOT_MODELLED), 0)
         for name in self._of:
             out[self.derived_status(name) or NOT_MODELLED] += 1
         return out
