@@ -1,0 +1,289 @@
+"""Statements of the MAC050–141 manual (register chapter 3.2, function blocks 4.1, regulators
+4.2–4.3, modes 4.4, monitoring 4.5), each test asserting the manual's words; the statement ids
+(``statements.yaml`` beside the family's conformance file) are in each test's marker."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from jvl_gym import ModeError, MotorArray
+from jvl_gym.families.mac050_141 import constants as c
+
+#: a coil set-up obeying the rules of manual 4.4.20 (its typical set-up)
+COIL = {"P1": 10000, "P2": 12000, "P3": 58000, "P4": 60000, "P5": 12000, "P6": 1}
+
+
+def _motor(n: int = 1, **kw) -> MotorArray:
+    return MotorArray("MAC140", n=n, seed=0, **kw)
+
+
+def _steps_until(m: MotorArray, leave: str, limit: int = 5000) -> int:
+    """Step until the (one) motor is no longer in mode ``leave``; the number of steps."""
+    for k in range(limit):
+        m.step()
+        if m.mode_name() != leave:
+            return k + 1
+    raise AssertionError(f"still in {leave} after {limit} samples")
+
+
+# ------------------------------------------------------------------ 3.2.1 PROG_VERSION
+
+
+@pytest.mark.statements("mac050_141:3.2.1:1", "mac050_141:3.2.1:2", "mac050_141:3.2.1:3")
+def test_prog_version_reads_78_is_writable_and_not_kept_in_flash() -> None:
+    m = _motor()
+    assert int(m.read("PROG_VERSION")[0]) == 78  # 4Eh: version 4.14
+    m.write("PROG_VERSION", 80)
+    assert int(m.read("PROG_VERSION")[0]) == 80
+    m.enter_safe_mode()
+    m.write_flash()  # saves and restarts: the program version is the program's again
+    assert int(m.read("PROG_VERSION")[0]) == 78
+
+
+# ------------------------------------------------------------------ 3.2.2 MODE_REG, 4.4.16 SAFE
+
+
+@pytest.mark.statements("mac050_141:3.2.2:4", "mac050_141:4.4.16:5", "mac050_141:3.1:1")
+def test_256_in_safe_mode_restores_the_defaults_saves_them_and_resets() -> None:
+    m = _motor()
+    m.write("KVOUT", 3.0)
+    m.enter_safe_mode()
+    m.write_flash()
+    assert m.read("KVOUT")[0] == 3.0  # the user set-up is in flash
+    m.enter_safe_mode()
+    m.write("MODE_REG", 256)
+    assert m.read("KVOUT")[0] == 1.0 and m.mode_name() == "INIT_MODE"  # defaults, reset
+    m.write("KVOUT", 2.0)
+    m.enter_safe_mode()
+    m.write("MODE_REG", 258)  # the last saved parameters are now the defaults
+    assert m.read("KVOUT")[0] == 1.0
+
+
+@pytest.mark.statements("mac050_141:3.2.2:2")
+def test_mode_values_outside_0_to_24_and_256_to_258_are_refused() -> None:
+    m = _motor()
+    for bad in (25, 100, 255):
+        before = m.regs.copy()
+        with pytest.raises(ModeError):
+            m.write("MODE_REG", bad)
+        np.testing.assert_array_equal(m.regs, before)
+
+
+# ------------------------------------------------------------------ 3.2.5 V_SOLL, 3.2.6 A_SOLL
+
+
+def _set_up_mode(m: MotorArray, mode: int, *, v_soll: int = 1000, a_soll: int = 20,
+                 t_soll: int = 1023, volts: float = 10.0, pulses: int = 200) -> None:
+    """``mode`` set up to ask for more speed than V_SOLL: a far target, a fast pulse train, a
+    full analogue input."""
+    m.write_many({"V_SOLL": v_soll, "A_SOLL": a_soll, "T_SOLL": t_soll, "GEARF1": 1,
+                  "GEARF2": 1, "FNCERRMAX": 0, "P_SOLL": 2000000, **COIL, "P1": 0 if mode == c.A2POS_MODE else
+                  COIL["P1"], "P2": 2000000 if mode == c.A2POS_MODE else COIL["P2"]})
+    if mode == c.APOS_MODE:
+        m.write_many({"P1": 2000000, "P2": 0, "P3": 0})
+    if mode == c.COIL_MODE:
+        m.write_many({"P5": 58000})  # start-position command: travel to P5 = 58000
+    m.set_input(analog_volts=volts, pulse_counts=pulses)
+    m.write("MODE_REG", mode)
+
+
+_V_SOLL_MODES = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.VAT_MODE, c.AG_MODE,
+                 c.COIL_MODE, c.A2POS_MODE, c.APOS_MODE, c.GF_MODE]
+
+
+@pytest.mark.statements("mac050_141:3.2.5:3", "mac050_141:3.2.5:4", "mac050_141:3.2.5:5",
+                        "mac050_141:3.2.5:6", "mac050_141:3.2.5:7", "mac050_141:3.2.5:8",
+                        "mac050_141:3.2.5:9", "mac050_141:3.2.5:10", "mac050_141:3.2.5:11",
+                        "mac050_141:3.2.5:12", "mac050_141:3.2.5:13")
+@pytest.mark.parametrize("mode", _V_SOLL_MODES, ids=[c.MODE_NAMES[x] for x in _V_SOLL_MODES])
+def test_v_soll_is_the_speed_limit_of_every_velocity_using_mode(mode: int) -> None:
+    """Manual 3.2.5: V_SOLL is the required, maximum or full-scale velocity of each mode: asked
+    for more, the profile (FNC_OUT) reaches V_SOLL and never exceeds it."""
+    m = _motor()
+    _set_up_mode(m, mode)
+    f = m.trace(["FNC_OUT"], 300)["FNC_OUT"][:, 0]
+    assert np.abs(f).max() == 1000
+    assert f[-1] == 1000
+
+
+_A_SOLL_MODES = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.HOME1_MODE,
+                 c.HOME2_MODE, c.HOME3_MODE, c.VAT_MODE, c.AG_MODE, c.COIL_MODE, c.A2POS_MODE,
+                 c.APOS_MODE, c.GF_MODE]
+
+
+@pytest.mark.statements("mac050_141:3.2.6:3", "mac050_141:3.2.6:4", "mac050_141:3.2.6:5",
+                        "mac050_141:3.2.6:6", "mac050_141:3.2.6:7", "mac050_141:3.2.6:8",
+                        "mac050_141:3.2.6:9", "mac050_141:3.2.6:10", "mac050_141:3.2.6:11",
+                        "mac050_141:3.2.6:12", "mac050_141:3.2.6:13", "mac050_141:3.2.6:14")
+@pytest.mark.parametrize("mode", _A_SOLL_MODES, ids=[c.MODE_NAMES[x] for x in _A_SOLL_MODES])
+def test_a_soll_is_the_acceleration_limit_of_every_profile_mode(mode: int) -> None:
+    """Manual 3.2.6: A_SOLL is the maximum acceleration/deceleration: the profile changes by
+    A_SOLL per sample while it accelerates and never by more."""
+    homing = mode in (c.HOME2_MODE, c.HOME3_MODE)  # the sensor (on the analogue input) far away
+    m = _motor(home_position=10.0) if homing else _motor()
+    m.write_many({"V_HOME": 1000, "T_HOME": 800})
+    _set_up_mode(m, mode)
+    f = m.trace(["FNC_OUT"], 120)["FNC_OUT"][:, 0]
+    steps = np.abs(np.diff([0, *f]))
+    assert steps.max() == 20
+    assert np.all(steps[:10] == 20)
+
+
+_T_SOLL_MODES = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.HOME2_MODE,
+                 c.HOME3_MODE, c.VAT_MODE, c.AG_MODE, c.COIL_MODE, c.A2POS_MODE, c.APOS_MODE,
+                 c.GF_MODE]
+
+
+@pytest.mark.statements("mac050_141:3.2.7:2", "mac050_141:3.2.7:3", "mac050_141:3.2.7:4",
+                        "mac050_141:3.2.7:5", "mac050_141:3.2.7:6", "mac050_141:3.2.7:7",
+                        "mac050_141:3.2.7:8", "mac050_141:3.2.7:9", "mac050_141:3.2.7:10",
+                        "mac050_141:3.2.7:11", "mac050_141:3.2.7:12", "mac050_141:3.2.7:13",
+                        "mac050_141:3.2.7:14", "mac050_141:4.4.14:2", "mac050_141:4.4.15:2")
+@pytest.mark.parametrize("mode", _T_SOLL_MODES, ids=[c.MODE_NAMES[x] for x in _T_SOLL_MODES])
+def test_t_soll_bounds_the_torque_of_a_blocked_motor(mode: int) -> None:
+    """Manual 3.2.7: T_SOLL is the maximum torque: a blocked rotor gets VF_OUT up to T_SOLL
+    and no more (VAT: |ANINP·T_SOLL/1024| at the full 10 V is T_SOLL within one unit)."""
+    homing = mode in (c.HOME2_MODE, c.HOME3_MODE)  # the sensor (on the analogue input) far away
+    m = _motor(coulomb_friction=5.0, **({"home_position": 10.0} if homing else {}))
+    m.write_many({"V_HOME": 1000, "T_HOME": 800})
+    _set_up_mode(m, mode, t_soll=300, a_soll=50)
+    vf = np.abs(m.trace(["VF_OUT"], 150)["VF_OUT"][:, 0])
+    assert vf.max() <= 300 and vf.max() >= 299
+
+
+@pytest.mark.statements("mac050_141:3.2.7:15", "mac050_141:3.2.121:2")
+def test_full_torque_is_1023() -> None:
+    m = _motor(coulomb_friction=50.0)
+    m.write_many({"T_SOLL": 1023, "V_SOLL": 3000, "A_SOLL": 1000})
+    m.write("MODE_REG", c.V_MODE)
+    vf = m.trace(["VF_OUT"], 60)["VF_OUT"][:, 0]
+    assert vf.max() == 1023
+
+
+# ------------------------------------------------------------------ 3.2.8 P_FNC, 3.2.10 P_IST
+
+
+_P_FNC_MODES = [c.V_MODE, c.P_MODE, c.AV_MODE, c.GP_MODE, c.AVG_MODE, c.AG_MODE, c.COIL_MODE]
+
+
+@pytest.mark.statements("mac050_141:3.2.8:1", "mac050_141:3.2.8:2", "mac050_141:3.2.8:3",
+                        "mac050_141:3.2.8:4", "mac050_141:3.2.8:5", "mac050_141:3.2.8:6",
+                        "mac050_141:3.2.8:7", "mac050_141:4.1.2:6")
+@pytest.mark.parametrize("mode", _P_FNC_MODES, ids=[c.MODE_NAMES[x] for x in _P_FNC_MODES])
+def test_p_fnc_accumulates_the_profile_in_the_function_generator_modes(mode: int) -> None:
+    """Manual 3.2.8, 4.1.2: the function generator adds each sample's FNC_OUT (1/16
+    count/sample) to P_FNC (1/16 counts)."""
+    m = _motor()
+    _set_up_mode(m, mode, pulses=10, volts=3.0)
+    m.step(20)
+    for _ in range(20):
+        before = int(m.read("P_FNC")[0])
+        m.step()
+        assert int(m.read("P_FNC")[0]) - before == int(m.read("FNC_OUT")[0]) != 0
+
+
+@pytest.mark.statements("mac050_141:3.2.8:9", "mac050_141:4.1.2:9", "mac050_141:4.1.2:10")
+def test_subtracting_from_p_fnc_is_a_relative_move() -> None:
+    """Manual 3.2.8, 4.1.2: subtracting 1600000 (1/16 counts) from P_FNC moves the motor a
+    further 100000 counts in P_MODE, and P_FNC ends at the same value again; repeatable."""
+    m = _motor()
+    m.write_many({"P_SOLL": 0, "V_SOLL": 4000, "A_SOLL": 100})
+    m.write("MODE_REG", c.P_MODE)
+    for k in (1, 2):
+        m.write("P_FNC", int(m.read("P_FNC")[0]) - 1600000)
+        m.run(2.0)
+        assert int(m.read("P_FNC")[0]) == 0
+        assert abs(int(m.read("P_IST")[0]) - k * 100000) < 10
+
+
+@pytest.mark.statements("mac050_141:3.2.10:1", "mac050_141:3.2.10:2")
+def test_p_ist_may_be_overwritten_without_moving_the_motor() -> None:
+    """Manual 3.2.10: P_IST, the position in encoder counts, can be overwritten: control does
+    not use it, so the motor holding its position in P_MODE stays where it is."""
+    m = _motor()
+    m.write_many({"P_SOLL": 4096, "V_SOLL": 2000})
+    m.write("MODE_REG", c.P_MODE)
+    m.run(1.0)
+    assert m.position_rad[0] == pytest.approx(2 * np.pi, abs=10 * c.RAD_PER_COUNT)
+    where = m.position_rad[0]
+    m.write("P_IST", 50000)
+    m.run(0.5)
+    assert m.position_rad[0] == pytest.approx(where, abs=3 * c.RAD_PER_COUNT)
+    assert abs(int(m.read("P_IST")[0]) - 50000) <= 3  # it counts on from the written value
+
+
+_ALL_MODES_ALIVE = [c.INIT_MODE, c.V_MODE, c.AT_MODE, c.MANI_MODE, c.STOP_MODE]
+
+
+@pytest.mark.statements("mac050_141:3.2.10:4", "mac050_141:3.2.12:3", "mac050_141:4.4.1:4",
+                        "mac050_141:4.4.8:3", "mac050_141:4.4.5:3", "mac050_141:4.2.1:2",
+                        "mac050_141:4.2.1:3")
+def test_p_ist_and_v_ist_follow_the_shaft_in_init_mode() -> None:
+    """Manual 3.2.10/3.2.12, 4.2: V_IST is the encoder's count difference per sample and is added
+    to P_IST, in every mode, also INIT_MODE with the motor passive (a coasting rotor)."""
+    m = _motor(initial_speed=300.0, load_inertia=1e-3)  # a flywheel: the braking is slow
+    assert m.mode_name() == "INIT_MODE"
+    m.step()  # the encoder is read at the start of a sample: one sample behind the shaft
+    p_start, t_start = int(m.read("P_IST")[0]), m.position_rad[0]
+    for _ in range(10):
+        p0 = int(m.read("P_IST")[0])
+        m.step()
+        dp = int(m.read("P_IST")[0]) - p0
+        assert dp == int(m.read("V_IST")[0]) > 0
+    travel = (m.position_rad[0] - t_start) / c.RAD_PER_COUNT
+    assert int(m.read("P_IST")[0]) - p_start == pytest.approx(travel, rel=0.05)
+
+
+@pytest.mark.statements("mac050_141:3.2.10:4", "mac050_141:3.2.12:3", "mac050_141:4.4.5:3",
+                        "mac050_141:4.4.8:3")
+@pytest.mark.parametrize("mode", [c.AT_MODE, c.MANI_MODE])
+def test_p_ist_and_v_ist_are_updated_in_the_torque_and_manual_modes(mode: int) -> None:
+    m = _motor()
+    m.write_many({"T_SOLL": 300, "MAN_I_NOM": 300, "MAN_ALPHA": 0})
+    m.set_input(analog_volts=3.0)
+    m.write("MODE_REG", mode)
+    m.step(5)
+    m.set_input(load_torque=0.5)  # turns the shaft in both modes
+    tr = m.trace(["P_IST", "V_IST"], 100)
+    assert np.any(tr["V_IST"][:, 0] != 0)
+    np.testing.assert_array_equal(np.diff(tr["P_IST"][:, 0]), tr["V_IST"][1:, 0])
+
+
+# ------------------------------------------------------------------ 3.2.13 KVOUT
+
+
+@pytest.mark.statements("mac050_141:3.2.13:3", "mac050_141:4.2.1:5")
+def test_the_speed_loop_torque_is_multiplied_by_kvout() -> None:
+    """Manual 3.2.13, 4.2: the VF filter's output is multiplied by KVOUT to give VF_OUT."""
+    from jvl_gym.families.mac050_141.firmware.speed_loop import speed_regulator
+
+    outs = []
+    for kvout in (1.0, 2.0, 4.0):
+        m = _motor()
+        m.write_many({"KVOUT": kvout, "KFF3": 1.0, "KFF2": 0.0, "KFF1": 0.0, "KFF0": 0.0,
+                      "GEARB": 0.0, "KVFX4": 0.5, "KVFX3": 0.0, "KVFX2": 0.0, "KVFX1": 0.0,
+                      "KVFY3": 0.0, "KVFY2": 0.0, "KVFY1": 0.0, "KVFY0": 0.0})
+        speed_regulator(m.regs[0], m.state[0], 100.0, False, 1023.0)
+        outs.append(int(m.read("VF_OUT")[0]))
+    assert outs == [50, 100, 200]
+
+
+# ------------------------------------------------------------------ 3.2.14 GEARF1, GEARF2
+
+
+@pytest.mark.statements("mac050_141:3.2.14:1", "mac050_141:3.2.14:2", "mac050_141:3.2.14:3",
+                        "mac050_141:4.4.4:2")
+@pytest.mark.parametrize("mode", [c.GP_MODE, c.GF_MODE, c.AVG_MODE, c.AG_MODE])
+def test_the_gear_ratio_is_gearf1_over_gearf2_and_its_sign_reverses(mode: int) -> None:
+    """Manual 3.2.14: output/input = GEARF1/GEARF2; a negative GEARF1 reverses the motor; used
+    in GP, AVG, AG and GF (0 V on the analogue input: AVG adds nothing, AG's factor is 1.01)."""
+    m = _motor(2)
+    m.write_many({"GEARF1": np.array([3, -3]), "GEARF2": 2, "V_SOLL": 10000, "A_SOLL": 200,
+                  "FNCERRMAX": 0})
+    m.set_input(pulse_counts=10, analog_volts=0.0)
+    m.write("MODE_REG", mode)
+    m.run(0.5)
+    v = np.mean(m.trace(["V_IST"], 100)["V_IST"], axis=0)
+    expected = 15.0 * (1.01 if mode == c.AG_MODE else 1.0)
+    np.testing.assert_allclose(v, [expected, -expected], rtol=3e-3)
