@@ -287,3 +287,174 @@ def test_the_gear_ratio_is_gearf1_over_gearf2_and_its_sign_reverses(mode: int) -
     v = np.mean(m.trace(["V_IST"], 100)["V_IST"], axis=0)
     expected = 15.0 * (1.01 if mode == c.AG_MODE else 1.0)
     np.testing.assert_allclose(v, [expected, -expected], rtol=3e-3)
+
+
+# ------------------------------------------------------------------ 3.2.16–19 I2T, UIT; 4.5.1–2
+
+
+@pytest.mark.statements("mac050_141:3.2.16:3", "mac050_141:3.2.16:4", "mac050_141:4.5.1:1",
+                        "mac050_141:3.2.35:17", "mac050_141:4.4:2")
+def test_i2t_trip_sets_i2t_err_and_stops_to_init() -> None:
+    """Manual 3.2.16, 4.5.1: I2T above I2TLIM sets I2T_ERR and the motor goes to INIT_MODE."""
+    m = _motor()
+    m.write_many({"I2TLIM": 200, "V_SOLL": 1600})
+    m.write("MODE_REG", c.V_MODE)
+    m.set_input(load_torque=0.3)
+    _steps_until(m, "V_MODE", 2000)
+    m.run(0.5)
+    assert int(m.read("ERR_STAT")[0]) & c.I2T_ERR
+    assert m.mode_name() == "INIT_MODE" and int(m.read("I2T")[0]) > 200
+
+
+@pytest.mark.statements("mac050_141:3.2.16:2", "mac050_141:3.2.16:5", "mac050_141:4.4:1")
+def test_i2t_integrates_the_squared_phase_currents_in_every_mode() -> None:
+    """Manual 3.2.16: I2T integrates Ia² + Ib² + Ic², in every mode: in MANI_MODE a stator
+    field of twice the current raises I2T four times as fast; a passive motor adds nothing."""
+    m = _motor(3, load_inertia=1e-2)  # the field does not turn the rotor much
+    m.write("MAN_I_NOM", np.array([0, 200, 400]))
+    m.write("MAN_ALPHA", 0)
+    m.write("MODE_REG", c.MANI_MODE)
+    m.step(200)
+    i2t = m.read("I2T").astype(float)
+    assert i2t[0] == 0
+    assert i2t[2] / i2t[1] == pytest.approx(4.0, rel=0.1)
+
+
+@pytest.mark.statements("mac050_141:3.2.18:1", "mac050_141:3.2.18:2", "mac050_141:3.2.18:3",
+                        "mac050_141:4.5.2:1", "mac050_141:3.2.35:14")
+def test_uit_counts_only_regenerated_power_and_trips_above_52_volts() -> None:
+    """Manual 3.2.18/19, 4.5.2: UIT integrates the regenerated power (negative power is taken
+    as 0: UIT stays 0 while the motor accelerates); above UITLIM with a supply above 52 V, UIT_ERR
+    is set and the motor goes to INIT_MODE; at 48 V it keeps running."""
+    m = _motor(2)
+    m.set_input(supply_volts=[56.0, 48.0])
+    m.write_many({"UITLIM": 1, "V_SOLL": 3000, "A_SOLL": 100})
+    m.write("MODE_REG", c.V_MODE)
+    m.step(25)  # accelerating: power flows into the motor
+    np.testing.assert_array_equal(m.read("UIT"), [0, 0])
+    m.step(275)
+    m.write("V_SOLL", -3000)  # braking: power flows back
+    m.step(300)
+    assert np.all(m.read("UIT") > 1)
+    err = m.read("ERR_STAT")
+    assert err[0] & c.UIT_ERR and not err[1] & c.UIT_ERR
+    np.testing.assert_array_equal(m.read("MODE_REG"), [c.INIT_MODE, c.V_MODE])
+
+
+# ------------------------------------------------------------------ 3.2.20–27 FLWERR, FNCERR; 4.5.4–5
+
+
+_FLWERR_MODES = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.VAT_MODE, c.AG_MODE,
+                 c.COIL_MODE, c.A2POS_MODE, c.APOS_MODE, c.GF_MODE, c.AVZ_MODE]
+
+
+@pytest.mark.statements("mac050_141:3.2.20:1", "mac050_141:3.2.20:3", "mac050_141:3.2.20:4",
+                        "mac050_141:4.5.4:1", "mac050_141:4.4.2:3", "mac050_141:4.4.3:3",
+                        "mac050_141:4.4.4:4", "mac050_141:4.4.6:3", "mac050_141:4.4.7:3",
+                        "mac050_141:4.4.21:3", "mac050_141:4.4.22:3", "mac050_141:4.4.25:3")
+@pytest.mark.parametrize("mode", _FLWERR_MODES, ids=[c.MODE_NAMES[x] for x in _FLWERR_MODES])
+def test_flwerr_accumulates_the_velocity_error_of_a_blocked_motor(mode: int) -> None:
+    """Manual 3.2.20, 4.5.4: in the regulated modes FLWERR accumulates the velocity error (the
+    profile minus the measured velocity): a blocked rotor makes it grow, so it detects a
+    blockage, even in the velocity modes."""
+    m = _motor(coulomb_friction=5.0)
+    _set_up_mode(m, mode, t_soll=300, pulses=20)
+    tr = m.trace(["FLWERR", "P_FNC"], 100)
+    flw, p_fnc = tr["FLWERR"][:, 0], tr["P_FNC"][:, 0]
+    assert abs(int(flw[-1])) > 100
+    # the motor does not move: FLWERR is the profile's travel, P_FNC/16 (P_FNC's start differs)
+    assert int(flw[-1]) - int(flw[0]) == pytest.approx((int(p_fnc[-1]) - int(p_fnc[0])) / 16,
+                                                       abs=2)
+
+
+_NO_FLWERR_MODES = [c.INIT_MODE, c.AT_MODE, c.MANI_MODE]
+
+
+@pytest.mark.statements("mac050_141:3.2.20:2", "mac050_141:3.2.24:2", "mac050_141:4.4.1:5",
+                        "mac050_141:4.4.1:6", "mac050_141:4.4.5:4", "mac050_141:4.4.8:4")
+@pytest.mark.parametrize("mode", _NO_FLWERR_MODES, ids=[c.MODE_NAMES[x] for x in _NO_FLWERR_MODES])
+def test_flwerr_and_fncerr_are_0_in_the_other_modes(mode: int) -> None:
+    """Manual 3.2.20/3.2.24, 4.4.1, 4.4.5, 4.4.8: FLWERR and FNCERR are 0 in INIT, AT and MANI,
+    also with the rotor blocked and after a mode that left them non-zero."""
+    m = _motor(coulomb_friction=5.0)
+    m.write_many({"T_SOLL": 300, "V_SOLL": 1000, "P_SOLL": 100000, "FNCERRMAX": 0,
+                  "MAN_I_NOM": 300})
+    m.write("MODE_REG", c.P_MODE)
+    m.step(100)
+    assert m.read("FLWERR")[0] != 0 and m.read("FNCERR")[0] != 0
+    m.write("MODE_REG", c.INIT_MODE)  # through STOP_MODE: the blocked motor stops at once
+    m.step(2)
+    m.set_input(analog_volts=3.0)
+    if mode != c.INIT_MODE:
+        m.write("MODE_REG", mode)
+    tr = m.trace(["FLWERR", "FNCERR"], 50)
+    assert not tr["FLWERR"].any() and not tr["FNCERR"].any()
+
+
+@pytest.mark.statements("mac050_141:3.2.22:1", "mac050_141:3.2.22:2", "mac050_141:4.5.4:2",
+                        "mac050_141:4.5.4:3", "mac050_141:3.2.35:15", "mac050_141:4.4.2:5")
+def test_flwerrmax_trips_flw_err_through_stop_and_0_disables_it() -> None:
+    """Manual 3.2.22, 4.5.4: |FLWERR| > FLWERRMAX sets FLW_ERR and the motor goes to INIT_MODE
+    through STOP_MODE; FLWERRMAX = 0 disables the check."""
+    m = _motor(2, coulomb_friction=5.0)
+    m.write_many({"V_SOLL": 800, "T_SOLL": 300, "FLWERRMAX": np.array([5000, 0])})
+    m.write("MODE_REG", c.V_MODE)
+    modes = m.trace(["MODE_REG", "FLWERR"], 300)
+    seen = modes["MODE_REG"][:, 0]
+    assert c.STOP_MODE in seen and seen[-1] == c.INIT_MODE
+    first_stop = int(np.argmax(seen == c.STOP_MODE))
+    assert abs(modes["FLWERR"][first_stop - 1, 0]) <= 5000 < abs(modes["FLWERR"][first_stop, 0])
+    err = m.read("ERR_STAT")
+    assert err[0] & c.FLW_ERR and not err[1] & c.FLW_ERR
+    assert int(m.read("MODE_REG")[1]) == c.V_MODE and abs(int(m.read("FLWERR")[1])) > 5000
+
+
+@pytest.mark.statements("mac050_141:3.2.26:1", "mac050_141:3.2.26:2", "mac050_141:4.5.5:2",
+                        "mac050_141:3.2.35:16", "mac050_141:4.4.3:6")
+def test_fncerrmax_trips_fnc_err_and_0_disables_it() -> None:
+    """Manual 3.2.26, 4.5.5: |FNCERR| > FNCERRMAX sets FNC_ERR and the motor goes to INIT_MODE;
+    FNCERRMAX = 0 disables the check (a held motor in P_MODE)."""
+    m = _motor(2, coulomb_friction=5.0)
+    m.write_many({"V_SOLL": 800, "T_SOLL": 300, "P_SOLL": 1000000,
+                  "FNCERRMAX": np.array([20000, 0])})
+    m.write("MODE_REG", c.P_MODE)
+    m.step(600)
+    err = m.read("ERR_STAT")
+    assert err[0] & c.FNC_ERR and not err[1] & c.FNC_ERR
+    np.testing.assert_array_equal(m.read("MODE_REG"), [c.INIT_MODE, c.P_MODE])
+    assert abs(int(m.read("FNCERR")[1])) > 20000
+
+
+_NO_CORRECTION_MODES = [c.V_MODE, c.AV_MODE, c.AVG_MODE, c.VAT_MODE, c.AVZ_MODE]
+
+
+@pytest.mark.statements("mac050_141:3.2.24:4", "mac050_141:4.4.6:4", "mac050_141:4.4.7:4",
+                        "mac050_141:4.4.2:4", "mac050_141:4.4.2:6")
+@pytest.mark.parametrize("mode", _NO_CORRECTION_MODES,
+                         ids=[c.MODE_NAMES[x] for x in _NO_CORRECTION_MODES])
+def test_without_function_correction_fncerr_stays_0(mode: int) -> None:
+    """Manual 4.4.2, 4.4.6, 4.4.7: the velocity modes do not correct the profile (correction of
+    function block passive), so FNCERR, the sum of the corrections (3.2.24), stays 0 and the
+    profile goes on though the blocked motor cannot follow."""
+    m = _motor(coulomb_friction=5.0)
+    _set_up_mode(m, mode, t_soll=300, pulses=20, volts=5.0)
+    tr = m.trace(["FNCERR", "FNC_OUT"], 200)
+    assert not tr["FNCERR"].any()
+    assert np.abs(tr["FNC_OUT"][-1, 0]) > 100
+
+
+@pytest.mark.statements("mac050_141:3.2.24:5", "mac050_141:4.4.4:5", "mac050_141:4.4.25:4")
+@pytest.mark.parametrize("mode", [c.GP_MODE, c.GF_MODE])
+def test_in_the_gear_modes_fncerr_is_the_position_error(mode: int) -> None:
+    """Manual 3.2.24: in GP and GF FNCERR is a positioning error: the lag of the motor's
+    function position behind the geared pulse position, in 1/16 counts."""
+    m = _motor()
+    m.write_many({"GEARF1": 1, "GEARF2": 1, "V_SOLL": 20000, "A_SOLL": 5, "FNCERRMAX": 0})
+    m.set_input(pulse_counts=20)
+    m.write("MODE_REG", mode)
+    p_fnc0 = int(m.read("P_FNC")[0])
+    tr = m.trace(["P_FNC", "FNCERR"], 30)
+    travelled = tr["P_FNC"][:, 0] - p_fnc0  # the profile's travel since the mode began
+    pulses = 16 * 20 * np.arange(1, 31)  # the geared pulse position since the mode began
+    np.testing.assert_array_equal(tr["FNCERR"][:, 0], travelled - pulses)
+    assert tr["FNCERR"][-1, 0] < -1000  # the profile lags (A_SOLL 5)
