@@ -458,3 +458,145 @@ def test_in_the_gear_modes_fncerr_is_the_position_error(mode: int) -> None:
     pulses = 16 * 20 * np.arange(1, 31)  # the geared pulse position since the mode began
     np.testing.assert_array_equal(tr["FNCERR"][:, 0], travelled - pulses)
     assert tr["FNCERR"][-1, 0] < -1000  # the profile lags (A_SOLL 5)
+
+
+# ------------------------------------------------------------------ 3.2.28–30 limits; 4.5.3
+
+
+@pytest.mark.statements("mac050_141:3.2.28:1", "mac050_141:3.2.28:2", "mac050_141:3.2.28:3",
+                        "mac050_141:4.5.3:1", "mac050_141:4.5.3:2", "mac050_141:3.2.10:3",
+                        "mac050_141:3.2.35:10")
+def test_position_limits_trip_below_min_and_above_max_and_both_0_disable() -> None:
+    """Manual 3.2.28/30, 4.5.3: P_IST < MIN_P_IST or P_IST > MAX_P_IST sets PLIM_ERR and the
+    motor goes to INIT_MODE through STOP_MODE; the check is on while either limit is non-zero
+    (motor 2: MIN_P_IST = 0, MAX_P_IST far: moving below 0 trips), off when both are 0."""
+    m = _motor(4)
+    m.write_many({"MIN_P_IST": np.array([-2000, -100000, 0, 0]),
+                  "MAX_P_IST": np.array([100000, 2000, 100000, 0]),
+                  "V_SOLL": np.array([-1000, 1000, -1000, -1000])})
+    m.write("MODE_REG", c.V_MODE)
+    tr = m.trace(["MODE_REG"], 300)["MODE_REG"]
+    err = m.read("ERR_STAT")
+    assert [bool(e & c.PLIM_ERR) for e in err] == [True, True, True, False]
+    for k in range(3):
+        assert c.STOP_MODE in tr[:, k] and tr[-1, k] == c.INIT_MODE
+    assert int(m.read("MODE_REG")[3]) == c.V_MODE
+    p = m.read("P_IST")
+    assert p[0] < -2000 and p[1] > 2000 and p[2] < 0
+
+
+# ------------------------------------------------------------------ 3.2.32 ACC_EMERG
+
+
+@pytest.mark.statements("mac050_141:3.2.32:1", "mac050_141:3.2.32:2", "mac050_141:4.1.8:1",
+                        "mac050_141:4.4.12:2")
+def test_acc_emerg_replaces_a_soll_when_an_error_stops_the_motor() -> None:
+    """Manual 3.2.32: after an error the stop decelerates with ACC_EMERG instead of A_SOLL;
+    ACC_EMERG = 0 keeps A_SOLL."""
+    slopes = []
+    for acc_emerg in (0, 5):
+        m = _motor()
+        m.write_many({"V_SOLL": 3000, "A_SOLL": 100, "ACC_EMERG": acc_emerg, "MIN_P_IST": -1,
+                      "MAX_P_IST": 20000})
+        m.write("MODE_REG", c.V_MODE)
+        tr = m.trace(["MODE_REG", "FNC_OUT"], 400)
+        stop = tr["FNC_OUT"][tr["MODE_REG"][:, 0] == c.STOP_MODE, 0]
+        assert int(m.read("ERR_STAT")[0]) & c.PLIM_ERR
+        slopes.append(set(np.diff(stop[:6]).tolist()))
+    assert slopes == [{-100}, {-5}]
+
+
+# ------------------------------------------------------------------ 3.2.33–34 INPOSWIN, INPOSCNT
+
+
+@pytest.mark.statements("mac050_141:3.2.33:2", "mac050_141:3.2.33:5", "mac050_141:4.1.1:5")
+def test_in_position_needs_less_than_inposwin_not_equal() -> None:
+    """Manual 3.2.33: in position only when the deviation is less than INPOSWIN; equal is not in
+    position. A motor at rest in V_MODE with INPOSCNT = 0 (|V_IST| = 0): IN_POS with INPOSWIN 1,
+    not with INPOSWIN 0."""
+    m = _motor(2)
+    m.write_many({"V_SOLL": 0, "INPOSCNT": 0, "INPOSWIN": np.array([1, 0])})
+    m.write("MODE_REG", c.V_MODE)
+    m.step(20)
+    np.testing.assert_array_equal(m.read("V_IST"), [0, 0])
+    assert [bool(e & c.IN_POS) for e in m.read("ERR_STAT")] == [True, False]
+
+
+@pytest.mark.statements("mac050_141:3.2.33:3", "mac050_141:3.2.33:4", "mac050_141:4.4.3:5")
+def test_inposcnt_is_the_number_of_consecutive_samples_inside_the_window() -> None:
+    """Manual 3.2.34: IN_POS comes INPOSCNT consecutive samples after the position is inside
+    INPOSWIN (P_MODE: |P_SOLL − P_FNC/16 + FLWERR| < INPOSWIN, manual 4.4.3)."""
+    for cnt in (1, 10):
+        m = _motor()
+        m.write_many({"P_SOLL": 5000, "V_SOLL": 2000, "INPOSWIN": 10, "INPOSCNT": cnt})
+        m.write("MODE_REG", c.P_MODE)
+        tr = m.trace(["ERR_STAT", "P_FNC", "FLWERR"], 300)
+        inside = np.abs(5000 - tr["P_FNC"][:, 0] / 16 + tr["FLWERR"][:, 0]) < 10
+        in_pos = (tr["ERR_STAT"][:, 0] & c.IN_POS) != 0
+        run = np.zeros(inside.size, dtype=int)  # consecutive samples inside, up to each
+        for k, x in enumerate(inside):
+            run[k] = (run[k - 1] + 1 if k else 1) if x else 0
+        np.testing.assert_array_equal(in_pos, run >= cnt)
+        assert not in_pos[0] and in_pos[-1] and (run[in_pos.argmax() - 1] == cnt - 1)
+
+
+@pytest.mark.statements("mac050_141:3.2.33:6", "mac050_141:4.1.1:6")
+def test_in_velocity_mode_with_inposcnt_in_pos_is_the_velocity_error() -> None:
+    """Manual 3.2.33/34, 4.1.1: in V_MODE with INPOSCNT > 0, IN_POS when |V_SOLL − 16·V_IST| <
+    INPOSWIN: at the required speed, not while accelerating, not when blocked; with
+    INPOSCNT = 0 it is the standstill test, not set while running."""
+    m = _motor(3, coulomb_friction=np.array([0.0, 5.0, 0.0]))
+    m.write_many({"V_SOLL": 1600, "T_SOLL": 300, "INPOSWIN": 40,
+                  "INPOSCNT": np.array([3, 3, 0])})
+    m.write("MODE_REG", c.V_MODE)
+    m.step(10)
+    assert not (m.read("ERR_STAT") & c.IN_POS).any()  # accelerating
+    m.run(0.5)
+    assert np.abs(1600 - 16 * int(m.read("V_IST")[0])) < 40
+    assert [bool(e & c.IN_POS) for e in m.read("ERR_STAT")] == [True, False, False]
+
+
+# ------------------------------------------------------------------ 3.2.35 ERR_STAT
+
+
+@pytest.mark.statements("mac050_141:3.2.35:18", "mac050_141:4.4.1:7")
+def test_an_error_bit_blocks_leaving_init_until_it_is_cleared() -> None:
+    """Manual 3.2.35, 4.4.1: after an error stop the motor stays in INIT_MODE until the error
+    bit is reset; writing a mode before that is refused and changes nothing."""
+    m = _motor(coulomb_friction=5.0)
+    m.write_many({"V_SOLL": 800, "T_SOLL": 300, "FLWERRMAX": 1000})
+    m.write("MODE_REG", c.V_MODE)
+    m.run(0.5)
+    assert m.mode_name() == "INIT_MODE" and int(m.read("ERR_STAT")[0]) & c.FLW_ERR
+    before = m.regs.copy()
+    with pytest.raises(ModeError, match="error bit"):
+        m.write("MODE_REG", c.V_MODE)
+    np.testing.assert_array_equal(m.regs, before)
+    m.write("ERR_STAT", 0)
+    m.write("MODE_REG", c.V_MODE)
+    assert m.mode_name() == "V_MODE"
+
+
+@pytest.mark.statements("mac050_141:3.2.35:8")
+def test_relative_positioning_by_p_fnc_moves_by_px() -> None:
+    """Manual 3.2.35 bit 10 RELPOSPFNC: with the bit set, a position register pointer subtracts
+    16·Px from P_FNC; in P_MODE the motor moves a further Px."""
+    m = _motor()
+    m.write_many({"P3": 3000, "V_SOLL": 3000})
+    m.write("MODE_REG", c.P_MODE)
+    m.write("ERR_STAT", c.RELPOSPFNC)
+    for k in (1, 2):
+        m.write("P_REG_P", 3)
+        m.run(1.0)
+        assert abs(int(m.read("P_IST")[0]) - k * 3000) < 10
+    assert int(m.read("P_SOLL")[0]) == 0
+
+
+@pytest.mark.statements("mac050_141:3.2.35:9")
+def test_absolute_positioning_by_the_registers_when_neither_bit_is_set() -> None:
+    """Manual 3.2.35 bit 9: with RELPOSPSOLL and RELPOSPFNC reset, P_SOLL = Px."""
+    m = _motor()
+    m.write_many({"P3": 3000, "P_SOLL": 777})
+    m.write("P_REG_P", 3)
+    m.write("P_REG_P", 3)
+    assert int(m.read("P_SOLL")[0]) == 3000
