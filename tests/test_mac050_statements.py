@@ -600,3 +600,170 @@ def test_absolute_positioning_by_the_registers_when_neither_bit_is_set() -> None
     m.write("P_REG_P", 3)
     m.write("P_REG_P", 3)
     assert int(m.read("P_SOLL")[0]) == 3000
+
+
+# ------------------------------------------------------------------ 3.2.36 CNTRL_BITS
+
+
+@pytest.mark.statements("mac050_141:3.2.36:1")
+def test_cntrl_bits_13_to_15_show_the_hall_signals() -> None:
+    """Manual 3.2.36 bits 15..13: the hall status: a turning rotor shows the six hall states
+    1..6 in turn, each for a sixth of the electrical turn (ELDEG_IST)."""
+    m = _motor()
+    m.write("V_SOLL", 400)
+    m.write("MODE_REG", c.V_MODE)
+    tr = m.trace(["CNTRL_BITS", "ELDEG_IST"], 300)
+    hall = tr["CNTRL_BITS"][:, 0] >> 13
+    assert set(hall.tolist()) == {1, 2, 3, 4, 5, 6}
+    changes = np.flatnonzero(np.diff(hall))
+    assert changes.size >= 6
+    for k in changes:  # a hall change every 2048/6 electrical units
+        assert min(int(tr["ELDEG_IST"][k + 1, 0]) % 341, 341 - int(tr["ELDEG_IST"][k + 1, 0])
+                   % 341) < 40
+
+
+@pytest.mark.statements("mac050_141:3.2.36:4", "mac050_141:3.2.163:3")
+def test_auto_resync_sets_p_fnc_to_16_p_ist_in_init_mode() -> None:
+    """Manual 3.2.36 bit 9, 3.2.163: with AUTO_RESYNC, in INIT_MODE P_FNC = 16·P_IST (a turning
+    passive motor); without it P_FNC is left alone."""
+    m = _motor(2, initial_speed=50.0)
+    cb = int(m.read("CNTRL_BITS")[0])
+    m.write("CNTRL_BITS", np.array([cb | c.AUTO_RESYNC, cb & ~c.AUTO_RESYNC]))
+    m.step(10)
+    p_ist = m.read("P_IST")
+    assert p_ist[0] > 0
+    np.testing.assert_array_equal(m.read("P_FNC"), [16 * p_ist[0], 0])
+
+
+@pytest.mark.statements("mac050_141:3.2.36:2", "mac050_141:3.2.36:3", "mac050_141:3.2.163:1",
+                        "mac050_141:3.2.163:2")
+def test_manual_resynchronisation_absolute_and_relative() -> None:
+    """Manual 3.2.163: MAN_RESYNC without REL_RESYNC sets P_SOLL = P_IST = P_NEW and
+    P_FNC = 16·P_NEW; with REL_RESYNC it adds P_NEW (16·P_NEW to P_FNC); the bit clears itself."""
+    m = _motor()
+    m.write_many({"P_NEW": 1234, "P_SOLL": 50})
+    cb = int(m.read("CNTRL_BITS")[0]) & ~c.AUTO_RESYNC
+    m.write("CNTRL_BITS", cb | c.MAN_RESYNC)
+    m.step()
+    assert [int(m.read(x)[0]) for x in ("P_SOLL", "P_IST", "P_FNC")] == [1234, 1234, 16 * 1234]
+    assert not int(m.read("CNTRL_BITS")[0]) & c.MAN_RESYNC
+    m.write("P_NEW", 100)
+    m.write("CNTRL_BITS", cb | c.MAN_RESYNC | c.REL_RESYNC)
+    m.step()
+    assert [int(m.read(x)[0]) for x in ("P_SOLL", "P_IST", "P_FNC")] == [1334, 1334, 16 * 1334]
+    assert not int(m.read("CNTRL_BITS")[0]) & c.MAN_RESYNC
+
+
+@pytest.mark.statements("mac050_141:3.2.36:6", "mac050_141:3.2.116:2")
+def test_recinnerbit_records_at_the_inner_rate() -> None:
+    """Manual 3.2.36 bit 8: with RECINNERBIT the buffer is written at 7812.5 Hz (15 records per
+    outer sample of 520.8 Hz), without it once per outer sample."""
+    m = _motor(2)
+    cb = int(m.read("CNTRL_BITS")[0]) | c.RECORDBIT
+    m.write("CNTRL_BITS", np.array([cb | c.RECINNERBIT, cb]))
+    m.step(2)
+    np.testing.assert_array_equal(m.read("REC_CNT"), [2 * c.INNER_PER_OUTER, 2])
+    assert c.INNER_PER_OUTER == 15 and c.INNER_HZ == pytest.approx(7812.5)
+
+
+@pytest.mark.statements("mac050_141:3.2.36:10", "mac050_141:3.2.36:11", "mac050_141:3.2.36:12")
+def test_pulse_format_and_sign_take_effect_only_after_flash_and_reset() -> None:
+    """Manual 3.2.36 bits 2, 3 and 0–1: PULSEDIR (pulse + direction instead of quadrature),
+    INPSIGN (count reversed) and USERINTF are read at power-on: a write changes nothing until
+    the set-up is saved in flash and the motor restarts."""
+    m = _motor()
+    assert m.pulse_decoding() == (np.array([False]), np.array([False]))
+    latched = int(m.interface_bits[0])
+    m.write("CNTRL_BITS", int(m.read("CNTRL_BITS")[0]) | c.PULSEDIR | c.INPSIGN | 0b11)
+    dec = m.pulse_decoding()
+    assert not dec[0][0] and not dec[1][0] and int(m.interface_bits[0]) == latched
+    m.enter_safe_mode()
+    m.write_flash()
+    dec = m.pulse_decoding()
+    assert dec[0][0] and dec[1][0] and int(m.interface_bits[0]) & 0b11 == 0b11
+
+
+# ------------------------------------------------------------------ 3.2.37–42 power-on and homing
+
+
+@pytest.mark.statements("mac050_141:3.2.37:1", "mac050_141:3.2.37:2", "mac050_141:3.2.42:2")
+def test_the_motor_starts_in_startmode_at_power_on_when_home_mode_is_0() -> None:
+    m = _motor()
+    m.write_many({"STARTMODE": c.V_MODE, "V_SOLL": 500, "HOME_MODE": 0})
+    m.enter_safe_mode()
+    m.write_flash()  # saved, and the motor restarts
+    assert m.mode_name() == "V_MODE"
+    m.step(50)
+    assert int(m.read("V_IST")[0]) == pytest.approx(500 / 16, abs=1)
+
+
+@pytest.mark.statements("mac050_141:3.2.42:1", "mac050_141:3.2.42:3", "mac050_141:3.2.42:6",
+                        "mac050_141:4.4.13:8")
+def test_home_mode_low_byte_homes_at_power_on_then_startmode() -> None:
+    """Manual 3.2.42: the low byte of HOME_MODE is the homing mode run after power-on; once the
+    home is found the motor goes on in STARTMODE (4.4.13: MODE_REG = STARTMODE)."""
+    m = _motor(end_stop_low=-3.0, end_stop_high=3.0)
+    m.write_many({"STARTMODE": c.P_MODE, "HOME_MODE": (13 << 8) | c.HOME1_MODE, "V_HOME": -800,
+                  "T_HOME": 300, "P_HOME": -100})
+    m.enter_safe_mode()
+    m.write_flash()
+    assert m.mode_name() == "HOME1_MODE"
+    _steps_until(m, "HOME1_MODE", 3000)
+    assert m.mode_name() == "P_MODE"
+    assert abs(int(m.read("P_IST")[0]) + 100) <= 2
+
+
+@pytest.mark.statements("mac050_141:3.2.41:1", "mac050_141:3.2.41:2", "mac050_141:4.4.13:4",
+                        "mac050_141:4.4.13:5", "mac050_141:4.4.13:7", "mac050_141:3.2.40:1",
+                        "mac050_141:3.2.40:2", "mac050_141:3.2.38:1", "mac050_141:4.4.13:6")
+def test_home1_counts_50_samples_above_t_home_with_the_torque_limited_to_1_25_t_home() -> None:
+    """Manual 3.2.41, 4.4.13: HOME1 runs at V_HOME (its sign the direction) into the mechanical
+    stop with the torque limited to 1.25·T_HOME; the home is where the torque has exceeded T_HOME
+    50 times: there P_IST = P_HOME, P_FNC = 16·P_HOME, P_SOLL = 0, and T_SOLL is unchanged."""
+    m = _motor(end_stop_low=-3.0, end_stop_high=3.0)
+    m.write_many({"V_HOME": -800, "T_HOME": 200, "P_HOME": -1000, "P_SOLL": 555,
+                  "T_SOLL": 900})
+    m.write("MODE_REG", c.HOME1_MODE)
+    vf = []
+    while m.mode_name() == "HOME1_MODE":
+        m.step()
+        vf.append(int(m.read("VF_OUT")[0]))
+        assert len(vf) < 3000
+    vf = np.abs(vf)
+    assert vf.max() <= 250 and vf.max() >= 249  # 1.25 · 200
+    assert int(np.sum(vf > 200)) == 50
+    assert m.position_rad[0] == pytest.approx(-3.0, abs=0.02)  # the negative stop
+    assert abs(int(m.read("P_IST")[0]) + 1000) <= 2
+    assert int(m.read("P_SOLL")[0]) == 0 and int(m.read("T_SOLL")[0]) == 900
+
+
+@pytest.mark.statements("mac050_141:3.2.41:3", "mac050_141:4.4.14:1")
+@pytest.mark.parametrize("mode", [c.HOME2_MODE, c.HOME3_MODE])
+def test_a_negative_t_home_makes_the_home_sensor_active_low(mode: int) -> None:
+    """Manual 3.2.41: the sign of T_HOME is the sensor's polarity: negative, active low. The
+    sensor input is high above 1 rad: active low, the active region is below; HOME2 from 2 rad
+    towards it (V_HOME negative) finds its zero where the input goes low, HOME3 where it goes
+    high again after the slow move back."""
+    m = _motor(home_position=1.0, initial_angle=2.0)
+    m.write_many({"V_HOME": -400, "T_HOME": -1, "P_HOME": 0, "STARTMODE": c.P_MODE})
+    m.write("MODE_REG", mode)
+    _steps_until(m, c.MODE_NAMES[mode], 5000)
+    zero_rad = m.position_rad[0] - int(m.read("P_IST")[0]) * c.RAD_PER_COUNT
+    one_sample = 400 / 16 * c.RAD_PER_COUNT  # V_HOME's travel in one outer sample
+    assert zero_rad == pytest.approx(1.0, abs=2 * one_sample)
+
+
+@pytest.mark.statements("mac050_141:4.4.15:1", "mac050_141:4.4.14:3")
+def test_home3_leaves_the_sensor_slowly_at_minus_v_home_over_64_plus_1() -> None:
+    """Manual 4.4.15: HOME3 goes towards the sensor at V_HOME, then, the sensor active, slowly
+    back at −V_HOME/64 + 1 until it deactivates: the zero."""
+    m = _motor(home_position=1.0, initial_angle=0.0)
+    m.write_many({"V_HOME": 640, "T_HOME": 1, "P_HOME": 0, "STARTMODE": c.P_MODE,
+                  "A_SOLL": 1000})
+    m.write("MODE_REG", c.HOME3_MODE)
+    f = []
+    while m.mode_name() == "HOME3_MODE":
+        m.step()
+        f.append(int(m.read("FNC_OUT")[0]))
+        assert len(f) < 5000
+    assert 640 in f and f[-1] == -640 // 64 + 1 == -9
