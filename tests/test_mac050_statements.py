@@ -767,3 +767,197 @@ def test_home3_leaves_the_sensor_slowly_at_minus_v_home_over_64_plus_1() -> None
         f.append(int(m.read("FNC_OUT")[0]))
         assert len(f) < 5000
     assert 640 in f and f[-1] == -640 // 64 + 1 == -9
+
+
+# ------------------------------------------------------------------ 3.2.89–111 filters; 4.2, 4.3
+
+_VF_TAPS = {"KVFX4": 0, "KVFX3": 1, "KVFX2": 2, "KVFX1": 3}
+_VF_POLES = {"KVFY3": 1, "KVFY2": 2, "KVFY1": 3, "KVFY0": 4}
+
+
+def _vf_impulse(coefficients: dict[str, float], kvout: float = 1.0) -> list[int]:
+    """VF_OUT for a velocity-error impulse of 200 through the speed regulator, FF = 1, VB = 0."""
+    from jvl_gym.families.mac050_141.firmware.speed_loop import speed_regulator
+
+    m = _motor()
+    m.write_many({"KFF3": 1.0, "KFF2": 0.0, "KFF1": 0.0, "KFF0": 0.0, "GEARB": 0.0,
+                  "KVOUT": kvout, **dict.fromkeys([*_VF_TAPS, *_VF_POLES], 0.0),
+                  **coefficients})
+    out = []
+    for k in range(6):
+        speed_regulator(m.regs[0], m.state[0], 200.0 if k == 0 else 0.0, False, 1023.0)
+        out.append(int(m.read("VF_OUT")[0]))
+    return out
+
+
+@pytest.mark.statements("mac050_141:3.2.93:1", "mac050_141:4.2.1:4")
+@pytest.mark.parametrize("name", list(_VF_TAPS))
+def test_each_vf_numerator_coefficient_has_its_delay(name: str) -> None:
+    """Manual 3.2.93–100: VF(z) = (KVFX4 z⁴ + KVFX3 z³ + KVFX2 z² + KVFX1 z)/(z⁴ − …): an
+    impulse of the velocity error (FF_OUT − VB_OUT) comes out after the coefficient's delay."""
+    expected = [0] * 6
+    expected[_VF_TAPS[name]] = 100
+    assert _vf_impulse({name: 0.5}) == expected
+
+
+@pytest.mark.statements("mac050_141:3.2.93:2")
+@pytest.mark.parametrize("name", list(_VF_POLES))
+def test_each_vf_denominator_coefficient_feeds_back_with_a_plus_sign(name: str) -> None:
+    """Manual 3.2.93–100 ("note the change of sign"): the denominator z⁴ − KVFY3 z³ − … − KVFY0
+    means a positive KVFYk adds its share of the output k samples later (KVFY3: 1, … KVFY0: 4)."""
+    out = _vf_impulse({"KVFX4": 0.5, name: 0.5})
+    delay = _VF_POLES[name]
+    expected = [0] * 6
+    for k in range(0, 6, delay):
+        expected[k] = int(100 * 0.5 ** (k // delay) + 0.5)  # rounded half up
+    assert out == expected
+
+
+@pytest.mark.statements("mac050_141:3.2.106:1", "mac050_141:3.2.106:2", "mac050_141:3.2.110:1",
+                        "mac050_141:4.3.1:4")
+def test_the_current_filters_if_and_ib() -> None:
+    """Manual 3.2.106–111, 4.3: per phase the error is IX_SOLL − IB(IX_IST), IB(z) = (KIB1 z +
+    KIB0)/z, and the voltage U = IF(error), IF(z) = (KIFX2 z² + KIFX1 z)/(z² − KIFY1 z −
+    KIFY0), saturated to ±1023 PWM counts."""
+    from jvl_gym.families.mac050_141.firmware.current_loop import phase_step
+
+    # (i_soll, i_ist, e1, u1, u2, i_ist1, KIB1, KIB0, KIFX2, KIFX1, KIFY1, KIFY0)
+    u, e = phase_step(100.0, 20.0, 30.0, 40.0, 50.0, 10.0, 1.5, 0.5, 2.0, 0.25, 0.5, -0.25)
+    assert e == 100.0 - (1.5 * 20.0 + 0.5 * 10.0)
+    assert u == round(2.0 * e + 0.25 * 30.0 + 0.5 * 40.0 - 0.25 * 50.0)
+    u, _ = phase_step(1000.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 7.0, 0.0, 0.0, 0.0)
+    assert u == 1023.0
+    u, _ = phase_step(-1000.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 7.0, 0.0, 0.0, 0.0)
+    assert u == -1023.0
+
+
+@pytest.mark.statements("mac050_141:4.3.1:1", "mac050_141:4.3.1:2", "mac050_141:4.3.1:3",
+                        "mac050_141:3.2.126:1", "mac050_141:3.2.127:2", "mac050_141:3.2.131:1")
+def test_commutation_gives_the_three_phase_references() -> None:
+    """Manual 4.3, 3.2.126/127: I_NOM = |VF_OUT|, PHI_SOLL = ELDEG_IST ± 90° (the sign of the
+    torque) + V_ELDEG·PHASE_COMP, and IA/IB/IC_SOLL = I_NOM·AMPLITUDE·sin(PHI_SOLL + 0, 120,
+    240°); the largest reference is 1023·AMPLITUDE."""
+    from jvl_gym.families.mac050_141.firmware.current_loop import references
+
+    amplitude = 212  # raw Fixed8: 0.828
+    for vf, eldeg, v_eldeg in ((1023.0, 0.0, 0.0), (-500.0, 100.0, 10.0), (300.0, 2000.0, -7.0)):
+        i_nom, phi, ia, ib, ic = references(vf, eldeg, v_eldeg, 5 * 256, amplitude)
+        assert i_nom == abs(vf)
+        assert phi == (eldeg + (512 if vf >= 0 else -512) + 5 * v_eldeg) % 2048
+        amp = abs(vf) * amplitude / 256
+        for k, i in enumerate((ia, ib, ic)):
+            assert i == pytest.approx(amp * np.sin((phi / 2048 + k / 3) * 2 * np.pi), abs=1)
+    assert references(1023.0, 0.0, 0.0, 0, amplitude)[2] == round(1023 * amplitude / 256)
+
+
+@pytest.mark.statements("mac050_141:3.2.128:1", "mac050_141:3.2.128:2", "mac050_141:4.4.8:1")
+def test_mani_mode_sets_the_stator_field_from_man_i_nom_and_man_alpha() -> None:
+    """Manual 3.2.128/129: in MANI_MODE IA/IB/IC_SOLL = MAN_I_NOM·sin(MAN_ALPHA + 0, 120, 240
+    electrical degrees)·AMPLITUDE, MAN_ALPHA in 360/2048 electrical degrees."""
+    m = _motor(load_inertia=1e-2)
+    m.write_many({"MAN_I_NOM": 400, "MAN_ALPHA": 256})  # 45 electrical degrees
+    m.write("MODE_REG", c.MANI_MODE)
+    m.step(3)
+    amp = 400 * float(m.read("AMPLITUDE")[0])
+    got = [int(m.read(x)[0]) for x in ("IA_SOLL", "IB_SOLL", "IC_SOLL")]
+    want = [amp * np.sin(np.radians(45 + k * 120)) for k in range(3)]
+    np.testing.assert_allclose(got, want, atol=1)
+    assert int(m.read("VF_OUT")[0]) == 0  # speed regulator passive
+
+
+@pytest.mark.statements("mac050_141:3.2.137:1", "mac050_141:3.2.148:1", "mac050_141:3.2.148:2")
+def test_kia_compensates_the_gain_of_the_phase_a_current_measurement() -> None:
+    """Manual 3.2.137, 3.2.148: IA_IST is the measured phase current, scaled by KIA/256 (256 =
+    1): at KIA 512 the loop reaches the same IA_IST with half the physical current."""
+    amps = []
+    for kia in (256, 512):
+        m = _motor(load_inertia=1e-2)
+        m.write_many({"KIA": kia, "MAN_I_NOM": 400, "MAN_ALPHA": 512})
+        m.write("MODE_REG", c.MANI_MODE)
+        m.step(20)
+        assert int(m.read("IA_IST")[0]) == pytest.approx(int(m.read("IA_SOLL")[0]), abs=25)
+        amps.append(m.phase_currents[0][0])
+    assert amps[1] / amps[0] == pytest.approx(0.5, rel=0.1)
+
+
+# ------------------------------------------------------------------ 3.2.112–122 data, analogue
+
+
+@pytest.mark.statements("mac050_141:3.2.122:1", "mac050_141:3.2.122:3", "mac050_141:3.2.122:2")
+def test_aninp_is_the_analogue_input_plus_10_volts_to_1023_in_every_mode() -> None:
+    """Manual 3.2.122: ANINP is the measured analogue voltage, ±10 V ↔ ±1023, updated in every
+    mode (here INIT_MODE)."""
+    m = _motor(4)
+    assert m.mode_name() == "INIT_MODE"
+    m.set_input(analog_volts=np.array([10.0, -10.0, 5.0, 0.0]))
+    m.step()
+    np.testing.assert_array_equal(m.read("ANINP"), [1023, -1023, 512, 0])
+
+
+@pytest.mark.statements("mac050_141:3.2.120:1", "mac050_141:3.2.120:2", "mac050_141:4.1.3:2")
+@pytest.mark.parametrize("mode", [c.INIT_MODE, c.GP_MODE, c.AVG_MODE, c.AG_MODE, c.COIL_MODE])
+def test_v_ext_is_the_pulse_count_of_the_last_sample(mode: int) -> None:
+    m = _motor()
+    m.write_many({**COIL, "GEARF1": 1, "GEARF2": 1, "V_SOLL": 2000, "FNCERRMAX": 0})
+    m.set_input(pulse_counts=7, analog_volts=0.0)
+    if mode != c.INIT_MODE:
+        m.write("MODE_REG", mode)
+    m.step(3)
+    assert int(m.read("V_EXT")[0]) == 7
+    m.set_input(pulse_counts=-3)
+    m.step()
+    assert int(m.read("V_EXT")[0]) == -3
+
+
+@pytest.mark.statements("mac050_141:4.1.4:1", "mac050_141:4.1.4:2", "mac050_141:4.4.5:1",
+                        "mac050_141:4.4.5:2")
+def test_at_mode_torque_is_the_analogue_input_scaled_to_t_soll() -> None:
+    """Manual 4.1.4, 4.4.5: in AT_MODE ±10 V give ±T_SOLL, written to VF_OUT with the speed
+    loop passive (FNC_OUT, FF_OUT stay 0); FLWERR, FNCERR and IN_POS are 0."""
+    m = _motor(3, load_inertia=1e-2)
+    m.write("T_SOLL", 600)
+    m.set_input(analog_volts=np.array([10.0, -5.0, 2.0]))
+    m.write("MODE_REG", c.AT_MODE)
+    m.step(3)
+    np.testing.assert_array_equal(m.read("VF_OUT"),
+                                  np.round(m.read("ANINP") * 600 / 1023).astype(int))
+    assert m.read("VF_OUT")[0] == 600
+    assert not m.read("FNC_OUT").any() and not m.read("FF_OUT").any()
+    assert not (m.read("ERR_STAT") & c.IN_POS).any()
+
+
+@pytest.mark.statements("mac050_141:3.2.151:1", "mac050_141:4.5.6:1")
+def test_u_supply_is_the_supply_voltage_in_53_7_mv() -> None:
+    m = _motor(2)
+    m.set_input(supply_volts=np.array([48.0, 56.0]))
+    m.run(0.2)
+    np.testing.assert_allclose(m.read("U_SUPPLY") * 0.0537, m.bus_voltage, atol=0.06)
+    assert m.bus_voltage[1] > 54
+
+
+@pytest.mark.statements("mac050_141:3.2.144:1")
+def test_v_eldeg_is_the_speed_per_inner_sample() -> None:
+    """Manual 3.2.144: V_ELDEG is the speed in encoder counts per 7812.5 Hz sample: 1/15 of V_IST
+    (counts per 520.8 Hz sample)."""
+    m = _motor()
+    m.write("V_SOLL", 3000)
+    m.write("MODE_REG", c.V_MODE)
+    m.run(0.5)
+    v = m.trace(["V_ELDEG", "V_IST"], 50)
+    assert np.mean(v["V_ELDEG"]) == pytest.approx(np.mean(v["V_IST"]) / 15, abs=0.5)
+
+
+@pytest.mark.statements("mac050_141:3.2.130:1", "mac050_141:4.4.9:1", "mac050_141:4.4.9:2")
+def test_testu_applies_umeas_to_a_and_minus_umeas_to_c_then_init() -> None:
+    """Manual 4.4.9: TESTU records UA_VAL (SAMPLE1 = 145) and IC_IST (SAMPLE2 = 139) at the inner
+    rate from the start of the buffer, with UA = UMEAS and UC = −UMEAS, for 11 samples, then
+    INIT_MODE."""
+    m = _motor(load_inertia=1e-2)
+    m.write_many({"UMEAS": 40, "SAMPLE3": 147})  # channel 3: UC_VAL
+    m.write("MODE_REG", c.TESTU_MODE)
+    m.step(2)
+    assert m.mode_name() == "INIT_MODE"
+    assert [int(m.read(f"SAMPLE{k}")[0]) for k in (1, 2)] == [145, 139]
+    buf = m.sample_buffer()
+    assert np.all(buf["UA_VAL"][0] == 40) and buf["UA_VAL"].shape[1] == 11
+    assert np.all(buf["UC_VAL"][0] == -40)
