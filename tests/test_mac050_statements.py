@@ -961,3 +961,162 @@ def test_testu_applies_umeas_to_a_and_minus_umeas_to_c_then_init() -> None:
     buf = m.sample_buffer()
     assert np.all(buf["UA_VAL"][0] == 40) and buf["UA_VAL"].shape[1] == 11
     assert np.all(buf["UC_VAL"][0] == -40)
+
+
+# ------------------------------------------------------------------ 4.1 function blocks, 4.4 modes
+
+
+@pytest.mark.statements("mac050_141:4.1.1:4")
+def test_the_profile_starts_from_0_after_init_mode() -> None:
+    """Manual 4.1.1: V_OLD is set to 0 in INIT_MODE: a velocity profile started after INIT
+    ramps up from 0 by A_SOLL, whatever it ran at before."""
+    m = _motor(load_inertia=1e-4)
+    m.write_many({"V_SOLL": 2000, "A_SOLL": 1000, "FLWERRMAX": 0})
+    m.write("MODE_REG", c.V_MODE)
+    m.step(10)
+    m.write("MODE_REG", c.INIT_MODE)
+    _steps_until(m, "STOP_MODE", 500)
+    m.write("A_SOLL", 30)
+    m.write("MODE_REG", c.V_MODE)
+    m.step()
+    assert int(m.read("FNC_OUT")[0]) == 30
+
+
+@pytest.mark.statements("mac050_141:4.1.8:2", "mac050_141:4.4.12:1", "mac050_141:4.4.2:7",
+                        "mac050_141:4.4.1:3")
+def test_stop_mode_switches_to_init_below_300_rpm() -> None:
+    """Manual 4.1.8, 4.4.12: a switch to INIT from V_MODE goes through STOP_MODE, which brakes
+    with A_SOLL and goes to INIT_MODE when the measured speed is below 300 rpm."""
+    m = _motor()
+    m.write_many({"V_SOLL": 3000, "A_SOLL": 10, "ACC_EMERG": 0})
+    m.write("MODE_REG", c.V_MODE)
+    m.run(0.6)
+    m.write("MODE_REG", c.INIT_MODE)
+    assert m.mode_name() == "STOP_MODE"
+    tr = m.trace(["MODE_REG", "V_IST", "FNC_OUT"], 600)
+    modes, v = tr["MODE_REG"][:, 0], tr["V_IST"][:, 0]
+    k = int(np.argmax(modes == c.INIT_MODE))
+    assert k > 0 and np.all(modes[:k] == c.STOP_MODE)
+    assert c.v_ist_to_rpm(abs(int(v[k]))) < 300 <= c.v_ist_to_rpm(abs(int(v[k - 1])))
+    assert set(np.diff(tr["FNC_OUT"][:k, 0]).tolist()) <= {-10, 0}
+
+
+_REGULATED = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.A2POS_MODE, c.APOS_MODE,
+              c.GF_MODE, c.VAT_MODE, c.AG_MODE, c.COIL_MODE, c.AVZ_MODE]
+
+
+@pytest.mark.statements("mac050_141:4.4.2:7", "mac050_141:4.4.3:7", "mac050_141:4.4.4:6",
+                        "mac050_141:4.4.6:5", "mac050_141:4.4.7:5", "mac050_141:4.4.21:5",
+                        "mac050_141:4.4.22:5", "mac050_141:4.4.25:5", "mac050_141:4.4.12:3")
+@pytest.mark.parametrize("mode", _REGULATED, ids=[c.MODE_NAMES[x] for x in _REGULATED])
+def test_a_moving_mode_goes_to_init_through_stop_mode(mode: int) -> None:
+    m = _motor()
+    _set_up_mode(m, mode, pulses=20, volts=10.0)
+    m.step(200)
+    m.write("MODE_REG", c.INIT_MODE)
+    assert m.mode_name() == "STOP_MODE"
+    _steps_until(m, "STOP_MODE", 2000)
+    assert m.mode_name() == "INIT_MODE"
+
+
+_IN_POS_0_MODES = [c.AT_MODE, c.AV_MODE, c.AVG_MODE, c.MANI_MODE, c.HOME1_MODE, c.HOME2_MODE,
+                   c.INIT_MODE]
+
+
+@pytest.mark.statements("mac050_141:4.4.1:2", "mac050_141:4.4.5:4", "mac050_141:4.4.6:6",
+                        "mac050_141:4.4.7:6", "mac050_141:4.4.8:4", "mac050_141:4.4.13:3",
+                        "mac050_141:4.4.14:4")
+@pytest.mark.parametrize("mode", _IN_POS_0_MODES, ids=[c.MODE_NAMES[x] for x in _IN_POS_0_MODES])
+def test_in_pos_is_0_in_the_modes_that_do_not_position(mode: int) -> None:
+    """Manual 4.4.1, 4.4.5–4.4.8, 4.4.13/14: IN_POS = 0 (a motor at rest with a wide window,
+    analogue input 0 V, home sensor far)."""
+    m = _motor(home_position=10.0)
+    m.write_many({"INPOSWIN": 1000, "INPOSCNT": 0, "V_SOLL": 0, "V_HOME": 0, "T_HOME": 100})
+    m.set_input(analog_volts=0.0)
+    if mode != c.INIT_MODE:
+        m.write("MODE_REG", mode)
+    tr = m.trace(["ERR_STAT"], 30)
+    assert not (tr["ERR_STAT"] & c.IN_POS).any()
+
+
+@pytest.mark.statements("mac050_141:4.4.4:3", "mac050_141:4.4.25:2")
+@pytest.mark.parametrize("mode", [c.GP_MODE, c.GF_MODE])
+def test_500_pulses_per_revolution_by_gearf_1024_over_125(mode: int) -> None:
+    """Manual 4.4.4/4.4.25: nominally 4096 pulses per revolution; GEARF1/GEARF2 = 1024/125 drives
+    the motor at 500 pulses per revolution: 2500 pulses are 5 revolutions."""
+    m = _motor()
+    m.write_many({"GEARF1": 1024, "GEARF2": 125, "V_SOLL": 20000, "A_SOLL": 200, "FNCERRMAX": 0})
+    m.write("MODE_REG", mode)
+    m.set_input(pulse_counts=25)
+    m.step(100)  # 2500 pulses
+    m.set_input(pulse_counts=0)
+    m.run(1.0)
+    assert int(m.read("P_IST")[0]) == pytest.approx(5 * 4096, abs=2)
+
+
+@pytest.mark.statements("mac050_141:4.4.18:1", "mac050_141:4.4.18:2")
+def test_vat_limits_the_torque_to_aninp_times_t_soll_over_1024() -> None:
+    """Manual 4.4.18: VAT is V_MODE with the torque limit |ANINP·T_SOLL/1024|."""
+    m = _motor(3, coulomb_friction=5.0)
+    m.write_many({"V_SOLL": 1000, "T_SOLL": 800})
+    m.set_input(analog_volts=np.array([10.0, -5.0, 2.5]))
+    m.write("MODE_REG", c.VAT_MODE)
+    vf = np.abs(m.trace(["VF_OUT"], 100)["VF_OUT"]).max(axis=0)
+    limit = np.abs(m.read("ANINP") * 800 / 1024)
+    assert np.all(vf <= limit + 0.5) and np.all(vf >= limit - 1)
+
+
+@pytest.mark.statements("mac050_141:4.1.10:4")
+def test_a2pos_relative_positioning_by_p_fnc() -> None:
+    """Manual 4.1.10: with RELPFNC (ERR_STAT RELPOSPFNC) a rising input subtracts 16·P2 from
+    P_FNC, a falling one 16·P1: each edge moves the motor by P2 or P1 further."""
+    m = _motor()
+    m.write_many({"P1": 1000, "P2": 3000, "V_SOLL": 4000})
+    m.set_input(analog_volts=0.0)
+    m.write("MODE_REG", c.A2POS_MODE)
+    m.run(1.0)
+    start = int(m.read("P_IST")[0])
+    m.write("ERR_STAT", c.RELPOSPFNC)
+    p_fnc = int(m.read("P_FNC")[0])
+    m.set_input(analog_volts=6.0)
+    m.step()
+    assert int(m.read("P_FNC")[0]) - int(m.read("FNC_OUT")[0]) == p_fnc - 16 * 3000
+    m.run(1.0)
+    m.set_input(analog_volts=4.0)
+    m.run(1.0)
+    assert int(m.read("P_IST")[0]) - start == pytest.approx(3000 + 1000, abs=10)
+
+
+@pytest.mark.statements("mac050_141:4.4.20:2")
+def test_coil_mode_adds_v8_to_the_spindle_pulses() -> None:
+    """Manual 4.4.20: in COIL_MODE V8 is added to V_EXT's pulses, so the traverse runs with the
+    spindle at rest: V8 = 10 moves like 10 pulses per sample."""
+    speeds = []
+    for v8, pulses in ((10, 0), (0, 10)):
+        m = _motor()
+        m.write_many({**COIL, "V8": v8, "GEARF1": 1, "GEARF2": 1, "V_SOLL": 20000,
+                      "A_SOLL": 400, "FNCERRMAX": 0})
+        m.set_input(analog_volts=0.0, pulse_counts=pulses)
+        m.write("MODE_REG", c.COIL_MODE)
+        m.step(100)
+        speeds.append(np.mean(m.trace(["V_IST"], 50)["V_IST"][:, 0]))
+    assert speeds[0] == pytest.approx(speeds[1], abs=0.3)
+    assert abs(speeds[0]) == pytest.approx(10, abs=0.3)
+
+
+@pytest.mark.statements("mac050_141:4.4.16:2", "mac050_141:4.4.16:3")
+def test_safe_mode_is_not_entered_or_left_by_writing_mode_reg() -> None:
+    """Manual 4.4.16: writing 15 to MODE_REG does not give SAFE_MODE; in SAFE_MODE a write of
+    another mode does not leave it (only 256..258, and the MacTalk command)."""
+    m = _motor()
+    with pytest.raises(ModeError):
+        m.write("MODE_REG", c.SAFE_MODE)
+    m.enter_safe_mode()
+    for mode in (c.INIT_MODE, c.V_MODE):
+        with pytest.raises(ModeError):
+            m.write("MODE_REG", mode)
+    assert m.mode_name() == "SAFE_MODE"
+    m.step(5)
+    assert int(m.read("VF_OUT")[0]) == 0  # passive, as INIT
+    m.exit_safe_mode()
+    assert m.mode_name() == "INIT_MODE"
