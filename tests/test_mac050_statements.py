@@ -44,7 +44,7 @@ def test_prog_version_reads_78_is_writable_and_not_kept_in_flash() -> None:
 # ------------------------------------------------------------------ 3.2.2 MODE_REG, 4.4.16 SAFE
 
 
-@pytest.mark.statements("mac050_141:3.2.2:4", "mac050_141:4.4.16:5", "mac050_141:3.1:1")
+@pytest.mark.statements("mac050_141:3.2.2:4", "mac050_141:4.4.16:5", "mac050_141:3:1")
 def test_256_in_safe_mode_restores_the_defaults_saves_them_and_resets() -> None:
     m = _motor()
     m.write("KVOUT", 3.0)
@@ -136,10 +136,10 @@ _T_SOLL_MODES = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.HOME2_M
 
 
 @pytest.mark.statements("mac050_141:3.2.7:2", "mac050_141:3.2.7:3", "mac050_141:3.2.7:4",
-                        "mac050_141:3.2.7:5", "mac050_141:3.2.7:6", "mac050_141:3.2.7:7",
-                        "mac050_141:3.2.7:8", "mac050_141:3.2.7:9", "mac050_141:3.2.7:10",
-                        "mac050_141:3.2.7:11", "mac050_141:3.2.7:12", "mac050_141:3.2.7:13",
-                        "mac050_141:3.2.7:14", "mac050_141:4.4.14:2", "mac050_141:4.4.15:2")
+                        "mac050_141:3.2.7:5", "mac050_141:3.2.7:6", "mac050_141:3.2.7:8",
+                        "mac050_141:3.2.7:9", "mac050_141:3.2.7:10", "mac050_141:3.2.7:11",
+                        "mac050_141:3.2.7:12", "mac050_141:3.2.7:13", "mac050_141:3.2.7:14",
+                        "mac050_141:3.2.7:15", "mac050_141:4.4.14:2", "mac050_141:4.4.15:2")
 @pytest.mark.parametrize("mode", _T_SOLL_MODES, ids=[c.MODE_NAMES[x] for x in _T_SOLL_MODES])
 def test_t_soll_bounds_the_torque_of_a_blocked_motor(mode: int) -> None:
     """Manual 3.2.7: T_SOLL is the maximum torque: a blocked rotor gets VF_OUT up to T_SOLL
@@ -152,7 +152,7 @@ def test_t_soll_bounds_the_torque_of_a_blocked_motor(mode: int) -> None:
     assert vf.max() <= 300 and vf.max() >= 299
 
 
-@pytest.mark.statements("mac050_141:3.2.7:15", "mac050_141:3.2.121:2")
+@pytest.mark.statements("mac050_141:3.2.7:16", "mac050_141:3.2.121:2")
 def test_full_torque_is_1023() -> None:
     m = _motor(coulomb_friction=50.0)
     m.write_many({"T_SOLL": 1023, "V_SOLL": 3000, "A_SOLL": 1000})
@@ -715,7 +715,8 @@ def test_home_mode_low_byte_homes_at_power_on_then_startmode() -> None:
 
 @pytest.mark.statements("mac050_141:3.2.41:1", "mac050_141:3.2.41:2", "mac050_141:4.4.13:4",
                         "mac050_141:4.4.13:5", "mac050_141:4.4.13:7", "mac050_141:3.2.40:1",
-                        "mac050_141:3.2.40:2", "mac050_141:3.2.38:1", "mac050_141:4.4.13:6")
+                        "mac050_141:3.2.40:2", "mac050_141:3.2.38:1", "mac050_141:4.4.13:6",
+                        "mac050_141:4.4.13:9")
 def test_home1_counts_50_samples_above_t_home_with_the_torque_limited_to_1_25_t_home() -> None:
     """Manual 3.2.41, 4.4.13: HOME1 runs at V_HOME (its sign the direction) into the mechanical
     stop with the torque limited to 1.25·T_HOME; the home is where the torque has exceeded T_HOME
@@ -728,6 +729,7 @@ def test_home1_counts_50_samples_above_t_home_with_the_torque_limited_to_1_25_t_
     while m.mode_name() == "HOME1_MODE":
         m.step()
         vf.append(int(m.read("VF_OUT")[0]))
+        assert int(m.read("FNCERR")[0]) == 0  # no function correction while searching
         assert len(vf) < 3000
     vf = np.abs(vf)
     assert vf.max() <= 250 and vf.max() >= 249  # 1.25 · 200
@@ -753,7 +755,7 @@ def test_a_negative_t_home_makes_the_home_sensor_active_low(mode: int) -> None:
     assert zero_rad == pytest.approx(1.0, abs=2 * one_sample)
 
 
-@pytest.mark.statements("mac050_141:4.4.15:1", "mac050_141:4.4.14:3")
+@pytest.mark.statements("mac050_141:4.4.15:1", "mac050_141:4.4.15:3")
 def test_home3_leaves_the_sensor_slowly_at_minus_v_home_over_64_plus_1() -> None:
     """Manual 4.4.15: HOME3 goes towards the sensor at V_HOME, then, the sensor active, slowly
     back at −V_HOME/64 + 1 until it deactivates: the zero."""
@@ -883,7 +885,7 @@ def test_kia_compensates_the_gain_of_the_phase_a_current_measurement() -> None:
 # ------------------------------------------------------------------ 3.2.112–122 data, analogue
 
 
-@pytest.mark.statements("mac050_141:3.2.122:1", "mac050_141:3.2.122:3", "mac050_141:3.2.122:2")
+@pytest.mark.statements("mac050_141:3.2.122:1", "mac050_141:3.2.122:2")
 def test_aninp_is_the_analogue_input_plus_10_volts_to_1023_in_every_mode() -> None:
     """Manual 3.2.122: ANINP is the measured analogue voltage, ±10 V ↔ ±1023, updated in every
     mode (here INIT_MODE)."""
@@ -1120,3 +1122,143 @@ def test_safe_mode_is_not_entered_or_left_by_writing_mode_reg() -> None:
     assert int(m.read("VF_OUT")[0]) == 0  # passive, as INIT
     m.exit_safe_mode()
     assert m.mode_name() == "INIT_MODE"
+
+
+@pytest.mark.statements("mac050_141:4.1.2:2", "mac050_141:4.1.2:4", "mac050_141:4.4.3:8")
+def test_the_position_profile_lands_on_p_soll_without_overshoot_and_flags_its_phases() -> None:
+    """Manual 4.1.2: the position block brakes so that the function position reaches 16·P_SOLL
+    exactly and never passes it; ACC_FLAG while it speeds up, DEC_FLAG while it brakes."""
+    m = _motor()
+    m.write_many({"P_SOLL": 30000, "V_SOLL": 3000, "A_SOLL": 37})
+    m.write("MODE_REG", c.P_MODE)
+    tr = m.trace(["P_FNC", "FNC_OUT", "ERR_STAT"], 600)
+    p_fnc, f, st = tr["P_FNC"][:, 0], tr["FNC_OUT"][:, 0], tr["ERR_STAT"][:, 0]
+    assert p_fnc.max() == 16 * 30000 == p_fnc[-1]
+    rising, falling = np.diff([0, *f]) > 0, np.diff([0, *f]) < 0
+    np.testing.assert_array_equal((st & c.ACC_FLAG) != 0, rising)
+    np.testing.assert_array_equal((st & c.DEC_FLAG) != 0, falling)
+    assert rising.any() and falling.any()
+
+
+@pytest.mark.statements("mac050_141:3.2.36:7")
+def test_rewindbit_sets_rec_cnt_to_0_and_clears_itself() -> None:
+    m = _motor()
+    m.write("CNTRL_BITS", int(m.read("CNTRL_BITS")[0]) | c.RECORDBIT)
+    m.step(20)
+    assert int(m.read("REC_CNT")[0]) == 20
+    m.write("CNTRL_BITS", (int(m.read("CNTRL_BITS")[0]) & ~c.RECORDBIT) | c.REWINDBIT)
+    m.step()
+    assert int(m.read("REC_CNT")[0]) == 0
+    assert not int(m.read("CNTRL_BITS")[0]) & c.REWINDBIT
+
+
+@pytest.mark.statements("mac050_141:3.2.101:1")
+def test_gearb_multiplies_the_vb_filter() -> None:
+    """Manual 3.2.101: VB_OUT = GEARB·(KVB3 + KVB2 z⁻¹ + …)·V_IST."""
+    from jvl_gym.families.mac050_141.firmware.speed_loop import speed_regulator
+
+    out = []
+    for gearb in (1.0, 2.0, 16.0):
+        m = _motor()
+        m.write_many({"GEARB": gearb, "KVB3": 1.0, "KVB2": 0.0, "KVB1": 0.0, "KVB0": 0.0})
+        m.regs[0, m.table.lookup("V_IST").number] = 50
+        speed_regulator(m.regs[0], m.state[0], 0.0, False, 1023.0)
+        out.append(int(m.read("VB_OUT")[0]))
+    assert out == [50, 100, 800]
+
+
+@pytest.mark.statements("mac050_141:3.2.124:2", "mac050_141:3.2.143:1")
+def test_the_electrical_angle_turns_once_per_2048_counts() -> None:
+    """Manual 3.2.124/125, 3.2.143: two pole pairs and 4096 counts per turn: ELDEG_IST (0..2047,
+    360/2048 electrical degrees) advances one unit per encoder count."""
+    m = _motor()
+    m.write("V_SOLL", 1600)
+    m.write("MODE_REG", c.V_MODE)
+    m.run(0.3)
+    tr = m.trace(["ELDEG_IST", "P_IST"], 40)
+    e, p = tr["ELDEG_IST"][:, 0], tr["P_IST"][:, 0]
+    assert e.min() >= 0 and e.max() <= 2047
+    # the angle is read at the inner rate, P_IST at the start of the outer sample: equal in sum
+    assert int(np.sum(np.diff(e) % 2048)) == pytest.approx(int(p[-1] - p[0]), abs=2)
+
+
+@pytest.mark.statements("mac050_141:3.2.148:1", "mac050_141:3.2.148:2")
+@pytest.mark.parametrize(("gain", "alpha", "phase"), [("KIB", 1877, 1), ("KIC", 1195, 2)])
+def test_kib_and_kic_compensate_their_phases(gain: str, alpha: int, phase: int) -> None:
+    """Manual 3.2.148–150: KIB and KIC scale the B and C current measurements as KIA does A
+    (MAN_ALPHA puts the field's peak on that phase)."""
+    amps = []
+    for k in (256, 512):
+        m = _motor(load_inertia=1e-2)
+        m.write_many({gain: k, "MAN_I_NOM": 400, "MAN_ALPHA": alpha})
+        m.write("MODE_REG", c.MANI_MODE)
+        m.step(20)
+        name = "ABC"[phase]
+        assert int(m.read(f"I{name}_IST")[0]) == pytest.approx(int(m.read(f"I{name}_SOLL")[0]),
+                                                                abs=25)
+        amps.append(m.phase_currents[0][phase])
+    assert amps[1] / amps[0] == pytest.approx(0.5, rel=0.1)
+
+
+@pytest.mark.statements("mac050_141:4.4.23:1")
+def test_testki_records_the_phase_currents_for_the_gain_calculation() -> None:
+    """Manual 4.4.23: TESTKI drives a current through the phases and records the measured
+    phase currents, from which the measurement gains (KIA, KIB) follow: the same current flows
+    in A and out of B, so a doubled KIA shows as a doubled IA_IST against IB_IST."""
+    ratios = []
+    for kia in (256, 512):
+        m = _motor(load_inertia=1e-2)
+        m.write_many({"KIA": kia, "UMEAS": 40})
+        m.write("MODE_REG", c.TESTKI_MODE)
+        m.step(3)
+        assert m.mode_name() == "INIT_MODE"
+        buf = m.sample_buffer()
+        ia, ib = buf["IA_IST"][0].astype(float), buf["IB_IST"][0].astype(float)
+        ratios.append(ia[-1] / -ib[-1])
+    assert ratios[0] == pytest.approx(1.0, rel=0.05)
+    assert ratios[1] == pytest.approx(2.0, rel=0.05)
+
+
+@pytest.mark.statements("mac050_141:4.5.6:4")
+def test_undervoltage_in_init_mode_uses_1_25_u_min_sup() -> None:
+    """Manual 4.5.6: in INIT_MODE UV_DETECT is set below 1.25·U_MIN_SUP, in the other modes
+    below U_MIN_SUP: 48 V with U_MIN_SUP = 40 V is an undervoltage only in INIT_MODE."""
+    m = _motor(2)
+    m.write("U_MIN_SUP", round(40 / 0.0537))
+    m.write("V_SOLL", 0)
+    m.write("MODE_REG", c.V_MODE, index=[1])
+    m.step(20)
+    st = m.read("ERR_STAT")
+    assert bool(st[0] & c.UV_DETECT) and not st[1] & c.UV_DETECT
+
+
+@pytest.mark.statements("mac050_141:4.4:3", "mac050_141:4.4:4")
+def test_uit_and_the_position_limits_work_in_at_mode_too() -> None:
+    """Manual 4.4: UIT, UIT_ERR and PLIM_ERR are updated in every mode: in AT_MODE a torque
+    against the motion regenerates (UIT rises), and the motor driven past MAX_P_IST trips."""
+    m = _motor(2, initial_speed=200.0)
+    m.write_many({"T_SOLL": 1023, "MAX_P_IST": np.array([0, 3000]),
+                  "MIN_P_IST": np.array([0, -100000])})
+    m.set_input(analog_volts=np.array([-10.0, 10.0]))
+    m.write("MODE_REG", c.AT_MODE)
+    m.step(30)
+    assert int(m.read("UIT")[0]) > 0
+    assert int(m.read("ERR_STAT")[1]) & c.PLIM_ERR
+    m.step(2)
+    assert int(m.read("VF_OUT")[1]) == 0  # torque off, on its way to INIT_MODE (4.4.5)
+
+
+@pytest.mark.statements("mac050_141:3.2.42:4")
+def test_the_fastmac_home_command_runs_the_home_mode_of_the_high_byte() -> None:
+    """Manual 3.2.42: HOME_MODE's high byte is the home mode a FastMAC home command starts."""
+    from jvl_gym.protocol import fastmac as fm
+    from jvl_gym.protocol.twin import Twin
+
+    m = _motor()
+    m.write("CNTRL_BITS", 3)  # USERINTF = 11: FastMAC, latched at the next power-on
+    m.enter_safe_mode()
+    m.write_flash()
+    m.write_many({"HOME_MODE": (c.HOME2_MODE << 8) | 0, "V_HOME": 100, "T_HOME": 1})
+    twin = Twin(m, [19])
+    twin.user[0].feed(bytes((fm.encode_command(fm.FastCommand.HOME, 1),)))
+    assert m.mode_name() == "HOME2_MODE"
