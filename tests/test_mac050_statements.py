@@ -44,7 +44,7 @@ def test_prog_version_reads_78_is_writable_and_not_kept_in_flash() -> None:
 # ------------------------------------------------------------------ 3.2.2 MODE_REG, 4.4.16 SAFE
 
 
-@pytest.mark.statements("mac050_141:3.2.2:4", "mac050_141:4.4.16:5", "mac050_141:3:1")
+@pytest.mark.statements("mac050_141:3:1", "mac050_141:3.2.2:4", "mac050_141:4.4.16:5")
 def test_256_in_safe_mode_restores_the_defaults_saves_them_and_resets() -> None:
     m = _motor()
     m.write("KVOUT", 3.0)
@@ -95,7 +95,8 @@ _V_SOLL_MODES = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.VAT_MOD
 @pytest.mark.statements("mac050_141:3.2.5:3", "mac050_141:3.2.5:4", "mac050_141:3.2.5:5",
                         "mac050_141:3.2.5:6", "mac050_141:3.2.5:7", "mac050_141:3.2.5:8",
                         "mac050_141:3.2.5:9", "mac050_141:3.2.5:10", "mac050_141:3.2.5:11",
-                        "mac050_141:3.2.5:12", "mac050_141:3.2.5:13")
+                        "mac050_141:3.2.5:12", "mac050_141:3.2.5:13", "mac050_141:4.1.3:4",
+                        "mac050_141:4.1.7:3", "mac050_141:4.1.12:2")
 @pytest.mark.parametrize("mode", _V_SOLL_MODES, ids=[c.MODE_NAMES[x] for x in _V_SOLL_MODES])
 def test_v_soll_is_the_speed_limit_of_every_velocity_using_mode(mode: int) -> None:
     """Manual 3.2.5: V_SOLL is the required, maximum or full-scale velocity of each mode: asked
@@ -115,7 +116,8 @@ _A_SOLL_MODES = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.HOME1_M
 @pytest.mark.statements("mac050_141:3.2.6:3", "mac050_141:3.2.6:4", "mac050_141:3.2.6:5",
                         "mac050_141:3.2.6:6", "mac050_141:3.2.6:7", "mac050_141:3.2.6:8",
                         "mac050_141:3.2.6:9", "mac050_141:3.2.6:10", "mac050_141:3.2.6:11",
-                        "mac050_141:3.2.6:12", "mac050_141:3.2.6:13", "mac050_141:3.2.6:14")
+                        "mac050_141:3.2.6:12", "mac050_141:3.2.6:13", "mac050_141:3.2.6:14",
+                        "mac050_141:4.1.5:2", "mac050_141:4.1.12:2")
 @pytest.mark.parametrize("mode", _A_SOLL_MODES, ids=[c.MODE_NAMES[x] for x in _A_SOLL_MODES])
 def test_a_soll_is_the_acceleration_limit_of_every_profile_mode(mode: int) -> None:
     """Manual 3.2.6: A_SOLL is the maximum acceleration/deceleration: the profile changes by
@@ -139,7 +141,8 @@ _T_SOLL_MODES = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.HOME2_M
                         "mac050_141:3.2.7:5", "mac050_141:3.2.7:6", "mac050_141:3.2.7:8",
                         "mac050_141:3.2.7:9", "mac050_141:3.2.7:10", "mac050_141:3.2.7:11",
                         "mac050_141:3.2.7:12", "mac050_141:3.2.7:13", "mac050_141:3.2.7:14",
-                        "mac050_141:3.2.7:15", "mac050_141:4.4.14:2", "mac050_141:4.4.15:2")
+                        "mac050_141:3.2.7:15", "mac050_141:3.2.41:5", "mac050_141:4.4.2:2",
+                        "mac050_141:4.4.14:2", "mac050_141:4.4.15:2")
 @pytest.mark.parametrize("mode", _T_SOLL_MODES, ids=[c.MODE_NAMES[x] for x in _T_SOLL_MODES])
 def test_t_soll_bounds_the_torque_of_a_blocked_motor(mode: int) -> None:
     """Manual 3.2.7: T_SOLL is the maximum torque: a blocked rotor gets VF_OUT up to T_SOLL
@@ -216,9 +219,9 @@ def test_p_ist_may_be_overwritten_without_moving_the_motor() -> None:
 _ALL_MODES_ALIVE = [c.INIT_MODE, c.V_MODE, c.AT_MODE, c.MANI_MODE, c.STOP_MODE]
 
 
-@pytest.mark.statements("mac050_141:3.2.10:4", "mac050_141:3.2.12:3", "mac050_141:4.4.1:4",
-                        "mac050_141:4.4.8:3", "mac050_141:4.4.5:3", "mac050_141:4.2.1:2",
-                        "mac050_141:4.2.1:3")
+@pytest.mark.statements("mac050_141:3.2.10:4", "mac050_141:3.2.12:3", "mac050_141:4.2.1:2",
+                        "mac050_141:4.2.1:3", "mac050_141:4.4.1:4", "mac050_141:4.4.5:3",
+                        "mac050_141:4.4.8:3")
 def test_p_ist_and_v_ist_follow_the_shaft_in_init_mode() -> None:
     """Manual 3.2.10/3.2.12, 4.2: V_IST is the encoder's count difference per sample and is added
     to P_IST, in every mode, also INIT_MODE with the motor passive (a coasting rotor)."""
@@ -235,8 +238,8 @@ def test_p_ist_and_v_ist_follow_the_shaft_in_init_mode() -> None:
     assert int(m.read("P_IST")[0]) - p_start == pytest.approx(travel, rel=0.05)
 
 
-@pytest.mark.statements("mac050_141:3.2.10:4", "mac050_141:3.2.12:3", "mac050_141:4.4.5:3",
-                        "mac050_141:4.4.8:3")
+@pytest.mark.statements("mac050_141:3.2.10:4", "mac050_141:3.2.12:3", "mac050_141:4.2.1:3",
+                        "mac050_141:4.4.5:3", "mac050_141:4.4.8:3")
 @pytest.mark.parametrize("mode", [c.AT_MODE, c.MANI_MODE])
 def test_p_ist_and_v_ist_are_updated_in_the_torque_and_manual_modes(mode: int) -> None:
     m = _motor()
@@ -273,7 +276,8 @@ def test_the_speed_loop_torque_is_multiplied_by_kvout() -> None:
 
 
 @pytest.mark.statements("mac050_141:3.2.14:1", "mac050_141:3.2.14:2", "mac050_141:3.2.14:3",
-                        "mac050_141:4.4.4:2")
+                        "mac050_141:4.1.3:3", "mac050_141:4.1.7:1", "mac050_141:4.4.4:2",
+                        "mac050_141:4.4.7:1")
 @pytest.mark.parametrize("mode", [c.GP_MODE, c.GF_MODE, c.AVG_MODE, c.AG_MODE])
 def test_the_gear_ratio_is_gearf1_over_gearf2_and_its_sign_reverses(mode: int) -> None:
     """Manual 3.2.14: output/input = GEARF1/GEARF2; a negative GEARF1 reverses the motor; used
@@ -292,8 +296,8 @@ def test_the_gear_ratio_is_gearf1_over_gearf2_and_its_sign_reverses(mode: int) -
 # ------------------------------------------------------------------ 3.2.16–19 I2T, UIT; 4.5.1–2
 
 
-@pytest.mark.statements("mac050_141:3.2.16:3", "mac050_141:3.2.16:4", "mac050_141:4.5.1:1",
-                        "mac050_141:3.2.35:17", "mac050_141:4.4:2")
+@pytest.mark.statements("mac050_141:3.2.16:3", "mac050_141:3.2.16:4", "mac050_141:3.2.35:17",
+                        "mac050_141:4.4:2", "mac050_141:4.5.1:1")
 def test_i2t_trip_sets_i2t_err_and_stops_to_init() -> None:
     """Manual 3.2.16, 4.5.1: I2T above I2TLIM sets I2T_ERR and the motor goes to INIT_MODE."""
     m = _motor()
@@ -321,7 +325,7 @@ def test_i2t_integrates_the_squared_phase_currents_in_every_mode() -> None:
 
 
 @pytest.mark.statements("mac050_141:3.2.18:1", "mac050_141:3.2.18:2", "mac050_141:3.2.18:3",
-                        "mac050_141:4.5.2:1", "mac050_141:3.2.35:14")
+                        "mac050_141:3.2.35:14", "mac050_141:4.5.2:1")
 def test_uit_counts_only_regenerated_power_and_trips_above_52_volts() -> None:
     """Manual 3.2.18/19, 4.5.2: UIT integrates the regenerated power (negative power is taken
     as 0: UIT stays 0 while the motor accelerates); above UITLIM with a supply above 52 V, UIT_ERR
@@ -349,9 +353,9 @@ _FLWERR_MODES = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.VAT_MOD
 
 
 @pytest.mark.statements("mac050_141:3.2.20:1", "mac050_141:3.2.20:3", "mac050_141:3.2.20:4",
-                        "mac050_141:4.5.4:1", "mac050_141:4.4.2:3", "mac050_141:4.4.3:3",
-                        "mac050_141:4.4.4:4", "mac050_141:4.4.6:3", "mac050_141:4.4.7:3",
-                        "mac050_141:4.4.21:3", "mac050_141:4.4.22:3", "mac050_141:4.4.25:3")
+                        "mac050_141:4.4.2:3", "mac050_141:4.4.3:3", "mac050_141:4.4.4:4",
+                        "mac050_141:4.4.6:3", "mac050_141:4.4.7:3", "mac050_141:4.4.21:3",
+                        "mac050_141:4.4.22:3", "mac050_141:4.4.25:3", "mac050_141:4.5.4:1")
 @pytest.mark.parametrize("mode", _FLWERR_MODES, ids=[c.MODE_NAMES[x] for x in _FLWERR_MODES])
 def test_flwerr_accumulates_the_velocity_error_of_a_blocked_motor(mode: int) -> None:
     """Manual 3.2.20, 4.5.4: in the regulated modes FLWERR accumulates the velocity error (the
@@ -391,8 +395,9 @@ def test_flwerr_and_fncerr_are_0_in_the_other_modes(mode: int) -> None:
     assert not tr["FLWERR"].any() and not tr["FNCERR"].any()
 
 
-@pytest.mark.statements("mac050_141:3.2.22:1", "mac050_141:3.2.22:2", "mac050_141:4.5.4:2",
-                        "mac050_141:4.5.4:3", "mac050_141:3.2.35:15", "mac050_141:4.4.2:5")
+@pytest.mark.statements("mac050_141:3.2.22:1", "mac050_141:3.2.22:2", "mac050_141:3.2.35:15",
+                        "mac050_141:4.1.8:3", "mac050_141:4.4.2:5", "mac050_141:4.4.3:9",
+                        "mac050_141:4.4.12:3", "mac050_141:4.5.4:2", "mac050_141:4.5.4:3")
 def test_flwerrmax_trips_flw_err_through_stop_and_0_disables_it() -> None:
     """Manual 3.2.22, 4.5.4: |FLWERR| > FLWERRMAX sets FLW_ERR and the motor goes to INIT_MODE
     through STOP_MODE; FLWERRMAX = 0 disables the check."""
@@ -409,8 +414,8 @@ def test_flwerrmax_trips_flw_err_through_stop_and_0_disables_it() -> None:
     assert int(m.read("MODE_REG")[1]) == c.V_MODE and abs(int(m.read("FLWERR")[1])) > 5000
 
 
-@pytest.mark.statements("mac050_141:3.2.26:1", "mac050_141:3.2.26:2", "mac050_141:4.5.5:2",
-                        "mac050_141:3.2.35:16", "mac050_141:4.4.3:6")
+@pytest.mark.statements("mac050_141:3.2.26:1", "mac050_141:3.2.26:2", "mac050_141:3.2.35:16",
+                        "mac050_141:4.4.3:6", "mac050_141:4.5.5:2")
 def test_fncerrmax_trips_fnc_err_and_0_disables_it() -> None:
     """Manual 3.2.26, 4.5.5: |FNCERR| > FNCERRMAX sets FNC_ERR and the motor goes to INIT_MODE;
     FNCERRMAX = 0 disables the check (a held motor in P_MODE)."""
@@ -428,8 +433,8 @@ def test_fncerrmax_trips_fnc_err_and_0_disables_it() -> None:
 _NO_CORRECTION_MODES = [c.V_MODE, c.AV_MODE, c.AVG_MODE, c.VAT_MODE, c.AVZ_MODE]
 
 
-@pytest.mark.statements("mac050_141:3.2.24:4", "mac050_141:4.4.6:4", "mac050_141:4.4.7:4",
-                        "mac050_141:4.4.2:4", "mac050_141:4.4.2:6")
+@pytest.mark.statements("mac050_141:3.2.24:4", "mac050_141:4.4.2:4", "mac050_141:4.4.2:6",
+                        "mac050_141:4.4.6:4", "mac050_141:4.4.7:4")
 @pytest.mark.parametrize("mode", _NO_CORRECTION_MODES,
                          ids=[c.MODE_NAMES[x] for x in _NO_CORRECTION_MODES])
 def test_without_function_correction_fncerr_stays_0(mode: int) -> None:
@@ -463,9 +468,9 @@ def test_in_the_gear_modes_fncerr_is_the_position_error(mode: int) -> None:
 # ------------------------------------------------------------------ 3.2.28–30 limits; 4.5.3
 
 
-@pytest.mark.statements("mac050_141:3.2.28:1", "mac050_141:3.2.28:2", "mac050_141:3.2.28:3",
-                        "mac050_141:4.5.3:1", "mac050_141:4.5.3:2", "mac050_141:3.2.10:3",
-                        "mac050_141:3.2.35:10")
+@pytest.mark.statements("mac050_141:3.2.10:3", "mac050_141:3.2.28:1", "mac050_141:3.2.28:2",
+                        "mac050_141:3.2.28:3", "mac050_141:3.2.35:10", "mac050_141:4.5.3:1",
+                        "mac050_141:4.5.3:2")
 def test_position_limits_trip_below_min_and_above_max_and_both_0_disable() -> None:
     """Manual 3.2.28/30, 4.5.3: P_IST < MIN_P_IST or P_IST > MAX_P_IST sets PLIM_ERR and the
     motor goes to INIT_MODE through STOP_MODE; the check is on while either limit is non-zero
@@ -540,7 +545,7 @@ def test_inposcnt_is_the_number_of_consecutive_samples_inside_the_window() -> No
         assert not in_pos[0] and in_pos[-1] and (run[in_pos.argmax() - 1] == cnt - 1)
 
 
-@pytest.mark.statements("mac050_141:3.2.33:6", "mac050_141:4.1.1:6")
+@pytest.mark.statements("mac050_141:3.2.33:6", "mac050_141:4.1.1:6", "mac050_141:4.4.2:8")
 def test_in_velocity_mode_with_inposcnt_in_pos_is_the_velocity_error() -> None:
     """Manual 3.2.33/34, 4.1.1: in V_MODE with INPOSCNT > 0, IN_POS when |V_SOLL − 16·V_IST| <
     INPOSWIN: at the required speed, not while accelerating, not when blocked; with
@@ -592,7 +597,7 @@ def test_relative_positioning_by_p_fnc_moves_by_px() -> None:
     assert int(m.read("P_SOLL")[0]) == 0
 
 
-@pytest.mark.statements("mac050_141:3.2.35:9")
+@pytest.mark.statements("mac050_141:3.2.35:9", "mac050_141:3.2.43:3")
 def test_absolute_positioning_by_the_registers_when_neither_bit_is_set() -> None:
     """Manual 3.2.35 bit 9: with RELPOSPSOLL and RELPOSPFNC reset, P_SOLL = Px."""
     m = _motor()
@@ -713,10 +718,10 @@ def test_home_mode_low_byte_homes_at_power_on_then_startmode() -> None:
     assert abs(int(m.read("P_IST")[0]) + 100) <= 2
 
 
-@pytest.mark.statements("mac050_141:3.2.41:1", "mac050_141:3.2.41:2", "mac050_141:4.4.13:4",
-                        "mac050_141:4.4.13:5", "mac050_141:4.4.13:7", "mac050_141:3.2.40:1",
-                        "mac050_141:3.2.40:2", "mac050_141:3.2.38:1", "mac050_141:4.4.13:6",
-                        "mac050_141:4.4.13:9")
+@pytest.mark.statements("mac050_141:3.2.38:1", "mac050_141:3.2.40:1", "mac050_141:3.2.40:2",
+                        "mac050_141:3.2.41:1", "mac050_141:3.2.41:2", "mac050_141:4.4.13:1",
+                        "mac050_141:4.4.13:2", "mac050_141:4.4.13:4", "mac050_141:4.4.13:5",
+                        "mac050_141:4.4.13:6", "mac050_141:4.4.13:7", "mac050_141:4.4.13:9")
 def test_home1_counts_50_samples_above_t_home_with_the_torque_limited_to_1_25_t_home() -> None:
     """Manual 3.2.41, 4.4.13: HOME1 runs at V_HOME (its sign the direction) into the mechanical
     stop with the torque limited to 1.25·T_HOME; the home is where the torque has exceeded T_HOME
@@ -739,7 +744,7 @@ def test_home1_counts_50_samples_above_t_home_with_the_torque_limited_to_1_25_t_
     assert int(m.read("P_SOLL")[0]) == 0 and int(m.read("T_SOLL")[0]) == 900
 
 
-@pytest.mark.statements("mac050_141:3.2.41:3", "mac050_141:4.4.14:1")
+@pytest.mark.statements("mac050_141:3.2.40:2", "mac050_141:3.2.41:3", "mac050_141:4.4.14:1")
 @pytest.mark.parametrize("mode", [c.HOME2_MODE, c.HOME3_MODE])
 def test_a_negative_t_home_makes_the_home_sensor_active_low(mode: int) -> None:
     """Manual 3.2.41: the sign of T_HOME is the sensor's polarity: negative, active low. The
@@ -755,7 +760,7 @@ def test_a_negative_t_home_makes_the_home_sensor_active_low(mode: int) -> None:
     assert zero_rad == pytest.approx(1.0, abs=2 * one_sample)
 
 
-@pytest.mark.statements("mac050_141:4.4.15:1", "mac050_141:4.4.15:3")
+@pytest.mark.statements("mac050_141:3.2.40:1", "mac050_141:4.4.15:1", "mac050_141:4.4.15:3")
 def test_home3_leaves_the_sensor_slowly_at_minus_v_home_over_64_plus_1() -> None:
     """Manual 4.4.15: HOME3 goes towards the sensor at V_HOME, then, the sensor active, slowly
     back at −V_HOME/64 + 1 until it deactivates: the zero."""
@@ -792,7 +797,7 @@ def _vf_impulse(coefficients: dict[str, float], kvout: float = 1.0) -> list[int]
     return out
 
 
-@pytest.mark.statements("mac050_141:3.2.93:1", "mac050_141:4.2.1:4")
+@pytest.mark.statements("mac050_141:3.2.93:1", "mac050_141:3.2.121:1", "mac050_141:4.2.1:4")
 @pytest.mark.parametrize("name", list(_VF_TAPS))
 def test_each_vf_numerator_coefficient_has_its_delay(name: str) -> None:
     """Manual 3.2.93–100: VF(z) = (KVFX4 z⁴ + KVFX3 z³ + KVFX2 z² + KVFX1 z)/(z⁴ − …): an
@@ -816,7 +821,7 @@ def test_each_vf_denominator_coefficient_feeds_back_with_a_plus_sign(name: str) 
 
 
 @pytest.mark.statements("mac050_141:3.2.106:1", "mac050_141:3.2.106:2", "mac050_141:3.2.110:1",
-                        "mac050_141:4.3.1:4")
+                        "mac050_141:3.2.145:1", "mac050_141:4.3.1:4")
 def test_the_current_filters_if_and_ib() -> None:
     """Manual 3.2.106–111, 4.3: per phase the error is IX_SOLL − IB(IX_IST), IB(z) = (KIB1 z +
     KIB0)/z, and the voltage U = IF(error), IF(z) = (KIFX2 z² + KIFX1 z)/(z² − KIFY1 z −
@@ -833,8 +838,9 @@ def test_the_current_filters_if_and_ib() -> None:
     assert u == -1023.0
 
 
-@pytest.mark.statements("mac050_141:4.3.1:1", "mac050_141:4.3.1:2", "mac050_141:4.3.1:3",
-                        "mac050_141:3.2.126:1", "mac050_141:3.2.127:2", "mac050_141:3.2.131:1")
+@pytest.mark.statements("mac050_141:3.2.126:1", "mac050_141:3.2.127:2", "mac050_141:3.2.131:1",
+                        "mac050_141:3.2.133:1", "mac050_141:4.3.1:1", "mac050_141:4.3.1:2",
+                        "mac050_141:4.3.1:3")
 def test_commutation_gives_the_three_phase_references() -> None:
     """Manual 4.3, 3.2.126/127: I_NOM = |VF_OUT|, PHI_SOLL = ELDEG_IST ± 90° (the sign of the
     torque) + V_ELDEG·PHASE_COMP, and IA/IB/IC_SOLL = I_NOM·AMPLITUDE·sin(PHI_SOLL + 0, 120,
@@ -852,7 +858,8 @@ def test_commutation_gives_the_three_phase_references() -> None:
     assert references(1023.0, 0.0, 0.0, 0, amplitude)[2] == round(1023 * amplitude / 256)
 
 
-@pytest.mark.statements("mac050_141:3.2.128:1", "mac050_141:3.2.128:2", "mac050_141:4.4.8:1")
+@pytest.mark.statements("mac050_141:3.2.2:17", "mac050_141:3.2.128:1", "mac050_141:3.2.128:2",
+                        "mac050_141:4.4.8:1", "mac050_141:4.4.8:5")
 def test_mani_mode_sets_the_stator_field_from_man_i_nom_and_man_alpha() -> None:
     """Manual 3.2.128/129: in MANI_MODE IA/IB/IC_SOLL = MAN_I_NOM·sin(MAN_ALPHA + 0, 120, 240
     electrical degrees)·AMPLITUDE, MAN_ALPHA in 360/2048 electrical degrees."""
@@ -896,7 +903,8 @@ def test_aninp_is_the_analogue_input_plus_10_volts_to_1023_in_every_mode() -> No
     np.testing.assert_array_equal(m.read("ANINP"), [1023, -1023, 512, 0])
 
 
-@pytest.mark.statements("mac050_141:3.2.120:1", "mac050_141:3.2.120:2", "mac050_141:4.1.3:2")
+@pytest.mark.statements("mac050_141:3.2.36:16", "mac050_141:3.2.120:1", "mac050_141:3.2.120:2",
+                        "mac050_141:4.1.3:2")
 @pytest.mark.parametrize("mode", [c.INIT_MODE, c.GP_MODE, c.AVG_MODE, c.AG_MODE, c.COIL_MODE])
 def test_v_ext_is_the_pulse_count_of_the_last_sample(mode: int) -> None:
     m = _motor()
@@ -911,8 +919,8 @@ def test_v_ext_is_the_pulse_count_of_the_last_sample(mode: int) -> None:
     assert int(m.read("V_EXT")[0]) == -3
 
 
-@pytest.mark.statements("mac050_141:4.1.4:1", "mac050_141:4.1.4:2", "mac050_141:4.4.5:1",
-                        "mac050_141:4.4.5:2")
+@pytest.mark.statements("mac050_141:3.2.2:14", "mac050_141:3.2.122:4", "mac050_141:4.1.4:1",
+                        "mac050_141:4.1.4:2", "mac050_141:4.4.5:1", "mac050_141:4.4.5:2")
 def test_at_mode_torque_is_the_analogue_input_scaled_to_t_soll() -> None:
     """Manual 4.1.4, 4.4.5: in AT_MODE ±10 V give ±T_SOLL, written to VF_OUT with the speed
     loop passive (FNC_OUT, FF_OUT stay 0); FLWERR, FNCERR and IN_POS are 0."""
@@ -949,7 +957,8 @@ def test_v_eldeg_is_the_speed_per_inner_sample() -> None:
     assert np.mean(v["V_ELDEG"]) == pytest.approx(np.mean(v["V_IST"]) / 15, abs=0.5)
 
 
-@pytest.mark.statements("mac050_141:3.2.130:1", "mac050_141:4.4.9:1", "mac050_141:4.4.9:2")
+@pytest.mark.statements("mac050_141:3.2.130:1", "mac050_141:3.2.145:1", "mac050_141:4.4.9:1",
+                        "mac050_141:4.4.9:2")
 def test_testu_applies_umeas_to_a_and_minus_umeas_to_c_then_init() -> None:
     """Manual 4.4.9: TESTU records UA_VAL (SAMPLE1 = 145) and IC_IST (SAMPLE2 = 139) at the inner
     rate from the start of the buffer, with UA = UMEAS and UC = −UMEAS, for 11 samples, then
@@ -984,8 +993,8 @@ def test_the_profile_starts_from_0_after_init_mode() -> None:
     assert int(m.read("FNC_OUT")[0]) == 30
 
 
-@pytest.mark.statements("mac050_141:4.1.8:2", "mac050_141:4.4.12:1", "mac050_141:4.4.2:7",
-                        "mac050_141:4.4.1:3")
+@pytest.mark.statements("mac050_141:3.2.2:21", "mac050_141:4.1.8:1", "mac050_141:4.1.8:2",
+                        "mac050_141:4.4.1:3", "mac050_141:4.4.2:7", "mac050_141:4.4.12:1")
 def test_stop_mode_switches_to_init_below_300_rpm() -> None:
     """Manual 4.1.8, 4.4.12: a switch to INIT from V_MODE goes through STOP_MODE, which brakes
     with A_SOLL and goes to INIT_MODE when the measured speed is below 300 rpm."""
@@ -1007,9 +1016,10 @@ _REGULATED = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.A2POS_MODE
               c.GF_MODE, c.VAT_MODE, c.AG_MODE, c.COIL_MODE, c.AVZ_MODE]
 
 
-@pytest.mark.statements("mac050_141:4.4.2:7", "mac050_141:4.4.3:7", "mac050_141:4.4.4:6",
-                        "mac050_141:4.4.6:5", "mac050_141:4.4.7:5", "mac050_141:4.4.21:5",
-                        "mac050_141:4.4.22:5", "mac050_141:4.4.25:5", "mac050_141:4.4.12:3")
+@pytest.mark.statements("mac050_141:4.1.8:3", "mac050_141:4.4.2:7", "mac050_141:4.4.3:7",
+                        "mac050_141:4.4.4:6", "mac050_141:4.4.6:5", "mac050_141:4.4.7:5",
+                        "mac050_141:4.4.12:3", "mac050_141:4.4.21:5", "mac050_141:4.4.22:5",
+                        "mac050_141:4.4.25:5")
 @pytest.mark.parametrize("mode", _REGULATED, ids=[c.MODE_NAMES[x] for x in _REGULATED])
 def test_a_moving_mode_goes_to_init_through_stop_mode(mode: int) -> None:
     m = _motor()
@@ -1056,7 +1066,7 @@ def test_500_pulses_per_revolution_by_gearf_1024_over_125(mode: int) -> None:
     assert int(m.read("P_IST")[0]) == pytest.approx(5 * 4096, abs=2)
 
 
-@pytest.mark.statements("mac050_141:4.4.18:1", "mac050_141:4.4.18:2")
+@pytest.mark.statements("mac050_141:3.2.2:27", "mac050_141:4.4.18:1", "mac050_141:4.4.18:2")
 def test_vat_limits_the_torque_to_aninp_times_t_soll_over_1024() -> None:
     """Manual 4.4.18: VAT is V_MODE with the torque limit |ANINP·T_SOLL/1024|."""
     m = _motor(3, coulomb_friction=5.0)
@@ -1068,7 +1078,7 @@ def test_vat_limits_the_torque_to_aninp_times_t_soll_over_1024() -> None:
     assert np.all(vf <= limit + 0.5) and np.all(vf >= limit - 1)
 
 
-@pytest.mark.statements("mac050_141:4.1.10:4")
+@pytest.mark.statements("mac050_141:4.1.10:4", "mac050_141:4.1.10:5")
 def test_a2pos_relative_positioning_by_p_fnc() -> None:
     """Manual 4.1.10: with RELPFNC (ERR_STAT RELPOSPFNC) a rising input subtracts 16·P2 from
     P_FNC, a falling one 16·P1: each edge moves the motor by P2 or P1 further."""
@@ -1089,7 +1099,7 @@ def test_a2pos_relative_positioning_by_p_fnc() -> None:
     assert int(m.read("P_IST")[0]) - start == pytest.approx(3000 + 1000, abs=10)
 
 
-@pytest.mark.statements("mac050_141:4.4.20:2")
+@pytest.mark.statements("mac050_141:3.2.72:1", "mac050_141:4.4.20:2")
 def test_coil_mode_adds_v8_to_the_spindle_pulses() -> None:
     """Manual 4.4.20: in COIL_MODE V8 is added to V_EXT's pulses, so the traverse runs with the
     spindle at rest: V8 = 10 moves like 10 pulses per sample."""
@@ -1124,7 +1134,8 @@ def test_safe_mode_is_not_entered_or_left_by_writing_mode_reg() -> None:
     assert m.mode_name() == "INIT_MODE"
 
 
-@pytest.mark.statements("mac050_141:4.1.2:2", "mac050_141:4.1.2:4", "mac050_141:4.4.3:8")
+@pytest.mark.statements("mac050_141:3.2.35:11", "mac050_141:3.2.35:12", "mac050_141:4.1.2:2",
+                        "mac050_141:4.1.2:3", "mac050_141:4.1.2:4", "mac050_141:4.4.3:8")
 def test_the_position_profile_lands_on_p_soll_without_overshoot_and_flags_its_phases() -> None:
     """Manual 4.1.2: the position block brakes so that the function position reaches 16·P_SOLL
     exactly and never passes it; ACC_FLAG while it speeds up, DEC_FLAG while it brakes."""
@@ -1140,7 +1151,7 @@ def test_the_position_profile_lands_on_p_soll_without_overshoot_and_flags_its_ph
     assert rising.any() and falling.any()
 
 
-@pytest.mark.statements("mac050_141:3.2.36:7")
+@pytest.mark.statements("mac050_141:3.2.36:7", "mac050_141:3.2.116:1")
 def test_rewindbit_sets_rec_cnt_to_0_and_clears_itself() -> None:
     m = _motor()
     m.write("CNTRL_BITS", int(m.read("CNTRL_BITS")[0]) | c.RECORDBIT)
@@ -1152,7 +1163,7 @@ def test_rewindbit_sets_rec_cnt_to_0_and_clears_itself() -> None:
     assert not int(m.read("CNTRL_BITS")[0]) & c.REWINDBIT
 
 
-@pytest.mark.statements("mac050_141:3.2.101:1")
+@pytest.mark.statements("mac050_141:3.2.101:1", "mac050_141:3.2.119:1")
 def test_gearb_multiplies_the_vb_filter() -> None:
     """Manual 3.2.101: VB_OUT = GEARB·(KVB3 + KVB2 z⁻¹ + …)·V_IST."""
     from jvl_gym.families.mac050_141.firmware.speed_loop import speed_regulator
@@ -1182,7 +1193,7 @@ def test_the_electrical_angle_turns_once_per_2048_counts() -> None:
     assert int(np.sum(np.diff(e) % 2048)) == pytest.approx(int(p[-1] - p[0]), abs=2)
 
 
-@pytest.mark.statements("mac050_141:3.2.148:1", "mac050_141:3.2.148:2")
+@pytest.mark.statements("mac050_141:3.2.137:1", "mac050_141:3.2.148:1", "mac050_141:3.2.148:2")
 @pytest.mark.parametrize(("gain", "alpha", "phase"), [("KIB", 1877, 1), ("KIC", 1195, 2)])
 def test_kib_and_kic_compensate_their_phases(gain: str, alpha: int, phase: int) -> None:
     """Manual 3.2.148–150: KIB and KIC scale the B and C current measurements as KIA does A
@@ -1200,7 +1211,7 @@ def test_kib_and_kic_compensate_their_phases(gain: str, alpha: int, phase: int) 
     assert amps[1] / amps[0] == pytest.approx(0.5, rel=0.1)
 
 
-@pytest.mark.statements("mac050_141:4.4.23:1")
+@pytest.mark.statements("mac050_141:3.2.2:32", "mac050_141:4.4.23:1")
 def test_testki_records_the_phase_currents_for_the_gain_calculation() -> None:
     """Manual 4.4.23: TESTKI drives a current through the phases and records the measured
     phase currents, from which the measurement gains (KIA, KIB) follow: the same current flows
@@ -1219,7 +1230,7 @@ def test_testki_records_the_phase_currents_for_the_gain_calculation() -> None:
     assert ratios[1] == pytest.approx(2.0, rel=0.05)
 
 
-@pytest.mark.statements("mac050_141:4.5.6:4")
+@pytest.mark.statements("mac050_141:3.2.152:1", "mac050_141:4.5.6:4")
 def test_undervoltage_in_init_mode_uses_1_25_u_min_sup() -> None:
     """Manual 4.5.6: in INIT_MODE UV_DETECT is set below 1.25·U_MIN_SUP, in the other modes
     below U_MIN_SUP: 48 V with U_MIN_SUP = 40 V is an undervoltage only in INIT_MODE."""
@@ -1232,7 +1243,7 @@ def test_undervoltage_in_init_mode_uses_1_25_u_min_sup() -> None:
     assert bool(st[0] & c.UV_DETECT) and not st[1] & c.UV_DETECT
 
 
-@pytest.mark.statements("mac050_141:4.4:3", "mac050_141:4.4:4")
+@pytest.mark.statements("mac050_141:3.2.18:4", "mac050_141:4.4:3", "mac050_141:4.4:4")
 def test_uit_and_the_position_limits_work_in_at_mode_too() -> None:
     """Manual 4.4: UIT, UIT_ERR and PLIM_ERR are updated in every mode: in AT_MODE a torque
     against the motion regenerates (UIT rises), and the motor driven past MAX_P_IST trips."""
@@ -1262,3 +1273,20 @@ def test_the_fastmac_home_command_runs_the_home_mode_of_the_high_byte() -> None:
     twin = Twin(m, [19])
     twin.user[0].feed(bytes((fm.encode_command(fm.FastCommand.HOME, 1),)))
     assert m.mode_name() == "HOME2_MODE"
+
+
+@pytest.mark.parametrize(("pointer", "size"), [("P_REG_P", 8), ("V_REG_P", 8), ("A_REG_P", 4),
+                                               ("T_REG_P", 4), ("L_REG_P", 4), ("Z_REG_P", 4)])
+@pytest.mark.statements("mac050_141:3.2.43:2", "mac050_141:3.2.44:2", "mac050_141:3.2.45:2",
+                        "mac050_141:3.2.46:2", "mac050_141:3.2.47:2", "mac050_141:3.2.48:2")
+def test_register_mode_pointers_refuse_values_past_their_set(pointer: str, size: int) -> None:
+    """Manual 3.2.43–3.2.48: P_REG_P and V_REG_P range 0 … 8, the others 0 … 4."""
+    from jvl_gym.registers import RegisterError
+
+    m = _motor()
+    before = m.regs.copy()
+    with pytest.raises(RegisterError):
+        m.write(pointer, size + 1)
+    np.testing.assert_array_equal(m.regs, before)
+    m.write(pointer, size)
+    assert int(m.read(pointer)[0]) == 0  # done at once
