@@ -131,8 +131,7 @@ def test_avg_bias_is_300_rpm_at_10_volts():
 COIL = dict(P1=10000, P2=12000, P3=58000, P4=60000, P5=12000, P6=1)
 
 
-@pytest.mark.statements("mac050_141:3.2.2:29", "mac050_141:3.2.49:3", "mac050_141:4.4.20:1",
-                        "mac050_141:4.4.20:3")
+@pytest.mark.statements("mac050_141:3.2.2:29", "mac050_141:4.4.20:1", "mac050_141:4.4.20:3")
 def test_coil_example_traverses_dwells_and_returns_to_p5():
     m = MotorArray("MAC140", n=1, seed=0, load_inertia=10e-6)
     for k, v in COIL.items():
@@ -275,9 +274,8 @@ def test_flying_saw_returns_to_start_through_p_fnc():
     assert int(m.read("ERR_STAT")[0]) & c.IN_POS
 
 
-@pytest.mark.statements("mac050_141:3.2.2:30", "mac050_141:3.2.49:4", "mac050_141:4.1.10:1",
-                        "mac050_141:4.1.10:2", "mac050_141:4.1.10:3", "mac050_141:4.1.10:5",
-                        "mac050_141:4.4.21:1")
+@pytest.mark.statements("mac050_141:3.2.2:30", "mac050_141:4.1.10:1", "mac050_141:4.1.10:2",
+                        "mac050_141:4.1.10:3", "mac050_141:4.1.10:5", "mac050_141:4.4.21:1")
 def test_a2pos_hysteresis_absolute_and_relative():
     m = MotorArray("MAC140", n=1, seed=0)
     m.write("P1", 1000)
@@ -295,8 +293,7 @@ def test_a2pos_hysteresis_absolute_and_relative():
     assert int(m.read("P_SOLL")[0]) == 6000
 
 
-@pytest.mark.statements("mac050_141:3.2.2:31", "mac050_141:3.2.49:5", "mac050_141:4.1.11:1",
-                        "mac050_141:4.4.22:1")
+@pytest.mark.statements("mac050_141:3.2.2:31", "mac050_141:4.1.11:1", "mac050_141:4.4.22:1")
 def test_apos_dead_band():
     m = MotorArray("MAC140", n=1, seed=0)
     m.write("P1", 100)

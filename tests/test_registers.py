@@ -73,10 +73,10 @@ def test_names_unique_and_lookup_round_trip():
         ("INDEX_OFFSET", 162, Format.WORD), ("P_NEW", 163, Format.LONGINT),
     ],
 )
-@pytest.mark.statements("mac050_141:3.2:1", "mac050_141:3.2.13:2", "mac050_141:3.2.14:4",
-                        "mac050_141:3.2.49:2", "mac050_141:3.2.65:2", "mac050_141:3.2.81:2",
-                        "mac050_141:3.2.89:2", "mac050_141:3.2.93:3", "mac050_141:3.2.101:2",
-                        "mac050_141:3.2.106:3", "mac050_141:3.2.110:2")
+@pytest.mark.statements("mac050_141:3.2:1", "mac050_141:3.2.8:11", "mac050_141:3.2.13:2",
+                        "mac050_141:3.2.14:4", "mac050_141:3.2.49:2", "mac050_141:3.2.65:2",
+                        "mac050_141:3.2.81:2", "mac050_141:3.2.89:2", "mac050_141:3.2.93:3",
+                        "mac050_141:3.2.101:2", "mac050_141:3.2.106:3", "mac050_141:3.2.110:2")
 def test_manual_numbers_and_formats(name, number, fmt):
     r = T.lookup(name)
     assert (r.number, r.format) == (number, fmt)

@@ -140,7 +140,6 @@ def test_at_mode_only_leaves_to_init():
     assert m.mode_name() == "INIT_MODE"
 
 
-@pytest.mark.statements("mac050_141:4.4.10:2")
 def test_test_modes_need_init(m):
     m.write("MODE_REG", 1)
     with pytest.raises(ModeError, match="INIT"):
