@@ -109,7 +109,7 @@ def test_i2t_trips_at_i2tlim_and_phase_comp_leads_the_field() -> None:
     assert vf[0] != vf[1]
 
 
-@pytest.mark.statements("mac050_141:3.2.18:2")
+@pytest.mark.statements("mac050_141:3.2.18:2", "mac050_141:4.5.2:2")
 def test_uit_trips_at_uitlim_only_above_52_volts() -> None:
     """UITLIM (manual 3.2.19): UIT_ERR when UIT passes it and the supply is above 52 V."""
     from jvl_gym.families.mac050_141 import constants as c

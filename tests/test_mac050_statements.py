@@ -222,7 +222,7 @@ _ALL_MODES_ALIVE = [c.INIT_MODE, c.V_MODE, c.AT_MODE, c.MANI_MODE, c.STOP_MODE]
 
 @pytest.mark.statements("mac050_141:3.2.10:4", "mac050_141:3.2.12:3", "mac050_141:4.2.1:2",
                         "mac050_141:4.2.1:3", "mac050_141:4.4.1:4", "mac050_141:4.4.5:3",
-                        "mac050_141:4.4.8:3")
+                        "mac050_141:4.4.8:3", "mac050_141:4.5.3:3")
 def test_p_ist_and_v_ist_follow_the_shaft_in_init_mode() -> None:
     """Manual 3.2.10/3.2.12, 4.2: V_IST is the encoder's count difference per sample and is added
     to P_IST, in every mode, also INIT_MODE with the motor passive (a coasting rotor)."""
@@ -311,7 +311,8 @@ def test_i2t_trip_sets_i2t_err_and_stops_to_init() -> None:
     assert m.mode_name() == "INIT_MODE" and int(m.read("I2T")[0]) > 200
 
 
-@pytest.mark.statements("mac050_141:3.2.16:2", "mac050_141:3.2.16:5", "mac050_141:4.4:1")
+@pytest.mark.statements("mac050_141:3.2.16:2", "mac050_141:3.2.16:5", "mac050_141:4.4:1",
+                        "mac050_141:4.5.1:2")
 def test_i2t_integrates_the_squared_phase_currents_in_every_mode() -> None:
     """Manual 3.2.16: I2T integrates Ia² + Ib² + Ic², in every mode: in MANI_MODE a stator
     field of twice the current raises I2T four times as fast; a passive motor adds nothing."""
@@ -326,7 +327,8 @@ def test_i2t_integrates_the_squared_phase_currents_in_every_mode() -> None:
 
 
 @pytest.mark.statements("mac050_141:3.2.18:1", "mac050_141:3.2.18:2", "mac050_141:3.2.18:3",
-                        "mac050_141:3.2.35:14", "mac050_141:4.5.2:1")
+                        "mac050_141:3.2.35:14", "mac050_141:3.2.35:20", "mac050_141:4.5.2:1",
+                        "mac050_141:4.5.2:2")
 def test_uit_counts_only_regenerated_power_and_trips_above_52_volts() -> None:
     """Manual 3.2.18/19, 4.5.2: UIT integrates the regenerated power (negative power is taken
     as 0: UIT stays 0 while the motor accelerates); above UITLIM with a supply above 52 V, UIT_ERR
@@ -337,9 +339,10 @@ def test_uit_counts_only_regenerated_power_and_trips_above_52_volts() -> None:
     m.write("MODE_REG", c.V_MODE)
     m.step(25)  # accelerating: power flows into the motor
     np.testing.assert_array_equal(m.read("UIT"), [0, 0])
-    m.step(275)
+    modes = m.trace(["MODE_REG"], 275)["MODE_REG"][:, 0]
     m.write("V_SOLL", -3000)  # braking: power flows back
-    m.step(300)
+    modes = np.concatenate([modes, m.trace(["MODE_REG"], 300)["MODE_REG"][:, 0]])
+    assert c.STOP_MODE in modes  # the error stop brakes first (4.5.2)
     assert np.all(m.read("UIT") > 1)
     err = m.read("ERR_STAT")
     assert err[0] & c.UIT_ERR and not err[1] & c.UIT_ERR
@@ -397,8 +400,9 @@ def test_flwerr_and_fncerr_are_0_in_the_other_modes(mode: int) -> None:
 
 
 @pytest.mark.statements("mac050_141:3.2.22:1", "mac050_141:3.2.22:2", "mac050_141:3.2.35:15",
-                        "mac050_141:4.1.8:3", "mac050_141:4.4.2:5", "mac050_141:4.4.3:9",
-                        "mac050_141:4.4.12:3", "mac050_141:4.5.4:2", "mac050_141:4.5.4:3")
+                        "mac050_141:3.2.35:20", "mac050_141:4.1.8:3", "mac050_141:4.4.2:5",
+                        "mac050_141:4.4.3:9", "mac050_141:4.4.12:3", "mac050_141:4.5.4:2",
+                        "mac050_141:4.5.4:3")
 def test_flwerrmax_trips_flw_err_through_stop_and_0_disables_it() -> None:
     """Manual 3.2.22, 4.5.4: |FLWERR| > FLWERRMAX sets FLW_ERR and the motor goes to INIT_MODE
     through STOP_MODE; FLWERRMAX = 0 disables the check."""
@@ -416,7 +420,7 @@ def test_flwerrmax_trips_flw_err_through_stop_and_0_disables_it() -> None:
 
 
 @pytest.mark.statements("mac050_141:3.2.26:1", "mac050_141:3.2.26:2", "mac050_141:3.2.35:16",
-                        "mac050_141:4.4.3:6", "mac050_141:4.5.5:2")
+                        "mac050_141:3.2.35:20", "mac050_141:4.4.3:6", "mac050_141:4.5.5:2")
 def test_fncerrmax_trips_fnc_err_and_0_disables_it() -> None:
     """Manual 3.2.26, 4.5.5: |FNCERR| > FNCERRMAX sets FNC_ERR and the motor goes to INIT_MODE;
     FNCERRMAX = 0 disables the check (a held motor in P_MODE)."""
@@ -424,7 +428,8 @@ def test_fncerrmax_trips_fnc_err_and_0_disables_it() -> None:
     m.write_many({"V_SOLL": 800, "T_SOLL": 300, "P_SOLL": 1000000,
                   "FNCERRMAX": np.array([20000, 0])})
     m.write("MODE_REG", c.P_MODE)
-    m.step(600)
+    modes = m.trace(["MODE_REG"], 600)["MODE_REG"][:, 0]
+    assert c.STOP_MODE in modes  # through STOP_MODE (4.5.5)
     err = m.read("ERR_STAT")
     assert err[0] & c.FNC_ERR and not err[1] & c.FNC_ERR
     np.testing.assert_array_equal(m.read("MODE_REG"), [c.INIT_MODE, c.P_MODE])
@@ -470,8 +475,8 @@ def test_in_the_gear_modes_fncerr_is_the_position_error(mode: int) -> None:
 
 
 @pytest.mark.statements("mac050_141:3.2.10:3", "mac050_141:3.2.28:1", "mac050_141:3.2.28:2",
-                        "mac050_141:3.2.28:3", "mac050_141:3.2.35:10", "mac050_141:4.5.3:1",
-                        "mac050_141:4.5.3:2")
+                        "mac050_141:3.2.28:3", "mac050_141:3.2.35:10", "mac050_141:3.2.35:20",
+                        "mac050_141:4.5.3:1", "mac050_141:4.5.3:2")
 def test_position_limits_trip_below_min_and_above_max_and_both_0_disable() -> None:
     """Manual 3.2.28/30, 4.5.3: P_IST < MIN_P_IST or P_IST > MAX_P_IST sets PLIM_ERR and the
     motor goes to INIT_MODE through STOP_MODE; the check is on while either limit is non-zero
@@ -995,7 +1000,8 @@ def test_the_profile_starts_from_0_after_init_mode() -> None:
 
 
 @pytest.mark.statements("mac050_141:3.2.2:21", "mac050_141:4.1.8:1", "mac050_141:4.1.8:2",
-                        "mac050_141:4.4.1:3", "mac050_141:4.4.2:7", "mac050_141:4.4.12:1")
+                        "mac050_141:4.4.1:3", "mac050_141:4.4.2:7", "mac050_141:4.4.12:1",
+                        "mac050_141:4.4.12:4")
 def test_stop_mode_switches_to_init_below_300_rpm() -> None:
     """Manual 4.1.8, 4.4.12: a switch to INIT from V_MODE goes through STOP_MODE, which brakes
     with A_SOLL and goes to INIT_MODE when the measured speed is below 300 rpm."""
@@ -1291,3 +1297,33 @@ def test_register_mode_pointers_refuse_values_past_their_set(pointer: str, size:
     np.testing.assert_array_equal(m.regs, before)
     m.write(pointer, size)
     assert int(m.read(pointer)[0]) == 0  # done at once
+
+
+@pytest.mark.statements("mac050_141:3.2.14:5")
+def test_a_gear_ratio_and_its_reduced_fraction_drive_the_motor_alike() -> None:
+    """Manual 3.2.14: 15500/10000 reduced is 31/20; both give the same motion."""
+    m = _motor(2)
+    m.write_many({"GEARF1": np.array([15500, 31]), "GEARF2": np.array([10000, 20]),
+                  "V_SOLL": 20000, "A_SOLL": 200, "FNCERRMAX": 0})
+    m.set_input(pulse_counts=13)
+    m.write("MODE_REG", c.GP_MODE)
+    m.step(200)
+    m.set_input(pulse_counts=0)
+    m.run(0.5)
+    p = m.read("P_IST")
+    assert p[0] == p[1] == pytest.approx(200 * 13 * 31 / 20, abs=2)
+
+
+@pytest.mark.parametrize("mode", [c.HOME2_MODE, c.HOME3_MODE])
+@pytest.mark.statements("mac050_141:4.4.14:5", "mac050_141:4.4.15:4")
+def test_at_the_sensor_zero_p_ist_is_p_home_p_fnc_16_p_home_and_p_soll_0(mode: int) -> None:
+    """Manual 4.4.14/4.4.15: at the zero P_IST = P_HOME, P_FNC = 16·P_HOME, P_SOLL = 0 and
+    MODE_REG = STARTMODE."""
+    m = _motor(home_position=1.0)
+    m.write_many({"V_HOME": 400, "T_HOME": 1, "P_HOME": 500, "P_SOLL": 777,
+                  "STARTMODE": c.V_MODE, "V_SOLL": 0})
+    m.write("MODE_REG", mode)
+    _steps_until(m, c.MODE_NAMES[mode], 5000)
+    assert m.mode_name() == "V_MODE"
+    assert [int(m.read(x)[0]) for x in ("P_SOLL", "P_FNC")] == [0, 16 * 500]
+    assert abs(int(m.read("P_IST")[0]) - 500) <= 30  # one sample of travel since the edge

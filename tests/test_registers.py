@@ -73,10 +73,19 @@ def test_names_unique_and_lookup_round_trip():
         ("INDEX_OFFSET", 162, Format.WORD), ("P_NEW", 163, Format.LONGINT),
     ],
 )
-@pytest.mark.statements("mac050_141:3.2:1", "mac050_141:3.2.8:11", "mac050_141:3.2.13:2",
-                        "mac050_141:3.2.14:4", "mac050_141:3.2.49:2", "mac050_141:3.2.65:2",
+@pytest.mark.statements("mac050_141:3.2:1", "mac050_141:3.2.2:35", "mac050_141:3.2.3:4",
+                        "mac050_141:3.2.5:14", "mac050_141:3.2.6:15", "mac050_141:3.2.7:17",
+                        "mac050_141:3.2.8:11", "mac050_141:3.2.10:5", "mac050_141:3.2.12:5",
+                        "mac050_141:3.2.13:2", "mac050_141:3.2.14:4", "mac050_141:3.2.20:6",
+                        "mac050_141:3.2.24:7", "mac050_141:3.2.28:4", "mac050_141:3.2.32:3",
+                        "mac050_141:3.2.35:19", "mac050_141:3.2.49:2", "mac050_141:3.2.65:2",
                         "mac050_141:3.2.81:2", "mac050_141:3.2.89:2", "mac050_141:3.2.93:3",
-                        "mac050_141:3.2.101:2", "mac050_141:3.2.106:3", "mac050_141:3.2.110:2")
+                        "mac050_141:3.2.101:2", "mac050_141:3.2.106:3", "mac050_141:3.2.110:2",
+                        "mac050_141:3.2.112:3", "mac050_141:3.2.116:4", "mac050_141:3.2.121:3",
+                        "mac050_141:3.2.127:4", "mac050_141:3.2.133:2", "mac050_141:3.2.137:2",
+                        "mac050_141:3.2.145:2", "mac050_141:3.2.148:3", "mac050_141:3.2.151:2",
+                        "mac050_141:3.2.154:2", "mac050_141:3.2.156:3", "mac050_141:3.2.158:2",
+                        "mac050_141:3.2.160:4", "mac050_141:3.2.163:4")
 def test_manual_numbers_and_formats(name, number, fmt):
     r = T.lookup(name)
     assert (r.number, r.format) == (number, fmt)
@@ -104,7 +113,11 @@ def test_kib_is_not_the_filter_coefficient():
     assert T.lookup("KIB0").number == 111
 
 
-@pytest.mark.statements("mac050_141:3.2.12:2", "mac050_141:3.2.16:1", "mac050_141:3.2.20:5")
+@pytest.mark.statements("mac050_141:3.2.12:2", "mac050_141:3.2.16:1", "mac050_141:3.2.18:5",
+                        "mac050_141:3.2.20:5", "mac050_141:3.2.24:8", "mac050_141:3.2.117:2",
+                        "mac050_141:3.2.118:2", "mac050_141:3.2.119:2", "mac050_141:3.2.120:3",
+                        "mac050_141:3.2.122:5", "mac050_141:3.2.143:2", "mac050_141:3.2.144:2",
+                        "mac050_141:3.2.151:3")
 def test_read_only_set():
     ro = {r.name for r in T if r.access == Access.RO and r.format != Format.LONGINT_HIGH}
     expected = {
@@ -409,6 +422,7 @@ def test_t_home_limit():  # manual 3.2.41: 1.25·T_HOME must stay ≤ 1023
     assert 1.25 * T.lookup("T_HOME").maximum <= T.lookup("T_SOLL").maximum
 
 
+@pytest.mark.statements("mac050_141:3.2.14:5")
 def test_gear_example_fits():  # manual 3.2.14: 15500/10000 = 31/20
     assert int(to_raw(T.lookup("GEARF1"), 15500)) == 15500
     assert int(to_raw(T.lookup("GEARF2"), 10000)) == 10000

@@ -84,7 +84,7 @@ def test_at_mode_torque_gives_t_over_j():
     assert acc == pytest.approx(torque / (cfg.rotor_inertia + jl), rel=0.02)
 
 
-@pytest.mark.statements("mac050_141:3.2.2:10", "mac050_141:4.4.1:1")
+@pytest.mark.statements("mac050_141:3.2.2:10", "mac050_141:4.4.1:1", "mac050_141:4.4.1:9")
 def test_init_short_circuit_braking_energy_balance():
     m = MotorArray("MAC140", n=1, seed=0, initial_speed=300.0, viscous_friction=1e-6)
     e0 = m.energy["kinetic"][0]

@@ -106,7 +106,7 @@ def test_forbidden_modes_raise_and_change_nothing(m):
         np.testing.assert_array_equal(m.regs, before)
 
 
-@pytest.mark.statements("mac050_141:4.4.1:3")
+@pytest.mark.statements("mac050_141:4.4.1:3", "mac050_141:4.4.12:4")
 def test_v_mode_to_init_goes_through_stop(m):
     m.write("V_SOLL", 3000)
     m.write("MODE_REG", 1)

@@ -113,6 +113,7 @@ def test_read_block_returns_16_words() -> None:
         0xFFF9
 
 
+@pytest.mark.statements("mac050_141:4.4.16:7")
 def test_safe_mode_flash_and_reset_rules(tmp_path: Path) -> None:
     twin = make_twin(flash_dir=tmp_path)
     twin.m.write("KVOUT", 2.5)
