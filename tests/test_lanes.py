@@ -3,9 +3,8 @@ of mac050_141.inner with every per-motor feature)."""
 
 from __future__ import annotations
 
-import pytest
-
 import numpy as np
+import pytest
 from numba import njit
 
 from jvl_gym import MotorArray
