@@ -1327,3 +1327,47 @@ def test_at_the_sensor_zero_p_ist_is_p_home_p_fnc_16_p_home_and_p_soll_0(mode: i
     assert m.mode_name() == "V_MODE"
     assert [int(m.read(x)[0]) for x in ("P_SOLL", "P_FNC")] == [0, 16 * 500]
     assert abs(int(m.read("P_IST")[0]) - 500) <= 30  # one sample of travel since the edge
+
+
+@pytest.mark.parametrize("mode", [c.A2POS_MODE, c.APOS_MODE])
+@pytest.mark.statements("mac050_141:4.4.21:4", "mac050_141:4.4.21:6", "mac050_141:4.4.22:4",
+                        "mac050_141:4.4.22:6")
+def test_the_analogue_position_modes_flag_their_profile_and_report_in_pos(mode: int) -> None:
+    """Manual 4.4.21/4.4.22: the analogue position modes run the position block: ACC_FLAG and
+    DEC_FLAG follow the profile, and IN_POS comes at the target (|P_SOLL − P_FNC/16 + FLWERR| <
+    INPOSWIN)."""
+    m = _motor()
+    m.write_many({"P1": 20000, "P2": 0, "P3": 0, "V_SOLL": 3000, "A_SOLL": 37, "INPOSWIN": 10,
+                  "INPOSCNT": 3})
+    m.set_input(analog_volts=0.0)  # A2POS: low → P1; APOS: ANINP 0 → P_NEW = P1
+    m.write("MODE_REG", mode)
+    tr = m.trace(["P_FNC", "FNC_OUT", "ERR_STAT", "P_SOLL"], 500)
+    f, st = tr["FNC_OUT"][:, 0], tr["ERR_STAT"][:, 0]
+    assert tr["P_SOLL"][-1, 0] == 20000 and tr["P_FNC"][:, 0].max() == 16 * 20000
+    rising, falling = np.diff([0, *f]) > 0, np.diff([0, *f]) < 0
+    np.testing.assert_array_equal((st & c.ACC_FLAG) != 0, rising)
+    np.testing.assert_array_equal((st & c.DEC_FLAG) != 0, falling)
+    assert st[-1] & c.IN_POS and not st[50] & c.IN_POS
+    assert abs(int(m.read("P_IST")[0]) - 20000) < 10
+
+
+_CORRECTING = [c.P_MODE, c.GP_MODE, c.AG_MODE, c.COIL_MODE, c.A2POS_MODE, c.APOS_MODE, c.GF_MODE]
+
+
+@pytest.mark.parametrize("mode", _CORRECTING, ids=[c.MODE_NAMES[x] for x in _CORRECTING])
+@pytest.mark.statements("mac050_141:3.2.24:9", "mac050_141:4.4.3:10", "mac050_141:4.4.4:8",
+                        "mac050_141:4.4.4:9", "mac050_141:4.4.19:2", "mac050_141:4.4.20:5",
+                        "mac050_141:4.4.21:2", "mac050_141:4.4.21:7", "mac050_141:4.4.22:2",
+                        "mac050_141:4.4.22:7", "mac050_141:4.4.25:7", "mac050_141:4.4.25:8")
+def test_the_correcting_modes_bound_the_torque_and_trip_on_fncerrmax(mode: int) -> None:
+    """Manual 3.2.24, 4.4 (correction of function block: active): a blocked motor's profile is
+    corrected so its torque stays at T_SOLL, the corrections sum in FNCERR, and |FNCERR| above
+    FNCERRMAX sets FNC_ERR and stops the motor to INIT_MODE."""
+    m = _motor(coulomb_friction=5.0)
+    _set_up_mode(m, mode, t_soll=300, pulses=20)
+    m.write("FNCERRMAX", 5000)
+    tr = m.trace(["VF_OUT", "FNCERR", "MODE_REG"], 800)
+    assert np.abs(tr["VF_OUT"][:, 0]).max() <= 300
+    assert np.abs(tr["FNCERR"][:, 0]).max() > 4000  # the corrections summed up
+    assert int(m.read("ERR_STAT")[0]) & c.FNC_ERR
+    assert c.STOP_MODE in tr["MODE_REG"][:, 0] and m.mode_name() == "INIT_MODE"
