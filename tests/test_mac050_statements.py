@@ -1371,3 +1371,71 @@ def test_the_correcting_modes_bound_the_torque_and_trip_on_fncerrmax(mode: int) 
     assert np.abs(tr["FNCERR"][:, 0]).max() > 4000  # the corrections summed up
     assert int(m.read("ERR_STAT")[0]) & c.FNC_ERR
     assert c.STOP_MODE in tr["MODE_REG"][:, 0] and m.mode_name() == "INIT_MODE"
+
+
+@pytest.mark.statements("mac050_141:4.4.9:4")
+def test_testu_sets_rewind_recinner_and_record_and_records_11_samples() -> None:
+    """Manual 4.4.9: TESTU sets REWINDBIT, RECINNERBIT (7812 Hz) and RECORDBIT, records for 11
+    sampling periods from the start of the buffer (REC_CNT = 11), then INIT_MODE."""
+    m = _motor(load_inertia=1e-2)
+    m.write("CNTRL_BITS", int(m.read("CNTRL_BITS")[0]) | c.RECORDBIT)
+    m.step(5)  # a recording already running: TESTU starts the buffer again
+    m.write("CNTRL_BITS", int(m.read("CNTRL_BITS")[0]) & ~c.RECORDBIT)
+    m.write("UMEAS", 40)
+    m.write("MODE_REG", c.TESTU_MODE)
+    m.step(2)
+    cb = int(m.read("CNTRL_BITS")[0])
+    assert cb & c.RECINNERBIT and not cb & c.RECORDBIT
+    assert int(m.read("REC_CNT")[0]) == 11 and m.mode_name() == "INIT_MODE"
+
+
+@pytest.mark.statements("mac050_141:4.4.10:2", "mac050_141:4.4.10:3", "mac050_141:4.4.10:4")
+def test_testa_sets_its_channels_records_11_outer_samples_then_break_mode() -> None:
+    """Manual 4.4.10: TESTA sets SAMPLE1 = 7 (T_SOLL), SAMPLE2 = 12 (V_IST), RECINNERBIT = 0
+    (520.8 Hz), records 11 sampling periods from the start of the buffer, then BREAK_MODE."""
+    m = _motor(load_inertia=1e-4)
+    m.write("CNTRL_BITS", int(m.read("CNTRL_BITS")[0]) | c.RECINNERBIT)
+    m.write("T_SOLL", 100)
+    m.write("MODE_REG", c.TESTA_MODE)
+    n = _steps_until(m, "TESTA_MODE", 100)
+    assert n == 11 and m.mode_name() == "BREAK_MODE"
+    assert [int(m.read(x)[0]) for x in ("SAMPLE1", "SAMPLE2", "REC_CNT")] == [7, 12, 11]
+    assert not int(m.read("CNTRL_BITS")[0]) & c.RECINNERBIT
+    buf = m.sample_buffer()
+    assert np.all(buf["T_SOLL"][0] == 100) and np.all(np.diff(buf["V_IST"][0]) >= 0)
+
+
+_RANGES = [("INPOSWIN", 0, 32767), ("INPOSCNT", 0, 32767), ("T1", 0, 1023), ("T4", 0, 1023),
+           ("Z1", 0, 32767), ("Z4", 0, 32767), ("ELDEGN_OFFSET", 0, 2047),
+           ("ELDEGP_OFFSET", 0, 2047), ("MAN_I_NOM", 0, 1023), ("MAN_ALPHA", 0, 2047),
+           ("UMEAS", 0, 100), ("P1", -67_000_000, 67_000_000), ("P8", -67_000_000, 67_000_000),
+           ("P_HOME", -67_000_000, 67_000_000), ("MIN_P_IST", -2147483647, 2147483647),
+           ("MAX_P_IST", -2147483647, 2147483647), ("P_FNC", -2147483647, 2147483647),
+           ("P_IST", -2147483647, 2147483647), ("FNCERRMAX", 0, 134217727),
+           ("FLWERRMAX", 0, 67_000_000), ("SAMPLE2", 1, 164), ("MYADDR", 1, 254)]
+
+
+@pytest.mark.parametrize(("name", "low", "high"), _RANGES, ids=[r[0] for r in _RANGES])
+@pytest.mark.statements("mac050_141:3.2.8:12", "mac050_141:3.2.10:6", "mac050_141:3.2.22:3",
+                        "mac050_141:3.2.26:4", "mac050_141:3.2.28:5", "mac050_141:3.2.33:9",
+                        "mac050_141:3.2.38:2", "mac050_141:3.2.49:3", "mac050_141:3.2.77:2",
+                        "mac050_141:3.2.85:2", "mac050_141:3.2.112:4", "mac050_141:3.2.124:4",
+                        "mac050_141:3.2.128:3", "mac050_141:3.2.130:2", "mac050_141:3.2.156:4")
+def test_the_register_ranges_of_the_manual_are_enforced(name: str, low: int, high: int) -> None:
+    """Manual 3.2: a register takes the values of its range, and a value outside is refused
+    and changes nothing."""
+    import warnings
+
+    from jvl_gym.registers import RegisterError
+
+    m = _motor()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # SAMPLE, offsets: a non-default value may warn
+        for value in (low, high):
+            m.write(name, value)
+            assert int(m.read(name)[0]) == value
+        before = m.regs.copy()
+        for value in (low - 1, high + 1):
+            with pytest.raises(RegisterError):
+                m.write(name, value)
+            np.testing.assert_array_equal(m.regs, before)
