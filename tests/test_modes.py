@@ -52,8 +52,7 @@ def test_gp_follows_500_pulse_master_exactly_and_stops_without_overshoot():
     assert int(m.read("ERR_STAT")[0]) & c.IN_POS
 
 
-@pytest.mark.statements("mac050_141:3.2.2:34", "mac050_141:4.1.3:1", "mac050_141:4.4.25:1",
-                        "mac050_141:4.4.25:6")
+@pytest.mark.statements("mac050_141:3.2.2:34", "mac050_141:4.1.3:1", "mac050_141:4.4.25:1")
 def test_gf_has_smaller_follow_error_and_overshoots():
     _, final_gp, lag_gp, _, _ = _gear_run(c.GP_MODE)
     m, final, lag_gf, pos, _ = _gear_run(c.GF_MODE)

@@ -337,7 +337,7 @@ def test_saturate_raw():
     assert saturate_raw(vf, np.zeros((2, 3))).shape == (2, 3)
 
 
-@pytest.mark.statements("mac050_141:3.1:1", "mac050_141:3.2.8:11")
+@pytest.mark.statements("mac050_141:3.1:1")
 def test_split_join_longint():
     assert split_longint(-1) == (0xFFFF, 0xFFFF)
     assert split_longint(0x00054711) == (0x4711, 0x0005)
