@@ -1459,3 +1459,27 @@ def test_in_the_gear_modes_in_pos_is_the_follow_error_not_p_fnc(mode: int) -> No
     m.run(2.0)
     assert int(m.read("ERR_STAT")[0]) & c.IN_POS
     assert abs(int(m.read("P_FNC")[0])) > 16 * 3000 and abs(int(m.read("P_IST")[0]) - 4000) <= 2
+
+
+@pytest.mark.statements("mac050_141:3.2.20:7", "mac050_141:4.4.13:11")
+def test_flwerr_accumulates_in_home1_and_is_0_in_stop_mode() -> None:
+    """Manual 4.4.13 (HOME1 updates FLWERR, the accumulated velocity error) against 3.2.20
+    (FLWERR 0 outside its list of modes): the homing search accumulates it while the motor
+    pushes against the stop; STOP_MODE, not in either list, keeps it 0."""
+    m = _motor(end_stop_low=-3.0, end_stop_high=3.0)
+    m.write_many({"V_HOME": -800, "T_HOME": 300, "P_HOME": -1000})
+    m.write("MODE_REG", c.HOME1_MODE)
+    flw = []
+    while m.mode_name() == "HOME1_MODE":
+        m.step()
+        flw.append(int(m.read("FLWERR")[0]))
+        assert len(flw) < 3000
+    assert min(flw) < -1000  # held by the stop, the profile runs on: the error grows
+    m = _motor()
+    m.write_many({"V_SOLL": 3000, "A_SOLL": 10})
+    m.write("MODE_REG", c.V_MODE)
+    m.run(0.5)
+    m.write("MODE_REG", c.INIT_MODE)
+    tr = m.trace(["FLWERR", "MODE_REG"], 50)
+    stop = tr["MODE_REG"][:, 0] == c.STOP_MODE
+    assert stop.sum() > 10 and not tr["FLWERR"][stop, 0].any()
