@@ -1441,8 +1441,8 @@ def test_the_register_ranges_of_the_manual_are_enforced(name: str, low: int, hig
             np.testing.assert_array_equal(m.regs, before)
 
 
-@pytest.mark.parametrize("mode", [c.GP_MODE, c.GF_MODE])
-@pytest.mark.statements("mac050_141:4.4.4:7", "mac050_141:4.4.25:6")
+@pytest.mark.parametrize("mode", [c.GP_MODE, c.GF_MODE, c.AG_MODE])
+@pytest.mark.statements("mac050_141:4.4.4:7", "mac050_141:4.4.19:3", "mac050_141:4.4.25:6")
 def test_in_the_gear_modes_in_pos_is_the_follow_error_not_p_fnc(mode: int) -> None:
     """Manual 4.4.4/4.4.25 write IN_POS as |P_FNC| < INPOSWIN; read as the follow error: after
     the pulses stop the motor reports IN_POS where it caught up, with P_FNC far from 0, and not
@@ -1450,7 +1450,7 @@ def test_in_the_gear_modes_in_pos_is_the_follow_error_not_p_fnc(mode: int) -> No
     m = _motor()
     m.write_many({"GEARF1": 1, "GEARF2": 1, "V_SOLL": 4000, "A_SOLL": 100, "INPOSWIN": 10,
                   "INPOSCNT": 3, "FNCERRMAX": 0})
-    m.set_input(pulse_counts=20)
+    m.set_input(pulse_counts=20, analog_volts=0.0)  # AG at 0 V: gear factor 1.01
     m.write("MODE_REG", mode)
     m.step(5)
     assert not int(m.read("ERR_STAT")[0]) & c.IN_POS  # lagging
@@ -1458,7 +1458,8 @@ def test_in_the_gear_modes_in_pos_is_the_follow_error_not_p_fnc(mode: int) -> No
     m.set_input(pulse_counts=0)
     m.run(2.0)
     assert int(m.read("ERR_STAT")[0]) & c.IN_POS
-    assert abs(int(m.read("P_FNC")[0])) > 16 * 3000 and abs(int(m.read("P_IST")[0]) - 4000) <= 2
+    final = 4000 * (1.01 if mode == c.AG_MODE else 1.0)
+    assert abs(int(m.read("P_FNC")[0])) > 16 * 3000 and abs(int(m.read("P_IST")[0]) - final) <= 2
 
 
 @pytest.mark.statements("mac050_141:3.2.20:7", "mac050_141:4.4.13:11")

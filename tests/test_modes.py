@@ -40,7 +40,7 @@ def _gear_run(mode: int, stop_at: int = 600, total_steps: int = 900):
 
 
 @pytest.mark.statements("mac050_141:3.2.2:13", "mac050_141:3.2.14:1", "mac050_141:4.1.12:1",
-                        "mac050_141:4.4.4:3", "mac050_141:4.4.4:7")
+                        "mac050_141:4.1.12:3", "mac050_141:4.4.4:3", "mac050_141:4.4.4:7")
 def test_gp_follows_500_pulse_master_exactly_and_stops_without_overshoot():
     m, final, lag, pos, vel = _gear_run(c.GP_MODE)
     # steady state: the speed is the master's exactly (5 rev/s · 4096 counts per outer sample)
