@@ -1484,3 +1484,17 @@ def test_flwerr_accumulates_in_home1_and_is_0_in_stop_mode() -> None:
     tr = m.trace(["FLWERR", "MODE_REG"], 50)
     stop = tr["MODE_REG"][:, 0] == c.STOP_MODE
     assert stop.sum() > 10 and not tr["FLWERR"][stop, 0].any()
+
+
+@pytest.mark.statements("mac050_141:4.5.6:5")
+def test_in_init_mode_an_undervoltage_only_sets_uv_detect() -> None:
+    """Manual 4.5.6: in INIT_MODE the undervoltage check presets the timer and sets UV_DETECT;
+    UV_ERR and V_SOLL = 0 are the running modes' reactions (48 V below U_MIN_SUP = 50 V, with
+    SET_UV_ERR and UV_SOLL0 set)."""
+    m = _motor()
+    m.write_many({"U_MIN_SUP": round(50 / 0.0537), "UV_HANDLE": c.SET_UV_ERR | c.UV_SOLL0,
+                  "V_SOLL": 500})
+    m.step(10)
+    st = int(m.read("ERR_STAT")[0])
+    assert st & c.UV_DETECT and not st & c.UV_ERR
+    assert int(m.read("V_SOLL")[0]) == 500
