@@ -356,9 +356,10 @@ _FLWERR_MODES = [c.V_MODE, c.P_MODE, c.GP_MODE, c.AV_MODE, c.AVG_MODE, c.VAT_MOD
 
 
 @pytest.mark.statements("mac050_141:3.2.20:1", "mac050_141:3.2.20:3", "mac050_141:3.2.20:4",
-                        "mac050_141:4.4.2:3", "mac050_141:4.4.3:3", "mac050_141:4.4.4:4",
-                        "mac050_141:4.4.6:3", "mac050_141:4.4.7:3", "mac050_141:4.4.21:3",
-                        "mac050_141:4.4.22:3", "mac050_141:4.4.25:3", "mac050_141:4.5.4:1")
+                        "mac050_141:3.2.20:8", "mac050_141:4.4.2:3", "mac050_141:4.4.3:3",
+                        "mac050_141:4.4.4:4", "mac050_141:4.4.6:3", "mac050_141:4.4.7:3",
+                        "mac050_141:4.4.21:3", "mac050_141:4.4.22:3", "mac050_141:4.4.25:3",
+                        "mac050_141:4.5.4:1")
 @pytest.mark.parametrize("mode", _FLWERR_MODES, ids=[c.MODE_NAMES[x] for x in _FLWERR_MODES])
 def test_flwerr_accumulates_the_velocity_error_of_a_blocked_motor(mode: int) -> None:
     """Manual 3.2.20, 4.5.4: in the regulated modes FLWERR accumulates the velocity error (the
@@ -532,7 +533,8 @@ def test_in_position_needs_less_than_inposwin_not_equal() -> None:
     assert [bool(e & c.IN_POS) for e in m.read("ERR_STAT")] == [True, False]
 
 
-@pytest.mark.statements("mac050_141:3.2.33:3", "mac050_141:3.2.33:4", "mac050_141:4.4.3:5")
+@pytest.mark.statements("mac050_141:3.2.20:8", "mac050_141:3.2.33:3", "mac050_141:3.2.33:4",
+                        "mac050_141:4.4.3:5")
 def test_inposcnt_is_the_number_of_consecutive_samples_inside_the_window() -> None:
     """Manual 3.2.34: IN_POS comes INPOSCNT consecutive samples after the position is inside
     INPOSWIN (P_MODE: |P_SOLL − P_FNC/16 + FLWERR| < INPOSWIN, manual 4.4.3)."""
