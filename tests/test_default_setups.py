@@ -13,6 +13,7 @@ RATIOS = np.array([1.0, 2.0, 5.0, 10.0])
 
 
 @pytest.mark.parametrize("motor", motor_types())
+@pytest.mark.statements("mac050_141:3.2.13:5")
 def test_velocity_step_and_position_move_for_kvout_1_to_10(motor):
     m = MotorArray(motor, n=RATIOS.size, seed=0)
     jm = m.motor_configs[0].rotor_inertia

@@ -4,6 +4,7 @@ of mac050_141.inner with every per-motor feature)."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from numba import njit
 
 from jvl_gym import MotorArray
@@ -88,6 +89,7 @@ def test_lanes_give_the_bits_of_the_one_motor_kernel() -> None:
     np.testing.assert_array_equal(a.state, c_.state)
 
 
+@pytest.mark.statements("mac050_141:3.2.35:4")
 def test_lanes_flag_a_saturated_current_reading() -> None:
     n = LANES
     a, b = MotorArray("MAC140", n=n, seed=0), MotorArray("MAC140", n=n, seed=0)

@@ -15,6 +15,11 @@ from jvl_gym import MotorArray
     ("T_REG_P", "T_SOLL", ("T1", "T2", "T3", "T4")),
     ("L_REG_P", "KVOUT", ("L1", "L2", "L3", "L4")),
     ("Z_REG_P", "INPOSWIN", ("Z1", "Z2", "Z3", "Z4"))])
+@pytest.mark.statements("mac050_141:3.2.33:8", "mac050_141:3.2.43:1", "mac050_141:3.2.44:1",
+                        "mac050_141:3.2.45:1", "mac050_141:3.2.46:1", "mac050_141:3.2.47:1",
+                        "mac050_141:3.2.48:1", "mac050_141:3.2.49:1", "mac050_141:3.2.65:1",
+                        "mac050_141:3.2.73:1", "mac050_141:3.2.77:1", "mac050_141:3.2.81:1",
+                        "mac050_141:3.2.85:1")
 def test_every_register_of_a_set_is_copied_by_its_pointer(
         pointer: str, target: str, names: tuple[str, ...]) -> None:
     """Manual 3.2.43–3.2.88: writing k to a pointer copies the k-th register of its set to the
@@ -27,6 +32,7 @@ def test_every_register_of_a_set_is_copied_by_its_pointer(
         assert m.read(target)[0] == values[name] and m.read(pointer)[0] == 0
 
 
+@pytest.mark.statements("mac050_141:3.2.122:3", "mac050_141:3.2.123:1")
 def test_analogue_offset_is_added_to_the_input() -> None:
     """ANINP_OFFSET (manual 3.2.123): offset compensation added to the analogue input."""
     m = MotorArray("MAC140", n=2, seed=0)
@@ -38,6 +44,7 @@ def test_analogue_offset_is_added_to_the_input() -> None:
     assert a[1] - a[0] == 50
 
 
+@pytest.mark.statements("mac050_141:3.2.36:8", "mac050_141:3.2.112:1")
 def test_sample_channels_2_and_4_record_their_registers() -> None:
     """SAMPLE1–4 (manual 3.2.112–115): the register recorded in each channel."""
     m = MotorArray("MAC140", n=1, seed=0)
@@ -55,6 +62,8 @@ _TAPS = {"KFF3": ("FF", 0), "KFF2": ("FF", 1), "KFF1": ("FF", 2), "KFF0": ("FF",
 
 
 @pytest.mark.parametrize("name", list(_TAPS))
+@pytest.mark.statements("mac050_141:3.2.89:1", "mac050_141:3.2.101:1", "mac050_141:3.2.118:1",
+                        "mac050_141:3.2.119:1", "mac050_141:4.2.1:1", "mac050_141:4.2.1:7")
 def test_each_feed_forward_and_feedback_tap_has_its_delay(name: str) -> None:
     """Manual 4.2, 3.2.89–3.2.105: FF(z) = KFF3 + KFF2 z⁻¹ + KFF1 z⁻² + KFF0 z⁻³ on FNC_OUT,
     VB(z) = KVB3 + … + KVB0 z⁻³ on V_IST (times GEARB): an impulse comes out of FF_OUT / VB_OUT
@@ -76,6 +85,7 @@ def test_each_feed_forward_and_feedback_tap_has_its_delay(name: str) -> None:
     assert out == expected
 
 
+@pytest.mark.statements("mac050_141:3.2.16:3", "mac050_141:3.2.126:1")
 def test_i2t_trips_at_i2tlim_and_phase_comp_leads_the_field() -> None:
     """I2TLIM (manual 3.2.17): I2T_ERR when I2T passes it; a larger limit keeps the motor
     running. PHASE_COMP (3.2.126): the commutation angle leads by V_ELDEG·PHASE_COMP, so the
@@ -99,6 +109,7 @@ def test_i2t_trips_at_i2tlim_and_phase_comp_leads_the_field() -> None:
     assert vf[0] != vf[1]
 
 
+@pytest.mark.statements("mac050_141:3.2.18:2", "mac050_141:4.5.2:2")
 def test_uit_trips_at_uitlim_only_above_52_volts() -> None:
     """UITLIM (manual 3.2.19): UIT_ERR when UIT passes it and the supply is above 52 V."""
     from jvl_gym.families.mac050_141 import constants as c
@@ -112,6 +123,8 @@ def test_uit_trips_at_uitlim_only_above_52_volts() -> None:
     assert not (m.read("ERR_STAT") & c.UIT_ERR).any()  # the default supply is below 52 V
 
 
+@pytest.mark.statements("mac050_141:3.2.28:1", "mac050_141:3.2.35:1", "mac050_141:3.2.35:11",
+                        "mac050_141:3.2.35:12", "mac050_141:4.1.1:2", "mac050_141:4.4.2:9")
 def test_acc_and_dec_flags_and_dis_p_lim() -> None:
     """ERR_STAT bits 5/6 (manual 3.2.35): ACC_FLAG while the profile accelerates, DEC_FLAG
     while it decelerates; bit 14 DIS_P_LIM disables the position limits (no PLIM_ERR)."""
@@ -133,6 +146,7 @@ def test_acc_and_dec_flags_and_dis_p_lim() -> None:
     assert err[0] & c.PLIM_ERR and not err[1] & c.PLIM_ERR
 
 
+@pytest.mark.statements("mac050_141:3.2.160:2")
 def test_uv_handle_go_passive() -> None:
     """UV_HANDLE bit 1 UV_GO_PASSIVE (manual 3.2.23): an under-voltage makes the motor
     passive."""

@@ -39,6 +39,8 @@ def _gear_run(mode: int, stop_at: int = 600, total_steps: int = 900):
     return m, total * 1024 / 125, np.array(lag), np.array(pos), np.array(vel)
 
 
+@pytest.mark.statements("mac050_141:3.2.2:13", "mac050_141:3.2.14:1", "mac050_141:4.1.12:1",
+                        "mac050_141:4.1.12:3", "mac050_141:4.4.4:3", "mac050_141:4.4.4:7")
 def test_gp_follows_500_pulse_master_exactly_and_stops_without_overshoot():
     m, final, lag, pos, vel = _gear_run(c.GP_MODE)
     # steady state: the speed is the master's exactly (5 rev/s · 4096 counts per outer sample)
@@ -50,6 +52,7 @@ def test_gp_follows_500_pulse_master_exactly_and_stops_without_overshoot():
     assert int(m.read("ERR_STAT")[0]) & c.IN_POS
 
 
+@pytest.mark.statements("mac050_141:3.2.2:34", "mac050_141:4.1.3:1", "mac050_141:4.4.25:1")
 def test_gf_has_smaller_follow_error_and_overshoots():
     _, final_gp, lag_gp, _, _ = _gear_run(c.GP_MODE)
     m, final, lag_gf, pos, _ = _gear_run(c.GF_MODE)
@@ -58,6 +61,7 @@ def test_gf_has_smaller_follow_error_and_overshoots():
     assert abs(pos[-1] - final) <= 2
 
 
+@pytest.mark.statements("mac050_141:3.2.2:26", "mac050_141:4.1.6:1", "mac050_141:4.4.17:1")
 def test_avz_dead_band_and_scale():
     m = MotorArray("MAC140", n=5, seed=0)
     m.write("V_SOLL", 2000)
@@ -73,6 +77,8 @@ def test_avz_dead_band_and_scale():
     assert expected[0] == expected[1] == 0
 
 
+@pytest.mark.statements("mac050_141:3.2.2:15", "mac050_141:3.2.122:4", "mac050_141:4.1.5:1",
+                        "mac050_141:4.4.6:1", "mac050_141:4.4.18:1")
 def test_av_and_vat():
     m = MotorArray("MAC140", n=2, seed=0)
     m.write("V_SOLL", 1600)
@@ -86,6 +92,8 @@ def test_av_and_vat():
     assert abs(int(m.read("VF_OUT")[1])) <= abs(-256 * 800 / 1024) + 1
 
 
+@pytest.mark.statements("mac050_141:3.2.2:28", "mac050_141:4.1.9:1", "mac050_141:4.1.9:2",
+                        "mac050_141:4.4.19:1")
 def test_ag_factor_limits_and_stationary_master():
     m = MotorArray("MAC140", n=3, seed=0)
     m.write("GEARF1", 1)
@@ -107,6 +115,8 @@ def test_ag_factor_limits_and_stationary_master():
     assert np.all(np.abs(m.speed_rpm) < 1)  # master at rest: motor at rest whatever the voltage
 
 
+@pytest.mark.statements("mac050_141:3.2.2:16", "mac050_141:3.2.122:4", "mac050_141:4.1.7:2",
+                        "mac050_141:4.4.7:1")
 def test_avg_bias_is_300_rpm_at_10_volts():
     m = MotorArray("MAC140", n=1, seed=0)
     m.write("V_SOLL", 10000)
@@ -120,6 +130,7 @@ def test_avg_bias_is_300_rpm_at_10_volts():
 COIL = dict(P1=10000, P2=12000, P3=58000, P4=60000, P5=12000, P6=1)
 
 
+@pytest.mark.statements("mac050_141:3.2.2:29", "mac050_141:4.4.20:1", "mac050_141:4.4.20:3")
 def test_coil_example_traverses_dwells_and_returns_to_p5():
     m = MotorArray("MAC140", n=1, seed=0, load_inertia=10e-6)
     for k, v in COIL.items():
@@ -150,6 +161,7 @@ def test_coil_example_traverses_dwells_and_returns_to_p5():
     assert abs(int(m.read("P_IST")[0]) - 12000) < 10
 
 
+@pytest.mark.statements("mac050_141:4.4.20:4")
 def test_coil_rules_are_enforced():
     m = MotorArray("MAC140", n=1, seed=0)
     for k, v in {**COIL, "P2": 9000}.items():
@@ -166,6 +178,7 @@ def test_coil_rules_are_enforced():
         m.write("P3", 61000)
 
 
+@pytest.mark.statements("mac050_141:3.2.42:5")
 def test_gearf2_zero_and_home_mode_values_refused():
     m = MotorArray("MAC140", n=1, seed=0)
     m.write("GEARF2", 0)
@@ -180,6 +193,8 @@ def test_gearf2_zero_and_home_mode_values_refused():
     m.write("HOME_MODE", 13 | (12 << 8))
 
 
+@pytest.mark.statements("mac050_141:3.2.2:22", "mac050_141:3.2.42:6", "mac050_141:4.4.13:1",
+                        "mac050_141:4.4.13:6")
 def test_home1_finds_mechanical_stop():
     m = MotorArray("MAC140", n=1, seed=0, end_stop_low=-3.0, end_stop_high=3.0)
     m.write("V_HOME", -800)
@@ -197,6 +212,7 @@ def test_home1_finds_mechanical_stop():
     assert int(m.read("P_FNC")[0]) == -16000 + 16 * (int(m.read("P_IST")[0]) + 1000)
 
 
+@pytest.mark.statements("mac050_141:3.2.37:3", "mac050_141:4.4.13:8")
 def test_home1_hands_over_to_p_mode_which_reaches_p_soll():
     """At the zero the function position is the motor position and STARTMODE starts (manual
     4.4.13): the follow error and the speed loop's history from pushing against the stop do
@@ -217,6 +233,9 @@ def test_home1_hands_over_to_p_mode_which_reaches_p_soll():
 
 @pytest.mark.parametrize("mode", [c.HOME2_MODE, c.HOME3_MODE])
 @pytest.mark.parametrize("start", [0.0, 2.0])
+@pytest.mark.statements("mac050_141:3.2.2:23", "mac050_141:3.2.2:24", "mac050_141:3.2.37:3",
+                        "mac050_141:3.2.38:1", "mac050_141:3.2.41:3", "mac050_141:3.2.122:4",
+                        "mac050_141:4.4.14:1", "mac050_141:4.4.14:3", "mac050_141:4.4.15:3")
 def test_home2_home3_find_the_sensor_edge(mode, start):
     edge = 1.0
     m = MotorArray("MAC140", n=1, seed=0, home_position=edge, initial_angle=start)
@@ -235,6 +254,7 @@ def test_home2_home3_find_the_sensor_edge(mode, start):
     assert abs(int(m.read("P_IST")[0]) - 500 - counts_past_edge) < 60
 
 
+@pytest.mark.statements("mac050_141:3.2.8:10")
 def test_flying_saw_returns_to_start_through_p_fnc():
     m = MotorArray("MAC140", n=1, seed=0)
     m.write("P_SOLL", 0)
@@ -253,6 +273,8 @@ def test_flying_saw_returns_to_start_through_p_fnc():
     assert int(m.read("ERR_STAT")[0]) & c.IN_POS
 
 
+@pytest.mark.statements("mac050_141:3.2.2:30", "mac050_141:4.1.10:1", "mac050_141:4.1.10:2",
+                        "mac050_141:4.1.10:3", "mac050_141:4.1.10:5", "mac050_141:4.4.21:1")
 def test_a2pos_hysteresis_absolute_and_relative():
     m = MotorArray("MAC140", n=1, seed=0)
     m.write("P1", 1000)
@@ -270,6 +292,7 @@ def test_a2pos_hysteresis_absolute_and_relative():
     assert int(m.read("P_SOLL")[0]) == 6000
 
 
+@pytest.mark.statements("mac050_141:3.2.2:31", "mac050_141:4.1.11:1", "mac050_141:4.4.22:1")
 def test_apos_dead_band():
     m = MotorArray("MAC140", n=1, seed=0)
     m.write("P1", 100)
@@ -288,6 +311,10 @@ def test_apos_dead_band():
     assert int(m.read("P_SOLL")[0]) == 1100
 
 
+@pytest.mark.statements("mac050_141:3.2.3:3", "mac050_141:3.2.13:4", "mac050_141:3.2.35:5",
+                        "mac050_141:3.2.35:6", "mac050_141:3.2.43:1", "mac050_141:3.2.43:3",
+                        "mac050_141:3.2.44:1", "mac050_141:3.2.45:1", "mac050_141:3.2.46:1",
+                        "mac050_141:3.2.47:1", "mac050_141:3.2.48:1")
 def test_register_mode_pointers():
     m = MotorArray("MAC140", n=2, seed=0)
     m.write("P3", 4000)
@@ -310,6 +337,7 @@ def test_register_mode_pointers():
     assert int(m.read("P_FNC")[0]) == p_fnc - 16 * 4000
 
 
+@pytest.mark.statements("mac050_141:3.2.36:2", "mac050_141:3.2.36:3", "mac050_141:3.2.163:1")
 def test_resynchronisation_bits():
     m = MotorArray("MAC140", n=1, seed=0)
     m.write("P_NEW", 1234)
@@ -322,6 +350,9 @@ def test_resynchronisation_bits():
     assert int(m.read("P_IST")[0]) == 2468 and int(m.read("P_SOLL")[0]) == 2468
 
 
+@pytest.mark.statements("mac050_141:3.2.35:2", "mac050_141:3.2.35:3", "mac050_141:3.2.152:1",
+                        "mac050_141:3.2.160:1", "mac050_141:3.2.160:3", "mac050_141:4.5.6:2",
+                        "mac050_141:4.5.6:3")
 def test_undervoltage_detection_and_timer():
     m = MotorArray("MAC140", n=1, seed=0, viscous_friction=1e-3)  # draws ≈ 100 W at 3000 rpm
     m.write("U_MIN_SUP", round(35 / 0.0537))
@@ -354,6 +385,7 @@ def test_pulse_input_decoding_semantics():
     assert neg.advance(c.OUTER_DT, np.array([True]), np.array([True]))[0] <= 0
 
 
+@pytest.mark.statements("mac050_141:4.1.3:3")
 def test_world_drives_gear_mode_through_the_kernel():
     m = MotorArray("MAC140", n=2, seed=0)
     m.write("V_SOLL", 20000)
@@ -365,6 +397,7 @@ def test_world_drives_gear_mode_through_the_kernel():
     np.testing.assert_allclose(m.speed_rpm, [120.0, 240.0], rtol=0.01)
 
 
+@pytest.mark.statements("mac050_141:3.2.26:1", "mac050_141:4.2.1:6", "mac050_141:4.4.4:1")
 def test_overload_in_gear_mode_bounds_torque_and_trips():
     m = MotorArray("MAC140", n=1, seed=0, coulomb_friction=2.0)  # rotor blocked
     m.write("T_SOLL", 300)
@@ -410,6 +443,7 @@ def test_every_mode_in_a_mixed_array_equals_separate_runs():
         np.testing.assert_array_equal(one.state[0], big.state[k], err_msg=c.MODE_NAMES[mode])
 
 
+@pytest.mark.statements("mac050_141:3.2.2:33", "mac050_141:4.4.24:1")
 def test_testtq_measures_friction():
     m = MotorArray("MAC140", n=1, seed=0, coulomb_friction=0.05)
     m.write("V_SOLL", 400)
@@ -424,6 +458,7 @@ def test_testtq_measures_friction():
     assert friction == pytest.approx(0.05, rel=0.1)
 
 
+@pytest.mark.statements("mac050_141:3.2.2:1")
 def test_mode_table_names_real_registers_and_every_mode():
     from jvl_gym.families.mac050_141.firmware.mode_table import MODES, markdown_mode_table
     from jvl_gym.families.mac050_141.table import TABLE as MAC050_141
@@ -437,6 +472,7 @@ def test_mode_table_names_real_registers_and_every_mode():
 
 
 @pytest.mark.parametrize("gear_mode", [c.GP_MODE, c.GF_MODE])
+@pytest.mark.statements("mac050_141:3.2.24:5")
 def test_gear_to_p_mode_hand_over_starts_fncerr_from_zero(gear_mode):
     """Manual 3.2.24: in GP/GF FNCERR is the gear position error, in P_MODE the sum of the
     profile corrections. A motor switched from following pulses to P_MODE starts its FNCERR
@@ -491,6 +527,7 @@ def test_every_hand_over_between_moving_modes_is_bumpless_and_error_free(first):
 
 
 @pytest.mark.parametrize("edge", [1.0, 2.0])
+@pytest.mark.statements("mac050_141:3.2.36:5", "mac050_141:4.4.14:3")
 def test_index_home_puts_the_zero_on_the_nearest_index_marker(edge):
     """CNTRL_BITS INDEX_HOME (3.2.36 bit 11): in a homing mode the home position is rounded to
     the nearest index marker, the hall transition at the electrical zero (two per revolution:

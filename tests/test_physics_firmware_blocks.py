@@ -20,11 +20,13 @@ HIGH, LOW = 5.4, 4.4  # A2POS: high above 5.4 V, low below 4.4 V (manual 4.1.10)
 @pytest.mark.parametrize(("level", "volts", "after"), [
     (0.0, 5.0, 0.0), (0.0, 5.5, 1.0), (1.0, 4.5, 1.0), (1.0, 4.3, 0.0), (1.0, 9.0, 1.0),
     (0.0, -9.0, 0.0)])
+@pytest.mark.statements("mac050_141:4.1.10:1")
 def test_hysteresis_level_switches_only_beyond_its_thresholds(level, volts, after):
     assert hysteresis_level(level, volts, HIGH, LOW) == after
 
 
 @given(st.sampled_from([0.0, 1.0]), st.floats(-20.0, 20.0))
+@pytest.mark.statements("mac050_141:4.1.10:1")
 def test_hysteresis_level_keeps_its_level_inside_the_band(level, volts):
     after = hysteresis_level.py_func(level, volts, HIGH, LOW)
     if LOW <= volts <= HIGH:
@@ -54,6 +56,7 @@ def test_vf_output_is_the_filter_output_and_its_scaling():
 @settings(deadline=None)  # the first example compiles ``rnd``
 @given(st.floats(-5000.0, 5000.0), st.floats(0.05, 4.0), st.floats(0.1, 3.0),
        st.floats(-50.0, 50.0), st.floats(10.0, 1023.0))
+@pytest.mark.statements("mac050_141:4.1.2:7")
 def test_corrected_profile_brings_the_output_to_the_torque_limit(f, k_ff, x0, rest, t_limit):
     """With FF_OUT = k_ff·FNC_OUT (a one-tap FF) the corrected FNC_OUT gives VF_OUT at the
     limit within the rounding of FNC_OUT (half a unit times the gain)."""

@@ -73,12 +73,26 @@ def test_names_unique_and_lookup_round_trip():
         ("INDEX_OFFSET", 162, Format.WORD), ("P_NEW", 163, Format.LONGINT),
     ],
 )
+@pytest.mark.statements("mac050_141:3.2:1", "mac050_141:3.2.2:35", "mac050_141:3.2.3:4",
+                        "mac050_141:3.2.5:14", "mac050_141:3.2.6:15", "mac050_141:3.2.7:17",
+                        "mac050_141:3.2.8:11", "mac050_141:3.2.10:5", "mac050_141:3.2.12:5",
+                        "mac050_141:3.2.13:2", "mac050_141:3.2.14:4", "mac050_141:3.2.20:6",
+                        "mac050_141:3.2.24:7", "mac050_141:3.2.28:4", "mac050_141:3.2.32:3",
+                        "mac050_141:3.2.35:19", "mac050_141:3.2.49:2", "mac050_141:3.2.65:2",
+                        "mac050_141:3.2.81:2", "mac050_141:3.2.89:2", "mac050_141:3.2.93:3",
+                        "mac050_141:3.2.101:2", "mac050_141:3.2.106:3", "mac050_141:3.2.110:2",
+                        "mac050_141:3.2.112:3", "mac050_141:3.2.116:4", "mac050_141:3.2.121:3",
+                        "mac050_141:3.2.127:4", "mac050_141:3.2.133:2", "mac050_141:3.2.137:2",
+                        "mac050_141:3.2.145:2", "mac050_141:3.2.148:3", "mac050_141:3.2.151:2",
+                        "mac050_141:3.2.154:2", "mac050_141:3.2.156:3", "mac050_141:3.2.158:2",
+                        "mac050_141:3.2.160:4", "mac050_141:3.2.163:4")
 def test_manual_numbers_and_formats(name, number, fmt):
     r = T.lookup(name)
     assert (r.number, r.format) == (number, fmt)
     assert r.section == f"3.2.{number}"
 
 
+@pytest.mark.statements("mac050_141:3.2:2", "mac050_141:3.2.31:1")
 def test_longint_rows_are_followed_by_their_high_word():
     for r in T:
         if r.format == Format.LONGINT:
@@ -92,12 +106,18 @@ def test_longint_rows_are_followed_by_their_high_word():
     assert T.lookup(31).name == "MAX_P_IST_HI"  # the manual's "3.2.31 Reserved"
 
 
+@pytest.mark.statements("mac050_141:3.2.110:2")
 def test_kib_is_not_the_filter_coefficient():
     assert T.lookup("KIB").number == 149
     assert T.lookup("KIB1").number == 110
     assert T.lookup("KIB0").number == 111
 
 
+@pytest.mark.statements("mac050_141:3.2.12:2", "mac050_141:3.2.16:1", "mac050_141:3.2.18:5",
+                        "mac050_141:3.2.20:5", "mac050_141:3.2.24:8", "mac050_141:3.2.117:2",
+                        "mac050_141:3.2.118:2", "mac050_141:3.2.119:2", "mac050_141:3.2.120:3",
+                        "mac050_141:3.2.122:5", "mac050_141:3.2.143:2", "mac050_141:3.2.144:2",
+                        "mac050_141:3.2.151:3")
 def test_read_only_set():
     ro = {r.name for r in T if r.access == Access.RO and r.format != Format.LONGINT_HIGH}
     expected = {
@@ -111,6 +131,10 @@ def test_read_only_set():
         assert T.lookup(name).access == Access.RW
 
 
+@pytest.mark.statements("mac050_141:3.2.3:1", "mac050_141:3.2.7:1", "mac050_141:3.2.20:5",
+                        "mac050_141:3.2.24:6", "mac050_141:3.2.41:4", "mac050_141:3.2.112:2",
+                        "mac050_141:3.2.116:3", "mac050_141:3.2.121:2", "mac050_141:3.2.127:1",
+                        "mac050_141:3.2.133:1", "mac050_141:3.2.137:1", "mac050_141:3.2.156:2")
 def test_ranges_from_the_manual():
     def rng(name):
         r = T.lookup(name)
@@ -138,6 +162,7 @@ def test_ranges_from_the_manual():
     assert "1.0..10.0" in T.lookup("KVOUT").description
 
 
+@pytest.mark.statements("mac050_141:3.2.148:2")
 def test_defaults_within_range_and_chosen_values():
     for r in T:
         if r.access != Access.RESERVED:
@@ -201,6 +226,7 @@ def test_lookup_numpy_integer_and_whitespace():
 # ----------------------------------------------------------------------------- formats
 
 
+@pytest.mark.statements("mac050_141:3.1:2", "mac050_141:3.2.93:3")
 def test_fixed4_round_trip_extremes():
     r = T.lookup("KVFX4")
     assert int(to_raw(r, 7.999756)) == 32767
@@ -210,6 +236,7 @@ def test_fixed4_round_trip_extremes():
     assert int(to_raw(r, 1 / 4096)) == 1
 
 
+@pytest.mark.statements("mac050_141:3.1:3", "mac050_141:3.2.89:2")
 def test_fixed8_round_trip_and_resolution():
     r = T.lookup("KFF3")
     assert int(to_raw(r, 127.996)) == 32767
@@ -273,6 +300,7 @@ def test_small_arrays_convert_like_large_ones():
      ("T_HOME", 801), ("P_SOLL", 67_000_001), ("MYADDR", 0), ("MODE_REG", 259),
      ("V_SOLL", float("nan")), ("V_SOLL", float("inf")), ("KFF0", -math.inf)],
 )
+@pytest.mark.statements("mac050_141:3.2.127:3")
 def test_range_errors_name_register_range_and_section(name, value):
     r = T.lookup(name)
     with pytest.raises(RegisterRangeError) as info:
@@ -309,6 +337,7 @@ def test_saturate_raw():
     assert saturate_raw(vf, np.zeros((2, 3))).shape == (2, 3)
 
 
+@pytest.mark.statements("mac050_141:3.1:1")
 def test_split_join_longint():
     assert split_longint(-1) == (0xFFFF, 0xFFFF)
     assert split_longint(0x00054711) == (0x4711, 0x0005)
@@ -333,6 +362,7 @@ def test_split_join_round_trip(x):
     assert join_longint(lo, hi) == x
 
 
+@pytest.mark.statements("mac050_141:3.1:1")
 def test_word16_mapping():
     v = T.lookup("V_SOLL")
     assert int(to_word16(v, -1)) == 0xFFFF
@@ -364,12 +394,14 @@ def test_word16_round_trip_signed(raw):
 # ----------------------------------------------------------------------------- manual examples
 
 
+@pytest.mark.statements("mac050_141:3.2.13:1")
 def test_kvout_worked_example():  # manual 3.2.13: (17.3E-6 + 50E-6)/17.3E-6 = 3.9
     r = T.lookup("KVOUT")
     raw = int(to_raw(r, (17.3e-6 + 50e-6) / 17.3e-6))
     assert raw == 996 and float(from_raw(r, raw)) == pytest.approx(3.9, abs=0.01)
 
 
+@pytest.mark.statements("mac050_141:4.1.2:8")
 def test_p_soll_670_relative_moves():  # manual 4.1.2 with P_SOLL range ±67E6 (3.2.3)
     r = T.lookup("P_SOLL")
     assert int(to_raw(r, 670 * 100_000)) == 67_000_000
@@ -377,6 +409,7 @@ def test_p_soll_670_relative_moves():  # manual 4.1.2 with P_SOLL range ±67E6 (
         to_raw(r, 671 * 100_000)
 
 
+@pytest.mark.statements("mac050_141:3.2.127:1", "mac050_141:3.2.127:2")
 def test_amplitude_limits_current_setpoint():  # manual 3.2.127: "1023·0.83 = 850" = IA_SOLL max
     amp = T.lookup("AMPLITUDE")
     assert T.lookup("IA_SOLL").maximum == 850
@@ -384,15 +417,18 @@ def test_amplitude_limits_current_setpoint():  # manual 3.2.127: "1023·0.83 = 8
     assert 1023 * float(from_raw(amp, amp.default_raw)) <= 850  # stored 212/256 → 847.2
 
 
+@pytest.mark.statements("mac050_141:3.2.41:4")
 def test_t_home_limit():  # manual 3.2.41: 1.25·T_HOME must stay ≤ 1023
     assert 1.25 * T.lookup("T_HOME").maximum <= T.lookup("T_SOLL").maximum
 
 
+@pytest.mark.statements("mac050_141:3.2.14:5")
 def test_gear_example_fits():  # manual 3.2.14: 15500/10000 = 31/20
     assert int(to_raw(T.lookup("GEARF1"), 15500)) == 15500
     assert int(to_raw(T.lookup("GEARF2"), 10000)) == 10000
 
 
+@pytest.mark.statements("mac050_141:3.2.1:1")
 def test_prog_version_example():  # manual 3.2.1: 78 = 4Eh
     assert int(to_word16(T.lookup("PROG_VERSION"), 78)) == 0x4E
 

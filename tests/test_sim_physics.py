@@ -11,6 +11,8 @@ from jvl_gym import MotorArray
 from jvl_gym.families.mac050_141 import constants as c
 
 
+@pytest.mark.statements("mac050_141:3.2.2:11", "mac050_141:3.2.5:1", "mac050_141:3.2.12:1",
+                        "mac050_141:4.4.2:1")
 def test_velocity_mode_settles_at_v_soll():
     m = MotorArray("MAC140", n=1, seed=0)
     m.write("V_SOLL", 1600)
@@ -20,6 +22,8 @@ def test_velocity_mode_settles_at_v_soll():
     assert m.read("V_IST")[0] == pytest.approx(100, abs=1)
 
 
+@pytest.mark.statements("mac050_141:3.2.6:1", "mac050_141:3.2.117:1", "mac050_141:4.1.1:1",
+                        "mac050_141:4.1.1:3")
 def test_profile_steps_by_exactly_a_soll():
     m = MotorArray("MAC140", n=1, seed=0)
     m.write("A_SOLL", 160)
@@ -48,6 +52,9 @@ def test_shaft_follows_a_slow_ramp_within_3_percent():
     assert max(errs) < 0.03
 
 
+@pytest.mark.statements("mac050_141:3.2.2:12", "mac050_141:3.2.3:2", "mac050_141:3.2.8:8",
+                        "mac050_141:3.2.26:3", "mac050_141:3.2.33:7", "mac050_141:3.2.35:13",
+                        "mac050_141:4.1.2:1", "mac050_141:4.4.3:1")
 def test_position_move_ends_in_position():
     m = MotorArray("MAC140", n=1, seed=0)
     m.write("V_SOLL", 4000)
@@ -61,6 +68,7 @@ def test_position_move_ends_in_position():
     assert int(m.read("FNCERR")[0]) == 0
 
 
+@pytest.mark.statements("mac050_141:3.2.2:14", "mac050_141:4.1.4:1")
 def test_at_mode_torque_gives_t_over_j():
     jl = 100e-6  # keeps the speed below 1000 rpm, where the current loop has voltage headroom
     m = MotorArray("MAC140", n=1, seed=0, load_inertia=jl)
@@ -76,6 +84,7 @@ def test_at_mode_torque_gives_t_over_j():
     assert acc == pytest.approx(torque / (cfg.rotor_inertia + jl), rel=0.02)
 
 
+@pytest.mark.statements("mac050_141:3.2.2:10", "mac050_141:4.4.1:1", "mac050_141:4.4.1:9")
 def test_init_short_circuit_braking_energy_balance():
     m = MotorArray("MAC140", n=1, seed=0, initial_speed=300.0, viscous_friction=1e-6)
     e0 = m.energy["kinetic"][0]
@@ -88,6 +97,8 @@ def test_init_short_circuit_braking_energy_balance():
     assert abs(e["electrical"][0]) < 1e-3 * e0  # equal phase voltages deliver no energy
 
 
+@pytest.mark.statements("mac050_141:3.2.2:18", "mac050_141:3.2.130:1", "mac050_141:4.4.9:1",
+                        "mac050_141:4.4.9:2", "mac050_141:4.4.9:3")
 def test_testu_record_is_the_rl_step():
     # A free rotor turns under the test current and its back-EMF bends the step; the classical
     # procedure holds the rotor (here: a large load inertia) so the record is the pure RL step.
@@ -109,6 +120,8 @@ def test_testu_record_is_the_rl_step():
     assert ic[0] == 0 and ic[d] == 0 and ic[d + 1] < 0
 
 
+@pytest.mark.statements("mac050_141:3.2.2:19", "mac050_141:3.2.2:20", "mac050_141:3.2.7:7",
+                        "mac050_141:4.4.10:1", "mac050_141:4.4.11:1")
 def test_testa_record_is_the_torque_ramp_then_break_and_init():
     jl = 100e-6
     m = MotorArray("MAC140", n=1, seed=0, load_inertia=jl)
@@ -131,6 +144,8 @@ def test_testa_record_is_the_torque_ramp_then_break_and_init():
 
 
 @pytest.mark.parametrize("case", ["inertia", "blocked"])
+@pytest.mark.statements("mac050_141:3.2.24:1", "mac050_141:4.1.2:7", "mac050_141:4.2.1:6",
+                        "mac050_141:4.4.3:1", "mac050_141:4.5.5:2")
 def test_overload_bounded_torque_fncerr_trip_stop_init(case):
     kw = {"load_inertia": 300e-6} if case == "inertia" else {"coulomb_friction": 2.0}
     m = MotorArray("MAC140", n=1, seed=0, **kw)
@@ -155,6 +170,7 @@ def test_overload_bounded_torque_fncerr_trip_stop_init(case):
     assert max(abs(x) for x in fncerr) > 50000
 
 
+@pytest.mark.statements("mac050_141:3.2.124:3", "mac050_141:3.2.143:1")
 def test_hall_synchronisation_of_the_electrical_angle():
     """hall_start = 1: ELDEG_IST starts at the hall sector centre (30° off at angle 0, torque
     ·cos 30°) and is exact after the first zero transition (ELDEGP_OFFSET = 0 matches)."""
@@ -193,6 +209,7 @@ def _turn(m: MotorArray, direction: int, steps: int) -> None:
 
 
 @pytest.mark.parametrize("direction", [1, -1])
+@pytest.mark.statements("mac050_141:3.2.124:1")
 def test_the_hall_offset_of_the_direction_is_written_to_eldeg_ist(direction):
     """3.2.124/125: at the hall zero transition the firmware writes ELDEGP_OFFSET to
     ELDEG_IST when the rotor turns positive and ELDEGN_OFFSET when it turns negative; the
@@ -208,6 +225,7 @@ def test_the_hall_offset_of_the_direction_is_written_to_eldeg_ist(direction):
     assert np.all(_eldeg_error(m, np.array([300.0, 0.0, 300.0])) > 0)
 
 
+@pytest.mark.statements("mac050_141:3.2.36:9")
 def test_hall_int_keeps_the_hall_correction_after_the_first():
     """CNTRL_BITS HALL_INT (3.2.36 bit 5): the first hall zero transition after power-on
     corrects ELDEG_IST; later ones only while HALL_INT is set, so a new ELDEGN_OFFSET takes

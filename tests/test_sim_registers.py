@@ -89,6 +89,7 @@ def test_write_subset_and_vector(m):
     assert m.read("KVOUT")[1] == pytest.approx(3.8984375)
 
 
+@pytest.mark.statements("mac050_141:3.2:2")
 def test_longint_high_word_write(m):
     m.write("P_SOLL", -1)
     assert m.read("P_SOLL")[0] == -1
@@ -96,6 +97,7 @@ def test_longint_high_word_write(m):
     assert m.read("P_SOLL")[0] == 0x1FFFF
 
 
+@pytest.mark.statements("mac050_141:3.2.2:2", "mac050_141:4.4.11:2", "mac050_141:4.4.16:2")
 def test_forbidden_modes_raise_and_change_nothing(m):
     for bad in (10, 15, 256, 25, 300):
         before = m.regs.copy()
@@ -104,6 +106,7 @@ def test_forbidden_modes_raise_and_change_nothing(m):
         np.testing.assert_array_equal(m.regs, before)
 
 
+@pytest.mark.statements("mac050_141:4.4.1:3", "mac050_141:4.4.12:4")
 def test_v_mode_to_init_goes_through_stop(m):
     m.write("V_SOLL", 3000)
     m.write("MODE_REG", 1)
@@ -114,6 +117,7 @@ def test_v_mode_to_init_goes_through_stop(m):
     assert m.mode_name() == "INIT_MODE"
 
 
+@pytest.mark.statements("mac050_141:3.2.35:18")
 def test_error_bits_must_be_cleared_before_leaving_init(m):
     m.regs[:, 35] |= c.FLW_ERR
     with pytest.raises(ModeError, match="error bit"):
@@ -123,6 +127,7 @@ def test_error_bits_must_be_cleared_before_leaving_init(m):
     assert m.mode_name() == "V_MODE"
 
 
+@pytest.mark.statements("mac050_141:4.4.5:5")
 def test_at_mode_only_leaves_to_init():
     # friction slows the coasting rotor down to the low speed at which AT_MODE may stop
     m = MotorArray("MAC140", n=3, seed=0, viscous_friction=2e-5)
@@ -141,6 +146,8 @@ def test_test_modes_need_init(m):
         m.write("MODE_REG", 8)
 
 
+@pytest.mark.statements("mac050_141:3.2.36:7", "mac050_141:3.2.36:8", "mac050_141:3.2.116:1",
+                        "mac050_141:3.2.116:3")
 def test_sample_buffer_records_until_full(m):
     m.write("SAMPLE1", 12)
     m.write("CNTRL_BITS", c.RECORDBIT | c.AUTO_RESYNC)
@@ -153,6 +160,8 @@ def test_sample_buffer_records_until_full(m):
     assert int(m.read("REC_CNT")[0]) == 0
 
 
+@pytest.mark.statements("mac050_141:3.2.2:25", "mac050_141:4.4.16:3", "mac050_141:4.4.16:4",
+                        "mac050_141:4.4.16:6")
 def test_safe_mode_flash_and_defaults(m):
     with pytest.raises(ModeError):
         m.write_flash()
@@ -195,6 +204,7 @@ def test_trace_records_registers_and_physics(m):
         m.trace(["NOPE"], 5)
 
 
+@pytest.mark.statements("mac050_141:3.2.153:1")
 def test_reset_can_change_the_motor_type_of_some_motors():
     from jvl_gym.families.mac050_141 import layout as L
     from jvl_gym.families.mac050_141.config import load_motor

@@ -64,6 +64,7 @@ def test_manual_write_example_shape() -> None:
     assert int(twin.m.read_raw(8)[0]) & 0xFFFF == 0x3322
 
 
+@pytest.mark.statements("mac050_141:3.2.156:1")
 def test_multidrop_by_myaddr_and_broadcast() -> None:
     twin = make_twin(3, [5, 6, 7])
     assert ask(twin, mt.encode_write_word(6, 65, 1234)) == mt.ACCEPT
@@ -112,6 +113,7 @@ def test_read_block_returns_16_words() -> None:
         0xFFF9
 
 
+@pytest.mark.statements("mac050_141:4.4.16:7")
 def test_safe_mode_flash_and_reset_rules(tmp_path: Path) -> None:
     twin = make_twin(flash_dir=tmp_path)
     twin.m.write("KVOUT", 2.5)
@@ -306,6 +308,7 @@ def test_fastmac_example_sequence_drives_to_p6_p7_p5() -> None:
     assert [abs(p - t) <= 10 for p, t in zip(reached, (4096, 10000, -3000))] == [True] * 3
 
 
+@pytest.mark.statements("mac050_141:3.2.36:14", "mac050_141:4.4.16:1")
 def test_flexmac_on_the_user_interface_and_safe_mode() -> None:
     twin = _user_twin()
     u = twin.user[0]
@@ -335,6 +338,7 @@ def test_flexmac_on_the_user_interface_and_safe_mode() -> None:
     assert u.feed(fx.encode_use_fastmac()) != b"" and not u.flexmac
 
 
+@pytest.mark.statements("mac050_141:3.2.36:12")
 def test_user_interface_inactive_without_userintf() -> None:
     twin = make_twin()
     assert twin.user[0].feed(bytes((0xE0, 0x62))) == b""
