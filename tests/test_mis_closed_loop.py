@@ -36,6 +36,7 @@ def test_current_scaling_times_of_the_manual() -> None:
     assert _ms_to(1023, 0, 1024, 0.0) == 57  # 1023 steps of 55.56 µs
 
 
+@pytest.mark.statements("mis:8.2.24:16")
 def test_closed_loop_current_follows_the_load_in_a_running_motor() -> None:
     m = MotorArray("MIS232", n=2, seed=0)
     m.write_many({"SETUP_BITS": np.array([CL, 0]), "V_SOLL": 30000, "A_SOLL": 2000,
@@ -79,6 +80,8 @@ def test_closed_loop_keeps_its_position_through_an_overload() -> None:
     assert abs(m.read("ENCODER_POS")[1] - target) < c.COUNTS_PER_FULL_STEP
 
 
+@pytest.mark.statements(
+    "mis:8.2.15:3", "mis:8.2.24:2", "mis:8.2.24:3", "mis:8.2.29:2", "mis:8.2.30:2")
 def test_auto_correction_retries_a_blocked_move() -> None:
     """§5.2.2: after a move whose encoder position is outside IN_POSITION_WINDOW, P_IST is
     reloaded from the encoder and the move repeated, up to IN_POSITION_COUNT times."""

@@ -45,6 +45,7 @@ def test_analogue_inputs_in_the_registers() -> None:
     assert filt[8] == 0 and filt[9] == 1 and filt[19] == 3 and filt[29] == 4  # every 10 ms
 
 
+@pytest.mark.statements("mis:8.2.16:3", "mis:8.2.16:4")
 def test_digital_input_filter() -> None:
     m = MotorArray("MIS232", n=1)
     m.write_many({"INPUT_FILTER_MASK": 0b10, "INPUT_FILTER_CNT": 5})

@@ -33,6 +33,7 @@ def _modbus_write(twin: Twin, first: int, values: list[int]) -> mb.Response:
     return mb.decode_response(reply)
 
 
+@pytest.mark.statements("mis:8.2.22:8")
 def test_mactalk_write_of_command_342_erases_the_program() -> None:
     twin = _twin()
     reply = twin.session().feed(m32.encode_write_value(ADDRESS, COMMAND, 342))

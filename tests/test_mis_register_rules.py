@@ -29,6 +29,7 @@ def _largest_velocity_step(v: np.ndarray) -> float:
 
 
 # --- §5.9.3, §5.9.5: software limits in position and gear mode ----------------------------
+@pytest.mark.statements("mis:8.2.27:2")
 def test_position_limit_in_position_mode_stops_at_the_limit_with_the_normal_deceleration(
         ) -> None:
     """§5.9.3: "in position mode … the motor will stop at Position Limit Max"; §5.9.5 (SETUP_BITS
@@ -51,6 +52,7 @@ def test_position_limit_in_position_mode_stops_at_the_limit_with_the_normal_dece
     assert np.count_nonzero(down < 0) > 250  # 300 RPM at 1000 RPM/s: about 290 ms
 
 
+@pytest.mark.statements("mis:8.2.27:2", "mis:8.2.31:5")
 def test_position_limit_in_position_mode_without_bit_17_is_an_error_at_the_limit() -> None:
     """§5.9.4: "The motor will stop and activate an error, when reaching a limit" — and it
     stops at the limit, not beyond (§5.9.3)."""
@@ -63,6 +65,7 @@ def test_position_limit_in_position_mode_without_bit_17_is_an_error_at_the_limit
     assert m.read("MODE_REG")[0] == c.PASSIVE
 
 
+@pytest.mark.statements("mis:8.2.26:2")
 def test_position_limit_in_gear_mode_is_never_passed() -> None:
     """§5.9.3: "in position mode or gear mode, the motor will stop at Position Limit Min"."""
     m = _motor(MAX_P_IST=100000, MIN_P_IST=-50000, V_SOLL=30000, A_SOLL=2000,
@@ -75,6 +78,7 @@ def test_position_limit_in_gear_mode_is_never_passed() -> None:
 
 
 # --- §8.2.24 bit 22, §8.2.105 (register 177) ---------------------------------------------
+@pytest.mark.statements("mis:8.2.24:22")
 def test_in_target_position_waits_for_the_standstill_time() -> None:
     """§8.2.105: INTARGETPOSITIONTIME is the "time the motor must stand still before
     InTargetPosition (reg 25) flag is set"."""
@@ -90,6 +94,7 @@ def test_in_target_position_waits_for_the_standstill_time() -> None:
 
 
 # --- §8.2.77–78: the dedicated outputs ----------------------------------------------------
+@pytest.mark.statements("mis:8.2.17:3")
 def test_in_position_and_error_outputs_drive_outputs() -> None:
     """INPOS_MASK: "The In Position output will then be set after a movement has completed";
     ERROR_MASK: "set when any error is set"; both only on pins IOSETUP makes outputs
@@ -138,6 +143,7 @@ def test_setup_bit_6_recalculates_in_physical_position_while_moving() -> None:
     assert seen == {0: False, c.SETUP_IN_PHYS_POS_CONTINUOUS: True}
 
 
+@pytest.mark.statements("mis:8.2.32:4")
 def test_setup_bit_28_limits_without_memory() -> None:
     """Bit 28 (§5.9.6): "the sensor has-been warning is automatically cleared when the
     direction of the motor is reversed and the limit switch is no longer active"."""
@@ -170,6 +176,7 @@ def test_motor_rev_counts_revolutions_and_is_writable() -> None:
 
 
 # --- §5.11.2: passive via the stop ramp ----------------------------------------------------
+@pytest.mark.statements("mis:8.2.3:9")
 def test_mode_0_on_a_running_motor_decelerates_with_the_stop_ramp_first() -> None:
     """§5.11.2: "When changing to Passive mode the motor goes into Stop mode to decelerate
     according to the 'Deceleration'-ramp. When 'Actual velocity' is 0 … the motor goes
@@ -210,6 +217,8 @@ def test_modbus_write_multiple_example_is_accepted_as_the_manual_replies() -> No
 @pytest.mark.parametrize("command, names", [
     (108, ("P1", "V1", "A1", "T1")), (109, ("P2", "V2", "A2", "T2")),
     (110, ("P3", "V3", "A3", "T3")), (111, ("P4", "V4", "A4", "T4"))])
+@pytest.mark.statements(
+    "mis:8.2.20:1", "mis:8.2.20:2", "mis:8.2.21:4", "mis:8.2.21:5", "mis:8.2.21:6", "mis:8.2.21:7")
 def test_fastmac_register_sets_load_the_profile(command: int, names: tuple[str, ...]) -> None:
     """FastMac 12–15 (commands 108–111): P_SOLL, V_SOLL, A_SOLL and the running current from
     position, velocity, acceleration and current register n."""
@@ -220,6 +229,7 @@ def test_fastmac_register_sets_load_the_profile(command: int, names: tuple[str, 
 
 
 @pytest.mark.parametrize("command, name", [(113, "P7"), (114, "P8")])
+@pytest.mark.statements("mis:8.2.21:8", "mis:8.2.21:9")
 def test_fastmac_relative_moves_add_p7_and_p8(command: int, name: str) -> None:
     """FastMac 17/18 (commands 113/114): P_SOLL = P_IST + position register 7 / 8."""
     m = _motor(P_IST=1000, **{name: -400})
@@ -263,6 +273,7 @@ def test_sample4_records_and_the_buffer_holds_buf_size_samples() -> None:
 
 
 # --- §5.9.2, §8.2.72: the negative limit input --------------------------------------------
+@pytest.mark.statements("mis:8.2.32:3")
 def test_negative_limit_input_of_nl_mask() -> None:
     m = _motor(NL_MASK=0b1000, V_SOLL=-5000, V_START=10000, SETUP_BITS=c.SETUP_NO_LIMIT_ERROR)
     m.write("MODE_REG", c.VELOCITY)

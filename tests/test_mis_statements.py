@@ -1,0 +1,573 @@
+"""Statements of the MIS/SMC manual that no other test asserts: the register tables' defaults,
+ranges and access (MIS manual §8.2), and short checks of the numbers and conditions of the
+register descriptions (§8.2) and of the function chapters (§5, §6). Each test carries the ids of
+the statements it asserts (``families/mis/statements.yaml``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from jvl_gym import MotorArray
+from jvl_gym.families.mis import constants as c
+from jvl_gym.registers import RegisterError
+from jvl_gym.sim import ModeError
+
+#: 0.01 RPM per ms per RPM/s: a ramp of A RPM/s changes V_IST by A/10 units per ms
+_UNITS_PER_MS = 0.1
+#: counts per ms at 0.01 RPM
+_COUNTS_PER_MS_PER_UNIT = 409600 / 60000 / 100
+#: peak amperes of one RUN_CURRENT unit (5.87 mA RMS)
+_PEAK_AMPS_PER_UNIT = np.sqrt(2.0) * 5.87e-3
+
+
+def _motor(motor: str = "MIS232", **regs: int) -> MotorArray:
+    m = MotorArray(motor, n=1, seed=0)
+    m.write_many(regs)
+    return m
+
+
+# --- §8.2: the register tables --------------------------------------------------------------
+#: defaults the register descriptions print (where the overview and the detail agree)
+_DEFAULTS = {
+    "MODE_REG": 0, "P_SOLL": 0, "V_SOLL": 10000, "A_SOLL": 1000, "RUN_CURRENT": 511,
+    "STANDBY_TIME": 500, "STANDBY_CURRENT": 128, "GEAR1": 409600, "GEAR2": 2048, "OUTPUTS": 0,
+    "FLWERRMAX": 0, "MIN_P_IST": 0, "MAX_P_IST": 0, "ACC_EMERG": 10000,
+    "IN_POSITION_WINDOW": 20000, "IN_POSITION_COUNT": 2, "ERR_BITS": 0, "WARN_BITS": 0,
+    "STARTMODE": 0, "P_HOME": 0, "T_HOME": 1024, "HOMEMODE": 0, "ABSENCODER": 0,
+    "EXTENCODER2": 0, "FLEXREGISTER": 0,
+    **{f"P{n}": 0 for n in range(1, 9)}, **{f"V{n}": 25000 for n in range(1, 9)},
+    **{f"A{n}": 1000 for n in range(1, 5)}, **{f"T{n}": 511 for n in range(1, 5)},
+    **{f"ANALOGUE_FILTERED{n}": 0 for n in range(1, 9)},
+    "AFZUP_WRITEBITS": 0, "AFZUP_READINDEX": 0, "AFZUP_CONFMIN": 0, "AFZUP_CONFMAX": 4095,
+    "AFZUP_MAXSLOPE": 4095, "AFZUP_FILTER": 64, "FILTERSTATUS": 0, "SETTLINGTIME": 0,
+    **{f"SAMPLE{n}": 0 for n in range(1, 5)}, "REC_CNT": 0, "S_TIME": 1, "S_CONTROL": 0,
+    "ZERO_SEARCH_BITS": 0, "SETUP_BITS": 0, "IOSETUP": 0, "TURNTABLE_MODE": 0,
+    "TURNTABLE_SIZE": 0, "NL_MASK": 0, "PL_MASK": 0, "HOME_MASK": 0, "INPUT_FILTER_MASK": 0,
+    "INPUT_FILTER_CNT": 5, "INPOS_MASK": 0, "ERROR_MASK": 0, "ACCEPT_VOLTAGE": 2052,
+    "ACCEPT_COUNT": 100, "SAVE_VOLTAGE": 1710, "P_NEW": 0, "BAUD_RATE": 1, "TX_DELAY": 15,
+    "MY_ADDR": 254, "NOTSAVED": 0, "FBUS_NODE_ID": 5, "FBUS_BAUD": 2,
+    "INTARGETPOSITIONTIME": 10, "BRAKE": 0, "CUR_SCALE_MAX": 2047, "CUR_SCALE_MIN": 1,
+    "CUR_SCALE_FACTOR": 500, "CUR_SCALE_INC": 2000, "CUR_SCALE_DEC": 4000, "XFIELD_ADDR": 0,
+    "XFIELD_DATA": 0, **{f"FLEXREGSETUP{n}": 0 for n in range(1, 9)},
+    "FLEXLEDSETUP1": 102303769, "FLEXLEDSETUP2": 504954880, "V_SOLL_AUTO": 0, "V_IST_CALC": 0,
+    "MOTOR_REV": 0, "EX_CYCLIC_SETUP": 0, "EX_CRC_ERR": 0, "V_HOME_CRAWL": 0,
+    "V_HOME_TIMEOUT": 0, "LOWBUSCVI_CNT": 10, "D_SOLL": 1000, "TICKS": 0,
+}
+
+#: where the overview and the detail table disagree, the chosen default (MIS register page)
+_CHOSEN_DEFAULTS = {"V_START": 1000, "V_HOME": -5000, "MIN_BUSVOL": 565,
+                    "TEMP_LIMITS": 80 + (90 << 16), "CL_CATCH_UP": 5000 << 8}
+
+
+@pytest.mark.parametrize("motor", ["MIS171", "MIS232", "MIS340"])
+@pytest.mark.statements(
+    "mis:8.2.3:1", "mis:8.2.4:1", "mis:8.2.5:1", "mis:8.2.6:1", "mis:8.2.7:1", "mis:8.2.8:1",
+    "mis:8.2.9:1", "mis:8.2.12:1", "mis:8.2.13:1", "mis:8.2.14:1", "mis:8.2.17:1", "mis:8.2.19:1",
+    "mis:8.2.20:1", "mis:8.2.26:1", "mis:8.2.27:1", "mis:8.2.28:1", "mis:8.2.29:1",
+    "mis:8.2.30:1", "mis:8.2.31:1", "mis:8.2.32:1", "mis:8.2.33:1", "mis:8.2.34:1",
+    "mis:8.2.35:1", "mis:8.2.36:1", "mis:8.2.37:1", "mis:8.2.38:1", "mis:8.2.39:1", "mis:8.2.40:1")
+def test_defaults_of_the_register_tables(motor: str) -> None:
+    m = MotorArray(motor, n=1)
+    for name, value in {**_DEFAULTS, **_CHOSEN_DEFAULTS}.items():
+        assert m.read(name)[0] == value, name
+
+
+#: ranges of read-write registers the register descriptions print (lowest, highest)
+_I32 = (-(2**31), 2**31 - 1)
+_RANGES = {
+    "P_SOLL": _I32, "V_SOLL": (-300000, 300000), "A_SOLL": (1, 500000),
+    "RUN_CURRENT": (0, 1533), "STANDBY_TIME": (1, 65535), "STANDBY_CURRENT": (0, 1533),
+    "P_IST": _I32, "GEAR1": _I32, "GEAR2": _I32, "ENCODER_POS": _I32, "FLWERRMAX": _I32,
+    "MIN_P_IST": _I32, "MAX_P_IST": _I32, "ACC_EMERG": (1, 500000),
+    "IN_POSITION_WINDOW": (0, 2**31 - 1), "IN_POSITION_COUNT": (0, 100), "P_HOME": _I32,
+    "V_HOME": (-300000, 300000), "T_HOME": (0, 2047),
+    **{f"P{n}": _I32 for n in range(1, 9)}, **{f"A{n}": (1, 500000) for n in range(1, 5)},
+    **{f"T{n}": (0, 1533) for n in range(1, 5)},
+    "MIN_BUSVOL": (0, 4095), "AFZUP_CONFMIN": (0, 4094), "AFZUP_CONFMAX": (1, 4095),
+    "AFZUP_MAXSLOPE": (2, 4095), "AFZUP_FILTER": (1, 64), "SETTLINGTIME": (0, 32676),
+    "TURNTABLE_MODE": (0, 5), "P_NEW": _I32, "BAUD_RATE": (0, 7), "TX_DELAY": (1, 255),
+    "GROUP_ID": (0, 255), "MY_ADDR": (0, 254), "NOTSAVED": (0, 65535),
+    "FBUS_NODE_ID": (1, 127), "FBUS_BAUD": (0, 8), "INTARGETPOSITIONTIME": (0, 2**32 - 1),
+    "BRAKE": (0, 2**32 - 1), "CUR_SCALE_MAX": (0, 2047), "CUR_SCALE_MIN": (0, 2047),
+    "CUR_SCALE_FACTOR": (1, 10000), "KPHASE": (0, 200), "CUR_SCALE_INC": (1, 100000),
+    "CUR_SCALE_DEC": (1, 100000), "V_SOLL_AUTO": (-300000, 300000),
+    "MOTOR_REV": (0, 2**32 - 1), "V_HOME_CRAWL": (0, 300000),
+    "V_HOME_TIMEOUT": (0, 2**32 - 1), "AFZUP_READINDEX": (0, 32775),
+}
+
+
+@pytest.mark.filterwarnings("ignore:.*is not modelled")
+@pytest.mark.statements(
+    "mis:8.2.4:1", "mis:8.2.5:1", "mis:8.2.6:1", "mis:8.2.7:1", "mis:8.2.8:1", "mis:8.2.9:1",
+    "mis:8.2.10:1", "mis:8.2.13:1", "mis:8.2.14:1", "mis:8.2.19:1", "mis:8.2.26:1",
+    "mis:8.2.27:1", "mis:8.2.28:1", "mis:8.2.29:1", "mis:8.2.30:1", "mis:8.2.34:1",
+    "mis:8.2.35:1", "mis:8.2.36:1")
+def test_ranges_of_the_register_tables() -> None:
+    """The lowest and the highest value of each range are taken and read back; one beyond
+    either end is refused and changes nothing."""
+    m = _motor()
+    for name, (lo, hi) in _RANGES.items():
+        before = int(m.read(name)[0])
+        for value in (lo, hi):
+            m.write(name, value)
+            assert m.read(name)[0] == value, name
+        m.write(name, before)
+        for value in (lo - 1, hi + 1):
+            with pytest.raises(RegisterError):
+                m.write(name, value)
+            assert m.read(name)[0] == before, name
+
+
+#: registers the register descriptions mark read-only (R)
+_READ_ONLY = ["PROG_VERSION", "V_IST", "INPUTS", "FLWERR", "STATUSBITS", "TEMP", "ABSENCODER",
+              "EXTENCODER2", "FLEXREGISTER", *[f"ANALOGUE_FILTERED{n}" for n in range(1, 9)],
+              *[f"ANALOGUE_INPUT{n}" for n in range(1, 9)], "BUSVOL", "ENCODER_TYPE",
+              "FILTERSTATUS", "BUF_SIZE", "INDEX_OFFSET", "CVI_VOLT", "GROUP_SEQ",
+              "MOTORTYPE", "SERIAL_NUMBER", "CHECKSUM_1", "CHECKSUM_2", "HARDWARE_REV",
+              "MAX_VOLTAGE", "AVAILABLE_IO", "BOOTLOADER_VER", "OPTION_BITS", "MODULE_TYPE",
+              "EXT_ENCODER_VEL", "FW_BUILD", "ACTUAL_TORQUE", "TEMP_LIMITS", "TEMP_HIGHRES",
+              "V_ENCODER", "EX_CYCLIC_SETUP"]
+
+
+@pytest.mark.statements(
+    "mis:8.2.2:1", "mis:8.2.11:1", "mis:8.2.16:1", "mis:8.2.18:1", "mis:8.2.24:1", "mis:8.2.25:1",
+    "mis:8.2.38:1", "mis:8.2.39:1", "mis:8.2.40:1")
+def test_read_only_registers_refuse_a_write() -> None:
+    m = _motor()
+    for name in _READ_ONLY:
+        before = int(m.read(name)[0])
+        with pytest.raises(RegisterError, match="ro"):
+            m.write(name, before + 1)
+        assert m.read(name)[0] == before, name
+
+
+# --- §8.2.3 MODE_REG ---------------------------------------------------------------------------
+@pytest.mark.statements("mis:8.2.3:2")
+def test_passive_mode_has_no_current_and_ignores_commands() -> None:
+    """§8.2.3: "the motor current is turned off and the motor will not react to any position/
+    velocity commands"."""
+    m = _motor(P_SOLL=100000, V_SOLL=30000)
+    m.step(100)
+    assert m.current_amplitude[0] == 0.0
+    assert m.read("P_IST")[0] == 0 and m.read("V_IST")[0] == 0 and m.rotor_counts[0] == 0
+
+
+@pytest.mark.statements("mis:8.2.3:3", "mis:8.2.5:2", "mis:8.2.11:2")
+def test_velocity_mode_follows_v_soll_changed_at_any_time() -> None:
+    """§8.2.3/§8.2.5: in velocity mode the motor runs at V_SOLL, which may be changed at any
+    time; a negative V_SOLL runs the motor the other way, and V_IST is then negative
+    (§8.2.11)."""
+    m = _motor(V_SOLL=20000, A_SOLL=10000, D_SOLL=0, V_START=1000)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(100)
+    assert m.read("V_IST")[0] == 20000
+    m.write("V_SOLL", 5000)
+    m.step(100)
+    assert m.read("V_IST")[0] == 5000
+    m.write("V_SOLL", -15000)
+    m.step(200)
+    assert m.read("V_IST")[0] == -15000
+    p0 = m.read("P_IST")[0]
+    m.step(100)
+    assert m.read("P_IST")[0] < p0
+
+
+@pytest.mark.statements("mis:8.2.3:6")
+def test_position_mode_takes_new_p_soll_and_v_soll_during_a_move() -> None:
+    """§8.2.3: "P_SOLL can be changed at any time and the motor will move accordingly. V_SOLL
+    can also be changed during a movement." """
+    m = _motor(P_SOLL=2_000_000, V_SOLL=30000, A_SOLL=10000, V_START=1000)
+    m.write("MODE_REG", c.POSITION)
+    m.step(200)
+    assert m.read("V_IST")[0] == 30000
+    m.write("V_SOLL", 10000)
+    m.step(300)
+    assert m.read("V_IST")[0] == 10000
+    m.write("P_SOLL", 100000)  # behind the motor now: it turns back
+    m.step(3000)
+    assert m.read("P_IST")[0] == 100000 and m.read("V_IST")[0] == 0
+
+
+@pytest.mark.statements("mis:8.2.3:12")
+def test_safe_mode_is_entered_by_command_only_and_allows_flash_and_reset() -> None:
+    """§8.2.3: safe mode "cannot be entered/exited directly; this must be done using the
+    serial commands ENTER/EXIT SAFEMODE"; like passive mode it has no current, and it allows
+    the save in flash and the reset."""
+    m = _motor()
+    with pytest.raises(ModeError):
+        m.write("MODE_REG", c.SAFE)
+    m.enter_safe_mode()
+    assert m.read("MODE_REG")[0] == c.SAFE
+    m.step(10)
+    assert m.current_amplitude[0] == 0.0
+    m.write("V_SOLL", 4321)
+    m.write_flash()
+    assert m.read("V_SOLL")[0] == 4321
+
+
+@pytest.mark.statements("mis:8.2.3:10", "mis:8.2.3:13", "mis:8.2.24:8", "mis:8.2.35:2")
+def test_zero_search_mode_13_ends_in_startmode() -> None:
+    """§8.2.3 example: "Writing MODE_REG = 13 will start a zero search … When the search is
+    completed, the MODE_REG will automatically be changed to the mode specified in
+    START_MODE"; §8.2.34: the zero point found is offset with P_HOME."""
+    m = _motor(HOME_MASK=0b1, V_HOME=5000, STARTMODE=c.POSITION, P_HOME=1000,
+               IN_POSITION_COUNT=0)
+    m.write("MODE_REG", c.ZERO_SEARCH_1)
+    m.step(100)
+    assert m.read("P_IST")[0] > 0  # a positive V_HOME searches in the positive direction
+    m.set_input(digital_inputs=0b1)
+    for _ in range(20):
+        m.step(100)
+        if m.read("MODE_REG")[0] != c.ZERO_SEARCH_1:
+            break
+    assert m.read("MODE_REG")[0] == c.POSITION
+    assert m.read("STATUSBITS")[0] & c.ST_ZERO_SEARCH_DONE
+
+
+# --- §8.2.4–§8.2.12 the profile --------------------------------------------------------------
+@pytest.mark.statements("mis:8.2.4:3")
+def test_409600_counts_are_one_revolution() -> None:
+    """§8.2.4: "The MISxxx motor family all have 409600 counts per motor revolution"."""
+    m = _motor(P_SOLL=409600, V_SOLL=30000, A_SOLL=5000)
+    m.write("MODE_REG", c.POSITION)
+    m.step(1500)
+    assert m.read("P_IST")[0] == 409600
+    assert m.position_rad[0] == pytest.approx(2 * np.pi, abs=2 * np.pi / 500)
+
+
+@pytest.mark.statements("mis:8.2.6:3")
+def test_a_soll_is_in_rpm_per_second() -> None:
+    """§8.2.6 example: "A_SOLL = 100, will set the acceleration to 100 RPM/s"."""
+    m = _motor(A_SOLL=100, V_SOLL=10000, V_START=1000)
+    m.write("MODE_REG", c.VELOCITY)
+    v = m.trace(["V_IST"], 500)["V_IST"][:, 0]
+    assert np.all(np.diff(v[:400]) == 100 * _UNITS_PER_MS)  # 1 RPM per 10 ms
+
+
+@pytest.mark.statements("mis:8.2.7:2", "mis:8.2.7:4", "mis:8.2.7:5")
+def test_run_current_unit_instant_change_and_maximum_per_size() -> None:
+    """§8.2.7: unit 5.87 mA ("RUN_CURRENT = 100, will set the running current to 0.587 ARMS");
+    a new value is set instantly; the largest setting is 681 on an MIS17x (4 ARMS), 1022 on an
+    MIS23x (6 ARMS), 1533 on an MIS34x (9 ARMS)."""
+    m = _motor(RUN_CURRENT=100, V_SOLL=10000)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(5)
+    assert m.current_amplitude[0] == pytest.approx(100 * _PEAK_AMPS_PER_UNIT, rel=1e-3)
+    m.write("RUN_CURRENT", 300)
+    m.step(1)
+    assert m.current_amplitude[0] == pytest.approx(300 * _PEAK_AMPS_PER_UNIT, rel=1e-3)
+    for motor, largest in (("MIS171", 681), ("MIS232", 1022), ("MIS340", 1533)):
+        big = _motor(motor, RUN_CURRENT=1533, V_SOLL=10000)
+        big.write("MODE_REG", c.VELOCITY)
+        big.step(5)
+        assert big.current_amplitude[0] == pytest.approx(largest * _PEAK_AMPS_PER_UNIT,
+                                                         rel=1e-3), motor
+
+
+@pytest.mark.statements(
+    "mis:8.2.7:3", "mis:8.2.8:2", "mis:8.2.8:3", "mis:8.2.9:1", "mis:8.2.9:2", "mis:8.2.24:18")
+def test_standby_current_and_its_status_bit() -> None:
+    """§8.2.8–9: the standby current is used STANDBY_TIME ms after the last step, and a new
+    move uses the running current without delay; STATUSBITS bit 18 tells that the standby
+    current is used (§8.2.24); a new STANDBY_CURRENT is set instantly."""
+    m = _motor(STANDBY_TIME=100, STANDBY_CURRENT=50, RUN_CURRENT=400, P_SOLL=20000,
+               V_SOLL=30000, V_START=30000)
+    m.write("MODE_REG", c.POSITION)
+    tr = m.trace(["STATUSBITS", "P_IST"], 300)
+    p, st = tr["P_IST"][:, 0], tr["STATUSBITS"][:, 0]
+    last_step = int(np.flatnonzero(np.diff(p))[-1]) + 1
+    first = int(np.flatnonzero(st & c.ST_STANDBY_CURRENT)[0])
+    assert first - last_step == pytest.approx(100, abs=2)
+    assert m.current_amplitude[0] == pytest.approx(50 * _PEAK_AMPS_PER_UNIT, rel=1e-3)
+    m.write("STANDBY_CURRENT", 80)
+    m.step(1)
+    assert m.current_amplitude[0] == pytest.approx(80 * _PEAK_AMPS_PER_UNIT, rel=1e-3)
+    m.write("P_SOLL", 0)
+    m.step(1)
+    assert m.current_amplitude[0] == pytest.approx(400 * _PEAK_AMPS_PER_UNIT, rel=1e-3)
+    assert not m.read("STATUSBITS")[0] & c.ST_STANDBY_CURRENT
+
+
+@pytest.mark.statements("mis:8.2.10:3")
+def test_p_ist_wraps_at_2_to_the_31_in_velocity_mode() -> None:
+    """§8.2.10: "When P_IST reaches 2^31 − 1, it will wrap around to −2^31"."""
+    m = _motor(V_SOLL=100000, A_SOLL=100000, IN_POSITION_COUNT=0)
+    m.write("P_IST", 2**31 - 10000)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(50)
+    assert m.read("P_IST")[0] < -(2**31) + 400000
+
+
+# --- §8.2.15–§8.2.19 encoder, inputs, outputs, follow error ----------------------------------
+@pytest.mark.statements("mis:8.2.15:1", "mis:8.2.18:2")
+def test_encoder_position_starts_at_zero_and_follows_the_shaft() -> None:
+    """§8.2.15: ENCODER_POS shows the internal encoder's position, zero at power-up; §8.2.18:
+    FLWERR is its deviation from P_IST."""
+    m = _motor(P_SOLL=409600, V_SOLL=30000, A_SOLL=5000)
+    assert m.read("ENCODER_POS")[0] == 0
+    m.write("MODE_REG", c.POSITION)
+    m.step(1500)
+    assert m.read("ENCODER_POS")[0] == pytest.approx(m.rotor_counts[0], abs=200)
+    assert m.read("FLWERR")[0] == m.read("P_IST")[0] - m.read("ENCODER_POS")[0]
+
+
+@pytest.mark.statements("mis:8.2.16:2", "mis:8.2.16:3")
+def test_inputs_show_io1_to_io8_and_nothing_above() -> None:
+    """§8.2.16: bits 0–7 of INPUTS are IO1–IO8; bits 8–15 are always 0; the active level is
+    set by IOSETUP bits 0–7 (§8.2.69)."""
+    m = _motor()
+    for level in (0b1, 0b1000_0000, 0b1010_0101, 0xFF):
+        m.set_input(digital_inputs=level)
+        m.step(1)
+        assert m.read("INPUTS")[0] == level
+    m.write("IOSETUP", 0b1000_0001)
+    m.set_input(digital_inputs=0)
+    m.step(1)
+    assert m.read("INPUTS")[0] == 0b1000_0001
+
+
+@pytest.mark.statements("mis:8.2.17:1", "mis:8.2.17:2")
+def test_outputs_are_written_through_outputs() -> None:
+    """§8.2.17: "The register can be changed in order to change the status of the outputs"
+    (bits 0–7 = IO1–IO8)."""
+    m = _motor(IOSETUP=0xFF00)
+    m.write("OUTPUTS", 0b1001_0110)
+    m.step(2)
+    assert m.read("OUTPUTS")[0] == 0b1001_0110
+
+
+@pytest.mark.statements("mis:8.2.19:2", "mis:8.2.19:3", "mis:8.2.31:2", "mis:8.2.31:3")
+def test_flwerrmax_zero_disables_the_follow_error() -> None:
+    """§8.2.19: "If FLWERRMAX = 0, the error is disabled"; otherwise a follow error beyond it
+    sets ERR_BITS bit 1 with the general error bit 0 (§8.2.31)."""
+    for limit in (0, 20000):
+        m = _motor(FLWERRMAX=limit, P_SOLL=4_000_000, V_SOLL=100000, A_SOLL=1000)
+        m.set_input(load_torque=5.0)
+        m.write("MODE_REG", c.POSITION)
+        m.step(300)
+        err = m.read("ERR_BITS")[0]
+        if limit == 0:
+            assert err == 0 and abs(m.read("FLWERR")[0]) > 20000
+        else:
+            assert err & c.ERR_FOLLOW and err & c.ERR_GENERAL
+
+
+# --- §8.2.20–§8.2.22 COMMAND -------------------------------------------------------------------
+@pytest.mark.statements("mis:8.2.21:1", "mis:8.2.32:1")
+def test_fastmac_1_clears_errors_and_warnings() -> None:
+    """§8.2.21: FastMac 1 (97): "Clear errors and warnings"."""
+    m = _motor(PL_MASK=0b1, V_SOLL=5000, V_START=10000)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(20)
+    m.set_input(digital_inputs=0b1)
+    m.step(5)
+    m.set_input(digital_inputs=0)
+    m.step(5)
+    assert m.read("ERR_BITS")[0] and m.read("WARN_BITS")[0] & c.WARN_POS_LIMIT_SEEN
+    m.write("COMMAND", c.CMD_CLEAR_ERRORS)
+    assert m.read("ERR_BITS")[0] == 0 and m.read("WARN_BITS")[0] == 0
+
+
+@pytest.mark.statements("mis:8.2.20:2", "mis:8.2.22:1", "mis:8.2.22:2", "mis:8.2.22:3")
+def test_reset_and_save_commands() -> None:
+    """§8.2.22: 267 resets the CPU (the registers come back from flash), 269 saves to flash and
+    continues, 268 saves and resets."""
+    m = _motor(V_SOLL=4321)
+    m.write("COMMAND", c.CMD_RESET)
+    assert m.read("V_SOLL")[0] == 10000  # not saved: the default again
+    m.write("V_SOLL", 4321)
+    m.write("COMMAND", c.CMD_SAVE)
+    assert m.read("V_SOLL")[0] == 4321 and m.read("MODE_REG")[0] == c.PASSIVE
+    m.write("V_SOLL", 1111)
+    m.write("COMMAND", c.CMD_RESET)
+    assert m.read("V_SOLL")[0] == 4321
+    m.write("A_SOLL", 2222)
+    m.write("COMMAND", c.CMD_SAVE_RESET)
+    assert m.read("A_SOLL")[0] == 2222
+    m.write("COMMAND", c.CMD_RESET)
+    assert m.read("A_SOLL")[0] == 2222
+
+
+# --- §8.2.24 STATUSBITS, §8.2.28, §8.2.31 ERR_BITS -------------------------------------------
+@pytest.mark.statements("mis:8.2.24:12", "mis:8.2.31:2")
+def test_general_error_status_bit_is_err_bits_bit_0() -> None:
+    """§8.2.24 bit 12: "General Error (Same as register 35 bit 0)"; §8.2.31 bit 0: "always set
+    together with one of the other bits"."""
+    m = _motor(MAX_P_IST=50000, MIN_P_IST=-50000, V_SOLL=20000)
+    m.write("MODE_REG", c.VELOCITY)
+    for _ in range(60):
+        m.step(10)
+        err, st = m.read("ERR_BITS")[0], m.read("STATUSBITS")[0]
+        assert bool(err & c.ERR_GENERAL) == bool(st & c.ST_GENERAL_ERROR)
+        assert bool(err & c.ERR_GENERAL) == bool(err & ~c.ERR_GENERAL)
+    assert err & c.ERR_POSITION_LIMIT
+
+
+@pytest.mark.statements("mis:8.2.24:16", "mis:8.2.24:17", "mis:8.2.24:20")
+def test_closed_loop_status_bits() -> None:
+    """§8.2.24: bit 16 "Closed loop activated" follows SETUP_BITS bit 24; bit 17 "Internal
+    encoder calibrated" and bit 20 "Internal encoder OK" with the encoder option."""
+    m = _motor(SETUP_BITS=c.SETUP_CLOSED_LOOP, V_SOLL=10000)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(20)
+    st = m.read("STATUSBITS")[0]
+    assert st & c.ST_CLOSED_LOOP and st & c.ST_ENCODER_CALIBRATED and st & c.ST_ENCODER_OK
+    open_loop = _motor(V_SOLL=10000)
+    open_loop.write("MODE_REG", c.VELOCITY)
+    open_loop.step(20)
+    assert not open_loop.read("STATUSBITS")[0] & c.ST_CLOSED_LOOP
+
+
+@pytest.mark.statements("mis:8.2.28:2")
+def test_an_error_stop_decelerates_with_acc_emerg() -> None:
+    """§8.2.28: "The motor will use this acceleration during an emergency stop" — a position
+    limit error in velocity mode stops the motor with ACC_EMERG."""
+    m = _motor(MAX_P_IST=400000, MIN_P_IST=-400000, V_SOLL=30000, A_SOLL=10000,
+               ACC_EMERG=2000)
+    m.write("MODE_REG", c.VELOCITY)
+    tr = m.trace(["V_IST", "ERR_BITS"], 1200)
+    v, err = tr["V_IST"][:, 0], tr["ERR_BITS"][:, 0]
+    first = int(np.flatnonzero(err)[0])
+    down = -np.diff(v[first:].astype(float))
+    down = down[(down > 0)]
+    assert np.median(down) == pytest.approx(2000 * _UNITS_PER_MS, abs=1)
+    assert v[-1] == 0 and m.read("MODE_REG")[0] == c.PASSIVE
+
+
+@pytest.mark.statements("mis:8.2.31:1", "mis:8.2.31:24")
+def test_writing_zero_to_err_bits_clears_the_errors() -> None:
+    """§8.2.31: "Some of the errors can be cleared by writing zero to this register"; the
+    motor then takes an active mode again."""
+    m = _motor(FLWERRMAX=1000, P_SOLL=4_000_000, V_SOLL=100000, A_SOLL=1000)
+    m.set_input(load_torque=5.0)
+    m.write("MODE_REG", c.POSITION)
+    m.step(200)
+    assert m.read("ERR_BITS")[0] & c.ERR_FOLLOW
+    m.write("ERR_BITS", 0)
+    assert m.read("ERR_BITS")[0] == 0
+    m.set_input(load_torque=0.0)
+    m.write("MODE_REG", c.POSITION)
+    assert m.read("MODE_REG")[0] == c.POSITION
+
+
+@pytest.mark.statements("mis:8.2.32:3", "mis:8.2.32:5")
+def test_negative_limit_warning_bits() -> None:
+    """§8.2.32 bits 1 and 3: the negative limit is active as long as its input is, and "has
+    been active" is remembered after it is released."""
+    m = _motor(NL_MASK=0b10, V_SOLL=-5000, V_START=10000, SETUP_BITS=c.SETUP_NO_LIMIT_ERROR)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(20)
+    m.set_input(digital_inputs=0b10)
+    m.step(5)
+    warn = m.read("WARN_BITS")[0]
+    assert warn & c.WARN_NEG_LIMIT and warn & c.WARN_NEG_LIMIT_SEEN
+    m.write("V_SOLL", 5000)
+    m.step(5)
+    m.set_input(digital_inputs=0)
+    m.step(5)
+    warn = m.read("WARN_BITS")[0]
+    assert not warn & c.WARN_NEG_LIMIT and warn & c.WARN_NEG_LIMIT_SEEN
+
+
+# --- §8.2.33–§8.2.37, §8.2.126 zero search ---------------------------------------------------
+def _search_on_input(p_home: int, at: int = 20000) -> MotorArray:
+    """Zero search type 1 upwards on IO1, which goes active when P_IST passes ``at``."""
+    m = _motor(HOME_MASK=0b1, V_HOME=5000, STARTMODE=c.POSITION, P_HOME=p_home,
+               IN_POSITION_COUNT=0)
+    m.write("MODE_REG", c.ZERO_SEARCH_1)
+    for _ in range(5000):
+        m.set_input(digital_inputs=int(m.rotor_counts[0] >= at))
+        m.step(1)
+        if m.read("MODE_REG")[0] != c.ZERO_SEARCH_1:
+            break
+    m.step(1000)
+    return m
+
+
+@pytest.mark.statements("mis:8.2.34:2")
+def test_p_home_offsets_the_zero_point() -> None:
+    """§8.2.34: "The zero point found is offset with this value": where P_IST = 0 lies on the
+    shaft moves by P_HOME."""
+    zeros = {}
+    for p_home in (0, 30000):
+        m = _search_on_input(p_home)
+        assert m.read("MODE_REG")[0] == c.POSITION
+        zeros[p_home] = m.rotor_counts[0] - m.read("P_IST")[0]
+    # the input is seen in the next 1 ms sample: about 340 counts late at 50 RPM
+    assert zeros[0] == pytest.approx(20000, abs=700)
+    assert zeros[0] - zeros[30000] == pytest.approx(30000, abs=400)
+
+
+@pytest.mark.statements("mis:8.2.15:2")
+def test_zero_search_sets_the_encoder_with_p_ist() -> None:
+    """§8.2.15: ENCODER_POS "is … modified by the firmware when a zero search is performed":
+    after the search it counts from the new zero with P_IST."""
+    m = _search_on_input(0)
+    assert m.read("ENCODER_POS")[0] == pytest.approx(m.read("P_IST")[0], abs=300)
+    # counted from power-on it would be about 20000 counts more
+    assert m.rotor_counts[0] - m.read("ENCODER_POS")[0] == pytest.approx(20000, abs=700)
+
+
+@pytest.mark.statements("mis:8.2.37:1", "mis:8.2.37:2")
+def test_homemode_values() -> None:
+    """§8.2.37: HOMEMODE takes 0, 13 and 14; 14 starts a type 2 search at power-up, 0 none."""
+    for value in (1, 2, 12, 15):
+        with pytest.raises(RegisterError):
+            MotorArray("MIS232", n=1, setup={"HOMEMODE": value})
+    assert MotorArray("MIS232", n=1, setup={"HOMEMODE": 14}).read("MODE_REG")[0] == 14
+    assert MotorArray("MIS232", n=1, setup={"HOMEMODE": 0}).read("MODE_REG")[0] == 0
+
+
+@pytest.mark.statements("mis:8.2.31:18")
+def test_zero_search_time_out_is_60_s_by_default() -> None:
+    """§8.2.126: "If 0, the Zero Search time out is 60000 ms. Else the value in this register is
+    used"; the time-out sets ERR_BITS bit 16 (§8.2.31)."""
+    m = _motor(HOME_MASK=0b1, V_HOME=-3000, MIN_P_IST=0, MAX_P_IST=0)
+    m.write("MODE_REG", c.ZERO_SEARCH_1)
+    m.step(59990)
+    assert m.read("ERR_BITS")[0] == 0
+    m.step(20)
+    assert m.read("ERR_BITS")[0] & c.ERR_ZERO_SEARCH_TIMEOUT
+    short = _motor(HOME_MASK=0b1, V_HOME=-3000, V_HOME_TIMEOUT=500)
+    short.write("MODE_REG", c.ZERO_SEARCH_1)
+    short.step(490)
+    assert short.read("ERR_BITS")[0] == 0
+    short.step(20)
+    assert short.read("ERR_BITS")[0] & c.ERR_ZERO_SEARCH_TIMEOUT
+
+
+@pytest.mark.statements(
+    "mis:8.2.21:2", "mis:8.2.21:3", "mis:8.2.21:8", "mis:8.2.21:13", "mis:8.2.21:14")
+def test_fastmac_position_and_velocity_commands() -> None:
+    """§8.2.21: FastMac 3 (99) P_IST = 0, FastMac 5 (101) V_SOLL = 0, FastMac 23 (119) P_IST,
+    P_SOLL and the encoder = P_NEW, FastMac 24 (120) each += P_NEW."""
+    m = _motor(P_NEW=5000, V_SOLL=12345, P_SOLL=700, P_IST=300)
+    m.write("COMMAND", 119)
+    assert [m.read(k)[0] for k in ("P_IST", "P_SOLL", "ENCODER_POS")] == [5000] * 3
+    m.write("P_NEW", -2000)
+    m.write("COMMAND", 120)
+    assert [m.read(k)[0] for k in ("P_IST", "P_SOLL", "ENCODER_POS")] == [3000] * 3
+    m.write("COMMAND", 99)
+    assert m.read("P_IST")[0] == 0 and m.read("P_SOLL")[0] == 3000
+    m.write("COMMAND", 101)
+    assert m.read("V_SOLL")[0] == 0
+
+
+@pytest.mark.statements("mis:8.2.22:12", "mis:8.2.22:13", "mis:8.2.28:2")
+def test_emergency_stop_commands() -> None:
+    """§8.2.22: 398 "Emergency stop with deceleration" (ACC_EMERG, §8.2.28), 399 "Emergency
+    stop without deceleration"; both leave the motor passive."""
+    m = _motor(V_SOLL=20000, V_START=1000, A_SOLL=1000, ACC_EMERG=3000)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(300)
+    m.write("COMMAND", 398)
+    tr = m.trace(["V_IST", "MODE_REG"], 100)
+    assert np.all(np.diff(tr["V_IST"][:60, 0]) == -3000 * _UNITS_PER_MS)
+    assert tr["MODE_REG"][-1, 0] == c.PASSIVE and tr["V_IST"][-1, 0] == 0
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(300)
+    m.write("COMMAND", 399)
+    assert m.read("MODE_REG")[0] == c.PASSIVE
+    m.step(1)
+    assert m.read("V_IST")[0] == 0
