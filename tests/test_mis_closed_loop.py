@@ -36,7 +36,7 @@ def test_current_scaling_times_of_the_manual() -> None:
     assert _ms_to(1023, 0, 1024, 0.0) == 57  # 1023 steps of 55.56 µs
 
 
-@pytest.mark.statements("mis:8.2.24:16")
+@pytest.mark.statements("mis:8.2.24:16", "mis:8.2.68:19", "mis:8.2.68:20")
 def test_closed_loop_current_follows_the_load_in_a_running_motor() -> None:
     m = MotorArray("MIS232", n=2, seed=0)
     m.write_many({"SETUP_BITS": np.array([CL, 0]), "V_SOLL": 30000, "A_SOLL": 2000,

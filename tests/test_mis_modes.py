@@ -64,7 +64,7 @@ def _table(mode: int, **regs: int) -> MotorArray:
                   A_SOLL=100000, IN_POSITION_COUNT=0, **regs)
 
 
-@pytest.mark.statements("mis:8.2.27:3")
+@pytest.mark.statements("mis:8.2.27:3", "mis:8.2.70:2")
 def test_turn_table_multiturn_cw_example() -> None:
     """§5.12.1, mode 4: start 0, target 970000: P_SOLL = 150800 (the remainder of
     970000/409600) after a CW move of 970000 counts; P_IST stays in range and TURNTAB_COUNT
@@ -81,7 +81,7 @@ def test_turn_table_multiturn_cw_example() -> None:
     assert m.rotor_counts[0] == pytest.approx(970000, abs=600)
 
 
-@pytest.mark.statements("mis:8.2.26:3", "mis:8.2.27:3")
+@pytest.mark.statements("mis:8.2.26:3", "mis:8.2.27:3", "mis:8.2.70:1", "mis:8.2.70:2")
 def test_turn_table_directions_and_limits() -> None:
     m = _table(c.TT_CW, P_SOLL=250000)
     m.write("MODE_REG", 2)
@@ -127,7 +127,7 @@ def test_zero_search_finds_the_sensor_and_goes_to_startmode(mode: int) -> None:
     assert m.read("ERR_BITS")[0] == 0
 
 
-@pytest.mark.statements("mis:8.2.3:13", "mis:8.2.33:3")
+@pytest.mark.statements("mis:8.2.3:13", "mis:8.2.33:3", "mis:8.2.74:2")
 def test_zero_search_on_an_external_input() -> None:
     m = _motor(HOME_MASK=0b100, V_HOME=3000, STARTMODE=1, V_SOLL=0, IN_POSITION_COUNT=0)
     m.write("MODE_REG", 13)
@@ -218,7 +218,9 @@ def test_software_position_limit_stops_with_an_error() -> None:
     assert m.read("P_IST")[0] < 100000 + 20000
 
 
-@pytest.mark.statements("mis:8.2.31:6", "mis:8.2.32:6")
+@pytest.mark.statements(
+    "mis:8.2.31:6", "mis:8.2.32:6", "mis:8.2.47:1", "mis:8.2.47:2", "mis:8.2.48:2",
+    "mis:8.2.68:16", "mis:8.2.68:17")
 def test_low_bus_voltage_actions() -> None:
     m = _motor(V_SOLL=10000, SETUP_BITS=(1 << 21) | (1 << 22))
     m.write("MODE_REG", 1)
@@ -232,6 +234,8 @@ def test_low_bus_voltage_actions() -> None:
 
 
 # --- sample buffer (§8.2.60–63) ---------------------------------------------------------
+@pytest.mark.statements(
+    "mis:8.2.60:1", "mis:8.2.60:2", "mis:8.2.60:3", "mis:8.2.61:2", "mis:8.2.63:2")
 def test_sample_buffer_records_registers() -> None:
     m = _motor(SAMPLE1=10, SAMPLE2=12, SAMPLE3=0, REC_CNT=50, S_TIME=2, V_SOLL=5000,
                V_START=10000)
@@ -289,7 +293,7 @@ def test_homemode_starts_a_zero_search_at_power_on() -> None:
     assert m.read("MODE_REG")[0] == 13
 
 
-@pytest.mark.statements("mis:8.2.32:2", "mis:8.2.32:4")
+@pytest.mark.statements("mis:8.2.32:2", "mis:8.2.32:4", "mis:8.2.68:13", "mis:8.2.73:2")
 def test_hardware_limit_input_and_its_warning_bits() -> None:
     m = _motor(PL_MASK=0b100, V_SOLL=5000, V_START=10000, SETUP_BITS=1 << 17)
     m.write("MODE_REG", 1)
@@ -312,7 +316,7 @@ def test_hardware_limit_input_and_its_warning_bits() -> None:
     assert not warn & c.WARN_POS_LIMIT and warn & c.WARN_POS_LIMIT_SEEN
 
 
-@pytest.mark.statements("mis:8.2.38:2", "mis:8.2.38:3")
+@pytest.mark.statements("mis:8.2.38:2", "mis:8.2.38:3", "mis:8.2.49:2")
 def test_absolute_encoder_register() -> None:
     m = MotorArray("MIS232", n=2, encoder_type=np.array([3, 4]))
     m.write_many({"V_SOLL": 100000, "A_SOLL": 10000, "MODE_REG": 1})

@@ -442,6 +442,7 @@ def test_program_survives_reset_and_starts_at_power_on_in_position_mode() -> Non
     assert m.program_text() is not None and m.program_status().state == 9
 
 
+@pytest.mark.statements("mis:8.2.68:3")
 def test_setup_bit_1_keeps_the_program_from_starting() -> None:
     m = MotorArray("MIS232", seed=0)
     m.write_many({"SETUP_BITS": 2, "STARTMODE": 1})

@@ -29,7 +29,7 @@ def _largest_velocity_step(v: np.ndarray) -> float:
 
 
 # --- §5.9.3, §5.9.5: software limits in position and gear mode ----------------------------
-@pytest.mark.statements("mis:8.2.27:2")
+@pytest.mark.statements("mis:8.2.27:2", "mis:8.2.68:13")
 def test_position_limit_in_position_mode_stops_at_the_limit_with_the_normal_deceleration(
         ) -> None:
     """§5.9.3: "in position mode … the motor will stop at Position Limit Max"; §5.9.5 (SETUP_BITS
@@ -94,7 +94,7 @@ def test_in_target_position_waits_for_the_standstill_time() -> None:
 
 
 # --- §8.2.77–78: the dedicated outputs ----------------------------------------------------
-@pytest.mark.statements("mis:8.2.17:3")
+@pytest.mark.statements("mis:8.2.17:3", "mis:8.2.69:3", "mis:8.2.77:2", "mis:8.2.78:2")
 def test_in_position_and_error_outputs_drive_outputs() -> None:
     """INPOS_MASK: "The In Position output will then be set after a movement has completed";
     ERROR_MASK: "set when any error is set"; both only on pins IOSETUP makes outputs
@@ -117,6 +117,7 @@ def test_in_position_and_error_outputs_drive_outputs() -> None:
 
 
 # --- §8.2.68 SETUP_BITS --------------------------------------------------------------------
+@pytest.mark.statements("mis:8.2.68:2")
 def test_setup_bit_0_inverts_the_motor_direction() -> None:
     """Bit 0: "Invert motor direction": a positive move turns the shaft negative; the
     encoder counts with the motor, so the follow error stays small."""
@@ -129,6 +130,7 @@ def test_setup_bit_0_inverts_the_motor_direction() -> None:
     assert abs(m.read("FLWERR")[0]) < 1000
 
 
+@pytest.mark.statements("mis:8.2.68:6")
 def test_setup_bit_6_recalculates_in_physical_position_while_moving() -> None:
     """Bit 6: "InPhysPosMode (If set, recalc InPhysPos continuously. If 0, only after
     stop)"."""
@@ -143,7 +145,7 @@ def test_setup_bit_6_recalculates_in_physical_position_while_moving() -> None:
     assert seen == {0: False, c.SETUP_IN_PHYS_POS_CONTINUOUS: True}
 
 
-@pytest.mark.statements("mis:8.2.32:4")
+@pytest.mark.statements("mis:8.2.32:4", "mis:8.2.68:21", "mis:8.2.73:2")
 def test_setup_bit_28_limits_without_memory() -> None:
     """Bit 28 (§5.9.6): "the sensor has-been warning is automatically cleared when the
     direction of the motor is reversed and the limit switch is no longer active"."""
@@ -198,6 +200,7 @@ def test_mode_0_on_a_running_motor_decelerates_with_the_stop_ramp_first() -> Non
 
 
 # --- §12.5: the worked example of Write Multiple Registers ------------------------------
+@pytest.mark.statements("mis:8.2.42:1")
 def test_modbus_write_multiple_example_is_accepted_as_the_manual_replies() -> None:
     """§12.5: V1 (65) = 409 600 and V2 (66) = 13 on slave 60; the manual shows the motor's
     reply {0x3C, 0x10, 0x00, 0x82, 0x00, 0x04, CRC}."""
@@ -218,7 +221,8 @@ def test_modbus_write_multiple_example_is_accepted_as_the_manual_replies() -> No
     (108, ("P1", "V1", "A1", "T1")), (109, ("P2", "V2", "A2", "T2")),
     (110, ("P3", "V3", "A3", "T3")), (111, ("P4", "V4", "A4", "T4"))])
 @pytest.mark.statements(
-    "mis:8.2.20:1", "mis:8.2.20:2", "mis:8.2.21:4", "mis:8.2.21:5", "mis:8.2.21:6", "mis:8.2.21:7")
+    "mis:8.2.20:1", "mis:8.2.20:2", "mis:8.2.21:4", "mis:8.2.21:5", "mis:8.2.21:6",
+    "mis:8.2.21:7", "mis:8.2.41:9", "mis:8.2.42:2", "mis:8.2.43:2", "mis:8.2.44:2")
 def test_fastmac_register_sets_load_the_profile(command: int, names: tuple[str, ...]) -> None:
     """FastMac 12–15 (commands 108–111): P_SOLL, V_SOLL, A_SOLL and the running current from
     position, velocity, acceleration and current register n."""
@@ -229,7 +233,7 @@ def test_fastmac_register_sets_load_the_profile(command: int, names: tuple[str, 
 
 
 @pytest.mark.parametrize("command, name", [(113, "P7"), (114, "P8")])
-@pytest.mark.statements("mis:8.2.21:8", "mis:8.2.21:9")
+@pytest.mark.statements("mis:8.2.21:8", "mis:8.2.21:9", "mis:8.2.41:10")
 def test_fastmac_relative_moves_add_p7_and_p8(command: int, name: str) -> None:
     """FastMac 17/18 (commands 113/114): P_SOLL = P_IST + position register 7 / 8."""
     m = _motor(P_IST=1000, **{name: -400})
@@ -239,6 +243,7 @@ def test_fastmac_relative_moves_add_p7_and_p8(command: int, name: str) -> None:
 
 # --- §8.2.45–46, §2.3.5: the eight analogue inputs -------------------------------------
 @pytest.mark.parametrize("k", range(1, 9))
+@pytest.mark.statements("mis:8.2.45:1", "mis:8.2.45:2", "mis:8.2.46:1", "mis:8.2.52:2")
 def test_each_analogue_input_has_its_registers(k: int) -> None:
     """ANALOGUE_INPUTn (register 88 + n) is the raw 0 … 5 V value of IOn; ANALOGUE_FILTEREDn
     (80 + n) its filtered value; AFZUP_CONFMIN discards raw samples below it."""
@@ -261,6 +266,7 @@ def test_each_analogue_input_has_its_registers(k: int) -> None:
 
 
 # --- §8.2.60–64: the fourth channel and the buffer size ----------------------------------
+@pytest.mark.statements("mis:8.2.60:2", "mis:8.2.63:2", "mis:8.2.64:1")
 def test_sample4_records_and_the_buffer_holds_buf_size_samples() -> None:
     m = _motor(SAMPLE1=0, SAMPLE2=0, SAMPLE3=0, SAMPLE4=10, REC_CNT=1024, S_TIME=1,
                V_SOLL=5000, V_START=10000)
@@ -273,7 +279,7 @@ def test_sample4_records_and_the_buffer_holds_buf_size_samples() -> None:
 
 
 # --- §5.9.2, §8.2.72: the negative limit input --------------------------------------------
-@pytest.mark.statements("mis:8.2.32:3")
+@pytest.mark.statements("mis:8.2.32:3", "mis:8.2.72:2")
 def test_negative_limit_input_of_nl_mask() -> None:
     m = _motor(NL_MASK=0b1000, V_SOLL=-5000, V_START=10000, SETUP_BITS=c.SETUP_NO_LIMIT_ERROR)
     m.write("MODE_REG", c.VELOCITY)
@@ -334,6 +340,7 @@ def test_notsaved_is_zero_after_a_reset() -> None:
 
 
 # --- §8.2.67 bit 5, §5.10.2 bit 23 -------------------------------------------------------
+@pytest.mark.statements("mis:8.2.67:6")
 def test_zero_search_bit_5_disables_the_time_out() -> None:
     """ZERO_SEARCH_BITS bit 5: "Disable zero search time out"."""
     m = _motor(HOME_MASK=1, V_HOME=-3000, V_HOME_TIMEOUT=200, ZERO_SEARCH_BITS=1 << 5)
@@ -342,6 +349,7 @@ def test_zero_search_bit_5_disables_the_time_out() -> None:
     assert m.read("ERR_BITS")[0] == 0 and m.read("MODE_REG")[0] == c.ZERO_SEARCH_1
 
 
+@pytest.mark.statements("mis:8.2.68:18")
 def test_low_bus_voltage_bit_23_sets_v_soll_to_0() -> None:
     """SETUP_BITS bit 23: "Low bus voltage" sets V_SOLL to 0 RPM; the motor decelerates and
     stays in its mode (§5.10)."""
@@ -355,6 +363,7 @@ def test_low_bus_voltage_bit_23_sets_v_soll_to_0() -> None:
 
 
 # --- §8.2.68 SETUP_BITS 5, 12, 16 ----------------------------------------------------------
+@pytest.mark.statements("mis:8.2.68:5")
 def test_setup_bit_5_syncs_the_encoder_to_p_ist_on_entering_an_active_mode() -> None:
     """Bit 5: "Synchronize encoder position to P_IST after change to active mode. Follow
     error = 0"."""
@@ -367,6 +376,7 @@ def test_setup_bit_5_syncs_the_encoder_to_p_ist_on_entering_an_active_mode() -> 
             assert abs(m.read("FLWERR")[0]) < 1000
 
 
+@pytest.mark.statements("mis:8.2.68:9")
 def test_setup_bit_12_keeps_the_external_encoder_over_a_reset() -> None:
     """Bit 12 KeepExtEncoder: "Do not zero the external encoder count on startup"."""
     for bits, kept in ((0, 0), (c.SETUP_KEEP_EXT_ENCODER, 1234)):
@@ -376,6 +386,7 @@ def test_setup_bit_12_keeps_the_external_encoder_over_a_reset() -> None:
         assert m.read("EXT_ENCODER")[0] == kept
 
 
+@pytest.mark.statements("mis:8.2.68:12")
 def test_setup_bit_16_inverts_the_external_encoder_count() -> None:
     """Bit 16: "External Encoder counting direction (1 = inverse)"."""
     for bits, sign in ((0, 1), (c.SETUP_EXT_ENCODER_INVERSE, -1)):
@@ -414,6 +425,7 @@ def _search_over_a_sensor(mode: int, bits: int, start_input: bool = False,
 
 
 @pytest.mark.parametrize(("mode", "near"), [(c.ZERO_SEARCH_1, 200.0), (c.ZERO_SEARCH_2, 50.0)])
+@pytest.mark.statements("mis:8.2.67:4")
 def test_zero_search_bit_2_finds_the_back_side_of_the_sensor(mode: int, near: float) -> None:
     """ZERO_SEARCH_BITS bit 2, "Search for opposite side of sensor": the zero is on the
     sensor's back side instead of its front side, in both types; type 2 takes the edge at its
@@ -425,6 +437,7 @@ def test_zero_search_bit_2_finds_the_back_side_of_the_sensor(mode: int, near: fl
 
 
 @pytest.mark.parametrize("mode", [c.ZERO_SEARCH_1, c.ZERO_SEARCH_2])
+@pytest.mark.statements("mis:8.2.67:5")
 def test_zero_search_bit_4_takes_the_position_where_the_motor_is(mode: int) -> None:
     """ZERO_SEARCH_BITS bit 4, "Ignore switch": the sensor input is not looked at, the actual
     position becomes the zero at once (here with the input active from the start, which would
@@ -434,6 +447,7 @@ def test_zero_search_bit_4_takes_the_position_where_the_motor_is(mode: int) -> N
 
 
 @pytest.mark.parametrize("mode", [c.ZERO_SEARCH_1, c.ZERO_SEARCH_2])
+@pytest.mark.statements("mis:8.2.67:3")
 def test_zero_search_bit_1_turns_at_a_limit_switch(mode: int) -> None:
     """ZERO_SEARCH_BITS bit 1, "Change direction on limit": a search that meets the limit
     switch ahead before its sensor turns and finds the sensor behind it, from the other side

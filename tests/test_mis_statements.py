@@ -66,7 +66,15 @@ _CHOSEN_DEFAULTS = {"V_START": 1000, "V_HOME": -5000, "MIN_BUSVOL": 565,
     "mis:8.2.9:1", "mis:8.2.12:1", "mis:8.2.13:1", "mis:8.2.14:1", "mis:8.2.17:1", "mis:8.2.19:1",
     "mis:8.2.20:1", "mis:8.2.26:1", "mis:8.2.27:1", "mis:8.2.28:1", "mis:8.2.29:1",
     "mis:8.2.30:1", "mis:8.2.31:1", "mis:8.2.32:1", "mis:8.2.33:1", "mis:8.2.34:1",
-    "mis:8.2.35:1", "mis:8.2.36:1", "mis:8.2.37:1", "mis:8.2.38:1", "mis:8.2.39:1", "mis:8.2.40:1")
+    "mis:8.2.35:1", "mis:8.2.36:1", "mis:8.2.37:1", "mis:8.2.38:1", "mis:8.2.39:1",
+    "mis:8.2.40:1", "mis:8.2.41:1", "mis:8.2.41:2", "mis:8.2.41:3", "mis:8.2.41:4",
+    "mis:8.2.41:5", "mis:8.2.41:6", "mis:8.2.41:7", "mis:8.2.41:8", "mis:8.2.42:1",
+    "mis:8.2.43:1", "mis:8.2.44:1", "mis:8.2.45:1", "mis:8.2.48:1", "mis:8.2.50:2",
+    "mis:8.2.51:2", "mis:8.2.52:1", "mis:8.2.53:1", "mis:8.2.54:1", "mis:8.2.55:1",
+    "mis:8.2.56:1", "mis:8.2.58:1", "mis:8.2.60:1", "mis:8.2.61:1", "mis:8.2.62:1",
+    "mis:8.2.63:1", "mis:8.2.67:1", "mis:8.2.68:1", "mis:8.2.69:1", "mis:8.2.71:2",
+    "mis:8.2.72:1", "mis:8.2.73:1", "mis:8.2.74:1", "mis:8.2.75:1", "mis:8.2.76:1",
+    "mis:8.2.77:1", "mis:8.2.78:1", "mis:8.2.79:1", "mis:8.2.80:1", "mis:8.2.81:1", "mis:8.2.83:1")
 def test_defaults_of_the_register_tables(motor: str) -> None:
     m = MotorArray(motor, n=1)
     for name, value in {**_DEFAULTS, **_CHOSEN_DEFAULTS}.items():
@@ -102,7 +110,10 @@ _RANGES = {
     "mis:8.2.4:1", "mis:8.2.5:1", "mis:8.2.6:1", "mis:8.2.7:1", "mis:8.2.8:1", "mis:8.2.9:1",
     "mis:8.2.10:1", "mis:8.2.13:1", "mis:8.2.14:1", "mis:8.2.19:1", "mis:8.2.26:1",
     "mis:8.2.27:1", "mis:8.2.28:1", "mis:8.2.29:1", "mis:8.2.30:1", "mis:8.2.34:1",
-    "mis:8.2.35:1", "mis:8.2.36:1")
+    "mis:8.2.35:1", "mis:8.2.36:1", "mis:8.2.41:1", "mis:8.2.41:2", "mis:8.2.41:3",
+    "mis:8.2.41:4", "mis:8.2.41:5", "mis:8.2.41:6", "mis:8.2.41:7", "mis:8.2.41:8",
+    "mis:8.2.43:1", "mis:8.2.44:1", "mis:8.2.48:1", "mis:8.2.51:2", "mis:8.2.52:1",
+    "mis:8.2.53:1", "mis:8.2.54:1", "mis:8.2.55:1", "mis:8.2.58:1", "mis:8.2.70:1", "mis:8.2.83:1")
 def test_ranges_of_the_register_tables() -> None:
     """The lowest and the highest value of each range are taken and read back; one beyond
     either end is refused and changes nothing."""
@@ -132,7 +143,8 @@ _READ_ONLY = ["PROG_VERSION", "V_IST", "INPUTS", "FLWERR", "STATUSBITS", "TEMP",
 
 @pytest.mark.statements(
     "mis:8.2.2:1", "mis:8.2.11:1", "mis:8.2.16:1", "mis:8.2.18:1", "mis:8.2.24:1", "mis:8.2.25:1",
-    "mis:8.2.38:1", "mis:8.2.39:1", "mis:8.2.40:1")
+    "mis:8.2.38:1", "mis:8.2.39:1", "mis:8.2.40:1", "mis:8.2.45:1", "mis:8.2.46:1",
+    "mis:8.2.47:1", "mis:8.2.49:1", "mis:8.2.56:1", "mis:8.2.64:1", "mis:8.2.65:1", "mis:8.2.82:1")
 def test_read_only_registers_refuse_a_write() -> None:
     m = _motor()
     for name in _READ_ONLY:
@@ -312,7 +324,7 @@ def test_encoder_position_starts_at_zero_and_follows_the_shaft() -> None:
     assert m.read("FLWERR")[0] == m.read("P_IST")[0] - m.read("ENCODER_POS")[0]
 
 
-@pytest.mark.statements("mis:8.2.16:2", "mis:8.2.16:3")
+@pytest.mark.statements("mis:8.2.16:2", "mis:8.2.16:3", "mis:8.2.69:2")
 def test_inputs_show_io1_to_io8_and_nothing_above() -> None:
     """§8.2.16: bits 0–7 of INPUTS are IO1–IO8; bits 8–15 are always 0; the active level is
     set by IOSETUP bits 0–7 (§8.2.69)."""
@@ -404,7 +416,7 @@ def test_general_error_status_bit_is_err_bits_bit_0() -> None:
     assert err & c.ERR_POSITION_LIMIT
 
 
-@pytest.mark.statements("mis:8.2.24:16", "mis:8.2.24:17", "mis:8.2.24:20")
+@pytest.mark.statements("mis:8.2.24:16", "mis:8.2.24:17", "mis:8.2.24:20", "mis:8.2.68:19")
 def test_closed_loop_status_bits() -> None:
     """§8.2.24: bit 16 "Closed loop activated" follows SETUP_BITS bit 24; bit 17 "Internal
     encoder calibrated" and bit 20 "Internal encoder OK" with the encoder option."""
@@ -451,7 +463,7 @@ def test_writing_zero_to_err_bits_clears_the_errors() -> None:
     assert m.read("MODE_REG")[0] == c.POSITION
 
 
-@pytest.mark.statements("mis:8.2.32:3", "mis:8.2.32:5")
+@pytest.mark.statements("mis:8.2.32:3", "mis:8.2.32:5", "mis:8.2.72:2")
 def test_negative_limit_warning_bits() -> None:
     """§8.2.32 bits 1 and 3: the negative limit is active as long as its input is, and "has
     been active" is remembered after it is released."""
@@ -485,7 +497,7 @@ def _search_on_input(p_home: int, at: int = 20000) -> MotorArray:
     return m
 
 
-@pytest.mark.statements("mis:8.2.34:2")
+@pytest.mark.statements("mis:8.2.34:2", "mis:8.2.74:2")
 def test_p_home_offsets_the_zero_point() -> None:
     """§8.2.34: "The zero point found is offset with this value": where P_IST = 0 lies on the
     shaft moves by P_HOME."""
@@ -538,7 +550,8 @@ def test_zero_search_time_out_is_60_s_by_default() -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.21:2", "mis:8.2.21:3", "mis:8.2.21:8", "mis:8.2.21:13", "mis:8.2.21:14")
+    "mis:8.2.21:2", "mis:8.2.21:3", "mis:8.2.21:8", "mis:8.2.21:13", "mis:8.2.21:14",
+    "mis:8.2.83:2")
 def test_fastmac_position_and_velocity_commands() -> None:
     """§8.2.21: FastMac 3 (99) P_IST = 0, FastMac 5 (101) V_SOLL = 0, FastMac 23 (119) P_IST,
     P_SOLL and the encoder = P_NEW, FastMac 24 (120) each += P_NEW."""
@@ -571,3 +584,176 @@ def test_emergency_stop_commands() -> None:
     assert m.read("MODE_REG")[0] == c.PASSIVE
     m.step(1)
     assert m.read("V_IST")[0] == 0
+
+
+# --- §8.2.45–§8.2.49 analogue inputs, bus voltage, encoder type -------------------------------
+@pytest.mark.statements("mis:8.2.46:2")
+def test_analogue_input_full_scale_is_5_v() -> None:
+    """§8.2.46: "An input voltage of 5.00 V" reads 4095 (1.221 mV per unit)."""
+    m = _motor()
+    m.set_input(analog3=5.0, analog5=2.5)
+    m.step(5)
+    assert m.read("ANALOGUE_INPUT3")[0] == 4095
+    assert m.read("ANALOGUE_INPUT5")[0] == pytest.approx(2.5 / 1.221e-3, abs=2)
+
+
+@pytest.mark.statements("mis:8.2.48:2")
+def test_min_busvol_is_the_under_voltage_trigger() -> None:
+    """§8.2.48: MIN_BUSVOL is the "Trigger point for under-voltage" (26.525 mV units): the
+    warning (WARN_BITS bit 4) comes below it, not above."""
+    m = _motor(MIN_BUSVOL=round(30.0 / 26.525e-3))
+    m.set_input(supply_volts=32.0)
+    m.step(50)
+    assert not m.read("WARN_BITS")[0] & c.WARN_LOW_BUS
+    m.set_input(supply_volts=28.0)
+    m.step(50)
+    assert m.read("WARN_BITS")[0] & c.WARN_LOW_BUS
+
+
+@pytest.mark.statements("mis:8.2.49:2")
+def test_encoder_type_codes() -> None:
+    """§8.2.49: 0 no encoder, 1 H2 10 bit, 2 H3, 3 H2 12 bit, 4 H4; without an encoder there
+    is no encoder position (§8.2.15)."""
+    m = MotorArray("MIS232", n=5, encoder_type=np.arange(5))
+    assert m.read("ENCODER_TYPE").tolist() == [0, 1, 2, 3, 4]
+    m.write_many({"V_SOLL": 30000, "A_SOLL": 10000, "MODE_REG": c.VELOCITY})
+    m.step(300)
+    enc = m.read("ENCODER_POS")
+    assert enc[0] == 0 and np.all(enc[1:] > 50000)
+
+
+@pytest.mark.statements("mis:8.2.57:2")
+def test_ssi_setup1_default() -> None:
+    """§8.2.57: the default is "25bit, 100kHz frequency": bits 0–4 = 25 data bits, bits 8–15
+    = 10 × 10 kHz."""
+    value = int(_motor().read("SSI_SETUP1")[0])
+    assert value & 0x1F == 25 and (value >> 8) & 0xFF == 10
+
+
+# --- §8.2.58–§8.2.64 AutoCorrection settling time, sampling ----------------------------------
+@pytest.mark.statements("mis:8.2.58:2")
+def test_settling_time_delays_the_auto_correction() -> None:
+    """§8.2.58: with AutoCorrection on, SETTLINGTIME ms pass after a move before the encoder
+    is tested and a retry starts."""
+    starts = {}
+    for settle in (0, 200):
+        m = _motor(IN_POSITION_COUNT=2, IN_POSITION_WINDOW=1000, SETTLINGTIME=settle,
+                   V_SOLL=20000, A_SOLL=3000, V_START=10000)
+        m.write("MODE_REG", c.POSITION)
+        m.set_input(load_torque=1.3 * m.pull_out_torque(200.0)[0])
+        m.write("P_SOLL", 409600)
+        m.run(0.06)
+        m.set_input(load_torque=0.0)
+        v = m.trace(["V_IST"], 3000)["V_IST"][:, 0]
+        stop = int(np.flatnonzero(v == 0)[0])
+        starts[settle] = int(np.flatnonzero(v[stop:] != 0)[0])
+    assert starts[200] - starts[0] == pytest.approx(200, abs=2)
+
+
+@pytest.mark.statements("mis:8.2.61:3")
+def test_rec_cnt_is_limited_to_buf_size() -> None:
+    """§8.2.61: REC_CNT "must never be set larger than the value in the read-only register
+    119" (BUF_SIZE)."""
+    m = _motor()
+    size = int(m.read("BUF_SIZE")[0])
+    m.write("REC_CNT", size)
+    with pytest.raises(RegisterError):
+        m.write("REC_CNT", size + 1)
+    assert m.read("REC_CNT")[0] == size
+
+
+@pytest.mark.statements("mis:8.2.62:2")
+def test_s_time_is_the_sample_period() -> None:
+    """§8.2.62: S_TIME is "the time in milliseconds between samples"."""
+    for period in (1, 3):
+        m = _motor(SAMPLE1=10, REC_CNT=20, S_TIME=period, V_SOLL=6000, V_START=10000)
+        m.write("MODE_REG", c.VELOCITY)
+        m.step(5)
+        m.write("S_CONTROL", 2)
+        m.step(100)
+        step = np.diff(m.sample_buffer()["P_IST"][0].astype(float))
+        assert step == pytest.approx(6000 * _COUNTS_PER_MS_PER_UNIT * period, abs=1)
+
+
+# --- §8.2.66–§8.2.83 Modbus set-up, low bus voltage, IO, turn table, P_NEW ---------------------
+@pytest.mark.statements("mis:8.2.66:1")
+def test_modbus_setup_layout() -> None:
+    """§8.2.66 / §12.1: bit 0 enables Modbus on the MacTalk (RS-485) channel, bits 2–3 the
+    parity (0 none, 1 odd, 2 even), bit 5 two stop bits; the register is stored."""
+    from jvl_gym.protocol import modbus as mb
+
+    assert mb.decode_setup(0b1) == mb.ModbusSetup(True, False, "N", 1)
+    assert mb.decode_setup(0b10_1001) == mb.ModbusSetup(True, False, "E", 2)
+    assert mb.decode_setup(0b0100) == mb.ModbusSetup(False, False, "O", 1)
+    m = _motor(MODBUS_SETUP=0b10_1001)
+    assert m.read("MODBUS_SETUP")[0] == 0b10_1001
+
+
+@pytest.mark.statements("mis:8.2.68:16")
+def test_low_bus_voltage_without_bits_is_a_warning_only() -> None:
+    """§8.2.68 bits 21–23 choose what low bus voltage does; with none of them it is only the
+    warning (WARN_BITS bit 4), with bit 21 it is also the error (ERR_BITS bit 4)."""
+    for bits, error in ((0, False), (1 << 21, True)):
+        m = _motor(V_SOLL=10000, SETUP_BITS=bits)
+        m.write("MODE_REG", c.VELOCITY)
+        m.step(50)
+        m.set_input(supply_volts=10.0)
+        m.step(100)
+        assert m.read("WARN_BITS")[0] & c.WARN_LOW_BUS
+        assert bool(m.read("ERR_BITS")[0] & c.ERR_LOW_BUS) is error
+
+
+@pytest.mark.statements("mis:8.2.69:3")
+def test_outputs_need_their_iosetup_bit() -> None:
+    """§8.2.69: bits 8–15 select the pins used as outputs: the in-position output drives IO3
+    only when IOSETUP bit 10 is set."""
+    for iosetup, driven in ((0, 0), (1 << 10, 0b100)):
+        m = _motor(IOSETUP=iosetup, INPOS_MASK=0b100, P_SOLL=2000)
+        m.write("MODE_REG", c.POSITION)
+        m.step(300)
+        assert m.read("OUTPUTS")[0] == driven
+
+
+@pytest.mark.statements("mis:8.2.77:3")
+def test_dedicated_output_masks_with_two_bits() -> None:
+    """"Exactly one bit must be set" (§8.2.77): the simulator's reading drives every masked
+    output pin and does not refuse the write."""
+    m = _motor(IOSETUP=0xFF00, INPOS_MASK=0b101, P_SOLL=2000)
+    m.write("MODE_REG", c.POSITION)
+    m.step(300)
+    assert m.read("INPOS_MASK")[0] == 0b101 and m.read("OUTPUTS")[0] == 0b101
+
+
+@pytest.mark.statements("mis:8.2.70:3")
+def test_turntable_mode_0_has_no_wrap() -> None:
+    """§8.2.70: "If the value of this register is zero, the motor will not operate in turntable
+    mode": a move beyond MAX_P_IST's range is no wrap (the limit stops it instead)."""
+    m = _motor(MIN_P_IST=0, MAX_P_IST=409599, V_SOLL=300000, A_SOLL=100000,
+               IN_POSITION_COUNT=0, SETUP_BITS=c.SETUP_NO_LIMIT_ERROR)
+    m.write("MODE_REG", c.POSITION)
+    m.write("P_SOLL", 500000)
+    assert m.read("P_SOLL")[0] == 500000
+    m.step(1000)
+    assert m.read("P_IST")[0] == 409599 and m.read("TURNTAB_COUNT")[0] == 0
+
+
+@pytest.mark.statements("mis:8.2.76:2")
+def test_input_filter_count_is_the_time() -> None:
+    """§8.2.76: a filtered input must be sampled at the same value for INPUT_FILTER_CNT ms."""
+    for count in (3, 20):
+        m = _motor(INPUT_FILTER_MASK=0b1, INPUT_FILTER_CNT=count)
+        m.set_input(digital_inputs=0b1)
+        inputs = m.trace(["INPUTS"], 40)["INPUTS"][:, 0]
+        assert int(np.flatnonzero(inputs)[0]) + 1 == count
+
+
+@pytest.mark.statements("mis:8.2.83:2")
+def test_p_new_moves_nothing() -> None:
+    """§8.2.83: P_NEW corrects or offsets the position "without performing a movement"."""
+    m = _motor(P_NEW=100000)
+    m.write("MODE_REG", c.POSITION)
+    m.step(10)
+    m.write("COMMAND", 120)
+    m.step(300)
+    assert m.read("P_IST")[0] == m.read("P_SOLL")[0] == 100000
+    assert abs(m.rotor_counts[0]) < 200
