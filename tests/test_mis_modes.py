@@ -64,7 +64,7 @@ def _table(mode: int, **regs: int) -> MotorArray:
                   A_SOLL=100000, IN_POSITION_COUNT=0, **regs)
 
 
-@pytest.mark.statements("mis:8.2.27:3", "mis:8.2.70:2")
+@pytest.mark.statements("mis:8.2.27:3", "mis:8.2.70:2", "mis:8.2.1:5")
 def test_turn_table_multiturn_cw_example() -> None:
     """§5.12.1, mode 4: start 0, target 970000: P_SOLL = 150800 (the remainder of
     970000/409600) after a CW move of 970000 counts; P_IST stays in range and TURNTAB_COUNT
@@ -81,7 +81,8 @@ def test_turn_table_multiturn_cw_example() -> None:
     assert m.rotor_counts[0] == pytest.approx(970000, abs=600)
 
 
-@pytest.mark.statements("mis:8.2.26:3", "mis:8.2.27:3", "mis:8.2.70:1", "mis:8.2.70:2")
+@pytest.mark.statements(
+    "mis:8.2.26:3", "mis:8.2.27:3", "mis:8.2.70:1", "mis:8.2.70:2", "mis:8.2.1:5")
 def test_turn_table_directions_and_limits() -> None:
     m = _table(c.TT_CW, P_SOLL=250000)
     m.write("MODE_REG", 2)

@@ -78,7 +78,7 @@ def test_position_limit_in_gear_mode_is_never_passed() -> None:
 
 
 # --- §8.2.24 bit 22, §8.2.105 (register 177) ---------------------------------------------
-@pytest.mark.statements("mis:8.2.24:22")
+@pytest.mark.statements("mis:8.2.24:22", "mis:8.2.105:2")
 def test_in_target_position_waits_for_the_standstill_time() -> None:
     """§8.2.105: INTARGETPOSITIONTIME is the "time the motor must stand still before
     InTargetPosition (reg 25) flag is set"."""
@@ -163,6 +163,7 @@ def test_setup_bit_28_limits_without_memory() -> None:
 
 
 # --- §8.2.122 MOTOR_REV ---------------------------------------------------------------------
+@pytest.mark.statements("mis:8.2.122:1", "mis:8.2.122:2")
 def test_motor_rev_counts_revolutions_and_is_writable() -> None:
     """"Counts multiples of 409600 counts since power on", R/W."""
     m = _motor(V_SOLL=30000, A_SOLL=3000)
@@ -293,6 +294,7 @@ def test_negative_limit_input_of_nl_mask() -> None:
 
 
 # --- §8.2.121, §8.2.131: the velocities ---------------------------------------------------
+@pytest.mark.statements("mis:8.2.121:2", "mis:8.2.131:2")
 def test_v_ist_calc_and_v_encoder_follow_the_motion() -> None:
     m = _motor(V_SOLL=12000, A_SOLL=5000)
     m.write("MODE_REG", c.VELOCITY)
@@ -303,6 +305,8 @@ def test_v_ist_calc_and_v_encoder_follow_the_motion() -> None:
 
 
 # --- §8.2.108–114: the closed-loop current scale ------------------------------------------
+@pytest.mark.statements(
+    "mis:8.2.108:2", "mis:8.2.109:2", "mis:8.2.110:2", "mis:8.2.112:1", "mis:8.2.113:2")
 def test_closed_loop_current_scale_stays_within_its_limits() -> None:
     """ACTUAL_TORQUE stays within CUR_SCALE_MIN … CUR_SCALE_MAX; a larger CUR_SCALE_INC
     (time per step up) and CUR_SCALE_DEC / CUR_SCALE_FACTOR (time per step down) slow the
@@ -319,6 +323,7 @@ def test_closed_loop_current_scale_stays_within_its_limits() -> None:
 
 
 # --- §5.6 type 2 zero search: the crawl velocity ------------------------------------------
+@pytest.mark.statements("mis:8.2.125:2")
 def test_zero_search_type_2_leaves_the_sensor_at_v_home_crawl() -> None:
     """V_HOME_CRAWL (§8.2.125): type 2 leaves the sensor at this velocity (0: V_HOME/64)."""
     m = MotorArray("MIS232", n=1, seed=0, home_position=-0.5)
@@ -330,6 +335,7 @@ def test_zero_search_type_2_leaves_the_sensor_at_v_home_crawl() -> None:
 
 
 # --- §8.2.96: not saved -------------------------------------------------------------------
+@pytest.mark.statements("mis:8.2.96:2")
 def test_notsaved_is_zero_after_a_reset() -> None:
     """NOTSAVED: "not used by the firmware", 0 after power-on, even when saved in flash."""
     m = _motor(NOTSAVED=77)

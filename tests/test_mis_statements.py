@@ -53,6 +53,10 @@ _DEFAULTS = {
     "FLEXLEDSETUP1": 102303769, "FLEXLEDSETUP2": 504954880, "V_SOLL_AUTO": 0, "V_IST_CALC": 0,
     "MOTOR_REV": 0, "EX_CYCLIC_SETUP": 0, "EX_CRC_ERR": 0, "V_HOME_CRAWL": 0,
     "V_HOME_TIMEOUT": 0, "LOWBUSCVI_CNT": 10, "D_SOLL": 1000, "TICKS": 0,
+    "TURNTAB_COUNT": 0, **{n: 0 for n in (
+        "CONTROL_WORD", "STATUS_WORD", "MODE_OF_OPERATION", "MODE_OF_OPERATION_DISPLAY",
+        "TARGET_POSITION", "ACTUAL_POSITION", "TARGET_VELOCITY", "ACTUAL_VELOCITY",
+        "DIGITAL_OUTPUTS", "DIGITAL_INPUT")},
 }
 
 #: where the overview and the detail table disagree, the chosen default (MIS register page)
@@ -74,7 +78,13 @@ _CHOSEN_DEFAULTS = {"V_START": 1000, "V_HOME": -5000, "MIN_BUSVOL": 565,
     "mis:8.2.56:1", "mis:8.2.58:1", "mis:8.2.60:1", "mis:8.2.61:1", "mis:8.2.62:1",
     "mis:8.2.63:1", "mis:8.2.67:1", "mis:8.2.68:1", "mis:8.2.69:1", "mis:8.2.71:2",
     "mis:8.2.72:1", "mis:8.2.73:1", "mis:8.2.74:1", "mis:8.2.75:1", "mis:8.2.76:1",
-    "mis:8.2.77:1", "mis:8.2.78:1", "mis:8.2.79:1", "mis:8.2.80:1", "mis:8.2.81:1", "mis:8.2.83:1")
+    "mis:8.2.77:1", "mis:8.2.78:1", "mis:8.2.79:1", "mis:8.2.80:1", "mis:8.2.81:1",
+    "mis:8.2.83:1", "mis:8.2.84:1", "mis:8.2.85:1", "mis:8.2.88:1", "mis:8.2.96:1",
+    "mis:8.2.98:1", "mis:8.2.99:1", "mis:8.2.105:1", "mis:8.2.106:1", "mis:8.2.108:1",
+    "mis:8.2.109:1", "mis:8.2.110:1", "mis:8.2.113:1", "mis:8.2.114:1", "mis:8.2.115:1",
+    "mis:8.2.116:1", "mis:8.2.117:1", "mis:8.2.120:1", "mis:8.2.121:1", "mis:8.2.123:1",
+    "mis:8.2.124:1", "mis:8.2.125:1", "mis:8.2.126:1", "mis:8.2.127:1", "mis:8.2.128:1",
+    "mis:8.2.130:1", "mis:8.2.1:1")
 def test_defaults_of_the_register_tables(motor: str) -> None:
     m = MotorArray(motor, n=1)
     for name, value in {**_DEFAULTS, **_CHOSEN_DEFAULTS}.items():
@@ -113,7 +123,11 @@ _RANGES = {
     "mis:8.2.35:1", "mis:8.2.36:1", "mis:8.2.41:1", "mis:8.2.41:2", "mis:8.2.41:3",
     "mis:8.2.41:4", "mis:8.2.41:5", "mis:8.2.41:6", "mis:8.2.41:7", "mis:8.2.41:8",
     "mis:8.2.43:1", "mis:8.2.44:1", "mis:8.2.48:1", "mis:8.2.51:2", "mis:8.2.52:1",
-    "mis:8.2.53:1", "mis:8.2.54:1", "mis:8.2.55:1", "mis:8.2.58:1", "mis:8.2.70:1", "mis:8.2.83:1")
+    "mis:8.2.53:1", "mis:8.2.54:1", "mis:8.2.55:1", "mis:8.2.58:1", "mis:8.2.70:1",
+    "mis:8.2.83:1", "mis:8.2.84:1", "mis:8.2.85:1", "mis:8.2.86:1", "mis:8.2.88:1",
+    "mis:8.2.96:1", "mis:8.2.98:1", "mis:8.2.99:1", "mis:8.2.105:1", "mis:8.2.106:1",
+    "mis:8.2.108:1", "mis:8.2.109:1", "mis:8.2.110:1", "mis:8.2.111:1", "mis:8.2.113:1",
+    "mis:8.2.114:1", "mis:8.2.120:1", "mis:8.2.122:1", "mis:8.2.125:1", "mis:8.2.126:1")
 def test_ranges_of_the_register_tables() -> None:
     """The lowest and the highest value of each range are taken and read back; one beyond
     either end is refused and changes nothing."""
@@ -138,13 +152,20 @@ _READ_ONLY = ["PROG_VERSION", "V_IST", "INPUTS", "FLWERR", "STATUSBITS", "TEMP",
               "MOTORTYPE", "SERIAL_NUMBER", "CHECKSUM_1", "CHECKSUM_2", "HARDWARE_REV",
               "MAX_VOLTAGE", "AVAILABLE_IO", "BOOTLOADER_VER", "OPTION_BITS", "MODULE_TYPE",
               "EXT_ENCODER_VEL", "FW_BUILD", "ACTUAL_TORQUE", "TEMP_LIMITS", "TEMP_HIGHRES",
-              "V_ENCODER", "EX_CYCLIC_SETUP"]
+              "V_ENCODER", "EX_CYCLIC_SETUP", "V_IST_CALC", "EX_CRC_ERR",
+              "STATUS_WORD", "MODE_OF_OPERATION_DISPLAY", "ACTUAL_POSITION", "ACTUAL_VELOCITY",
+              "DIGITAL_INPUT"]
 
 
 @pytest.mark.statements(
     "mis:8.2.2:1", "mis:8.2.11:1", "mis:8.2.16:1", "mis:8.2.18:1", "mis:8.2.24:1", "mis:8.2.25:1",
     "mis:8.2.38:1", "mis:8.2.39:1", "mis:8.2.40:1", "mis:8.2.45:1", "mis:8.2.46:1",
-    "mis:8.2.47:1", "mis:8.2.49:1", "mis:8.2.56:1", "mis:8.2.64:1", "mis:8.2.65:1", "mis:8.2.82:1")
+    "mis:8.2.47:1", "mis:8.2.49:1", "mis:8.2.56:1", "mis:8.2.64:1", "mis:8.2.65:1",
+    "mis:8.2.82:1", "mis:8.2.87:1", "mis:8.2.89:1", "mis:8.2.90:1", "mis:8.2.91:1",
+    "mis:8.2.92:1", "mis:8.2.93:1", "mis:8.2.94:1", "mis:8.2.95:1", "mis:8.2.97:1",
+    "mis:8.2.100:1", "mis:8.2.102:1", "mis:8.2.104:1", "mis:8.2.112:1", "mis:8.2.121:1",
+    "mis:8.2.123:1", "mis:8.2.124:1", "mis:8.2.127:1", "mis:8.2.129:1", "mis:8.2.131:1",
+    "mis:8.2.1:4")
 def test_read_only_registers_refuse_a_write() -> None:
     m = _motor()
     for name in _READ_ONLY:
@@ -531,7 +552,7 @@ def test_homemode_values() -> None:
     assert MotorArray("MIS232", n=1, setup={"HOMEMODE": 0}).read("MODE_REG")[0] == 0
 
 
-@pytest.mark.statements("mis:8.2.31:18")
+@pytest.mark.statements("mis:8.2.31:18", "mis:8.2.126:2")
 def test_zero_search_time_out_is_60_s_by_default() -> None:
     """§8.2.126: "If 0, the Zero Search time out is 60000 ms. Else the value in this register is
     used"; the time-out sets ERR_BITS bit 16 (§8.2.31)."""
@@ -757,3 +778,152 @@ def test_p_new_moves_nothing() -> None:
     m.step(300)
     assert m.read("P_IST")[0] == m.read("P_SOLL")[0] == 100000
     assert abs(m.rotor_counts[0]) < 200
+
+
+# --- §8.2.84–§8.2.100 serial line, identification ---------------------------------------------
+@pytest.mark.statements("mis:8.2.84:2")
+def test_baud_rate_codes_of_the_modbus_line() -> None:
+    """§8.2.84: 0 9600, 1 19200, 2 38400, 3 57600, 4 115200, 5 230400, 6 460800 baud."""
+    from jvl_gym.protocol.modbus_twin import modbus_bus
+    from jvl_gym.protocol.twin import Twin
+
+    m = _motor()
+    slave = modbus_bus(Twin(m)).slaves[0]
+    for code, baud in enumerate((9600, 19200, 38400, 57600, 115200, 230400, 460800)):
+        m.write("BAUD_RATE", code)
+        assert slave.serial_format().baud == baud
+
+
+def _ask(twin: object, raw: bytes) -> bytes:
+    s = twin.session()  # type: ignore[attr-defined]
+    return s.feed(raw) + s.flush()
+
+
+@pytest.mark.statements("mis:8.2.88:2")
+def test_my_addr_and_broadcast() -> None:
+    """§8.2.88: data is accepted only when its address is MY_ADDR or 255 (broadcast)."""
+    from jvl_gym.protocol import mactalk32 as m32
+    from jvl_gym.protocol.twin import Twin
+
+    m = MotorArray("MIS232", n=2)
+    m.write("MY_ADDR", np.array([10, 11]))
+    twin = Twin(m)
+    assert _ask(twin, m32.encode_write_value(10, 5, 1234)) == m32.ACCEPT
+    assert _ask(twin, m32.encode_write_value(12, 5, 4321)) == b""
+    assert m.read("V_SOLL").tolist() == [1234, 10000]
+    _ask(twin, m32.encode_write_value(255, 6, 777))
+    assert m.read("A_SOLL").tolist() == [777, 777]
+
+
+@pytest.mark.statements("mis:8.2.86:2")
+def test_group_write_reaches_the_motors_of_the_group() -> None:
+    """§8.2.86: a motor takes a group write only if the group matches its GROUP_ID."""
+    from jvl_gym.protocol import mactalk32 as m32
+    from jvl_gym.protocol.twin import Twin
+
+    m = MotorArray("MIS232", n=3)
+    m.write("MY_ADDR", np.array([1, 2, 3]))
+    m.write("GROUP_ID", np.array([7, 8, 7]))
+    twin = Twin(m)
+    _ask(twin, m32.encode_group_write(7, 1, 5, (4321).to_bytes(4, "little")))
+    assert m.read("V_SOLL").tolist() == [4321, 10000, 4321]
+
+
+@pytest.mark.statements("mis:8.2.89:2")
+def test_motortype_codes() -> None:
+    """§8.2.89: MIS171 121, MIS232 153, MIS340 81, MIS432 92, SMC66 150, SMC85 80."""
+    for motor, code in (("MIS171", 121), ("MIS232", 153), ("MIS340", 81), ("MIS432", 92),
+                        ("SMC66", 150), ("SMC85", 80)):
+        assert MotorArray(motor, n=1).read("MOTORTYPE")[0] == code, motor
+
+
+@pytest.mark.statements("mis:8.2.98:2")
+def test_canopen_node_id_comes_from_the_register() -> None:
+    """§8.2.98: FBUS_NODE_ID is the CANopen node id (default 5): the boot-up message is sent
+    on 700h + the node id."""
+    from canopen_rig import Rig
+
+    m = MotorArray("MIS232", n=1)
+    m.write("FBUS_NODE_ID", 12)
+    rig = Rig(motors=m)
+    try:
+        assert rig.slave.node_id == 12
+        rig.clear()
+        rig.node(12).nmt.send_command(0x82)
+        assert rig.sent(0x70C) == [b"\x00"]
+    finally:
+        rig.close()
+
+
+# --- §8.2.103–§8.2.131 ------------------------------------------------------------------------
+@pytest.mark.statements("mis:8.2.103:1")
+def test_internal_encoder_setup_default() -> None:
+    """§8.2.103's figure marks the defaults: hysteresis 1 (bits 0–1), resolution 4 = 12 bit
+    (bits 2–4), filter time 1 (bit 5), filter cutoff 1 (bit 6)."""
+    value = int(_motor().read("INTERNAL_ENCODER_SETUP")[0])
+    assert value & 0b11 == 1 and (value >> 2) & 0b111 == 4
+    assert (value >> 5) & 1 == 1 and (value >> 6) & 1 == 1
+
+
+@pytest.mark.statements("mis:8.2.107:1")
+def test_ticks_count_milliseconds() -> None:
+    """§8.2.107: TICKS "Increments at a fixed rate of 1 count per millisecond. Starts at zero"."""
+    m = _motor()
+    assert m.read("TICKS")[0] == 0
+    ticks = m.trace(["TICKS"], 250)["TICKS"][:, 0]
+    assert np.all(np.diff(ticks) == 1) and ticks[-1] == 250
+
+
+@pytest.mark.statements("mis:8.2.112:2")
+def test_actual_torque_is_full_without_current_control() -> None:
+    """§8.2.112: "In active mode without current control enabled = 100 %" (2047), with the
+    closed loop on and off."""
+    for bits in (0, c.SETUP_CLOSED_LOOP):
+        m = _motor(SETUP_BITS=bits, V_SOLL=20000)
+        m.write("MODE_REG", c.VELOCITY)
+        m.step(300)
+        assert m.read("ACTUAL_TORQUE")[0] == 2047
+
+
+@pytest.mark.statements("mis:8.2.118:1", "mis:8.2.119:1")
+def test_flexled_defaults_name_the_manual_bits() -> None:
+    """§8.2.118–119: by default L2 shows STATUSBITS (25) bit 3, L3 bit 4, L1 red bit 15 and
+    L1 green nothing."""
+    m = _motor()
+    led1, led2 = int(m.read("FLEXLEDSETUP1")[0]), int(m.read("FLEXLEDSETUP2")[0])
+    assert (led1 & 0x1FF, (led1 >> 9) & 0x1F) == (25, 4)  # L3
+    assert ((led1 >> 16) & 0x1FF, (led1 >> 25) & 0x1F) == (25, 3)  # L2
+    assert ((led2 >> 16) & 0x1FF, (led2 >> 25) & 0x1F) == (25, 15)  # L1 red
+    assert led2 & 0xFFFF == 0  # L1 green: off
+
+
+@pytest.mark.statements("mis:8.2.125:2")
+def test_type_2_crawls_at_v_home_over_64() -> None:
+    """§8.2.125: "In Zero Search type 2, the "crawl" velocity is V_HOME/64 by default"."""
+    m = MotorArray("MIS232", n=1, seed=0, home_position=-0.5)
+    m.write_many({"HOME_MASK": 1, "V_HOME": -12800, "IN_POSITION_COUNT": 0})
+    m.write("MODE_REG", c.ZERO_SEARCH_2)
+    v = m.trace(["V_IST"], 3000)["V_IST"][:, 0]
+    assert v.max() == 12800 // 64
+
+
+@pytest.mark.statements("mis:8.2.1:1")
+def test_d_soll_range() -> None:
+    """D_SOLL (§8.2.1): 0 … 500 000 RPM/s, 0 included because 0 means "use A_SOLL"."""
+    m = _motor(D_SOLL=0)
+    m.write("D_SOLL", 500000)
+    for bad in (-1, 500001):
+        with pytest.raises(RegisterError):
+            m.write("D_SOLL", bad)
+    assert m.read("D_SOLL")[0] == 500000
+
+
+@pytest.mark.statements("mis:8.2.1:5")
+def test_turntab_count_is_writable() -> None:
+    """§5.12.5: TURNTAB_COUNT "can be written … at any time" and counts on from the value."""
+    m = _motor(TURNTABLE_MODE=c.TT_MULTI_CW, MIN_P_IST=0, MAX_P_IST=409599, V_SOLL=300000,
+               A_SOLL=100000, IN_POSITION_COUNT=0, TURNTAB_COUNT=-5)
+    m.write("MODE_REG", c.POSITION)
+    m.write("P_SOLL", 970000)
+    m.step(1500)
+    assert m.read("TURNTAB_COUNT")[0] == -3
