@@ -64,7 +64,9 @@ def _table(mode: int, **regs: int) -> MotorArray:
                   A_SOLL=100000, IN_POSITION_COUNT=0, **regs)
 
 
-@pytest.mark.statements("mis:8.2.27:3", "mis:8.2.70:2", "mis:8.2.1:5")
+@pytest.mark.statements(
+    "mis:8.2.27:3", "mis:8.2.70:2", "mis:8.2.1:5", "mis:5.12.1:1", "mis:5.12.1:6", "mis:5.12.5:1",
+    "mis:5.12.6:1")
 def test_turn_table_multiturn_cw_example() -> None:
     """§5.12.1, mode 4: start 0, target 970000: P_SOLL = 150800 (the remainder of
     970000/409600) after a CW move of 970000 counts; P_IST stays in range and TURNTAB_COUNT
@@ -82,7 +84,8 @@ def test_turn_table_multiturn_cw_example() -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.26:3", "mis:8.2.27:3", "mis:8.2.70:1", "mis:8.2.70:2", "mis:8.2.1:5")
+    "mis:8.2.26:3", "mis:8.2.27:3", "mis:8.2.70:1", "mis:8.2.70:2", "mis:8.2.1:5", "mis:5.12.1:1",
+    "mis:5.12.1:2", "mis:5.12.1:3", "mis:5.12.1:5", "mis:5.12.1:7", "mis:5.12.3:2")
 def test_turn_table_directions_and_limits() -> None:
     m = _table(c.TT_CW, P_SOLL=250000)
     m.write("MODE_REG", 2)
@@ -208,7 +211,7 @@ def test_status_bits_during_a_move() -> None:
 
 
 # --- limits and under-voltage (§5.9, §5.10) ---------------------------------------------
-@pytest.mark.statements("mis:8.2.31:5")
+@pytest.mark.statements("mis:8.2.31:5", "mis:5.9.3:2", "mis:5.9.4:1", "mis:5.9.4:2")
 def test_software_position_limit_stops_with_an_error() -> None:
     m = _motor(MAX_P_IST=100000, MIN_P_IST=-100000, V_SOLL=20000, ACC_EMERG=50000)
     m.write("MODE_REG", 1)
@@ -221,7 +224,7 @@ def test_software_position_limit_stops_with_an_error() -> None:
 
 @pytest.mark.statements(
     "mis:8.2.31:6", "mis:8.2.32:6", "mis:8.2.47:1", "mis:8.2.47:2", "mis:8.2.48:2",
-    "mis:8.2.68:16", "mis:8.2.68:17")
+    "mis:8.2.68:16", "mis:8.2.68:17", "mis:5.10:1", "mis:5.10:2")
 def test_low_bus_voltage_actions() -> None:
     m = _motor(V_SOLL=10000, SETUP_BITS=(1 << 21) | (1 << 22))
     m.write("MODE_REG", 1)
@@ -294,7 +297,9 @@ def test_homemode_starts_a_zero_search_at_power_on() -> None:
     assert m.read("MODE_REG")[0] == 13
 
 
-@pytest.mark.statements("mis:8.2.32:2", "mis:8.2.32:4", "mis:8.2.68:13", "mis:8.2.73:2")
+@pytest.mark.statements(
+    "mis:8.2.32:2", "mis:8.2.32:4", "mis:8.2.68:13", "mis:8.2.73:2", "mis:5.9.2:1", "mis:5.9.2:2",
+    "mis:5.9.4:1", "mis:5.9.5:1")
 def test_hardware_limit_input_and_its_warning_bits() -> None:
     m = _motor(PL_MASK=0b100, V_SOLL=5000, V_START=10000, SETUP_BITS=1 << 17)
     m.write("MODE_REG", 1)
@@ -317,7 +322,7 @@ def test_hardware_limit_input_and_its_warning_bits() -> None:
     assert not warn & c.WARN_POS_LIMIT and warn & c.WARN_POS_LIMIT_SEEN
 
 
-@pytest.mark.statements("mis:8.2.38:2", "mis:8.2.38:3", "mis:8.2.49:2")
+@pytest.mark.statements("mis:8.2.38:2", "mis:8.2.38:3", "mis:8.2.49:2", "mis:5.8.1:1")
 def test_absolute_encoder_register() -> None:
     m = MotorArray("MIS232", n=2, encoder_type=np.array([3, 4]))
     m.write_many({"V_SOLL": 100000, "A_SOLL": 10000, "MODE_REG": 1})

@@ -29,7 +29,8 @@ def _largest_velocity_step(v: np.ndarray) -> float:
 
 
 # --- §5.9.3, §5.9.5: software limits in position and gear mode ----------------------------
-@pytest.mark.statements("mis:8.2.27:2", "mis:8.2.68:13")
+@pytest.mark.statements(
+    "mis:8.2.27:2", "mis:8.2.68:13", "mis:5.9.3:2", "mis:5.9.5:1", "mis:5.9.5:2")
 def test_position_limit_in_position_mode_stops_at_the_limit_with_the_normal_deceleration(
         ) -> None:
     """§5.9.3: "in position mode … the motor will stop at Position Limit Max"; §5.9.5 (SETUP_BITS
@@ -52,7 +53,7 @@ def test_position_limit_in_position_mode_stops_at_the_limit_with_the_normal_dece
     assert np.count_nonzero(down < 0) > 250  # 300 RPM at 1000 RPM/s: about 290 ms
 
 
-@pytest.mark.statements("mis:8.2.27:2", "mis:8.2.31:5")
+@pytest.mark.statements("mis:8.2.27:2", "mis:8.2.31:5", "mis:5.9.4:2")
 def test_position_limit_in_position_mode_without_bit_17_is_an_error_at_the_limit() -> None:
     """§5.9.4: "The motor will stop and activate an error, when reaching a limit" — and it
     stops at the limit, not beyond (§5.9.3)."""
@@ -65,7 +66,7 @@ def test_position_limit_in_position_mode_without_bit_17_is_an_error_at_the_limit
     assert m.read("MODE_REG")[0] == c.PASSIVE
 
 
-@pytest.mark.statements("mis:8.2.26:2")
+@pytest.mark.statements("mis:8.2.26:2", "mis:5.9.3:2", "mis:5.9.3:3")
 def test_position_limit_in_gear_mode_is_never_passed() -> None:
     """§5.9.3: "in position mode or gear mode, the motor will stop at Position Limit Min"."""
     m = _motor(MAX_P_IST=100000, MIN_P_IST=-50000, V_SOLL=30000, A_SOLL=2000,
@@ -94,7 +95,8 @@ def test_in_target_position_waits_for_the_standstill_time() -> None:
 
 
 # --- §8.2.77–78: the dedicated outputs ----------------------------------------------------
-@pytest.mark.statements("mis:8.2.17:3", "mis:8.2.69:3", "mis:8.2.77:2", "mis:8.2.78:2")
+@pytest.mark.statements(
+    "mis:8.2.17:3", "mis:8.2.69:3", "mis:8.2.77:2", "mis:8.2.78:2", "mis:5.6.2:1")
 def test_in_position_and_error_outputs_drive_outputs() -> None:
     """INPOS_MASK: "The In Position output will then be set after a movement has completed";
     ERROR_MASK: "set when any error is set"; both only on pins IOSETUP makes outputs
@@ -130,7 +132,7 @@ def test_setup_bit_0_inverts_the_motor_direction() -> None:
     assert abs(m.read("FLWERR")[0]) < 1000
 
 
-@pytest.mark.statements("mis:8.2.68:6")
+@pytest.mark.statements("mis:8.2.68:6", "mis:5.2.3:2")
 def test_setup_bit_6_recalculates_in_physical_position_while_moving() -> None:
     """Bit 6: "InPhysPosMode (If set, recalc InPhysPos continuously. If 0, only after
     stop)"."""
@@ -145,7 +147,7 @@ def test_setup_bit_6_recalculates_in_physical_position_while_moving() -> None:
     assert seen == {0: False, c.SETUP_IN_PHYS_POS_CONTINUOUS: True}
 
 
-@pytest.mark.statements("mis:8.2.32:4", "mis:8.2.68:21", "mis:8.2.73:2")
+@pytest.mark.statements("mis:8.2.32:4", "mis:8.2.68:21", "mis:8.2.73:2", "mis:5.9.6:1")
 def test_setup_bit_28_limits_without_memory() -> None:
     """Bit 28 (§5.9.6): "the sensor has-been warning is automatically cleared when the
     direction of the motor is reversed and the limit switch is no longer active"."""
@@ -179,7 +181,7 @@ def test_motor_rev_counts_revolutions_and_is_writable() -> None:
 
 
 # --- §5.11.2: passive via the stop ramp ----------------------------------------------------
-@pytest.mark.statements("mis:8.2.3:9")
+@pytest.mark.statements("mis:8.2.3:9", "mis:5.11.2:2")
 def test_mode_0_on_a_running_motor_decelerates_with_the_stop_ramp_first() -> None:
     """§5.11.2: "When changing to Passive mode the motor goes into Stop mode to decelerate
     according to the 'Deceleration'-ramp. When 'Actual velocity' is 0 … the motor goes
@@ -201,7 +203,7 @@ def test_mode_0_on_a_running_motor_decelerates_with_the_stop_ramp_first() -> Non
 
 
 # --- §12.5: the worked example of Write Multiple Registers ------------------------------
-@pytest.mark.statements("mis:8.2.42:1")
+@pytest.mark.statements("mis:8.2.42:1", "mis:12.1:2")
 def test_modbus_write_multiple_example_is_accepted_as_the_manual_replies() -> None:
     """§12.5: V1 (65) = 409 600 and V2 (66) = 13 on slave 60; the manual shows the motor's
     reply {0x3C, 0x10, 0x00, 0x82, 0x00, 0x04, CRC}."""
@@ -280,7 +282,7 @@ def test_sample4_records_and_the_buffer_holds_buf_size_samples() -> None:
 
 
 # --- §5.9.2, §8.2.72: the negative limit input --------------------------------------------
-@pytest.mark.statements("mis:8.2.32:3", "mis:8.2.72:2")
+@pytest.mark.statements("mis:8.2.32:3", "mis:8.2.72:2", "mis:5.9.2:1", "mis:5.9.2:3")
 def test_negative_limit_input_of_nl_mask() -> None:
     m = _motor(NL_MASK=0b1000, V_SOLL=-5000, V_START=10000, SETUP_BITS=c.SETUP_NO_LIMIT_ERROR)
     m.write("MODE_REG", c.VELOCITY)
@@ -306,7 +308,8 @@ def test_v_ist_calc_and_v_encoder_follow_the_motion() -> None:
 
 # --- §8.2.108–114: the closed-loop current scale ------------------------------------------
 @pytest.mark.statements(
-    "mis:8.2.108:2", "mis:8.2.109:2", "mis:8.2.110:2", "mis:8.2.112:1", "mis:8.2.113:2")
+    "mis:8.2.108:2", "mis:8.2.109:2", "mis:8.2.110:2", "mis:8.2.112:1", "mis:8.2.113:2",
+    "mis:5.3.7:1")
 def test_closed_loop_current_scale_stays_within_its_limits() -> None:
     """ACTUAL_TORQUE stays within CUR_SCALE_MIN … CUR_SCALE_MAX; a larger CUR_SCALE_INC
     (time per step up) and CUR_SCALE_DEC / CUR_SCALE_FACTOR (time per step down) slow the
@@ -355,7 +358,7 @@ def test_zero_search_bit_5_disables_the_time_out() -> None:
     assert m.read("ERR_BITS")[0] == 0 and m.read("MODE_REG")[0] == c.ZERO_SEARCH_1
 
 
-@pytest.mark.statements("mis:8.2.68:18")
+@pytest.mark.statements("mis:8.2.68:18", "mis:5.10:3")
 def test_low_bus_voltage_bit_23_sets_v_soll_to_0() -> None:
     """SETUP_BITS bit 23: "Low bus voltage" sets V_SOLL to 0 RPM; the motor decelerates and
     stays in its mode (§5.10)."""

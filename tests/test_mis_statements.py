@@ -84,7 +84,8 @@ _CHOSEN_DEFAULTS = {"V_START": 1000, "V_HOME": -5000, "MIN_BUSVOL": 565,
     "mis:8.2.109:1", "mis:8.2.110:1", "mis:8.2.113:1", "mis:8.2.114:1", "mis:8.2.115:1",
     "mis:8.2.116:1", "mis:8.2.117:1", "mis:8.2.120:1", "mis:8.2.121:1", "mis:8.2.123:1",
     "mis:8.2.124:1", "mis:8.2.125:1", "mis:8.2.126:1", "mis:8.2.127:1", "mis:8.2.128:1",
-    "mis:8.2.130:1", "mis:8.2.1:1")
+    "mis:8.2.130:1", "mis:8.2.1:1", "mis:12.1:6", "mis:5.3.4:2", "mis:5.3.4:3", "mis:5.9.2:1",
+    "mis:5.10:4")
 def test_defaults_of_the_register_tables(motor: str) -> None:
     m = MotorArray(motor, n=1)
     for name, value in {**_DEFAULTS, **_CHOSEN_DEFAULTS}.items():
@@ -278,7 +279,8 @@ def test_a_soll_is_in_rpm_per_second() -> None:
     assert np.all(np.diff(v[:400]) == 100 * _UNITS_PER_MS)  # 1 RPM per 10 ms
 
 
-@pytest.mark.statements("mis:8.2.7:2", "mis:8.2.7:4", "mis:8.2.7:5")
+@pytest.mark.statements(
+    "mis:8.2.7:2", "mis:8.2.7:4", "mis:8.2.7:5", "mis:5.1.2:1", "mis:5.1.3:1", "mis:5.1.4:1")
 def test_run_current_unit_instant_change_and_maximum_per_size() -> None:
     """§8.2.7: unit 5.87 mA ("RUN_CURRENT = 100, will set the running current to 0.587 ARMS");
     a new value is set instantly; the largest setting is 681 on an MIS17x (4 ARMS), 1022 on an
@@ -299,7 +301,8 @@ def test_run_current_unit_instant_change_and_maximum_per_size() -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.7:3", "mis:8.2.8:2", "mis:8.2.8:3", "mis:8.2.9:1", "mis:8.2.9:2", "mis:8.2.24:18")
+    "mis:8.2.7:3", "mis:8.2.8:2", "mis:8.2.8:3", "mis:8.2.9:1", "mis:8.2.9:2", "mis:8.2.24:18",
+    "mis:5.1:1")
 def test_standby_current_and_its_status_bit() -> None:
     """§8.2.8–9: the standby current is used STANDBY_TIME ms after the last step, and a new
     move uses the running current without delay; STATUSBITS bit 18 tells that the standby
@@ -387,7 +390,7 @@ def test_flwerrmax_zero_disables_the_follow_error() -> None:
 
 
 # --- §8.2.20–§8.2.22 COMMAND -------------------------------------------------------------------
-@pytest.mark.statements("mis:8.2.21:1", "mis:8.2.32:1")
+@pytest.mark.statements("mis:8.2.21:1", "mis:8.2.32:1", "mis:5.9.4:2")
 def test_fastmac_1_clears_errors_and_warnings() -> None:
     """§8.2.21: FastMac 1 (97): "Clear errors and warnings"."""
     m = _motor(PL_MASK=0b1, V_SOLL=5000, V_START=10000)
@@ -618,7 +621,7 @@ def test_analogue_input_full_scale_is_5_v() -> None:
     assert m.read("ANALOGUE_INPUT5")[0] == pytest.approx(2.5 / 1.221e-3, abs=2)
 
 
-@pytest.mark.statements("mis:8.2.48:2")
+@pytest.mark.statements("mis:8.2.48:2", "mis:5.10.2:1")
 def test_min_busvol_is_the_under_voltage_trigger() -> None:
     """§8.2.48: MIN_BUSVOL is the "Trigger point for under-voltage" (26.525 mV units): the
     warning (WARN_BITS bit 4) comes below it, not above."""
@@ -652,7 +655,7 @@ def test_ssi_setup1_default() -> None:
 
 
 # --- §8.2.58–§8.2.64 AutoCorrection settling time, sampling ----------------------------------
-@pytest.mark.statements("mis:8.2.58:2")
+@pytest.mark.statements("mis:8.2.58:2", "mis:5.2.2:2")
 def test_settling_time_delays_the_auto_correction() -> None:
     """§8.2.58: with AutoCorrection on, SETTLINGTIME ms pass after a move before the encoder
     is tested and a retry starts."""
@@ -710,7 +713,7 @@ def test_modbus_setup_layout() -> None:
     assert m.read("MODBUS_SETUP")[0] == 0b10_1001
 
 
-@pytest.mark.statements("mis:8.2.68:16")
+@pytest.mark.statements("mis:8.2.68:16", "mis:5.10.2:2", "mis:5.10:4")
 def test_low_bus_voltage_without_bits_is_a_warning_only() -> None:
     """§8.2.68 bits 21–23 choose what low bus voltage does; with none of them it is only the
     warning (WARN_BITS bit 4), with bit 21 it is also the error (ERR_BITS bit 4)."""
@@ -781,7 +784,7 @@ def test_p_new_moves_nothing() -> None:
 
 
 # --- §8.2.84–§8.2.100 serial line, identification ---------------------------------------------
-@pytest.mark.statements("mis:8.2.84:2")
+@pytest.mark.statements("mis:8.2.84:2", "mis:12.1:6")
 def test_baud_rate_codes_of_the_modbus_line() -> None:
     """§8.2.84: 0 9600, 1 19200, 2 38400, 3 57600, 4 115200, 5 230400, 6 460800 baud."""
     from jvl_gym.protocol.modbus_twin import modbus_bus
@@ -874,7 +877,7 @@ def test_ticks_count_milliseconds() -> None:
     assert np.all(np.diff(ticks) == 1) and ticks[-1] == 250
 
 
-@pytest.mark.statements("mis:8.2.112:2")
+@pytest.mark.statements("mis:8.2.112:2", "mis:5.3.1:2")
 def test_actual_torque_is_full_without_current_control() -> None:
     """§8.2.112: "In active mode without current control enabled = 100 %" (2047), with the
     closed loop on and off."""
@@ -927,3 +930,300 @@ def test_turntab_count_is_writable() -> None:
     m.write("P_SOLL", 970000)
     m.step(1500)
     assert m.read("TURNTAB_COUNT")[0] == -3
+
+
+# --- §12.1 the Modbus registers ----------------------------------------------------------------
+def _modbus(**regs: int) -> tuple[MotorArray, object]:
+    from jvl_gym.protocol.modbus_twin import modbus_bus
+    from jvl_gym.protocol.twin import Twin
+
+    m = _motor(MY_ADDR=42, **regs)
+    return m, modbus_bus(Twin(m))
+
+
+@pytest.mark.statements("mis:12.1:1", "mis:12.1:2")
+def test_modbus_functions_and_registers() -> None:
+    """§12.1: only 03h and 10h; "All other commands will result in Exception replies
+    (exception type 1, Illegal Function)"; the slave address is register 150."""
+    from jvl_gym.protocol import modbus as mb
+
+    m, bus = _modbus(V_SOLL=1234)
+    reply, _ = bus.handle(mb.encode_read_request(42, 2 * 5, 2), now=0.0)
+    assert mb.decode_response(reply) == mb.ReadResponse(42, (1234, 0))
+    reply, _ = bus.handle(mb.encode_read_request(43, 2 * 5, 2), now=0.0)
+    assert reply == b""
+    single = mb.append_crc(bytes((42, 0x06, 0x00, 0x0A, 0x00, 0x01)))  # write single register
+    reply, _ = bus.handle(single, now=0.0)
+    assert reply == mb.encode_exception(42, 0x06, 1)
+
+
+@pytest.mark.statements("mis:12.1:3", "mis:12.1:4")
+def test_modbus_timeout_responses() -> None:
+    """§12.1: register 199 the time-out in ms (0: never), 200 the response: 1 V_SOLL = 0,
+    2 passive mode."""
+    from jvl_gym.protocol import modbus as mb
+
+    for timeout, response in ((50, 1), (50, 2), (0, 2)):
+        m, bus = _modbus(V_SOLL=5000, V_START=10000)
+        for reg, value in ((2, c.VELOCITY), (199, timeout), (200, response)):
+            bus.handle(mb.encode_write_request(42, 2 * reg, list(mb.words_of(value))), now=0.0)
+        bus.poll(0.049)
+        assert m.read("V_SOLL")[0] == 5000 and m.read("MODE_REG")[0] == c.VELOCITY
+        bus.poll(0.051)
+        if timeout == 0:
+            assert m.read("V_SOLL")[0] == 5000 and m.read("MODE_REG")[0] == c.VELOCITY
+        elif response == 1:
+            assert m.read("V_SOLL")[0] == 0 and m.read("MODE_REG")[0] == c.VELOCITY
+        else:
+            assert m.read("MODE_REG")[0] in (c.PASSIVE, c.STOP)
+
+
+@pytest.mark.statements("mis:12.1:5")
+def test_modbus_frame_delay() -> None:
+    """§12.1: register 201 delays the reply; 0 is the default of 2.5 characters."""
+    m, bus = _modbus(BAUD_RATE=4)
+    slave = bus.slaves[0]
+    assert slave.reply_delay() == pytest.approx(2.5 * slave.serial_format().bits / 115200)
+    m.write("MODBUS_FRAME_DELAY", 5)
+    assert slave.reply_delay() == pytest.approx(5e-3)
+
+
+# --- §5.1–§5.3 current, AutoCorrection, closed loop ----------------------------------------------
+@pytest.mark.statements("mis:5.1.3:2", "mis:5.1.6:1", "mis:5.1.6:3")
+def test_holding_torque_is_proportional_to_the_current() -> None:
+    """§5.1.3/§5.1.6: an MIS232 gives 1.9 N·m at 6000 mA (RUN_CURRENT 1022); at low speed the
+    torque is proportional to the current; at high speed less."""
+    m = _motor(RUN_CURRENT=1022)
+    assert m.pull_out_torque(1.0)[0] == pytest.approx(1.9, rel=0.02)
+    m.write("RUN_CURRENT", 511)
+    assert m.pull_out_torque(1.0)[0] == pytest.approx(0.95, rel=0.02)
+    assert m.pull_out_torque(2000.0)[0] < 0.9 * m.pull_out_torque(1.0)[0]
+
+
+def _blocked_move(motor: MotorArray, mode: int = c.POSITION) -> None:
+    """A one-revolution move whose first 60 ms are overloaded (steps are lost)."""
+    motor.write_many({"IN_POSITION_COUNT": 2, "IN_POSITION_WINDOW": 1000, "V_SOLL": 20000,
+                      "A_SOLL": 3000, "V_START": 10000, "GEAR1": 409600, "GEAR2": 1})
+    motor.write("MODE_REG", mode)
+    motor.set_input(load_torque=1.3 * motor.pull_out_torque(200.0)[0])
+    if mode == c.GEAR:
+        motor.set_input(pulse_counts=1)
+        motor.step(1)
+        motor.set_input(pulse_counts=0)
+    else:
+        motor.write("P_SOLL", 409600)
+    motor.run(0.06)
+    motor.set_input(load_torque=0.0)
+    motor.run(4.0)
+
+
+@pytest.mark.statements("mis:8.2.15:3", "mis:5.2.1:1")
+def test_auto_correction_needs_the_encoder() -> None:
+    """§5.2.1: AutoCorrection needs an encoder option; §8.2.15: it retries a movement in
+    position and gear mode."""
+    bare = MotorArray("MIS232", n=1, seed=0, encoder_type=0)
+    _blocked_move(bare)
+    assert bare.read("P_IST")[0] == 409600
+    assert abs(bare.rotor_counts[0] - 409600) > 100000  # the lost steps stay lost
+    for mode in (c.POSITION, c.GEAR):
+        m = _motor()
+        _blocked_move(m, mode)
+        assert abs(m.read("ENCODER_POS")[0] - 409600) <= 1000, mode
+
+
+@pytest.mark.statements("mis:5.3.1:4")
+def test_closed_loop_in_position_needs_the_encoder_in_the_window() -> None:
+    """§5.3.1: with the closed loop on, the in-position bit tells that the encoder position and
+    P_SOLL are within the in-position window; in open loop it is set when P_IST = P_SOLL."""
+    seen = {}
+    for bits in (0, c.SETUP_CLOSED_LOOP):
+        m = _motor(SETUP_BITS=bits, P_SOLL=20000, IN_POSITION_WINDOW=100,
+                   IN_POSITION_COUNT=0, STANDBY_TIME=65535)
+        m.write("MODE_REG", c.POSITION)
+        m.step(300)
+        m.set_input(load_torque=0.6 * m.pull_out_torque(1.0)[0])  # pushes the rotor aside
+        m.step(200)
+        assert abs(m.read("ENCODER_POS")[0] - 20000) > 100
+        seen[bits] = bool(m.read("STATUSBITS")[0] & c.ST_IN_POSITION)
+    assert seen == {0: True, c.SETUP_CLOSED_LOOP: False}
+
+
+@pytest.mark.statements("mis:5.3.3:1")
+def test_closed_loop_current_control_uses_no_standby_current() -> None:
+    """§5.3.3: "The "Standby current" and "Standby time" setting is not used at any time"
+    with closed-loop current control."""
+    for bits, standby in ((c.SETUP_CLOSED_LOOP, True),
+                          (c.SETUP_CLOSED_LOOP | c.SETUP_CURRENT_CONTROL, False)):
+        m = _motor(SETUP_BITS=bits, P_SOLL=20000, STANDBY_TIME=50, STANDBY_CURRENT=10)
+        m.write("MODE_REG", c.POSITION)
+        m.step(600)
+        assert bool(m.read("STATUSBITS")[0] & c.ST_STANDBY_CURRENT) is standby
+        if not standby:
+            assert m.current_amplitude[0] > 10 * _PEAK_AMPS_PER_UNIT
+
+
+@pytest.mark.statements("mis:5.3.4:2")
+def test_closed_loop_switched_on_the_fly() -> None:
+    """§5.3.4: the closed loop and its current control "Can be activated/deactivated on the fly
+    and have immediate effect"."""
+    m = _motor(V_SOLL=20000)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(300)
+    assert not m.read("STATUSBITS")[0] & c.ST_CLOSED_LOOP
+    m.write("SETUP_BITS", c.SETUP_CLOSED_LOOP | c.SETUP_CURRENT_CONTROL)
+    m.step(1)
+    assert m.read("STATUSBITS")[0] & c.ST_CLOSED_LOOP
+    m.step(500)
+    assert m.read("ACTUAL_TORQUE")[0] < 2047
+    m.write("SETUP_BITS", 0)
+    m.step(1)
+    assert not m.read("STATUSBITS")[0] & c.ST_CLOSED_LOOP
+    assert m.read("ACTUAL_TORQUE")[0] == 2047
+
+
+@pytest.mark.statements("mis:5.3.5:1", "mis:5.3.7:1")
+def test_actual_torque_is_the_share_of_the_running_current() -> None:
+    """§5.3.5: "The actual torque read-out is based on the actual motor current as a percentage
+    of the "Running current" setting" (2047 = 100 %, §8.2.112)."""
+    m = _motor(SETUP_BITS=c.SETUP_CLOSED_LOOP | c.SETUP_CURRENT_CONTROL, RUN_CURRENT=800,
+               V_SOLL=20000)
+    m.write("MODE_REG", c.VELOCITY)
+    m.set_input(load_torque=0.2)
+    m.step(800)
+    share = m.read("ACTUAL_TORQUE")[0] / 2047
+    assert 0.0 < share < 1.0
+    assert m.current_amplitude[0] == pytest.approx(share * 800 * _PEAK_AMPS_PER_UNIT, rel=0.01)
+
+
+# --- §5.9–§5.12 limits, under voltage, turn table ---------------------------------------------
+@pytest.mark.statements("mis:5.9.3:1")
+def test_software_limits_off_at_zero_and_both_on_otherwise() -> None:
+    """§5.9.3: "Default for both parameters is 0 meaning that the feature is disabled. Notice
+    that if one of the parameters are different from 0, both values are activated"."""
+    off = _motor(V_SOLL=-30000, A_SOLL=100000)
+    off.write("MODE_REG", c.VELOCITY)
+    off.step(300)
+    assert off.read("ERR_BITS")[0] == 0 and off.read("P_IST")[0] < -100000
+    on = _motor(MAX_P_IST=1_000_000, P_IST=100000, V_SOLL=-30000, A_SOLL=100000)
+    on.write("MODE_REG", c.VELOCITY)  # MIN_P_IST stays 0, and is a limit now
+    on.step(300)
+    assert on.read("ERR_BITS")[0] & c.ERR_POSITION_LIMIT and on.read("P_IST")[0] > -100000
+    assert on.read("WARN_BITS")[0] & c.WARN_NEG_LIMIT_SEEN
+
+
+@pytest.mark.statements("mis:5.9.3:3", "mis:5.9.4:1")
+def test_velocity_mode_stops_past_min_p_ist() -> None:
+    """§5.9.3: "In velocity mode the speed will internally be set to 0 when passing Position
+    Limit Min"; the negative warning bits are 1 and 3 (§5.9.4)."""
+    m = _motor(MIN_P_IST=-100000, MAX_P_IST=100000, V_SOLL=-20000,
+               SETUP_BITS=c.SETUP_NO_LIMIT_ERROR)
+    m.write("MODE_REG", c.VELOCITY)
+    tr = m.trace(["P_IST", "V_IST"], 800)
+    p, v = tr["P_IST"][:, 0], tr["V_IST"][:, 0]
+    passed = int(np.flatnonzero(p < -100000)[0])
+    assert np.all(np.diff(np.abs(v[passed:])) <= 0) and v[-1] == 0
+    assert m.read("MODE_REG")[0] == c.VELOCITY
+    assert m.read("WARN_BITS")[0] & c.WARN_NEG_LIMIT_SEEN
+
+
+@pytest.mark.statements("mis:5.9.5:2")
+def test_limit_stop_in_velocity_mode_uses_acc_emerg() -> None:
+    """§5.9.5: with SETUP_BITS bit 17 "the motor decelerates with the "Error deceleration" … on
+    position limits in velocity mode"."""
+    m = _motor(MIN_P_IST=-400000, MAX_P_IST=400000, V_SOLL=30000, A_SOLL=10000, D_SOLL=0,
+               ACC_EMERG=2000, SETUP_BITS=c.SETUP_NO_LIMIT_ERROR)
+    m.write("MODE_REG", c.VELOCITY)
+    tr = m.trace(["P_IST", "V_IST"], 1500)
+    p, v = tr["P_IST"][:, 0], tr["V_IST"][:, 0]
+    passed = int(np.flatnonzero(p > 400000)[0])
+    down = -np.diff(v[passed:].astype(float))
+    assert np.median(down[down > 0]) == pytest.approx(2000 * _UNITS_PER_MS, abs=1)
+
+
+def _under_voltage(bits: int) -> MotorArray:
+    m = _motor(V_SOLL=10000, SETUP_BITS=bits)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(50)
+    m.set_input(supply_volts=10.0)
+    m.step(300)
+    m.set_input(supply_volts=48.0)
+    m.step(300)
+    return m
+
+
+@pytest.mark.statements("mis:5.10:1")
+def test_under_voltage_error_stays_after_the_supply_returns() -> None:
+    """§5.10: "When P+ is re-applied to the motor it will stay in Passive mode and report a
+    "Low bus voltage" error"."""
+    m = _under_voltage(1 << 21)
+    assert m.read("MODE_REG")[0] == c.PASSIVE and m.read("ERR_BITS")[0] & c.ERR_LOW_BUS
+
+
+@pytest.mark.statements("mis:5.10:2")
+def test_under_voltage_passive_stays_after_the_supply_returns() -> None:
+    """§5.10: "Stop controlled and go to passive … When P+ is re-applied the motor stays in
+    Passive mode"."""
+    m = _under_voltage(1 << 22)
+    assert m.read("MODE_REG")[0] == c.PASSIVE and m.read("V_IST")[0] == 0
+
+
+def _table(mode: int, **regs: int) -> MotorArray:
+    return _motor(TURNTABLE_MODE=mode, MIN_P_IST=0, MAX_P_IST=409599, V_SOLL=300000,
+                  A_SOLL=100000, IN_POSITION_COUNT=0, **regs)
+
+
+@pytest.mark.statements("mis:5.12.1:4")
+def test_turn_table_mode_2_always_turns_ccw() -> None:
+    """§5.12.1 mode 2 "Singleturn CCW rotation": from 0 to 250000 the motor turns CCW
+    (159600 counts back through MIN_P_IST)."""
+    m = _table(c.TT_CCW)
+    m.write("MODE_REG", c.POSITION)
+    m.write("P_SOLL", 250000)
+    m.step(600)
+    assert m.read("P_IST")[0] == 250000
+    assert m.rotor_counts[0] == pytest.approx(-159600, abs=600)
+
+
+@pytest.mark.statements("mis:5.12.1:6", "mis:5.12.1:8")
+def test_turn_table_multiturn_limits() -> None:
+    """§5.12.1 mode 4: a target below the range is limited to its minimum (−1000 → 0); mode 5
+    from 0 to −970000: the simulator's reading lands where the CCW move of 970000 ends."""
+    m = _table(c.TT_MULTI_CW, P_SOLL=150000)
+    m.write("MODE_REG", c.POSITION)
+    m.step(400)
+    m.write("P_SOLL", -1000)
+    assert m.read("P_SOLL")[0] == 0
+    w = _table(c.TT_MULTI_CCW)
+    w.write("MODE_REG", c.POSITION)
+    w.write("P_SOLL", -970000)
+    w.step(1500)
+    assert w.read("P_IST")[0] == (-970000) % 409600 == 258800
+    assert w.rotor_counts[0] == pytest.approx(-970000, abs=600)
+
+
+@pytest.mark.statements("mis:5.12.3:1")
+def test_turn_table_swaps_a_reversed_range() -> None:
+    """§5.12.3: "the firmware will swap the min. and max. values if the minimum is larger than
+    the maximum"."""
+    m = _motor(TURNTABLE_MODE=c.TT_CW, MIN_P_IST=409599, MAX_P_IST=0, V_SOLL=300000,
+               A_SOLL=100000, IN_POSITION_COUNT=0)
+    m.write("MODE_REG", c.POSITION)
+    m.write("P_SOLL", 300000)
+    m.step(400)
+    m.write("P_SOLL", 100000)
+    m.step(600)
+    assert m.read("P_IST")[0] == 100000
+    assert m.rotor_counts[0] == pytest.approx(300000 + 209600, abs=600)
+
+
+@pytest.mark.statements("mis:5.12.5:2")
+def test_absencoder_is_not_wrapped_by_the_turn_table() -> None:
+    """§5.12.5: ABSENCODER (H3/H4) "Not corrected for the turn table"."""
+    m = MotorArray("MIS232", n=1, seed=0, encoder_type=4)
+    m.write_many({"TURNTABLE_MODE": c.TT_MULTI_CW, "MIN_P_IST": 0, "MAX_P_IST": 409599,
+                  "V_SOLL": 300000, "A_SOLL": 100000, "IN_POSITION_COUNT": 0})
+    m.write("MODE_REG", c.POSITION)
+    m.write("P_SOLL", 970000)
+    m.step(1500)
+    assert m.read("P_IST")[0] == 150800
+    assert m.read("ABSENCODER")[0] == pytest.approx(970000, abs=600)
