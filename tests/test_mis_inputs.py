@@ -49,7 +49,7 @@ def test_analogue_inputs_in_the_registers() -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.16:3", "mis:8.2.16:4", "mis:8.2.69:2", "mis:8.2.75:2", "mis:8.2.76:2")
+    "mis:8.2.16:3", "mis:8.2.16:4", "mis:8.2.69:2", "mis:8.2.75:2", "mis:8.2.76:2", "mis:6.5.9:1")
 def test_digital_input_filter() -> None:
     m = MotorArray("MIS232", n=1)
     m.write_many({"INPUT_FILTER_MASK": 0b10, "INPUT_FILTER_CNT": 5})

@@ -22,7 +22,7 @@ def _motor(**regs: int) -> MotorArray:
 
 
 # --- gear mode (§8.2.3, §8.2.13) --------------------------------------------------------
-@pytest.mark.statements("mis:8.2.3:7", "mis:8.2.13:3")
+@pytest.mark.statements("mis:8.2.3:7", "mis:8.2.13:3", "mis:6.4.1:2")
 def test_gear_one_input_step_moves_200_counts() -> None:
     """§8.2.13: GEAR1 = 409600, GEAR2 = 2048: one step applied moves the motor 200 counts;
     2048 counts one revolution."""
@@ -44,7 +44,7 @@ def test_gear_one_input_step_moves_200_counts() -> None:
 @given(st.lists(st.integers(-50, 50), min_size=1, max_size=40),
        st.integers(1, 10**6), st.integers(-5000, 5000).filter(lambda g: g != 0))
 @settings(max_examples=25, deadline=None)
-@pytest.mark.statements("mis:8.2.3:7", "mis:8.2.13:2", "mis:8.2.14:1")
+@pytest.mark.statements("mis:8.2.3:7", "mis:8.2.13:2", "mis:8.2.14:1", "mis:6.4.1:1")
 def test_gear_carries_the_remainder(pulses: list[int], g1: int, g2: int) -> None:
     """§8.2.3: input × GEAR1/GEAR2 is added to P_SOLL; any remainder is used next time: over
     any pulse sequence P_SOLL = floor(total × GEAR1 / GEAR2)."""
@@ -113,7 +113,7 @@ def test_turn_table_directions_and_limits() -> None:
 # --- zero search (§6.5) -----------------------------------------------------------------
 @pytest.mark.parametrize("mode", [13, 14])
 @pytest.mark.statements(
-    "mis:8.2.3:10", "mis:8.2.3:11", "mis:8.2.24:8", "mis:8.2.33:3", "mis:8.2.35:2")
+    "mis:8.2.3:10", "mis:8.2.3:11", "mis:8.2.24:8", "mis:8.2.33:3", "mis:8.2.35:2", "mis:6.5.1:1")
 def test_zero_search_finds_the_sensor_and_goes_to_startmode(mode: int) -> None:
     home = -0.5  # rad: the home input is active at or below it
     m = MotorArray("MIS232", n=1, seed=0, home_position=home)
@@ -131,7 +131,8 @@ def test_zero_search_finds_the_sensor_and_goes_to_startmode(mode: int) -> None:
     assert m.read("ERR_BITS")[0] == 0
 
 
-@pytest.mark.statements("mis:8.2.3:13", "mis:8.2.33:3", "mis:8.2.74:2")
+@pytest.mark.statements(
+    "mis:8.2.3:13", "mis:8.2.33:3", "mis:8.2.74:2", "mis:6.5.2:2", "mis:6.5.8:2")
 def test_zero_search_on_an_external_input() -> None:
     m = _motor(HOME_MASK=0b100, V_HOME=3000, STARTMODE=1, V_SOLL=0, IN_POSITION_COUNT=0)
     m.write("MODE_REG", 13)
@@ -171,7 +172,8 @@ def test_fastmac_commands() -> None:
     assert m.read("ENCODER_POS")[0] == 84  # the encoder keeps its new zero
 
 
-@pytest.mark.statements("mis:8.2.3:1", "mis:8.2.21:1", "mis:8.2.31:3", "mis:8.2.31:23")
+@pytest.mark.statements(
+    "mis:8.2.3:1", "mis:8.2.21:1", "mis:8.2.31:3", "mis:8.2.31:23", "mis:7.2.4:1", "mis:7.2.4:2")
 def test_clear_errors_command_and_modes_refused_while_in_error() -> None:
     m = _motor(FLWERRMAX=1000, P_SOLL=4_000_000, V_SOLL=100000, A_SOLL=1000)
     m.set_input(load_torque=5.0)
@@ -211,7 +213,8 @@ def test_status_bits_during_a_move() -> None:
 
 
 # --- limits and under-voltage (§5.9, §5.10) ---------------------------------------------
-@pytest.mark.statements("mis:8.2.31:5", "mis:5.9.3:2", "mis:5.9.4:1", "mis:5.9.4:2")
+@pytest.mark.statements(
+    "mis:8.2.31:5", "mis:5.9.3:2", "mis:5.9.4:1", "mis:5.9.4:2", "mis:6.6:1", "mis:7.2.6:1")
 def test_software_position_limit_stops_with_an_error() -> None:
     m = _motor(MAX_P_IST=100000, MIN_P_IST=-100000, V_SOLL=20000, ACC_EMERG=50000)
     m.write("MODE_REG", 1)
@@ -224,7 +227,7 @@ def test_software_position_limit_stops_with_an_error() -> None:
 
 @pytest.mark.statements(
     "mis:8.2.31:6", "mis:8.2.32:6", "mis:8.2.47:1", "mis:8.2.47:2", "mis:8.2.48:2",
-    "mis:8.2.68:16", "mis:8.2.68:17", "mis:5.10:1", "mis:5.10:2")
+    "mis:8.2.68:16", "mis:8.2.68:17", "mis:5.10:1", "mis:5.10:2", "mis:6.6:1", "mis:7.2.7:1")
 def test_low_bus_voltage_actions() -> None:
     m = _motor(V_SOLL=10000, SETUP_BITS=(1 << 21) | (1 << 22))
     m.write("MODE_REG", 1)
@@ -291,7 +294,7 @@ def test_startmode_from_a_setup_and_flash_in_safe_mode() -> None:
     assert m.read("P_IST")[0] == 0
 
 
-@pytest.mark.statements("mis:8.2.37:2")
+@pytest.mark.statements("mis:8.2.37:2", "mis:6.5.2:1")
 def test_homemode_starts_a_zero_search_at_power_on() -> None:
     m = MotorArray("MIS232", n=1, setup={"HOMEMODE": 13, "STARTMODE": 2})
     assert m.read("MODE_REG")[0] == 13
@@ -299,7 +302,7 @@ def test_homemode_starts_a_zero_search_at_power_on() -> None:
 
 @pytest.mark.statements(
     "mis:8.2.32:2", "mis:8.2.32:4", "mis:8.2.68:13", "mis:8.2.73:2", "mis:5.9.2:1", "mis:5.9.2:2",
-    "mis:5.9.4:1", "mis:5.9.5:1")
+    "mis:5.9.4:1", "mis:5.9.5:1", "mis:6.6:4")
 def test_hardware_limit_input_and_its_warning_bits() -> None:
     m = _motor(PL_MASK=0b100, V_SOLL=5000, V_START=10000, SETUP_BITS=1 << 17)
     m.write("MODE_REG", 1)
@@ -333,7 +336,7 @@ def test_absolute_encoder_register() -> None:
     assert m.read("ENCODER_TYPE").tolist() == [3, 4]
 
 
-@pytest.mark.statements("mis:8.2.34:2", "mis:8.2.36:2")
+@pytest.mark.statements("mis:8.2.34:2", "mis:8.2.36:2", "mis:6.5.1:3")
 def test_torque_zero_search_against_an_end_stop() -> None:
     """§6.5.7: with closed loop and current control the search runs into a mechanical stop
     until the current reaches T_HOME; that point is P_HOME; then to position 0 and STARTMODE

@@ -102,7 +102,7 @@ def test_standby_current_after_standby_time() -> None:
     assert m.current_amplitude[0] == pytest.approx(511 * amps, rel=0.02)
 
 
-@pytest.mark.statements("mis:8.2.3:2")
+@pytest.mark.statements("mis:8.2.3:2", "mis:6.1.1:1")
 def test_passive_mode_has_no_current_and_the_encoder_follows_a_turned_shaft() -> None:
     m = MotorArray("MIS232", n=1, seed=0)
     m.set_input(load_torque=-0.5)  # turns the free shaft forward

@@ -18,7 +18,7 @@ def _motor(**regs: int) -> MotorArray:
     return m
 
 
-@pytest.mark.statements("mis:8.2.5:3")
+@pytest.mark.statements("mis:8.2.5:3", "mis:6.2.1:1")
 def test_the_family_is_found_by_motor_type_and_v_soll_is_in_hundredths_of_rpm() -> None:
     m = _motor(V_SOLL=25000)
     assert type(m).__name__ == "MisMotorArray"

@@ -53,7 +53,7 @@ def test_position_limit_in_position_mode_stops_at_the_limit_with_the_normal_dece
     assert np.count_nonzero(down < 0) > 250  # 300 RPM at 1000 RPM/s: about 290 ms
 
 
-@pytest.mark.statements("mis:8.2.27:2", "mis:8.2.31:5", "mis:5.9.4:2")
+@pytest.mark.statements("mis:8.2.27:2", "mis:8.2.31:5", "mis:5.9.4:2", "mis:7.2.6:1")
 def test_position_limit_in_position_mode_without_bit_17_is_an_error_at_the_limit() -> None:
     """§5.9.4: "The motor will stop and activate an error, when reaching a limit" — and it
     stops at the limit, not beyond (§5.9.3)."""
@@ -66,7 +66,7 @@ def test_position_limit_in_position_mode_without_bit_17_is_an_error_at_the_limit
     assert m.read("MODE_REG")[0] == c.PASSIVE
 
 
-@pytest.mark.statements("mis:8.2.26:2", "mis:5.9.3:2", "mis:5.9.3:3")
+@pytest.mark.statements("mis:8.2.26:2", "mis:5.9.3:2", "mis:5.9.3:3", "mis:6.6:1")
 def test_position_limit_in_gear_mode_is_never_passed() -> None:
     """§5.9.3: "in position mode or gear mode, the motor will stop at Position Limit Min"."""
     m = _motor(MAX_P_IST=100000, MIN_P_IST=-50000, V_SOLL=30000, A_SOLL=2000,
@@ -326,7 +326,7 @@ def test_closed_loop_current_scale_stays_within_its_limits() -> None:
 
 
 # --- §5.6 type 2 zero search: the crawl velocity ------------------------------------------
-@pytest.mark.statements("mis:8.2.125:2")
+@pytest.mark.statements("mis:8.2.125:2", "mis:6.5.1:2")
 def test_zero_search_type_2_leaves_the_sensor_at_v_home_crawl() -> None:
     """V_HOME_CRAWL (§8.2.125): type 2 leaves the sensor at this velocity (0: V_HOME/64)."""
     m = MotorArray("MIS232", n=1, seed=0, home_position=-0.5)
@@ -434,7 +434,7 @@ def _search_over_a_sensor(mode: int, bits: int, start_input: bool = False,
 
 
 @pytest.mark.parametrize(("mode", "near"), [(c.ZERO_SEARCH_1, 200.0), (c.ZERO_SEARCH_2, 50.0)])
-@pytest.mark.statements("mis:8.2.67:4")
+@pytest.mark.statements("mis:8.2.67:4", "mis:6.5.1:1", "mis:6.5.1:2", "mis:6.5.4:2")
 def test_zero_search_bit_2_finds_the_back_side_of_the_sensor(mode: int, near: float) -> None:
     """ZERO_SEARCH_BITS bit 2, "Search for opposite side of sensor": the zero is on the
     sensor's back side instead of its front side, in both types; type 2 takes the edge at its
@@ -446,7 +446,7 @@ def test_zero_search_bit_2_finds_the_back_side_of_the_sensor(mode: int, near: fl
 
 
 @pytest.mark.parametrize("mode", [c.ZERO_SEARCH_1, c.ZERO_SEARCH_2])
-@pytest.mark.statements("mis:8.2.67:5")
+@pytest.mark.statements("mis:8.2.67:5", "mis:6.5.4:3")
 def test_zero_search_bit_4_takes_the_position_where_the_motor_is(mode: int) -> None:
     """ZERO_SEARCH_BITS bit 4, "Ignore switch": the sensor input is not looked at, the actual
     position becomes the zero at once (here with the input active from the start, which would
@@ -456,7 +456,7 @@ def test_zero_search_bit_4_takes_the_position_where_the_motor_is(mode: int) -> N
 
 
 @pytest.mark.parametrize("mode", [c.ZERO_SEARCH_1, c.ZERO_SEARCH_2])
-@pytest.mark.statements("mis:8.2.67:3")
+@pytest.mark.statements("mis:8.2.67:3", "mis:6.5.4:1")
 def test_zero_search_bit_1_turns_at_a_limit_switch(mode: int) -> None:
     """ZERO_SEARCH_BITS bit 1, "Change direction on limit": a search that meets the limit
     switch ahead before its sensor turns and finds the sensor behind it, from the other side

@@ -85,7 +85,7 @@ _CHOSEN_DEFAULTS = {"V_START": 1000, "V_HOME": -5000, "MIN_BUSVOL": 565,
     "mis:8.2.116:1", "mis:8.2.117:1", "mis:8.2.120:1", "mis:8.2.121:1", "mis:8.2.123:1",
     "mis:8.2.124:1", "mis:8.2.125:1", "mis:8.2.126:1", "mis:8.2.127:1", "mis:8.2.128:1",
     "mis:8.2.130:1", "mis:8.2.1:1", "mis:12.1:6", "mis:5.3.4:2", "mis:5.3.4:3", "mis:5.9.2:1",
-    "mis:5.10:4")
+    "mis:5.10:4", "mis:6.1.1:1")
 def test_defaults_of_the_register_tables(motor: str) -> None:
     m = MotorArray(motor, n=1)
     for name, value in {**_DEFAULTS, **_CHOSEN_DEFAULTS}.items():
@@ -187,7 +187,7 @@ def test_passive_mode_has_no_current_and_ignores_commands() -> None:
     assert m.read("P_IST")[0] == 0 and m.read("V_IST")[0] == 0 and m.rotor_counts[0] == 0
 
 
-@pytest.mark.statements("mis:8.2.3:3", "mis:8.2.5:2", "mis:8.2.11:2")
+@pytest.mark.statements("mis:8.2.3:3", "mis:8.2.5:2", "mis:8.2.11:2", "mis:6.2.1:1")
 def test_velocity_mode_follows_v_soll_changed_at_any_time() -> None:
     """§8.2.3/§8.2.5: in velocity mode the motor runs at V_SOLL, which may be changed at any
     time; a negative V_SOLL runs the motor the other way, and V_IST is then negative
@@ -240,7 +240,8 @@ def test_safe_mode_is_entered_by_command_only_and_allows_flash_and_reset() -> No
     assert m.read("V_SOLL")[0] == 4321
 
 
-@pytest.mark.statements("mis:8.2.3:10", "mis:8.2.3:13", "mis:8.2.24:8", "mis:8.2.35:2")
+@pytest.mark.statements(
+    "mis:8.2.3:10", "mis:8.2.3:13", "mis:8.2.24:8", "mis:8.2.35:2", "mis:6.5.8:2")
 def test_zero_search_mode_13_ends_in_startmode() -> None:
     """§8.2.3 example: "Writing MODE_REG = 13 will start a zero search … When the search is
     completed, the MODE_REG will automatically be changed to the mode specified in
@@ -390,7 +391,7 @@ def test_flwerrmax_zero_disables_the_follow_error() -> None:
 
 
 # --- §8.2.20–§8.2.22 COMMAND -------------------------------------------------------------------
-@pytest.mark.statements("mis:8.2.21:1", "mis:8.2.32:1", "mis:5.9.4:2")
+@pytest.mark.statements("mis:8.2.21:1", "mis:8.2.32:1", "mis:5.9.4:2", "mis:7.2.1:1")
 def test_fastmac_1_clears_errors_and_warnings() -> None:
     """§8.2.21: FastMac 1 (97): "Clear errors and warnings"."""
     m = _motor(PL_MASK=0b1, V_SOLL=5000, V_START=10000)
@@ -455,7 +456,7 @@ def test_closed_loop_status_bits() -> None:
     assert not open_loop.read("STATUSBITS")[0] & c.ST_CLOSED_LOOP
 
 
-@pytest.mark.statements("mis:8.2.28:2")
+@pytest.mark.statements("mis:8.2.28:2", "mis:6.6:2")
 def test_an_error_stop_decelerates_with_acc_emerg() -> None:
     """§8.2.28: "The motor will use this acceleration during an emergency stop" — a position
     limit error in velocity mode stops the motor with ACC_EMERG."""
@@ -471,7 +472,7 @@ def test_an_error_stop_decelerates_with_acc_emerg() -> None:
     assert v[-1] == 0 and m.read("MODE_REG")[0] == c.PASSIVE
 
 
-@pytest.mark.statements("mis:8.2.31:1", "mis:8.2.31:24")
+@pytest.mark.statements("mis:8.2.31:1", "mis:8.2.31:24", "mis:7.2.4:2")
 def test_writing_zero_to_err_bits_clears_the_errors() -> None:
     """§8.2.31: "Some of the errors can be cleared by writing zero to this register"; the
     motor then takes an active mode again."""
@@ -521,7 +522,7 @@ def _search_on_input(p_home: int, at: int = 20000) -> MotorArray:
     return m
 
 
-@pytest.mark.statements("mis:8.2.34:2", "mis:8.2.74:2")
+@pytest.mark.statements("mis:8.2.34:2", "mis:8.2.74:2", "mis:6.5.8:1")
 def test_p_home_offsets_the_zero_point() -> None:
     """§8.2.34: "The zero point found is offset with this value": where P_IST = 0 lies on the
     shaft moves by P_HOME."""
@@ -545,7 +546,7 @@ def test_zero_search_sets_the_encoder_with_p_ist() -> None:
     assert m.rotor_counts[0] - m.read("ENCODER_POS")[0] == pytest.approx(20000, abs=700)
 
 
-@pytest.mark.statements("mis:8.2.37:1", "mis:8.2.37:2")
+@pytest.mark.statements("mis:8.2.37:1", "mis:8.2.37:2", "mis:6.5.2:2")
 def test_homemode_values() -> None:
     """§8.2.37: HOMEMODE takes 0, 13 and 14; 14 starts a type 2 search at power-up, 0 none."""
     for value in (1, 2, 12, 15):
@@ -1227,3 +1228,124 @@ def test_absencoder_is_not_wrapped_by_the_turn_table() -> None:
     m.step(1500)
     assert m.read("P_IST")[0] == 150800
     assert m.read("ABSENCODER")[0] == pytest.approx(970000, abs=600)
+
+
+# --- §6 modes and zero search, §7.2 errors, §8.1 -------------------------------------------------
+@pytest.mark.statements("mis:6.4.1:1", "mis:6.4.1:2", "mis:6.4.7:2")
+def test_gear_ratio_extremes() -> None:
+    """§6.4.1: ratios from 1/2147483647 to 2147483647/1; §6.4.7: 500 pulses with output 100000
+    and input 500 move 100000 counts."""
+    m = _motor(GEAR1=100000, GEAR2=500, V_SOLL=300000, A_SOLL=500000)
+    m.write("MODE_REG", c.GEAR)
+    m.set_input(pulse_counts=50)
+    m.step(10)
+    assert m.read("P_SOLL")[0] == 100000
+    big = _motor(GEAR1=2**31 - 1, GEAR2=1, V_SOLL=0)
+    big.write("MODE_REG", c.GEAR)
+    big.set_input(pulse_counts=1)
+    big.step(1)
+    assert big.read("P_SOLL")[0] == 2**31 - 1
+    small = _motor(GEAR1=1, GEAR2=2**31 - 1, V_SOLL=0)
+    small.write("MODE_REG", c.GEAR)
+    small.set_input(pulse_counts=1000)
+    small.step(5)
+    assert small.read("P_SOLL")[0] == 0  # 5000/(2^31 − 1) of a count: kept as the remainder
+
+
+@pytest.mark.statements("mis:6.4.7:1")
+def test_gear_mode_respects_v_soll() -> None:
+    """§6.4.7: "The value of the velocity register will be respected at any time when the motor
+    is in gear mode"."""
+    m = _motor(GEAR1=409600, GEAR2=2048, V_SOLL=5000, V_START=1000, A_SOLL=100000)
+    m.write("MODE_REG", c.GEAR)
+    m.set_input(pulse_counts=20)  # 4000 counts per ms: about 586 RPM asked
+    v = m.trace(["V_IST"], 200)["V_IST"][:, 0]
+    assert v.max() == 5000
+
+
+@pytest.mark.statements("mis:6.5.2:1")
+def test_a_stored_program_skips_the_power_up_zero_search() -> None:
+    """§6.5.2: the power-up zero search runs "every time the MIS motor is powered up unless a
+    eRXP program exist" (the program starts in position mode, §9.1)."""
+    m = MotorArray("MIS232", n=1, setup={"HOMEMODE": 13, "STARTMODE": 2})
+    assert m.read("MODE_REG")[0] == c.ZERO_SEARCH_1
+    m.store_program("set_output output=2 state=high\njump line=2\n")
+    m.write("MODE_REG", c.PASSIVE)
+    m.step(300)
+    m.write("COMMAND", c.CMD_RESET)
+    assert m.read("MODE_REG")[0] == c.POSITION
+
+
+@pytest.mark.statements("mis:6.5.8:1")
+def test_zero_search_ends_at_position_0_after_an_offset() -> None:
+    """§6.5.8: "the position counter is set to the value specified in the "Zero search position"
+    field. If the zero search position value is different from [0], the motor will now move to
+    position 0"."""
+    m = _search_on_input(30000)
+    assert m.read("P_IST")[0] == 0 and m.read("P_SOLL")[0] == 0
+    assert m.read("MODE_REG")[0] == c.POSITION
+
+
+@pytest.mark.statements("mis:7.2.4:1")
+def test_follow_error_sets_the_motor_passive() -> None:
+    """§7.2.4: "The Follow error (register 20) has exceeded the value specified in "Follow error
+    max" (register 22)" — "Motor is set in Passive mode"."""
+    m = _motor(FLWERRMAX=30000, P_SOLL=4_000_000, V_SOLL=100000, A_SOLL=1000)
+    m.set_input(load_torque=5.0)
+    m.write("MODE_REG", c.POSITION)
+    tr = m.trace(["FLWERR", "ERR_BITS", "MODE_REG"], 300)
+    first = int(np.flatnonzero(tr["ERR_BITS"][:, 0] & c.ERR_FOLLOW)[0])
+    assert abs(tr["FLWERR"][first, 0]) > 30000 and abs(tr["FLWERR"][first - 1, 0]) <= 30000
+    assert m.read("MODE_REG")[0] == c.PASSIVE
+
+
+@pytest.mark.statements("mis:7.2.6:2")
+def test_after_a_limit_error_only_the_way_back() -> None:
+    """§7.2.6: after the position limit error is cleared "It is now only possible to run the
+    motor in the opposite direction of the limit"."""
+    m = _motor(PL_MASK=0b1, V_SOLL=5000, V_START=10000)
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(20)
+    m.set_input(digital_inputs=0b1)
+    m.step(5)
+    assert m.read("ERR_BITS")[0] & c.ERR_POSITION_LIMIT and m.read("MODE_REG")[0] == 0
+    m.write("COMMAND", c.CMD_CLEAR_ERRORS)
+    m.write("MODE_REG", c.VELOCITY)
+    held = m.read("P_IST")[0]
+    m.step(20)
+    assert m.read("P_IST")[0] == held  # not towards the active limit
+    m.write("V_SOLL", -5000)
+    m.step(20)
+    assert m.read("P_IST")[0] < held
+
+
+@pytest.mark.statements("mis:7.2.7:2")
+def test_low_bus_voltage_error_clears() -> None:
+    """§7.2.7: "Reset the motor, clear the error bit(s) in register 35 or cycle the power"."""
+    m = _under_voltage(1 << 21)
+    m.write("ERR_BITS", 0)
+    assert m.read("ERR_BITS")[0] == 0
+    m.write("MODE_REG", c.VELOCITY)
+    m.step(150)
+    assert m.read("V_IST")[0] == 10000
+
+
+@pytest.mark.statements("mis:8.1:1", "mis:8.1:2")
+def test_canopen_register_objects() -> None:
+    """§8.1: register n is object 2012h (32 bits) / 2014h (16 bits) sub-index n, with the same
+    access as over RS485."""
+    import canopen
+    from canopen_rig import Rig
+
+    rig = Rig()
+    try:
+        node = rig.node()
+        node.sdo[0x2012][3].raw = 123456
+        assert rig.m.read("P_SOLL")[0] == 123456
+        node.sdo[0x2014][5].raw = 2500
+        assert rig.m.read("V_SOLL")[0] == 2500
+        assert node.sdo[0x2012][3].raw == 123456
+        with pytest.raises(canopen.SdoAbortedError):
+            node.sdo[0x2012][12].raw = 5  # V_IST is read-only
+    finally:
+        rig.close()
