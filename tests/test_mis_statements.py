@@ -1335,6 +1335,7 @@ def test_canopen_register_objects() -> None:
     """§8.1: register n is object 2012h (32 bits) / 2014h (16 bits) sub-index n, with the same
     access as over RS485."""
     import canopen
+
     from canopen_rig import Rig
 
     rig = Rig()
