@@ -1263,7 +1263,7 @@ def test_gear_mode_respects_v_soll() -> None:
     assert v.max() == 5000
 
 
-@pytest.mark.statements("mis:6.5.2:1")
+@pytest.mark.statements("mis:6.5.2:1", "mis:9.1:1")
 def test_a_stored_program_skips_the_power_up_zero_search() -> None:
     """§6.5.2: the power-up zero search runs "every time the MIS motor is powered up unless a
     eRXP program exist" (the program starts in position mode, §9.1)."""
