@@ -841,7 +841,7 @@ def test_motortype_codes() -> None:
         assert MotorArray(motor, n=1).read("MOTORTYPE")[0] == code, motor
 
 
-@pytest.mark.statements("mis:8.2.98:2")
+@pytest.mark.statements("mis:8.2.98:2", "mis:11.2.4:1", "mis:11.9.2:1")
 def test_canopen_node_id_comes_from_the_register() -> None:
     """§8.2.98: FBUS_NODE_ID is the CANopen node id (default 5): the boot-up message is sent
     on 700h + the node id."""
@@ -1330,7 +1330,7 @@ def test_low_bus_voltage_error_clears() -> None:
     assert m.read("V_IST")[0] == 10000
 
 
-@pytest.mark.statements("mis:8.1:1", "mis:8.1:2")
+@pytest.mark.statements("mis:8.1:1", "mis:8.1:2", "mis:11.4.6:1")
 def test_canopen_register_objects() -> None:
     """§8.1: register n is object 2012h (32 bits) / 2014h (16 bits) sub-index n, with the same
     access as over RS485."""
@@ -1350,3 +1350,339 @@ def test_canopen_register_objects() -> None:
             node.sdo[0x2012][12].raw = 5  # V_IST is read-only
     finally:
         rig.close()
+
+
+# --- §11 CANopen -------------------------------------------------------------------------------
+SAVE, LOAD = 0x65766173, 0x64616F6C
+
+
+@pytest.fixture
+def rig():  # type: ignore[no-untyped-def]
+    from canopen_rig import Rig
+
+    r = Rig()
+    yield r
+    r.close()
+
+
+@pytest.mark.statements("mis:11.3.2:1")
+def test_canopen_sdo_example_of_the_manual(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.3.2: MODE_REG 2, V_SOLL 10000 (100 RPM), P_SOLL 4096000 (10 revolutions); then
+    MODE_REG 0 makes the motor passive."""
+    node = rig.node()
+    node.sdo[0x2012][2].raw = 2
+    node.sdo[0x2012][5].raw = 10000
+    node.sdo[0x2012][3].raw = 4096000
+    rig.advance(7.0)
+    assert rig.m.read("P_IST")[0] == 4096000
+    assert rig.m.rotor_counts[0] == pytest.approx(4096000, abs=600)
+    node.sdo[0x2012][2].raw = 0
+    rig.advance(0.01)
+    assert rig.m.read("MODE_REG")[0] == c.PASSIVE
+
+
+@pytest.mark.statements("mis:11.4.1:1", "mis:11.9.7:2")
+def test_canopen_communication_objects(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.4.1: 1000h 0x40192, 1008h "JVL A/S", 1018h sub 1 117h (JVL), 1016h 3 entries, 1017h
+    0; §11.9.7: no error control is on at start-up (1017h = 0, 100Ch = 0)."""
+    node = rig.node()
+    assert node.sdo[0x1000].raw == 0x40192 and node.sdo[0x1008].raw == "JVL A/S"
+    assert node.sdo[0x1018][1].raw == 0x117 and node.sdo[0x1016][0].raw == 3
+    assert node.sdo[0x1017].raw == 0 and node.sdo[0x100C].raw == 0
+    rig.clear()
+    rig.advance(1.0)
+    assert rig.sent(0x705) == []
+
+
+@pytest.mark.statements("mis:11.4.1:2", "mis:11.4.2:1", "mis:11.4.2:2")
+def test_canopen_emcy_on_a_follow_error() -> None:
+    """§11.4.2: a follow error sends one EMCY with code 1003h, the error register and ERR_BITS;
+    1003h sub 0 counts it; writing 0 there clears the motor's errors and the buffer."""
+    import struct
+
+    from canopen_rig import Rig
+
+    rig = Rig(encoder_type=1, end_stop_high=1.0)
+    try:
+        node = rig.node()
+        node.sdo[0x2012][22].raw = 5000
+        node.sdo[0x2012][2].raw = 2
+        node.sdo[0x2012][3].raw = 409600
+        rig.clear()
+        rig.advance(1.0)
+        [emcy] = rig.sent(0x85)
+        code, _, err = struct.unpack_from("<HBH", emcy)
+        assert code == 0x1003 and err & c.ERR_FOLLOW
+        assert node.sdo[0x1003][0].raw == 1
+        node.sdo[0x1003][0].raw = 0
+        rig.advance(0.01)
+        assert node.sdo[0x1003][0].raw == 0 and rig.m.read("ERR_BITS")[0] == 0
+    finally:
+        rig.close()
+
+
+@pytest.mark.statements("mis:11.4.3:1", "mis:11.4.3:2", "mis:11.9.7:1")
+def test_canopen_heartbeat_and_node_guarding(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.4.3: heartbeat every 1017h ms; node guarding answers with a toggle bit starting at 0
+    (§11.9.7); no guard request within 100Ch × 100Dh ms raises EMCY 8130h."""
+    node = rig.node()
+    node.sdo[0x1017].raw = 200
+    rig.clear()
+    rig.advance(1.0)
+    assert rig.sent(0x705) == [b"\x7f"] * 5
+    node.sdo[0x1017].raw = 0
+    node.sdo[0x100C].raw = 100
+    node.sdo[0x100D].raw = 2
+    answers = []
+    for _ in range(3):
+        rig.clear()
+        rig.send(0x705, remote=True)
+        answers += rig.sent(0x705)
+    assert answers == [b"\x7f", b"\xff", b"\x7f"]
+    rig.clear()
+    rig.advance(0.15)
+    assert rig.sent(0x85) == []
+    rig.advance(0.1)
+    [emcy] = rig.sent(0x85)
+    assert int.from_bytes(emcy[:2], "little") == 0x8130
+
+
+@pytest.mark.statements("mis:11.4.4:1", "mis:11.4.5:1")
+def test_canopen_store_and_restore(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.4.5: "SAVE" to 1010h sub 1 stores the registers in flash (back after a reset node);
+    §11.4.4: "LOAD" to 1011h sub 1 restores the DSP-402 parameters' factory defaults."""
+    node = rig.node()
+    node.sdo[0x2012][5].raw = 23456
+    node.sdo[0x6094][1].raw = 3
+    node.sdo[0x1010][1].raw = SAVE
+    node.sdo[0x2012][5].raw = 111
+    node.nmt.send_command(0x81)
+    rig.settle()
+    assert rig.m.read("V_SOLL")[0] == 23456 and node.sdo[0x6094][1].raw == 3
+    node.sdo[0x1011][1].raw = LOAD
+    assert node.sdo[0x6094][1].raw == 1
+
+
+@pytest.mark.statements("mis:11.4.6:2")
+def test_canopen_16_bit_access(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.4.6: 2014h is 16-bit access; "If writing to a 32bit parameter, the lsb 16-bit value
+    will be treated as signed"."""
+    node = rig.node()
+    node.sdo[0x2014][3].raw = 0xFFFF
+    assert rig.m.read("P_SOLL")[0] == -1
+    node.sdo[0x2014][5].raw = 12345
+    assert rig.m.read("V_SOLL")[0] == 12345 and node.sdo[0x2014][5].raw == 12345
+
+
+@pytest.mark.statements("mis:11.4.7:1")
+def test_canopen_pdos_start_disabled_and_bit_31_enables(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.4.7: "all PDOs are disabled when the module is booted up"; bit 31 of the COB-ID
+    (sub 1) set disables, cleared enables."""
+    node = rig.node()
+    for comm in (0x1400, 0x1401, 0x1414, 0x1800, 0x1801, 0x1814):
+        assert node.sdo[comm][1].raw & 0x80000000, hex(comm)
+    node.sdo[0x1800][1].raw = 0x185
+    assert node.sdo[0x1800][1].raw == 0x185
+    node.sdo[0x1800][1].raw = 0x80000185
+    assert node.sdo[0x1800][1].raw & 0x80000000
+
+
+@pytest.mark.statements("mis:11.4.8:1")
+def test_canopen_dynamic_mapping_procedure(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.4.8 steps 1–9: TPDO 1 mapped to 2012h sub 5 (20120520h), type 255, event timer
+    100 ms: sent every 100 ms in operational."""
+    import struct
+
+    node = rig.node()
+    node.nmt.state = "PRE-OPERATIONAL"
+    node.sdo[0x1800][1].raw = node.sdo[0x1800][1].raw | 0x80000000
+    node.sdo[0x1A00][0].raw = 0
+    node.sdo[0x1A00][1].raw = 0x20120520
+    node.sdo[0x1A00][0].raw = 1
+    node.sdo[0x1800][2].raw = 255
+    node.sdo[0x1800][5].raw = 100
+    node.sdo[0x1800][1].raw = 0x185
+    node.nmt.state = "OPERATIONAL"
+    rig.clear()
+    rig.advance(1.0)
+    frames = rig.sent(0x185)
+    assert len(frames) == 10 and {struct.unpack("<l", f)[0] for f in frames} == {10000}
+
+
+def _mapping(node, index: int) -> list[int]:  # type: ignore[no-untyped-def]
+    return [node.sdo[index][k].raw for k in range(1, node.sdo[index][0].raw + 1)]
+
+
+@pytest.mark.statements("mis:11.4.9:1", "mis:11.4.9:2", "mis:11.4.9:3")
+def test_canopen_rpdo_21_to_23(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.4.9: RPDO 21 P_SOLL (2012h sub 3), V_SOLL, A_SOLL (2014h sub 5, 6); RPDO 22
+    RUN_CURRENT, MODE_REG (2014h sub 7, 2); RPDO 23 the command (2014h sub 18h)."""
+    import struct
+
+    node = rig.node()
+    assert _mapping(node, 0x1614) == [0x20120320, 0x20140510, 0x20140610]
+    assert _mapping(node, 0x1615) == [0x20140710, 0x20140210]
+    assert _mapping(node, 0x1616) == [0x20141810]
+    for k, cob in ((20, 0x215), (21, 0x315), (22, 0x415)):
+        node.sdo[0x1400 + k][1].raw = cob
+    node.nmt.state = "OPERATIONAL"
+    rig.send(0x315, struct.pack("<hh", 300, c.POSITION))
+    rig.send(0x215, struct.pack("<lhh", 409600, 30000, 5000))
+    rig.advance(1.5)
+    assert rig.m.read("RUN_CURRENT")[0] == 300 and rig.m.read("MODE_REG")[0] == c.POSITION
+    assert rig.m.read("P_IST")[0] == 409600 and rig.m.read("V_SOLL")[0] == 30000
+    rig.send(0x415, struct.pack("<h", c.CMD_V_SOLL_ZERO))
+    rig.advance(0.001)
+    assert rig.m.read("V_SOLL")[0] == 0
+
+
+@pytest.mark.statements("mis:11.4.10:1", "mis:11.4.10:2", "mis:11.4.10:3", "mis:11.4.10:4")
+def test_canopen_tpdo_21_to_24(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.4.10: TPDO 21 P_IST (2012h sub 0Ah), V_IST (2014h sub 0Ch), ERR_BITS (2014h sub 23h);
+    TPDO 22 V_IST; TPDO 23/24 analogue inputs 1–4 / 5–8 (2014h sub 59h–60h)."""
+    import struct
+
+    node = rig.node()
+    assert _mapping(node, 0x1A14) == [0x20120A20, 0x20140C10, 0x20142310]
+    assert _mapping(node, 0x1A15) == [0x20140C10]
+    assert _mapping(node, 0x1A16) == [0x20145910, 0x20145A10, 0x20145B10, 0x20145C10]
+    assert _mapping(node, 0x1A17) == [0x20145D10, 0x20145E10, 0x20145F10, 0x20146010]
+    cob = 0x195
+    node.sdo[0x1814][1].raw = cob
+    node.nmt.state = "OPERATIONAL"
+    rig.m.write("P_IST", 123456)
+    rig.clear()
+    rig.send(cob, remote=True)
+    [frame] = rig.sent(cob)
+    assert struct.unpack("<lhH", frame) == (123456, 0, 0)
+
+
+@pytest.mark.statements("mis:11.4.11:1", "mis:11.4.13:1", "mis:11.4.13:2", "mis:11.4.14:1")
+def test_canopen_beckhoff_mode() -> None:
+    """§11.4.11–14: with SETUP_BITS bit 14, PDOs 1–4 are enabled at power-up with the Beckhoff
+    COB-IDs (RPDO 1 200h + node id, TPDO 4 480h + node id) and maps; RPDO 1 (P_SOLL, V_SOLL,
+    A_SOLL) moves the motor, TPDO 1 sends P_IST, V_IST, ERR_BITS."""
+    import struct
+
+    from canopen_rig import Rig
+
+    rig = Rig()
+    try:
+        node = rig.node()
+        node.sdo[0x2012][124].raw = 1 << 14
+        node.nmt.send_command(0x82)
+        rig.settle()
+        assert [node.sdo[0x1400 + k][1].raw for k in range(4)] == [0x205, 0x305, 0x405, 0x505]
+        assert [node.sdo[0x1800 + k][1].raw for k in range(4)] == [0x185, 0x285, 0x385, 0x485]
+        assert _mapping(node, 0x1600) == [0x20120320, 0x20140510, 0x20140610]
+        assert _mapping(node, 0x1A00) == [0x20120A20, 0x20140C10, 0x20142310]
+        node.sdo[0x2012][2].raw = 2
+        node.nmt.state = "OPERATIONAL"
+        rig.send(0x205, struct.pack("<lhh", 409600, 20000, 3000))
+        rig.advance(1.0)
+        rig.clear()
+        rig.send(0x185, remote=True)
+        assert struct.unpack("<lhH", rig.sent(0x185)[0]) == (409600, 0, 0)
+    finally:
+        rig.close()
+
+
+def _node402(rig):  # type: ignore[no-untyped-def]
+    node = rig.node()
+    node.nmt.state = "PRE-OPERATIONAL"
+    node.setup_402_state_machine()
+    return node
+
+
+@pytest.fixture
+def rig402():  # type: ignore[no-untyped-def]
+    from canopen.profiles.p402 import BaseNode402
+
+    from canopen_rig import Rig
+
+    r = Rig(node_class=BaseNode402)
+    yield r
+    r.close()
+
+
+@pytest.mark.statements("mis:11.5.1:1", "mis:11.5.3:1")
+def test_canopen_402_mode_change_only_while_not_enabled(rig402) -> None:  # type: ignore[no-untyped-def]
+    """§11.5.3: the mode of operation changes only while the operation is not enabled;
+    §11.5.1: 6502h lists profile position, velocity, torque, homing, interpolated position and
+    the three cyclic synchronous modes."""
+    import canopen
+
+    node = _node402(rig402)
+    node.op_mode = "PROFILED POSITION"
+    node.state = "OPERATION ENABLED"
+    with pytest.raises(canopen.SdoAbortedError):
+        node.sdo[0x6060].raw = 3
+    node.state = "SWITCHED ON"
+    node.sdo[0x6060].raw = 3
+    assert node.sdo[0x6061].raw == 3
+    supported = node.sdo[0x6502].raw
+    assert [mode for mode in range(1, 11) if supported >> (mode - 1) & 1] == [
+        1, 3, 4, 6, 7, 8, 9, 10]
+
+
+@pytest.mark.statements("mis:11.5.4:1")
+def test_canopen_402_profile_position(rig402) -> None:  # type: ignore[no-untyped-def]
+    """§11.5.4: a new set-point (bit 4) is acknowledged (status bit 12), the target reached
+    sets status bit 10, and bit 6 makes the next move relative."""
+    node = _node402(rig402)
+    node.op_mode = "PROFILED POSITION"
+    node.state = "OPERATION ENABLED"
+    node.sdo[0x6081].raw = 30000
+    node.sdo[0x6083].raw = 3000
+    node.sdo[0x607A].raw = 2 * 409600
+    node.controlword = 0x1F
+    assert node.sdo[0x6041].raw & 0x1000
+    node.controlword = 0x0F
+    rig402.advance(2.0)
+    assert node.sdo[0x6064].raw == 2 * 409600 and node.sdo[0x6041].raw & 0x400
+    node.sdo[0x607A].raw = -409600
+    node.controlword = 0x5F
+    node.controlword = 0x4F
+    rig402.advance(1.5)
+    assert node.sdo[0x6064].raw == 409600
+
+
+@pytest.mark.statements("mis:11.5.2:1")
+def test_canopen_402_position_factor(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.5.2's example: a 3.5:1 gear box and a 124 mm drive wheel, positions in mm: 6091h =
+    35/10, 6092h = 38956/100."""
+    node = rig.node()
+    node.sdo[0x6091][1].raw = 35
+    node.sdo[0x6091][2].raw = 10
+    node.sdo[0x6092][1].raw = 38956
+    node.sdo[0x6092][2].raw = 100
+    rig.m.write("P_IST", round(100 * 3.5 * 409600 / 389.56))  # 100 mm
+    assert node.sdo[0x6064].raw == 100
+
+
+@pytest.mark.statements("mis:11.7.3:1")
+def test_canopen_lss_configure_node_id(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.7.3: "Configure Node-ID": 0 success, 1 inadmissible node-ID; §11.7.5 stores it and
+    the device works with it after a reset."""
+    lss = rig.net.lss
+    lss.send_switch_state_global(lss.CONFIGURATION_STATE)
+    assert lss.inquire_node_id() == 5
+    with pytest.raises(Exception, match="(?i)error"):
+        lss.configure_node_id(0)
+    lss.configure_node_id(9)
+    lss.store_configuration()
+    lss.send_switch_state_global(lss.WAITING_STATE)
+    assert rig.m.read("FBUS_NODE_ID")[0] == 9
+    rig.clear()
+    rig.node(5).nmt.send_command(0x81)
+    assert rig.sent(0x709) == [b"\x00"]
+
+
+@pytest.mark.statements("mis:11.9.6:1")
+def test_canopen_stopped_node_answers_no_sdo(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.9.6: "In the stopped state, the nodes can only process NMT instructions"."""
+    node = rig.node()
+    node.nmt.state = "STOPPED"
+    assert rig.request(0x605, bytes([0x40, 0x00, 0x10, 0, 0, 0, 0, 0]), 0x585) is None
+    node.nmt.state = "PRE-OPERATIONAL"
+    assert node.sdo[0x1000].raw == 0x40192
