@@ -1686,3 +1686,89 @@ def test_canopen_stopped_node_answers_no_sdo(rig) -> None:  # type: ignore[no-un
     assert rig.request(0x605, bytes([0x40, 0x00, 0x10, 0, 0, 0, 0, 0]), 0x585) is None
     node.nmt.state = "PRE-OPERATIONAL"
     assert node.sdo[0x1000].raw == 0x40192
+
+
+# --- §11.8 J1939, §13 DMX512 --------------------------------------------------------------------
+@pytest.mark.statements("mis:11.8.3:1", "mis:11.8.4:1", "mis:11.8.5:1", "mis:11.8.7:1")
+def test_j1939_name_address_and_register_access() -> None:
+    """§11.8.3–§11.8.7: node 5 claims with NAME FF FF FF FF 01 FF FE 80 (PGN 60928, broadcast);
+    DM14 (PGN 55552) read of register 5 → DM15 proceed, DM16 10000, DM15 complete; a write →
+    proceed, the tool's DM16, complete; an unknown pointer extension fails."""
+    from jvl_gym.protocol.sae_j1939 import J1939Device
+    from jvl_gym.protocol.sae_j1939.frames import can_id
+
+    m = _motor()
+    d = J1939Device(m, 0, 5)
+    with pytest.raises(ValueError):
+        J1939Device(m, 0, 253)
+    [claim] = d.claim()
+    assert (claim.arbitration_id, claim.data) == (0x18EEFF05, bytes.fromhex("ffffffff01fffe80"))
+
+    def ask(pgn: int, data: str, now: float = 0.0) -> list[tuple[int, bytes]]:
+        return [(f.arbitration_id, f.data)
+                for f in d.handle(can_id(pgn, 0xF9, 5), bytes.fromhex(data), now)]
+
+    assert ask(55552, "0403050000 80ffff") == [
+        (0x18D8F905, bytes.fromhex("0411ffffffffffff")),
+        (0x18D7F905, bytes.fromhex("0410270000ffffff")),
+        (0x18D8F905, bytes.fromhex("0019ffffffffffff"))]
+    assert ask(55552, "0405050000 80ffff") == [(0x18D8F905, bytes.fromhex("0411ffffffffffff"))]
+    assert ask(55040, "04204e0000ffffff", 0.5) == [
+        (0x18D8F905, bytes.fromhex("0019ffffffffffff"))]
+    assert m.read("V_SOLL")[0] == 20000
+    assert ask(55552, "0403050000 81ffff") == [(0x18D8F905, bytes.fromhex("001bffffffffffff"))]
+
+
+@pytest.mark.statements("mis:13.1.6:1", "mis:13.1.7:1", "mis:13.1.8:1", "mis:13.1.10:1")
+def test_dmx512_channels_scaling_and_control() -> None:
+    """§13.1.6–§13.1.8, §13.1.10: SA1 position coarse/fine and control, SA2 acceleration and
+    velocity, scaled by nom/den + offset; control 60–69 position mode, 0–9 passive; a packet of
+    another start code is ignored."""
+    from jvl_gym.protocol.dmx512 import DmxPacket, DmxReceiver, DmxSettings
+
+    m = _motor(IN_POSITION_COUNT=0)
+    r = DmxReceiver(m, 0, DmxSettings(start_address1=10, start_address2=300, homing=False,
+                                      pos_nom=2, pos_den=1, pos_offset=100, vel_nom=100))
+    slots = bytearray(512)
+    slots[9:12] = bytes([0x01, 0x90, 65])  # position 400, control 65
+    slots[299:301] = bytes([200, 150])
+    r.packet(DmxPacket(0, bytes(slots)))
+    got = [int(m.read(k)[0]) for k in ("MODE_REG", "P_SOLL", "A_SOLL", "V_SOLL")]
+    assert got == [c.POSITION, 900, 200, 15000]
+    slots[11] = 3
+    r.packet(DmxPacket(0x17, bytes(slots)))
+    assert m.read("MODE_REG")[0] == c.POSITION
+    r.packet(DmxPacket(0, bytes(slots)))
+    assert m.read("MODE_REG")[0] == c.PASSIVE
+
+
+@pytest.mark.statements("mis:13.1.8:2", "mis:13.1.8:3")
+def test_dmx512_homing_and_reset_error() -> None:
+    """§13.1.8: homing after "10 identical values in the range 180..189", not aborted by other
+    values, then position mode; 200–209 reset the errors."""
+    from jvl_gym.protocol.dmx512 import DmxPacket, DmxReceiver, DmxSettings
+
+    def frame(control: int) -> DmxPacket:
+        slots = bytearray(512)
+        slots[2] = control
+        return DmxPacket(0, bytes(slots))
+
+    m = MotorArray("MIS232", n=1, seed=0, home_position=-0.3)
+    m.write_many({"HOME_MASK": 8, "V_HOME": -3000, "IN_POSITION_COUNT": 0})
+    r = DmxReceiver(m, 0, DmxSettings(homing_mode=13))
+    for _ in range(9):
+        r.packet(frame(185))
+    assert m.read("MODE_REG")[0] == c.PASSIVE
+    r.packet(frame(185))
+    assert m.read("MODE_REG")[0] == c.ZERO_SEARCH_1
+    r.packet(frame(0))
+    assert m.read("MODE_REG")[0] == c.ZERO_SEARCH_1
+    for _ in range(100):
+        m.step(50)
+        r.poll()
+        if not r.homing:
+            break
+    assert m.read("MODE_REG")[0] == c.POSITION
+    m.write("ERR_BITS", c.ERR_GENERAL | c.ERR_POSITION_LIMIT)
+    r.packet(frame(204))
+    assert m.read("ERR_BITS")[0] == 0
