@@ -65,8 +65,8 @@ def _table(mode: int, **regs: int) -> MotorArray:
 
 
 @pytest.mark.statements(
-    "mis:8.2.27:3", "mis:8.2.70:2", "mis:8.2.1:5", "mis:5.12.1:1", "mis:5.12.1:6", "mis:5.12.5:1",
-    "mis:5.12.6:1")
+    "mis:8.2.27:3", "mis:8.2.70:2", "mis:5.12.5:1", "mis:5.12.1:1", "mis:5.12.1:6",
+    "mis:5.12.5:2", "mis:5.12.6:1")
 def test_turn_table_multiturn_cw_example() -> None:
     """§5.12.1, mode 4: start 0, target 970000: P_SOLL = 150800 (the remainder of
     970000/409600) after a CW move of 970000 counts; P_IST stays in range and TURNTAB_COUNT
@@ -84,8 +84,8 @@ def test_turn_table_multiturn_cw_example() -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.26:3", "mis:8.2.27:3", "mis:8.2.70:1", "mis:8.2.70:2", "mis:8.2.1:5", "mis:5.12.1:1",
-    "mis:5.12.1:2", "mis:5.12.1:3", "mis:5.12.1:5", "mis:5.12.1:7", "mis:5.12.3:2")
+    "mis:8.2.26:3", "mis:8.2.27:3", "mis:8.2.70:1", "mis:8.2.70:2", "mis:5.12.5:1",
+    "mis:5.12.1:1", "mis:5.12.1:2", "mis:5.12.1:3", "mis:5.12.1:5", "mis:5.12.1:7", "mis:5.12.3:2")
 def test_turn_table_directions_and_limits() -> None:
     m = _table(c.TT_CW, P_SOLL=250000)
     m.write("MODE_REG", 2)

@@ -67,7 +67,7 @@ def test_a_soll_and_v_start_changes_wait_for_standstill() -> None:
     assert tr[stop + 2] - tr[stop + 1] == -500  # the new A_SOLL: 5 RPM per ms
 
 
-@pytest.mark.statements("mis:8.2.1:2")
+@pytest.mark.statements("mis:8.2.1:3")
 def test_d_soll_decelerates_and_zero_means_a_soll() -> None:
     m = _motor(V_START=1000, V_SOLL=20000, A_SOLL=1000, D_SOLL=4000)
     m.write("MODE_REG", 1)

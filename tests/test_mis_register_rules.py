@@ -203,7 +203,7 @@ def test_mode_0_on_a_running_motor_decelerates_with_the_stop_ramp_first() -> Non
 
 
 # --- §12.5: the worked example of Write Multiple Registers ------------------------------
-@pytest.mark.statements("mis:8.2.42:1", "mis:12.1:2")
+@pytest.mark.statements("mis:8.2.42:1", "mis:12.1:6")
 def test_modbus_write_multiple_example_is_accepted_as_the_manual_replies() -> None:
     """§12.5: V1 (65) = 409 600 and V2 (66) = 13 on slave 60; the manual shows the motor's
     reply {0x3C, 0x10, 0x00, 0x82, 0x00, 0x04, CRC}."""

@@ -84,8 +84,8 @@ _CHOSEN_DEFAULTS = {"V_START": 1000, "V_HOME": -5000, "MIN_BUSVOL": 565,
     "mis:8.2.109:1", "mis:8.2.110:1", "mis:8.2.113:1", "mis:8.2.114:1", "mis:8.2.115:1",
     "mis:8.2.116:1", "mis:8.2.117:1", "mis:8.2.120:1", "mis:8.2.121:1", "mis:8.2.123:1",
     "mis:8.2.124:1", "mis:8.2.125:1", "mis:8.2.126:1", "mis:8.2.127:1", "mis:8.2.128:1",
-    "mis:8.2.130:1", "mis:8.2.1:1", "mis:12.1:6", "mis:5.3.4:2", "mis:5.3.4:3", "mis:5.9.2:1",
-    "mis:5.10:4", "mis:6.1.1:1")
+    "mis:8.2.130:1", "mis:8.2.1:2", "mis:12.1:10", "mis:5.3.4:2", "mis:5.3.4:3", "mis:5.9.2:1",
+    "mis:6.1.1:1")
 def test_defaults_of_the_register_tables(motor: str) -> None:
     m = MotorArray(motor, n=1)
     for name, value in {**_DEFAULTS, **_CHOSEN_DEFAULTS}.items():
@@ -166,7 +166,7 @@ _READ_ONLY = ["PROG_VERSION", "V_IST", "INPUTS", "FLWERR", "STATUSBITS", "TEMP",
     "mis:8.2.92:1", "mis:8.2.93:1", "mis:8.2.94:1", "mis:8.2.95:1", "mis:8.2.97:1",
     "mis:8.2.100:1", "mis:8.2.102:1", "mis:8.2.104:1", "mis:8.2.112:1", "mis:8.2.121:1",
     "mis:8.2.123:1", "mis:8.2.124:1", "mis:8.2.127:1", "mis:8.2.129:1", "mis:8.2.131:1",
-    "mis:8.2.1:4")
+    "mis:8.2.1:5")
 def test_read_only_registers_refuse_a_write() -> None:
     m = _motor()
     for name in _READ_ONLY:
@@ -645,6 +645,10 @@ def test_encoder_type_codes() -> None:
     m.step(300)
     enc = m.read("ENCODER_POS")
     assert enc[0] == 0 and np.all(enc[1:] > 50000)
+    # 10 bit (H2, and the H3's 1024 cpr, §5.8.1): 400 counts a step; 12 bit: 100 counts
+    enc = m.trace(["ENCODER_POS"], 50)["ENCODER_POS"]
+    steps = [set(enc[:, k] % step) for k, step in ((1, 400), (2, 400), (3, 100), (4, 100))]
+    assert steps == [{0}] * 4
 
 
 @pytest.mark.statements("mis:8.2.57:2")
@@ -701,20 +705,21 @@ def test_s_time_is_the_sample_period() -> None:
 
 
 # --- §8.2.66–§8.2.83 Modbus set-up, low bus voltage, IO, turn table, P_NEW ---------------------
-@pytest.mark.statements("mis:8.2.66:1")
+@pytest.mark.statements("mis:8.2.66:1", "mis:12.1:1", "mis:12.1:2", "mis:12.1:3")
 def test_modbus_setup_layout() -> None:
     """§8.2.66 / §12.1: bit 0 enables Modbus on the MacTalk (RS-485) channel, bits 2–3 the
     parity (0 none, 1 odd, 2 even), bit 5 two stop bits; the register is stored."""
     from jvl_gym.protocol import modbus as mb
 
     assert mb.decode_setup(0b1) == mb.ModbusSetup(True, False, "N", 1)
+    assert mb.decode_setup(0b1000) == mb.ModbusSetup(False, False, "E", 1)
     assert mb.decode_setup(0b10_1001) == mb.ModbusSetup(True, False, "E", 2)
     assert mb.decode_setup(0b0100) == mb.ModbusSetup(False, False, "O", 1)
     m = _motor(MODBUS_SETUP=0b10_1001)
     assert m.read("MODBUS_SETUP")[0] == 0b10_1001
 
 
-@pytest.mark.statements("mis:8.2.68:16", "mis:5.10.2:2", "mis:5.10:4")
+@pytest.mark.statements("mis:8.2.68:16", "mis:5.10.2:2")
 def test_low_bus_voltage_without_bits_is_a_warning_only() -> None:
     """§8.2.68 bits 21–23 choose what low bus voltage does; with none of them it is only the
     warning (WARN_BITS bit 4), with bit 21 it is also the error (ERR_BITS bit 4)."""
@@ -785,7 +790,7 @@ def test_p_new_moves_nothing() -> None:
 
 
 # --- §8.2.84–§8.2.100 serial line, identification ---------------------------------------------
-@pytest.mark.statements("mis:8.2.84:2", "mis:12.1:6")
+@pytest.mark.statements("mis:8.2.84:2", "mis:12.1:10")
 def test_baud_rate_codes_of_the_modbus_line() -> None:
     """§8.2.84: 0 9600, 1 19200, 2 38400, 3 57600, 4 115200, 5 230400, 6 460800 baud."""
     from jvl_gym.protocol.modbus_twin import modbus_bus
@@ -911,7 +916,7 @@ def test_type_2_crawls_at_v_home_over_64() -> None:
     assert v.max() == 12800 // 64
 
 
-@pytest.mark.statements("mis:8.2.1:1")
+@pytest.mark.statements("mis:8.2.1:2")
 def test_d_soll_range() -> None:
     """D_SOLL (§8.2.1): 0 … 500 000 RPM/s, 0 included because 0 means "use A_SOLL"."""
     m = _motor(D_SOLL=0)
@@ -922,7 +927,7 @@ def test_d_soll_range() -> None:
     assert m.read("D_SOLL")[0] == 500000
 
 
-@pytest.mark.statements("mis:8.2.1:5")
+@pytest.mark.statements("mis:5.12.5:1")
 def test_turntab_count_is_writable() -> None:
     """§5.12.5: TURNTAB_COUNT "can be written … at any time" and counts on from the value."""
     m = _motor(TURNTABLE_MODE=c.TT_MULTI_CW, MIN_P_IST=0, MAX_P_IST=409599, V_SOLL=300000,
@@ -942,7 +947,7 @@ def _modbus(**regs: int) -> tuple[MotorArray, object]:
     return m, modbus_bus(Twin(m))
 
 
-@pytest.mark.statements("mis:12.1:1", "mis:12.1:2")
+@pytest.mark.statements("mis:12.1:5", "mis:12.1:6")
 def test_modbus_functions_and_registers() -> None:
     """§12.1: only 03h and 10h; "All other commands will result in Exception replies
     (exception type 1, Illegal Function)"; the slave address is register 150."""
@@ -958,7 +963,7 @@ def test_modbus_functions_and_registers() -> None:
     assert reply == mb.encode_exception(42, 0x06, 1)
 
 
-@pytest.mark.statements("mis:12.1:3", "mis:12.1:4")
+@pytest.mark.statements("mis:12.1:7", "mis:12.1:8")
 def test_modbus_timeout_responses() -> None:
     """§12.1: register 199 the time-out in ms (0: never), 200 the response: 1 V_SOLL = 0,
     2 passive mode."""
@@ -979,7 +984,7 @@ def test_modbus_timeout_responses() -> None:
             assert m.read("MODE_REG")[0] in (c.PASSIVE, c.STOP)
 
 
-@pytest.mark.statements("mis:12.1:5")
+@pytest.mark.statements("mis:12.1:9")
 def test_modbus_frame_delay() -> None:
     """§12.1: register 201 delays the reply; 0 is the default of 2.5 characters."""
     m, bus = _modbus(BAUD_RATE=4)
@@ -1217,7 +1222,7 @@ def test_turn_table_swaps_a_reversed_range() -> None:
     assert m.rotor_counts[0] == pytest.approx(300000 + 209600, abs=600)
 
 
-@pytest.mark.statements("mis:5.12.5:2")
+@pytest.mark.statements("mis:5.12.5:3")
 def test_absencoder_is_not_wrapped_by_the_turn_table() -> None:
     """§5.12.5: ABSENCODER (H3/H4) "Not corrected for the turn table"."""
     m = MotorArray("MIS232", n=1, seed=0, encoder_type=4)
@@ -1557,7 +1562,8 @@ def test_canopen_tpdo_21_to_24(rig) -> None:  # type: ignore[no-untyped-def]
     assert struct.unpack("<lhH", frame) == (123456, 0, 0)
 
 
-@pytest.mark.statements("mis:11.4.11:1", "mis:11.4.13:1", "mis:11.4.13:2", "mis:11.4.14:1")
+@pytest.mark.statements(
+    "mis:8.2.68:11", "mis:11.4.11:1", "mis:11.4.13:1", "mis:11.4.13:2", "mis:11.4.14:1")
 def test_canopen_beckhoff_mode() -> None:
     """§11.4.11–14: with SETUP_BITS bit 14, PDOs 1–4 are enabled at power-up with the Beckhoff
     COB-IDs (RPDO 1 200h + node id, TPDO 4 480h + node id) and maps; RPDO 1 (P_SOLL, V_SOLL,
