@@ -281,7 +281,7 @@ def test_a_soll_is_in_rpm_per_second() -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.7:2", "mis:8.2.7:4", "mis:8.2.7:5", "mis:5.1.2:1", "mis:5.1.3:1", "mis:5.1.4:1")
+    "mis:8.2.7:2", "mis:8.2.7:4", "mis:8.2.7:5", "mis:5.1.2:1", "mis:5.1.3:1", "mis:5.1.4:2")
 def test_run_current_unit_instant_change_and_maximum_per_size() -> None:
     """§8.2.7: unit 5.87 mA ("RUN_CURRENT = 100, will set the running current to 0.587 ARMS");
     a new value is set instantly; the largest setting is 681 on an MIS17x (4 ARMS), 1022 on an
@@ -1304,7 +1304,7 @@ def test_follow_error_sets_the_motor_passive() -> None:
     assert m.read("MODE_REG")[0] == c.PASSIVE
 
 
-@pytest.mark.statements("mis:7.2.6:2")
+@pytest.mark.statements("mis:7.2.6:1", "mis:7.2.6:3")
 def test_after_a_limit_error_only_the_way_back() -> None:
     """§7.2.6: after the position limit error is cleared "It is now only possible to run the
     motor in the opposite direction of the limit"."""
