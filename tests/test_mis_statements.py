@@ -1399,7 +1399,7 @@ def test_canopen_communication_objects(rig) -> None:  # type: ignore[no-untyped-
     assert rig.sent(0x705) == []
 
 
-@pytest.mark.statements("mis:11.4.1:2", "mis:11.4.2:1", "mis:11.4.2:2")
+@pytest.mark.statements("mis:11.4.1:2", "mis:11.4.2:1", "mis:11.4.2:2", "mis:11.4.2:3")
 def test_canopen_emcy_on_a_follow_error() -> None:
     """§11.4.2: a follow error sends one EMCY with code 1003h, the error register and ERR_BITS;
     1003h sub 0 counts it; writing 0 there clears the motor's errors and the buffer."""
@@ -1426,7 +1426,7 @@ def test_canopen_emcy_on_a_follow_error() -> None:
         rig.close()
 
 
-@pytest.mark.statements("mis:11.4.3:1", "mis:11.4.3:2", "mis:11.9.7:1")
+@pytest.mark.statements("mis:11.4.3:1", "mis:11.4.3:2", "mis:11.9.7:1", "mis:11.4.2:3")
 def test_canopen_heartbeat_and_node_guarding(rig) -> None:  # type: ignore[no-untyped-def]
     """§11.4.3: heartbeat every 1017h ms; node guarding answers with a toggle bit starting at 0
     (§11.9.7); no guard request within 100Ch × 100Dh ms raises EMCY 8130h."""
@@ -1778,3 +1778,120 @@ def test_dmx512_homing_and_reset_error() -> None:
     m.write("ERR_BITS", c.ERR_GENERAL | c.ERR_POSITION_LIMIT)
     r.packet(frame(204))
     assert m.read("ERR_BITS")[0] == 0
+
+
+@pytest.mark.statements("mis:11.5.5:1")
+def test_canopen_402_velocity_halt(rig402) -> None:  # type: ignore[no-untyped-def]
+    """§11.5.5: velocity mode runs at 60FFh; halt (bit 8) decelerates to 0, released the motor
+    runs at 60FFh again."""
+    node = _node402(rig402)
+    node.sdo[0x60FF].raw = 10000
+    node.sdo[0x6083].raw = 5000
+    node.op_mode = "PROFILED VELOCITY"
+    assert node.sdo[0x6061].raw == 3
+    node.state = "OPERATION ENABLED"
+    rig402.advance(0.5)
+    assert node.sdo[0x606C].raw == 10000
+    node.controlword = 0x10F
+    rig402.advance(0.5)
+    assert node.sdo[0x606C].raw == 0
+    node.controlword = 0x0F
+    rig402.advance(0.5)
+    assert node.sdo[0x606C].raw == 10000
+
+
+@pytest.mark.statements("mis:11.5.6:1", "mis:11.5.6:3")
+def test_canopen_402_homing_methods() -> None:
+    """§11.5.6: methods 1–6, −3, −4 supported, −2, −1 not; method 3 (home switch, negative)
+    ends at the switch with the home offset 607Ch as its position, homing attained."""
+    import canopen
+    from canopen.profiles.p402 import BaseNode402
+
+    from canopen_rig import Rig
+
+    rig = Rig(node_class=BaseNode402, step_per_frame=0.01, home_position=-3.0)
+    try:
+        node = _node402(rig)
+        for method in (1, 2, 3, 4, 5, 6, -3, -4):
+            node.sdo[0x6098].raw = method
+        for method in (-2, -1, 7, 35):
+            with pytest.raises(canopen.SdoAbortedError):
+                node.sdo[0x6098].raw = method
+        node.sdo[0x2012][132].raw = 8
+        node.sdo[0x6098].raw = 3
+        node.sdo[0x6099][1].raw = 5000
+        node.sdo[0x607C].raw = 1000
+        assert node.homing(timeout=30)
+        assert node.sdo[0x6041].raw & 0x1000
+        assert rig.m.read("P_HOME")[0] == 1000
+        zero = rig.m.rotor_counts[0] - rig.m.read("P_IST")[0]
+        assert zero == pytest.approx(-3.0 * 409600 / (2 * np.pi) - 1000, abs=700)
+    finally:
+        rig.close()
+
+
+@pytest.mark.statements("mis:11.5.7:2")
+def test_canopen_402_torque_is_current(rig402) -> None:  # type: ignore[no-untyped-def]
+    """§11.5.7: torque in rated current/1000: 6071h = 500 runs the motor on half its running
+    current at the target velocity 60FFh."""
+    node = _node402(rig402)
+    current = int(rig402.m.read("RUN_CURRENT")[0])
+    node.sdo[0x6071].raw = 500
+    node.sdo[0x6087].raw = 10000
+    node.sdo[0x60FF].raw = 10000
+    node.op_mode = "PROFILED TORQUE"
+    node.state = "OPERATION ENABLED"
+    rig402.advance(0.5)
+    assert rig402.m.read("RUN_CURRENT")[0] == round(current / 2)
+    assert rig402.m.read("V_IST")[0] == 10000
+
+
+@pytest.mark.statements("mis:11.5.8:1")
+def test_canopen_402_interpolated_position(rig402) -> None:  # type: ignore[no-untyped-def]
+    """§11.5.8: 60C1h sub 1 is reached by the next SYNC within 60C2h's period; sub 2 = 1 is
+    relative."""
+    node = _node402(rig402)
+    node.sdo[0x60C2][1].raw = 10
+    node.op_mode = "INTERPOLATED POSITION"
+    node.state = "OPERATION ENABLED"
+    node.controlword = 0x1F
+    node.sdo[0x60C1][1].raw = 2000
+    assert rig402.m.read("P_SOLL")[0] == 0
+    rig402.send(0x80)
+    rig402.advance(0.01)
+    assert rig402.m.read("P_IST")[0] == 2000
+    node.sdo[0x60C1][2].raw = 1
+    node.sdo[0x60C1][1].raw = 500
+    for _ in range(2):
+        rig402.send(0x80)
+        rig402.advance(0.01)
+    assert rig402.m.read("P_IST")[0] == 3000
+
+
+@pytest.mark.statements("mis:11.4.2:3")
+def test_canopen_emcy_codes(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.4.2: position error 1002h and low bus voltage 1004h as EMCY codes, and 8210h for a
+    PDO of the wrong length."""
+    import struct
+
+    node = rig.node()
+    node.sdo[0x1400 + 20][1].raw = 0x215
+    node.nmt.state = "OPERATIONAL"
+    rig.clear()
+    rig.send(0x215, b"\x01\x02")
+    [emcy] = rig.sent(0x85)
+    assert struct.unpack_from("<H", emcy)[0] == 0x8210
+    node.sdo[0x1003][0].raw = 0
+    rig.m.write_many({"MAX_P_IST": 50000, "MIN_P_IST": -50000, "V_SOLL": 30000,
+                      "SETUP_BITS": 1 << 21})
+    rig.m.write("MODE_REG", c.VELOCITY)
+    rig.clear()
+    rig.advance(0.5)
+    codes = [struct.unpack_from("<H", f)[0] for f in rig.sent(0x85)]
+    assert 0x1002 in codes
+    node.sdo[0x1003][0].raw = 0
+    rig.m.set_input(supply_volts=10.0)
+    rig.clear()
+    rig.advance(0.1)
+    codes = [struct.unpack_from("<H", f)[0] for f in rig.sent(0x85)]
+    assert 0x1004 in codes
