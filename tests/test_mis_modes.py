@@ -132,7 +132,7 @@ def test_zero_search_finds_the_sensor_and_goes_to_startmode(mode: int) -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.3:13", "mis:8.2.33:3", "mis:8.2.74:2", "mis:6.5.2:2", "mis:6.5.8:2")
+    "mis:8.2.3:13", "mis:8.2.33:3", "mis:8.2.74:2", "mis:6.5.2:2", "mis:6.5.8:2", "mis:2.2.2:2")
 def test_zero_search_on_an_external_input() -> None:
     m = _motor(HOME_MASK=0b100, V_HOME=3000, STARTMODE=1, V_SOLL=0, IN_POSITION_COUNT=0)
     m.write("MODE_REG", 13)

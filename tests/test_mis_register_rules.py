@@ -203,7 +203,7 @@ def test_mode_0_on_a_running_motor_decelerates_with_the_stop_ramp_first() -> Non
 
 
 # --- §12.5: the worked example of Write Multiple Registers ------------------------------
-@pytest.mark.statements("mis:8.2.42:1", "mis:12.1:6")
+@pytest.mark.statements("mis:8.2.42:1", "mis:12.1:6", "mis:12.5:1")
 def test_modbus_write_multiple_example_is_accepted_as_the_manual_replies() -> None:
     """§12.5: V1 (65) = 409 600 and V2 (66) = 13 on slave 60; the manual shows the motor's
     reply {0x3C, 0x10, 0x00, 0x82, 0x00, 0x04, CRC}."""
@@ -246,7 +246,8 @@ def test_fastmac_relative_moves_add_p7_and_p8(command: int, name: str) -> None:
 
 # --- §8.2.45–46, §2.3.5: the eight analogue inputs -------------------------------------
 @pytest.mark.parametrize("k", range(1, 9))
-@pytest.mark.statements("mis:8.2.45:1", "mis:8.2.45:2", "mis:8.2.46:1", "mis:8.2.52:2")
+@pytest.mark.statements(
+    "mis:8.2.45:1", "mis:8.2.45:2", "mis:8.2.46:1", "mis:8.2.52:2", "mis:2.3.5:2", "mis:2.3.5:3")
 def test_each_analogue_input_has_its_registers(k: int) -> None:
     """ANALOGUE_INPUTn (register 88 + n) is the raw 0 … 5 V value of IOn; ANALOGUE_FILTEREDn
     (80 + n) its filtered value; AFZUP_CONFMIN discards raw samples below it."""

@@ -85,7 +85,7 @@ _CHOSEN_DEFAULTS = {"V_START": 1000, "V_HOME": -5000, "MIN_BUSVOL": 565,
     "mis:8.2.116:1", "mis:8.2.117:1", "mis:8.2.120:1", "mis:8.2.121:1", "mis:8.2.123:1",
     "mis:8.2.124:1", "mis:8.2.125:1", "mis:8.2.126:1", "mis:8.2.127:1", "mis:8.2.128:1",
     "mis:8.2.130:1", "mis:8.2.1:2", "mis:12.1:10", "mis:5.3.4:2", "mis:5.3.4:3", "mis:5.9.2:1",
-    "mis:6.1.1:1")
+    "mis:6.1.1:1", "mis:2.2.2:1")
 def test_defaults_of_the_register_tables(motor: str) -> None:
     m = MotorArray(motor, n=1)
     for name, value in {**_DEFAULTS, **_CHOSEN_DEFAULTS}.items():
@@ -349,7 +349,7 @@ def test_encoder_position_starts_at_zero_and_follows_the_shaft() -> None:
     assert m.read("FLWERR")[0] == m.read("P_IST")[0] - m.read("ENCODER_POS")[0]
 
 
-@pytest.mark.statements("mis:8.2.16:2", "mis:8.2.16:3", "mis:8.2.69:2")
+@pytest.mark.statements("mis:8.2.16:2", "mis:8.2.16:3", "mis:8.2.69:2", "mis:2.2.5:1")
 def test_inputs_show_io1_to_io8_and_nothing_above() -> None:
     """§8.2.16: bits 0–7 of INPUTS are IO1–IO8; bits 8–15 are always 0; the active level is
     set by IOSETUP bits 0–7 (§8.2.69)."""
@@ -522,7 +522,7 @@ def _search_on_input(p_home: int, at: int = 20000) -> MotorArray:
     return m
 
 
-@pytest.mark.statements("mis:8.2.34:2", "mis:8.2.74:2", "mis:6.5.8:1")
+@pytest.mark.statements("mis:8.2.34:2", "mis:8.2.74:2", "mis:6.5.8:1", "mis:2.2.2:2")
 def test_p_home_offsets_the_zero_point() -> None:
     """§8.2.34: "The zero point found is offset with this value": where P_IST = 0 lies on the
     shaft moves by P_HOME."""
@@ -612,7 +612,7 @@ def test_emergency_stop_commands() -> None:
 
 
 # --- §8.2.45–§8.2.49 analogue inputs, bus voltage, encoder type -------------------------------
-@pytest.mark.statements("mis:8.2.46:2")
+@pytest.mark.statements("mis:8.2.46:2", "mis:2.3.1:1")
 def test_analogue_input_full_scale_is_5_v() -> None:
     """§8.2.46: "An input voltage of 5.00 V" reads 4095 (1.221 mV per unit)."""
     m = _motor()
@@ -767,7 +767,7 @@ def test_turntable_mode_0_has_no_wrap() -> None:
     assert m.read("P_IST")[0] == 409599 and m.read("TURNTAB_COUNT")[0] == 0
 
 
-@pytest.mark.statements("mis:8.2.76:2")
+@pytest.mark.statements("mis:8.2.76:2", "mis:2.2.5:2")
 def test_input_filter_count_is_the_time() -> None:
     """§8.2.76: a filtered input must be sampled at the same value for INPUT_FILTER_CNT ms."""
     for count in (3, 20):
@@ -1895,3 +1895,63 @@ def test_canopen_emcy_codes(rig) -> None:  # type: ignore[no-untyped-def]
     rig.advance(0.1)
     codes = [struct.unpack_from("<H", f)[0] for f in rig.sent(0x85)]
     assert 0x1004 in codes
+
+
+# --- §2 inputs -----------------------------------------------------------------------------------
+@pytest.mark.statements("mis:2.3.5:1")
+def test_an_input_has_a_digital_state_and_an_analogue_value() -> None:
+    """§2.3.5: "When an I/O is configured to be an input, it simultaneously has both a digital
+    value (high or low) and an analogue value"."""
+    m = _motor()
+    m.set_input(digital_inputs=0b1, analog1=3.0)
+    m.step(20)
+    assert m.read("INPUTS")[0] & 1
+    assert m.read("ANALOGUE_INPUT1")[0] == pytest.approx(3.0 / 1.221e-3, abs=2)
+
+
+# --- §12.3–§12.6 Modbus frames -------------------------------------------------------------------
+@pytest.mark.statements("mis:12.3:1", "mis:12.3:2", "mis:12.4:1", "mis:12.4:2", "mis:12.5:2")
+def test_modbus_addressing_and_the_manual_frames() -> None:
+    """§12.3: register n is Modbus 2n (low half), 2n+1 (high half), big-endian words, and
+    40000 + n; writes only of whole registers; §12.4's example frame; at most 16 words; §12.5:
+    address 0 is a broadcast write, not answered."""
+    from jvl_gym.protocol import modbus as mb
+
+    m, bus = _modbus(P_IST=123456789)
+    req = mb.append_crc(bytes((0x2A, 0x03, 0x00, 0x14, 0x00, 0x02)))
+    reply, _ = bus.handle(req, now=0.0)
+    assert reply == mb.append_crc(bytes((0x2A, 0x03, 0x04, 0xCD, 0x15, 0x07, 0x5B)))
+    reply, _ = bus.handle(mb.encode_read_request(42, 40000 + 10, 2), now=0.0)
+    assert mb.decode_response(reply).words == (0xCD15, 0x075B)
+    for index, words in ((2 * 65 + 1, [1, 0]), (2 * 65, [1]), (2 * 65, [0] * 18)):
+        reply, _ = bus.handle(mb.encode_write_request(42, index, words), now=0.0)
+        assert isinstance(mb.decode_response(reply), mb.ExceptionResponse)
+    assert m.read("V1")[0] == 25000
+    reply, _ = bus.handle(mb.encode_write_request(0, 2 * 65, list(mb.words_of(-7))), now=0.0)
+    assert reply == b"" and m.read("V1")[0] == -7
+    reply, _ = bus.handle(mb.encode_read_request(0, 20, 2), now=0.0)
+    assert reply == b""
+
+
+@pytest.mark.statements("mis:12.6:1", "mis:12.6.2:1")
+def test_modbus_pdo_registers() -> None:
+    """§12.6: PDO1_TX_SETUP (F300h) = 10, 12, 25: PDO1_VALUE (F400h) [0..2] read P_IST, V_IST,
+    STATUSBITS in one frame; PDO1_RX_SETUP (F200h) = 3, 5: writing VALUE[0..1] sets P_SOLL and
+    V_SOLL; an unconfigured value register is an invalid address (§12.6.2)."""
+    from jvl_gym.protocol import modbus as mb
+
+    m, bus = _modbus(P_IST=-5)
+
+    def ask(frame: bytes) -> object:
+        return mb.decode_response(bus.handle(frame, now=0.0)[0])
+
+    value = 0xF400
+    assert isinstance(ask(mb.encode_read_request(42, value, 2)), mb.ExceptionResponse)
+    ask(mb.encode_write_request(42, 0xF300, [w for n in (10, 12, 25) for w in mb.words_of(n)]))
+    out = ask(mb.encode_read_request(42, value, 6))
+    assert out.words == (*mb.words_of(-5), *mb.words_of(0),  # type: ignore[attr-defined]
+                         *mb.words_of(int(m.read("STATUSBITS")[0])))
+    assert isinstance(ask(mb.encode_write_request(42, value, [1, 0])), mb.ExceptionResponse)
+    ask(mb.encode_write_request(42, 0xF200, [3, 0, 5, 0]))
+    ask(mb.encode_write_request(42, value, [*mb.words_of(100000), *mb.words_of(2500)]))
+    assert m.read("P_SOLL")[0] == 100000 and m.read("V_SOLL")[0] == 2500
