@@ -325,7 +325,8 @@ def test_hardware_limit_input_and_its_warning_bits() -> None:
     assert not warn & c.WARN_POS_LIMIT and warn & c.WARN_POS_LIMIT_SEEN
 
 
-@pytest.mark.statements("mis:8.2.38:2", "mis:8.2.38:3", "mis:8.2.49:2", "mis:5.8.1:1")
+@pytest.mark.statements(
+    "mis:8.2.38:1", "mis:8.2.38:2", "mis:8.2.38:3", "mis:8.2.49:2", "mis:5.8.1:1")
 def test_absolute_encoder_register() -> None:
     m = MotorArray("MIS232", n=2, encoder_type=np.array([3, 4]))
     m.write_many({"V_SOLL": 100000, "A_SOLL": 10000, "MODE_REG": 1})

@@ -1955,3 +1955,32 @@ def test_modbus_pdo_registers() -> None:
     ask(mb.encode_write_request(42, 0xF200, [3, 0, 5, 0]))
     ask(mb.encode_write_request(42, value, [*mb.words_of(100000), *mb.words_of(2500)]))
     assert m.read("P_SOLL")[0] == 100000 and m.read("V_SOLL")[0] == 2500
+
+
+@pytest.mark.statements("mis:8.2.20:2")
+def test_reserved_commands_change_nothing() -> None:
+    """§8.2.20: "The values 128-255 are reserved": writing one changes no register."""
+    m = _motor(V_SOLL=1234, P_IST=77, P_NEW=5)
+    before = m.regs.copy()
+    for command in (128, 200, 255):
+        m.write("COMMAND", command)
+    np.testing.assert_array_equal(m.regs, before)
+
+
+@pytest.mark.statements("mis:5.2.2:3")
+def test_auto_correction_starts_on_a_changed_p_soll_only() -> None:
+    """§5.2.2: "changing P_SOLL (not just writing the same value again) will reload the maximum
+    number of retries and set the Auto Correction Active status bit"."""
+    m = _motor(IN_POSITION_COUNT=2, IN_POSITION_WINDOW=100, SETTLINGTIME=50,
+               STANDBY_TIME=65535, P_SOLL=20000)
+    m.write("MODE_REG", c.POSITION)
+    m.step(300)
+    assert not m.read("STATUSBITS")[0] & c.ST_AUTOCORRECTION
+    m.set_input(load_torque=0.6 * m.pull_out_torque(1.0)[0])  # the rotor pushed aside
+    m.step(100)
+    m.write("P_SOLL", 20000)
+    m.step(1)
+    assert not m.read("STATUSBITS")[0] & c.ST_AUTOCORRECTION
+    m.write("P_SOLL", 20001)
+    m.step(1)
+    assert m.read("STATUSBITS")[0] & c.ST_AUTOCORRECTION
