@@ -39,7 +39,7 @@ def test_current_scaling_times_of_the_manual() -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.24:16", "mis:8.2.68:19", "mis:8.2.68:20", "mis:8.2.112:2", "mis:8.2.112:3",
+    "mis:8.2.24:16", "mis:8.2.68:19", "mis:8.2.68:20", "mis:8.2.112:4", "mis:8.2.112:5",
     "mis:5.3.1:3", "mis:5.3.5:1")
 def test_closed_loop_current_follows_the_load_in_a_running_motor() -> None:
     m = MotorArray("MIS232", n=2, seed=0)

@@ -51,7 +51,7 @@ def test_analogue_inputs_in_the_registers() -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.16:3", "mis:8.2.16:4", "mis:8.2.69:2", "mis:8.2.75:2", "mis:8.2.76:2", "mis:6.5.9:1",
+    "mis:8.2.16:3", "mis:8.2.16:4", "mis:8.2.69:2", "mis:8.2.75:2", "mis:8.2.76:2", "mis:6.5.9:2",
     "mis:2.2.2:1", "mis:2.2.5:1")
 def test_digital_input_filter() -> None:
     m = MotorArray("MIS232", n=1)

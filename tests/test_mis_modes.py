@@ -65,8 +65,8 @@ def _table(mode: int, **regs: int) -> MotorArray:
 
 
 @pytest.mark.statements(
-    "mis:8.2.27:3", "mis:8.2.70:2", "mis:5.12.5:1", "mis:5.12.1:1", "mis:5.12.1:6",
-    "mis:5.12.5:2", "mis:5.12.6:1")
+    "mis:8.2.27:3", "mis:8.2.70:2", "mis:5.12.5:2", "mis:5.12.1:1", "mis:5.12.1:6",
+    "mis:5.12.5:3", "mis:5.12.6:4")
 def test_turn_table_multiturn_cw_example() -> None:
     """§5.12.1, mode 4: start 0, target 970000: P_SOLL = 150800 (the remainder of
     970000/409600) after a CW move of 970000 counts; P_IST stays in range and TURNTAB_COUNT
@@ -84,7 +84,7 @@ def test_turn_table_multiturn_cw_example() -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.26:3", "mis:8.2.27:3", "mis:8.2.70:1", "mis:8.2.70:2", "mis:5.12.5:1",
+    "mis:8.2.26:3", "mis:8.2.27:3", "mis:8.2.70:1", "mis:8.2.70:2", "mis:5.12.5:2",
     "mis:5.12.1:1", "mis:5.12.1:2", "mis:5.12.1:3", "mis:5.12.1:5", "mis:5.12.1:7", "mis:5.12.3:2")
 def test_turn_table_directions_and_limits() -> None:
     m = _table(c.TT_CW, P_SOLL=250000)
@@ -173,7 +173,7 @@ def test_fastmac_commands() -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.3:1", "mis:8.2.21:1", "mis:8.2.31:3", "mis:8.2.31:23", "mis:7.2.4:1", "mis:7.2.4:2")
+    "mis:8.2.3:1", "mis:8.2.21:1", "mis:8.2.31:4", "mis:8.2.31:24", "mis:7.2.4:1", "mis:7.2.4:2")
 def test_clear_errors_command_and_modes_refused_while_in_error() -> None:
     m = _motor(FLWERRMAX=1000, P_SOLL=4_000_000, V_SOLL=100000, A_SOLL=1000)
     m.set_input(load_torque=5.0)
@@ -214,7 +214,7 @@ def test_status_bits_during_a_move() -> None:
 
 # --- limits and under-voltage (§5.9, §5.10) ---------------------------------------------
 @pytest.mark.statements(
-    "mis:8.2.31:5", "mis:5.9.3:2", "mis:5.9.4:1", "mis:5.9.4:2", "mis:6.6:1", "mis:7.2.6:1")
+    "mis:8.2.31:6", "mis:5.9.3:2", "mis:5.9.4:1", "mis:5.9.4:2", "mis:6.6:1", "mis:7.2.6:1")
 def test_software_position_limit_stops_with_an_error() -> None:
     m = _motor(MAX_P_IST=100000, MIN_P_IST=-100000, V_SOLL=20000, ACC_EMERG=50000)
     m.write("MODE_REG", 1)
@@ -226,7 +226,7 @@ def test_software_position_limit_stops_with_an_error() -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.31:6", "mis:8.2.32:6", "mis:8.2.47:1", "mis:8.2.47:2", "mis:8.2.48:2",
+    "mis:8.2.31:7", "mis:8.2.32:6", "mis:8.2.47:1", "mis:8.2.47:2", "mis:8.2.48:2",
     "mis:8.2.68:16", "mis:8.2.68:17", "mis:5.10:1", "mis:5.10:2", "mis:6.6:1", "mis:7.2.7:1")
 def test_low_bus_voltage_actions() -> None:
     m = _motor(V_SOLL=10000, SETUP_BITS=(1 << 21) | (1 << 22))

@@ -67,7 +67,7 @@ def test_set_mode(mode: str, code: int) -> None:
     assert _reg(m, "MODE_REG") == code
 
 
-@pytest.mark.statements("mis:8.2.31:23", "mis:9.7.2:2")
+@pytest.mark.statements("mis:8.2.31:24", "mis:9.7.2:2")
 def test_set_mode_refused_with_errors_keeps_the_mode_and_goes_on() -> None:
     """§8.2.31: an active mode is refused while ERR_BITS ≠ 0; the program continues."""
     m = MotorArray("MIS232", seed=0)
@@ -399,7 +399,7 @@ def test_fastmac_change_mode_and_activate_register() -> None:
     assert _reg(m, "MODE_REG") == 2
 
 
-@pytest.mark.statements("mis:8.2.21:2", "mis:9.7.23:1")
+@pytest.mark.statements("mis:8.2.21:3", "mis:9.7.23:1")
 def test_fastmac_macro_command() -> None:
     """FastMac 3 (COMMAND 99, §8.2.21): P_IST = 0; FastMac 1: errors cleared."""
     m = MotorArray("MIS232", seed=0)
@@ -591,7 +591,7 @@ def _program_of(m: MotorArray, i: int = 0) -> tuple[str | None, tuple]:
     return m.program_text(i), (s.state, s.line, s.error, s.checksum)
 
 
-@pytest.mark.statements("mis:8.2.22:8")
+@pytest.mark.statements("mis:8.2.22:11")
 def test_command_342_erases_the_stored_program() -> None:
     """Writing COMMAND 342 erases the program of the motors written (it stops, a reset no
     longer starts it); COMMAND reads 0 and the other motors keep theirs."""

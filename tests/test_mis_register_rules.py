@@ -53,7 +53,7 @@ def test_position_limit_in_position_mode_stops_at_the_limit_with_the_normal_dece
     assert np.count_nonzero(down < 0) > 250  # 300 RPM at 1000 RPM/s: about 290 ms
 
 
-@pytest.mark.statements("mis:8.2.27:2", "mis:8.2.31:5", "mis:5.9.4:2", "mis:7.2.6:1")
+@pytest.mark.statements("mis:8.2.27:2", "mis:8.2.31:6", "mis:5.9.4:2", "mis:7.2.6:1")
 def test_position_limit_in_position_mode_without_bit_17_is_an_error_at_the_limit() -> None:
     """§5.9.4: "The motor will stop and activate an error, when reaching a limit" — and it
     stops at the limit, not beyond (§5.9.3)."""
@@ -96,7 +96,7 @@ def test_in_target_position_waits_for_the_standstill_time() -> None:
 
 # --- §8.2.77–78: the dedicated outputs ----------------------------------------------------
 @pytest.mark.statements(
-    "mis:8.2.17:3", "mis:8.2.69:3", "mis:8.2.77:2", "mis:8.2.78:2", "mis:5.6.2:1")
+    "mis:8.2.17:3", "mis:8.2.69:3", "mis:8.2.77:2", "mis:8.2.78:3", "mis:5.6.2:1")
 def test_in_position_and_error_outputs_drive_outputs() -> None:
     """INPOS_MASK: "The In Position output will then be set after a movement has completed";
     ERROR_MASK: "set when any error is set"; both only on pins IOSETUP makes outputs
@@ -224,8 +224,8 @@ def test_modbus_write_multiple_example_is_accepted_as_the_manual_replies() -> No
     (108, ("P1", "V1", "A1", "T1")), (109, ("P2", "V2", "A2", "T2")),
     (110, ("P3", "V3", "A3", "T3")), (111, ("P4", "V4", "A4", "T4"))])
 @pytest.mark.statements(
-    "mis:8.2.20:1", "mis:8.2.20:2", "mis:8.2.21:4", "mis:8.2.21:5", "mis:8.2.21:6",
-    "mis:8.2.21:7", "mis:8.2.41:9", "mis:8.2.42:2", "mis:8.2.43:2", "mis:8.2.44:2")
+    "mis:8.2.20:1", "mis:8.2.20:2", "mis:8.2.21:6", "mis:8.2.21:7", "mis:8.2.21:8",
+    "mis:8.2.21:9", "mis:8.2.41:9", "mis:8.2.42:2", "mis:8.2.43:2", "mis:8.2.44:2")
 def test_fastmac_register_sets_load_the_profile(command: int, names: tuple[str, ...]) -> None:
     """FastMac 12–15 (commands 108–111): P_SOLL, V_SOLL, A_SOLL and the running current from
     position, velocity, acceleration and current register n."""
@@ -236,7 +236,7 @@ def test_fastmac_register_sets_load_the_profile(command: int, names: tuple[str, 
 
 
 @pytest.mark.parametrize("command, name", [(113, "P7"), (114, "P8")])
-@pytest.mark.statements("mis:8.2.21:8", "mis:8.2.21:9", "mis:8.2.41:10")
+@pytest.mark.statements("mis:8.2.21:10", "mis:8.2.21:11", "mis:8.2.41:10")
 def test_fastmac_relative_moves_add_p7_and_p8(command: int, name: str) -> None:
     """FastMac 17/18 (commands 113/114): P_SOLL = P_IST + position register 7 / 8."""
     m = _motor(P_IST=1000, **{name: -400})
@@ -309,7 +309,7 @@ def test_v_ist_calc_and_v_encoder_follow_the_motion() -> None:
 
 # --- §8.2.108–114: the closed-loop current scale ------------------------------------------
 @pytest.mark.statements(
-    "mis:8.2.108:2", "mis:8.2.109:2", "mis:8.2.110:2", "mis:8.2.112:1", "mis:8.2.113:2",
+    "mis:8.2.108:2", "mis:8.2.109:2", "mis:8.2.110:2", "mis:8.2.112:3", "mis:8.2.113:2",
     "mis:5.3.7:1")
 def test_closed_loop_current_scale_stays_within_its_limits() -> None:
     """ACTUAL_TORQUE stays within CUR_SCALE_MIN … CUR_SCALE_MAX; a larger CUR_SCALE_INC

@@ -69,7 +69,7 @@ _CHOSEN_DEFAULTS = {"V_START": 1000, "V_HOME": -5000, "MIN_BUSVOL": 565,
     "mis:8.2.3:1", "mis:8.2.4:1", "mis:8.2.5:1", "mis:8.2.6:1", "mis:8.2.7:1", "mis:8.2.8:1",
     "mis:8.2.9:1", "mis:8.2.12:1", "mis:8.2.13:1", "mis:8.2.14:1", "mis:8.2.17:1", "mis:8.2.19:1",
     "mis:8.2.20:1", "mis:8.2.26:1", "mis:8.2.27:1", "mis:8.2.28:1", "mis:8.2.29:1",
-    "mis:8.2.30:1", "mis:8.2.31:1", "mis:8.2.32:1", "mis:8.2.33:1", "mis:8.2.34:1",
+    "mis:8.2.30:1", "mis:8.2.31:2", "mis:8.2.32:1", "mis:8.2.33:1", "mis:8.2.34:1",
     "mis:8.2.35:1", "mis:8.2.36:1", "mis:8.2.37:1", "mis:8.2.38:1", "mis:8.2.39:1",
     "mis:8.2.40:1", "mis:8.2.41:1", "mis:8.2.41:2", "mis:8.2.41:3", "mis:8.2.41:4",
     "mis:8.2.41:5", "mis:8.2.41:6", "mis:8.2.41:7", "mis:8.2.41:8", "mis:8.2.42:1",
@@ -78,7 +78,7 @@ _CHOSEN_DEFAULTS = {"V_START": 1000, "V_HOME": -5000, "MIN_BUSVOL": 565,
     "mis:8.2.56:1", "mis:8.2.58:1", "mis:8.2.60:1", "mis:8.2.61:1", "mis:8.2.62:1",
     "mis:8.2.63:1", "mis:8.2.67:1", "mis:8.2.68:1", "mis:8.2.69:1", "mis:8.2.71:2",
     "mis:8.2.72:1", "mis:8.2.73:1", "mis:8.2.74:1", "mis:8.2.75:1", "mis:8.2.76:1",
-    "mis:8.2.77:1", "mis:8.2.78:1", "mis:8.2.79:1", "mis:8.2.80:1", "mis:8.2.81:1",
+    "mis:8.2.77:1", "mis:8.2.78:2", "mis:8.2.79:1", "mis:8.2.80:1", "mis:8.2.81:1",
     "mis:8.2.83:1", "mis:8.2.84:1", "mis:8.2.85:1", "mis:8.2.88:1", "mis:8.2.96:1",
     "mis:8.2.98:1", "mis:8.2.99:1", "mis:8.2.105:1", "mis:8.2.106:1", "mis:8.2.108:1",
     "mis:8.2.109:1", "mis:8.2.110:1", "mis:8.2.113:1", "mis:8.2.114:1", "mis:8.2.115:1",
@@ -164,7 +164,7 @@ _READ_ONLY = ["PROG_VERSION", "V_IST", "INPUTS", "FLWERR", "STATUSBITS", "TEMP",
     "mis:8.2.47:1", "mis:8.2.49:1", "mis:8.2.56:1", "mis:8.2.64:1", "mis:8.2.65:1",
     "mis:8.2.82:1", "mis:8.2.87:1", "mis:8.2.89:1", "mis:8.2.90:1", "mis:8.2.91:1",
     "mis:8.2.92:1", "mis:8.2.93:1", "mis:8.2.94:1", "mis:8.2.95:1", "mis:8.2.97:1",
-    "mis:8.2.100:1", "mis:8.2.102:1", "mis:8.2.104:1", "mis:8.2.112:1", "mis:8.2.121:1",
+    "mis:8.2.100:1", "mis:8.2.102:1", "mis:8.2.104:1", "mis:8.2.112:3", "mis:8.2.121:1",
     "mis:8.2.123:1", "mis:8.2.124:1", "mis:8.2.127:1", "mis:8.2.129:1", "mis:8.2.131:1",
     "mis:8.2.1:5")
 def test_read_only_registers_refuse_a_write() -> None:
@@ -374,7 +374,7 @@ def test_outputs_are_written_through_outputs() -> None:
     assert m.read("OUTPUTS")[0] == 0b1001_0110
 
 
-@pytest.mark.statements("mis:8.2.19:2", "mis:8.2.19:3", "mis:8.2.31:2", "mis:8.2.31:3")
+@pytest.mark.statements("mis:8.2.19:2", "mis:8.2.19:3", "mis:8.2.31:3", "mis:8.2.31:4")
 def test_flwerrmax_zero_disables_the_follow_error() -> None:
     """§8.2.19: "If FLWERRMAX = 0, the error is disabled"; otherwise a follow error beyond it
     sets ERR_BITS bit 1 with the general error bit 0 (§8.2.31)."""
@@ -406,7 +406,7 @@ def test_fastmac_1_clears_errors_and_warnings() -> None:
     assert m.read("ERR_BITS")[0] == 0 and m.read("WARN_BITS")[0] == 0
 
 
-@pytest.mark.statements("mis:8.2.20:2", "mis:8.2.22:1", "mis:8.2.22:2", "mis:8.2.22:3")
+@pytest.mark.statements("mis:8.2.20:2", "mis:8.2.22:3", "mis:8.2.22:5", "mis:8.2.22:6")
 def test_reset_and_save_commands() -> None:
     """§8.2.22: 267 resets the CPU (the registers come back from flash), 269 saves to flash and
     continues, 268 saves and resets."""
@@ -427,7 +427,7 @@ def test_reset_and_save_commands() -> None:
 
 
 # --- §8.2.24 STATUSBITS, §8.2.28, §8.2.31 ERR_BITS -------------------------------------------
-@pytest.mark.statements("mis:8.2.24:12", "mis:8.2.31:2")
+@pytest.mark.statements("mis:8.2.24:12", "mis:8.2.31:3")
 def test_general_error_status_bit_is_err_bits_bit_0() -> None:
     """§8.2.24 bit 12: "General Error (Same as register 35 bit 0)"; §8.2.31 bit 0: "always set
     together with one of the other bits"."""
@@ -472,7 +472,7 @@ def test_an_error_stop_decelerates_with_acc_emerg() -> None:
     assert v[-1] == 0 and m.read("MODE_REG")[0] == c.PASSIVE
 
 
-@pytest.mark.statements("mis:8.2.31:1", "mis:8.2.31:24", "mis:7.2.4:2")
+@pytest.mark.statements("mis:8.2.31:2", "mis:8.2.31:25", "mis:7.2.4:2")
 def test_writing_zero_to_err_bits_clears_the_errors() -> None:
     """§8.2.31: "Some of the errors can be cleared by writing zero to this register"; the
     motor then takes an active mode again."""
@@ -556,7 +556,7 @@ def test_homemode_values() -> None:
     assert MotorArray("MIS232", n=1, setup={"HOMEMODE": 0}).read("MODE_REG")[0] == 0
 
 
-@pytest.mark.statements("mis:8.2.31:18", "mis:8.2.126:2")
+@pytest.mark.statements("mis:8.2.31:19", "mis:8.2.126:2")
 def test_zero_search_time_out_is_60_s_by_default() -> None:
     """§8.2.126: "If 0, the Zero Search time out is 60000 ms. Else the value in this register is
     used"; the time-out sets ERR_BITS bit 16 (§8.2.31)."""
@@ -575,7 +575,7 @@ def test_zero_search_time_out_is_60_s_by_default() -> None:
 
 
 @pytest.mark.statements(
-    "mis:8.2.21:2", "mis:8.2.21:3", "mis:8.2.21:8", "mis:8.2.21:13", "mis:8.2.21:14",
+    "mis:8.2.21:3", "mis:8.2.21:4", "mis:8.2.21:10", "mis:8.2.21:15", "mis:8.2.21:16",
     "mis:8.2.83:2")
 def test_fastmac_position_and_velocity_commands() -> None:
     """§8.2.21: FastMac 3 (99) P_IST = 0, FastMac 5 (101) V_SOLL = 0, FastMac 23 (119) P_IST,
@@ -592,7 +592,7 @@ def test_fastmac_position_and_velocity_commands() -> None:
     assert m.read("V_SOLL")[0] == 0
 
 
-@pytest.mark.statements("mis:8.2.22:12", "mis:8.2.22:13", "mis:8.2.28:2")
+@pytest.mark.statements("mis:8.2.22:15", "mis:8.2.22:16", "mis:8.2.28:2")
 def test_emergency_stop_commands() -> None:
     """§8.2.22: 398 "Emergency stop with deceleration" (ACC_EMERG, §8.2.28), 399 "Emergency
     stop without deceleration"; both leave the motor passive."""
@@ -874,7 +874,7 @@ def test_internal_encoder_setup_default() -> None:
     assert (value >> 5) & 1 == 1 and (value >> 6) & 1 == 1
 
 
-@pytest.mark.statements("mis:8.2.107:1")
+@pytest.mark.statements("mis:8.2.107:3")
 def test_ticks_count_milliseconds() -> None:
     """§8.2.107: TICKS "Increments at a fixed rate of 1 count per millisecond. Starts at zero"."""
     m = _motor()
@@ -883,7 +883,7 @@ def test_ticks_count_milliseconds() -> None:
     assert np.all(np.diff(ticks) == 1) and ticks[-1] == 250
 
 
-@pytest.mark.statements("mis:8.2.112:2", "mis:5.3.1:2")
+@pytest.mark.statements("mis:8.2.112:4", "mis:5.3.1:2")
 def test_actual_torque_is_full_without_current_control() -> None:
     """§8.2.112: "In active mode without current control enabled = 100 %" (2047), with the
     closed loop on and off."""
@@ -927,7 +927,7 @@ def test_d_soll_range() -> None:
     assert m.read("D_SOLL")[0] == 500000
 
 
-@pytest.mark.statements("mis:5.12.5:1")
+@pytest.mark.statements("mis:5.12.5:2")
 def test_turntab_count_is_writable() -> None:
     """§5.12.5: TURNTAB_COUNT "can be written … at any time" and counts on from the value."""
     m = _motor(TURNTABLE_MODE=c.TT_MULTI_CW, MIN_P_IST=0, MAX_P_IST=409599, V_SOLL=300000,
@@ -1222,7 +1222,7 @@ def test_turn_table_swaps_a_reversed_range() -> None:
     assert m.rotor_counts[0] == pytest.approx(300000 + 209600, abs=600)
 
 
-@pytest.mark.statements("mis:5.12.5:3")
+@pytest.mark.statements("mis:5.12.5:4")
 def test_absencoder_is_not_wrapped_by_the_turn_table() -> None:
     """§5.12.5: ABSENCODER (H3/H4) "Not corrected for the turn table"."""
     m = MotorArray("MIS232", n=1, seed=0, encoder_type=4)
@@ -1518,7 +1518,7 @@ def _mapping(node, index: int) -> list[int]:  # type: ignore[no-untyped-def]
     return [node.sdo[index][k].raw for k in range(1, node.sdo[index][0].raw + 1)]
 
 
-@pytest.mark.statements("mis:11.4.9:1", "mis:11.4.9:2", "mis:11.4.9:3")
+@pytest.mark.statements("mis:11.4.9:3", "mis:11.4.9:4", "mis:11.4.9:5")
 def test_canopen_rpdo_21_to_23(rig) -> None:  # type: ignore[no-untyped-def]
     """§11.4.9: RPDO 21 P_SOLL (2012h sub 3), V_SOLL, A_SOLL (2014h sub 5, 6); RPDO 22
     RUN_CURRENT, MODE_REG (2014h sub 7, 2); RPDO 23 the command (2014h sub 18h)."""
@@ -1611,7 +1611,7 @@ def rig402():  # type: ignore[no-untyped-def]
     r.close()
 
 
-@pytest.mark.statements("mis:11.5.1:1", "mis:11.5.3:1")
+@pytest.mark.statements("mis:11.5.1:2", "mis:11.5.3:1")
 def test_canopen_402_mode_change_only_while_not_enabled(rig402) -> None:  # type: ignore[no-untyped-def]
     """§11.5.3: the mode of operation changes only while the operation is not enabled;
     §11.5.1: 6502h lists profile position, velocity, torque, homing, interpolated position and
