@@ -1984,3 +1984,92 @@ def test_auto_correction_starts_on_a_changed_p_soll_only() -> None:
     m.write("P_SOLL", 20001)
     m.step(1)
     assert m.read("STATUSBITS")[0] & c.ST_AUTOCORRECTION
+
+
+@pytest.mark.statements("mis:11.9.3:1")
+def test_canopen_synchronous_pdos(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.9.3: a TPDO of type 1 after every SYNC, of type 2 after every second; an RPDO of a
+    synchronous type is carried out at the next SYNC."""
+    import struct
+
+    node = rig.node()
+    node.sdo[0x1800][1].raw = 0x185
+    node.sdo[0x1802][2].raw = 2
+    node.sdo[0x1802][1].raw = 0x385
+    node.sdo[0x1414][1].raw = 0x215
+    node.sdo[0x1414][2].raw = 1
+    node.nmt.state = "OPERATIONAL"
+    rig.clear()
+    for _ in range(4):
+        rig.send(0x80)
+    assert (len(rig.sent(0x185)), len(rig.sent(0x385))) == (4, 2)
+    rig.send(0x215, struct.pack("<lhh", 1234, 100, 100))
+    assert rig.m.read("P_SOLL")[0] == 0
+    rig.send(0x80)
+    assert rig.m.read("P_SOLL")[0] == 1234
+
+
+@pytest.mark.statements("mis:11.7.4:1")
+def test_canopen_lss_bit_timing(rig) -> None:  # type: ignore[no-untyped-def]
+    """§11.7.4: bit timing codes of the CiA table (5 reserved), stored by §11.7.5."""
+    lss = rig.net.lss
+    lss.send_switch_state_global(lss.CONFIGURATION_STATE)
+    with pytest.raises(Exception, match="(?i)error"):
+        lss.configure_bit_timing(5)
+    lss.configure_bit_timing(4)  # 125 kbit/s
+    lss.store_configuration()
+    lss.send_switch_state_global(lss.WAITING_STATE)
+    assert rig.m.read("FBUS_BAUD")[0] == 4 and rig.m.flash_image(0)[167] == 4
+
+
+def _dmx(pos: int, control: int = 60, acc: int = 0, vel: int = 0):  # type: ignore[no-untyped-def]
+    from jvl_gym.protocol.dmx512 import DmxPacket
+
+    slots = bytearray(512)
+    slots[0:3] = bytes([pos >> 8, pos & 0xFF, control])
+    slots[499:501] = bytes([acc, vel])
+    return DmxPacket(0, bytes(slots))
+
+
+@pytest.mark.statements("mis:13.1.9:1")
+def test_dmx512_jogging_by_inputs() -> None:
+    """§13.1.9: input 1 on: velocity mode at 0 RPM, DMX ignored; input 2 +, input 3 − jog
+    velocity; input 1 off: the default velocity, P_SOLL at the position reached, passive."""
+    from jvl_gym.protocol.dmx512 import DmxReceiver, DmxSettings
+
+    m = _motor(IN_POSITION_COUNT=0)
+    r = DmxReceiver(m, 0, DmxSettings(homing=False, jog_velocity=5000,
+                                      default_velocity=70000))
+    r.packet(_dmx(1000))
+    m.set_input(digital_inputs=0b001)
+    m.step(1)
+    r.poll()
+    assert m.read("MODE_REG")[0] == c.VELOCITY and m.read("V_SOLL")[0] == 0
+    r.packet(_dmx(2000))
+    assert m.read("P_SOLL")[0] == 1000
+    for bits, v in ((0b011, 5000), (0b001, 0), (0b101, -5000)):
+        m.set_input(digital_inputs=bits)
+        m.step(1)
+        r.poll()
+        assert m.read("V_SOLL")[0] == v
+    m.step(200)
+    m.set_input(digital_inputs=0)
+    m.step(1)
+    r.poll()
+    assert m.read("V_SOLL")[0] == 70000 and m.read("P_SOLL")[0] == m.read("P_IST")[0]
+    m.step(300)
+    assert m.read("MODE_REG")[0] == c.PASSIVE
+
+
+@pytest.mark.statements("mis:13.1.10:2")
+def test_dmx512_values_only_with_a_new_position() -> None:
+    """§13.1.10: velocity and acceleration "only when a new value for Position is received"."""
+    from jvl_gym.protocol.dmx512 import DmxReceiver, DmxSettings
+
+    m = _motor(IN_POSITION_COUNT=0)
+    r = DmxReceiver(m, 0, DmxSettings(homing=False, values_with_position=True))
+    r.packet(_dmx(10, vel=50))
+    r.packet(_dmx(10, vel=90))
+    assert m.read("V_SOLL")[0] == 500
+    r.packet(_dmx(11, vel=90))
+    assert m.read("V_SOLL")[0] == 900 and m.read("P_SOLL")[0] == 11
