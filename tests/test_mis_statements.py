@@ -2073,3 +2073,22 @@ def test_dmx512_values_only_with_a_new_position() -> None:
     assert m.read("V_SOLL")[0] == 500
     r.packet(_dmx(11, vel=90))
     assert m.read("V_SOLL")[0] == 900 and m.read("P_SOLL")[0] == 11
+
+
+@pytest.mark.statements("mis:8.2.63:4")
+def test_samples_are_read_with_command_53h() -> None:
+    """§8.2.63: "The sampled values are read back using the command hex 53 SMC_READSAMPLE":
+    each request gives the next sample of the four buffers."""
+    from jvl_gym.protocol import mactalk32 as m32
+    from jvl_gym.protocol.twin import Twin
+
+    m = _motor(MY_ADDR=7, SAMPLE1=10, SAMPLE2=12, REC_CNT=3, V_SOLL=6000, V_START=10000)
+    m.write("MODE_REG", c.VELOCITY)
+    m.write("S_CONTROL", 2)
+    m.step(10)
+    want = m.sample_buffer()
+    twin = Twin(m)
+    for k in range(3):
+        data = m32.decode(_ask(twin, m32.encode_read_sample(7))).data
+        p_ist, v_ist = (int.from_bytes(data[j:j + 4], "little", signed=True) for j in (0, 4))
+        assert (p_ist, v_ist) == (want["P_IST"][0][k], want["V_IST"][0][k])
