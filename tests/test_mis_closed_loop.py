@@ -26,6 +26,8 @@ def _ms_to(goal: float, start: float, follow_error: float, rpm: float) -> int:
     raise AssertionError("never reached")
 
 
+@pytest.mark.statements(
+    "mis:8.2.110:2", "mis:8.2.113:2", "mis:8.2.114:2", "mis:5.3.7:2", "mis:5.3.7:3", "mis:5.3.7:4")
 def test_current_scaling_times_of_the_manual() -> None:
     """§5.3.7: one step up per 55.56 µs (0 → 100 % in about 113 ms); one step down per 111 µs
     at 0 RPM (100 % → 0 in 227 ms) and per 1.13 ms at 3000 RPM (2.3 s)."""
@@ -36,6 +38,9 @@ def test_current_scaling_times_of_the_manual() -> None:
     assert _ms_to(1023, 0, 1024, 0.0) == 57  # 1023 steps of 55.56 µs
 
 
+@pytest.mark.statements(
+    "mis:8.2.24:16", "mis:8.2.68:19", "mis:8.2.68:20", "mis:8.2.112:4", "mis:8.2.112:5",
+    "mis:5.3.1:3", "mis:5.3.5:1")
 def test_closed_loop_current_follows_the_load_in_a_running_motor() -> None:
     m = MotorArray("MIS232", n=2, seed=0)
     m.write_many({"SETUP_BITS": np.array([CL, 0]), "V_SOLL": 30000, "A_SOLL": 2000,
@@ -52,6 +57,7 @@ def test_closed_loop_current_follows_the_load_in_a_running_motor() -> None:
     assert m.lost_steps.tolist() == [0, 0]
 
 
+@pytest.mark.statements("mis:8.2.128:2", "mis:5.3.1:1", "mis:5.3.4:3")
 def test_closed_loop_keeps_its_position_through_an_overload() -> None:
     """§5.3.1: in closed loop an overload does not stall the motor; §8.2.128: without
     CL_CATCH_UP's overspeed the rotor keeps its lag at V_SOLL, with it the rotor catches up;
@@ -79,6 +85,9 @@ def test_closed_loop_keeps_its_position_through_an_overload() -> None:
     assert abs(m.read("ENCODER_POS")[1] - target) < c.COUNTS_PER_FULL_STEP
 
 
+@pytest.mark.statements(
+    "mis:8.2.15:3", "mis:8.2.24:2", "mis:8.2.24:3", "mis:8.2.29:2", "mis:8.2.30:2",
+    "mis:8.2.120:2", "mis:5.2.1:1", "mis:5.2.2:1", "mis:5.2.2:2", "mis:5.2.2:3", "mis:5.2.3:1")
 def test_auto_correction_retries_a_blocked_move() -> None:
     """§5.2.2: after a move whose encoder position is outside IN_POSITION_WINDOW, P_IST is
     reloaded from the encoder and the move repeated, up to IN_POSITION_COUNT times."""

@@ -15,6 +15,7 @@ from jvl_gym.families.mis.config import MOTORS_DIR, load_motor, motor_types
 from jvl_gym.families.mis.units import MOTOR_TYPE_CODES
 
 
+@pytest.mark.statements("mis:8.2.89:2")
 def test_every_type_loads_runs_and_names_its_motor_type_code() -> None:
     types = motor_types()
     assert {"MIS171", "MIS176", "MIS231", "MIS232", "MIS234", "MIS340", "MIS343", "MIS432",

@@ -10,6 +10,9 @@ from jvl_gym import MotorArray
 from jvl_gym.families.mis.firmware.inputs import analogue_filter_step
 
 
+@pytest.mark.statements(
+    "mis:8.2.53:2", "mis:8.2.54:2", "mis:8.2.55:2", "mis:2.3.5:3", "mis:2.3.5:4", "mis:2.3.5:5",
+    "mis:2.3.5:6")
 def test_analogue_filter_example_of_the_manual() -> None:
     """§2.3.5: confidence 0 … 500, max slope 10, filter 8/64, old value 0: samples 100, 100,
     100, 800 give 1.25, 2.5, 3.75, 3.75; from 95.0 samples of 100 give 95.625, 96.171875,
@@ -35,6 +38,8 @@ def test_analogue_filter_example_of_the_manual() -> None:
     assert all(np.diff(tail) > 0) and tail[-1] < 100.0
 
 
+@pytest.mark.statements(
+    "mis:8.2.45:2", "mis:8.2.46:2", "mis:8.2.53:2", "mis:8.2.54:2", "mis:8.2.55:2")
 def test_analogue_inputs_in_the_registers() -> None:
     m = MotorArray("MIS232", n=1)
     m.write_many({"AFZUP_CONFMAX": 500, "AFZUP_MAXSLOPE": 10, "AFZUP_FILTER": 8})
@@ -45,6 +50,9 @@ def test_analogue_inputs_in_the_registers() -> None:
     assert filt[8] == 0 and filt[9] == 1 and filt[19] == 3 and filt[29] == 4  # every 10 ms
 
 
+@pytest.mark.statements(
+    "mis:8.2.16:3", "mis:8.2.16:4", "mis:8.2.69:2", "mis:8.2.75:2", "mis:8.2.76:2", "mis:6.5.9:2",
+    "mis:2.2.2:1", "mis:2.2.5:1")
 def test_digital_input_filter() -> None:
     m = MotorArray("MIS232", n=1)
     m.write_many({"INPUT_FILTER_MASK": 0b10, "INPUT_FILTER_CNT": 5})

@@ -22,6 +22,7 @@ def _motor(**regs: int) -> MotorArray:
 
 
 # --- gear mode (§8.2.3, §8.2.13) --------------------------------------------------------
+@pytest.mark.statements("mis:8.2.3:7", "mis:8.2.13:3", "mis:6.4.1:2")
 def test_gear_one_input_step_moves_200_counts() -> None:
     """§8.2.13: GEAR1 = 409600, GEAR2 = 2048: one step applied moves the motor 200 counts;
     2048 counts one revolution."""
@@ -43,6 +44,7 @@ def test_gear_one_input_step_moves_200_counts() -> None:
 @given(st.lists(st.integers(-50, 50), min_size=1, max_size=40),
        st.integers(1, 10**6), st.integers(-5000, 5000).filter(lambda g: g != 0))
 @settings(max_examples=25, deadline=None)
+@pytest.mark.statements("mis:8.2.3:7", "mis:8.2.13:2", "mis:8.2.14:1", "mis:6.4.1:1")
 def test_gear_carries_the_remainder(pulses: list[int], g1: int, g2: int) -> None:
     """§8.2.3: input × GEAR1/GEAR2 is added to P_SOLL; any remainder is used next time: over
     any pulse sequence P_SOLL = floor(total × GEAR1 / GEAR2)."""
@@ -62,6 +64,9 @@ def _table(mode: int, **regs: int) -> MotorArray:
                   A_SOLL=100000, IN_POSITION_COUNT=0, **regs)
 
 
+@pytest.mark.statements(
+    "mis:8.2.27:3", "mis:8.2.70:2", "mis:5.12.5:2", "mis:5.12.1:1", "mis:5.12.1:6",
+    "mis:5.12.5:3", "mis:5.12.6:4")
 def test_turn_table_multiturn_cw_example() -> None:
     """§5.12.1, mode 4: start 0, target 970000: P_SOLL = 150800 (the remainder of
     970000/409600) after a CW move of 970000 counts; P_IST stays in range and TURNTAB_COUNT
@@ -78,6 +83,9 @@ def test_turn_table_multiturn_cw_example() -> None:
     assert m.rotor_counts[0] == pytest.approx(970000, abs=600)
 
 
+@pytest.mark.statements(
+    "mis:8.2.26:3", "mis:8.2.27:3", "mis:8.2.70:1", "mis:8.2.70:2", "mis:5.12.5:2",
+    "mis:5.12.1:1", "mis:5.12.1:2", "mis:5.12.1:3", "mis:5.12.1:5", "mis:5.12.1:7", "mis:5.12.3:2")
 def test_turn_table_directions_and_limits() -> None:
     m = _table(c.TT_CW, P_SOLL=250000)
     m.write("MODE_REG", 2)
@@ -104,6 +112,8 @@ def test_turn_table_directions_and_limits() -> None:
 
 # --- zero search (§6.5) -----------------------------------------------------------------
 @pytest.mark.parametrize("mode", [13, 14])
+@pytest.mark.statements(
+    "mis:8.2.3:10", "mis:8.2.3:11", "mis:8.2.24:8", "mis:8.2.33:3", "mis:8.2.35:2", "mis:6.5.1:1")
 def test_zero_search_finds_the_sensor_and_goes_to_startmode(mode: int) -> None:
     home = -0.5  # rad: the home input is active at or below it
     m = MotorArray("MIS232", n=1, seed=0, home_position=home)
@@ -121,6 +131,8 @@ def test_zero_search_finds_the_sensor_and_goes_to_startmode(mode: int) -> None:
     assert m.read("ERR_BITS")[0] == 0
 
 
+@pytest.mark.statements(
+    "mis:8.2.3:13", "mis:8.2.33:3", "mis:8.2.74:2", "mis:6.5.2:2", "mis:6.5.8:2", "mis:2.2.2:2")
 def test_zero_search_on_an_external_input() -> None:
     m = _motor(HOME_MASK=0b100, V_HOME=3000, STARTMODE=1, V_SOLL=0, IN_POSITION_COUNT=0)
     m.write("MODE_REG", 13)
@@ -160,6 +172,8 @@ def test_fastmac_commands() -> None:
     assert m.read("ENCODER_POS")[0] == 84  # the encoder keeps its new zero
 
 
+@pytest.mark.statements(
+    "mis:8.2.3:1", "mis:8.2.21:1", "mis:8.2.31:4", "mis:8.2.31:24", "mis:7.2.4:1", "mis:7.2.4:2")
 def test_clear_errors_command_and_modes_refused_while_in_error() -> None:
     m = _motor(FLWERRMAX=1000, P_SOLL=4_000_000, V_SOLL=100000, A_SOLL=1000)
     m.set_input(load_torque=5.0)
@@ -181,6 +195,9 @@ def test_clear_errors_command_and_modes_refused_while_in_error() -> None:
 
 
 # --- status bits (§8.2.24) --------------------------------------------------------------
+@pytest.mark.statements(
+    "mis:8.2.24:3", "mis:8.2.24:4", "mis:8.2.24:5", "mis:8.2.24:6", "mis:8.2.24:7",
+    "mis:8.2.24:20", "mis:8.2.24:22")
 def test_status_bits_during_a_move() -> None:
     m = _motor(P_SOLL=409600, V_SOLL=30000, A_SOLL=3000, D_SOLL=0)
     m.write("MODE_REG", 2)
@@ -196,6 +213,8 @@ def test_status_bits_during_a_move() -> None:
 
 
 # --- limits and under-voltage (§5.9, §5.10) ---------------------------------------------
+@pytest.mark.statements(
+    "mis:8.2.31:6", "mis:5.9.3:2", "mis:5.9.4:1", "mis:5.9.4:2", "mis:6.6:1", "mis:7.2.6:1")
 def test_software_position_limit_stops_with_an_error() -> None:
     m = _motor(MAX_P_IST=100000, MIN_P_IST=-100000, V_SOLL=20000, ACC_EMERG=50000)
     m.write("MODE_REG", 1)
@@ -206,6 +225,9 @@ def test_software_position_limit_stops_with_an_error() -> None:
     assert m.read("P_IST")[0] < 100000 + 20000
 
 
+@pytest.mark.statements(
+    "mis:8.2.31:7", "mis:8.2.32:6", "mis:8.2.47:1", "mis:8.2.47:2", "mis:8.2.48:2",
+    "mis:8.2.68:16", "mis:8.2.68:17", "mis:5.10:1", "mis:5.10:2", "mis:6.6:1", "mis:7.2.7:1")
 def test_low_bus_voltage_actions() -> None:
     m = _motor(V_SOLL=10000, SETUP_BITS=(1 << 21) | (1 << 22))
     m.write("MODE_REG", 1)
@@ -219,6 +241,8 @@ def test_low_bus_voltage_actions() -> None:
 
 
 # --- sample buffer (§8.2.60–63) ---------------------------------------------------------
+@pytest.mark.statements(
+    "mis:8.2.60:1", "mis:8.2.60:2", "mis:8.2.60:3", "mis:8.2.61:2", "mis:8.2.63:2")
 def test_sample_buffer_records_registers() -> None:
     m = _motor(SAMPLE1=10, SAMPLE2=12, SAMPLE3=0, REC_CNT=50, S_TIME=2, V_SOLL=5000,
                V_START=10000)
@@ -251,6 +275,7 @@ def test_bad_writes_change_nothing() -> None:
 
 
 # --- power-on, safe mode, flash (§8.2.3, §8.2.33, §8.2.37) --------------------------------
+@pytest.mark.statements("mis:8.2.3:12", "mis:8.2.33:1", "mis:8.2.33:2")
 def test_startmode_from_a_setup_and_flash_in_safe_mode() -> None:
     m = MotorArray("MIS232", n=1, setup={"STARTMODE": 1, "V_SOLL": 5000, "V_START": 10000})
     assert m.read("MODE_REG")[0] == 1
@@ -269,11 +294,15 @@ def test_startmode_from_a_setup_and_flash_in_safe_mode() -> None:
     assert m.read("P_IST")[0] == 0
 
 
+@pytest.mark.statements("mis:8.2.37:2", "mis:6.5.2:1")
 def test_homemode_starts_a_zero_search_at_power_on() -> None:
     m = MotorArray("MIS232", n=1, setup={"HOMEMODE": 13, "STARTMODE": 2})
     assert m.read("MODE_REG")[0] == 13
 
 
+@pytest.mark.statements(
+    "mis:8.2.32:2", "mis:8.2.32:4", "mis:8.2.68:13", "mis:8.2.73:2", "mis:5.9.2:1", "mis:5.9.2:2",
+    "mis:5.9.4:1", "mis:5.9.5:1", "mis:6.6:4")
 def test_hardware_limit_input_and_its_warning_bits() -> None:
     m = _motor(PL_MASK=0b100, V_SOLL=5000, V_START=10000, SETUP_BITS=1 << 17)
     m.write("MODE_REG", 1)
@@ -296,6 +325,8 @@ def test_hardware_limit_input_and_its_warning_bits() -> None:
     assert not warn & c.WARN_POS_LIMIT and warn & c.WARN_POS_LIMIT_SEEN
 
 
+@pytest.mark.statements(
+    "mis:8.2.38:1", "mis:8.2.38:2", "mis:8.2.38:3", "mis:8.2.49:2", "mis:5.8.1:1")
 def test_absolute_encoder_register() -> None:
     m = MotorArray("MIS232", n=2, encoder_type=np.array([3, 4]))
     m.write_many({"V_SOLL": 100000, "A_SOLL": 10000, "MODE_REG": 1})
@@ -306,6 +337,7 @@ def test_absolute_encoder_register() -> None:
     assert m.read("ENCODER_TYPE").tolist() == [3, 4]
 
 
+@pytest.mark.statements("mis:8.2.34:2", "mis:8.2.36:2", "mis:6.5.1:3")
 def test_torque_zero_search_against_an_end_stop() -> None:
     """§6.5.7: with closed loop and current control the search runs into a mechanical stop
     until the current reaches T_HOME; that point is P_HOME; then to position 0 and STARTMODE

@@ -32,6 +32,7 @@ def test_below_the_pull_out_torque_no_step_is_lost_in_100_revolutions(rpm: float
 
 
 @pytest.mark.parametrize("rpm", [60.0, 300.0, 1200.0])
+@pytest.mark.statements("mis:8.2.19:2")
 def test_above_the_pull_out_torque_steps_are_lost_and_flwerrmax_trips(rpm: float) -> None:
     m = _running(rpm, 0.0)
     m.run(1.5)  # at speed first
@@ -45,6 +46,7 @@ def test_above_the_pull_out_torque_steps_are_lost_and_flwerrmax_trips(rpm: float
     assert abs(tr["FLWERR"][tripped[0] - 1, 0]) <= 20000  # tripped as it passed FLWERRMAX
 
 
+@pytest.mark.statements("mis:5.8.1:3")
 def test_lost_steps_come_in_whole_electrical_turns_and_the_encoder_sees_them() -> None:
     m = _running(300.0, 0.0)
     m.write("FLWERRMAX", 0)
@@ -72,6 +74,7 @@ def test_holding_torque_is_the_torque_angle_peak_at_standstill() -> None:
     assert m.lost_steps[0] != 0
 
 
+@pytest.mark.statements("mis:5.1.6:3")
 def test_back_emf_limits_the_current_at_speed() -> None:
     m = _running(2500.0, 0.0)
     m.write("A_SOLL", 5000)
@@ -85,6 +88,7 @@ def test_back_emf_limits_the_current_at_speed() -> None:
     assert m.pull_out_torque(2500.0)[0] < m.pull_out_torque(100.0)[0]
 
 
+@pytest.mark.statements("mis:8.2.7:3", "mis:8.2.8:2", "mis:8.2.8:3", "mis:8.2.24:18", "mis:5.1:1")
 def test_standby_current_after_standby_time() -> None:
     m = MotorArray("MIS232", n=1, seed=0)
     m.write_many({"STANDBY_TIME": 200, "STANDBY_CURRENT": 100, "P_SOLL": 10000, "MODE_REG": 2})
@@ -98,6 +102,7 @@ def test_standby_current_after_standby_time() -> None:
     assert m.current_amplitude[0] == pytest.approx(511 * amps, rel=0.02)
 
 
+@pytest.mark.statements("mis:8.2.3:2", "mis:6.1.1:1")
 def test_passive_mode_has_no_current_and_the_encoder_follows_a_turned_shaft() -> None:
     m = MotorArray("MIS232", n=1, seed=0)
     m.set_input(load_torque=-0.5)  # turns the free shaft forward
@@ -146,6 +151,7 @@ def test_threads_equal_serial_and_a_seed_repeats() -> None:
     np.testing.assert_array_equal(again.state, a.state)
 
 
+@pytest.mark.statements("mis:8.2.18:3")
 def test_without_an_encoder_steps_are_lost_unseen() -> None:
     """§8.2.18: FLWERR needs the encoder option; without it the lost steps are invisible to
     the firmware (no follow error, no error bit) but not to the truth."""

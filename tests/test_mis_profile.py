@@ -18,6 +18,7 @@ def _motor(**regs: int) -> MotorArray:
     return m
 
 
+@pytest.mark.statements("mis:8.2.5:3", "mis:6.2.1:1")
 def test_the_family_is_found_by_motor_type_and_v_soll_is_in_hundredths_of_rpm() -> None:
     m = _motor(V_SOLL=25000)
     assert type(m).__name__ == "MisMotorArray"
@@ -30,6 +31,7 @@ def test_the_family_is_found_by_motor_type_and_v_soll_is_in_hundredths_of_rpm() 
     assert m.rotor_counts[0] == pytest.approx(m.read("P_IST")[0], abs=2048)
 
 
+@pytest.mark.statements("mis:8.2.11:2", "mis:8.2.12:2", "mis:8.2.12:5", "mis:8.2.12:6")
 def test_v_start_example_of_the_manual() -> None:
     """§8.2.12: V_START 100 RPM, V_SOLL 200 RPM: ramp from 100 RPM; V_SOLL 50 RPM: decelerate
     to 100 RPM and stay; V_SOLL −50 RPM: stop, then run at −50 RPM."""
@@ -49,6 +51,7 @@ def test_v_start_example_of_the_manual() -> None:
     assert m.lost_steps[0] == 0
 
 
+@pytest.mark.statements("mis:8.2.3:4", "mis:8.2.6:2", "mis:8.2.12:4")
 def test_a_soll_and_v_start_changes_wait_for_standstill() -> None:
     m = _motor(V_START=1000, V_SOLL=30000, A_SOLL=1000)
     m.write("MODE_REG", 1)
@@ -64,6 +67,7 @@ def test_a_soll_and_v_start_changes_wait_for_standstill() -> None:
     assert tr[stop + 2] - tr[stop + 1] == -500  # the new A_SOLL: 5 RPM per ms
 
 
+@pytest.mark.statements("mis:8.2.1:3")
 def test_d_soll_decelerates_and_zero_means_a_soll() -> None:
     m = _motor(V_START=1000, V_SOLL=20000, A_SOLL=1000, D_SOLL=4000)
     m.write("MODE_REG", 1)
@@ -80,6 +84,7 @@ def test_d_soll_decelerates_and_zero_means_a_soll() -> None:
     assert np.diff(tr)[0] == -100
 
 
+@pytest.mark.statements("mis:8.2.12:3")
 def test_below_v_start_runs_without_a_ramp() -> None:
     m = _motor(V_START=10000, V_SOLL=3000)
     m.write("MODE_REG", 1)
@@ -87,6 +92,7 @@ def test_below_v_start_runs_without_a_ramp() -> None:
     assert tr.tolist() == [3000, 3000, 3000]
 
 
+@pytest.mark.statements("mis:8.2.3:5", "mis:8.2.24:5")
 def test_position_move_lands_on_p_soll_with_the_profile() -> None:
     m = _motor(V_START=1000, V_SOLL=30000, A_SOLL=2000, P_SOLL=409600 * 3)
     m.write("MODE_REG", 2)
@@ -100,6 +106,7 @@ def test_position_move_lands_on_p_soll_with_the_profile() -> None:
     assert abs(m.read("FLWERR")[0]) < 2048
 
 
+@pytest.mark.statements("mis:8.2.10:2")
 def test_writing_p_ist_in_position_mode_makes_a_move() -> None:
     """§8.2.10: P_IST = P_SOLL = 1000, P_IST := 500: the motor moves 500 steps forward and
     P_IST is again 1000."""
@@ -115,6 +122,7 @@ def test_writing_p_ist_in_position_mode_makes_a_move() -> None:
     assert m.rotor_counts[0] - before == pytest.approx(500, abs=160)
 
 
+@pytest.mark.statements("mis:8.2.4:2", "mis:8.2.10:3")
 def test_relative_moves_wrap_at_2_to_the_31() -> None:
     """§8.2.4: P_SOLL wraps at 2³¹ − 1 and the motor moves correctly; P_IST wraps too."""
     m = _motor(V_SOLL=300000, A_SOLL=500000, IN_POSITION_COUNT=0)  # no auto-correction:
@@ -127,6 +135,7 @@ def test_relative_moves_wrap_at_2_to_the_31() -> None:
     assert m.rotor_counts[0] == pytest.approx(4000, abs=100)
 
 
+@pytest.mark.statements("mis:8.2.3:9")
 def test_stop_mode_decelerates_then_goes_passive() -> None:
     m = _motor(V_START=1000, V_SOLL=20000, A_SOLL=1000)
     m.write("MODE_REG", 1)
@@ -142,6 +151,7 @@ def test_stop_mode_decelerates_then_goes_passive() -> None:
 @given(st.integers(-500_000, 500_000), st.integers(5000, 300000), st.integers(1, 300000),
        st.integers(100, 50000), st.integers(0, 50000))
 @settings(max_examples=30, deadline=None)
+@pytest.mark.statements("mis:8.2.3:5", "mis:8.2.12:2")
 def test_position_moves_land_exactly_without_overshoot(target: int, v_soll: int, v_start: int,
                                                        a_soll: int, d_soll: int) -> None:
     """Any move ends exactly on P_SOLL, P_IST never passes it, the speed never exceeds

@@ -47,6 +47,7 @@ def _end(program: str) -> str:
 
 
 # --- §9.7.1 remark, program pointer, §18.2.10 states -------------------------------------
+@pytest.mark.statements("mis:9.7.1:1")
 def test_remark_does_nothing_and_running_off_the_end_is_a_program_overflow() -> None:
     m = MotorArray("MIS232", seed=0)
     before = m.read_raw("V_SOLL").copy()
@@ -60,11 +61,13 @@ def test_remark_does_nothing_and_running_off_the_end_is_a_program_overflow() -> 
 
 # --- §9.7.2 set mode ---------------------------------------------------------------------
 @pytest.mark.parametrize(("mode", "code"), [("passive", 0), ("velocity", 1), ("gear", 3)])
+@pytest.mark.statements("mis:9.7.2:1")
 def test_set_mode(mode: str, code: int) -> None:
     m = _run(_end(f"mode mode={mode}\n"), 2)
     assert _reg(m, "MODE_REG") == code
 
 
+@pytest.mark.statements("mis:8.2.31:24", "mis:9.7.2:2")
 def test_set_mode_refused_with_errors_keeps_the_mode_and_goes_on() -> None:
     """§8.2.31: an active mode is refused while ERR_BITS ≠ 0; the program continues."""
     m = MotorArray("MIS232", seed=0)
@@ -77,6 +80,7 @@ def test_set_mode_refused_with_errors_keeps_the_mode_and_goes_on() -> None:
 
 
 # --- §9.7.4 move relative ----------------------------------------------------------------
+@pytest.mark.statements("mis:9.7.4:1", "mis:9.7.4:2")
 def test_move_relative_waits_for_in_position_and_overwrites_v_a_p1() -> None:
     m = _run(_end("move_relative distance=204800 velocity=300 acceleration=30000\n"
                   "set_output output=1 state=high\n"), 1)
@@ -88,6 +92,7 @@ def test_move_relative_waits_for_in_position_and_overwrites_v_a_p1() -> None:
     assert took > 100  # 0.5 rev at 300 RPM is 100 ms at least
 
 
+@pytest.mark.statements("mis:9.7.4:1", "mis:9.7.4:2")
 def test_move_relative_without_wait_goes_on_at_once_and_zero_keeps_v_soll() -> None:
     m = _run(_end("move_relative distance=-102400 wait=no\nset_output output=1 state=high\n"),
              1)
@@ -96,6 +101,7 @@ def test_move_relative_without_wait_goes_on_at_once_and_zero_keeps_v_soll() -> N
     assert _reg(m, "P_IST") == -102400
 
 
+@pytest.mark.statements("mis:9.7.4:1")
 def test_move_relative_is_relative_to_p_ist_and_takes_a_user_register() -> None:
     m = MotorArray("MIS232", seed=0)
     m.write_many({"P2": 40960, "A_SOLL": 20000})
@@ -108,6 +114,7 @@ def test_move_relative_is_relative_to_p_ist_and_takes_a_user_register() -> None:
 
 
 # --- §9.7.5 move relative + velocity change at a distance ----------------------------------
+@pytest.mark.statements("mis:9.7.5:1")
 def test_move_relative_velocity_change_at_distance() -> None:
     """§9.7.5: V_SOLL becomes the new velocity when the distance left reaches the change
     distance (tested every pass: in the first outer sample it is reached); always waits."""
@@ -125,6 +132,7 @@ def test_move_relative_velocity_change_at_distance() -> None:
 
 
 # --- §9.7.6 move relative + set outputs -----------------------------------------------------
+@pytest.mark.statements("mis:9.7.6:1")
 def test_move_relative_sets_outputs_when_done() -> None:
     m = _run(_end("set_outputs outputs=4:high\n"
                   "move_relative_outputs distance=40960 velocity=300 outputs=1:high,4:low\n"), 20)
@@ -134,6 +142,7 @@ def test_move_relative_sets_outputs_when_done() -> None:
 
 
 # --- §9.7.7 move absolute ---------------------------------------------------------------------
+@pytest.mark.statements("mis:9.7.7:1")
 def test_move_absolute_to_a_saved_position() -> None:
     m = MotorArray("MIS232", seed=0)
     m.write_many({"P3": -81920, "A_SOLL": 20000})
@@ -148,6 +157,7 @@ def test_move_absolute_to_a_saved_position() -> None:
 
 
 # --- §9.7.8 move sensor ----------------------------------------------------------------------
+@pytest.mark.statements("mis:9.7.8:1")
 def test_move_sensor_stops_distance_after_the_input() -> None:
     m = _run(_end("move_sensor distance=20480 velocity=300 safety_distance=409600 input=3 "
                   "condition=high\nset_output output=1 state=high\n"), 150)
@@ -159,6 +169,7 @@ def test_move_sensor_stops_distance_after_the_input() -> None:
     assert _reg(m, "P_IST") == at + 20480 and _reg(m, "P1") == 20480
 
 
+@pytest.mark.statements("mis:9.7.8:1")
 def test_move_sensor_never_passes_the_safety_distance() -> None:
     m = _run(_end("move_sensor distance=-20480 velocity=600 safety_distance=81920 input=3 "
                   "condition=high\nset_output output=1 state=high\n"))
@@ -167,6 +178,7 @@ def test_move_sensor_never_passes_the_safety_distance() -> None:
 
 
 # --- §9.7.9 set outputs --------------------------------------------------------------------
+@pytest.mark.statements("mis:9.7.9:1")
 def test_set_output_single_levels_and_pulse() -> None:
     m = _run(_end("set_output output=3 state=high\nset_output output=3 state=low\n"
                   "set_output output=5 state=high_pulse pulse_ms=50\n"), 1)
@@ -177,6 +189,7 @@ def test_set_output_single_levels_and_pulse() -> None:
     assert _reg(m, "OUTPUTS") == 0
 
 
+@pytest.mark.statements("mis:9.7.9:1")
 def test_low_pulse_and_multiple_outputs_leave_dont_care_alone() -> None:
     m = MotorArray("MIS232", seed=0)
     m.write("OUTPUTS", 0b10000001)
@@ -190,6 +203,7 @@ def test_low_pulse_and_multiple_outputs_leave_dont_care_alone() -> None:
 
 
 # --- §9.7.10 – §9.7.12 jumps ------------------------------------------------------------------
+@pytest.mark.statements("mis:9.7.10:1")
 def test_unconditional_jump() -> None:
     m = _run("jump line=3\nset_output output=1 state=high\nset_output output=2 state=high\n"
              "jump line=4\n", 1)
@@ -198,6 +212,7 @@ def test_unconditional_jump() -> None:
 
 @pytest.mark.parametrize(("inputs", "condition", "taken"),
                          [(0b100, "high", True), (0, "high", False), (0, "low", True)])
+@pytest.mark.statements("mis:9.7.11:1")
 def test_jump_single_input_level(inputs: int, condition: str, taken: bool) -> None:
     m = MotorArray("MIS232", seed=0)
     m.set_input(digital_inputs=inputs)
@@ -217,6 +232,7 @@ def _edges(m: MotorArray, n: int) -> None:
         m.step(4)
 
 
+@pytest.mark.statements("mis:9.7.11:1")
 def test_edges_a_jump_sees_only_in_the_pass_after_them_a_wait_sees_all() -> None:
     """§9.7.11: a jump sees a transition "during the last 30 microseconds" (the pass after the
     outer sample that brought it), §9.7.14: a wait tests every pass, so it sees every edge."""
@@ -246,6 +262,7 @@ def test_jump_sees_the_filtered_input() -> None:
                          [("and", "1:high,2:low", True), ("and", "1:high,2:high", False),
                           ("or", "1:low,2:high", False), ("or", "1:low,in_position:high", True),
                           ("and", "error:low,in_position:high", True)])
+@pytest.mark.statements("mis:9.7.12:1")
 def test_jump_multiple_inputs(operand: str, pattern: str, taken: bool) -> None:
     m = MotorArray("MIS232", seed=0)
     m.write("MODE_REG", 2)
@@ -259,6 +276,7 @@ def test_jump_multiple_inputs(operand: str, pattern: str, taken: bool) -> None:
 
 
 # --- §9.7.13 – §9.7.15 waits ----------------------------------------------------------------
+@pytest.mark.statements("mis:9.7.13:1")
 def test_wait_ms() -> None:
     m = _run(_end("set_output output=1 state=high\nwait_ms time=100\n"
                   "set_output output=1 state=low\n"), 1)
@@ -270,6 +288,7 @@ def test_wait_ms() -> None:
 
 @pytest.mark.parametrize(("condition", "levels"), [("falling", (1, 0)), ("rising", (0, 1)),
                                                    ("low", (1, 0)), ("high", (0, 1))])
+@pytest.mark.statements("mis:9.7.14:1")
 def test_wait_single_input(condition: str, levels: tuple[int, int]) -> None:
     m = MotorArray("MIS232", seed=0)
     m.set_input(digital_inputs=levels[0] << 6)
@@ -284,6 +303,7 @@ def test_wait_single_input(condition: str, levels: tuple[int, int]) -> None:
     assert _reg(m, "OUTPUTS") == 1
 
 
+@pytest.mark.statements("mis:9.7.15:1")
 def test_wait_multiple_inputs_and_or() -> None:
     m = _run(_end("wait_inputs operand=and inputs=1:high,2:high\n"
                   "set_output output=1 state=high\n"
@@ -301,6 +321,7 @@ def test_wait_multiple_inputs_and_or() -> None:
 
 
 # --- §9.7.16 – §9.7.18 registers ----------------------------------------------------------
+@pytest.mark.statements("mis:9.7.16:1")
 def test_set_register_native_and_engineering_units() -> None:
     m = _run(_end("set_register register=V_SOLL value=123.45rpm\n"
                   "set_register register=P4 value=1.5rev\nset_register register=65 value=777\n"),
@@ -311,6 +332,7 @@ def test_set_register_native_and_engineering_units() -> None:
 @pytest.mark.parametrize(("op", "value", "taken"), [("=", 5, True), ("!=", 5, False),
                                                     ("<", 6, True), (">", 5, False),
                                                     ("<=", 5, True), (">=", 6, False)])
+@pytest.mark.statements("mis:9.7.17:1")
 def test_jump_register(op: str, value: int, taken: bool) -> None:
     m = MotorArray("MIS232", seed=0)
     m.write("P2", 5)
@@ -321,6 +343,7 @@ def test_jump_register(op: str, value: int, taken: bool) -> None:
     assert _reg(m, "OUTPUTS") == (0 if taken else 1)
 
 
+@pytest.mark.statements("mis:9.7.18:1")
 def test_wait_register_sees_it_as_the_firmware_updates_it() -> None:
     m = _run(_end("move_relative distance=409600 velocity=300 wait=no\n"
                   "wait_register register=P_IST operator=>= value=204800\n"
@@ -333,6 +356,7 @@ def test_wait_register_sees_it_as_the_firmware_updates_it() -> None:
 
 
 # --- §9.7.19 – §9.7.21 positions and zero search ------------------------------------------
+@pytest.mark.statements("mis:9.7.19:1", "mis:9.7.20:1")
 def test_save_and_set_position() -> None:
     m = _run(_end("move_relative distance=40960 velocity=600\nsave_position register=register2\n"
                   "set_position position=12345\n"))
@@ -344,6 +368,7 @@ def test_save_and_set_position() -> None:
     assert _reg(m, "P_IST") == -5 and _reg(m, "P_SOLL") == -5
 
 
+@pytest.mark.statements("mis:9.7.21:1")
 def test_zero_search_waits_until_done() -> None:
     home = -0.5
     m = MotorArray("MIS232", seed=0, home_position=home)
@@ -358,6 +383,7 @@ def test_zero_search_waits_until_done() -> None:
 
 
 # --- §9.7.22 – §9.7.24 FastMAC and binary ---------------------------------------------------
+@pytest.mark.statements("mis:9.7.22:1")
 def test_fastmac_change_mode_and_activate_register() -> None:
     """§9.7.22: "the value in register no. 65 (V1) will be written to register no. 5"."""
     m = MotorArray("MIS232", seed=0)
@@ -373,6 +399,7 @@ def test_fastmac_change_mode_and_activate_register() -> None:
     assert _reg(m, "MODE_REG") == 2
 
 
+@pytest.mark.statements("mis:8.2.21:3", "mis:9.7.23:1")
 def test_fastmac_macro_command() -> None:
     """FastMac 3 (COMMAND 99, §8.2.21): P_IST = 0; FastMac 1: errors cleared."""
     m = MotorArray("MIS232", seed=0)
@@ -383,6 +410,7 @@ def test_fastmac_macro_command() -> None:
     assert _reg(m, "P_IST") == 0 and _reg(m, "ERR_BITS") == 0 and _reg(m, "COMMAND") == 0
 
 
+@pytest.mark.statements("mis:9.7.24:1")
 def test_binary_command_runs_its_instruction() -> None:
     code = encode_command(parse_program("set_output output=6 state=high\n")[0]).hex()
     m = _run(_end(f"binary code={code}\n"), 1)
@@ -390,6 +418,7 @@ def test_binary_command_runs_its_instruction() -> None:
 
 
 # --- §9.7.25 – §9.7.27 calculator and comparison ----------------------------------------------
+@pytest.mark.statements("mis:9.7.25:1")
 def test_calculator_left_to_right_in_32_bits() -> None:
     m = MotorArray("MIS232", seed=0)
     m.write_many({"V_SOLL": 100, "P2": 2147483647, "P3": -7})
@@ -407,6 +436,7 @@ def test_calculator_left_to_right_in_32_bits() -> None:
 
 
 @pytest.mark.parametrize(("op", "taken"), [(">=", True), ("<", False), ("=", False)])
+@pytest.mark.statements("mis:9.7.27:1")
 def test_jump_according_to_a_comparison(op: str, taken: bool) -> None:
     """§9.7.27's example: register 3 (P_SOLL) >= register 51 (P2)."""
     m = MotorArray("MIS232", seed=0)
@@ -419,6 +449,7 @@ def test_jump_according_to_a_comparison(op: str, taken: bool) -> None:
 
 
 # --- timing (§9.8) -----------------------------------------------------------------------------
+@pytest.mark.statements("mis:9.8:2")
 def test_lines_share_the_main_loop_time_between_outer_samples() -> None:
     """A counting loop of 2 lines (calculator of two operands 120 µs, jump 30 µs) runs
     1000/150 times per outer sample on average."""
@@ -427,6 +458,7 @@ def test_lines_share_the_main_loop_time_between_outer_samples() -> None:
 
 
 # --- flash, power-on, control -------------------------------------------------------------------
+@pytest.mark.statements("mis:9.1:1", "mis:9.1:2")
 def test_program_survives_reset_and_starts_at_power_on_in_position_mode() -> None:
     m = MotorArray("MIS232", seed=0)
     m.write("STARTMODE", 1)
@@ -440,6 +472,7 @@ def test_program_survives_reset_and_starts_at_power_on_in_position_mode() -> Non
     assert m.program_text() is not None and m.program_status().state == 9
 
 
+@pytest.mark.statements("mis:8.2.68:3", "mis:9.1:3")
 def test_setup_bit_1_keeps_the_program_from_starting() -> None:
     m = MotorArray("MIS232", seed=0)
     m.write_many({"SETUP_BITS": 2, "STARTMODE": 1})
@@ -497,6 +530,7 @@ def test_motors_without_a_program_step_as_before() -> None:
     assert np.array_equal(a.regs, b.regs) and np.array_equal(a.state, b.state)
 
 
+@pytest.mark.statements("mis:9.7.5:2")
 def test_a_fatal_error_holds_the_program_at_its_move() -> None:
     """§9.7.5: after a fatal error the program stays at the move until the motor is reset."""
     m = _run(_end("move_relative distance=409600 velocity=300\nset_output output=1 "
@@ -557,6 +591,7 @@ def _program_of(m: MotorArray, i: int = 0) -> tuple[str | None, tuple]:
     return m.program_text(i), (s.state, s.line, s.error, s.checksum)
 
 
+@pytest.mark.statements("mis:8.2.22:11")
 def test_command_342_erases_the_stored_program() -> None:
     """Writing COMMAND 342 erases the program of the motors written (it stops, a reset no
     longer starts it); COMMAND reads 0 and the other motors keep theirs."""

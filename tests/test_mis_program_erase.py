@@ -33,6 +33,7 @@ def _modbus_write(twin: Twin, first: int, values: list[int]) -> mb.Response:
     return mb.decode_response(reply)
 
 
+@pytest.mark.statements("mis:8.2.22:11")
 def test_mactalk_write_of_command_342_erases_the_program() -> None:
     twin = _twin()
     reply = twin.session().feed(m32.encode_write_value(ADDRESS, COMMAND, 342))
@@ -40,6 +41,7 @@ def test_mactalk_write_of_command_342_erases_the_program() -> None:
     assert twin.m.program_text() is None and twin.m.program_status().name == "passive"
 
 
+@pytest.mark.statements("mis:8.2.22:11")
 def test_modbus_write_of_command_342_erases_the_program() -> None:
     twin = _twin()
     assert isinstance(_modbus_write(twin, COMMAND, [342]), mb.WriteResponse)
@@ -65,6 +67,7 @@ def rig() -> Iterator[Rig]:
     r.close()
 
 
+@pytest.mark.statements("mis:8.2.22:11")
 def test_canopen_sdo_write_of_command_342_erases_the_program(rig: Rig) -> None:
     """Register 24 is object 2012h sub-index 24 (§11.4.6)."""
     rig.node().sdo[0x2012][COMMAND].raw = 342

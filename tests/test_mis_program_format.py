@@ -84,6 +84,7 @@ def test_a_program_bigger_than_the_program_flash_is_refused() -> None:
     assert m.program_text() is None
 
 
+@pytest.mark.statements("mis:9.8:1")
 def test_costs_follow_the_timing_table() -> None:
     """§9.8: move relative 90/150/210 µs, absolute 60/120/180, set a register 60, jump 30."""
     cmds = parse_program("move_relative distance=1\nmove_relative distance=1 velocity=1\n"

@@ -29,6 +29,8 @@ def _largest_velocity_step(v: np.ndarray) -> float:
 
 
 # --- §5.9.3, §5.9.5: software limits in position and gear mode ----------------------------
+@pytest.mark.statements(
+    "mis:8.2.27:2", "mis:8.2.68:13", "mis:5.9.3:2", "mis:5.9.5:1", "mis:5.9.5:2")
 def test_position_limit_in_position_mode_stops_at_the_limit_with_the_normal_deceleration(
         ) -> None:
     """§5.9.3: "in position mode … the motor will stop at Position Limit Max"; §5.9.5 (SETUP_BITS
@@ -51,6 +53,7 @@ def test_position_limit_in_position_mode_stops_at_the_limit_with_the_normal_dece
     assert np.count_nonzero(down < 0) > 250  # 300 RPM at 1000 RPM/s: about 290 ms
 
 
+@pytest.mark.statements("mis:8.2.27:2", "mis:8.2.31:6", "mis:5.9.4:2", "mis:7.2.6:1")
 def test_position_limit_in_position_mode_without_bit_17_is_an_error_at_the_limit() -> None:
     """§5.9.4: "The motor will stop and activate an error, when reaching a limit" — and it
     stops at the limit, not beyond (§5.9.3)."""
@@ -63,6 +66,7 @@ def test_position_limit_in_position_mode_without_bit_17_is_an_error_at_the_limit
     assert m.read("MODE_REG")[0] == c.PASSIVE
 
 
+@pytest.mark.statements("mis:8.2.26:2", "mis:5.9.3:2", "mis:5.9.3:3", "mis:6.6:1")
 def test_position_limit_in_gear_mode_is_never_passed() -> None:
     """§5.9.3: "in position mode or gear mode, the motor will stop at Position Limit Min"."""
     m = _motor(MAX_P_IST=100000, MIN_P_IST=-50000, V_SOLL=30000, A_SOLL=2000,
@@ -75,6 +79,7 @@ def test_position_limit_in_gear_mode_is_never_passed() -> None:
 
 
 # --- §8.2.24 bit 22, §8.2.105 (register 177) ---------------------------------------------
+@pytest.mark.statements("mis:8.2.24:22", "mis:8.2.105:2")
 def test_in_target_position_waits_for_the_standstill_time() -> None:
     """§8.2.105: INTARGETPOSITIONTIME is the "time the motor must stand still before
     InTargetPosition (reg 25) flag is set"."""
@@ -90,6 +95,8 @@ def test_in_target_position_waits_for_the_standstill_time() -> None:
 
 
 # --- §8.2.77–78: the dedicated outputs ----------------------------------------------------
+@pytest.mark.statements(
+    "mis:8.2.17:3", "mis:8.2.69:3", "mis:8.2.77:2", "mis:8.2.78:3", "mis:5.6.2:1")
 def test_in_position_and_error_outputs_drive_outputs() -> None:
     """INPOS_MASK: "The In Position output will then be set after a movement has completed";
     ERROR_MASK: "set when any error is set"; both only on pins IOSETUP makes outputs
@@ -112,6 +119,7 @@ def test_in_position_and_error_outputs_drive_outputs() -> None:
 
 
 # --- §8.2.68 SETUP_BITS --------------------------------------------------------------------
+@pytest.mark.statements("mis:8.2.68:2")
 def test_setup_bit_0_inverts_the_motor_direction() -> None:
     """Bit 0: "Invert motor direction": a positive move turns the shaft negative; the
     encoder counts with the motor, so the follow error stays small."""
@@ -124,6 +132,7 @@ def test_setup_bit_0_inverts_the_motor_direction() -> None:
     assert abs(m.read("FLWERR")[0]) < 1000
 
 
+@pytest.mark.statements("mis:8.2.68:6", "mis:5.2.3:2")
 def test_setup_bit_6_recalculates_in_physical_position_while_moving() -> None:
     """Bit 6: "InPhysPosMode (If set, recalc InPhysPos continuously. If 0, only after
     stop)"."""
@@ -138,6 +147,7 @@ def test_setup_bit_6_recalculates_in_physical_position_while_moving() -> None:
     assert seen == {0: False, c.SETUP_IN_PHYS_POS_CONTINUOUS: True}
 
 
+@pytest.mark.statements("mis:8.2.32:4", "mis:8.2.68:21", "mis:8.2.73:2", "mis:5.9.6:1")
 def test_setup_bit_28_limits_without_memory() -> None:
     """Bit 28 (§5.9.6): "the sensor has-been warning is automatically cleared when the
     direction of the motor is reversed and the limit switch is no longer active"."""
@@ -155,6 +165,7 @@ def test_setup_bit_28_limits_without_memory() -> None:
 
 
 # --- §8.2.122 MOTOR_REV ---------------------------------------------------------------------
+@pytest.mark.statements("mis:8.2.122:1", "mis:8.2.122:2")
 def test_motor_rev_counts_revolutions_and_is_writable() -> None:
     """"Counts multiples of 409600 counts since power on", R/W."""
     m = _motor(V_SOLL=30000, A_SOLL=3000)
@@ -170,6 +181,7 @@ def test_motor_rev_counts_revolutions_and_is_writable() -> None:
 
 
 # --- §5.11.2: passive via the stop ramp ----------------------------------------------------
+@pytest.mark.statements("mis:8.2.3:9", "mis:5.11.2:2")
 def test_mode_0_on_a_running_motor_decelerates_with_the_stop_ramp_first() -> None:
     """§5.11.2: "When changing to Passive mode the motor goes into Stop mode to decelerate
     according to the 'Deceleration'-ramp. When 'Actual velocity' is 0 … the motor goes
@@ -191,6 +203,7 @@ def test_mode_0_on_a_running_motor_decelerates_with_the_stop_ramp_first() -> Non
 
 
 # --- §12.5: the worked example of Write Multiple Registers ------------------------------
+@pytest.mark.statements("mis:8.2.42:1", "mis:12.1:6", "mis:12.5:1")
 def test_modbus_write_multiple_example_is_accepted_as_the_manual_replies() -> None:
     """§12.5: V1 (65) = 409 600 and V2 (66) = 13 on slave 60; the manual shows the motor's
     reply {0x3C, 0x10, 0x00, 0x82, 0x00, 0x04, CRC}."""
@@ -210,6 +223,9 @@ def test_modbus_write_multiple_example_is_accepted_as_the_manual_replies() -> No
 @pytest.mark.parametrize("command, names", [
     (108, ("P1", "V1", "A1", "T1")), (109, ("P2", "V2", "A2", "T2")),
     (110, ("P3", "V3", "A3", "T3")), (111, ("P4", "V4", "A4", "T4"))])
+@pytest.mark.statements(
+    "mis:8.2.20:1", "mis:8.2.20:2", "mis:8.2.21:6", "mis:8.2.21:7", "mis:8.2.21:8",
+    "mis:8.2.21:9", "mis:8.2.41:9", "mis:8.2.42:2", "mis:8.2.43:2", "mis:8.2.44:2")
 def test_fastmac_register_sets_load_the_profile(command: int, names: tuple[str, ...]) -> None:
     """FastMac 12–15 (commands 108–111): P_SOLL, V_SOLL, A_SOLL and the running current from
     position, velocity, acceleration and current register n."""
@@ -220,6 +236,7 @@ def test_fastmac_register_sets_load_the_profile(command: int, names: tuple[str, 
 
 
 @pytest.mark.parametrize("command, name", [(113, "P7"), (114, "P8")])
+@pytest.mark.statements("mis:8.2.21:10", "mis:8.2.21:11", "mis:8.2.41:10")
 def test_fastmac_relative_moves_add_p7_and_p8(command: int, name: str) -> None:
     """FastMac 17/18 (commands 113/114): P_SOLL = P_IST + position register 7 / 8."""
     m = _motor(P_IST=1000, **{name: -400})
@@ -229,6 +246,8 @@ def test_fastmac_relative_moves_add_p7_and_p8(command: int, name: str) -> None:
 
 # --- §8.2.45–46, §2.3.5: the eight analogue inputs -------------------------------------
 @pytest.mark.parametrize("k", range(1, 9))
+@pytest.mark.statements(
+    "mis:8.2.45:1", "mis:8.2.45:2", "mis:8.2.46:1", "mis:8.2.52:2", "mis:2.3.5:2", "mis:2.3.5:3")
 def test_each_analogue_input_has_its_registers(k: int) -> None:
     """ANALOGUE_INPUTn (register 88 + n) is the raw 0 … 5 V value of IOn; ANALOGUE_FILTEREDn
     (80 + n) its filtered value; AFZUP_CONFMIN discards raw samples below it."""
@@ -251,6 +270,7 @@ def test_each_analogue_input_has_its_registers(k: int) -> None:
 
 
 # --- §8.2.60–64: the fourth channel and the buffer size ----------------------------------
+@pytest.mark.statements("mis:8.2.60:2", "mis:8.2.63:2", "mis:8.2.64:1")
 def test_sample4_records_and_the_buffer_holds_buf_size_samples() -> None:
     m = _motor(SAMPLE1=0, SAMPLE2=0, SAMPLE3=0, SAMPLE4=10, REC_CNT=1024, S_TIME=1,
                V_SOLL=5000, V_START=10000)
@@ -263,6 +283,7 @@ def test_sample4_records_and_the_buffer_holds_buf_size_samples() -> None:
 
 
 # --- §5.9.2, §8.2.72: the negative limit input --------------------------------------------
+@pytest.mark.statements("mis:8.2.32:3", "mis:8.2.72:2", "mis:5.9.2:1", "mis:5.9.2:3")
 def test_negative_limit_input_of_nl_mask() -> None:
     m = _motor(NL_MASK=0b1000, V_SOLL=-5000, V_START=10000, SETUP_BITS=c.SETUP_NO_LIMIT_ERROR)
     m.write("MODE_REG", c.VELOCITY)
@@ -276,6 +297,7 @@ def test_negative_limit_input_of_nl_mask() -> None:
 
 
 # --- §8.2.121, §8.2.131: the velocities ---------------------------------------------------
+@pytest.mark.statements("mis:8.2.121:2", "mis:8.2.131:2")
 def test_v_ist_calc_and_v_encoder_follow_the_motion() -> None:
     m = _motor(V_SOLL=12000, A_SOLL=5000)
     m.write("MODE_REG", c.VELOCITY)
@@ -286,6 +308,9 @@ def test_v_ist_calc_and_v_encoder_follow_the_motion() -> None:
 
 
 # --- §8.2.108–114: the closed-loop current scale ------------------------------------------
+@pytest.mark.statements(
+    "mis:8.2.108:2", "mis:8.2.109:2", "mis:8.2.110:2", "mis:8.2.112:3", "mis:8.2.113:2",
+    "mis:5.3.7:1")
 def test_closed_loop_current_scale_stays_within_its_limits() -> None:
     """ACTUAL_TORQUE stays within CUR_SCALE_MIN … CUR_SCALE_MAX; a larger CUR_SCALE_INC
     (time per step up) and CUR_SCALE_DEC / CUR_SCALE_FACTOR (time per step down) slow the
@@ -302,6 +327,7 @@ def test_closed_loop_current_scale_stays_within_its_limits() -> None:
 
 
 # --- §5.6 type 2 zero search: the crawl velocity ------------------------------------------
+@pytest.mark.statements("mis:8.2.125:2", "mis:6.5.1:2")
 def test_zero_search_type_2_leaves_the_sensor_at_v_home_crawl() -> None:
     """V_HOME_CRAWL (§8.2.125): type 2 leaves the sensor at this velocity (0: V_HOME/64)."""
     m = MotorArray("MIS232", n=1, seed=0, home_position=-0.5)
@@ -313,6 +339,7 @@ def test_zero_search_type_2_leaves_the_sensor_at_v_home_crawl() -> None:
 
 
 # --- §8.2.96: not saved -------------------------------------------------------------------
+@pytest.mark.statements("mis:8.2.96:2")
 def test_notsaved_is_zero_after_a_reset() -> None:
     """NOTSAVED: "not used by the firmware", 0 after power-on, even when saved in flash."""
     m = _motor(NOTSAVED=77)
@@ -323,6 +350,7 @@ def test_notsaved_is_zero_after_a_reset() -> None:
 
 
 # --- §8.2.67 bit 5, §5.10.2 bit 23 -------------------------------------------------------
+@pytest.mark.statements("mis:8.2.67:6")
 def test_zero_search_bit_5_disables_the_time_out() -> None:
     """ZERO_SEARCH_BITS bit 5: "Disable zero search time out"."""
     m = _motor(HOME_MASK=1, V_HOME=-3000, V_HOME_TIMEOUT=200, ZERO_SEARCH_BITS=1 << 5)
@@ -331,6 +359,7 @@ def test_zero_search_bit_5_disables_the_time_out() -> None:
     assert m.read("ERR_BITS")[0] == 0 and m.read("MODE_REG")[0] == c.ZERO_SEARCH_1
 
 
+@pytest.mark.statements("mis:8.2.68:18", "mis:5.10:3")
 def test_low_bus_voltage_bit_23_sets_v_soll_to_0() -> None:
     """SETUP_BITS bit 23: "Low bus voltage" sets V_SOLL to 0 RPM; the motor decelerates and
     stays in its mode (§5.10)."""
@@ -344,6 +373,7 @@ def test_low_bus_voltage_bit_23_sets_v_soll_to_0() -> None:
 
 
 # --- §8.2.68 SETUP_BITS 5, 12, 16 ----------------------------------------------------------
+@pytest.mark.statements("mis:8.2.68:5")
 def test_setup_bit_5_syncs_the_encoder_to_p_ist_on_entering_an_active_mode() -> None:
     """Bit 5: "Synchronize encoder position to P_IST after change to active mode. Follow
     error = 0"."""
@@ -356,6 +386,7 @@ def test_setup_bit_5_syncs_the_encoder_to_p_ist_on_entering_an_active_mode() -> 
             assert abs(m.read("FLWERR")[0]) < 1000
 
 
+@pytest.mark.statements("mis:8.2.68:9")
 def test_setup_bit_12_keeps_the_external_encoder_over_a_reset() -> None:
     """Bit 12 KeepExtEncoder: "Do not zero the external encoder count on startup"."""
     for bits, kept in ((0, 0), (c.SETUP_KEEP_EXT_ENCODER, 1234)):
@@ -365,6 +396,7 @@ def test_setup_bit_12_keeps_the_external_encoder_over_a_reset() -> None:
         assert m.read("EXT_ENCODER")[0] == kept
 
 
+@pytest.mark.statements("mis:8.2.68:12")
 def test_setup_bit_16_inverts_the_external_encoder_count() -> None:
     """Bit 16: "External Encoder counting direction (1 = inverse)"."""
     for bits, sign in ((0, 1), (c.SETUP_EXT_ENCODER_INVERSE, -1)):
@@ -403,6 +435,7 @@ def _search_over_a_sensor(mode: int, bits: int, start_input: bool = False,
 
 
 @pytest.mark.parametrize(("mode", "near"), [(c.ZERO_SEARCH_1, 200.0), (c.ZERO_SEARCH_2, 50.0)])
+@pytest.mark.statements("mis:8.2.67:4", "mis:6.5.1:1", "mis:6.5.1:2", "mis:6.5.4:2")
 def test_zero_search_bit_2_finds_the_back_side_of_the_sensor(mode: int, near: float) -> None:
     """ZERO_SEARCH_BITS bit 2, "Search for opposite side of sensor": the zero is on the
     sensor's back side instead of its front side, in both types; type 2 takes the edge at its
@@ -414,6 +447,7 @@ def test_zero_search_bit_2_finds_the_back_side_of_the_sensor(mode: int, near: fl
 
 
 @pytest.mark.parametrize("mode", [c.ZERO_SEARCH_1, c.ZERO_SEARCH_2])
+@pytest.mark.statements("mis:8.2.67:5", "mis:6.5.4:3")
 def test_zero_search_bit_4_takes_the_position_where_the_motor_is(mode: int) -> None:
     """ZERO_SEARCH_BITS bit 4, "Ignore switch": the sensor input is not looked at, the actual
     position becomes the zero at once (here with the input active from the start, which would
@@ -423,6 +457,7 @@ def test_zero_search_bit_4_takes_the_position_where_the_motor_is(mode: int) -> N
 
 
 @pytest.mark.parametrize("mode", [c.ZERO_SEARCH_1, c.ZERO_SEARCH_2])
+@pytest.mark.statements("mis:8.2.67:3", "mis:6.5.4:1")
 def test_zero_search_bit_1_turns_at_a_limit_switch(mode: int) -> None:
     """ZERO_SEARCH_BITS bit 1, "Change direction on limit": a search that meets the limit
     switch ahead before its sensor turns and finds the sensor behind it, from the other side
