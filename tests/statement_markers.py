@@ -144,13 +144,16 @@ def slug(heading: str) -> str:
 
 
 def anchors(page: Path) -> set[str]:
-    """The heading anchors of a Markdown page (a repeated one as mkdocs numbers it:
-    ``name``, ``name_1``, …); fenced code is skipped."""
+    """The anchors of a Markdown page: its headings' (a repeated one as mkdocs numbers it:
+    ``name``, ``name_1``, …) and the explicit ones (``<a id="s18"></a>``); fenced code is
+    skipped."""
     out: set[str] = set()
     fenced = False
     for line in page.read_text(encoding="utf-8").splitlines():
         if line.lstrip().startswith(("```", "~~~")):
             fenced = not fenced
+        if not fenced:
+            out.update(re.findall(r"<a\s+(?:id|name)=\"([^\"]+)\"", line))
         m = None if fenced else re.match(r"#{1,6}\s+(.*?)\s*#*\s*$", line)
         if m:
             base = anchor = slug(m.group(1))

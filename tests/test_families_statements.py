@@ -320,8 +320,9 @@ def test_a_registers_status_derives_from_its_statements() -> None:
 
     assert derived("modelled", DECISION) == "modelled"
     assert derived("modelled", "stored only") == "stored only"
-    assert derived("modelled", "stored only", "not modelled") == "not modelled"
-    assert derived(DECISION, "not modelled") == "not modelled"
+    assert derived("modelled", "stored only", "not modelled") == "partly modelled"
+    assert derived(DECISION, "not modelled") == "partly modelled"
+    assert derived("stored only", "not modelled") == "not modelled"
 
 
 def test_a_modelled_register_with_a_not_modelled_statement_is_reported() -> None:
@@ -331,8 +332,15 @@ def test_a_modelled_register_with_a_not_modelled_statement_is_reported() -> None
     st = _load(_s(registers=[modelled]),
                _s("mis:8.2.13:2", registers=[modelled], status="not modelled", why="w"))
     assert st.conflicts(CONFORMANCE) == [
-        f"{modelled}: modelled in {CONFORMANCE.source}, but not modelled in mis:8.2.13:2"]
+        f"{modelled}: modelled in {CONFORMANCE.source}, but not modelled in mis:8.2.13:2 "
+        "(partly modelled, then)"]
     assert _load(_s(registers=[modelled])).conflicts(CONFORMANCE) == []
+    partly = Conformance(TABLE, {"registers": {modelled: {"status": "partly modelled",
+                                                          "tests": ["test_a.py::test_one"]}}},
+                         "<p>")
+    assert st.conflicts(partly) == []
+    assert _load(_s(registers=[modelled])).conflicts(partly) == [
+        f"{modelled}: partly modelled in <p>, but no statement about it is not modelled"]
     stored = Conformance(TABLE, {"registers": {modelled: {"status": "stored only",
                                                           "why": "w"}}}, "<c>")
     assert st.conflicts(stored) == []
@@ -377,10 +385,10 @@ def test_the_reference_page_lists_the_statements_and_their_counts() -> None:
     assert "| §5 | 0 | 0 | 0 | 1 | 1 |" in md
     assert "| §8 | 1 | 0 | 1 | 0 | 2 |" in md
     assert "| all | 1 | 0 | 1 | 1 | 3 |" in md
-    assert "Registers: 1 modelled, 0 stored only, 1 not modelled," in md
+    assert "Registers: 1 modelled, 1 partly modelled, 0 stored only, 0 not modelled," in md
     rows = {ln.split(" | ")[1]: ln for ln in md.splitlines() if ln.startswith("| ")
             and ln[2].isdigit()}
-    assert rows["ACTUAL_TORQUE"].endswith("| not modelled (2) |")
+    assert rows["ACTUAL_TORQUE"].endswith("| partly modelled (2) |")
     assert rows["V_SOLL"].endswith("| modelled (1) |")
     assert rows["P_SOLL"].endswith("|  |")
     assert ("| ACTUAL_TORQUE | mis:8.2.13:2 | 8.2.13 | It reads 0 in passive mode. | "

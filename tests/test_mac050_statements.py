@@ -1271,8 +1271,8 @@ def test_uit_and_the_position_limits_work_in_at_mode_too() -> None:
 @pytest.mark.statements("mac050_141:3.2.42:4")
 def test_the_fastmac_home_command_runs_the_home_mode_of_the_high_byte() -> None:
     """Manual 3.2.42: HOME_MODE's high byte is the home mode a FastMAC home command starts."""
-    from jvl_gym.protocol import fastmac as fm
-    from jvl_gym.protocol.twin import Twin
+    from jvl_gym.protocol.mactalk import fastmac as fm
+    from jvl_gym.protocol.mactalk.twin16 import Twin
 
     m = _motor()
     m.write("CNTRL_BITS", 3)  # USERINTF = 11: FastMAC, latched at the next power-on

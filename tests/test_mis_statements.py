@@ -10,8 +10,8 @@ import pytest
 
 from jvl_gym import MotorArray
 from jvl_gym.families.mis import constants as c
+from jvl_gym.motor.array import ModeError
 from jvl_gym.registers import RegisterError
-from jvl_gym.sim import ModeError
 
 #: 0.01 RPM per ms per RPM/s: a ramp of A RPM/s changes V_IST by A/10 units per ms
 _UNITS_PER_MS = 0.1
@@ -709,7 +709,7 @@ def test_s_time_is_the_sample_period() -> None:
 def test_modbus_setup_layout() -> None:
     """§8.2.66 / §12.1: bit 0 enables Modbus on the MacTalk (RS-485) channel, bits 2–3 the
     parity (0 none, 1 odd, 2 even), bit 5 two stop bits; the register is stored."""
-    from jvl_gym.protocol import modbus as mb
+    from jvl_gym.protocol.modbus import codec as mb
 
     assert mb.decode_setup(0b1) == mb.ModbusSetup(True, False, "N", 1)
     assert mb.decode_setup(0b1000) == mb.ModbusSetup(False, False, "E", 1)
@@ -793,8 +793,8 @@ def test_p_new_moves_nothing() -> None:
 @pytest.mark.statements("mis:8.2.84:2", "mis:12.1:10")
 def test_baud_rate_codes_of_the_modbus_line() -> None:
     """§8.2.84: 0 9600, 1 19200, 2 38400, 3 57600, 4 115200, 5 230400, 6 460800 baud."""
-    from jvl_gym.protocol.modbus_twin import modbus_bus
-    from jvl_gym.protocol.twin import Twin
+    from jvl_gym.protocol.mactalk.twin16 import Twin
+    from jvl_gym.protocol.modbus.twin import modbus_bus
 
     m = _motor()
     slave = modbus_bus(Twin(m)).slaves[0]
@@ -811,8 +811,8 @@ def _ask(twin: object, raw: bytes) -> bytes:
 @pytest.mark.statements("mis:8.2.88:2")
 def test_my_addr_and_broadcast() -> None:
     """§8.2.88: data is accepted only when its address is MY_ADDR or 255 (broadcast)."""
-    from jvl_gym.protocol import mactalk32 as m32
-    from jvl_gym.protocol.twin import Twin
+    from jvl_gym.protocol.mactalk import codec32 as m32
+    from jvl_gym.protocol.mactalk.twin16 import Twin
 
     m = MotorArray("MIS232", n=2)
     m.write("MY_ADDR", np.array([10, 11]))
@@ -827,8 +827,8 @@ def test_my_addr_and_broadcast() -> None:
 @pytest.mark.statements("mis:8.2.86:2")
 def test_group_write_reaches_the_motors_of_the_group() -> None:
     """§8.2.86: a motor takes a group write only if the group matches its GROUP_ID."""
-    from jvl_gym.protocol import mactalk32 as m32
-    from jvl_gym.protocol.twin import Twin
+    from jvl_gym.protocol.mactalk import codec32 as m32
+    from jvl_gym.protocol.mactalk.twin16 import Twin
 
     m = MotorArray("MIS232", n=3)
     m.write("MY_ADDR", np.array([1, 2, 3]))
@@ -940,8 +940,8 @@ def test_turntab_count_is_writable() -> None:
 
 # --- §12.1 the Modbus registers ----------------------------------------------------------------
 def _modbus(**regs: int) -> tuple[MotorArray, object]:
-    from jvl_gym.protocol.modbus_twin import modbus_bus
-    from jvl_gym.protocol.twin import Twin
+    from jvl_gym.protocol.mactalk.twin16 import Twin
+    from jvl_gym.protocol.modbus.twin import modbus_bus
 
     m = _motor(MY_ADDR=42, **regs)
     return m, modbus_bus(Twin(m))
@@ -951,7 +951,7 @@ def _modbus(**regs: int) -> tuple[MotorArray, object]:
 def test_modbus_functions_and_registers() -> None:
     """§12.1: only 03h and 10h; "All other commands will result in Exception replies
     (exception type 1, Illegal Function)"; the slave address is register 150."""
-    from jvl_gym.protocol import modbus as mb
+    from jvl_gym.protocol.modbus import codec as mb
 
     m, bus = _modbus(V_SOLL=1234)
     reply, _ = bus.handle(mb.encode_read_request(42, 2 * 5, 2), now=0.0)
@@ -967,7 +967,7 @@ def test_modbus_functions_and_registers() -> None:
 def test_modbus_timeout_responses() -> None:
     """§12.1: register 199 the time-out in ms (0: never), 200 the response: 1 V_SOLL = 0,
     2 passive mode."""
-    from jvl_gym.protocol import modbus as mb
+    from jvl_gym.protocol.modbus import codec as mb
 
     for timeout, response in ((50, 1), (50, 2), (0, 2)):
         m, bus = _modbus(V_SOLL=5000, V_START=10000)
@@ -1915,7 +1915,7 @@ def test_modbus_addressing_and_the_manual_frames() -> None:
     """§12.3: register n is Modbus 2n (low half), 2n+1 (high half), big-endian words, and
     40000 + n; writes only of whole registers; §12.4's example frame; at most 16 words; §12.5:
     address 0 is a broadcast write, not answered."""
-    from jvl_gym.protocol import modbus as mb
+    from jvl_gym.protocol.modbus import codec as mb
 
     m, bus = _modbus(P_IST=123456789)
     req = mb.append_crc(bytes((0x2A, 0x03, 0x00, 0x14, 0x00, 0x02)))
@@ -1938,7 +1938,7 @@ def test_modbus_pdo_registers() -> None:
     """§12.6: PDO1_TX_SETUP (F300h) = 10, 12, 25: PDO1_VALUE (F400h) [0..2] read P_IST, V_IST,
     STATUSBITS in one frame; PDO1_RX_SETUP (F200h) = 3, 5: writing VALUE[0..1] sets P_SOLL and
     V_SOLL; an unconfigured value register is an invalid address (§12.6.2)."""
-    from jvl_gym.protocol import modbus as mb
+    from jvl_gym.protocol.modbus import codec as mb
 
     m, bus = _modbus(P_IST=-5)
 
@@ -2079,8 +2079,8 @@ def test_dmx512_values_only_with_a_new_position() -> None:
 def test_samples_are_read_with_command_53h() -> None:
     """§8.2.63: "The sampled values are read back using the command hex 53 SMC_READSAMPLE":
     each request gives the next sample of the four buffers."""
-    from jvl_gym.protocol import mactalk32 as m32
-    from jvl_gym.protocol.twin import Twin
+    from jvl_gym.protocol.mactalk import codec32 as m32
+    from jvl_gym.protocol.mactalk.twin16 import Twin
 
     m = _motor(MY_ADDR=7, SAMPLE1=10, SAMPLE2=12, REC_CNT=3, V_SOLL=6000, V_START=10000)
     m.write("MODE_REG", c.VELOCITY)

@@ -10,7 +10,7 @@ from jvl_gym import MotorArray
 from jvl_gym.families.mis import constants as c
 
 
-@pytest.mark.statements("mis:7.2.19:1", "mis:7.2.19:2", "mis:8.2.31:1")
+@pytest.mark.statements("mis:7.2.19:1", "mis:7.2.19:2", "mis:8.2.31:1", "mis:6.5.9:1")
 @pytest.mark.parametrize("startmode", [c.PASSIVE, c.VELOCITY])
 def test_time_out_sets_the_motor_back_in_the_mode_before_the_search(startmode: int) -> None:
     """A search started in position mode times out after V_HOME_TIMEOUT ms: ERR_BITS bit 16
@@ -39,7 +39,7 @@ def test_time_out_sets_the_motor_back_in_the_mode_before_the_search(startmode: i
     assert m.read("MODE_REG")[0] == c.POSITION and m.read("P_IST")[0] == 0
 
 
-@pytest.mark.statements("mis:6.5.9:1")
+@pytest.mark.statements("mis:6.5.9:1", "mis:7.2.19:1")
 def test_a_power_on_search_that_times_out_goes_on_in_startmode() -> None:
     """§6.5.9: "If the time out is passed the motor will return to startup mode" — the search
     of HOMEMODE at power-on has STARTMODE as its previous mode; the motor stays in it."""
