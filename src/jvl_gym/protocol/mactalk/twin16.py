@@ -86,15 +86,9 @@ class Twin(MotorTwin):
 
     Parameters
     ----------
-    motors : MotorBackend
-        Usually ``MotorArray(type, n=len(addresses))``.
-    addresses : list of int, optional
-        MYADDR (1..254) of each motor, kept as the motor's factory address: written now and
-        stored in flash unless a flash file provides the registers.
-    flash_dir : path, optional
-        Directory of the flash files ``flash_<i>.json`` (loaded at start, written by 56h);
-        created if missing. A directory that cannot be created or written, or a flash file
-        that cannot be read as a flash image, raises ValueError naming it.
+    motors, addresses, flash_dir
+        As for :class:`~jvl_gym.protocol.serving.twin.MotorTwin`; the flash files are also
+        written by MacTalk's 'write flash' (56h).
     fastmac_code : dict
         FastMAC register code (:data:`~.fastmac.EXAMPLE_CODE` or ``TABLE_CODE``).
     dialect : str, optional
