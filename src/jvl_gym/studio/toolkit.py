@@ -127,6 +127,6 @@ def load_toolkit(spec: str) -> TuningToolkit:
                          "MODULE:OBJECT naming the toolkit object") from None
     if not isinstance(obj, TuningToolkit):
         raise TypeError(f"--toolkit {spec}: {module}.{name} is a {type(obj).__name__}, not a "
-                        "tuning toolkit (an object with autotune, autotune_line and "
-                        "write_setup, e.g. tuning.studio_adapter:TOOLKIT)")
+                        "tuning toolkit (a TuningToolkit: an object with autotune, "
+                        "autotune_line and write_setup, e.g. tuning.studio_adapter:TOOLKIT)")
     return obj
