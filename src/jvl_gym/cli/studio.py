@@ -5,6 +5,9 @@ Examples
 ``jvl-gym studio --motor MAC140 --motor MIS232``  (two simulated motors, two families)
 ``jvl-gym studio --connect socket://127.0.0.1:5000 --address 19``  (a ``jvl-gym serve`` twin)
 ``jvl-gym studio --connect /dev/ttyUSB0 --scan 1-32 --motor MAC140``  (motors on a line)
+
+It prints the URL to open with the token of this start; every request needs that token
+(docs/studio.md, "Who may open the studio").
 """
 
 from __future__ import annotations
