@@ -885,7 +885,13 @@ def test_stop_waits_for_a_run_that_holds_the_motor():
     held.lock.acquire()
     try:
         lines = s.stop_motors(wait=0.0)
-        assert "busy" in lines[0]
+        assert "STOP pending" in lines[0]
+        free = s.motors[1]  # stopped meanwhile, while the other is still held
+        for _ in range(60000):
+            if free.read_raw("MODE_REG") == 11:
+                break
+            time.sleep(0.01)
+        assert free.read_raw("MODE_REG") == 11
     finally:
         held.lock.release()
     for _ in range(6000):  # the waiting stop goes ahead once the lock is free

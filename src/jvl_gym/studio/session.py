@@ -153,13 +153,14 @@ class Session:
         return [m.label for m in self.motors]
 
     # ------------------------------------------------------------------ STOP
-    def stop_motors(self, wait: float = 2.0) -> list[str]:
+    def stop_motors(self, wait: float = 10.0) -> list[str]:
         """Stop every motor of the studio, each by its family's stop
         (:meth:`~.motor.StudioMotor.stop_motor`), all at once, and say how (one line each).
 
         Each motor is stopped in a thread of its own, so a motor that does not answer does
         not hold up the others. A motor that a long run (a tuning) holds is stopped as soon as
-        the run lets go of it; its line says so when that takes longer than ``wait`` seconds.
+        the run lets go of it; its line says so ("STOP pending") when that takes longer than
+        ``wait`` seconds.
 
         Parameters
         ----------
@@ -186,8 +187,9 @@ class Session:
         end = time.monotonic() + wait
         for t in threads:
             t.join(max(0.0, end - time.monotonic()))
-        return [outcomes.get(k, f"{m.label}: busy (a run holds it); it stops as soon as the "
-                             "run lets go") for k, m in enumerate(self.motors)]
+        return [outcomes.get(k, f"{m.label}: STOP pending (a run holds the motor, or the line "
+                             "is slow); it is stopped as soon as it can be")
+                for k, m in enumerate(self.motors)]
 
     # ------------------------------------------------------------------ clock
     def start(self, period: float = 0.005) -> None:

@@ -121,7 +121,7 @@ def stop_button(page: Page) -> None:
     show what each motor did."""
     async def stop() -> None:
         lines = await run.io_bound(page.session.stop_motors)
-        failed = any("failed" in line or "busy" in line for line in lines)
+        failed = any("STOP failed" in line or "STOP pending" in line for line in lines)
         page.say("STOP: " + "; ".join(lines), ok=not failed)
 
     guarded = page.guard(stop)
