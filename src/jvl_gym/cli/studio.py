@@ -127,7 +127,12 @@ def studio(
         help="The tuning toolkit, MODULE[:OBJECT] (default: the one installed as the entry "
         "point jvl_gym.toolkits).")] = None,
 ) -> None:
-    """Open the motor workbench in the browser: motors, registers, scope, tuning, episodes."""
+    """Open the motor workbench in the browser: motors, registers, scope, tuning, episodes.
+
+    It prints the URL to open, with this start's token, which every page and write needs.
+
+    STOP in every view, or the Escape key, stops every motor.
+    """
     try:
         import nicegui  # noqa: F401
     except ImportError as exc:
