@@ -27,6 +27,7 @@ import socket
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 from pathlib import Path
 
@@ -80,9 +81,15 @@ def browser_rate(seconds: float = 5.0) -> tuple[float, float] | None:
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(ROOT / "src"), str(ROOT)]))
     proc = subprocess.Popen([sys.executable, "-m", "jvl_gym.cli", "studio", "--no-browser",
                              "--port", str(port), "--motor", "MAC140"], env=env,
-                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
         url = f"http://127.0.0.1:{port}"
+        token = ""
+        for line in proc.stdout:  # the URL with this start's token (docs/studio.md)
+            if "?token=" in line:
+                token = line.split("?token=", 1)[1].split()[0]
+                break
+        threading.Thread(target=proc.stdout.read, daemon=True).start()
         for _ in range(600):
             try:
                 with socket.create_connection(("127.0.0.1", port), timeout=1):
@@ -96,7 +103,7 @@ def browser_rate(seconds: float = 5.0) -> tuple[float, float] | None:
             ctx = p.chromium.launch_persistent_context(tempfile.mkdtemp(), headless=True,
                                                        executable_path=CHROMIUM, args=args)
             page = ctx.new_page()
-            page.goto(url + "/scope?m=0", timeout=300000)
+            page.goto(f"{url}/scope?m=0&token={token}", timeout=300000)
             counter = page.get_by_test_id("scope-count")
             counter.wait_for(timeout=60000)
             first = _update_number(counter.inner_text())

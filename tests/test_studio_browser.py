@@ -2,29 +2,32 @@
 registers view and seen running on the scope, a refused value with its reason, a setup saved
 and loaded, a sample buffer captured, the tuning page run to the written result, the episodes
 page, and twins served as ``jvl-gym serve`` serves them (in this process, on a free port) whose
-value written by another client appears (and whose line comes back after the twin restarts).
+value written by another client appears (and whose line comes back after the twin restarts);
+the lock (a foreign Host name or Origin refused, nothing served without the token, the twin
+unchanged) and STOP (the header's button on every view and the Escape key, on simulated motors
+and on twins).
 Each view is saved as a screenshot in the artefacts folder (``$JVL_ARTEFACTS``, default the
 test run's temporary folder), and in ``docs/img/studio`` with ``JVL_STUDIO_DOCS=1``."""
 
 from __future__ import annotations
 
-import functools
 import os
 import re
-import socket
-import subprocess
-import sys
 import time
-import urllib.request
 from collections.abc import Iterator
 from pathlib import Path
 
 import pytest
 
+from test_studio_lock import Studio, start_twin, twin_registers
+
 CHROMIUM = "/usr/bin/chromium"
+FOREIGN = "evil.example"  #: a web site's name that Chromium resolves to 127.0.0.1
 ROOT = Path(__file__).resolve().parents[1]
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+        "--disable-background-networking", "--disable-component-update", "--disable-sync",
+        # a foreign name that leads to this machine, as DNS rebinding would make it
+        f"--host-resolver-rules=MAP {FOREIGN} 127.0.0.1"]
 
 pytestmark = pytest.mark.skipif(not Path(CHROMIUM).exists(),
                                 reason=f"Debian's Chromium ({CHROMIUM}) is not installed")
@@ -60,83 +63,11 @@ def shoot(page, artefacts: Path, name: str, full: bool = False) -> None:
         page.screenshot(path=str(docs / f"{name}.png"), full_page=full)
 
 
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
-
-
-@functools.cache
-def _entry_points() -> Path:
-    """A folder with the distribution metadata of this tree's entry points (pyproject.toml's
-    ``[project.entry-points]``), so that the studio finds the tuning toolkit the way an
-    installed package announces it, also when the installed metadata is older than the tree."""
-    import tempfile
-
-    import tomllib
-
-    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    folder = Path(tempfile.mkdtemp(prefix="jvl-entry-points-"))
-    dist = folder / "jvl_gym_tree_entry_points-0.dist-info"
-    dist.mkdir()
-    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: jvl-gym-tree-entry-points\n"
-                                   "Version: 0\n")
-    (dist / "entry_points.txt").write_text("".join(
-        f"[{group}]\n" + "".join(f"{k} = {v}\n" for k, v in eps.items())
-        for group, eps in project.get("entry-points", {}).items()))
-    return folder
-
-
-def _env() -> dict[str, str]:
-    env = dict(os.environ, MPLBACKEND="Agg")
-    env.pop("PYTEST_CURRENT_TEST", None)  # NiceGUI would start in its own test mode
-    env["PYTHONPATH"] = os.pathsep.join([str(ROOT / "src"), str(ROOT), str(_entry_points()),
-                                         env.get("PYTHONPATH", "")])
-    return env
-
-
-def _wait_http(url: str, proc: subprocess.Popen, seconds: float = 300.0) -> None:
-    end = time.monotonic() + seconds
-    while time.monotonic() < end:
-        if proc.poll() is not None:
-            raise RuntimeError(f"{url}: the server exited: {proc.stdout.read()}")
-        try:
-            with urllib.request.urlopen(url, timeout=5) as r:
-                if r.status == 200:
-                    return
-        except OSError:
-            time.sleep(0.3)
-    raise TimeoutError(f"{url} did not answer within {seconds} s")
-
-
-def _stop(proc: subprocess.Popen) -> None:
-    proc.terminate()
-    try:
-        proc.wait(10)
-    except subprocess.TimeoutExpired:
-        proc.kill()
-        proc.wait()
-
-
-def start_studio(*args: str) -> tuple[subprocess.Popen, str]:
-    port = free_port()
-    proc = subprocess.Popen([sys.executable, "-m", "jvl_gym.cli", "studio", "--no-browser",
-                             "--port", str(port), *args], env=_env(), cwd=ROOT,
-                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    url = f"http://127.0.0.1:{port}"
-    try:
-        _wait_http(url + "/", proc)
-    except Exception:
-        _stop(proc)
-        raise
-    return proc, url
-
-
 @pytest.fixture(scope="module")
-def studio() -> Iterator[str]:
-    proc, url = start_studio("--motor", "MAC140", "--motor", "MIS232", "--motor", "MAC140")
-    yield url
-    _stop(proc)
+def studio() -> Iterator[Studio]:
+    studio = Studio("--motor", "MAC140", "--motor", "MIS232", "--motor", "MAC140")
+    yield studio
+    studio.stop()
 
 
 def write(page, name: str, value: str) -> None:
@@ -164,7 +95,7 @@ def wait_value(page, name: str, target: float, tol: float, seconds: float = 20.0
 
 
 def test_motors_view(page, studio, artefacts):
-    page.goto(studio + "/?m=0")
+    page.goto(studio.with_token("/?m=0"))
     expect(page.get_by_test_id("mode-0")).to_contain_text("INIT_MODE")
     expect(page.get_by_test_id("mode-1")).to_contain_text("passive")
     expect(page.get_by_test_id("bits-1-ERR_BITS")).to_contain_text("ERR_BITS")
@@ -182,7 +113,7 @@ def test_write_from_registers_and_see_it_run_on_the_scope(page, studio, artefact
                                                           v_ist, name):
     """V_SOLL then MODE_REG = 1 (velocity mode): the MAC050–141 runs at V_SOLL/16
     counts/sample (manual 3.2.5, 3.2.12), the MIS at V_SOLL in 0.01 rpm (§8.2.6, §8.2.13)."""
-    page.goto(f"{studio}/registers?m={m}")
+    page.goto(studio.with_token(f"/registers?m={m}"))
     message = page.get_by_test_id("message")
     write(page, "V_SOLL", v_soll)
     expect(message).to_have_text(f"V_SOLL = {v_soll}")
@@ -192,7 +123,7 @@ def test_write_from_registers_and_see_it_run_on_the_scope(page, studio, artefact
     expect(message).to_contain_text("outside the range")
     expect(page.get_by_label("V_SOLL", exact=True)).to_have_value(v_soll)
     shoot(page, artefacts, f"registers_{name}")
-    page.goto(f"{studio}/scope?m={m}")
+    page.goto(studio.with_token(f"/scope?m={m}"))
     wait_value(page, "V_IST", v_ist, 0.15 * v_ist)
     assert last_value(page, "V_SOLL") == float(v_soll)
     if m == 0:
@@ -203,7 +134,7 @@ def test_write_from_registers_and_see_it_run_on_the_scope(page, studio, artefact
 
 
 def test_save_and_load_a_setup(page, studio, tmp_path):
-    page.goto(studio + "/registers?m=0")
+    page.goto(studio.with_token("/registers?m=0"))
     field = page.get_by_label("A_SOLL", exact=True)
     expect(field).not_to_have_value("")
     saved = field.input_value()
@@ -224,8 +155,30 @@ def test_save_and_load_a_setup(page, studio, tmp_path):
     expect(field).to_have_value(saved)
 
 
+def test_stop_in_every_view_stops_every_motor(page, studio):
+    """The header's STOP is on every view; pressed on the registers view it stops every motor
+    by its family's stop (MAC050–141 STOP_MODE, manual 4.1.8; MIS mode 11, §8.2.3), which
+    ramps down and goes passive."""
+    from jvl_gym.studio.ui.common import VIEWS
+
+    for path in VIEWS:
+        page.goto(studio.with_token(f"{path}?m=0"))
+        expect(page.get_by_test_id("stop")).to_be_visible()
+    page.goto(studio.with_token("/registers?m=1"))
+    write(page, "V_SOLL", "5000")
+    write(page, "MODE_REG", "1")
+    expect(page.get_by_test_id("message")).to_have_text("MODE_REG = 1")
+    page.get_by_test_id("stop").click()
+    message = page.get_by_test_id("message")
+    expect(message).to_contain_text("STOP: MAC140 @ 1")
+    expect(message).to_contain_text("MIS232 @ 2: stop (11), ramp, then passive")
+    page.goto(studio.with_token("/?m=0"))
+    expect(page.get_by_test_id("mode-1")).to_contain_text("passive", timeout=30000)
+    expect(page.get_by_test_id("mode-0")).to_contain_text("INIT_MODE", timeout=30000)
+
+
 def test_tuning_page_to_the_written_result(page, studio, artefacts):
-    page.goto(studio + "/tuning?m=2")
+    page.goto(studio.with_token("/tuning?m=2"))
     page.get_by_test_id("tuning-run").click()
     expect(page.get_by_test_id("tuning-write")).to_be_visible(timeout=240000)
     table = page.get_by_test_id("tuning-registers")
@@ -235,25 +188,15 @@ def test_tuning_page_to_the_written_result(page, studio, artefacts):
     page.get_by_test_id("tuning-write").click()
     page.get_by_test_id("tuning-confirm").click()
     expect(page.get_by_test_id("message")).to_contain_text("wrote")
-    page.goto(studio + "/registers?m=2")
+    page.goto(studio.with_token("/registers?m=2"))
     expect(page.get_by_label("KVOUT", exact=True)).to_have_value(new)
 
 
 def test_episodes_page(page, studio, artefacts):
-    page.goto(studio + "/episodes")
+    page.goto(studio.with_token("/episodes"))
     page.get_by_test_id("episode-run").click()
     expect(page.get_by_test_id("episode-total")).to_contain_text("return", timeout=120000)
     shoot(page, artefacts, "episodes")
-
-
-def start_twin(types: list[str], addresses: list[int], port: int = 0):
-    """The twins of ``types`` at ``addresses`` served in-process (what ``jvl-gym serve --tcp``
-    serves) on ``port`` (0: a free one); a fresh line each time, as a restarted server."""
-    from jvl_gym.cli.serve import build_line
-    from jvl_gym.protocol.serving.transport import TwinServer
-
-    line, _ = build_line(types, addresses)
-    return TwinServer(line, tcp=("127.0.0.1", port)).start()
 
 
 def test_a_twin_shows_what_another_client_writes(page, artefacts):
@@ -261,10 +204,10 @@ def test_a_twin_shows_what_another_client_writes(page, artefacts):
 
     twin = start_twin(["MAC140"], [19])
     tcp = twin.endpoint("mactalk", "tcp").port
-    proc = None
+    studio = None
     try:
-        proc, url = start_studio("--connect", f"socket://127.0.0.1:{tcp}", "--scan", "18-20")
-        page.goto(url + "/registers?m=0")
+        studio = Studio("--connect", f"socket://127.0.0.1:{tcp}", "--scan", "18-20")
+        page.goto(studio.with_token("/registers?m=0"))
         field = page.get_by_label("V_SOLL", exact=True)
         with MacTalkClient(f"socket://127.0.0.1:{tcp}", 19) as other:
             other.write("V_SOLL", 321)
@@ -278,8 +221,8 @@ def test_a_twin_shows_what_another_client_writes(page, artefacts):
         expect(field).to_have_value("123", timeout=10000)
         expect(page.get_by_test_id("line-state")).to_have_text("")
     finally:
-        if proc is not None:
-            _stop(proc)
+        if studio is not None:
+            studio.stop()
         twin.stop()
 
 
@@ -293,11 +236,11 @@ def test_a_line_of_mis_and_mac800_twins(page, artefacts):
 
     twin = start_twin(["MIS232", "MAC800"], [7, 8])
     line = f"socket://127.0.0.1:{twin.endpoint('mactalk', 'tcp').port}"
-    proc = None
+    studio = None
     try:
-        proc, url = start_studio("--connect", line, "--motor", "MIS232", "--address", "7",
+        studio = Studio("--connect", line, "--motor", "MIS232", "--address", "7",
                                  "--motor", "MAC800", "--address", "8")
-        page.goto(url + "/registers?m=0")
+        page.goto(studio.with_token("/registers?m=0"))
         message = page.get_by_test_id("message")
         write(page, "V_SOLL", "4321")
         expect(message).to_have_text("V_SOLL = 4321")
@@ -307,12 +250,143 @@ def test_a_line_of_mis_and_mac800_twins(page, artefacts):
         expect(message).to_contain_text("did not accept", timeout=10000)
         expect(page.get_by_label("MODE_REG", exact=True)).to_have_value("0")
         shoot(page, artefacts, "registers_line32")
-        page.goto(url + "/registers?m=1")
+        page.goto(studio.with_token("/registers?m=1"))
         field = page.get_by_label("V_SOLL", exact=True)
         with MacTalk32Client(line, 8, table=family_of_motor("MAC800").table) as other:
             other.write("V_SOLL", 277)
         expect(field).to_have_value("277")
     finally:
-        if proc is not None:
-            _stop(proc)
+        if studio is not None:
+            studio.stop()
+        twin.stop()
+
+
+# ---------------------------------------------------------------------- the lock
+@pytest.fixture(scope="module")
+def on_twin() -> Iterator[tuple[Studio, object]]:
+    """A studio on the twin of an MAC140 at address 19 (``jvl-gym serve``)."""
+    twin = start_twin(["MAC140"], [19])
+    studio = None
+    try:
+        studio = Studio("--connect", f"socket://127.0.0.1:{twin.endpoint('mactalk', 'tcp').port}",
+                        "--address", "19")
+        yield studio, twin
+    finally:
+        if studio is not None:
+            studio.stop()
+        twin.stop()
+
+
+def test_a_foreign_host_name_is_refused_and_changes_nothing(page, on_twin):
+    """A page fetched under a foreign name that leads here (DNS rebinding) is refused with
+    the reason, even with the token in the URL; what its scripts send is refused too, and the
+    twin's registers are unchanged."""
+    studio, twin = on_twin
+    before = twin_registers(twin)
+    response = page.goto(f"http://{FOREIGN}:{studio.port}/?token={studio.token}")
+    assert response is not None and response.status == 403
+    expect(page.locator("body")).to_contain_text(f"refused: Host '{FOREIGN}:{studio.port}'")
+    status = page.evaluate("""async () => (await fetch('/_nicegui/client/x/upload/1',
+        {method: 'POST', body: 'registers: {A_SOLL: 5}'})).status""")
+    assert status == 403
+    assert twin_registers(twin) == before
+
+
+OPEN_WS = """url => new Promise(resolve => {
+    const ws = new WebSocket(url);
+    ws.onopen = () => { ws.close(); resolve('open'); };
+    ws.onerror = () => resolve('refused');
+})"""
+
+
+def test_a_websocket_from_a_foreign_origin_is_refused(page, on_twin):
+    """A page of another origin on this machine (which gets the studio's cookie: same site)
+    cannot open the studio's live connection, with the cookie or even with the token; the
+    studio's own page can."""
+    import http.server
+    import threading
+
+    studio, twin = on_twin
+    before = twin_registers(twin)
+    page.goto(studio.with_token("/"))  # the cookie is set
+    live = f"ws://127.0.0.1:{studio.port}/_nicegui_ws/socket.io/?EIO=4&transport=websocket"
+    assert page.evaluate(OPEN_WS, live) == "open"
+
+    class Quiet(http.server.SimpleHTTPRequestHandler):
+        def log_message(self, *args) -> None:
+            pass
+
+    other = http.server.ThreadingHTTPServer(("127.0.0.1", 0), Quiet)
+    threading.Thread(target=other.serve_forever, daemon=True).start()
+    try:
+        page.goto(f"http://127.0.0.1:{other.server_address[1]}/")
+        assert page.evaluate(OPEN_WS, live) == "refused"
+        assert page.evaluate(OPEN_WS, f"{live}&token={studio.token}") == "refused"
+    finally:
+        other.shutdown()
+        other.server_close()
+    assert twin_registers(twin) == before
+
+
+def test_without_the_token_nothing_is_served_and_with_it_a_write_works(page, on_twin):
+    """Without the token: the page, an upload and the live connection (over which every write
+    goes) are refused and the twin is unchanged; the URL with the token opens the studio and a
+    write reaches the motor."""
+    studio, twin = on_twin
+    before = twin_registers(twin)
+    for path in ("/", "/registers?m=0", "/registers?m=0&token=wrong"):
+        response = page.goto(studio.url + path)
+        assert response is not None and response.status == 401
+        expect(page.locator("body")).to_contain_text("refused: the studio's token")
+    upload = page.request.post(studio.url + "/_nicegui/client/x/upload/1",
+                               multipart={"file": {"name": "setup.yaml", "mimeType": "text/yaml",
+                                                   "buffer": b"registers: {A_SOLL: 5}\n"}})
+    assert upload.status == 401
+    live = f"ws://127.0.0.1:{studio.port}/_nicegui_ws/socket.io/?EIO=4&transport=websocket"
+    assert page.evaluate(OPEN_WS, live) == "refused"
+    assert twin_registers(twin) == before
+    page.goto(studio.with_token("/registers?m=0"))
+    value = str(before["V_SOLL"] + 111)
+    write(page, "V_SOLL", value)
+    expect(page.get_by_test_id("message")).to_have_text(f"V_SOLL = {value}")
+    assert twin_registers(twin)["V_SOLL"] == int(value)
+
+
+def test_escape_stops_the_motors_on_a_line(page):
+    """The Escape key stops every motor on a line of twins (MIS232 and MAC140 over the
+    MacTalk line) as STOP does: each goes through its stop mode to passive."""
+    from jvl_gym.families import family_of_motor
+    from jvl_gym.protocol.mactalk.client16 import MacTalkClient
+    from jvl_gym.protocol.mactalk.client32 import MacTalk32Client
+
+    twin = start_twin(["MIS232", "MAC140"], [7, 8])
+    line = f"socket://127.0.0.1:{twin.endpoint('mactalk', 'tcp').port}"
+    studio = None
+    try:
+        studio = Studio("--connect", line, "--motor", "MIS232", "--address", "7", "--motor",
+                        "MAC140", "--address", "8")
+
+        def clients() -> list:
+            return [MacTalk32Client(line, 7, table=family_of_motor("MIS232").table),
+                    MacTalkClient(line, 8)]
+
+        for client, speed in zip(clients(), (5000, 320)):
+            with client:
+                client.write("V_SOLL", speed)
+                client.write("MODE_REG", 1)
+        page.goto(studio.with_token("/scope?m=0"))
+        expect(page.get_by_test_id("stop")).to_be_visible()
+        page.keyboard.press("Escape")
+        message = page.get_by_test_id("message")
+        expect(message).to_contain_text("MIS232 @ 7: stop (11)", timeout=30000)
+        expect(message).to_contain_text("MAC140 @ 8: STOP_MODE (11)")
+        for client in clients():
+            end = time.monotonic() + 60
+            with client:
+                while client.read_raw(2) != 0 and time.monotonic() < end:  # MODE_REG
+                    time.sleep(0.1)
+                assert client.read_raw(2) == 0
+    finally:
+        if studio is not None:
+            studio.stop()
         twin.stop()

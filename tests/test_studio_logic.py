@@ -809,3 +809,131 @@ def _catch(failed: list[BaseException], fn, *args) -> None:
         fn(*args)
     except BaseException as exc:  # noqa: BLE001 - handed to the test's thread
         failed.append(exc)
+
+
+# ---------------------------------------------------------------------- STOP
+def test_each_family_states_its_stop():
+    """The family contract says how each family stops: the MAC050–141's STOP_MODE (11,
+    manual 4.1.8, 4.4.12) and the MIS's mode 11 "Stop" (§8.2.3) ramp down and go passive; the
+    MAC800 has no stop mode (register overview §1.2: modes 7–11 reserved) and goes passive."""
+    assert family("mac050_141").twin.stop_mode == 11
+    assert family("mis").twin.stop_mode == 11
+    assert family("mac800").twin.stop_mode is None
+    assert all(family(k).twin.passive_mode == 0 for k in ("mac050_141", "mis", "mac800"))
+
+
+def _run(m: SimMotor, speed: float) -> None:
+    """Velocity mode at ``speed`` (V_SOLL in the family's unit), stepped until it runs."""
+    m.write("V_SOLL", speed)
+    m.write("MODE_REG", 1)
+    m.step(int(m.facts.outer_hz))  # 1 s
+
+
+@pytest.mark.parametrize("motor_type, speed, ramped", [("MAC140", 320, True),
+                                                       ("MIS232", 5000, True),
+                                                       ("MAC800", 320, False)])
+def test_stop_by_the_family_stop(motor_type, speed, ramped):
+    """``stop_motor``: MODE_REG gets the family's stop mode, which decelerates (the speed
+    after one sample is still near the running speed) and then goes passive by itself; a
+    family without a stop mode goes passive at once; a passive motor is left as it is."""
+    m = SimMotor(motor_type, 1)
+    assert "already" in m.stop_motor() and m.read_raw("MODE_REG") == 0
+    _run(m, speed)
+    running = abs(m.read_raw("V_IST"))
+    assert running > 0
+    line = m.stop_motor()
+    assert line.startswith(f"{m.label}: ")
+    if ramped:
+        assert m.read_raw("MODE_REG") == 11 and "ramp, then passive" in line
+        m.step(1)
+        assert abs(m.read_raw("V_IST")) > 0.5 * running  # a ramp, not a halt
+        for _ in range(50):  # up to 5 s of firmware time
+            m.step(int(m.facts.outer_hz) // 10)
+            if m.read_raw("MODE_REG") == 0:
+                break
+    else:
+        assert "passive at once" in line
+    assert m.read_raw("MODE_REG") == 0
+    m.step(int(m.facts.outer_hz) // 10)
+    assert m.read_raw("MODE_REG") == 0
+
+
+def test_stop_leaves_safe_mode_alone():
+    m = SimMotor("MIS232", 1)
+    m.actions()["safe mode"]()
+    safe = m.read_raw("MODE_REG")
+    assert "already" in m.stop_motor() and m.read_raw("MODE_REG") == safe
+
+
+def test_session_stops_every_motor():
+    """STOP stops every motor of a studio of three families at once, one line each."""
+    s = Session.simulated(["MAC140", "MIS232", "MAC800"])
+    for m, speed in zip(s.motors, (320, 5000, 320)):
+        _run(m, speed)
+    lines = s.stop_motors(wait=600.0)
+    assert [ln.split(":")[0] for ln in lines] == s.labels()
+    assert [m.read_raw("MODE_REG") for m in s.motors] == [11, 11, 0]
+
+
+def test_stop_waits_for_a_run_that_holds_the_motor():
+    """A motor held by a long run (its lock) does not hold up the others; it is stopped as
+    soon as the run lets go."""
+    s = Session.simulated(["MAC140", "MIS232"])
+    for m, speed in zip(s.motors, (320, 5000)):
+        _run(m, speed)
+    held = s.motors[0]
+    held.lock.acquire()
+    try:
+        lines = s.stop_motors(wait=0.0)
+        assert "STOP pending" in lines[0]
+        free = s.motors[1]  # stopped meanwhile, while the other is still held
+        for _ in range(60000):
+            if free.read_raw("MODE_REG") == 11:
+                break
+            time.sleep(0.01)
+        assert free.read_raw("MODE_REG") == 11
+    finally:
+        held.lock.release()
+    for _ in range(6000):  # the waiting stop goes ahead once the lock is free
+        if held.read_raw("MODE_REG") == 11:
+            break
+        time.sleep(0.01)
+    assert held.read_raw("MODE_REG") == 11
+
+
+@pytest.mark.parametrize("motor_type, address, speed", [("MIS232", 7, 5000),
+                                                         ("MAC140", 8, 320),
+                                                         ("MAC800", 9, 320)])
+def test_stop_a_motor_on_a_line(motor_type, address, speed):
+    """STOP over the MacTalk line reaches a twin as it would a real motor: the family's stop
+    mode written in its dialect, the twin ramps down and goes passive."""
+    from jvl_gym.cli.serve import build_line
+    from jvl_gym.protocol.serving.transport import TwinServer
+
+    line, _ = build_line([motor_type], [address])
+    server = TwinServer(line, tcp=("127.0.0.1", 0), run_clock=False).start()
+    twin = line.twins[0] if hasattr(line, "twins") else line
+    s = Session.on_line(f"socket://127.0.0.1:{server.endpoint('mactalk', 'tcp').port}",
+                        [motor_type], [address])
+    try:
+        m = s.motors[0]
+        m.write("V_SOLL", speed)
+        m.write("MODE_REG", 1)
+        with twin.lock:
+            twin.step(1000)
+            assert twin.m.read_raw("V_IST")[0] != 0
+        (out,) = s.stop_motors(wait=600.0)
+        stop = family_of(motor_type).twin.stop_mode
+        assert m.read_raw("MODE_REG") == (0 if stop is None else stop), out
+        with twin.lock:
+            twin.step(10000)
+        assert m.read_raw("MODE_REG") == 0
+    finally:
+        s.stop()
+        server.stop()
+
+
+def family_of(motor_type: str):
+    from jvl_gym.families import family_of_motor
+
+    return family_of_motor(motor_type)

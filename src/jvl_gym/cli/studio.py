@@ -5,10 +5,15 @@ Examples
 ``jvl-gym studio --motor MAC140 --motor MIS232``  (two simulated motors, two families)
 ``jvl-gym studio --connect socket://127.0.0.1:5000 --address 19``  (a ``jvl-gym serve`` twin)
 ``jvl-gym studio --connect /dev/ttyUSB0 --scan 1-32 --motor MAC140``  (motors on a line)
+
+It prints the URL to open with the token of this start; every request needs that token
+(docs/studio.md, "Who may open the studio").
 """
 
 from __future__ import annotations
 
+import errno
+import ipaddress
 import socket
 from typing import Annotated
 
@@ -35,14 +40,62 @@ def parse_range(text: str) -> range:
     return range(a, b + 1)
 
 
+def check_host(host: str) -> None:
+    """Refuse a ``--host`` that is neither an IP address nor a name this machine resolves
+    (one line naming the option)."""
+    bare = host.strip("[]")
+    try:
+        ipaddress.ip_address(bare)
+        return
+    except ValueError:
+        pass
+    if not bare or all(ch.isdigit() or ch == "." for ch in bare):
+        raise CliError(f"--host {host!r} is not an IP address (four numbers 0..255, e.g. "
+                       "127.0.0.1) nor a host name")
+    try:
+        socket.getaddrinfo(bare, None, type=socket.SOCK_STREAM)
+    except (socket.gaierror, UnicodeError) as exc:
+        raise CliError(f"--host {host!r} does not resolve ({exc}); give an address of this "
+                       "machine, e.g. 127.0.0.1") from None
+
+
 def _port_free(host: str, port: int) -> None:
-    with socket.socket() as s:
+    """Refuse a ``host``:``port`` the studio cannot listen on: taken (another ``--port``) or
+    not an address of this machine (another ``--host``)."""
+    bare = host.strip("[]")
+    try:
+        family = socket.getaddrinfo(bare, port, type=socket.SOCK_STREAM)[0][0]
+    except (socket.gaierror, UnicodeError) as exc:
+        raise CliError(f"--host {host!r} does not resolve ({exc})") from None
+    with socket.socket(family) as s:
         s.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)  # as uvicorn binds
         try:
-            s.bind((host, port))
+            s.bind((bare, port))
         except OSError as exc:
-            raise CliError(f"cannot listen on {host}:{port} ({exc.strerror}); "
-                           "give another --port") from None
+            if exc.errno in (errno.EADDRINUSE, errno.EACCES):
+                raise CliError(f"cannot listen on port {port} ({exc.strerror}); give another "
+                               "--port") from None
+            raise CliError(f"cannot listen on --host {host} ({exc.strerror}): not an address "
+                           "of this machine; give e.g. 127.0.0.1") from None
+
+
+def allowed_hosts(host: str) -> list[str]:
+    """The names the studio answers to beyond the loopback names: ``host``, and for a
+    wildcard host (0.0.0.0, ::) this machine's name and addresses."""
+    names = [host]
+    if host.strip("[]") in ("0.0.0.0", "::"):
+        try:
+            hostname = socket.gethostname()
+            names += [hostname, socket.getfqdn(), *socket.gethostbyname_ex(hostname)[2]]
+        except OSError:
+            pass
+    return names
+
+
+#: the warning for a studio that listens beyond this machine
+NETWORK_WARNING = ("warning: --host {host} lets the whole network reach this studio, which "
+                   "writes registers and moves motors; the token in the URL is required, keep "
+                   "it secret")
 
 
 def studio(
@@ -58,7 +111,9 @@ def studio(
     scan: Annotated[str | None, typer.Option(
         help="With --connect: the addresses FIRST-LAST to scan for motors (instead of "
         "--address).")] = None,
-    host: Annotated[str, typer.Option(help="Address the studio listens on.")] = "127.0.0.1",
+    host: Annotated[str, typer.Option(
+        help="Address the studio listens on (default this machine only; another address lets "
+        "the network in, behind the token).")] = "127.0.0.1",
     port: Annotated[int, typer.Option(help="Port the studio listens on.", min=1, max=65535)]
     = 8080,
     no_browser: Annotated[bool, typer.Option("--no-browser", help="Do not open a browser.")]
@@ -72,11 +127,17 @@ def studio(
         help="The tuning toolkit, MODULE[:OBJECT] (default: the one installed as the entry "
         "point jvl_gym.toolkits).")] = None,
 ) -> None:
-    """Open the motor workbench in the browser: motors, registers, scope, tuning, episodes."""
+    """Open the motor workbench in the browser: motors, registers, scope, tuning, episodes.
+
+    It prints the URL to open, with this start's token, which every page and write needs.
+
+    STOP in every view, or the Escape key, stops every motor.
+    """
     try:
         import nicegui  # noqa: F401
     except ImportError as exc:
         raise CliError(STUDIO_EXTRA_HINT) from exc
+    from ..studio.lock import Access, is_loopback, new_token
     from ..studio.session import Session
     from ..studio.toolkit import load_toolkit
     from ..studio.ui.app import serve
@@ -85,11 +146,13 @@ def studio(
         raise typer.BadParameter("--scan needs --connect (a line to scan)")
     if not 0 < speed < float("inf"):
         raise typer.BadParameter(f"--speed must be a finite number > 0, got {speed}")
+    check_host(host)
     _port_free(host, port)
     try:
         kit = load_toolkit(toolkit) if toolkit is not None else None
     except (ValueError, TypeError) as exc:
         raise CliError(str(exc)) from None
+    access = Access(new_token(), port, allowed_hosts(host))
     try:
         if connect is None:
             session = Session.simulated(motor or [], address or [], seed=seed, speed=speed,
@@ -100,6 +163,8 @@ def studio(
                                       speed=speed)
     except (ValueError, ConnectionError) as exc:
         raise CliError(str(exc)) from None
-    typer.echo(f"jvl-gym studio on http://{host}:{port} with "
-               f"{', '.join(session.labels())}; Ctrl-C to stop")
-    serve(session, host, port, show=not no_browser)
+    if not is_loopback(host):
+        typer.echo(NETWORK_WARNING.format(host=host), err=True)
+    typer.echo(f"jvl-gym studio with {', '.join(session.labels())}; open "
+               f"{access.url(host)} (Ctrl-C to stop)")
+    serve(session, access, host, show=not no_browser)

@@ -10,7 +10,8 @@ written in the file as that constant's name, so it is stated once::
     capabilities: [TORQUE, ENERGY]          # Capability members by name
     twin:
       dialects: [MACTALK_DIALECT]           # constants, the default first
-      passive_mode: PASSIVE_MODE            # a constant (safe_mode, init_mode likewise)
+      passive_mode: PASSIVE_MODE            # a constant (safe_mode, init_mode, stop_mode
+                                            # likewise)
       status_register: ERR_STAT             # a register name, as written
       status_bits: ERR_STAT_BITS            # a constant name → mask, or a list of constants
       error_bits: BLOCKING_ERRORS           # a constant mask (its status bits), or a list of
@@ -38,7 +39,7 @@ __all__ = ["FAMILY_FILE", "record_fields"]
 
 FAMILY_FILE = "family.yaml"  #: the file's name in a family's folder
 _TOP = ("key", "title", "capabilities", "twin", "j1939_name")
-_TWIN = ("dialects", "safe_mode", "init_mode", "passive_mode", "status_register",
+_TWIN = ("dialects", "safe_mode", "init_mode", "passive_mode", "stop_mode", "status_register",
          "status_bits", "error_bits", "clearable_bits", "commands")
 _BIT_LISTS = ("error_bits", "clearable_bits")
 
@@ -108,7 +109,7 @@ def _twin(data: Any, constants: ModuleType, where: str) -> TwinSpec:
     _check_keys(data, _TWIN, where)
     fields: dict[str, Any] = {}
     fields["dialects"] = tuple(_constant(constants, n, where) for n in data.get("dialects", ()))
-    for key in ("safe_mode", "init_mode", "passive_mode"):
+    for key in ("safe_mode", "init_mode", "passive_mode", "stop_mode"):
         if key in data:
             fields[key] = int(_constant(constants, data[key], where))
     if "status_register" in data:

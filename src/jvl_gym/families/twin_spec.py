@@ -26,6 +26,10 @@ class TwinSpec:
     passive_mode : int or None
         MODE_REG value of the passive mode (the power stage off), which a bus time-out may
         command; None where the family has none.
+    stop_mode : int or None
+        MODE_REG value of the family's stop: the mode that brings a running motor to rest on
+        its stop ramp and then goes to :attr:`passive_mode` by itself (what a STOP button
+        writes); None where the family has no such mode and the stop is the passive mode.
     status_register : str
         The register whose bits :attr:`status_bits` names (the status a FastMAC status byte
         or a CANopen status word is built from).
@@ -44,6 +48,7 @@ class TwinSpec:
     safe_mode: int | None = None
     init_mode: int | None = None
     passive_mode: int | None = None
+    stop_mode: int | None = None
     status_register: str = "ERR_STAT"
     status_bits: Mapping[int, str] = field(default_factory=dict)
     error_bits: tuple[str, ...] = ()

@@ -14,7 +14,12 @@ The logic lives in modules of one concept each and runs without a browser:
   motor's sample buffer and the TESTU/TESTA records;
 * :mod:`.tuning_run` — the ``jvl-tune`` pipeline as steps with progress, through the tuning
   toolkit the studio is given (:mod:`.toolkit`);
-* :mod:`.episodes` — one episode of a registered env with its policy or baseline.
+* :mod:`.episodes` — one episode of a registered env with its policy or baseline;
+* :mod:`.lock` — who may reach the studio: the Host and Origin rules and the token of each
+  start, an ASGI middleware in front of the pages and the websocket.
+
+STOP (:meth:`.session.Session.stop_motors`) stops every motor by its family's stop
+(:attr:`~jvl_gym.families.TwinSpec.stop_mode`).
 
 The browser pages (:mod:`.ui`, NiceGUI) only lay these out.
 """

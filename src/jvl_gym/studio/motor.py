@@ -120,6 +120,41 @@ class StudioMotor(ABC):
         manual 3.2.2; passive of the MIS, §8.2.3)."""
         self.write(self.facts.mode_register, 0)
 
+    def stop_motor(self) -> str:
+        """Stop the motor the way its family's manual says, and say how (one line).
+
+        A motor that is passive or in safe mode is left as it is. Otherwise MODE_REG gets the
+        family's stop mode (:attr:`~jvl_gym.families.TwinSpec.stop_mode`: the MAC050–141's
+        STOP_MODE, manual 4.1.8 and 4.4.12, and the MIS's mode 11 "Stop", §8.2.3, decelerate on
+        the stop ramp and then go passive by themselves), or, where the family has none (the
+        MAC800), its passive mode; a stop mode the motor refuses in its present state is
+        followed by the passive mode.
+
+        Returns
+        -------
+        str
+            ``"<label>: <what was done>"``.
+        """
+        from ..registers import RegisterError
+
+        twin = self.family.twin
+        mode_register = self.facts.mode_register
+        passive = twin.passive_mode if twin.passive_mode is not None else 0
+        with self.lock:
+            mode = self.read_raw(mode_register)
+            if mode in (passive, twin.safe_mode):
+                return f"{self.label}: already {self.facts.mode_name(mode)} ({mode})"
+            target = twin.stop_mode if twin.stop_mode is not None else passive
+            try:
+                self.write(mode_register, target)
+            except RegisterError:
+                if target == passive:
+                    raise
+                target = passive
+                self.write(mode_register, target)
+        how = "ramp, then passive" if target != passive else "passive at once"
+        return f"{self.label}: {self.facts.mode_name(target)} ({target}), {how}"
+
     def clear_errors(self) -> None:
         """Write 0 to every writable error bit register (MAC050–141 manual 3.2.35 ERR_STAT,
         MIS manual §8.2.31 ERR_BITS); status bits the firmware computes come back."""

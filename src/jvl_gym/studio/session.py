@@ -152,6 +152,45 @@ class Session:
         """The motors' labels."""
         return [m.label for m in self.motors]
 
+    # ------------------------------------------------------------------ STOP
+    def stop_motors(self, wait: float = 10.0) -> list[str]:
+        """Stop every motor of the studio, each by its family's stop
+        (:meth:`~.motor.StudioMotor.stop_motor`), all at once, and say how (one line each).
+
+        Each motor is stopped in a thread of its own, so a motor that does not answer does
+        not hold up the others. A motor that a long run (a tuning) holds is stopped as soon as
+        the run lets go of it; its line says so ("STOP pending") when that takes longer than
+        ``wait`` seconds.
+
+        Parameters
+        ----------
+        wait : float
+            Seconds to wait for the motors' answers.
+
+        Returns
+        -------
+        list of str
+            One line per motor, in the studio's order.
+        """
+        outcomes: dict[int, str] = {}
+
+        def stop(k: int, motor: StudioMotor) -> None:
+            try:
+                outcomes[k] = motor.stop_motor()
+            except Exception as exc:  # noqa: BLE001 - reported per motor, the others go on
+                outcomes[k] = f"{motor.label}: STOP failed: {exc}"
+
+        threads = [threading.Thread(target=stop, args=(k, m), daemon=True, name="studio-stop")
+                   for k, m in enumerate(self.motors)]
+        for t in threads:
+            t.start()
+        end = time.monotonic() + wait
+        for t in threads:
+            t.join(max(0.0, end - time.monotonic()))
+        return [outcomes.get(k, f"{m.label}: STOP pending (a run holds the motor, or the line "
+                             "is slow); it is stopped as soon as it can be")
+                for k, m in enumerate(self.motors)]
+
     # ------------------------------------------------------------------ clock
     def start(self, period: float = 0.005) -> None:
         """Start the real-time clock of the simulated motors (a daemon thread)."""

@@ -125,6 +125,8 @@ def load_toolkit(spec: str) -> TuningToolkit:
     except AttributeError:
         raise ValueError(f"--toolkit {spec}: module {module!r} has no {name!r}; give "
                          "MODULE:OBJECT naming the toolkit object") from None
-    found = find_toolkit(obj)
-    assert found is not None
-    return found
+    if not isinstance(obj, TuningToolkit):
+        raise TypeError(f"--toolkit {spec}: {module}.{name} is a {type(obj).__name__}, not a "
+                        "tuning toolkit (a TuningToolkit: an object with autotune, "
+                        "autotune_line and write_setup, e.g. tuning.studio_adapter:TOOLKIT)")
+    return obj

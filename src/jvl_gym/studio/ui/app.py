@@ -2,6 +2,8 @@
 
 NiceGUI serves the pages (FastAPI and uvicorn underneath, Vue and Quasar in the browser, ECharts
 for the live charts); each page updates itself over its websocket from timers on the server.
+The whole application, pages, uploads and the websocket alike, sits behind the studio's lock
+(:class:`~jvl_gym.studio.lock.StudioLock`).
 """
 
 from __future__ import annotations
@@ -9,6 +11,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Callable
 
+from ..lock import Access, StudioLock
 from ..session import Session
 
 __all__ = ["serve", "RECONNECT_S"]
@@ -37,17 +40,19 @@ def build(session: Session) -> None:
     app.on_shutdown(session.stop)
 
 
-def serve(session: Session, host: str = "127.0.0.1", port: int = 8080,
+def serve(session: Session, access: Access, host: str = "127.0.0.1",
           show: bool = True) -> None:
-    """Serve the studio of ``session`` on ``host``:``port`` until Ctrl-C (``show``: open the
-    browser)."""
+    """Serve the studio of ``session`` on ``host``:``access.port`` behind the lock of
+    ``access`` until Ctrl-C (``show``: open the browser at the URL with the token)."""
     import matplotlib
 
     matplotlib.use("Agg")
-    from nicegui import ui
+    from nicegui import app, ui
 
     logging.getLogger("jvl_gym.studio").setLevel(logging.INFO)
     build(session)
-    ui.run(host=host, port=port, show=show, reload=False, title="jvl-gym studio",
-           show_welcome_message=False, favicon="⚙", uvicorn_logging_level="warning",
-           reconnect_timeout=RECONNECT_S)
+    app.add_middleware(StudioLock, access=access)
+    ui.run(host=host, port=access.port,
+           show=access.path("/") if show else False,
+           reload=False, title="jvl-gym studio", show_welcome_message=False, favicon="⚙",
+           uvicorn_logging_level="warning", reconnect_timeout=RECONNECT_S)

@@ -10,17 +10,20 @@ import logging
 from collections.abc import Callable
 from typing import Any
 
-from nicegui import ui
+from nicegui import run, ui
 
 from ...cli.app import one_line
 from ..motor import StudioMotor
 from ..session import Session
 
-__all__ = ["VIEWS", "Page", "frame", "tid"]
+__all__ = ["VIEWS", "Page", "frame", "tid", "stop_button", "STOP_KEY"]
 
 #: the views: path → title
 VIEWS = {"/": "Motors", "/registers": "Registers", "/scope": "Scope", "/tuning": "Tuning",
          "/episodes": "Episodes"}
+
+#: the key that stops every motor, as the STOP button does (also inside an input field)
+STOP_KEY = "Escape"
 
 log = logging.getLogger("jvl_gym.studio")
 
@@ -112,6 +115,26 @@ class Page:
         return run
 
 
+def stop_button(page: Page) -> None:
+    """The STOP button of the header and its key (:data:`STOP_KEY`): both stop every motor
+    of the studio, each by its family's stop (:meth:`~..session.Session.stop_motors`), and
+    show what each motor did."""
+    async def stop() -> None:
+        lines = await run.io_bound(page.session.stop_motors)
+        failed = any("STOP failed" in line or "STOP pending" in line for line in lines)
+        page.say("STOP: " + "; ".join(lines), ok=not failed)
+
+    guarded = page.guard(stop)
+    ui.button("STOP", on_click=guarded, color="red").props(
+        f'{tid("stop")} unelevated title="Stop every motor ({STOP_KEY})"').classes(
+        "font-bold text-white")
+
+    async def key(e: Any) -> None:
+        if e.key == STOP_KEY and e.action.keydown and not e.action.repeat:
+            await guarded()
+    ui.keyboard(on_key=key, ignore=[])
+
+
 def frame(session: Session, path: str, m: int = 0) -> Page:
     """Lay out the header (views, motor choice, line state) and the message line of the page
     at ``path`` for motor index ``m``; return the page."""
@@ -125,6 +148,7 @@ def frame(session: Session, path: str, m: int = 0) -> Page:
             if p == path:
                 link.classes("underline font-bold")
         ui.space()
+        stop_button(page)
         options = {k: mm.label for k, mm in enumerate(session.motors)}
         ui.select(options, value=m, label="motor",
                   on_change=lambda e: ui.navigate.to(f"{path}?m={e.value}")
