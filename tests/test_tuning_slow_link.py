@@ -6,7 +6,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from tuning.identify_resonance import coupling_of
-from tuning.link import LinkTooSlow
 from tuning.models import MotorData
 from tuning.serial_source import autotune_over_serial
 
@@ -25,6 +24,25 @@ def _two_mass(f_res: float) -> MotorArray:
     j_l, k, d = coupling_of(md.J_m, 4.0, f_res, 0.02)
     return MotorArray("MAC140", n=1, seed=0, load_inertia=j_l, coupling_stiffness=k,
                       coupling_damping=d, record_length=64)
+
+
+def load_kernels() -> None:
+    """Run the modes a port run uses once in this process, so that no compiled kernel is
+    loaded while a real-time twin serves (loading holds the twin's lock for about a second,
+    longer than a MacTalk request waits for its answer)."""
+    from tuning.records import acquire_testa, acquire_testu
+
+    m = _two_mass(90.0)
+    acquire_testu(m, 100, 11)
+    acquire_testa(m, 20.0, 11)
+    _spin(m)
+    m.write("MODE_REG", 0)
+    m.step(10)
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _kernels_loaded() -> None:
+    load_kernels()
 
 
 def _spin(sm) -> None:
@@ -129,6 +147,7 @@ def test_identification_over_a_ten_times_slower_link_stays_right(slow_twin):
 
 def test_resonance_over_a_ten_times_slower_link_is_right_or_refused(slow_twin, tmp_path):
     from tuning.cli import app
+    from tuning.link import LinkTooSlow
     from typer.testing import CliRunner
 
     m, link = slow_twin
