@@ -178,3 +178,25 @@ def test_the_brake_limit_follows_the_link():
     assert brake_overshoot(fast, SHORT_S, 1.92e-3) <= limit
     assert brake_overshoot(fast, LONG_S, 1.92e-3) <= limit
     assert brake_overshoot(slow, LONG_S, 1.92e-3) > limit
+
+
+def test_a_motor_still_in_at_mode_after_the_brake_is_refused_not_recorded():
+    # a brake that overshot (the link slowed during the record): the motor coasts in AT_MODE
+    # above 300 rpm; the step stops with a reason instead of starting the next record
+    from tuning.identify_resonance import _brake_and_rest
+    from tuning.records import RecordError
+
+    class Coasting:
+        n = 1
+
+        def read(self, key):
+            return np.array([{"V_IST": -300.0, "MODE_REG": 4.0}[key]])
+
+        def write(self, key, value):
+            pass
+
+        def step(self, n=1):
+            pass
+
+    with pytest.raises(RecordError, match="did not leave AT_MODE after the brake"):
+        _brake_and_rest(Coasting(), np.ones(1), 0.01, 1.92e-3)

@@ -198,6 +198,12 @@ def _brake_and_rest(m: Any, sign: np.ndarray, rest_s: float, ts_o: float) -> Non
     m.write("ANINP_OFFSET", 0)
     m.write("MODE_REG", 0)
     _step_until(m, lambda: bool(np.all(np.asarray(m.read("MODE_REG")) == 0)), 5000)
+    mode = np.asarray(m.read("MODE_REG"))
+    if np.any(mode != 0):  # still coasting in AT_MODE: the next record would start moving
+        v = np.asarray(m.read("V_IST"))[mode != 0]
+        raise RecordError(f"the motor did not leave AT_MODE after the brake (V_IST {v.tolist()}, "
+                          "above the 300 rpm of manual 4.4.5): the brake overshot, e.g. over a "
+                          "link that became slow during the record")
     m.step(int(rest_s / ts_o))
 
 
@@ -216,7 +222,8 @@ def acquire_step_records(m: Any, t_soll: np.ndarray | float, duration_s: float,
     ------
     RecordError
         A motor's record does not hold the step and :data:`MIN_RECORD_S` after it (over a slow
-        serial link the mode change can arrive after the buffer is full).
+        serial link the mode change can arrive after the buffer is full), or a motor did not
+        leave AT_MODE after the brake.
     """
     facts = record_facts_of(m)
     c = facts.constants  # AT_MODE and the sample buffer's control bits
