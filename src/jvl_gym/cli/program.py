@@ -115,7 +115,7 @@ def run(program: Annotated[Path, typer.Argument(help="program text file (one com
         out: Annotated[Path, typer.Option(help="output directory",
                                           callback=writable_dir)] = Path("program_out"),
         seed: Annotated[int, typer.Option(help="noise seed")] = 0) -> None:
-    """Run PROGRAM on a simulated motor and write its trace (CSV and plot) to OUT."""
+    """Run PROGRAM from power-on on a simulated motor; write its trace (CSV and plot) to OUT."""
     from .. import MotorArray
     from ..families import Capability, families_with, family_of_motor
     from ..registers import RegisterError
