@@ -150,3 +150,87 @@ def test_a_register_to_trace_by_number(tmp_path: Path, capsys: pytest.CaptureFix
     assert code == 0, err
     header = (tmp_path / "o" / "trace.csv").read_text().splitlines()[0]
     assert "P2" in header.split(",")
+
+
+def test_a_program_without_a_mode_line_runs_as_from_power_on(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    """The run is a power-on: the motor takes the mode a stored program gives it (position
+    mode, MIS manual §9.1) and the program's first move runs without a mode line."""
+    from jvl_gym.families.mis import constants as c
+
+    prog, io = _files(tmp_path, "move_relative distance=40960 velocity=300\n"
+                                "set_output output=1 state=high\njump line=3\n", "")
+    code, _, err = _run(["program", "run", str(prog), "--motor", "MIS232", "--seconds", "1",
+                         "--out", str(tmp_path / "o")], capsys)
+    assert code == 0, err
+    rows = list(csv.DictReader((tmp_path / "o" / "trace.csv").open()))
+    assert int(rows[0]["MODE_REG"]) == c.POSITION
+    done = [r for r in rows if int(r["OUTPUTS"]) & 1]
+    assert done and abs(int(done[0]["P_IST"]) - 40960) < 2048 and rows[-1]["line"] == "3"
+
+
+def test_a_file_larger_than_the_motor_holds_is_refused_unread(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+        ) -> None:
+    from jvl_gym.families.mis.program.format import MAX_TEXT_BYTES
+
+    big = tmp_path / "big.txt"
+    with big.open("wb") as fh:  # a sparse 64 MB file
+        fh.truncate(64 * 2**20)
+    opened: list[Path] = []
+    real_open = Path.open
+    monkeypatch.setattr(Path, "open", lambda self, *a, **k: (
+        opened.append(self), real_open(self, *a, **k))[1])
+    code, _, err = _run(["program", "run", str(big), "--motor", "MIS232", "--seconds", "0.01",
+                         "--out", str(tmp_path / "o")], capsys)
+    assert code == 2 and err.count("\n") == 1 and len(err) < 400, err
+    assert f"{64 * 2**20} bytes is more than any program" in err and str(MAX_TEXT_BYTES) in err
+    assert big not in opened and not (tmp_path / "o").exists()
+
+
+def test_an_error_quoting_the_file_is_short(tmp_path: Path,
+                                            capsys: pytest.CaptureFixture[str]) -> None:
+    # a file of NULs under the size limit: the error shows a piece of it and its length
+    prog = tmp_path / "nul.txt"
+    prog.write_bytes(b"\0" * 1_000_000)
+    code, _, err = _run(["program", "run", str(prog), "--motor", "MIS232", "--seconds", "0.01",
+                         "--out", str(tmp_path / "o")], capsys)
+    assert code == 2 and err.count("\n") == 1 and len(err) < 400, err
+    assert "line 1: the line has 1000000 bytes, more than 1024" in err
+    assert "(1000000 characters)" in err
+
+
+def _interrupting(monkeypatch: pytest.MonkeyPatch, error: BaseException) -> list:
+    """Make the bench run 50 ms of the program, then raise ``error``; the motors it ran on."""
+    import jvl_gym.families.mis.program as programs
+
+    real = programs.run_bench
+    seen: list = []
+
+    def run_bench(m, seconds, script=None, extra=()):
+        seen.append(m)
+        real(m, 0.05, script, extra)
+        raise error
+
+    monkeypatch.setattr(programs, "run_bench", run_bench)
+    return seen
+
+
+@pytest.mark.parametrize(("error", "status", "words"), [
+    (KeyboardInterrupt(), 130, "interrupted at 0.05"),
+    (RuntimeError("boom"), 1, "boom"),
+])
+def test_ctrl_c_or_an_error_stops_the_program_and_the_motor(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch,
+        error: BaseException, status: int, words: str) -> None:
+    from jvl_gym.families import family_of_motor
+
+    seen = _interrupting(monkeypatch, error)
+    prog, io = _files(tmp_path, "move_relative distance=4096000 velocity=3000\njump line=1\n",
+                      "")
+    code, _, err = _run(["program", "run", str(prog), "--motor", "MIS232", "--seconds", "1",
+                         "--out", str(tmp_path / "o")], capsys)
+    assert code == status and err.count("\n") == 1 and words in err, err
+    m = seen[0]
+    assert m.read_raw("MODE_REG")[0] == family_of_motor("MIS232").twin.passive_mode
+    assert m.program_status(0).name == "stopped" and not (tmp_path / "o").exists()

@@ -16,6 +16,7 @@ from jvl_gym.families.mis.program.binary import (
     encode_program,
 )
 from jvl_gym.families.mis.program.commands import cost_us
+from jvl_gym.families.mis.program.format import parse_line, print_line
 
 #: one line of every command type (§9.7.1 … §9.7.27)
 EVERY = (Path(__file__).parent / "fixtures" / "mis_program_every.txt").read_text()
@@ -129,10 +130,35 @@ def test_random_text_is_refused_cleanly_or_round_trips(text: str) -> None:
     assert decode_program(encode_program(cmds)) == cmds
 
 
-@pytest.mark.parametrize("text", ["wait_ms time=" + "9" * 5000,
+@pytest.mark.parametrize("text", ["wait_ms time=" + "9" * 1000,
                                   "set_register register=P2 value=" + "9" * 300 + "rev",
                                   "move_relative distance=1 velocity=" + "9" * 200,
                                   "calculate register=P2 expression=" + "9" * 200])
 def test_huge_numbers_are_refused_cleanly(text: str) -> None:
     with pytest.raises(ProgramError, match="line 1, field"):
         parse_program(text)
+
+
+def test_a_text_above_what_the_flash_holds_is_refused_by_its_size() -> None:
+    from jvl_gym.families.mis.program.binary import FLASH_BYTES, encode_command
+    from jvl_gym.families.mis.program.format import (
+        MAX_LINE_BYTES,
+        MAX_TEXT_BYTES,
+        MIN_INSTRUCTION_BYTES,
+        parse_line,
+    )
+
+    assert len(encode_command(parse_line("remark"))) == MIN_INSTRUCTION_BYTES
+    assert MAX_TEXT_BYTES == (FLASH_BYTES - 2) // MIN_INSTRUCTION_BYTES * (MAX_LINE_BYTES + 2)
+    with pytest.raises(ProgramError, match="cannot be a program") as info:
+        parse_program("\0" * 4 * 2**20)  # 4 MB of NULs
+    assert len(str(info.value)) < 300
+
+
+def test_errors_show_a_short_piece_of_the_text() -> None:
+    for text in ("\0" * 1000, "x" * 1000, "mode " + "y" * 900 + "=1", "mode mode=" + "z" * 399):
+        with pytest.raises(ProgramError) as info:
+            parse_program(text + "\n")
+        assert len(str(info.value)) < 700, str(info.value)[:200]
+    longest = print_line(parse_line('remark text="' + '\\"' * 255 + '"'))
+    assert len(longest.encode()) <= 1024  # the longest canonical line fits a line

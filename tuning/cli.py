@@ -375,7 +375,7 @@ def _two_mass_step(m: object, res: Result, out: Path) -> tuple[str, Path]:
              f"J_l/J_m {est.load_ratio:.2f}, damping ratio {est.zeta:.3f}, "
              f"detected {est.detected}",
              f"  as recorded under the current loop: {est.f_seen:.1f} Hz, damping ratio "
-             f"{est.zeta_seen:.3f}"]
+             f"{est.zeta_seen:.3f}", *(f"  {note}" for note in est.notes)]
     out.mkdir(parents=True, exist_ok=True)
     path = out / "bode_two_mass.png"
     if not est.detected or est.load_ratio <= 0.0:

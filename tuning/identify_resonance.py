@@ -13,6 +13,16 @@ timing between the host and the motor, so the same procedure runs over a serial 
 (:class:`tuning.serial_source.SerialMotor`), where a frame's round trip is milliseconds of motor
 time. Between steps the motor is braked by the reversed torque and rests.
 
+The link. The brake is the one part that acts on what it reads: it reverses the torque while
+V_IST has not crossed zero, so the speed overshoots zero by the step's acceleration times one
+brake iteration (a read, a write, an outer sample, and the age of the read). Leaving AT_MODE
+needs the speed below the stop speed (300 rpm, 4.4.5); above it the motor coasts in AT_MODE.
+Over a port the link is measured before each record (:func:`tuning.link.measure_link`) and a
+record whose overshoot would exceed half the stop speed is not taken: the short record is
+skipped (its step's acceleration is 4.5 times the long one's; resonances above about 120 Hz are
+then found in the long record only), and when the long one cannot be kept either the step is
+refused (:class:`tuning.link.LinkTooSlow`) instead of reporting a record it could not make.
+
 The model. With the current loop fast against the mechanics the torque is a step ``T`` and the
 motor angle (torque-driven two-mass system, the load free) is::
 
@@ -61,6 +71,7 @@ from jvl_gym.physics.coupling import coupling_for
 
 from .identify_coil import correlation_inflation
 from .intervals import LEVEL
+from .link import LinkTiming, LinkTooSlow
 from .models import MotorData, inner_modes
 from .records import RecordError
 from .testmode_facts import record_facts_of
@@ -86,6 +97,9 @@ CURRENT_LOOP_KEYS = ("KIFX2", "KIFX1", "KIFY1", "KIFY0", "KIB1", "KIB0")
 #: at most 0.42 of the shift
 SHIFT_ERROR: float = 0.75
 ZETA_MIN: float = 0.002  #: smallest damping ratio an estimate or interval reports
+END_SPEED: float = 150.0  #: speed each torque step reaches at its planned end [rad/s]
+#: round trips of a brake iteration: the read, the write, and the read's age (module docstring)
+BRAKE_ROUND_TRIPS: float = 3.0
 
 
 @dataclass
@@ -156,6 +170,7 @@ class ResonanceEstimate:
     detected: bool
     fits: list[ResonanceFit] = field(default_factory=list)
     used: int = 0
+    notes: list[str] = field(default_factory=list)
 
 
 def _step_until(m: Any, done: Any, max_samples: int) -> None:
@@ -183,6 +198,12 @@ def _brake_and_rest(m: Any, sign: np.ndarray, rest_s: float, ts_o: float) -> Non
     m.write("ANINP_OFFSET", 0)
     m.write("MODE_REG", 0)
     _step_until(m, lambda: bool(np.all(np.asarray(m.read("MODE_REG")) == 0)), 5000)
+    mode = np.asarray(m.read("MODE_REG"))
+    if np.any(mode != 0):  # still coasting in AT_MODE: the next record would start moving
+        v = np.asarray(m.read("V_IST"))[mode != 0]
+        raise RecordError(f"the motor did not leave AT_MODE after the brake (V_IST {v.tolist()}, "
+                          "above the 300 rpm of manual 4.4.5): the brake overshot, e.g. over a "
+                          "link that became slow during the record")
     m.step(int(rest_s / ts_o))
 
 
@@ -201,7 +222,8 @@ def acquire_step_records(m: Any, t_soll: np.ndarray | float, duration_s: float,
     ------
     RecordError
         A motor's record does not hold the step and :data:`MIN_RECORD_S` after it (over a slow
-        serial link the mode change can arrive after the buffer is full).
+        serial link the mode change can arrive after the buffer is full), or a motor did not
+        leave AT_MODE after the brake.
     """
     facts = record_facts_of(m)
     c = facts.constants  # AT_MODE and the sample buffer's control bits
@@ -391,8 +413,36 @@ def estimate_from_fits(fits: Sequence[ResonanceFit], J: float, J_ci: tuple[float
         detected=detected, fits=list(fits), used=used)
 
 
+def brake_overshoot(link: LinkTiming, duration_s: float, ts_o: float) -> float:
+    """Speed [rad/s] by which the brake may overshoot zero after a step of ``duration_s`` [s]
+    to :data:`END_SPEED` over ``link`` (servo sample time ``ts_o`` [s]; module docstring)."""
+    return END_SPEED / duration_s * (BRAKE_ROUND_TRIPS * link.motor_s + ts_o)
+
+
+def stop_speed(m: Any) -> float:
+    """The speed [rad/s] below which AT_MODE is left (4.4.5: 300 rpm), of ``m``'s family."""
+    facts = record_facts_of(m)
+    return float(facts.constants.STOP_SPEED_COUNTS) / facts.ts_o / facts.counts_per_rad
+
+
+def link_refusal(m: Any, duration_s: float) -> str | None:
+    """Why the link of ``m`` cannot keep a step of ``duration_s`` [s] (None: it can, or ``m``
+    is a simulator, which has no link)."""
+    measure = getattr(m, "measure_link", None)
+    if measure is None:
+        return None
+    link = measure()
+    facts = record_facts_of(m)
+    over, limit = brake_overshoot(link, duration_s, facts.ts_o), 0.5 * stop_speed(m)
+    if over <= limit:
+        return None
+    return (f"{link.describe()}, so the brake after the {1e3 * duration_s:.0f} ms torque step "
+            f"may overshoot by {over:.0f} rad/s, more than the {limit:.0f} rad/s that lets the "
+            "motor leave AT_MODE (half the 300 rpm stop speed, manual 4.4.5)")
+
+
 def step_torques(J: np.ndarray, torque_per_vf: np.ndarray, duration_s: float,
-                 end_speed: float = 150.0) -> np.ndarray:
+                 end_speed: float = END_SPEED) -> np.ndarray:
     """T_SOLL [VF_OUT units] that brings total inertias ``J`` [kg·m²] to ``end_speed`` [rad/s]
     in ``duration_s`` [s], within 5..1023."""
     t = np.asarray(J) * end_speed / duration_s / np.asarray(torque_per_vf)
@@ -407,7 +457,12 @@ def identify_resonance(m: Any, idents: Sequence[Any], short_s: float = SHORT_S,
     inertia J and its interval, rotor inertia J_m, K_vf).
 
     Returns one :class:`ResonanceEstimate` per motor, corrected for the current loop with the
-    current-loop registers ``m`` has.
+    current-loop registers ``m`` has; its ``notes`` name a record the link could not keep.
+
+    Raises
+    ------
+    LinkTooSlow
+        Over a port, the link cannot keep the long record's timing either (module docstring).
     """
     regs = [{k: float(np.asarray(m.read(k))[i]) for k in CURRENT_LOOP_KEYS}
             for i in range(len(idents))]
@@ -415,8 +470,19 @@ def identify_resonance(m: Any, idents: Sequence[Any], short_s: float = SHORT_S,
     kvf = np.array([i.motor.torque_per_vf for i in idents])
     fits: list[list[ResonanceFit]] = [[] for _ in idents]
     ts_i = record_facts_of(m).ts_i
+    notes: list[str] = []
     for dur, order in zip((short_s, long_s), FIT_ORDERS):
+        why = link_refusal(m, dur)
+        if why is not None:
+            notes.append(f"the {1e3 * dur:.0f} ms record was not taken: {why}")
+            continue
         for i, x in enumerate(acquire_step_records(m, step_torques(J, kvf, dur), dur)):
             fits[i].append(fit_resonance(x, ts_i, order=order))
-    return [estimate_from_fits(f, idn.mechanics.J, idn.mechanics.ci["J"], idn.motor, r)
-            for f, idn, r in zip(fits, idents, regs)]
+    if not fits[0]:
+        raise LinkTooSlow(f"the resonance step is refused: {notes[-1]}; use a faster link "
+                          "(a higher baud rate) or a slower twin (--speed)")
+    out = [estimate_from_fits(f, idn.mechanics.J, idn.mechanics.ci["J"], idn.motor, r)
+           for f, idn, r in zip(fits, idents, regs)]
+    for est in out:
+        est.notes.extend(notes)
+    return out

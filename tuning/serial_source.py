@@ -6,6 +6,12 @@ The identification procedure of :mod:`tuning.autotune` drives "a MotorArray or c
 for one motor behind a :class:`jvl_gym.protocol.MacTalkClient` (manual 5.1): reads and writes
 become MacTalk frames, ``step(n)`` waits n outer samples of wall-clock time (divided by the
 twin's ``time_scale``), and the sample buffer is read out with the MacTalk sample-buffer command.
+A twin whose clock the caller runs (``TwinServer(run_clock=False)``) is stepped instead through
+``clock``: then the motor's time passes only when the procedure waits, and the link costs none.
+
+A run over a port measures the link first (:mod:`tuning.link`) and, whatever ends it (the end,
+an error, a broken link, Ctrl-C), leaves the motor in its family's passive mode, confirmed by
+reading MODE_REG back (:mod:`tuning.motor_stop`).
 
 The record length of TESTU/TESTA is the motor's: the manual's firmware records 11 samples; the
 twin records what ``jvl-gym serve --record-length N`` sets. Asking for more than the motor
@@ -15,12 +21,14 @@ recorded raises :class:`tuning.records.RecordError` saying so.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 
 from .family import tuned_family
+from .link import measure_link
+from .motor_stop import stop_motor
 from .records import RecordError
 from .testmode_facts import record_facts_of
 
@@ -37,18 +45,43 @@ class SerialMotor:
     time_scale : float
         Simulated seconds per wall-clock second of the other end (1 for a real motor; the
         twin's ``--speed``).
+    clock : callable, optional
+        ``clock(seconds)`` advances the other end's simulated time by ``seconds`` (a twin served
+        with ``run_clock=False``, e.g. ``MotorTwin.advance``); waits then step the twin instead
+        of sleeping, and no motor time passes during a request.
     """
 
     n = 1
 
-    def __init__(self, client: Any, motor: Any, time_scale: float = 1.0) -> None:
+    def __init__(self, client: Any, motor: Any, time_scale: float = 1.0,
+                 clock: Callable[[float], None] | None = None) -> None:
         if not time_scale > 0:
             raise ValueError(f"time_scale must be > 0, got {time_scale}")
         self.client = client
         self.family = tuned_family(motor)
         self.config = self.family.load_motor(motor)
         self.time_scale = float(time_scale)
+        self.clock = clock
         self._wanted = 0
+
+    def motor_seconds(self, wall_s: float) -> float:
+        """Motor time that passes in ``wall_s`` wall-clock seconds (0 on a simulated clock)."""
+        return 0.0 if self.clock is not None else wall_s * self.time_scale
+
+    def wall_seconds(self, motor_s: float) -> float:
+        """Wall-clock time [s] ``motor_s`` of motor time take (0 on a simulated clock)."""
+        return 0.0 if self.clock is not None else motor_s / self.time_scale
+
+    def wait(self, motor_s: float) -> None:
+        """Let ``motor_s`` seconds of motor time pass (sleep, or step a simulated clock)."""
+        if self.clock is not None:
+            self.clock(motor_s)
+        else:
+            time.sleep(motor_s / self.time_scale)
+
+    def measure_link(self) -> Any:
+        """The link's round trip now (:func:`tuning.link.measure_link`)."""
+        return measure_link(self)
 
     @property
     def motor_configs(self) -> list[Any]:
@@ -73,7 +106,7 @@ class SerialMotor:
 
     def step(self, n_outer: int = 1) -> None:
         """Let ``n_outer`` outer samples (1.92 ms each) of motor time pass."""
-        time.sleep(n_outer * self.family.tuning.outer_dt / self.time_scale)
+        self.wait(n_outer * self.family.tuning.outer_dt)
 
     def set_record_length(self, n_samples: int) -> None:
         """Remember the record length the next test needs (the motor's own is fixed)."""
@@ -92,7 +125,10 @@ class SerialMotor:
             recording = int(self.client.read("CNTRL_BITS")) & self.family.constants.RECORDBIT
             if count > 0 and not recording:
                 break
-            time.sleep(0.005)
+            if self.clock is not None:
+                self.wait(self.family.tuning.outer_dt)
+            else:
+                time.sleep(0.005)
         buf = self.client.sample_buffer()
         got = min((len(v) for v in buf.values()), default=0)
         if got < self._wanted:
@@ -103,10 +139,15 @@ class SerialMotor:
         return {k: np.asarray(v)[None, :] for k, v in buf.items()}
 
 
+class MotorNotStopped(RuntimeError):
+    """The run ended but the motor's passive mode could not be confirmed."""
+
+
 def autotune_over_serial(port: str, motor: str, address: int = 1, time_scale: float = 1.0,
                          n_coil: int | None = None, n_mech: int | None = None,
                          structure: str = "pi", write: bool = False, progress: Any = None,
-                         two_mass: Any = None) -> tuple[Any, Any]:
+                         two_mass: Any = None,
+                         clock: Callable[[float], None] | None = None) -> tuple[Any, Any]:
     """Identify and design on a motor behind ``port`` (device path or pyserial URL).
 
     Runs TESTU and the two-level TESTA through MacTalk with the firmware's record length
@@ -118,11 +159,17 @@ def autotune_over_serial(port: str, motor: str, address: int = 1, time_scale: fl
     ``write``, writes the kept registers to the motor and reads them back. Returns
     ``(Identification, Result)``. The motor must be in INIT_MODE and free to turn.
 
+    The link is measured first and reported through ``progress``. However the run ends (done,
+    an error, a broken link, KeyboardInterrupt) the motor is put in its family's passive mode
+    and the mode read back (:func:`tuning.motor_stop.stop_motor`, on a new connection if the
+    old one broke); a stop that cannot be confirmed is reported through ``progress`` and, after
+    a run that otherwise succeeded, raised as :class:`MotorNotStopped`.
+
     ``two_mass(m, result)``, if given, runs on the motor (``m``, a :class:`SerialMotor`)
     after the design and before the write, e.g. the resonance step of ``jvl-tune autotune
-    --resonance`` (:mod:`tuning.identify_resonance`: one continuous sample-buffer record per
-    torque step, so the link's timing does not matter as long as a frame's round trip is short
-    against the 114 ms record); it may change ``result.chosen.registers``.
+    --resonance`` (:mod:`tuning.identify_resonance`, which measures the link again before each
+    record and skips or refuses the records whose brake the link cannot keep); it may change
+    ``result.chosen.registers``. ``clock``: see :class:`SerialMotor`.
     """
     from jvl_gym.protocol import MacTalkClient
 
@@ -133,17 +180,44 @@ def autotune_over_serial(port: str, motor: str, address: int = 1, time_scale: fl
     strategy = strategy_of(motor)
     samples = record_facts_of(motor).test_record_samples
     n_coil, n_mech = n_coil or samples, n_mech or samples
-    with MacTalkClient(port, address=address) as client:
-        m = SerialMotor(client, motor, time_scale)
-        if int(m.read("MODE_REG")[0]) != 0:
+    m = SerialMotor(MacTalkClient(port, address=address), motor, time_scale, clock)
+    try:
+        say(f"link to {port}: {m.measure_link().describe()}")
+        if int(m.read("MODE_REG")[0]) != 0:  # refused before anything is changed
             raise RecordError("the motor must be in INIT_MODE (MODE_REG = 0) to be identified")
-        ident = strategy.identify(m, {"n_coil": n_coil, "n_mech": n_mech}, say)[0]
-        say("acceptance: simulating the candidates on the identified motor")
-        result = design_and_accept(strategy, [ident], {"structure": structure})[0]
-        if two_mass is not None:
-            two_mass(m, result)
-        bad = strategy.failures(result.chosen)
-        if write and not bad:
-            say("writing the synthesised registers and reading them back")
-            client.write_registers(result.chosen.registers)
+        try:
+            ident = strategy.identify(m, {"n_coil": n_coil, "n_mech": n_mech}, say)[0]
+            say("acceptance: simulating the candidates on the identified motor")
+            result = design_and_accept(strategy, [ident], {"structure": structure})[0]
+            if two_mass is not None:
+                two_mass(m, result)
+            bad = strategy.failures(result.chosen)
+            if write and not bad:
+                say("writing the synthesised registers and reading them back")
+                m.client.write_registers(result.chosen.registers)
+        except BaseException:
+            _stop(m, port, address, say)
+            raise
+        why = _stop(m, port, address, say)
+        if why is not None:
+            raise MotorNotStopped(f"the run ended but the motor's passive mode could not be "
+                                  f"confirmed: {why}; stop the motor by hand")
+    finally:
+        try:
+            m.client.close()
+        except Exception:  # noqa: BLE001  (a broken link's close)
+            pass
     return ident, result
+
+
+def _stop(m: SerialMotor, port: str, address: int, say: Callable[[str], None]) -> str | None:
+    """Stop the motor (:func:`tuning.motor_stop.stop_motor`, reconnecting to ``port``); say
+    what happened; the reason when the passive mode was not confirmed."""
+    from jvl_gym.protocol import MacTalkClient
+
+    why = stop_motor(m, reconnect=lambda: MacTalkClient(port, address=address))
+    if why is None:
+        say("the motor is passive (MODE_REG read back)")
+    else:
+        say(f"could not confirm that the motor is passive: {why}; stop it by hand")
+    return why

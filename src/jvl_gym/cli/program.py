@@ -4,8 +4,10 @@
 stores the program in the motor, runs it from power-on with the script's inputs, sensors and
 load, and writes ``DIR/trace.csv`` and ``DIR/trace.png``. The motor's family declares
 ``Capability.PROGRAMS`` and its record's ``programs`` module does the work. A malformed program,
-an unknown motor or a motor without stored programs, or a malformed I/O script is one line on
-stderr and exit status 2.
+a file larger than any program the motor holds (refused by its size, unread), an unknown motor
+or a motor without stored programs, or a malformed I/O script is one line on stderr and exit
+status 2. An error or Ctrl-C during the run stops the program and puts the motor in its
+family's passive mode before the command ends.
 """
 
 from __future__ import annotations
@@ -60,6 +62,45 @@ def _traced(m: Any, registers: list[str], where: str) -> list[str]:
     return names
 
 
+def _read_program(path: Path, limit: int, refusal: Any) -> str:
+    """The text of the program file ``path``: refused by its size before it is read when it is
+    larger than ``limit`` bytes (``refusal(size)`` says why), and read no further than that for
+    a file whose size the system does not give (a pipe, a device)."""
+    try:
+        size = path.stat().st_size
+        why = refusal(size)
+        if why is not None:
+            raise UsageError(f"{path}: {why}; nothing was read")
+        with path.open("rb") as fh:
+            data = fh.read(limit + 1)
+        why = refusal(len(data)) if len(data) > limit else None
+        if why is not None:
+            raise UsageError(f"{path}: more than {limit} bytes: {why}")
+        return data.decode("utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise UsageError(f"cannot read the program {path}: {exc}; give a text file") from None
+
+
+#: simulated time [s] the stop after an interrupted run may take (the deceleration ramp)
+STOP_SECONDS = 30.0
+
+
+def _stop(m: Any, fam: Any) -> None:
+    """Stop motor 0's program and put the motor in its family's passive mode, the way the
+    family does it (the MIS decelerates in stop mode first, MIS manual §5.11.2), stepping the
+    simulation until MODE_REG reads passive (at most :data:`STOP_SECONDS`)."""
+    m.program_stop(0)
+    passive = fam.twin.passive_mode
+    if passive is None:
+        return
+    m.write("MODE_REG", passive, index=0)
+    chunk = max(int(m.OUTER_HZ // 100), 1)
+    for _ in range(int(STOP_SECONDS * m.OUTER_HZ) // chunk):
+        if int(m.read_raw("MODE_REG")[0]) == passive:
+            return
+        m.step(chunk)
+
+
 @program_app.command("run")
 def run(program: Annotated[Path, typer.Argument(help="program text file (one command a line)")],
         motor: Annotated[str | None, typer.Option(
@@ -74,7 +115,7 @@ def run(program: Annotated[Path, typer.Argument(help="program text file (one com
         out: Annotated[Path, typer.Option(help="output directory",
                                           callback=writable_dir)] = Path("program_out"),
         seed: Annotated[int, typer.Option(help="noise seed")] = 0) -> None:
-    """Run PROGRAM on a simulated motor and write its trace (CSV and plot) to OUT."""
+    """Run PROGRAM from power-on on a simulated motor; write its trace (CSV and plot) to OUT."""
     from .. import MotorArray
     from ..families import Capability, families_with, family_of_motor
     from ..registers import RegisterError
@@ -82,10 +123,6 @@ def run(program: Annotated[Path, typer.Argument(help="program text file (one com
     runners = families_with(Capability.PROGRAMS)
     if motor is None:
         motor = runners[0].motor_types()[0]
-    try:
-        text = program.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise UsageError(f"cannot read the program {program}: {exc}; give a text file") from None
     try:
         fam = family_of_motor(motor)
         fam.require(Capability.PROGRAMS)
@@ -97,6 +134,7 @@ def run(program: Annotated[Path, typer.Argument(help="program text file (one com
         raise UsageError(f"--motor {motor}: {exc}") from None
     progs = fam.programs
     assert progs is not None  # a family declaring PROGRAMS states its programs module
+    text = _read_program(program, progs.MAX_TEXT_BYTES, progs.text_size_refusal)
     try:
         m: Any = MotorArray(motor, seed=seed)  # its family runs programs: store_program …
     except (ValueError, KeyError, OSError) as exc:
@@ -108,11 +146,21 @@ def run(program: Annotated[Path, typer.Argument(help="program text file (one com
         raise UsageError(f"{program}: {exc}") from None
     try:
         script = progs.load_io_script(io)
-        trace = progs.run_bench(m, seconds, script, traced)
     except progs.IoScriptError as exc:
         raise UsageError(f"{io}: {exc}") from None
-    except RegisterError as exc:
-        raise UsageError(f"{exc}") from None
+    try:
+        trace = progs.run_bench(m, seconds, script, traced)
+    except KeyboardInterrupt:
+        at = float(m.time[0])
+        _stop(m, fam)
+        typer.echo(f"{program.name}: interrupted at {at:.3f} s; the program is stopped and the "
+                   "motor passive; nothing was written", err=True)
+        raise typer.Exit(130) from None
+    except BaseException as exc:
+        _stop(m, fam)
+        if isinstance(exc, RegisterError):
+            raise UsageError(f"{exc}") from None
+        raise
     out.mkdir(parents=True, exist_ok=True)
     progs.write_csv(trace, out / "trace.csv")
     progs.plot_trace(trace, out / "trace.png", f"{program.name} on {motor}")

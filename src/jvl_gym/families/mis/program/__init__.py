@@ -10,8 +10,8 @@ from __future__ import annotations
 from .bench import IoScriptError, load_io_script, plot_trace, run_bench, write_csv
 from .commands import SPECS, Command
 from .executor import STATE_NAMES, ProgramStatus
-from .format import ProgramError, parse_program, print_program
+from .format import MAX_TEXT_BYTES, ProgramError, parse_program, print_program, text_size_refusal
 
 __all__ = ["SPECS", "Command", "ProgramError", "ProgramStatus", "STATE_NAMES", "parse_program",
            "print_program", "IoScriptError", "load_io_script", "run_bench", "write_csv",
-           "plot_trace"]
+           "plot_trace", "MAX_TEXT_BYTES", "text_size_refusal"]

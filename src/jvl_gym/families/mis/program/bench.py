@@ -154,9 +154,12 @@ def run_bench(m: MisMotorArray, seconds: float, script: IoScript | None = None,
               extra: Sequence[str] = ()) -> dict[str, np.ndarray]:
     """Run motor 0's stored program for ``seconds`` with the surroundings of ``script``.
 
-    With a load inertia the motor is first reset with it (a power-on); then the script's
-    registers are written and the program (re)started from line 1. Before each outer sample
-    the inputs and the load torque the script gives for that time are applied.
+    The motor is powered on (with the script's load inertia, if any): it takes its start mode
+    and the stored program starts from line 1 in position mode, as at every power-on
+    (:meth:`~.api.ProgramMixin._program_power_on`, MIS manual §9.1) unless SETUP_BITS bit 1
+    says not to; the script's registers are written after the power-on, before the program's
+    first line runs. Before each outer sample the inputs and the load torque the script gives
+    for that time are applied.
 
     Parameters
     ----------
@@ -179,14 +182,13 @@ def run_bench(m: MisMotorArray, seconds: float, script: IoScript | None = None,
     names = list(dict.fromkeys([*TRACE_REGISTERS, *extra]))
     for name in names:
         m._lookup(name)
-    if script.load_inertia is not None:
-        m.reset(0, load_inertia=script.load_inertia)  # a power-on with the load
+    load = {} if script.load_inertia is None else {"load_inertia": script.load_inertia}
+    m.reset(0, **load)  # the power-on: the start mode, the program from line 1
     if script.registers:
         m.write_many(script.registers, index=0)
     n = int(round(seconds * m.OUTER_HZ))
     dt = 1.0 / m.OUTER_HZ
     cols: dict[str, list[float]] = {k: [] for k in ("t", "line", "state", *names, "rotor")}
-    m.program_restart(0)
     base = int(m.inputs[0, m.INPUTS["digital_inputs"]])
     scripted = {k: (base >> (k - 1)) & 1 for k in range(1, 9)}
     events = list(script.inputs)

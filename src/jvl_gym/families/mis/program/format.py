@@ -14,6 +14,14 @@ Line *n* of the text is program line *n* (jump targets ``line=n``); every line i
 (``remark`` is the comment). A value with spaces or quotes is written in double quotes with
 ``\\"`` and ``\\\\`` escapes. Fields with a default may be left out; :func:`print_program` writes
 every field, so ``parse_program(print_program(p)) == p``.
+
+Size. The program flash holds 3072 bytes (:data:`.binary.FLASH_BYTES`): a 2-byte line count and
+instructions of at least :data:`MIN_INSTRUCTION_BYTES` (an empty remark), so at most
+:data:`MAX_PROGRAM_LINES` lines; a line is at most :data:`MAX_LINE_BYTES` bytes (every canonical
+line is shorter: a remark of 255 quotes escaped is 524). No text above :data:`MAX_TEXT_BYTES`
+can be a program the motor holds; :func:`text_size_refusal` says so from the size alone, before
+the text is read. Errors show a piece of the text they quote, never more than
+:data:`SHOWN_CHARS` characters and its length (:func:`shown`).
 """
 
 from __future__ import annotations
@@ -21,13 +29,48 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 
-from .binary import decode_command
+from .binary import FLASH_BYTES, decode_command
 from .commands import FASTMAC_GROUPS, SPECS, Command
 from .fields import FieldError
 
-__all__ = ["ProgramError", "parse_program", "parse_line", "print_program", "print_line"]
+__all__ = ["ProgramError", "parse_program", "parse_line", "print_program", "print_line",
+           "MAX_TEXT_BYTES", "MAX_LINE_BYTES", "MAX_PROGRAM_LINES", "MIN_INSTRUCTION_BYTES",
+           "text_size_refusal", "shown"]
 
 _BARE = re.compile(r'[^\s"]+\Z')
+
+#: the shortest instruction in the flash: a command byte and a length byte (an empty remark)
+MIN_INSTRUCTION_BYTES = 2
+#: the most lines a program in the flash can have (after its 2-byte line count)
+MAX_PROGRAM_LINES = (FLASH_BYTES - 2) // MIN_INSTRUCTION_BYTES
+#: the longest line of a program text [bytes of UTF-8, without the line break]
+MAX_LINE_BYTES = 1024
+#: the largest program text a program the flash holds can have [bytes]: its most lines, each
+#: at its longest with a CR LF line break
+MAX_TEXT_BYTES = MAX_PROGRAM_LINES * (MAX_LINE_BYTES + 2)
+#: characters of the text an error message shows at most
+SHOWN_CHARS = 40
+
+
+def shown(text: str, limit: int = SHOWN_CHARS) -> str:
+    """``text`` as an error shows it: its repr, cut to ``limit`` characters with its length."""
+    if len(text) <= limit:
+        return repr(text)
+    return f"{text[:limit]!r}… ({len(text)} characters)"
+
+
+def _cut(name: str) -> str:
+    """A field name as an error names it: at most :data:`SHOWN_CHARS` characters."""
+    return name if len(name) <= SHOWN_CHARS else name[:SHOWN_CHARS] + "…"
+
+
+def text_size_refusal(size: int) -> str | None:
+    """Why a program text of ``size`` bytes cannot be a program of the motor (None: it may)."""
+    if size <= MAX_TEXT_BYTES:
+        return None
+    return (f"{size} bytes is more than any program the {FLASH_BYTES}-byte program flash holds "
+            f"({MAX_PROGRAM_LINES} lines of at most {MAX_LINE_BYTES} bytes: {MAX_TEXT_BYTES} "
+            "bytes)")
 
 
 class ProgramError(ValueError):
@@ -88,13 +131,17 @@ def _tokens(text: str, n: int) -> list[tuple[str, str | None]]:
 
 def parse_line(text: str, n: int = 1) -> Command:
     """One program line → :class:`Command`; ProgramError naming line ``n`` and the field."""
+    size = len(text.encode("utf-8", "surrogatepass"))
+    if size > MAX_LINE_BYTES:
+        raise ProgramError(n, None, f"the line has {size} bytes, more than {MAX_LINE_BYTES}: "
+                                    f"{shown(text)}")
     toks = _tokens(text, n)
     if not toks:
         raise ProgramError(n, None, "empty line (every line is a command; use remark)")
     keyword = toks[0][0]
     spec = SPECS.get(keyword)
     if spec is None:
-        raise ProgramError(n, None, f"unknown command {keyword!r}; the commands are "
+        raise ProgramError(n, None, f"unknown command {shown(keyword)}; the commands are "
                                     f"{', '.join(SPECS)}")
     got: dict[str, str] = {}
     if toks[0][1] is not None:
@@ -102,15 +149,16 @@ def parse_line(text: str, n: int = 1) -> Command:
     for tok, quoted in toks[1:]:
         key, sep, value = tok.partition("=")
         if not sep or not key:
-            raise ProgramError(n, None, f"{tok!r} is not key=value")
+            raise ProgramError(n, None, f"{shown(tok)} is not key=value")
         value = value if quoted is None else quoted
         if key not in spec.fields:
-            raise ProgramError(n, key, f"{keyword} has no field {key!r}; its fields are "
-                                       f"{', '.join(spec.fields)}")
+            raise ProgramError(n, _cut(key), f"{keyword} has no field {shown(key)}; its fields "
+                                             f"are {', '.join(spec.fields)}")
         if key in got:
-            raise ProgramError(n, key, "given twice")
+            raise ProgramError(n, _cut(key), "given twice")
         if len(value) > 400:
-            raise ProgramError(n, key, "the value is longer than 400 characters")
+            raise ProgramError(n, _cut(key), "the value is longer than 400 characters: "
+                                             f"{shown(value)}")
         got[key] = value
     values: dict[str, object] = {}
     for key, (ftype, default) in spec.fields.items():
@@ -122,7 +170,8 @@ def parse_line(text: str, n: int = 1) -> Command:
         try:
             values[key] = ftype.parse(got[key])
         except FieldError as exc:
-            raise ProgramError(n, key, str(exc)) from None
+            text = got[key]
+            raise ProgramError(n, key, str(exc).replace(repr(text), shown(text))) from None
     _check(Command(keyword, values), got, n)
     if keyword == "set_output" and not str(values["state"]).endswith("_pulse"):
         values.pop("pulse_ms")
@@ -177,6 +226,10 @@ def parse_program(text: str) -> list[Command]:
     """
     if not isinstance(text, str):
         raise ProgramError(1, None, f"a program is text, got {type(text).__name__}")
+    why = text_size_refusal(len(text))  # characters: at most the bytes of their UTF-8
+    if why is not None:
+        raise ProgramError(1, None, f"the text of {len(text)} characters cannot be a program: "
+                                    f"{why}")
     lines = text.split("\n")
     if lines and lines[-1] == "":
         lines.pop()
