@@ -10,8 +10,9 @@ Each writes its search velocity to V_SOLL (4.4.13–4.4.15 "V_SOLL = V_HOME", "=
 which keeps the last one after the zero; T_SOLL is untouched (HOME1's torque limit is applied
 without writing it, so "T_SOLL = original value" holds).
 The home sensor is wired to the analogue input; its active level is high if T_HOME > 0 and low
-otherwise, T_HOME = 0 included (3.2.41). At the zero: P_IST = P_HOME (rounded to the nearest hall index marker when
-CNTRL_BITS INDEX_HOME is set), P_FNC = 16·P_HOME, P_SOLL = 0, MODE_REG = STARTMODE.
+otherwise, T_HOME = 0 included (3.2.41). At the zero: P_IST = P_HOME (rounded to the nearest
+hall index marker when CNTRL_BITS INDEX_HOME is set), P_FNC = 16·P_HOME, P_SOLL = 0,
+MODE_REG = STARTMODE.
 
 State: S_AUX4 detection counter / phase, S_AUX5 sensor level at the previous sample (−1 before
 the first sample of the search).
