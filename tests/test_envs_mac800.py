@@ -120,8 +120,10 @@ def test_gear_sync_runs_the_mac800_analogue_gear_mode_and_the_pi_baseline_holds(
     assert core.gear_ratio == pytest.approx(7.5)  # 10 at 4000 rpm → 7.5 at 3000 rpm
     assert np.all(m.read("KVOUT") > 1.4)  # KVOUT = 1 + inertia ratio (0.5 … 3)
     env.step(np.zeros((2, 1), dtype=np.float32))
-    # action 0 ↔ 5 V ↔ ANINP 1024 (register 170)
-    np.testing.assert_array_equal(m.read_raw("ANINP"), 1024)
+    # action 0 ↔ 0 V ↔ ANINP 0, the analogue gear factor's centre 1.01; action 1 ↔ ANINP 2047
+    np.testing.assert_array_equal(m.read_raw("ANINP"), 0)
+    env.step(np.ones((2, 1), dtype=np.float32))
+    np.testing.assert_array_equal(m.read_raw("ANINP"), 2047)
     steps = 600
     pi_error, pi_ended = _gear_sync_errors(make_baseline("jvl_gym/GearSync-v0", 3, 1,
                                                           motor_type="MAC800"), steps)

@@ -767,6 +767,54 @@ def test_a_negative_t_home_makes_the_home_sensor_active_low(mode: int) -> None:
     assert zero_rad == pytest.approx(1.0, abs=2 * one_sample)
 
 
+@pytest.mark.statements("mac050_141:3.2.41:6")
+@pytest.mark.parametrize("mode", [c.HOME2_MODE, c.HOME3_MODE])
+def test_t_home_0_makes_the_home_sensor_active_low(mode: int) -> None:
+    """Manual 3.2.41: the input is active high only if T_HOME is positive, active low otherwise:
+    T_HOME = 0 (the default) homes as a negative T_HOME does, on a sensor that pulls the input
+    low (high above 1 rad, so the active region is below it)."""
+    m = _motor(home_position=1.0, initial_angle=2.0)
+    m.write_many({"V_HOME": -400, "T_HOME": 0, "P_HOME": 0, "STARTMODE": c.P_MODE})
+    m.write("MODE_REG", mode)
+    _steps_until(m, c.MODE_NAMES[mode], 5000)
+    zero_rad = m.position_rad[0] - int(m.read("P_IST")[0]) * c.RAD_PER_COUNT
+    one_sample = 400 / 16 * c.RAD_PER_COUNT
+    assert zero_rad == pytest.approx(1.0, abs=2 * one_sample)
+
+
+@pytest.mark.statements("mac050_141:4.4.13:10")
+def test_homing_writes_its_search_velocity_to_v_soll() -> None:
+    """Manual 4.4.13–4.4.15: HOME1 sets V_SOLL = V_HOME; HOME2/3 V_SOLL = V_HOME towards the
+    passive sensor, −V_HOME away from the active one, HOME3 then −V_HOME/64 + 1; at the zero
+    only T_SOLL is restored, so V_SOLL keeps the last search velocity."""
+    m = _motor(end_stop_low=-3.0, end_stop_high=3.0)
+    m.write_many({"V_SOLL": 123, "V_HOME": -800, "T_HOME": 300, "T_SOLL": 900,
+                  "STARTMODE": c.P_MODE})
+    m.write("MODE_REG", c.HOME1_MODE)
+    m.step()
+    assert int(m.read("V_SOLL")[0]) == -800
+    _steps_until(m, "HOME1_MODE", 3000)
+    assert int(m.read("V_SOLL")[0]) == -800 and int(m.read("T_SOLL")[0]) == 900
+
+    m = _motor(home_position=1.0, initial_angle=0.0)
+    m.write_many({"V_SOLL": 123, "V_HOME": 640, "T_HOME": 1, "STARTMODE": c.P_MODE,
+                  "A_SOLL": 1000})
+    m.write("MODE_REG", c.HOME3_MODE)
+    v = []
+    while m.mode_name() == "HOME3_MODE":
+        m.step()
+        v.append(int(m.read("V_SOLL")[0]))
+        assert len(v) < 5000
+    assert v[0] == 640 and v[-1] == -640 // 64 + 1
+    assert int(m.read("V_SOLL")[0]) == -9  # kept after the zero
+
+    m = _motor(home_position=1.0, initial_angle=2.0)  # HOME2 starting on the active sensor
+    m.write_many({"V_SOLL": 123, "V_HOME": 400, "T_HOME": 1, "STARTMODE": c.P_MODE})
+    m.write("MODE_REG", c.HOME2_MODE)
+    m.step()
+    assert int(m.read("V_SOLL")[0]) == -400
+
+
 @pytest.mark.statements("mac050_141:3.2.40:1", "mac050_141:4.4.15:1", "mac050_141:4.4.15:3")
 def test_home3_leaves_the_sensor_slowly_at_minus_v_home_over_64_plus_1() -> None:
     """Manual 4.4.15: HOME3 goes towards the sensor at V_HOME, then, the sensor active, slowly
@@ -1085,6 +1133,24 @@ def test_vat_limits_the_torque_to_aninp_times_t_soll_over_1024() -> None:
     vf = np.abs(m.trace(["VF_OUT"], 100)["VF_OUT"]).max(axis=0)
     limit = np.abs(m.read("ANINP") * 800 / 1024)
     assert np.all(vf <= limit + 0.5) and np.all(vf >= limit - 1)
+
+
+@pytest.mark.statements("mac050_141:4.4.18:3")
+def test_vat_reports_in_pos_by_the_velocity_mode_rule() -> None:
+    """Manual 4.4.18: VAT is V_MODE but for the torque limit, so IN_POS follows V_MODE's rule
+    (4.1.1): with INPOSCNT = 0 at standstill (|V_IST| < INPOSWIN), with INPOSCNT > 0 when
+    |V_SOLL − 16·V_IST| < INPOSWIN for INPOSCNT samples; in V_MODE and VAT alike."""
+    for mode in (c.V_MODE, c.VAT_MODE):
+        m = _motor(2)
+        m.write_many({"V_SOLL": np.array([0, 1600]), "T_SOLL": 800, "INPOSWIN": 40,
+                      "INPOSCNT": np.array([0, 3])})
+        m.set_input(analog_volts=10.0)  # VAT: the full torque limit
+        m.write("MODE_REG", mode)
+        m.step(10)
+        assert [bool(e & c.IN_POS) for e in m.read("ERR_STAT")] == [True, False], mode
+        m.run(0.5)
+        assert np.abs(1600 - 16 * int(m.read("V_IST")[1])) < 40
+        assert [bool(e & c.IN_POS) for e in m.read("ERR_STAT")] == [True, True], mode
 
 
 @pytest.mark.statements("mac050_141:4.1.10:4", "mac050_141:4.1.10:5")

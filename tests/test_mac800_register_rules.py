@@ -205,15 +205,18 @@ def test_motor_type_is_the_configs_code() -> None:
         assert m.read("MOTOR_TYPE")[0] == m.motor_configs[0].motor_type_code
 
 
-@pytest.mark.statements("mac800:reg2:16")
+@pytest.mark.statements("mac800:reg2:16", "mac800:reg2:17")
 def test_analog_gear_mode_scales_the_gear_by_aninp() -> None:
-    """MODE_REG 18 (analogue gear): the gear factor GEARF_1/GEARF_2 times ANINP/2047."""
+    """MODE_REG 18 (analogue gear): the gear factor GEARF_1/GEARF_2 times the analogue gear
+    factor 1.01 + 0.14·ANINP/2047 (0.87 … 1.15 over ±10 V)."""
     m = MotorArray("MAC800", n=2, seed=0)
-    m.set_input(analog_volts=np.array([10.0, 5.0]), pulse_counts=8)
+    m.set_input(analog_volts=np.array([9.995, 5.0]), pulse_counts=8)
     m.write_many({"GEARF_1": 1, "GEARF_2": 1, "MODE_REG": c.ANALOG_GEAR_MODE})
     m.step(50)
     gv = m.read("GV_EXT")
-    assert gv[0] == 16 * 8 and abs(gv[1] - 16 * 8 * m.read("ANINP")[1] / 2047) <= 1
+    factor = 1.01 + 0.14 * m.read("ANINP") / 2047
+    assert m.read("ANINP")[0] == 2047
+    assert np.all(np.abs(gv - 16 * 8 * factor) <= 1)
 
 
 @pytest.mark.statements("mac800:reg36:6")

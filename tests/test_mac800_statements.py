@@ -108,6 +108,42 @@ def test_analog_velocity_gear_mode_adds_the_input_to_the_gear() -> None:
     assert m.speed_rpm[1] > 100.0
 
 
+@pytest.mark.statements("mac800:reg2:9")
+def test_analog_velocity_gear_mode_adds_300_rpm_at_10_volts_whatever_v_soll() -> None:
+    """Mode 6 as the MAC050–141's AVG block (its manual 4.1.7, 4.4.7): ±10 V adds ±300 RPM to
+    the geared velocity; V_SOLL (only the limit of a follow-error compensation the mode does
+    not run) neither scales nor bounds it. Without pulses: 300 RPM at +10 V with V_SOLL at
+    1000 RPM or 0, −300 RPM at −10 V; with pulses the 300 RPM add to the geared speed."""
+    m = MotorArray("MAC800", n=4, seed=0)
+    m.set_input(analog_volts=np.array([u.ANINP_VOLTS_PER_UNIT * 2047, 9.995, -9.995, 9.995]),
+                pulse_counts=np.array([0.0, 0.0, 0.0, 8.0]))
+    m.write_many({"GEARF_1": 2, "GEARF_2": 1, "V_SOLL": np.array([RPM_1000, 0, RPM_1000, 0]),
+                  "MODE_REG": 6})
+    m.run(0.6)
+    geared_rpm = 2 * 8 * u.SAMPLE_HZ * 60 / COUNTS_PER_REV
+    np.testing.assert_allclose(m.speed_rpm, [300.0, 300.0, -300.0, geared_rpm + 300.0],
+                               rtol=0.02)
+
+
+@pytest.mark.statements("mac800:reg2:17")
+def test_analog_gear_factor_is_0_87_to_1_15_and_the_motor_stands_without_pulses() -> None:
+    """Mode 18 as the MAC050–141's analogue gear block (its manual 4.1.9): ±10 V sets an
+    analogue gear factor 0.87 … 1.15 on GEARF_1/GEARF_2, so the motor follows the pulses at
+    any voltage (forwards at −10 V and at 0 V) and stands when they stop, whatever the input."""
+    volts = np.array([-9.995, 0.0, 9.995])
+    m = MotorArray("MAC800", n=3, seed=0)
+    m.set_input(analog_volts=volts, pulse_counts=8)
+    m.write_many({"GEARF_1": 2, "GEARF_2": 1, "V_SOLL": RPM_1000,
+                  "MODE_REG": c.ANALOG_GEAR_MODE})
+    m.run(0.6)
+    geared_rpm = 2 * 8 * u.SAMPLE_HZ * 60 / COUNTS_PER_REV
+    np.testing.assert_allclose(m.speed_rpm, geared_rpm * np.array([0.87, 1.01, 1.15]),
+                               rtol=0.02)
+    m.set_input(pulse_counts=0)
+    m.run(0.6)
+    assert np.all(np.abs(m.speed_rpm) < 1.0)
+
+
 @pytest.mark.statements("mac800:reg2:14")
 def test_dead_band_mode_is_analogue_velocity_beyond_the_band() -> None:
     """Mode 16: ±10 V is ±V_SOLL as in mode 5; about 0 V the motor stands (dead band)."""

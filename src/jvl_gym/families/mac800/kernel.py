@@ -108,7 +108,7 @@ def _profile(r: np.ndarray, s: np.ndarray, mode: int, gv: float) -> tuple[float,
     if mode == c.ANALOG_VELOCITY_MODE:
         return velocity_block(r, s, A.analog_velocity(r), a), t_lim
     if mode == c.ANALOG_VELOCITY_GEAR_MODE:
-        return velocity_block(r, s, A.analog_velocity(r) + gv, a), t_lim
+        return velocity_block(r, s, A.analog_velocity_gear(r) + gv, a), t_lim
     if mode == c.ANALOG_VELOCITY_DEADBAND_MODE:
         return velocity_block(r, s, A.dead_band_velocity(r), a), t_lim
     if mode == c.VELOCITY_ANALOG_TORQUE_MODE:

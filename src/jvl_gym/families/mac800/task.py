@@ -40,8 +40,8 @@ POSITION_MODE = _c.POSITION_MODE  #: mode 2, Position
 VELOCITY_MODE = _c.VELOCITY_MODE  #: mode 1, Velocity
 #: mode 4, Analog torque: VF_OUT = ANINP·T_SOLL/2047 (firmware/analog.py)
 ANALOG_TORQUE_MODE = _c.ANALOG_TORQUE_MODE
-#: mode 18, Analog gear: the pulse input geared by GEARF_1/GEARF_2 times ANINP/2047
-#: (firmware/analog.py)
+#: mode 18, Analog gear: the pulse input geared by GEARF_1/GEARF_2 times the analogue gear
+#: factor, −10 V ↔ 0.87 … +10 V ↔ 1.15 (firmware/analog.py)
 ANALOG_GEAR_MODE = _c.ANALOG_GEAR_MODE
 #: the main filter's PI taps: KVFX6 = kp + ki, KVFX5 = −kp (register overview §1.2 "Filters")
 SPEED_PI = ("KVFX6", "KVFX5")
@@ -50,12 +50,10 @@ SPEED_PI = ("KVFX6", "KVFX5")
 #: (configs/setups/MAC800.yaml)
 SPEED_FEEDBACK = ("KVB4", "KVB3")
 GEARF = ("GEARF_1", "GEARF_2")  #: the gear factor's numerator and denominator (registers 14, 15)
-#: a task's analogue gear trim: input = AG_CENTRE_VOLTS + AG_SPAN_VOLTS·a for a ∈ [−1, 1]
-#: (decision): mode 18's factor is ANINP/2047, 0 at 0 V, so the trim works around the middle of
-#: the forward half, 5 V (factor 0.5), ±1 V (factor ±0.1: a trim of ±20 %, near the
-#: MAC050–141's ±13.9 %)
-AG_CENTRE_VOLTS = 5.0
-AG_SPAN_VOLTS = 1.0
+#: a task's analogue gear trim: input = AG_CENTRE_VOLTS + AG_SPAN_VOLTS·a for a ∈ [−1, 1], the
+#: whole ±10 V input (mode 18's factor 0.87 … 1.15, as the MAC050–141's AG block)
+AG_CENTRE_VOLTS = 0.0
+AG_SPAN_VOLTS = _c.ANINP_VOLTS
 #: whether a task sets KVOUT = (J_motor + J_load)/J_motor for its load (register 13): yes, the
 #: default setup's speed loop is designed for the bare rotor at KVOUT = 1
 #: (configs/setups/MAC800.yaml) and is too slow to follow a gear under a load of several rotor

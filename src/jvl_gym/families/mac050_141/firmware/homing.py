@@ -6,9 +6,13 @@
 - HOME2: away from the sensor (−V_HOME) while it is active, towards it (V_HOME) while passive;
   found when it becomes active.
 - HOME3: as HOME2, then slowly away (−V_HOME/64 + 1) while active; found when it deactivates.
+Each writes its search velocity to V_SOLL (4.4.13–4.4.15 "V_SOLL = V_HOME", "= −V_HOME", …),
+which keeps the last one after the zero; T_SOLL is untouched (HOME1's torque limit is applied
+without writing it, so "T_SOLL = original value" holds).
 The home sensor is wired to the analogue input; its active level is high if T_HOME > 0 and low
-otherwise (3.2.41). At the zero: P_IST = P_HOME (rounded to the nearest hall index marker when
-CNTRL_BITS INDEX_HOME is set), P_FNC = 16·P_HOME, P_SOLL = 0, MODE_REG = STARTMODE.
+otherwise, T_HOME = 0 included (3.2.41). At the zero: P_IST = P_HOME (rounded to the nearest
+hall index marker when CNTRL_BITS INDEX_HOME is set), P_FNC = 16·P_HOME, P_SOLL = 0,
+MODE_REG = STARTMODE.
 
 State: S_AUX4 detection counter / phase, S_AUX5 sensor level at the previous sample (−1 before
 the first sample of the search).
@@ -35,7 +39,7 @@ HOME1_TORQUE_FACTOR = 1.25
 def sensor_active(r: np.ndarray) -> bool:
     """Home sensor level read on the analogue input, active level from the sign of T_HOME."""
     high = r[R.ANINP] > 512
-    return high if r[R.T_HOME] >= 0 else not high
+    return high if r[R.T_HOME] > 0 else not high
 
 
 @njit(**KERNEL)
@@ -51,6 +55,7 @@ def home_block(r: np.ndarray, s: np.ndarray, mode: int) -> tuple[float, float]:
     vh = float(r[R.V_HOME])
     a = float(r[R.A_SOLL])
     if mode == c.HOME1_MODE:
+        r[R.V_SOLL] = r[R.V_HOME]
         return velocity_block(r, s, vh, a), HOME1_TORQUE_FACTOR * abs(float(r[R.T_HOME]))
     active = sensor_active(r)
     phase = s[L.S_AUX4]
@@ -64,6 +69,7 @@ def home_block(r: np.ndarray, s: np.ndarray, mode: int) -> tuple[float, float]:
                 target = float(int(-vh / 64.0)) + 1.0
         else:
             target = float(int(-vh / 64.0)) + 1.0
+    r[R.V_SOLL] = int(target)
     return velocity_block(r, s, target, a), float(r[R.T_SOLL])
 
 

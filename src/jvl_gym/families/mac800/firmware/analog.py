@@ -6,12 +6,17 @@ manual 4.1.4–4.1.6, 4.1.10, 4.4.18) scaled to the MAC800's ±2047 input (decis
 
 - 4 analogue torque: VF_OUT = ANINP·T_SOLL/2047, limited to ±T_SOLL (no function block);
 - 5 analogue velocity: target = ANINP·V_SOLL/2047 (±10 V ↔ ±V_SOLL);
-- 6 analogue velocity/gear: target = ANINP·V_SOLL/2047 + GV_EXT;
+- 6 analogue velocity/gear: target = GV_EXT + ANINP/2047·(300 RPM), the MAC050–141's AVG block
+  (its manual 4.1.7, 4.4.7: ±10 V adds ±300 RPM to the geared velocity); V_SOLL, "the maximum
+  velocity for compensating for follow error", bounds nothing, as the mode has no function
+  correction (docs/families/mac800.md, "Modes 6, 18 and 21");
 - 16 analogue velocity with dead band: ±128 (±0.625 V) gives 0, beyond it linear to ±V_SOLL
   at ±2047;
 - 17 velocity/analogue torque: the velocity block at V_SOLL with the torque limit
   |ANINP|·T_SOLL/2047;
-- 18 analogue gear: the gear block with the ratio scaled by ANINP/2047;
+- 18 analogue gear: the gear block with the ratio times the analogue gear factor
+  1.01 + 0.14·ANINP/2047, −10 V ↔ 0.87 … +10 V ↔ 1.15 (MAC050–141 manual 4.1.9, as its AG
+  block): the motor follows the pulses at any input voltage;
 - 21 analogue to position: the input as a logic level with hysteresis (high above 5.4 V, low
   below 4.4 V); a rising edge sets the target to POS1, a falling one to POS0 (with CNTRL_BITS
   RELPOSPSOLL added to P_SOLL, with RELPOSPFNC to the function position); on entry the level
@@ -28,9 +33,15 @@ from ....physics.fixed import clamp, rnd, wrap32
 from ....physics.levels import hysteresis_level
 from .. import constants as c
 from .. import layout as L
+from ..units import V_SOLL_UNITS_PER_RPM
 from . import regs as R
 
 _FULL = float(c.ANINP_FULL)
+#: mode 6: the analogue velocity at ANINP = 2047 (≈ 10 V) [1/16 count/sample], 300 RPM
+AVG_VELOCITY = 300.0 * V_SOLL_UNITS_PER_RPM
+#: mode 18: the analogue gear factor at 0 V and its change at ±10 V (0.87 … 1.15)
+AG_CENTRE = 1.01
+AG_SPAN = 0.14
 DEAD_BAND = 128.0  #: mode 16's dead band [ANINP units], 0.625 V
 _HIGH = 5.4 / c.ANINP_VOLTS_PER_UNIT
 _LOW = 4.4 / c.ANINP_VOLTS_PER_UNIT
@@ -45,8 +56,14 @@ def analog_torque(r: np.ndarray) -> float:
 
 @njit(cache=True, inline="always")
 def analog_velocity(r: np.ndarray) -> float:
-    """Modes 5 and 6: ±10 V ↔ ±V_SOLL."""
+    """Mode 5: ±10 V ↔ ±V_SOLL."""
     return float(int(r[R.ANINP] * float(r[R.V_SOLL]) / _FULL))
+
+
+@njit(cache=True, inline="always")
+def analog_velocity_gear(r: np.ndarray) -> float:
+    """Mode 6's analogue part, added to the geared velocity: ±10 V ↔ ±300 RPM."""
+    return float(int(r[R.ANINP] * AVG_VELOCITY / _FULL))
 
 
 @njit(cache=True, inline="always")
@@ -69,8 +86,8 @@ def torque_limit(r: np.ndarray) -> float:
 
 @njit(cache=True, inline="always")
 def gear_factor(r: np.ndarray) -> float:
-    """Mode 18: the gear ratio's analogue factor ANINP/2047."""
-    return r[R.ANINP] / _FULL
+    """Mode 18: the gear ratio's analogue factor, −10 V ↔ 0.87, 0 V ↔ 1.01, +10 V ↔ 1.15."""
+    return AG_CENTRE + AG_SPAN * r[R.ANINP] / _FULL
 
 
 @njit(**KERNEL)
