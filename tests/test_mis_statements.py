@@ -995,7 +995,7 @@ def test_modbus_frame_delay() -> None:
 
 
 # --- §5.1–§5.3 current, AutoCorrection, closed loop ----------------------------------------------
-@pytest.mark.statements("mis:5.1.3:2", "mis:5.1.6:1", "mis:5.1.6:3")
+@pytest.mark.statements("mis:5.1.3:2", "mis:5.1.6:1", "mis:5.1.6:2", "mis:5.1.6:3")
 def test_holding_torque_is_proportional_to_the_current() -> None:
     """§5.1.3/§5.1.6: an MIS232 gives 1.9 N·m at 6000 mA (RUN_CURRENT 1022); at low speed the
     torque is proportional to the current; at high speed less."""
@@ -1023,7 +1023,7 @@ def _blocked_move(motor: MotorArray, mode: int = c.POSITION) -> None:
     motor.run(4.0)
 
 
-@pytest.mark.statements("mis:8.2.15:3", "mis:5.2.1:1")
+@pytest.mark.statements("mis:8.2.15:3", "mis:5.2.1:1", "mis:5.2.1:2")
 def test_auto_correction_needs_the_encoder() -> None:
     """§5.2.1: AutoCorrection needs an encoder option; §8.2.15: it retries a movement in
     position and gear mode."""
@@ -1800,7 +1800,7 @@ def test_canopen_402_velocity_halt(rig402) -> None:  # type: ignore[no-untyped-d
     assert node.sdo[0x606C].raw == 10000
 
 
-@pytest.mark.statements("mis:11.5.6:1", "mis:11.5.6:3")
+@pytest.mark.statements("mis:11.5.6:1", "mis:11.5.6:2", "mis:11.5.6:3")
 def test_canopen_402_homing_methods() -> None:
     """§11.5.6: methods 1–6, −3, −4 supported, −2, −1 not; method 3 (home switch, negative)
     ends at the switch with the home offset 607Ch as its position, homing attained."""
@@ -1830,16 +1830,18 @@ def test_canopen_402_homing_methods() -> None:
         rig.close()
 
 
-@pytest.mark.statements("mis:11.5.7:2")
+@pytest.mark.statements("mis:11.5.7:1", "mis:11.5.7:2")
 def test_canopen_402_torque_is_current(rig402) -> None:  # type: ignore[no-untyped-def]
     """§11.5.7: torque in rated current/1000: 6071h = 500 runs the motor on half its running
-    current at the target velocity 60FFh."""
+    current at the target velocity 60FFh; profile torque is DSP-402's 6060h = 4 (the manual's
+    3 is the velocity mode's number, docs/protocol.md)."""
     node = _node402(rig402)
     current = int(rig402.m.read("RUN_CURRENT")[0])
     node.sdo[0x6071].raw = 500
     node.sdo[0x6087].raw = 10000
     node.sdo[0x60FF].raw = 10000
     node.op_mode = "PROFILED TORQUE"
+    assert node.sdo[0x6061].raw == 4
     node.state = "OPERATION ENABLED"
     rig402.advance(0.5)
     assert rig402.m.read("RUN_CURRENT")[0] == round(current / 2)
