@@ -70,3 +70,17 @@ def test_turntable_size_is_not_read() -> None:
         out.append((int(m.read("P_SOLL")[0]), int(m.read("P_IST")[0]),
                     int(m.read("TURNTAB_COUNT")[0])))
     assert out[0] == out[1] == (5000, 5000, 1)
+
+
+@pytest.mark.statements("mis:2.3.5:7")
+@pytest.mark.parametrize(("outside", "bit"), [(50, 0), (51, 1)])
+def test_filter_status_needs_more_than_half_the_samples(outside: int, bit: int) -> None:
+    """§2.3.5 "at least half" against §8.2.56 "more than half" of the second's samples: 50 of
+    the 100 samples outside the confidence limits leave FILTERSTATUS bit 0 clear, 51 set it."""
+    m = MotorArray("MIS232", n=1, seed=0)
+    m.write("AFZUP_CONFMAX", 2000)  # 2.44 V
+    m.set_input(analog1=4.0)
+    m.step(10 * outside)  # one analogue sample each 10 ms
+    m.set_input(analog1=0.0)
+    m.step(1000 - 10 * outside)
+    assert m.read("FILTERSTATUS")[0] == bit

@@ -790,15 +790,16 @@ def test_p_new_moves_nothing() -> None:
 
 
 # --- §8.2.84–§8.2.100 serial line, identification ---------------------------------------------
-@pytest.mark.statements("mis:8.2.84:2", "mis:12.1:10")
+@pytest.mark.statements("mis:8.2.84:2", "mis:8.2.84:3", "mis:12.1:10")
 def test_baud_rate_codes_of_the_modbus_line() -> None:
-    """§8.2.84: 0 9600, 1 19200, 2 38400, 3 57600, 4 115200, 5 230400, 6 460800 baud."""
+    """§8.2.84: 0 9600, 1 19200, 2 38400, 3 57600, 4 115200, 5 230400, 6 460800, 7 921600
+    baud."""
     from jvl_gym.protocol.mactalk.twin16 import Twin
     from jvl_gym.protocol.modbus.twin import modbus_bus
 
     m = _motor()
     slave = modbus_bus(Twin(m)).slaves[0]
-    for code, baud in enumerate((9600, 19200, 38400, 57600, 115200, 230400, 460800)):
+    for code, baud in enumerate((9600, 19200, 38400, 57600, 115200, 230400, 460800, 921600)):
         m.write("BAUD_RATE", code)
         assert slave.serial_format().baud == baud
 
@@ -836,6 +837,25 @@ def test_group_write_reaches_the_motors_of_the_group() -> None:
     twin = Twin(m)
     _ask(twin, m32.encode_group_write(7, 1, 5, (4321).to_bytes(4, "little")))
     assert m.read("V_SOLL").tolist() == [4321, 10000, 4321]
+
+
+@pytest.mark.statements("mis:8.2.87:2")
+def test_group_seq_holds_the_last_group_write_received() -> None:
+    """§8.2.87: GROUP_SEQ, a register of the motor, is "the last received group write
+    sequence" of a motor of the group; 0 on one that received none."""
+    from jvl_gym.protocol.mactalk import codec32 as m32
+    from jvl_gym.protocol.mactalk.twin16 import Twin
+
+    m = MotorArray("MIS232", n=2)
+    m.write("MY_ADDR", np.array([1, 2]))
+    m.write("GROUP_ID", np.array([7, 8]))
+    twin = Twin(m)
+    _ask(twin, m32.encode_group_write(7, 42, 5, (4321).to_bytes(4, "little")))
+    assert m.read("GROUP_SEQ").tolist() == [42, 0]
+    _ask(twin, m32.encode_group_write(7, 43, 6, (500).to_bytes(4, "little")))
+    assert m.read("GROUP_SEQ").tolist() == [43, 0]
+    reply = m32.decode(_ask(twin, m32.encode_read(1, m.table.lookup("GROUP_SEQ").number)))
+    assert m32.data_value(reply.data) == 43
 
 
 @pytest.mark.statements("mis:8.2.89:2")
@@ -1307,7 +1327,8 @@ def test_follow_error_sets_the_motor_passive() -> None:
 @pytest.mark.statements("mis:7.2.6:1", "mis:7.2.6:3")
 def test_after_a_limit_error_only_the_way_back() -> None:
     """§7.2.6: after the position limit error is cleared "It is now only possible to run the
-    motor in the opposite direction of the limit"."""
+    motor in the opposite direction of the limit": towards it, the error comes back at once
+    (the limit is still active, §7.2.6's error condition) and the motor does not move."""
     m = _motor(PL_MASK=0b1, V_SOLL=5000, V_START=10000)
     m.write("MODE_REG", c.VELOCITY)
     m.step(20)
@@ -1319,9 +1340,11 @@ def test_after_a_limit_error_only_the_way_back() -> None:
     held = m.read("P_IST")[0]
     m.step(20)
     assert m.read("P_IST")[0] == held  # not towards the active limit
-    m.write("V_SOLL", -5000)
+    assert m.read("ERR_BITS")[0] & c.ERR_POSITION_LIMIT and m.read("MODE_REG")[0] == 0
+    m.write("COMMAND", c.CMD_CLEAR_ERRORS)
+    m.write_many({"V_SOLL": -5000, "MODE_REG": c.VELOCITY})
     m.step(20)
-    assert m.read("P_IST")[0] < held
+    assert m.read("P_IST")[0] < held and m.read("ERR_BITS")[0] == 0
 
 
 @pytest.mark.statements("mis:7.2.7:2")

@@ -74,6 +74,8 @@ ST_ENCODER_CALIBRATED = 1 << 17
 ST_STANDBY_CURRENT = 1 << 18
 ST_ENCODER_OK = 1 << 20
 ST_IN_TARGET_POSITION = 1 << 22
+#: INPOS_MASK bit 8: the in-position output shows "in physical position" (§5.6.3)
+INPOS_PHYSICAL = 1 << 8
 
 # --- ERR_BITS (§8.2.31) --------------------------------------------------------------------
 ERR_GENERAL = 1 << 0

@@ -153,6 +153,7 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         p[L.P_HOME_POS] = -math.inf
         p[L.P_AMPS_PER_UNIT] = CURRENT_AMPS_PER_UNIT
         p[L.P_RUN_MAX] = cfg.run_current_max
+        p[L.P_STANDBY_MAX] = cfg.standby_current_limit
         p[L.P_ZETA] = cfg.damping_ratio
         p[L.P_STOP_LO] = -math.inf
         p[L.P_STOP_HI] = math.inf
