@@ -2,8 +2,9 @@
 ACTUAL_TORQUE in passive and active mode (§8.2.112), TICKS counting on from a written value
 (§8.2.107), EXT_ENCODER counting the external encoder input in every mode (§8.2.101) and
 EXT_ENCODER_VEL its velocity (§8.2.102), FILTERSTATUS (§8.2.56), the position-limit error of a
-motor standing at its limit (§7.2.6), the in-physical-position output (§5.6.3) and the standby
-current's ceiling per motor type (§5.1.4)."""
+motor standing at its limit (§7.2.6), the in-physical-position output (§5.6.3), the standby
+current's ceiling per motor type (§5.1.4), and S_CONTROL = 1 initialising the sample system
+(§8.2.63)."""
 
 from __future__ import annotations
 
@@ -169,3 +170,20 @@ def test_standby_current_of_an_mis34x_tops_out_at_6_amperes() -> None:
         m.step(50)
         assert m.read("STATUSBITS")[0] & c.ST_STANDBY_CURRENT
         assert m.current_amplitude[0] == pytest.approx(largest * peak, rel=1e-3), motor
+
+
+@pytest.mark.statements("mis:8.2.63:3")
+def test_s_control_1_initialises_the_sample_system() -> None:
+    """§8.2.63: "A value of one will initialize the sample system": a recording under way
+    stops and its samples are dropped; 2 then starts a new sequence from an empty buffer."""
+    m = _motor(SAMPLE1=10, REC_CNT=100, S_TIME=1)
+    m.write("S_CONTROL", 2)
+    m.step(20)
+    assert m.sample_buffer()["P_IST"].shape == (1, 20)
+    m.write("S_CONTROL", 1)
+    m.step(20)
+    assert m.sample_buffer()["P_IST"].shape == (1, 0)
+    assert m.read("S_CONTROL")[0] == 1
+    m.write("S_CONTROL", 2)
+    m.step(10)
+    assert m.sample_buffer()["P_IST"].shape == (1, 10)
