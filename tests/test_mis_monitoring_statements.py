@@ -3,8 +3,8 @@ ACTUAL_TORQUE in passive and active mode (§8.2.112), TICKS counting on from a w
 (§8.2.107), EXT_ENCODER counting the external encoder input in every mode (§8.2.101) and
 EXT_ENCODER_VEL its velocity (§8.2.102), FILTERSTATUS (§8.2.56), the position-limit error of a
 motor standing at its limit (§7.2.6), the in-physical-position output (§5.6.3), the standby
-current's ceiling per motor type (§5.1.4), and S_CONTROL = 1 initialising the sample system
-(§8.2.63)."""
+current's ceiling per motor type (§5.1.4), S_CONTROL = 1 initialising the sample system
+(§8.2.63) and the under-voltage count LOWBUSCVI_CNT (§8.2.130)."""
 
 from __future__ import annotations
 
@@ -187,3 +187,21 @@ def test_s_control_1_initialises_the_sample_system() -> None:
     m.write("S_CONTROL", 2)
     m.step(10)
     assert m.sample_buffer()["P_IST"].shape == (1, 10)
+
+
+@pytest.mark.statements("mis:8.2.130:2")
+def test_low_bus_error_waits_for_lowbuscvi_cnt_measurements_in_a_row() -> None:
+    """§8.2.130: LOWBUSCVI_CNT is the "Number of times in a row the voltage can be too low
+    before error is set", one measurement per 50 µs: with 100, a dip of 5 ms (100
+    measurements) gives the warning only, a sixth millisecond the error (SETUP_BITS bit 21)."""
+    m = _motor(SETUP_BITS=1 << 21, LOWBUSCVI_CNT=100)
+    m.set_input(supply_volts=10.0)  # below MIN_BUSVOL (15 V)
+    m.step(5)
+    assert m.read("WARN_BITS")[0] & c.WARN_LOW_BUS and m.read("ERR_BITS")[0] == 0
+    m.set_input(supply_volts=48.0)
+    m.step(1)  # the count starts again
+    m.set_input(supply_volts=10.0)
+    m.step(5)
+    assert m.read("ERR_BITS")[0] == 0
+    m.step(1)
+    assert m.read("ERR_BITS")[0] & c.ERR_LOW_BUS

@@ -59,7 +59,9 @@ S_EXT_VEL_ACC = S_HOME_PREV + 1
 S_AF_CONF0 = S_EXT_VEL_ACC + 1
 #: analogue filter samples of IO1 … IO8 slope limited this second (§8.2.56)
 S_AF_SLOPE0 = S_AF_CONF0 + 8
-N_STATE = S_AF_SLOPE0 + 8
+#: under-voltage measurements in a row (one per 50 µs, §8.2.130)
+S_LOW_BUS_N = S_AF_SLOPE0 + 8
+N_STATE = S_LOW_BUS_N + 1
 
 # --- params ---------------------------------------------------------------------------------
 (

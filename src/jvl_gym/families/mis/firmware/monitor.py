@@ -10,7 +10,9 @@ status bits (MIS manual §8.2.15, §8.2.18–19, §8.2.24, §8.2.31–32, §5.9,
   names no sign); 0 without an encoder. In an active mode |FLWERR| > FLWERRMAX > 0 sets ERR_BITS
   bits 1 and 0 (§8.2.19, §7.2.4).
 - BUSVOL from the supply; below MIN_BUSVOL: WARN_BITS bit 4 always, and by SETUP_BITS 21/22/23
-  the error bit, a controlled stop to passive, or V_SOLL = 0 (§5.10.2).
+  the error bit, a controlled stop to passive, or V_SOLL = 0 (§5.10.2). The error bit waits
+  until the voltage has been low in more than LOWBUSCVI_CNT measurements in a row, one per
+  50 µs (§8.2.130): the supply is held for a whole outer sample, so each low sample counts 20.
 - Position limits (§5.9): software limits when MIN_P_IST or MAX_P_IST ≠ 0 and no turn table;
   hardware limits on the inputs of PL_MASK / NL_MASK. Moving into a limit sets WARN_BITS 0/1
   (active) and 2/3 (has been active) and ERR_BITS bit 3, unless SETUP_BITS bit 17 disables the
@@ -47,6 +49,8 @@ from . import regs as R
 #: encoder counts per revolution by ENCODER_TYPE code (0: none)
 _CPR = np.array([c.ENCODER_CPR.get(k, 0) for k in range(11)], dtype=np.int64)
 COUNTS_PER_RAD = COUNTS_PER_REV / (2.0 * math.pi)
+#: the firmware measures the bus voltage every 50 µs (§8.2.130): 20 times per outer sample
+_LOW_BUS_MEASUREMENTS_PER_MS = 20.0
 
 
 @njit(cache=True, inline="always")
@@ -116,7 +120,8 @@ def check_errors(regs, s, u, active: bool, has_encoder: bool,
     regs[R.BUSVOL] = busvol
     if busvol < regs[R.MIN_BUSVOL]:
         warn |= c.WARN_LOW_BUS
-        if setup & (1 << 21):
+        s[L.S_LOW_BUS_N] += _LOW_BUS_MEASUREMENTS_PER_MS
+        if setup & (1 << 21) and s[L.S_LOW_BUS_N] > regs[R.LOWBUSCVI_CNT]:
             err |= c.ERR_LOW_BUS
         if setup & (1 << 22) and active:
             regs[R.MODE_REG] = c.STOP
@@ -124,6 +129,7 @@ def check_errors(regs, s, u, active: bool, has_encoder: bool,
             regs[R.V_SOLL] = 0
     else:
         warn &= ~c.WARN_LOW_BUS
+        s[L.S_LOW_BUS_N] = 0.0
     v = s[L.S_VEL]
     lo, hi = regs[R.MIN_P_IST], regs[R.MAX_P_IST]
     soft = (lo != 0 or hi != 0) and not tt
