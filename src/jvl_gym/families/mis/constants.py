@@ -94,6 +94,7 @@ WARN_NEG_LIMIT_SEEN = 1 << 3
 WARN_LOW_BUS = 1 << 4
 
 # --- ZERO_SEARCH_BITS (§8.2.67) --------------------------------------------------------------
+ZS_USE_INDEX = 1 << 0  #: after the sensor, on to the encoder index, which is the zero
 ZS_TURN_AT_LIMIT = 1 << 1  #: the search turns at a limit input instead of stopping
 ZS_OPPOSITE_SIDE = 1 << 2  #: the zero on the sensor's back side
 ZS_IGNORE_SWITCH = 1 << 4  #: the zero where the motor is, no input looked at

@@ -61,7 +61,11 @@ S_AF_CONF0 = S_EXT_VEL_ACC + 1
 S_AF_SLOPE0 = S_AF_CONF0 + 8
 #: under-voltage measurements in a row (one per 50 µs, §8.2.130)
 S_LOW_BUS_N = S_AF_SLOPE0 + 8
-N_STATE = S_LOW_BUS_N + 1
+#: zero search with the index: the encoder's revolution where the sensor was found, and the
+#: direction it goes on in to the index (§8.2.65, §8.2.67 bit 0)
+S_INDEX_TURN = S_LOW_BUS_N + 1
+S_INDEX_DIR = S_INDEX_TURN + 1
+N_STATE = S_INDEX_DIR + 1
 
 # --- params ---------------------------------------------------------------------------------
 (
