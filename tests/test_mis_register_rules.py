@@ -469,3 +469,27 @@ def test_zero_search_bit_1_turns_at_a_limit_switch(mode: int) -> None:
     assert done == 1 and err == 0 and zero == pytest.approx(behind[1], abs=200)
     _, done, err = _search_over_a_sensor(mode, 0, sensor=behind, limit=50_000)
     assert done == c.PASSIVE and err & c.ERR_POSITION_LIMIT
+
+
+# --- §8.2.65, §8.2.67 bit 0: zero search with the encoder index -------------------------------
+@pytest.mark.statements("mis:8.2.67:2", "mis:8.2.65:2")
+def test_zero_search_bit_0_goes_on_to_the_encoder_index() -> None:
+    """ZERO_SEARCH_BITS bit 0, "Search for index": after the sensor the search goes on to the
+    encoder's index (single-turn position 0), which is the zero; INDEX_OFFSET holds the encoder's
+    single-turn position where the sensor was found (§8.2.65). Without the bit the sensor's
+    point is the zero."""
+    rev = 409600
+    sensor = -0.5 * rev / (2 * np.pi)  # home_position = -0.5 rad
+    zero = {}
+    for bits in (0, 1):
+        m = MotorArray("MIS232", n=1, seed=0, home_position=-0.5)
+        m.write_many({"HOME_MASK": 1, "V_HOME": -20000, "V_HOME_CRAWL": 5000,
+                      "ZERO_SEARCH_BITS": bits, "IN_POSITION_COUNT": 0})
+        m.write("MODE_REG", c.ZERO_SEARCH_1)
+        m.step(3000)
+        assert m.read("STATUSBITS")[0] & c.ST_ZERO_SEARCH_DONE, bits
+        zero[bits] = m.rotor_counts[0] - m.read("P_IST")[0]  # the rotor where P_IST is 0
+        if bits:
+            assert abs(m.read("INDEX_OFFSET")[0] - (rev + sensor)) < 2000
+    assert abs(zero[0] - sensor) < 3000
+    assert abs(zero[1] - (-rev)) < 1000  # the next index on, one revolution below 0

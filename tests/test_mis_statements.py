@@ -790,15 +790,16 @@ def test_p_new_moves_nothing() -> None:
 
 
 # --- §8.2.84–§8.2.100 serial line, identification ---------------------------------------------
-@pytest.mark.statements("mis:8.2.84:2", "mis:12.1:10")
+@pytest.mark.statements("mis:8.2.84:2", "mis:8.2.84:3", "mis:12.1:10")
 def test_baud_rate_codes_of_the_modbus_line() -> None:
-    """§8.2.84: 0 9600, 1 19200, 2 38400, 3 57600, 4 115200, 5 230400, 6 460800 baud."""
+    """§8.2.84: 0 9600, 1 19200, 2 38400, 3 57600, 4 115200, 5 230400, 6 460800, 7 921600
+    baud."""
     from jvl_gym.protocol.mactalk.twin16 import Twin
     from jvl_gym.protocol.modbus.twin import modbus_bus
 
     m = _motor()
     slave = modbus_bus(Twin(m)).slaves[0]
-    for code, baud in enumerate((9600, 19200, 38400, 57600, 115200, 230400, 460800)):
+    for code, baud in enumerate((9600, 19200, 38400, 57600, 115200, 230400, 460800, 921600)):
         m.write("BAUD_RATE", code)
         assert slave.serial_format().baud == baud
 
@@ -836,6 +837,25 @@ def test_group_write_reaches_the_motors_of_the_group() -> None:
     twin = Twin(m)
     _ask(twin, m32.encode_group_write(7, 1, 5, (4321).to_bytes(4, "little")))
     assert m.read("V_SOLL").tolist() == [4321, 10000, 4321]
+
+
+@pytest.mark.statements("mis:8.2.87:2")
+def test_group_seq_holds_the_last_group_write_received() -> None:
+    """§8.2.87: GROUP_SEQ, a register of the motor, is "the last received group write
+    sequence" of a motor of the group; 0 on one that received none."""
+    from jvl_gym.protocol.mactalk import codec32 as m32
+    from jvl_gym.protocol.mactalk.twin16 import Twin
+
+    m = MotorArray("MIS232", n=2)
+    m.write("MY_ADDR", np.array([1, 2]))
+    m.write("GROUP_ID", np.array([7, 8]))
+    twin = Twin(m)
+    _ask(twin, m32.encode_group_write(7, 42, 5, (4321).to_bytes(4, "little")))
+    assert m.read("GROUP_SEQ").tolist() == [42, 0]
+    _ask(twin, m32.encode_group_write(7, 43, 6, (500).to_bytes(4, "little")))
+    assert m.read("GROUP_SEQ").tolist() == [43, 0]
+    reply = m32.decode(_ask(twin, m32.encode_read(1, m.table.lookup("GROUP_SEQ").number)))
+    assert m32.data_value(reply.data) == 43
 
 
 @pytest.mark.statements("mis:8.2.89:2")
@@ -995,7 +1015,7 @@ def test_modbus_frame_delay() -> None:
 
 
 # --- §5.1–§5.3 current, AutoCorrection, closed loop ----------------------------------------------
-@pytest.mark.statements("mis:5.1.3:2", "mis:5.1.6:1", "mis:5.1.6:3")
+@pytest.mark.statements("mis:5.1.3:2", "mis:5.1.6:1", "mis:5.1.6:2", "mis:5.1.6:3")
 def test_holding_torque_is_proportional_to_the_current() -> None:
     """§5.1.3/§5.1.6: an MIS232 gives 1.9 N·m at 6000 mA (RUN_CURRENT 1022); at low speed the
     torque is proportional to the current; at high speed less."""
@@ -1023,7 +1043,7 @@ def _blocked_move(motor: MotorArray, mode: int = c.POSITION) -> None:
     motor.run(4.0)
 
 
-@pytest.mark.statements("mis:8.2.15:3", "mis:5.2.1:1")
+@pytest.mark.statements("mis:8.2.15:3", "mis:5.2.1:1", "mis:5.2.1:2")
 def test_auto_correction_needs_the_encoder() -> None:
     """§5.2.1: AutoCorrection needs an encoder option; §8.2.15: it retries a movement in
     position and gear mode."""
@@ -1307,7 +1327,8 @@ def test_follow_error_sets_the_motor_passive() -> None:
 @pytest.mark.statements("mis:7.2.6:1", "mis:7.2.6:3")
 def test_after_a_limit_error_only_the_way_back() -> None:
     """§7.2.6: after the position limit error is cleared "It is now only possible to run the
-    motor in the opposite direction of the limit"."""
+    motor in the opposite direction of the limit": towards it, the error comes back at once
+    (the limit is still active, §7.2.6's error condition) and the motor does not move."""
     m = _motor(PL_MASK=0b1, V_SOLL=5000, V_START=10000)
     m.write("MODE_REG", c.VELOCITY)
     m.step(20)
@@ -1319,9 +1340,11 @@ def test_after_a_limit_error_only_the_way_back() -> None:
     held = m.read("P_IST")[0]
     m.step(20)
     assert m.read("P_IST")[0] == held  # not towards the active limit
-    m.write("V_SOLL", -5000)
+    assert m.read("ERR_BITS")[0] & c.ERR_POSITION_LIMIT and m.read("MODE_REG")[0] == 0
+    m.write("COMMAND", c.CMD_CLEAR_ERRORS)
+    m.write_many({"V_SOLL": -5000, "MODE_REG": c.VELOCITY})
     m.step(20)
-    assert m.read("P_IST")[0] < held
+    assert m.read("P_IST")[0] < held and m.read("ERR_BITS")[0] == 0
 
 
 @pytest.mark.statements("mis:7.2.7:2")
@@ -1800,7 +1823,7 @@ def test_canopen_402_velocity_halt(rig402) -> None:  # type: ignore[no-untyped-d
     assert node.sdo[0x606C].raw == 10000
 
 
-@pytest.mark.statements("mis:11.5.6:1", "mis:11.5.6:3")
+@pytest.mark.statements("mis:11.5.6:1", "mis:11.5.6:2", "mis:11.5.6:3")
 def test_canopen_402_homing_methods() -> None:
     """§11.5.6: methods 1–6, −3, −4 supported, −2, −1 not; method 3 (home switch, negative)
     ends at the switch with the home offset 607Ch as its position, homing attained."""
@@ -1830,16 +1853,18 @@ def test_canopen_402_homing_methods() -> None:
         rig.close()
 
 
-@pytest.mark.statements("mis:11.5.7:2")
+@pytest.mark.statements("mis:11.5.7:1", "mis:11.5.7:2")
 def test_canopen_402_torque_is_current(rig402) -> None:  # type: ignore[no-untyped-def]
     """§11.5.7: torque in rated current/1000: 6071h = 500 runs the motor on half its running
-    current at the target velocity 60FFh."""
+    current at the target velocity 60FFh; profile torque is DSP-402's 6060h = 4 (the manual's
+    3 is the velocity mode's number, docs/protocol.md)."""
     node = _node402(rig402)
     current = int(rig402.m.read("RUN_CURRENT")[0])
     node.sdo[0x6071].raw = 500
     node.sdo[0x6087].raw = 10000
     node.sdo[0x60FF].raw = 10000
     node.op_mode = "PROFILED TORQUE"
+    assert node.sdo[0x6061].raw == 4
     node.state = "OPERATION ENABLED"
     rig402.advance(0.5)
     assert rig402.m.read("RUN_CURRENT")[0] == round(current / 2)

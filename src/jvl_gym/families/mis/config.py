@@ -39,6 +39,8 @@ class MisMotorConfig(MotorData):
     family: Text = "mis"
     name: Text
     run_current_max: Whole = Field(ge=1, le=1533, description="RUN_CURRENT units (§8.2.7)")
+    standby_current_max: Whole | None = Field(
+        None, ge=1, le=1533, description="RUN_CURRENT units; None: run_current_max (§5.1)")
     holding_torque: Real = Field(gt=0.01, le=50.0, description="N·m at run_current_max")
     rotor_inertia: Real = Field(ge=1e-6, le=0.05, description="kg·m²")
     phase_resistance: Real = Field(ge=0.01, le=50.0, description="Ω")
@@ -56,6 +58,9 @@ class MisMotorConfig(MotorData):
             raise ValueError(f"family must be 'mis', got {self.family!r}")
         if self.encoder_type not in ENCODER_TYPES:
             raise ValueError(f"encoder_type must be one of {sorted(ENCODER_TYPES)}")
+        if self.standby_current_max is not None and \
+                self.standby_current_max > self.run_current_max:
+            raise ValueError("standby_current_max must be at most run_current_max")
         if self.detent_torque > 0.2 * self.holding_torque:
             raise ValueError("detent_torque must be at most 20 % of holding_torque")
         if self.coulomb_friction > 0.5 * self.holding_torque:
@@ -70,6 +75,13 @@ class MisMotorConfig(MotorData):
     def rated_current(self) -> float:
         """Largest phase current [A RMS]."""
         return self.run_current_max * CURRENT_AMPS_PER_UNIT
+
+    @property
+    def standby_current_limit(self) -> int:
+        """Largest effective STANDBY_CURRENT [RUN_CURRENT units]: ``standby_current_max``, or
+        the largest running current where the type's table gives both the same range."""
+        return self.run_current_max if self.standby_current_max is None else \
+            self.standby_current_max
 
     @property
     def torque_constant(self) -> float:

@@ -74,6 +74,8 @@ ST_ENCODER_CALIBRATED = 1 << 17
 ST_STANDBY_CURRENT = 1 << 18
 ST_ENCODER_OK = 1 << 20
 ST_IN_TARGET_POSITION = 1 << 22
+#: INPOS_MASK bit 8: the in-position output shows "in physical position" (§5.6.3)
+INPOS_PHYSICAL = 1 << 8
 
 # --- ERR_BITS (§8.2.31) --------------------------------------------------------------------
 ERR_GENERAL = 1 << 0
@@ -92,6 +94,7 @@ WARN_NEG_LIMIT_SEEN = 1 << 3
 WARN_LOW_BUS = 1 << 4
 
 # --- ZERO_SEARCH_BITS (§8.2.67) --------------------------------------------------------------
+ZS_USE_INDEX = 1 << 0  #: after the sensor, on to the encoder index, which is the zero
 ZS_TURN_AT_LIMIT = 1 << 1  #: the search turns at a limit input instead of stopping
 ZS_OPPOSITE_SIDE = 1 << 2  #: the zero on the sensor's back side
 ZS_IGNORE_SWITCH = 1 << 4  #: the zero where the motor is, no input looked at
@@ -101,6 +104,10 @@ ZS_NO_TIME_OUT = 1 << 5  #: no zero-search time-out
 SETUP_INVERT_DIRECTION = 1 << 0
 SETUP_SYNC_ENCODER = 1 << 5
 SETUP_IN_PHYS_POS_CONTINUOUS = 1 << 6
+#: SETUP_BITS 10/11: at power-up P_IST from the single-turn encoder / the multi-turn position
+#: (§8.2.68, §5.4.3)
+SETUP_SINGLE_TURN_AT_POWER_UP = 1 << 10
+SETUP_MULTI_TURN_AT_POWER_UP = 1 << 11
 SETUP_KEEP_EXT_ENCODER = 1 << 12
 SETUP_EXT_ENCODER_INVERSE = 1 << 16
 SETUP_NO_LIMIT_ERROR = 1 << 17
@@ -124,6 +131,7 @@ CMD_ADD_POSITION = 120  #: P_IST, P_SOLL, encoder += P_NEW
 CMD_ADD_ACTUAL = 121  #: P_IST, encoder += P_NEW
 # --- COMMAND: user commands (§8.2.22) ---------------------------------------------------------
 CMD_RESYNC = 257  #: P_IST := encoder position
+CMD_PRESET_POSITION = 354  #: encoder, P_IST and P_SOLL := P_NEW (follow error 0)
 CMD_RESET = 267  #: reset the CPU
 CMD_SAVE_RESET = 268  #: save to flash, then reset
 CMD_SAVE = 269  #: save to flash, continue

@@ -24,7 +24,8 @@ the standby current is not used (§5.3.3). ACTUAL_TORQUE reads 0 in passive mode
 active mode without current control (§8.2.112).
 
 TICKS counts on by one per sample from the value it holds, so a written value goes on counting
-(§8.2.107, R/W). EXT_ENCODER counts the pulse input in every mode (§8.2.101). A turn table
+(§8.2.107, R/W). EXT_ENCODER counts the pulse input in every mode (§8.2.101), and
+EXT_ENCODER_VEL holds its counts of the last 16 ms, renewed every 16 ms (§8.2.102). A turn table
 keeps P_IST inside MIN_P_IST … MAX_P_IST in position mode only; in the other modes P_IST may
 leave the range (§5.12.6) and a return to position mode brings it back by whole turns.
 """
@@ -54,18 +55,25 @@ _SQRT2 = math.sqrt(2.0)
 #: the motor back in its previous mode (§7.2.19), with the general-error bit that comes with it;
 #: the motor holds still there until the errors are cleared (§8.2.31)
 _NOT_STOPPING = c.ERR_ZERO_SEARCH_TIMEOUT | c.ERR_GENERAL
+#: outer samples (ms) between two measurements of EXT_ENCODER_VEL (§8.2.102)
+_EXT_VEL_MS = 16
 
 
 @njit(cache=True, inline="always")
-def _ext_encoder(regs, u) -> int:  # pragma: no cover - compiled
+def _ext_encoder(regs, s, u) -> int:  # pragma: no cover - compiled
     """The pulse input's counts of this sample, added to EXT_ENCODER in every mode ("counts the
     external encoder input", §8.2.101, names no mode); SETUP_BITS bit 16 counts the input the
-    other way (§8.2.68)."""
+    other way (§8.2.68). Every 16 ms EXT_ENCODER_VEL becomes the counts of the last 16 ms
+    (§8.2.102: "measured every 16ms", counts per 16 ms)."""
     counts = int(u[L.I_PULSE_COUNTS])
     if regs[R.SETUP_BITS] & c.SETUP_EXT_ENCODER_INVERSE:
         counts = -counts
     if counts != 0:
         regs[R.EXT_ENCODER] = wrap32(regs[R.EXT_ENCODER] + counts)
+        s[L.S_EXT_VEL_ACC] += counts
+    if int(s[L.S_TICK]) % _EXT_VEL_MS == 0:
+        regs[R.EXT_ENCODER_VEL] = int(s[L.S_EXT_VEL_ACC])
+        s[L.S_EXT_VEL_ACC] = 0.0
     return counts
 
 
@@ -182,7 +190,7 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
     # TICKS counts on from whatever it holds: a written value too (R/W, §8.2.107)
     regs[R.TICKS] = (regs[R.TICKS] + 1) & 0xFFFFFFFF
     update_inputs(regs, s, p, u)
-    pulses = _ext_encoder(regs, u)
+    pulses = _ext_encoder(regs, s, u)
     has_encoder = read_encoder(regs, s, p)
     mode = regs[R.MODE_REG]
     active = mode != c.PASSIVE and mode != c.SAFE
@@ -242,7 +250,9 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
         units = regs[R.RUN_CURRENT] * s[L.S_CUR_SCALE] / 2047.0
     else:
         s[L.S_CUR_SCALE] = 2047.0
-        units = regs[R.STANDBY_CURRENT] if standby else regs[R.RUN_CURRENT]
+        # the type's own ceiling of the standby current (6 A on an MIS34x/43x, §5.1.4)
+        units = min(float(regs[R.STANDBY_CURRENT]), p[L.P_STANDBY_MAX]) if standby else float(
+            regs[R.RUN_CURRENT])
     # "In passive mode = 0%", active without current control 100 % (§8.2.112)
     regs[R.ACTUAL_TORQUE] = int(s[L.S_CUR_SCALE]) if active else 0
     s[L.S_FIELD_STEP] = field_step(regs, s, v) if closed_loop else 0.0

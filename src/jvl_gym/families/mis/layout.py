@@ -53,7 +53,19 @@ S_DIN0 = S_AF0 + 8  #: input filter: ms the raw level of IO1 … IO8 has differe
 S_REV_ACC = S_DIN0 + 8
 #: the mode a zero search was started from, which a time-out sets back (§7.2.19)
 S_HOME_PREV = S_REV_ACC + 1
-N_STATE = S_HOME_PREV + 1
+#: external encoder counts since EXT_ENCODER_VEL was last measured (§8.2.102)
+S_EXT_VEL_ACC = S_HOME_PREV + 1
+#: analogue filter samples of IO1 … IO8 outside the confidence limits this second (§8.2.56)
+S_AF_CONF0 = S_EXT_VEL_ACC + 1
+#: analogue filter samples of IO1 … IO8 slope limited this second (§8.2.56)
+S_AF_SLOPE0 = S_AF_CONF0 + 8
+#: under-voltage measurements in a row (one per 50 µs, §8.2.130)
+S_LOW_BUS_N = S_AF_SLOPE0 + 8
+#: zero search with the index: the encoder's revolution where the sensor was found, and the
+#: direction it goes on in to the index (§8.2.65, §8.2.67 bit 0)
+S_INDEX_TURN = S_LOW_BUS_N + 1
+S_INDEX_DIR = S_INDEX_TURN + 1
+N_STATE = S_INDEX_DIR + 1
 
 # --- params ---------------------------------------------------------------------------------
 (
@@ -72,8 +84,9 @@ N_STATE = S_HOME_PREV + 1
     P_ZETA,  # damping ratio of the rotor against the stator field
     P_STOP_LO,  # mechanical end stop below this rotor angle [rad] (−inf: none)
     P_STOP_HI,  # mechanical end stop above this rotor angle [rad] (inf: none)
+    P_STANDBY_MAX,  # largest STANDBY_CURRENT of the type
     N_PARAM,
-) = range(16)
+) = range(17)
 
 # --- inputs ---------------------------------------------------------------------------------
 (

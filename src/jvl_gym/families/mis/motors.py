@@ -153,6 +153,7 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         p[L.P_HOME_POS] = -math.inf
         p[L.P_AMPS_PER_UNIT] = CURRENT_AMPS_PER_UNIT
         p[L.P_RUN_MAX] = cfg.run_current_max
+        p[L.P_STANDBY_MAX] = cfg.standby_current_limit
         p[L.P_ZETA] = cfg.damping_ratio
         p[L.P_STOP_LO] = -math.inf
         p[L.P_STOP_HI] = math.inf
@@ -165,6 +166,7 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
 
     def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
                     values: np.ndarray) -> None:
+        self._store_position_backup(idx)
         codes = set(c.ENCODER_CPR)
         for q in range(cols.size):
             if not to_state[q] and cols[q] == L.P_ENCODER and not set(
@@ -173,11 +175,42 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
                                  f"{values[q].tolist()}")
         super()._reset_rows(idx, cols, to_state, values)
 
+    def _store_position_backup(self, idx: np.ndarray) -> None:
+        """The position back-up of §5.4.2: P_IST as the motors ``idx`` leave it at a power-down
+        or reset (the flash copy a later power-up with SETUP_BITS bit 11 restores)."""
+        if getattr(self, "_position_backup", None) is None:
+            self._position_backup = np.zeros(self.n, dtype=np.int64)
+        self._position_backup[idx] = self.regs[idx, R.P_IST]
+
+    def _power_up_position(self, idx: np.ndarray, code: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """P_IST after power-up by SETUP_BITS bits 10/11 and the encoder option (§5.4.3's
+        table; bit 11 wins when both are set): 0 by default; bit 10 the single-turn position
+        (0 … 409599) with an H2 or H4, 0 otherwise (H3: "not available"); bit 11 the H3's full
+        multi-turn position, the stored position (:meth:`_store_position_backup`) without an
+        encoder, and with an H2 or H4 the stored position corrected by the single-turn
+        encoder to within half a revolution. ``q``: the quantised rotor angle in counts."""
+        setup = self.regs[idx, R.SETUP_BITS]
+        multi = (setup & c.SETUP_MULTI_TURN_AT_POWER_UP) != 0
+        single = ((setup & c.SETUP_SINGLE_TURN_AT_POWER_UP) != 0) & ~multi
+        q = q.astype(np.int64)
+        turn = np.mod(q, COUNTS_PER_REV)
+        half = COUNTS_PER_REV // 2
+        stored = self._position_backup[idx]
+        near = stored + np.mod(turn - stored + half, COUNTS_PER_REV) - half
+        single_turn_encoder = np.isin(code, (1, 3, 4))
+        pos = np.zeros(idx.size, dtype=np.int64)
+        pos = np.where(single & single_turn_encoder, turn, pos)
+        pos = np.where(multi & (code == 0), stored, pos)
+        pos = np.where(multi & single_turn_encoder, near, pos)
+        pos = np.where(multi & (code == 2), q, pos)
+        return np.mod(pos + 2**31, 2**32) - 2**31
+
     def _power_on(self, idx: np.ndarray) -> None:
         """Firmware start: positions, counters, NOTSAVED (§8.2.96) and error bits cleared
-        (P_IST = P_SOLL = 0, so a saved P_SOLL makes no move at power-on; the position back-up
-        of §5.4 is not modelled), EXT_ENCODER too unless SETUP_BITS bit 12 keeps it, the mode
-        from HOMEMODE or else STARTMODE (§8.2.33, §8.2.37)."""
+        (P_IST = P_SOLL = ENCODER_POS = 0, or the position SETUP_BITS bits 10/11 take from the
+        encoder or the position back-up, :meth:`_power_up_position`; P_SOLL = P_IST, so a saved
+        P_SOLL makes no move at power-on), EXT_ENCODER too unless SETUP_BITS bit 12 keeps it,
+        the mode from HOMEMODE or else STARTMODE (§8.2.33, §8.2.37)."""
         s, regs = self.state, self.regs
         for num in (R.P_IST, R.P_SOLL, R.V_IST, R.ENCODER_POS, R.FLWERR, R.ERR_BITS,
                     R.WARN_BITS, R.STATUSBITS, R.TURNTAB_COUNT, R.COMMAND,
@@ -193,7 +226,14 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         cpr = np.array([c.ENCODER_CPR[k] for k in code.tolist()], dtype=np.int64)
         per = np.where(cpr > 0, COUNTS_PER_REV // np.maximum(cpr, 1), 1)
         q = np.floor(self._firmware_angle(idx) * COUNTS_PER_REV / (2 * math.pi) / per) * per
-        s[idx, L.S_ENC_OFFSET] = np.where(cpr > 0, -q, 0.0)
+        if getattr(self, "_position_backup", None) is None:
+            self._store_position_backup(idx)
+        pos = self._power_up_position(idx, code, q)
+        regs[idx, R.P_IST] = regs[idx, R.P_SOLL] = pos
+        s[idx, L.S_SEEN_PSOLL] = pos
+        regs[idx, R.ENCODER_POS] = np.where(cpr > 0, pos, 0)
+        s[idx, L.S_ENC_OFFSET] = np.where(cpr > 0, pos - q, 0.0)
+        s[idx, L.S_ENC_PREV] = regs[idx, R.ENCODER_POS]
         s[idx, L.S_CMD] = s[idx, L.S_CMD_PREV] = 0.0
         home = regs[idx, R.HOMEMODE]
         start = regs[idx, R.STARTMODE]
@@ -306,6 +346,7 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         the power-on of the firmware (:meth:`_power_on`); the rotor keeps its angle and speed,
         and the drive restarts with its commanded position at the rotor (no jump)."""
         idx = as_index(index, self.n)
+        self._store_position_backup(idx)
         keep = self.state[np.ix_(idx, _PLANT_STATE)].copy()
         memory = self._rom if self._flash is None else self._flash
         for i in idx.tolist():
@@ -377,7 +418,7 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         self.regs[i, R.ENCODER_POS] = value
 
     def _commands(self, idx: np.ndarray, raw: np.ndarray) -> None:
-        """FastMac commands (§8.2.21) and the user commands 257, 267–269, 342, 398, 399
+        """FastMac commands (§8.2.21) and the user commands 257, 267–269, 342, 354, 398, 399
         (§8.2.22; reset and save only in passive or safe mode, which "allows the save in flash
         and reset commands", §8.2.3; 342 erases the stored program,
         :meth:`~.program.api.ProgramMixin.erase_program`); other numbers do nothing. COMMAND
@@ -416,9 +457,12 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
                 pn = TABLE.lookup(f"P{7 + c.CMD_RELATIVE.index(cmd)}").number
                 self._store_p_soll(np.array([i]),
                                    np.array([wrap32(int(regs[i, R.P_IST] + regs[i, pn]))]))
-            elif cmd in (c.CMD_SET_POSITION, c.CMD_ADD_POSITION, c.CMD_ADD_ACTUAL):
+            elif cmd in (c.CMD_SET_POSITION, c.CMD_ADD_POSITION, c.CMD_ADD_ACTUAL,
+                         c.CMD_PRESET_POSITION):
+                # 354 presets "encoder …, P_IST and P_SOLL with P_NEW" as FastMac 119 does;
+                # the follow error is 0 with the encoder set to P_IST (§8.2.22)
                 new = int(regs[i, R.P_NEW])
-                add = cmd != c.CMD_SET_POSITION
+                add = cmd in (c.CMD_ADD_POSITION, c.CMD_ADD_ACTUAL)
                 regs[i, R.P_IST] = wrap32(int(regs[i, R.P_IST]) * add + new)
                 if cmd != c.CMD_ADD_ACTUAL:
                     regs[i, R.P_SOLL] = wrap32(int(regs[i, R.P_SOLL]) * add + new)

@@ -123,8 +123,8 @@ class Twin(MotorTwin):
         return [] if address == mt.MASTER else super().targets(address, broadcast)
 
     def value(self, i: int, reg: int) -> int:
-        """The register's stored integer, or the one the twin keeps itself (GROUP_SEQ of the
-        32-bit MacTalk's group writes, MIS manual §8.2)."""
+        """The register's stored integer (in the 32-bit MacTalk, 0 for a register number the
+        table does not have or reserves)."""
         if self.unit32 is not None:
             return self.unit32.value(i, reg)
         return super().value(i, reg)

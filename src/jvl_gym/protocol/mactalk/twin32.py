@@ -64,8 +64,9 @@ class MacTalk32Unit:
     Attributes
     ----------
     group_seq : list of int or None
-        Sequence of the last group write each motor received (None: none since power-on);
-        read back as GROUP_SEQ (0 before the first).
+        Sequence of the last group write each motor received (None: none since power-on),
+        which a repeat of it is told by; the motor holds it in its register GROUP_SEQ (0 before
+        the first), where the family has that register.
     """
 
     def __init__(self, twin: MotorTwin, samples: SampleCursor) -> None:
@@ -77,8 +78,6 @@ class MacTalk32Unit:
     def value(self, i: int, reg: int) -> int:
         """The 32-bit value of register ``reg`` of motor ``i`` (0 where there is none)."""
         t = self.twin
-        if reg == t.reg.GROUP_SEQ:
-            return self.group_seq[i] or 0
         if reg not in t.m.table or t.m.table.lookup(reg).access.value == "reserved":
             return 0
         return int(t.m.read_raw(reg)[i])
@@ -131,7 +130,15 @@ class MacTalk32Unit:
             if int(groups[i]) != f.group or self.group_seq[i] == f.sequence:
                 continue
             self.group_seq[i] = f.sequence
+            self._hold_group_seq(i, f.sequence)
             self.write(i, f.register, f.data)
+
+    def _hold_group_seq(self, i: int, sequence: int) -> None:
+        """Motor ``i``'s GROUP_SEQ := ``sequence`` (a read-only register the motor's own
+        group-write reception sets, MIS §8.2.87), where its family has that register."""
+        t = self.twin
+        if t.reg.GROUP_SEQ >= 0:
+            t.m.regs[i, t.reg.GROUP_SEQ] = sequence
 
     def _one(self, i: int, f: m32.Request) -> bytes:
         t = self.twin
@@ -185,4 +192,5 @@ class MacTalk32Unit:
         """Protocol state of motor ``i`` after a reset: no group write received, the sample
         buffer read from its first sample."""
         self.group_seq[i] = None
+        self._hold_group_seq(i, 0)
         self.samples.restart(i)

@@ -114,8 +114,9 @@ PDO_BASES: dict[int, dict[str, int]] = {
 }
 #: 32-bit registers in each PDO block (MIS manual §12.6: "[0..7]")
 PDO_SLOTS = 8
-#: baud rate of each value of the baud-rate registers (MIS manual §12.1: 0..6)
-BAUD_RATES = (9600, 19200, 38400, 57600, 115200, 230400, 460800)
+#: baud rate of each value of the baud-rate registers (MIS manual §12.1 lists 0..6; the
+#: register BAUD_RATE, §8.2.84, adds 7 = 921600)
+BAUD_RATES = (9600, 19200, 38400, 57600, 115200, 230400, 460800, 921600)
 
 _FIXED_T35 = 1.75e-3  # Modbus serial line guide 2.5.1.1: above 19 200 baud
 _FIXED_T15 = 0.75e-3

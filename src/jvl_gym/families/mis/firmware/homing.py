@@ -24,7 +24,14 @@ seeks its sensor, a limit input ahead (PL_MASK/NL_MASK, MIN_P_IST/MAX_P_IST) tur
 (``S_HOME_DIR``) instead of stopping it with the position-limit error; every later phase runs in
 the turned direction, and a limit met again turns it again until the time-out. Phases
 (``S_HOME_PHASE``): 0 start, 1 seek, 2 leave the sensor, 3 stop, 4 move to 0, 6 run through the
-sensor (bit 2), 7 come back onto it (bit 2, type 2).
+sensor (bit 2), 7 come back onto it (bit 2, type 2), 8 on to the encoder index (bit 0).
+
+Bit 0 "Use index after zero search" (with an encoder option): where the sensor (or, with bit 4,
+the motor's position) would be the zero, the search instead notes the encoder's single-turn
+position there in INDEX_OFFSET (§8.2.65: "the absolute value of the internal encoder where the
+Zero search/home position was found") and goes on in the direction it was moving, at the crawl
+velocity, to the encoder's index, once per revolution where its single-turn position is 0; the
+index is the zero (phase 8). A decision: the manual names the bit and the register only.
 
 Torque zero search (§6.5.7, "only available with H2/H4 encoder … Closed loop and Current
 control enabled"): the register list gives it no MODE_REG or HOMEMODE number (HOMEMODE takes
@@ -46,9 +53,16 @@ from numba import njit
 from ....physics.fixed import wrap32
 from .. import constants as c
 from .. import layout as L
-from ..units import ZERO_SEARCH_TIMEOUT_DEFAULT_S
+from ..units import COUNTS_PER_REV, ZERO_SEARCH_TIMEOUT_DEFAULT_S
 from . import regs as R
-from .monitor import COUNTS_PER_RAD, seeking_turns, set_encoder
+from .monitor import (
+    COUNTS_PER_RAD,
+    encoder_cpr,
+    firmware_angle,
+    rotor_counts_quantised,
+    seeking_turns,
+    set_encoder,
+)
 from .profile import position_step, velocity_step
 
 
@@ -63,6 +77,31 @@ def _set_zero(regs, s, p, at_rotor: bool) -> None:  # pragma: no cover - compile
     regs[R.P_IST] = regs[R.P_HOME]
     s[L.S_FRAC] = 0.0
     set_encoder(regs, s, p, regs[R.P_HOME])
+
+
+@njit(cache=True)
+def _found(regs, s, p, v: float) -> None:  # pragma: no cover - compiled
+    """The sensor's point reached while moving at ``v``: the zero here (phase 3), or with
+    ZERO_SEARCH_BITS bit 0 and an encoder, INDEX_OFFSET := the encoder's single-turn position
+    here and on to the index (phase 8)."""
+    cpr = encoder_cpr(p)
+    if regs[R.ZERO_SEARCH_BITS] & c.ZS_USE_INDEX and cpr > 0:
+        absolute = rotor_counts_quantised(firmware_angle(regs, s), cpr)
+        regs[R.INDEX_OFFSET] = int(absolute % COUNTS_PER_REV)
+        s[L.S_INDEX_TURN] = math.floor(absolute / COUNTS_PER_REV)
+        s[L.S_INDEX_DIR] = 1.0 if v >= 0.0 else -1.0
+        s[L.S_HOME_PHASE] = 8.0
+    else:
+        _set_zero(regs, s, p, False)
+        s[L.S_HOME_PHASE] = 3.0
+
+
+@njit(cache=True)
+def _at_index(regs, s, p) -> bool:  # pragma: no cover - compiled
+    """The encoder has passed its index (single-turn position 0) since the sensor."""
+    absolute = rotor_counts_quantised(firmware_angle(regs, s), encoder_cpr(p))
+    turn = math.floor(absolute / COUNTS_PER_REV)
+    return turn != s[L.S_INDEX_TURN]
 
 
 @njit(cache=True)
@@ -102,13 +141,14 @@ def zero_search(regs, s, p, mode: int,
     reversed_ = s[L.S_VEL] == 0.0 or (s[L.S_VEL] > 0.0) != (vh > 0.0)
     if phase == 1.0:
         if bits & c.ZS_IGNORE_SWITCH and not torque_search:
-            _set_zero(regs, s, p, False)
-            s[L.S_HOME_PHASE] = 3.0
+            _found(regs, s, p, vh)
         elif home:
-            if torque_search or (mode == c.ZERO_SEARCH_1 and not bits & c.ZS_OPPOSITE_SIDE):
-                _set_zero(regs, s, p, torque_search)
-                s[L.S_VEL] = 0.0 if torque_search else s[L.S_VEL]
+            if torque_search:
+                _set_zero(regs, s, p, True)
+                s[L.S_VEL] = 0.0
                 s[L.S_HOME_PHASE] = 3.0
+            elif mode == c.ZERO_SEARCH_1 and not bits & c.ZS_OPPOSITE_SIDE:
+                _found(regs, s, p, vh)
             elif bits & c.ZS_OPPOSITE_SIDE:
                 s[L.S_HOME_PHASE] = 6.0
                 return velocity_step(regs, s, vh, s[L.S_DEC]), False
@@ -120,21 +160,24 @@ def zero_search(regs, s, p, mode: int,
         if home:
             return velocity_step(regs, s, vh, s[L.S_DEC]), False
         if mode == c.ZERO_SEARCH_1:
-            _set_zero(regs, s, p, False)
-            s[L.S_HOME_PHASE] = 3.0
+            _found(regs, s, p, vh)
         else:
             s[L.S_HOME_PHASE] = 7.0
     if s[L.S_HOME_PHASE] == 7.0:
         if not (home and reversed_):
             return velocity_step(regs, s, back, s[L.S_DEC]), False
-        _set_zero(regs, s, p, False)
-        s[L.S_HOME_PHASE] = 3.0
+        _found(regs, s, p, back)
     if s[L.S_HOME_PHASE] == 2.0:
         if not home and reversed_:
-            _set_zero(regs, s, p, False)
-            s[L.S_HOME_PHASE] = 3.0
+            _found(regs, s, p, back)
         else:
             return velocity_step(regs, s, back, s[L.S_DEC]), False
+    if s[L.S_HOME_PHASE] == 8.0:
+        if not _at_index(regs, s, p):
+            return velocity_step(regs, s, math.copysign(crawl, s[L.S_INDEX_DIR]),
+                                 s[L.S_DEC]), False
+        _set_zero(regs, s, p, False)
+        s[L.S_HOME_PHASE] = 3.0
     if s[L.S_HOME_PHASE] == 3.0:
         v = velocity_step(regs, s, 0.0, s[L.S_DEC])
         if v != 0.0:

@@ -13,6 +13,11 @@ discarded; else it is limited to the last filtered value ± AFZUP_MAXSLOPE; the 
 rounded in the ANALOGUE_FILTERED registers. The manual selects per-input settings through
 AFZUP_WRITEBITS / AFZUP_READINDEX; the simulator applies the registers' current values to all
 eight inputs (a simplification).
+
+FILTERSTATUS (§8.2.56), each second of the motor's clock: bits 0–7 tell that more than half the
+samples of the last second of IO1 … IO8 were discarded as outside the confidence limits, bits
+8–15 that more than half were slope limited (the detail's order; the register overview swaps
+the halves).
 """
 
 from __future__ import annotations
@@ -28,6 +33,8 @@ from . import regs as R
 
 #: outer samples (ms) between two analogue filter samples (§2.3.5: "fixed intervals of 10 mS")
 AF_PERIOD = 10
+#: analogue filter samples in the second FILTERSTATUS is taken over (§8.2.56)
+AF_PER_SECOND = 1000 // AF_PERIOD
 
 
 @njit(cache=True)
@@ -88,7 +95,30 @@ def update_inputs(regs, s, p, u) -> None:  # pragma: no cover - compiled
                   float(ANALOGUE_FULL))
         regs[R.ANALOGUE_INPUT1 + k] = int(raw)
         if sample:
+            old = s[L.S_AF0 + k]
+            if raw < regs[R.AFZUP_CONFMIN] or raw > regs[R.AFZUP_CONFMAX]:
+                s[L.S_AF_CONF0 + k] += 1.0
+            elif abs(raw - old) > regs[R.AFZUP_MAXSLOPE]:
+                s[L.S_AF_SLOPE0 + k] += 1.0
             s[L.S_AF0 + k] = analogue_filter_step(
-                s[L.S_AF0 + k], raw, regs[R.AFZUP_CONFMIN], regs[R.AFZUP_CONFMAX],
+                old, raw, regs[R.AFZUP_CONFMIN], regs[R.AFZUP_CONFMAX],
                 regs[R.AFZUP_MAXSLOPE], regs[R.AFZUP_FILTER])
             regs[R.ANALOGUE_FILTERED1 + k] = int(math.floor(s[L.S_AF0 + k] + 0.5))
+    if int(s[L.S_TICK]) % 1000 == 0:
+        _filter_status(regs, s)
+
+
+@njit(cache=True)
+def _filter_status(regs, s) -> None:  # pragma: no cover - compiled
+    """FILTERSTATUS of the last second (§8.2.56): bit k when more than half the analogue
+    samples of IO(k+1) were outside the confidence limits, bit 8 + k when more than half were
+    slope limited; the counts start again."""
+    status = 0
+    for k in range(8):
+        if 2.0 * s[L.S_AF_CONF0 + k] > AF_PER_SECOND:
+            status |= 1 << k
+        if 2.0 * s[L.S_AF_SLOPE0 + k] > AF_PER_SECOND:
+            status |= 1 << (8 + k)
+        s[L.S_AF_CONF0 + k] = 0.0
+        s[L.S_AF_SLOPE0 + k] = 0.0
+    regs[R.FILTERSTATUS] = status

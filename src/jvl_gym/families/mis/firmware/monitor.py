@@ -10,16 +10,20 @@ status bits (MIS manual §8.2.15, §8.2.18–19, §8.2.24, §8.2.31–32, §5.9,
   names no sign); 0 without an encoder. In an active mode |FLWERR| > FLWERRMAX > 0 sets ERR_BITS
   bits 1 and 0 (§8.2.19, §7.2.4).
 - BUSVOL from the supply; below MIN_BUSVOL: WARN_BITS bit 4 always, and by SETUP_BITS 21/22/23
-  the error bit, a controlled stop to passive, or V_SOLL = 0 (§5.10.2).
+  the error bit, a controlled stop to passive, or V_SOLL = 0 (§5.10.2). The error bit waits
+  until the voltage has been low in more than LOWBUSCVI_CNT measurements in a row, one per
+  50 µs (§8.2.130): the supply is held for a whole outer sample, so each low sample counts 20.
 - Position limits (§5.9): software limits when MIN_P_IST or MAX_P_IST ≠ 0 and no turn table;
   hardware limits on the inputs of PL_MASK / NL_MASK. Moving into a limit sets WARN_BITS 0/1
   (active) and 2/3 (has been active) and ERR_BITS bit 3, unless SETUP_BITS bit 17 disables the
   error; either way the motor stops, and while a limit is active the profile does not move
-  towards it. A travel-limit input, and a software limit in velocity mode, is noticed when the
-  motor is at or past it while moving towards it; with bit 17 the motor then brakes with
-  ACC_EMERG and stays active (§5.9.5). In position and gear mode the move itself ends at a
-  software limit, braking with the normal deceleration (``outer``), so P_IST never passes it;
-  the limit counts as reached when the motor stands at it with P_SOLL beyond. With SETUP_BITS
+  towards it. A limit is reached when the motor is at or past it while moving towards it, or
+  stands at it while asked to move towards it (P_SOLL beyond it in position and gear mode,
+  V_SOLL towards it in velocity mode): §7.2.6 sets the error whenever a sensor is active or
+  P_IST is at a software limit, so a motor that enters an active mode at its limit and is sent
+  on towards it gets the error too; with bit 17 a moving motor then brakes with ACC_EMERG and
+  stays active (§5.9.5). In position and gear mode the move itself ends at a software limit,
+  braking with the normal deceleration (``outer``), so P_IST never passes it. With SETUP_BITS
   bit 28 (limits without memory, §5.9.6) a has-been-active warning clears when the motor moves
   away from its limit and the limit is no longer active.
 - An error (ERR_BITS ≠ 0) in an active mode stops the motor with ACC_EMERG and then makes it
@@ -45,6 +49,8 @@ from . import regs as R
 #: encoder counts per revolution by ENCODER_TYPE code (0: none)
 _CPR = np.array([c.ENCODER_CPR.get(k, 0) for k in range(11)], dtype=np.int64)
 COUNTS_PER_RAD = COUNTS_PER_REV / (2.0 * math.pi)
+#: the firmware measures the bus voltage every 50 µs (§8.2.130): 20 times per outer sample
+_LOW_BUS_MEASUREMENTS_PER_MS = 20.0
 
 
 @njit(cache=True, inline="always")
@@ -114,7 +120,8 @@ def check_errors(regs, s, u, active: bool, has_encoder: bool,
     regs[R.BUSVOL] = busvol
     if busvol < regs[R.MIN_BUSVOL]:
         warn |= c.WARN_LOW_BUS
-        if setup & (1 << 21):
+        s[L.S_LOW_BUS_N] += _LOW_BUS_MEASUREMENTS_PER_MS
+        if setup & (1 << 21) and s[L.S_LOW_BUS_N] > regs[R.LOWBUSCVI_CNT]:
             err |= c.ERR_LOW_BUS
         if setup & (1 << 22) and active:
             regs[R.MODE_REG] = c.STOP
@@ -122,6 +129,7 @@ def check_errors(regs, s, u, active: bool, has_encoder: bool,
             regs[R.V_SOLL] = 0
     else:
         warn &= ~c.WARN_LOW_BUS
+        s[L.S_LOW_BUS_N] = 0.0
     v = s[L.S_VEL]
     lo, hi = regs[R.MIN_P_IST], regs[R.MAX_P_IST]
     soft = (lo != 0 or hi != 0) and not tt
@@ -141,11 +149,13 @@ def check_errors(regs, s, u, active: bool, has_encoder: bool,
         if v > 0.0 and not neg_hit:
             warn &= ~c.WARN_NEG_LIMIT_SEEN
     mode = regs[R.MODE_REG]
+    # the way the motor is asked to move: to P_SOLL, or at V_SOLL (0: nowhere)
     ahead = wrap32(regs[R.P_SOLL] - regs[R.P_IST]) if (
-        mode == c.POSITION or mode == c.GEAR) else 0
+        mode == c.POSITION or mode == c.GEAR) else (regs[R.V_SOLL] if mode == c.VELOCITY
+                                                    else 0)
     passing = (pos_hit and v > 0.0) or (neg_hit and v < 0.0)
     if active and not seeking_turns(regs, s, mode) and (
-            passing or (soft_pos and ahead > 0) or (soft_neg and ahead < 0)):
+            passing or (pos_hit and ahead > 0) or (neg_hit and ahead < 0)):
         if not setup & c.SETUP_NO_LIMIT_ERROR:
             err |= c.ERR_POSITION_LIMIT
         elif passing:
@@ -177,7 +187,8 @@ def status_bits(regs, s, v: float, prev_v: float, target_v: float, mode: int,
     6 (§8.2.68). Bit 22 (in target position) once the motor has stood still for
     INTARGETPOSITIONTIME ms (§8.2.105) with the encoder in that window. The dedicated outputs
     (§8.2.77–78): the IO pins of INPOS_MASK and ERROR_MASK that IOSETUP bits 8–15 make
-    outputs follow bit 4 (in position: a movement has completed) and ERR_BITS ≠ 0 in OUTPUTS.
+    outputs follow bit 4 (in position: a movement has completed), or bit 2 (in physical
+    position) with INPOS_MASK bit 8 (§5.6.3), and ERR_BITS ≠ 0 in OUTPUTS.
     """
     st = regs[R.STATUSBITS] & (c.ST_ZERO_SEARCH_DONE | c.ST_AUTOCORRECTION)
     moving_mode = mode == c.VELOCITY or mode == c.POSITION or mode == c.GEAR
@@ -215,7 +226,8 @@ def status_bits(regs, s, v: float, prev_v: float, target_v: float, mode: int,
     error = regs[R.ERROR_MASK] & outputs
     if inpos | error:
         o = regs[R.OUTPUTS] & ~(inpos | error)
-        if st & c.ST_IN_POSITION:
+        if st & (c.ST_IN_PHYSICAL_POSITION if regs[R.INPOS_MASK] & c.INPOS_PHYSICAL
+                 else c.ST_IN_POSITION):
             o |= inpos
         if regs[R.ERR_BITS] != 0:
             o |= error
