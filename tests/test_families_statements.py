@@ -372,6 +372,16 @@ def test_a_bit_or_value_statement_is_held_against_its_conformance_entry() -> Non
         "MODE_REG value 32: not modelled in <c>, but mis:8.2.3:1 is modelled"]
 
 
+def test_a_statement_of_a_register_without_a_section_counts_in_its_register_s_chapter() -> None:
+    table = family("mac800").table
+    st = Statements("mac800", table, {"manual": "MAC800 overview", "statements": [
+        _s("mac800:reg2:1", registers=["MODE_REG"]), _s("mac800:1.3.1:1", registers=[])]},
+        "<made up>")
+    assert table.lookup("MODE_REG").section.startswith("1.2")
+    assert list(st.chapter_counts()) == ["1"]
+    assert sum(st.chapter_counts()["1"].values()) == 2
+
+
 # --- the reference page -----------------------------------------------------------------------
 def test_the_reference_page_lists_the_statements_and_their_counts() -> None:
     st = _load(_s(registers=["ACTUAL_TORQUE", "V_SOLL"]),

@@ -332,10 +332,20 @@ class Statements:
         """Chapter → statements per status, chapters in the manual's order."""
         out: dict[str, dict[str, int]] = {}
         for s in self.statements:
-            out.setdefault(s.chapter, dict.fromkeys(STATUSES, 0))[s.status] += 1
+            out.setdefault(self.chapter_of(s), dict.fromkeys(STATUSES, 0))[s.status] += 1
         return dict(sorted(out.items(), key=lambda kv: (not kv[0].isdigit(),
                                                          int(kv[0]) if kv[0].isdigit() else 0,
                                                          kv[0])))
+
+    def chapter_of(self, statement: Statement) -> str:
+        """The chapter of ``statement``: its section's first number; for a section that is no
+        number (a register without a section of its own, ``reg35``), the chapter of its first
+        register's section in the register table."""
+        if statement.section[0].isdigit() or not statement.registers:
+            return statement.chapter
+        section = self.table.lookup(statement.registers[0]).section
+        chapter = section.split(".")[0].split()[0] if section else ""
+        return chapter if chapter.isdigit() else statement.chapter
 
     def derived_counts(self) -> dict[str, int]:
         """Registers per derived status (registers with statements)."""
