@@ -67,7 +67,10 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
               help="algorithm of the config (default: its algo, e.g. ppo; or sac)")] = None,
           checkpoint_every: Annotated[int | None, typer.Option(
               help="also save the model every N steps (OUT/<Env>-<family>-<algo>-<steps>.zip)",
-              min=1)] = None
+              min=1)] = None,
+          link: Annotated[str | None, typer.Option(
+              help="train behind a link: mactalk:19200, mactalk32:BAUD, modbus:BAUD, "
+                   "canopen:2ms, dac:12 (then ,jitter=S ,drop=P)")] = None
           ) -> None:
     """Train the configured algorithm (configs/rl/*.yml) on ENV_ID and save the model
     (OUT/<Env>-<family>-<algo>.zip, its training log beside it)."""
@@ -82,8 +85,16 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
     except KeyError as exc:
         raise typer.BadParameter(f"{exc.args[0]}: add it to configs/rl/*.yml or pick another "
                                  "--family/--algo") from None
+    if link is not None:
+        from ..envs.link import parse_link
+
+        try:
+            parse_link(link)
+        except ValueError as exc:
+            raise typer.BadParameter(str(exc)) from None
     run(env_id, out, timesteps, seed, progress_bar=True, threads=threads,
-        config_dir=config_dir, family=family, algo=algo, checkpoint_every=checkpoint_every)
+        config_dir=config_dir, family=family, algo=algo, checkpoint_every=checkpoint_every,
+        link=link)
 
 
 @app.command()
