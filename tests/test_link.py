@@ -152,11 +152,9 @@ def test_same_step_autoreset_reports_each_end_once() -> None:
 
 
 def test_the_single_env_passes_check_env_without_warnings() -> None:
-    import gymnasium as gym
+    from jvl_gym.envs.positioning import PositioningEnv
 
-    import jvl_gym  # noqa: F401
-
-    env = LinkEnv(gym.make(ENV, max_episode_steps=40).unwrapped, "dac:12,jitter=0.004")
+    env = LinkEnv(PositioningEnv(max_episode_steps=40), "dac:12,jitter=0.004")
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         check_env(env, skip_render_check=True)

@@ -1,5 +1,5 @@
 """``jvl-gym`` command line: ``train``, ``evaluate``, ``compile``, ``sweep``, ``program run``,
-``studio`` (and ``serve`` when available).
+``deploy``, ``studio`` (and ``serve`` when available).
 
 Errors are one line on stderr with a non-zero exit status; ``--debug`` shows the traceback
 (:class:`jvl_gym.cli.app.App`).
@@ -230,6 +230,15 @@ def _mount_serve() -> None:
 
 _mount_serve()
 app.add_typer(program_app, name="program")
+
+
+def _mount_deploy() -> None:
+    from .deploy import deploy
+
+    app.command(name="deploy")(deploy)
+
+
+_mount_deploy()
 
 
 def _mount_studio() -> None:
