@@ -304,3 +304,22 @@ def test_the_metrics_from_a_trace_equal_the_envs_statistics():
 def test_metrics_of_an_env_without_them_is_a_one_line_error():
     with pytest.raises(KeyError, match="no engineering metrics stated"):
         engineering_metrics("jvl_gym/CoilWinding-v0", {"t": np.zeros(1)})
+
+
+def test_deploy_refuses_an_env_it_cannot_bridge_in_one_line(capsys):
+    from cli_checks import one_line_error, run_cli
+    from jvl_gym.cli.main import app
+
+    code, _, err = run_cli(app, ["deploy", "jvl_gym/CoilWinding-v0"], capsys)
+    assert code == 2 and "Positioning" in one_line_error(code, err)
+    code, _, err = run_cli(app, ["deploy", ENV, "--period", "0"], capsys)
+    assert code == 2 and "--period" in one_line_error(code, err)
+
+
+def test_the_loop_period_is_the_link_models():
+    from jvl_gym.cli.deploy import loop_period
+    from jvl_gym.envs.link import make_link_vec
+
+    env = make_link_vec(ENV, 1, "mactalk:19200")
+    assert loop_period(ENV, "mactalk:19200", MOTOR) == pytest.approx(
+        env.period_steps * env.step_seconds)

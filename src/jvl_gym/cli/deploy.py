@@ -90,7 +90,7 @@ def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-
     report = run(env_id, pol, url, address, motor_type, period=step, deadline=deadline,
                  episodes=episodes, seed=seed, max_step=max_step, watchdog_url=watchdog_url,
                  watchdog_timeout=watchdog_timeout, timeout=timeout, trace=trace)
-    typer.echo(f"period {1e3 * step:.2f} ms ({link})")
+    typer.echo(f"period {1e3 * step:.2f} ms ({'--period' if period is not None else link})")
     typer.echo(report.summary())
     if report.reason != "done":
         raise typer.Exit(1)

@@ -190,6 +190,8 @@ def _client(url: str, address: int, fam: Any, timeout: float, retries: int) -> A
 
 #: the client's time-out [s] while an episode is set up (before the loop's own)
 SETUP_TIMEOUT = 2.0
+#: the time the policy's first call (outside the loop) may take [s]
+WARM_UP_SECONDS = 60.0
 
 
 class _Terminate(BaseException):
@@ -262,6 +264,10 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
     limits = Limits((-1.0,) * act_dim, (1.0,) * act_dim, max_step)
     supervisor = Supervisor(link, limits, bridge.to_registers, bridge.bounds, watchdog)
     runner = PolicyRunner(policy)
+    # a first call outside the deadline: a network's first inference loads and allocates
+    runner(np.zeros((1, len(env.core.obs_labels)), dtype=np.float32), WARM_UP_SECONDS)
+    if hasattr(policy, "reset"):
+        policy.reset(None)
     report = DeployReport(trace=None if trace is None else Path(trace))
     rows: list[list[float]] = []
     latencies: list[float] = []
