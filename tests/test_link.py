@@ -202,3 +202,27 @@ def test_train_takes_a_link(tmp_path) -> None:
         sb3_adapter.make_sb3_env = real
     assert path.is_file()
     assert made and made[0].link == parse_link("mactalk:19200")
+
+
+def test_evaluation_behind_a_link_uses_the_link() -> None:
+    """run_episodes behind a CANopen link: the returns and statistics of the link's episodes
+    (a constant action: the same as without the link but for the period it is late)."""
+    from jvl_gym.rl.evaluate import run_episodes
+
+    def policy(obs):
+        return np.full((obs.shape[0], 1), 0.3)
+
+    plain = run_episodes(ENV, policy, 7, 2, {"max_episode_steps": 40})
+    linked = run_episodes(ENV, policy, 7, 2, {"max_episode_steps": 40}, link="canopen:7.68ms")
+    assert linked.lengths.tolist() == [10, 10]  # 40 env steps in periods of 4
+    assert plain.lengths.tolist() == [40, 40]
+    assert set(linked.stats) == set(plain.stats)
+    assert not np.allclose(linked.returns, plain.returns)
+
+
+def test_evaluate_refuses_a_bad_link_in_one_line(capsys) -> None:
+    from cli_checks import one_line_error, run_cli
+    from jvl_gym.cli.main import app
+
+    code, _, err = run_cli(app, ["evaluate", ENV, "--link", "canopen:x"], capsys)
+    assert code == 2 and "canopen:x" in one_line_error(code, err)

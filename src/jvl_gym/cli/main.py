@@ -42,6 +42,16 @@ def _check_family(env_id: str, family: str | None) -> None:
                                  f"{', '.join(known)}")
 
 
+def _check_link(link: str) -> None:
+    """Refuse link text that ``jvl_gym.envs.link.parse_link`` does not read (one line)."""
+    from ..envs.link import parse_link
+
+    try:
+        parse_link(link)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc)) from None
+
+
 def _need_rl_extra(command: str) -> None:
     """Raise a one-line error unless torch and stable-baselines3 can be imported."""
     try:
@@ -86,12 +96,7 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
         raise typer.BadParameter(f"{exc.args[0]}: add it to configs/rl/*.yml or pick another "
                                  "--family/--algo") from None
     if link is not None:
-        from ..envs.link import parse_link
-
-        try:
-            parse_link(link)
-        except ValueError as exc:
-            raise typer.BadParameter(str(exc)) from None
+        _check_link(link)
     run(env_id, out, timesteps, seed, progress_bar=True, threads=threads,
         config_dir=config_dir, family=family, algo=algo, checkpoint_every=checkpoint_every,
         link=link)
@@ -117,7 +122,10 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
                  help="with --all: directory for results.md and its plots",
                  callback=writable_dir)] = None,
              max_steps: Annotated[int | None, typer.Option(
-                 help="cut the episodes at this many steps", min=1)] = None) -> None:
+                 help="cut the episodes at this many steps", min=1)] = None,
+             link: Annotated[str | None, typer.Option(
+                 help="evaluate behind a link (as train --link): mactalk:19200 …")] = None
+             ) -> None:
     """Print policy vs baseline (mean ± std over held-out seeds) for each ENV_ID, or with
     --all write the results page (OUT/results.md).
 
@@ -126,9 +134,9 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
     on stderr (exit status 1) after the table, which then shows the baseline only.
     """
     if all_:
-        if env_ids or family is not None:
-            raise typer.BadParameter("--all evaluates every env and family: give no ENV_IDS "
-                                     "and no --family")
+        if env_ids or family is not None or link is not None:
+            raise typer.BadParameter("--all evaluates every env and family: give no ENV_IDS, "
+                                     "no --family and no --link")
         if out is None:
             raise typer.BadParameter("--all needs --out DIR (the directory for results.md)")
         _need_rl_extra("jvl-gym evaluate --all")
@@ -141,6 +149,8 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
         return
     if out is not None:
         raise typer.BadParameter("--out is for --all (the results page)")
+    if link is not None:
+        _check_link(link)
     if not env_ids:
         raise typer.BadParameter("give ENV_IDS to evaluate, or --all --out DIR")
     from ..rl import evaluate as ev
@@ -161,7 +171,7 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
     results = {}
     for env_id, path in paths.items():
         results[env_id] = ev.evaluate(env_id, path if path.exists() else None, seeds, episodes,
-                                      config_dir=config_dir, family=family)
+                                      config_dir=config_dir, family=family, link=link)
     typer.echo(ev.format_table(results))
     missing = [env_id for env_id, path in paths.items() if not path.exists()]
     if missing:
