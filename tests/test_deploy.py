@@ -323,3 +323,19 @@ def test_the_loop_period_is_the_link_models():
     env = make_link_vec(ENV, 1, "mactalk:19200")
     assert loop_period(ENV, "mactalk:19200", MOTOR) == pytest.approx(
         env.period_steps * env.step_seconds)
+
+
+def test_settle_time_counts_to_the_last_sample_outside_the_window():
+    from jvl_gym.rl.metrics import settle_time
+
+    t = np.arange(6) * 0.5
+    assert settle_time(t, [3, 2, 0.5, 2, 0.1, 0.0], 1.0) == 1.5
+    assert settle_time(t, [0.2] * 6, 1.0) == 0.0
+    assert settle_time(t, [0, 0, 0, 0, 0, 5], 1.0) == 2.5  # ends outside: the whole trace
+
+
+def test_gear_sync_metrics_from_a_tension_trace():
+    got = engineering_metrics("jvl_gym/GearSync-v0",
+                              {"t": np.arange(4.0), "tension_error": [1.0, -3.0, 2.0, 0.0],
+                               "copper": [0.0, 1.0, 2.0, 2.5]})
+    assert got == {"tension_error": 1.5, "tension_error_max": 3.0, "copper_loss": 2.5}
