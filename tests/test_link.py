@@ -226,3 +226,48 @@ def test_evaluate_refuses_a_bad_link_in_one_line(capsys) -> None:
 
     code, _, err = run_cli(app, ["evaluate", ENV, "--link", "canopen:x"], capsys)
     assert code == 2 and "canopen:x" in one_line_error(code, err)
+
+
+def test_the_single_env_equals_a_copy_of_the_vector_env() -> None:
+    from jvl_gym.envs.positioning import PositioningEnv
+
+    link = "modbus:115200,jitter=0.004,drop=0.2"
+    vec = make_link_vec(ENV, 2, link, max_episode_steps=60)
+    single = LinkEnv(PositioningEnv(max_episode_steps=60), link)
+    vo, _ = vec.reset(seed=20)
+    so, _ = single.reset(seed=21)
+    assert np.array_equal(vo[1], so)
+    for t in range(8):
+        a = np.full((2, 1), np.cos(t), dtype=np.float32)
+        vo, vr, *_ = vec.step(a)
+        so, sr, *_ = single.step(a[1])
+        assert np.array_equal(vo[1], so) and vr[1] == sr
+
+
+def test_next_step_autoreset_starts_the_new_episode_on_the_next_period() -> None:
+    env = make_link_vec(ENV, 2, "canopen:7.68ms", max_episode_steps=8)  # 2 periods an episode
+    env.reset(seed=0)
+    ends = []
+    for _ in range(6):
+        obs, r, term, trunc, info = env.step(np.full((2, 1), 0.2))
+        ends.append(bool((term | trunc).all()))
+        if ends[-2:-1] == [True]:  # the period after an end: the new episode, no reward
+            assert not (term | trunc).any() and (r == 0).all()
+    assert ends == [False, True, False, False, True, False]
+
+
+def test_next_step_autoreset_of_some_copies_starts_them_afresh() -> None:
+    """One copy ends a period before the other: the period after, it returns the first
+    observation of a new episode (a reset's), reward 0, and then runs a whole episode."""
+    env = make_link_vec(ENV, 2, "canopen:7.68ms", max_episode_steps=8)
+    env.reset(seed=0)
+    env.step(np.zeros((2, 1)))
+    env.env.reset(options={"reset_mask": np.array([False, True])})  # copy 1 one period behind
+    env.step(np.zeros((2, 1)))  # copy 0 ends
+    obs, r, term, trunc, _ = env.step(np.zeros((2, 1)))  # copy 1 at 8 steps: ends; copy 0 new
+    assert r[0] == 0 and not term[0] and not trunc[0] and trunc[1]
+    assert env.env._t[0] == 0  # copy 0 stands at the start of its new episode
+    _, _, term, trunc, _ = env.step(np.zeros((2, 1)))
+    assert not (term | trunc)[0]
+    _, _, term, trunc, _ = env.step(np.zeros((2, 1)))
+    assert trunc[0]  # 8 steps of its own: the whole episode

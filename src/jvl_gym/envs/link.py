@@ -31,8 +31,10 @@ once per ``period`` (default: every env step) with no latency; its resolution is
 
 Episodes end on the env step that ends them; a copy of the vector env that ends inside a period
 is reset at once and runs the rest of the period in its new episode, under the link's held
-command (its reward in those steps is not counted; ``SAME_STEP`` reports the final observation,
-``NEXT_STEP`` reports the end and starts the new episode with the next period).
+command (its reward in those steps is not counted); ``SAME_STEP`` reports the final
+observation. ``NEXT_STEP`` reports the end, and the next period returns the first observation
+of a new episode with reward 0 (a vector env steps every copy: a copy that ended is reset,
+stepped through that period with no command, and reset again).
 """
 
 from __future__ import annotations
@@ -357,6 +359,9 @@ class LinkVectorEnv(VectorEnv):
             if done.any():  # reset at once: the rest of the period runs the new episode
                 obs, _ = self.env.reset(options={"reset_mask": done})
                 self._restart(np.flatnonzero(done), obs, keep_clock=True)
+        if fresh.any():  # NEXT_STEP: the copies that ended start their episode from here
+            obs, _ = self.env.reset(options={"reset_mask": fresh})
+            self._restart(np.flatnonzero(fresh), obs)
         read = np.array([rng.random() >= self.link.drop if self.link.drop else True
                          for rng in self._rngs])
         got = read | ended | fresh
