@@ -221,19 +221,21 @@ def test_killing_the_loops_process_puts_the_motor_passive(twin_url):
     assert seen - t_kill <= 0.2 + obs.margin
 
 
-def test_sigterm_stops_the_loop_and_the_motor(twin_url):
+@pytest.mark.parametrize(("sig", "reason"), [(signal.SIGTERM, b"terminated (SIGTERM)"),
+                                           (signal.SIGINT, b"interrupted (Ctrl-C)")])
+def test_sigterm_and_ctrl_c_stop_the_loop_and_the_motor(twin_url, sig, reason):
     obs = Observer(twin_url)
     proc = _deploy_process(twin_url)
     try:
         assert obs.wait_mode(RUNNING, 120) is not None
         t_term = time.monotonic()
-        proc.send_signal(signal.SIGTERM)
+        proc.send_signal(sig)
         seen = obs.wait_stop(30)
         out, _ = proc.communicate(timeout=60)
     finally:
         proc.kill()
     assert seen is not None and seen - t_term <= obs.margin + 0.03
-    assert proc.returncode == 1 and b"terminated (SIGTERM)" in out
+    assert proc.returncode == 1 and reason in out
 
 
 class FakeLink:
