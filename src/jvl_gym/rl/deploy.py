@@ -11,11 +11,12 @@ observation to the end of the write of the action) are measured.
 
 A task reaches the motor through a bridge (:class:`PositioningBridge`): the registers it reads
 and writes, the observation from them, the reward. Positioning commands torque; over the bus
-that is velocity mode with the speed command at its register's limit, in the action's
-direction, and the torque limit T_SOLL = |action| × its full scale (MAC050–141 manual 4.4.2:
-the velocity loop saturates at T_SOLL), so the torque follows the action while the motor is
-below the speed limit. The episode's target is drawn as the env draws it with the same seed; the
-motor's load is the twin's (``jvl-gym serve`` options), not drawn.
+that is velocity mode with the speed command at the speed limit (:data:`SPEED_LIMIT_RPM`) in
+the action's direction and the torque limit T_SOLL = |action| × its full scale (MAC050–141
+manual 4.4.2: the velocity loop saturates at T_SOLL), so the torque follows the action while
+the motor is below the speed limit, which the velocity loop holds. The episode's target is drawn
+as the env draws it with the same seed; the motor's load is the twin's (``jvl-gym serve``
+options), not drawn.
 """
 
 from __future__ import annotations
@@ -68,6 +69,11 @@ class BusLink:
         self.client.write("MODE_REG", self.passive_mode)
 
 
+#: the speed limit of a deployed Positioning policy [rpm]: the scale of the env's speed
+#: observation and the speed of its firmware baseline
+SPEED_LIMIT_RPM = 3000.0
+
+
 class PositioningBridge:
     """jvl_gym/Positioning-v0 over the registers (module docstring).
 
@@ -77,14 +83,16 @@ class PositioningBridge:
         The motor's family.
     overshoot_weight, effort_weight : float
         The env's reward weights.
+    speed_limit : float
+        The speed command's magnitude [rpm]: the velocity loop holds the motor below it.
     """
 
     env_id = "jvl_gym/Positioning-v0"
     writes = ("T_SOLL", "V_SOLL")
     reads = ("P_IST", "V_IST")
 
-    def __init__(self, fam: Any, overshoot_weight: float = 2.0, effort_weight: float = 0.01
-                 ) -> None:
+    def __init__(self, fam: Any, overshoot_weight: float = 2.0, effort_weight: float = 0.01,
+                 speed_limit: float = SPEED_LIMIT_RPM) -> None:
         from ..envs import positioning as pos
 
         k = fam.constants
@@ -93,6 +101,8 @@ class PositioningBridge:
         self.fine = pos._FINE_TURNS * k.COUNTS_PER_REV
         self.v_norm = pos._NORM_RPM / 60.0 * k.COUNTS_PER_REV / k.OUTER_HZ
         self.bounds = register_bounds(fam.table, self.writes)
+        lo, hi = self.bounds["V_SOLL"]
+        self.v_limit = int(min(abs(round(fam.task.rpm_to_v_soll(speed_limit))), hi, -lo))
         self.w_over, self.w_effort = float(overshoot_weight), float(effort_weight)
         self.target = 0
         self.direction = 1.0
@@ -109,12 +119,12 @@ class PositioningBridge:
         self.overshoot = 0.0
 
     def to_registers(self, action: np.ndarray) -> dict[str, int]:
-        """Torque limit |a| of full scale, speed command at its limit in a's direction."""
+        """Torque limit |a| of full scale, speed command at the speed limit in a's
+        direction."""
         a = float(action[0])
         t_full = self.bounds["T_SOLL"][1]
-        v_lo, v_hi = self.bounds["V_SOLL"]
         return {"T_SOLL": int(round(abs(a) * t_full)),
-                "V_SOLL": v_hi if a >= 0 else v_lo}
+                "V_SOLL": self.v_limit if a >= 0 else -self.v_limit}
 
     def observe(self, raws: Mapping[str, int], previous: float) -> tuple[np.ndarray, float]:
         """The env's observation (1, 4) and the position error [turns]."""
