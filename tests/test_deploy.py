@@ -341,3 +341,30 @@ def test_gear_sync_metrics_from_a_tension_trace():
                               {"t": np.arange(4.0), "tension_error": [1.0, -3.0, 2.0, 0.0],
                                "copper": [0.0, 1.0, 2.0, 2.5]})
     assert got == {"tension_error": 1.5, "tension_error_max": 3.0, "copper_loss": 2.5}
+
+
+@pytest.mark.parametrize("motor", ["MAC140", "MAC800"])
+def test_a_deployed_episode_writes_its_trace_and_statistics(tmp_path, motor):
+    import csv
+
+    from jvl_gym.cli.serve import build_line
+
+    twin, _ = build_line([motor], [7])
+    twin.advance(0.01)
+    with TwinServer(twin, tcp=("127.0.0.1", 0), speed=0.25) as server:
+        url = server.endpoint("mactalk", "tcp").url
+        report = deploy(ENV, lambda o: np.full((1, 1), 0.2), url, 7, motor, period=0.05,
+                        episodes=2, max_seconds=0.2, trace=tmp_path / "trace.csv")
+        from jvl_gym.rl.watchdog import passive_client
+
+        mode = int(passive_client(url, 7, motor, timeout=2.0).read("MODE_REG"))
+    assert report.reason == "done" and report.lengths == [4, 4]
+    assert set(report.stats) == {"settle_time", "final_error", "overshoot", "copper_loss"}
+    assert report.rate_hz > 0 and report.latency_max >= report.latency_mean > 0
+    rows = list(csv.DictReader((tmp_path / "trace.csv").open()))
+    assert len(rows) == 8 and {"T_SOLL", "V_SOLL", "position_error", "latency_s"} <= set(rows[0])
+    # the rate limit (0.5 a period) from 0: 0.2 at once; T_SOLL = 0.2 of its full scale
+    assert [float(r["action"]) for r in rows[:2]] == pytest.approx([0.2, 0.2])
+    assert int(rows[0]["T_SOLL"]) == round(0.2 * 1023)
+    fam = family_of_motor(motor)
+    assert mode != int(fam.task.VELOCITY_MODE)  # stopped at the end (passive, or on its way)
