@@ -1,5 +1,5 @@
 """``jvl-gym`` command line: ``train``, ``evaluate``, ``compile``, ``sweep``, ``program run``,
-``studio`` (and ``serve`` when available).
+``deploy``, ``studio`` (and ``serve`` when available).
 
 Errors are one line on stderr with a non-zero exit status; ``--debug`` shows the traceback
 (:class:`jvl_gym.cli.app.App`).
@@ -42,6 +42,16 @@ def _check_family(env_id: str, family: str | None) -> None:
                                  f"{', '.join(known)}")
 
 
+def _check_link(link: str) -> None:
+    """Refuse link text that ``jvl_gym.envs.link.parse_link`` does not read (one line)."""
+    from ..envs.link import parse_link
+
+    try:
+        parse_link(link)
+    except ValueError as exc:
+        raise typer.BadParameter(str(exc)) from None
+
+
 def _need_rl_extra(command: str) -> None:
     """Raise a one-line error unless torch and stable-baselines3 can be imported."""
     try:
@@ -67,7 +77,10 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
               help="algorithm of the config (default: its algo, e.g. ppo; or sac)")] = None,
           checkpoint_every: Annotated[int | None, typer.Option(
               help="also save the model every N steps (OUT/<Env>-<family>-<algo>-<steps>.zip)",
-              min=1)] = None
+              min=1)] = None,
+          link: Annotated[str | None, typer.Option(
+              help="train behind a link: mactalk:19200, mactalk32:BAUD, modbus:BAUD, "
+                   "canopen:2ms, dac:12 (then ,jitter=S ,drop=P)")] = None
           ) -> None:
     """Train the configured algorithm (configs/rl/*.yml) on ENV_ID and save the model
     (OUT/<Env>-<family>-<algo>.zip, its training log beside it)."""
@@ -82,8 +95,11 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
     except KeyError as exc:
         raise typer.BadParameter(f"{exc.args[0]}: add it to configs/rl/*.yml or pick another "
                                  "--family/--algo") from None
+    if link is not None:
+        _check_link(link)
     run(env_id, out, timesteps, seed, progress_bar=True, threads=threads,
-        config_dir=config_dir, family=family, algo=algo, checkpoint_every=checkpoint_every)
+        config_dir=config_dir, family=family, algo=algo, checkpoint_every=checkpoint_every,
+        link=link)
 
 
 @app.command()
@@ -106,7 +122,10 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
                  help="with --all: directory for results.md and its plots",
                  callback=writable_dir)] = None,
              max_steps: Annotated[int | None, typer.Option(
-                 help="cut the episodes at this many steps", min=1)] = None) -> None:
+                 help="cut the episodes at this many steps", min=1)] = None,
+             link: Annotated[str | None, typer.Option(
+                 help="evaluate behind a link (as train --link): mactalk:19200 …")] = None
+             ) -> None:
     """Print policy vs baseline (mean ± std over held-out seeds) for each ENV_ID, or with
     --all write the results page (OUT/results.md).
 
@@ -115,9 +134,9 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
     on stderr (exit status 1) after the table, which then shows the baseline only.
     """
     if all_:
-        if env_ids or family is not None:
-            raise typer.BadParameter("--all evaluates every env and family: give no ENV_IDS "
-                                     "and no --family")
+        if env_ids or family is not None or link is not None:
+            raise typer.BadParameter("--all evaluates every env and family: give no ENV_IDS, "
+                                     "no --family and no --link")
         if out is None:
             raise typer.BadParameter("--all needs --out DIR (the directory for results.md)")
         _need_rl_extra("jvl-gym evaluate --all")
@@ -130,6 +149,8 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
         return
     if out is not None:
         raise typer.BadParameter("--out is for --all (the results page)")
+    if link is not None:
+        _check_link(link)
     if not env_ids:
         raise typer.BadParameter("give ENV_IDS to evaluate, or --all --out DIR")
     from ..rl import evaluate as ev
@@ -150,7 +171,7 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
     results = {}
     for env_id, path in paths.items():
         results[env_id] = ev.evaluate(env_id, path if path.exists() else None, seeds, episodes,
-                                      config_dir=config_dir, family=family)
+                                      config_dir=config_dir, family=family, link=link)
     typer.echo(ev.format_table(results))
     missing = [env_id for env_id, path in paths.items() if not path.exists()]
     if missing:
@@ -219,6 +240,15 @@ def _mount_serve() -> None:
 
 _mount_serve()
 app.add_typer(program_app, name="program")
+
+
+def _mount_deploy() -> None:
+    from .deploy import deploy
+
+    app.command(name="deploy")(deploy)
+
+
+_mount_deploy()
 
 
 def _mount_studio() -> None:

@@ -96,9 +96,11 @@ class RandomPolicy:
 
 def run_episodes(env_id: str, policy: Policy, seed: int, n_episodes: int,
                  env_kwargs: dict[str, Any] | None = None,
-                 reset_policy: Callable[[np.ndarray | None], None] | None = None) -> Episodes:
+                 reset_policy: Callable[[np.ndarray | None], None] | None = None,
+                 link: str | None = None) -> Episodes:
     """Run the first episode of ``n_episodes`` copies seeded ``seed + i`` under ``policy``
-    (``(N, K) observations -> (N, A) actions``).
+    (``(N, K) observations -> (N, A) actions``), behind ``link`` if given
+    (``jvl_gym.envs.link``: ``"mactalk:19200"`` …).
 
     The vector env autoresets in SAME_STEP mode; a copy's steps after its first episode are
     not counted.
@@ -112,8 +114,15 @@ def run_episodes(env_id: str, policy: Policy, seed: int, n_episodes: int,
 
     names = tuple(vector_class(env_id).episode_stats)
     stats = {name: np.zeros(n_episodes) for name in names}
-    env = gym.make_vec(env_id, num_envs=n_episodes, vectorization_mode="vector_entry_point",
-                       autoreset_mode=AutoresetMode.SAME_STEP, **(env_kwargs or {}))
+    if link is not None:
+        from ..envs.link import make_link_vec
+
+        env = make_link_vec(env_id, n_episodes, link, AutoresetMode.SAME_STEP,
+                            **(env_kwargs or {}))
+    else:
+        env = gym.make_vec(env_id, num_envs=n_episodes,
+                           vectorization_mode="vector_entry_point",
+                           autoreset_mode=AutoresetMode.SAME_STEP, **(env_kwargs or {}))
     obs, _ = env.reset(seed=seed)
     if reset_policy is not None:
         reset_policy(None)
@@ -169,10 +178,11 @@ def evaluate_controllers(env_id: str, models: dict[str, str | Path], *,
                          family: str | None = None, n_seeds: int | None = None,
                          episodes_per_seed: int | None = None,
                          max_episode_steps: int | None = None, random_policy: bool = True,
-                         config_dir: str | Path | None = None, progress_bar: bool = False
-                         ) -> dict[str, ControllerResult]:
+                         config_dir: str | Path | None = None, progress_bar: bool = False,
+                         link: str | None = None) -> dict[str, ControllerResult]:
     """The baseline, each model of ``models`` (label -> file) and (``random_policy``) uniform
-    random actions on the held-out seeds of ``env_id`` on ``family``.
+    random actions on the held-out seeds of ``env_id`` on ``family`` (behind ``link`` if
+    given, :func:`run_episodes`).
 
     ``max_episode_steps`` shortens the episodes (never lengthens them). Keys of the result:
     ``"baseline"``, the labels of ``models``, ``"random"``.
@@ -204,9 +214,10 @@ def evaluate_controllers(env_id: str, models: dict[str, str | Path], *,
         bl = make_baseline(env_id, n_ep, act_dim, decimation=kwargs.get("decimation"),
                            motor_type=kwargs.get("motor_type"))
         out["baseline"].add(run_episodes(env_id, bl, seed, n_ep,
-                                         {**kwargs, **BASELINES[env_id].env_kwargs}, bl.reset))
+                                         {**kwargs, **BASELINES[env_id].env_kwargs}, bl.reset,
+                                         link))
         for label, policy in policies.items():
-            out[label].add(run_episodes(env_id, policy, seed, n_ep, kwargs))
+            out[label].add(run_episodes(env_id, policy, seed, n_ep, kwargs, link=link))
         if random_policy:
             out["random"].add(run_episodes(env_id, RandomPolicy(n_ep, act_dim, seed), seed,
                                            n_ep, kwargs))
@@ -215,14 +226,15 @@ def evaluate_controllers(env_id: str, models: dict[str, str | Path], *,
 
 def evaluate(env_id: str, model_file: str | Path | None, n_seeds: int | None = None,
              episodes_per_seed: int | None = None, progress_bar: bool = True,
-             config_dir: str | Path | None = None, family: str | None = None
-             ) -> dict[str, tuple[float, float]]:
-    """Mean ± std (over seeds) of the per-seed mean return of the policy and the baseline,
-    and ``seeds_won``: (seeds where the policy's mean beats the baseline's, seeds)."""
+             config_dir: str | Path | None = None, family: str | None = None,
+             link: str | None = None) -> dict[str, tuple[float, float]]:
+    """Mean ± std (over seeds) of the per-seed mean return of the policy and the baseline
+    (behind ``link`` if given), and ``seeds_won``: (seeds where the policy's mean beats the
+    baseline's, seeds)."""
     models = {} if model_file is None else {"policy": model_file}
     res = evaluate_controllers(env_id, models, family=family, n_seeds=n_seeds,
                                episodes_per_seed=episodes_per_seed, random_policy=False,
-                               config_dir=config_dir, progress_bar=progress_bar)
+                               config_dir=config_dir, progress_bar=progress_bar, link=link)
     out = {k: v.mean_std for k, v in res.items()}
     if "policy" in res:
         out["seeds_won"] = (float(res["policy"].seeds_won(res["baseline"])),

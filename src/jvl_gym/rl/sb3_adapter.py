@@ -122,11 +122,20 @@ class SB3VecEnv(VecEnv):
         return list(frames) if frames is not None else [None] * self.num_envs
 
 
-def make_sb3_env(env_id: str, num_envs: int, **env_kwargs: Any) -> SB3VecEnv:
-    """``gymnasium.make_vec(env_id, num_envs, vector_entry_point, SAME_STEP)`` for SB3."""
+def make_sb3_env(env_id: str, num_envs: int, link: Any = None, **env_kwargs: Any
+                 ) -> SB3VecEnv:
+    """``gymnasium.make_vec(env_id, num_envs, vector_entry_point, SAME_STEP)`` for SB3; with
+    ``link`` (a ``jvl_gym.envs.link.Link`` or its text, e.g. ``"mactalk:19200"``) the env
+    behind that link."""
     import gymnasium as gym
 
     import jvl_gym  # noqa: F401  (registers the ids)
+
+    if link is not None:
+        from ..envs.link import make_link_vec
+
+        return SB3VecEnv(make_link_vec(env_id, num_envs, link, AutoresetMode.SAME_STEP,
+                                       **env_kwargs))
 
     venv = gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point",
                         autoreset_mode=AutoresetMode.SAME_STEP, **env_kwargs)

@@ -93,7 +93,8 @@ def _checkpoints(path: Path, every: int) -> Any:
 def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None = None,
           seed: int | None = None, progress_bar: bool = True, threads: int = 1,
           config_dir: str | Path | None = None, family: str | None = None,
-          algo: str | None = None, checkpoint_every: int | None = None) -> Path:
+          algo: str | None = None, checkpoint_every: int | None = None,
+          link: str | None = None) -> Path:
     """Train the configured algorithm on ``env_id`` and save it (:func:`model_path`, with the
     training log beside it, :func:`log_path`); returns the model path.
 
@@ -116,6 +117,9 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
         Motor family key and algorithm (default: the config's first family and its ``algo``).
     checkpoint_every : int, optional
         Also save the model every this many steps (:func:`checkpoint_path`).
+    link : str, optional
+        Train behind this link (``jvl_gym.envs.link``: ``"mactalk:19200"``,
+        ``"canopen:2ms"``, ``"dac:12"`` …).
     """
     import numba
     import torch
@@ -132,7 +136,7 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
     numba.set_num_threads(min(int(threads), numba.config.NUMBA_NUM_THREADS))
     seed = int(cfg["seed"] if seed is None else seed)
     steps = int(cfg["total_timesteps"] if total_timesteps is None else total_timesteps)
-    venv = VecMonitor(make_sb3_env(env_id, int(cfg["n_envs"]), **cfg["env_kwargs"]),
+    venv = VecMonitor(make_sb3_env(env_id, int(cfg["n_envs"]), link, **cfg["env_kwargs"]),
                       filename=str(log_path(path)))
     hyper: dict[str, Any] = dict(cfg["hyperparams"])
     model = algo_class(cfg["algo"])(cfg["policy"], venv, seed=seed, verbose=0, device="cpu",
