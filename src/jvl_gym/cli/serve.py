@@ -180,14 +180,19 @@ def build_line(types: list[str], addresses: list[int], seed: int = 0,
     groups: dict[str, list[int]] = {}
     for k, t in enumerate(types):
         groups.setdefault(family_of_motor(t).key, []).append(k)
-    twins = []
-    for key, members in groups.items():
-        m = MotorArray([types[k] for k in members], n=len(members), seed=seed, **array_kw)
-        where = flash_dir / key if flash_dir is not None and len(groups) > 1 else flash_dir
-        twin = Twin(m, [addresses[k] for k in members], flash_dir=where,
-                    fastmac_code=fastmac_code or fm.DEFAULT_CODE)
-        _put_load(twin, load or {}, members)
-        twins.append(twin)
+    twins: list[Twin] = []
+    try:
+        for key, members in groups.items():
+            m = MotorArray([types[k] for k in members], n=len(members), seed=seed, **array_kw)
+            where = flash_dir / key if flash_dir is not None and len(groups) > 1 else flash_dir
+            twin = Twin(m, [addresses[k] for k in members], flash_dir=where,
+                        fastmac_code=fastmac_code or fm.DEFAULT_CODE)
+            twins.append(twin)
+            _put_load(twin, load or {}, members)
+    except BaseException:
+        for twin in twins:  # their flash directories are free again
+            twin.close()
+        raise
     order = [k for members in groups.values() for k in members]
     return (twins[0] if len(twins) == 1 else Bus(twins)), order
 
@@ -274,6 +279,7 @@ def serve(
     motor or one per --address; checked before anything is served)."""
     from ..protocol.mactalk import fastmac as fm
     from ..protocol.serving.transport import TwinServer
+    from ..protocol.serving.twin import FlashDirectoryInUse
 
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
     motor = motor or ["MAC140"]
@@ -311,6 +317,8 @@ def serve(
                                  fastmac_code=code, load=load, **array_kw)
     except LoadError as exc:
         raise typer.BadParameter(str(exc)) from None
+    except FlashDirectoryInUse as exc:
+        raise typer.BadParameter(str(exc), param_hint="'--flash-dir'") from None
     except (TypeError, ValueError) as exc:  # the arrays' own check of the record length
         if record_length is None or not any(w in str(exc) for w in ("record_length",
                                                                     "record length")):
@@ -374,6 +382,7 @@ def serve(
         if node is not None:
             node.close()
             node.bus.shutdown()
+        line.close()
         stats = server.bus.stats if modbus and server is not None else line.stats
         typer.echo(f"stopped; {dict(stats)}")
 

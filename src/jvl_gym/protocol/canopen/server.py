@@ -123,7 +123,8 @@ class CanopenServer:
                 k += 1
                 with twin.lock:
                     s = CanopenSlave(twin.m, i, od, f, self._send, node_id=nid,
-                                     on_store=lambda twin=twin, i=i: twin.save_flash_file(i))
+                                     on_store=lambda before, twin=twin, i=i:
+                                     twin.save_flash_file(i, before))
                 self.slaves.append(s)
                 self._owner.append(twin)
 
