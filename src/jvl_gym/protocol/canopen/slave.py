@@ -29,8 +29,8 @@ registers in its flash with the motor's own command (save to flash, §8.2.22, wh
 active mode refuses: abort 0800 0022h) and keeps the storable DSP-402 objects (6091h, 6092h,
 6094h, 6097h) in the node's non-volatile memory; ``on_store`` (the twin's flash file) is then
 called, and a file it cannot write aborts the save with 0800 0020h (the motor's flash keeps
-its previous image). 1011h sub 1 := "load" (64616F6Ch) sets the DSP-402 objects to their factory defaults
-without storing them. Any other value: abort 0800 0020h.
+its previous image). 1011h sub 1 := "load" (64616F6Ch) sets the DSP-402 objects to their
+factory defaults without storing them. Any other value: abort 0800 0020h.
 
 **Reset node** (NMT 129) resets the motor (registers from its flash, its power-on) and every
 object; **reset communication** (130) the objects 1000h–1FFFh; both re-read the node id from
