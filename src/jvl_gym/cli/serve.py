@@ -272,6 +272,12 @@ def serve(
     node_id: Annotated[list[int] | None, typer.Option(
         "--node-id", help="CANopen node id 1..127 of each motor (repeat: one per --address; "
         "default: each motor's register 166, factory value 5).")] = None,
+    max_connections: Annotated[int, typer.Option(
+        help="Connections each TCP endpoint serves at once; one more is closed at once.",
+        min=1)] = 32,
+    idle_timeout: Annotated[float, typer.Option(
+        help="Seconds without a received byte after which a TCP connection is closed (0: "
+        "never).", min=0.0)] = 300.0,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log every refusal.")] = False,
 ) -> None:
     """Serve one or many simulated motors (multi-drop by MYADDR) until Ctrl-C, each with
@@ -334,18 +340,19 @@ def serve(
         can_server = canopen_server(line, can_interface, can_channel, ids, speed,
                                     bitrate=can_bitrate)
     clock = can_server is None
+    limits = {"max_connections": max_connections, "idle_timeout": idle_timeout}
     try:
         if can_server is not None and tcp is None and not pty:
             server: Any = None
         elif dmx:
             server = _dmx_server(line, endpoint, pty, speed, dmx_start,
-                                 modbus or user_tcp is not None or user_pty)
+                                 modbus or user_tcp is not None or user_pty, limits)
         elif modbus:
             server = _modbus_server(line, endpoint, pty, speed, switch=modbus_switch,
-                                    run_clock=clock)
+                                    run_clock=clock, limits=limits)
         else:
             server = TwinServer(line, speed=speed, tcp=endpoint, pty=pty, user_tcp=user_tcp,
-                                user_pty=user_pty, run_clock=clock)
+                                user_pty=user_pty, run_clock=clock, **limits)
         node = _j1939_node(line, j1939, j1939_address) if j1939 is not None else None
     except typer.BadParameter:
         if can_server is not None:
@@ -469,8 +476,10 @@ def _j1939_node(line: Any, spec: str, addresses: list[int] | None) -> Any:
 
 
 def _dmx_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
-                starts: list[int] | None, other: bool) -> Any:
-    """A DMX512 server of the motors of ``line`` (one twin of a family with DMX512)."""
+                starts: list[int] | None, other: bool,
+                limits: dict[str, Any] | None = None) -> Any:
+    """A DMX512 server of the motors of ``line`` (one twin of a family with DMX512);
+    ``limits`` are the TCP endpoint's (``max_connections``, ``idle_timeout``)."""
     from ..families import Capability
     from ..protocol.dmx512.receiver import DmxSettings
     from ..protocol.dmx512.server import DmxLine, DmxServer
@@ -487,16 +496,19 @@ def _dmx_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
         raise typer.BadParameter(f"give one --dmx-start per --address ({n})")
     try:
         settings = [DmxSettings(start_address1=a) for a in starts]
-        return DmxServer(line, speed=speed, tcp=tcp, pty=pty, line=DmxLine(line, settings))
+        return DmxServer(line, speed=speed, tcp=tcp, pty=pty, line=DmxLine(line, settings),
+                         **(limits or {}))
     except (ValueError, KeyError) as exc:
         raise typer.BadParameter(f"--dmx: {exc}") from None
 
 
 def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
-                   switch: bool = False, run_clock: bool = True) -> Any:
+                   switch: bool = False, run_clock: bool = True,
+                   limits: dict[str, Any] | None = None) -> Any:
     """A Modbus RTU server of the motors of ``line`` (one twin of a 32-bit family); with
     ``switch``, every stream starts in MacTalk and goes to Modbus as the first motor's register
-    121 says (MIS manual §12.2.1), the silence counted from now (power-on)."""
+    121 says (MIS manual §12.2.1), the silence counted from now (power-on); ``limits`` are the
+    TCP endpoint's (``max_connections``, ``idle_timeout``)."""
     import time
 
     from ..protocol.mactalk.twin16 import Twin
@@ -519,7 +531,8 @@ def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: flo
             raise typer.BadParameter(f"--modbus: address {a} is no Modbus slave address "
                                      "(1..247; MIS manual §12.1)")
     if not switch:
-        return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=run_clock)
+        return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=run_clock,
+                            **(limits or {}))
     setup = bus.slaves[0].registers.setup
     if setup is None:
         raise typer.BadParameter("--modbus-switch: the family has no Modbus set-up register")
@@ -529,7 +542,7 @@ def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: flo
         return SwitchingSession(line.session(), ModbusSession(bus), line_switch)
 
     return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=run_clock,
-                        make_session=switching)
+                        make_session=switching, **(limits or {}))
 
 
 if __name__ == "__main__":
