@@ -448,11 +448,10 @@ def _require(twins: list[Any], capability: Any, option: str) -> None:
 def _j1939_node(line: Any, spec: str, addresses: list[int] | None) -> Any:
     """J1939 nodes of the motors of ``line`` on the python-can bus ``spec`` (INTERFACE:CHANNEL),
     claiming their addresses now."""
-    import can
-
     from ..families import Capability
     from ..protocol.mactalk.twin16 import Twin
     from ..protocol.sae_j1939.node import J1939Node
+    from ..protocol.serving.canbus import open_bus as open_can_bus
 
     _require(list(getattr(line, "twins", [line])), Capability.J1939, "--j1939")
     if not isinstance(line, Twin):
@@ -460,11 +459,17 @@ def _j1939_node(line: Any, spec: str, addresses: list[int] | None) -> Any:
     interface, sep, channel = spec.partition(":")
     if not sep or not interface or not channel:
         raise typer.BadParameter(f"--j1939 {spec!r}: give INTERFACE:CHANNEL, e.g. socketcan:vcan0")
+    given = addresses is not None
+    if addresses is None:
+        addresses = [int(v) for v in line.m.read_raw("FBUS_NODE_ID")]
     try:
-        if addresses is None:
-            addresses = [int(v) for v in line.m.read_raw("FBUS_NODE_ID")]
-        bus = can.Bus(interface=interface, channel=channel)
-    except (ValueError, KeyError, OSError, can.CanError, ImportError) as exc:
+        J1939Node.check_addresses(addresses, line.m.n)
+    except ValueError as exc:
+        where = "" if given else " (by default each motor's FBUS_NODE_ID)"
+        raise typer.BadParameter(f"{exc}{where}", param_hint="'--j1939-address'") from None
+    try:
+        bus = open_can_bus(interface, channel)
+    except ValueError as exc:
         raise typer.BadParameter(f"--j1939 {spec}: {exc}") from None
     try:
         node = J1939Node(line, bus, addresses)
