@@ -222,3 +222,12 @@ def test_the_motors_of_one_node_hear_each_others_claims() -> None:
         node.close()
         node.bus.shutdown()
         tool.shutdown()
+
+
+def test_a_node_that_hears_its_own_claim_keeps_its_address() -> None:
+    """A bus that loops frames back (python-can's udp_multicast) brings the node its own
+    claim: the same address with the same NAME is no contender."""
+    _, d = _device()
+    [claim] = d.claim()
+    assert d.handle(claim.arbitration_id, claim.data) == [] and d.address == 5
+    assert d.handle(can_id(59904, TOOL, 255), H("00 ee 00")) == [claim]

@@ -13,6 +13,10 @@ Examples
 ``python -m jvl_gym.cli.serve --motor MAC050 --pty --user-pty``  (FastMAC/FlexMAC too)
 ``jvl-gym serve -m MIS232 -a 1 -m MIS232 -a 2 --canopen --can-interface socketcan
 --can-channel vcan0 --node-id 5 --node-id 6``  (two MIS as CANopen slaves, MIS manual §11)
+``jvl-gym serve -m MIS232 --canopen --can-interface udp_multicast``  (a CANopen slave that a
+master in another process of this host reaches on python-can's ``udp_multicast``, group
+239.74.163.2, loopback only)
+``jvl-gym serve -m MIS232 --j1939 udp_multicast:239.74.163.2``  (a J1939 node, the same way)
 ``jvl-gym serve -m MAC140 -a 19 --tcp 127.0.0.1:5000 --load-inertia 1e-4``  (a rigid load)
 ``jvl-gym serve -m MAC140 -a 19 --pty --load-inertia 1e-4 --coupling-stiffness 40``
 (the load behind an elastic coupling: a two-mass plant)
@@ -224,7 +228,8 @@ def serve(
         "default 1, 4, 7, …); Start Address 2 is 500.")] = None,
     j1939: Annotated[str | None, typer.Option(
         "--j1939", help="Also serve the motors as J1939 nodes (MIS manual §11.8) on a "
-        "python-can bus INTERFACE:CHANNEL, e.g. socketcan:vcan0 or virtual:bus0.")] = None,
+        "python-can bus INTERFACE:CHANNEL, e.g. socketcan:vcan0, udp_multicast:239.74.163.2 "
+        "(other processes of this host) or virtual:bus0 (this process).")] = None,
     j1939_address: Annotated[list[int] | None, typer.Option(
         "--j1939-address", help="J1939 node address 1..252 of each motor (repeat; default "
         "the motor's FBUS_NODE_ID, 5).")] = None,
@@ -262,11 +267,14 @@ def serve(
         "--canopen", help="Serve the motors as CANopen slaves (MIS manual §11) on a python-can "
         "bus, beside any --tcp/--pty endpoint of the same motors.")] = False,
     can_interface: Annotated[str, typer.Option(
-        help="python-can interface of --canopen (socketcan, virtual, pcan, …).")
+        help="python-can interface of --canopen (socketcan, udp_multicast: other processes "
+        "of this host, virtual: this process only, pcan, …).")
     ] = "socketcan",
-    can_channel: Annotated[str, typer.Option(
-        help="python-can channel of --canopen (vcan0, can0, a virtual bus name, …).")
-    ] = "vcan0",
+    can_channel: Annotated[str | None, typer.Option(
+        help="python-can channel of --canopen (vcan0, can0, a multicast group of "
+        "udp_multicast, a virtual bus name, …; default vcan0, for udp_multicast "
+        "239.74.163.2).")
+    ] = None,
     can_bitrate: Annotated[int | None, typer.Option(
         help="Bit rate [bit/s] of --canopen, for interfaces that set it.")] = None,
     node_id: Annotated[list[int] | None, typer.Option(
@@ -285,6 +293,7 @@ def serve(
     motor or one per --address; checked before anything is served)."""
     from ..protocol.mactalk import fastmac as fm
     from ..protocol.serving.transport import TwinServer
+    from ..protocol.serving.canbus import DEFAULT_GROUP, UDP_MULTICAST
     from ..protocol.serving.twin import FlashDirectoryInUse
 
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
@@ -335,6 +344,8 @@ def serve(
     _check_distinct(line.addresses(), [types[k] for k in order], "--flash-dir")
     endpoint = parse_tcp(tcp) if tcp else None
     can_server = None
+    if can_channel is None:
+        can_channel = DEFAULT_GROUP if can_interface == UDP_MULTICAST else "vcan0"
     if canopen:
         ids = None if not node_id else [node_id[k] for k in order]
         can_server = canopen_server(line, can_interface, can_channel, ids, speed,

@@ -26,7 +26,9 @@ Decisions where the manual is silent (``docs/protocol.md``, "J1939"):
   capable", it claims the next free address of 129 … 247 (§11.8.3: "Negotiable address support
   129 – 247"), else (or when none is free) it sends "cannot claim" (the claim from the null
   address 254) and answers a request for PGN 60928 with it again; a claim of our address with a
-  higher NAME is answered by our claim again.
+  higher NAME is answered by our claim again; a claim of our address with our own NAME is our
+  claim heard back (a bus such as python-can's ``udp_multicast`` loops frames back) and is
+  ignored.
 """
 
 from __future__ import annotations
@@ -113,6 +115,8 @@ class J1939Device:
 
     def _claimed(self, source: int, data: bytes) -> list[Frame]:
         other = int.from_bytes(bytes(data[:8]), "little")
+        if source == self.address and other == self.name.value():
+            return []  # our own claim, heard back (a bus that loops frames back)
         self.others[source] = other
         if source != self.address or self.address == NULL_ADDRESS:
             return []
