@@ -292,8 +292,8 @@ def serve(
     an optional load: inertia, friction, an elastic coupling (SI units; one value for every
     motor or one per --address; checked before anything is served)."""
     from ..protocol.mactalk import fastmac as fm
-    from ..protocol.serving.transport import TwinServer
     from ..protocol.serving.canbus import DEFAULT_GROUP, UDP_MULTICAST
+    from ..protocol.serving.transport import TwinServer
     from ..protocol.serving.twin import FlashDirectoryInUse
 
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
