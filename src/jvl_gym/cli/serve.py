@@ -40,6 +40,7 @@ from typing import Annotated, Any
 
 import typer
 
+from ..registers.errors import echo
 from .app import App
 
 __all__ = ["app", "serve", "parse_tcp", "banner", "build_line", "LOAD_OPTIONS",
@@ -68,9 +69,9 @@ def parse_tcp(text: str) -> tuple[str, int]:
     host, _, port = text.rpartition(":")
     host = host.strip("[]") or "127.0.0.1"
     if host not in LOCALHOSTS:
-        raise typer.BadParameter(f"TCP is served on localhost only, not {host!r}")
+        raise typer.BadParameter(f"TCP is served on localhost only, not {echo(host)}")
     if not port.isdigit() or not 0 <= int(port) <= 65535:
-        raise typer.BadParameter(f"bad TCP port in {text!r}")
+        raise typer.BadParameter(f"bad TCP port in {echo(text)}")
     return host, int(port)
 
 
@@ -469,7 +470,8 @@ def _j1939_node(line: Any, spec: str, addresses: list[int] | None) -> Any:
         raise typer.BadParameter("--j1939 serves motors of one family")
     interface, sep, channel = spec.partition(":")
     if not sep or not interface or not channel:
-        raise typer.BadParameter(f"--j1939 {spec!r}: give INTERFACE:CHANNEL, e.g. socketcan:vcan0")
+        raise typer.BadParameter(f"--j1939 {echo(spec)}: give INTERFACE:CHANNEL, e.g. "
+                                 "socketcan:vcan0")
     given = addresses is not None
     if addresses is None:
         addresses = [int(v) for v in line.m.read_raw("FBUS_NODE_ID")]

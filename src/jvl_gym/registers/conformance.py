@@ -36,7 +36,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .errors import RegisterError
+from .errors import RegisterError, echo
 from .table import Access, Format, Register, RegisterTable
 
 __all__ = ["MODELLED", "STORED_ONLY", "NOT_MODELLED", "STATUSES", "Conformance",
@@ -89,7 +89,7 @@ class Entry:
 
 def _entry(raw: Any, where: str, section: str, nested: bool) -> Entry:
     if not isinstance(raw, dict):
-        raise ConformanceError(f"{where}: expected a mapping, got {raw!r}")
+        raise ConformanceError(f"{where}: expected a mapping, got {echo(raw)}")
     allowed = {"status", "tests", "why", "name", "section"} | (set() if nested else
                                                                 {"bits", "values"})
     unknown = set(raw) - allowed
@@ -98,7 +98,7 @@ def _entry(raw: Any, where: str, section: str, nested: bool) -> Entry:
     status = raw.get("status")
     if status not in STATUSES:
         raise ConformanceError(f"{where}: status must be one of {list(STATUSES)}, got "
-                               f"{status!r}")
+                               f"{echo(status)}")
     tests = raw.get("tests") or []
     if not isinstance(tests, list) or not all(isinstance(t, str) and "::" in t for t in tests):
         raise ConformanceError(f"{where}: tests must be a list of 'file.py::test_name'")
@@ -111,7 +111,7 @@ def _entry(raw: Any, where: str, section: str, nested: bool) -> Entry:
     for key in ("bits", "values"):
         for k, sub in (raw.get(key) or {}).items():
             if not isinstance(k, int) or (key == "bits" and not 0 <= k <= 31):
-                raise ConformanceError(f"{where}: {key} key {k!r} is not a "
+                raise ConformanceError(f"{where}: {key} key {echo(k)} is not a "
                                        f"{'bit number 0 … 31' if key == 'bits' else 'value'}")
             subs[key][k] = _entry(sub, f"{where} {key[:-1]} {k}", section, True)
     return Entry(status, tuple(tests), why, str(raw.get("name") or ""),

@@ -39,6 +39,8 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Protocol
 
+from ...registers.errors import echo
+
 __all__ = ["TwinServer", "Endpoint", "LOCALHOSTS", "Session", "ByteSession", "Served",
            "MAX_CONNECTIONS", "IDLE_TIMEOUT", "TRANSIENT_ACCEPT_ERRORS"]
 
@@ -155,7 +157,7 @@ class TwinServer:
         if isinstance(self.max_connections, bool) or not (
                 isinstance(self.max_connections, int) and self.max_connections >= 1):
             raise ValueError(f"max_connections must be an integer >= 1, got "
-                             f"{self.max_connections!r}")
+                             f"{echo(self.max_connections)}")
         if not 0 <= self.idle_timeout < float("inf"):
             raise ValueError(f"idle_timeout must be a finite number of seconds >= 0 (0: never), "
                              f"got {self.idle_timeout}")
@@ -245,7 +247,7 @@ class TwinServer:
 
     def _listen(self, host: str, port: int, what: str, make: Callable[[], Session]) -> None:
         if host not in LOCALHOSTS:
-            raise ValueError(f"the twin serves TCP on localhost only, not {host!r}")
+            raise ValueError(f"the twin serves TCP on localhost only, not {echo(host)}")
         family = socket.AF_INET6 if host == "::1" else socket.AF_INET
         srv = socket.socket(family, socket.SOCK_STREAM)
         srv.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)

@@ -40,6 +40,7 @@ from typing import Any, Protocol
 import numpy as np
 
 from ...families.contract import Capability, TwinSpec, UnsupportedOperation
+from ...registers.errors import echo
 
 __all__ = ["MotorBackend", "TwinFamily", "MotorTwin", "RegisterNumbers", "FlashFileError",
            "FlashDirectoryInUse", "LOCK_NAME"]
@@ -340,7 +341,7 @@ class MotorTwin:
             image = {}
             for k, v in regs.items():
                 if not k.isdigit() or type(v) is not int:
-                    raise ValueError(f"entry {k!r}: {v!r} is not register number: integer")
+                    raise ValueError(f"entry {echo(k)}: {echo(v)} is not register number: integer")
                 image[int(k)] = v
         except (OSError, UnicodeDecodeError, ValueError) as exc:
             raise self._flash_file_error(i, exc) from exc

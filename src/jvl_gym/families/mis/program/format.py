@@ -21,6 +21,7 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 
+from ....registers.errors import ECHO_LIMIT, echo
 from .binary import decode_command
 from .commands import FASTMAC_GROUPS, SPECS, Command
 from .fields import FieldError
@@ -42,7 +43,8 @@ class ProgramError(ValueError):
     """
 
     def __init__(self, line: int, field: str | None, message: str) -> None:
-        where = f"line {line}" + (f", field {field}" if field else "")
+        shown = field if field is None or len(field) <= ECHO_LIMIT else echo(field)
+        where = f"line {line}" + (f", field {shown}" if field else "")
         super().__init__(f"{where}: {message}")
         self.line = line
         self.field = field
@@ -94,7 +96,7 @@ def parse_line(text: str, n: int = 1) -> Command:
     keyword = toks[0][0]
     spec = SPECS.get(keyword)
     if spec is None:
-        raise ProgramError(n, None, f"unknown command {keyword!r}; the commands are "
+        raise ProgramError(n, None, f"unknown command {echo(keyword)}; the commands are "
                                     f"{', '.join(SPECS)}")
     got: dict[str, str] = {}
     if toks[0][1] is not None:
@@ -102,10 +104,10 @@ def parse_line(text: str, n: int = 1) -> Command:
     for tok, quoted in toks[1:]:
         key, sep, value = tok.partition("=")
         if not sep or not key:
-            raise ProgramError(n, None, f"{tok!r} is not key=value")
+            raise ProgramError(n, None, f"{echo(tok)} is not key=value")
         value = value if quoted is None else quoted
         if key not in spec.fields:
-            raise ProgramError(n, key, f"{keyword} has no field {key!r}; its fields are "
+            raise ProgramError(n, key, f"{keyword} has no field {echo(key)}; its fields are "
                                        f"{', '.join(spec.fields)}")
         if key in got:
             raise ProgramError(n, key, "given twice")
