@@ -164,3 +164,20 @@ def test_the_endpoint_accepts_again_after_the_descriptors_ran_out(tmp_path) -> N
     assert run.returncode == 0, run.stderr[-2000:]
     assert lines[0].startswith("exhausted 24")  # EMFILE
     assert lines[-1] == "answered", run.stdout
+
+
+def test_a_long_running_server_keeps_a_bounded_number_of_sessions() -> None:
+    """Connection after connection, a Modbus server keeps the latest sessions only."""
+    from jvl_gym.protocol.modbus import codec as mb
+    from jvl_gym.protocol.modbus.server import ModbusServer
+    from jvl_gym.protocol.modbus.twin import modbus_bus
+    from jvl_gym.protocol.serving.transport import KEPT_SESSIONS
+
+    twin = Twin(MotorArray("MIS232", n=1, seed=0), [7])
+    with ModbusServer(twin, tcp=("127.0.0.1", 0), bus=modbus_bus(twin)) as server:
+        port = server.endpoint("modbus", "tcp").port
+        for _ in range(KEPT_SESSIONS + 6):
+            with _connect(port) as sock:
+                sock.sendall(mb.encode_read_request(7, 2 * 5, 2))
+                assert sock.recv(64)[:2] == bytes([7, 3])
+        assert len(server.sessions) == KEPT_SESSIONS

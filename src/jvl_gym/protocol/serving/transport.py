@@ -34,15 +34,16 @@ import socket
 import threading
 import time
 import tty
-from collections import Counter
+from collections import Counter, deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
 from ...registers.errors import echo
 
 __all__ = ["TwinServer", "Endpoint", "LOCALHOSTS", "Session", "ByteSession", "Served",
-           "MAX_CONNECTIONS", "IDLE_TIMEOUT", "TRANSIENT_ACCEPT_ERRORS"]
+           "MAX_CONNECTIONS", "IDLE_TIMEOUT", "TRANSIENT_ACCEPT_ERRORS", "KEPT_SESSIONS",
+           "kept_sessions"]
 
 log = logging.getLogger(__name__)
 
@@ -51,6 +52,14 @@ LOCALHOSTS = ("127.0.0.1", "localhost", "::1")
 MAX_CONNECTIONS = 32
 #: seconds without a received byte after which a TCP connection is closed by default
 IDLE_TIMEOUT = 300.0
+#: sessions a server keeps for inspection (``sessions``), the latest ones
+KEPT_SESSIONS = 64
+
+
+def kept_sessions() -> deque[Any]:
+    """The latest sessions of a server, at most :data:`KEPT_SESSIONS` (older ones are let go:
+    a server that runs for long holds no more)."""
+    return deque(maxlen=KEPT_SESSIONS)
 #: errors of ``accept`` that pass: the process or system is out of descriptors, buffers or
 #: memory, or the peer gave up before the connection was accepted
 TRANSIENT_ACCEPT_ERRORS = frozenset({errno.EMFILE, errno.ENFILE, errno.ECONNABORTED,
