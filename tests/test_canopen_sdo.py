@@ -258,3 +258,24 @@ def test_a_segmented_download_past_its_limit_is_aborted_at_once(rig: Rig) -> Non
     abort = rig.request(0x605, bytes([0x00, 1, 2, 3, 4, 5, 6, 7]), 0x585)  # 7 > 4
     assert abort is not None and struct.unpack_from("<L", abort, 4)[0] == 0x06070012
     assert int(rig.m.read_raw("V_SOLL")[0]) == v
+
+
+def test_a_save_by_the_command_object_reaches_the_flash_file(tmp_path) -> None:
+    """The motor's command (2010h sub 1, MIS manual §8.2.22) "save to flash" writes the flash
+    file as 1010h does: a new twin (power-on) has the saved register."""
+    import json
+
+    rig = Rig(flash_dir=tmp_path)
+    try:
+        node = rig.node()
+        node.sdo[0x2012][6].raw = 4321
+        node.sdo[0x2010][1].raw = rig.server.slaves[0].facts.cmd_save
+        saved = json.loads((tmp_path / "flash_0.json").read_text())["registers"]
+        assert saved == {str(k): v for k, v in sorted(rig.m.flash_image(0).items())}
+    finally:
+        rig.close()
+    again = Rig(flash_dir=tmp_path)
+    try:
+        assert again.node().sdo[0x2012][6].raw == 4321
+    finally:
+        again.close()

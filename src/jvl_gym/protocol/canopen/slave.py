@@ -257,10 +257,30 @@ class CanopenSlave:
         return int(self.m.read_raw(number)[self.i])
 
     def reg_write(self, number: int, value: int, sdo: bool = True) -> None:
-        """Write register ``number``; the motor's refusal as an SDO abort (nothing changed)."""
+        """Write register ``number``; the motor's refusal as an SDO abort (nothing changed). A
+        write of the motor's command register that saves its flash (§8.2.22) writes the flash
+        file too (``on_store``), and aborts 0800 0020h if the file cannot be written."""
         t = self.m.table
         if number not in t or t.lookup(number).access == Access.RESERVED:
             raise SdoAbortedError(ABORT["read_only"])
+        before = (self.m.flash_image(self.i)
+                  if self.on_store is not None and number == self.facts.command else None)
+        self._write_register(number, value)
+        if before is not None and self.m.flash_image(self.i) != before:
+            self._save_file(before)
+
+    def _save_file(self, before: dict[int, int]) -> None:
+        """The motor's flash to its file (``on_store``); abort 0800 0020h if it fails."""
+        if self.on_store is None:
+            return
+        try:
+            self.on_store(before)
+        except ValueError as exc:
+            self.refuse(str(exc))
+            raise SdoAbortedError(ABORT["store"]) from None
+
+    def _write_register(self, number: int, value: int) -> None:
+        """Write register ``number`` as the motor does; its refusal as an SDO abort."""
         try:
             self.m.write_raw(number, np.int64(value), index=self.i)
         except ReadOnlyRegisterError as exc:
@@ -415,13 +435,9 @@ class CanopenSlave:
         file cannot be written (``on_store``; the motor's flash then keeps its previous
         image)."""
         before = self.m.flash_image(self.i)
-        self.reg_write(self.facts.command, self.facts.cmd_save)
-        if self.on_store is not None:
-            try:
-                self.on_store(before)
-            except ValueError as exc:
-                self.refuse(str(exc))
-                raise SdoAbortedError(ABORT["store"]) from None
+        self.reg_write(self.facts.command, self.facts.cmd_save)  # a changed flash: its file
+        if self.m.flash_image(self.i) == before:
+            self._save_file(before)  # unchanged: the file is written all the same
         self.stored = {k: v for k, v in self.values.items() if k[0] in STORABLE_402}
 
     # ------------------------------------------------------------------ the canopen node
