@@ -106,6 +106,7 @@ class Rig:
 
     def close(self) -> None:
         self.server.stop()
+        self.twin.close()  # the flash directory is free for the next twin (a power cycle)
         # wake the master's notifier (it waits up to 1 s for a frame) so it stops at once
         wake = threading.Timer(0.01, lambda: self.raw.send(can.Message(arbitration_id=0x7FF)))
         wake.start()

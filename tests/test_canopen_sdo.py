@@ -234,3 +234,48 @@ def test_the_eds_says_which_register_objects_take_writes(rig: Rig) -> None:
             assert node.sdo.upload(index, sub) == before, (hex(index), sub, var.name)
             kinds[var.access_type] += 1
     assert kinds["rw"] > 200 and kinds["ro"] > 200
+
+
+def test_a_segmented_download_past_its_limit_is_aborted_at_once(rig: Rig) -> None:
+    """Segments without a size beyond MAX_DOWNLOAD bytes: aborted 0607 0012h at the segment
+    that passes the limit (the server holds no more), nothing written; with a size, at the
+    segment that passes it."""
+    from jvl_gym.protocol.canopen.sdo import MAX_DOWNLOAD
+
+    v = int(rig.m.read_raw("V_SOLL")[0])
+    assert rig.request(0x605, bytes([0x20, 0x12, 0x20, 5, 0, 0, 0, 0]), 0x585)[0] == 0x60
+    toggle, reply = 0, None
+    for _ in range(MAX_DOWNLOAD // 7 + 1):
+        reply = rig.request(0x605, bytes([toggle, 1, 2, 3, 4, 5, 6, 7]), 0x585)
+        assert reply is not None
+        if reply[0] == 0x80:
+            break
+        toggle ^= 0x10
+    assert reply[0] == 0x80 and struct.unpack_from("<L", reply, 4)[0] == 0x06070012
+    assert int(rig.m.read_raw("V_SOLL")[0]) == v
+    ok = rig.request(0x605, bytes([0x21, 0x12, 0x20, 5, 4, 0, 0, 0]), 0x585)  # size 4
+    assert ok is not None and ok[0] == 0x60
+    abort = rig.request(0x605, bytes([0x00, 1, 2, 3, 4, 5, 6, 7]), 0x585)  # 7 > 4
+    assert abort is not None and struct.unpack_from("<L", abort, 4)[0] == 0x06070012
+    assert int(rig.m.read_raw("V_SOLL")[0]) == v
+
+
+def test_a_save_by_the_command_object_reaches_the_flash_file(tmp_path) -> None:
+    """The motor's command (2010h sub 1, MIS manual §8.2.22) "save to flash" writes the flash
+    file as 1010h does: a new twin (power-on) has the saved register."""
+    import json
+
+    rig = Rig(flash_dir=tmp_path)
+    try:
+        node = rig.node()
+        node.sdo[0x2012][6].raw = 4321
+        node.sdo[0x2010][1].raw = rig.server.slaves[0].facts.cmd_save
+        saved = json.loads((tmp_path / "flash_0.json").read_text())["registers"]
+        assert saved == {str(k): v for k, v in sorted(rig.m.flash_image(0).items())}
+    finally:
+        rig.close()
+    again = Rig(flash_dir=tmp_path)
+    try:
+        assert again.node().sdo[0x2012][6].raw == 4321
+    finally:
+        again.close()

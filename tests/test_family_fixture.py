@@ -147,6 +147,7 @@ def test_the_twin_saves_the_toy_registers_to_flash_and_reloads_them(tmp_path: Pa
     assert m.read("KP").tolist() == [3.0] and m.mode_name(0) == "passive"
     again = MotorArray("TOY1", n=1, seed=0)
     assert again.read("KP").tolist() == [2.0]
+    twin.close()  # the flash directory has one owner: the first twin gives it up
     Twin(again, addresses=[5], flash_dir=tmp_path)
     assert again.read("KP").tolist() == [3.0] and again.read("MYADDR").tolist() == [5]
     assert ask(twin, mt.encode_go_safe_mode(5)) == mt.ACCEPT

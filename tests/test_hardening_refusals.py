@@ -211,6 +211,7 @@ def test_save_by_command_over_modbus_holds_after_restart(tmp_path) -> None:
     twin = _mis_twin(tmp_path)
     assert not isinstance(_modbus_write(twin, 5, [1234]), mb.ExceptionResponse)
     assert not isinstance(_modbus_write(twin, 24, [268]), mb.ExceptionResponse)
+    twin.close()
     assert _mis_twin(tmp_path).m.read("V_SOLL").tolist() == [1234]
 
 
@@ -219,6 +220,7 @@ def test_save_by_command_over_mactalk32_holds_after_restart(tmp_path) -> None:
     session = twin.session()
     assert session.feed(m32.encode_write_value(ADDRESS, 5, 1234)) == m32.ACCEPT
     assert session.feed(m32.encode_write_value(ADDRESS, 24, 269)) == m32.ACCEPT
+    twin.close()
     assert _mis_twin(tmp_path).m.read("V_SOLL").tolist() == [1234]
 
 
@@ -228,13 +230,19 @@ def test_save_by_safe_mode_request_over_mactalk_holds_after_restart(tmp_path) ->
     def twin() -> Twin:
         return Twin(MotorArray("MAC140", n=1, seed=0), [ADDRESS], flash_dir=tmp_path)
 
+    def restarted() -> Twin:  # a power cycle: the running twin gives its directory to a new one
+        first.close()
+        again = twin()
+        again.close()
+        return again
+
     first = twin()
     default = int(first.m.read_raw("V_SOLL")[0])
     session = first.session()
     session.feed(mt.encode_go_safe_mode(ADDRESS))
     assert session.feed(mt.encode_write_word(ADDRESS, 5, default + 100)) == mt.ACCEPT
     session.feed(mt.encode_write_flash(ADDRESS))
-    assert twin().m.read_raw("V_SOLL").tolist() == [default + 100]
+    assert restarted().m.read_raw("V_SOLL").tolist() == [default + 100]
     session.feed(mt.encode_go_safe_mode(ADDRESS))
     assert session.feed(mt.encode_write_word(ADDRESS, 2, 256)) == mt.ACCEPT
-    assert twin().m.read_raw("V_SOLL").tolist() == [default]
+    assert restarted().m.read_raw("V_SOLL").tolist() == [default]

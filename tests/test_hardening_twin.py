@@ -52,13 +52,15 @@ def test_a_bad_flash_file_loads_no_motor_and_changes_no_file(tmp_path, second):
     motor 0's flash and registers are as they were, and both files are unchanged."""
     (tmp_path / "flash_0.json").write_text('{"motor": 0, "registers": {"13": 700}}')
     (tmp_path / "flash_1.json").write_text(second)
-    files = {p.name: p.read_text() for p in tmp_path.iterdir()}
+    files = {p.name: p.read_text() for p in tmp_path.glob("flash_*")}
     m = MotorArray("MAC140", n=2, seed=0)
     regs = m.regs.copy()
     with pytest.raises(ValueError, match="flash_1.json"):
         Twin(m, [19, 20], flash_dir=tmp_path)
     assert m.flash_image(0) == {} and m.flash_image(1) == {} and (m.regs == regs).all()
-    assert {p.name: p.read_text() for p in tmp_path.iterdir()} == files
+    assert {p.name: p.read_text() for p in tmp_path.glob("flash_*")} == files
+    (tmp_path / "flash_1.json").unlink()  # the refused twin left the directory free
+    Twin(MotorArray("MAC140", n=2, seed=0), [19, 20], flash_dir=tmp_path).close()
 
 
 def test_serve_with_a_flash_file_without_registers_is_one_line(tmp_path, capsys):
@@ -104,11 +106,14 @@ def test_unwritable_flash_dir_keeps_state_and_session(tmp_path):
     twin.m.step(300)
     blocked = tmp_path / "blocked"
     blocked.write_text("")
-    twin.flash_dir = blocked  # mkdir fails: the file cannot be written
-    assert session.feed(mt.encode_write_flash(19)) == b""
+    saved = twin.m.flash_image(0)
+    twin.flash_dir = blocked  # the file cannot be written
+    assert session.feed(mt.encode_write_flash(19)) == b""  # 56h has no answer (manual 5.1)
     assert twin.stats["flash_file_errors"] == 1
-    assert "blocked" in twin.last_refusal
-    assert twin.m.flash_image(0)[13] == 640  # the motor's flash holds KVOUT 2.5
+    assert "blocked" in twin.last_refusal and "the save failed" in twin.last_refusal
+    # the save failed where the requester sees it: the motor stays in SAFE_MODE, its flash
+    # as the file has it; the registers keep KVOUT 2.5 (nothing is lost)
+    assert twin.mode(0) == 15 and twin.m.flash_image(0) == saved
     reply = mt.decode(session.feed(mt.encode_read(19, 13)))  # the session still answers
     assert mt.bytes_to_words(reply.data)[0] == 640
 

@@ -4,7 +4,11 @@ can-j1939 package's DM14 client against the motor on a python-can virtual bus.""
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 import time
+from pathlib import Path
 
 import can
 import numpy as np
@@ -151,3 +155,79 @@ def test_the_can_j1939_client_reads_and_writes_over_a_virtual_bus() -> None:
         ecu.disconnect()
         node.close()
         bus.shutdown()
+
+
+# ----------------------------------------------------------------------------- one address
+def test_a_node_refuses_two_motors_at_one_address() -> None:
+    twin = Twin(MotorArray("MIS232", n=2, seed=0), [1, 2])
+    bus = can.Bus(interface="virtual", channel=f"j1939-dup-{time.monotonic_ns()}")
+    try:
+        with pytest.raises(ValueError, match="motor 0 and motor 1 have J1939 address 7"):
+            J1939Node(twin, bus, [7, 7])
+    finally:
+        bus.shutdown()
+
+
+@pytest.mark.parametrize("extra", [[], ["--j1939-address", "7", "--j1939-address", "7"]])
+def test_serve_refuses_two_motors_at_one_j1939_address_in_one_line(extra) -> None:
+    """Both at the default (each motor's FBUS_NODE_ID, 5) or both given 7: one line, exit ≠ 0,
+    nothing served (a process of its own: a served line would run until stopped)."""
+    root = Path(__file__).resolve().parents[1]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(root / "src"), str(root)])}
+    try:
+        run = subprocess.run([sys.executable, "-m", "jvl_gym.cli", "serve", "-m", "MIS232",
+                              "-a", "1", "-a", "2", "--j1939",
+                              f"virtual:dup-{time.monotonic_ns()}", *extra],
+                             capture_output=True, text=True, timeout=300, env=env)
+    except subprocess.TimeoutExpired:
+        pytest.fail("serve ran with two motors at one J1939 address")
+    assert run.returncode not in (0, None)
+    err = run.stderr.strip().splitlines()
+    assert len(err) == 1 and "J1939 address" in err[0] and "--j1939-address" in err[0]
+
+
+def test_a_node_without_arbitrary_address_gives_up_and_cannot_claim() -> None:
+    """SAE J1939/81: a claim of our address by a lower NAME (higher priority) takes it: a node
+    that is not arbitrary address capable sends "cannot claim" (the claim from the null
+    address 254) and answers a request for address claimed with it; it serves nothing more."""
+    m = MotorArray("MIS232", seed=0)
+    mine = Name.from_value(m.family.j1939_name & ~(1 << 63))
+    d = J1939Device(m, 0, 5, name=mine)
+    lower = Name(1, 1, 0, 0, 0, 0, 0, 0, False).to_bytes()
+    [cannot] = d.handle(can_id(60928, 5, 255), lower)
+    assert d.address == 254 and (cannot.arbitration_id, cannot.data) == (0x18EEFFFE,
+                                                                        mine.to_bytes())
+    request = d.handle(can_id(59904, TOOL, 255), H("00 ee 00"))
+    assert [(f.arbitration_id, f.data) for f in request] == [(0x18EEFFFE, mine.to_bytes())]
+    assert _ask(d, 55552, H("04 03 05 00 00 80 ff ff")) == []  # no address: no service
+
+
+def test_the_motors_of_one_node_hear_each_others_claims() -> None:
+    """Motor 0 at 5 loses its address to a lower NAME and takes a negotiable address: not 129,
+    which its neighbour in the twin claimed, but 130."""
+    channel = f"j1939-siblings-{time.monotonic_ns()}"
+    twin = Twin(MotorArray("MIS232", n=2, seed=0), [1, 2])
+    tool = can.Bus(interface="virtual", channel=channel)
+    node = J1939Node(twin, can.Bus(interface="virtual", channel=channel), [5, 129]).start()
+    try:
+        seen = {tool.recv(5).arbitration_id for _ in range(2)}
+        assert seen == {0x18EEFF05, 0x18EEFF81}
+        lower = Name(1, 1, 0, 0, 0, 0, 0, 0, False).to_bytes()
+        tool.send(can.Message(arbitration_id=can_id(60928, 5, 255), data=lower,
+                              is_extended_id=True))
+        reply = tool.recv(5)
+        assert reply is not None and reply.arbitration_id == 0x18EEFF82
+        assert [d.address for d in node.devices] == [130, 129]
+    finally:
+        node.close()
+        node.bus.shutdown()
+        tool.shutdown()
+
+
+def test_a_node_that_hears_its_own_claim_keeps_its_address() -> None:
+    """A bus that loops frames back (python-can's udp_multicast) brings the node its own
+    claim: the same address with the same NAME is no contender."""
+    _, d = _device()
+    [claim] = d.claim()
+    assert d.handle(claim.arbitration_id, claim.data) == [] and d.address == 5
+    assert d.handle(can_id(59904, TOOL, 255), H("00 ee 00")) == [claim]

@@ -148,6 +148,7 @@ def test_write_flash_is_kept_in_the_flash_file(tmp_path) -> None:
     ask(twin, m32.encode_enter_safe_mode(7))
     assert ask(twin, m32.encode_write_flash(7)) == b""
     again = RegisterArray(mis.REGISTERS, 1)
+    twin.close()
     Twin(again, [7], dialect=MACTALK32, flash_dir=tmp_path)
     assert again.read_raw("P_SOLL")[0] == -99 and again.read_raw("MY_ADDR")[0] == 7
 

@@ -133,6 +133,7 @@ def test_safe_mode_flash_and_reset_rules(tmp_path: Path) -> None:
     assert ask(twin, mt.encode_reset(19)) == b""
     assert float(twin.m.read("KVOUT")[0]) == 2.5  # registers from flash
     # a new twin (power cycle) reads the flash file
+    twin.close()
     again = make_twin(flash_dir=tmp_path)
     assert float(again.m.read("KVOUT")[0]) == 2.5 and again.addresses() == [19]
     # go init mode leaves SAFE_MODE

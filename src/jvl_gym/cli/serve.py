@@ -13,6 +13,10 @@ Examples
 ``python -m jvl_gym.cli.serve --motor MAC050 --pty --user-pty``  (FastMAC/FlexMAC too)
 ``jvl-gym serve -m MIS232 -a 1 -m MIS232 -a 2 --canopen --can-interface socketcan
 --can-channel vcan0 --node-id 5 --node-id 6``  (two MIS as CANopen slaves, MIS manual §11)
+``jvl-gym serve -m MIS232 --canopen --can-interface udp_multicast``  (a CANopen slave that a
+master in another process of this host reaches on python-can's ``udp_multicast``, group
+239.74.163.2, loopback only)
+``jvl-gym serve -m MIS232 --j1939 udp_multicast:239.74.163.2``  (a J1939 node, the same way)
 ``jvl-gym serve -m MAC140 -a 19 --tcp 127.0.0.1:5000 --load-inertia 1e-4``  (a rigid load)
 ``jvl-gym serve -m MAC140 -a 19 --pty --load-inertia 1e-4 --coupling-stiffness 40``
 (the load behind an elastic coupling: a two-mass plant)
@@ -36,6 +40,7 @@ from typing import Annotated, Any
 
 import typer
 
+from ..registers.errors import echo
 from .app import App
 
 __all__ = ["app", "serve", "parse_tcp", "banner", "build_line", "LOAD_OPTIONS",
@@ -64,9 +69,9 @@ def parse_tcp(text: str) -> tuple[str, int]:
     host, _, port = text.rpartition(":")
     host = host.strip("[]") or "127.0.0.1"
     if host not in LOCALHOSTS:
-        raise typer.BadParameter(f"TCP is served on localhost only, not {host!r}")
+        raise typer.BadParameter(f"TCP is served on localhost only, not {echo(host)}")
     if not port.isdigit() or not 0 <= int(port) <= 65535:
-        raise typer.BadParameter(f"bad TCP port in {text!r}")
+        raise typer.BadParameter(f"bad TCP port in {echo(text)}")
     return host, int(port)
 
 
@@ -180,14 +185,19 @@ def build_line(types: list[str], addresses: list[int], seed: int = 0,
     groups: dict[str, list[int]] = {}
     for k, t in enumerate(types):
         groups.setdefault(family_of_motor(t).key, []).append(k)
-    twins = []
-    for key, members in groups.items():
-        m = MotorArray([types[k] for k in members], n=len(members), seed=seed, **array_kw)
-        where = flash_dir / key if flash_dir is not None and len(groups) > 1 else flash_dir
-        twin = Twin(m, [addresses[k] for k in members], flash_dir=where,
-                    fastmac_code=fastmac_code or fm.DEFAULT_CODE)
-        _put_load(twin, load or {}, members)
-        twins.append(twin)
+    twins: list[Twin] = []
+    try:
+        for key, members in groups.items():
+            m = MotorArray([types[k] for k in members], n=len(members), seed=seed, **array_kw)
+            where = flash_dir / key if flash_dir is not None and len(groups) > 1 else flash_dir
+            twin = Twin(m, [addresses[k] for k in members], flash_dir=where,
+                        fastmac_code=fastmac_code or fm.DEFAULT_CODE)
+            twins.append(twin)
+            _put_load(twin, load or {}, members)
+    except BaseException:
+        for twin in twins:  # their flash directories are free again
+            twin.close()
+        raise
     order = [k for members in groups.values() for k in members]
     return (twins[0] if len(twins) == 1 else Bus(twins)), order
 
@@ -219,7 +229,8 @@ def serve(
         "default 1, 4, 7, …); Start Address 2 is 500.")] = None,
     j1939: Annotated[str | None, typer.Option(
         "--j1939", help="Also serve the motors as J1939 nodes (MIS manual §11.8) on a "
-        "python-can bus INTERFACE:CHANNEL, e.g. socketcan:vcan0 or virtual:bus0.")] = None,
+        "python-can bus INTERFACE:CHANNEL, e.g. socketcan:vcan0, udp_multicast:239.74.163.2 "
+        "(other processes of this host) or virtual:bus0 (this process).")] = None,
     j1939_address: Annotated[list[int] | None, typer.Option(
         "--j1939-address", help="J1939 node address 1..252 of each motor (repeat; default "
         "the motor's FBUS_NODE_ID, 5).")] = None,
@@ -257,23 +268,34 @@ def serve(
         "--canopen", help="Serve the motors as CANopen slaves (MIS manual §11) on a python-can "
         "bus, beside any --tcp/--pty endpoint of the same motors.")] = False,
     can_interface: Annotated[str, typer.Option(
-        help="python-can interface of --canopen (socketcan, virtual, pcan, …).")
+        help="python-can interface of --canopen (socketcan, udp_multicast: other processes "
+        "of this host, virtual: this process only, pcan, …).")
     ] = "socketcan",
-    can_channel: Annotated[str, typer.Option(
-        help="python-can channel of --canopen (vcan0, can0, a virtual bus name, …).")
-    ] = "vcan0",
+    can_channel: Annotated[str | None, typer.Option(
+        help="python-can channel of --canopen (vcan0, can0, a multicast group of "
+        "udp_multicast, a virtual bus name, …; default vcan0, for udp_multicast "
+        "239.74.163.2).")
+    ] = None,
     can_bitrate: Annotated[int | None, typer.Option(
         help="Bit rate [bit/s] of --canopen, for interfaces that set it.")] = None,
     node_id: Annotated[list[int] | None, typer.Option(
         "--node-id", help="CANopen node id 1..127 of each motor (repeat: one per --address; "
         "default: each motor's register 166, factory value 5).")] = None,
+    max_connections: Annotated[int, typer.Option(
+        help="Connections each TCP endpoint serves at once; one more is closed at once.",
+        min=1)] = 32,
+    idle_timeout: Annotated[float, typer.Option(
+        help="Seconds without a received byte after which a TCP connection is closed (0: "
+        "never).", min=0.0)] = 300.0,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log every refusal.")] = False,
 ) -> None:
     """Serve one or many simulated motors (multi-drop by MYADDR) until Ctrl-C, each with
     an optional load: inertia, friction, an elastic coupling (SI units; one value for every
     motor or one per --address; checked before anything is served)."""
     from ..protocol.mactalk import fastmac as fm
+    from ..protocol.serving.canbus import DEFAULT_GROUP, UDP_MULTICAST
     from ..protocol.serving.transport import TwinServer
+    from ..protocol.serving.twin import FlashDirectoryInUse
 
     logging.basicConfig(level=logging.INFO if verbose else logging.WARNING)
     motor = motor or ["MAC140"]
@@ -311,6 +333,8 @@ def serve(
                                  fastmac_code=code, load=load, **array_kw)
     except LoadError as exc:
         raise typer.BadParameter(str(exc)) from None
+    except FlashDirectoryInUse as exc:
+        raise typer.BadParameter(str(exc), param_hint="'--flash-dir'") from None
     except (TypeError, ValueError) as exc:  # the arrays' own check of the record length
         if record_length is None or not any(w in str(exc) for w in ("record_length",
                                                                     "record length")):
@@ -321,23 +345,26 @@ def serve(
     _check_distinct(line.addresses(), [types[k] for k in order], "--flash-dir")
     endpoint = parse_tcp(tcp) if tcp else None
     can_server = None
+    if can_channel is None:
+        can_channel = DEFAULT_GROUP if can_interface == UDP_MULTICAST else "vcan0"
     if canopen:
         ids = None if not node_id else [node_id[k] for k in order]
         can_server = canopen_server(line, can_interface, can_channel, ids, speed,
                                     bitrate=can_bitrate)
     clock = can_server is None
+    limits = {"max_connections": max_connections, "idle_timeout": idle_timeout}
     try:
         if can_server is not None and tcp is None and not pty:
             server: Any = None
         elif dmx:
             server = _dmx_server(line, endpoint, pty, speed, dmx_start,
-                                 modbus or user_tcp is not None or user_pty)
+                                 modbus or user_tcp is not None or user_pty, limits)
         elif modbus:
             server = _modbus_server(line, endpoint, pty, speed, switch=modbus_switch,
-                                    run_clock=clock)
+                                    run_clock=clock, limits=limits)
         else:
             server = TwinServer(line, speed=speed, tcp=endpoint, pty=pty, user_tcp=user_tcp,
-                                user_pty=user_pty, run_clock=clock)
+                                user_pty=user_pty, run_clock=clock, **limits)
         node = _j1939_node(line, j1939, j1939_address) if j1939 is not None else None
     except typer.BadParameter:
         if can_server is not None:
@@ -374,6 +401,7 @@ def serve(
         if node is not None:
             node.close()
             node.bus.shutdown()
+        line.close()
         stats = server.bus.stats if modbus and server is not None else line.stats
         typer.echo(f"stopped; {dict(stats)}")
 
@@ -432,23 +460,29 @@ def _require(twins: list[Any], capability: Any, option: str) -> None:
 def _j1939_node(line: Any, spec: str, addresses: list[int] | None) -> Any:
     """J1939 nodes of the motors of ``line`` on the python-can bus ``spec`` (INTERFACE:CHANNEL),
     claiming their addresses now."""
-    import can
-
     from ..families import Capability
     from ..protocol.mactalk.twin16 import Twin
     from ..protocol.sae_j1939.node import J1939Node
+    from ..protocol.serving.canbus import open_bus as open_can_bus
 
     _require(list(getattr(line, "twins", [line])), Capability.J1939, "--j1939")
     if not isinstance(line, Twin):
         raise typer.BadParameter("--j1939 serves motors of one family")
     interface, sep, channel = spec.partition(":")
     if not sep or not interface or not channel:
-        raise typer.BadParameter(f"--j1939 {spec!r}: give INTERFACE:CHANNEL, e.g. socketcan:vcan0")
+        raise typer.BadParameter(f"--j1939 {echo(spec)}: give INTERFACE:CHANNEL, e.g. "
+                                 "socketcan:vcan0")
+    given = addresses is not None
+    if addresses is None:
+        addresses = [int(v) for v in line.m.read_raw("FBUS_NODE_ID")]
     try:
-        if addresses is None:
-            addresses = [int(v) for v in line.m.read_raw("FBUS_NODE_ID")]
-        bus = can.Bus(interface=interface, channel=channel)
-    except (ValueError, KeyError, OSError, can.CanError, ImportError) as exc:
+        J1939Node.check_addresses(addresses, line.m.n)
+    except ValueError as exc:
+        where = "" if given else " (by default each motor's FBUS_NODE_ID)"
+        raise typer.BadParameter(f"{exc}{where}", param_hint="'--j1939-address'") from None
+    try:
+        bus = open_can_bus(interface, channel)
+    except ValueError as exc:
         raise typer.BadParameter(f"--j1939 {spec}: {exc}") from None
     try:
         node = J1939Node(line, bus, addresses)
@@ -460,8 +494,10 @@ def _j1939_node(line: Any, spec: str, addresses: list[int] | None) -> Any:
 
 
 def _dmx_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
-                starts: list[int] | None, other: bool) -> Any:
-    """A DMX512 server of the motors of ``line`` (one twin of a family with DMX512)."""
+                starts: list[int] | None, other: bool,
+                limits: dict[str, Any] | None = None) -> Any:
+    """A DMX512 server of the motors of ``line`` (one twin of a family with DMX512);
+    ``limits`` are the TCP endpoint's (``max_connections``, ``idle_timeout``)."""
     from ..families import Capability
     from ..protocol.dmx512.receiver import DmxSettings
     from ..protocol.dmx512.server import DmxLine, DmxServer
@@ -478,16 +514,19 @@ def _dmx_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
         raise typer.BadParameter(f"give one --dmx-start per --address ({n})")
     try:
         settings = [DmxSettings(start_address1=a) for a in starts]
-        return DmxServer(line, speed=speed, tcp=tcp, pty=pty, line=DmxLine(line, settings))
+        return DmxServer(line, speed=speed, tcp=tcp, pty=pty, line=DmxLine(line, settings),
+                         **(limits or {}))
     except (ValueError, KeyError) as exc:
         raise typer.BadParameter(f"--dmx: {exc}") from None
 
 
 def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: float,
-                   switch: bool = False, run_clock: bool = True) -> Any:
+                   switch: bool = False, run_clock: bool = True,
+                   limits: dict[str, Any] | None = None) -> Any:
     """A Modbus RTU server of the motors of ``line`` (one twin of a 32-bit family); with
     ``switch``, every stream starts in MacTalk and goes to Modbus as the first motor's register
-    121 says (MIS manual §12.2.1), the silence counted from now (power-on)."""
+    121 says (MIS manual §12.2.1), the silence counted from now (power-on); ``limits`` are the
+    TCP endpoint's (``max_connections``, ``idle_timeout``)."""
     import time
 
     from ..protocol.mactalk.twin16 import Twin
@@ -510,7 +549,8 @@ def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: flo
             raise typer.BadParameter(f"--modbus: address {a} is no Modbus slave address "
                                      "(1..247; MIS manual §12.1)")
     if not switch:
-        return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=run_clock)
+        return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=run_clock,
+                            **(limits or {}))
     setup = bus.slaves[0].registers.setup
     if setup is None:
         raise typer.BadParameter("--modbus-switch: the family has no Modbus set-up register")
@@ -520,7 +560,7 @@ def _modbus_server(line: Any, tcp: tuple[str, int] | None, pty: bool, speed: flo
         return SwitchingSession(line.session(), ModbusSession(bus), line_switch)
 
     return ModbusServer(line, speed=speed, tcp=tcp, pty=pty, bus=bus, run_clock=run_clock,
-                        make_session=switching)
+                        make_session=switching, **(limits or {}))
 
 
 if __name__ == "__main__":

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import enum
 
-__all__ = ["Capability", "UnsupportedOperation"]
+__all__ = ["Capability", "UnsupportedOperation", "motors_of"]
 
 
 class Capability(enum.Enum):
@@ -54,6 +54,12 @@ class Capability(enum.Enum):
     J1939 = "SAE J1939 interface"
 
 
+def motors_of(family_title: str) -> str:
+    """The motors of a family in words: its title where the title names them ("MAC800
+    integrated servo motors"), else the title followed by "motors"."""
+    return family_title if family_title.endswith("motors") else f"{family_title} motors"
+
+
 class UnsupportedOperation(NotImplementedError):
     """An operation the motors' family does not support; nothing was changed.
 
@@ -67,5 +73,5 @@ class UnsupportedOperation(NotImplementedError):
 
     def __init__(self, family_title: str, capability: Capability) -> None:
         self.capability = capability
-        super().__init__(f"{family_title} motors have no {capability.value} "
+        super().__init__(f"{motors_of(family_title)} have no {capability.value} "
                          f"(the family does not declare Capability.{capability.name})")

@@ -6,6 +6,8 @@ so that a server can log the reason and carry on; the one-shot ``decode_*`` func
 
 from __future__ import annotations
 
+from ..registers.errors import echo_hex
+
 __all__ = [
     "ProtocolError",
     "FrameError",
@@ -46,7 +48,7 @@ class FrameError(ProtocolError, ValueError):
         self.data = bytes(data)
 
     def __repr__(self) -> str:
-        return f"FrameError({self.code}: {self.reason!r} at {self.offset}, {self.data.hex(' ')})"
+        return f"FrameError({self.code}: {self.reason!r} at {self.offset}, {echo_hex(self.data)})"
 
     def __eq__(self, other: object) -> bool:
         return (isinstance(other, FrameError) and other.reason == self.reason

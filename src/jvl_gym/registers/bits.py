@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 
+from .errors import echo
+
 __all__ = ["bit_masks", "mask_of"]
 
 
@@ -36,7 +38,7 @@ def bit_masks(names: str) -> dict[str, int]:
         if name == "-":
             continue
         if not name.isidentifier() or name in out:
-            raise ValueError(f"bit {bit}: {name!r} is not a new identifier")
+            raise ValueError(f"bit {bit}: {echo(name)} is not a new identifier")
         out[name] = 1 << bit
     return out
 

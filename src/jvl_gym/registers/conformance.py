@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from .errors import RegisterError
+from .errors import RegisterError, echo
 from .table import Access, Format, Register, RegisterTable
 
 __all__ = ["MODELLED", "STORED_ONLY", "NOT_MODELLED", "PARTLY_MODELLED", "STATUSES",
@@ -141,7 +141,7 @@ def packaged_yaml(package: str, filename: str, error: type[ConformanceError] = C
 
 def _entry(raw: Any, where: str, section: str, nested: bool) -> Entry:
     if not isinstance(raw, dict):
-        raise ConformanceError(f"{where}: expected a mapping, got {raw!r}")
+        raise ConformanceError(f"{where}: expected a mapping, got {echo(raw)}")
     allowed = {"status", "tests", "why", "name", "section"} | (set() if nested else
                                                                 {"bits", "values"})
     unknown = set(raw) - allowed
@@ -151,7 +151,7 @@ def _entry(raw: Any, where: str, section: str, nested: bool) -> Entry:
     allowed_statuses = STATUSES if nested else REGISTER_STATUSES
     if status not in allowed_statuses:
         raise ConformanceError(f"{where}: status must be one of {list(allowed_statuses)}, got "
-                               f"{status!r}")
+                               f"{echo(status)}")
     tests = parse_test_ids(raw.get("tests"), where)
     why = str(raw.get("why") or "")
     if status in (MODELLED, PARTLY_MODELLED) and not tests:
@@ -162,7 +162,7 @@ def _entry(raw: Any, where: str, section: str, nested: bool) -> Entry:
     for key in ("bits", "values"):
         for k, sub in (raw.get(key) or {}).items():
             if not isinstance(k, int) or (key == "bits" and not 0 <= k <= 31):
-                raise ConformanceError(f"{where}: {key} key {k!r} is not a "
+                raise ConformanceError(f"{where}: {key} key {echo(k)} is not a "
                                        f"{'bit number 0 … 31' if key == 'bits' else 'value'}")
             subs[key][k] = _entry(sub, f"{where} {key[:-1]} {k}", section, True)
     return Entry(status, tests, why, str(raw.get("name") or ""),

@@ -52,7 +52,7 @@ import numpy as np
 from numba import njit
 
 from ..engine.jit import KERNEL
-from .errors import ReadOnlyRegisterError, RegisterRangeError, RegisterShapeError
+from .errors import ReadOnlyRegisterError, RegisterRangeError, RegisterShapeError, echo
 from .table import FORMAT_RAW_RANGE, FORMATS_32_ONE_NUMBER, Access, Format, Register
 
 __all__ = [
@@ -117,7 +117,7 @@ def whole_only(reg: Register) -> bool:
 
 def _not_a_number(reg: Register, value: Any) -> RegisterRangeError:
     return RegisterRangeError(
-        f"{reg.name} (register {reg.number}): value {value!r} is not a number; give an int, "
+        f"{reg.name} (register {reg.number}): value {echo(value)} is not a number; give an int, "
         f"a float or a real numeric array (manual {reg.section})")
 
 
@@ -357,10 +357,10 @@ def _as_int_array(x: Any, what: str) -> np.ndarray:
     a = np.asarray(x)
     if a.dtype.kind == "f":
         if not np.all(np.isfinite(a)) or np.any(a != np.round(a)):
-            raise RegisterRangeError(f"{what} must be integers, got {x!r}")
+            raise RegisterRangeError(f"{what} must be integers, got {echo(x)}")
         return a.astype(np.int64)
     if a.dtype.kind not in "iub":
-        raise RegisterRangeError(f"{what} must be integers, got {x!r}")
+        raise RegisterRangeError(f"{what} must be integers, got {echo(x)}")
     return a.astype(np.int64)
 
 
@@ -447,7 +447,7 @@ def to_word16(reg: Register, raw: Any) -> np.ndarray:
     lo, hi = FORMAT_RAW_RANGE[reg.format]
     if np.any((a < lo) | (a > hi)):
         raise RegisterRangeError(
-            f"{reg.name} (register {reg.number}): raw value {raw!r} does not fit the "
+            f"{reg.name} (register {reg.number}): raw value {echo(raw)} does not fit the "
             f"{reg.format.value} format ({lo} … {hi}, manual 3.1)")
     if reg.format == Format.LONGINT:
         low, high = split_longint(a)
@@ -487,7 +487,7 @@ def from_word16(reg: Register, word: Any) -> np.ndarray:
     w = _as_int_array(word, f"{reg.name} (register {reg.number}) words")
     if np.any((w < 0) | (w > 0xFFFF)):
         raise RegisterRangeError(
-            f"{reg.name} (register {reg.number}): words must be 0 … 65535, got {word!r}")
+            f"{reg.name} (register {reg.number}): words must be 0 … 65535, got {echo(word)}")
     if reg.format == Format.LONGINT:
         if w.ndim == 0 or w.shape[-1] != 2:
             raise RegisterShapeError(
@@ -533,7 +533,7 @@ def split_word32(raw: Any, signed: bool = True) -> tuple[Any, Any]:
     lo, hi = (-(2**31), 2**31 - 1) if signed else (0, 2**32 - 1)
     if np.any((a < lo) | (a > hi)):
         kind = "signed" if signed else "unsigned"
-        raise RegisterRangeError(f"32-bit value {raw!r} does not fit in 32 {kind} bits "
+        raise RegisterRangeError(f"32-bit value {echo(raw)} does not fit in 32 {kind} bits "
                                  f"({lo} … {hi})")
     u = a & 0xFFFFFFFF
     return _scalar_or_array(u & 0xFFFF), _scalar_or_array(u >> 16)
@@ -565,7 +565,7 @@ def join_word32(low: Any, high: Any, signed: bool = True) -> Any:
     hi = _as_int_array(high, "32-bit value words")
     for w in (lo, hi):
         if np.any((w < 0) | (w > 0xFFFF)):
-            raise RegisterRangeError(f"words must be 0 … 65535, got {low!r}, {high!r}")
+            raise RegisterRangeError(f"words must be 0 … 65535, got {echo(low)}, {echo(high)}")
     try:
         lo, hi = np.broadcast_arrays(lo, hi)
     except ValueError as exc:

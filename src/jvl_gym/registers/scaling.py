@@ -18,6 +18,8 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
+from .errors import echo
+
 __all__ = ["linear_unit", "linear_units", "UNIT_COLUMNS"]
 
 Conversion = Callable[[float], float]
@@ -53,7 +55,7 @@ def linear_unit(register: str, quantity: str, source: str, *,
         raise ValueError("give exactly one of quantity_per_unit and units_per_quantity")
     factor = quantity_per_unit if quantity_per_unit is not None else units_per_quantity
     if not 0.0 < factor < float("inf"):
-        raise ValueError(f"a unit factor is a finite positive number, got {factor!r}")
+        raise ValueError(f"a unit factor is a finite positive number, got {echo(factor)}")
 
     if quantity_per_unit is not None:
         def to_quantity(units: float) -> float:
@@ -115,9 +117,10 @@ def linear_units(path: Path, constants: Mapping[str, Any]) -> dict[str, Conversi
         given = row["given_as"]
         if (not isinstance(factor, (int, float)) or isinstance(factor, bool)
                 or given not in ("quantity_per_unit", "units_per_quantity")):
-            raise ValueError(f"{path}:{line}: factor {row['factor']!r} must name a number of the "
+            raise ValueError(f"{path}:{line}: factor {echo(row['factor'])} must name a number "
+                             "of the "
                              f"units module, given_as quantity_per_unit or units_per_quantity "
-                             f"(got {given!r})")
+                             f"(got {echo(given)})")
         to_quantity, to_units = linear_unit(row["register"], row["quantity"], row["source"],
                                             **{given: float(factor)})
         out[row["to_quantity"]] = to_quantity

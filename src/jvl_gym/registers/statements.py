@@ -51,7 +51,7 @@ from .conformance import (
     packaged_yaml,
     parse_test_ids,
 )
-from .errors import RegisterError
+from .errors import RegisterError, echo
 from .table import Access, Format, RegisterTable
 
 __all__ = ["DECISION", "STATUSES", "Statement", "StatementError", "Statements",
@@ -129,13 +129,13 @@ def _text(raw: dict, key: str, where: str) -> str:
         return ""
     if not isinstance(value, str):
         raise StatementError(f"{where}: {key} must be a string (quoted in YAML: '8.2' "
-                             f"unquoted is a number), got {value!r}")
+                             f"unquoted is a number), got {echo(value)}")
     return value.strip()
 
 
 def _statement(raw: Any, key: str, table: RegisterTable, where: str) -> Statement:
     if not isinstance(raw, dict):
-        raise StatementError(f"{where}: expected a mapping, got {raw!r}")
+        raise StatementError(f"{where}: expected a mapping, got {echo(raw)}")
     unknown = set(raw) - _KEYS
     if unknown:
         raise StatementError(f"{where}: unknown keys {sorted(unknown)}")
@@ -143,17 +143,17 @@ def _statement(raw: Any, key: str, table: RegisterTable, where: str) -> Statemen
     where = f"{where} ({sid})" if sid else where
     if not _SECTION.fullmatch(section):
         raise StatementError(f"{where}: section must be a manual section such as '8.2.13', "
-                             f"got {raw.get('section')!r}")
+                             f"got {echo(raw.get('section'))}")
     if not re.fullmatch(rf"{re.escape(key)}:{re.escape(section)}:[1-9][0-9]*", sid):
         raise StatementError(f"{where}: id must be '{key}:{section}:<ordinal>' (family "
-                             f"{key}, section {section}), got {raw.get('id')!r}")
+                             f"{key}, section {section}), got {echo(raw.get('id'))}")
     line = raw.get("line")
     if isinstance(line, bool) or not isinstance(line, int) or line < 1:
-        raise StatementError(f"{where}: line must be a line number ≥ 1, got {line!r}")
+        raise StatementError(f"{where}: line must be a line number ≥ 1, got {echo(line)}")
     names = raw.get("registers")
     if not isinstance(names, list) or not all(isinstance(n, str) for n in names):
         raise StatementError(f"{where}: registers must be a list of register names ([] for "
-                             f"a chapter's statement), got {names!r}")
+                             f"a chapter's statement), got {echo(names)}")
     registers = []
     for name in names:
         try:
@@ -171,10 +171,10 @@ def _statement(raw: Any, key: str, table: RegisterTable, where: str) -> Statemen
                 top is not None and part > top):
             raise StatementError(f"{where}: {name} must be a whole number"
                                  + (f" 0 … {top}" if top is not None else " ≥ 0")
-                                 + f", got {part!r}")
+                                 + f", got {echo(part)}")
         if len(registers) != 1:
             raise StatementError(f"{where}: a statement about a {name} names its one register, "
-                                 f"got {names!r}")
+                                 f"got {echo(names)}")
     if bit is not None and value is not None:
         raise StatementError(f"{where}: a statement is about a bit or a value, not both")
     says = _text(raw, "says", where)
@@ -183,7 +183,7 @@ def _statement(raw: Any, key: str, table: RegisterTable, where: str) -> Statemen
     status = raw.get("status")
     if status not in STATUSES:
         raise StatementError(f"{where}: status must be one of {list(STATUSES)}, got "
-                             f"{status!r}")
+                             f"{echo(status)}")
     tests = parse_test_ids(raw.get("tests"), where, StatementError)
     why, decision = _text(raw, "why", where), _text(raw, "decision", where)
     if status in (MODELLED, DECISION) and not tests:
@@ -193,7 +193,7 @@ def _statement(raw: Any, key: str, table: RegisterTable, where: str) -> Statemen
     if status == DECISION and not decision:
         raise StatementError(f"{where}: a decision names its doc section ('file.md#anchor')")
     if decision and not _DECISION.fullmatch(decision):
-        raise StatementError(f"{where}: decision must be 'file.md#anchor', got {decision!r}")
+        raise StatementError(f"{where}: decision must be 'file.md#anchor', got {echo(decision)}")
     return Statement(sid, section, line, tuple(dict.fromkeys(registers)), says, status, tests,
                      why, decision, bit, value)
 

@@ -33,7 +33,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import RegisterError, UnknownRegisterError
+from .errors import RegisterError, UnknownRegisterError, echo
 
 __all__ = [
     "Format",
@@ -347,7 +347,7 @@ class RegisterTable:
             If no register has that name or number; the message lists up to three close names.
         """
         if isinstance(key, (bool, np.bool_)):
-            raise UnknownRegisterError(f"register key must be a name or number, got {key!r}")
+            raise UnknownRegisterError(f"register key must be a name or number, got {echo(key)}")
         if isinstance(key, (int, np.integer)):
             reg = self._by_number.get(int(key))
             if reg is None:
@@ -360,9 +360,9 @@ class RegisterTable:
                 close = difflib.get_close_matches(key.strip().upper(), list(self._by_name), n=3,
                                                   cutoff=0.5)
                 hint = f"; did you mean {', '.join(close)}?" if close else ""
-                raise UnknownRegisterError(f"no register named {key!r}{hint}")
+                raise UnknownRegisterError(f"no register named {echo(key)}{hint}")
             return reg
-        raise UnknownRegisterError(f"register key must be a name or number, got {key!r}")
+        raise UnknownRegisterError(f"register key must be a name or number, got {echo(key)}")
 
     def __iter__(self) -> Iterator[Register]:
         return iter(self.registers)
@@ -406,7 +406,7 @@ def _validate(regs: tuple[Register, ...], source: str) -> None:
     for r in regs:
         key = r.name.upper()
         if not r.name or key in seen:
-            raise TableError(f"{source}: register {r.number}: name {r.name!r} is empty or "
+            raise TableError(f"{source}: register {r.number}: name {echo(r.name)} is empty or "
                              f"already used by register {seen.get(key)}")
         seen[key] = r.number
     for i, r in enumerate(regs):
@@ -456,12 +456,12 @@ def _parse_rows(text: str, source: str) -> list[Register]:
         try:
             fmt = Format(row["format"].strip())
         except ValueError:
-            raise TableError(f"{source} line {line}: unknown format {row['format']!r} "
+            raise TableError(f"{source} line {line}: unknown format {echo(row['format'])} "
                              f"(known: {', '.join(f.value for f in Format)})") from None
         try:
             access = Access(row["access"].strip())
         except ValueError:
-            raise TableError(f"{source} line {line}: unknown access {row['access']!r} "
+            raise TableError(f"{source} line {line}: unknown access {echo(row['access'])} "
                              f"(known: {', '.join(a.value for a in Access)})") from None
         try:
             number = int(row["number"])
@@ -471,7 +471,7 @@ def _parse_rows(text: str, source: str) -> list[Register]:
         user_text = (row.get("user") or "yes").strip().lower()
         if user_text not in ("yes", "no"):
             raise TableError(f"{source} line {line}: column user must be 'yes' or 'no', "
-                             f"got {row.get('user')!r}")
+                             f"got {echo(row.get('user'))}")
         rows.append(Register(
             number=number, name=row["name"].strip(), format=fmt, minimum=vals[0],
             maximum=vals[1], unit=row["unit"].strip(), access=access, default=vals[2],

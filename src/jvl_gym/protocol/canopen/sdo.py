@@ -9,7 +9,9 @@
 * a segment whose toggle bit did not alternate: abort 0503 0000h, and the transfer ends;
 * a segmented download is checked (object, sub-index, write access) at its initiation, not
   only after the last segment, and the data are written once, whole, after the last one;
-* a download whose data are longer or shorter than the object: 0607 0012h / 0607 0013h.
+* a download whose data are longer or shorter than the object: 0607 0012h / 0607 0013h; a
+  segmented download that passes its announced size or :data:`MAX_DOWNLOAD` bytes is aborted
+  (0607 0012h) at that segment, and the transfer ends (the data held are bounded).
 
 Every abort names the object of the request; nothing is written by a refused request. The
 node (:class:`~.slave.CanopenSlave`) raises :class:`~canopen.SdoAbortedError` with the
@@ -37,7 +39,11 @@ from canopen.sdo.constants import (
     TOGGLE_BIT,
 )
 
-__all__ = ["NodeSdoServer", "ABORT"]
+__all__ = ["NodeSdoServer", "ABORT", "MAX_DOWNLOAD"]
+
+#: bytes a segmented download may carry at most (every writable object of the dictionary holds
+#: 4 bytes at most): a longer one is aborted with 0607 0012h at the segment that passes it
+MAX_DOWNLOAD = 256
 
 #: the abort codes of MIS manual §11.9.4 this server and its node use
 ABORT = {
@@ -131,6 +137,11 @@ class NodeSdoServer(SdoServer):
     def segmented_download(self, command: int, request: bytes) -> None:
         last_byte = 8 - ((command >> 1) & 0x7)
         self._buffer.extend(request[1:last_byte])
+        if len(self._buffer) > (MAX_DOWNLOAD if self._size is None
+                                else min(MAX_DOWNLOAD, self._size)):
+            self._active = None
+            self._buffer = bytearray()
+            raise SdoAbortedError(ABORT["too_long"])
         if command & NO_MORE_DATA:
             self._active = None
             if self._size is not None and self._size != len(self._buffer):

@@ -32,6 +32,7 @@ from typing import Any
 
 import can
 
+from ..serving.canbus import open_bus as serving_open_bus
 from .facts import facts_of
 from .objects import build_dictionary
 from .slave import CanopenSlave
@@ -42,16 +43,12 @@ log = logging.getLogger(__name__)
 
 
 def open_bus(interface: str, channel: str, bitrate: int | None = None) -> can.BusABC:
-    """A python-can bus; ValueError (one line) if it cannot be opened."""
-    kw: dict[str, Any] = {"interface": interface, "channel": channel}
-    if bitrate:
-        kw["bitrate"] = bitrate
+    """A python-can bus (:func:`~jvl_gym.protocol.serving.canbus.open_bus`: ``udp_multicast``
+    on loopback only); ValueError (one line) if it cannot be opened."""
     try:
-        return can.Bus(**kw)
-    except (can.CanError, OSError, ValueError, ImportError, NotImplementedError) as exc:
-        reason = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ValueError(f"cannot open CAN bus {interface}:{channel}: {reason}; check "
-                         "--can-interface and --can-channel") from None
+        return serving_open_bus(interface, channel, bitrate)
+    except ValueError as exc:
+        raise ValueError(f"{exc}; check --can-interface and --can-channel") from None
 
 
 class CanopenServer:
@@ -123,7 +120,8 @@ class CanopenServer:
                 k += 1
                 with twin.lock:
                     s = CanopenSlave(twin.m, i, od, f, self._send, node_id=nid,
-                                     on_store=lambda twin=twin, i=i: twin.save_flash_file(i))
+                                     on_store=lambda before, twin=twin, i=i:
+                                     twin.save_flash_file(i, before))
                 self.slaves.append(s)
                 self._owner.append(twin)
 

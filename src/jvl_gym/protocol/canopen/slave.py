@@ -28,8 +28,9 @@ Where each object's value comes from:
 registers in its flash with the motor's own command (save to flash, §8.2.22, which a motor in an
 active mode refuses: abort 0800 0022h) and keeps the storable DSP-402 objects (6091h, 6092h,
 6094h, 6097h) in the node's non-volatile memory; ``on_store`` (the twin's flash file) is then
-called. 1011h sub 1 := "load" (64616F6Ch) sets the DSP-402 objects to their factory defaults
-without storing them. Any other value: abort 0800 0020h.
+called, and a file it cannot write aborts the save with 0800 0020h (the motor's flash keeps
+its previous image). 1011h sub 1 := "load" (64616F6Ch) sets the DSP-402 objects to their
+factory defaults without storing them. Any other value: abort 0800 0020h.
 
 **Reset node** (NMT 129) resets the motor (registers from its flash, its power-on) and every
 object; **reset communication** (130) the objects 1000h–1FFFh; both re-read the node id from
@@ -99,7 +100,8 @@ class CanopenSlave:
         Node id 1 … 127 to give the motor now (written to its node-id register and flash);
         default: the register's value.
     on_store : callable, optional
-        Called after a successful "save" (the twin writes its flash file).
+        Called with the motor's flash image before the save after a successful "save" (the
+        twin writes its flash file); a ValueError it raises aborts the save (0800 0020h).
 
     Attributes
     ----------
@@ -115,7 +117,7 @@ class CanopenSlave:
 
     def __init__(self, motors: Any, index: int, od: ObjectDictionary, facts: CanopenFacts,
                  send: Send, node_id: int | None = None,
-                 on_store: Callable[[], None] | None = None) -> None:
+                 on_store: Callable[[dict[int, int]], None] | None = None) -> None:
         self.m = motors
         self.i = index
         self.object_dictionary = od
@@ -255,10 +257,30 @@ class CanopenSlave:
         return int(self.m.read_raw(number)[self.i])
 
     def reg_write(self, number: int, value: int, sdo: bool = True) -> None:
-        """Write register ``number``; the motor's refusal as an SDO abort (nothing changed)."""
+        """Write register ``number``; the motor's refusal as an SDO abort (nothing changed). A
+        write of the motor's command register that saves its flash (§8.2.22) writes the flash
+        file too (``on_store``), and aborts 0800 0020h if the file cannot be written."""
         t = self.m.table
         if number not in t or t.lookup(number).access == Access.RESERVED:
             raise SdoAbortedError(ABORT["read_only"])
+        before = (self.m.flash_image(self.i)
+                  if self.on_store is not None and number == self.facts.command else None)
+        self._write_register(number, value)
+        if before is not None and self.m.flash_image(self.i) != before:
+            self._save_file(before)
+
+    def _save_file(self, before: dict[int, int]) -> None:
+        """The motor's flash to its file (``on_store``); abort 0800 0020h if it fails."""
+        if self.on_store is None:
+            return
+        try:
+            self.on_store(before)
+        except ValueError as exc:
+            self.refuse(str(exc))
+            raise SdoAbortedError(ABORT["store"]) from None
+
+    def _write_register(self, number: int, value: int) -> None:
+        """Write register ``number`` as the motor does; its refusal as an SDO abort."""
         try:
             self.m.write_raw(number, np.int64(value), index=self.i)
         except ReadOnlyRegisterError as exc:
@@ -409,11 +431,14 @@ class CanopenSlave:
 
     def store(self) -> None:
         """1010h "save": the motor's registers to its flash, the storable DSP-402 objects kept
-        (§11.4.5); abort 0800 0022h if the motor refuses (not passive)."""
-        self.reg_write(self.facts.command, self.facts.cmd_save)
+        (§11.4.5); abort 0800 0022h if the motor refuses (not passive), 0800 0020h if its flash
+        file cannot be written (``on_store``; the motor's flash then keeps its previous
+        image)."""
+        before = self.m.flash_image(self.i)
+        self.reg_write(self.facts.command, self.facts.cmd_save)  # a changed flash: its file
+        if self.m.flash_image(self.i) == before:
+            self._save_file(before)  # unchanged: the file is written all the same
         self.stored = {k: v for k, v in self.values.items() if k[0] in STORABLE_402}
-        if self.on_store is not None:
-            self.on_store()
 
     # ------------------------------------------------------------------ the canopen node
     def get_data(self, index: int, subindex: int, check_readable: bool = False) -> bytes:

@@ -49,6 +49,7 @@ from typing import Any
 
 from ...families import Capability
 from ...registers import RegisterError
+from ...registers.errors import echo
 from .frames import DmxPacket
 
 __all__ = ["DmxSettings", "DmxReceiver", "MODE_NAMES"]
@@ -107,12 +108,13 @@ class DmxSettings:
             v = getattr(self, f.name)
             if f.name not in _LIMITS:
                 if not isinstance(v, bool):
-                    raise ValueError(f"DMX512 setting {f.name} must be true or false, got {v!r}")
+                    raise ValueError(f"DMX512 setting {f.name} must be true or false, "
+                                     f"got {echo(v)}")
                 continue
             lo, hi = _LIMITS[f.name]
             if isinstance(v, bool) or not isinstance(v, int) or not lo <= v <= hi:
                 raise ValueError(f"DMX512 setting {f.name} must be a whole number {lo} … {hi}, "
-                                 f"got {v!r}")
+                                 f"got {echo(v)}")
 
     def position(self, coarse: int, fine: int) -> int:
         """P_SOLL of a DMX position (§13.1.7)."""

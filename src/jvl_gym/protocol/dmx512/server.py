@@ -8,10 +8,11 @@ watches the jogging inputs and the end of a homing every ``poll_interval`` secon
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
-from ..serving.transport import Session, TwinServer
+from ..serving.transport import Session, TwinServer, kept_sessions
 from ..serving.twin import MotorTwin
 from .frames import DmxDecoder, DmxPacket
 from .receiver import DmxReceiver, DmxSettings
@@ -70,7 +71,7 @@ class DmxServer(TwinServer):
     line: DmxLine | None = None
     poll_interval: float = 0.005
     frame_timeout: float = 1.0
-    sessions: list[DmxSession] = field(default_factory=list)
+    sessions: deque[DmxSession] = field(default_factory=kept_sessions)
 
     def start(self) -> DmxServer:
         """Open the endpoints and start the threads; return self."""

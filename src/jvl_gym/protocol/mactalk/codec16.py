@@ -50,6 +50,7 @@ import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 
+from ...registers.errors import echo, echo_hex
 from ..errors import FrameError
 from .stream import Malformed, NeedMore, StreamDecoder, decode_all_with, decode_one_with
 
@@ -164,7 +165,7 @@ Frame = Request | DataReply | Accept
 # ----------------------------------------------------------------------------- encoding
 def _byte(value: int, what: str) -> int:
     if not isinstance(value, int) or not 0 <= value <= 0xFF:
-        raise ValueError(f"{what} must be an integer 0..255, got {value!r}")
+        raise ValueError(f"{what} must be an integer 0..255, got {echo(value)}")
     return value
 
 
@@ -187,7 +188,8 @@ def _unit_address(address: int) -> int:
 
 def _register(register: int) -> int:
     if not isinstance(register, int) or not 1 <= register <= 0xFF:
-        raise ValueError(f"register number must be 1..255 (regnr := 01h..0FFh), got {register!r}")
+        raise ValueError("register number must be 1..255 (regnr := 01h..0FFh), "
+                         f"got {echo(register)}")
     return register
 
 
@@ -226,7 +228,7 @@ def words_to_bytes(words: Sequence[int]) -> bytes:
     out = bytearray()
     for w in words:
         if not isinstance(w, int) or not 0 <= w <= 0xFFFF:
-            raise ValueError(f"words must be integers 0..65535, got {w!r}")
+            raise ValueError(f"words must be integers 0..65535, got {echo(w)}")
         out += w.to_bytes(2, "little")
     return bytes(out)
 
@@ -241,7 +243,7 @@ def bytes_to_words(data: bytes) -> list[int]:
 def long_to_bytes(value: int) -> bytes:
     """A 32-bit value (signed or unsigned) to 4 bytes, low byte first (low word first)."""
     if not isinstance(value, int) or not -(2**31) <= value <= 2**32 - 1:
-        raise ValueError(f"value must fit in 32 bits, got {value!r}")
+        raise ValueError(f"value must fit in 32 bits, got {echo(value)}")
     return (value & 0xFFFFFFFF).to_bytes(4, "little")
 
 
@@ -373,7 +375,7 @@ def _parse(buf: bytes | bytearray) -> tuple[Frame, int]:
     if b0 == _ACCEPT_BYTE:
         rest = r.take(2)
         if rest != b"\x11\x11":
-            raise _Bad(f"incomplete accept: 11h followed by {rest.hex(' ').upper()} "
+            raise _Bad(f"incomplete accept: 11h followed by {echo_hex(rest)} "
                        "(expected 11h 11h 11h)", "bad_sync")
         return Accept(), 3
     if b0 not in _SYNC_BYTES:

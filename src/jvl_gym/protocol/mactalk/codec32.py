@@ -80,6 +80,7 @@ import enum
 import re
 from dataclasses import dataclass
 
+from ...registers.errors import echo, echo_hex
 from ..errors import FrameError
 from .codec16 import ACCEPT, END, MASTER, Accept, _Reader, protect
 from .stream import Malformed, StreamDecoder, decode_all_with, decode_one_with
@@ -224,14 +225,14 @@ Frame = Request | GroupWrite | Reply | ProgramReply | Accept
 # ----------------------------------------------------------------------------- encoding
 def _byte(value: int, what: str) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 0xFF:
-        raise ValueError(f"{what} must be an integer 0..255, got {value!r}")
+        raise ValueError(f"{what} must be an integer 0..255, got {echo(value)}")
     return value
 
 
 def _register(register: int | None) -> int:
     if isinstance(register, bool) or not isinstance(register, int) or not 1 <= register <= 0xFF:
         raise ValueError(f"register number must be 1..255 (MIS §18.2: 'numbered 1-255'), "
-                         f"got {register!r}")
+                         f"got {echo(register)}")
     return register
 
 
@@ -278,11 +279,11 @@ def value_bytes(value: int, length: int = 4) -> bytes:
     '70 82 03 00'
     """
     if length not in WRITE_LENGTHS:
-        raise ValueError(f"length must be 2 or 4, got {length!r}")
+        raise ValueError(f"length must be 2 or 4, got {echo(length)}")
     bits = 8 * length
     if isinstance(value, bool) or not isinstance(value, int) or not (
             -(2 ** (bits - 1)) <= value < 2**bits):
-        raise ValueError(f"value must fit in {bits} bits, got {value!r}")
+        raise ValueError(f"value must fit in {bits} bits, got {echo(value)}")
     return (value & (2**bits - 1)).to_bytes(length, "little")
 
 
@@ -412,7 +413,7 @@ def _parse(buf: bytes | bytearray) -> tuple[Frame, int]:
     if b0 == _ACCEPT_BYTE:
         rest = r.take(2)
         if rest != b"\x11\x11":
-            raise Malformed(f"incomplete accept: 11h followed by {rest.hex(' ').upper()} "
+            raise Malformed(f"incomplete accept: 11h followed by {echo_hex(rest)} "
                             "(expected 11h 11h 11h)", "bad_sync")
         return Accept(), 3
     if b0 not in _SYNC_BYTES:

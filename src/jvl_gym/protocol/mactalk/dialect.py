@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from typing import Any
 
+from ...registers.errors import echo
 from . import codec16, codec32
 
 __all__ = ["MACTALK16", "MACTALK32", "DIALECTS", "check_dialect", "dialect_of", "client_class"]
@@ -27,7 +28,7 @@ DIALECTS = (MACTALK16, MACTALK32)
 def check_dialect(name: str) -> str:
     """``name`` if it is a known dialect; ValueError naming the known ones otherwise."""
     if name not in DIALECTS:
-        raise ValueError(f"unknown MacTalk dialect {name!r}; known: {', '.join(DIALECTS)}")
+        raise ValueError(f"unknown MacTalk dialect {echo(name)}; known: {', '.join(DIALECTS)}")
     return name
 
 

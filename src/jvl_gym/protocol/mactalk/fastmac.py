@@ -36,6 +36,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
+from ...registers.errors import echo
 from ..errors import FrameError
 
 __all__ = [
@@ -163,7 +164,7 @@ class FastMacByte:
 
 def _toggle(toggle: int) -> int:
     if toggle not in (0, 1):
-        raise ValueError(f"toggle must be 0 or 1, got {toggle!r}")
+        raise ValueError(f"toggle must be 0 or 1, got {echo(toggle)}")
     return toggle << 7
 
 
@@ -176,7 +177,7 @@ def encode_activate(mode: Mode | int, register: str, toggle: int,
         raise ValueError("command mode carries a command, not a register (use encode_command)")
     group, num = register[:1].upper(), register[1:]
     if group not in GROUP_SIZES or not num.isdigit() or not 1 <= int(num) <= GROUP_SIZES[group]:
-        raise ValueError(f"no FastMAC register {register!r} (P1..P8, V1..V8, A/T/L/Z1..4)")
+        raise ValueError(f"no FastMAC register {echo(register)} (P1..P8, V1..V8, A/T/L/Z1..4)")
     prefix, bits = code[group]
     payload = (prefix << (5 - bits)) | (int(num) - 1)
     return _toggle(toggle) | (mode << 5) | payload
@@ -190,7 +191,7 @@ def encode_command(command: FastCommand | int, toggle: int) -> int:
 def decode_byte(byte: int, code: dict[str, tuple[int, int]] = DEFAULT_CODE) -> FastMacByte:
     """Decode one FastMAC command byte (every byte value is a valid command)."""
     if not 0 <= byte <= 0xFF:
-        raise ValueError(f"a byte is 0..255, got {byte!r}")
+        raise ValueError(f"a byte is 0..255, got {echo(byte)}")
     toggle, mode, payload = byte >> 7, Mode((byte >> 5) & 3), byte & 0x1F
     if mode == Mode.COMMAND:
         return FastMacByte(toggle, mode, command=FastCommand(payload))
@@ -225,7 +226,7 @@ def encode_status(s: Status) -> int:
 def decode_status(byte: int) -> Status:
     """Decode a status byte; a byte with bits 6,5 = 11 is a FlexMAC header, not a status."""
     if not 0 <= byte <= 0xFF:
-        raise ValueError(f"a byte is 0..255, got {byte!r}")
+        raise ValueError(f"a byte is 0..255, got {echo(byte)}")
     if byte & 0x60 == 0x60:
         raise FrameError(f"{byte:02X}h has bits 6,5 = 11: a FlexMAC header byte, not a "
                          "FastMAC status byte (manual 5.2.2)", "bad_header", 0, bytes((byte,)))

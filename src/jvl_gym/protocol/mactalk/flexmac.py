@@ -33,6 +33,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from ...registers.errors import echo, echo_hex
 from ..errors import FrameError
 from .codec16 import protect
 from .stream import Malformed, NeedMore, StreamDecoder, decode_one_with
@@ -166,7 +167,7 @@ FlexMessage = FlexWrite | FlexRead
 def header_byte(read: bool, long: bool, index: int = 0) -> int:
     """Header byte (manual 5.2.2): bit 7 longword, bits 6,5 = 11, bit 4 read, bits 3..0 index."""
     if not 0 <= index <= 15:
-        raise ValueError(f"register index must be 0..15, got {index!r}")
+        raise ValueError(f"register index must be 0..15, got {echo(index)}")
     return (0x80 if long else 0) | 0x60 | (0x10 if read else 0) | index
 
 
@@ -204,7 +205,7 @@ def encode_write(value: int, *, long: bool = False, index: int | None = None,
     n = 4 if long else 2
     lo = -(2 ** (8 * n - 1))
     if not isinstance(value, int) or not lo <= value < 2 ** (8 * n):
-        raise ValueError(f"value {value!r} does not fit in {8 * n} bits")
+        raise ValueError(f"value {echo(value)} does not fit in {8 * n} bits")
     head = header_byte(read=False, long=long, index=idx)
     return bytes((head,)) * 3 + target + protect((value % 2 ** (8 * n)).to_bytes(n, "little"))
 
@@ -320,7 +321,7 @@ class FlexMacDecoder(StreamDecoder):
         return b & 0x60 == 0x60 and all(x == b for x in self._buf[k:k + 3])
 
     def _truncated(self, data: bytes) -> str:
-        return f"truncated FlexMAC message: {data.hex(' ').upper()}"
+        return f"truncated FlexMAC message: {echo_hex(data)}"
 
 
 def decode(data: bytes) -> FlexMessage:

@@ -74,6 +74,11 @@ class Bus:
         for twin in self.twins:
             twin.advance(seconds)
 
+    def close(self) -> None:
+        """Give up every twin's flash directory (:meth:`MotorTwin.close`)."""
+        for twin in self.twins:
+            twin.close()
+
     def session(self) -> BusSession:
         """A new session of the line (one per connection)."""
         return BusSession(self)

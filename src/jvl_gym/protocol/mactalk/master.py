@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from ...compat import renamed_method
+from ...registers.errors import echo
 from ..errors import FrameError, NoAnswerError, UnexpectedReplyError
 
 __all__ = ["SerialMaster", "RegisterMaster", "DEFAULT_BAUDRATE", "open_port"]
@@ -148,7 +149,7 @@ class SerialMaster(ABC):
                 if self._kind(frame) == expect:
                     return frame
                 wanted = "an accept" if expect == "accept" else "a data reply"
-                raise UnexpectedReplyError(f"{what}: expected {wanted}, got {frame!r}")
+                raise UnexpectedReplyError(f"{what}: expected {wanted}, got {echo(frame)}")
         raise NoAnswerError(what,
             f"motor at address {self.address} on {self.port} did not answer {what} "
             f"({self.retries + 1} attempts, timeout {self.timeout} s; {', '.join(problems)}). "

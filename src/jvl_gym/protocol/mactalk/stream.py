@@ -11,6 +11,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from typing import Any
 
+from ...registers.errors import echo_hex
 from ..errors import FrameError
 
 
@@ -60,7 +61,7 @@ class StreamDecoder(ABC):
         return k
 
     def _truncated(self, data: bytes) -> str:
-        return f"truncated frame: {len(data)} bytes ({data.hex(' ').upper()}) and then no more"
+        return f"truncated frame: {len(data)} bytes ({echo_hex(data)}) and then no more"
 
     def _discard(self, n: int) -> bytes:
         out = bytes(self._buf[:n])

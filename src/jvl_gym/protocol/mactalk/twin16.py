@@ -50,7 +50,13 @@ from typing import Any
 
 from ...families.contract import Capability, UnsupportedOperation
 from ..errors import FrameError
-from ..serving.twin import MotorBackend, MotorTwin, RegisterNumbers, TwinFamily
+from ..serving.twin import (
+    FlashFileError,
+    MotorBackend,
+    MotorTwin,
+    RegisterNumbers,
+    TwinFamily,
+)
 from . import codec16 as mt
 from . import codec32 as m32
 from . import fastmac as fm
@@ -212,8 +218,15 @@ class Twin(MotorTwin):
                 return mt.ACCEPT
             if cmd == c.WRITE_FLASH:
                 self.require(Capability.FLASH)
+                before = self.m.flash_image(i)
                 self.m.write_flash(i)  # refuses unless in safe mode
-                self.save_flash_file(i)
+                try:
+                    self.save_flash_file(i, before)
+                except FlashFileError:
+                    # 56h has no answer (manual 5.1): the motor stays in SAFE_MODE, its flash
+                    # as before, which the requester reads back (MODE_REG 15)
+                    self.m.enter_safe_mode(i)
+                    raise
                 self._after_reset(i)
                 return b""
             if cmd == c.RESET:

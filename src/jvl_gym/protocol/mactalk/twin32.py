@@ -41,6 +41,7 @@ from typing import TYPE_CHECKING
 
 from ...families.contract import Capability, UnsupportedOperation
 from ...registers.table import is_signed
+from ..serving.twin import FlashFileError
 from . import codec32 as m32
 
 if TYPE_CHECKING:
@@ -167,11 +168,17 @@ class MacTalk32Unit:
             if cmd == c.WRITE_FLASH:
                 try:
                     t.require(Capability.FLASH)
+                    before = t.m.flash_image(i)
                     t.m.write_flash(i)  # refuses unless in safe mode
                 except (ValueError, UnsupportedOperation) as exc:
                     t.refuse(f"WRITE_FLASH for motor {i}: {exc}")
                     return m32.ACCEPT  # MIS §18.2.7: a response only if the command failed
-                t.save_flash_file(i)
+                try:
+                    t.save_flash_file(i, before)
+                except FlashFileError as exc:
+                    t.refuse(f"WRITE_FLASH for motor {i}: {exc}")
+                    self.power_on(i)
+                    return m32.ACCEPT  # the save failed: answered as a failed command
                 self.power_on(i)
                 return b""
             if cmd == c.PROGRAM:

@@ -45,6 +45,7 @@ import enum
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+from ...registers.errors import echo
 from ..errors import FrameError
 
 __all__ = [
@@ -268,7 +269,7 @@ def crc_ok(frame: bytes | bytearray) -> bool:
 # ----------------------------------------------------------------------------- encoding
 def _check(value: int, lo: int, hi: int, what: str) -> int:
     if not isinstance(value, int) or isinstance(value, bool) or not lo <= value <= hi:
-        raise ValueError(f"{what} must be an integer {lo}..{hi}, got {value!r}")
+        raise ValueError(f"{what} must be an integer {lo}..{hi}, got {echo(value)}")
     return value
 
 
@@ -524,7 +525,7 @@ class AddressMap:
 
     def __post_init__(self) -> None:
         if self.alt_reading not in ("register", "word"):
-            raise ValueError(f"alt_reading is 'register' or 'word', got {self.alt_reading!r}")
+            raise ValueError(f"alt_reading is 'register' or 'word', got {echo(self.alt_reading)}")
 
     def index_of(self, number: int, alt: bool = False) -> int:
         """Modbus index of the low word of motor register ``number`` (2n, or the alternative

@@ -37,7 +37,7 @@ import enum
 import logging
 import threading
 import time
-from collections import Counter
+from collections import Counter, deque
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol, runtime_checkable
@@ -49,7 +49,7 @@ from ...registers.errors import (
     UnknownRegisterError,
 )
 from ..errors import FrameError
-from ..serving.transport import TwinServer
+from ..serving.transport import TwinServer, kept_sessions
 from . import codec as mb
 
 __all__ = [
@@ -700,7 +700,7 @@ class ModbusServer(TwinServer):
     bus: ModbusBus | None = None
     poll_interval: float = 0.01
     make_session: Callable[[], Any] | None = None
-    sessions: list[Any] = field(default_factory=list)
+    sessions: deque[Any] = field(default_factory=kept_sessions)
 
     def start(self) -> ModbusServer:
         """Open the endpoints and start the threads; return self."""

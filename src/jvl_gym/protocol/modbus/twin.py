@@ -22,6 +22,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
+from ...families.capability import motors_of
 from ...registers import RegisterError, UnknownRegisterError
 from ...registers.table import is_signed
 from ..serving.twin import MotorTwin
@@ -136,7 +137,7 @@ def modbus_bus(twin: MotorTwin) -> ModbusBus:
     (:func:`modbus_registers`)."""
     _require_wide_registers(twin)
     if twin.spec.passive_mode is None:
-        raise ValueError(f"{twin.family.title} motors have no passive mode for the Modbus "
+        raise ValueError(f"{motors_of(twin.family.title)} have no passive mode for the Modbus "
                          "time-out (MIS manual §12.1)")
     regs = modbus_registers(twin.m.table, twin.spec.passive_mode)
     return ModbusBus([MotorRegisters(twin, i) for i in range(twin.m.n)], regs)

@@ -20,11 +20,15 @@ Decisions where the manual is silent (``docs/protocol.md``, "J1939"):
   operation completed or failed carries length 0 (nothing more is to be transferred); the error
   indicator is FFFFFFh (no code; the manual names none), EDCP extension FFh, seed FFFFh (no
   key: "Key/user level: NA"), reserved bits 1.
-* Address claim (SAE J1939/81): the claim is sent at start and on a request for PGN 60928; a
-  claim of our address by a node of lower NAME makes the motor, "arbitrary address capable",
-  claim the next free address of 129 … 247 (§11.8.3: "Negotiable address support 129 – 247"),
-  or send "cannot claim" from address 254 when none is free; a claim with a higher NAME is
-  answered by our claim again.
+* Address claim (SAE J1939/81): the claim (PGN 60928, the 64-bit NAME) is sent at start and
+  on a request for PGN 60928 to our address or to all; a claim of our address by a node of
+  lower NAME (the higher priority) makes the motor give the address up: "arbitrary address
+  capable", it claims the next free address of 129 … 247 (§11.8.3: "Negotiable address support
+  129 – 247"), else (or when none is free) it sends "cannot claim" (the claim from the null
+  address 254) and answers a request for PGN 60928 with it again; a claim of our address with a
+  higher NAME is answered by our claim again; a claim of our address with our own NAME is our
+  claim heard back (a bus such as python-can's ``udp_multicast`` loops frames back) and is
+  ignored.
 """
 
 from __future__ import annotations
@@ -105,11 +109,14 @@ class J1939Device:
 
     # ------------------------------------------------------------------ address claim
     def claim(self) -> list[Frame]:
-        """The address claim (PGN 60928, broadcast, from our address)."""
+        """The address claim (PGN 60928, broadcast, from our address; from the null address
+        254 it is "cannot claim")."""
         return [Frame(can_id(PGN_ADDRESS_CLAIMED, self.address, GLOBAL), self.name.to_bytes())]
 
     def _claimed(self, source: int, data: bytes) -> list[Frame]:
         other = int.from_bytes(bytes(data[:8]), "little")
+        if source == self.address and other == self.name.value():
+            return []  # our own claim, heard back (a bus that loops frames back)
         self.others[source] = other
         if source != self.address or self.address == NULL_ADDRESS:
             return []
@@ -126,12 +133,12 @@ class J1939Device:
         _, pgn, source, dest = split_id(identifier)
         if pgn == PGN_ADDRESS_CLAIMED:
             return self._claimed(source, data)
-        if self.address == NULL_ADDRESS or dest not in (self.address, GLOBAL):
+        if dest not in (self.address, GLOBAL):
             return []
         if pgn == PGN_REQUEST and len(data) >= 3 and int.from_bytes(
                 bytes(data[:3]), "little") == PGN_ADDRESS_CLAIMED:
-            return self.claim()
-        if dest != self.address:
+            return self.claim()  # from 254 ("cannot claim") if the address was lost
+        if self.address == NULL_ADDRESS or dest != self.address:
             return []
         if pgn == PGN_DM14:
             return self._dm14(source, bytes(data), now)

@@ -15,24 +15,56 @@ threads,
 
 An inter-character pause of ``frame_timeout`` seconds ends a partial frame (reported as
 truncated). :meth:`TwinServer.stop` shuts everything down and joins the threads.
+
+Limits of a TCP endpoint: at most ``max_connections`` connections at once (a connection beyond
+is closed at once, the first of a run of them logged); a connection that sends nothing for
+``idle_timeout`` seconds is closed (0: never); an accept that fails for want of resources (no
+file descriptors, buffers or memory, or a connection aborted before it was accepted) is retried
+after ``accept_backoff`` seconds, so the endpoint accepts again as soon as resources are free.
 """
 
 from __future__ import annotations
 
 import contextlib
+import errno
+import logging
 import os
 import select
 import socket
 import threading
 import time
 import tty
+from collections import Counter, deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Any, Protocol
 
-__all__ = ["TwinServer", "Endpoint", "LOCALHOSTS", "Session", "ByteSession", "Served"]
+from ...registers.errors import echo
+
+__all__ = ["TwinServer", "Endpoint", "LOCALHOSTS", "Session", "ByteSession", "Served",
+           "MAX_CONNECTIONS", "IDLE_TIMEOUT", "TRANSIENT_ACCEPT_ERRORS", "KEPT_SESSIONS",
+           "kept_sessions"]
+
+log = logging.getLogger(__name__)
 
 LOCALHOSTS = ("127.0.0.1", "localhost", "::1")
+#: connections a TCP endpoint serves at once by default
+MAX_CONNECTIONS = 32
+#: seconds without a received byte after which a TCP connection is closed by default
+IDLE_TIMEOUT = 300.0
+#: sessions a server keeps for inspection (``sessions``), the latest ones
+KEPT_SESSIONS = 64
+
+
+def kept_sessions() -> deque[Any]:
+    """The latest sessions of a server, at most :data:`KEPT_SESSIONS` (older ones are let go:
+    a server that runs for long holds no more)."""
+    return deque(maxlen=KEPT_SESSIONS)
+#: errors of ``accept`` that pass: the process or system is out of descriptors, buffers or
+#: memory, or the peer gave up before the connection was accepted
+TRANSIENT_ACCEPT_ERRORS = frozenset({errno.EMFILE, errno.ENFILE, errno.ECONNABORTED,
+                                     errno.ENOBUFS, errno.ENOMEM, errno.EPROTO, errno.EPERM,
+                                     errno.EAGAIN, errno.EINTR})
 
 
 @dataclass
@@ -100,6 +132,18 @@ class TwinServer:
         Inter-character timeout [s] after which a partial frame is dropped as truncated.
     run_clock : bool
         Advance the simulation in real time (False: the caller steps it).
+    max_connections : int
+        Connections each TCP endpoint serves at once (>= 1); one more is closed at once.
+    idle_timeout : float
+        Seconds without a received byte after which a TCP connection is closed (0: never).
+    accept_backoff : float
+        Seconds to wait before accepting again after an accept failed for want of resources.
+
+    Attributes
+    ----------
+    counts : collections.Counter
+        ``accept_errors`` (accepts that failed and were retried), ``refused_connections``
+        (beyond ``max_connections``), ``idle_closed`` (closed after ``idle_timeout``).
     """
 
     twin: Served
@@ -112,10 +156,23 @@ class TwinServer:
     run_clock: bool = True
     max_lag: float = 0.25
     endpoints: list[Endpoint] = field(default_factory=list)
+    max_connections: int = MAX_CONNECTIONS
+    idle_timeout: float = IDLE_TIMEOUT
+    accept_backoff: float = 0.05
 
     def __post_init__(self) -> None:
         if not 0 < self.speed < float("inf"):
             raise ValueError(f"speed must be a finite number > 0, got {self.speed}")
+        if isinstance(self.max_connections, bool) or not (
+                isinstance(self.max_connections, int) and self.max_connections >= 1):
+            raise ValueError(f"max_connections must be an integer >= 1, got "
+                             f"{echo(self.max_connections)}")
+        if not 0 <= self.idle_timeout < float("inf"):
+            raise ValueError(f"idle_timeout must be a finite number of seconds >= 0 (0: never), "
+                             f"got {self.idle_timeout}")
+        self.counts: Counter[str] = Counter()
+        self._open: Counter[str] = Counter()  # open connections per endpoint
+        self._refusing: set[str] = set()  # endpoints whose refusals are logged already
         self._stop = threading.Event()
         #: guards _threads and _socks (connection threads remove themselves when they end)
         self._lock = threading.Lock()
@@ -199,7 +256,7 @@ class TwinServer:
 
     def _listen(self, host: str, port: int, what: str, make: Callable[[], Session]) -> None:
         if host not in LOCALHOSTS:
-            raise ValueError(f"the twin serves TCP on localhost only, not {host!r}")
+            raise ValueError(f"the twin serves TCP on localhost only, not {echo(host)}")
         family = socket.AF_INET6 if host == "::1" else socket.AF_INET
         srv = socket.socket(family, socket.SOCK_STREAM)
         srv.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
@@ -214,27 +271,66 @@ class TwinServer:
         srv.settimeout(0.2)
         self._socks.append(srv)
         self.endpoints.append(Endpoint("tcp", what, host=host, port=srv.getsockname()[1]))
-        self._spawn(self._accept_loop, f"twin-tcp-{what}", srv, make)
+        self._spawn(self._accept_loop, f"twin-tcp-{what}", srv, make, what)
 
-    def _accept_loop(self, srv: socket.socket, make: Callable[[], Session]) -> None:
+    def _accept_loop(self, srv: socket.socket, make: Callable[[], Session],
+                     what: str = "mactalk") -> None:
+        """Accept connections until the server stops: an accept that fails for want of
+        resources is retried after ``accept_backoff`` seconds (logged once per run of
+        failures), a connection beyond ``max_connections`` is closed at once."""
+        failing = False
         while not self._stop.is_set():
             try:
                 conn, _ = srv.accept()
             except TimeoutError:
                 continue
-            except OSError:
-                return
-            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            except OSError as exc:
+                if self._stop.is_set() or srv.fileno() < 0:
+                    return  # the server stopped: its socket is closed
+                self.counts["accept_errors"] += 1
+                if not failing:
+                    failing = True
+                    log.warning("%s endpoint cannot accept (%s); retrying every %g s",
+                                what, exc.strerror or exc, self.accept_backoff)
+                if exc.errno not in TRANSIENT_ACCEPT_ERRORS:
+                    log.debug("accept error %r", exc)
+                self._stop.wait(self.accept_backoff)
+                continue
+            if failing:
+                failing = False
+                log.warning("%s endpoint accepts again", what)
             with self._lock:
-                self._socks.append(conn)
-            self._spawn(self._serve_conn, "twin-conn", conn, make())
+                full = self._open[what] >= self.max_connections
+                if not full:
+                    self._open[what] += 1
+                    self._socks.append(conn)
+            if full:
+                self._refuse(conn, what)
+                continue
+            conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            self._spawn(self._serve_conn, "twin-conn", conn, make(), what)
 
-    def _serve_conn(self, conn: socket.socket, session: Session) -> None:
+    def _refuse(self, conn: socket.socket, what: str) -> None:
+        """Close a connection beyond ``max_connections`` (logged once until one closes)."""
+        with contextlib.suppress(OSError):
+            conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, b"\x01\x00\x00\x00"
+                            b"\x00\x00\x00\x00")  # a reset: the client knows at once
+        conn.close()
+        self.counts["refused_connections"] += 1
+        if what not in self._refusing:
+            self._refusing.add(what)
+            log.warning("%s endpoint serves %d connections at most: a new connection is "
+                        "refused until one closes", what, self.max_connections)
+
+    def _serve_conn(self, conn: socket.socket, session: Session,
+                    what: str = "mactalk") -> None:
         """Serve one TCP connection until it closes; then release its socket and thread."""
         try:
             self._serve_open_conn(conn, session)
         finally:
             with self._lock:
+                self._open[what] -= 1
+                self._refusing.discard(what)
                 with contextlib.suppress(ValueError):
                     self._socks.remove(conn)
                 with contextlib.suppress(ValueError):
@@ -242,17 +338,23 @@ class TwinServer:
 
     def _serve_open_conn(self, conn: socket.socket, session: Session) -> None:
         conn.settimeout(self.frame_timeout)
+        last = time.monotonic()
         with conn:
             while not self._stop.is_set():
                 try:
                     data = conn.recv(4096)
                 except TimeoutError:
                     session.flush()
+                    if self.idle_timeout and time.monotonic() - last >= self.idle_timeout:
+                        self.counts["idle_closed"] += 1
+                        log.info("closed a connection idle for %g s", self.idle_timeout)
+                        return
                     continue
                 except OSError:
                     return
                 if not data:
                     return
+                last = time.monotonic()
                 reply = session.feed(data)
                 if reply:
                     try:

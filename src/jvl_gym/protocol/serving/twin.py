@@ -11,15 +11,27 @@ requests through it: :meth:`~MotorTwin.store` writes as one transaction (a refus
 nothing, a write that saves to flash writes the flash file), :meth:`~MotorTwin.value` reads,
 :meth:`~MotorTwin.dispatch` runs a request on each addressed motor.
 
-No I/O here but the flash files (the transport is :mod:`.transport`).
+A flash directory has one owner: the twin holds an exclusive lock (``fcntl.flock``) on the
+file :data:`LOCK_NAME` in it, which names the owner's process, from its start to :meth:`close`
+(or its end); a second twin on the directory, in this process or another, is refused with
+:class:`FlashDirectoryInUse` naming the holder. A flash file is written under a unique temporary
+name in the same directory, flushed to disk and renamed over the old one (``os.replace``, then
+the directory synced), so a reader sees the old image or the new, never a part; a save that
+does not reach the file raises :class:`FlashFileError`, which every bus answers as a failure.
+
+No I/O here but the flash files and their lock (the transport is :mod:`.transport`).
 """
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import json
 import logging
 import os
+import tempfile
 import threading
+import weakref
 from collections import Counter
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -28,10 +40,81 @@ from typing import Any, Protocol
 import numpy as np
 
 from ...families.contract import Capability, TwinSpec, UnsupportedOperation
+from ...registers.errors import echo
 
-__all__ = ["MotorBackend", "TwinFamily", "MotorTwin", "RegisterNumbers"]
+__all__ = ["MotorBackend", "TwinFamily", "MotorTwin", "RegisterNumbers", "FlashFileError",
+           "FlashDirectoryInUse", "LOCK_NAME"]
 
 log = logging.getLogger(__name__)
+
+#: the file in a flash directory that its owner (a twin) holds locked; it names its process
+LOCK_NAME = "owner.lock"
+
+
+class FlashFileError(ValueError):
+    """A flash file that could not be written: the save is answered to its requester as
+    failed (the motor's flash keeps the image it had before the save)."""
+
+
+class FlashDirectoryInUse(ValueError):
+    """The flash directory is held by another twin (one line, naming its process)."""
+
+
+def _process_name(pid: int) -> str:
+    """``"process 1234 (python)"``: a process id with its command name where the system
+    tells it (``/proc``)."""
+    try:
+        comm = Path(f"/proc/{pid}/comm").read_text(encoding="utf-8").strip()
+    except OSError:
+        return f"process {pid}"
+    return f"process {pid} ({comm})"
+
+
+def _lock_flash_dir(folder: Path) -> int:
+    """Lock ``folder`` for this twin: the open lock file's descriptor, locked, holding this
+    process's id. FlashDirectoryInUse naming the holder if another twin holds it."""
+    path = folder / LOCK_NAME
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT | os.O_CLOEXEC, 0o644)
+    except OSError as exc:
+        reason = exc.strerror or exc
+        raise ValueError(f"flash directory {folder}: cannot open its lock file ({reason}); "
+                         "give a writable --flash-dir") from None
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        holder = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+        os.close(fd)
+        who = _process_name(int(holder)) if holder.isdigit() else "another process"
+        here = " (this one)" if holder == str(os.getpid()) else ""
+        raise FlashDirectoryInUse(f"flash directory {folder} is in use by {who}{here}: one "
+                                  "twin per flash directory; stop it or give another "
+                                  "--flash-dir") from None
+    os.ftruncate(fd, 0)
+    os.pwrite(fd, f"{os.getpid()}\n".encode("ascii"), 0)
+    return fd
+
+
+def _write_atomically(path: Path, text: str) -> None:
+    """Replace ``path`` by a file holding ``text``: written under a unique temporary name in
+    the same directory, flushed to disk, renamed over ``path``, the directory synced. OSError
+    if any step fails (``path`` is then as it was, the temporary file removed)."""
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as f:
+            f.write(text)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+    dfd = os.open(path.parent, os.O_RDONLY | os.O_DIRECTORY)
+    try:
+        os.fsync(dfd)
+    finally:
+        os.close(dfd)
 
 
 class RegisterNumbers:
@@ -120,8 +203,10 @@ class MotorTwin:
         stored in flash unless a flash file provides the registers.
     flash_dir : path, optional
         Directory of the flash files ``flash_<i>.json`` (loaded at start, written when a motor
-        saves to flash); created if missing. A directory that cannot be created or written, or
-        a flash file that cannot be read as a flash image, raises ValueError naming it.
+        saves to flash); created if missing, and held by this twin until :meth:`close`. A
+        directory that cannot be created or written, or a flash file that cannot be read as a
+        flash image, raises ValueError naming it; a directory another twin holds raises
+        :class:`FlashDirectoryInUse` naming the holder's process.
 
     Attributes
     ----------
@@ -163,12 +248,20 @@ class MotorTwin:
                 if not 1 <= a <= 254:
                     raise ValueError(f"a unit address is 1..254 (manual 3.2.156), got {a}")
         self._check_flash_dir()
-        # every flash file is read and checked (MotorArray.check_flash_image) before any is
-        # loaded: a bad one changes nothing
-        images = [self._read_flash_file(i) for i in range(motors.n)]
-        for i, image in enumerate(images):
-            if image is not None:
-                self._flash_file_call(i, motors.check_flash_image, image)
+        self._release: Callable[[], None] | None = None
+        if self.flash_dir is not None:
+            fd = _lock_flash_dir(self.flash_dir)
+            self._release = weakref.finalize(self, os.close, fd)
+        try:
+            # every flash file is read and checked (MotorArray.check_flash_image) before any
+            # is loaded: a bad one changes nothing
+            images = [self._read_flash_file(i) for i in range(motors.n)]
+            for i, image in enumerate(images):
+                if image is not None:
+                    self._flash_file_call(i, motors.check_flash_image, image)
+        except BaseException:
+            self.close()
+            raise
         for i, image in enumerate(images):
             if image is not None:
                 self._flash_file_call(i, motors.load_flash_image, image)
@@ -176,6 +269,19 @@ class MotorTwin:
             elif addresses is not None:
                 motors.load_flash_image(i, {self.reg.MYADDR: addresses[i]})
                 motors.write_raw(self.reg.MYADDR, addresses[i], index=i)
+
+    def close(self) -> None:
+        """Give up the flash directory (its lock; idempotent). The twin serves on, but another
+        twin may now take the directory: close a twin when it stops."""
+        release, self._release = self._release, None
+        if release is not None:
+            release()
+
+    def __enter__(self) -> MotorTwin:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
 
     def supports(self, capability: Capability) -> bool:
         """Whether the motors' family declares ``capability``."""
@@ -235,7 +341,7 @@ class MotorTwin:
             image = {}
             for k, v in regs.items():
                 if not k.isdigit() or type(v) is not int:
-                    raise ValueError(f"entry {k!r}: {v!r} is not register number: integer")
+                    raise ValueError(f"entry {echo(k)}: {echo(v)} is not register number: integer")
                 image[int(k)] = v
         except (OSError, UnicodeDecodeError, ValueError) as exc:
             raise self._flash_file_error(i, exc) from exc
@@ -257,25 +363,43 @@ class MotorTwin:
                           f"{reason}; fix or delete it (the twin writes it when the motor saves "
                           "to flash)")
 
-    def save_flash_file(self, i: int) -> None:
-        """Write motor ``i``'s flash to its file; a file that cannot be written is logged and
-        counted (``stats["flash_file_errors"]``): the motor's flash holds the registers."""
+    def save_flash_file(self, i: int, before: dict[int, int] | None = None) -> None:
+        """Write motor ``i``'s flash to its file, atomically (:func:`_write_atomically`).
+
+        Parameters
+        ----------
+        i : int
+            The motor.
+        before : dict, optional
+            The motor's flash image before the save (:meth:`MotorBackend.flash_image`): if the
+            file cannot be written, the motor's flash is given this image back, so that flash
+            and file agree.
+
+        Raises
+        ------
+        FlashFileError
+            The file could not be written (counted in ``stats["flash_file_errors"]``, logged,
+            :attr:`last_refusal`): the requester is answered that the save failed.
+        """
         path = self._flash_path(i)
         if path is None:
             return
-        image = self.m.flash_image(i)
-        try:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            tmp = path.with_suffix(".tmp")
-            tmp.write_text(json.dumps({"motor": i, "registers": {str(k): v for k, v in
-                                                                  sorted(image.items())}},
-                                      indent=1))
-            tmp.replace(path)
-        except OSError as exc:
-            self.stats["flash_file_errors"] += 1
-            self.last_refusal = (f"flash file {path} not written ({exc.strerror or exc}); the "
-                                 f"motor's flash holds the registers until the twin stops")
-            log.error("%s", self.last_refusal)
+        with self.lock:
+            image = self.m.flash_image(i)
+            text = json.dumps({"motor": i, "registers": {str(k): v for k, v in
+                                                         sorted(image.items())}}, indent=1)
+            try:
+                _write_atomically(path, text)
+            except OSError as exc:
+                if before is not None:
+                    self.m.load_flash_image(i, before)
+                self.stats["flash_file_errors"] += 1
+                kept = ("keeps its previous image" if before is not None
+                        else "holds the new image until the twin stops")
+                self.last_refusal = (f"flash file {path} not written ({exc.strerror or exc}): "
+                                     f"the save failed; the motor's flash {kept}")
+                log.error("%s", self.last_refusal)
+                raise FlashFileError(self.last_refusal) from None
 
     def store(self, i: int, values: Mapping[int, int]) -> None:
         """Write stored integers (register number → raw, in this order) to motor ``i`` as one
@@ -288,11 +412,16 @@ class MotorTwin:
         ------
         RegisterError
             The motor refuses (unknown, read-only or reserved register, range, mode).
+        FlashFileError
+            The write saved to flash but the flash file could not be written: the registers
+            are written, the motor's flash keeps its previous image, and the request is
+            answered as failed.
         """
-        before = self.m.flash_image(i) if self.flash_dir is not None else None
-        self.m.write_raw_many(values, index=i)
-        if before is not None and self.m.flash_image(i) != before:
-            self.save_flash_file(i)
+        with self.lock:
+            before = self.m.flash_image(i) if self.flash_dir is not None else None
+            self.m.write_raw_many(values, index=i)
+            if before is not None and self.m.flash_image(i) != before:
+                self.save_flash_file(i, before)
 
     def addresses(self) -> list[int]:
         """MYADDR of every motor now."""

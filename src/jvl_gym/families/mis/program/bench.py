@@ -27,6 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ....registers.errors import echo
 from ..units import COUNTS_PER_REV
 from .executor import STATE_NAMES
 
@@ -60,14 +61,14 @@ class IoScript:
 def _number(value: Any, where: str, lo: float = -math.inf) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(
             value) or value < lo:
-        raise IoScriptError(f"{where}: {value!r} is not a finite number"
+        raise IoScriptError(f"{where}: {echo(value)} is not a finite number"
                             + (f" >= {lo:g}" if lo > -math.inf else ""))
     return float(value)
 
 
 def _input(value: Any, where: str) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 8:
-        raise IoScriptError(f"{where}: input {value!r} is not 1 … 8")
+        raise IoScriptError(f"{where}: input {echo(value)} is not 1 … 8")
     return value
 
 
@@ -96,7 +97,7 @@ def load_io_script(source: str | Path | Mapping[str, Any] | None) -> IoScript:
                             "sensors, load, load_inertia)")
     unknown = set(data) - {"registers", "inputs", "sensors", "load", "load_inertia"}
     if unknown:
-        raise IoScriptError(f"io script: unknown key {sorted(unknown)[0]!r}; the keys are "
+        raise IoScriptError(f"io script: unknown key {echo(sorted(unknown)[0])}; the keys are "
                             "registers, inputs, sensors, load, load_inertia")
     out = IoScript()
     regs = data.get("registers") or {}
@@ -111,7 +112,7 @@ def load_io_script(source: str | Path | Mapping[str, Any] | None) -> IoScript:
         levels = {}
         for name, level in row["set"].items():
             if level not in _LEVELS or isinstance(level, float):
-                raise IoScriptError(f"{where}: level {level!r} of input {name} is not high/low")
+                raise IoScriptError(f"{where}: level {echo(level)} of input {name} is not high/low")
             levels[_input(name, where)] = _LEVELS[level]
         out.inputs.append((_number(row["t"], f"{where}.t", 0.0), levels))
     out.inputs.sort(key=lambda r: r[0])

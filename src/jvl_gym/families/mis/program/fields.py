@@ -17,6 +17,7 @@ import struct
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 
+from ....registers.errors import echo
 from ..table import TABLE
 from ..units import COUNTS_PER_REV
 
@@ -42,7 +43,7 @@ class FieldError(ValueError):
 
 def _int(text: str, lo: int, hi: int) -> int:
     if len(text) > 24 or not _INT.match(text):
-        raise FieldError(f"{text!r} is not a whole number")
+        raise FieldError(f"{echo(text)} is not a whole number")
     v = int(text)
     if not lo <= v <= hi:
         raise FieldError(f"{v} is outside {lo} … {hi}")
@@ -98,7 +99,7 @@ class Choice(Field):
 
     def parse(self, text: str) -> str:
         if text not in self.options:
-            raise FieldError(f"{text!r} is not one of {', '.join(self.options)}")
+            raise FieldError(f"{echo(text)} is not one of {', '.join(self.options)}")
         return text
 
     def pack(self, value: object) -> bytes:
@@ -117,7 +118,7 @@ class Velocity(Field):
 
     def parse(self, text: str) -> int:
         if len(text) > 24 or not _DECIMAL.match(text):
-            raise FieldError(f"{text!r} is not a velocity in RPM (at most two decimals)")
+            raise FieldError(f"{echo(text)} is not a velocity in RPM (at most two decimals)")
         whole, _, frac = text.lstrip("+-").partition(".")
         units = int(whole) * 100 + int((frac + "00")[:2])
         if text.startswith("-") or units > 300000:
@@ -149,7 +150,7 @@ class Source(Field):
         if text in ("register1", "register2", "register3"):
             return text
         if text.startswith("register"):
-            raise FieldError(f"{text!r}: the user memory has register1, register2, register3")
+            raise FieldError(f"{echo(text)}: the user memory has register1, register2, register3")
         return _int(text, self.lo, _I32[1])
 
     def pack(self, value: object) -> bytes:
@@ -175,7 +176,7 @@ class RegisterField(Field):
         try:
             reg = TABLE.lookup(int(text) if _INT.match(text) else text)
         except (KeyError, ValueError, LookupError) as exc:
-            raise FieldError(f"{text!r} is not an MIS register (§8.2)") from exc
+            raise FieldError(f"{echo(text)} is not an MIS register (§8.2)") from exc
         if reg.access.value == "reserved":
             raise FieldError(f"register {reg.number} is reserved")
         if self.writable and reg.access.value != "rw":
@@ -206,9 +207,9 @@ class Value(Field):
                 try:
                     x = float(num)
                 except ValueError:
-                    raise FieldError(f"{text!r} is not a number of {suffix}") from None
+                    raise FieldError(f"{echo(text)} is not a number of {suffix}") from None
                 if len(num) > 24 or not re.fullmatch(r"[+-]?[0-9]+(\.[0-9]+)?", num):
-                    raise FieldError(f"{text!r} is not a number of {suffix}")
+                    raise FieldError(f"{echo(text)} is not a number of {suffix}")
                 v = round(x * per)
                 if not _I32[0] <= v <= _I32[1]:
                     raise FieldError(f"{text} is outside 32 bits")
@@ -234,7 +235,7 @@ class Pattern(Field):
         for item in text.split(","):
             name, sep, level = item.partition(":")
             if not sep or name not in self.names or level not in ("high", "low"):
-                raise FieldError(f"{item!r} is not NAME:high or NAME:low with NAME in "
+                raise FieldError(f"{echo(item)} is not NAME:high or NAME:low with NAME in "
                                  f"{', '.join(self.names)}")
             if name in got:
                 raise FieldError(f"{name} is given twice")
@@ -291,7 +292,7 @@ class Hex(Field):
 
     def parse(self, text: str) -> str:
         if not re.fullmatch(r"([0-9a-fA-F]{2}){1,64}", text):
-            raise FieldError(f"{text!r} is not 1 … 64 bytes of hexadecimal digits")
+            raise FieldError(f"{echo(text)} is not 1 … 64 bytes of hexadecimal digits")
         return text.lower()
 
     def pack(self, value: object) -> bytes:
@@ -321,7 +322,7 @@ class Expression(Field):
         while k < len(s):
             m = (_TERM if terms else _FIRST).match(s, k)
             if m is None or (terms and m.group(1) is None):
-                raise FieldError(f"expression {text!r}: expected "
+                raise FieldError(f"expression {echo(text)}: expected "
                                  f"{'an operator and ' if terms else ''}an operand at "
                                  f"character {k + 1}")
             op, arg = m.group(1) or "", m.group(2)

@@ -21,7 +21,8 @@ instructions of at least :data:`MIN_INSTRUCTION_BYTES` (an empty remark), so at 
 line is shorter: a remark of 255 quotes escaped is 524). No text above :data:`MAX_TEXT_BYTES`
 can be a program the motor holds; :func:`text_size_refusal` says so from the size alone, before
 the text is read. Errors show a piece of the text they quote, never more than
-:data:`SHOWN_CHARS` characters and its length (:func:`shown`).
+:data:`~jvl_gym.registers.errors.ECHO_LIMIT` characters and its length
+(:func:`~jvl_gym.registers.errors.echo`).
 """
 
 from __future__ import annotations
@@ -29,13 +30,14 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 
+from ....registers.errors import ECHO_LIMIT, echo
 from .binary import FLASH_BYTES, decode_command
 from .commands import FASTMAC_GROUPS, SPECS, Command
 from .fields import FieldError
 
 __all__ = ["ProgramError", "parse_program", "parse_line", "print_program", "print_line",
            "MAX_TEXT_BYTES", "MAX_LINE_BYTES", "MAX_PROGRAM_LINES", "MIN_INSTRUCTION_BYTES",
-           "text_size_refusal", "shown"]
+           "text_size_refusal"]
 
 _BARE = re.compile(r'[^\s"]+\Z')
 
@@ -49,19 +51,9 @@ MAX_LINE_BYTES = 1024
 #: at its longest with a CR LF line break
 MAX_TEXT_BYTES = MAX_PROGRAM_LINES * (MAX_LINE_BYTES + 2)
 #: characters of the text an error message shows at most
-SHOWN_CHARS = 40
-
-
-def shown(text: str, limit: int = SHOWN_CHARS) -> str:
-    """``text`` as an error shows it: its repr, cut to ``limit`` characters with its length."""
-    if len(text) <= limit:
-        return repr(text)
-    return f"{text[:limit]!r}… ({len(text)} characters)"
-
-
 def _cut(name: str) -> str:
-    """A field name as an error names it: at most :data:`SHOWN_CHARS` characters."""
-    return name if len(name) <= SHOWN_CHARS else name[:SHOWN_CHARS] + "…"
+    """A field name as an error names it: at most :data:`ECHO_LIMIT` characters."""
+    return name if len(name) <= ECHO_LIMIT else name[:ECHO_LIMIT] + "…"
 
 
 def text_size_refusal(size: int) -> str | None:
@@ -134,14 +126,14 @@ def parse_line(text: str, n: int = 1) -> Command:
     size = len(text.encode("utf-8", "surrogatepass"))
     if size > MAX_LINE_BYTES:
         raise ProgramError(n, None, f"the line has {size} bytes, more than {MAX_LINE_BYTES}: "
-                                    f"{shown(text)}")
+                                    f"{echo(text)}")
     toks = _tokens(text, n)
     if not toks:
         raise ProgramError(n, None, "empty line (every line is a command; use remark)")
     keyword = toks[0][0]
     spec = SPECS.get(keyword)
     if spec is None:
-        raise ProgramError(n, None, f"unknown command {shown(keyword)}; the commands are "
+        raise ProgramError(n, None, f"unknown command {echo(keyword)}; the commands are "
                                     f"{', '.join(SPECS)}")
     got: dict[str, str] = {}
     if toks[0][1] is not None:
@@ -149,16 +141,16 @@ def parse_line(text: str, n: int = 1) -> Command:
     for tok, quoted in toks[1:]:
         key, sep, value = tok.partition("=")
         if not sep or not key:
-            raise ProgramError(n, None, f"{shown(tok)} is not key=value")
+            raise ProgramError(n, None, f"{echo(tok)} is not key=value")
         value = value if quoted is None else quoted
         if key not in spec.fields:
-            raise ProgramError(n, _cut(key), f"{keyword} has no field {shown(key)}; its fields "
+            raise ProgramError(n, _cut(key), f"{keyword} has no field {echo(key)}; its fields "
                                              f"are {', '.join(spec.fields)}")
         if key in got:
             raise ProgramError(n, _cut(key), "given twice")
         if len(value) > 400:
             raise ProgramError(n, _cut(key), "the value is longer than 400 characters: "
-                                             f"{shown(value)}")
+                                             f"{echo(value)}")
         got[key] = value
     values: dict[str, object] = {}
     for key, (ftype, default) in spec.fields.items():
@@ -171,7 +163,7 @@ def parse_line(text: str, n: int = 1) -> Command:
             values[key] = ftype.parse(got[key])
         except FieldError as exc:
             text = got[key]
-            raise ProgramError(n, key, str(exc).replace(repr(text), shown(text))) from None
+            raise ProgramError(n, key, str(exc).replace(repr(text), echo(text))) from None
     _check(Command(keyword, values), got, n)
     if keyword == "set_output" and not str(values["state"]).endswith("_pulse"):
         values.pop("pulse_ms")
