@@ -18,6 +18,7 @@ import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -26,6 +27,25 @@ from jvl_gym.studio.lock import Access, StudioLock, is_loopback, split_host
 ROOT = Path(__file__).resolve().parents[1]
 #: the line the studio prints with its URL
 URL_LINE = re.compile(r"open (http://\S+?)/\?token=(\S+)")
+
+
+def _run(coroutine: Any) -> None:
+    """Run ``coroutine`` to its end on an event loop of its own, in a thread of its own: the
+    test's thread may already run a loop (Playwright's, when a browser test ran first in this
+    worker), where ``asyncio.run`` refuses."""
+    errors: list[BaseException] = []
+
+    def target() -> None:
+        try:
+            asyncio.run(coroutine)
+        except BaseException as exc:  # re-raised in the test's thread
+            errors.append(exc)
+
+    thread = threading.Thread(target=target)
+    thread.start()
+    thread.join()
+    if errors:
+        raise errors[0]
 
 
 # ---------------------------------------------------------------------- a started studio
@@ -207,7 +227,7 @@ def _asgi(scope_type: str, headers: dict[str, str], query: str = "", method: str
     scope = {"type": scope_type, "path": "/", "method": method,
              "query_string": query.encode(), "extensions": {"websocket.http.response": {}},
              "headers": [(k.lower().encode(), v.encode()) for k, v in headers.items()]}
-    asyncio.run(StudioLock(app, ACCESS)(scope, receive, send))
+    _run(StudioLock(app, ACCESS)(scope, receive, send))
     return reached, sent
 
 
@@ -270,7 +290,7 @@ def test_a_websocket_without_the_denial_extension_is_closed():
 
     scope = {"type": "websocket", "path": "/", "query_string": b"", "headers": [
         (b"host", b"evil.example")]}
-    asyncio.run(StudioLock(app, ACCESS)(scope, None, send))
+    _run(StudioLock(app, ACCESS)(scope, None, send))
     assert sent == [{"type": "websocket.close", "code": 1008, "reason": sent[0]["reason"]}]
 
 
