@@ -139,6 +139,16 @@ def studio() -> Iterator[str]:
     _stop(proc)
 
 
+def open_raw_registers(page, url: str) -> None:
+    """The Registers view at ``url`` with the raw toggle on: values in the registers' own
+    units, every register a field."""
+    page.goto(url)
+    expect(page.get_by_test_id("raw-V_SOLL")).to_contain_text("raw")  # the page is live
+    page.get_by_test_id("units-raw").click()
+    expect(page.get_by_test_id("unit-V_SOLL")).to_have_text(
+        re.compile(r"count|0\.01 RPM"))  # the register's own unit
+
+
 def write(page, name: str, value: str) -> None:
     expect(page.get_by_test_id(f"raw-{name}")).to_contain_text("raw")  # the page is live
     field = page.get_by_label(name, exact=True)
@@ -182,7 +192,7 @@ def test_write_from_registers_and_see_it_run_on_the_scope(page, studio, artefact
                                                           v_ist, name):
     """V_SOLL then MODE_REG = 1 (velocity mode): the MAC050–141 runs at V_SOLL/16
     counts/sample (manual 3.2.5, 3.2.12), the MIS at V_SOLL in 0.01 rpm (§8.2.6, §8.2.13)."""
-    page.goto(f"{studio}/registers?m={m}")
+    open_raw_registers(page, f"{studio}/registers?m={m}")
     message = page.get_by_test_id("message")
     write(page, "V_SOLL", v_soll)
     expect(message).to_have_text(f"V_SOLL = {v_soll}")
@@ -203,7 +213,7 @@ def test_write_from_registers_and_see_it_run_on_the_scope(page, studio, artefact
 
 
 def test_save_and_load_a_setup(page, studio, tmp_path):
-    page.goto(studio + "/registers?m=0")
+    open_raw_registers(page, studio + "/registers?m=0")
     field = page.get_by_label("A_SOLL", exact=True)
     expect(field).not_to_have_value("")
     saved = field.input_value()
@@ -235,7 +245,7 @@ def test_tuning_page_to_the_written_result(page, studio, artefacts):
     page.get_by_test_id("tuning-write").click()
     page.get_by_test_id("tuning-confirm").click()
     expect(page.get_by_test_id("message")).to_contain_text("wrote")
-    page.goto(studio + "/registers?m=2")
+    open_raw_registers(page, studio + "/registers?m=2")
     expect(page.get_by_label("KVOUT", exact=True)).to_have_value(new)
 
 
@@ -264,7 +274,7 @@ def test_a_twin_shows_what_another_client_writes(page, artefacts):
     proc = None
     try:
         proc, url = start_studio("--connect", f"socket://127.0.0.1:{tcp}", "--scan", "18-20")
-        page.goto(url + "/registers?m=0")
+        open_raw_registers(page, url + "/registers?m=0")
         field = page.get_by_label("V_SOLL", exact=True)
         with MacTalkClient(f"socket://127.0.0.1:{tcp}", 19) as other:
             other.write("V_SOLL", 321)
@@ -297,7 +307,7 @@ def test_a_line_of_mis_and_mac800_twins(page, artefacts):
     try:
         proc, url = start_studio("--connect", line, "--motor", "MIS232", "--address", "7",
                                  "--motor", "MAC800", "--address", "8")
-        page.goto(url + "/registers?m=0")
+        open_raw_registers(page, url + "/registers?m=0")
         message = page.get_by_test_id("message")
         write(page, "V_SOLL", "4321")
         expect(message).to_have_text("V_SOLL = 4321")
@@ -307,7 +317,7 @@ def test_a_line_of_mis_and_mac800_twins(page, artefacts):
         expect(message).to_contain_text("did not accept", timeout=10000)
         expect(page.get_by_label("MODE_REG", exact=True)).to_have_value("0")
         shoot(page, artefacts, "registers_line32")
-        page.goto(url + "/registers?m=1")
+        open_raw_registers(page, url + "/registers?m=1")
         field = page.get_by_label("V_SOLL", exact=True)
         with MacTalk32Client(line, 8, table=family_of_motor("MAC800").table) as other:
             other.write("V_SOLL", 277)
@@ -316,3 +326,35 @@ def test_a_line_of_mis_and_mac800_twins(page, artefacts):
         if proc is not None:
             _stop(proc)
         twin.stop()
+
+
+def test_engineering_units_modes_bits_and_a_jog(page, studio, artefacts):
+    """The Registers view in engineering units (MAC050–141 manual 3.2.5: V_SOLL in rpm), the
+    mode register as the modes, CNTRL_BITS as named boxes, a value written on leaving its field;
+    the motion panel jogs while its button is held and stops on release."""
+    page.goto(studio + "/registers?m=0")
+    message = page.get_by_test_id("message")
+    expect(page.get_by_test_id("unit-V_SOLL")).to_have_text("rpm")
+    expect(page.get_by_test_id("unit-P_IST")).to_have_text("turns")
+    expect(page.get_by_test_id("reg-MODE_REG")).to_contain_text(re.compile(r"[A-Z]+_MODE \(\d+\)"))
+    expect(page.get_by_test_id("bit-CNTRL_BITS-6")).to_contain_text("RECORD")
+    write(page, "V_SOLL", "100")
+    expect(message).to_have_text(re.compile(r"V_SOLL = (99|100)\.\d+ rpm"))
+    field = page.get_by_label("A_SOLL", exact=True)
+    field.fill("20000")
+    page.get_by_label("KVOUT", exact=True).click()  # leave the field without Enter
+    expect(message).to_have_text(re.compile(r"A_SOLL = (19|20)\d{3}(\.\d+)? rpm/s"))
+    shoot(page, artefacts, "registers_engineering")
+    page.goto(studio + "/?m=0")
+    state = page.get_by_test_id("motion-state-0")
+    expect(state).to_contain_text("position")
+    page.get_by_test_id("speed-0").fill("200")
+    page.get_by_test_id("jog-plus-0").hover()
+    page.mouse.down()
+    expect(state).to_contain_text("jogging")
+    shoot(page, artefacts, "motion_jog")
+    page.mouse.up()
+    expect(message).to_contain_text("jog stopped")
+    expect(state).not_to_contain_text("jogging")
+    page.get_by_test_id("passive-0").click()
+    expect(state).to_contain_text("INIT_MODE")

@@ -12,6 +12,7 @@ from ..capture import run_test
 from ..scope import Scope, channel_choices, series_csv, series_png
 from ..session import Session
 from .common import Page, frame, tid
+from .motion_panel import motion_panel
 
 #: seconds between two scope updates
 PERIOD_S = 0.03
@@ -147,5 +148,7 @@ def _buffer_block(page: Page) -> None:
 def build(session: Session, m: int) -> None:
     """The Scope page of motor ``m``."""
     page = frame(session, "/scope", m)
+    with ui.expansion("motion", value=True).classes("w-full").props("dense"):
+        motion_panel(page, page.motor, m)
     _scope_block(page)
     _buffer_block(page)
