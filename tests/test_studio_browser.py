@@ -358,3 +358,34 @@ def test_engineering_units_modes_bits_and_a_jog(page, studio, artefacts):
     expect(state).not_to_contain_text("jogging")
     page.get_by_test_id("passive-0").click()
     expect(state).to_contain_text("INIT_MODE")
+
+
+def test_parameters_against_flash_undo_and_write_to_flash(page, studio, artefacts):
+    """KVOUT changed on the Registers view shows against the flash, an undo takes it back, a
+    redo makes it again, and the flash write lists it before it writes (MAC050–141 manual
+    5.1)."""
+    page.goto(studio + "/registers?m=0")
+    message = page.get_by_test_id("message")
+    field = page.get_by_label("KVOUT", exact=True)
+    expect(field).not_to_have_value("")
+    old = field.input_value()
+    new = f"{float(old) + 0.5:g}"
+    changed_row = page.locator('[data-changed="1"]', has=field)
+    write(page, "KVOUT", new)
+    expect(message).to_have_text(f"KVOUT = {new}")
+    expect(changed_row).to_have_count(1)
+    expect(page.get_by_test_id("changes")).to_contain_text("changed against flash")
+    shoot(page, artefacts, "parameters_changed")
+    page.get_by_test_id("undo").click()
+    expect(message).to_contain_text("undone: KVOUT")
+    expect(field).to_have_value(old)
+    expect(changed_row).to_have_count(0)
+    page.get_by_test_id("redo").click()
+    expect(field).to_have_value(new)
+    page.get_by_test_id("write-flash").click()
+    expect(page.get_by_test_id("flash-dialog")).to_contain_text(f"KVOUT: {old} → {new}")
+    shoot(page, artefacts, "parameters_flash_dialog")
+    page.get_by_test_id("flash-confirm").click()
+    expect(message).to_contain_text("saved in flash")
+    expect(changed_row).to_have_count(0, timeout=10000)
+    expect(field).to_have_value(new)

@@ -211,3 +211,31 @@ def test_home_modes_are_the_familys(motor):
     assert modes and all("home" in n.lower() or "zero" in n.lower() for n in modes.values())
     with pytest.raises(MotionError, match="none of"):
         mo.home(1)
+
+
+# ---------------------------------------------------------------------- parameters
+@pytest.mark.parametrize("motor_type", ["MAC140", "MIS232"])
+def test_compare_with_flash_undo_redo_and_write_to_flash(motor_type):
+    from jvl_gym.studio import parameters as P
+
+    m = SimMotor(motor_type, 3)
+    name = "KVOUT" if motor_type == "MAC140" else "A_SOLL"
+    assert P.flash_changes(m) == []  # a new motor is its defaults, which its flash holds
+    before = m.read(name)
+    hist = P.History(m)
+    assert hist.edit(name, str(before * 2)).ok
+    diffs = P.flash_changes(m)
+    assert [(d.name, d.base, d.now) for d in diffs] == [(name, before, before * 2)]
+    assert "→" in P.describe(diffs[0])
+    assert hist.undo().ok and m.read(name) == before and P.flash_changes(m) == []
+    assert not hist.undo().ok  # nothing left to undo
+    assert hist.redo().ok and m.read(name) == before * 2
+    assert not hist.redo().ok
+    refused = hist.edit(name, "1e12")
+    assert not refused.ok and len(hist.done) == 1  # a refused edit is no step of the history
+    assert P.write_flash(m).ok
+    assert P.flash_changes(m) == [] and m.read(name) == before * 2
+    # against the defaults, the change shows; against a setup file of the motor, nothing does
+    assert [d.name for d in P.changed(P.compare(m, P.default_values(m)))] == [name]
+    from jvl_gym.studio.registers import setup_text
+    assert P.changed(P.compare(m, P.file_values(m, setup_text(m)))) == []

@@ -11,11 +11,13 @@ from typing import Any
 
 from nicegui import background_tasks, events, run, ui
 
+from ...registers import from_raw
 from ..line import LineDown
 from ..registers import edit, grouped_registers, load_setup_file, setup_text
 from ..session import Session
 from ..units_view import Kind, UnitsView
 from .common import Page, frame, tid
+from .parameters_panel import ParametersPanel
 
 #: seconds between two refreshes of the values
 REFRESH_S = 0.5
@@ -24,19 +26,26 @@ REFRESH_S = 0.5
 class _Rows:
     """The rows of the page: one widget set per register, rebuilt when the units change."""
 
-    def __init__(self, page: Page, view: UnitsView) -> None:
+    def __init__(self, page: Page, view: UnitsView, panel: ParametersPanel | None = None
+                 ) -> None:
         self.page = page
+        self.panel = panel
         self.motor = page.motor
         self.view = view
         #: number → (register, kind, widget(s), raw label, row)
         self.fields: dict[int, tuple[Any, str, Any, Any, Any]] = {}
         self.editing: set[int] = set()
-        self.shown: dict[int, str] = {}  # number → the text last shown in an input
+        self.typed: set[int] = set()  # numbers of the inputs typed in and not yet written
         self.updating = False  # True while the refresh sets widgets (not the user)
         self.busy = False
+        self.marked: set[int] = set()  # numbers of the rows highlighted as changed
 
     async def write(self, reg: Any, text: str) -> None:
-        result = await run.io_bound(edit, self.motor, reg.name, text, self.view)
+        self.typed.discard(reg.number)  # committed: leaving the field does not send it again
+        if self.panel is not None:  # recorded for undo
+            result = await run.io_bound(self.panel.history.edit, reg.name, text, self.view)
+        else:
+            result = await run.io_bound(edit, self.motor, reg.name, text, self.view)
         self.page.say(result.message, result.ok)
         self.editing.discard(reg.number)
         await self.refresh()
@@ -44,6 +53,8 @@ class _Rows:
     async def write_raw(self, reg: Any, raw: int) -> None:
         """Write a mode or a bit pattern (a raw value) to ``reg``."""
         def go() -> Any:
+            if self.panel is not None:
+                return self.panel.history.edit(reg.name, str(int(raw)))
             return edit(self.motor, reg.name, str(int(raw)))
         result = await run.io_bound(go)
         self.page.say(result.message, result.ok)
@@ -108,6 +119,9 @@ class _Rows:
             f'dense outlined {tid("reg-" + reg.name)}' + ("" if writable else " readonly")
         ).classes("w-44 shrink-0")
         field.on("focus", lambda _e, n=reg.number: self.editing.add(n))
+        # typed by the user (the refresh setting the value is not): what leaving sends
+        field.on_value_change(lambda _e, n=reg.number: None if self.updating
+                              else self.typed.add(n))
 
         async def on_enter(e: events.GenericEventArguments, reg: Any = reg) -> None:
             await self.write(reg, str(e.args))
@@ -115,7 +129,7 @@ class _Rows:
         async def on_blur(e: events.GenericEventArguments, reg: Any = reg) -> None:
             # a value typed without Enter is written on leaving the field, never dropped
             text = str(e.args)
-            if writable and text.strip() and text != self.shown.get(reg.number):
+            if writable and text.strip() and reg.number in self.typed:
                 await self.write(reg, text)
             else:
                 self.editing.discard(reg.number)
@@ -140,9 +154,21 @@ class _Rows:
             return
         finally:
             self.busy = False
+        values = {reg.name: float(from_raw(reg, raws[n]))
+                  for n, (reg, *_rest) in self.fields.items()}
+        differ = self.panel.changed_names(values) if self.panel is not None else set()
+        if self.panel is not None:
+            self.panel.show_count(differ)
         self.updating = True
         try:
-            for n, (reg, kind, widget, raw_label, _row) in self.fields.items():
+            for n, (reg, kind, widget, raw_label, row) in self.fields.items():
+                # a setting that differs from the baseline is highlighted (sent on a change)
+                mark = reg.name in differ
+                if mark != (n in self.marked):
+                    row.classes(add="bg-amber-100" if mark else "",
+                                remove="" if mark else "bg-amber-100")
+                    row.props(f'data-changed="{int(mark)}"')
+                    (self.marked.add if mark else self.marked.discard)(n)
                 raw_label.set_text(f"raw {raws[n]}")
                 if kind == Kind.MODE:
                     if raws[n] not in widget.options:
@@ -155,9 +181,7 @@ class _Rows:
                         if widget[bit].value != on:
                             widget[bit].set_value(on)
                 elif n not in self.editing:
-                    text = self.view.text(reg, raws[n])
-                    self.shown[n] = text
-                    widget.value = text
+                    widget.value = self.view.text(reg, raws[n])
         finally:
             self.updating = False
 
@@ -168,6 +192,9 @@ def build(session: Session, m: int) -> None:
     motor = page.motor
     view = UnitsView(motor.motor_type)
     state: dict[str, Any] = {"rows": _Rows(page, view), "filter": ""}
+
+    async def refresh_rows() -> None:
+        await state["rows"].refresh()
 
     with ui.row().classes("items-center gap-4"):
         ui.label(f"{motor.label} · {motor.facts.title}").classes("text-lg")
@@ -196,11 +223,12 @@ def build(session: Session, m: int) -> None:
                   ).props('accept=".yaml,.yml" flat dense hide-upload-btn '
                           + tid("load-setup")).classes("w-40 max-h-12 overflow-hidden")
 
+    panel = ParametersPanel(page, view, refresh_rows)
     groups = grouped_registers(motor)
 
     @ui.refreshable
     def table() -> None:
-        rows = _Rows(page, view)
+        rows = _Rows(page, view, panel)
         state["rows"] = rows
         for title, regs in groups:
             with ui.expansion(f"{title} ({len(regs)})", value=True).classes("w-full").props(
