@@ -389,3 +389,35 @@ def test_parameters_against_flash_undo_and_write_to_flash(page, studio, artefact
     expect(message).to_contain_text("saved in flash")
     expect(changed_row).to_have_count(0, timeout=10000)
     expect(field).to_have_value(new)
+
+
+def test_a_triggered_step_response_read_with_cursors(page, studio, artefacts):
+    """The scope armed in single mode on V_IST rising through 10 counts/sample (76 rpm,
+    MAC050–141 manual 3.2.12), a run at 300 rpm from the motion panel beside it: the scope
+    stops on the edge with time 0 at the crossing, and the cursors read Δt, Δvalue and
+    1/Δt."""
+    page.goto(studio + "/scope?m=0")
+    page.get_by_test_id("passive-0").click()
+    expect(page.get_by_test_id("motion-state-0")).to_contain_text("INIT_MODE")
+    page.get_by_test_id("trigger").click()
+    page.get_by_test_id("trigger-channel").click()
+    page.get_by_role("option", name="V_IST [counts/sample]").click()
+    page.get_by_test_id("trigger-level").fill("10")
+    page.get_by_test_id("time-base").fill("2")
+    page.get_by_test_id("trigger-mode").get_by_text("single").click()
+    expect(page.get_by_test_id("scope-count")).to_contain_text("waiting for the trigger")
+    page.get_by_test_id("speed-0").fill("300")
+    page.get_by_test_id("run-0").click()
+    expect(page.get_by_test_id("message")).to_contain_text("single: triggered on V_IST",
+                                                           timeout=20000)
+    expect(page.get_by_test_id("live")).to_have_attribute("aria-checked", "false")
+    page.get_by_test_id("cursors").click()
+    page.get_by_test_id("cursor-channel").click()
+    page.get_by_role("option", name="V_IST [counts/sample]").last.click()
+    page.get_by_test_id("t1").fill("0")
+    page.get_by_test_id("t2").fill("0.1")
+    readout = page.get_by_test_id("cursor-readout")
+    expect(readout).to_contain_text("Δt = 0.1 s")
+    expect(readout).to_contain_text("1/Δt = 10 Hz")
+    shoot(page, artefacts, "scope_triggered_step")
+    page.get_by_test_id("passive-0").click()

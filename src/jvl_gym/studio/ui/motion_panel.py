@@ -31,39 +31,49 @@ def motion_panel(page: Page, motor: StudioMotor, k: int = 0) -> Motion | None:
         await run.io_bound(fn, *args)
         page.say(f"{motor.label}: {what}")
 
+    def act(describe: Any, fn: Any, *values: Any) -> Any:
+        """A button's handler: ``fn`` with the values read when it is clicked (``values``:
+        callables), its errors on the message line."""
+        async def handler() -> None:
+            args = [v() for v in values]
+            await do(describe(*args), fn, *args)
+        return page.guard(handler)
+
+    def rpm() -> float:
+        return float(speed.value or 0)
+
+    def position() -> float:
+        return float(target.value or 0)
+
     with ui.column().classes("gap-1 w-full").props(tid(f"motion-{k}")):
         with ui.row().classes("items-center gap-2"):
-            ui.button("enable", on_click=page.guard(
-                lambda: do("enabled (holding its position)", motion.enable))).props(
+            ui.button("enable", on_click=act(lambda: "enabled (holding its position)",
+                                             motion.enable)).props(
                 f'dense color=positive {tid(f"enable-{k}")}')
-            ui.button("passive", on_click=page.guard(
-                lambda: do("passive", motion.passive))).props(
+            ui.button("passive", on_click=act(lambda: "passive", motion.passive)).props(
                 f'dense outline {tid(f"passive-{k}")}')
             speed = ui.number("speed [rpm]", value=100, format="%.6g").props(
                 f'dense outlined {tid(f"speed-{k}")}').classes("w-32")
             jog_minus = ui.button("◀ jog").props(f'dense {tid(f"jog-minus-{k}")}')
             jog_plus = ui.button("jog ▶").props(f'dense {tid(f"jog-plus-{k}")}')
-            ui.button("run", on_click=page.guard(
-                lambda: do(f"running at {speed.value:g} rpm", motion.run,
-                           float(speed.value or 0)))).props(f'dense {tid(f"run-{k}")}')
+            ui.button("run", on_click=act(lambda v: f"running at {v:g} rpm", motion.run, rpm)
+                      ).props(f'dense {tid(f"run-{k}")}')
         with ui.row().classes("items-center gap-2"):
             target = ui.number(f"position [{unit}]", value=0, format="%.6g").props(
                 f'dense outlined {tid(f"target-{k}")}').classes("w-36")
-            ui.button("move to", on_click=page.guard(
-                lambda: do(f"moving to {target.value:g} {unit}", motion.move_absolute,
-                           float(target.value or 0), float(speed.value or 0)))).props(
+            ui.button("move to", on_click=act(lambda p, v: f"moving to {p:g} {unit}",
+                                              motion.move_absolute, position, rpm)).props(
                 f'dense {tid(f"move-to-{k}")}')
-            ui.button("move by", on_click=page.guard(
-                lambda: do(f"moving by {target.value:g} {unit}", motion.move_relative,
-                           float(target.value or 0), float(speed.value or 0)))).props(
+            ui.button("move by", on_click=act(lambda p, v: f"moving by {p:g} {unit}",
+                                              motion.move_relative, position, rpm)).props(
                 f'dense {tid(f"move-by-{k}")}')
             homes = motion.home_modes()
             home = ui.select({v: f"{n} ({v})" for v, n in homes.items()},
                              value=next(iter(homes), None), label="home mode").props(
                 f'dense outlined {tid(f"home-mode-{k}")}').classes("w-52")
-            ui.button("home", on_click=page.guard(
-                lambda: do(f"homing ({motor.facts.mode_name(home.value)})", motion.home,
-                           home.value))).props(f'dense {tid(f"home-{k}")}')
+            ui.button("home", on_click=act(
+                lambda h: f"homing ({motor.facts.mode_name(h)})", motion.home,
+                lambda: home.value)).props(f'dense {tid(f"home-{k}")}')
         state = ui.label("").classes("text-sm").props(tid(f"motion-state-{k}"))
         limits = ui.label("").classes("text-xs text-gray-600").props(tid(f"limits-{k}"))
 
