@@ -131,3 +131,50 @@ def test_a_sample_buffer_capture_triggers_within_one_sample_of_the_crossing(runn
     assert t[i] - t[i - 1] == pytest.approx(dt[0]) and np.allclose(dt, dt[0])
     with pytest.raises(capture.CaptureError, match="does not cross"):
         capture.triggered(rec, Trigger(key, 1e9))
+
+
+# ---------------------------------------------------------------------- compile notice
+def test_the_compile_notice_names_the_top_level_jvl_gym_compile():
+    from types import SimpleNamespace
+
+    from jvl_gym.studio.compiling import CompileWatch
+
+    def event(module: str, name: str) -> SimpleNamespace:
+        fn = SimpleNamespace(__module__=module, __qualname__=name)
+        return SimpleNamespace(data={"dispatcher": SimpleNamespace(py_func=fn)})
+
+    w = CompileWatch()
+    assert w.current() is None
+    w.on_start(event("jvl_gym.families.mac800.inner", "inner_samples"))
+    w.on_start(event("jvl_gym.physics.trig", "sin"))  # nested: part of the first
+    assert "compiling jvl_gym.families.mac800.inner.inner_samples" in w.current()
+    w.on_end(None)
+    assert "inner_samples" in w.current()
+    w.on_end(None)
+    assert w.current() is None
+    w.on_start(event("numpy.other", "f"))  # not ours: no notice
+    assert w.current() is None
+
+
+def test_the_compile_watch_sees_a_real_numba_compile():
+    import numba
+
+    from jvl_gym.studio import compiling
+
+    watch = compiling.install()
+    assert compiling.install() is watch  # once per process
+    seen = []
+    g = numba.njit(cache=False)(lambda x: x * 2)
+    g.py_func.__module__ = "jvl_gym.studio.test_probe"
+    start = watch.on_start
+
+    def spy(ev):
+        start(ev)
+        seen.append(watch.current())
+    watch.on_start = spy
+    try:
+        assert g(2) == 4
+    finally:
+        del watch.on_start
+    assert any(s and "compiling jvl_gym.studio.test_probe" in s for s in seen)
+    assert compiling.current() is None

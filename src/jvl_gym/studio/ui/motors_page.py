@@ -10,6 +10,7 @@ from ..line import LineDown
 from ..session import Session
 from .common import Page, tid
 from .motion_panel import motion_panel
+from .notice import compile_notice
 
 
 def _card(page: Page, motor, k: int) -> None:
@@ -63,5 +64,6 @@ def build(session: Session, m: int) -> None:
     from .common import frame
 
     page = frame(session, "/", m)
+    compile_notice(page)
     for k, motor in enumerate(session.motors):
         _card(page, motor, k)

@@ -17,6 +17,7 @@ from ..registers import edit, grouped_registers, load_setup_file, setup_text
 from ..session import Session
 from ..units_view import Kind, UnitsView
 from .common import Page, frame, tid
+from .notice import compile_notice
 from .parameters_panel import ParametersPanel
 
 #: seconds between two refreshes of the values
@@ -189,6 +190,7 @@ class _Rows:
 def build(session: Session, m: int) -> None:
     """The Registers page of motor ``m``."""
     page = frame(session, "/registers", m)
+    compile_notice(page)
     motor = page.motor
     view = UnitsView(motor.motor_type)
     state: dict[str, Any] = {"rows": _Rows(page, view), "filter": ""}

@@ -19,6 +19,7 @@ from ..session import Session
 from ..trigger import TIME, Recorder, Trigger, TriggerMode, cursors, scaled, window
 from .common import Page, frame, tid
 from .motion_panel import motion_panel
+from .notice import compile_notice
 
 #: seconds between two scope updates
 PERIOD_S = 0.03
@@ -335,6 +336,7 @@ def _buffer_block(page: Page) -> None:
 def build(session: Session, m: int) -> None:
     """The Scope page of motor ``m``."""
     page = frame(session, "/scope", m)
+    compile_notice(page)
     with ui.expansion("motion", value=True).classes("w-full").props("dense"):
         motion_panel(page, page.motor, m)
     _scope_block(page)
