@@ -182,7 +182,9 @@ class _Rows:
                         if widget[bit].value != on:
                             widget[bit].set_value(on)
                 elif n not in self.editing:
-                    widget.value = self.view.text(reg, raws[n])
+                    text = self.view.text(reg, raws[n])
+                    if widget.value != text:  # unchanged values are not sent again
+                        widget.value = text
         finally:
             self.updating = False
 
