@@ -63,7 +63,7 @@ class _Rows:
 
     def build(self, regs: list[Any]) -> None:
         for reg in regs:
-            with ui.row().classes("items-center gap-2 w-full no-wrap") as row:
+            with ui.row().classes("items-center gap-2 w-full no-wrap py-0 my-0") as row:
                 ui.label(str(reg.number)).classes("w-8 shrink-0 text-right text-gray-500")
                 kind = Kind.VALUE if self.view.raw else self.view.kind(reg)
                 widget = self._widget(reg, kind)
@@ -89,7 +89,8 @@ class _Rows:
                 if not self.updating and e.value is not None:
                     background_tasks.create(page.guard(set_mode)(int(e.value), reg))
             sel = ui.select(self.view.modes(reg), label=reg.name, on_change=on_mode).props(
-                f'dense outlined {tid("reg-" + reg.name)}').classes("w-56 shrink-0")
+                f'dense outlined hide-bottom-space {tid("reg-" + reg.name)}'
+            ).classes("w-56 shrink-0")
             if not writable:
                 sel.disable()
             return sel
@@ -117,7 +118,8 @@ class _Rows:
             box.props(tid("reg-" + reg.name))
             return boxes
         field = ui.input(label=reg.name).props(
-            f'dense outlined {tid("reg-" + reg.name)}' + ("" if writable else " readonly")
+            f'dense outlined hide-bottom-space {tid("reg-" + reg.name)}'
+            + ("" if writable else " readonly")
         ).classes("w-44 shrink-0")
         field.on("focus", lambda _e, n=reg.number: self.editing.add(n))
         # typed by the user (the refresh setting the value is not): what leaving sends
@@ -236,7 +238,7 @@ def build(session: Session, m: int) -> None:
         state["rows"] = rows
         for title, regs in groups:
             with ui.expansion(f"{title} ({len(regs)})", value=True).classes("w-full").props(
-                    "dense"):
+                    "dense"), ui.column().classes("gap-1 w-full"):  # rows close together
                 rows.build(regs)
         rows.show(state["filter"])
 
