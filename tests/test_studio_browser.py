@@ -70,6 +70,16 @@ def studio() -> Iterator[Studio]:
     studio.stop()
 
 
+def open_raw_registers(page, url: str) -> None:
+    """The Registers view at ``url`` with the raw toggle on: values in the registers' own
+    units, every register a field."""
+    page.goto(url)
+    expect(page.get_by_test_id("raw-V_SOLL")).to_contain_text("raw")  # the page is live
+    page.get_by_test_id("units-raw").click()
+    expect(page.get_by_test_id("unit-V_SOLL")).to_have_text(
+        re.compile(r"count|0\.01 RPM"))  # the register's own unit
+
+
 def write(page, name: str, value: str) -> None:
     expect(page.get_by_test_id(f"raw-{name}")).to_contain_text("raw")  # the page is live
     field = page.get_by_label(name, exact=True)
@@ -113,7 +123,7 @@ def test_write_from_registers_and_see_it_run_on_the_scope(page, studio, artefact
                                                           v_ist, name):
     """V_SOLL then MODE_REG = 1 (velocity mode): the MAC050–141 runs at V_SOLL/16
     counts/sample (manual 3.2.5, 3.2.12), the MIS at V_SOLL in 0.01 rpm (§8.2.6, §8.2.13)."""
-    page.goto(studio.with_token(f"/registers?m={m}"))
+    open_raw_registers(page, studio.with_token(f"/registers?m={m}"))
     message = page.get_by_test_id("message")
     write(page, "V_SOLL", v_soll)
     expect(message).to_have_text(f"V_SOLL = {v_soll}")
@@ -134,7 +144,7 @@ def test_write_from_registers_and_see_it_run_on_the_scope(page, studio, artefact
 
 
 def test_save_and_load_a_setup(page, studio, tmp_path):
-    page.goto(studio.with_token("/registers?m=0"))
+    open_raw_registers(page, studio.with_token("/registers?m=0"))
     field = page.get_by_label("A_SOLL", exact=True)
     expect(field).not_to_have_value("")
     saved = field.input_value()
@@ -188,7 +198,7 @@ def test_tuning_page_to_the_written_result(page, studio, artefacts):
     page.get_by_test_id("tuning-write").click()
     page.get_by_test_id("tuning-confirm").click()
     expect(page.get_by_test_id("message")).to_contain_text("wrote")
-    page.goto(studio.with_token("/registers?m=2"))
+    open_raw_registers(page, studio.with_token("/registers?m=2"))
     expect(page.get_by_label("KVOUT", exact=True)).to_have_value(new)
 
 
@@ -207,7 +217,7 @@ def test_a_twin_shows_what_another_client_writes(page, artefacts):
     studio = None
     try:
         studio = Studio("--connect", f"socket://127.0.0.1:{tcp}", "--scan", "18-20")
-        page.goto(studio.with_token("/registers?m=0"))
+        open_raw_registers(page, studio.with_token("/registers?m=0"))
         field = page.get_by_label("V_SOLL", exact=True)
         with MacTalkClient(f"socket://127.0.0.1:{tcp}", 19) as other:
             other.write("V_SOLL", 321)
@@ -240,7 +250,7 @@ def test_a_line_of_mis_and_mac800_twins(page, artefacts):
     try:
         studio = Studio("--connect", line, "--motor", "MIS232", "--address", "7",
                                  "--motor", "MAC800", "--address", "8")
-        page.goto(studio.with_token("/registers?m=0"))
+        open_raw_registers(page, studio.with_token("/registers?m=0"))
         message = page.get_by_test_id("message")
         write(page, "V_SOLL", "4321")
         expect(message).to_have_text("V_SOLL = 4321")
@@ -250,7 +260,7 @@ def test_a_line_of_mis_and_mac800_twins(page, artefacts):
         expect(message).to_contain_text("did not accept", timeout=10000)
         expect(page.get_by_label("MODE_REG", exact=True)).to_have_value("0")
         shoot(page, artefacts, "registers_line32")
-        page.goto(studio.with_token("/registers?m=1"))
+        open_raw_registers(page, studio.with_token("/registers?m=1"))
         field = page.get_by_label("V_SOLL", exact=True)
         with MacTalk32Client(line, 8, table=family_of_motor("MAC800").table) as other:
             other.write("V_SOLL", 277)
@@ -390,3 +400,98 @@ def test_escape_stops_the_motors_on_a_line(page):
         if studio is not None:
             studio.stop()
         twin.stop()
+
+
+def test_engineering_units_modes_bits_and_a_jog(page, studio, artefacts):
+    """The Registers view in engineering units (MAC050–141 manual 3.2.5: V_SOLL in rpm), the
+    mode register as the modes, CNTRL_BITS as named boxes, a value written on leaving its field;
+    the motion panel jogs while its button is held and stops on release."""
+    page.goto(studio.with_token("/registers?m=0"))
+    message = page.get_by_test_id("message")
+    expect(page.get_by_test_id("unit-V_SOLL")).to_have_text("rpm")
+    expect(page.get_by_test_id("unit-P_IST")).to_have_text("turns")
+    expect(page.get_by_test_id("reg-MODE_REG")).to_contain_text(re.compile(r"[A-Z]+_MODE \(\d+\)"))
+    expect(page.get_by_test_id("bit-CNTRL_BITS-6")).to_contain_text("RECORD")
+    write(page, "V_SOLL", "100")
+    expect(message).to_have_text(re.compile(r"V_SOLL = (99|100)\.\d+ rpm"))
+    field = page.get_by_label("A_SOLL", exact=True)
+    field.fill("20000")
+    page.get_by_label("KVOUT", exact=True).click()  # leave the field without Enter
+    expect(message).to_have_text(re.compile(r"A_SOLL = (19|20)\d{3}(\.\d+)? rpm/s"))
+    shoot(page, artefacts, "registers_engineering")
+    page.goto(studio.with_token("/?m=0"))
+    state = page.get_by_test_id("motion-state-0")
+    expect(state).to_contain_text("position")
+    page.get_by_test_id("speed-0").fill("200")
+    page.get_by_test_id("jog-plus-0").hover()
+    page.mouse.down()
+    expect(state).to_contain_text("jogging")
+    shoot(page, artefacts, "motion_jog")
+    page.mouse.up()
+    expect(message).to_contain_text("jog stopped")
+    expect(state).not_to_contain_text("jogging")
+    page.get_by_test_id("passive-0").click()
+    expect(state).to_contain_text("INIT_MODE")
+
+
+def test_parameters_against_flash_undo_and_write_to_flash(page, studio, artefacts):
+    """KVOUT changed on the Registers view shows against the flash, an undo takes it back, a
+    redo makes it again, and the flash write lists it before it writes (MAC050–141 manual
+    5.1)."""
+    page.goto(studio.with_token("/registers?m=0"))
+    message = page.get_by_test_id("message")
+    field = page.get_by_label("KVOUT", exact=True)
+    expect(field).not_to_have_value("")
+    old = field.input_value()
+    new = f"{float(old) + 0.5:g}"
+    changed_row = page.locator('[data-changed="1"]', has=field)
+    write(page, "KVOUT", new)
+    expect(message).to_have_text(f"KVOUT = {new}")
+    expect(changed_row).to_have_count(1)
+    expect(page.get_by_test_id("changes")).to_contain_text("changed against flash")
+    shoot(page, artefacts, "parameters_changed")
+    page.get_by_test_id("undo").click()
+    expect(message).to_contain_text("undone: KVOUT")
+    expect(field).to_have_value(old)
+    expect(changed_row).to_have_count(0)
+    page.get_by_test_id("redo").click()
+    expect(field).to_have_value(new)
+    page.get_by_test_id("write-flash").click()
+    expect(page.get_by_test_id("flash-dialog")).to_contain_text(f"KVOUT: {old} → {new}")
+    shoot(page, artefacts, "parameters_flash_dialog")
+    page.get_by_test_id("flash-confirm").click()
+    expect(message).to_contain_text("saved in flash")
+    expect(changed_row).to_have_count(0, timeout=10000)
+    expect(field).to_have_value(new)
+
+
+def test_a_triggered_step_response_read_with_cursors(page, studio, artefacts):
+    """The scope armed in single mode on V_IST rising through 10 counts/sample (76 rpm,
+    MAC050–141 manual 3.2.12), a run at 300 rpm from the motion panel beside it: the scope
+    stops on the edge with time 0 at the crossing, and the cursors read Δt, Δvalue and
+    1/Δt."""
+    page.goto(studio.with_token("/scope?m=0"))
+    page.get_by_test_id("passive-0").click()
+    expect(page.get_by_test_id("motion-state-0")).to_contain_text("INIT_MODE")
+    page.get_by_test_id("trigger").click()
+    page.get_by_test_id("trigger-channel").click()
+    page.get_by_role("option", name="V_IST [counts/sample]").click()
+    page.get_by_test_id("trigger-level").fill("10")
+    page.get_by_test_id("time-base").fill("2")
+    page.get_by_test_id("trigger-mode").get_by_text("single").click()
+    expect(page.get_by_test_id("scope-count")).to_contain_text("waiting for the trigger")
+    page.get_by_test_id("speed-0").fill("300")
+    page.get_by_test_id("run-0").click()
+    expect(page.get_by_test_id("message")).to_contain_text("single: triggered on V_IST",
+                                                           timeout=20000)
+    expect(page.get_by_test_id("live")).to_have_attribute("aria-checked", "false")
+    page.get_by_test_id("cursors").click()
+    page.get_by_test_id("cursor-channel").click()
+    page.get_by_role("option", name="V_IST [counts/sample]").last.click()
+    page.get_by_test_id("t1").fill("0")
+    page.get_by_test_id("t2").fill("0.1")
+    readout = page.get_by_test_id("cursor-readout")
+    expect(readout).to_contain_text("Δt = 0.1 s")
+    expect(readout).to_contain_text("1/Δt = 10 Hz")
+    shoot(page, artefacts, "scope_triggered_step")
+    page.get_by_test_id("passive-0").click()

@@ -10,8 +10,13 @@ The logic lives in modules of one concept each and runs without a browser:
   of a studio and the real-time clock of the simulated ones;
 * :mod:`.bits` — bit registers in words, :mod:`.groups` — the register groups of the manuals,
   :mod:`.registers` — the register view's rows, edits and setup files;
-* :mod:`.scope` — scope channels and buffers, CSV and PNG export; :mod:`.capture` — the
-  motor's sample buffer and the TESTU/TESTA records;
+* :mod:`.units_view` — register values in engineering units, mode registers as mode names,
+  bit registers as named bits; :mod:`.motion` — the motion panel (enable, jog, run, moves,
+  home) on each family's modes; :mod:`.parameters` — the settings against flash, defaults or
+  a setup file, undo and redo, the flash write;
+* :mod:`.scope` — scope channels and buffers, CSV and PNG export; :mod:`.trigger` — trigger,
+  time base, cursors, trace scaling and recording; :mod:`.capture` — the motor's sample buffer
+  and the TESTU/TESTA records; :mod:`.compiling` — the compile notice;
 * :mod:`.tuning_run` — the ``jvl-tune`` pipeline as steps with progress, through the tuning
   toolkit the studio is given (:mod:`.toolkit`);
 * :mod:`.episodes` — one episode of a registered env with its policy or baseline;

@@ -24,8 +24,9 @@ import numpy as np
 from ..registers import RegisterTable
 from .bits import bit_of
 from .motor import StudioMotor
+from .trigger import TIME, Trigger, crossing_time, find_trigger
 
-__all__ = ["CaptureError", "control_register", "capture", "run_test"]
+__all__ = ["CaptureError", "control_register", "capture", "run_test", "triggered"]
 
 
 class CaptureError(RuntimeError):
@@ -146,4 +147,29 @@ def run_test(motor: StudioMotor, test: str, setup: Mapping[str, float],
     n = min(len(v) for v in buf.values()) if buf else 0
     out = {"sample": np.arange(n, dtype=float)}
     out.update({_label(motor, k): np.asarray(v, dtype=float)[:n] for k, v in buf.items()})
+    return out
+
+
+def triggered(series: Mapping[str, np.ndarray], trigger: Trigger) -> dict[str, np.ndarray]:
+    """A captured ``series`` (:func:`capture`) on the live scope's trigger: the whole record
+    with time 0 at the first crossing of the trigger's level on its edge
+    (:func:`.trigger.find_trigger`, :func:`.trigger.crossing_time`), the samples at the
+    firmware's exact interval.
+
+    Raises
+    ------
+    CaptureError
+        The record does not cross the level on the edge, or has no such channel.
+    """
+    if trigger.channel not in series:
+        raise CaptureError(f"no channel {trigger.channel!r} in the record to trigger on")
+    t = np.asarray(series[TIME], dtype=float)
+    v = np.asarray(series[trigger.channel], dtype=float)
+    k = find_trigger(v, trigger)
+    if k is None:
+        raise CaptureError(f"{trigger.channel} does not cross {trigger.level:g} "
+                           f"({trigger.edge.value}) in the record")
+    t0 = crossing_time(t, v, k, trigger.level)
+    out = {key: np.asarray(a, dtype=float) for key, a in series.items()}
+    out[TIME] = t - t0
     return out

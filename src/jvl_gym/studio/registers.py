@@ -23,6 +23,7 @@ from ..registers.table import FORMAT_SCALE
 from .groups import family_ranges, register_groups, visible
 from .line import LineDown
 from .motor import StudioMotor
+from .units_view import UnitsView
 
 __all__ = ["Row", "rows", "value_text", "range_text", "parse_value", "edit", "EditResult",
            "setup_of", "setup_text", "save_setup", "read_setup", "load_setup_file",
@@ -98,20 +99,29 @@ class EditResult:
     message: str
 
 
-def edit(motor: StudioMotor, name: str, text: str) -> EditResult:
+def edit(motor: StudioMotor, name: str, text: str, view: UnitsView | None = None
+         ) -> EditResult:
     """Write ``text`` to register ``name`` of ``motor`` through the motor's validated write.
 
-    A value that is no number, out of range, read-only or not allowed in the present mode is
-    refused with the reason of the motor's API and changes nothing.
+    ``text`` is in the unit ``view`` shows the register in (its engineering unit; default:
+    the register's own unit). A value that is no number, out of range, read-only or not
+    allowed in the present mode is refused with the reason of the motor's API and changes
+    nothing.
     """
     try:
         reg = motor.register(name)
         value = parse_value(text)
+        if view is not None:
+            value = view.to_register(reg, value)
         motor.write(reg.number, value)
     except (RegisterError, ValueError, LineDown) as exc:
         text = str(exc)
         return EditResult(False, text if text.startswith(name) else f"{name}: {text}")
-    return EditResult(True, f"{reg.name} = {value_text(reg, motor.read_raw(reg.number))}")
+    raw = motor.read_raw(reg.number)
+    if view is not None and view.unit_of(reg) is not None:
+        return EditResult(True, f"{reg.name} = {view.text(reg, raw)} {view.unit_text(reg)}"
+                          .rstrip())
+    return EditResult(True, f"{reg.name} = {value_text(reg, raw)}")
 
 
 def setup_of(motor: StudioMotor) -> dict[str, object]:

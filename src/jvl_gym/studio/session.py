@@ -196,6 +196,9 @@ class Session:
         """Start the real-time clock of the simulated motors (a daemon thread)."""
         if self._thread is not None or not any(m.simulated for m in self.motors):
             return
+        from .compiling import install
+
+        install()  # the pages say what numba compiles while the first steps wait for it
         self._stop.clear()
         self._thread = threading.Thread(target=self._run, args=(period,), daemon=True,
                                         name="studio-clock")

@@ -103,3 +103,18 @@ REGISTER_GROUPS: tuple[tuple[str, int, int], ...] = (
     ("Current-loops", 124, 152),
     ("Diverse", 153, 163),
 )
+
+# --- the motion panel of jvl-gym studio: the modes and registers behind it (manual 4.4) ------
+#: motion → MODE_REG value(s): passive (INIT_MODE, 4.4.1), velocity (V_MODE, 4.4.2: jog and
+#: run at V_SOLL, its sign the direction), position (P_MODE, 4.4.3: a move to P_SOLL at most
+#: V_SOLL) and the home modes (HOME1–3_MODE, 4.4.13–4.4.15)
+MOTION_MODES: dict[str, tuple[int, ...]] = {
+    "passive": (INIT_MODE,), "velocity": (V_MODE,), "position": (P_MODE,),
+    "home": (HOME1_MODE, HOME2_MODE, HOME3_MODE)}
+#: the registers of a motion: speed (signed in velocity mode, the maximum of a move), target
+#: position, actual position and velocity, software position limits (3.2.28, 3.2.30)
+MOTION_REGISTERS: dict[str, str] = {
+    "speed": "V_SOLL", "target": "P_SOLL", "position": "P_IST", "velocity": "V_IST",
+    "min_position": "MIN_P_IST", "max_position": "MAX_P_IST"}
+#: registers whose value is a MODE_REG value (3.2.37 STARTMODE), shown as the list of modes
+MODE_VALUED_REGISTERS: tuple[str, ...] = ("STARTMODE",)

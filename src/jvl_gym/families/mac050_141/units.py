@@ -51,3 +51,26 @@ def v_ist_to_rpm(v_ist: float) -> float:
 def a_soll_to_rpm_per_s(a_soll: float) -> float:
     """Acceleration in 1/16 count/sample² → rpm/s (manual 3.2.6: 160 ↔ 39731 rpm/s)."""
     return a_soll / 16.0 * OUTER_HZ**2 / COUNTS_PER_REV * 60.0
+
+
+# --- engineering units the studio shows (the conversions above, as factors) -------------------
+#: register unit (or register name, which wins) → the engineering units it is shown in, first
+#: the default: (unit, factor per register unit) or (unit, factor, motor-data field the factor
+#: is multiplied by); a register in no entry is shown in its own unit. Positions in turns or
+#: degrees (COUNTS_PER_REV), velocities in rpm (3.2.5, 3.2.12), accelerations in rpm/s (3.2.6),
+#: torques in N·m of the motor's peak torque (3.2.7: 1023 = peak), currents in A of the motor's
+#: A per ADC count (3.2.139), U_SUPPLY in V (3.2.151), ANINP in V (3.2.122: ±1023 ↔ ±10 V),
+#: electrical angles in electrical degrees (3.2.143).
+ENGINEERING_UNITS: dict[str, tuple[tuple, ...]] = {
+    "counts": (("turns", 1.0 / COUNTS_PER_REV), ("°", 360.0 / COUNTS_PER_REV)),
+    "1/16 count": (("turns", 1.0 / 16.0 / COUNTS_PER_REV), ("°", 360.0 / 16.0 / COUNTS_PER_REV)),
+    "1/16 count/sample": (("rpm", v_soll_to_rpm(1.0)),),
+    "counts/sample": (("rpm", v_ist_to_rpm(1.0)),),
+    "1/16 count/sample^2": (("rpm/s", a_soll_to_rpm_per_s(1.0)),),
+    "1/1023 peak torque": (("N·m", 1.0 / VF_FULL, "peak_torque"),),
+    "ADC counts": (("A", 1.0, "amps_per_count"),),
+    "ANINP": (("V", ANINP_VOLTS / ANINP_FULL),),
+    "ANINP_OFFSET": (("V", ANINP_VOLTS / ANINP_FULL),),
+    "53.7 mV": (("V", U_SUPPLY_VOLTS_PER_UNIT),),
+    "1/2048 electrical turn": (("°el", 360.0 / ELDEG_PER_TURN),),
+}

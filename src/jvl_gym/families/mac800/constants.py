@@ -130,3 +130,17 @@ OVERVOLTAGE = OVERVOLTAGE_VOLTS
 #: MacTalk of the 32-bit register families: data always 4 bytes, LSB first
 #: (protocol.mactalk.dialect)
 MACTALK_DIALECT = "mactalk32"
+
+# --- the motion panel of jvl-gym studio: the modes and registers behind it (overview §1.2) ---
+#: motion → MODE_REG value(s): passive, velocity (jog and run at V_SOLL, its sign the
+#: direction), position (a move to P_SOLL at most V_SOLL) and the zero searches (register 2)
+MOTION_MODES: dict[str, tuple[int, ...]] = {
+    "passive": (PASSIVE_MODE,), "velocity": (VELOCITY_MODE,), "position": (POSITION_MODE,),
+    "home": (TORQUE_ZERO_SEARCH, SENSOR1_ZERO_SEARCH, SENSOR2_ZERO_SEARCH)}
+#: the registers of a motion: speed, target position, actual position and velocity, software
+#: position limits (registers 5, 3, 10, 11: V_IST16, in V_SOLL's finer unit, 28, 30)
+MOTION_REGISTERS: dict[str, str] = {
+    "speed": "V_SOLL", "target": "P_SOLL", "position": "P_IST", "velocity": "V_IST16",
+    "min_position": "MIN_P_IST", "max_position": "MAX_P_IST"}
+#: registers whose value is a MODE_REG value (register 37 START_MODE), shown as the modes
+MODE_VALUED_REGISTERS: tuple[str, ...] = ("START_MODE",)

@@ -118,4 +118,24 @@ def t_soll_to_percent_of_nominal(t_soll: float) -> float:
 #: the register unit conversions of ``units.csv`` by name, each also a name of this module
 CONVERSIONS = linear_units(Path(__file__).with_name("units.csv"), globals())
 globals().update(CONVERSIONS)
-__all__ += list(CONVERSIONS)
+__all__ += list(CONVERSIONS) + ["ENGINEERING_UNITS"]
+
+
+# --- engineering units the studio shows (the conversions above, as factors) -------------------
+#: register unit (or register name, which wins) → the engineering units it is shown in, first
+#: the default: (unit, factor per register unit) or (unit, factor, motor-data field the factor
+#: is multiplied by); a register in no entry is shown in its own unit. Positions in turns or
+#: degrees (COUNTS_PER_REV), velocities in rpm (registers 5, 12), accelerations in rpm/s
+#: (register 6), torques in N·m of the motor's peak torque (register 7: 1023 = peak), the
+#: measurements in V and °C (registers 21, 29, 170, 198).
+ENGINEERING_UNITS: dict[str, tuple[tuple, ...]] = {
+    "counts": (("turns", 1.0 / COUNTS_PER_REV), ("°", 360.0 / COUNTS_PER_REV)),
+    "1/16 count/sample": (("rpm", CONVERSIONS["v_soll_to_rpm"](1.0)),),
+    "counts/sample": (("rpm", CONVERSIONS["v_ist_to_rpm"](1.0)),),
+    "1/16 count/sample^2": (("rpm/s", a_soll_to_rpm_per_s(1.0)),),
+    "1/1023 peak torque": (("N·m", 1.0 / T_SOLL_FULL, "peak_torque"),),
+    "0.0048828 V": (("V", CONVERSIONS["aninp_to_volts"](1.0)),),
+    "0.013428 V": (("V", CONVERSIONS["u_24v_to_volts"](1.0)),),
+    "0.12207 degC": (("°C", CONVERSIONS["degc_to_celsius"](1.0)),),
+    "0.888798 V": (("V", CONVERSIONS["u_bus_to_volts"](1.0)),),
+}

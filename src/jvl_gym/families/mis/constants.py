@@ -158,5 +158,20 @@ MACTALK_DIALECT = "mactalk32"
 #: (identity 1FFFFFh, manufacturer 7FFh) rather than the shorter values of the list.
 J1939_NAME = 0x80FE_FF01_FFFF_FFFF
 
+# --- the motion panel of jvl-gym studio: the modes and registers behind it (§6, §8.2.3) ------
+#: motion → MODE_REG value(s): passive, velocity (jog and run at V_SOLL, its sign the
+#: direction), position (a move to P_SOLL at most V_SOLL) and the zero searches (§8.2.3)
+MOTION_MODES: dict[str, tuple[int, ...]] = {
+    "passive": (PASSIVE,), "velocity": (VELOCITY,), "position": (POSITION,),
+    "home": (ZERO_SEARCH_1, ZERO_SEARCH_2)}
+#: the registers of a motion: speed, target position, actual position and velocity, software
+#: position limits (§8.2.5, §8.2.4, §8.2.10, §8.2.11, §8.2.26, §8.2.27)
+MOTION_REGISTERS: dict[str, str] = {
+    "speed": "V_SOLL", "target": "P_SOLL", "position": "P_IST", "velocity": "V_IST",
+    "min_position": "MIN_P_IST", "max_position": "MAX_P_IST"}
+#: registers whose value is a MODE_REG value (§8.2.33 STARTMODE), shown as the modes
+MODE_VALUED_REGISTERS: tuple[str, ...] = ("STARTMODE",)
+
 __all__ = [name for name in dir() if name.isupper() and not name.startswith("_")] + [
     "COUNTS_PER_FULL_STEP", "ACCEL_MAX_RPM_PER_S", "CUR_SCALE_FULL"]
+

@@ -169,4 +169,25 @@ def cur_scale_dec_step_s(rpm: float, cur_scale_dec: float, cur_scale_factor: flo
 #: the register unit conversions of ``units.csv`` by name, each also a name of this module
 CONVERSIONS = linear_units(Path(__file__).with_name("units.csv"), globals())
 globals().update(CONVERSIONS)
-__all__ += list(CONVERSIONS)
+__all__ += list(CONVERSIONS) + ["ENGINEERING_UNITS"]
+
+
+# --- engineering units the studio shows (the conversions above, as factors) -------------------
+#: register unit (or register name, which wins) → the engineering units it is shown in, first
+#: the default: (unit, factor per register unit) or (unit, factor, motor-data field the factor
+#: is multiplied by); a register in no entry is shown in its own unit. Positions in turns or
+#: degrees (§8.2.4: 409600 counts a revolution), velocities in rpm (§8.2.5), accelerations in
+#: rpm/s (§8.2.6), currents in A RMS (§8.2.7, the C driver's 5.87 mA), voltages in V
+#: (§8.2.45, §8.2.47), temperatures in °C (§8.2.25, §8.2.129).
+ENGINEERING_UNITS: dict[str, tuple[tuple, ...]] = {
+    "counts (1/409600 rev)": (("turns", CONVERSIONS["counts_to_rev"](1.0)),
+                              ("°", 360.0 * CONVERSIONS["counts_to_rev"](1.0))),
+    "0.01 RPM": (("rpm", CONVERSIONS["v_soll_to_rpm"](1.0)),),
+    "RPM/s": (("rpm/s", 1.0),),
+    "5.87 mA": (("A", CONVERSIONS["run_current_to_amps"](1.0)),),
+    "1.221 mV": (("V", CONVERSIONS["analogue_to_volts"](1.0)),),
+    "26.525 mV": (("V", CONVERSIONS["busvol_to_volts"](1.0)),),
+    "8.764 mV": (("V", CONVERSIONS["cvi_to_volts"](1.0)),),
+    "2.27 degC": (("°C", CONVERSIONS["temp_to_celsius"](1.0)),),
+    "0.001 degC": (("°C", TEMP_HIGHRES_CELSIUS_PER_UNIT),),
+}

@@ -9,6 +9,8 @@ from ..bits import status_registers, words
 from ..line import LineDown
 from ..session import Session
 from .common import Page, tid
+from .motion_panel import motion_panel
+from .notice import compile_notice
 
 
 def _card(page: Page, motor, k: int) -> None:
@@ -45,6 +47,9 @@ def _card(page: Page, motor, k: int) -> None:
                 set_bits = words(r, raws[r.number])
                 bit_labels[r.name].set_text(f"{r.name}: {', '.join(set_bits) or 'none set'}")
 
+        with ui.expansion("motion", value=k == page.session.motors.index(page.motor)
+                          ).classes("w-full").props("dense " + tid(f"motion-open-{k}")):
+            motion_panel(page, motor, k)
         with ui.row():
             for name, action in motor.actions().items():
                 async def do(action=action, name=name) -> None:
@@ -59,5 +64,6 @@ def build(session: Session, m: int) -> None:
     from .common import frame
 
     page = frame(session, "/", m)
+    compile_notice(page)
     for k, motor in enumerate(session.motors):
         _card(page, motor, k)

@@ -1,22 +1,31 @@
 """The Scope view: registers and physical signals of the motor as channels on one live chart
-(one y axis per unit), the motor's sample buffer and TESTU/TESTA records, CSV and PNG export."""
+with one shared axis (each trace with its scale and offset), a trigger on any channel (level,
+edge, pre-trigger share; auto, normal, single), a time base, cursors reading Δt, Δvalue and
+1/Δt, zoom and pan, recording to a file; the motor's sample buffer and TESTU/TESTA records on
+the same trigger and cursors; CSV and PNG export (the logic: :mod:`jvl_gym.studio.scope`,
+:mod:`jvl_gym.studio.trigger`, :mod:`jvl_gym.studio.capture`)."""
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 from nicegui import run, ui
 
 from ..capture import capture as capture_buffer
-from ..capture import run_test
+from ..capture import run_test, triggered
 from ..scope import Scope, channel_choices, series_csv, series_png
 from ..session import Session
+from ..trigger import TIME, Recorder, Trigger, TriggerMode, cursors, scaled, window
 from .common import Page, frame, tid
+from .motion_panel import motion_panel
+from .notice import compile_notice
 
 #: seconds between two scope updates
 PERIOD_S = 0.03
-#: points a live chart keeps per channel (10 s at the page's rate)
-DEPTH = 250
+#: points the live scope keeps per channel (about 10 s at the page's rate; the time base
+#: shows up to that)
+DEPTH = 300
 #: the channels a scope opens with: those of these names the motor has
 DEFAULT_CHANNELS = ("V_SOLL", "V_IST", "shaft speed", "MODE_REG")
 
@@ -26,60 +35,206 @@ def _short(v: float) -> float:
     return float(f"{float(v):.7g}")
 
 
-def chart_options(series: dict[str, Any], title: str = "") -> dict[str, Any]:
+def chart_options(series: dict[str, Any], title: str = "",
+                  traces: dict[str, tuple[float, float]] | None = None,
+                  marks: tuple[float, float] | None = None,
+                  level: float | None = None) -> dict[str, Any]:
     """ECharts options of ``series`` (first entry: x axis; labels ``"name [unit]"``): one
-    line per channel, one y axis per unit."""
+    line per channel on one shared y axis, each trace times its scale plus its offset
+    (``traces``: label → (scale, offset)); ``marks``: the two cursors' times; ``level``: the
+    trigger level (of the trigger's trace as drawn). The legend sits below the chart, zoom and
+    pan with the mouse wheel and the slider."""
     keys = list(series)
-    x = series[keys[0]]
-    units: list[str] = []
+    x = series[keys[0]] if keys else []
+    traces = traces or {}
     lines = []
-    for k in keys[1:]:
-        unit = k.rpartition("[")[2].rstrip("]") if k.endswith("]") else ""
-        if unit not in units:
-            units.append(unit)
-        lines.append({"name": k, "type": "line", "showSymbol": False, "animation": False,
-                      "sampling": "lttb",
-                      "yAxisIndex": units.index(unit),
-                      "data": [[_short(a), _short(b)] for a, b in zip(x, series[k])]})
-    axes = [{"type": "value", "name": u or "value", "scale": True, "nameLocation": "end",
-             "nameGap": 8 + 14 * (i // 2), "position": "left" if i % 2 == 0 else "right",
-             "offset": 70 * (i // 2), "axisLine": {"show": True}}
-            for i, u in enumerate(units or [""])]
-    side = 70 * ((len(axes) + 1) // 2)
-    return {"title": {"text": title, "textStyle": {"fontSize": 12}},
+    for n, k in enumerate(keys[1:]):
+        scale, offset = traces.get(k, (1.0, 0.0))
+        name = k if (scale, offset) == (1.0, 0.0) else f"{k} ×{scale:g}{offset:+g}"
+        line: dict[str, Any] = {
+            "name": name, "type": "line", "showSymbol": False, "animation": False,
+            "sampling": "lttb",
+            "data": [[_short(a), _short(b)] for a, b in zip(x, scaled(series[k], scale,
+                                                                       offset))]}
+        if n == 0 and (marks or level is not None):
+            data: list[Any] = [{"xAxis": _short(t)} for t in (marks or ())]
+            if level is not None:
+                data.append({"yAxis": _short(level)})
+            line["markLine"] = {"silent": True, "symbol": "none", "animation": False,
+                                "lineStyle": {"type": "dashed"}, "data": data}
+        lines.append(line)
+    return {"title": {"text": title, "textStyle": {"fontSize": 12}, "left": "center",
+                      "top": 0},
             "animation": False, "tooltip": {"trigger": "axis", "animation": False},
-            "legend": {"top": 20}, "grid": {"top": 80, "left": side, "right": side},
-            "xAxis": {"type": "value", "name": keys[0], "scale": True}, "yAxis": axes,
-            "series": lines}
+            "legend": {"type": "scroll", "bottom": 0},
+            "grid": {"top": 30, "left": 60, "right": 30, "bottom": 80},
+            "dataZoom": [{"type": "inside"}, {"type": "slider", "bottom": 28, "height": 18}],
+            "xAxis": {"type": "value", "name": keys[0] if keys else "", "scale": True,
+                      "nameLocation": "middle", "nameGap": 22},
+            "yAxis": {"type": "value", "scale": True}, "series": lines}
+
+
+class _Tools:
+    """The trigger, time base, cursors and trace settings of one chart."""
+
+    def __init__(self, page: Page, prefix: str, labels: list[str], live: bool) -> None:
+        self.prefix = prefix
+        self.traces: dict[str, tuple[float, float]] = {}
+        with ui.row().classes("items-center gap-2"):
+            self.on = ui.switch("trigger", value=False).props(tid(f"{prefix}trigger"))
+            self.channel = ui.select(labels, value=labels[0] if labels else None,
+                                     label="on").props(
+                "dense outlined " + tid(f"{prefix}trigger-channel")).classes("w-56")
+            self.level = ui.number("level", value=0.0, format="%.6g").props(
+                "dense outlined " + tid(f"{prefix}trigger-level")).classes("w-28")
+            self.edge = ui.toggle(["rising", "falling"], value="rising").props(
+                "dense " + tid(f"{prefix}trigger-edge"))
+            self.pre = ui.number("pre-trigger %", value=20, min=0, max=100).props(
+                "dense outlined " + tid(f"{prefix}trigger-pre")).classes("w-28")
+            if live:
+                self.mode = ui.toggle([m.value for m in TriggerMode], value="auto").props(
+                    "dense " + tid(f"{prefix}trigger-mode"))
+                self.span = ui.number("time base [s]", value=5.0, min=0.05).props(
+                    "dense outlined " + tid(f"{prefix}time-base")).classes("w-28")
+        with ui.row().classes("items-center gap-2"):
+            self.cursor_on = ui.switch("cursors", value=False).props(tid(f"{prefix}cursors"))
+            self.cursor_channel = ui.select(labels, value=labels[0] if labels else None,
+                                            label="on").props(
+                "dense outlined " + tid(f"{prefix}cursor-channel")).classes("w-56")
+            self.t1 = ui.number("t1 [s]", value=0.0, format="%.6g").props(
+                "dense outlined " + tid(f"{prefix}t1")).classes("w-28")
+            self.t2 = ui.number("t2 [s]", value=0.1, format="%.6g").props(
+                "dense outlined " + tid(f"{prefix}t2")).classes("w-28")
+            self.readout = ui.label("").classes("text-sm font-mono").props(
+                tid(f"{prefix}cursor-readout"))
+        self.trace_row = ui.row().classes("items-center gap-2")
+        self.set_labels(labels)
+
+    def set_labels(self, labels: list[str]) -> None:
+        """The traces the tools offer (after a change of channels)."""
+        for sel in (self.channel, self.cursor_channel):
+            sel.set_options(labels, value=sel.value if sel.value in labels else
+                            (labels[0] if labels else None))
+        self.traces = {k: self.traces.get(k, (1.0, 0.0)) for k in labels}
+        self.trace_row.clear()
+        with self.trace_row:
+            ui.label("scale · offset:").classes("text-xs")
+            scales: dict[str, tuple[Any, Any]] = {}
+            for k in labels:
+                def set_trace(_e: Any = None, k: str = k) -> None:
+                    s, o = scales[k]
+                    self.traces[k] = (float(s.value or 1.0), float(o.value or 0.0))
+                s = ui.number(f"{k} ×", value=self.traces[k][0], format="%.6g",
+                              on_change=set_trace).props("dense").classes("w-36")
+                o = ui.number("+", value=self.traces[k][1], format="%.6g",
+                              on_change=set_trace).props("dense").classes("w-20")
+                scales[k] = (s, o)
+
+    def trigger(self) -> Trigger | None:
+        """The trigger set, None while it is off."""
+        if not self.on.value or not self.channel.value:
+            return None
+        return Trigger(str(self.channel.value), float(self.level.value or 0.0),
+                       str(self.edge.value), float(self.pre.value or 0.0) / 100.0)
+
+    def show_cursors(self, series: dict[str, Any]) -> tuple[float, float] | None:
+        """Read the cursors on ``series``; their times to mark, None while they are off."""
+        if not self.cursor_on.value or not self.cursor_channel.value \
+                or self.cursor_channel.value not in series or len(series[TIME]) == 0:
+            self.readout.set_text("")
+            return None
+        t1, t2 = float(self.t1.value or 0.0), float(self.t2.value or 0.0)
+        label = str(self.cursor_channel.value)
+        unit = label.rpartition("[")[2].rstrip("]") if label.endswith("]") else ""
+        c = cursors(series, label, t1, t2)
+        self.readout.set_text(f"v1 = {c.v1:.6g}, v2 = {c.v2:.6g}; " + c.text(unit))
+        return t1, t2
+
+    def level_drawn(self) -> float | None:
+        """The trigger level as drawn (on its trace's scale), None without a trigger."""
+        trig = self.trigger()
+        if trig is None:
+            return None
+        scale, offset = self.traces.get(trig.channel, (1.0, 0.0))
+        return trig.level * scale + offset
 
 
 def _scope_block(page: Page) -> None:
     motor = page.motor
     choices = channel_choices(motor)
     start = [c for c in DEFAULT_CHANNELS if c in choices]
-    state: dict[str, Any] = {"scope": Scope(motor, start, DEPTH), "live": True, "updates": 0}
+    state: dict[str, Any] = {"scope": Scope(motor, start, DEPTH), "live": True, "updates": 0,
+                             "recorder": None, "shown": None, "drawn": None}
+
+    def labels() -> list[str]:
+        sc = state["scope"]
+        return [sc.label(c) for c in sc.channels]
+
     with ui.row().classes("items-center gap-4 w-full"):
         pick = ui.select(choices, value=start, multiple=True, label="channels",
-                         with_input=True).props("use-chips " + tid("channels")
+                         with_input=True).props("use-chips dense " + tid("channels")
                                                 ).classes("min-w-[28rem]")
-
-        def set_channels() -> None:
-            state["scope"] = Scope(motor, list(pick.value), DEPTH)
-        pick.on_value_change(page.guard(set_channels))
         live = ui.switch("live", value=True).props(tid("live"))
-        live.on_value_change(lambda e: state.update(live=e.value))
+
+        def set_live(e: Any) -> None:
+            state.update(live=e.value)
+            if e.value:  # (re)armed: a fresh record, so a single trigger waits for a new edge
+                state["scope"].clear()
+                state["shown"] = None
+        live.on_value_change(set_live)
 
         def export_csv() -> None:
-            ui.download.content(state["scope"].csv(), "scope.csv")
-        ui.button("CSV", on_click=page.guard(export_csv)).props(tid("scope-csv"))
+            ui.download.content(series_csv(state["shown"] or state["scope"].series()),
+                                "scope.csv")
+        ui.button("CSV", on_click=page.guard(export_csv)).props("dense " + tid("scope-csv"))
 
         def export_png() -> None:
-            ui.download.content(state["scope"].png(), "scope.png", "image/png")
-        ui.button("PNG", on_click=page.guard(export_png)).props(tid("scope-png"))
-        counter = ui.label("").props(tid("scope-count"))
-    chart = ui.echart(chart_options(state["scope"].series(), motor.label)).classes(
+            ui.download.content(series_png(state["shown"] or state["scope"].series(),
+                                           motor.label), "scope.png", "image/png")
+        ui.button("PNG", on_click=page.guard(export_png)).props("dense " + tid("scope-png"))
+        counter = ui.label("").classes("text-sm").props(tid("scope-count"))
+    tools = _Tools(page, "", labels(), live=True)
+
+    def set_channels() -> None:
+        state["scope"] = Scope(motor, list(pick.value), DEPTH)
+        state["shown"] = None
+        tools.set_labels(labels())
+    pick.on_value_change(page.guard(set_channels))
+
+    with ui.row().classes("items-center gap-2"):
+        path = ui.input("record to", value=f"{motor.motor_type}_{motor.address}_record.csv"
+                        ).props("dense outlined " + tid("record-path")).classes("w-72")
+        rec_button = ui.button("record").props("dense color=negative " + tid("record"))
+        rec_state = ui.label("").classes("text-sm").props(tid("record-state"))
+
+        def toggle_record() -> None:
+            rec = state["recorder"]
+            if rec is None:
+                state["recorder"] = Recorder(Path(path.value), labels())
+                rec_button.set_text("stop recording")
+                page.say(f"recording {', '.join(labels())} to {path.value}")
+            else:
+                state["recorder"] = None
+                done = rec.stop()
+                rec_button.set_text("record")
+                page.say(f"recorded {rec.rows} rows, {rec.elapsed:.1f} s, "
+                         f"{done.stat().st_size} bytes to {done}")
+        rec_button.on_click(page.guard(toggle_record))
+
+    chart = ui.echart(chart_options(state["scope"].series())).classes(
         "w-full h-96").props(tid("scope-chart"))
     last = ui.label("").classes("text-sm").props(tid("scope-last"))
+
+    def draw() -> None:
+        shown = state["shown"]
+        if shown is None:
+            return
+        marks = tools.show_cursors(shown)
+        chart.options.clear()
+        chart.options.update(chart_options(shown, "", tools.traces, marks, tools.level_drawn()))
+        chart.update()
+    for w in (tools.cursor_on, tools.t1, tools.t2, tools.cursor_channel):
+        w.on_value_change(page.guard(draw))  # the cursors move on a stopped scope too
 
     async def tick() -> None:
         if not state["live"] or state.get("busy") or motor.paused:
@@ -91,10 +246,27 @@ def _scope_block(page: Page) -> None:
         finally:
             state["busy"] = False
         state["updates"] += 1
-        chart.options.clear()
-        chart.options.update(chart_options(sc.series(), motor.label))
-        chart.update()
-        counter.set_text(f"update {state['updates']}: {len(sc.t)} points, t = {sc.t[-1]:.2f} s")
+        rec = state["recorder"]
+        if rec is not None:
+            rec.add(sc.t[-1], [b[-1] for b in sc.values])
+            rec_state.set_text(f"● {rec.elapsed:.1f} s, {rec.size / 1024:.1f} kB")
+        series = sc.series()
+        trig = tools.trigger()
+        mode = TriggerMode(tools.mode.value)
+        span = float(tools.span.value or 5.0)
+        shown = window(series, trig, span, mode)
+        if shown is not None:
+            if trig is not None and mode is TriggerMode.SINGLE:
+                live.set_value(False)  # one triggered window, then the scope stops
+                page.say(f"single: triggered on {trig.channel}")
+            state["shown"] = shown
+        waiting = trig is not None and window(series, trig, span, TriggerMode.NORMAL) is None
+        # a window is drawn when there is a new one: waiting for a trigger sends nothing
+        if shown is not None or state["drawn"] is not state["shown"]:
+            state["drawn"] = state["shown"]
+            draw()
+        counter.set_text(f"update {state['updates']}: {len(sc.t)} points, t = {sc.t[-1]:.2f} s"
+                         + (" · waiting for the trigger" if waiting else ""))
         last.set_text("; ".join(f"{sc.label(c)} = {b[-1]:.6g}"
                                 for c, b in zip(sc.channels, sc.values)))
     page.every(PERIOD_S, page.guard(tick))
@@ -104,48 +276,68 @@ def _buffer_block(page: Page) -> None:
     motor = page.motor
     regs = [c for c in channel_choices(motor) if c not in motor.physical()]
     ui.label("Sample buffer").classes("text-lg mt-4")
+    result: dict[str, Any] = {}
     with ui.row().classes("items-center gap-4"):
         pick = ui.select(regs, value=[r for r in ("V_IST", "P_IST") if r in regs],
                          multiple=True, label="registers (up to 4)", with_input=True
-                         ).props("use-chips " + tid("buffer-registers")).classes("min-w-[24rem]")
+                         ).props("use-chips dense " + tid("buffer-registers")
+                                 ).classes("min-w-[24rem]")
         samples = ui.number("samples", value=200, min=1, precision=0).props(
-            tid("buffer-samples")).classes("w-28")
-        result: dict[str, Any] = {}
+            "dense " + tid("buffer-samples")).classes("w-28")
 
         def show(series: dict[str, Any], what: str) -> None:
             result.clear()
             result.update(series)
-            chart.options.clear()
-            chart.options.update(chart_options(series, f"{motor.label}: {what}"))
-            chart.update()
+            draw()
             n = len(next(iter(series.values())))
             page.say(f"{what}: {n} samples of {', '.join(list(series)[1:])}")
 
         async def trigger() -> None:
             series = await run.io_bound(capture_buffer, motor, list(pick.value)[:4],
                                         int(samples.value or 1))
-            show(series, "sample buffer")
-        ui.button("capture", on_click=page.guard(trigger)).props(tid("capture"))
+            trig = tools.trigger()
+            if trig is not None:
+                series = triggered(series, trig)
+            tools.set_labels(list(series)[1:])
+            show(series, "sample buffer" + (f", triggered on {trig.channel}" if trig else ""))
+        ui.button("capture", on_click=page.guard(trigger)).props("dense " + tid("capture"))
         for test, setup in (("TESTU", {}), ("TESTA", {})):
             if test in motor.facts.test_modes():
                 async def do(test: str = test, setup: dict = setup) -> None:
                     series = await run.io_bound(run_test, motor, test, setup)
                     show(series, test)
-                ui.button(test, on_click=page.guard(do)).props(tid(test.lower()))
+                ui.button(test, on_click=page.guard(do)).props("dense " + tid(test.lower()))
 
         def export_csv() -> None:
             ui.download.content(series_csv(result), "buffer.csv")
 
         def export_png() -> None:
             ui.download.content(series_png(result, motor.label), "buffer.png", "image/png")
-        ui.button("CSV", on_click=page.guard(export_csv)).props(tid("buffer-csv"))
-        ui.button("PNG", on_click=page.guard(export_png)).props(tid("buffer-png"))
-    chart = ui.echart(chart_options({"t [s]": []})).classes("w-full h-72").props(
+        ui.button("CSV", on_click=page.guard(export_csv)).props("dense " + tid("buffer-csv"))
+        ui.button("PNG", on_click=page.guard(export_png)).props("dense " + tid("buffer-png"))
+    labels = [f"{r} [{motor.register(r).unit}]" if motor.register(r).unit else r
+              for r in pick.value]
+    tools = _Tools(page, "buffer-", labels, live=False)
+    chart = ui.echart(chart_options({TIME: []})).classes("w-full h-72").props(
         tid("buffer-chart"))
+
+    def draw() -> None:
+        if not result:
+            return
+        marks = tools.show_cursors(result)
+        chart.options.clear()
+        chart.options.update(chart_options(result, motor.label, tools.traces, marks,
+                                           tools.level_drawn()))
+        chart.update()
+    for w in (tools.cursor_on, tools.t1, tools.t2, tools.cursor_channel):
+        w.on_value_change(page.guard(draw))
 
 
 def build(session: Session, m: int) -> None:
     """The Scope page of motor ``m``."""
     page = frame(session, "/scope", m)
+    compile_notice(page)
+    with ui.expansion("motion", value=True).classes("w-full").props("dense"):
+        motion_panel(page, page.motor, m)
     _scope_block(page)
     _buffer_block(page)
