@@ -174,7 +174,7 @@ def test_stop_in_every_view_stops_every_motor(page, studio):
     for path in VIEWS:
         page.goto(studio.with_token(f"{path}?m=0"))
         expect(page.get_by_test_id("stop")).to_be_visible()
-    page.goto(studio.with_token("/registers?m=1"))
+    open_raw_registers(page, studio.with_token("/registers?m=1"))
     write(page, "V_SOLL", "5000")
     write(page, "MODE_REG", "1")
     expect(page.get_by_test_id("message")).to_have_text("MODE_REG = 1")
@@ -355,7 +355,7 @@ def test_without_the_token_nothing_is_served_and_with_it_a_write_works(page, on_
     live = f"ws://127.0.0.1:{studio.port}/_nicegui_ws/socket.io/?EIO=4&transport=websocket"
     assert page.evaluate(OPEN_WS, live) == "refused"
     assert twin_registers(twin) == before
-    page.goto(studio.with_token("/registers?m=0"))
+    open_raw_registers(page, studio.with_token("/registers?m=0"))
     value = str(before["V_SOLL"] + 111)
     write(page, "V_SOLL", value)
     expect(page.get_by_test_id("message")).to_have_text(f"V_SOLL = {value}")
