@@ -34,7 +34,9 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURES = """
-import json, sys
+import json, sys, time
+if CLOCK == "cpu":  # before the benchmark modules read the clock
+    time.perf_counter = time.process_time
 sys.path.insert(0, "benchmarks")
 import best_rate
 best_rate.WINDOWS = WINDOWS
@@ -49,12 +51,13 @@ print(json.dumps(out))
 """
 
 
-def figures(tree: Path, windows: int) -> dict[str, float]:
+def figures(tree: Path, windows: int, clock: str = "wall") -> dict[str, float]:
     """The figures of the source tree ``tree``, measured in a new process, each the best of
-    ``windows`` windows."""
+    ``windows`` windows of the clock ``clock`` (``"wall"`` or ``"cpu"``: see ``--clock``)."""
     env = {**os.environ, "PYTHONPATH": f"{tree / 'src'}{os.pathsep}{tree}",
            "JVL_QUIET_COMPILE": "1"}
-    code = FIGURES.replace("= WINDOWS", f"= {int(windows)}")
+    code = FIGURES.replace("= WINDOWS", f"= {int(windows)}").replace(
+        "if CLOCK ==", f"if {clock!r} ==")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True, env=env, cwd=tree)
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -130,6 +133,11 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=2, help="alternations (best of each)")
     parser.add_argument("--windows", type=int, default=20,
                         help="windows per rate (best of; more and shorter on a loaded machine)")
+    parser.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                        help="wall: rates per second of elapsed time; cpu: per CPU-second of "
+                        "the measuring process, all its threads (for a machine so busy that "
+                        "few wall windows are quiet; a threaded figure then counts the CPU "
+                        "of every thread)")
     parser.add_argument("--advance", action="store_true",
                         help="write HEAD into benchmarks/REFERENCE when every figure is at or "
                         "above the reference's (and the working files are committed)")
@@ -149,7 +157,7 @@ def main() -> None:
     best: dict[str, dict[str, float]] = {key: {} for key in trees}
     for _ in range(args.rounds):
         for key, tree in trees.items():
-            for name, value in figures(tree, args.windows).items():
+            for name, value in figures(tree, args.windows, args.clock).items():
                 best[key][name] = max(value, best[key].get(name, 0.0))
     print("\n".join(report(best, labels)))
     lost = below(best)
