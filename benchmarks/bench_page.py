@@ -107,6 +107,9 @@ def machine() -> dict[str, str]:
         "numpy": _version("numpy"),
         "NUMBA_NUM_THREADS": os.environ.get("NUMBA_NUM_THREADS", "default"),
         "commit": _commit() or "unknown",
+        # other jobs on the machine when the section was written (1, 5, 15 min): rates taken
+        # under load are lower whatever the best-of-windows rule catches
+        "load average": " ".join(f"{x:.2f}" for x in os.getloadavg()),
     }
 
 

@@ -77,8 +77,8 @@ def section(motors: dict[int, dict[int, float]], envs: dict[int, dict[int, float
     headers += [f"Positioning env-steps/s, {k} thread{'s' if k > 1 else ''}" for k in threads]
     rows = []
     for n in motors:
-        rows.append([f"{n:,}"] + [f"{motors[n][k]:,.4g}" for k in threads]
-                    + [f"{envs[n][k]:,.4g}" for k in threads])
+        rows.append([f"{n:,}"] + [f"{motors[n][k]:,.0f}" for k in threads]
+                    + [f"{envs[n][k]:,.0f}" for k in threads])
     return ("Rates against the number of motors (env copies) N and numba threads; below 32 "
             "motors every driver steps in one thread.\n\n" + table(headers, rows))
 
