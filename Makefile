@@ -45,11 +45,13 @@ bench: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_sim.py
 	$(BIN)/python benchmarks/bench_protocol.py
 	$(BIN)/python benchmarks/bench_envs.py
+	$(BIN)/python benchmarks/bench_scaling.py
 	$(BIN)/python benchmarks/bench_scale.py
 	$(BIN)/python benchmarks/bench_studio.py
 	@echo "figures written to docs/benchmarks.md"
 
-# BASELINE=<git revision>: speed of that revision beside this tree, in one run
+# this tree beside the reference (benchmarks/REFERENCE) and BASELINE=<git revision> (default
+# HEAD~1), in one run
 bench-compare: $(STAMP_RL)
 	$(BIN)/python benchmarks/bench_compare.py $(or $(BASELINE),HEAD~1)
 

@@ -39,7 +39,7 @@ def test_page_sections_are_replaced_in_place(bench, tmp_path) -> None:
     # known sections in their order, those not run yet as placeholders
     assert text.index("bench:sim begin") < text.index("bench:protocol begin") \
         < text.index("bench:envs begin")
-    assert text.count("Not measured on this checkout yet") == 2
+    assert text.count("Not measured on this checkout yet") == 3
     assert "Run 2030-01-02 03:04 UTC by `benchmarks/bench_envs.py`" in text
     assert "Test CPU 9000" in text and "numba 0.x" in text
 
@@ -48,7 +48,7 @@ def test_page_sections_are_replaced_in_place(bench, tmp_path) -> None:
     bp.update_section("extra", "extra body", page, when=WHEN, host=HOST)
     text = page.read_text()
     assert "sim body" in text and "envs body 2" in text and "envs body 1" not in text
-    assert text.count("Not measured on this checkout yet") == 1  # protocol only
+    assert text.count("Not measured on this checkout yet") == 2  # protocol, scaling
     assert text.index("bench:envs end") < text.index("bench:extra begin")
     for key in ("sim", "protocol", "envs", "extra"):
         assert text.count(f"<!-- bench:{key} begin -->") == 1
@@ -63,7 +63,7 @@ def test_no_page_when_disabled(bench, tmp_path) -> None:
 
 def test_machine_description(bench) -> None:
     host = bench("bench_page").machine()
-    assert {"CPU", "cores", "Python", "numba", "numpy", "commit"} <= set(host)
+    assert {"CPU", "cores", "Python", "numba", "numpy", "commit", "load average"} <= set(host)
     assert all(isinstance(v, str) and v for v in host.values())
 
 
@@ -95,9 +95,17 @@ def test_script_sections(bench, tmp_path) -> None:
     assert "12,000 (256 copies)" in env_text
     assert "not measured" in envs.section(None, rows[:1])
 
+    scaling = bench("bench_scaling").section(
+        {1: {1: 2.0e6, 2: 2.0e6}, 16384: {1: 3.0e7, 2: 5.5e7}},
+        {1: {1: 150000.0, 2: 150000.0}, 16384: {1: 1.5e6, 2: 2.8e6}})
+    assert "| 16,384 | 30,000,000 | 55,000,000 | 1,500,000 | 2,800,000 |" in scaling
+    assert "motor-inner-steps/s, 2 threads" in scaling
+
     bp = bench("bench_page")
     page = tmp_path / "benchmarks.md"
-    for key, body in (("sim", sim), ("protocol", protocol), ("envs", env_text)):
+    for key, body in (("sim", sim), ("protocol", protocol), ("envs", env_text),
+                      ("scaling", scaling)):
         bp.update_section(key, body, page, when=WHEN, host=HOST)
     text = page.read_text()
-    assert "Not measured" not in text and text.count("Run 2030-01-02") == 3
+    assert "Not measured" not in text and text.count("Run 2030-01-02") == 4
+    assert "## Scaling: copies and threads" in text

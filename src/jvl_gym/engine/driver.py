@@ -291,11 +291,17 @@ class TaskDriver:
         bool
             False, with nothing changed, when an action is not finite.
         """
+        return self.runner(arrays)(*arrays, *episode, task, actions, decimation)
+
+    def runner(self, arrays: tuple) -> Any:
+        """The compiled step for the motors ``arrays`` (the fields of an :class:`EngineView`):
+        threaded from :data:`PARALLEL_MIN` copies, else serial; taken with the arguments of
+        :meth:`step` spread, ``(*arrays, *episode, task, actions, decimation)``. An env keeps
+        it (its number of copies does not change) and calls it without :meth:`step`'s frame."""
         if not self._prepared:
             self.family.compiled.prepare(arrays)
             self._prepared = True
-        run = self.parallel if arrays[0].shape[0] >= PARALLEL_MIN else self.serial
-        return run(*arrays, *episode, task, actions, decimation)
+        return self.parallel if arrays[0].shape[0] >= PARALLEL_MIN else self.serial
 
     def observe(self, arrays: tuple, episode: tuple, task: tuple, idx: np.ndarray) -> None:
         """The task's observation of copies ``idx`` (M,) int64 after their reset."""

@@ -228,8 +228,11 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         ``self._truncated``, counts the step in ``self._t`` and stores the clipped action in
         ``self._prev_action``.
         """
-        return self._driver.step(self.motors.engine_view(), self._episode, self._task_args,
-                                 actions, self.decimation)
+        view = self.motors.engine_view()
+        run = self._run
+        if run is None:
+            run = self._run = self._driver.runner(view)
+        return run(*view, *self._episode, self._task_args, actions, self.decimation)
 
     def _observe_copies(self, idx: np.ndarray) -> None:
         """Fill ``self._obs[idx]`` (noisy, clipped) after a reset of copies ``idx``."""
@@ -282,11 +285,12 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
     # ------------------------------------------------------------------ pickling
     def _transient(self) -> dict[str, Any]:
         """Attributes the env keeps but does not pickle, rebuilt after unpickling: the compiled
-        step of the task on the env's family and the plain tuple of its state's arrays."""
+        step of the task on the env's family, the plain tuple of its state's arrays and the
+        driver's compiled step for the env's number of copies (taken on the first step)."""
         if not self.task.compiled:
             return {}
         args = () if self.state is None else tuple(self.state)
-        return {"_driver": self.task.driver(self.family_key), "_task_args": args}
+        return {"_driver": self.task.driver(self.family_key), "_task_args": args, "_run": None}
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()

@@ -32,6 +32,9 @@ class MotorEnv(gym.Env):
         self.observation_space = self.core.single_observation_space
         self.action_space = self.core.single_action_space
         self._ended = False
+        self._action_shape = self.action_space.shape
+        #: the action as the core takes it, (1, A) float64 (filled at each step)
+        self._action = np.zeros((1, *self._action_shape))
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None
               ) -> tuple[np.ndarray, dict[str, Any]]:
@@ -54,17 +57,21 @@ class MotorEnv(gym.Env):
             raise RuntimeError(f"{type(self).__name__}: the episode has ended (terminated or "
                                "truncated); call reset() before step()")
         a = action if type(action) is np.ndarray else np.asarray(action)
-        if a.shape != self.action_space.shape or a.dtype.kind not in "fiu":
-            self.core._refuse_action(a, self.action_space.shape)
-        obs, reward, terminated, truncated = self.core._step_batch(a[None])
+        core = self.core
+        if a.shape != self._action_shape or a.dtype.kind not in "fiu":
+            core._refuse_action(a, self._action_shape)
+        self._action[0] = a
+        core._step_actions(self._action)
+        terminated = core._terminated.item()
+        truncated = core._truncated.item()
         info: dict[str, Any] = {}
-        if terminated[0] or truncated[0]:
+        if terminated or truncated:
             self._ended = True
-            end = self.core._end_info(np.ones(1, dtype=np.bool_), terminated)
+            end = core._end_info(np.ones(1, dtype=np.bool_), core._terminated)
             info["termination_reason"] = str(end.pop("termination_reason")[0])
             info.update({name: float(values[0]) for name, values in end.items()
                          if not name.startswith("_")})
-        return obs[0].copy(), float(reward[0]), bool(terminated[0]), bool(truncated[0]), info
+        return core._obs[0].copy(), core._reward.item(), terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
         """The scope plot as an (H, W, 3) uint8 image when ``render_mode="rgb_array"``."""

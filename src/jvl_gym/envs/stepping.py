@@ -60,11 +60,19 @@ class Stepping:
             self._refuse_action(a)
         if a.dtype is not _FLOAT64:
             a = a.astype(np.float64)
-        if not self._step_copies(a):
+        self._step_actions(a)
+        return self._obs, self._reward, self._terminated, self._truncated
+
+    def _step_actions(self, actions: np.ndarray) -> None:
+        """One step of every copy, without autoreset, with checked ``actions`` ((N, A)
+        float64): raises RuntimeError before the first reset, ValueError (nothing stepped)
+        when an action is not finite; fills the (obs, reward, terminated, truncated) buffers."""
+        if not self._has_reset:
+            raise RuntimeError("call reset() before step()")
+        if not self._step_copies(actions):
             raise ValueError("action must be finite")
         if self.render_mode is not None:
             self._record_scope()
-        return self._obs, self._reward, self._terminated, self._truncated
 
     def _refuse_action(self, a: np.ndarray, shape: tuple[int, ...] | None = None) -> None:
         """Raise the ValueError of an action array ``a`` that is not real numbers of shape
