@@ -46,6 +46,7 @@ def test_phase_currents_sinusoidal_with_frequency_set_by_speed() -> None:
         assert _dominant_hz(tr["IA_SOLL"][:, 0]) == pytest.approx(expected, abs=0.5)
 
 
+@pytest.mark.statements("mac050_141:4.4.13:10")
 def test_home1_runs_at_v_home() -> None:
     """MAC50-141 manual §4.4.13: in HOME1_MODE the velocity function block is given
     V_SOLL = V_HOME."""
@@ -56,6 +57,7 @@ def test_home1_runs_at_v_home() -> None:
     assert int(m.read("V_IST")[0]) == pytest.approx(-320 / 16, abs=1)
 
 
+@pytest.mark.statements("mac050_141:3.2.1:2")
 def test_prog_version_is_a_word() -> None:
     """MAC50-141 manual §3.2.1: PROG_VERSION has data format Word (16 bit unsigned,
     0..65535, manual §3.1)."""
@@ -69,6 +71,7 @@ def test_prog_version_is_a_word() -> None:
     assert int(m.read_raw("PROG_VERSION")[0]) == 65535
 
 
+@pytest.mark.statements("mac050_141:4.4.6:1")
 def test_av_mode_speed_regulator_active() -> None:
     """MAC50-141 manual §4.4.6: in AV_MODE the speed regulator is active: the motor's speed
     follows the AV block's velocity (+/-10 V = +/-V_SOLL) and a load is met with torque."""
@@ -81,6 +84,7 @@ def test_av_mode_speed_regulator_active() -> None:
     assert int(m.read("VF_OUT")[0]) > 0
 
 
+@pytest.mark.statements("mac050_141:3.2.153:1")
 def test_motor_type_indicates_the_motor_type() -> None:
     """MAC50-141 manual §3.2.153: MOTOR_TYPE indicates the motor type (a distinct value for
     each of MAC50, MAC95, MAC140, MAC141)."""
@@ -103,6 +107,7 @@ def test_gear_position_block_velocity_from_v_ext_and_gear_factor() -> None:
     assert int(m.read("FNC_OUT")[0]) == 0
 
 
+@pytest.mark.statements("mac050_141:4.1.3:3", "mac050_141:4.1.3:4")
 def test_gear_follow_limits_velocity_to_v_soll_and_steps_to_a_soll() -> None:
     """MAC50-141 manual §4.1.3: the gear follow block follows V_EXT*GEARF1/GEARF2 but limits the
     velocity to +/-V_SOLL and each change to +/-A_SOLL."""
@@ -117,6 +122,7 @@ def test_gear_follow_limits_velocity_to_v_soll_and_steps_to_a_soll() -> None:
     assert int(m.read("FNC_OUT")[0]) == 10 * 3 * 16 // 2
 
 
+@pytest.mark.statements("mac050_141:4.1.4:1")
 def test_torque_block_ten_volts_is_t_soll() -> None:
     """MAC50-141 manual §4.1.4: the torque block converts the analogue input so that +/-10 V is
     +/-T_SOLL, written to VF_OUT."""
@@ -128,6 +134,7 @@ def test_torque_block_ten_volts_is_t_soll() -> None:
         assert int(m.read("VF_OUT")[0]) == pytest.approx(400 * volts / 10, abs=1)
 
 
+@pytest.mark.statements("mac050_141:3.2.123:1", "mac050_141:3.2.122:3")
 def test_aninp_offset_compensates_the_analogue_input() -> None:
     """MAC50-141 manual §3.2.123 (with §3.2.122): ANINP_OFFSET compensates an offset of the
     analogue input; ANINP is the measured voltage (+/-10 V = +/-1023) plus ANINP_OFFSET."""
@@ -139,6 +146,7 @@ def test_aninp_offset_compensates_the_analogue_input() -> None:
     assert int(m.read("ANINP")[0]) == pytest.approx(-512 + 100, abs=1)
 
 
+@pytest.mark.statements("mac050_141:3.2.143:1")
 def test_eldeg_ist_unit_is_360_over_2048_electrical_degrees() -> None:
     """MAC50-141 manual §3.2.143: ELDEG_IST is the rotor's electrical angle in units of
     360/2048 electrical degrees (2048 per electrical turn, two pole pairs per revolution)."""
@@ -153,6 +161,7 @@ def test_eldeg_ist_unit_is_360_over_2048_electrical_degrees() -> None:
     assert per_rev == pytest.approx(POLE_PAIRS, rel=0.01)
 
 
+@pytest.mark.statements("mac050_141:3.2.40:2")
 @pytest.mark.parametrize("v_home", [320, -320])
 def test_sign_of_v_home_is_the_search_direction(v_home: int) -> None:
     """MAC50-141 manual §3.2.40: the sign of V_HOME gives the direction of the home search."""
@@ -161,6 +170,7 @@ def test_sign_of_v_home_is_the_search_direction(v_home: int) -> None:
     assert np.sign(int(m.read("P_IST")[0])) == np.sign(v_home)
 
 
+@pytest.mark.statements("mac050_141:4.4.6:5")
 def test_av_mode_to_init_goes_via_stop_mode() -> None:
     """MAC50-141 manual §4.4.6: from AV_MODE a change to INIT_MODE always passes through
     STOP_MODE."""
@@ -175,6 +185,7 @@ def test_av_mode_to_init_goes_via_stop_mode() -> None:
     assert m.mode_name() == "INIT_MODE"
 
 
+@pytest.mark.statements("mac050_141:4.4:1")
 @pytest.mark.parametrize("mode", [1, 2, 4])
 def test_i2t_updated_in_all_modes(mode: int) -> None:
     """MAC50-141 manual §4.4 (and §3.2.16): I2T, the calculated coil load, is updated in all
@@ -186,6 +197,8 @@ def test_i2t_updated_in_all_modes(mode: int) -> None:
     assert int(m.read("I2T")[0]) > 0
 
 
+@pytest.mark.statements("mac050_141:3.2.163:1", "mac050_141:3.2.163:2", "mac050_141:3.2.36:2",
+                         "mac050_141:3.2.36:3")
 def test_man_resync_sets_positions_to_p_new() -> None:
     """MAC50-141 manual §3.2.163: MAN_RESYNC without REL_RESYNC sets P_SOLL = P_IST = P_NEW and
     P_FNC = 16*P_NEW; with REL_RESYNC P_NEW is added; the bit resets itself."""
@@ -203,6 +216,7 @@ def test_man_resync_sets_positions_to_p_new() -> None:
     assert int(m.read("P_FNC")[0]) == 16 * 12445
 
 
+@pytest.mark.statements("mac050_141:3.1:2")
 def test_fixed4_unit_is_one_4096th() -> None:
     """MAC50-141 manual §3.1: Fixed4 is 16-bit signed fixed point with unit 1/4096 (range
     -7.999756..+7.999756)."""

@@ -83,6 +83,7 @@ def _read_frame(address: int, reg: int) -> list[int]:
     return [0x50] * 3 + _protected(address, reg) + [0xAA, 0xAA]
 
 
+@pytest.mark.statements("mac800:reg7:1", "mac800:reg7:2", "mac800:reg7:3")
 def test_t_soll_range_and_1023_is_300_percent() -> None:
     """MAC800 overview §1.2 (T_SOLL, register 7): the maximum allowed torque, 0-1023, where 1023
     is 300 % of nominal (the full peak torque): VF_OUT never passes T_SOLL and VF_OUT/1023 of
@@ -104,6 +105,7 @@ def test_t_soll_range_and_1023_is_300_percent() -> None:
     assert vf_out / 1023 * 3 * rated == pytest.approx(2.0, rel=0.03)
 
 
+@pytest.mark.statements("mac800:reg49:1")
 def test_pos3_is_position_register_p4() -> None:
     """MAC800 overview §1.2 (register 55 POS3): position register P4 in encoder counts, a Long
     Int, the fourth of the position registers that feed P_SOLL."""
@@ -115,6 +117,7 @@ def test_pos3_is_position_register_p4() -> None:
     assert int(m.read("P_SOLL")[0]) == 245_000
 
 
+@pytest.mark.statements("mac800:reg40:1")
 def test_v_home_has_the_unit_of_v_soll() -> None:
     """MAC800 overview §1.2 (V_HOME, register 40): the speed used during a zero search, in the
     unit of register 5 (V_SOLL, counts/sample/16)."""
@@ -125,6 +128,7 @@ def test_v_home_has_the_unit_of_v_soll() -> None:
     assert v.mean() == pytest.approx(-100, abs=2)
 
 
+@pytest.mark.statements("mac800:reg2:11")
 def test_mode_12_is_a_torque_zero_search() -> None:
     """MAC800 overview §1.2 (MODE_REG, register 2): mode 12 is the torque zero search: the motor
     runs at V_HOME until the torque passes T_HOME, and that point is the zero (P_HOME), with
@@ -140,6 +144,7 @@ def test_mode_12_is_a_torque_zero_search() -> None:
     assert int(tr["HOME_MODE"][left, 0]) & (1 << 16)
 
 
+@pytest.mark.statements("mac800:1.3.2:1", "mac800:1.3.2:3")
 def test_write_example_writes_600_to_register_5(line: _Line) -> None:
     """MAC800 overview §1.3 (write example 1): 52h x3, address 8, register 5, length 4, data
     58h 02h 00h 00h (each byte followed by its complement), AAh AAh writes 600 to V_SOLL and the
@@ -151,12 +156,15 @@ def test_write_example_writes_600_to_register_5(line: _Line) -> None:
     assert reply[9:17:2] == (600).to_bytes(4, "little")
 
 
+@pytest.mark.statements("mac800:reg5:1")
 def test_v_soll_unit_is_counts_per_sample_over_16() -> None:
-    """MAC800 overview §1.2 (V_SOLL, register 5): the desired velocity in counts/sample/16."""
+    """MAC800 overview §1.2 (V_SOLL, register 5): the desired velocity in counts/sample/16;
+    1 RPM = 2.77056."""
     m = _motor(V_SOLL=1600, MODE_REG=1)
     m.run(1.0)
-    v = m.trace(["V_IST"], 50)["V_IST"][:, 0]
-    assert v.mean() == pytest.approx(100, abs=1)
+    tr = m.trace(["V_IST", "speed_rpm"], 50)
+    assert tr["V_IST"][:, 0].mean() == pytest.approx(100, abs=1)
+    assert tr["speed_rpm"][:, 0].mean() == pytest.approx(1600 / 2.77056, rel=0.01)
 
 
 def test_1000_rpm_is_v_soll_2771() -> None:
@@ -167,6 +175,7 @@ def test_1000_rpm_is_v_soll_2771() -> None:
     assert float(m.speed_rpm[0]) == pytest.approx(1000, rel=0.01)
 
 
+@pytest.mark.statements("mac800:1.1:2")
 def test_long_int_is_32_bit_signed() -> None:
     """MAC800 overview §1.1: Long Int is 32 bit signed, range -2.147E9..+2.147E9."""
     m = _motor()
@@ -178,6 +187,7 @@ def test_long_int_is_32_bit_signed() -> None:
         m.write("P_SOLL", 2**31)
 
 
+@pytest.mark.statements("mac800:1.3.3:1")
 def test_read_reply_data_first_byte_lsb(line: _Line) -> None:
     """MAC800 overview §1.3 (read command): the reply carries address 0, the register number,
     length 4 and the register's data, first byte the LSB, each byte followed by its
@@ -188,6 +198,7 @@ def test_read_reply_data_first_byte_lsb(line: _Line) -> None:
                            0x02, 0xFD, 0x00, 0xFF, 0x00, 0xFF, 0xAA, 0xAA])
 
 
+@pytest.mark.statements("mac800:reg12:1")
 def test_v_ist_counts_per_sample_and_rpm() -> None:
     """MAC800 overview §1.2 (V_IST, register 12): the actual velocity, a Long Int in
     counts/sample, 1 RPM = 0.17316 counts/sample."""
@@ -198,6 +209,7 @@ def test_v_ist_counts_per_sample_and_rpm() -> None:
                                                      rel=0.01)
 
 
+@pytest.mark.statements("mac800:reg35:4", "mac800:reg26:1")
 def test_fnc_err_bit_2_when_function_error_passes_fncerrmax() -> None:
     """MAC800 overview §1.2 (ERR_STAT bit 2 FNC_ERR, FNCERRMAX register 26): when the function
     error passes FNCERRMAX the motor is stopped and FNC_ERR (ERR_STAT bit 2) is set."""
@@ -216,6 +228,7 @@ def test_fnc_err_bit_2_when_function_error_passes_fncerrmax() -> None:
     assert int(m.read("ERR_STAT")[0]) & 4
 
 
+@pytest.mark.statements("mac800:reg163:1")
 def test_v_ext_is_the_pulse_input_speed() -> None:
     """MAC800 overview §1.2 (V_EXT, register 163): the speed at the external pulse input."""
     m = _motor()
@@ -224,6 +237,7 @@ def test_v_ext_is_the_pulse_input_speed() -> None:
     assert int(m.read(163)[0]) == 37
 
 
+@pytest.mark.statements("mac800:1.1:3")
 def test_kvfx3_is_fixed16() -> None:
     """MAC800 overview §1.2 (KVFX3, register 130) and §1.1: a Fixed16 coefficient, 16 bit
     signed fixed point in units of 1/65536, range -32768.0..+32767.9999847."""
@@ -236,6 +250,7 @@ def test_kvfx3_is_fixed16() -> None:
         m.write("KVFX3", 32768.0)
 
 
+@pytest.mark.statements("mac800:reg1:2")
 def test_prog_ver_is_long_with_bit_15_for_mac800(line: _Line) -> None:
     """MAC800 overview §1.2 (PROG_VER, register 1): a Long Int with the firmware version
     (bits 0-5 minor, 6-12 major) and bit 15 set on a MAC400 or MAC800."""
@@ -246,6 +261,7 @@ def test_prog_ver_is_long_with_bit_15_for_mac800(line: _Line) -> None:
     assert int(_motor().read("PROG_VERSION")[0]) == value
 
 
+@pytest.mark.statements("mac800:1.3.4:5")
 def test_read_p_ist_example_245000(line: _Line) -> None:
     """MAC800 overview §1.3 (application example "reading the actual position"): P_IST =
     245 000 counts (3BD08h) reads as 08h F7h BDh 42h 03h FCh 00h FFh."""

@@ -105,6 +105,7 @@ def test_zero_search_bit_4_ignores_the_switch_and_finds_the_index() -> None:
     assert round(turns) != 0  # it went there: it started 0.16 turns away
 
 
+@pytest.mark.statements("mis:8.2.24:2", "mis:5.2.2:3")
 def test_statusbits_bit_1_autocorrection_active() -> None:
     """MIS manual §8.2.24 (STATUSBITS) with §5.2.2: bit 1 is "AutoCorrection active": a change
     of P_SOLL sets it and it stays set until the encoder position is within the target window
@@ -180,6 +181,7 @@ def test_canopen_on_mis17x_23x_34x_43x_and_smc(canopen_net: tuple[Any, str]) -> 
         assert len(raw) == 4
 
 
+@pytest.mark.statements("mis:8.2.94:1")
 def test_available_io_is_read_only() -> None:
     """MIS manual §8.2.94 (AVAILABLE_IO): the value is read-only (set in manufacturing)."""
     m = _motor()
@@ -236,6 +238,7 @@ def test_interpolated_position_absolute_and_relative(canopen_net: tuple[Any, str
     u(0x6040, 0, 0x06, 2)
 
 
+@pytest.mark.statements("mis:5.9.6:1")
 def test_limit_without_memory_clears_has_been_warning_on_reversal() -> None:
     """MIS manual §5.9.6: with "position limits without memory" (SETUP_BITS bit 28) the limit's
     has-been warning clears by itself once the motor reverses and the switch is no longer
@@ -298,6 +301,7 @@ def test_j1939_read_of_no_register_answers_operation_failed() -> None:
         proc.wait(20)
 
 
+@pytest.mark.statements("mis:8.2.83:2")
 def test_fastmac_23_and_24_set_and_offset_positions_by_p_new() -> None:
     """MIS manual §8.2.83 (P_NEW): FastMac command 23 (COMMAND 119) copies P_NEW to P_IST and
     P_SOLL; FastMac 24 (COMMAND 120) adds it with its sign to both."""
