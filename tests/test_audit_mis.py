@@ -7,6 +7,14 @@ are those of the MIS/SMC integrated step motor manual's text edition in §5, §6
 stating a checkable behaviour was taken. Bus statements are checked on ``jvl-gym serve`` twins
 with python-can's ``udp_multicast`` bus (a group of its own, so that no other test hears it) and
 the ``canopen`` library as the master.
+
+Candidate lines: 2231-3529, 3530-3935, 4264-6120, 6121-6589, 6598-9175, 9488-9660.
+Drawn line -> statement line (section): 4371 -> 4372 (8.2.67), 4886 -> 4887 (8.2.24), 4535 ->
+4535 (8.2.2), 2930 -> 2933 (5.7), 4919 -> 4922 (8.2.25), 8601 -> 8602-8606 (11.7.2), 6615 ->
+6620 (11.1.1), 5688 -> 5691 (8.2.94), 6958 -> 6958 (11.4.1), 8424 -> 8420 (11.6), 7950 -> 7950
+(11.5.8), 3194 -> 3194 (5.9.6), 2674 -> 2672 (5.5), 8830 -> 8830 (11.8.6), 5537 -> 5538
+(8.2.83). Skipped as stating nothing checkable: 12 lines (reserved bits, headings, figure
+captions, MacTalk/TwinCAT click steps).
 """
 
 from __future__ import annotations
@@ -301,10 +309,24 @@ def test_j1939_read_of_no_register_answers_operation_failed() -> None:
         proc.wait(20)
 
 
+@pytest.mark.statements("mis:8.2.83:1")
+def test_p_new_is_a_read_write_signed_32_bit_register_default_0() -> None:
+    """MIS manual §8.2.83 (the P_NEW row): register 144, 32 bit, R/W, range -2^31..2^31-1,
+    default 0, in counts."""
+    m = _motor()
+    assert int(m.read(144)[0]) == 0
+    for value in (-(2**31), 2**31 - 1):
+        m.write("P_NEW", value)
+        assert int(m.read("P_NEW")[0]) == value
+    with pytest.raises(ValueError):
+        m.write("P_NEW", 2**31)
+
+
 @pytest.mark.statements("mis:8.2.83:2")
 def test_fastmac_23_and_24_set_and_offset_positions_by_p_new() -> None:
-    """MIS manual §8.2.83 (P_NEW): FastMac command 23 (COMMAND 119) copies P_NEW to P_IST and
-    P_SOLL; FastMac 24 (COMMAND 120) adds it with its sign to both."""
+    """Beyond the sample (the description below the row), MIS manual §8.2.83 (P_NEW): FastMac
+    command 23 (COMMAND 119) copies P_NEW to P_IST and P_SOLL; FastMac 24 (COMMAND 120) adds it
+    with its sign to both."""
     m = _motor(P_NEW=5000, COMMAND=119)
     m.step(3)
     assert int(m.read("P_IST")[0]) == 5000
