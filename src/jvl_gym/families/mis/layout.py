@@ -96,4 +96,6 @@ N_STATE = S_INDEX_DIR + 1
     I_DIGITAL,  # IO1-IO8 levels (bits 0-7)
     I_ANALOG0,  # IO1 … IO8 analogue levels [V] (8 columns)
 ) = range(5)
-N_INPUT = I_ANALOG0 + 8
+#: the word the SSI encoder sends, Gray or binary as it codes it (§5.7; read on command 321/322)
+I_SSI_WORD = I_ANALOG0 + 8
+N_INPUT = I_SSI_WORD + 1

@@ -28,8 +28,10 @@ from .config import MisMotorConfig, load_motor
 from .firmware import regs as R
 from .plant.torque_curve import pull_out_torque
 from .program.api import ProgramMixin
+from .ssi_port import SSI_COMMANDS, SsiPort
 from .table import CONFORMANCE, TABLE
 from .units import COUNTS_PER_REV, CURRENT_AMPS_PER_UNIT
+from .user_commands import UserCommands
 
 __all__ = ["MisMotorArray"]
 
@@ -58,7 +60,8 @@ _INPUT_COLUMNS: dict[str, int] = {"load_torque": L.I_LOAD_TORQUE,
                                   "supply_volts": L.I_SUPPLY_VOLTS,
                                   "pulse_counts": L.I_PULSE_COUNTS,
                                   "digital_inputs": L.I_DIGITAL,
-                                  **{f"analog{k + 1}": L.I_ANALOG0 + k for k in range(8)}}
+                                  **{f"analog{k + 1}": L.I_ANALOG0 + k for k in range(8)},
+                                  "ssi_word": L.I_SSI_WORD}
 #: registers whose writes the firmware's rules handle one by one
 _SPECIAL = frozenset({R.MODE_REG, R.P_SOLL, R.COMMAND, R.ENCODER_POS, R.S_CONTROL,
                       R.STARTMODE, R.HOMEMODE, R.TURNTABLE_MODE})
@@ -73,7 +76,7 @@ BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
 _PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD]
 
 
-class MisMotorArray(ProgramMixin, MotorArray, layout=L):
+class MisMotorArray(SsiPort, UserCommands, ProgramMixin, MotorArray, layout=L):
     """N simulated MIS/SMC integrated step motors (:class:`~jvl_gym.MotorArray` of the
     ``mis`` family).
 
@@ -109,7 +112,8 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
     INPUT_RULES: ClassVar[dict[str, InputRule]] = {
         "supply_volts": InputRule(0.0, 80.0, unit="V"),
         "pulse_counts": InputRule(whole=True, unit="counts per outer sample"),
-        "digital_inputs": InputRule(0.0, 255.0, whole=True, unit="(bits of IO1-IO8)")}
+        "digital_inputs": InputRule(0.0, 255.0, whole=True, unit="(bits of IO1-IO8)"),
+        "ssi_word": InputRule(0.0, 2.0**31 - 1, whole=True, unit="(the SSI encoder's word)")}
     PHYSICAL = frozenset({"speed_rpm", "speed_rad_s", "position_rad", "torque", "current_amplitude",
                           "lost_steps"})
     SHAFT_ANGLE, SHAFT_SPEED = L.S_THETA, L.S_OMEGA
@@ -242,6 +246,8 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
                                          home, start)
         # a power-on zero search that times out goes on in STARTMODE (§6.5.9, §7.2.19)
         s[idx, L.S_HOME_PREV] = start
+        self._commands_power_on(idx)
+        self._ssi_power_on(idx)
         self._program_power_on(idx)
 
     @property
@@ -348,12 +354,14 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         idx = as_index(index, self.n)
         self._store_position_backup(idx)
         keep = self.state[np.ix_(idx, _PLANT_STATE)].copy()
+        ssi = self.regs[idx, R.EXTENCODER2].copy()
         memory = self._rom if self._flash is None else self._flash
         for i in idx.tolist():
             self.regs[i] = memory[i] if self._has_flash[i] else self._rom[self._type_of[i]]
         self.state[idx] = 0.0
         self.state[np.ix_(idx, _PLANT_STATE)] = keep
         self._power_on(idx)
+        self._ssi_keep(idx, ssi)
         rotor = self.state[idx, L.S_THETA] * COUNTS_PER_REV / (2.0 * math.pi)
         for col in (L.S_CMD, L.S_CMD_PREV, L.S_FIELD):
             self.state[idx, col] = rotor
@@ -421,15 +429,21 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         """FastMac commands (§8.2.21) and the user commands 257, 267–269, 342, 354, 398, 399
         (§8.2.22; reset and save only in passive or safe mode, which "allows the save in flash
         and reset commands", §8.2.3; 342 erases the stored program,
-        :meth:`~.program.api.ProgramMixin.erase_program`); other numbers do nothing. COMMAND
-        reads 0 afterwards."""
+        :meth:`~.program.api.ProgramMixin.erase_program`), the SSI commands 320–322
+        (:mod:`.ssi_port`), 999 and the protected commands, the RelativeMove flag and the
+        K-phase flash (:mod:`.user_commands`); other numbers do nothing. COMMAND reads 0
+        afterwards."""
         regs = self.regs
         for i, cmd in zip(idx.tolist(), raw.tolist()):
             if cmd in c.CMD_PASSIVE_ONLY and regs[i, R.MODE_REG] not in (c.PASSIVE, c.SAFE):
                 raise RegisterError(f"COMMAND = {cmd} refused for motor {i}: reset and save "
                                     "need passive or safe mode (§8.2.3). Nothing was changed.")
         for i, cmd in zip(idx.tolist(), raw.tolist()):
-            if cmd == c.CMD_CLEAR_ERRORS:
+            if self._user_command(i, cmd):
+                pass  # 999, the protected commands, RelativeMove, K-phase (.user_commands)
+            elif cmd in SSI_COMMANDS:
+                self._ssi_command(i, cmd)
+            elif cmd == c.CMD_CLEAR_ERRORS:
                 regs[i, R.ERR_BITS] = 0
                 regs[i, R.WARN_BITS] = 0
             elif cmd == c.CMD_P_SOLL_ZERO:
@@ -496,7 +510,9 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         Keywords: ``load_torque`` [N·m, opposing positive rotation], ``supply_volts`` [V,
         0 … 80], ``pulse_counts`` (whole gear-input counts per outer sample),
         ``digital_inputs`` (IO1–IO8 levels as bits 0–7, 0 … 255), ``analog1`` … ``analog8``
-        [V] (the ADC reads 0 … 5 V, §2.3.5). All are checked before any is set.
+        [V] (the ADC reads 0 … 5 V, §2.3.5), ``ssi_word`` (the word the SSI encoder sends,
+        0 … 2³¹ − 1, Gray or binary as it codes it; read by commands 321/322, §5.7). All are
+        checked before any is set.
         """
         super().set_input(index, **inputs)
 
