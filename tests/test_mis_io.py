@@ -244,3 +244,73 @@ def test_fastmac_20_to_22_clear_and_set_the_relative_move_flag() -> None:
     assert m.relative_move.tolist() == [True, False]
     m.software_reset()
     assert m.relative_move.tolist() == [False, False]
+
+
+# --- FLEXREGISTER --------------------------------------------------------------------------------
+def _flex(low: tuple[int, int], high: tuple[int, int] = (0, 0)) -> int:
+    """A FLEXREGSETUP value: (register, bit) of its low and its high FLEXREGISTER bit."""
+    return low[0] | (low[1] << 9) | (high[0] << 16) | (high[1] << 25)
+
+
+@pytest.mark.statements("mis:8.2.40:2", "mis:8.2.117:2", "mis:8.2.40:1", "mis:8.2.117:1")
+def test_flexregister_collects_the_bits_its_setup_registers_name() -> None:
+    """Each FLEXREGSETUP register sets up 2 of FLEXREGISTER's 16 bits (§8.2.117): here bit 0
+    follows STATUSBITS bit 4 (in position), bit 1 INPUTS bit 0, bit 14 P1 bit 3 and bit 15 (the
+    sign of the signed 16-bit value, §8.2.40) P1 bit 31; register 0 gives 0."""
+    m = MotorArray("MIS232", n=1, seed=0)
+    m.step(1)
+    assert m.read("FLEXREGISTER")[0] == 0
+    m.write_many({"FLEXREGSETUP1": _flex((25, 4), (18, 0)), "FLEXREGSETUP8": _flex((49, 3),
+                                                                                    (49, 31)),
+                  "P_SOLL": 0, "MODE_REG": c.POSITION})
+    m.set_input(digital_inputs=1)
+    m.step(2)
+    assert m.read("STATUSBITS")[0] & (1 << 4) and m.read("INPUTS")[0] & 1
+    assert m.read("FLEXREGISTER")[0] == 0b11
+    m.write("P1", -8)  # bits 3 … 31 set
+    m.set_input(digital_inputs=0)
+    m.step(2)
+    assert m.read("FLEXREGISTER")[0] == (0b01 | 0b11 << 14) - (1 << 16)
+    m.write_many({"FLEXREGSETUP1": 0, "FLEXREGSETUP8": 0})
+    m.step(1)
+    assert m.read("FLEXREGISTER")[0] == 0
+
+
+# --- the analogue filter settings of each input -------------------------------------------------
+def _settings(m: MotorArray) -> list[int]:
+    return [int(m.read(k)[0]) for k in ("AFZUP_CONFMIN", "AFZUP_CONFMAX", "AFZUP_MAXSLOPE",
+                                        "AFZUP_FILTER")]
+
+
+@pytest.mark.statements("mis:8.2.50:1", "mis:8.2.50:2", "mis:8.2.51:1")
+def test_afzup_writebits_hands_the_settings_to_the_inputs_it_selects() -> None:
+    """§8.2.50: registers 102-105 loaded, then bits 0-7 of AFZUP_WRITEBITS select the inputs
+    that take them and the firmware sets bit 15; §8.2.51: writing n to AFZUP_READINDEX loads
+    input n's settings back into 102-105 and sets bit 15. A filter of 1/64 on IO2 only: IO1
+    follows its input at once, IO2 slowly."""
+    m = MotorArray("MIS232", n=1, seed=0)
+    assert m.read("AFZUP_WRITEBITS")[0] == 0
+    m.write_many({"AFZUP_CONFMIN": 5, "AFZUP_CONFMAX": 3000, "AFZUP_MAXSLOPE": 200,
+                  "AFZUP_FILTER": 1})
+    m.write("AFZUP_WRITEBITS", 0b10)
+    assert m.read("AFZUP_WRITEBITS")[0] == 0b10 | 1 << 15
+    m.write_many({"AFZUP_CONFMIN": 0, "AFZUP_CONFMAX": 4095, "AFZUP_MAXSLOPE": 4095,
+                  "AFZUP_FILTER": 64})
+    m.set_input(analog1=1.0, analog2=1.0)
+    m.step(10)
+    assert m.read("ANALOGUE_FILTERED1")[0] == m.read("ANALOGUE_INPUT1")[0] == 819
+    assert m.read("ANALOGUE_FILTERED2")[0] == 3  # 200/64 of the slope-limited step
+    m.write("AFZUP_READINDEX", 2)
+    assert m.read("AFZUP_READINDEX")[0] == 32768 + 2
+    assert _settings(m) == [5, 3000, 200, 1]
+    m.write("AFZUP_READINDEX", 1)
+    assert _settings(m) == [0, 4095, 4095, 64]
+
+
+@pytest.mark.statements("mis:8.2.51:1")
+@pytest.mark.parametrize("bad", [9, 100, 32767, 32776])
+def test_afzup_readindex_refuses_values_outside_its_range(bad: int) -> None:
+    m = MotorArray("MIS232", n=1, seed=0)
+    with pytest.raises(Exception, match=r"AFZUP_READINDEX .*8\.2\.51"):
+        m.write("AFZUP_READINDEX", bad)
+    assert m.read("AFZUP_READINDEX")[0] == 0 and _settings(m) == [0, 4095, 4095, 64]

@@ -25,6 +25,7 @@ from ...registers import Register, RegisterError, RegisterRangeError
 from . import constants as c
 from . import layout as L
 from .config import MisMotorConfig, load_motor
+from .filter_setup import READ_INDEX_VALUES, FilterSetup
 from .firmware import regs as R
 from .plant.torque_curve import pull_out_torque
 from .program.api import ProgramMixin
@@ -64,19 +65,21 @@ _INPUT_COLUMNS: dict[str, int] = {"load_torque": L.I_LOAD_TORQUE,
                                   "ssi_word": L.I_SSI_WORD}
 #: registers whose writes the firmware's rules handle one by one
 _SPECIAL = frozenset({R.MODE_REG, R.P_SOLL, R.COMMAND, R.ENCODER_POS, R.S_CONTROL,
-                      R.STARTMODE, R.HOMEMODE, R.TURNTABLE_MODE})
+                      R.STARTMODE, R.HOMEMODE, R.TURNTABLE_MODE, R.AFZUP_WRITEBITS,
+                      R.AFZUP_READINDEX})
 #: registers a setup (a register set) may not hold: commands and mode requests
 _NOT_IN_SETUP = frozenset({R.MODE_REG, R.COMMAND, R.S_CONTROL, R.ENCODER_POS})
 #: registers that hold one of a set of codes: (allowed, where the manual says so)
 _MEMBERS: dict[int, tuple[frozenset[int], str]] = {
     R.STARTMODE: (c.START_MODES, "§8.2.33"), R.HOMEMODE: (c.HOME_MODES, "§8.2.37"),
-    R.TURNTABLE_MODE: (frozenset(range(6)), "§5.12.3: >5 is illegal")}
+    R.TURNTABLE_MODE: (frozenset(range(6)), "§5.12.3: >5 is illegal"),
+    R.AFZUP_READINDEX: (READ_INDEX_VALUES, "§8.2.51: 0, 1-8, 32768-32775")}
 BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
 #: the plant's state, which a reset of the electronics leaves alone
 _PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD]
 
 
-class MisMotorArray(SsiPort, UserCommands, ProgramMixin, MotorArray, layout=L):
+class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray, layout=L):
     """N simulated MIS/SMC integrated step motors (:class:`~jvl_gym.MotorArray` of the
     ``mis`` family).
 
@@ -247,6 +250,7 @@ class MisMotorArray(SsiPort, UserCommands, ProgramMixin, MotorArray, layout=L):
         # a power-on zero search that times out goes on in STARTMODE (§6.5.9, §7.2.19)
         s[idx, L.S_HOME_PREV] = start
         self._commands_power_on(idx)
+        self._afzup_power_on(idx)
         self._ssi_power_on(idx)
         self._program_power_on(idx)
 
@@ -299,9 +303,14 @@ class MisMotorArray(SsiPort, UserCommands, ProgramMixin, MotorArray, layout=L):
                 self._set_encoder(i, int(regs[i, R.P_IST]))
                 regs[i, R.FLWERR] = 0
             regs[idx, R.MODE_REG] = np.where(running, c.STOP, raw)
+        elif num == R.AFZUP_READINDEX:
+            self._check_member(reg, raw, *_MEMBERS[num])
+            self._afzup_read_index(idx, raw)
         elif num in _MEMBERS:
             self._check_member(reg, raw, *_MEMBERS[num])
             regs[idx, num] = raw
+        elif num == R.AFZUP_WRITEBITS:
+            self._afzup_write_bits(idx, raw)
         elif num == R.P_SOLL:
             self._store_p_soll(idx, raw)
         elif num == R.ENCODER_POS:
