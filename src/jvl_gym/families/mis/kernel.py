@@ -2,8 +2,9 @@
 
 Order: time and inputs; encoder, follow error and monitoring; the mode's profile velocity;
 the commanded position (P_IST) advanced by it; status bits; the phase current the chopper aims
-at; FLEXREGISTER (``flexreg``); the sample buffer. The plant then runs the sample's inner samples (``plant``) with the
-commanded position moving linearly from ``S_CMD_PREV`` to ``S_CMD``.
+at; FLEXREGISTER (``flexreg``); the sample buffer. The plant then runs the sample's inner
+samples (``plant``) with the commanded position moving linearly from ``S_CMD_PREV`` to
+``S_CMD``.
 
 Modes (§8.2.3): passive (0) and safe (15) switch the bridge off; velocity (1) runs at V_SOLL by
 the profile rules (``profile``); position (2) moves P_IST to P_SOLL (the distance is
