@@ -37,8 +37,8 @@ def _ext2(m: MotorArray) -> int:
     return int(m.read("EXTENCODER2")[0])
 
 
-@pytest.mark.statements("mis:5.7.3:1", "mis:8.2.22:8", "mis:8.2.22:9", "mis:8.2.57:1",
-                        "mis:8.2.39:2")
+@pytest.mark.statements("mis:8.2.22:8", "mis:8.2.22:9", "mis:8.2.39:2", "mis:8.2.57:1",
+    "mis:5.7.3:1")
 def test_ssi_position_arrives_after_the_prepare_time_and_the_clock_periods() -> None:
     """§5.7.3: "Time = Prepare time + (1/Clock frequency × (Number of Data bits + 1))", 2.7 ms
     for 100 µs, 10 kHz and 25 bits: the value is in register 47 at the first outer sample
@@ -54,9 +54,9 @@ def test_ssi_position_arrives_after_the_prepare_time_and_the_clock_periods() -> 
     assert _ext2(m) == 123456
 
 
-@pytest.mark.statements("mis:8.2.57:1")
 @pytest.mark.parametrize(("bits", "clock", "prepare", "ms"), [
     (12, 100, 0, 1), (31, 2, 255, 2), (13, 1, 50, 2)])
+@pytest.mark.statements("mis:8.2.57:1", "mis:8.2.59:1")
 def test_ssi_reading_time_follows_the_setup_fields(bits: int, clock: int, prepare: int,
                                                    ms: int) -> None:
     """Bits 0-4 data bits, 8-15 clock in 10 kHz units, SSI_SETUP2 bits 0-7 prepare time (µs):
@@ -82,9 +82,9 @@ def test_ssi_keeps_only_the_data_bits() -> None:
     assert _ext2(m) == 0x12345 & 0x3FF
 
 
-@pytest.mark.statements("mis:8.2.22:10", "mis:8.2.39:2", "mis:8.2.59:1")
 @pytest.mark.parametrize(("command", "setup2", "gray"), [
     (321, 0, False), (322, 0, True), (321, 0x100, True)])
+@pytest.mark.statements("mis:8.2.22:10", "mis:8.2.39:2", "mis:8.2.59:1")
 def test_ssi_gray_code_is_converted_on_322_or_with_setup2_bit_8(command: int, setup2: int,
                                                                  gray: bool) -> None:
     """Command 322 (and 321 with SSI_SETUP2 bit 8) converts the encoder's Gray code to
@@ -120,7 +120,7 @@ def _moving_read(m: MotorArray, step: int, samples: int = 20) -> None:
         m.set_input(ssi_word=word)
 
 
-@pytest.mark.statements("mis:5.7.2:1", "mis:8.2.31:14", "mis:7.2.14:1", "mis:8.2.57:1")
+@pytest.mark.statements("mis:8.2.31:14", "mis:8.2.57:1", "mis:5.7.2:1", "mis:7.2.14:1")
 def test_ssi_failed_reading_keeps_the_last_value_and_sets_err_bit_11() -> None:
     """§5.7.2: samples that differ by more than the largest sample deviation fail the reading;
     after the read retries it "will be discarded and 'SSI Encoder value' still shows the last
@@ -143,7 +143,7 @@ def test_ssi_failed_reading_keeps_the_last_value_and_sets_err_bit_11() -> None:
     assert err & (1 << 11) and err & c.ERR_GENERAL
 
 
-@pytest.mark.statements("mis:8.2.68:15", "mis:8.2.32:8")
+@pytest.mark.statements("mis:8.2.32:8", "mis:8.2.68:15")
 def test_setup_bit_20_disables_the_ssi_error_and_warns_instead() -> None:
     """SETUP_BITS bit 20 "Disable SSI encoder error": a failed reading sets no error bit; the
     simulator shows it in WARN_BITS bit 7 (SSI encoder) instead."""
@@ -163,7 +163,7 @@ def test_ssi_failed_reading_in_an_active_mode_stops_the_motor() -> None:
     assert m.read("MODE_REG")[0] == c.PASSIVE
 
 
-@pytest.mark.statements("mis:8.2.68:10", "mis:8.2.39:1")
+@pytest.mark.statements("mis:8.2.68:10")
 def test_setup_bit_13_keeps_the_ssi_register_over_a_reset() -> None:
     """SETUP_BITS bit 13: "Do not zero the SSI data register at start-up"; without it
     EXTENCODER2 (default 0) is zeroed."""
@@ -252,7 +252,7 @@ def _flex(low: tuple[int, int], high: tuple[int, int] = (0, 0)) -> int:
     return low[0] | (low[1] << 9) | (high[0] << 16) | (high[1] << 25)
 
 
-@pytest.mark.statements("mis:8.2.40:2", "mis:8.2.117:2", "mis:8.2.40:1", "mis:8.2.117:1")
+@pytest.mark.statements("mis:8.2.40:2", "mis:8.2.117:2")
 def test_flexregister_collects_the_bits_its_setup_registers_name() -> None:
     """Each FLEXREGSETUP register sets up 2 of FLEXREGISTER's 16 bits (§8.2.117): here bit 0
     follows STATUSBITS bit 4 (in position), bit 1 INPUTS bit 0, bit 14 P1 bit 3 and bit 15 (the
@@ -274,6 +274,12 @@ def test_flexregister_collects_the_bits_its_setup_registers_name() -> None:
     m.write_many({"FLEXREGSETUP1": 0, "FLEXREGSETUP8": 0})
     m.step(1)
     assert m.read("FLEXREGISTER")[0] == 0
+    names = ("FLEXREGSETUP1", "FLEXREGSETUP2", "FLEXREGSETUP3", "FLEXREGSETUP4",
+             "FLEXREGSETUP5", "FLEXREGSETUP6", "FLEXREGSETUP7", "FLEXREGSETUP8")
+    for k, name in enumerate(names):  # in position: STATUSBITS bit 4 in the high half
+        m.write_many({other: 0 for other in names} | {name: _flex((0, 0), (25, 4))})
+        m.step(1)
+        assert m.read("FLEXREGISTER")[0] == (1 << (2 * k + 1)) - (1 << 16) * (k == 7)
 
 
 # --- the analogue filter settings of each input -------------------------------------------------
@@ -282,7 +288,7 @@ def _settings(m: MotorArray) -> list[int]:
                                         "AFZUP_FILTER")]
 
 
-@pytest.mark.statements("mis:8.2.50:1", "mis:8.2.50:2", "mis:8.2.51:1")
+@pytest.mark.statements("mis:8.2.50:1", "mis:8.2.51:1")
 def test_afzup_writebits_hands_the_settings_to_the_inputs_it_selects() -> None:
     """§8.2.50: registers 102-105 loaded, then bits 0-7 of AFZUP_WRITEBITS select the inputs
     that take them and the firmware sets bit 15; §8.2.51: writing n to AFZUP_READINDEX loads
@@ -307,8 +313,8 @@ def test_afzup_writebits_hands_the_settings_to_the_inputs_it_selects() -> None:
     assert _settings(m) == [0, 4095, 4095, 64]
 
 
-@pytest.mark.statements("mis:8.2.51:1")
 @pytest.mark.parametrize("bad", [9, 100, 32767, 32776])
+@pytest.mark.statements("mis:8.2.51:1")
 def test_afzup_readindex_refuses_values_outside_its_range(bad: int) -> None:
     m = MotorArray("MIS232", n=1, seed=0)
     with pytest.raises(Exception, match=r"AFZUP_READINDEX .*8\.2\.51"):
