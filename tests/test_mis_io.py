@@ -320,3 +320,17 @@ def test_afzup_readindex_refuses_values_outside_its_range(bad: int) -> None:
     with pytest.raises(Exception, match=r"AFZUP_READINDEX .*8\.2\.51"):
         m.write("AFZUP_READINDEX", bad)
     assert m.read("AFZUP_READINDEX")[0] == 0 and _settings(m) == [0, 4095, 4095, 64]
+
+
+@pytest.mark.statements("mis:8.2.22:17")
+def test_closed_loop_set_up_acts_without_command_406() -> None:
+    """Command 406 "activate closed loop configuration registers": the simulator's closed loop
+    follows SETUP_BITS 24 at once, so the loop is on with or without 406, and 406 changes
+    nothing (mis-sim.md, "Closed-loop activation")."""
+    m = MotorArray("MIS232", n=2, seed=0)
+    m.write_many({"SETUP_BITS": 1 << 24, "V_SOLL": 1000, "MODE_REG": c.VELOCITY})
+    before = m.regs[1].copy()
+    m.write("COMMAND", 406, index=1)
+    assert (m.regs[1] == before).all()
+    m.step(5)
+    assert (m.read("STATUSBITS") & c.ST_CLOSED_LOOP).all()
