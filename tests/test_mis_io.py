@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 import pytest
 
 from jvl_gym import MotorArray
@@ -334,3 +335,32 @@ def test_closed_loop_set_up_acts_without_command_406() -> None:
     assert (m.regs[1] == before).all()
     m.step(5)
     assert (m.read("STATUSBITS") & c.ST_CLOSED_LOOP).all()
+
+
+@pytest.mark.statements("mis:8.2.22:7", "mis:5.8.4:1")
+def test_command_316_presets_the_h3_encoder_with_p_new() -> None:
+    """§5.8.4: "a new encoder position is preset by writing it to P_NEW and then 316 to
+    COMMAND": the H3's position (ABSENCODER, and ENCODER_POS with it) reads P_NEW and counts on
+    from there; P_IST stays; the H3 keeps the preset over a reset, where SETUP_BITS bit 11 takes
+    P_IST from it. A motor with another encoder (an H2) is not changed."""
+    m = MotorArray("MIS232", n=2, seed=0, encoder_type=np.array([2, 3]))
+    # no follow error check and no auto-correction: the preset leaves P_IST 10⁶ counts from
+    # the encoder, which either would act on (§8.2.19, §5.2)
+    m.write_many({"FLWERRMAX": 0, "IN_POSITION_COUNT": 0, "V_SOLL": 30000, "A_SOLL": 10000})
+    old = m.read("ABSENCODER")[1]
+    m.write("P_NEW", 1_000_000)
+    m.write("COMMAND", 316)
+    assert m.read("ABSENCODER").tolist() == [1_000_000, old]
+    assert m.read("ENCODER_POS")[0] == 1_000_000 and m.read("P_IST").tolist() == [0, 0]
+    m.step(1)
+    assert m.read("ABSENCODER")[0] == 1_000_000
+    m.write_many({"P_SOLL": 409600, "MODE_REG": c.POSITION})
+    m.run(1.5)
+    moved = m.read("ABSENCODER")[0] - 1_000_000
+    assert moved == pytest.approx(409600, abs=2000)
+    m.write("MODE_REG", c.PASSIVE)
+    m.write("SETUP_BITS", c.SETUP_MULTI_TURN_AT_POWER_UP)
+    m.enter_safe_mode()
+    m.write_flash()
+    m.step(1)
+    assert m.read("P_IST")[0] == m.read("ABSENCODER")[0] == pytest.approx(1_409_600, abs=2000)

@@ -85,8 +85,9 @@ N_STATE = S_INDEX_DIR + 1
     P_STOP_LO,  # mechanical end stop below this rotor angle [rad] (−inf: none)
     P_STOP_HI,  # mechanical end stop above this rotor angle [rad] (inf: none)
     P_STANDBY_MAX,  # largest STANDBY_CURRENT of the type
+    P_H3_PRESET,  # H3 encoder: its preset minus the rotor's count at the preset (command 316)
     P_AF0,  # analogue filter settings of IO1 … IO8 as the firmware holds them (4 per input)
-) = range(17)
+) = range(18)
 #: one input's analogue filter settings at P_AF0 + 4·k + column: the firmware's copies of
 #: AFZUP_CONFMIN, AFZUP_CONFMAX, AFZUP_MAXSLOPE and AFZUP_FILTER (§8.2.50–55)
 AF_CONFMIN, AF_CONFMAX, AF_MAXSLOPE, AF_FILTER = range(4)

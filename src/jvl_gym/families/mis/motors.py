@@ -209,7 +209,7 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
         pos = np.where(single & single_turn_encoder, turn, pos)
         pos = np.where(multi & (code == 0), stored, pos)
         pos = np.where(multi & single_turn_encoder, near, pos)
-        pos = np.where(multi & (code == 2), q, pos)
+        pos = np.where(multi & (code == 2), q + self.params[idx, L.P_H3_PRESET], pos)
         return np.mod(pos + 2**31, 2**32) - 2**31
 
     def _power_on(self, idx: np.ndarray) -> None:
@@ -434,6 +434,18 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
             self.state[i, L.S_ENC_PREV] = value
         self.regs[i, R.ENCODER_POS] = value
 
+    def _preset_h3(self, i: int, value: int) -> None:
+        """User command 316 (§8.2.22, §5.8.4): the H3 encoder's position := ``value``; the
+        encoder keeps the preset over resets (its own memory), ABSENCODER and ENCODER_POS read
+        ``value`` at once, P_IST and P_SOLL stay."""
+        cpr = c.ENCODER_CPR[c.ENCODER_H3]
+        per = COUNTS_PER_REV // cpr
+        q = math.floor(self._firmware_angle(np.array([i]))[0] * COUNTS_PER_REV
+                       / (2 * math.pi) / per) * per
+        self.params[i, L.P_H3_PRESET] = value - q
+        self.regs[i, R.ABSENCODER] = value
+        self._set_encoder(i, value)
+
     def _commands(self, idx: np.ndarray, raw: np.ndarray) -> None:
         """FastMac commands (§8.2.21) and the user commands 257, 267–269, 342, 354, 398, 399
         (§8.2.22; reset and save only in passive or safe mode, which "allows the save in flash
@@ -490,6 +502,8 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
                 if cmd != c.CMD_ADD_ACTUAL:
                     regs[i, R.P_SOLL] = wrap32(int(regs[i, R.P_SOLL]) * add + new)
                 self._set_encoder(i, wrap32(int(regs[i, R.ENCODER_POS]) * add + new))
+            elif cmd == c.CMD_PRESET_H3 and self.params[i, L.P_ENCODER] == c.ENCODER_H3:
+                self._preset_h3(i, int(regs[i, R.P_NEW]))
             elif cmd == c.CMD_RESYNC and self.params[i, L.P_ENCODER] > 0:
                 regs[i, R.P_IST] = regs[i, R.ENCODER_POS]
                 self.state[i, L.S_FRAC] = 0.0
