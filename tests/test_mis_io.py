@@ -364,3 +364,19 @@ def test_command_316_presets_the_h3_encoder_with_p_new() -> None:
     m.write_flash()
     m.step(1)
     assert m.read("P_IST")[0] == m.read("ABSENCODER")[0] == pytest.approx(1_409_600, abs=2000)
+
+
+def test_a_refused_transaction_takes_the_commands_back() -> None:
+    """A register set refused part-way (an active mode while ERR_BITS ≠ 0) leaves the motor as
+    it was: no RelativeMove flag, no arming, no SSI set-up or reading."""
+    m = _ssi()
+    m.set_input(ssi_word=5)
+    m.write("ERR_BITS", 1)
+    for command in (117, 999, 321):
+        with pytest.raises(Exception, match="MODE_REG"):
+            m.write_many({"COMMAND": command, "MODE_REG": c.VELOCITY})
+    m.write("KPHASE", 9)
+    m.write("COMMAND", 720)  # not armed: nothing saved
+    assert m.relative_move.tolist() == [False] and m.kphase_flash()[0] == 0
+    m.step(5)
+    assert _ext2(m) == 0

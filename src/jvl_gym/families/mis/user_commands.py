@@ -17,6 +17,8 @@ the RelativeMove flag, the protection of commands by 999, and the K-phase flash.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ...motor.arguments import MotorIndex, as_index
@@ -66,6 +68,18 @@ class UserCommands:
         flag, armed, _ = self._command_state()
         flag[idx] = False
         armed[idx] = False
+
+    def _snapshot(self, idx: np.ndarray) -> tuple[Any, ...]:
+        """What a register transaction may change (``RegisterBank._snapshot``) and this
+        module's state (a refused transaction takes its commands back)."""
+        saved = tuple(a.copy() for a in self._command_state())
+        return super()._snapshot(idx), saved  # type: ignore[misc]
+
+    def _restore(self, idx: np.ndarray, saved: tuple[Any, ...]) -> None:
+        """Put back what :meth:`_snapshot` saved."""
+        rows, (flag, armed, kflash) = saved
+        super()._restore(idx, rows)  # type: ignore[misc]
+        self._relative_flag, self._armed, self._kphase_flash = flag, armed, kflash
 
     def _user_command(self, i: int, cmd: int) -> bool:
         """Take the arming of motor ``i`` and run ``cmd`` if it is one of this module's; False
