@@ -1,7 +1,8 @@
 """The MIS/SMC SSI encoder port (MIS manual §5.7, §8.2.22 commands 320–322, §8.2.39,
-§8.2.57, §8.2.59, SETUP_BITS 13 and 20, ERR_BITS 11, WARN_BITS 7) and the command-side
-firmware state (999 and the protected commands, the K-phase flash, the RelativeMove flag,
-§8.2.21–8.2.23)."""
+§8.2.57, §8.2.59, SETUP_BITS 13 and 20, ERR_BITS 11, WARN_BITS 7), the command-side firmware
+state (999 and the protected commands, the K-phase flash, the RelativeMove flag, the H3 preset
+316, command 406; §8.2.21–8.2.23, §5.8.4), FLEXREGISTER (§8.2.40, §8.2.117) and the analogue
+filter settings per input (AFZUP_WRITEBITS / AFZUP_READINDEX, §8.2.50–51)."""
 
 from __future__ import annotations
 
