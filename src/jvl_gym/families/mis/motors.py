@@ -435,9 +435,10 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
         self.regs[i, R.ENCODER_POS] = value
 
     def _preset_h3(self, i: int, value: int) -> None:
-        """User command 316 (§8.2.22, §5.8.4): the H3 encoder's position := ``value``; the
-        encoder keeps the preset over resets (its own memory), ABSENCODER and ENCODER_POS read
-        ``value`` at once, P_IST and P_SOLL stay."""
+        """User command 316 (§8.2.22, §5.8.4): the H3 encoder's position := ``value``:
+        ABSENCODER and ENCODER_POS read it at once, P_IST and P_SOLL stay. The encoder keeps
+        the preset over commands 267 and 268 (its own memory); ``reset`` starts the motor
+        anew with its type's parameters and clears it."""
         cpr = c.ENCODER_CPR[c.ENCODER_H3]
         per = COUNTS_PER_REV // cpr
         q = math.floor(self._firmware_angle(np.array([i]))[0] * COUNTS_PER_REV
