@@ -13,6 +13,7 @@ import pytest
 
 from jvl_gym import MotorArray
 from jvl_gym.families.mis import constants as c
+from jvl_gym.families.mis import layout as L
 from jvl_gym.families.mis.firmware.ssi import SsiSetup, gray_to_binary
 
 #: SSI_SETUP1 of §5.7.3's example: 25 data bits, clock 1 × 10 kHz
@@ -186,7 +187,8 @@ def test_ssi_word_input_refuses_bad_values_and_changes_nothing() -> None:
     for bad in (math.nan, -1, 2.0**31, 1.5):
         with pytest.raises(ValueError, match="ssi_word"):
             m.set_input(ssi_word=bad, supply_volts=30.0)
-    assert m.inputs[:, -1].tolist() == [7.0, 7.0]
+    assert m.inputs[:, L.I_SSI_WORD].tolist() == [7.0, 7.0]
+    assert m.inputs[:, L.I_SUPPLY_VOLTS].tolist() != [30.0, 30.0]
 
 
 def test_ssi_reading_of_a_program_arrives_while_it_runs() -> None:
