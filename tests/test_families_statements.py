@@ -423,3 +423,22 @@ def test_the_mac050_141_page_shows_the_statements_column_too() -> None:
     assert "| P_SOLL | mac050_141:3.2.3:1 | 3.2.3 |" in md
     assert markdown_reference(table) == markdown_reference(
         table, statements=Statements("mac050_141", table, None, "<none>"))
+
+
+@pytest.mark.parametrize("key", KEYS)
+def test_every_registers_conformance_status_is_its_derived_status(key: str) -> None:
+    """The conformance matrix's status of each register is the one its statements give
+    (:meth:`Statements.derived_status`): the two files never tell different stories."""
+    st = _with_file(key)
+    conformance = family(key).conformance
+    assert conformance is not None
+    bad = []
+    for reg in st.table:
+        derived = st.derived_status(reg.name)
+        entry = conformance.entry(reg)
+        if derived is None or entry is None:
+            continue
+        if entry.status != derived:
+            bad.append(f"{reg.name}: {entry.status} in {conformance.source}, {derived} by its "
+                       "statements")
+    assert not bad, f"{len(bad)} registers disagree:\n" + "\n".join(bad)

@@ -42,7 +42,8 @@ def test_analogue_filter_example_of_the_manual() -> None:
     "mis:8.2.45:2", "mis:8.2.46:2", "mis:8.2.53:2", "mis:8.2.54:2", "mis:8.2.55:2")
 def test_analogue_inputs_in_the_registers() -> None:
     m = MotorArray("MIS232", n=1)
-    m.write_many({"AFZUP_CONFMAX": 500, "AFZUP_MAXSLOPE": 10, "AFZUP_FILTER": 8})
+    m.write_many({"AFZUP_CONFMAX": 500, "AFZUP_MAXSLOPE": 10, "AFZUP_FILTER": 8,
+                  "AFZUP_WRITEBITS": 255})  # to every input (§8.2.50)
     m.set_input(analog1=100 * 5.0 / 4095)  # 100 units on IO1
     tr = m.trace(["ANALOGUE_INPUT1", "ANALOGUE_FILTERED1"], 40)
     assert np.all(tr["ANALOGUE_INPUT1"][:, 0] == 100)

@@ -79,6 +79,7 @@ def test_filter_status_needs_more_than_half_the_samples(outside: int, bit: int) 
     the 100 samples outside the confidence limits leave FILTERSTATUS bit 0 clear, 51 set it."""
     m = MotorArray("MIS232", n=1, seed=0)
     m.write("AFZUP_CONFMAX", 2000)  # 2.44 V
+    m.write("AFZUP_WRITEBITS", 255)  # to every input (§8.2.50)
     m.set_input(analog1=4.0)
     m.step(10 * outside)  # one analogue sample each 10 ms
     m.set_input(analog1=0.0)

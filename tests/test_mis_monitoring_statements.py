@@ -107,7 +107,8 @@ def test_filter_status_tells_confidence_and_slope_errors_each_second() -> None:
     """§8.2.56: each second, bit k when more than half the samples of the last second of input
     k + 1 fell outside the confidence limits, bit 8 + k when more than half were slope
     limited."""
-    m = _motor(AFZUP_CONFMAX=2000, AFZUP_MAXSLOPE=10)  # 2.44 V; 12 mV per 10 ms sample
+    m = _motor(AFZUP_CONFMAX=2000, AFZUP_MAXSLOPE=10,  # 2.44 V; 12 mV per 10 ms sample
+               AFZUP_WRITEBITS=255)  # to every input (§8.2.50)
     m.set_input(analog1=4.0, analog2=2.0)  # IO1 outside confidence; IO2 climbs slope-limited
     m.step(999)
     assert m.read("FILTERSTATUS")[0] == 0  # not updated before the second is over

@@ -263,7 +263,7 @@ def test_each_analogue_input_has_its_registers(k: int) -> None:
     m.set_input(**{f"analog{k}": 2000 * 5.0 / 4095})
     m.step(200)
     assert m.read(raw)[0] == 2000 and m.read(filt)[0] == 2000
-    low = _motor(AFZUP_CONFMIN=2500)
+    low = _motor(AFZUP_CONFMIN=2500, AFZUP_WRITEBITS=255)  # to every input (§8.2.50)
     low.set_input(**{f"analog{k}": 2000 * 5.0 / 4095})
     low.step(200)
     assert low.read(raw)[0] == 2000 and low.read(filt)[0] == 0

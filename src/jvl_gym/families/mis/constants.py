@@ -131,6 +131,7 @@ CMD_ADD_POSITION = 120  #: P_IST, P_SOLL, encoder += P_NEW
 CMD_ADD_ACTUAL = 121  #: P_IST, encoder += P_NEW
 # --- COMMAND: user commands (§8.2.22) ---------------------------------------------------------
 CMD_RESYNC = 257  #: P_IST := encoder position
+CMD_PRESET_H3 = 316  #: the H3 encoder's position := P_NEW
 CMD_PRESET_POSITION = 354  #: encoder, P_IST and P_SOLL := P_NEW (follow error 0)
 CMD_RESET = 267  #: reset the CPU
 CMD_SAVE_RESET = 268  #: save to flash, then reset
@@ -144,6 +145,7 @@ CMD_PASSIVE_ONLY = (CMD_RESET, CMD_SAVE_RESET, CMD_SAVE)
 # --- encoders (§8.2.49, units.ENCODER_TYPES) ----------------------------------------------
 #: encoder counts per revolution of each ENCODER_TYPE code (0: no encoder)
 ENCODER_CPR = {code: cpr for code, (_, cpr) in ENCODER_TYPES.items()}
+ENCODER_H3 = 2  #: ENCODER_TYPE of the H3 absolute multi-turn encoder (§8.2.49)
 
 # --- serial line (§18.2) ---------------------------------------------------------------------
 #: MacTalk of the 32-bit register families: registers 1–255, data always 4 bytes

@@ -2,8 +2,9 @@
 
 Order: time and inputs; encoder, follow error and monitoring; the mode's profile velocity;
 the commanded position (P_IST) advanced by it; status bits; the phase current the chopper aims
-at; the sample buffer. The plant then runs the sample's inner samples (``plant``) with the
-commanded position moving linearly from ``S_CMD_PREV`` to ``S_CMD``.
+at; FLEXREGISTER (``flexreg``); the sample buffer. The plant then runs the sample's inner
+samples (``plant``) with the commanded position moving linearly from ``S_CMD_PREV`` to
+``S_CMD``.
 
 Modes (§8.2.3): passive (0) and safe (15) switch the bridge off; velocity (1) runs at V_SOLL by
 the profile rules (``profile``); position (2) moves P_IST to P_SOLL (the distance is
@@ -42,6 +43,7 @@ from . import constants as c
 from . import layout as L
 from .firmware import regs as R
 from .firmware.closed_loop import field_step, scale_current
+from .firmware.flexreg import flex_register
 from .firmware.homing import zero_search
 from .firmware.inputs import update_inputs
 from .firmware.monitor import check_errors, read_encoder, status_bits
@@ -258,6 +260,7 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
     s[L.S_FIELD_STEP] = field_step(regs, s, v) if closed_loop else 0.0
     s[L.S_I_AMP] = _SQRT2 * min(units, p[L.P_RUN_MAX]) * p[L.P_AMPS_PER_UNIT]
     s[L.S_BRIDGE] = (2.0 if closed_loop else 1.0) if active else 0.0
+    flex_register(regs)
     if rec:
         _record(regs, s, buf)
 

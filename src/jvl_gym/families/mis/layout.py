@@ -85,8 +85,14 @@ N_STATE = S_INDEX_DIR + 1
     P_STOP_LO,  # mechanical end stop below this rotor angle [rad] (−inf: none)
     P_STOP_HI,  # mechanical end stop above this rotor angle [rad] (inf: none)
     P_STANDBY_MAX,  # largest STANDBY_CURRENT of the type
-    N_PARAM,
-) = range(17)
+    P_H3_PRESET,  # H3 encoder: its preset minus the rotor's count at the preset (command 316)
+    P_AF0,  # analogue filter settings of IO1 … IO8 as the firmware holds them (4 per input)
+) = range(18)
+#: one input's analogue filter settings at P_AF0 + 4·k + column: the firmware's copies of
+#: AFZUP_CONFMIN, AFZUP_CONFMAX, AFZUP_MAXSLOPE and AFZUP_FILTER (§8.2.50–55)
+AF_CONFMIN, AF_CONFMAX, AF_MAXSLOPE, AF_FILTER = range(4)
+AF_SETTINGS = 4
+N_PARAM = P_AF0 + AF_SETTINGS * 8
 
 # --- inputs ---------------------------------------------------------------------------------
 (
@@ -96,4 +102,6 @@ N_STATE = S_INDEX_DIR + 1
     I_DIGITAL,  # IO1-IO8 levels (bits 0-7)
     I_ANALOG0,  # IO1 … IO8 analogue levels [V] (8 columns)
 ) = range(5)
-N_INPUT = I_ANALOG0 + 8
+#: the word the SSI encoder sends, Gray or binary as it codes it (§5.7; read on command 321/322)
+I_SSI_WORD = I_ANALOG0 + 8
+N_INPUT = I_SSI_WORD + 1

@@ -25,11 +25,14 @@ from ...registers import Register, RegisterError, RegisterRangeError
 from . import constants as c
 from . import layout as L
 from .config import MisMotorConfig, load_motor
+from .filter_setup import READ_INDEX_VALUES, FilterSetup
 from .firmware import regs as R
 from .plant.torque_curve import pull_out_torque
 from .program.api import ProgramMixin
+from .ssi_port import SSI_COMMANDS, SsiPort
 from .table import CONFORMANCE, TABLE
 from .units import COUNTS_PER_REV, CURRENT_AMPS_PER_UNIT
+from .user_commands import UserCommands
 
 __all__ = ["MisMotorArray"]
 
@@ -58,22 +61,25 @@ _INPUT_COLUMNS: dict[str, int] = {"load_torque": L.I_LOAD_TORQUE,
                                   "supply_volts": L.I_SUPPLY_VOLTS,
                                   "pulse_counts": L.I_PULSE_COUNTS,
                                   "digital_inputs": L.I_DIGITAL,
-                                  **{f"analog{k + 1}": L.I_ANALOG0 + k for k in range(8)}}
+                                  **{f"analog{k + 1}": L.I_ANALOG0 + k for k in range(8)},
+                                  "ssi_word": L.I_SSI_WORD}
 #: registers whose writes the firmware's rules handle one by one
 _SPECIAL = frozenset({R.MODE_REG, R.P_SOLL, R.COMMAND, R.ENCODER_POS, R.S_CONTROL,
-                      R.STARTMODE, R.HOMEMODE, R.TURNTABLE_MODE})
+                      R.STARTMODE, R.HOMEMODE, R.TURNTABLE_MODE, R.AFZUP_WRITEBITS,
+                      R.AFZUP_READINDEX})
 #: registers a setup (a register set) may not hold: commands and mode requests
 _NOT_IN_SETUP = frozenset({R.MODE_REG, R.COMMAND, R.S_CONTROL, R.ENCODER_POS})
 #: registers that hold one of a set of codes: (allowed, where the manual says so)
 _MEMBERS: dict[int, tuple[frozenset[int], str]] = {
     R.STARTMODE: (c.START_MODES, "§8.2.33"), R.HOMEMODE: (c.HOME_MODES, "§8.2.37"),
-    R.TURNTABLE_MODE: (frozenset(range(6)), "§5.12.3: >5 is illegal")}
+    R.TURNTABLE_MODE: (frozenset(range(6)), "§5.12.3: >5 is illegal"),
+    R.AFZUP_READINDEX: (READ_INDEX_VALUES, "§8.2.51: 0, 1-8, 32768-32775")}
 BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
 #: the plant's state, which a reset of the electronics leaves alone
 _PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD]
 
 
-class MisMotorArray(ProgramMixin, MotorArray, layout=L):
+class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray, layout=L):
     """N simulated MIS/SMC integrated step motors (:class:`~jvl_gym.MotorArray` of the
     ``mis`` family).
 
@@ -109,7 +115,8 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
     INPUT_RULES: ClassVar[dict[str, InputRule]] = {
         "supply_volts": InputRule(0.0, 80.0, unit="V"),
         "pulse_counts": InputRule(whole=True, unit="counts per outer sample"),
-        "digital_inputs": InputRule(0.0, 255.0, whole=True, unit="(bits of IO1-IO8)")}
+        "digital_inputs": InputRule(0.0, 255.0, whole=True, unit="(bits of IO1-IO8)"),
+        "ssi_word": InputRule(0.0, 2.0**31 - 1, whole=True, unit="(the SSI encoder's word)")}
     PHYSICAL = frozenset({"speed_rpm", "speed_rad_s", "position_rad", "torque", "current_amplitude",
                           "lost_steps"})
     SHAFT_ANGLE, SHAFT_SPEED = L.S_THETA, L.S_OMEGA
@@ -202,7 +209,7 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         pos = np.where(single & single_turn_encoder, turn, pos)
         pos = np.where(multi & (code == 0), stored, pos)
         pos = np.where(multi & single_turn_encoder, near, pos)
-        pos = np.where(multi & (code == 2), q, pos)
+        pos = np.where(multi & (code == 2), q + self.params[idx, L.P_H3_PRESET], pos)
         return np.mod(pos + 2**31, 2**32) - 2**31
 
     def _power_on(self, idx: np.ndarray) -> None:
@@ -242,6 +249,9 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
                                          home, start)
         # a power-on zero search that times out goes on in STARTMODE (§6.5.9, §7.2.19)
         s[idx, L.S_HOME_PREV] = start
+        self._commands_power_on(idx)
+        self._afzup_power_on(idx)
+        self._ssi_power_on(idx)
         self._program_power_on(idx)
 
     @property
@@ -293,9 +303,14 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
                 self._set_encoder(i, int(regs[i, R.P_IST]))
                 regs[i, R.FLWERR] = 0
             regs[idx, R.MODE_REG] = np.where(running, c.STOP, raw)
+        elif num == R.AFZUP_READINDEX:
+            self._check_member(reg, raw, *_MEMBERS[num])
+            self._afzup_read_index(idx, raw)
         elif num in _MEMBERS:
             self._check_member(reg, raw, *_MEMBERS[num])
             regs[idx, num] = raw
+        elif num == R.AFZUP_WRITEBITS:
+            self._afzup_write_bits(idx, raw)
         elif num == R.P_SOLL:
             self._store_p_soll(idx, raw)
         elif num == R.ENCODER_POS:
@@ -348,12 +363,14 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         idx = as_index(index, self.n)
         self._store_position_backup(idx)
         keep = self.state[np.ix_(idx, _PLANT_STATE)].copy()
+        ssi = self.regs[idx, R.EXTENCODER2].copy()
         memory = self._rom if self._flash is None else self._flash
         for i in idx.tolist():
             self.regs[i] = memory[i] if self._has_flash[i] else self._rom[self._type_of[i]]
         self.state[idx] = 0.0
         self.state[np.ix_(idx, _PLANT_STATE)] = keep
         self._power_on(idx)
+        self._ssi_keep(idx, ssi)
         rotor = self.state[idx, L.S_THETA] * COUNTS_PER_REV / (2.0 * math.pi)
         for col in (L.S_CMD, L.S_CMD_PREV, L.S_FIELD):
             self.state[idx, col] = rotor
@@ -417,19 +434,38 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
             self.state[i, L.S_ENC_PREV] = value
         self.regs[i, R.ENCODER_POS] = value
 
+    def _preset_h3(self, i: int, value: int) -> None:
+        """User command 316 (§8.2.22, §5.8.4): the H3 encoder's position := ``value``:
+        ABSENCODER and ENCODER_POS read it at once, P_IST and P_SOLL stay. The encoder keeps
+        the preset over commands 267 and 268 (its own memory); ``reset`` starts the motor
+        anew with its type's parameters and clears it."""
+        cpr = c.ENCODER_CPR[c.ENCODER_H3]
+        per = COUNTS_PER_REV // cpr
+        q = math.floor(self._firmware_angle(np.array([i]))[0] * COUNTS_PER_REV
+                       / (2 * math.pi) / per) * per
+        self.params[i, L.P_H3_PRESET] = value - q
+        self.regs[i, R.ABSENCODER] = value
+        self._set_encoder(i, value)
+
     def _commands(self, idx: np.ndarray, raw: np.ndarray) -> None:
         """FastMac commands (§8.2.21) and the user commands 257, 267–269, 342, 354, 398, 399
         (§8.2.22; reset and save only in passive or safe mode, which "allows the save in flash
         and reset commands", §8.2.3; 342 erases the stored program,
-        :meth:`~.program.api.ProgramMixin.erase_program`); other numbers do nothing. COMMAND
-        reads 0 afterwards."""
+        :meth:`~.program.api.ProgramMixin.erase_program`), the SSI commands 320–322
+        (:mod:`.ssi_port`), 999 and the protected commands, the RelativeMove flag and the
+        K-phase flash (:mod:`.user_commands`); other numbers do nothing. COMMAND reads 0
+        afterwards."""
         regs = self.regs
         for i, cmd in zip(idx.tolist(), raw.tolist()):
             if cmd in c.CMD_PASSIVE_ONLY and regs[i, R.MODE_REG] not in (c.PASSIVE, c.SAFE):
                 raise RegisterError(f"COMMAND = {cmd} refused for motor {i}: reset and save "
                                     "need passive or safe mode (§8.2.3). Nothing was changed.")
         for i, cmd in zip(idx.tolist(), raw.tolist()):
-            if cmd == c.CMD_CLEAR_ERRORS:
+            if self._user_command(i, cmd):
+                pass  # 999, the protected commands, RelativeMove, K-phase (.user_commands)
+            elif cmd in SSI_COMMANDS:
+                self._ssi_command(i, cmd)
+            elif cmd == c.CMD_CLEAR_ERRORS:
                 regs[i, R.ERR_BITS] = 0
                 regs[i, R.WARN_BITS] = 0
             elif cmd == c.CMD_P_SOLL_ZERO:
@@ -467,6 +503,8 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
                 if cmd != c.CMD_ADD_ACTUAL:
                     regs[i, R.P_SOLL] = wrap32(int(regs[i, R.P_SOLL]) * add + new)
                 self._set_encoder(i, wrap32(int(regs[i, R.ENCODER_POS]) * add + new))
+            elif cmd == c.CMD_PRESET_H3 and self.params[i, L.P_ENCODER] == c.ENCODER_H3:
+                self._preset_h3(i, int(regs[i, R.P_NEW]))
             elif cmd == c.CMD_RESYNC and self.params[i, L.P_ENCODER] > 0:
                 regs[i, R.P_IST] = regs[i, R.ENCODER_POS]
                 self.state[i, L.S_FRAC] = 0.0
@@ -496,7 +534,9 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         Keywords: ``load_torque`` [N·m, opposing positive rotation], ``supply_volts`` [V,
         0 … 80], ``pulse_counts`` (whole gear-input counts per outer sample),
         ``digital_inputs`` (IO1–IO8 levels as bits 0–7, 0 … 255), ``analog1`` … ``analog8``
-        [V] (the ADC reads 0 … 5 V, §2.3.5). All are checked before any is set.
+        [V] (the ADC reads 0 … 5 V, §2.3.5), ``ssi_word`` (the word the SSI encoder sends,
+        0 … 2³¹ − 1, Gray or binary as it codes it; read by commands 321/322, §5.7). All are
+        checked before any is set.
         """
         super().set_input(index, **inputs)
 

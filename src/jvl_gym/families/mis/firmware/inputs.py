@@ -10,9 +10,9 @@ not say which level a set bit selects).
 Analogue filter, every 10 ms (§2.3.5): a raw sample outside AFZUP_CONFMIN … AFZUP_CONFMAX is
 discarded; else it is limited to the last filtered value ± AFZUP_MAXSLOPE; the result is
 ``new·F/64 + old·(64 − F)/64`` with F = AFZUP_FILTER, kept with a fractional part inside and
-rounded in the ANALOGUE_FILTERED registers. The manual selects per-input settings through
-AFZUP_WRITEBITS / AFZUP_READINDEX; the simulator applies the registers' current values to all
-eight inputs (a simplification).
+rounded in the ANALOGUE_FILTERED registers. Each input filters with its own settings, the
+firmware's copies of AFZUP_CONFMIN … AFZUP_FILTER that AFZUP_WRITEBITS hands it (§8.2.50;
+``mis.filter_setup``), held in the motor's ``params`` row.
 
 FILTERSTATUS (§8.2.56), each second of the motor's clock: bits 0–7 tell that more than half the
 samples of the last second of IO1 … IO8 were discarded as outside the confidence limits, bits
@@ -96,13 +96,15 @@ def update_inputs(regs, s, p, u) -> None:  # pragma: no cover - compiled
         regs[R.ANALOGUE_INPUT1 + k] = int(raw)
         if sample:
             old = s[L.S_AF0 + k]
-            if raw < regs[R.AFZUP_CONFMIN] or raw > regs[R.AFZUP_CONFMAX]:
+            af = L.P_AF0 + L.AF_SETTINGS * k
+            conf_min, conf_max = p[af + L.AF_CONFMIN], p[af + L.AF_CONFMAX]
+            max_slope = p[af + L.AF_MAXSLOPE]
+            if raw < conf_min or raw > conf_max:
                 s[L.S_AF_CONF0 + k] += 1.0
-            elif abs(raw - old) > regs[R.AFZUP_MAXSLOPE]:
+            elif abs(raw - old) > max_slope:
                 s[L.S_AF_SLOPE0 + k] += 1.0
-            s[L.S_AF0 + k] = analogue_filter_step(
-                old, raw, regs[R.AFZUP_CONFMIN], regs[R.AFZUP_CONFMAX],
-                regs[R.AFZUP_MAXSLOPE], regs[R.AFZUP_FILTER])
+            s[L.S_AF0 + k] = analogue_filter_step(old, raw, conf_min, conf_max, max_slope,
+                                                  p[af + L.AF_FILTER])
             regs[R.ANALOGUE_FILTERED1 + k] = int(math.floor(s[L.S_AF0 + k] + 0.5))
     if int(s[L.S_TICK]) % 1000 == 0:
         _filter_status(regs, s)

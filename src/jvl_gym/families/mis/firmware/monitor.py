@@ -5,7 +5,8 @@ status bits (MIS manual §8.2.15, §8.2.18–19, §8.2.24, §8.2.31–32, §5.9,
   §8.2.49), reported in 409 600 counts/rev, plus an offset the firmware moves when it sets the
   position (zero search, FastMac 119–121). Without an encoder it keeps its value.
 - ABSENCODER: the rotor angle from power-on as the encoder reads it, single turn
-  (0 … 409599) for H2, multiturn for H3/H4 (§8.2.38, §5.12.5); not moved by zeroing.
+  (0 … 409599) for H2, multiturn for H3/H4 (§8.2.38, §5.12.5); not moved by zeroing; an H3's
+  moved by its preset (command 316, §5.8.4).
 - FLWERR = P_IST − ENCODER_POS (positive when the rotor lags behind a positive move; §8.2.18
   names no sign); 0 without an encoder. In an active mode |FLWERR| > FLWERRMAX > 0 sets ERR_BITS
   bits 1 and 0 (§8.2.19, §7.2.4).
@@ -84,7 +85,9 @@ def read_encoder(regs, s, p) -> bool:  # pragma: no cover - compiled
         return False
     absolute = int(rotor_counts_quantised(firmware_angle(regs, s), cpr))
     single_turn = int(p[L.P_ENCODER]) in (1, 3)  # H2 (§5.12.5: 0 … 409599, §8.2.38)
-    regs[R.ABSENCODER] = absolute % COUNTS_PER_REV if single_turn else wrap32(absolute)
+    # the H3 keeps its own preset (command 316, §5.8.4) in its battery-backed memory
+    regs[R.ABSENCODER] = absolute % COUNTS_PER_REV if single_turn else wrap32(
+        absolute + int(p[L.P_H3_PRESET]))
     pos = wrap32(int(absolute + s[L.S_ENC_OFFSET]))
     regs[R.V_ENCODER] = int(np.floor(wrap32(pos - int(s[L.S_ENC_PREV]))
                                      / c.VEL_UNIT_TO_COUNTS + 0.5))

@@ -247,6 +247,10 @@ class ProgramMixin:
                 self.regs[i, R.MODE_REG] = c.POSITION
                 r.start(resume=False)
 
+    def _between_samples(self) -> None:
+        """What the firmware serves between two outer samples a program runs in besides the
+        program (the motor array's other parts override it)."""
+
     def step(self, n_outer: int = 1) -> None:
         """Advance all motors by ``n_outer`` outer samples; running programs run their lines
         before each outer sample (:mod:`.executor`)."""
@@ -260,6 +264,7 @@ class ProgramMixin:
             if not live:
                 super().step(left)  # type: ignore[misc]
                 return
+            self._between_samples()
             for i, r in live:
                 r.sample(self, i)  # type: ignore[arg-type]
             world = getattr(self, "world", None)
