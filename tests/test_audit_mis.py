@@ -137,13 +137,16 @@ def test_prog_version_bit_13_clear_on_a_released_firmware() -> None:
     assert not int(_motor().read("PROG_VERSION")[0]) & (1 << 13)
 
 
-@pytest.mark.xfail(strict=True, reason="SSI encoders are not modelled (docs/families/mis-sim.md "
-                   "'Not modelled'): the simulator has no SSI clock/data lines or SSI input")
 def test_ssi_clock_idles_high_and_goes_low_to_sample() -> None:
     """MIS manual §5.7: the SSI clock line idles high; for a reading it goes low for t1 µs so
-    that the encoder samples its value, which then appears as the SSI encoder value."""
+    that the encoder samples its value, which then appears as the SSI encoder value (the clock
+    line itself is electrical: what a user sees is the sampled value in EXTENCODER2 after a
+    reading, command 321, on a port set up by command 320)."""
     m = _motor()
-    m.set_input(ssi_position=12345)
+    m.write("SSI_SETUP1", 25 | (1 << 5) | (10 << 8))  # 25 data bits, 1 sample, 100 kHz
+    m.write("COMMAND", 320)
+    m.set_input(ssi_word=12345)
+    m.write("COMMAND", 321)
     m.run(0.05)
     assert int(m.read("EXTENCODER2")[0]) == 12345
 
