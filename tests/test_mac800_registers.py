@@ -173,3 +173,14 @@ def test_task_interface() -> None:
     assert m.read("ANINP")[0] == round(2.0 / u.ANINP_VOLTS_PER_UNIT)
     assert m.read("V_EXT")[0] == 7
     assert task.shaft_angle(view, 0) == m.position_rad[0]
+
+
+def test_function_error_is_stated_in_the_profiles_sixteenth_counts() -> None:
+    """FNCERR accumulates the function generator's velocity corrections, which are in the
+    profile's 1/16 count per sample (MAC050–141 manual 3.2.24, which the MAC800 overview's
+    function error follows; the overview gives no unit): the table states its unit, and
+    FNCERRMAX's, as 1/16 count, as the MAC050–141's table does."""
+    mac800 = MotorArray("MAC800", n=1, seed=0).table
+    mac140 = MotorArray("MAC140", n=1, seed=0).table
+    for name in ("FNCERR", "FNCERRMAX"):
+        assert mac800.lookup(name).unit == mac140.lookup(name).unit == "1/16 count"
