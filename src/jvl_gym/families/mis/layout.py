@@ -65,7 +65,16 @@ S_LOW_BUS_N = S_AF_SLOPE0 + 8
 #: direction it goes on in to the index (§8.2.65, §8.2.67 bit 0)
 S_INDEX_TURN = S_LOW_BUS_N + 1
 S_INDEX_DIR = S_INDEX_TURN + 1
-N_STATE = S_INDEX_DIR + 1
+#: hardware supervision (``firmware.supervision``): 1 while the program waits for the control
+#: voltage (CVI) at start-up or after it fell below SAVE_VOLTAGE (§8.2.79–81), the measurements
+#: at or above ACCEPT_VOLTAGE in a row, the electronics' temperature above ambient [K], the
+#: brake (1: holding), the ms since the brake was last told to hold or to release (§8.2.106)
+S_CVI_WAIT = S_INDEX_DIR + 1
+S_CVI_N = S_CVI_WAIT + 1
+S_TEMP_RISE = S_CVI_N + 1
+S_BRAKE_HELD = S_TEMP_RISE + 1
+S_BRAKE_MS = S_BRAKE_HELD + 1
+N_STATE = S_BRAKE_MS + 1
 
 # --- params ---------------------------------------------------------------------------------
 (
@@ -85,8 +94,10 @@ N_STATE = S_INDEX_DIR + 1
     P_STOP_LO,  # mechanical end stop below this rotor angle [rad] (−inf: none)
     P_STOP_HI,  # mechanical end stop above this rotor angle [rad] (inf: none)
     P_STANDBY_MAX,  # largest STANDBY_CURRENT of the type
+    P_BRAKE_TORQUE,  # holding torque of the electromechanical brake [N·m] (0: none)
+    P_OVERLOAD,  # 1 on the types with the driver overload error (§8.2.31 bit 18)
     N_PARAM,
-) = range(17)
+) = range(19)
 
 # --- inputs ---------------------------------------------------------------------------------
 (
@@ -96,4 +107,9 @@ N_STATE = S_INDEX_DIR + 1
     I_DIGITAL,  # IO1-IO8 levels (bits 0-7)
     I_ANALOG0,  # IO1 … IO8 analogue levels [V] (8 columns)
 ) = range(5)
-N_INPUT = I_ANALOG0 + 8
+I_CONTROL_VOLTS = I_ANALOG0 + 8  #: control supply at the CVI terminal [V]
+I_AMBIENT = I_CONTROL_VOLTS + 1  #: ambient temperature [°C]
+I_STO_A = I_AMBIENT + 1  #: Safe Torque Off channel A [V]
+I_STO_B = I_STO_A + 1  #: Safe Torque Off channel B [V]
+I_FAULTS = I_STO_B + 1  #: injected hardware faults (ERR_BITS positions of constants.FAULT_BITS)
+N_INPUT = I_FAULTS + 1

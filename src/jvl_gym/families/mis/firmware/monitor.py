@@ -30,7 +30,8 @@ status bits (MIS manual §8.2.15, §8.2.18–19, §8.2.24, §8.2.31–32, §5.9,
   passive (§8.2.28, §8.2.31: "will not move until all the errors have been cleared"), except
   the zero-search time-out (bit 16), which sets the motor back in its previous mode, where it
   brakes with its deceleration and holds still until the errors are cleared (§7.2.19, §8.2.31;
-  ``kernel``, ``homing``).
+  ``kernel``, ``homing``). The hardware errors (over-voltage, temperature, STO, control voltage,
+  injected faults) are set by ``supervision``.
 """
 
 from __future__ import annotations
@@ -43,8 +44,9 @@ from numba import njit
 from ....physics.fixed import wrap32
 from .. import constants as c
 from .. import layout as L
-from ..units import BUSVOL_VOLTS_PER_UNIT, COUNTS_PER_REV
+from ..units import COUNTS_PER_REV
 from . import regs as R
+from .supervision import busvol_units
 
 #: encoder counts per revolution by ENCODER_TYPE code (0: none)
 _CPR = np.array([c.ENCODER_CPR.get(k, 0) for k in range(11)], dtype=np.int64)
@@ -115,8 +117,7 @@ def check_errors(regs, s, u, active: bool, has_encoder: bool,
     maxerr = regs[R.FLWERRMAX]
     if active and has_encoder and maxerr > 0 and abs(regs[R.FLWERR]) > maxerr:
         err |= c.ERR_FOLLOW
-    busvol = int(min(max(np.floor(u[L.I_SUPPLY_VOLTS] / BUSVOL_VOLTS_PER_UNIT + 0.5), 0.0),
-                     4095.0))
+    busvol = busvol_units(u)
     regs[R.BUSVOL] = busvol
     if busvol < regs[R.MIN_BUSVOL]:
         warn |= c.WARN_LOW_BUS

@@ -1,0 +1,208 @@
+"""Hardware supervision: control voltage, temperature, over-voltage, Safe Torque Off, the brake
+and injected hardware faults (MIS manual §5.4.5, §5.6.4, §5.11, §7.2, §8.2.24–25, §8.2.31–32,
+§8.2.79–82, §8.2.93, §8.2.106, §8.2.127, §8.2.129). Everything here runs once per outer sample
+(1 ms), never in the plant's inner samples.
+
+- Control voltage (CVI, world input ``control_volts``): CVI_VOLT reads it in 8.764 mV units.
+  Below SAVE_VOLTAGE "the program shuts down and all motor activity stops" (§8.2.81): the
+  bridge goes off at once, the motor passive, ERR_BITS bit 17 (CVI unstable, §7.2.20: "below
+  what is specified as minimum voltage", which a reset clears) is set; P_IST stays where the
+  motor stopped, so a later reset or power-down backs up that position (§5.4.4). The program then
+  waits, as at a start with a low CVI, until the voltage has been measured above ACCEPT_VOLTAGE
+  ACCEPT_COUNT times in a row, once per 1 ms (§5.4.5, §8.2.79–80); while it waits the firmware
+  does nothing (TICKS stands still).
+- Temperature: the electronics are at the ambient temperature (world input
+  ``ambient_celsius``) plus a first-order rise from the bridge's conduction loss (the thermal
+  constants of ``constants``); TEMP reads °C / 2.27 (§8.2.25), TEMP_HIGHRES m°C (§8.2.129).
+  Above TEMP_LIMITS bits 0–15 [°C] WARN_BITS bit 6 ("has been above", kept until cleared),
+  above bits 16–31 ERR_BITS bit 6, set again every sample while it is still too hot (§7.2.9,
+  §8.2.127).
+- Over-voltage: a measured bus voltage (BUSVOL) above MAX_VOLTAGE bits 0–15 [V] (100 V,
+  §7.2.8, §8.2.93) sets ERR_BITS bit 5.
+- Safe Torque Off (world inputs ``sto_a``, ``sto_b`` [V]): a channel below 18 V (§7.2.18) takes
+  the torque off at once (passive, no ramp), sets ERR_BITS bit 29 (STO) and WARN_BITS bit 9
+  (active while a channel is off); STATUSBITS bits 23/24 show each channel on, bit 19 the
+  torque safely off (§8.2.24).
+- Injected faults (world input ``faults``, bits in ERR_BITS positions): each present fault sets
+  its error bit every sample (a clear does not hold while the fault is there); the driver
+  overload also WARN_BITS bit 8; the encoder COM error (bit 10) only at start-up (§7.2.13,
+  ``motors``). STATUSBITS bit 9 shows an internal encoder error and bit 20 (encoder OK) is off
+  while one is set.
+- Brake (§5.6.4, §5.11, §8.2.106): a motor has a brake when its ``brake_torque`` parameter is
+  above 0 or BRAKE selects an output. The brake is told to hold in passive and safe mode (and
+  while the program is shut down) and to release in an active mode, unless SETUP_BITS bit 19
+  disables it (released in every mode). The brake output (the IO pins of BRAKE bits 0–7 set as
+  outputs) follows at once, high while released. The brake itself holds BRAKE bits 8–15 ms
+  (T_ON) after it was told to hold and releases bits 16–23 ms (T_OFF) after it was told to
+  release; until then an active motor does not move. STATUSBITS bit 14: the brake holds.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+from .. import constants as c
+from .. import layout as L
+from ..units import (
+    BUSVOL_VOLTS_PER_UNIT,
+    CVI_VOLTS_PER_UNIT,
+    OUTER_DT,
+    TEMP_CELSIUS_PER_UNIT,
+    TEMP_HIGHRES_CELSIUS_PER_UNIT,
+)
+from . import regs as R
+
+#: the first-order rise's step per outer sample (exact for a loss held over the sample)
+_RISE_STEP = 1.0 - math.exp(-OUTER_DT / c.THERMAL_TIME_CONSTANT)
+_FAULTS_IN_RUN = c.FAULT_BITS & ~c.ERR_ENCODER_COM
+_BRAKE_MASK = 0xFF
+
+
+@njit(cache=True, inline="always")
+def busvol_units(u) -> int:  # pragma: no cover - compiled
+    """The bus (P+) voltage as BUSVOL reads it: 26.525 mV units, 0 … 4095 (§8.2.47)."""
+    return int(min(max(np.floor(u[L.I_SUPPLY_VOLTS] / BUSVOL_VOLTS_PER_UNIT + 0.5), 0.0),
+                   4095.0))
+
+
+@njit(cache=True, inline="always")
+def cvi_units(volts: float) -> int:  # pragma: no cover - compiled
+    """A control voltage as CVI_VOLT reads it: 8.764 mV units, 0 … 4095 (§8.2.82)."""
+    return int(min(max(np.floor(volts / CVI_VOLTS_PER_UNIT + 0.5), 0.0), 4095.0))
+
+
+@njit(cache=True)
+def temperature(regs, s, u) -> float:  # pragma: no cover - compiled
+    """The electronics' temperature [°C] of this sample, in TEMP and TEMP_HIGHRES (module
+    docstring); the loss is that of the phase current the bridge ran with in the last sample."""
+    amps = s[L.S_I_AMP] if s[L.S_BRIDGE] > 0.0 else 0.0
+    loss = c.DRIVER_RESISTANCE * amps * amps
+    s[L.S_TEMP_RISE] += (c.THERMAL_RESISTANCE * loss - s[L.S_TEMP_RISE]) * _RISE_STEP
+    celsius = u[L.I_AMBIENT] + s[L.S_TEMP_RISE]
+    regs[R.TEMP_HIGHRES] = int(np.floor(celsius / TEMP_HIGHRES_CELSIUS_PER_UNIT + 0.5))
+    regs[R.TEMP] = int(min(max(np.floor(celsius / TEMP_CELSIUS_PER_UNIT + 0.5), 0.0), 127.0))
+    return celsius
+
+
+@njit(cache=True)
+def control_voltage(regs, s, u) -> bool:  # pragma: no cover - compiled
+    """CVI_VOLT of this sample and whether the program runs (module docstring)."""
+    cvi = cvi_units(u[L.I_CONTROL_VOLTS])
+    regs[R.CVI_VOLT] = cvi
+    if s[L.S_CVI_WAIT] == 0.0:
+        if cvi >= regs[R.SAVE_VOLTAGE]:
+            return True
+        regs[R.ERR_BITS] |= c.ERR_CVI | c.ERR_GENERAL
+        regs[R.MODE_REG] = c.PASSIVE
+        s[L.S_CVI_WAIT] = 1.0
+        s[L.S_CVI_N] = 0.0
+        return False
+    s[L.S_CVI_N] = s[L.S_CVI_N] + 1.0 if cvi > regs[R.ACCEPT_VOLTAGE] else 0.0
+    if s[L.S_CVI_N] >= regs[R.ACCEPT_COUNT]:
+        s[L.S_CVI_WAIT] = 0.0
+        s[L.S_CVI_N] = 0.0
+        return True
+    return False
+
+
+@njit(cache=True)
+def program_stopped(regs, s, p) -> None:  # pragma: no cover - compiled
+    """The outer sample of a motor whose program is not running: bridge off, no command
+    motion, the brake holding."""
+    s[L.S_VEL] = 0.0
+    s[L.S_EMERGENCY] = 0.0
+    s[L.S_CMD_PREV] = s[L.S_CMD]
+    s[L.S_I_AMP] = 0.0
+    s[L.S_BRIDGE] = 0.0
+    s[L.S_FIELD_STEP] = 0.0
+    s[L.S_BRAKE_HELD] = 1.0
+    s[L.S_BRAKE_MS] = 0.0
+    regs[R.ACTUAL_TORQUE] = 0
+    if has_brake(regs, p):
+        regs[R.STATUSBITS] |= c.ST_BRAKE_ACTIVE
+
+
+@njit(cache=True, inline="always")
+def sto_off(u) -> bool:  # pragma: no cover - compiled
+    """True while a Safe Torque Off channel is below 18 V (§7.2.18)."""
+    return u[L.I_STO_A] < c.STO_ON_VOLTS or u[L.I_STO_B] < c.STO_ON_VOLTS
+
+
+@njit(cache=True)
+def supervise(regs, s, u, celsius: float) -> None:  # pragma: no cover - compiled
+    """Over-voltage, temperature, Safe Torque Off and the injected faults of this sample
+    (module docstring): their error and warning bits, and the torque off at once by STO."""
+    err = regs[R.ERR_BITS]
+    warn = regs[R.WARN_BITS]
+    if busvol_units(u) * BUSVOL_VOLTS_PER_UNIT > (regs[R.MAX_VOLTAGE] & 0xFFFF):
+        err |= c.ERR_OVER_VOLTAGE
+    limits = regs[R.TEMP_LIMITS]
+    if celsius > (limits & 0xFFFF):
+        warn |= c.WARN_TEMPERATURE
+    if celsius > ((limits >> 16) & 0xFFFF):
+        err |= c.ERR_TEMPERATURE
+    if sto_off(u):
+        err |= c.ERR_STO
+        warn |= c.WARN_STO
+        mode = regs[R.MODE_REG]
+        if mode != c.PASSIVE and mode != c.SAFE:
+            regs[R.MODE_REG] = c.PASSIVE
+            s[L.S_VEL] = 0.0
+            s[L.S_EMERGENCY] = 0.0
+            s[L.S_HOME_PHASE] = 0.0
+    else:
+        warn &= ~c.WARN_STO
+    faults = int(u[L.I_FAULTS]) & _FAULTS_IN_RUN
+    err |= faults
+    if faults & c.ERR_DRIVER_OVERLOAD:
+        warn |= c.WARN_DRIVER_OVERLOAD
+    if err & ~c.ERR_GENERAL:
+        err |= c.ERR_GENERAL
+    regs[R.ERR_BITS] = err
+    regs[R.WARN_BITS] = warn
+
+
+@njit(cache=True, inline="always")
+def has_brake(regs, p) -> bool:  # pragma: no cover - compiled
+    """An internal brake (``brake_torque`` > 0) or an external one on BRAKE's outputs."""
+    return p[L.P_BRAKE_TORQUE] > 0.0 or (regs[R.BRAKE] & _BRAKE_MASK) != 0
+
+
+@njit(cache=True)
+def brake(regs, s, p, active: bool) -> bool:  # pragma: no cover - compiled
+    """The brake and its output in this sample (module docstring); True while an active motor
+    waits for its brake to release (it does not move)."""
+    hold = not active and (regs[R.SETUP_BITS] & c.SETUP_BRAKE_OFF) == 0
+    want = 1.0 if hold else 0.0
+    if s[L.S_BRAKE_HELD] == want:
+        s[L.S_BRAKE_MS] = 0.0
+    else:
+        s[L.S_BRAKE_MS] += 1.0
+        delay = (regs[R.BRAKE] >> 8) & 0xFF if hold else (regs[R.BRAKE] >> 16) & 0xFF
+        if s[L.S_BRAKE_MS] >= delay:
+            s[L.S_BRAKE_HELD] = want
+            s[L.S_BRAKE_MS] = 0.0
+    out = regs[R.BRAKE] & _BRAKE_MASK & ((regs[R.IOSETUP] >> 8) & 0xFF)
+    if out:
+        regs[R.OUTPUTS] = (regs[R.OUTPUTS] & ~out) | (0 if hold else out)
+    return active and s[L.S_BRAKE_HELD] != 0.0 and has_brake(regs, p)
+
+
+@njit(cache=True)
+def supervision_status(regs, s, p, u) -> None:  # pragma: no cover - compiled
+    """STATUSBITS bits 9, 14, 19, 20, 23 and 24 of this sample (§8.2.24)."""
+    st = regs[R.STATUSBITS]
+    if regs[R.ERR_BITS] & c.ERR_ENCODER_ANY:
+        st = (st | c.ST_ENCODER_ERROR) & ~c.ST_ENCODER_OK
+    if s[L.S_BRAKE_HELD] != 0.0 and has_brake(regs, p):
+        st |= c.ST_BRAKE_ACTIVE
+    if u[L.I_STO_A] >= c.STO_ON_VOLTS:
+        st |= c.ST_STO_A
+    if u[L.I_STO_B] >= c.STO_ON_VOLTS:
+        st |= c.ST_STO_B
+    if sto_off(u):
+        st |= c.ST_STO
+    regs[R.STATUSBITS] = st
