@@ -170,22 +170,22 @@ def test_a_modelled_entry_without_tests_or_a_bad_status_is_refused() -> None:
 def test_a_non_default_write_to_a_not_modelled_register_warns_once_logs_and_is_stored(
         caplog) -> None:
     m = MotorArray("MIS232", n=2, seed=0)
-    assert CMIS.entries[m.table.lookup("BRAKE").number].status == NOT_MODELLED
+    assert CMIS.entries[m.table.lookup("KPHASE").number].status == NOT_MODELLED
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        m.write("BRAKE", 0)  # the default: no warning
+        m.write("KPHASE", 0)  # the default: no warning
         m.write("SETUP_BITS", cmis.SETUP_INVERT_DIRECTION)  # a modelled bit: no warning
     with caplog.at_level(logging.WARNING, logger="jvl_gym.conformance"), \
-            pytest.warns(NotModelledWarning, match=r"BRAKE \(register 179\).*§?8\.2\.106"):
-        m.write("BRAKE", 0x0501)
-    assert m.read("BRAKE").tolist() == [0x0501, 0x0501]
-    assert any("BRAKE" in r.getMessage() for r in caplog.records)
+            pytest.warns(NotModelledWarning, match=r"KPHASE \(register 216\).*§?8\.2\.111"):
+        m.write("KPHASE", 5)
+    assert m.read("KPHASE").tolist() == [5, 5]
+    assert any("KPHASE" in r.getMessage() for r in caplog.records)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        m.write("BRAKE", 0x0702)  # once per register
+        m.write("KPHASE", 7)  # once per register
     with pytest.warns(NotModelledWarning, match="SETUP_BITS"):
-        m.write_many({"V_SOLL": 2000, "SETUP_BITS": 1 << 19})  # bit 19: disable brake
-    assert m.read("SETUP_BITS")[0] == 1 << 19
+        m.write_many({"V_SOLL": 2000, "SETUP_BITS": 1 << 2})  # bit 2: encoder input type
+    assert m.read("SETUP_BITS")[0] == 1 << 2
     with pytest.warns(NotModelledWarning, match="TEMP_HIGHRES|ELDEG_OFFSET|KIA"):
         MotorArray("MAC800", n=1).write("KIA", 5)
 
@@ -196,12 +196,12 @@ def test_the_twin_logs_a_not_modelled_write(caplog) -> None:
 
     m = MotorArray("MIS232", n=1, seed=0)
     twin = Twin(m)
-    frame = m32.encode_write_value(int(m.read("MY_ADDR")[0]), 179, 0x0301)
+    frame = m32.encode_write_value(int(m.read("MY_ADDR")[0]), 216, 3)
     with caplog.at_level(logging.WARNING), warnings.catch_warnings():
         warnings.simplefilter("ignore", NotModelledWarning)
         twin.session().feed(frame)
-    assert m.read("BRAKE")[0] == 0x0301
-    assert any("BRAKE" in r.getMessage() and "not modelled" in r.getMessage()
+    assert m.read("KPHASE")[0] == 3
+    assert any("KPHASE" in r.getMessage() and "not modelled" in r.getMessage()
                for r in caplog.records)
 
 

@@ -39,13 +39,15 @@ def _status(m: MotorArray) -> int:
 
 
 # --- over-voltage ----------------------------------------------------------------------------
-@pytest.mark.statements("mis:8.2.31:8", "mis:8.2.93:3", "mis:7.2.8:1")
+@pytest.mark.statements("mis:8.2.31:8", "mis:8.2.93:2", "mis:8.2.93:3", "mis:7.2.8:1")
 def test_over_voltage_above_100_v_is_an_error_and_the_motor_goes_passive() -> None:
     """§7.2.8: "A too high P+ voltage (> 100 V)": ERR_BITS bit 5, "Motor is set in Passive
     mode"; "Reset the motor, clear the error bit(s) in register 35 or cycle the power".
-    §8.2.93: MAX_VOLTAGE bits 0–15 hold the bus voltage limit."""
+    §8.2.93: MAX_VOLTAGE bits 0–15 hold the bus voltage limit, bits 16–31 the full-scale motor
+    current in mA RMS (the MIS232's 1022 × 5.87 mA)."""
     m = _running()
     assert m.read("MAX_VOLTAGE")[0] & 0xFFFF == 100
+    assert m.read("MAX_VOLTAGE")[0] >> 16 == round(1022 * 5.87)
     m.set_input(supply_volts=99.0)
     m.step(20)
     assert _err(m) == 0
@@ -108,7 +110,7 @@ def test_below_save_voltage_all_motor_activity_stops_with_the_cvi_error() -> Non
     m.write("MODE_REG", c.VELOCITY)
 
 
-@pytest.mark.statements("mis:8.2.79:2", "mis:8.2.80:2")
+@pytest.mark.statements("mis:8.2.79:2", "mis:8.2.80:2", "mis:5.4.5:1")
 def test_the_start_waits_for_accept_count_measurements_above_accept_voltage() -> None:
     """§8.2.79: the acceptance voltage is "required at the CVI supply terminal … for the
     program to start up"; §8.2.80: "the number of times a voltage above the acceptance voltage
@@ -282,7 +284,7 @@ def test_the_brake_releases_after_t_off_in_an_active_mode_and_holds_in_passive()
     assert _status(m) & c.ST_BRAKE_ACTIVE
 
 
-@pytest.mark.statements("mis:8.2.68:14", "mis:5.11.4:1")
+@pytest.mark.statements("mis:8.2.68:14", "mis:5.11.4:1", "mis:8.2.24:14")
 def test_the_brake_holds_the_shaft_in_passive_unless_setup_bit_19_disables_it() -> None:
     """§5.11.1: the brake holds "the position in Passive mode"; §5.11.6: SETUP_BITS bit 19
     "will disable the brake which will allow the machine operator to move the shaft", and
