@@ -47,6 +47,7 @@ from .firmware.closed_loop import field_step, scale_current
 from .firmware.homing import zero_search
 from .firmware.inputs import update_inputs
 from .firmware.monitor import check_errors, read_encoder, status_bits
+from .firmware.profile import position_step, velocity_step
 from .firmware.supervision import (
     brake,
     control_voltage,
@@ -55,7 +56,6 @@ from .firmware.supervision import (
     supervision_status,
     temperature,
 )
-from .firmware.profile import position_step, velocity_step
 from .firmware.turntable import tt_active, tt_distance, tt_wrap
 from .units import COUNTS_PER_REV
 
