@@ -300,3 +300,19 @@ def test_the_brake_holds_the_shaft_in_passive_unless_setup_bit_19_disables_it() 
     free = MotorArray("MIS232", n=1, seed=0)  # no brake: bit 14 never set
     free.step(10)
     assert int(free.read("STATUSBITS")[0]) & c.ST_BRAKE_ACTIVE == 0
+
+
+def test_the_factory_limits_survive_a_save_in_flash_and_a_reset() -> None:
+    """Flash holds the writable registers; the read-only factory limits MAX_VOLTAGE (§8.2.93)
+    and TEMP_LIMITS (§8.2.127: "They are factory settings") stay, so a motor saved and reset
+    starts without an over-voltage or temperature error."""
+    m = MotorArray("MIS232", n=1, seed=0)
+    limits = (int(m.read("MAX_VOLTAGE")[0]), int(m.read("TEMP_LIMITS")[0]))
+    m.write_many({"STARTMODE": c.VELOCITY, "V_SOLL": 1000})
+    m.write("COMMAND", c.CMD_SAVE_RESET)
+    m.step(5)
+    assert (int(m.read("MAX_VOLTAGE")[0]), int(m.read("TEMP_LIMITS")[0])) == limits
+    assert _err(m) == 0 and m.read("MODE_REG")[0] == c.VELOCITY
+    m.reset()
+    m.step(5)
+    assert _err(m) == 0 and m.read("MODE_REG")[0] == c.VELOCITY

@@ -97,18 +97,21 @@ def test_preset_command_354_clears_the_lost_position_and_reed_errors() -> None:
     assert _err(m) == 0 and m.read("P_IST")[0] == 1000
 
 
-@pytest.mark.statements("mis:8.2.31:13", "mis:7.2.13:1")
-def test_encoder_com_error_is_set_only_at_start_up_and_can_be_cleared() -> None:
-    """§7.2.13: "This error will only be set during startup and can be cleared afterwards. Then
-    the motor operation will be the same"."""
-    m = _running("MIS232", 2)
-    m.set_input(faults=c.ERR_ENCODER_COM)
+@pytest.mark.statements("mis:8.2.31:13", "mis:7.2.13:1", "mis:8.2.31:16", "mis:7.2.16:1")
+@pytest.mark.parametrize(("bit", "encoder"), [(c.ERR_ENCODER_COM, 2),
+                                              (c.ERR_EXTERNAL_MEMORY, 3)])
+def test_errors_found_only_at_start_up_can_be_cleared(bit: int, encoder: int) -> None:
+    """§7.2.13 encoder COM error (bit 10, H3/H4), §7.2.16 external memory (bit 13): "This error
+    will only be set during startup and can be cleared afterwards. Then the motor operation
+    will be the same"."""
+    m = _running("MIS232", encoder)
+    m.set_input(faults=bit)
     m.step(20)
     assert _err(m) == 0 and m.read("V_IST")[0] == 30000  # not while running
     m.write("MODE_REG", c.PASSIVE)
     m.step(400)
     m.write("COMMAND", c.CMD_RESET)
-    assert _err(m) == c.ERR_ENCODER_COM | c.ERR_GENERAL
+    assert _err(m) == bit | c.ERR_GENERAL
     m.step(5)
     m.write("ERR_BITS", 0)
     m.step(5)
@@ -116,6 +119,26 @@ def test_encoder_com_error_is_set_only_at_start_up_and_can_be_cleared() -> None:
     m.write_many({"V_SOLL": 30000, "A_SOLL": 10000, "MODE_REG": c.VELOCITY})
     m.step(100)
     assert m.read("V_IST")[0] == 30000
+
+
+@pytest.mark.statements("mis:8.2.31:15", "mis:7.2.15:1")
+def test_closed_loop_fault_sets_its_error_when_the_closed_loop_is_activated() -> None:
+    """§7.2.15: "The error only occurs when activating the closed loop"; passive; back after a
+    calibration and a reset ("the motor can be reset by writing 267 to register 24")."""
+    m = _running("MIS232", 3)
+    m.set_input(faults=c.ERR_CLOSED_LOOP)
+    m.step(20)
+    assert _err(m) == 0  # open loop: no error
+    m.write("SETUP_BITS", c.SETUP_CLOSED_LOOP)
+    m.step(1)
+    assert _err(m) == c.ERR_CLOSED_LOOP | c.ERR_GENERAL
+    m.step(30)
+    assert m.read("MODE_REG")[0] == c.PASSIVE
+    m.set_input(faults=0)
+    m.write("ERR_BITS", 0)
+    assert _err(m) == c.ERR_CLOSED_LOOP | c.ERR_GENERAL
+    m.write("COMMAND", c.CMD_RESET)
+    assert _err(m) == 0
 
 
 def test_faults_the_motor_cannot_have_are_refused_and_change_nothing() -> None:

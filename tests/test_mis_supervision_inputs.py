@@ -47,8 +47,12 @@ def test_a_bad_value_is_refused_and_changes_nothing(name: str, value: float,
     low, high = RANGES[name]
     ok = math.isfinite(value) and low <= value <= high
     if name == "faults" and ok:
-        ok = value == int(value) and int(value) & c.ERR_ENCODER_ANY == 0 and not int(
-            value) & c.ERR_DRIVER_OVERLOAD
+        # both motors have the H2 (code 3): no fault of the H3/H4's, and the MIS232 no
+        # driver overload
+        h3_h4 = (c.ERR_ENCODER_LOST_POSITION | c.ERR_ENCODER_REED | c.ERR_ENCODER_COM
+                 | c.ERR_H4_ENCODER)
+        refused = h3_h4 | c.ERR_DRIVER_OVERLOAD | ~c.FAULT_BITS
+        ok = value == int(value) and int(value) & refused == 0
     before = _M.inputs.copy()
     extra = {"load_torque": 0.25} if other else {}
     if ok:

@@ -95,6 +95,7 @@ ERR_ENCODER_LOST_POSITION = 1 << 8
 ERR_ENCODER_REED = 1 << 9
 ERR_ENCODER_COM = 1 << 10
 ERR_CLOSED_LOOP = 1 << 12
+ERR_EXTERNAL_MEMORY = 1 << 13
 ERR_SINGLE_TURN_ENCODER = 1 << 14
 ERR_H4_ENCODER = 1 << 15
 ERR_ZERO_SEARCH_TIMEOUT = 1 << 16
@@ -107,11 +108,12 @@ ERR_STO = 1 << 29
 ERR_ENCODER_ANY = (ERR_ENCODER_LOST_POSITION | ERR_ENCODER_REED | ERR_ENCODER_COM
                    | ERR_SINGLE_TURN_ENCODER | ERR_H4_ENCODER)
 #: errors a write of ERR_BITS (or FastMac 97) does not clear: the manual's way back is a reset
-#: or a power cycle (§7.2.5 output driver, §7.2.10 internal, §7.2.17 single turn encoder,
+#: or a power cycle (§7.2.5 output driver, §7.2.10 internal, §7.2.15 closed loop (after a
+#: calibration), §7.2.17 single turn encoder,
 #: §7.2.20 CVI unstable, §7.2.21 driver overload; §8.2.31: "Other errors will require hardware
 #: fixes or intervention")
-ERR_NEEDS_RESET = (ERR_OUTPUT_DRIVER | ERR_INTERNAL | ERR_SINGLE_TURN_ENCODER | ERR_CVI
-                   | ERR_DRIVER_OVERLOAD)
+ERR_NEEDS_RESET = (ERR_OUTPUT_DRIVER | ERR_INTERNAL | ERR_CLOSED_LOOP | ERR_SINGLE_TURN_ENCODER
+                   | ERR_CVI | ERR_DRIVER_OVERLOAD)
 #: errors user command 354 (preset the encoder position) clears (§7.2.11, §7.2.12)
 ERR_CLEARED_BY_PRESET = ERR_ENCODER_LOST_POSITION | ERR_ENCODER_REED
 
@@ -171,14 +173,18 @@ THERMAL_RESISTANCE = 2.0  #: K/W, electronics to ambient through the motor's hou
 THERMAL_TIME_CONSTANT = 600.0  #: s, the housing's heat capacity × THERMAL_RESISTANCE
 #: bits of the ``faults`` world input (ERR_BITS positions, §8.2.31) that inject a hardware fault
 FAULT_BITS = (ERR_OUTPUT_DRIVER | ERR_INTERNAL | ERR_ENCODER_LOST_POSITION | ERR_ENCODER_REED
-              | ERR_ENCODER_COM | ERR_SINGLE_TURN_ENCODER | ERR_H4_ENCODER | ERR_DRIVER_OVERLOAD
-              | ERR_STO_ALARM)
+              | ERR_ENCODER_COM | ERR_CLOSED_LOOP | ERR_EXTERNAL_MEMORY | ERR_SINGLE_TURN_ENCODER
+              | ERR_H4_ENCODER | ERR_DRIVER_OVERLOAD | ERR_STO_ALARM)
+#: faults the firmware finds only at its start (§7.2.13 encoder COM, §7.2.16 external memory:
+#: "This error will only be set during startup and can be cleared afterwards")
+FAULTS_AT_START = ERR_ENCODER_COM | ERR_EXTERNAL_MEMORY
 #: the encoder options (ENCODER_TYPE codes, §8.2.49) a fault of the internal encoder needs:
-#: the multi-turn H3/H4 (§7.2.11–13), the single-turn H2/H4 (§7.2.17), the H4 (§8.2.31 bit 15)
+#: the multi-turn H3/H4 (§7.2.11–13), the single-turn H2/H4 (§7.2.17; the closed loop's
+#: encoder, §7.2.15, §5.3), the H4 (§8.2.31 bit 15)
 FAULT_ENCODERS: dict[int, frozenset[int]] = {
     ERR_ENCODER_LOST_POSITION: frozenset({2, 4}), ERR_ENCODER_REED: frozenset({2, 4}),
-    ERR_ENCODER_COM: frozenset({2, 4}), ERR_SINGLE_TURN_ENCODER: frozenset({1, 3, 4}),
-    ERR_H4_ENCODER: frozenset({4})}
+    ERR_ENCODER_COM: frozenset({2, 4}), ERR_CLOSED_LOOP: frozenset({1, 3, 4}),
+    ERR_SINGLE_TURN_ENCODER: frozenset({1, 3, 4}), ERR_H4_ENCODER: frozenset({4})}
 #: the types with the driver overload error (§8.2.31 bit 18: "only available in
 #: SMC85/MIS34x/MIS43x")
 OVERLOAD_TYPES = ("SMC85", "MIS34", "MIS43")

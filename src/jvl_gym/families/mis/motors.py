@@ -272,9 +272,13 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         """The hardware supervision at the start (``firmware.supervision``): CVI_VOLT, TEMP and
         TEMP_HIGHRES at the ambient temperature; the program starts at once when the control
         voltage is above ACCEPT_VOLTAGE, and otherwise waits until it has been measured there
-        ACCEPT_COUNT times (§8.2.79–80); the brake holds; an encoder COM fault of an H3/H4 sets
-        ERR_BITS bit 10, which only the start sets (§7.2.13)."""
+        ACCEPT_COUNT times (§8.2.79–80); MAX_VOLTAGE and TEMP_LIMITS hold the factory values;
+        the brake holds; an encoder COM fault (H3/H4) and an external memory fault set ERR_BITS
+        bits 10 and 13, which only the start sets (§7.2.13, §7.2.16)."""
         s, regs, u = self.state, self.regs, self.inputs
+        # the factory limits from ROM: flash holds the writable registers only
+        for num in (R.MAX_VOLTAGE, R.TEMP_LIMITS):
+            regs[idx, num] = self._rom[self._type_of[idx], num]
         cvi = np.clip(np.floor(u[idx, L.I_CONTROL_VOLTS] / CVI_VOLTS_PER_UNIT + 0.5), 0, 4095)
         regs[idx, R.CVI_VOLT] = cvi.astype(np.int64)
         s[idx, L.S_CVI_WAIT] = (regs[idx, R.CVI_VOLT] <= regs[idx, R.ACCEPT_VOLTAGE]) & (
@@ -286,9 +290,8 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
                                     127).astype(np.int64)
         s[idx, L.S_BRAKE_HELD] = 1.0
         s[idx, L.S_BRAKE_MS] = 0.0
-        com = ((u[idx, L.I_FAULTS].astype(np.int64) & c.ERR_ENCODER_COM) != 0) & np.isin(
-            self.params[idx, L.P_ENCODER], list(c.FAULT_ENCODERS[c.ERR_ENCODER_COM]))
-        regs[idx[com], R.ERR_BITS] |= c.ERR_ENCODER_COM | c.ERR_GENERAL
+        found = u[idx, L.I_FAULTS].astype(np.int64) & c.FAULTS_AT_START
+        regs[idx, R.ERR_BITS] |= np.where(found != 0, found | c.ERR_GENERAL, 0)
 
     @property
     def time(self) -> np.ndarray:
@@ -563,8 +566,9 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         ``ambient_celsius`` [°C, −40 … 150, at rest 25], ``sto_a``, ``sto_b`` [V, 0 … 48] (the
         Safe Torque Off channels, nominal 24 V, off below 18 V, §7.2.18), ``faults`` (injected
         hardware faults as ERR_BITS bits: 2 output driver, 7 internal, 8–10 H3/H4 encoder lost
-        position / reed / COM, 14 H2/H4 single turn, 15 H4, 18 driver overload (SMC85,
-        MIS34x, MIS43x), 27 STO alarm; an encoder fault needs its encoder option). All are
+        position / reed / COM, 12 closed loop (H2/H4), 13 external memory, 14 H2/H4 single
+        turn, 15 H4, 18 driver overload (SMC85, MIS34x, MIS43x), 27 STO alarm; an encoder
+        fault needs its encoder option). All are
         checked before any is set (``firmware.supervision`` describes their effects).
         """
         if inputs.get("faults") is not None:

@@ -25,9 +25,10 @@ and injected hardware faults (MIS manual §5.4.5, §5.6.4, §5.11, §7.2, §8.2.
   torque safely off (§8.2.24).
 - Injected faults (world input ``faults``, bits in ERR_BITS positions): each present fault sets
   its error bit every sample (a clear does not hold while the fault is there); the driver
-  overload also WARN_BITS bit 8; the encoder COM error (bit 10) only at start-up (§7.2.13,
-  ``motors``). STATUSBITS bit 9 shows an internal encoder error and bit 20 (encoder OK) is off
-  while one is set.
+  overload also WARN_BITS bit 8; the closed-loop error (bit 12) only while SETUP_BITS bit 24
+  selects the closed loop (§7.2.15); the encoder COM and external memory errors (bits 10, 13)
+  only at start-up (§7.2.13, §7.2.16, ``motors``). STATUSBITS bit 9 shows an internal
+  encoder error and bit 20 (encoder OK) is off while one is set.
 - Brake (§5.6.4, §5.11, §8.2.106): a motor has a brake when its ``brake_torque`` parameter is
   above 0 or BRAKE selects an output. The brake is told to hold in passive and safe mode (and
   while the program is shut down) and to release in an active mode, unless SETUP_BITS bit 19
@@ -57,7 +58,7 @@ from . import regs as R
 
 #: the first-order rise's step per outer sample (exact for a loss held over the sample)
 _RISE_STEP = 1.0 - math.exp(-OUTER_DT / c.THERMAL_TIME_CONSTANT)
-_FAULTS_IN_RUN = c.FAULT_BITS & ~c.ERR_ENCODER_COM
+_FAULTS_IN_RUN = c.FAULT_BITS & ~c.FAULTS_AT_START & ~c.ERR_CLOSED_LOOP
 _BRAKE_MASK = 0xFF
 
 
@@ -155,7 +156,10 @@ def supervise(regs, s, u, celsius: float) -> None:  # pragma: no cover - compile
             s[L.S_HOME_PHASE] = 0.0
     else:
         warn &= ~c.WARN_STO
-    faults = int(u[L.I_FAULTS]) & _FAULTS_IN_RUN
+    word = int(u[L.I_FAULTS])
+    faults = word & _FAULTS_IN_RUN
+    if word & c.ERR_CLOSED_LOOP and regs[R.SETUP_BITS] & c.SETUP_CLOSED_LOOP:
+        faults |= c.ERR_CLOSED_LOOP  # "only occurs when activating the closed loop" (§7.2.15)
     err |= faults
     if faults & c.ERR_DRIVER_OVERLOAD:
         warn |= c.WARN_DRIVER_OVERLOAD
