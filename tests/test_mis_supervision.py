@@ -160,16 +160,18 @@ def test_save_voltage_stops_the_motor_where_the_position_back_up_keeps_it() -> N
 @pytest.mark.statements("mis:8.2.25:2", "mis:8.2.129:2")
 def test_temp_and_temp_highres_follow_the_electronics_temperature() -> None:
     """§8.2.25: "Tc = 2.27 * Value"; §8.2.129: TEMP_HIGHRES in °C/1000. The electronics sit at
-    the ambient temperature and rise by first order with the bridge's loss (constants)."""
+    the ambient temperature and rise by first order with the bridge's loss (constants),
+    measured every THERMAL_PERIOD_MS."""
+    period = c.THERMAL_PERIOD_MS
     m = MotorArray("MIS340", n=1, seed=0)
     m.step(1)
     assert m.read("TEMP_HIGHRES")[0] == 25000 and m.read("TEMP")[0] == round(25 / 2.27)
     m.set_input(ambient_celsius=40.0)
-    m.step(1)
+    m.step(period)
     assert m.read("TEMP_HIGHRES")[0] == 40000 and m.read("TEMP")[0] == round(40 / 2.27)
     m.write_many({"RUN_CURRENT": 1533, "V_SOLL": 30000, "A_SOLL": 100000})
     m.write("MODE_REG", c.VELOCITY)
-    m.step(5000)
+    m.step(5000 - period)
     amps = math.sqrt(2.0) * 1533 * 5.87e-3
     rise = c.THERMAL_RESISTANCE * c.DRIVER_RESISTANCE * amps**2 * (
         1.0 - math.exp(-5.0 / c.THERMAL_TIME_CONSTANT))
@@ -192,25 +194,26 @@ def test_temperature_warning_above_80_and_error_above_90_degrees() -> None:
     m = _running()
     limits = int(m.read("TEMP_LIMITS")[0])
     assert (limits & 0xFFFF, limits >> 16) == (80, 90)
+    period = c.THERMAL_PERIOD_MS  # one temperature measurement
     m.set_input(ambient_celsius=79.5)
-    m.step(5)
+    m.step(period)
     assert _warn(m) & c.WARN_TEMPERATURE == 0
     m.set_input(ambient_celsius=85.0)
-    m.step(5)
+    m.step(period)
     assert _warn(m) & c.WARN_TEMPERATURE and _err(m) == 0
     m.set_input(ambient_celsius=50.0)
-    m.step(5)
+    m.step(period)
     assert _warn(m) & c.WARN_TEMPERATURE  # has been above 80 °C
     m.write("WARN_BITS", 0)
-    m.step(1)
+    m.step(period)
     assert _warn(m) & c.WARN_TEMPERATURE == 0
     m.set_input(ambient_celsius=95.0)
-    m.step(1)
+    m.step(period)
     assert _err(m) == c.ERR_TEMPERATURE | c.ERR_GENERAL
     m.step(30)
     assert m.read("MODE_REG")[0] == c.PASSIVE
     m.write("ERR_BITS", 0)  # still too hot
-    m.step(1)
+    m.step(period)
     assert _err(m) & c.ERR_TEMPERATURE
     m.set_input(ambient_celsius=30.0)
     m.write("ERR_BITS", 0)

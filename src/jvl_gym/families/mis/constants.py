@@ -171,6 +171,9 @@ NOMINAL_AMBIENT_CELSIUS = 25.0
 DRIVER_RESISTANCE = 0.1  #: Ω, the two conducting MOSFETs of one phase's H-bridge
 THERMAL_RESISTANCE = 2.0  #: K/W, electronics to ambient through the motor's housing
 THERMAL_TIME_CONSTANT = 600.0  #: s, the housing's heat capacity × THERMAL_RESISTANCE
+#: ms between two temperature measurements (the manual gives none; a temperature with a time
+#: constant of minutes needs no faster one)
+THERMAL_PERIOD_MS = 10
 #: bits of the ``faults`` world input (ERR_BITS positions, §8.2.31) that inject a hardware fault
 FAULT_BITS = (ERR_OUTPUT_DRIVER | ERR_INTERNAL | ERR_ENCODER_LOST_POSITION | ERR_ENCODER_REED
               | ERR_ENCODER_COM | ERR_CLOSED_LOOP | ERR_EXTERNAL_MEMORY | ERR_SINGLE_TURN_ENCODER

@@ -197,7 +197,7 @@ def _advance(regs, s, v: float, arrive: bool, tt: bool) -> None:  # pragma: no c
 def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover - compiled
     """One outer sample of one motor (module docstring); rows of the engine's arrays."""
     s[L.S_TICK] += 1.0
-    celsius = temperature(regs, s, u)
+    temperature(regs, s, u)
     if not control_voltage(regs, s, u):
         program_stopped(regs, s, p)
         return
@@ -206,11 +206,11 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
     update_inputs(regs, s, p, u)
     pulses = _ext_encoder(regs, s, u)
     has_encoder = read_encoder(regs, s, p)
-    supervise(regs, s, u, celsius)
+    supervise(regs, s, u)
     mode = regs[R.MODE_REG]
     active = mode != c.PASSIVE and mode != c.SAFE
     tt = tt_active(regs)
-    limits = check_errors(regs, s, u, active, has_encoder, tt)
+    limits = check_errors(regs, s, p, u, active, has_encoder, tt)
     held = brake(regs, s, p, active)
     mode = regs[R.MODE_REG]
     v_prev = s[L.S_VEL]
@@ -263,7 +263,7 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
     standby = (not current_control and s[L.S_STILL_MS] >= regs[R.STANDBY_TIME])
     status_bits(regs, s, s[L.S_VEL], v_prev, target_v, mode, has_encoder, closed_loop,
                 standby and active)
-    supervision_status(regs, s, p, u)
+    supervision_status(regs, u)
     if current_control:
         scale_current(regs, s, float(regs[R.FLWERR]), v / c.VEL_UNIT_TO_COUNTS * 0.01)
         units = regs[R.RUN_CURRENT] * s[L.S_CUR_SCALE] / 2047.0

@@ -74,7 +74,10 @@ S_CVI_N = S_CVI_WAIT + 1
 S_TEMP_RISE = S_CVI_N + 1
 S_BRAKE_HELD = S_TEMP_RISE + 1
 S_BRAKE_MS = S_BRAKE_HELD + 1
-N_STATE = S_BRAKE_MS + 1
+#: the brake as last told (1: hold) and whether BRAKE then selected an external brake output
+S_BRAKE_CMD = S_BRAKE_MS + 1
+S_BRAKE_EXT = S_BRAKE_CMD + 1
+N_STATE = S_BRAKE_EXT + 1
 
 # --- params ---------------------------------------------------------------------------------
 (
@@ -96,8 +99,9 @@ N_STATE = S_BRAKE_MS + 1
     P_STANDBY_MAX,  # largest STANDBY_CURRENT of the type
     P_BRAKE_TORQUE,  # holding torque of the electromechanical brake [N·m] (0: none)
     P_OVERLOAD,  # 1 on the types with the driver overload error (§8.2.31 bit 18)
+    P_MAX_BUS_VOLTS,  # MAX_VOLTAGE bits 0-15, the over-voltage threshold [V] (§8.2.93)
     N_PARAM,
-) = range(19)
+) = range(20)
 
 # --- inputs ---------------------------------------------------------------------------------
 (

@@ -178,6 +178,7 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         p[L.P_STOP_LO] = -math.inf
         p[L.P_STOP_HI] = math.inf
         p[L.P_OVERLOAD] = float(cfg.name.startswith(c.OVERLOAD_TYPES))
+        p[L.P_MAX_BUS_VOLTS] = c.MAX_BUS_VOLTS
         return p
 
     def _rest_inputs(self, cfg: MisMotorConfig) -> np.ndarray:
@@ -288,8 +289,11 @@ class MisMotorArray(ProgramMixin, MotorArray, layout=L):
         regs[idx, R.TEMP_HIGHRES] = np.floor(celsius * 1000.0 + 0.5).astype(np.int64)
         regs[idx, R.TEMP] = np.clip(np.floor(celsius / TEMP_CELSIUS_PER_UNIT + 0.5), 0,
                                     127).astype(np.int64)
-        s[idx, L.S_BRAKE_HELD] = 1.0
+        s[idx, L.S_BRAKE_HELD] = s[idx, L.S_BRAKE_CMD] = 1.0
         s[idx, L.S_BRAKE_MS] = 0.0
+        s[idx, L.S_BRAKE_EXT] = (regs[idx, R.BRAKE] & 0xFF) != 0
+        fitted = (self.params[idx, L.P_BRAKE_TORQUE] > 0.0) | (s[idx, L.S_BRAKE_EXT] != 0.0)
+        regs[idx[fitted], R.STATUSBITS] |= c.ST_BRAKE_ACTIVE
         found = u[idx, L.I_FAULTS].astype(np.int64) & c.FAULTS_AT_START
         regs[idx, R.ERR_BITS] |= np.where(found != 0, found | c.ERR_GENERAL, 0)
 

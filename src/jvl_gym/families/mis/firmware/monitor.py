@@ -46,7 +46,7 @@ from .. import constants as c
 from .. import layout as L
 from ..units import COUNTS_PER_REV
 from . import regs as R
-from .supervision import busvol_units
+from .supervision import busvol_units, over_voltage
 
 #: encoder counts per revolution by ENCODER_TYPE code (0: none)
 _CPR = np.array([c.ENCODER_CPR.get(k, 0) for k in range(11)], dtype=np.int64)
@@ -107,10 +107,10 @@ def set_encoder(regs, s, p, value: int) -> None:  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def check_errors(regs, s, u, active: bool, has_encoder: bool,
+def check_errors(regs, s, p, u, active: bool, has_encoder: bool,
                  tt: bool) -> int:  # pragma: no cover - compiled
-    """Follow error, bus voltage and limits (module docstring); returns the active limits
-    (1: positive, 2: negative), which block motion towards them."""
+    """Follow error, bus voltage (and over-voltage) and limits (module docstring); returns the
+    active limits (1: positive, 2: negative), which block motion towards them."""
     err = regs[R.ERR_BITS]
     warn = regs[R.WARN_BITS]
     setup = regs[R.SETUP_BITS]
@@ -119,6 +119,8 @@ def check_errors(regs, s, u, active: bool, has_encoder: bool,
         err |= c.ERR_FOLLOW
     busvol = busvol_units(u)
     regs[R.BUSVOL] = busvol
+    if over_voltage(p, busvol):
+        err |= c.ERR_OVER_VOLTAGE  # §7.2.8, §8.2.93
     if busvol < regs[R.MIN_BUSVOL]:
         warn |= c.WARN_LOW_BUS
         s[L.S_LOW_BUS_N] += _LOW_BUS_MEASUREMENTS_PER_MS
@@ -191,7 +193,7 @@ def status_bits(regs, s, v: float, prev_v: float, target_v: float, mode: int,
     outputs follow bit 4 (in position: a movement has completed), or bit 2 (in physical
     position) with INPOS_MASK bit 8 (§5.6.3), and ERR_BITS ≠ 0 in OUTPUTS.
     """
-    st = regs[R.STATUSBITS] & (c.ST_ZERO_SEARCH_DONE | c.ST_AUTOCORRECTION)
+    st = regs[R.STATUSBITS] & (c.ST_ZERO_SEARCH_DONE | c.ST_AUTOCORRECTION | c.ST_BRAKE_ACTIVE)
     moving_mode = mode == c.VELOCITY or mode == c.POSITION or mode == c.GEAR
     if moving_mode and v == target_v:
         st |= c.ST_AT_VELOCITY

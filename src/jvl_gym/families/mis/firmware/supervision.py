@@ -11,12 +11,13 @@ and injected hardware faults (MIS manual §5.4.5, §5.6.4, §5.11, §7.2, §8.2.
   waits, as at a start with a low CVI, until the voltage has been measured above ACCEPT_VOLTAGE
   ACCEPT_COUNT times in a row, once per 1 ms (§5.4.5, §8.2.79–80); while it waits the firmware
   does nothing (TICKS stands still).
-- Temperature: the electronics are at the ambient temperature (world input
-  ``ambient_celsius``) plus a first-order rise from the bridge's conduction loss (the thermal
-  constants of ``constants``); TEMP reads °C / 2.27 (§8.2.25), TEMP_HIGHRES m°C (§8.2.129).
+- Temperature, measured every 10 ms (``THERMAL_PERIOD_MS``): the electronics are at the
+  ambient temperature (world input ``ambient_celsius``) plus a first-order rise from the
+  bridge's conduction loss (the thermal constants of ``constants``); TEMP reads °C / 2.27
+  (§8.2.25), TEMP_HIGHRES m°C (§8.2.129).
   Above TEMP_LIMITS bits 0–15 [°C] WARN_BITS bit 6 ("has been above", kept until cleared),
-  above bits 16–31 ERR_BITS bit 6, set again every sample while it is still too hot (§7.2.9,
-  §8.2.127).
+  above bits 16–31 ERR_BITS bit 6, set again at every measurement while it is still too hot
+  (§7.2.9, §8.2.127).
 - Over-voltage: a measured bus voltage (BUSVOL) above MAX_VOLTAGE bits 0–15 [V] (100 V,
   §7.2.8, §8.2.93) sets ERR_BITS bit 5.
 - Safe Torque Off (world inputs ``sto_a``, ``sto_b`` [V]): a channel below 18 V (§7.2.18) takes
@@ -33,7 +34,8 @@ and injected hardware faults (MIS manual §5.4.5, §5.6.4, §5.11, §7.2, §8.2.
   above 0 or BRAKE selects an output. The brake is told to hold in passive and safe mode (and
   while the program is shut down) and to release in an active mode, unless SETUP_BITS bit 19
   disables it (released in every mode). The brake output (the IO pins of BRAKE bits 0–7 set as
-  outputs) follows at once, high while released. The brake itself holds BRAKE bits 8–15 ms
+  outputs) follows at once, high while released (set when the brake is told to hold or to
+  release). The brake itself holds BRAKE bits 8–15 ms
   (T_ON) after it was told to hold and releases bits 16–23 ms (T_OFF) after it was told to
   release; until then an active motor does not move. STATUSBITS bit 14: the brake holds.
 """
@@ -56,10 +58,17 @@ from ..units import (
 )
 from . import regs as R
 
-#: the first-order rise's step per outer sample (exact for a loss held over the sample)
-_RISE_STEP = 1.0 - math.exp(-OUTER_DT / c.THERMAL_TIME_CONSTANT)
+#: the temperature is measured every THERMAL_PERIOD_MS outer samples (``constants``)
+_PERIOD = c.THERMAL_PERIOD_MS
+#: the first-order rise's step per measurement (exact for a loss held over the period)
+_RISE_STEP = 1.0 - math.exp(-_PERIOD * OUTER_DT / c.THERMAL_TIME_CONSTANT)
+_PER_CVI_UNIT = 1.0 / CVI_VOLTS_PER_UNIT
+_PER_TEMP_UNIT = 1.0 / TEMP_CELSIUS_PER_UNIT
+_PER_TEMP_HIGHRES_UNIT = 1.0 / TEMP_HIGHRES_CELSIUS_PER_UNIT
 _FAULTS_IN_RUN = c.FAULT_BITS & ~c.FAULTS_AT_START & ~c.ERR_CLOSED_LOOP
 _BRAKE_MASK = 0xFF
+#: STATUSBITS the supervision sets (``monitor.status_bits`` keeps them from sample to sample)
+STATUS_BITS = (c.ST_ENCODER_ERROR | c.ST_BRAKE_ACTIVE | c.ST_STO | c.ST_STO_A | c.ST_STO_B)
 
 
 @njit(cache=True, inline="always")
@@ -72,23 +81,30 @@ def busvol_units(u) -> int:  # pragma: no cover - compiled
 @njit(cache=True, inline="always")
 def cvi_units(volts: float) -> int:  # pragma: no cover - compiled
     """A control voltage as CVI_VOLT reads it: 8.764 mV units, 0 … 4095 (§8.2.82)."""
-    return int(min(max(np.floor(volts / CVI_VOLTS_PER_UNIT + 0.5), 0.0), 4095.0))
+    return int(min(max(np.floor(volts * _PER_CVI_UNIT + 0.5), 0.0), 4095.0))
 
 
-@njit(cache=True)
-def temperature(regs, s, u) -> float:  # pragma: no cover - compiled
-    """The electronics' temperature [°C] of this sample, in TEMP and TEMP_HIGHRES (module
-    docstring); the loss is that of the phase current the bridge ran with in the last sample."""
+@njit(cache=True, inline="always")
+def temperature(regs, s, u) -> None:  # pragma: no cover - compiled
+    """Every THERMAL_PERIOD_MS samples: the electronics' temperature in TEMP and TEMP_HIGHRES
+    and its warning and error bits (module docstring); the loss is that of the phase current
+    the bridge runs with."""
+    if int(s[L.S_TICK]) % _PERIOD != 0:
+        return
     amps = s[L.S_I_AMP] if s[L.S_BRIDGE] > 0.0 else 0.0
     loss = c.DRIVER_RESISTANCE * amps * amps
     s[L.S_TEMP_RISE] += (c.THERMAL_RESISTANCE * loss - s[L.S_TEMP_RISE]) * _RISE_STEP
     celsius = u[L.I_AMBIENT] + s[L.S_TEMP_RISE]
-    regs[R.TEMP_HIGHRES] = int(np.floor(celsius / TEMP_HIGHRES_CELSIUS_PER_UNIT + 0.5))
-    regs[R.TEMP] = int(min(max(np.floor(celsius / TEMP_CELSIUS_PER_UNIT + 0.5), 0.0), 127.0))
-    return celsius
+    regs[R.TEMP_HIGHRES] = int(np.floor(celsius * _PER_TEMP_HIGHRES_UNIT + 0.5))
+    regs[R.TEMP] = int(min(max(np.floor(celsius * _PER_TEMP_UNIT + 0.5), 0.0), 127.0))
+    limits = regs[R.TEMP_LIMITS]
+    if celsius > (limits & 0xFFFF):
+        regs[R.WARN_BITS] |= c.WARN_TEMPERATURE
+    if celsius > ((limits >> 16) & 0xFFFF):
+        regs[R.ERR_BITS] |= c.ERR_TEMPERATURE | c.ERR_GENERAL
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def control_voltage(regs, s, u) -> bool:  # pragma: no cover - compiled
     """CVI_VOLT of this sample and whether the program runs (module docstring)."""
     cvi = cvi_units(u[L.I_CONTROL_VOLTS])
@@ -122,7 +138,7 @@ def program_stopped(regs, s, p) -> None:  # pragma: no cover - compiled
     s[L.S_BRAKE_HELD] = 1.0
     s[L.S_BRAKE_MS] = 0.0
     regs[R.ACTUAL_TORQUE] = 0
-    if has_brake(regs, p):
+    if p[L.P_BRAKE_TORQUE] > 0.0 or s[L.S_BRAKE_EXT] != 0.0:
         regs[R.STATUSBITS] |= c.ST_BRAKE_ACTIVE
 
 
@@ -132,20 +148,21 @@ def sto_off(u) -> bool:  # pragma: no cover - compiled
     return u[L.I_STO_A] < c.STO_ON_VOLTS or u[L.I_STO_B] < c.STO_ON_VOLTS
 
 
-@njit(cache=True)
-def supervise(regs, s, u, celsius: float) -> None:  # pragma: no cover - compiled
-    """Over-voltage, temperature, Safe Torque Off and the injected faults of this sample
-    (module docstring): their error and warning bits, and the torque off at once by STO."""
+@njit(cache=True, inline="always")
+def supervise(regs, s, u) -> None:  # pragma: no cover - compiled
+    """Safe Torque Off and the injected faults of this sample (module docstring): their
+    error, warning and status bits, and the torque off at once by STO (the temperature:
+    :func:`temperature`, the over-voltage: :func:`over_voltage`)."""
+    word = int(u[L.I_FAULTS])
+    a = u[L.I_STO_A] >= c.STO_ON_VOLTS
+    b = u[L.I_STO_B] >= c.STO_ON_VOLTS
+    if word == 0 and a and b:
+        if regs[R.WARN_BITS] & c.WARN_STO:
+            regs[R.WARN_BITS] &= ~c.WARN_STO
+        return
     err = regs[R.ERR_BITS]
     warn = regs[R.WARN_BITS]
-    if busvol_units(u) * BUSVOL_VOLTS_PER_UNIT > (regs[R.MAX_VOLTAGE] & 0xFFFF):
-        err |= c.ERR_OVER_VOLTAGE
-    limits = regs[R.TEMP_LIMITS]
-    if celsius > (limits & 0xFFFF):
-        warn |= c.WARN_TEMPERATURE
-    if celsius > ((limits >> 16) & 0xFFFF):
-        err |= c.ERR_TEMPERATURE
-    if sto_off(u):
+    if not (a and b):
         err |= c.ERR_STO
         warn |= c.WARN_STO
         mode = regs[R.MODE_REG]
@@ -156,7 +173,6 @@ def supervise(regs, s, u, celsius: float) -> None:  # pragma: no cover - compile
             s[L.S_HOME_PHASE] = 0.0
     else:
         warn &= ~c.WARN_STO
-    word = int(u[L.I_FAULTS])
     faults = word & _FAULTS_IN_RUN
     if word & c.ERR_CLOSED_LOOP and regs[R.SETUP_BITS] & c.SETUP_CLOSED_LOOP:
         faults |= c.ERR_CLOSED_LOOP  # "only occurs when activating the closed loop" (§7.2.15)
@@ -170,43 +186,55 @@ def supervise(regs, s, u, celsius: float) -> None:  # pragma: no cover - compile
 
 
 @njit(cache=True, inline="always")
-def has_brake(regs, p) -> bool:  # pragma: no cover - compiled
-    """An internal brake (``brake_torque`` > 0) or an external one on BRAKE's outputs."""
-    return p[L.P_BRAKE_TORQUE] > 0.0 or (regs[R.BRAKE] & _BRAKE_MASK) != 0
+def over_voltage(p, busvol: int) -> bool:  # pragma: no cover - compiled
+    """True if the measured bus voltage ``busvol`` (BUSVOL units) is above the type's
+    MAX_VOLTAGE bits 0–15 [V] (§8.2.93; a factory value, kept in ``params``)."""
+    return busvol * BUSVOL_VOLTS_PER_UNIT > p[L.P_MAX_BUS_VOLTS]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def brake(regs, s, p, active: bool) -> bool:  # pragma: no cover - compiled
     """The brake and its output in this sample (module docstring); True while an active motor
-    waits for its brake to release (it does not move)."""
+    waits for its brake to release (it does not move). BRAKE is read when the brake is told
+    to hold or to release: the output and whether an external brake is fitted change then."""
     hold = not active and (regs[R.SETUP_BITS] & c.SETUP_BRAKE_OFF) == 0
     want = 1.0 if hold else 0.0
+    if want == s[L.S_BRAKE_HELD] and want == s[L.S_BRAKE_CMD]:
+        return False
+    setup = regs[R.BRAKE]
+    if want != s[L.S_BRAKE_CMD]:
+        s[L.S_BRAKE_CMD] = want
+        s[L.S_BRAKE_EXT] = 1.0 if setup & _BRAKE_MASK else 0.0
+        out = setup & _BRAKE_MASK & ((regs[R.IOSETUP] >> 8) & 0xFF)
+        if out:
+            regs[R.OUTPUTS] = (regs[R.OUTPUTS] & ~out) | (0 if hold else out)
     if s[L.S_BRAKE_HELD] == want:
         s[L.S_BRAKE_MS] = 0.0
     else:
         s[L.S_BRAKE_MS] += 1.0
-        delay = (regs[R.BRAKE] >> 8) & 0xFF if hold else (regs[R.BRAKE] >> 16) & 0xFF
+        delay = (setup >> 8) & 0xFF if hold else (setup >> 16) & 0xFF
         if s[L.S_BRAKE_MS] >= delay:
             s[L.S_BRAKE_HELD] = want
             s[L.S_BRAKE_MS] = 0.0
-    out = regs[R.BRAKE] & _BRAKE_MASK & ((regs[R.IOSETUP] >> 8) & 0xFF)
-    if out:
-        regs[R.OUTPUTS] = (regs[R.OUTPUTS] & ~out) | (0 if hold else out)
-    return active and s[L.S_BRAKE_HELD] != 0.0 and has_brake(regs, p)
+    fitted = p[L.P_BRAKE_TORQUE] > 0.0 or s[L.S_BRAKE_EXT] != 0.0
+    st = regs[R.STATUSBITS] & ~c.ST_BRAKE_ACTIVE
+    regs[R.STATUSBITS] = st | (c.ST_BRAKE_ACTIVE if fitted and s[L.S_BRAKE_HELD] != 0.0 else 0)
+    return active and s[L.S_BRAKE_HELD] != 0.0 and fitted
 
 
-@njit(cache=True)
-def supervision_status(regs, s, p, u) -> None:  # pragma: no cover - compiled
-    """STATUSBITS bits 9, 14, 19, 20, 23 and 24 of this sample (§8.2.24)."""
-    st = regs[R.STATUSBITS]
+@njit(cache=True, inline="always")
+def supervision_status(regs, u) -> None:  # pragma: no cover - compiled
+    """STATUSBITS bits 9, 19, 20, 23 and 24 of this sample (§8.2.24); bit 14 is the brake's
+    (:func:`brake`)."""
+    st = regs[R.STATUSBITS] & ~(c.ST_ENCODER_ERROR | c.ST_STO | c.ST_STO_A | c.ST_STO_B)
     if regs[R.ERR_BITS] & c.ERR_ENCODER_ANY:
         st = (st | c.ST_ENCODER_ERROR) & ~c.ST_ENCODER_OK
-    if s[L.S_BRAKE_HELD] != 0.0 and has_brake(regs, p):
-        st |= c.ST_BRAKE_ACTIVE
-    if u[L.I_STO_A] >= c.STO_ON_VOLTS:
+    a = u[L.I_STO_A] >= c.STO_ON_VOLTS
+    b = u[L.I_STO_B] >= c.STO_ON_VOLTS
+    if a:
         st |= c.ST_STO_A
-    if u[L.I_STO_B] >= c.STO_ON_VOLTS:
+    if b:
         st |= c.ST_STO_B
-    if sto_off(u):
+    if not (a and b):
         st |= c.ST_STO
     regs[R.STATUSBITS] = st
