@@ -151,8 +151,6 @@ def test_ssi_clock_idles_high_and_goes_low_to_sample() -> None:
     assert int(m.read("EXTENCODER2")[0]) == 12345
 
 
-@pytest.mark.xfail(strict=True, reason="the electronics temperature is not modelled "
-                   "(docs/families/mis-sim.md 'Not modelled'): TEMP reads 0")
 def test_temp_times_2_27_is_degrees_celsius() -> None:
     """MIS manual §8.2.25 (TEMP): the temperature in °C is about 2.27 x TEMP (at rest at room
     temperature the electronics read some 20-30 °C)."""

@@ -184,8 +184,8 @@ def test_a_non_default_write_to_a_not_modelled_register_warns_once_logs_and_is_s
         warnings.simplefilter("error")
         m.write("CONTROL_WORD", 0x0702)  # once per register
     with pytest.warns(NotModelledWarning, match="SETUP_BITS"):
-        m.write_many({"V_SOLL": 2000, "SETUP_BITS": 1 << 19})  # bit 19: disable brake
-    assert m.read("SETUP_BITS")[0] == 1 << 19
+        m.write_many({"V_SOLL": 2000, "SETUP_BITS": 1 << 2})  # bit 2: encoder input type
+    assert m.read("SETUP_BITS")[0] == 1 << 2
     with pytest.warns(NotModelledWarning, match="IA_OFFSET"):
         MotorArray("MAC050", n=1).write("IA_OFFSET", 1000)
 

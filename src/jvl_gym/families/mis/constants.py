@@ -67,13 +67,18 @@ ST_IN_POSITION = 1 << 4
 ST_ACCELERATING = 1 << 5
 ST_DECELERATING = 1 << 6
 ST_ZERO_SEARCH_DONE = 1 << 7
+ST_ENCODER_ERROR = 1 << 9
 ST_GENERAL_ERROR = 1 << 12
+ST_BRAKE_ACTIVE = 1 << 14
 ST_CLOSED_LOOP_LAG = 1 << 15
 ST_CLOSED_LOOP = 1 << 16
 ST_ENCODER_CALIBRATED = 1 << 17
 ST_STANDBY_CURRENT = 1 << 18
+ST_STO = 1 << 19
 ST_ENCODER_OK = 1 << 20
 ST_IN_TARGET_POSITION = 1 << 22
+ST_STO_A = 1 << 23
+ST_STO_B = 1 << 24
 #: INPOS_MASK bit 8: the in-position output shows "in physical position" (§5.6.3)
 INPOS_PHYSICAL = 1 << 8
 
@@ -83,8 +88,34 @@ ERR_FOLLOW = 1 << 1
 ERR_POSITION_LIMIT = 1 << 3
 ERR_LOW_BUS = 1 << 4
 ERR_OVER_VOLTAGE = 1 << 5
+ERR_OUTPUT_DRIVER = 1 << 2
+ERR_TEMPERATURE = 1 << 6
+ERR_INTERNAL = 1 << 7
+ERR_ENCODER_LOST_POSITION = 1 << 8
+ERR_ENCODER_REED = 1 << 9
+ERR_ENCODER_COM = 1 << 10
 ERR_CLOSED_LOOP = 1 << 12
+ERR_EXTERNAL_MEMORY = 1 << 13
+ERR_SINGLE_TURN_ENCODER = 1 << 14
+ERR_H4_ENCODER = 1 << 15
 ERR_ZERO_SEARCH_TIMEOUT = 1 << 16
+ERR_CVI = 1 << 17
+ERR_DRIVER_OVERLOAD = 1 << 18
+ERR_STO_ALARM = 1 << 27
+ERR_STO = 1 << 29
+#: the internal encoder's errors (§7.2.11–13, §7.2.17, §8.2.31 bits 8–10, 14, 15): STATUSBITS
+#: bit 9 while any is set
+ERR_ENCODER_ANY = (ERR_ENCODER_LOST_POSITION | ERR_ENCODER_REED | ERR_ENCODER_COM
+                   | ERR_SINGLE_TURN_ENCODER | ERR_H4_ENCODER)
+#: errors a write of ERR_BITS (or FastMac 97) does not clear: the manual's way back is a reset
+#: or a power cycle (§7.2.5 output driver, §7.2.10 internal, §7.2.15 closed loop (after a
+#: calibration), §7.2.17 single turn encoder,
+#: §7.2.20 CVI unstable, §7.2.21 driver overload; §8.2.31: "Other errors will require hardware
+#: fixes or intervention")
+ERR_NEEDS_RESET = (ERR_OUTPUT_DRIVER | ERR_INTERNAL | ERR_CLOSED_LOOP | ERR_SINGLE_TURN_ENCODER
+                   | ERR_CVI | ERR_DRIVER_OVERLOAD)
+#: errors user command 354 (preset the encoder position) clears (§7.2.11, §7.2.12)
+ERR_CLEARED_BY_PRESET = ERR_ENCODER_LOST_POSITION | ERR_ENCODER_REED
 
 # --- WARN_BITS (§8.2.32) -------------------------------------------------------------------
 WARN_POS_LIMIT = 1 << 0
@@ -92,6 +123,9 @@ WARN_NEG_LIMIT = 1 << 1
 WARN_POS_LIMIT_SEEN = 1 << 2
 WARN_NEG_LIMIT_SEEN = 1 << 3
 WARN_LOW_BUS = 1 << 4
+WARN_TEMPERATURE = 1 << 6
+WARN_DRIVER_OVERLOAD = 1 << 8
+WARN_STO = 1 << 9
 
 # --- ZERO_SEARCH_BITS (§8.2.67) --------------------------------------------------------------
 ZS_USE_INDEX = 1 << 0  #: after the sensor, on to the encoder index, which is the zero
@@ -111,9 +145,52 @@ SETUP_MULTI_TURN_AT_POWER_UP = 1 << 11
 SETUP_KEEP_EXT_ENCODER = 1 << 12
 SETUP_EXT_ENCODER_INVERSE = 1 << 16
 SETUP_NO_LIMIT_ERROR = 1 << 17
+SETUP_BRAKE_OFF = 1 << 19  #: "Disable brake" (§5.11.6, §8.2.68)
 SETUP_CLOSED_LOOP = 1 << 24
 SETUP_CURRENT_CONTROL = 1 << 25
 SETUP_LIMITS_WITHOUT_MEMORY = 1 << 28
+
+# --- hardware supervision (§7.2, §5.4.5, §5.11, ``firmware.supervision``) -------------------
+#: the P+ level above which the over-voltage error is set (§7.2.8: "> 100 V"), the maximum
+#: bus voltage of MAX_VOLTAGE bits 0–15 (§8.2.93) on every type
+MAX_BUS_VOLTS = 100
+#: a Safe Torque Off channel below this is off (§7.2.18: "measured less than 18 V")
+STO_ON_VOLTS = 18.0
+#: nominal control (CVI) and STO supply [V] (§8.2.79: "The typical and recommended nominal
+#: voltage is 24VDC"): the world inputs' values at rest
+NOMINAL_CVI_VOLTS = 24.0
+#: ambient temperature at rest [°C]
+NOMINAL_AMBIENT_CELSIUS = 25.0
+#: Thermal model of the electronics (the manual gives no thermal data, MIS manual §7.2.9 only the
+#: limits and the 40 °C ambient maximum): temperature = ambient + a first-order rise to
+#: ``THERMAL_RESISTANCE × loss`` with time constant ``THERMAL_TIME_CONSTANT``; the loss is the
+#: bridge's conduction loss ``DRIVER_RESISTANCE × I²`` of the phase current amplitude I while
+#: the bridge is on (two phases, RMS² = I²/2 each). The values are chosen so that a MIS34x at
+#: its largest current (12.7 A amplitude, 16 W) settles 32 K above ambient: within the limits at
+#: the 40 °C ambient the manual allows, above 80 °C (warning) at 48 °C and above.
+DRIVER_RESISTANCE = 0.1  #: Ω, the two conducting MOSFETs of one phase's H-bridge
+THERMAL_RESISTANCE = 2.0  #: K/W, electronics to ambient through the motor's housing
+THERMAL_TIME_CONSTANT = 600.0  #: s, the housing's heat capacity × THERMAL_RESISTANCE
+#: ms between two temperature measurements (the manual gives none; a temperature with a time
+#: constant of minutes needs no faster one)
+THERMAL_PERIOD_MS = 10
+#: bits of the ``faults`` world input (ERR_BITS positions, §8.2.31) that inject a hardware fault
+FAULT_BITS = (ERR_OUTPUT_DRIVER | ERR_INTERNAL | ERR_ENCODER_LOST_POSITION | ERR_ENCODER_REED
+              | ERR_ENCODER_COM | ERR_CLOSED_LOOP | ERR_EXTERNAL_MEMORY | ERR_SINGLE_TURN_ENCODER
+              | ERR_H4_ENCODER | ERR_DRIVER_OVERLOAD | ERR_STO_ALARM)
+#: faults the firmware finds only at its start (§7.2.13 encoder COM, §7.2.16 external memory:
+#: "This error will only be set during startup and can be cleared afterwards")
+FAULTS_AT_START = ERR_ENCODER_COM | ERR_EXTERNAL_MEMORY
+#: the encoder options (ENCODER_TYPE codes, §8.2.49) a fault of the internal encoder needs:
+#: the multi-turn H3/H4 (§7.2.11–13), the single-turn H2/H4 (§7.2.17; the closed loop's
+#: encoder, §7.2.15, §5.3), the H4 (§8.2.31 bit 15)
+FAULT_ENCODERS: dict[int, frozenset[int]] = {
+    ERR_ENCODER_LOST_POSITION: frozenset({2, 4}), ERR_ENCODER_REED: frozenset({2, 4}),
+    ERR_ENCODER_COM: frozenset({2, 4}), ERR_CLOSED_LOOP: frozenset({1, 3, 4}),
+    ERR_SINGLE_TURN_ENCODER: frozenset({1, 3, 4}), ERR_H4_ENCODER: frozenset({4})}
+#: the types with the driver overload error (§8.2.31 bit 18: "only available in
+#: SMC85/MIS34x/MIS43x")
+OVERLOAD_TYPES = ("SMC85", "MIS34", "MIS43")
 
 # --- TURNTABLE_MODE (§5.12.3) -------------------------------------------------------------
 TT_OFF, TT_CW, TT_CCW, TT_SHORTEST, TT_MULTI_CW, TT_MULTI_CCW = range(6)

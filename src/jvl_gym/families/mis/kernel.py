@@ -1,6 +1,8 @@
 """One outer sample (1 ms) of the MIS/SMC firmware for one motor (MIS manual §6, §8.2).
 
-Order: time and inputs; encoder, follow error and monitoring; the mode's profile velocity;
+Order: time, the electronics' temperature and the control voltage (a program shut down or
+still waiting for its CVI does nothing more, ``firmware.supervision``); inputs; encoder, hardware
+supervision, follow error and monitoring, the brake; the mode's profile velocity;
 the commanded position (P_IST) advanced by it; status bits; the phase current the chopper aims
 at; FLEXREGISTER (``flexreg``); the sample buffer. The plant then runs the sample's inner
 samples (``plant``) with the commanded position moving linearly from ``S_CMD_PREV`` to
@@ -48,6 +50,14 @@ from .firmware.homing import zero_search
 from .firmware.inputs import update_inputs
 from .firmware.monitor import check_errors, read_encoder, status_bits
 from .firmware.profile import position_step, velocity_step
+from .firmware.supervision import (
+    brake,
+    control_voltage,
+    program_stopped,
+    supervise,
+    supervision_status,
+    temperature,
+)
 from .firmware.turntable import tt_active, tt_distance, tt_wrap
 from .units import COUNTS_PER_REV
 
@@ -189,15 +199,21 @@ def _advance(regs, s, v: float, arrive: bool, tt: bool) -> None:  # pragma: no c
 def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover - compiled
     """One outer sample of one motor (module docstring); rows of the engine's arrays."""
     s[L.S_TICK] += 1.0
+    temperature(regs, s, u)
+    if not control_voltage(regs, s, u):
+        program_stopped(regs, s, p)
+        return
     # TICKS counts on from whatever it holds: a written value too (R/W, §8.2.107)
     regs[R.TICKS] = (regs[R.TICKS] + 1) & 0xFFFFFFFF
     update_inputs(regs, s, p, u)
     pulses = _ext_encoder(regs, s, u)
     has_encoder = read_encoder(regs, s, p)
+    supervise(regs, s, u)
     mode = regs[R.MODE_REG]
     active = mode != c.PASSIVE and mode != c.SAFE
     tt = tt_active(regs)
-    limits = check_errors(regs, s, u, active, has_encoder, tt)
+    limits = check_errors(regs, s, p, u, active, has_encoder, tt)
+    held = brake(regs, s, p, active)
     mode = regs[R.MODE_REG]
     v_prev = s[L.S_VEL]
     target_v = 0.0
@@ -217,6 +233,8 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
         # the zero-search time-out: in its previous mode, the motor "will not move until all
         # the errors have been cleared" (§8.2.31); it brakes with its deceleration and holds
         v = velocity_step(regs, s, 0.0, s[L.S_DEC])
+    elif held:
+        pass  # the brake still releasing: no move yet (§5.11.2)
     elif mode == c.VELOCITY:
         target_v = _unblocked(regs[R.V_SOLL] * c.VEL_UNIT_TO_COUNTS, limits)
         v = velocity_step(regs, s, target_v, s[L.S_DEC])
@@ -247,6 +265,7 @@ def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover -
     standby = (not current_control and s[L.S_STILL_MS] >= regs[R.STANDBY_TIME])
     status_bits(regs, s, s[L.S_VEL], v_prev, target_v, mode, has_encoder, closed_loop,
                 standby and active)
+    supervision_status(regs, u)
     if current_control:
         scale_current(regs, s, float(regs[R.FLWERR]), v / c.VEL_UNIT_TO_COUNTS * 0.01)
         units = regs[R.RUN_CURRENT] * s[L.S_CUR_SCALE] / 2047.0

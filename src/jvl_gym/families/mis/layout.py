@@ -65,7 +65,19 @@ S_LOW_BUS_N = S_AF_SLOPE0 + 8
 #: direction it goes on in to the index (§8.2.65, §8.2.67 bit 0)
 S_INDEX_TURN = S_LOW_BUS_N + 1
 S_INDEX_DIR = S_INDEX_TURN + 1
-N_STATE = S_INDEX_DIR + 1
+#: hardware supervision (``firmware.supervision``): 1 while the program waits for the control
+#: voltage (CVI) at start-up or after it fell below SAVE_VOLTAGE (§8.2.79–81), the measurements
+#: at or above ACCEPT_VOLTAGE in a row, the electronics' temperature above ambient [K], the
+#: brake (1: holding), the ms since the brake was last told to hold or to release (§8.2.106)
+S_CVI_WAIT = S_INDEX_DIR + 1
+S_CVI_N = S_CVI_WAIT + 1
+S_TEMP_RISE = S_CVI_N + 1
+S_BRAKE_HELD = S_TEMP_RISE + 1
+S_BRAKE_MS = S_BRAKE_HELD + 1
+#: the brake as last told (1: hold) and whether BRAKE then selected an external brake output
+S_BRAKE_CMD = S_BRAKE_MS + 1
+S_BRAKE_EXT = S_BRAKE_CMD + 1
+N_STATE = S_BRAKE_EXT + 1
 
 # --- params ---------------------------------------------------------------------------------
 (
@@ -85,9 +97,12 @@ N_STATE = S_INDEX_DIR + 1
     P_STOP_LO,  # mechanical end stop below this rotor angle [rad] (−inf: none)
     P_STOP_HI,  # mechanical end stop above this rotor angle [rad] (inf: none)
     P_STANDBY_MAX,  # largest STANDBY_CURRENT of the type
+    P_BRAKE_TORQUE,  # holding torque of the electromechanical brake [N·m] (0: none)
+    P_OVERLOAD,  # 1 on the types with the driver overload error (§8.2.31 bit 18)
+    P_MAX_BUS_VOLTS,  # MAX_VOLTAGE bits 0-15, the over-voltage threshold [V] (§8.2.93)
     P_H3_PRESET,  # H3 encoder: its preset minus the rotor's count at the preset (command 316)
     P_AF0,  # analogue filter settings of IO1 … IO8 as the firmware holds them (4 per input)
-) = range(18)
+) = range(21)
 #: one input's analogue filter settings at P_AF0 + 4·k + column: the firmware's copies of
 #: AFZUP_CONFMIN, AFZUP_CONFMAX, AFZUP_MAXSLOPE and AFZUP_FILTER (§8.2.50–55)
 AF_CONFMIN, AF_CONFMAX, AF_MAXSLOPE, AF_FILTER = range(4)
@@ -104,4 +119,9 @@ N_PARAM = P_AF0 + AF_SETTINGS * 8
 ) = range(5)
 #: the word the SSI encoder sends, Gray or binary as it codes it (§5.7; read on command 321/322)
 I_SSI_WORD = I_ANALOG0 + 8
-N_INPUT = I_SSI_WORD + 1
+I_CONTROL_VOLTS = I_SSI_WORD + 1  #: control supply at the CVI terminal [V]
+I_AMBIENT = I_CONTROL_VOLTS + 1  #: ambient temperature [°C]
+I_STO_A = I_AMBIENT + 1  #: Safe Torque Off channel A [V]
+I_STO_B = I_STO_A + 1  #: Safe Torque Off channel B [V]
+I_FAULTS = I_STO_B + 1  #: injected hardware faults (ERR_BITS positions of constants.FAULT_BITS)
+N_INPUT = I_FAULTS + 1

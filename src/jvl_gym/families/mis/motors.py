@@ -18,7 +18,7 @@ import numpy as np
 from ...motor.arguments import InputValue, MotorIndex, as_index
 from ...motor.array import ModeError, MotorArray
 from ...motor.bank import StorePlan
-from ...motor.inputs import InputRule
+from ...motor.inputs import InputRule, staged_inputs
 from ...motor.keywords import FINITE, NONNEGATIVE, POSITIVE
 from ...physics.fixed import wrap32
 from ...registers import Register, RegisterError, RegisterRangeError
@@ -31,7 +31,12 @@ from .plant.torque_curve import pull_out_torque
 from .program.api import ProgramMixin
 from .ssi_port import SSI_COMMANDS, SsiPort
 from .table import CONFORMANCE, TABLE
-from .units import COUNTS_PER_REV, CURRENT_AMPS_PER_UNIT
+from .units import (
+    COUNTS_PER_REV,
+    CURRENT_AMPS_PER_UNIT,
+    CVI_VOLTS_PER_UNIT,
+    TEMP_CELSIUS_PER_UNIT,
+)
 from .user_commands import UserCommands
 
 __all__ = ["MisMotorArray"]
@@ -51,10 +56,11 @@ _PARAMETERS: dict[str, int] = {
     "damping_ratio": L.P_ZETA,  # rotor against the stator field (``plant``)
     "end_stop_low": L.P_STOP_LO,  # rad (−inf: none)
     "end_stop_high": L.P_STOP_HI,  # rad (inf: none)
+    "brake_torque": L.P_BRAKE_TORQUE,  # N·m, the electromechanical brake's (0: none, §5.11)
 }
 _STATES: dict[str, int] = {"initial_angle": L.S_THETA}  # rad
 _NONNEGATIVE = {"load_inertia", "detent_torque", "viscous_friction", "coulomb_friction",
-                "encoder_type", "damping_ratio"}
+                "encoder_type", "damping_ratio", "brake_torque"}
 _POSITIVE = {"rotor_inertia", "phase_resistance", "phase_inductance", "torque_constant"}
 _MAY_BE_INFINITE = {"home_position", "end_stop_low", "end_stop_high"}
 _INPUT_COLUMNS: dict[str, int] = {"load_torque": L.I_LOAD_TORQUE,
@@ -62,11 +68,15 @@ _INPUT_COLUMNS: dict[str, int] = {"load_torque": L.I_LOAD_TORQUE,
                                   "pulse_counts": L.I_PULSE_COUNTS,
                                   "digital_inputs": L.I_DIGITAL,
                                   **{f"analog{k + 1}": L.I_ANALOG0 + k for k in range(8)},
-                                  "ssi_word": L.I_SSI_WORD}
+                                  "ssi_word": L.I_SSI_WORD,
+                                  "control_volts": L.I_CONTROL_VOLTS,
+                                  "ambient_celsius": L.I_AMBIENT,
+                                  "sto_a": L.I_STO_A, "sto_b": L.I_STO_B,
+                                  "faults": L.I_FAULTS}
 #: registers whose writes the firmware's rules handle one by one
 _SPECIAL = frozenset({R.MODE_REG, R.P_SOLL, R.COMMAND, R.ENCODER_POS, R.S_CONTROL,
                       R.STARTMODE, R.HOMEMODE, R.TURNTABLE_MODE, R.AFZUP_WRITEBITS,
-                      R.AFZUP_READINDEX})
+                      R.AFZUP_READINDEX, R.ERR_BITS})
 #: registers a setup (a register set) may not hold: commands and mode requests
 _NOT_IN_SETUP = frozenset({R.MODE_REG, R.COMMAND, R.S_CONTROL, R.ENCODER_POS})
 #: registers that hold one of a set of codes: (allowed, where the manual says so)
@@ -75,8 +85,9 @@ _MEMBERS: dict[int, tuple[frozenset[int], str]] = {
     R.TURNTABLE_MODE: (frozenset(range(6)), "§5.12.3: >5 is illegal"),
     R.AFZUP_READINDEX: (READ_INDEX_VALUES, "§8.2.51: 0, 1-8, 32768-32775")}
 BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
-#: the plant's state, which a reset of the electronics leaves alone
-_PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD]
+#: the plant's state and the electronics' temperature, which a reset of the electronics leaves
+#: alone
+_PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD, L.S_TEMP_RISE]
 
 
 class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray, layout=L):
@@ -113,7 +124,13 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
         for name in [*_PARAMETERS, *_STATES]}
     INPUTS: ClassVar[dict[str, int]] = _INPUT_COLUMNS
     INPUT_RULES: ClassVar[dict[str, InputRule]] = {
-        "supply_volts": InputRule(0.0, 80.0, unit="V"),
+        # physical ranges beyond the firmware's thresholds (over-voltage at 100 V, §7.2.8)
+        "supply_volts": InputRule(0.0, 150.0, unit="V"),
+        "control_volts": InputRule(0.0, 48.0, unit="V"),
+        "ambient_celsius": InputRule(-40.0, 150.0, unit="°C"),
+        "sto_a": InputRule(0.0, 48.0, unit="V"),
+        "sto_b": InputRule(0.0, 48.0, unit="V"),
+        "faults": InputRule(0.0, float(c.FAULT_BITS), whole=True, unit="(ERR_BITS bits)"),
         "pulse_counts": InputRule(whole=True, unit="counts per outer sample"),
         "digital_inputs": InputRule(0.0, 255.0, whole=True, unit="(bits of IO1-IO8)"),
         "ssi_word": InputRule(0.0, 2.0**31 - 1, whole=True, unit="(the SSI encoder's word)")}
@@ -131,6 +148,9 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
     def _rom_image(self, cfg: MisMotorConfig, setup: Any) -> np.ndarray:
         image = self.table.default_raw_array.astype(np.int64).copy()
         image[R.MOTORTYPE] = cfg.motor_type_code
+        # MAX_VOLTAGE: bits 0-15 the bus voltage limit [V], 16-31 the full-scale current [mA
+        # RMS] (§8.2.93)
+        image[R.MAX_VOLTAGE] = c.MAX_BUS_VOLTS | (round(cfg.rated_current * 1000.0) << 16)
         if setup is not None:
             from ..config import load_setup
 
@@ -164,11 +184,15 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
         p[L.P_ZETA] = cfg.damping_ratio
         p[L.P_STOP_LO] = -math.inf
         p[L.P_STOP_HI] = math.inf
+        p[L.P_OVERLOAD] = float(cfg.name.startswith(c.OVERLOAD_TYPES))
+        p[L.P_MAX_BUS_VOLTS] = c.MAX_BUS_VOLTS
         return p
 
     def _rest_inputs(self, cfg: MisMotorConfig) -> np.ndarray:
         u = np.zeros(L.N_INPUT)
         u[L.I_SUPPLY_VOLTS] = cfg.supply_voltage
+        u[L.I_CONTROL_VOLTS] = u[L.I_STO_A] = u[L.I_STO_B] = c.NOMINAL_CVI_VOLTS
+        u[L.I_AMBIENT] = c.NOMINAL_AMBIENT_CELSIUS
         return u
 
     def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
@@ -252,7 +276,36 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
         self._commands_power_on(idx)
         self._afzup_power_on(idx)
         self._ssi_power_on(idx)
+        self._supervision_power_on(idx)
         self._program_power_on(idx)
+
+    def _supervision_power_on(self, idx: np.ndarray) -> None:
+        """The hardware supervision at the start (``firmware.supervision``): CVI_VOLT, TEMP and
+        TEMP_HIGHRES at the ambient temperature; the program starts at once when the control
+        voltage is above ACCEPT_VOLTAGE, and otherwise waits until it has been measured there
+        ACCEPT_COUNT times (§8.2.79–80); MAX_VOLTAGE and TEMP_LIMITS hold the factory values;
+        the brake holds; an encoder COM fault (H3/H4) and an external memory fault set ERR_BITS
+        bits 10 and 13, which only the start sets (§7.2.13, §7.2.16)."""
+        s, regs, u = self.state, self.regs, self.inputs
+        # the factory limits from ROM: flash holds the writable registers only
+        for num in (R.MAX_VOLTAGE, R.TEMP_LIMITS):
+            regs[idx, num] = self._rom[self._type_of[idx], num]
+        cvi = np.clip(np.floor(u[idx, L.I_CONTROL_VOLTS] / CVI_VOLTS_PER_UNIT + 0.5), 0, 4095)
+        regs[idx, R.CVI_VOLT] = cvi.astype(np.int64)
+        s[idx, L.S_CVI_WAIT] = (regs[idx, R.CVI_VOLT] <= regs[idx, R.ACCEPT_VOLTAGE]) & (
+            regs[idx, R.ACCEPT_COUNT] > 0)
+        s[idx, L.S_CVI_N] = 0.0
+        celsius = u[idx, L.I_AMBIENT] + s[idx, L.S_TEMP_RISE]
+        regs[idx, R.TEMP_HIGHRES] = np.floor(celsius * 1000.0 + 0.5).astype(np.int64)
+        regs[idx, R.TEMP] = np.clip(np.floor(celsius / TEMP_CELSIUS_PER_UNIT + 0.5), 0,
+                                    127).astype(np.int64)
+        s[idx, L.S_BRAKE_HELD] = s[idx, L.S_BRAKE_CMD] = 1.0
+        s[idx, L.S_BRAKE_MS] = 0.0
+        s[idx, L.S_BRAKE_EXT] = (regs[idx, R.BRAKE] & 0xFF) != 0
+        fitted = (self.params[idx, L.P_BRAKE_TORQUE] > 0.0) | (s[idx, L.S_BRAKE_EXT] != 0.0)
+        regs[idx[fitted], R.STATUSBITS] |= c.ST_BRAKE_ACTIVE
+        found = u[idx, L.I_FAULTS].astype(np.int64) & c.FAULTS_AT_START
+        regs[idx, R.ERR_BITS] |= np.where(found != 0, found | c.ERR_GENERAL, 0)
 
     @property
     def time(self) -> np.ndarray:
@@ -325,6 +378,17 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
             regs[idx, num] = raw
         elif num == R.COMMAND:
             self._commands(idx, raw)
+        elif num == R.ERR_BITS:
+            self._store_err_bits(idx, raw)
+
+    def _store_err_bits(self, idx: np.ndarray, raw: np.ndarray) -> None:
+        """ERR_BITS := ``raw``, but the errors only a reset clears stay (``ERR_NEEDS_RESET``:
+        §7.2.5, §7.2.10, §7.2.17, §7.2.20, §7.2.21; "Other errors will require hardware fixes
+        or intervention", §8.2.31), with the general error bit 0 while any error is left."""
+        kept = self.regs[idx, R.ERR_BITS] & c.ERR_NEEDS_RESET
+        value = np.asarray(raw, dtype=np.int64) | kept
+        value = np.where(value & ~c.ERR_GENERAL, value | c.ERR_GENERAL, value)
+        self.regs[idx, R.ERR_BITS] = value
 
     def _check_member(self, reg: Register, raw: np.ndarray, allowed: frozenset[int],
                       where: str) -> None:
@@ -466,7 +530,7 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
             elif cmd in SSI_COMMANDS:
                 self._ssi_command(i, cmd)
             elif cmd == c.CMD_CLEAR_ERRORS:
-                regs[i, R.ERR_BITS] = 0
+                self._store_err_bits(np.array([i]), np.array([0]))
                 regs[i, R.WARN_BITS] = 0
             elif cmd == c.CMD_P_SOLL_ZERO:
                 self._store_p_soll(np.array([i]), np.array([0]))
@@ -503,6 +567,11 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
                 if cmd != c.CMD_ADD_ACTUAL:
                     regs[i, R.P_SOLL] = wrap32(int(regs[i, R.P_SOLL]) * add + new)
                 self._set_encoder(i, wrap32(int(regs[i, R.ENCODER_POS]) * add + new))
+                if cmd == c.CMD_PRESET_POSITION:
+                    # "Reset the position (special command 354 …)" clears the H3/H4's lost
+                    # position and reed errors (§7.2.11, §7.2.12)
+                    self._store_err_bits(np.array([i]), np.array(
+                        [int(regs[i, R.ERR_BITS]) & ~c.ERR_CLEARED_BY_PRESET & ~c.ERR_GENERAL]))
             elif cmd == c.CMD_PRESET_H3 and self.params[i, L.P_ENCODER] == c.ENCODER_H3:
                 self._preset_h3(i, int(regs[i, R.P_NEW]))
             elif cmd == c.CMD_RESYNC and self.params[i, L.P_ENCODER] > 0:
@@ -532,13 +601,41 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
         """Set world inputs, held from the next outer sample on (per motor).
 
         Keywords: ``load_torque`` [N·m, opposing positive rotation], ``supply_volts`` [V,
-        0 … 80], ``pulse_counts`` (whole gear-input counts per outer sample),
-        ``digital_inputs`` (IO1–IO8 levels as bits 0–7, 0 … 255), ``analog1`` … ``analog8``
-        [V] (the ADC reads 0 … 5 V, §2.3.5), ``ssi_word`` (the word the SSI encoder sends,
-        0 … 2³¹ − 1, Gray or binary as it codes it; read by commands 321/322, §5.7). All are
-        checked before any is set.
+        0 … 150; above 100 V the over-voltage error, §7.2.8], ``pulse_counts`` (whole
+        gear-input counts per outer sample), ``digital_inputs`` (IO1–IO8 levels as bits 0–7,
+        0 … 255), ``analog1`` … ``analog8`` [V] (the ADC reads 0 … 5 V, §2.3.5), ``ssi_word``
+        (the word the SSI encoder sends, 0 … 2³¹ − 1, Gray or binary as it codes it; read by
+        commands 321/322, §5.7), ``control_volts`` [V, 0 … 48] (the CVI terminal, nominal 24 V,
+        §8.2.79–82), ``ambient_celsius`` [°C, −40 … 150, at rest 25], ``sto_a``, ``sto_b``
+        [V, 0 … 48] (the Safe Torque Off channels, nominal 24 V, off below 18 V, §7.2.18),
+        ``faults`` (injected hardware faults as ERR_BITS bits: 2 output driver, 7 internal, 8–10
+        H3/H4 encoder lost position / reed / COM, 12 closed loop (H2/H4), 13 external memory,
+        14 H2/H4 single turn, 15 H4, 18 driver overload (SMC85, MIS34x, MIS43x), 27 STO alarm;
+        an encoder fault needs its encoder option). All are checked before any is set
+        (``firmware.supervision`` describes their effects).
         """
+        if inputs.get("faults") is not None:
+            self._check_faults(as_index(index, self.n), inputs["faults"])
         super().set_input(index, **inputs)
+
+    def _check_faults(self, idx: np.ndarray, value: InputValue) -> None:
+        """Refuse fault bits that are not injectable or that the motor's hardware lacks."""
+        ((_, bits),) = staged_inputs({"faults": value}, {"faults": 0}, self.INPUT_RULES,
+                                     idx.size)
+        for i, word in zip(idx.tolist(), bits.astype(np.int64).tolist()):
+            if word & ~c.FAULT_BITS:
+                raise ValueError(f"faults: bits {word & ~c.FAULT_BITS:#x} of motor {i} are no "
+                                 f"injectable fault (allowed {c.FAULT_BITS:#x}, ERR_BITS bits)")
+            code = int(self.params[i, L.P_ENCODER])
+            for bit, codes in c.FAULT_ENCODERS.items():
+                if word & bit and code not in codes:
+                    raise ValueError(f"faults: bit {bit.bit_length() - 1} needs encoder option "
+                                     f"{sorted(codes)} (ENCODER_TYPE, §8.2.49); motor {i} has "
+                                     f"{code}")
+            if word & c.ERR_DRIVER_OVERLOAD and not self.params[i, L.P_OVERLOAD]:
+                raise ValueError(f"faults: bit 18 (driver overload) exists on SMC85, MIS34x and "
+                                 f"MIS43x only (§8.2.31); motor {i} is a "
+                                 f"{self._configs[self._type_of[i]].name}")
 
     # ------------------------------------------------------------------ physical truth
     @property

@@ -31,7 +31,8 @@ status bits (MIS manual §8.2.15, §8.2.18–19, §8.2.24, §8.2.31–32, §5.9,
   passive (§8.2.28, §8.2.31: "will not move until all the errors have been cleared"), except
   the zero-search time-out (bit 16), which sets the motor back in its previous mode, where it
   brakes with its deceleration and holds still until the errors are cleared (§7.2.19, §8.2.31;
-  ``kernel``, ``homing``).
+  ``kernel``, ``homing``). The hardware errors (over-voltage, temperature, STO, control voltage,
+  injected faults) are set by ``supervision``.
 """
 
 from __future__ import annotations
@@ -44,8 +45,9 @@ from numba import njit
 from ....physics.fixed import wrap32
 from .. import constants as c
 from .. import layout as L
-from ..units import BUSVOL_VOLTS_PER_UNIT, COUNTS_PER_REV
+from ..units import COUNTS_PER_REV
 from . import regs as R
+from .supervision import busvol_units, over_voltage
 
 #: encoder counts per revolution by ENCODER_TYPE code (0: none)
 _CPR = np.array([c.ENCODER_CPR.get(k, 0) for k in range(11)], dtype=np.int64)
@@ -108,19 +110,20 @@ def set_encoder(regs, s, p, value: int) -> None:  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def check_errors(regs, s, u, active: bool, has_encoder: bool,
+def check_errors(regs, s, p, u, active: bool, has_encoder: bool,
                  tt: bool) -> int:  # pragma: no cover - compiled
-    """Follow error, bus voltage and limits (module docstring); returns the active limits
-    (1: positive, 2: negative), which block motion towards them."""
+    """Follow error, bus voltage (and over-voltage) and limits (module docstring); returns the
+    active limits (1: positive, 2: negative), which block motion towards them."""
     err = regs[R.ERR_BITS]
     warn = regs[R.WARN_BITS]
     setup = regs[R.SETUP_BITS]
     maxerr = regs[R.FLWERRMAX]
     if active and has_encoder and maxerr > 0 and abs(regs[R.FLWERR]) > maxerr:
         err |= c.ERR_FOLLOW
-    busvol = int(min(max(np.floor(u[L.I_SUPPLY_VOLTS] / BUSVOL_VOLTS_PER_UNIT + 0.5), 0.0),
-                     4095.0))
+    busvol = busvol_units(u)
     regs[R.BUSVOL] = busvol
+    if over_voltage(p, busvol):
+        err |= c.ERR_OVER_VOLTAGE  # §7.2.8, §8.2.93
     if busvol < regs[R.MIN_BUSVOL]:
         warn |= c.WARN_LOW_BUS
         s[L.S_LOW_BUS_N] += _LOW_BUS_MEASUREMENTS_PER_MS
@@ -193,7 +196,7 @@ def status_bits(regs, s, v: float, prev_v: float, target_v: float, mode: int,
     outputs follow bit 4 (in position: a movement has completed), or bit 2 (in physical
     position) with INPOS_MASK bit 8 (§5.6.3), and ERR_BITS ≠ 0 in OUTPUTS.
     """
-    st = regs[R.STATUSBITS] & (c.ST_ZERO_SEARCH_DONE | c.ST_AUTOCORRECTION)
+    st = regs[R.STATUSBITS] & (c.ST_ZERO_SEARCH_DONE | c.ST_AUTOCORRECTION | c.ST_BRAKE_ACTIVE)
     moving_mode = mode == c.VELOCITY or mode == c.POSITION or mode == c.GEAR
     if moving_mode and v == target_v:
         st |= c.ST_AT_VELOCITY

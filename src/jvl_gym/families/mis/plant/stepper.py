@@ -131,7 +131,8 @@ def prepare_lane(sc, j: int, s, p, u) -> None:  # pragma: no cover - compiled
     sc[F_DAMP * k + j] = 2.0 * p[L.P_ZETA] * math.sqrt(stiffness * inertia)
     sc[F_WC * k + j] = dcmd / _H / COUNTS_PER_RAD
     sc[F_VISC * k + j] = p[L.P_VISCOUS]
-    sc[F_COUL * k + j] = p[L.P_COULOMB]
+    # a holding brake adds its torque to the friction that holds the shaft (``supervision``)
+    sc[F_COUL * k + j] = p[L.P_COULOMB] + s[L.S_BRAKE_HELD] * p[L.P_BRAKE_TORQUE]
     sc[F_LOAD * k + j] = u[L.I_LOAD_TORQUE]
     sc[F_R * k + j] = r
     sc[F_BRIDGE * k + j] = min(s[L.S_BRIDGE], 1.0)
