@@ -9,6 +9,7 @@ The chart comes right below the channels, so at 1280×720 it is in view without 
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -28,6 +29,9 @@ from .notice import compile_notice
 
 #: seconds between two scope updates
 PERIOD_S = 0.03
+#: seconds after which a chart update the browser has not reported drawn counts as lost (the
+#: next one is sent anyway)
+DRAWN_WITHIN_S = 2.0
 #: points the live scope keeps per channel (about 10 s at the page's rate; the time base
 #: shows up to that)
 DEPTH = 300
@@ -266,8 +270,9 @@ def _scope_block(page: Page) -> None:
     motor = page.motor
     choices = channel_choices(motor)
     start = [c for c in DEFAULT_CHANNELS if c in choices]
+    # "sent": when the chart update the browser has not drawn yet was sent (None: drawn)
     state: dict[str, Any] = {"scope": Scope(motor, start, DEPTH), "live": True, "updates": 0,
-                             "recorder": None, "shown": None, "drawn": None}
+                             "recorder": None, "shown": None, "drawn": None, "sent": None}
 
     def labels() -> list[str]:
         sc = state["scope"]
@@ -311,6 +316,7 @@ def _scope_block(page: Page) -> None:
         shown = state["shown"]
         if shown is None:
             return
+        state["drawn"], state["sent"] = shown, time.monotonic()
         over = overlay.drawn()
         marks = tools.show_cursors(shown, over, overlay.name)
         chart.options.clear()
@@ -321,6 +327,18 @@ def _scope_block(page: Page) -> None:
                       lambda: state["shown"], draw)
     for w in (tools.cursor_on, tools.t1, tools.t2, tools.cursor_channel):
         w.on_value_change(page.guard(draw))  # the cursors move on a stopped scope too
+
+    def browser_busy() -> bool:
+        """The browser has not drawn the last update yet: a new one would queue behind it
+        (on a busy machine the chart would fall ever further behind the motor)."""
+        sent = state["sent"]
+        return sent is not None and time.monotonic() - sent < DRAWN_WITHIN_S
+
+    def drawn(_e: Any = None) -> None:
+        state["sent"] = None
+        if state["drawn"] is not state["shown"]:
+            draw()  # the newest window, which waited for this one
+    chart.on("chart:finished", page.guard(drawn), args=[])
 
     with ui.row().classes("items-center gap-2"):
         path = ui.input("record to", value=f"{motor.motor_type}_{motor.address}_record.csv"
@@ -367,9 +385,9 @@ def _scope_block(page: Page) -> None:
                 page.say(f"single: triggered on {trig.channel}")
             state["shown"] = shown
         waiting = trig is not None and window(series, trig, span, TriggerMode.NORMAL) is None
-        # a window is drawn when there is a new one: waiting for a trigger sends nothing
-        if shown is not None or state["drawn"] is not state["shown"]:
-            state["drawn"] = state["shown"]
+        # a window is drawn when there is a new one (waiting for a trigger sends nothing) and
+        # the browser has drawn the one before (else when it reports it drawn)
+        if state["drawn"] is not state["shown"] and not browser_busy():
             draw()
         counter.set_text(f"update {state['updates']}: {len(sc.t)} points, t = {sc.t[-1]:.2f} s"
                          + (" · waiting for the trigger" if waiting else ""))
