@@ -126,3 +126,19 @@ def test_the_chart_draws_the_overlay_with_its_own_legend_entry_outside_the_plot(
     legend, slider, grid = opts["legend"], opts["dataZoom"][1], opts["grid"]
     assert legend["bottom"] + legend["height"] <= slider["bottom"]
     assert slider["bottom"] + slider["height"] + 36 <= grid["bottom"]  # x labels and name
+
+
+def test_the_studio_page_points_at_the_studio_benchmark_section():
+    """docs/studio.md's link to the figures of ``benchmarks/bench_studio.py`` resolves: the
+    generated page has that section, with its figures."""
+    import re
+    from pathlib import Path
+
+    docs = Path(__file__).resolve().parents[1] / "docs"
+    links = re.findall(r"\]\(benchmarks\.md#([\w-]+)\)", (docs / "studio.md").read_text())
+    assert links == ["studio"]
+    page = (docs / "benchmarks.md").read_text()
+    section = page.split("<!-- bench:studio begin -->")[1].split("<!-- bench:studio end -->")[0]
+    assert re.search(r"^## studio$", section, re.M | re.I)
+    assert "scope frames/s drawn in headless Chromium, 8 channels" in section
+    assert "trigger latency" in section
