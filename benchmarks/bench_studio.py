@@ -86,19 +86,19 @@ def _update_number(text: str) -> int:
 
 
 def _pick_channels(page) -> None:
-    """Add the channels of :data:`CHANNELS` the page does not show yet."""
+    """Add the channels of :data:`CHANNELS` the chart does not show yet (typed into the
+    channel picker's search field, the option clicked) and wait for the chart to draw them."""
     field = page.get_by_test_id("channels")
+    drawn = f"""(name) => {CHART}.getOption().series.some(
+        (s) => s.name === name || s.name.startsWith(name + ' ['))"""
     for name in CHANNELS:
-        shown = page.get_by_test_id("scope-last").inner_text()
-        if f"{name} [" in shown or f"{name} =" in shown:
+        if page.evaluate(drawn, name):
             continue
-        field.click()
-        page.keyboard.type(name)
-        page.get_by_role("option", name=name, exact=True).click()
-        page.keyboard.press("Escape")
-        page.wait_for_function(
-            f"""() => document.querySelector('[data-testid="scope-last"]').innerText
-                .includes({json.dumps(name + " ")})""", timeout=60000)
+        field.fill(name)
+        page.get_by_role("option", name=name, exact=True).dispatch_event("click")
+        page.wait_for_function(drawn, arg=name, timeout=60000)
+    field.fill("")
+    page.keyboard.press("Tab")  # the picker's menu closes (Escape would be STOP)
 
 
 def _frames(page, seconds: float) -> tuple[float, float]:

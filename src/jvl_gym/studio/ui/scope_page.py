@@ -32,6 +32,9 @@ PERIOD_S = 0.03
 #: seconds after which a chart update the browser has not reported drawn counts as lost (the
 #: next one is sent anyway)
 DRAWN_WITHIN_S = 2.0
+#: seconds between two updates of the scope's text lines while no chart update is sent (a
+#: trigger awaited): a person reads no faster, and a busy browser is not flooded
+LABELS_S = 0.1
 #: points the live scope keeps per channel (about 10 s at the page's rate; the time base
 #: shows up to that)
 DEPTH = 300
@@ -272,7 +275,8 @@ def _scope_block(page: Page) -> None:
     start = [c for c in DEFAULT_CHANNELS if c in choices]
     # "sent": when the chart update the browser has not drawn yet was sent (None: drawn)
     state: dict[str, Any] = {"scope": Scope(motor, start, DEPTH), "live": True, "updates": 0,
-                             "recorder": None, "shown": None, "drawn": None, "sent": None}
+                             "recorder": None, "shown": None, "drawn": None, "sent": None,
+                             "labelled": 0.0}
 
     def labels() -> list[str]:
         sc = state["scope"]
@@ -312,11 +316,19 @@ def _scope_block(page: Page) -> None:
         tools.set_labels(labels())
     pick.on_value_change(page.guard(set_channels))
 
+    def show_text() -> None:
+        """The counter and the channels' last values (as of the last update)."""
+        state["labelled"] = time.monotonic()
+        if state.get("text"):
+            counter.set_text(state["text"][0])
+            last.set_text(state["text"][1])
+
     def draw() -> None:
         shown = state["shown"]
         if shown is None:
             return
         state["drawn"], state["sent"] = shown, time.monotonic()
+        show_text()
         over = overlay.drawn()
         marks = tools.show_cursors(shown, over, overlay.name)
         chart.options.clear()
@@ -336,7 +348,7 @@ def _scope_block(page: Page) -> None:
 
     def drawn(_e: Any = None) -> None:
         state["sent"] = None
-        if state["drawn"] is not state["shown"]:
+        if state["shown"] is not None and state["drawn"] is not state["shown"]:
             draw()  # the newest window, which waited for this one
     chart.on("chart:finished", page.guard(drawn), args=[])
 
@@ -387,12 +399,15 @@ def _scope_block(page: Page) -> None:
         waiting = trig is not None and window(series, trig, span, TriggerMode.NORMAL) is None
         # a window is drawn when there is a new one (waiting for a trigger sends nothing) and
         # the browser has drawn the one before (else when it reports it drawn)
-        if state["drawn"] is not state["shown"] and not browser_busy():
-            draw()
-        counter.set_text(f"update {state['updates']}: {len(sc.t)} points, t = {sc.t[-1]:.2f} s"
-                         + (" · waiting for the trigger" if waiting else ""))
-        last.set_text("; ".join(f"{sc.label(c)} = {b[-1]:.6g}"
-                                for c, b in zip(sc.channels, sc.values)))
+        state["text"] = (f"update {state['updates']}: {len(sc.t)} points, t = {sc.t[-1]:.2f} s"
+                         + (" · waiting for the trigger" if waiting else ""),
+                         "; ".join(f"{sc.label(c)} = {b[-1]:.6g}"
+                                   for c, b in zip(sc.channels, sc.values)))
+        fresh = state["shown"] is not None and state["drawn"] is not state["shown"]
+        if fresh and not browser_busy():
+            draw()  # the text lines with it
+        elif not browser_busy() and time.monotonic() - state["labelled"] >= LABELS_S:
+            show_text()
     page.every(PERIOD_S, page.guard(tick))
 
 
