@@ -139,3 +139,20 @@ def test_a_capture_saved_and_overlaid_at_the_trigger(page, studio, tmp_path):
     assert "\n" not in message.inner_text()
     expect(page.get_by_test_id("overlay-state")).to_have_text("overlay: run1.csv")
     assert "V_IST [counts/sample] · run1" in chart_rects(page, "scope-chart")["names"]
+
+
+def test_a_chart_update_waits_until_the_browser_has_drawn_the_one_before(page, studio):
+    """Once the page stops reporting frames drawn (ECharts' ``finished``), the studio sends
+    at most the update in flight and one more after ``DRAWN_WITHIN_S`` (2 s), instead of an
+    update every tick (about 45 in 1.5 s) that a busy browser would queue ever further behind
+    the motor."""
+    open_scope(page, studio)
+    page.evaluate(f"""() => {{ const chart = ({CHART})('scope-chart');
+        window.__updates = 0;
+        chart.off('finished');  // the page's report of a frame drawn
+        const set = chart.setOption.bind(chart);
+        chart.setOption = (...args) => {{ window.__updates++; return set(...args); }}; }}""")
+    page.wait_for_timeout(1500)
+    assert page.evaluate("() => window.__updates") <= 2
+    # the text lines still follow the motor meanwhile
+    expect(page.get_by_test_id("scope-count")).to_contain_text("update", timeout=SLOW)
