@@ -105,6 +105,8 @@ def test_missing_binary_and_unsaveable_files(tmp_path):
         assert "\n" not in str(err.value)
     with pytest.raises(stored.StoredTraceError, match="nothing captured"):
         stored.save({TIME: np.zeros(0)}, tmp_path / "x.csv")
+    with pytest.raises(stored.StoredTraceError, match="this record counts 'sample'"):
+        stored.save({"sample": np.arange(3.0), "x": np.ones(3)}, tmp_path / "x.csv")
     with pytest.raises(stored.StoredTraceError, match=r"\.csv or \.parquet"):
         stored.save(_step(0.1), tmp_path / "x.json")
     assert not (tmp_path / "x.csv").exists() and not (tmp_path / "x.json").exists()

@@ -54,8 +54,11 @@ def save(series: Mapping[str, np.ndarray], path: str | os.PathLike[str]) -> Path
     """
     path = Path(path)
     suffix = _suffix(path)
-    if TIME not in series or len(series[TIME]) == 0 or len(series) < 2:
+    if not series or len(next(iter(series.values()))) == 0 or len(series) < 2:
         raise StoredTraceError("nothing captured to save yet")
+    if TIME not in series:
+        raise StoredTraceError(f"a stored trace has a '{TIME}' column; this record counts "
+                               f"{next(iter(series))!r} (export it with CSV)")
     if suffix == ".parquet":
         try:
             import pyarrow as pa

@@ -470,7 +470,7 @@ def _buffer_block(page: Page) -> None:
                                            tools.level_drawn(), over, overlay.name))
         chart.update()
     overlay = _Stored(page, "buffer-", f"{motor.motor_type}_{motor.address}_buffer.csv", tools,
-                      lambda: dict(result) if TIME in result else None, draw)
+                      lambda: dict(result), draw)
     chart = ui.echart(chart_options({TIME: []})).classes("w-full h-72").props(
         tid("buffer-chart"))
     for w in (tools.cursor_on, tools.t1, tools.t2, tools.cursor_channel):
