@@ -98,7 +98,9 @@ def _pick_channels(page) -> None:
         page.get_by_role("option", name=name, exact=True).dispatch_event("click")
         page.wait_for_function(drawn, arg=name, timeout=60000)
     field.fill("")
-    page.keyboard.press("Tab")  # the picker's menu closes (Escape would be STOP)
+    page.keyboard.press("Tab")  # the picker's menu closes (Escape would be STOP) ...
+    page.mouse.click(2, 400)  # ... or a click beside it, in the page's margin
+    page.locator(".q-menu").wait_for(state="hidden", timeout=60000)
 
 
 def _frames(page, seconds: float) -> tuple[float, float]:
