@@ -97,31 +97,32 @@ def test_recording_to_parquet_where_pyarrow_is(tmp_path):
 
 @pytest.fixture(scope="module")
 def running() -> Session:
-    s = Session.simulated(["MAC140", "MIS232"], seed=5)
+    s = Session.simulated(["MAC140", "MIS232", "MAC800"], seed=5)
     s.start()
     yield s
     s.stop()
 
 
-@pytest.mark.parametrize("k, level", [(0, 100.0), (1, 60.0)])
+@pytest.mark.parametrize("k, level", [(0, 100.0), (1, 60.0), (2, 50.0)],
+                         ids=["MAC140", "MIS232", "MAC800"])
 def test_a_sample_buffer_capture_triggers_within_one_sample_of_the_crossing(running, k,
                                                                              level):
     """A speed step recorded in the motor's sample buffer (MAC050–141 manual 3.2.112–3.2.116,
-    MIS manual §8.2.60–8.2.63), triggered on V_IST rising through ``level`` rpm-units: time 0
-    lies between the last sample below the level and the first at or above it, one sample
-    interval apart."""
+    the MAC800 by the same RECORD and REWIND bits, MIS manual §8.2.60–8.2.63), triggered on
+    V_IST rising through ``level`` in its unit: time 0 lies between the last sample below the
+    level and the first at or above it, one sample interval apart."""
     m = running.motors[k]
     with m.lock:
         m.write("MODE_REG", 0)
     time.sleep(0.3)
     unit = m.register("V_IST").unit
     with m.lock:
-        m.write("V_SOLL", 1600 if k == 0 else 12000)  # 763 rpm, 120 rpm
+        m.write("V_SOLL", 12000 if k == 1 else 1600)  # 120 rpm; 100 counts/sample
         m.write("MODE_REG", 1)
     rec = capture.capture(m, ["V_IST"], 200)
     m.write("MODE_REG", 0)
     key = f"V_IST [{unit}]"
-    level = level if k == 0 else level * 100  # MIS V_IST in 0.01 rpm
+    level = level * 100 if k == 1 else level  # MIS V_IST in 0.01 rpm
     out = capture.triggered(rec, Trigger(key, level))
     t, v = out[TIME], out[key]
     i = int(np.searchsorted(t, 0.0))

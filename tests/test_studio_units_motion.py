@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from jvl_gym.families import family_of_motor
+from jvl_gym.families import families, family, family_of_motor
 from jvl_gym.registers import from_raw
 from jvl_gym.studio.motion import Motion, MotionError
 from jvl_gym.studio.motor import SimMotor
@@ -62,14 +62,22 @@ def _mis(t: str) -> dict:
     }
 
 
-#: motor type → the family's own conversions, by register unit (or register name)
+#: family → its own conversions of a motor type, by register unit (or register name)
+BY_FAMILY = {"mac050_141": _mac050_141, "mac800": _mac800, "mis": _mis}
+#: a motor type of each family → its conversions
 CONVERSIONS = {"MAC140": _mac050_141, "MAC800": _mac800, "MIS232": _mis}
+#: every motor type of every family (the factors of some are the motor's own data)
+EVERY_TYPE = [t for k in families() for t in family(k).motor_types()]
 
 
-@pytest.mark.parametrize("motor_type", sorted(CONVERSIONS))
+def test_the_conversions_cover_every_family():
+    assert set(BY_FAMILY) == set(families())
+
+
+@pytest.mark.parametrize("motor_type", EVERY_TYPE)
 def test_every_engineering_value_is_the_familys_conversion(motor_type):
     view = UnitsView(motor_type)
-    expected = CONVERSIONS[motor_type](motor_type)
+    expected = BY_FAMILY[family_of_motor(motor_type).key](motor_type)
     shown = 0
     for reg in view.facts.table:
         if reg.access.value == "reserved" or view.unit_of(reg) is None:

@@ -1,5 +1,6 @@
 """What every page shares: the header with the views and the motor choice, the message line,
-the guard that turns an error into a message on the page, and the page's timers, which run only
+the guard that turns an error into a message on the page (in the header: always in view, never
+over the page's content), and the page's timers, which run only
 while its tab is connected."""
 
 from __future__ import annotations
@@ -27,6 +28,9 @@ STOP_KEY = "Escape"
 
 log = logging.getLogger("jvl_gym.studio")
 
+#: the colours of the header's message line (on its dark background): an outcome, an error
+OK_CLASS, ERROR_CLASS = "text-green-300", "text-red-300 font-bold"
+
 
 def tid(name: str) -> str:
     """The props that name an element for the browser tests (``data-testid``)."""
@@ -50,11 +54,10 @@ class Page:
         self.message: Any = None
 
     def say(self, text: str, ok: bool = True) -> None:
-        """Show ``text`` on the message line (and as a notification when it is an error)."""
+        """Show ``text`` on the message line of the header (an error in red, as a line, never
+        a pop-up over the page)."""
         self.message.set_text(text)
-        self.message.classes(replace="text-positive" if ok else "text-negative")
-        if not ok:
-            ui.notify(text, type="negative", multi_line=True)
+        self.message.classes(replace=f"text-sm {OK_CLASS if ok else ERROR_CLASS}")
 
     def every(self, seconds: float, callback: Callable[[], Any]) -> Any:
         """Call ``callback`` (sync or async) every ``seconds`` s while the page's tab is
@@ -141,25 +144,30 @@ def frame(session: Session, path: str, m: int = 0) -> Page:
     m = m if 0 <= m < len(session.motors) else 0
     page = Page(session, session.motors[m])
     ui.page_title(f"jvl-gym studio · {VIEWS[path]}")
-    with ui.header().classes("items-center gap-4 bg-slate-800"):
-        ui.label("jvl-gym studio").classes("text-lg font-bold")
-        for p, title in VIEWS.items():
-            link = ui.link(title, f"{p}?m={m}").classes("text-white")
-            if p == path:
-                link.classes("underline font-bold")
-        ui.space()
-        stop_button(page)
-        options = {k: mm.label for k, mm in enumerate(session.motors)}
-        ui.select(options, value=m, label="motor",
-                  on_change=lambda e: ui.navigate.to(f"{path}?m={e.value}")
-                  ).props("dark dense outlined").classes("w-48").props(tid("motor-select"))
-    state = ui.label("").classes("text-negative").props(tid("line-state"))
+    with ui.header().classes("bg-slate-800 py-1"), ui.column().classes("w-full gap-0"):
+        with ui.row().classes("items-center gap-4 w-full"):
+            ui.label("jvl-gym studio").classes("text-lg font-bold")
+            for p, title in VIEWS.items():
+                link = ui.link(title, f"{p}?m={m}").classes("text-white")
+                if p == path:
+                    link.classes("underline font-bold")
+            ui.space()
+            stop_button(page)
+            options = {k: mm.label for k, mm in enumerate(session.motors)}
+            ui.select(options, value=m, label="motor",
+                      on_change=lambda e: ui.navigate.to(f"{path}?m={e.value}")
+                      ).props("dark dense outlined").classes("w-48").props(tid("motor-select"))
+        # the line's state and the message line stay in the header: always in view, and an
+        # error never covers what the page shows (no pop-up)
+        state = ui.label("").classes(f"{ERROR_CLASS} text-sm").props(tid("line-state"))
+        page.message = ui.label("").classes("text-sm").props(tid("message"))
 
     def show_state() -> None:
         problems = [p for p in (session.clock_problem,
                                 session.line.problem if session.line else None) if p]
         state.set_text("; ".join(problems))
+        state.set_visibility(bool(problems))
 
+    show_state()
     page.every(1.0, show_state)
-    page.message = ui.label("").props(tid("message"))
     return page

@@ -2,20 +2,26 @@
 with one shared axis (each trace with its scale and offset), a trigger on any channel (level,
 edge, pre-trigger share; auto, normal, single), a time base, cursors reading Δt, Δvalue and
 1/Δt, zoom and pan, recording to a file; the motor's sample buffer and TESTU/TESTA records on
-the same trigger and cursors; CSV and PNG export (the logic: :mod:`jvl_gym.studio.scope`,
-:mod:`jvl_gym.studio.trigger`, :mod:`jvl_gym.studio.capture`)."""
+the same trigger and cursors; a capture saved to a file and a stored trace overlaid, aligned
+at the trigger; CSV and PNG export (the logic: :mod:`jvl_gym.studio.scope`,
+:mod:`jvl_gym.studio.trigger`, :mod:`jvl_gym.studio.capture`, :mod:`jvl_gym.studio.stored`).
+The chart comes right below the channels, so at 1280×720 it is in view without scrolling."""
 
 from __future__ import annotations
 
+import time
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
 from nicegui import run, ui
 
+from .. import stored
 from ..capture import capture as capture_buffer
 from ..capture import run_test, triggered
 from ..scope import Scope, channel_choices, series_csv, series_png
 from ..session import Session
+from ..stored import StoredTraceError, stored_label
 from ..trigger import TIME, Recorder, Trigger, TriggerMode, cursors, scaled, window
 from .common import Page, frame, tid
 from .motion_panel import motion_panel
@@ -23,6 +29,12 @@ from .notice import compile_notice
 
 #: seconds between two scope updates
 PERIOD_S = 0.03
+#: seconds after which a chart update the browser has not reported drawn counts as lost (the
+#: next one is sent anyway)
+DRAWN_WITHIN_S = 2.0
+#: seconds between two updates of the scope's text lines while no chart update is sent (a
+#: trigger awaited): a person reads no faster, and a busy browser is not flooded
+LABELS_S = 0.1
 #: points the live scope keeps per channel (about 10 s at the page's rate; the time base
 #: shows up to that)
 DEPTH = 300
@@ -35,27 +47,44 @@ def _short(v: float) -> float:
     return float(f"{float(v):.7g}")
 
 
+#: the chart's layout [px]: the legend in a line of its own below the zoom slider, which sits
+#: below the x axis's labels and name, so neither covers a trace
+LEGEND_BOTTOM, LEGEND_HEIGHT = 0, 22
+SLIDER_BOTTOM, SLIDER_HEIGHT = 30, 18
+GRID_TOP, GRID_BOTTOM = 30, 88
+
+
 def chart_options(series: dict[str, Any], title: str = "",
                   traces: dict[str, tuple[float, float]] | None = None,
                   marks: tuple[float, float] | None = None,
-                  level: float | None = None) -> dict[str, Any]:
+                  level: float | None = None,
+                  overlay: dict[str, Any] | None = None,
+                  overlay_name: str = "") -> dict[str, Any]:
     """ECharts options of ``series`` (first entry: x axis; labels ``"name [unit]"``): one
     line per channel on one shared y axis, each trace times its scale plus its offset
     (``traces``: label → (scale, offset)); ``marks``: the two cursors' times; ``level``: the
-    trigger level (of the trigger's trace as drawn). The legend sits below the chart, zoom and
-    pan with the mouse wheel and the slider."""
+    trigger level (of the trigger's trace as drawn); ``overlay``: a stored trace (its own
+    ``"t [s]"`` and channels, :mod:`jvl_gym.studio.stored`) drawn dashed over it on the same
+    axes, each channel with the scale and offset of the live channel of its label and its own
+    legend entry (:func:`~jvl_gym.studio.stored.stored_label` with ``overlay_name``). The
+    legend sits below the chart and the zoom slider, outside the plot; zoom and pan with the
+    mouse wheel and the slider."""
     keys = list(series)
     x = series[keys[0]] if keys else []
     traces = traces or {}
     lines = []
+
+    def line_of(name: str, xs: Any, ys: Any, scale: float, offset: float) -> dict[str, Any]:
+        return {"name": name, "type": "line", "showSymbol": False, "animation": False,
+                "sampling": "lttb",
+                "data": [[_short(a), _short(b)] for a, b in zip(xs, scaled(ys, scale, offset))]}
+
+    def legend_name(k: str, scale: float, offset: float) -> str:
+        return k if (scale, offset) == (1.0, 0.0) else f"{k} ×{scale:g}{offset:+g}"
+
     for n, k in enumerate(keys[1:]):
         scale, offset = traces.get(k, (1.0, 0.0))
-        name = k if (scale, offset) == (1.0, 0.0) else f"{k} ×{scale:g}{offset:+g}"
-        line: dict[str, Any] = {
-            "name": name, "type": "line", "showSymbol": False, "animation": False,
-            "sampling": "lttb",
-            "data": [[_short(a), _short(b)] for a, b in zip(x, scaled(series[k], scale,
-                                                                       offset))]}
+        line = line_of(legend_name(k, scale, offset), x, series[k], scale, offset)
         if n == 0 and (marks or level is not None):
             data: list[Any] = [{"xAxis": _short(t)} for t in (marks or ())]
             if level is not None:
@@ -63,12 +92,21 @@ def chart_options(series: dict[str, Any], title: str = "",
             line["markLine"] = {"silent": True, "symbol": "none", "animation": False,
                                 "lineStyle": {"type": "dashed"}, "data": data}
         lines.append(line)
+    if overlay:
+        xs = overlay[TIME]
+        for k in (k for k in overlay if k != TIME):
+            scale, offset = traces.get(k, (1.0, 0.0))
+            line = line_of(legend_name(stored_label(overlay_name, k), scale, offset), xs,
+                           overlay[k], scale, offset)
+            line["lineStyle"] = {"type": "dashed", "width": 1.5}
+            lines.append(line)
     return {"title": {"text": title, "textStyle": {"fontSize": 12}, "left": "center",
                       "top": 0},
             "animation": False, "tooltip": {"trigger": "axis", "animation": False},
-            "legend": {"type": "scroll", "bottom": 0},
-            "grid": {"top": 30, "left": 60, "right": 30, "bottom": 80},
-            "dataZoom": [{"type": "inside"}, {"type": "slider", "bottom": 28, "height": 18}],
+            "legend": {"type": "scroll", "bottom": LEGEND_BOTTOM, "height": LEGEND_HEIGHT},
+            "grid": {"top": GRID_TOP, "left": 60, "right": 30, "bottom": GRID_BOTTOM},
+            "dataZoom": [{"type": "inside"}, {"type": "slider", "bottom": SLIDER_BOTTOM,
+                                              "height": SLIDER_HEIGHT}],
             "xAxis": {"type": "value", "name": keys[0] if keys else "", "scale": True,
                       "nameLocation": "middle", "nameGap": 22},
             "yAxis": {"type": "value", "scale": True}, "series": lines}
@@ -137,8 +175,11 @@ class _Tools:
         return Trigger(str(self.channel.value), float(self.level.value or 0.0),
                        str(self.edge.value), float(self.pre.value or 0.0) / 100.0)
 
-    def show_cursors(self, series: dict[str, Any]) -> tuple[float, float] | None:
-        """Read the cursors on ``series``; their times to mark, None while they are off."""
+    def show_cursors(self, series: dict[str, Any], stored: dict[str, Any] | None = None,
+                     name: str = "") -> tuple[float, float] | None:
+        """Read the cursors on ``series``, and on the same channel of a ``stored`` trace
+        overlaid (``name``: its legend name); their times to mark, None while they are
+        off."""
         if not self.cursor_on.value or not self.cursor_channel.value \
                 or self.cursor_channel.value not in series or len(series[TIME]) == 0:
             self.readout.set_text("")
@@ -147,7 +188,12 @@ class _Tools:
         label = str(self.cursor_channel.value)
         unit = label.rpartition("[")[2].rstrip("]") if label.endswith("]") else ""
         c = cursors(series, label, t1, t2)
-        self.readout.set_text(f"v1 = {c.v1:.6g}, v2 = {c.v2:.6g}; " + c.text(unit))
+        text = f"v1 = {c.v1:.6g}, v2 = {c.v2:.6g}; " + c.text(unit)
+        if stored is not None and label in stored:
+            s = cursors(stored, label, t1, t2)
+            text += (f" | {stored_label(name, 'stored')}: v1 = {s.v1:.6g}, v2 = {s.v2:.6g}; "
+                     + s.text(unit))
+        self.readout.set_text(text)
         return t1, t2
 
     def level_drawn(self) -> float | None:
@@ -159,21 +205,87 @@ class _Tools:
         return trig.level * scale + offset
 
 
+class _Stored:
+    """Save the chart's capture to a file; load a stored trace to overlay the chart, aligned
+    at the trigger (:mod:`jvl_gym.studio.stored`)."""
+
+    def __init__(self, page: Page, prefix: str, default: str, tools: _Tools,
+                 current: Callable[[], dict[str, Any] | None],
+                 redraw: Callable[[], None]) -> None:
+        self.page = page
+        self.tools = tools
+        self.current = current
+        self.redraw = redraw
+        self.series: dict[str, Any] | None = None
+        self.name = ""
+        with ui.row().classes("items-center gap-2"):
+            self.path = ui.input("stored trace (.csv, .parquet)", value=default).props(
+                "dense outlined " + tid(f"{prefix}stored-path")).classes("w-72")
+            ui.button("save", on_click=page.guard(self.save)).props(
+                "dense outline " + tid(f"{prefix}save"))
+            ui.button("overlay", on_click=page.guard(self.load)).props(
+                "dense " + tid(f"{prefix}overlay"))
+            ui.button("clear overlay", on_click=page.guard(self.clear)).props(
+                "dense flat " + tid(f"{prefix}clear-overlay"))
+            self.state = ui.label("").classes("text-sm").props(tid(f"{prefix}overlay-state"))
+
+    def save(self) -> None:
+        """The chart's capture to the file named."""
+        series = self.current()
+        if not series:
+            raise StoredTraceError("nothing captured to save yet")
+        path = stored.save(series, str(self.path.value or "").strip())
+        n = len(series[TIME])
+        self.page.say(f"saved {n} samples of {', '.join(k for k in series if k != TIME)} "
+                      f"to {path}")
+
+    def load(self) -> None:
+        """The file named as the overlay (a bad file: its message, the overlay unchanged)."""
+        path = Path(str(self.path.value or "").strip())
+        series = stored.load(path)
+        _, how = stored.aligned(series, self.tools.trigger())
+        self.series, self.name = series, path.stem
+        self.state.set_text(f"overlay: {path.name}")
+        self.redraw()
+        self.page.say(f"overlaid {path.name} ({len(series[TIME])} samples of "
+                      f"{', '.join(k for k in series if k != TIME)}), {how}")
+
+    def clear(self) -> None:
+        """No overlay."""
+        self.series, self.name = None, ""
+        self.state.set_text("")
+        self.redraw()
+
+    def drawn(self) -> dict[str, Any] | None:
+        """The overlay on the trigger as it is set now (times as stored where the trace
+        does not cross the level), None without one."""
+        if self.series is None:
+            return None
+        try:
+            return stored.aligned(self.series, self.tools.trigger())[0]
+        except StoredTraceError:
+            return self.series
+
+
 def _scope_block(page: Page) -> None:
+    """The live scope: its channels, the chart right below them (in view at 1280×720), then
+    its tools, the stored trace and the recorder."""
     motor = page.motor
     choices = channel_choices(motor)
     start = [c for c in DEFAULT_CHANNELS if c in choices]
+    # "sent": when the chart update the browser has not drawn yet was sent (None: drawn)
     state: dict[str, Any] = {"scope": Scope(motor, start, DEPTH), "live": True, "updates": 0,
-                             "recorder": None, "shown": None, "drawn": None}
+                             "recorder": None, "shown": None, "drawn": None, "sent": None,
+                             "labelled": 0.0}
 
     def labels() -> list[str]:
         sc = state["scope"]
         return [sc.label(c) for c in sc.channels]
 
-    with ui.row().classes("items-center gap-4 w-full"):
+    with ui.row().classes("items-center gap-4 w-full no-wrap"):
         pick = ui.select(choices, value=start, multiple=True, label="channels",
                          with_input=True).props("use-chips dense " + tid("channels")
-                                                ).classes("min-w-[28rem]")
+                                                ).classes("grow min-w-[28rem]")
         live = ui.switch("live", value=True).props(tid("live"))
 
         def set_live(e: Any) -> None:
@@ -192,7 +304,10 @@ def _scope_block(page: Page) -> None:
             ui.download.content(series_png(state["shown"] or state["scope"].series(),
                                            motor.label), "scope.png", "image/png")
         ui.button("PNG", on_click=page.guard(export_png)).props("dense " + tid("scope-png"))
-        counter = ui.label("").classes("text-sm").props(tid("scope-count"))
+        counter = ui.label("").classes("text-sm w-72 shrink-0").props(tid("scope-count"))
+    chart = ui.echart(chart_options(state["scope"].series())).classes(
+        "w-full h-[52vh] min-h-[16rem]").props(tid("scope-chart"))
+    last = ui.label("").classes("text-sm").props(tid("scope-last"))
     tools = _Tools(page, "", labels(), live=True)
 
     def set_channels() -> None:
@@ -200,6 +315,44 @@ def _scope_block(page: Page) -> None:
         state["shown"] = None
         tools.set_labels(labels())
     pick.on_value_change(page.guard(set_channels))
+
+    def show_text() -> None:
+        """The counter and the channels' last values (as of the last update)."""
+        state["labelled"] = time.monotonic()
+        if state.get("text"):
+            counter.set_text(state["text"][0])
+            last.set_text(state["text"][1])
+
+    def draw() -> None:
+        shown = state["shown"]
+        if shown is None:
+            return
+        state["drawn"], state["sent"] = shown, time.monotonic()
+        show_text()
+        over = overlay.drawn()
+        marks = tools.show_cursors(shown, over, overlay.name)
+        # straight to the chart's setOption: the element's options are reactive in the
+        # browser, and ECharts walking the reactive copy of every point takes several times
+        # as long as a plain one
+        chart.run_chart_method("setOption", chart_options(
+            shown, "", tools.traces, marks, tools.level_drawn(), over, overlay.name),
+            {"replaceMerge": ["series"]})
+    overlay = _Stored(page, "", f"{motor.motor_type}_{motor.address}_scope.csv", tools,
+                      lambda: state["shown"], draw)
+    for w in (tools.cursor_on, tools.t1, tools.t2, tools.cursor_channel):
+        w.on_value_change(page.guard(draw))  # the cursors move on a stopped scope too
+
+    def browser_busy() -> bool:
+        """The browser has not drawn the last update yet: a new one would queue behind it
+        (on a busy machine the chart would fall ever further behind the motor)."""
+        sent = state["sent"]
+        return sent is not None and time.monotonic() - sent < DRAWN_WITHIN_S
+
+    def drawn(_e: Any = None) -> None:
+        state["sent"] = None
+        if state["shown"] is not None and state["drawn"] is not state["shown"]:
+            draw()  # the newest window, which waited for this one
+    chart.on("chart:finished", page.guard(drawn), args=[])
 
     with ui.row().classes("items-center gap-2"):
         path = ui.input("record to", value=f"{motor.motor_type}_{motor.address}_record.csv"
@@ -220,21 +373,6 @@ def _scope_block(page: Page) -> None:
                 page.say(f"recorded {rec.rows} rows, {rec.elapsed:.1f} s, "
                          f"{done.stat().st_size} bytes to {done}")
         rec_button.on_click(page.guard(toggle_record))
-
-    chart = ui.echart(chart_options(state["scope"].series())).classes(
-        "w-full h-96").props(tid("scope-chart"))
-    last = ui.label("").classes("text-sm").props(tid("scope-last"))
-
-    def draw() -> None:
-        shown = state["shown"]
-        if shown is None:
-            return
-        marks = tools.show_cursors(shown)
-        chart.options.clear()
-        chart.options.update(chart_options(shown, "", tools.traces, marks, tools.level_drawn()))
-        chart.update()
-    for w in (tools.cursor_on, tools.t1, tools.t2, tools.cursor_channel):
-        w.on_value_change(page.guard(draw))  # the cursors move on a stopped scope too
 
     async def tick() -> None:
         if not state["live"] or state.get("busy") or motor.paused:
@@ -261,18 +399,23 @@ def _scope_block(page: Page) -> None:
                 page.say(f"single: triggered on {trig.channel}")
             state["shown"] = shown
         waiting = trig is not None and window(series, trig, span, TriggerMode.NORMAL) is None
-        # a window is drawn when there is a new one: waiting for a trigger sends nothing
-        if shown is not None or state["drawn"] is not state["shown"]:
-            state["drawn"] = state["shown"]
-            draw()
-        counter.set_text(f"update {state['updates']}: {len(sc.t)} points, t = {sc.t[-1]:.2f} s"
-                         + (" · waiting for the trigger" if waiting else ""))
-        last.set_text("; ".join(f"{sc.label(c)} = {b[-1]:.6g}"
-                                for c, b in zip(sc.channels, sc.values)))
+        # a window is drawn when there is a new one (waiting for a trigger sends nothing) and
+        # the browser has drawn the one before (else when it reports it drawn)
+        state["text"] = (f"update {state['updates']}: {len(sc.t)} points, t = {sc.t[-1]:.2f} s"
+                         + (" · waiting for the trigger" if waiting else ""),
+                         "; ".join(f"{sc.label(c)} = {b[-1]:.6g}"
+                                   for c, b in zip(sc.channels, sc.values)))
+        fresh = state["shown"] is not None and state["drawn"] is not state["shown"]
+        if fresh and not browser_busy():
+            draw()  # the text lines with it
+        elif not browser_busy() and time.monotonic() - state["labelled"] >= LABELS_S:
+            show_text()
     page.every(PERIOD_S, page.guard(tick))
 
 
 def _buffer_block(page: Page) -> None:
+    """The motor's sample buffer and its TESTU/TESTA records on a chart of their own, with
+    the same trigger, cursors and stored trace as the live scope."""
     motor = page.motor
     regs = [c for c in channel_choices(motor) if c not in motor.physical()]
     ui.label("Sample buffer").classes("text-lg mt-4")
@@ -318,17 +461,20 @@ def _buffer_block(page: Page) -> None:
     labels = [f"{r} [{motor.register(r).unit}]" if motor.register(r).unit else r
               for r in pick.value]
     tools = _Tools(page, "buffer-", labels, live=False)
-    chart = ui.echart(chart_options({TIME: []})).classes("w-full h-72").props(
-        tid("buffer-chart"))
 
     def draw() -> None:
         if not result:
             return
-        marks = tools.show_cursors(result)
+        over = overlay.drawn() if TIME in result else None  # TESTU/TESTA count samples
+        marks = tools.show_cursors(result, over, overlay.name)
         chart.options.clear()
         chart.options.update(chart_options(result, motor.label, tools.traces, marks,
-                                           tools.level_drawn()))
+                                           tools.level_drawn(), over, overlay.name))
         chart.update()
+    overlay = _Stored(page, "buffer-", f"{motor.motor_type}_{motor.address}_buffer.csv", tools,
+                      lambda: dict(result), draw)
+    chart = ui.echart(chart_options({TIME: []})).classes("w-full h-72").props(
+        tid("buffer-chart"))
     for w in (tools.cursor_on, tools.t1, tools.t2, tools.cursor_channel):
         w.on_value_change(page.guard(draw))
 
@@ -337,7 +483,7 @@ def build(session: Session, m: int) -> None:
     """The Scope page of motor ``m``."""
     page = frame(session, "/scope", m)
     compile_notice(page)
+    _scope_block(page)
     with ui.expansion("motion", value=True).classes("w-full").props("dense"):
         motion_panel(page, page.motor, m)
-    _scope_block(page)
     _buffer_block(page)
