@@ -147,7 +147,9 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
 
         rows = res.evaluate_all(runs, seeds, episodes, max_steps, config_dir,
                                 progress_bar=True)
-        page = res.write_page(rows, out, runs, max_episode_steps=max_steps)
+        transfer = res.evaluate_transfer(runs, config_dir)  # real time: about a minute
+        page = res.write_page(rows, out, runs, max_episode_steps=max_steps,
+                              transfer=transfer)
         typer.echo(f"wrote {page}")
         return
     if out is not None:

@@ -18,7 +18,8 @@ Each entry holds ``algo`` (PPO, SAC or TD3), ``n_envs``, ``total_timesteps``, ``
   the variant's own ``families`` (default: the entry's first), saved under a name of their own
   (``<Env>-<family>-<variant>-<algo>.zip``). ``link`` (default none) trains behind a link
   (``jvl_gym.envs.link``): a variant with a link and one without make the transfer gap's pair
-  (:mod:`jvl_gym.rl.transfer`).
+  (:mod:`jvl_gym.rl.transfer`). ``init: shipped`` starts a training from the shipped policy
+  of the same env, family and algorithm (a fine-tuning; default: from scratch).
 
 A family's overrides may hold ``algos`` of their own: overrides for that algorithm on that
 family only. They apply in this order, each over the one before: the entry, its ``algos``
@@ -46,6 +47,7 @@ _DEFAULTS: dict[str, Any] = {
     "algo": "PPO", "n_envs": 16, "total_timesteps": 200_000, "policy": "MlpPolicy",
     "env_kwargs": {}, "hyperparams": {}, "seed": 0,
     "eval": {"n_seeds": 5, "episodes_per_seed": 8, "seed_offset": 100_000}, "link": None,
+    "init": None,
 }
 _NESTED = ("families", "algos", "variants")
 

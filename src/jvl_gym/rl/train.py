@@ -145,8 +145,18 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
     venv = VecMonitor(make_sb3_env(env_id, int(cfg["n_envs"]), link, **cfg["env_kwargs"]),
                       filename=str(log_path(path)))
     hyper: dict[str, Any] = dict(cfg["hyperparams"])
-    model = algo_class(cfg["algo"])(cfg["policy"], venv, seed=seed, verbose=0, device="cpu",
-                                    **hyper)
+    if cfg.get("init") is not None:  # a fine-tuning of the shipped policy
+        if cfg["init"] != "shipped":
+            raise ValueError(f"{env_id}: init must be 'shipped', got {cfg['init']!r}")
+        start = shipped_model(env_id, family, cfg["algo"])
+        if start is None:
+            raise FileNotFoundError(f"{env_id}: no shipped {cfg['algo']} policy on {family} "
+                                    "to start from")
+        model = algo_class(cfg["algo"]).load(str(start), env=venv, device="cpu")
+        model.set_random_seed(seed)
+    else:
+        model = algo_class(cfg["algo"])(cfg["policy"], venv, seed=seed, verbose=0,
+                                        device="cpu", **hyper)
     t0 = time.perf_counter()
     callback = None if checkpoint_every is None else _checkpoints(path, int(checkpoint_every))
     model.learn(total_timesteps=steps, progress_bar=progress_bar, callback=callback)
