@@ -145,15 +145,16 @@ def test_a_stalled_policy_puts_the_motor_passive_by_the_deadline(twin_url):
             release.wait(30)
         return np.zeros((1, 1))
 
-    period, deadline = 0.05, 0.03
+    # a long period: a loaded machine's late period (which stops the loop too) is unlikely
+    period, deadline = 0.2, 0.03
     th, out = _run_in_thread(twin_url.env, policy=policy, url=twin_url, address=ADDRESS,
                              motor_type=MOTOR, period=period, deadline=deadline,
-                             max_seconds=5.0)
+                             max_seconds=5.0, watchdog_timeout=1.0)
     assert obs.wait_mode(obs.running, 60) is not None
     seen = obs.wait_stop(30)
     release.set()
     th.join(30)
-    assert seen is not None and "t" in stalled
+    assert seen is not None and "t" in stalled, out
     stated = deadline  # the supervisor's stated time: the policy's deadline
     assert seen - stalled["t"] <= stated + obs.margin
     assert out["report"].reason.startswith("policy stalled")
@@ -203,8 +204,9 @@ def test_a_cut_link_puts_the_motor_passive_after_the_clients_time_out(twin_url):
     proxy = Proxy(twin_url)
     timeout, retries = 0.05, 1
     th, out = _run_in_thread(twin_url.env, policy=lambda o: np.full((1, 1), 0.1),
-                             url=proxy.url, address=ADDRESS, motor_type=MOTOR, period=0.05,
-                             watchdog_url=str(twin_url), timeout=timeout, max_seconds=10.0)
+                             url=proxy.url, address=ADDRESS, motor_type=MOTOR, period=0.2,
+                             watchdog_url=str(twin_url), timeout=timeout, max_seconds=10.0,
+                             watchdog_timeout=1.0)
     assert obs.wait_mode(obs.running, 60) is not None
     time.sleep(0.1)
     t_cut = time.monotonic()
@@ -222,8 +224,8 @@ def _deploy_process(url: str, *extra: str) -> subprocess.Popen:
     return subprocess.Popen(
         [sys.executable, "-m", "jvl_gym.cli", "deploy", getattr(url, "env", ENV), "--policy",
          "zero", "--url", str(url),
-         "--address", str(ADDRESS), "--motor", MOTOR, "--period", "0.05", "--episodes", "50",
-         "--watchdog-timeout", "0.2", *extra],
+         "--address", str(ADDRESS), "--motor", MOTOR, "--period", "0.2", "--episodes", "50",
+         "--watchdog-timeout", "0.5", *extra],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
 
 
@@ -242,7 +244,7 @@ def test_killing_the_loops_process_puts_the_motor_passive(twin_url):
     assert seen is not None
     # the watchdog's heartbeat pipe closes with the process: it writes passive at once, and in
     # any case within its time-out
-    assert seen - t_kill <= 0.2 + obs.margin
+    assert seen - t_kill <= 0.5 + obs.margin
 
 
 @pytest.mark.parametrize(("sig", "reason"), [(signal.SIGTERM, b"terminated (SIGTERM)"),

@@ -178,3 +178,15 @@ def test_no_gear_beyond_the_bounds_reaches_the_motor(actions, max_step, nominal)
         # 1/1023 (one more at most by rounding), GEARF1 rounded
         assert abs(g - previous) <= 0.14 * nominal * (max_step + 1 / 1023) + 1
         previous = g
+
+
+def test_serve_builds_the_line_around_one_motor_and_refuses_more_in_one_line():
+    from jvl_gym.cli.serve import build_line
+
+    twin, order = build_line([MOTOR], [4], seed=11, line_env=ENV)
+    assert isinstance(twin.m, GearSyncLine) and twin.m.seed == 11 and order == [0]
+    assert twin.addresses() == [4]
+    with pytest.raises(ValueError, match="--line serves one motor"):
+        build_line([MOTOR, MOTOR], [4, 5], line_env=ENV)
+    with pytest.raises(ValueError, match="MAC050–141"):
+        build_line(["MAC800"], [4], line_env=ENV)

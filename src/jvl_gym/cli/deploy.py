@@ -17,7 +17,7 @@ from typing import Annotated
 
 import typer
 
-from ..rl.deploy import loop_period
+from ..rl.deploy import link_latency, loop_period
 from .app import CliError
 
 __all__ = ["deploy", "loop_period"]
@@ -48,7 +48,10 @@ def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-
                help="the watchdog's own connection (default: --url)")] = None,
            timeout: Annotated[float, typer.Option(help="the client's answer time-out [s]")]
            = 0.1,
-           trace: Annotated[Path | None, typer.Option(help="CSV of every period")] = None
+           trace: Annotated[Path | None, typer.Option(help="CSV of every period")] = None,
+           line_time: Annotated[bool, typer.Option(
+               "--line-time", help="hold each write until the link model's latency after the "
+               "read: the serial line's time, which a twin over TCP does not take")] = False
            ) -> None:
     """Run POLICY on the motor in real time, bounded and watched by the safety supervisor;
     print the episodes' return and metrics, the loop's rate and latency, and why it stopped."""
@@ -79,7 +82,8 @@ def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-
         report = run(env_id, pol, url, address, motor_type, period=step, deadline=deadline,
                      episodes=episodes, seed=seed, max_step=max_step,
                      watchdog_url=watchdog_url, watchdog_timeout=watchdog_timeout,
-                     timeout=timeout, trace=trace)
+                     timeout=timeout, trace=trace,
+                     hold=link_latency(env_id, link, motor_type) if line_time else 0.0)
     except ValueError as exc:  # a bridge that does not run on the motor's family
         raise CliError(str(exc)) from None
     typer.echo(f"period {1e3 * step:.2f} ms ({'--period' if period is not None else link})")

@@ -37,7 +37,7 @@ from .metrics import engineering_metrics
 from .supervisor import Limits, PolicyRunner, Stopped, Supervisor, Watchdog, register_bounds
 
 __all__ = ["PositioningBridge", "GearSyncBridge", "BusLink", "DeployReport", "deploy", "BRIDGES",
-           "load_policy", "loop_period"]
+           "load_policy", "loop_period", "link_latency"]
 
 
 class BusLink:
@@ -361,6 +361,17 @@ def loop_period(env_id: str, link: str, motor_type: str | None) -> float:
     return max(1, math.ceil(period / step - 1e-9)) * step
 
 
+def link_latency(env_id: str, link: str, motor_type: str | None) -> float:
+    """The link model's latency [s] of ``link`` on ``env_id`` (:mod:`jvl_gym.envs.link`): from
+    the answer to the read to the end of the write, on the serial line."""
+    from ..envs.link import observed_registers, parse_link
+    from ..envs.registration import vector_class
+
+    cls = vector_class(env_id)
+    return parse_link(link).times(len(cls.act_labels), observed_registers(cls.obs_labels),
+                                  cls.step_seconds(motor_type))[1]
+
+
 def load_policy(text: str, env_id: str, act_dim: int, step_seconds: float
                 ) -> Callable[[np.ndarray], np.ndarray]:
     """A policy from ``text``: an SB3 zip, or a scripted baseline by name (``zero``)."""
@@ -401,8 +412,8 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
            episodes: int = 1, seed: int = 0, max_seconds: float | None = None,
            max_step: float = 0.5, watchdog_url: str | None = None,
            watchdog_timeout: float = 0.25, timeout: float = 0.1, retries: int = 1,
-           trace: str | Path | None = None, stop: threading.Event | None = None
-           ) -> DeployReport:
+           trace: str | Path | None = None, stop: threading.Event | None = None,
+           hold: float = 0.0) -> DeployReport:
     """Run ``policy`` on the motor at ``address`` of ``url`` for ``episodes`` episodes.
 
     Parameters
@@ -435,6 +446,10 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
         CSV of every period.
     stop : threading.Event, optional
         Set to end the run (as Ctrl-C does).
+    hold : float
+        Hold each period's write until this long after its read [s] (0: at once): the line
+        time a serial link at the link model's baud rate takes (:func:`link_latency`), which a
+        twin over TCP does not, so that the action lands as late as the link model has it.
     """
     import gymnasium as gym
 
@@ -497,6 +512,8 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
                 t_read = time.monotonic()
                 obs = bridge.observe(raws, supervisor.last, period)
                 action = runner(obs, deadline)
+                if hold > 0.0:
+                    time.sleep(max(0.0, t_read + hold - time.monotonic()))
                 a, written = supervisor.command(np.asarray(action).reshape(-1))
                 t_written = time.monotonic()
                 watchdog.beat()
