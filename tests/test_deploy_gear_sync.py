@@ -168,7 +168,7 @@ def test_no_gear_beyond_the_bounds_reaches_the_motor(actions, max_step, nominal)
     sup.bounds.update(bridge.bounds)  # as the loop does once the nominal gear is read
     lo, hi = bridge.bounds["GEARF1"]
     assert lo >= round(0.87 * nominal) - 1 and hi <= min(round(1.15 * nominal) + 1, 32767)
-    previous = bridge.to_registers(np.zeros(1))["GEARF1"]
+    previous = min(max(bridge.to_registers(np.zeros(1))["GEARF1"], lo), hi)
     for a in actions:
         sup.command([a])
     for sent in link.sent:

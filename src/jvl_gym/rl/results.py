@@ -295,7 +295,9 @@ def transfer_section(transfers: list[Any]) -> list[str]:
              "with `jvl-gym deploy` in real time over MacTalk on TCP to a twin whose motor sits "
              "in the env's machine drawn per episode with the same seed (`jvl-gym serve --line`, "
              "docs/deploy.md) at the link model's period. Kept: 1 − (reference − deployed) / "
-             "|reference| of the mean returns (100 %: the deployment lost nothing). Rate and "
+             "|reference| of the mean returns (100 %: the deployment lost nothing; over the "
+             "deployed episodes that ran to their end when the supervisor stopped the loop "
+             "early). Rate and "
              "latency (the read of the observation to the written action) are the deploy "
              "loop's, measured with the machine's load average at the time (2 cores, shared).",
              "", "| env | policy | link (period) | simulation | link model | deployed | "
@@ -303,7 +305,9 @@ def transfer_section(transfers: list[Any]) -> list[str]:
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for t in transfers:
         m = {k: float(np.mean(getattr(t, k))) for k in ("sim", "link_model", "deployed")}
-        dep = f"{m['deployed']:.2f}" if t.deployed else f"— ({t.reason})"
+        dep = f"{m['deployed']:.2f}" if t.deployed else "—"
+        if t.reason != "done":  # the mean of the episodes that ran to their end
+            dep += f" ({len(t.deployed)} of {len(t.sim)} episodes; stopped: {t.reason})"
         lines.append(
             f"| {t.env_id} | {getattr(t, 'label', '')} | {t.link} ({1e3 * t.period:.1f} ms) | "
             f"{m['sim']:.2f} | {m['link_model']:.2f} | {dep} | "
