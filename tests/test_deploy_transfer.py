@@ -64,3 +64,13 @@ def test_kept_is_the_fraction_of_the_reference_for_either_sign():
     assert kept(-50.0, -55.0) == pytest.approx(0.9)
     assert kept(-50.0, -40.0) == pytest.approx(1.2)
     assert np.isnan(kept(0.0, 1.0))
+
+
+def test_train_refuses_an_unknown_variant_in_one_line(capsys, tmp_path):
+    from cli_checks import one_line_error, run_cli
+    from jvl_gym.cli.main import app
+
+    code, _, err = run_cli(app, ["train", "jvl_gym/Positioning-v0", "--variant", "fast",
+                                 "--out", str(tmp_path)], capsys)
+    assert code == 2 and "no variant 'fast'" in one_line_error(code, err)
+    assert not any(tmp_path.iterdir())

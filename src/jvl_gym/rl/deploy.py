@@ -205,25 +205,22 @@ class GearSyncBridge:
         from ..envs import gear_sync as gs
         from .lines import LOADCELL_FULL_SCALE
 
-        if fam.key != "mac050_141":
-            raise ValueError(f"jvl-gym deploy runs GearSync on the MAC050–141 (GP_MODE and "
-                             f"its AG factor), not the {fam.title}")
-        from ..families.mac050_141.firmware import regs as R
-        from ..families.mac050_141.firmware.gear_blocks import analog_gear_factor
-
+        gear_mode = getattr(fam.task, "GEAR_MODE", None)
+        ag = getattr(fam.task, "ag_factor", None)
+        if gear_mode is None or ag is None:
+            raise ValueError(f"jvl-gym deploy runs GearSync on a family whose task module states "
+                             f"its gear mode and AG factor (the MAC050–141), not the {fam.title}")
         k = fam.constants
         self.fam = fam
-        self.gp_mode = int(k.GP_MODE)
+        self.gp_mode = int(gear_mode)
         self.dt = float(k.OUTER_DT)
         self.v_norm = gs._NORM_RPM / 60.0 * k.COUNTS_PER_REV / k.OUTER_HZ
         self.tau = float(gs._INTEGRAL_TAU)
         self.full_scale = float(LOADCELL_FULL_SCALE)
         self.aninp_full = 1023.0  # ±10 V (manual 3.2.122)
-        regs = np.zeros(fam.table.last + 1, dtype=np.int64)
 
         def factor(a: float) -> float:
-            regs[R.ANINP] = int(round(self.aninp_full * min(max(a, -1.0), 1.0)))
-            return float(analog_gear_factor.py_func(regs))
+            return float(ag(int(round(self.aninp_full * min(max(a, -1.0), 1.0)))))
 
         self.factor = factor
         self.bounds = register_bounds(fam.table, self.writes)

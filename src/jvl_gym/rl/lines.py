@@ -154,7 +154,7 @@ class GearSyncLine(EnvMachine):
         from ..families import family_of_motor
 
         fam = family_of_motor(motor_type)
-        if fam.key != "mac050_141":
+        if getattr(fam.task, "GEAR_MODE", None) is None:
             raise ValueError(f"the GearSync line is wired for the MAC050–141 (its GP_MODE and "
                              f"analogue input), not the {fam.title}")
         super().__init__(motor_type, seed, loadcell_noise=0.0, **env_kwargs)
