@@ -9,8 +9,9 @@ each episode's return, length and engineering metrics (:mod:`jvl_gym.rl.metrics`
 ``jvl-gym evaluate`` reports; the loop's achieved rate and its latency (from the read of the
 observation to the end of the write of the action) are measured.
 
-A task reaches the motor through a bridge (:class:`PositioningBridge`): the registers it reads
-and writes, the observation from them, the reward. Positioning commands torque; over the bus
+A task reaches the motor through a bridge (:class:`PositioningBridge`, :class:`GearSyncBridge`):
+the registers it reads and writes, the observation from them, the reward, and a failure that
+ends an episode early (GearSync's web). Positioning commands torque; over the bus
 that is velocity mode with the speed command at the speed limit (:data:`SPEED_LIMIT_RPM`) in
 the action's direction and the torque limit T_SOLL = |action| × its full scale (MAC050–141
 manual 4.4.2: the velocity loop saturates at T_SOLL), so the torque follows the action while
@@ -339,6 +340,9 @@ class DeployReport:
                  f"{1e3 * self.latency_max:.2f} ms"]
         if self.returns:
             lines.append(f"return: {np.mean(self.returns):.3f} ± {np.std(self.returns):.3f}")
+        early = [f"episode {k}: {why}" for k, why in enumerate(self.ended) if why]
+        if early:
+            lines.append("ended early: " + "; ".join(early))
         for name, values in self.stats.items():
             known = [v for v in values if not math.isnan(v)]
             lines.append(f"{name}: {np.mean(known):.4g}" if known else f"{name}: n/a")
