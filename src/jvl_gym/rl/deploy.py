@@ -448,9 +448,10 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
     stop : threading.Event, optional
         Set to end the run (as Ctrl-C does).
     hold : float
-        Hold each period's write until this long after its read [s] (0: at once): the line
-        time a serial link at the link model's baud rate takes (:func:`link_latency`), which a
-        twin over TCP does not, so that the action lands as late as the link model has it.
+        Hold each period's write so that it ends this long after its read [s] (0: at once;
+        the write starts the last write's duration before): the line time a serial link at the
+        link model's baud rate takes (:func:`link_latency`), which a twin over TCP does not,
+        so that the action lands as late as the link model has it.
     """
     import gymnasium as gym
 
@@ -492,7 +493,7 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
 
         old_term = signal.signal(signal.SIGTERM, on_term)
     t_first = time.monotonic()
-    loop_time, t0 = 0.0, t_first
+    loop_time, t0, write_time = 0.0, t_first, 0.0
     try:
         for ep in range(episodes):
             env.reset(seed=seed + ep)
@@ -513,10 +514,13 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
                 t_read = time.monotonic()
                 obs = bridge.observe(raws, supervisor.last, period)
                 action = runner(obs, deadline)
-                if hold > 0.0:
-                    time.sleep(max(0.0, t_read + hold - time.monotonic()))
+                if hold > 0.0:  # the write is to end ``hold`` after the read: it starts
+                    # the last write's duration earlier
+                    time.sleep(max(0.0, t_read + hold - write_time - time.monotonic()))
+                t_write = time.monotonic()
                 a, written = supervisor.command(np.asarray(action).reshape(-1))
                 t_written = time.monotonic()
+                write_time = t_written - t_write
                 watchdog.beat()
                 latencies.append(t_written - t_read)
                 r = bridge.reward(a, period / step_seconds)
