@@ -74,3 +74,21 @@ def test_train_refuses_an_unknown_variant_in_one_line(capsys, tmp_path):
                                  "--out", str(tmp_path)], capsys)
     assert code == 2 and "no variant 'fast'" in one_line_error(code, err)
     assert not any(tmp_path.iterdir())
+
+
+def test_line_time_holds_each_write_to_the_links_latency():
+    from jvl_gym.rl.deploy import link_latency
+
+    hold = link_latency("jvl_gym/Positioning-v0", "mactalk:19200", MOTOR)
+    assert hold > 0.04  # 43.75 ms: the line time of MacTalk's frames at 19200 baud
+    twin = served_twin("jvl_gym/Positioning-v0", MOTOR, 3, seed=1)
+    twin.advance(0.01)
+    with TwinServer(twin, tcp=("127.0.0.1", 0), speed=0.25) as server:
+        report = deploy("jvl_gym/Positioning-v0", lambda o: np.zeros((1, 1)),
+                        server.endpoint("mactalk", "tcp").url, 3, MOTOR, period=0.2,
+                        episodes=1, seed=1, max_seconds=0.8, hold=hold)
+    assert report.reason == "done" and report.periods == 4
+    # each write is to end the hold after its read (it starts the last write's duration
+    # early, which a loaded machine may make too early by as much again); without the hold a
+    # write ends a round trip after the read
+    assert report.latency_mean >= 0.5 * hold
