@@ -1,7 +1,9 @@
 """jvl-gym deploy against a twin: killing the loop's process, stalling its policy and cutting
-its link each put the twin's motor passive within the supervisor's stated time; no command
-beyond the bounds reaches the motor (a property over a fake link); the engineering metrics
-from a trace equal the env's own statistics.
+its link each put the twin's motor passive within the supervisor's stated time, for each task
+with a bridge (Positioning on a bare motor, GearSync on its web line: ``jvl_gym.rl.lines``); no
+command beyond the bounds reaches the motor (a property over a fake link; GearSync's in
+tests/test_deploy_gear_sync.py); the engineering metrics from a trace equal the env's own
+statistics.
 
 Times are wall-clock against a twin served on a slow clock (a quarter of real time: less CPU
 for the simulation, whose thread shares the interpreter with the loop), so every bound is the
@@ -35,6 +37,7 @@ from jvl_gym.protocol.mactalk.client16 import MacTalkClient
 from jvl_gym.protocol.mactalk.twin16 import Twin
 from jvl_gym.protocol.serving.transport import TwinServer
 from jvl_gym.rl.deploy import PositioningBridge, deploy
+from jvl_gym.rl.lines import GearSyncLine
 from jvl_gym.rl.metrics import engineering_metrics
 from jvl_gym.rl.supervisor import Limits, Supervisor, register_bounds
 
@@ -45,20 +48,39 @@ FAM = family_of_motor(MOTOR)
 PASSIVE = int(FAM.twin.passive_mode)
 RUNNING = int(FAM.task.VELOCITY_MODE)
 ROOT = Path(__file__).resolve().parents[1]
+#: each task with a bridge: its env, the motor's running mode, the twin's motor
+TASKS = {"positioning": (ENV, RUNNING, lambda: MotorArray(MOTOR, n=1, seed=0)),
+         # a slow line without steps, so that the web holds for the whole test untrimmed
+         "gear_sync": ("jvl_gym/GearSync-v0", int(FAM.constants.GP_MODE),
+                       lambda: GearSyncLine(MOTOR, 0, randomization={
+                           "line_speed": (0.1, 0.1), "ramp_time": (1.0, 1.0),
+                           "speed_step": (0.0, 0.0), "walk": (0.0, 0.0),
+                           "ripple": (0.0, 0.0)}))}
 
 
-@pytest.fixture
-def twin_url():
-    twin = Twin(MotorArray(MOTOR, n=1, seed=0), [ADDRESS])
+class Served(str):
+    """The twin's URL, with the task's env id and running mode."""
+
+    env: str
+    running: int
+
+
+@pytest.fixture(params=sorted(TASKS))
+def twin_url(request):
+    env, running, motors = TASKS[request.param]
+    twin = Twin(motors(), [ADDRESS])
     twin.advance(0.01)  # compiled before it is served (numba compiles on first use)
     with TwinServer(twin, tcp=("127.0.0.1", 0), speed=0.25) as server:
-        yield server.endpoint("mactalk", "tcp").url
+        url = Served(server.endpoint("mactalk", "tcp").url)
+        url.env, url.running = env, running
+        yield url
 
 
 class Observer:
     """A connection of the test's own to the twin: MODE_REG, and the margin of this machine."""
 
     def __init__(self, url: str) -> None:
+        self.running = getattr(url, "running", RUNNING)
         self.client = MacTalkClient(url, ADDRESS, timeout=2.0)
         rtt = []
         for _ in range(5):
@@ -90,18 +112,18 @@ class Observer:
         """Poll until the motor leaves the running mode (the passive command accepted: the
         MAC050–141 runs its stop, STOP_MODE, on the way to passive); then check that it does
         reach passive. The time it left (monotonic) or None."""
-        left = self.wait_mode(RUNNING, seconds, leave=True)
+        left = self.wait_mode(self.running, seconds, leave=True)
         if left is not None:
             assert self.wait_mode(PASSIVE, 60) is not None, "stopping, but never passive"
         return left
 
 
-def _run_in_thread(**kwargs):
+def _run_in_thread(env=ENV, **kwargs):
     out = {}
 
     def target():
         try:
-            out["report"] = deploy(ENV, **kwargs)
+            out["report"] = deploy(env, **kwargs)
         except BaseException as exc:  # noqa: BLE001
             out["error"] = exc
 
@@ -123,14 +145,16 @@ def test_a_stalled_policy_puts_the_motor_passive_by_the_deadline(twin_url):
             release.wait(30)
         return np.zeros((1, 1))
 
-    period, deadline = 0.05, 0.03
-    th, out = _run_in_thread(policy=policy, url=twin_url, address=ADDRESS, motor_type=MOTOR,
-                             period=period, deadline=deadline, max_seconds=5.0)
-    assert obs.wait_mode(RUNNING, 60) is not None
+    # a long period: a loaded machine's late period (which stops the loop too) is unlikely
+    period, deadline = 0.2, 0.03
+    th, out = _run_in_thread(twin_url.env, policy=policy, url=twin_url, address=ADDRESS,
+                             motor_type=MOTOR, period=period, deadline=deadline,
+                             max_seconds=5.0, watchdog_timeout=1.0)
+    assert obs.wait_mode(obs.running, 60) is not None
     seen = obs.wait_stop(30)
     release.set()
     th.join(30)
-    assert seen is not None and "t" in stalled
+    assert seen is not None and "t" in stalled, out
     stated = deadline  # the supervisor's stated time: the policy's deadline
     assert seen - stalled["t"] <= stated + obs.margin
     assert out["report"].reason.startswith("policy stalled")
@@ -179,10 +203,11 @@ def test_a_cut_link_puts_the_motor_passive_after_the_clients_time_out(twin_url):
     obs = Observer(twin_url)
     proxy = Proxy(twin_url)
     timeout, retries = 0.05, 1
-    th, out = _run_in_thread(policy=lambda o: np.full((1, 1), 0.1), url=proxy.url,
-                             address=ADDRESS, motor_type=MOTOR, period=0.05,
-                             watchdog_url=twin_url, timeout=timeout, max_seconds=10.0)
-    assert obs.wait_mode(RUNNING, 60) is not None
+    th, out = _run_in_thread(twin_url.env, policy=lambda o: np.full((1, 1), 0.1),
+                             url=proxy.url, address=ADDRESS, motor_type=MOTOR, period=0.2,
+                             watchdog_url=str(twin_url), timeout=timeout, max_seconds=10.0,
+                             watchdog_timeout=1.0)
+    assert obs.wait_mode(obs.running, 60) is not None
     time.sleep(0.1)
     t_cut = time.monotonic()
     proxy.cut()
@@ -197,9 +222,10 @@ def test_a_cut_link_puts_the_motor_passive_after_the_clients_time_out(twin_url):
 def _deploy_process(url: str, *extra: str) -> subprocess.Popen:
     env = {**os.environ, "PYTHONPATH": f"{ROOT / 'src'}{os.pathsep}{ROOT}"}
     return subprocess.Popen(
-        [sys.executable, "-m", "jvl_gym.cli", "deploy", ENV, "--policy", "zero", "--url", url,
-         "--address", str(ADDRESS), "--motor", MOTOR, "--period", "0.05", "--episodes", "50",
-         "--watchdog-timeout", "0.2", *extra],
+        [sys.executable, "-m", "jvl_gym.cli", "deploy", getattr(url, "env", ENV), "--policy",
+         "zero", "--url", str(url),
+         "--address", str(ADDRESS), "--motor", MOTOR, "--period", "0.2", "--episodes", "50",
+         "--watchdog-timeout", "0.5", *extra],
         env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
 
 
@@ -207,7 +233,7 @@ def test_killing_the_loops_process_puts_the_motor_passive(twin_url):
     obs = Observer(twin_url)
     proc = _deploy_process(twin_url)
     try:
-        assert obs.wait_mode(RUNNING, 120) is not None, proc.stderr.read1().decode()
+        assert obs.wait_mode(obs.running, 120) is not None, proc.stderr.read1().decode()
         time.sleep(0.1)
         t_kill = time.monotonic()
         proc.send_signal(signal.SIGKILL)
@@ -218,7 +244,7 @@ def test_killing_the_loops_process_puts_the_motor_passive(twin_url):
     assert seen is not None
     # the watchdog's heartbeat pipe closes with the process: it writes passive at once, and in
     # any case within its time-out
-    assert seen - t_kill <= 0.2 + obs.margin
+    assert seen - t_kill <= 0.5 + obs.margin
 
 
 @pytest.mark.parametrize(("sig", "reason"), [(signal.SIGTERM, b"terminated (SIGTERM)"),
@@ -227,7 +253,7 @@ def test_sigterm_and_ctrl_c_stop_the_loop_and_the_motor(twin_url, sig, reason):
     obs = Observer(twin_url)
     proc = _deploy_process(twin_url)
     try:
-        assert obs.wait_mode(RUNNING, 120) is not None
+        assert obs.wait_mode(obs.running, 120) is not None
         t_term = time.monotonic()
         proc.send_signal(sig)
         seen = obs.wait_stop(30)

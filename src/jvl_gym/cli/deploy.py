@@ -17,22 +17,10 @@ from typing import Annotated
 
 import typer
 
+from ..rl.deploy import link_latency, loop_period
 from .app import CliError
 
 __all__ = ["deploy", "loop_period"]
-
-
-def loop_period(env_id: str, link: str, motor_type: str | None) -> float:
-    """The control period [s] of ``link`` on ``env_id``: the link model's period in whole env
-    steps (:mod:`jvl_gym.envs.link`), as a policy trained for the link acts."""
-    from ..envs.link import observed_registers, parse_link
-    from ..envs.registration import vector_class
-
-    cls = vector_class(env_id)
-    step = cls.step_seconds(motor_type)
-    period, _ = parse_link(link).times(len(cls.act_labels), observed_registers(cls.obs_labels),
-                                       step)
-    return max(1, math.ceil(period / step - 1e-9)) * step
 
 
 def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-v0")],
@@ -60,7 +48,10 @@ def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-
                help="the watchdog's own connection (default: --url)")] = None,
            timeout: Annotated[float, typer.Option(help="the client's answer time-out [s]")]
            = 0.1,
-           trace: Annotated[Path | None, typer.Option(help="CSV of every period")] = None
+           trace: Annotated[Path | None, typer.Option(help="CSV of every period")] = None,
+           line_time: Annotated[bool, typer.Option(
+               "--line-time", help="hold each write until the link model's latency after the "
+               "read: the serial line's time, which a twin over TCP does not take")] = False
            ) -> None:
     """Run POLICY on the motor in real time, bounded and watched by the safety supervisor;
     print the episodes' return and metrics, the loop's rate and latency, and why it stopped."""
@@ -87,9 +78,14 @@ def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-
         pol = load_policy(policy, env_id, len(cls.act_labels), cls.step_seconds(motor_type))
     except (ValueError, FileNotFoundError) as exc:
         raise CliError(str(exc)) from None
-    report = run(env_id, pol, url, address, motor_type, period=step, deadline=deadline,
-                 episodes=episodes, seed=seed, max_step=max_step, watchdog_url=watchdog_url,
-                 watchdog_timeout=watchdog_timeout, timeout=timeout, trace=trace)
+    try:
+        report = run(env_id, pol, url, address, motor_type, period=step, deadline=deadline,
+                     episodes=episodes, seed=seed, max_step=max_step,
+                     watchdog_url=watchdog_url, watchdog_timeout=watchdog_timeout,
+                     timeout=timeout, trace=trace,
+                     hold=link_latency(env_id, link, motor_type) if line_time else 0.0)
+    except ValueError as exc:  # a bridge that does not run on the motor's family
+        raise CliError(str(exc)) from None
     typer.echo(f"period {1e3 * step:.2f} ms ({'--period' if period is not None else link})")
     typer.echo(report.summary())
     if report.reason != "done":

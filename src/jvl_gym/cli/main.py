@@ -80,7 +80,10 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
               min=1)] = None,
           link: Annotated[str | None, typer.Option(
               help="train behind a link: mactalk:19200, mactalk32:BAUD, modbus:BAUD, "
-                   "canopen:2ms, dac:12 (then ,jitter=S ,drop=P)")] = None
+                   "canopen:2ms, dac:12 (then ,jitter=S ,drop=P)")] = None,
+          variant: Annotated[str | None, typer.Option(
+              help="train a variant of the config (its variants: e.g. link, nolink; "
+                   "OUT/<Env>-<family>-<variant>-<algo>.zip)")] = None
           ) -> None:
     """Train the configured algorithm (configs/rl/*.yml) on ENV_ID and save the model
     (OUT/<Env>-<family>-<algo>.zip, its training log beside it)."""
@@ -91,15 +94,15 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
     from ..rl.train import train as run
 
     try:
-        rl_config(env_id, config_dir, family=family, algo=algo)
+        rl_config(env_id, config_dir, family=family, algo=algo, variant=variant)
     except KeyError as exc:
         raise typer.BadParameter(f"{exc.args[0]}: add it to configs/rl/*.yml or pick another "
-                                 "--family/--algo") from None
+                                 "--family/--algo/--variant") from None
     if link is not None:
         _check_link(link)
     run(env_id, out, timesteps, seed, progress_bar=True, threads=threads,
         config_dir=config_dir, family=family, algo=algo, checkpoint_every=checkpoint_every,
-        link=link)
+        link=link, variant=variant)
 
 
 @app.command()
@@ -144,7 +147,9 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
 
         rows = res.evaluate_all(runs, seeds, episodes, max_steps, config_dir,
                                 progress_bar=True)
-        page = res.write_page(rows, out, runs, max_episode_steps=max_steps)
+        transfer = res.evaluate_transfer(runs, config_dir)  # real time: about a minute
+        page = res.write_page(rows, out, runs, max_episode_steps=max_steps,
+                              transfer=transfer)
         typer.echo(f"wrote {page}")
         return
     if out is not None:

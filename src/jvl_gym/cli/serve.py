@@ -162,14 +162,16 @@ def _put_load(twin: Any, load: dict[str, list[float]], members: list[int]) -> No
 def build_line(types: list[str], addresses: list[int], seed: int = 0,
                flash_dir: Path | None = None,
                fastmac_code: dict[str, tuple[int, int]] | None = None,
-               load: dict[str, list[float]] | None = None,
+               load: dict[str, list[float]] | None = None, line_env: str | None = None,
                **array_kw: Any) -> tuple[Any, list[int]]:
     """The twins of ``types`` at ``addresses``: one :class:`~..protocol.mactalk.twin16.Twin` per
     motor family (a :class:`~..protocol.mactalk.line.Bus` of them when there are several), and
     the motor indices in the order the line lists them (family by family). With several families
     each keeps its flash files in ``flash_dir/<family key>``; ``array_kw`` go to every
     ``MotorArray``; ``load`` (reset keyword → one value per motor of ``types``,
-    :func:`load_per_motor`) is each motor's load after power-on.
+    :func:`load_per_motor`) is each motor's load after power-on. ``line_env`` serves one motor
+    inside the machine of that env instead (``jvl_gym.rl.lines``: GearSync's web line), its
+    lines drawn from ``seed``.
 
     Raises
     ------
@@ -188,7 +190,15 @@ def build_line(types: list[str], addresses: list[int], seed: int = 0,
     twins: list[Twin] = []
     try:
         for key, members in groups.items():
-            m = MotorArray([types[k] for k in members], n=len(members), seed=seed, **array_kw)
+            if line_env is not None:
+                from ..rl.lines import make_line
+
+                if len(types) != 1 or array_kw or load:
+                    raise ValueError("--line serves one motor, without load options")
+                m = make_line(line_env, types[0], seed)
+            else:
+                m = MotorArray([types[k] for k in members], n=len(members), seed=seed,
+                               **array_kw)
             where = flash_dir / key if flash_dir is not None and len(groups) > 1 else flash_dir
             twin = Twin(m, [addresses[k] for k in members], flash_dir=where,
                         fastmac_code=fastmac_code or fm.DEFAULT_CODE)
@@ -287,6 +297,10 @@ def serve(
     idle_timeout: Annotated[float, typer.Option(
         help="Seconds without a received byte after which a TCP connection is closed (0: "
         "never).", min=0.0)] = 300.0,
+    line_env: Annotated[str | None, typer.Option(
+        "--line", help="Serve the one motor inside an env's machine: jvl_gym/GearSync-v0 (its "
+        "web line: the master encoder on the pulse input, the load cell on the analogue "
+        "input, 0..10 V for 0..100 N; lines drawn from --seed).")] = None,
     verbose: Annotated[bool, typer.Option("--verbose", "-v", help="Log every refusal.")] = False,
 ) -> None:
     """Serve one or many simulated motors (multi-drop by MYADDR) until Ctrl-C, each with
@@ -330,12 +344,14 @@ def serve(
     try:
         load = load_per_motor(given, address)
         line, order = build_line(types, list(address), seed=seed, flash_dir=flash_dir,
-                                 fastmac_code=code, load=load, **array_kw)
+                                 fastmac_code=code, load=load, line_env=line_env, **array_kw)
     except LoadError as exc:
         raise typer.BadParameter(str(exc)) from None
     except FlashDirectoryInUse as exc:
         raise typer.BadParameter(str(exc), param_hint="'--flash-dir'") from None
     except (TypeError, ValueError) as exc:  # the arrays' own check of the record length
+        if line_env is not None:
+            raise typer.BadParameter(str(exc), param_hint="'--line'") from None
         if record_length is None or not any(w in str(exc) for w in ("record_length",
                                                                     "record length")):
             raise

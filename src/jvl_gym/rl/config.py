@@ -13,11 +13,18 @@ Each entry holds ``algo`` (PPO, SAC or TD3), ``n_envs``, ``total_timesteps``, ``
 - ``algos``: algorithm name (one of :data:`ALGOS`) -> overrides of the entry for that
   algorithm (its ``hyperparams``, ``n_envs`` ...), trained on every configured family; the
   entry's own ``algo`` is the default one.
+- ``variants``: variant name -> overrides of the entry (any key above but ``families``,
+  ``algos`` and ``variants``), trained with the entry's algorithm on the families listed in
+  the variant's own ``families`` (default: the entry's first), saved under a name of their own
+  (``<Env>-<family>-<variant>-<algo>.zip``). ``link`` (default none) trains behind a link
+  (``jvl_gym.envs.link``): a variant with a link and one without make the transfer gap's pair
+  (:mod:`jvl_gym.rl.transfer`). ``init: shipped`` starts a training from the shipped policy
+  of the same env, family and algorithm (a fine-tuning; default: from scratch).
 
 A family's overrides may hold ``algos`` of their own: overrides for that algorithm on that
 family only. They apply in this order, each over the one before: the entry, its ``algos``
 section of the algorithm, the family's overrides, the family's ``algos`` section of the
-algorithm.
+algorithm; a variant's overrides come last.
 """
 
 from __future__ import annotations
@@ -30,7 +37,7 @@ import yaml
 
 from ..families.config import configs_dir
 
-__all__ = ["ALGOS", "load_rl_configs", "rl_config", "rl_runs", "env_families",
+__all__ = ["ALGOS", "load_rl_configs", "rl_config", "rl_runs", "rl_variants", "env_families",
            "family_motor_type"]
 
 #: the stable-baselines3 algorithms a config may name
@@ -39,9 +46,10 @@ ALGOS = ("PPO", "SAC", "TD3")
 _DEFAULTS: dict[str, Any] = {
     "algo": "PPO", "n_envs": 16, "total_timesteps": 200_000, "policy": "MlpPolicy",
     "env_kwargs": {}, "hyperparams": {}, "seed": 0,
-    "eval": {"n_seeds": 5, "episodes_per_seed": 8, "seed_offset": 100_000},
+    "eval": {"n_seeds": 5, "episodes_per_seed": 8, "seed_offset": 100_000}, "link": None,
+    "init": None,
 }
-_NESTED = ("families", "algos")
+_NESTED = ("families", "algos", "variants")
 
 
 def env_families(env_id: str) -> tuple[str, ...]:
@@ -84,6 +92,24 @@ def _check_algos(where: str, algos: Any, names: tuple[str, ...] = ALGOS) -> None
         _check_keys(f"{where}: algos: {name}", over or {}, set(_DEFAULTS))
 
 
+def _check_variants(where: str, variants: Any) -> None:
+    """A ``variants`` section: name -> overrides (and ``families``, a list of keys)."""
+    if variants is None:
+        return
+    if not isinstance(variants, dict):
+        raise ValueError(f"{where}: variants: expected a mapping, got "
+                         f"{type(variants).__name__}")
+    for name, over in variants.items():
+        if not str(name).replace("_", "").isalnum() or str(name).upper() in ALGOS:
+            raise ValueError(f"{where}: variants: {name!r} is not a name (letters, digits, "
+                             "'_'; not an algorithm's)")
+        _check_keys(f"{where}: variants: {name}", over or {}, set(_DEFAULTS) | {"families"})
+        fams = (over or {}).get("families")
+        if fams is not None and not isinstance(fams, list):
+            raise ValueError(f"{where}: variants: {name}: families: expected a list of "
+                             "family keys")
+
+
 def _merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
     out = {**base, **over}
     out["eval"] = {**base.get("eval", {}), **over.get("eval", {})}
@@ -110,6 +136,7 @@ def load_rl_configs(directory: str | Path | None = None) -> dict[str, dict[str, 
                 where = f"{path}: {env_id}: families: {key}"
                 _check_keys(where, over or {}, set(_DEFAULTS) | {"algos"})
                 _check_algos(where, (over or {}).get("algos"), trained)
+            _check_variants(f"{path}: {env_id}", cfg.get("variants"))
             if cfg.get("algo", _DEFAULTS["algo"]) not in ALGOS:
                 raise ValueError(f"{path}: {env_id}: algo must be one of {', '.join(ALGOS)}")
             out[env_id] = _merge(_DEFAULTS, cfg)
@@ -121,20 +148,38 @@ def _configured_families(env_id: str, entry: dict[str, Any]) -> list[str]:
     return list(listed) if listed else [env_families(env_id)[0]]
 
 
+def _variant_families(env_id: str, entry: dict[str, Any], name: str) -> list[str]:
+    over = (entry.get("variants") or {}).get(name) or {}
+    return list(over.get("families") or [env_families(env_id)[0]])
+
+
 def rl_config(env_id: str, directory: str | Path | None = None, *, family: str | None = None,
-              algo: str | None = None) -> dict[str, Any]:
+              algo: str | None = None, variant: str | None = None) -> dict[str, Any]:
     """The config of one env id on one family (default: the first configured) with one
-    algorithm (default: the entry's ``algo``; case-insensitive).
+    algorithm (default: the entry's ``algo``; case-insensitive), or of one of its variants.
 
     Raises
     ------
     KeyError
-        The env, family or algorithm is not configured (the message lists what is).
+        The env, family, algorithm or variant is not configured (the message lists what is).
     """
     configs = load_rl_configs(directory)
     if env_id not in configs:
         raise KeyError(f"no RL config for {env_id!r}; configured: {sorted(configs)}")
     entry = configs[env_id]
+    if variant is not None:
+        variants = entry.get("variants") or {}
+        if variant not in variants:
+            raise KeyError(f"no variant {variant!r} of {env_id}; configured: "
+                           f"{', '.join(variants) or 'none'}")
+        fams = _variant_families(env_id, entry, variant)
+        key = fams[0] if family is None else family
+        if key not in fams:
+            raise KeyError(f"variant {variant} of {env_id} is not configured on family "
+                           f"{key!r}; configured: {', '.join(fams)}")
+        over = {k: v for k, v in (variants[variant] or {}).items() if k != "families"}
+        base = {k: v for k, v in entry.items() if k not in _NESTED}
+        return _kwargs(env_id, key, _merge(base, over))
     fams = _configured_families(env_id, entry)
     key = fams[0] if family is None else family
     if key not in fams:
@@ -150,6 +195,11 @@ def rl_config(env_id: str, directory: str | Path | None = None, *, family: str |
     fam_algos = {str(a).upper(): over or {} for a, over in (fam.pop("algos", None) or {}).items()}
     cfg = _merge(_merge(_merge(base, {**algos[name], "algo": name}), fam),
                  fam_algos.get(name, {}))
+    return _kwargs(env_id, key, cfg)
+
+
+def _kwargs(env_id: str, key: str, cfg: dict[str, Any]) -> dict[str, Any]:
+    """``cfg`` with its ``env_kwargs`` for family ``key`` (its motor type)."""
     kwargs = dict(cfg["env_kwargs"])
     if kwargs.get("motor_type") == "all":
         from ..families import family as family_record
@@ -168,4 +218,13 @@ def rl_runs(directory: str | Path | None = None) -> list[tuple[str, str, str]]:
         names = [entry["algo"].upper(), *(str(name).upper() for name in entry.get("algos") or {})]
         for key in _configured_families(env_id, entry):
             out.extend((env_id, key, name) for name in names)
+    return out
+
+
+def rl_variants(directory: str | Path | None = None) -> list[tuple[str, str, str]]:
+    """Every configured variant's training: (env id, family key, variant), in config order."""
+    out = []
+    for env_id, entry in load_rl_configs(directory).items():
+        for name in entry.get("variants") or {}:
+            out.extend((env_id, key, name) for key in _variant_families(env_id, entry, name))
     return out

@@ -9,8 +9,9 @@ each episode's return, length and engineering metrics (:mod:`jvl_gym.rl.metrics`
 ``jvl-gym evaluate`` reports; the loop's achieved rate and its latency (from the read of the
 observation to the end of the write of the action) are measured.
 
-A task reaches the motor through a bridge (:class:`PositioningBridge`): the registers it reads
-and writes, the observation from them, the reward. Positioning commands torque; over the bus
+A task reaches the motor through a bridge (:class:`PositioningBridge`, :class:`GearSyncBridge`):
+the registers it reads and writes, the observation from them, the reward, and a failure that
+ends an episode early (GearSync's web). Positioning commands torque; over the bus
 that is velocity mode with the speed command at the speed limit (:data:`SPEED_LIMIT_RPM`) in
 the action's direction and the torque limit T_SOLL = |action| × its full scale (MAC050–141
 manual 4.4.2: the velocity loop saturates at T_SOLL), so the torque follows the action while
@@ -36,7 +37,8 @@ import numpy as np
 from .metrics import engineering_metrics
 from .supervisor import Limits, PolicyRunner, Stopped, Supervisor, Watchdog, register_bounds
 
-__all__ = ["PositioningBridge", "BusLink", "DeployReport", "deploy", "BRIDGES", "load_policy"]
+__all__ = ["PositioningBridge", "GearSyncBridge", "BusLink", "DeployReport", "deploy", "BRIDGES",
+           "load_policy", "loop_period", "link_latency"]
 
 
 class BusLink:
@@ -90,6 +92,9 @@ class PositioningBridge:
     env_id = "jvl_gym/Positioning-v0"
     writes = ("T_SOLL", "V_SOLL")
     reads = ("P_IST", "V_IST")
+    #: the trace's error column and its unit
+    error_label = "error_turns"
+    failure_penalty = 0.0
 
     def __init__(self, fam: Any, overshoot_weight: float = 2.0, effort_weight: float = 0.01,
                  speed_limit: float = SPEED_LIMIT_RPM) -> None:
@@ -107,14 +112,21 @@ class PositioningBridge:
         self.target = 0
         self.direction = 1.0
         self.overshoot = 0.0
+        self.error = 0.0
+        self.window: float | None = None
 
-    def start(self, link: BusLink, target: int) -> None:
-        """Begin a move to ``target`` [counts] from here: passive, P_IST = 0, no torque, then
-        velocity mode."""
+    def prepare(self, link: BusLink) -> None:
+        """Once before the episodes: the in-position window INPOSWIN (for the metrics)."""
+        self.window = float(link.client.read_raw("INPOSWIN")) / self.cpr
+
+    def start(self, link: BusLink, core: Any) -> None:
+        """Begin a move to the target the env drew (``core.target``, counts) from here:
+        passive, P_IST = 0, no torque, then velocity mode."""
+        target = int(core.target[0])
         link.passive()
         link.write_raws({"P_IST": 0, "T_SOLL": 0, "V_SOLL": 0})
         link.client.write("MODE_REG", int(self.fam.task.VELOCITY_MODE))
-        self.target = int(target)
+        self.target = target
         self.direction = 1.0 if target >= 0 else -1.0
         self.overshoot = 0.0
 
@@ -126,23 +138,182 @@ class PositioningBridge:
         return {"T_SOLL": int(round(abs(a) * t_full)),
                 "V_SOLL": self.v_limit if a >= 0 else -self.v_limit}
 
-    def observe(self, raws: Mapping[str, int], previous: float) -> tuple[np.ndarray, float]:
-        """The env's observation (1, 4) and the position error [turns]."""
+    def observe(self, raws: Mapping[str, int], previous: np.ndarray, period: float
+                ) -> np.ndarray:
+        """The env's observation (1, 4); keeps the position error [turns]."""
         from ..envs.compiled import OBS_BOUND
 
         e = float(self.target - raws["P_IST"])
         obs = np.array([e / (2.0 * self.cpr), e / self.fine, raws["V_IST"] / self.v_norm,
-                        previous], dtype=np.float32)
-        return np.clip(obs, -OBS_BOUND, OBS_BOUND)[None], e / self.cpr
+                        float(previous[0])], dtype=np.float32)
+        self.error = e / self.cpr
+        return np.clip(obs, -OBS_BOUND, OBS_BOUND)[None]
 
-    def reward(self, error_turns: float, action: float) -> float:
-        """The env's reward of one env step at this error and command."""
+    def reward(self, action: np.ndarray, steps: float) -> float:
+        """The env's reward over ``steps`` env steps at this error and command."""
+        error_turns, a = self.error, float(action[0])
         past = max(-self.direction * error_turns, 0.0)
         self.overshoot = max(self.overshoot, past)
-        return -abs(error_turns) - self.w_over * past - self.w_effort * action * action
+        return steps * (-abs(error_turns) - self.w_over * past - self.w_effort * a * a)
+
+    def failure(self) -> str:
+        """Why the episode ends early: never (the motor's error bits stop it on its own)."""
+        return ""
+
+    def columns(self) -> dict[str, float]:
+        """This period's row of the metrics' trace (:func:`~.metrics.engineering_metrics`)."""
+        return {"error": self.error, "direction": self.direction}
+
+    def metrics(self, cols: Mapping[str, np.ndarray]) -> dict[str, float]:
+        """The episode's engineering metrics from its trace."""
+        return engineering_metrics(self.env_id, cols, self.window)
 
 
-BRIDGES: dict[str, Callable[..., Any]] = {PositioningBridge.env_id: PositioningBridge}
+class GearSyncBridge:
+    """jvl_gym/GearSync-v0 over the registers of a bus-trimmed winder (module docstring).
+
+    The env trims the gear through the analogue input in AG_MODE (MAC050–141 manual 4.1.9,
+    4.4.19: gear GEARF1/GEARF2 × AG factor, the factor 0.87..1.15 over −10..+10 V). Over
+    MacTalk the controller writes the trimmed gear itself: the motor runs in gear position
+    mode GP_MODE (manual 4.4.4; the gear position block of 4.1.12, the block AG_MODE runs),
+    and each period the action ``a`` becomes GEARF1 = nominal GEARF1 × the AG factor at
+    ANINP = round(1023·a) (manual 3.2.14: GEARF1 is read each sample), so the motor's gear is
+    the env's to GEARF1's resolution. The nominal GEARF1 and GEARF2 are the line's set-up,
+    read at the start of each episode; the task's bounds on GEARF1 follow from them.
+
+    The analogue input is then free for the load cell (:mod:`jvl_gym.rl.lines`): the
+    tension is ANINP/1023 × :data:`~jvl_gym.rl.lines.LOADCELL_FULL_SCALE` (manual 3.2.122);
+    the master's speed is the pulse input V_EXT (3.2.120); V_IST, FLWERR and FNCERR are read
+    as the env observes them. The tension's rate is the change since the last period and the
+    leaky integral is kept by the controller, both as the env computes them per step, over
+    the period. The reward is the env's from the load cell's tension (the env's uses the
+    true tension, which no controller reads); the episode ends with the env's failure penalty
+    when the load cell reads above ``break_ratio`` × the reference (a web break) or nothing
+    (a web slack, or broken between two reads).
+
+    Parameters
+    ----------
+    fam : Family
+        The motor's family: the MAC050–141 (its GP_MODE and AG factor).
+    """
+
+    env_id = "jvl_gym/GearSync-v0"
+    writes = ("GEARF1",)
+    reads = ("ANINP", "V_EXT", "V_IST", "FLWERR", "FNCERR")
+    error_label = "load_cell_error"
+
+    def __init__(self, fam: Any) -> None:
+        from ..envs import gear_sync as gs
+        from .lines import LOADCELL_FULL_SCALE
+
+        gear_mode = getattr(fam.task, "GEAR_MODE", None)
+        ag = getattr(fam.task, "ag_factor", None)
+        if gear_mode is None or ag is None:
+            raise ValueError(f"jvl-gym deploy runs GearSync on a family whose task module states "
+                             f"its gear mode and AG factor (the MAC050–141), not the {fam.title}")
+        k = fam.constants
+        self.fam = fam
+        self.gp_mode = int(gear_mode)
+        self.dt = float(k.OUTER_DT)
+        self.v_norm = gs._NORM_RPM / 60.0 * k.COUNTS_PER_REV / k.OUTER_HZ
+        self.tau = float(gs._INTEGRAL_TAU)
+        self.full_scale = float(LOADCELL_FULL_SCALE)
+        self.aninp_full = 1023.0  # ±10 V (manual 3.2.122)
+
+        def factor(a: float) -> float:
+            return float(ag(int(round(self.aninp_full * min(max(a, -1.0), 1.0)))))
+
+        self.factor = factor
+        self.bounds = register_bounds(fam.table, self.writes)
+        self.nominal = 0
+        self.ref = 1.0
+        self.error = 0.0
+        self._reset_state()
+
+    def _reset_state(self) -> None:
+        self.previous_tension: float | None = None
+        self.integral = 0.0
+        self.last_action = 0.0
+        self.tension = self.ref
+
+    def prepare(self, link: BusLink) -> None:
+        """Once before the episodes: nothing to read."""
+
+    def start(self, link: BusLink, core: Any) -> None:
+        """Begin a line: passive (the line threads a new web), the env's figures (reference
+        tension, weights: ``core``), the nominal gear read, GEARF1 at the action 0, the speed
+        limit V_SOLL the env sets (the family's rated speed), then GP_MODE (GEARF2 is the
+        line's, as set up)."""
+        link.passive()
+        self.ref = float(core.tension_ref[0])
+        self.tolerance = float(core.tension_tolerance)
+        self.rate_weight = float(core.action_rate_weight)
+        self.break_ratio = float(core.break_ratio)
+        self.failure_penalty = float(core.failure_penalty)
+        self.master_counts = float(core._counts_per_m) * self.dt  # counts/sample at 1 m/s
+        self.set_nominal(int(link.read_raws(("GEARF1",))["GEARF1"]))
+        self._reset_state()
+        v_soll = int(round(self.fam.task.rpm_to_v_soll(core.rated_rpm)))
+        link.write_raws({**self.to_registers(np.zeros(1)), "V_SOLL": v_soll})
+        link.client.write("MODE_REG", self.gp_mode)
+
+    def set_nominal(self, gearf1: int) -> None:
+        """The line's nominal GEARF1, and the task's bounds on GEARF1 from it: the gears of
+        the actions −1 and +1, within the register's range."""
+        self.nominal = int(gearf1)
+        lo, hi = register_bounds(self.fam.table, self.writes)["GEARF1"]
+        ends = sorted(round(self.nominal * self.factor(a)) for a in (-1.0, 1.0))
+        self.bounds = {"GEARF1": (max(lo, int(ends[0])), min(hi, int(ends[1])))}
+
+    def to_registers(self, action: np.ndarray) -> dict[str, int]:
+        """GEARF1 = nominal × the AG factor at the action (class docstring)."""
+        return {"GEARF1": int(round(self.nominal * self.factor(float(action[0]))))}
+
+    def observe(self, raws: Mapping[str, int], previous: np.ndarray, period: float
+                ) -> np.ndarray:
+        """The env's observation (1, 8) from the registers and the controller's own state."""
+        from ..envs.compiled import OBS_BOUND
+
+        ref = self.ref
+        tension = raws["ANINP"] / self.aninp_full * self.full_scale
+        before = tension if self.previous_tension is None else self.previous_tension
+        self.previous_tension = self.tension = tension
+        e = (tension - ref) / ref
+        self.integral += period * (e - self.integral / self.tau)
+        self.error = e
+        obs = np.array([e, (tension - before) / ref * (0.1 / period), self.integral * 10.0,
+                        raws["V_EXT"] / self.master_counts, raws["V_IST"] / self.v_norm,
+                        raws["FLWERR"] / 100.0, raws["FNCERR"] / 10000.0, float(previous[0])],
+                       dtype=np.float32)
+        return np.clip(obs, -OBS_BOUND, OBS_BOUND)[None]
+
+    def reward(self, action: np.ndarray, steps: float) -> float:
+        """The env's reward over ``steps`` env steps at this tension, the action's change
+        counted once (the command changes once a period)."""
+        a = float(action[0])
+        da, self.last_action = a - self.last_action, a
+        return (steps * (1.0 - min(abs(self.error) / self.tolerance, 2.0))
+                - self.rate_weight * da * da)
+
+    def failure(self) -> str:
+        """A web break or slack seen by the load cell, or ""."""
+        if self.tension > self.break_ratio * self.ref:
+            return f"web break: tension above {self.break_ratio:g} × the reference"
+        if self.tension <= 0.0:
+            return "web slack or broken: the load cell reads no tension"
+        return ""
+
+    def columns(self) -> dict[str, float]:
+        """This period's row of the metrics' trace: the tension error [%]."""
+        return {"tension_error": 100.0 * self.error}
+
+    def metrics(self, cols: Mapping[str, np.ndarray]) -> dict[str, float]:
+        """The episode's engineering metrics from its trace."""
+        return engineering_metrics(self.env_id, cols)
+
+
+BRIDGES: dict[str, Callable[..., Any]] = {PositioningBridge.env_id: PositioningBridge,
+                                          GearSyncBridge.env_id: GearSyncBridge}
 
 
 @dataclass
@@ -151,6 +322,8 @@ class DeployReport:
 
     returns: list[float] = field(default_factory=list)
     lengths: list[int] = field(default_factory=list)
+    #: why each episode ended early (a task's failure: GearSync's web break or slack), or ""
+    ended: list[str] = field(default_factory=list)
     stats: dict[str, list[float]] = field(default_factory=dict)
     reason: str = ""
     periods: int = 0
@@ -167,10 +340,37 @@ class DeployReport:
                  f"{1e3 * self.latency_max:.2f} ms"]
         if self.returns:
             lines.append(f"return: {np.mean(self.returns):.3f} ± {np.std(self.returns):.3f}")
+        early = [f"episode {k}: {why}" for k, why in enumerate(self.ended) if why]
+        if early:
+            lines.append("ended early: " + "; ".join(early))
         for name, values in self.stats.items():
             known = [v for v in values if not math.isnan(v)]
             lines.append(f"{name}: {np.mean(known):.4g}" if known else f"{name}: n/a")
         return "\n".join(lines)
+
+
+def loop_period(env_id: str, link: str, motor_type: str | None) -> float:
+    """The control period [s] of ``link`` on ``env_id``: the link model's period in whole env
+    steps (:mod:`jvl_gym.envs.link`), as a policy trained for the link acts."""
+    from ..envs.link import observed_registers, parse_link
+    from ..envs.registration import vector_class
+
+    cls = vector_class(env_id)
+    step = cls.step_seconds(motor_type)
+    period, _ = parse_link(link).times(len(cls.act_labels), observed_registers(cls.obs_labels),
+                                       step)
+    return max(1, math.ceil(period / step - 1e-9)) * step
+
+
+def link_latency(env_id: str, link: str, motor_type: str | None) -> float:
+    """The link model's latency [s] of ``link`` on ``env_id`` (:mod:`jvl_gym.envs.link`): from
+    the answer to the read to the end of the write, on the serial line."""
+    from ..envs.link import observed_registers, parse_link
+    from ..envs.registration import vector_class
+
+    cls = vector_class(env_id)
+    return parse_link(link).times(len(cls.act_labels), observed_registers(cls.obs_labels),
+                                  cls.step_seconds(motor_type))[1]
 
 
 def load_policy(text: str, env_id: str, act_dim: int, step_seconds: float
@@ -213,8 +413,8 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
            episodes: int = 1, seed: int = 0, max_seconds: float | None = None,
            max_step: float = 0.5, watchdog_url: str | None = None,
            watchdog_timeout: float = 0.25, timeout: float = 0.1, retries: int = 1,
-           trace: str | Path | None = None, stop: threading.Event | None = None
-           ) -> DeployReport:
+           trace: str | Path | None = None, stop: threading.Event | None = None,
+           hold: float = 0.0) -> DeployReport:
     """Run ``policy`` on the motor at ``address`` of ``url`` for ``episodes`` episodes.
 
     Parameters
@@ -247,6 +447,11 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
         CSV of every period.
     stop : threading.Event, optional
         Set to end the run (as Ctrl-C does).
+    hold : float
+        Hold each period's write so that it ends this long after its read [s] (0: at once;
+        the write starts the last write's duration before): the line time a serial link at the
+        link model's baud rate takes (:func:`link_latency`), which a twin over TCP does not,
+        so that the action lands as late as the link model has it.
     """
     import gymnasium as gym
 
@@ -268,7 +473,7 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
     n_periods = max(1, int(math.ceil(horizon / period - 1e-9)))
     client = _client(url, address, fam, max(timeout, SETUP_TIMEOUT), retries)
     link = BusLink(client, fam.twin.passive_mode)
-    window = float(client.read_raw("INPOSWIN")) / bridge.cpr
+    bridge.prepare(link)
     watchdog = Watchdog(watchdog_url or url, address, motor_type, watchdog_timeout)
     act_dim = len(env.core.act_labels)
     limits = Limits((-1.0,) * act_dim, (1.0,) * act_dim, max_step)
@@ -288,36 +493,51 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
 
         old_term = signal.signal(signal.SIGTERM, on_term)
     t_first = time.monotonic()
-    loop_time, t0 = 0.0, t_first
+    loop_time, t0, write_time = 0.0, t_first, 0.0
     try:
         for ep in range(episodes):
             env.reset(seed=seed + ep)
             client.timeout = max(timeout, SETUP_TIMEOUT)
-            bridge.start(link, int(env.core.target[0]))
+            bridge.start(link, env.core)
+            # the task's register bounds may follow from the episode's set-up (GearSync's
+            # nominal gear)
+            supervisor.bounds.update(bridge.bounds)
             client.timeout = timeout
             supervisor.last = np.zeros(act_dim)
-            ret, t0 = 0.0, time.monotonic()
-            cols: dict[str, list[float]] = {"t": [], "error": [], "direction": []}
+            ret, t0, length = 0.0, time.monotonic(), 0
+            cols: dict[str, list[float]] = {"t": []}
             for k in range(n_periods):
                 if stop is not None and stop.is_set():
                     raise KeyboardInterrupt
                 start = t0 + k * period
                 raws = link.read_raws(bridge.reads)
                 t_read = time.monotonic()
-                obs, error = bridge.observe(raws, float(supervisor.last[0]))
+                obs = bridge.observe(raws, supervisor.last, period)
                 action = runner(obs, deadline)
+                if hold > 0.0:  # the write is to end ``hold`` after the read: it starts
+                    # the last write's duration earlier
+                    time.sleep(max(0.0, t_read + hold - write_time - time.monotonic()))
+                t_write = time.monotonic()
                 a, written = supervisor.command(np.asarray(action).reshape(-1))
                 t_written = time.monotonic()
+                write_time = t_written - t_write
                 watchdog.beat()
                 latencies.append(t_written - t_read)
-                r = bridge.reward(error, float(a[0])) * period / step_seconds
+                r = bridge.reward(a, period / step_seconds)
+                failed = bridge.failure()
+                if failed:
+                    r -= bridge.failure_penalty
                 ret += r
                 cols["t"].append(start - t0)
-                cols["error"].append(error)
-                cols["direction"].append(bridge.direction)
-                rows.append([ep, k, start - t_first, error, *obs[0].tolist(), float(a[0]),
-                             *written.values(), r, t_written - t_read])
+                for key, value in bridge.columns().items():
+                    cols.setdefault(key, []).append(value)
+                rows.append([ep, k, start - t_first, bridge.error, *obs[0].tolist(),
+                             float(a[0]), *written.values(), r, t_written - t_read])
                 report.periods += 1
+                length += 1
+                if failed:
+                    report.ended.append(failed)
+                    break
                 late = time.monotonic() - (start + period)
                 if late > period:
                     raise Stopped(f"loop overrun: period {k} ended {late * 1e3:.1f} ms late "
@@ -326,9 +546,11 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
             loop_time += time.monotonic() - t0
             supervisor.link.passive()
             report.returns.append(ret)
-            report.lengths.append(n_periods)
+            report.lengths.append(length)
+            if len(report.ended) < len(report.returns):
+                report.ended.append("")
             trace_cols = {key: np.asarray(v) for key, v in cols.items()}
-            for name, value in engineering_metrics(env_id, trace_cols, window).items():
+            for name, value in bridge.metrics(trace_cols).items():
                 report.stats.setdefault(name, []).append(value)
         report.reason = "done"
         supervisor.stop("done")
@@ -374,6 +596,6 @@ def _write_trace(path: Path, rows: list[list[float]], bridge: Any,
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", newline="") as f:
         w = csv.writer(f)
-        w.writerow(["episode", "period", "time_s", "error_turns", *obs_labels, "action",
+        w.writerow(["episode", "period", "time_s", bridge.error_label, *obs_labels, "action",
                     *bridge.writes, "reward", "latency_s"])
         w.writerows(rows)

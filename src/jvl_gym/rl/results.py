@@ -8,7 +8,11 @@ models from ``RUNS`` (what ``jvl-gym train`` writes) or else the package's shipp
 whose training logs are shipped beside them.
 Per task, ``configs/rl/notes.md`` (a ``## <env id>`` section each) gives the notes. The page
 holds nothing but what the evaluation computes from the seeds, so two runs on the same models
-write the same page.
+write the same page, but for its last section: the transfer gap (:func:`evaluate_transfer`),
+each env's link-trained policy and the same config trained without the link (the config's
+``variants``), each in simulation, behind the link model and deployed in real time over a
+twin's MacTalk link, whose deployed returns, loop rate and latency are measured on the machine
+at the time (with its load average).
 """
 
 from __future__ import annotations
@@ -17,15 +21,21 @@ import re
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from ..families.config import configs_dir
-from .config import env_families, rl_config, rl_runs
+from .config import env_families, family_motor_type, rl_config, rl_runs, rl_variants
 from .evaluate import ControllerResult, evaluate_controllers, held_out_seeds
 from .train import SHIPPED_DIR, log_path, model_path, training_log
 
-__all__ = ["Row", "evaluate_all", "write_page", "plot_curve", "read_notes"]
+__all__ = ["Row", "evaluate_all", "write_page", "plot_curve", "read_notes",
+           "evaluate_transfer", "transfer_section", "write_transfer_section",
+           "TRANSFER_HEADING"]
+
+#: the heading of the transfer gap's section of the page
+TRANSFER_HEADING = "## Transfer: simulation, link model, deployed"
 
 #: a policy beats the baseline when it wins at least this fraction of the seeds
 WIN_FRACTION = 0.8
@@ -167,8 +177,8 @@ def _verdict(row: Row) -> str:
 
 
 def write_page(rows: list[Row], out_dir: str | Path, runs: str | Path = "runs",
-               notes: dict[str, str] | None = None, max_episode_steps: int | None = None
-               ) -> Path:
+               notes: dict[str, str] | None = None, max_episode_steps: int | None = None,
+               transfer: list[Any] | None = None) -> Path:
     """Write ``out_dir/results.md`` and ``out_dir/results/<model>.png`` (one learning curve per
     training whose log exists); returns the page's path."""
     from ..envs.registration import vector_class
@@ -233,7 +243,89 @@ def write_page(rows: list[Row], out_dir: str | Path, runs: str | Path = "runs",
                             f"![{row.family} {algo}](results/{png.name})")
                         break
         lines += [*curves.get(env_id, []), ""] if env_id in curves else []
+    if transfer:
+        lines += transfer_section(transfer)
     page = out_dir / "results.md"
     out_dir.mkdir(parents=True, exist_ok=True)
     page.write_text("\n".join(lines).rstrip("\n") + "\n")
+    return page
+
+
+def evaluate_transfer(runs: str | Path = "runs", config_dir: str | Path | None = None,
+                      episodes: int = 5, envs: list[str] | None = None) -> list[Any]:
+    """The transfer gap (:func:`.transfer.measure_transfer`) of every configured variant with
+    a model (in ``runs``, else shipped), of the envs ``envs`` (default: every env with a
+    variant behind a link): each deployed over the link of its env's link-trained variant,
+    ``episodes`` episodes from the env's held-out seed offset."""
+    from .transfer import measure_transfer
+
+    cdir = Path(config_dir) if config_dir is not None else None
+    out = []
+    variants = rl_variants(cdir)
+    for env_id, key, name in variants:
+        if envs is not None and env_id not in envs:
+            continue
+        links = [rl_config(env_id, cdir, family=key, variant=v)["link"]
+                 for e, k, v in variants if (e, k) == (env_id, key)]
+        link = next((text for text in links if text), None)
+        if link is None:
+            continue
+        cfg = rl_config(env_id, cdir, family=key, variant=name)
+        model = model_path(runs, env_id, key, cfg["algo"], name)
+        if not model.is_file():
+            model = model_path(SHIPPED_DIR, env_id, key, cfg["algo"], name)
+        if not model.is_file():
+            continue
+        motor = cfg["env_kwargs"].get("motor_type") or family_motor_type(key)
+        t = measure_transfer(env_id, model, link, motor_type=motor, episodes=episodes,
+                             seed=int(cfg["eval"]["seed_offset"]))
+        t.label = f"{name} ({model.name}; trained {cfg['total_timesteps']} steps "
+        t.label += f"behind {cfg['link']})" if cfg["link"] else "without a link)"
+        out.append(t)
+    return out
+
+
+def transfer_section(transfers: list[Any]) -> list[str]:
+    """The page's lines of the transfer gap (:func:`evaluate_transfer`)."""
+    lines = [TRANSFER_HEADING, "",
+             "Each env's policy trained behind the link its deployment runs over, and the same "
+             "config trained without it, on the same episodes (seeds from the held-out offset, "
+             "one each) three ways: the env as it is (simulation), the env behind the link model "
+             "(`jvl_gym.envs.link`: the link's period, latency and quantisation), and deployed "
+             "with `jvl-gym deploy` in real time over MacTalk on TCP to a twin whose motor sits "
+             "in the env's machine drawn per episode with the same seed (`jvl-gym serve --line`, "
+             "docs/deploy.md) at the link model's period. Kept: 1 − (reference − deployed) / "
+             "|reference| of the mean returns (100 %: the deployment lost nothing; over the "
+             "deployed episodes that ran to their end when the supervisor stopped the loop "
+             "early). Rate and "
+             "latency (the read of the observation to the written action) are the deploy "
+             "loop's, measured with the machine's load average at the time (2 cores, shared).",
+             "", "| env | policy | link (period) | simulation | link model | deployed | "
+             "kept of link model | kept of simulation | loop | latency mean / max | load |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    for t in transfers:
+        m = {k: float(np.mean(getattr(t, k))) for k in ("sim", "link_model", "deployed")}
+        dep = f"{m['deployed']:.2f}" if t.deployed else "—"
+        if t.reason != "done":  # the mean of the episodes that ran to their end
+            dep += f" ({len(t.deployed)} of {len(t.sim)} episodes; stopped: {t.reason})"
+        lines.append(
+            f"| {t.env_id} | {getattr(t, 'label', '')} | {t.link} ({1e3 * t.period:.1f} ms) | "
+            f"{m['sim']:.2f} | {m['link_model']:.2f} | {dep} | "
+            f"{100 * t.kept_of_link_model:.1f} % | {100 * t.kept_of_sim:.1f} % | "
+            f"{t.rate_hz:.1f} Hz | {1e3 * t.latency_mean:.1f} / {1e3 * t.latency_max:.1f} ms | "
+            f"{t.load[0]:.1f} |")
+    return [*lines, ""]
+
+
+def write_transfer_section(page: str | Path, transfers: list[Any]) -> Path:
+    """Put the transfer gap's section into an existing results page (in place of the one it
+    has, or at its end), leaving the rest as it is."""
+    page = Path(page)
+    text = page.read_text() if page.is_file() else "# Results\n"
+    head, _, tail = text.partition(TRANSFER_HEADING)
+    rest = tail.partition("\n## ")[2] if tail else ""
+    new = head.rstrip("\n") + "\n\n" + "\n".join(transfer_section(transfers))
+    if rest:
+        new = new.rstrip("\n") + "\n\n## " + rest
+    page.write_text(new.rstrip("\n") + "\n")
     return page

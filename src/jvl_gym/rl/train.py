@@ -24,16 +24,18 @@ SHIPPED_DIR = Path(__file__).resolve().parent / "policies"
 
 
 def model_path(out_dir: str | Path, env_id: str, family: str | None = None,
-               algo: str | None = None) -> Path:
+               algo: str | None = None, variant: str | None = None) -> Path:
     """Where the model of ``env_id`` is saved: ``<out>/<EnvName>-<family>-<algo>.zip`` (algo
-    in lower case), or ``<out>/<EnvName>.zip`` when neither family nor algo is given."""
+    in lower case; a variant's ``<EnvName>-<family>-<variant>-<algo>.zip``), or
+    ``<out>/<EnvName>.zip`` when neither family nor algo nor variant is given."""
     name = env_id.split("/")[-1]
-    if family is None and algo is None:
+    if family is None and algo is None and variant is None:
         return Path(out_dir) / f"{name}.zip"
     from .config import env_families
 
     key = env_families(env_id)[0] if family is None else family
-    return Path(out_dir) / f"{name}-{key}-{(algo or 'PPO').lower()}.zip"
+    tag = "" if variant is None else f"-{variant}"
+    return Path(out_dir) / f"{name}-{key}{tag}-{(algo or 'PPO').lower()}.zip"
 
 
 def log_path(model: str | Path) -> Path:
@@ -53,10 +55,11 @@ def training_log(model: str | Path) -> Path | None:
     return None
 
 
-def shipped_model(env_id: str, family: str | None = None, algo: str = "PPO") -> Path | None:
+def shipped_model(env_id: str, family: str | None = None, algo: str = "PPO",
+                  variant: str | None = None) -> Path | None:
     """The shipped trained policy of ``env_id`` on ``family`` (default: the env's first) with
-    ``algo`` (:data:`SHIPPED_DIR`), or None."""
-    path = model_path(SHIPPED_DIR, env_id, family, algo)
+    ``algo`` (of ``variant``, if given) (:data:`SHIPPED_DIR`), or None."""
+    path = model_path(SHIPPED_DIR, env_id, family, algo, variant)
     return path if path.is_file() else None
 
 
@@ -94,7 +97,7 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
           seed: int | None = None, progress_bar: bool = True, threads: int = 1,
           config_dir: str | Path | None = None, family: str | None = None,
           algo: str | None = None, checkpoint_every: int | None = None,
-          link: str | None = None) -> Path:
+          link: str | None = None, variant: str | None = None) -> Path:
     """Train the configured algorithm on ``env_id`` and save it (:func:`model_path`, with the
     training log beside it, :func:`log_path`); returns the model path.
 
@@ -119,7 +122,9 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
         Also save the model every this many steps (:func:`checkpoint_path`).
     link : str, optional
         Train behind this link (``jvl_gym.envs.link``: ``"mactalk:19200"``,
-        ``"canopen:2ms"``, ``"dac:12"`` …).
+        ``"canopen:2ms"``, ``"dac:12"`` …; default: the config's ``link``).
+    variant : str, optional
+        Train a variant of the config (:func:`~.config.rl_config`; its own model name).
     """
     import numba
     import torch
@@ -128,9 +133,10 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
     from .config import env_families
     from .sb3_adapter import make_sb3_env
 
-    cfg = rl_config(env_id, config_dir, family=family, algo=algo)
+    cfg = rl_config(env_id, config_dir, family=family, algo=algo, variant=variant)
     family = env_families(env_id)[0] if family is None else family
-    path = model_path(out_dir, env_id, family, cfg["algo"])
+    path = model_path(out_dir, env_id, family, cfg["algo"], variant)
+    link = cfg.get("link") if link is None else link
     path.parent.mkdir(parents=True, exist_ok=True)
     torch.set_num_threads(int(threads))
     numba.set_num_threads(min(int(threads), numba.config.NUMBA_NUM_THREADS))
@@ -139,8 +145,18 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
     venv = VecMonitor(make_sb3_env(env_id, int(cfg["n_envs"]), link, **cfg["env_kwargs"]),
                       filename=str(log_path(path)))
     hyper: dict[str, Any] = dict(cfg["hyperparams"])
-    model = algo_class(cfg["algo"])(cfg["policy"], venv, seed=seed, verbose=0, device="cpu",
-                                    **hyper)
+    if cfg.get("init") is not None:  # a fine-tuning of the shipped policy
+        if cfg["init"] != "shipped":
+            raise ValueError(f"{env_id}: init must be 'shipped', got {cfg['init']!r}")
+        start = shipped_model(env_id, family, cfg["algo"])
+        if start is None:
+            raise FileNotFoundError(f"{env_id}: no shipped {cfg['algo']} policy on {family} "
+                                    "to start from")
+        model = algo_class(cfg["algo"]).load(str(start), env=venv, device="cpu")
+        model.set_random_seed(seed)
+    else:
+        model = algo_class(cfg["algo"])(cfg["policy"], venv, seed=seed, verbose=0,
+                                        device="cpu", **hyper)
     t0 = time.perf_counter()
     callback = None if checkpoint_every is None else _checkpoints(path, int(checkpoint_every))
     model.learn(total_timesteps=steps, progress_bar=progress_bar, callback=callback)

@@ -47,8 +47,13 @@ def passive_client(url: str, address: int, motor_type: str, timeout: float = 0.2
     return client
 
 
+#: attempts of the passive write before the watchdog gives up (each the client's time-out
+#: and retry: a few seconds in all, for a motor that answers late on a loaded line)
+PASSIVE_ATTEMPTS = 10
+
+
 def _passive(client: Any, why: str) -> None:
-    for _ in range(3):
+    for _ in range(PASSIVE_ATTEMPTS):
         try:
             client.passive()
             print(f"passive: {why}", flush=True)

@@ -26,7 +26,8 @@ __all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BI
            "set_reg", "shaft_angle", "coil_direction", "set_analog_volts",
            "set_load_torque", "set_pulse_counts", "POSITION_MODE", "VELOCITY_MODE",
            "ANALOG_TORQUE_MODE", "ANALOG_GEAR_MODE", "rpm_to_v_soll", "SPEED_PI", "GEARF",
-           "AG_CENTRE_VOLTS", "AG_SPAN_VOLTS", "AG_CENTRE_FACTOR", "KVOUT_FROM_LOAD",
+           "AG_CENTRE_VOLTS", "AG_SPAN_VOLTS", "AG_CENTRE_FACTOR", "GEAR_MODE", "ag_factor",
+           "KVOUT_FROM_LOAD",
            "COPPER_COLUMN"]
 
 
@@ -62,6 +63,17 @@ KVOUT_FROM_LOAD = False
 COPPER_COLUMN = _L.S_E_COPPER
 #: the AG factor at AG_CENTRE_VOLTS, as the firmware computes it (ANINP = 0)
 AG_CENTRE_FACTOR = float(_analog_gear_factor.py_func(_np.zeros(_TABLE.last + 1, dtype=_np.int64)))
+#: the mode whose gear is GEARF1/GEARF2 alone, run by AG_MODE's gear position block: GP_MODE
+#: (manual 4.4.4, 4.1.12), where a controller on the bus sets the trimmed gear itself
+GEAR_MODE = _c.GP_MODE
+
+
+def ag_factor(aninp: int) -> float:
+    """AG_MODE's factor at the analogue input ``aninp`` (ANINP counts, ±1023 = ±10 V; manual
+    4.1.9), as the firmware computes it."""
+    regs = _np.zeros(_TABLE.last + 1, dtype=_np.int64)
+    regs[R.ANINP] = int(aninp)
+    return float(_analog_gear_factor.py_func(regs))
 
 
 #: register values, saturated stores, the shaft angle and the world inputs (``set_analog_volts``:
