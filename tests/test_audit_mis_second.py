@@ -86,6 +86,7 @@ def _autocorrection_motors(window: list[int], v_auto: int = 0) -> Any:
     return m
 
 
+@pytest.mark.statements("mis:8.2.29:2")
 def test_autocorrection_when_encoder_differs_more_than_window() -> None:
     """MIS manual §5.8.3 (line 3021): an auto-correction after the end of a movement is
     performed when the actual position and the encoder position differ by more than the
@@ -104,6 +105,7 @@ def test_autocorrection_when_encoder_differs_more_than_window() -> None:
     assert (p_ist[arrived[1]:, 1] == target).all()
 
 
+@pytest.mark.statements("mis:8.2.120:2", "mis:5.2.3:1")
 def test_autocorrection_velocity_used_during_a_retry() -> None:
     """MIS manual §5.8.3 (line 3023): the "Autocorrection velocity" (V_SOLL_AUTO) is the
     velocity used during a retry."""
@@ -120,6 +122,7 @@ def test_autocorrection_velocity_used_during_a_retry() -> None:
 
 # -- §8.2 -------------------------------------------------------------------------------------
 
+@pytest.mark.statements("mis:8.2.53:1", "mis:8.2.53:2")
 def test_afzup_confmax_is_the_maximum_confidence_limit() -> None:
     """MIS manual §8.2.1 (line 4338): register 103 AFZUP_ConfMax, R/W, 1-4095, default 4095
     (1.221 mV): the maximum confidence limit for the analogue inputs; samples above it are not
@@ -139,6 +142,7 @@ def test_afzup_confmax_is_the_maximum_confidence_limit() -> None:
     assert filtered[0] <= 2000  # the samples above ConfMax are discarded
 
 
+@pytest.mark.statements("mis:8.2.21:12", "mis:8.2.21:14")
 def test_command_118_sets_flag_relative_move() -> None:
     """MIS manual §8.2.21 (line 4825): command 118 (FastMac 22) sets the flag RelativeMove
     (116, FastMac 20, clears it)."""
@@ -152,6 +156,7 @@ def test_command_118_sets_flag_relative_move() -> None:
     assert int(m.read("COMMAND")[0]) == 0
 
 
+@pytest.mark.statements("mis:8.2.49:2")
 def test_encoder_type_2_is_the_absolute_multiturn_h3() -> None:
     """MIS manual §8.2.49 (line 5176): ENCODER_TYPE = 2 is the absolute multi-turn encoder
     (H3): a motor with the H3 reads 2 and its encoder counts over several revolutions."""
@@ -182,6 +187,7 @@ def test_ssi_setup2_prepare_time_in_milliseconds() -> None:
     assert int(m.read("EXTENCODER2")[0]) == 12345
 
 
+@pytest.mark.statements("mis:8.2.81:1", "mis:8.2.81:2")
 def test_save_voltage_default_15_volt_in_8_764_mv() -> None:
     """MIS manual §8.2.81 (line 5524, nearest to the drawn 5521): register 141 Save voltage,
     R/W, default 1710 (15 V), unit 8.764 mV: the CVI level where the program shuts down."""
@@ -207,6 +213,7 @@ def test_motortype_104_is_the_mis515() -> None:
     assert int(m.read("MOTORTYPE")[0]) == 104
 
 
+@pytest.mark.statements("mis:8.2.93:1", "mis:8.2.93:2", "mis:8.2.93:3")
 def test_max_voltage_bits_0_15_are_the_bus_maximum() -> None:
     """MIS manual §8.2.93 (line 5680, nearest to the drawn 5679): MAX_VOLTAGE bits 0-15 are the
     maximum voltage on the bus (above it the motor enters an error state); read-only."""
