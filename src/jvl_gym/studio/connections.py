@@ -239,6 +239,9 @@ class Connections:
         from .parameters import settings_of
 
         line = self._line(port)
+        for m in self.session.motors:
+            if getattr(m, "line", None) is line and m.address == address:
+                raise ValueError(f"{m.label} is in the studio already")
         if motor_type is None:
             found = {f.address: f for f in self.found.get(port, [])}
             if address not in found or found[address].motor_type is None:
