@@ -164,5 +164,7 @@ def frame(session: Session, path: str, m: int = 0) -> Page:
         state.set_text("; ".join(problems))
 
     page.every(1.0, show_state)
-    page.message = ui.label("").props(tid("message"))
+    # one line high also while empty, so a message does not shift the page under the pointer
+    # (a held jog button would see the pointer leave it)
+    page.message = ui.label("").classes("min-h-6").props(tid("message"))
     return page
