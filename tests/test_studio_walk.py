@@ -35,8 +35,8 @@ pytestmark = pytest.mark.skipif(not Path(CHROMIUM).exists(),
                                 reason=f"Debian's Chromium ({CHROMIUM}) is not installed")
 expect = pytest.importorskip("playwright.sync_api").expect
 
-#: generous: a loaded machine may hold a page, the twin or the studio up for seconds
-LONG = 60_000
+#: generous [ms]: a loaded machine may hold a page, the twin or the studio up for seconds
+LONG = 90_000
 
 
 @pytest.fixture(scope="session")
@@ -154,6 +154,7 @@ def rise_time(text: str, channel: str) -> tuple[float, float]:
 
 
 def test_the_first_session_walk(page, studio, twins, artefacts):  # noqa: F811
+    page.set_default_timeout(LONG * 2)  # a loaded machine holds Chromium up for seconds
     message = page.get_by_test_id("message")
 
     # 1. the studio without motors opens on the Connections view
@@ -203,11 +204,15 @@ def test_the_first_session_walk(page, studio, twins, artefacts):  # noqa: F811
     page.goto(studio.url + "/scope?m=0")
     expect(page.get_by_test_id("motion-state-0")).to_contain_text("INIT_MODE", timeout=LONG)
     page.get_by_test_id("trigger").click()
+    expect(page.get_by_test_id("trigger")).to_have_attribute("aria-checked", "true",
+                                                                     timeout=LONG)
     page.get_by_test_id("trigger-channel").click()
     page.get_by_role("option", name="V_IST [counts/sample]").click()
+    expect(page.get_by_test_id("trigger-channel")).to_contain_text("V_IST", timeout=LONG)
     page.get_by_test_id("trigger-level").fill("10")
     page.get_by_test_id("time-base").fill("2")
     page.get_by_test_id("trigger-mode").get_by_text("single").click()
+    shoot(page, artefacts, "debug_trigger")
     expect(page.get_by_test_id("scope-count")).to_contain_text("waiting for the trigger",
                                                                timeout=LONG)
     page.get_by_test_id("speed-0").fill("300")
