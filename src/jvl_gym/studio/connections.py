@@ -21,6 +21,7 @@ lacks shows "—" with the reason.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass
 from typing import Any
@@ -71,19 +72,35 @@ def serial_ports() -> list[tuple[str, str]]:
     return [(p.device, p.description or "") for p in sorted(list_ports.comports())]
 
 
+#: a bit field of a version register's description: "bits 0-5 minor", "6-12 major", "13 beta"
+_FIELD = re.compile(r"(\d+)(?:-(\d+))? (minor|major|beta)")
+#: a worked example of a version register's description: "78 = 4Eh = version 4.14"
+_EXAMPLE = re.compile(r"(\d+) = [0-9A-Fa-f]+h = version (\d+)\.(\d+)")
+
+
 def version_text(fam: Family, raw: int) -> str:
-    """PROG_VERSION ``raw`` as the family's manual reads it: MAC050–141 manual 3.2.1 (78 =
-    4Eh: version 4.14, the high and low nibble), MAC800 register overview §1.2 (bits 0–5
-    minor, 6–12 major, 13 beta), MIS manual §8.2.2 (bits 0–3 minor, 4–12 major, 13 beta)."""
-    if fam.key == "mac050_141":
-        return f"{raw >> 4}.{raw & 0xF}"
-    if fam.key == "mac800":
-        major, minor = (raw >> 6) & 0x7F, raw & 0x3F
-    elif fam.key == "mis":
-        major, minor = (raw >> 4) & 0x1FF, raw & 0xF
-    else:
-        return str(raw)
-    return f"{major}.{minor}" + (" beta" if raw >> 13 & 1 else "")
+    """PROG_VERSION ``raw`` as the family's manual reads it, from the register's description
+    in the family's table: its bit fields (MAC800 register overview §1.2: bits 0–5 minor,
+    6–12 major, 13 beta; MIS manual §8.2.2: bits 0–3 minor, 4–12 major, 13 beta), or its worked
+    example (MAC050–141 manual 3.2.1: 78 = 4Eh = version 4.14, the minor version in the bits
+    below the major one); the plain number where the description gives neither."""
+    reg = _register(fam, "firmware")
+    text = reg.description if reg is not None else ""
+    fields = {m.group(3): (int(m.group(1)), int(m.group(2) or m.group(1)))
+              for m in _FIELD.finditer(text)}
+    if "major" in fields and "minor" in fields:
+        def bits(name: str) -> int:
+            lo, hi = fields[name]
+            return (raw >> lo) & ((1 << (hi - lo + 1)) - 1)
+        beta = "beta" in fields and bits("beta")
+        return f"{bits('major')}.{bits('minor')}" + (" beta" if beta else "")
+    example = _EXAMPLE.search(text)
+    if example:
+        value, major, minor = (int(g) for g in example.groups())
+        for shift in range(1, 16):  # the split that the example's value shows
+            if value >> shift == major and value & ((1 << shift) - 1) == minor:
+                return f"{raw >> shift}.{raw & ((1 << shift) - 1)}"
+    return str(raw)
 
 
 @dataclass(frozen=True)
