@@ -2,6 +2,7 @@
 
 Examples
 --------
+``jvl-gym studio``  (no motor yet: connect lines and add motors on the Connections view)
 ``jvl-gym studio --motor MAC140 --motor MIS232``  (two simulated motors, two families)
 ``jvl-gym studio --connect socket://127.0.0.1:5000 --address 19``  (a ``jvl-gym serve`` twin)
 ``jvl-gym studio --connect /dev/ttyUSB0 --scan 1-32 --motor MAC140``  (motors on a line)
@@ -29,15 +30,14 @@ STUDIO_EXTRA_HINT = ("needs the studio extra (NiceGUI): run `make setup-rl` or "
 
 
 def parse_range(text: str) -> range:
-    """``"1-32"`` → range(1, 33); ``"19"`` → range(19, 20); within the unit addresses 1..254."""
-    lo, _, hi = text.partition("-")
+    """``--scan``'s ``"1-32"`` → range(1, 33) (:func:`~..studio.connections.address_range`);
+    a malformed range is a usage error naming ``--scan``."""
+    from ..studio.connections import address_range
+
     try:
-        a, b = int(lo), int(hi or lo)
-    except ValueError:
-        raise typer.BadParameter(f"--scan takes FIRST-LAST, e.g. 1-32, not {text!r}") from None
-    if not 1 <= a <= b <= 254:
-        raise typer.BadParameter(f"--scan {text}: addresses are 1..254 (MYADDR), first <= last")
-    return range(a, b + 1)
+        return address_range(text)
+    except ValueError as exc:
+        raise typer.BadParameter(f"--scan: {exc}") from None
 
 
 def check_host(host: str) -> None:
@@ -100,8 +100,9 @@ NETWORK_WARNING = ("warning: --host {host} lets the whole network reach this stu
 
 def studio(
     motor: Annotated[list[str] | None, typer.Option(
-        "--motor", "-m", help="Motor type (repeat: several motors, any families; default "
-        "MAC140). Simulated in-process unless --connect.")] = None,
+        "--motor", "-m", help="Motor type (repeat: several motors, any families). Simulated "
+        "in-process unless --connect. None: the studio opens on the Connections view with no "
+        "motor.")] = None,
     address: Annotated[list[int] | None, typer.Option(
         "--address", "-a", help="Unit address (MYADDR) of each motor (repeat; default 1, 2, …).")
     ] = None,
@@ -154,7 +155,9 @@ def studio(
         raise CliError(str(exc)) from None
     access = Access(new_token(), port, allowed_hosts(host))
     try:
-        if connect is None:
+        if connect is None and not motor and not address:
+            session = Session(speed=speed, toolkit=kit)
+        elif connect is None:
             session = Session.simulated(motor or [], address or [], seed=seed, speed=speed,
                                         toolkit=kit)
         else:
@@ -165,6 +168,6 @@ def studio(
         raise CliError(str(exc)) from None
     if not is_loopback(host):
         typer.echo(NETWORK_WARNING.format(host=host), err=True)
-    typer.echo(f"jvl-gym studio with {', '.join(session.labels())}; open "
+    typer.echo(f"jvl-gym studio with {', '.join(session.labels()) or 'no motor yet'}; open "
                f"{access.url(host)} (Ctrl-C to stop)")
     serve(session, access, host, show=not no_browser)

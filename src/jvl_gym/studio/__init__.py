@@ -7,7 +7,8 @@ The logic lives in modules of one concept each and runs without a browser:
 * :mod:`.motor` — one motor seen by the studio: :class:`~.motor.SimMotor` (one in-process
   :class:`~jvl_gym.MotorArray`), :mod:`.line` — :class:`~.line.LineMotor` (a twin or a real
   motor behind the project's MacTalk clients, either dialect), :mod:`.session` — the motors
-  of a studio and the real-time clock of the simulated ones;
+  of a studio and the real-time clock of the simulated ones; :mod:`.connections` — lines
+  connected, scanned and closed, motors identified, added and removed while the studio runs;
 * :mod:`.bits` — bit registers in words, :mod:`.groups` — the register groups of the manuals,
   :mod:`.registers` — the register view's rows, edits and setup files;
 * :mod:`.units_view` — register values in engineering units, mode registers as mode names,

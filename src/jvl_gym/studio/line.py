@@ -60,6 +60,18 @@ class Line:
         #: the last failure, None while the line works
         self.problem: str | None = None
 
+    def open(self) -> None:
+        """Open the port now (it opens on first use otherwise).
+
+        Raises
+        ------
+        LineDown
+            The port cannot be opened: no such device, a TCP port nobody listens on, a
+            malformed URL (one line).
+        """
+        with self.lock:
+            self._port()
+
     def _port(self) -> Any:
         """The open port (opened if it is not)."""
         from ..protocol.mactalk.master import open_port
@@ -153,14 +165,40 @@ class Line:
 
 class LineMotor(StudioMotor):
     """A motor at ``address`` on ``line``, spoken to in its family's MacTalk dialect
-    (:attr:`~jvl_gym.families.TwinSpec.dialect`)."""
+    (:attr:`~jvl_gym.families.TwinSpec.dialect`).
 
-    def __init__(self, line: Line, motor_type: str, address: int) -> None:
+    Parameters
+    ----------
+    line : Line
+        The line.
+    motor_type : str
+        Its motor type.
+    address : int
+        Its unit address (MYADDR).
+    with_port : bool
+        Name the port in the label (``"MAC140 @ 1 on /dev/ttyUSB1"``): for a motor whose
+        type and address a motor on another line of the studio has too.
+    """
+
+    def __init__(self, line: Line, motor_type: str, address: int, *,
+                 with_port: bool = False) -> None:
         super().__init__(motor_type, address)
         self.dialect = self.family.twin.dialect
         client_class(self.dialect)  # a dialect the protocol package speaks
         self.line = line
+        self.with_port = with_port
         self._t0 = time.monotonic()
+        #: the settings (register name → value) the flash is known to hold, since MacTalk
+        #: has no command that reads the flash back: as read when the Connections view took
+        #: the motor up (a motor loads its flash at power-on) and at each flash write from the
+        #: Registers view (:func:`~.parameters.write_flash`); None until then
+        self.flash_record: dict[str, float] | None = None
+
+    @property
+    def label(self) -> str:
+        """``"<type> @ <address>"``, with ``" on <port>"`` where :attr:`with_port`."""
+        base = f"{self.motor_type} @ {self.address}"
+        return f"{base} on {self.line.port}" if self.with_port else base
 
     def call(self, fn: Callable[[Any], Any]) -> Any:
         """``fn(client)`` on the line, with the master of this motor's dialect and table."""
@@ -209,6 +247,7 @@ class LineMotor(StudioMotor):
         for label, (capability, _) in ACTIONS.items():
             if self.family.supports(capability):
                 out[label] = cmd(commands[label])
+
         out["clear errors"] = self.clear_errors
         return out
 

@@ -26,11 +26,12 @@ from .motor import SimMotor, StudioMotor
 from .registers import EditResult, edit, read_setup, setup_of
 from .units_view import UnitsView
 
-__all__ = ["Difference", "flash_values", "default_values", "file_values", "compare",
-           "History", "flash_changes", "write_flash"]
+__all__ = ["Difference", "settings_of", "flash_values", "default_values", "file_values",
+           "compare", "History", "flash_changes", "write_flash"]
 
 
-def _settings(motor: StudioMotor) -> dict[str, float]:
+def settings_of(motor: StudioMotor) -> dict[str, float]:
+    """The motor's settings now (:func:`.registers.setup_of`): register name → value."""
     regs = setup_of(motor)["registers"]
     assert isinstance(regs, dict)
     return {str(k): float(v) for k, v in regs.items()}
@@ -69,11 +70,14 @@ def _names(motor: StudioMotor) -> set[str]:
 
 
 def flash_values(motor: StudioMotor) -> dict[str, float] | None:
-    """The settings in the motor's flash (its defaults if the flash was never written); None
-    where the flash cannot be read (a motor on a line: compare with a setup file saved after
-    the last flash write, or the defaults)."""
+    """The settings in the motor's flash (its defaults if the flash was never written). A
+    motor on a line cannot be read from flash: its flash record instead (the settings as
+    read when the studio took it up and at each flash write from the studio,
+    :attr:`~.line.LineMotor.flash_record`); None where it has none."""
     if not isinstance(motor, SimMotor):
-        return None
+        record = getattr(motor, "flash_record", None)
+        return None if record is None else {k: v for k, v in record.items()
+                                            if k in _names(motor)}
     with motor.lock:
         image = motor.array.flash_image(0)
     if not image:
@@ -126,7 +130,7 @@ class Difference:
 
 def compare(motor: StudioMotor, baseline: dict[str, float]) -> list[Difference]:
     """Every setting of ``motor`` now against ``baseline``, in register order."""
-    now = _settings(motor)
+    now = settings_of(motor)
     return [Difference(k, v, baseline.get(k)) for k, v in now.items()]
 
 
@@ -210,11 +214,14 @@ def flash_changes(motor: StudioMotor) -> list[Difference] | None:
 def write_flash(motor: StudioMotor) -> EditResult:
     """Save the motor's settings in flash with the family's own actions: safe mode, then the
     flash write, which resets the motor from the flash (MAC050–141 manual 5.1, MIS manual
-    §18.2.5, §18.2.7)."""
+    §18.2.5, §18.2.7); on a motor on a line the settings saved become its flash record."""
     actions = motor.actions()
     if "save in flash" not in actions:
         return EditResult(False, f"{motor.label}: the {motor.facts.title} have no flash write")
+    saved = None if isinstance(motor, SimMotor) else settings_of(motor)
     if "safe mode" in actions:
         actions["safe mode"]()
     actions["save in flash"]()
+    if saved is not None:  # what the flash of a motor on a line now holds
+        motor.flash_record = saved  # type: ignore[attr-defined]
     return EditResult(True, f"{motor.label}: settings saved in flash")

@@ -1,10 +1,16 @@
 """The motors of one studio and the real-time clock of the simulated ones.
 
-A :class:`Session` holds the motors the command line named: simulated motors in-process
-(:class:`~.motor.SimMotor`, any families side by side) and motors on a line
-(:class:`~.line.LineMotor`). Its clock thread advances every simulated motor that is not
-paused by as many firmware samples as wall-clock time has passed (times ``speed``), so the
-simulated motors run in real time while the pages read and write them.
+A :class:`Session` holds the motors of the studio: simulated motors in-process
+(:class:`~.motor.SimMotor`, any families side by side) and motors on lines
+(:class:`~.line.LineMotor`, several lines at once). The command line names the first ones;
+the Connections view (:mod:`.connections`) adds and removes motors and lines while the
+studio runs. Its clock thread advances every simulated motor that is not paused by as many
+firmware samples as wall-clock time has passed (times ``speed``), so the simulated motors run
+in real time while the pages read and write them.
+
+The motor list is replaced, never changed in place (:meth:`Session.add`,
+:meth:`Session.remove`, under one lock), so the clock, STOP and the pages each work on the
+list as it was when they read it, while another thread adds or removes a motor.
 """
 
 from __future__ import annotations
@@ -101,13 +107,20 @@ class Session:
         :func:`~jvl_gym.studio.toolkit.find_toolkit`; None if there is none).
     """
 
-    def __init__(self, motors: list[StudioMotor], speed: float = 1.0,
+    def __init__(self, motors: list[StudioMotor] | None = None, speed: float = 1.0,
                  line: Line | None = None, toolkit: TuningToolkit | None = None) -> None:
         _check_speed(speed)
-        self.motors = motors
+        #: the motors, in the order the pages list them (a new list after every change)
+        self.motors: list[StudioMotor] = []
+        #: the open lines, by port (a new dict after every change)
+        self.lines: dict[str, Line] = {}
         self.speed = float(speed)
-        self.line = line
         self.toolkit = find_toolkit(toolkit)
+        self._change = threading.RLock()
+        if line is not None:
+            self.add_line(line)
+        for m in motors or []:
+            self.add(m)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         #: last error of the clock (a motor that refused to step), None if none
@@ -141,12 +154,85 @@ class Session:
             plan = plan_motors(motors, addresses, DEFAULT_MOTOR)
         return cls([LineMotor(line, t, a) for t, a in plan], speed, line=line, toolkit=toolkit)
 
+    # ------------------------------------------------------------------ lines and motors
+    @property
+    def line(self) -> Line | None:
+        """The first open line (None without one)."""
+        return next(iter(self.lines.values()), None)
+
+    def add_line(self, line: Line) -> Line:
+        """Hold ``line`` (the one already held at its port, if any)."""
+        with self._change:
+            if line.port in self.lines:
+                return self.lines[line.port]
+            self.lines = {**self.lines, line.port: line}
+            return line
+
+    def drop_line(self, port: str) -> list[str]:
+        """Remove every motor on the line at ``port`` (:meth:`remove`) and close the line;
+        return what each removal did (one line each).
+
+        Raises
+        ------
+        KeyError
+            No line is open at ``port``.
+        """
+        with self._change:
+            if port not in self.lines:
+                raise KeyError(f"no line is open at {port!r}; open: "
+                               f"{', '.join(self.lines) or 'none'}")
+            line = self.lines[port]
+            said = [self.remove(m.label) for m in self.motors
+                    if getattr(m, "line", None) is line]
+            self.lines = {p: ln for p, ln in self.lines.items() if p != port}
+        line.close()
+        return said
+
+    def add(self, motor: StudioMotor) -> StudioMotor:
+        """Add ``motor`` to the studio (safe while the clock runs and pages poll); a
+        simulated motor starts running with the clock from now on.
+
+        Raises
+        ------
+        ValueError
+            A motor of that label (type and address, on that line) is in the studio already.
+        """
+        with self._change:
+            if motor.label in self.labels():
+                raise ValueError(f"{motor.label} is in the studio already; remove it first or "
+                                 "give another address")
+            line = getattr(motor, "line", None)
+            if line is not None and line.port not in self.lines:
+                self.add_line(line)
+            self.motors = [*self.motors, motor]
+        return motor
+
+    def remove(self, label: str) -> str:
+        """Stop the motor shown as ``label`` (:meth:`~.motor.StudioMotor.stop_motor`, so no
+        motor the studio set moving runs on out of its reach) and remove it; return what the
+        stop did (one line). A motor that does not answer is removed all the same.
+
+        Raises
+        ------
+        KeyError
+            No motor of that label.
+        """
+        with self._change:
+            motor = self.motor(label)
+            self.motors = [m for m in self.motors if m is not motor]
+        try:
+            said = motor.stop_motor()
+        except Exception as exc:  # noqa: BLE001 - removed all the same, the reason is said
+            said = f"{motor.label}: not stopped ({exc})"
+        return f"removed {said}"
+
     def motor(self, label: str) -> StudioMotor:
         """The motor shown as ``label`` (``"MAC140 @ 1"``)."""
         for m in self.motors:
             if m.label == label:
                 return m
-        raise KeyError(f"no motor {label!r}; the studio has {', '.join(self.labels())}")
+        raise KeyError(f"no motor {label!r}; the studio has "
+                       f"{', '.join(self.labels()) or 'none'}")
 
     def labels(self) -> list[str]:
         """The motors' labels."""
@@ -173,6 +259,7 @@ class Session:
             One line per motor, in the studio's order.
         """
         outcomes: dict[int, str] = {}
+        motors = self.motors  # the motors of this moment, even if one is added meanwhile
 
         def stop(k: int, motor: StudioMotor) -> None:
             try:
@@ -181,7 +268,7 @@ class Session:
                 outcomes[k] = f"{motor.label}: STOP failed: {exc}"
 
         threads = [threading.Thread(target=stop, args=(k, m), daemon=True, name="studio-stop")
-                   for k, m in enumerate(self.motors)]
+                   for k, m in enumerate(motors)]
         for t in threads:
             t.start()
         end = time.monotonic() + wait
@@ -189,12 +276,13 @@ class Session:
             t.join(max(0.0, end - time.monotonic()))
         return [outcomes.get(k, f"{m.label}: STOP pending (a run holds the motor, or the line "
                              "is slow); it is stopped as soon as it can be")
-                for k, m in enumerate(self.motors)]
+                for k, m in enumerate(motors)]
 
     # ------------------------------------------------------------------ clock
     def start(self, period: float = 0.005) -> None:
-        """Start the real-time clock of the simulated motors (a daemon thread)."""
-        if self._thread is not None or not any(m.simulated for m in self.motors):
+        """Start the real-time clock of the simulated motors (a daemon thread), which also
+        runs the simulated motors added later."""
+        if self._thread is not None:
             return
         from .compiling import install
 
@@ -205,23 +293,31 @@ class Session:
         self._thread.start()
 
     def _run(self, period: float) -> None:
-        sims = [m for m in self.motors if isinstance(m, SimMotor)]
         start = time.monotonic()
-        done = [0] * len(sims)
+        done: dict[int, int] = {}  # id of a motor → firmware samples it has run
         while not self._stop.wait(period):
-            elapsed = (time.monotonic() - start) * self.speed
-            for k, m in enumerate(sims):
-                due = int(elapsed * m.facts.outer_hz)
-                if m.paused:
-                    done[k] = due
-                    continue
-                n = min(due - done[k], int(m.facts.outer_hz))  # at most 1 s behind
-                if n > 0:
-                    try:
-                        m.step(n)
-                    except Exception as exc:  # noqa: BLE001 - shown on the page, clock runs on
-                        self.clock_problem = f"{m.label}: {exc}"
-                    done[k] = due
+            self.tick((time.monotonic() - start) * self.speed, done)
+
+    def tick(self, elapsed: float, done: dict[int, int]) -> None:
+        """Bring every simulated motor of the studio now to ``elapsed`` simulated seconds
+        since the clock started; ``done``: id of a motor → the samples it has run (a motor
+        new to it starts from now)."""
+        sims = [m for m in self.motors if isinstance(m, SimMotor)]
+        for m in sims:
+            due = int(elapsed * m.facts.outer_hz)
+            ran = done.setdefault(id(m), due)
+            if m.paused:
+                done[id(m)] = due
+                continue
+            n = min(due - ran, int(m.facts.outer_hz))  # at most 1 s behind
+            if n > 0:
+                try:
+                    m.step(n)
+                except Exception as exc:  # noqa: BLE001 - shown on the page, clock runs on
+                    self.clock_problem = f"{m.label}: {exc}"
+                done[id(m)] = due
+        for key in set(done) - {id(m) for m in sims}:  # removed motors
+            del done[key]
 
     def stop(self) -> None:
         """Stop the clock and close the line."""
@@ -229,5 +325,5 @@ class Session:
         if self._thread is not None:
             self._thread.join(timeout=2.0)
             self._thread = None
-        if self.line is not None:
-            self.line.close()
+        for line in self.lines.values():
+            line.close()

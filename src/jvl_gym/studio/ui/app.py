@@ -22,20 +22,39 @@ RECONNECT_S = 30.0
 
 
 def build(session: Session) -> None:
-    """Register the studio's pages for ``session``."""
+    """Register the studio's pages for ``session``: a view that needs a motor sends a studio
+    without one to the Connections view."""
+    from fastapi.responses import RedirectResponse
     from nicegui import app, ui
 
-    from . import episodes_page, motors_page, registers_page, scope_page, tuning_page
+    from ..connections import Connections
+    from . import (
+        connections_page,
+        episodes_page,
+        motors_page,
+        registers_page,
+        scope_page,
+        tuning_page,
+    )
+    from .common import WITHOUT_MOTOR
 
-    def route(builder: Callable[[Session, int], None]) -> Callable[[int], None]:
-        def page(m: int = 0) -> None:
+    connections = Connections(session)
+
+    def route(path: str, builder: Callable[[Session, int], None]
+              ) -> Callable[[int], RedirectResponse | None]:
+        def page(m: int = 0) -> RedirectResponse | None:
+            if not session.motors and path not in WITHOUT_MOTOR:
+                return RedirectResponse("/connections")
             builder(session, m)
+            return None
         return page
 
     for path, module in (("/", motors_page), ("/registers", registers_page),
                          ("/scope", scope_page), ("/tuning", tuning_page),
                          ("/episodes", episodes_page)):
-        ui.page(path)(route(module.build))
+        ui.page(path)(route(path, module.build))
+    ui.page("/connections")(route("/connections",
+                                  lambda s, m: connections_page.build(connections, m)))
     app.on_startup(session.start)
     app.on_shutdown(session.stop)
 

@@ -17,11 +17,13 @@ from ...cli.app import one_line
 from ..motor import StudioMotor
 from ..session import Session
 
-__all__ = ["VIEWS", "Page", "frame", "tid", "stop_button", "STOP_KEY"]
+__all__ = ["VIEWS", "WITHOUT_MOTOR", "Page", "frame", "tid", "stop_button", "STOP_KEY"]
 
 #: the views: path → title
-VIEWS = {"/": "Motors", "/registers": "Registers", "/scope": "Scope", "/tuning": "Tuning",
-         "/episodes": "Episodes"}
+VIEWS = {"/connections": "Connections", "/": "Motors", "/registers": "Registers",
+         "/scope": "Scope", "/tuning": "Tuning", "/episodes": "Episodes"}
+#: the views that work without a motor (the others send an empty studio to Connections)
+WITHOUT_MOTOR = ("/connections", "/episodes")
 
 #: the key that stops every motor, as the STOP button does (also inside an input field)
 STOP_KEY = "Escape"
@@ -42,13 +44,13 @@ class Page:
 
     Attributes
     ----------
-    motor : StudioMotor
-        The motor the page works on.
+    motor : StudioMotor or None
+        The motor the page works on (None in a studio without motors).
     message : ui.label
         The line that shows the last outcome (``#message``).
     """
 
-    def __init__(self, session: Session, motor: StudioMotor) -> None:
+    def __init__(self, session: Session, motor: StudioMotor | None) -> None:
         self.session = session
         self.motor = motor
         self.message: Any = None
@@ -141,8 +143,9 @@ def stop_button(page: Page) -> None:
 def frame(session: Session, path: str, m: int = 0) -> Page:
     """Lay out the header (views, motor choice, line state) and the message line of the page
     at ``path`` for motor index ``m``; return the page."""
-    m = m if 0 <= m < len(session.motors) else 0
-    page = Page(session, session.motors[m])
+    motors = session.motors  # the motors of this moment
+    m = m if 0 <= m < len(motors) else 0
+    page = Page(session, motors[m] if motors else None)
     ui.page_title(f"jvl-gym studio · {VIEWS[path]}")
     with ui.header().classes("bg-slate-800 py-1"), ui.column().classes("w-full gap-0"):
         with ui.row().classes("items-center gap-4 w-full"):
@@ -153,18 +156,20 @@ def frame(session: Session, path: str, m: int = 0) -> Page:
                     link.classes("underline font-bold")
             ui.space()
             stop_button(page)
-            options = {k: mm.label for k, mm in enumerate(session.motors)}
-            ui.select(options, value=m, label="motor",
+            options = {k: mm.label for k, mm in enumerate(motors)}
+            ui.select(options, value=m if motors else None, label="motor",
                       on_change=lambda e: ui.navigate.to(f"{path}?m={e.value}")
                       ).props("dark dense outlined").classes("w-48").props(tid("motor-select"))
         # the line's state and the message line stay in the header: always in view, and an
-        # error never covers what the page shows (no pop-up)
+        # error never covers what the page shows (no pop-up); the message line is one line high
+        # also while empty, so a message does not shift the page under the pointer (a held jog
+        # button would see the pointer leave it)
         state = ui.label("").classes(f"{ERROR_CLASS} text-sm").props(tid("line-state"))
-        page.message = ui.label("").classes("text-sm").props(tid("message"))
+        page.message = ui.label("").classes("text-sm min-h-6").props(tid("message"))
 
     def show_state() -> None:
         problems = [p for p in (session.clock_problem,
-                                session.line.problem if session.line else None) if p]
+                                *(line.problem for line in session.lines.values())) if p]
         state.set_text("; ".join(problems))
         state.set_visibility(bool(problems))
 
