@@ -59,7 +59,7 @@ class Page:
         """Show ``text`` on the message line of the header (an error in red, as a line, never
         a pop-up over the page)."""
         self.message.set_text(text)
-        self.message.classes(replace=f"text-sm {OK_CLASS if ok else ERROR_CLASS}")
+        self.message.classes(replace=f"text-sm min-h-6 {OK_CLASS if ok else ERROR_CLASS}")
 
     def every(self, seconds: float, callback: Callable[[], Any]) -> Any:
         """Call ``callback`` (sync or async) every ``seconds`` s while the page's tab is
