@@ -127,7 +127,13 @@ class CanopenServer:
 
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> CanopenServer:
-        """Boot every slave (boot-up messages) and start the threads; return self."""
+        """Boot every slave (boot-up messages) and start the threads; return self. With
+        ``run_clock`` the twins are warmed up first
+        (:meth:`~jvl_gym.protocol.serving.twin.MotorTwin.warm_up`): the motors' compiled step
+        is ready before the first frame is carried out."""
+        if self.run_clock:
+            for twin in self.twins:
+                twin.warm_up()
         with self.lock:
             for s, twin in zip(self.slaves, self._owner):
                 with twin.lock:
