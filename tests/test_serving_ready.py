@@ -144,3 +144,54 @@ def test_ctrl_c_right_after_the_ready_line_stops_serve_cleanly(
     out = capsys.readouterr().out
     assert info.value.code in (0, None) and "stopped" in out, out
     assert signal.getsignal(signal.SIGINT) is before  # serve gave the handler back
+
+
+def test_a_canopen_clock_that_catches_up_carries_out_a_frame_within_a_millisecond(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """The clock falls 0.25 s behind (its most); a SDO request that arrives 10 simulated ms
+    into the catch-up is answered in the next millisecond, not after the whole catch-up."""
+    import types
+
+    import can
+
+    from jvl_gym.protocol.canopen import server as server_module
+    from jvl_gym.protocol.canopen.server import CanopenServer, open_bus
+
+    channel = f"catch-up-{os.getpid()}"
+    readings = iter([1000.0])  # the clock's start; every later reading is 0.25 s on
+    monkeypatch.setattr(server_module, "time", types.SimpleNamespace(
+        monotonic=lambda: next(readings, 1000.25)))
+    twin = Twin(MotorArray("MIS232", n=1, seed=0), [1])
+    twin.warm_up()
+    server = CanopenServer([twin], open_bus("virtual", channel), speed=1.0)
+    master = can.Bus(interface="virtual", channel=channel)
+    answered: list[int] = []  # the simulated millisecond of each SDO answer
+    send = server.bus.send
+
+    def recorded(msg: can.Message, *a: Any, **k: Any) -> None:
+        if msg.arbitration_id == 0x580 + server.slaves[0].node_id:
+            answered.append(server.time_ms)
+        send(msg, *a, **k)
+
+    monkeypatch.setattr(server.bus, "send", recorded)
+    tick = server.slaves[0].tick
+
+    def tick_then_request() -> None:
+        tick()
+        if server.time_ms == 10:  # an SDO upload of 1000h sub 0, from the master
+            master.send(can.Message(arbitration_id=0x600 + server.slaves[0].node_id,
+                                    data=bytes([0x40, 0x00, 0x10, 0, 0, 0, 0, 0]),
+                                    is_extended_id=False))
+
+    monkeypatch.setattr(server.slaves[0], "tick", tick_then_request)
+    server.start()
+    try:
+        deadline = 600  # polls of the test's own; the answer's simulated time is what counts
+        while not answered and deadline:
+            server._stop.wait(0.05)
+            deadline -= 1
+        assert answered and answered[0] <= 11, answered
+    finally:
+        server.stop()
+        master.shutdown()
+        twin.close()
