@@ -9,6 +9,15 @@ import pytest
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 
+try:  # no hypothesis example may fail for the wall-clock time it took: a busy machine (two
+    # cores shared by several test runs) takes several times the default 200 ms deadline
+    from hypothesis import settings
+
+    settings.register_profile("jvl_gym", deadline=None)
+    settings.load_profile("jvl_gym")
+except ImportError:  # hypothesis is a test extra; the tests that use it import it themselves
+    pass
+
 
 @pytest.fixture(scope="session")
 def local_ray() -> Iterator[None]:

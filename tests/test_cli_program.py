@@ -188,6 +188,41 @@ def test_a_file_larger_than_the_motor_holds_is_refused_unread(
     assert big not in opened and not (tmp_path / "o").exists()
 
 
+def test_an_io_script_larger_than_the_limit_is_refused_unread(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+        ) -> None:
+    from jvl_gym.cli.program import MAX_IO_SCRIPT_BYTES
+
+    prog, _ = _files(tmp_path)
+    big = tmp_path / "big.yaml"
+    with big.open("wb") as fh:  # a sparse 64 MB file
+        fh.truncate(64 * 2**20)
+    opened: list[Path] = []
+    for name in ("open", "read_text", "read_bytes"):
+        real = getattr(Path, name)
+        monkeypatch.setattr(Path, name, lambda self, *a, real=real, **k: (
+            opened.append(self), real(self, *a, **k))[1])
+    code, _, err = _run(["program", "run", str(prog), "--motor", "MIS232", "--seconds", "0.01",
+                         "--io", str(big), "--out", str(tmp_path / "o")], capsys)
+    assert code == 2 and err.count("\n") == 1 and len(err) < 400, err
+    assert f"{64 * 2**20} bytes is more than an I/O script may have" in err
+    assert str(MAX_IO_SCRIPT_BYTES) in err and "nothing was read" in err
+    assert big not in opened and not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize(("io", "words"), [
+    ("just text\n", "the top level is a mapping"),
+    ("inputs: [\n", "io script: while parsing"),
+])
+def test_an_io_script_that_is_no_mapping_is_one_line(
+        tmp_path: Path, capsys: pytest.CaptureFixture[str], io: str, words: str) -> None:
+    prog, script = _files(tmp_path, io=io)
+    code, _, err = _run(["program", "run", str(prog), "--motor", "MIS232", "--seconds", "0.01",
+                         "--io", str(script), "--out", str(tmp_path / "o")], capsys)
+    assert code == 2 and err.count("\n") == 1 and words in err, err
+    assert not (tmp_path / "o").exists()
+
+
 def test_an_error_quoting_the_file_is_short(tmp_path: Path,
                                             capsys: pytest.CaptureFixture[str]) -> None:
     # a file of NULs under the size limit: the error shows a piece of it and its length

@@ -278,6 +278,52 @@ def test_the_token_opens_and_sets_the_cookie():
     assert reached
 
 
+def _upload(headers: dict[str, str], chunks: list[bytes]) -> tuple[bytes, list[dict]]:
+    """POST ``chunks`` through the lock to an app that reads the whole body and answers 200;
+    return (what the app read, what was sent)."""
+    read = bytearray()
+    sent: list[dict] = []
+    pending = [{"type": "http.request", "body": c, "more_body": k < len(chunks) - 1}
+               for k, c in enumerate(chunks)]
+
+    async def app(scope, receive, send) -> None:
+        while True:
+            message = await receive()
+            if message["type"] == "http.disconnect":
+                return  # as Starlette: the client is gone, nothing is answered
+            read.extend(message.get("body", b""))
+            if not message.get("more_body"):
+                break
+        await send({"type": "http.response.start", "status": 200, "headers": []})
+        await send({"type": "http.response.body", "body": b"ok"})
+
+    async def receive() -> dict:
+        return pending.pop(0) if pending else {"type": "http.disconnect"}
+
+    async def send(message) -> None:
+        sent.append(message)
+
+    scope = {"type": "http", "path": "/upload", "method": "POST", "query_string": b"",
+             "headers": [(k.lower().encode(), v.encode())
+                         for k, v in {**HOST, "X-JVL-Token": "s3cret-token", **headers}.items()]}
+    _run(StudioLock(app, ACCESS)(scope, receive, send))
+    return bytes(read), sent
+
+
+def test_a_body_larger_than_the_studio_takes_is_refused():
+    from jvl_gym.studio.lock import MAX_BODY_BYTES
+
+    read, sent = _upload({"Content-Length": str(64 * 2**20)}, [b"x" * 1024])
+    assert read == b"" and sent[0]["status"] == 413  # refused by its length, unread
+    body = sent[1]["body"].decode()
+    assert body.startswith("refused: ") and str(MAX_BODY_BYTES) in body and body.count("\n") == 1
+    chunk = b"x" * (256 * 1024)
+    read, sent = _upload({}, [chunk] * 8)  # chunked, no length: cut where it passes the limit
+    assert len(read) <= MAX_BODY_BYTES and [m.get("status") for m in sent[:1]] == [413]
+    read, sent = _upload({}, [chunk] * 4)  # within the limit: taken whole
+    assert len(read) == 4 * len(chunk) and sent[0]["status"] == 200
+
+
 def test_a_websocket_without_the_denial_extension_is_closed():
     """A server without the ASGI websocket denial response gets a close (it answers 403)."""
     sent: list[dict] = []

@@ -142,3 +142,27 @@ def test_cli_autotune_port_resonance_writes_the_kept_notch(tmp_path, monkeypatch
     assert f_res == pytest.approx(90.0, rel=0.05)
     assert m.read("KVFY2")[0] != 0.0  # the notch fills VF's free order in the motor
     assert m.read("MODE_REG")[0] == 0  # left passive
+
+
+def test_a_record_on_a_simulated_clock_is_awaited_in_motor_time(twin_server, monkeypatch):
+    """However slowly this machine answers (here: every look at the wall clock finds 100 s
+    more), the wait for a record on a simulated clock ends when the motor has recorded."""
+    import itertools
+    import time
+    import types
+
+    from tuning import serial_source
+
+    from jvl_gym.protocol import MacTalkClient
+
+    server, _ = twin_server
+    ticks = itertools.count(0.0, 100.0)
+    monkeypatch.setattr(serial_source, "time", types.SimpleNamespace(
+        monotonic=lambda: next(ticks), sleep=time.sleep))
+    with MacTalkClient(server.endpoint("mactalk", "tcp").url, address=19) as client:
+        sm = SerialMotor(client, "MAC140", clock=server.twin.advance)
+        sm.set_record_length(64)
+        sm.write("UMEAS", 50)
+        sm.write("MODE_REG", 8)
+        buf = sm.sample_buffer()
+    assert all(v.shape == (1, 64) for v in buf.values())

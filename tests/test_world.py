@@ -94,3 +94,21 @@ def test_world_takes_the_sample_time_and_pulse_decoding_from_the_motors():
                                atol=1)  # whole counts: a fraction is carried to the next
     assert world.t == pytest.approx(100 / m.OUTER_HZ)
 
+
+
+def test_a_world_input_the_motors_lack_is_named_in_plain_words():
+    m = MotorArray("MIS232")  # the MIS/SMC integrated step motors have no analog_volts input
+    world = World(analog=AnalogInput(1.0, n=1))
+    with pytest.raises(ValueError, match="analog_volts") as info:
+        world.schedule(m, 1)
+    assert "which MIS/SMC integrated step motors do not have" in str(info.value)
+    assert "motors motors" not in str(info.value)
+
+
+def test_the_shaft_error_names_the_motors_once():
+    from types import SimpleNamespace
+
+    stand_in = SimpleNamespace(family=SimpleNamespace(title="MAC800 integrated servo motors"))
+    with pytest.raises(AttributeError) as info:
+        MotorArray._shaft(stand_in, -1)  # a family that declares no shaft state column
+    assert str(info.value).startswith("MAC800 integrated servo motors declare no shaft state")

@@ -117,16 +117,20 @@ class SerialMotor:
 
         Waits (polling REC_CNT and RECORDBIT) until the recording has stopped: the other end's
         clock, not this process, decides when samples exist, and the buffer is read out only
-        when no sample is being added.
+        when no sample is being added. ``timeout`` is in seconds of wall-clock time, or, on a
+        simulated clock (``clock``), of motor time: how busy this machine is then does not
+        change when the wait ends.
         """
         end = time.monotonic() + timeout
-        while time.monotonic() < end:
+        waited = 0.0  # motor time stepped on a simulated clock
+        while (waited < timeout if self.clock is not None else time.monotonic() < end):
             count = int(self.client.read("REC_CNT"))
             recording = int(self.client.read("CNTRL_BITS")) & self.family.constants.RECORDBIT
             if count > 0 and not recording:
                 break
             if self.clock is not None:
                 self.wait(self.family.tuning.outer_dt)
+                waited += self.family.tuning.outer_dt
             else:
                 time.sleep(0.005)
         buf = self.client.sample_buffer()

@@ -4,10 +4,11 @@
 stores the program in the motor, runs it from power-on with the script's inputs, sensors and
 load, and writes ``DIR/trace.csv`` and ``DIR/trace.png``. The motor's family declares
 ``Capability.PROGRAMS`` and its record's ``programs`` module does the work. A malformed program,
-a file larger than any program the motor holds (refused by its size, unread), an unknown motor
-or a motor without stored programs, or a malformed I/O script is one line on stderr and exit
-status 2. An error or Ctrl-C during the run stops the program and puts the motor in its
-family's passive mode before the command ends.
+a file larger than any program the motor holds, an I/O script larger than
+:data:`MAX_IO_SCRIPT_BYTES` (each refused by its size, unread), an unknown motor or a motor
+without stored programs, or a malformed I/O script is one line on stderr and exit status 2. An
+error or Ctrl-C during the run stops the program and puts the motor in its family's passive
+mode before the command ends.
 """
 
 from __future__ import annotations
@@ -19,9 +20,9 @@ from typing import Annotated, Any
 import typer
 
 from ..families import UnsupportedOperation
-from .app import CliError, writable_dir
+from .app import CliError, one_line, writable_dir
 
-__all__ = ["program_app"]
+__all__ = ["program_app", "MAX_IO_SCRIPT_BYTES"]
 
 program_app = typer.Typer(help="Stored programs of the motors that run them.",
                           no_args_is_help=True)
@@ -35,6 +36,9 @@ class UsageError(CliError):
 
 #: the simulated time a run may take [s]
 SECONDS_RANGE = (0.001, 3600.0)
+#: the largest I/O script ``--io`` reads [bytes]: a larger file is refused by its size, unread
+#: (a script of thousands of timed inputs is far smaller)
+MAX_IO_SCRIPT_BYTES = 1 << 20
 
 
 def _seconds(value: float) -> float:
@@ -62,10 +66,10 @@ def _traced(m: Any, registers: list[str], where: str) -> list[str]:
     return names
 
 
-def _read_program(path: Path, limit: int, refusal: Any) -> str:
-    """The text of the program file ``path``: refused by its size before it is read when it is
-    larger than ``limit`` bytes (``refusal(size)`` says why), and read no further than that for
-    a file whose size the system does not give (a pipe, a device)."""
+def _read_text(path: Path, limit: int, refusal: Any, what: str) -> str:
+    """The text of the file ``path`` (``what`` it is: "the program"): refused by its size before
+    it is read when it is larger than ``limit`` bytes (``refusal(size)`` says why), and read no
+    further than that for a file whose size the system does not give (a pipe, a device)."""
     try:
         size = path.stat().st_size
         why = refusal(size)
@@ -78,7 +82,30 @@ def _read_program(path: Path, limit: int, refusal: Any) -> str:
             raise UsageError(f"{path}: more than {limit} bytes: {why}")
         return data.decode("utf-8")
     except (OSError, UnicodeDecodeError) as exc:
-        raise UsageError(f"cannot read the program {path}: {exc}; give a text file") from None
+        raise UsageError(f"cannot read {what} {path}: {exc}; give a text file") from None
+
+
+def _io_script_size_refusal(size: int) -> str | None:
+    """Why an I/O script of ``size`` bytes is not read (None: it is)."""
+    if size <= MAX_IO_SCRIPT_BYTES:
+        return None
+    return f"{size} bytes is more than an I/O script may have ({MAX_IO_SCRIPT_BYTES} bytes)"
+
+
+def _read_io_script(path: Path) -> Any:
+    """The YAML document of the I/O script ``path`` (refused by its size, unread, above
+    :data:`MAX_IO_SCRIPT_BYTES`); one-line UsageError if it is not YAML."""
+    import yaml
+
+    text = _read_text(path, MAX_IO_SCRIPT_BYTES, _io_script_size_refusal, "the I/O script")
+    try:
+        document = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        raise UsageError(f"{path}: io script: {one_line(exc)}") from None
+    if isinstance(document, str):  # a mapping is checked by the family's load_io_script
+        raise UsageError(f"{path}: io script: the top level is a mapping (registers, inputs, "
+                         "sensors, load, load_inertia), not text")
+    return document
 
 
 #: simulated time [s] the stop after an interrupted run may take (the deceleration ramp)
@@ -134,7 +161,8 @@ def run(program: Annotated[Path, typer.Argument(help="program text file (one com
         raise UsageError(f"--motor {motor}: {exc}") from None
     progs = fam.programs
     assert progs is not None  # a family declaring PROGRAMS states its programs module
-    text = _read_program(program, progs.MAX_TEXT_BYTES, progs.text_size_refusal)
+    text = _read_text(program, progs.MAX_TEXT_BYTES, progs.text_size_refusal, "the program")
+    document = _read_io_script(io) if io is not None else None
     try:
         m: Any = MotorArray(motor, seed=seed)  # its family runs programs: store_program …
     except (ValueError, KeyError, OSError) as exc:
@@ -145,7 +173,7 @@ def run(program: Annotated[Path, typer.Argument(help="program text file (one com
     except progs.ProgramError as exc:
         raise UsageError(f"{program}: {exc}") from None
     try:
-        script = progs.load_io_script(io)
+        script = progs.load_io_script(document)
     except progs.IoScriptError as exc:
         raise UsageError(f"{io}: {exc}") from None
     try:

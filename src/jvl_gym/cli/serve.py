@@ -369,6 +369,9 @@ def serve(
                                     bitrate=can_bitrate)
     clock = can_server is None
     limits = {"max_connections": max_connections, "idle_timeout": idle_timeout}
+    # the motors' compiled step is ready (compiled, or loaded from the compile cache) before
+    # anything listens: a client's first request is not kept waiting for it under the lock
+    line.warm_up()
     try:
         if can_server is not None and tcp is None and not pty:
             server: Any = None
@@ -396,6 +399,10 @@ def serve(
             raise typer.BadParameter(exc.strerror or str(exc), param_hint="'--tcp'") from None
     if can_server is not None:
         can_server.start()
+    done = threading.Event()
+    # before the ready line: a Ctrl-C or SIGTERM right after it stops serve cleanly
+    previous = {sig: signal.signal(sig, lambda *_: done.set())
+                for sig in (signal.SIGINT, signal.SIGTERM)}
     for text in banner([types[k] for k in order], line, [address[k] for k in order]):
         typer.echo(text)
     for e in server.endpoints if server is not None else []:
@@ -404,9 +411,6 @@ def serve(
         for k, s in enumerate(can_server.slaves):
             typer.echo(f"canopen {can_interface}:{can_channel}: motor {k} node id {s.node_id}")
     typer.echo(f"running at speed {speed}; Ctrl-C to stop")
-    done = threading.Event()
-    signal.signal(signal.SIGINT, lambda *_: done.set())
-    signal.signal(signal.SIGTERM, lambda *_: done.set())
     try:
         done.wait()
     finally:
@@ -418,6 +422,8 @@ def serve(
             node.close()
             node.bus.shutdown()
         line.close()
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
         stats = server.bus.stats if modbus and server is not None else line.stats
         typer.echo(f"stopped; {dict(stats)}")
 

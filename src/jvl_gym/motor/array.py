@@ -31,6 +31,7 @@ import numpy as np
 
 from ..compat import renamed_method
 from ..families import Capability, Family, UnsupportedOperation, family, family_of_motor
+from ..families.capability import motors_of
 from ..registers import Register, RegisterError, RegisterTable
 from ..registers.formats import from_raw
 from .arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, motor_index, real_array
@@ -242,7 +243,7 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
     # ------------------------------------------------------------------ the shaft
     def _shaft(self, column: int) -> np.ndarray:
         if column < 0:
-            raise AttributeError(f"{self.family.title} motors declare no shaft state "
+            raise AttributeError(f"{motors_of(self.family.title)} declare no shaft state "
                                  "(SHAFT_ANGLE, SHAFT_SPEED)")
         return self.state[:, column]
 

@@ -17,6 +17,11 @@ order:
    ``X-JVL-Token`` (for scripts); else 401. A request that brings the right token in its query
    gets the cookie (HttpOnly, SameSite=Strict), which carries the later requests.
 
+4. **Size**: a request body (a setup file's upload, a form) of more than
+   :data:`MAX_BODY_BYTES` is refused with 413: by its ``Content-Length`` before any of it is
+   read, and a body without one (chunked) as soon as it passes the limit (the application then
+   reads the end of the body and answers nothing; the lock answers 413).
+
 A refused request gets a one-line plain-text reason and never reaches the application: it
 changes nothing. Tokens are compared with :func:`hmac.compare_digest`.
 """
@@ -32,12 +37,15 @@ from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 __all__ = ["Access", "StudioLock", "new_token", "is_loopback", "LOOPBACK_NAMES", "TOKEN_PARAM",
-           "TOKEN_HEADER"]
+           "TOKEN_HEADER", "MAX_BODY_BYTES"]
 
 #: the names of this machine's loopback that every studio answers to
 LOOPBACK_NAMES = ("localhost", "127.0.0.1", "::1")
 TOKEN_PARAM = "token"  #: the query parameter that carries the token
 TOKEN_HEADER = "x-jvl-token"  #: the header that carries the token (besides Authorization)
+#: the largest request body the studio takes [bytes]: a setup file of every register of a motor
+#: is a few kilobytes
+MAX_BODY_BYTES = 1 << 20
 #: methods that read only: no Origin check (a browser sends one on its own page's POSTs)
 _SAFE_METHODS = frozenset({"GET", "HEAD"})
 
@@ -204,7 +212,46 @@ class StudioLock:
             return
         if from_query and scope["type"] == "http":
             send = self._with_cookie(send)
+        if scope["type"] == "http":
+            await self._bounded(scope, receive, send)
+            return
         await self.app(scope, receive, send)
+
+    async def _bounded(self, scope: Scope, receive: Receive, send: Send) -> None:
+        """Pass an HTTP request on whose body stays within :data:`MAX_BODY_BYTES`; answer 413
+        for one that passes it (the application gets a disconnect in place of the rest)."""
+        too_big = Refusal(413, f"refused: the request's body is larger than the studio takes "
+                          f"({MAX_BODY_BYTES} bytes)")
+        size = _headers(scope).get("content-length", "")
+        if size.isdigit() and int(size) > MAX_BODY_BYTES:
+            await self._refuse(scope, send, too_big)
+            return
+        state = {"read": 0, "over": False, "started": False}
+
+        async def bounded_receive() -> Message:
+            if state["over"]:
+                return {"type": "http.disconnect"}
+            message = await receive()
+            if message["type"] == "http.request":
+                state["read"] += len(message.get("body", b""))
+                if state["read"] > MAX_BODY_BYTES:
+                    state["over"] = True
+                    return {"type": "http.disconnect"}
+            return message
+
+        async def watched_send(message: Message) -> None:
+            if state["over"] and not state["started"]:
+                return  # the lock answers
+            state["started"] = True
+            await send(message)
+
+        try:
+            await self.app(scope, bounded_receive, watched_send)
+        except Exception:
+            if not state["over"]:
+                raise
+        if state["over"] and not state["started"]:
+            await self._refuse(scope, send, too_big)
 
     def check(self, scope: Scope) -> bool:
         """Apply the rules to a request; return whether the token came in its query.

@@ -6,6 +6,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..families.capability import motors_of
 from .analog import AnalogInput
 from .pulse import PulseInput
 from .supply import SupplyEvents
@@ -37,7 +38,7 @@ class World:
         for name, source in (("pulse_counts", self.pulse), ("analog_volts", self.analog),
                              ("supply_volts", self.supply), ("load_torque", self.load_torque)):
             if source is not None and name not in col:
-                raise ValueError(f"this world drives {name!r}, which {m.family.title} motors "
+                raise ValueError(f"this world drives {name!r}, which {motors_of(m.family.title)} "
                                  f"do not have; their inputs: {', '.join(col)}")
         out = np.repeat(m.inputs[None, :, :], n_outer, axis=0)
         dt = 1.0 / m.OUTER_HZ

@@ -127,7 +127,13 @@ class CanopenServer:
 
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> CanopenServer:
-        """Boot every slave (boot-up messages) and start the threads; return self."""
+        """Boot every slave (boot-up messages) and start the threads; return self. With
+        ``run_clock`` the twins are warmed up first
+        (:meth:`~jvl_gym.protocol.serving.twin.MotorTwin.warm_up`): the motors' compiled step
+        is ready before the first frame is carried out."""
+        if self.run_clock:
+            for twin in self.twins:
+                twin.warm_up()
         with self.lock:
             for s, twin in zip(self.slaves, self._owner):
                 with twin.lock:
@@ -216,20 +222,43 @@ class CanopenServer:
                 pass
             self._run(seconds)
 
-    def _run(self, seconds: float) -> None:
+    def _milliseconds(self, seconds: float) -> int:
+        """The whole milliseconds of ``seconds`` more simulated time (the rest is carried)."""
         self._carry += seconds * 1000.0
         n = int(self._carry + 1e-9)
         self._carry -= n
+        return n
+
+    def _run(self, seconds: float) -> None:
+        for _ in range(self._milliseconds(seconds)):
+            self._millisecond()
+
+    def _millisecond(self) -> None:
+        """One simulated millisecond: the motors' outer samples of it, then every slave's
+        tick."""
+        self._ms += 1
+        for k, twin in enumerate(self.twins):
+            due = int(self._ms * self._rate[k] / 1000) - self._stepped[k]
+            if due > 0:
+                twin.step(due)
+                self._stepped[k] += due
+        for s, twin in zip(self.slaves, self._owner):
+            with twin.lock:
+                s.tick()
+
+    def _catch_up(self, seconds: float) -> None:
+        """The clock's advance: ``seconds`` of simulated time one millisecond at a time, each
+        after the frames received so far. A frame waits for one simulated millisecond of work,
+        not for the whole catch-up of a clock that fell behind (up to ``max_lag``: tens of
+        milliseconds of work on a busy machine), so a master's SDO request is answered within
+        its time-out."""
+        with self.lock:
+            n = self._milliseconds(seconds)
         for _ in range(n):
-            self._ms += 1
-            for k, twin in enumerate(self.twins):
-                due = int(self._ms * self._rate[k] / 1000) - self._stepped[k]
-                if due > 0:
-                    twin.step(due)
-                    self._stepped[k] += due
-            for s, twin in zip(self.slaves, self._owner):
-                with twin.lock:
-                    s.tick()
+            with self.lock:
+                while self._take():
+                    pass
+                self._millisecond()
 
     def _clock(self) -> None:
         last = time.monotonic()
@@ -238,4 +267,4 @@ class CanopenServer:
             now = time.monotonic()
             seconds = min((now - last) * self.speed, cap)
             last = now
-            self.advance(seconds)
+            self._catch_up(seconds)

@@ -77,6 +77,7 @@ class DmxServer(TwinServer):
         """Open the endpoints and start the threads; return self."""
         if self.line is None:
             raise ValueError("DmxServer needs a line")
+        self.warm_up()
         if self.tcp is not None:
             self._listen(self.tcp[0], self.tcp[1], "dmx", self._session)
         if self.pty:

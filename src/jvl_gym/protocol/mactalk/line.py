@@ -74,6 +74,11 @@ class Bus:
         for twin in self.twins:
             twin.advance(seconds)
 
+    def warm_up(self) -> None:
+        """Make every twin's motors ready to answer at once (:meth:`MotorTwin.warm_up`)."""
+        for twin in self.twins:
+            twin.warm_up()
+
     def close(self) -> None:
         """Give up every twin's flash directory (:meth:`MotorTwin.close`)."""
         for twin in self.twins:

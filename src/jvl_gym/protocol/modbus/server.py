@@ -706,6 +706,7 @@ class ModbusServer(TwinServer):
         """Open the endpoints and start the threads; return self."""
         if self.bus is None:
             raise ValueError("ModbusServer needs a bus")
+        self.warm_up()
         if self.tcp is not None:
             self._listen(self.tcp[0], self.tcp[1], "modbus", self._session)  # type: ignore
         if self.pty:

@@ -1,6 +1,10 @@
 """The transport every bus's serving side shares: pseudo-terminals and TCP on localhost, with
 the simulation paced in real time.
 
+A server that runs the clock steps the twin once before it listens
+(:meth:`TwinServer.warm_up`), so the motors' compiled step is ready when the first request
+comes: a client's first request is answered within its time-out.
+
 A :class:`TwinServer` serves anything :class:`Served` (the MacTalk twin, a line of several
 twins; the Modbus and DMX512 servers are TwinServers of their own sessions) and runs, in daemon
 threads,
@@ -98,6 +102,7 @@ class Served(Protocol):
 
     def session(self) -> ByteSession: ...
     def advance(self, seconds: float) -> None: ...
+    def warm_up(self) -> None: ...
 
 
 @dataclass
@@ -183,7 +188,9 @@ class TwinServer:
 
     # ------------------------------------------------------------------ lifecycle
     def start(self) -> TwinServer:
-        """Open the endpoints and start the threads; return self."""
+        """Open the endpoints and start the threads; return self. With ``run_clock`` the
+        twin is warmed up first (:meth:`warm_up`): its first request is answered at once."""
+        self.warm_up()
         if self.tcp is not None:
             self._listen(self.tcp[0], self.tcp[1], "mactalk", lambda: self._mactalk())
         if self.pty:
@@ -226,6 +233,14 @@ class TwinServer:
             if e.what == what and (kind is None or e.kind == kind):
                 return e
         raise KeyError(f"no {kind or ''} endpoint for {what}")
+
+    def warm_up(self) -> None:
+        """With ``run_clock``, step the twin once before anything listens
+        (:meth:`~jvl_gym.protocol.serving.twin.MotorTwin.warm_up`: the compile of the
+        motors' step, or its load from the cache, is done before a client connects, not under
+        the lock while a request waits). Without, the caller steps the twin: nothing here."""
+        if self.run_clock and self.twin is not None:
+            self.twin.warm_up()
 
     # ------------------------------------------------------------------ internals
     def _spawn(self, target: Callable[..., None], name: str, *args: object) -> None:
@@ -312,15 +327,17 @@ class TwinServer:
 
     def _refuse(self, conn: socket.socket, what: str) -> None:
         """Close a connection beyond ``max_connections`` (logged once until one closes)."""
-        with contextlib.suppress(OSError):
-            conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, b"\x01\x00\x00\x00"
-                            b"\x00\x00\x00\x00")  # a reset: the client knows at once
-        conn.close()
+        # counted and logged before the close: whoever sees the connection closed sees it
+        # counted too
         self.counts["refused_connections"] += 1
         if what not in self._refusing:
             self._refusing.add(what)
             log.warning("%s endpoint serves %d connections at most: a new connection is "
                         "refused until one closes", what, self.max_connections)
+        with contextlib.suppress(OSError):
+            conn.setsockopt(socket.SOL_SOCKET, socket.SO_LINGER, b"\x01\x00\x00\x00"
+                            b"\x00\x00\x00\x00")  # a reset: the client knows at once
+        conn.close()
 
     def _serve_conn(self, conn: socket.socket, session: Session,
                     what: str = "mactalk") -> None:

@@ -235,6 +235,7 @@ class MotorTwin:
         self.outer_dt = 1.0 / float(motors.OUTER_HZ)
         self._sim_time = 0.0
         self._stepped = 0
+        self._warm = False
         self.reg = RegisterNumbers(motors.table)
         self.lock = threading.RLock()
         self.stats: Counter[str] = Counter()
@@ -449,6 +450,16 @@ class MotorTwin:
         if n_outer > 0:
             with self.lock:
                 self.m.step(n_outer)
+
+    def warm_up(self) -> None:
+        """Make the motors ready to answer at once: step them one outer sample (one sample of
+        simulated time, as :meth:`advance`), so that their step is compiled, or loaded from
+        the compile cache, before a request waits on the lock for it (a first compile takes
+        minutes, a load from the cache seconds on a busy machine). A server calls it before it
+        listens; later calls do nothing."""
+        if not self._warm:
+            self._warm = True
+            self.advance(self.outer_dt)
 
     @property
     def answers_broadcast(self) -> bool:
