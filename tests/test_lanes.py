@@ -43,11 +43,11 @@ def _run_reference(m: MotorArray, n_outer: int) -> None:
     _reference(regs, state, params, inputs, keys, buf, rec, fmt, n_outer, plan, scratch[0])
 
 
-def _mixed(n: int) -> MotorArray:
+def _mixed(n: int, coupled: bool = True) -> MotorArray:
     """Motors of every type in lane-eligible and ineligible conditions: speed and position
-    modes, loads (some behind an elastic coupling), Coulomb friction, end stops, with and
-    without the PWM delay; some with noise, a hall start or no regulation (INIT), which run
-    outside the lanes."""
+    modes, loads (some behind an elastic coupling unless not ``coupled``), Coulomb friction,
+    end stops, with and without the PWM delay; some with noise, a hall start or no regulation
+    (INIT), which run outside the lanes."""
     types = ["MAC050", "MAC095", "MAC140", "MAC141"]
     k = np.arange(n)
     m = MotorArray([types[i % 4] for i in range(n)], n=n, seed=3,
@@ -61,7 +61,7 @@ def _mixed(n: int) -> MotorArray:
                    current_noise=np.where(k % 11 == 1, 0.5, 0.0),
                    torque_noise=np.where(k % 13 == 2, 1e-4, 0.0),
                    hall_start=np.where(k % 7 == 3, 1.0, 0.0),
-                   coupling_stiffness=np.where((k % 3 == 2) & (k > 0), 2.0, 0.0),
+                   coupling_stiffness=np.where((k % 3 == 2) & (k > 0) & coupled, 2.0, 0.0),
                    coupling_damping=np.where(k % 2 == 0, 2e-4, 0.0))
     m.write("V_SOLL", np.linspace(-4000, 4000, n).round())
     m.write("P_SOLL", np.where(k % 4 == 1, 20000, -9000))
@@ -72,9 +72,12 @@ def _mixed(n: int) -> MotorArray:
     return m
 
 
-def test_lanes_give_the_bits_of_the_one_motor_kernel() -> None:
+@pytest.mark.parametrize("coupled", [True, False])
+def test_lanes_give_the_bits_of_the_one_motor_kernel(coupled: bool) -> None:
+    """With elastically coupled motors in every block (their lanes run the coupled form of
+    the plant) and without (the rigid form: ``lanes.lane_samples_rigid``)."""
     n = 2 * LANES + 5  # two full blocks and a partial one
-    a, b = _mixed(n), _mixed(n)
+    a, b = _mixed(n, coupled), _mixed(n, coupled)
     eligible = [in_lanes(a.regs[i], a.params[i]) for i in range(n)]
     assert 10 < sum(eligible) < n  # both paths are exercised
     a.step(150)  # lanes (parallel driver: n >= 32)
@@ -83,8 +86,9 @@ def test_lanes_give_the_bits_of_the_one_motor_kernel() -> None:
     np.testing.assert_array_equal(a.state, b.state)
     assert np.any(a.state[:, L.S_OMEGA] != 0.0)
     twist = a.state[:, L.S_THETA] - a.state[:, L.S_LOAD_THETA]
-    assert np.any(twist[np.array(eligible)] != 0.0)  # two-mass motors ran in the lanes
-    c_ = _mixed(n)
+    # two-mass motors ran in the lanes
+    assert np.any(twist[np.array(eligible)] != 0.0) == coupled
+    c_ = _mixed(n, coupled)
     driver(c_.family.key).serial(*c_.engine_view(), 150)
     np.testing.assert_array_equal(a.state, c_.state)
 

@@ -13,7 +13,9 @@ from jvl_gym.families.mac050_141 import constants as c
 from jvl_gym.physics.mechanics import (
     MAX_COUPLING_OMEGA_H,
     coupling_problem,
+    mech_constants,
     mech_step,
+    mech_step_prepared,
     two_mass_step,
 )
 
@@ -80,6 +82,25 @@ def test_rigid_shaft_step_is_the_one_mass_step() -> None:
     b = two_mass_step(0.3, 12.0, 0.3, 12.0, 0.05, 0.0, J_M, J_L, 1e-5, 0.002, 0.0, 0.0, H)
     assert (b[0], b[1], b[4]) == a
     assert (b[2], b[3]) == (b[0], b[1])
+
+
+def test_rigid_form_gives_the_bits_of_the_coupled_form_for_a_rigid_shaft() -> None:
+    """``mech_step_prepared(..., rigid=True)`` (the SIMD lanes of a block without an elastic
+    coupling) leaves out the coupling's terms; for a rigid shaft they are exact zeros, so both
+    forms give the same state and the same loss (the sign of a zero loss aside), at rest,
+    stuck in Coulomb friction, through a reversal and with a signed zero drive."""
+    for j, b, tc in ((J_M + J_L, 1e-5, 0.002), (J_M, 0.0, 0.0), (J_M, 2e-5, 0.05)):
+        k = mech_constants(J_M, j - J_M, b, 0.0, 0.0, H)
+        for th, w, drive in ((0.3, 12.0, 0.05), (0.0, 0.0, 0.0), (0.0, 0.0, -0.0),
+                             (0.0, 0.0, 0.001), (-1.0, 0.0, -0.2), (2.0, -1e-3, 0.3),
+                             (1.0, 5.0, -0.0), (1.0, -5.0, 0.0), (0.5, 1e-9, -1.0)):
+            for _ in range(20):
+                got = mech_step_prepared(th, w, th, w, drive, 0.0, j, tc, H, k, True)
+                ref = mech_step_prepared(th, w, th, w, drive, 0.0, j, tc, H, k, False)
+                assert np.array_equal(np.array(got[:4]).view(np.int64),
+                                      np.array(ref[:4]).view(np.int64))
+                assert got[4] == ref[4]
+                th, w = got[0], got[1]
 
 
 def test_static_twist_is_load_torque_over_stiffness() -> None:

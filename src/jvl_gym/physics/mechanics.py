@@ -105,13 +105,19 @@ def two_mass_step(theta: float, omega: float, theta_l: float, omega_l: float, dr
 
 @njit(cache=True, inline="always")
 def mech_step_prepared(theta: float, omega: float, theta_l: float, omega_l: float, drive: float,
-                       load_l: float, j: float, tc: float, h: float, k: tuple):
+                       load_l: float, j: float, tc: float, h: float, k: tuple,
+                       rigid: bool = False):
     """One step given ``k = mech_constants(...)`` and ``j = shaft_inertia(...)``.
 
     ``drive`` [N·m] acts on the motor shaft, ``load_l`` [N·m] on the load behind the coupling
     (0 for a rigid shaft, whose load torque is part of ``drive``). Returns ``(theta1, omega1,
     theta_l1, omega_l1, loss)``; for a rigid shaft the load follows the motor
     (``theta_l1 = theta1``, ``omega_l1 = omega1``).
+
+    ``rigid`` (a constant at the call, which the compiler folds) says that the shaft is rigid
+    (``k`` of a rigid shaft, ``theta_l, omega_l = theta, omega``, ``load_l = 0``): the coupling
+    terms, exact zeros then, are left out, with the same results but for the sign of a zero
+    loss (which the energy accounts sum to the same value).
     """
     # the branches are selects (the SIMD lanes of mac050_141.lanes compute both sides anyway)
     h_j, inv_den, kk, cc, gl, jl = k
@@ -122,12 +128,16 @@ def mech_step_prepared(theta: float, omega: float, theta_l: float, omega_l: floa
     # depends on ω1 into inv_den and the rest into the motor's effective driving torque
     spring = kk * tw0 + cc * s0
     r_l = jl * omega_l + h * (spring - load_l)
-    drive_eff = drive - spring + cc * gl * r_l
+    drive_eff = drive if rigid else drive - spring + cc * gl * r_l
     stuck = omega == 0.0 and abs(drive_eff) <= tc
     sgn = 1.0 if omega > 0.0 else (-1.0 if omega < 0.0 else (1.0 if drive_eff > 0.0 else -1.0))
     omega1 = (omega + h_j * (drive_eff - tc * sgn)) * inv_den
     omega1 = 0.0 if ((omega1 * sgn < 0.0 and tc > 0.0) or stuck) else omega1
     dtheta = 0.5 * h * (omega + omega1)
+    if rigid:
+        theta1 = theta + dtheta
+        return (theta1, omega1, theta1, omega1,
+                drive * dtheta - 0.5 * j * (omega1 * omega1 - omega * omega))
     omega_l1 = gl * (r_l + h * cc * omega1)
     dtheta_l = 0.5 * h * (omega_l + omega_l1)
     tw1 = tw0 + (dtheta - dtheta_l)

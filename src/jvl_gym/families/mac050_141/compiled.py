@@ -14,7 +14,7 @@ from numba import njit, typeof, types
 from ...engine.view import EngineView, record_rows, take_planned_inputs
 from .inner import inner_samples_one
 from .kernel import outer_firmware
-from .lanes import LANES, inner_samples, lane_scratch
+from .lanes import LANES, inner_samples, lane_samples_coupled, lane_samples_rigid, lane_scratch
 
 __all__ = ["LANES", "outer_sample", "inner_block", "prepare", "scratch"]
 
@@ -57,6 +57,11 @@ def prepare(arrays: tuple) -> None:
                                typeof(view.params[0]), typeof(view.inputs[0]),
                                typeof(view.keys[0]), typeof(view.buf[0]), rec,
                                typeof(view.fmt), typeof(view.scratch[0]), types.int64))
+    for lane_samples in (lane_samples_rigid, lane_samples_coupled):
+        lane_samples.compile((typeof(view.scratch[0]), types.int64, typeof(view.regs[0]),
+                              typeof(view.state[0]), typeof(view.params[0]),
+                              typeof(view.inputs[0]), typeof(view.keys[0]),
+                              typeof(view.buf[0]), rec, typeof(view.fmt)))
     inner_samples.compile((typeof(view.regs), typeof(view.state), typeof(view.params),
                            typeof(view.inputs), typeof(view.keys), typeof(view.buf), rec,
                            typeof(view.fmt), types.int64, types.int64,

@@ -293,18 +293,19 @@ def _torque_noise(p: np.ndarray, key: np.uint64, tick: float) -> float:
 
 
 @njit(cache=True, inline="always")
-def inner_sample(sc: np.ndarray, j: int, k: int, last: bool, full: bool, r: np.ndarray,
-                 s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64, buf: np.ndarray,
-                 rec: bool, fmt: np.ndarray) -> None:
+def inner_sample(sc: np.ndarray, j: int, k: int, last: bool, full: bool, rigid: bool,
+                 r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
+                 buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:
     """Inner sample ``k`` (0 … 14) of an outer sample for the motor in lane ``j`` of the
     scratch row ``sc`` (module docstring).
 
-    ``last`` and ``full`` are constants at each call. ``last``: the sample stores its
+    ``last``, ``full`` and ``rigid`` are constants at each call. ``last``: the sample stores its
     registers into the lane's fields (``full`` False; the earlier samples' registers would be
     overwritten unread). ``full``: the per-motor features, with the motor's rows ``r``, ``s``,
     ``p``, ``u``, its noise ``key`` and the sample buffer ``buf``, ``rec``, ``fmt``; the
     registers go to ``r`` at once. Without ``full`` those arguments are not read (any rows of
-    the right types will do).
+    the right types will do). ``rigid``: the motor's shaft is rigid (no elastic coupling), so
+    the plant leaves the coupling's terms out (``plant_sample``; the same bits).
     """
     theta = sc[LANE_BASE[L.S_THETA] + j]
     omega = sc[LANE_BASE[L.S_OMEGA] + j]
@@ -376,7 +377,7 @@ def inner_sample(sc: np.ndarray, j: int, k: int, last: bool, full: bool, r: np.n
         (sc[F_KM0 * LANES + j], sc[F_KM1 * LANES + j], sc[F_KM2 * LANES + j], sc[F_KM3 * LANES + j],
          sc[F_KM4 * LANES + j], sc[F_KM5 * LANES + j]),
         (sc[F_KB0 * LANES + j], sc[F_KB1 * LANES + j], sc[F_KB2 * LANES + j], sc[F_KB3 * LANES + j],
-         sc[F_KB4 * LANES + j], sc[F_KB5 * LANES + j], sc[F_KB6 * LANES + j]))
+         sc[F_KB4 * LANES + j], sc[F_KB5 * LANES + j], sc[F_KB6 * LANES + j]), rigid)
     sc[LANE_BASE[L.S_THETA] + j] = theta1
     sc[LANE_BASE[L.S_OMEGA] + j] = omega1
     sc[LANE_BASE[L.S_LOAD_THETA] + j] = theta_l1
@@ -412,5 +413,5 @@ def inner_samples_one(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray
     """
     gather(sc, j, 0, r, s, p, u)
     for k in range(c.INNER_PER_OUTER):
-        inner_sample(sc, j, k, True, True, r, s, p, u, key, buf, rec, fmt)
+        inner_sample(sc, j, k, True, True, False, r, s, p, u, key, buf, rec, fmt)
     scatter_state(sc, j, s)

@@ -266,7 +266,7 @@ def plant_sample(theta: float, omega: float, theta_l: float, omega_l: float, acc
                  uc: float, theta_e: float, pp: float, r_phase: float, lam: float, j: float,
                  coulomb: float, stop_lo: float, stop_hi: float, stop_k: float, stop_d: float,
                  load: float, noise_torque: float, u_supply: float, u_dump: float,
-                 k_coil: tuple, k_mech: tuple, k_bus: tuple):
+                 k_coil: tuple, k_mech: tuple, k_bus: tuple, rigid: bool):
     """The plant over one inner sample (docs/model.md §5): PWM counts ``ua, ub, uc`` on the bus
     drive the coil, the torque the rotor (and the load behind an elastic coupling), the coil's
     power the DC bus.
@@ -276,20 +276,22 @@ def plant_sample(theta: float, omega: float, theta_l: float, omega_l: float, acc
     and the energies of the step [J]. Pure arithmetic on scalars, so that the inner sample
     (:mod:`mac050_141.inner`) runs it in SIMD lanes. The load torque ``load``
     acts on the motor shaft when it is rigid and on the load behind the coupling otherwise.
+    ``rigid`` (a constant at each call) leaves the coupling's terms out for a motor whose shaft
+    is known to be rigid (``mech_step_prepared``): the same bits without their arithmetic.
     """
     kv = ubus * _HALF_PWM_PER_VOLT
     s_u = phase_to_vector(ua * kv, ub * kv, uc * kv)
     omega_mid = omega + 0.5 * _H * acc
     s1, torque, p_el, p_cu = coil_step_prepared(complex(i_re, i_im), s_u, theta_e,
                                                 pp * omega_mid, r_phase, lam, pp, _H, k_coil)
-    two = k_mech[2] > 0.0
+    two = not rigid and k_mech[2] > 0.0
     load_l = load if two else 0.0
     drive = torque - (0.0 if two else load) + end_stop_torque(theta, omega, stop_lo, stop_hi,
                                                               stop_k, stop_d)
     if noise_torque != 0.0:
         drive += noise_torque
     theta1, omega1, theta_l1, omega_l1, e_fric = mech_step_prepared(
-        theta, omega, theta_l, omega_l, drive, load_l, j, coulomb, _H, k_mech)
+        theta, omega, theta_l, omega_l, drive, load_l, j, coulomb, _H, k_mech, rigid)
     e_load = load * ((theta_l1 - theta_l) if two else (theta1 - theta))
     ubus1, dump_on1, e_dump, e_sup = bus_step_prepared(ubus, p_el, u_supply, u_dump, dump_on,
                                                        _H, k_bus)

@@ -7,6 +7,13 @@ lanes of the block's scratch (:mod:`mac050_141.scratch`) and steps them together
 others one at a time with every per-motor feature; both are specialisations of the one inner
 sample, :func:`mac050_141.inner.inner_sample`, and give the same bits, so an N-motor array is
 bit-for-bit equal to N one-motor arrays.
+
+The lanes of a block whose motors all have a rigid shaft run :func:`lane_samples_rigid`, which
+leaves the elastic coupling's terms out of the plant (exact zeros for such a motor: the same
+bits without their arithmetic); a block with a coupled motor in its lanes runs
+:func:`lane_samples_coupled`. Both are one template, :func:`_lane_samples`, compiled once for
+each value of ``RIGID`` (:func:`jvl_gym.engine.specialize.specialise`) as functions of their
+own, so that numba's inliner copies the sample into each of them once.
 """
 
 from __future__ import annotations
@@ -15,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from ...engine.jit import LANE_KERNEL
+from ...engine.specialize import specialise
 from . import constants as c
 from . import layout as L
 from .firmware import regs as R
@@ -23,7 +31,12 @@ from .firmware.modes import COMMUTATED
 from .inner import inner_sample, inner_samples_one
 from .scratch import F_MOTOR, LANES, gather, lane_scratch, scatter_state, store_registers
 
-__all__ = ["LANES", "in_lanes", "inner_samples", "lane_scratch"]
+__all__ = ["LANES", "in_lanes", "inner_samples", "lane_samples_coupled", "lane_samples_rigid",
+           "lane_scratch"]
+
+#: bound per specialisation of :func:`_lane_samples`: True when no motor of the lanes has an
+#: elastic coupling
+RIGID: bool = False
 
 
 @njit(cache=True, inline="always")
@@ -39,6 +52,26 @@ def in_lanes(r: np.ndarray, p: np.ndarray) -> bool:
             and not ((cb & c.RECORDBIT) and (cb & c.RECINNERBIT)))
 
 
+def _lane_samples(scratch, m, r0, s0, p0, u0, key0, b0, rec, fmt):  # pragma: no cover
+    """The 15 inner samples of lanes 0 … ``m`` − 1 of a block's scratch row ``scratch``
+    (:func:`mac050_141.inner.inner_sample` without its per-motor features, ``rigid`` =
+    ``RIGID``); the rows ``r0`` … ``fmt`` stand in for the arguments the lanes do not read."""
+    for k in range(c.INNER_PER_OUTER - 1):
+        for j in range(m):
+            inner_sample(scratch, j, k, False, False, RIGID, r0, s0, p0, u0, key0, b0, rec, fmt)
+    for j in range(m):
+        inner_sample(scratch, j, c.INNER_PER_OUTER - 1, True, False, RIGID, r0, s0, p0, u0, key0,
+                     b0, rec, fmt)
+
+
+#: :func:`_lane_samples` of lanes whose motors all have a rigid shaft
+lane_samples_rigid = specialise({"_lane_samples": _lane_samples}, {"RIGID": True}, "rigid",
+                                __file__, {"_lane_samples": LANE_KERNEL})["_lane_samples"]
+#: :func:`_lane_samples` of lanes with an elastically coupled motor among them
+lane_samples_coupled = specialise({"_lane_samples": _lane_samples}, {"RIGID": False}, "coupled",
+                                  __file__, {"_lane_samples": LANE_KERNEL})["_lane_samples"]
+
+
 @njit(**LANE_KERNEL)
 def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scratch):
     """The 15 inner samples (step 4, ``mac050_141.kernel``) of motors ``i0 .. i0 + n - 1``
@@ -49,33 +82,30 @@ def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scrat
     and scattered back; the others run :func:`mac050_141.inner.inner_samples_one` one at a
     time in lanes n − 1, n − 2, … (so that each motor keeps its lane, and the lane its plant
     factors, while the motors' modes stay). Both give the same bits (tests/test_lanes.py).
+    The lanes run :func:`lane_samples_rigid` unless one of their motors has an elastic coupling.
     """
     m = 0
     q = n - 1
+    coupled = False
     for i in range(i0, i0 + n):
         r = regs[i]
         s = state[i]
         p = params[i]
         if in_lanes(r, p):
             gather(scratch, m, i, r, s, p, inputs[i])
+            coupled = coupled or p[L.P_K_COUPLING] > 0.0
             m += 1
             continue
         inner_samples_one(r, s, p, inputs[i], keys[i], buf[i] if rec else buf[0], rec, fmt,
                           scratch, q)
         q -= 1
     # the lanes' samples read no row: any rows of the right types stand in
-    r0 = regs[i0]
-    s0 = state[i0]
-    p0 = params[i0]
-    u0 = inputs[i0]
-    key0 = keys[i0]
-    b0 = buf[0]
-    for k in range(c.INNER_PER_OUTER - 1):
-        for j in range(m):
-            inner_sample(scratch, j, k, False, False, r0, s0, p0, u0, key0, b0, rec, fmt)
-    for j in range(m):
-        inner_sample(scratch, j, c.INNER_PER_OUTER - 1, True, False, r0, s0, p0, u0, key0, b0,
-                     rec, fmt)
+    if coupled:
+        lane_samples_coupled(scratch, m, regs[i0], state[i0], params[i0], inputs[i0], keys[i0],
+                             buf[0], rec, fmt)
+    elif m > 0:
+        lane_samples_rigid(scratch, m, regs[i0], state[i0], params[i0], inputs[i0], keys[i0],
+                           buf[0], rec, fmt)
     for j in range(m):
         i = int(scratch[F_MOTOR * LANES + j])
         scatter_state(scratch, j, state[i])
