@@ -175,6 +175,25 @@ def test_a_stalled_policy_puts_the_motor_passive_by_the_deadline(twin_url):
     assert out["report"].reason.startswith("policy stalled")
 
 
+def test_a_tripped_watchdog_ends_the_loop_before_its_next_command(twin_url):
+    """A watchdog whose heartbeats come too late puts the motor passive and ends; the loop must
+    then stop at once and send no further command (which would set the motor running again
+    behind the watchdog's back)."""
+    obs = Observer(twin_url)
+    period = 0.2
+    th, out = _run_in_thread(twin_url.env, policy=lambda o: np.zeros((1, 1)), url=twin_url,
+                             address=ADDRESS, motor_type=MOTOR, period=period,
+                             max_seconds=5.0, timeout=obs.loop_limits["timeout"],
+                             watchdog_timeout=0.02)  # shorter than a period: it trips
+    th.join(120)
+    report = out.get("report")
+    assert report is not None, out
+    assert report.reason.startswith("watchdog"), report.reason
+    # ended within the periods the watchdog takes to write passive and end, not after 5 s
+    assert report.periods < 5.0 / period / 2
+    assert obs.mode() == PASSIVE
+
+
 class Proxy:
     """A TCP relay between the loop and the twin that the test can cut."""
 

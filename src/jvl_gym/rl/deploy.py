@@ -498,6 +498,7 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
         for ep in range(episodes):
             env.reset(seed=seed + ep)
             client.timeout = max(timeout, SETUP_TIMEOUT)
+            watchdog.check()
             bridge.start(link, env.core)
             # the task's register bounds may follow from the episode's set-up (GearSync's
             # nominal gear)
@@ -518,6 +519,7 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
                     # the last write's duration earlier
                     time.sleep(max(0.0, t_read + hold - write_time - time.monotonic()))
                 t_write = time.monotonic()
+                watchdog.check()  # a watchdog that put the motor passive ends the loop
                 a, written = supervisor.command(np.asarray(action).reshape(-1))
                 t_written = time.monotonic()
                 write_time = t_written - t_write

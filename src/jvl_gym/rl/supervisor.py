@@ -243,6 +243,24 @@ class Watchdog:
         """A heartbeat: the loop is alive."""
         self._send(b".")
 
+    def check(self) -> None:
+        """Raise :class:`Stopped` when the watchdog has ended: it put the motor passive (no
+        heartbeat within its time-out) or lost its own connection, and the loop must not
+        command the motor past it.
+
+        Raises
+        ------
+        Stopped
+            The watchdog ended; ``reason`` carries what it printed.
+        """
+        if self.proc.poll() is None:
+            return
+        said = b""
+        with contextlib.suppress(OSError, ValueError):
+            said = self.proc.stdout.read() if self.proc.stdout else b""
+        what = said.decode(errors="replace").strip().splitlines()
+        raise Stopped(f"watchdog: {what[-1] if what else 'ended'}")
+
     def trip(self) -> None:
         """Put the motor passive now."""
         self._send(b"!")
