@@ -101,7 +101,7 @@ def test_setup_bits_2_and_3_choose_pulse_direction_or_quadrature_or_nothing() ->
     assert forward[2] == forward[3] == 0 and m.multifunction_output_total[2:].tolist() == [0, 0]
 
 
-@pytest.mark.statements("mis:8.2.115:3", "mis:8.2.116:3")
+@pytest.mark.statements("mis:8.2.115:2", "mis:8.2.116:2")
 def test_nothing_routed_or_an_unknown_xfield_set_up_emits_nothing_and_is_kept() -> None:
     """The defaults (XFIELD_ADDR = XFIELD_DATA = 0) route nothing to the output; a pair of
     values §5.5 does not give is stored and read back, and emits nothing."""

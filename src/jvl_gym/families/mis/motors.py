@@ -91,7 +91,8 @@ BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
 _PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD, L.S_TEMP_RISE]
 
 
-class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray, layout=L):
+class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, ProgramMixin,
+                    MotorArray, layout=L):
     """N simulated MIS/SMC integrated step motors (:class:`~jvl_gym.MotorArray` of the
     ``mis`` family).
 
