@@ -138,12 +138,12 @@ def test_the_output_starts_when_the_routing_is_set_and_a_reset_starts_the_sum_ag
 
 @pytest.mark.statements("mis:5.5.3:1")
 def test_a_program_that_sets_the_routing_starts_the_output_at_its_sample() -> None:
-    """§5.5.1: the set-up may be written by the program's first lines; the output starts at the
-    outer sample the lines run before, and stepping many samples at once gives the same counts
-    as stepping one at a time."""
-    program = ("set_register register=SETUP_BITS value=8\n"
+    """§5.5.1: the set-up may be written by a program's lines; the output starts at the outer
+    sample the lines run before (here after a 100 ms wait), whether the samples are stepped one
+    at a time or 250 at once."""
+    program = ("wait_ms time=100\nset_register register=SETUP_BITS value=8\n"
                "set_register register=XFIELD_DATA value=4626\n"
-               "set_register register=XFIELD_ADDR value=4160\njump line=4\n")
+               "set_register register=XFIELD_ADDR value=4160\njump line=5\n")
     totals = []
     for chunk in (1, 250):
         m = MotorArray("MIS232", n=1, seed=0)
@@ -156,6 +156,8 @@ def test_a_program_that_sets_the_routing_starts_the_output_at_its_sample() -> No
         assert m.multifunction_routing == ["generator quadrature"]
         totals.append(int(m.multifunction_output_total[0]))
     assert totals[0] == totals[1] > 0
+    # the 400 samples after the wait only: 300 RPM is 128 output counts per ms
+    assert abs(totals[0] - 128 * 400) <= 2 * 128
 
 
 @settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
