@@ -35,7 +35,7 @@ def _running(n: int = 1, rpm: float = 600.0, **regs: int | np.ndarray) -> MotorA
 
 
 def _generator_floor(m: MotorArray) -> np.ndarray:
-    return np.floor(m.state[:, L.S_CMD] / 16).astype(np.int64)
+    return np.floor(np.round(m.state[:, L.S_CMD], 6) / 16).astype(np.int64)
 
 
 def _encoder_floor(m: MotorArray) -> np.ndarray:

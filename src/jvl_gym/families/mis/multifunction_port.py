@@ -101,7 +101,10 @@ class MultifunctionOutput:
         """The whole output counts below each source's position now: the encoder's (rotor
         angle) and the generator's (commanded position / 16), (N,) int64 each."""
         enc = np.floor(self.state[:, L.S_THETA] * _ENCODER_PER_RAD).astype(np.int64)
-        gen = np.floor(self.state[:, L.S_CMD] / GENERATOR_SCALE).astype(np.int64)
+        # (the commanded position is whole steps plus a carried fraction in floating point;
+        # rounded to a millionth of a count, a whole step summed up as 0.999… counts is whole)
+        cmd = np.round(self.state[:, L.S_CMD], 6)
+        gen = np.floor(cmd / GENERATOR_SCALE).astype(np.int64)
         return enc, gen
 
     def _mf_arrays(self) -> None:
