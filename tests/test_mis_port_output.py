@@ -181,3 +181,18 @@ def test_fractional_counts_carry_exactly_over_long_runs(rpm: float, chunks: list
     assert emitted[1] == _encoder_floor(m)[1] - e0
     assert abs(emitted[0] - (m.state[0, L.S_CMD] - cmd0) / 16) < 1.0
     assert abs(emitted[1] - (m.state[1, L.S_THETA] - theta0) * 4096 / (2 * math.pi)) < 1.0
+
+
+@pytest.mark.statements("mis:5.5.3:1")
+def test_samples_a_compiled_task_runs_go_into_the_sum_at_the_next_step() -> None:
+    """Samples advanced by the engine's driver outside :meth:`step` (as a compiled task does)
+    are settled at the next step: into the sum, not into the last sample's counts."""
+    from jvl_gym.motor.stepping import driver
+
+    m = _running(rpm=300.0, SETUP_BITS=QUADRATURE, **GENERATOR_OUT)
+    before, total = _generator_floor(m), m.multifunction_output_total
+    driver("mis").run(m.engine_view(), 50)
+    m.step()
+    assert m.multifunction_output.tolist() == [128]  # 300 RPM: 128 counts per ms
+    assert (m.multifunction_output_total - total == _generator_floor(m) - before).all()
+    assert (m.multifunction_output_total - total)[0] == 128 * 51

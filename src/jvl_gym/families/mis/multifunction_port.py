@@ -59,6 +59,10 @@ ROUTES: dict[int, str] = {NONE: "none", ENCODER: "encoder quadrature",
                           GENERATOR_PULSE_DIRECTION: "generator pulse/direction",
                           UNKNOWN: "unknown"}
 _ENCODER_PER_RAD = ENCODER_OUTPUT_CPR / (2.0 * math.pi)
+#: the state columns of the sources: the rotor angle (encoder), the commanded position
+_SOURCES = [L.S_THETA, L.S_CMD]
+#: the registers the routing is read from
+_ROUTING_REGISTERS = [R.XFIELD_ADDR, R.XFIELD_DATA, R.SETUP_BITS]
 
 
 class MultifunctionOutput:
@@ -72,12 +76,26 @@ class MultifunctionOutput:
 
     # ------------------------------------------------------------------ the routing
     def _mf_routes(self) -> np.ndarray:
-        """The routing code of each motor from its registers now, (N,) int."""
+        """The routing code of each motor from its registers now, (N,) int (kept while
+        XFIELD_ADDR, XFIELD_DATA and SETUP_BITS stay as they are; a power-on clears it)."""
+        key = self.regs[:, _ROUTING_REGISTERS]
+        cached = getattr(self, "_mf_route_cache", None)
+        if cached is not None and np.array_equal(cached[0], key):
+            return cached[1]
+        route = self._mf_route_of()
+        self._mf_route_cache = (key, route)
+        return route
+
+    def _mf_route_of(self) -> np.ndarray:
+        """:meth:`_mf_routes` computed from the registers and the encoder options."""
         regs = self.regs
         port = regs[:, R.XFIELD_ADDR] == XFIELD_ADDR_PORT
         data = regs[:, R.XFIELD_DATA]
         fmt = regs[:, R.SETUP_BITS] & SETUP_FORMAT_MASK
-        has_encoder = np.isin(self.params[:, L.P_ENCODER], ENCODERS_WITH_OUTPUT)
+        code = self.params[:, L.P_ENCODER]
+        has_encoder = np.zeros(self.n, bool)
+        for k in ENCODERS_WITH_OUTPUT:  # (np.isin costs more on a few motors)
+            has_encoder |= code == k
         out = np.where((regs[:, R.XFIELD_ADDR] != 0) | (data != 0), UNKNOWN, NONE)
         out[port & (data == XFIELD_ENCODER)] = NONE
         out[port & (data == XFIELD_GENERATOR)] = NONE
@@ -97,29 +115,35 @@ class MultifunctionOutput:
         return [ROUTES[int(code)] for code in self._mf_routes()]
 
     # ------------------------------------------------------------------ the sources
-    def _mf_sources(self) -> tuple[np.ndarray, np.ndarray]:
-        """The whole output counts below each source's position now: the encoder's (rotor
-        angle) and the generator's (commanded position / 16), (N,) int64 each."""
-        enc = np.floor(self.state[:, L.S_THETA] * _ENCODER_PER_RAD).astype(np.int64)
+    @staticmethod
+    def _mf_floors(at: np.ndarray) -> np.ndarray:
+        """The whole output counts below the sources' positions ``at`` (N, 2) (rotor angle,
+        commanded position): the encoder's and the generator's, (N, 2) int64."""
+        out = np.empty(at.shape, np.int64)
+        out[:, 0] = np.floor(at[:, 0] * _ENCODER_PER_RAD)
         # (the commanded position is whole steps plus a carried fraction in floating point;
         # rounded to a millionth of a count, a whole step summed up as 0.999… counts is whole)
-        cmd = np.round(self.state[:, L.S_CMD], 6)
-        gen = np.floor(cmd / GENERATOR_SCALE).astype(np.int64)
-        return enc, gen
+        out[:, 1] = np.floor(np.round(at[:, 1], 6) / GENERATOR_SCALE)
+        return out
 
     def _mf_arrays(self) -> None:
-        """Create the output's arrays (once; a power-on rebases them)."""
+        """Create the output's arrays (once; a power-on rebases them): the sources' positions
+        at the last settling (and their whole counts), the last sample's counts, the sum, and
+        whether the last settling found nothing routed (then a settling with no XFIELD_DATA
+        set only moves the positions on)."""
         if getattr(self, "_mf_counts", None) is None:
-            self._mf_enc, self._mf_gen = self._mf_sources()
+            self._mf_at = self.state[:, _SOURCES]
+            self._mf_base: np.ndarray | None = None  # the floors of _mf_at, when known
             self._mf_counts = np.zeros(self.n, np.int64)
             self._mf_total = np.zeros(self.n, np.int64)
+            self._mf_quiet = False
 
     def _mf_power_on(self, idx: np.ndarray) -> None:
         """Power-on or reset of motors ``idx``: the sources taken from here, no counts, the
         sum 0 (the jump of the commanded position a reset makes emits nothing)."""
         self._mf_arrays()
-        enc, gen = self._mf_sources()
-        self._mf_enc[idx], self._mf_gen[idx] = enc[idx], gen[idx]
+        self._mf_route_cache = self._mf_base = None
+        self._mf_at[idx] = self.state[np.ix_(idx, _SOURCES)]
         self._mf_counts[idx] = 0
         self._mf_total[idx] = 0
 
@@ -127,14 +151,22 @@ class MultifunctionOutput:
         """The counts emitted since the last settling, by the routing now; they become the
         last sample's counts and go into the sum."""
         self._mf_arrays()
-        enc, gen = self._mf_sources()
+        now = self.state[:, _SOURCES]
+        self._mf_tick = self.state[:, L.S_TICK].copy()
+        if self._mf_quiet and not self.regs[:, R.XFIELD_DATA].any():
+            self._mf_at, self._mf_base = now, None
+            return
         route = self._mf_routes()
-        counts = np.where(route == ENCODER, enc - self._mf_enc,
+        floors = self._mf_floors(now)
+        base = self._mf_floors(self._mf_at) if self._mf_base is None else self._mf_base
+        moved = floors - base
+        counts = np.where(route == ENCODER, moved[:, 0],
                           np.where((route == GENERATOR_QUADRATURE)
-                                   | (route == GENERATOR_PULSE_DIRECTION), gen - self._mf_gen, 0))
-        self._mf_enc, self._mf_gen = enc, gen
+                                   | (route == GENERATOR_PULSE_DIRECTION), moved[:, 1], 0))
+        self._mf_at, self._mf_base = now, floors
         self._mf_counts = counts
         self._mf_total += counts
+        self._mf_quiet = not ((route != NONE) & (route != UNKNOWN)).any()
 
     # ------------------------------------------------------------------ the world output
     @property
@@ -160,7 +192,8 @@ class MultifunctionOutput:
         left = outer_count(n_outer, "step")
         if left == 0:
             return
-        self._mf_settle()
+        if not np.array_equal(self.state[:, L.S_TICK], getattr(self, "_mf_tick", None)):
+            self._mf_settle()  # samples ran since the last settling (a compiled task's)
         if left > 1:
             super().step(left - 1)  # type: ignore[misc]
             self._mf_settle()
