@@ -196,3 +196,19 @@ def test_samples_a_compiled_task_runs_go_into_the_sum_at_the_next_step() -> None
     assert m.multifunction_output.tolist() == [128]  # 300 RPM: 128 counts per ms
     assert (m.multifunction_output_total - total == _generator_floor(m) - before).all()
     assert (m.multifunction_output_total - total)[0] == 128 * 51
+
+
+@pytest.mark.statements("mis:5.5.2:1")
+def test_the_encoder_output_counts_a_shaft_turned_in_passive_mode() -> None:
+    """The encoder's signals come from the shaft: a passive motor turned by its load emits
+    the encoder's counts, the generator's routing (no commanded motion) nothing."""
+    m = MotorArray("MIS232", n=2, seed=0)
+    m.write_many({"XFIELD_DATA": np.array([5140, 4626]), "XFIELD_ADDR": 4160,
+                  "SETUP_BITS": QUADRATURE})
+    start = _encoder_floor(m)
+    m.set_input(load_torque=-0.5)  # turns the shaft forwards
+    m.run(0.5)
+    assert m.read("MODE_REG").tolist() == [0, 0]
+    turned = _encoder_floor(m) - start
+    assert turned[0] > 100
+    assert m.multifunction_output_total.tolist() == [turned[0], 0]
