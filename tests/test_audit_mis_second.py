@@ -59,9 +59,7 @@ def _canopen(setup: dict[str, int] | None = None) -> Iterator[tuple[Any, Any, An
 
 # -- §5 ---------------------------------------------------------------------------------------
 
-@pytest.mark.xfail(strict=True, reason="not modelled: the multifunction port's RS422 output "
-                   "routing (XFIELD_ADDR/DATA) is not simulated, so a motor has no pulse "
-                   "generator output to observe (docs/families/mis-sim.md)")
+@pytest.mark.statements("mis:5.5.4:1")
 def test_setup_bits_2_3_select_pulse_direction_output() -> None:
     """MIS manual §5.5.4 (line 2765, drawn; its table at 2769-2772): with the multifunction
     port routed to the internal pulse generator, SETUP_BITS bit 2 = 1 and bit 3 = 0 give
@@ -69,9 +67,11 @@ def test_setup_bits_2_3_select_pulse_direction_output() -> None:
     m = MotorArray("MIS232")
     m.write_many({"XFIELD_DATA": 4626, "XFIELD_ADDR": 4160, "SETUP_BITS": 1 << 2,
                   "V_SOLL": 6000, "MODE_REG": 2, "P_SOLL": REV})
-    m.run(1.0)
+    m.run(2.0)  # the move (1 s at 60 RPM and its ramps) is done
+    assert int(m.read_raw("P_IST")[0]) == REV
     # a user would count the pulses on the port: one per 16 counts
-    assert int(m.multifunction_pulses[0]) == REV // 16  # type: ignore[attr-defined]
+    assert m.multifunction_routing == ["generator pulse/direction"]
+    assert int(m.multifunction_output_total[0]) == REV // 16
 
 
 def _autocorrection_motors(window: list[int], v_auto: int = 0) -> Any:

@@ -27,6 +27,7 @@ from . import layout as L
 from .config import MisMotorConfig, load_motor
 from .filter_setup import READ_INDEX_VALUES, FilterSetup
 from .firmware import regs as R
+from .multifunction_port import MultifunctionOutput
 from .plant.torque_curve import pull_out_torque
 from .program.api import ProgramMixin
 from .ssi_port import SSI_COMMANDS, SsiPort
@@ -90,7 +91,8 @@ BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
 _PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD, L.S_TEMP_RISE]
 
 
-class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray, layout=L):
+class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, ProgramMixin,
+                    MotorArray, layout=L):
     """N simulated MIS/SMC integrated step motors (:class:`~jvl_gym.MotorArray` of the
     ``mis`` family).
 
@@ -135,7 +137,8 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
         "digital_inputs": InputRule(0.0, 255.0, whole=True, unit="(bits of IO1-IO8)"),
         "ssi_word": InputRule(0.0, 2.0**31 - 1, whole=True, unit="(the SSI encoder's word)")}
     PHYSICAL = frozenset({"speed_rpm", "speed_rad_s", "position_rad", "torque", "current_amplitude",
-                          "lost_steps"})
+                          "lost_steps", "multifunction_output",
+                          "multifunction_output_total"})
     SHAFT_ANGLE, SHAFT_SPEED = L.S_THETA, L.S_OMEGA
     ONE_BY_ONE = _SPECIAL
 
@@ -278,6 +281,7 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
         self._ssi_power_on(idx)
         self._supervision_power_on(idx)
         self._program_power_on(idx)
+        self._mf_power_on(idx)
 
     def _supervision_power_on(self, idx: np.ndarray) -> None:
         """The hardware supervision at the start (``firmware.supervision``): CVI_VOLT, TEMP and
@@ -438,6 +442,7 @@ class MisMotorArray(SsiPort, UserCommands, FilterSetup, ProgramMixin, MotorArray
         rotor = self.state[idx, L.S_THETA] * COUNTS_PER_REV / (2.0 * math.pi)
         for col in (L.S_CMD, L.S_CMD_PREV, L.S_FIELD):
             self.state[idx, col] = rotor
+        self._mf_power_on(idx)
 
     def _in_safe(self, idx: np.ndarray, what: str) -> None:
         bad = idx[self.regs[idx, R.MODE_REG] != c.SAFE]
