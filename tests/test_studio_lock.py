@@ -134,8 +134,9 @@ class Studio:
             if self.proc.poll() is not None:
                 raise RuntimeError(f"the studio exited: {''.join(self.stdout + self.stderr)}")
             try:
+                # an empty studio's first view sends the browser on to Connections
                 if httpx.get(self.url + "/", headers={"X-JVL-Token": self.token},
-                             timeout=5).status_code == 200:
+                             timeout=5, follow_redirects=True).status_code == 200:
                     return
             except httpx.HTTPError:
                 pass
@@ -482,6 +483,6 @@ def test_a_studio_open_to_the_network_warns_and_needs_the_token():
         assert studio.url.startswith("http://127.0.0.1:")
         _refused(httpx.get(studio.url + "/"), 401, "token")
         _refused(httpx.get(studio.url + "/", headers={"Host": "evil.example"}), 403, "Host")
-        assert httpx.get(studio.with_token("/")).status_code == 200
+        assert httpx.get(studio.with_token("/"), follow_redirects=True).status_code == 200
     finally:
         studio.stop()
