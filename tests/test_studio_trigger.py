@@ -38,6 +38,19 @@ def test_rising_and_falling_edges():
     assert crossing_time(np.arange(7.0), np.asarray(v, float), 2, 1.5) == pytest.approx(1.5)
 
 
+def test_single_holds_a_whole_window_not_the_edge_alone():
+    """Single mode: a crossing recorded with too little after it is not yet the trigger (the
+    scope would stop on the edge alone); once ``(1 − pre) · span`` after it is recorded, the
+    window is the whole span around the crossing."""
+    s = _ramp()  # crosses 1 V at 0.6 s; recorded to 0.99 s
+    trig = Trigger("x [V]", 1.0, pre=0.25)
+    assert window(s, trig, 0.8, TriggerMode.SINGLE) is None  # needs 0.6 s after: to 1.2 s
+    assert window(s, trig, 0.8, TriggerMode.NORMAL) is not None
+    w = window(s, trig, 0.4, TriggerMode.SINGLE)  # needs 0.3 s after: to 0.9 s
+    assert w[TIME][0] == pytest.approx(-0.1, abs=0.011)
+    assert w[TIME][-1] == pytest.approx(0.3, abs=0.011)
+
+
 def test_a_window_around_the_trigger_with_its_pre_trigger_share():
     s = _ramp()
     w = window(s, Trigger("x [V]", 1.0, pre=0.25), span=0.4)
@@ -114,7 +127,10 @@ def test_a_sample_buffer_capture_triggers_within_one_sample_of_the_crossing(runn
     m = running.motors[k]
     with m.lock:
         m.write("MODE_REG", 0)
-    time.sleep(0.3)
+    end = time.monotonic() + 60  # at rest before the step, however loaded the machine
+    while abs(float(m.read("V_IST"))) > 0 and time.monotonic() < end:
+        time.sleep(0.05)
+    time.sleep(0.05)
     unit = m.register("V_IST").unit
     with m.lock:
         m.write("V_SOLL", 12000 if k == 1 else 1600)  # 120 rpm; 100 counts/sample

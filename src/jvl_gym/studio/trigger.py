@@ -113,7 +113,9 @@ def window(series: Mapping[str, np.ndarray], trigger: Trigger | None, span: floa
 
     With a trigger found: the window holds ``pre · span`` before the crossing, time 0 at the
     crossing (:func:`crossing_time`). Without: auto mode gives the last ``span`` seconds
-    (times as they are), normal and single give None (nothing to show yet).
+    (times as they are), normal and single give None (nothing to show yet). Single mode counts
+    a crossing only once the ``(1 − pre) · span`` after it is recorded (within a sample): the
+    one window it holds is a whole one, not the edge alone.
 
     Raises
     ------
@@ -136,6 +138,11 @@ def window(series: Mapping[str, np.ndarray], trigger: Trigger | None, span: floa
         while k is not None:
             hits.append(k)
             k = find_trigger(v, trigger, k + 1)
+        if hits and mode is TriggerMode.SINGLE:
+            # the sweep after the crossing recorded to the end of the window, within a sample
+            dt = float(t[-1] - t[-2]) if len(t) > 1 else 0.0
+            hits = [k for k in hits if t[-1] + dt
+                    >= crossing_time(t, v, k, trigger.level) + (1.0 - trigger.pre) * span]
         if hits:
             index = hits[-1]
     if index is None:
