@@ -236,9 +236,9 @@ class Proxy:
 def test_a_cut_link_puts_the_motor_passive_after_the_clients_time_out(twin_url):
     obs = Observer(twin_url)
     proxy = Proxy(twin_url)
-    timeout, retries = max(0.05, obs.margin), 1
+    timeout, retries, period = max(0.05, obs.margin), 1, 0.2
     th, out = _run_in_thread(twin_url.env, policy=lambda o: np.full((1, 1), 0.1),
-                             url=proxy.url, address=ADDRESS, motor_type=MOTOR, period=0.2,
+                             url=proxy.url, address=ADDRESS, motor_type=MOTOR, period=period,
                              watchdog_url=str(twin_url), timeout=timeout, max_seconds=10.0,
                              watchdog_timeout=obs.loop_limits["watchdog_timeout"])
     assert obs.wait_mode(obs.running, 60) is not None
@@ -248,7 +248,9 @@ def test_a_cut_link_puts_the_motor_passive_after_the_clients_time_out(twin_url):
     seen = obs.wait_stop(30)
     th.join(30)
     assert seen is not None
-    stated = timeout * (1 + retries)  # the link is given up on; the watchdog acts at once
+    # the loop meets the cut link at its next read (within a period), gives the link up after
+    # its time-outs, and the watchdog acts at once
+    stated = period + timeout * (1 + retries)
     assert seen - t_cut <= stated + obs.margin
     assert out["report"].reason.startswith("link")
 

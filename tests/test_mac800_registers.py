@@ -158,7 +158,9 @@ def test_task_interface() -> None:
     from jvl_gym.families.mac050_141 import task as t050
     from jvl_gym.families.mac800 import task
 
-    shared = set(t050.__all__) - {"coil_direction"}
+    # coil_direction: the coil mode; GEAR_MODE, ag_factor: GearSync deployed over the bus,
+    # which the MAC050–141 alone offers
+    shared = set(t050.__all__) - {"coil_direction", "GEAR_MODE", "ag_factor"}
     assert shared <= set(task.__all__)
     assert task.FAMILY_KEY == "mac800" and task.DEFAULT_MOTOR_TYPE == "MAC800"
     assert dict(task.TERMINAL_ERRORS)["OV_ERR"] == c.OV_ERR

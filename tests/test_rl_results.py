@@ -109,7 +109,13 @@ def test_every_shipped_policy_has_its_learning_curve_on_the_page(pages):
 
 
 def test_the_page_is_deterministic(pages):
-    assert pages[0] == pages[1]
+    """Everything but the transfer gap's section, whose deployed returns, loop rate and
+    latency are measured in real time on the machine (``rl.results`` module docstring)."""
+    from jvl_gym.rl.results import TRANSFER_HEADING
+
+    computed = [page.split(TRANSFER_HEADING, 1)[0] for page in pages]
+    assert all(TRANSFER_HEADING in page for page in pages)
+    assert computed[0] == computed[1]
 
 
 @pytest.mark.parametrize("args, words", [

@@ -71,7 +71,9 @@ EVERY_TYPE = [t for k in families() for t in family(k).motor_types()]
 
 
 def test_the_conversions_cover_every_family():
-    assert set(BY_FAMILY) == set(families())
+    """Every packaged family (a test's own registered family, such as the toy family of the
+    family-contract tests, has no conversions here)."""
+    assert set(BY_FAMILY) == set(families()) - {"toy"}
 
 
 @pytest.mark.parametrize("motor_type", EVERY_TYPE)
