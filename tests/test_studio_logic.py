@@ -192,6 +192,22 @@ def test_scope_reads_registers_and_physical_signals():
         Scope(m, ["NO_SUCH_SIGNAL"])
 
 
+def test_a_scope_read_at_an_unchanged_motor_time_replaces_its_last_point():
+    """A clock that did not advance between two reads (a busy machine): the scope keeps one
+    point per motor time, so a saved window's times increase and it loads back as a stored
+    trace."""
+    m = SimMotor("MAC140", 1, seed=1)
+    sc = Scope(m, ["V_SOLL"])
+    sc.sample()
+    m.write("V_SOLL", 400)
+    sc.sample()  # the motor's time did not move
+    m.step(5)
+    sc.sample()
+    s = sc.series()
+    assert len(s["t [s]"]) == 2 and np.all(np.diff(s["t [s]"]) > 0)
+    assert s["V_SOLL [1/16 count/sample]"].tolist() == [400.0, 400.0]
+
+
 @pytest.fixture(scope="module")
 def running() -> Session:
     s = Session.simulated(["MAC140", "MIS232"], seed=3)

@@ -80,18 +80,24 @@ class Scope:
         self.values: list[deque[float]] = [deque(maxlen=depth) for _ in self.channels]
 
     def sample(self) -> None:
-        """Read every channel once and append the point at the motor's time now."""
+        """Read every channel once and append the point at the motor's time now; a reading at
+        a motor time not later than the last point's (a clock that did not advance between two
+        reads) replaces that point, so that the times always increase."""
         numbers = [c.number for c in self.channels if c.number is not None]
         with self.motor.lock:
             t = self.motor.now()
             raws = self.motor.read_raws(numbers) if numbers else {}
             phys = {c.name: self._phys[c.name]() for c in self.channels if c.number is None}
+        point = [phys[c.name] if c.number is None
+                 else float(from_raw(self.motor.register(c.number), raws[c.number]))
+                 for c in self.channels]
+        if self.t and t <= self.t[-1]:
+            for buf, value in zip(self.values, point):
+                buf[-1] = value
+            return
         self.t.append(t)
-        for c, buf in zip(self.channels, self.values):
-            if c.number is None:
-                buf.append(phys[c.name])
-            else:
-                buf.append(float(from_raw(self.motor.register(c.number), raws[c.number])))
+        for buf, value in zip(self.values, point):
+            buf.append(value)
 
     def clear(self) -> None:
         """Forget the points taken."""
