@@ -106,30 +106,9 @@ def twins(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Twins]:
     t.stop()
 
 
-class EmptyStudio(Studio):
-    """``jvl-gym studio`` with no motor: its views that need one send to Connections, so it is
-    up when Connections answers."""
-
-    def _wait_http(self, seconds: float) -> None:
-        import httpx
-
-        end = time.monotonic() + seconds
-        while time.monotonic() < end:
-            if self.proc.poll() is not None:
-                raise RuntimeError(f"the studio exited: {''.join(self.stdout + self.stderr)}")
-            try:
-                if httpx.get(self.url + "/connections", headers={"X-JVL-Token": self.token},
-                             timeout=5).status_code == 200:
-                    return
-            except httpx.HTTPError:
-                pass
-            time.sleep(0.3)
-        raise TimeoutError(f"{self.url} did not answer within {seconds} s")
-
-
 @pytest.fixture(scope="module")
 def studio() -> Iterator[Studio]:
-    s = EmptyStudio()  # no motor: the studio opens on the Connections view
+    s = Studio()  # no motor: the studio opens on the Connections view
     yield s
     s.stop()
 
