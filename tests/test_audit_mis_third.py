@@ -79,6 +79,7 @@ def test_h3_encoder_keeps_the_position_while_unpowered():
     _run_until(m, lambda m: _reg(m, "P_IST") == 1_024_000 and _reg(m, "V_IST") == 0, 5.0)
     m.write("MODE_REG", 0)
     m.run(0.05)
+    m.set_input(supply_volts=0.0, control_volts=0.0)  # power off
     m.set_input(load_torque=0.2)  # the shaft is turned by hand while the motor is off
     m.run(0.3)
     m.set_input(load_torque=0.0)
@@ -86,6 +87,8 @@ def test_h3_encoder_keeps_the_position_while_unpowered():
     shaft = _counts(m)
     assert abs(shaft - 1_024_000) > COUNTS_PER_REV  # it was turned by more than a turn
     assert _reg(m, "P_IST") == 1_024_000  # the commanded position did not see it
+    m.set_input(supply_volts=48.0, control_volts=24.0)  # power on again
+    m.run(0.2)
     m.write("COMMAND", 267)  # restart
     m.step(1)
     assert abs(_reg(m, "P_IST") - shaft) <= 400  # H3: 1024 counts per turn inside
@@ -164,6 +167,26 @@ def test_turn_table_actual_position_stays_in_range():
     assert p.min() >= 0 and p.max() <= COUNTS_PER_REV - 1
     assert p.max() > 350_000 and tr["V_IST"].ravel()[-1] == 0
     assert _reg(m, "P_IST") == 150_800
+    assert _reg(m, "TURNTAB_COUNT") == 2  # the wrap-arounds
+
+
+def test_turn_table_wraps_keep_the_encoder_in_the_frame_of_p_ist():
+    """MIS manual §5.12.5 with §8.2.18 and §5.2.1 (found with the check of line 3500, fixed
+    after the sample): with an encoder, a multiturn turn-table move of 970 000 counts wraps
+    P_IST twice, TURNTAB_COUNT counts 2 and the shaft turns 970 000 counts. The follow error
+    P_IST − ENCODER_POS stays that of the rotor (the encoder wraps with P_IST), so neither
+    auto-correction (on by default: IN_POSITION_COUNT 2) retries a move that arrived nor a
+    follow-error limit trips at a wrap."""
+    m = MotorArray("MIS232")  # H2 encoder
+    m.write_many({"MIN_P_IST": 0, "MAX_P_IST": COUNTS_PER_REV - 1, "TURNTABLE_MODE": 4})
+    m.write_many({"MODE_REG": 2, "V_SOLL": 60000, "A_SOLL": 5000, "FLWERRMAX": 20000})
+    m.write("P_SOLL", 970_000)
+    tr = m.trace(["FLWERR", "TURNTAB_COUNT", "ERR_BITS"], 3000)
+    assert np.abs(tr["FLWERR"].ravel()).max() < 20000
+    assert np.all(tr["ERR_BITS"].ravel() == 0)
+    assert _reg(m, "TURNTAB_COUNT") == 2 and _reg(m, "P_IST") == 150_800
+    assert abs(_counts(m) - 970_000) < FULL_STEP
+    assert abs(_reg(m, "ENCODER_POS") - 150_800) < FULL_STEP
 
 
 # --------------------------------------------------------------------------- §5.12.6, line 3527

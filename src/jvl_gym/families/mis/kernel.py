@@ -191,7 +191,7 @@ def _advance(regs, s, v: float, arrive: bool, tt: bool) -> None:  # pragma: no c
         s[L.S_TT_TRAVEL] = 0.0 if arrive or (left > 0.0) != (s[L.S_TT_TRAVEL] > 0.0) else left
     regs[R.P_IST] = wrap32(regs[R.P_IST] + int(steps))
     if tt:
-        tt_wrap(regs)
+        tt_wrap(regs, s)
     s[L.S_STILL_MS] = 0.0 if steps != 0 or v != 0.0 else s[L.S_STILL_MS] + 1.0
 
 

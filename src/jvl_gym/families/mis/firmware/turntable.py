@@ -3,16 +3,21 @@ to the target.
 
 The range is MIN_P_IST … MAX_P_IST (swapped if MIN > MAX, §5.12.3), ``size = MAX − MIN + 1``.
 P_IST is kept inside it: leaving it at MAX continues at MIN and counts TURNTAB_COUNT up, leaving
-it at MIN continues at MAX and counts down (§5.12.1, §5.12.5). The travel to P_SOLL is always
-positive (modes 1, 4: CW), always negative (2, 5: CCW) or the shorter way round (3). A multiturn
-move (modes 4, 5) written beyond the range keeps its full length in ``S_TT_TRAVEL`` (set where
-P_SOLL is written, ``motors.py``).
+it at MIN continues at MAX and counts down (§5.12.1, §5.12.5). The encoder position (ENCODER_POS)
+wraps with it, so that it stays in P_IST's frame: the follow error P_IST − ENCODER_POS
+(§8.2.18) and auto-correction's window around P_SOLL (§5.2.1, §8.2.15) compare positions of one
+turn, while ABSENCODER stays "not corrected for the turntable" (§5.12.5).
+
+The travel to P_SOLL is always positive (modes 1, 4: CW), always negative (2, 5: CCW) or the
+shorter way round (3). A multiturn move (modes 4, 5) written beyond the range keeps its full
+length in ``S_TT_TRAVEL`` (set where P_SOLL is written, ``motors.py``).
 """
 
 from __future__ import annotations
 
 from numba import njit
 
+from ....physics.fixed import wrap32
 from .. import constants as c
 from .. import layout as L
 from . import regs as R
@@ -49,12 +54,19 @@ def tt_distance(regs, s) -> float:  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def tt_wrap(regs) -> None:  # pragma: no cover - compiled
-    """Keep P_IST inside the range, counting wrap-arounds in TURNTAB_COUNT (§5.12.5)."""
+def tt_wrap(regs, s) -> None:  # pragma: no cover - compiled
+    """Keep P_IST inside the range, counting wrap-arounds in TURNTAB_COUNT (§5.12.5), and move
+    the encoder position by the same whole turns (module docstring)."""
     lo, hi = tt_range(regs)
     size = hi - lo + 1
     p = regs[R.P_IST]
     turns = (p - lo) // size
     if turns != 0:
-        regs[R.P_IST] = p - turns * size
+        shift = turns * size
+        regs[R.P_IST] = p - shift
         regs[R.TURNTAB_COUNT] += turns
+        s[L.S_ENC_OFFSET] -= shift
+        s[L.S_ENC_PREV] = wrap32(int(s[L.S_ENC_PREV]) - shift)
+        if regs[R.ENCODER_TYPE] != 0:
+            regs[R.ENCODER_POS] = wrap32(regs[R.ENCODER_POS] - shift)
+            regs[R.FLWERR] = wrap32(regs[R.P_IST] - regs[R.ENCODER_POS])
