@@ -44,6 +44,7 @@ def _run_until(m: MotorArray, done, seconds: float) -> None:
 
 
 # --------------------------------------------------------------------------- §5.3.7, line 2586
+@pytest.mark.statements("mis:5.3.7:4")
 def test_current_decrement_at_3000_rpm_one_step_per_40621_clocks():
     """MIS manual §5.3.7 (line 2586): with the factory settings (CUR_SCALE_FACTOR 500,
     CUR_SCALE_DEC 4000) the decrement count at 3000 RPM is (3000·100/4096)·500 + 4000 = 40621
@@ -66,6 +67,7 @@ def test_current_decrement_at_3000_rpm_one_step_per_40621_clocks():
 
 
 # --------------------------------------------------------------------------- §5.8.1, line 2944
+@pytest.mark.statements("mis:5.8.1:4")
 def test_h3_encoder_keeps_the_position_while_unpowered():
     """MIS manual §5.8.1 (line 2949, the nearest checkable sentence to line 2944): with the
     absolute multi-turn encoder (H3) the motor keeps track of its position whether power is
@@ -96,6 +98,7 @@ def test_h3_encoder_keeps_the_position_while_unpowered():
 
 
 # --------------------------------------------------------------------------- §5.8.1, line 2957
+@pytest.mark.statements("mis:5.8.1:1")
 def test_h3_resolution_409600_displayed_1024_inside():
     """MIS manual §5.8.1 (line 2959): the H3's position is displayed in 409 600 counts per
     revolution while the encoder resolves 1024 per revolution inside: one turn reads 409 600,
@@ -114,6 +117,7 @@ def test_h3_resolution_409600_displayed_1024_inside():
 
 
 # --------------------------------------------------------------------------- §5.9.3, line 3157
+@pytest.mark.statements("mis:5.9.3:4")
 def test_changing_a_passed_position_limit_lets_the_motor_move_on():
     """MIS manual §5.9.3 (line 3160): when a software position limit has stopped the motor
     (here kept in its mode by SETUP_BITS bit 17, §5.9.5), changing the limits may make it start
@@ -131,6 +135,7 @@ def test_changing_a_passed_position_limit_lets_the_motor_move_on():
 
 
 # --------------------------------------------------------------------------- §5.10.1, line 3233
+@pytest.mark.statements("mis:5.10:1", "mis:5.10:2", "mis:5.10:3")
 def test_three_under_voltage_options():
     """MIS manual §5.10.1 (line 3226, with §5.10 and §5.10.2): three options set what the motor
     does when P+ falls below "Min bus voltage": set the error bit (error stop, then passive,
@@ -155,6 +160,7 @@ def test_three_under_voltage_options():
 
 
 # --------------------------------------------------------------------------- §5.12.5, line 3501
+@pytest.mark.statements("mis:5.12.5:1", "mis:5.12.5:2", "mis:5.12.5:3")
 def test_turn_table_actual_position_stays_in_range():
     """MIS manual §5.12.5 (line 3500): in a turn table mode the actual position P_IST stays
     within the defined minimum and maximum, wrapping around when the motor passes them."""
@@ -170,6 +176,7 @@ def test_turn_table_actual_position_stays_in_range():
     assert _reg(m, "TURNTAB_COUNT") == 2  # the wrap-arounds
 
 
+@pytest.mark.statements("mis:5.12.5:1")
 def test_turn_table_wraps_keep_the_encoder_in_the_frame_of_p_ist():
     """MIS manual §5.12.5 with §8.2.18 and §5.2.1 (found with the check of line 3500, fixed
     after the sample): with an encoder, a multiturn turn-table move of 970 000 counts wraps
@@ -190,6 +197,7 @@ def test_turn_table_wraps_keep_the_encoder_in_the_frame_of_p_ist():
 
 
 # --------------------------------------------------------------------------- §5.12.6, line 3527
+@pytest.mark.statements("mis:5.12.6:1", "mis:5.12.6:2")
 def test_turn_table_jog_leaves_range_and_position_mode_moves():
     """MIS manual §5.12.6 (line 3524): after a jog in velocity mode P_IST may be left outside
     the turn table's range, and switching back to position mode may move the motor (to the old
@@ -214,6 +222,7 @@ def test_turn_table_jog_leaves_range_and_position_mode_moves():
 
 
 # --------------------------------------------------------------------------- §6, line 3548
+@pytest.mark.statements("mis:6.4.1:1", "mis:8.2.13:2")
 def test_gear_ratio_from_gear1_and_gear2():
     """MIS manual §6 overview (line 3546): in gear mode the ratio, which may be large, is set
     by GEAR1 (register 14) and GEAR2 (register 15): the motor moves the input counts times
@@ -233,6 +242,7 @@ def test_gear_ratio_from_gear1_and_gear2():
 
 
 # --------------------------------------------------------------------------- §6, line 3551
+@pytest.mark.statements("mis:6.5.1:1")
 def test_zero_search_defines_zero_at_the_sensor():
     """MIS manual §6 overview (line 3550): the zero search mode searches for a sensor and makes
     the point where it is found the zero position."""
@@ -251,6 +261,7 @@ def test_zero_search_defines_zero_at_the_sensor():
 
 
 # --------------------------------------------------------------------------- §6.5.1, line 3779
+@pytest.mark.statements("mis:6.5.1:1", "mis:6.5.1:2", "mis:6.5.1:3")
 @pytest.mark.parametrize("kind", ["sensor type 1", "sensor type 2", "torque"])
 def test_three_zero_search_modes(kind):
     """MIS manual §6.5.1 (line 3780; the modes in its table): the motor offers three zero
@@ -281,6 +292,7 @@ def test_three_zero_search_modes(kind):
 
 
 # --------------------------------------------------------------------------- §8.2.3, line 4620
+@pytest.mark.statements("mis:8.2.3:5")
 def test_position_mode_moves_to_p_soll_with_v_soll_and_a_soll():
     """MIS manual §8.2.3 (line 4620): MODE_REG = 2 sets position mode; a new P_SOLL makes the
     motor move there at no more than V_SOLL, accelerating with A_SOLL."""
@@ -299,6 +311,7 @@ def test_position_mode_moves_to_p_soll_with_v_soll_and_a_soll():
 
 
 # --------------------------------------------------------------------------- §8.2.112, line 5908
+@pytest.mark.statements("mis:8.2.112:1")
 def test_actual_torque_zero_in_passive_mode():
     """MIS manual §8.2.112 (line 5909): ACTUAL_TORQUE reads 0 % in passive mode (after running
     with the closed loop and current control too)."""
@@ -315,6 +328,7 @@ def test_actual_torque_zero_in_passive_mode():
 
 
 # --------------------------------------------------------------------------- §9.7.19, line 6458
+@pytest.mark.statements("mis:9.7.19:1")
 def test_program_save_position_keeps_p_ist_for_a_move():
     """MIS manual §9.7.19 (line 6460): the program command "Save position" copies the actual
     position (P_IST, register 10) to one of three locations of the user memory, and a move
@@ -366,6 +380,7 @@ def _sdo_read(node, index: int, sub: int) -> int:
 
 
 # --------------------------------------------------------------------------- §11.5.8, line 7947
+@pytest.mark.statements("mis:11.5.8:2")
 def test_ip_mode_ready_bit_10(master):
     """MIS manual §11.5.8 (line 7944): in interpolated position mode, once ENABLE_IP_MODE
     (controlword bit 4) is set, the motor sets statusword bit 10 (IP_MODE_READY) when it is
@@ -386,6 +401,7 @@ def test_ip_mode_ready_bit_10(master):
 
 
 # --------------------------------------------------------------------------- §11.9.4, line 9046
+@pytest.mark.statements("mis:11.9.4:1")
 def test_sdo_abort_when_mapping_exceeds_pdo_length(master):
     """MIS manual §11.9.4 (line 9047): mapping objects whose number and length exceed a PDO's
     length is refused with SDO abort code 0604 0042h."""
