@@ -364,6 +364,9 @@ def master():
     net = canopen.Network()
     net.connect(interface="virtual", channel=channel)
     node = net.add_node(5, str(shipped_path()))
+    # simulated time is the server's; the wall-clock time-out only ends a wait for a server
+    # that never answers (the canopen package's 0.3 s can pass on a loaded machine)
+    node.sdo.RESPONSE_TIMEOUT = 5.0
     try:
         yield m, server, node
     finally:
