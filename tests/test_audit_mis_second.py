@@ -278,16 +278,18 @@ def test_beckhoff_receive_pdo4_default_is_the_outputs() -> None:
         assert int(m.read("OUTPUTS")[0]) & 0x3 == 0x3
 
 
-@pytest.mark.xfail(strict=True, reason="the simulator accepts only the homing table's 'Yes' "
-                   "methods (-4, -3, 1-6) and aborts 6098h writes of 7-34 with 0609 0030h "
-                   "(its documented decision, docs/protocol.md 'Homing methods')")
+@pytest.mark.statements("mis:11.5.6:2")
 def test_homing_methods_1_to_34_are_supported() -> None:
     """MIS manual §11.5.6 (line 7749, nearest checkable to the drawn 7751): the standard
-    homing search modes 1-34 are supported: 6098h takes each of them."""
+    homing search modes 1-34 are supported: 6098h takes each of them (the standard defines
+    1-14, 17-30, 33, 34; 15, 16, 31, 32 are reserved there, and refused)."""
     with _canopen() as (_m, _server, _net, node):
-        for method in range(1, 35):
+        for method in [*range(1, 15), *range(17, 31), 33, 34]:
             _write(node, 0x6098, 0, method, 1)
             assert int.from_bytes(node.sdo.upload(0x6098, 0), "little", signed=True) == method
+        for method in (15, 16, 31, 32):
+            with pytest.raises(canopen.SdoAbortedError):
+                _write(node, 0x6098, 0, method, 1)
 
 
 def test_controlword_drives_cyclic_synchronous_velocity_mode() -> None:
