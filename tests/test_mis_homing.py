@@ -71,8 +71,10 @@ def _start_at(rig: Rig, theta: float) -> None:
     m.step()
 
 
-def _home(rig: Rig, method: int, start: float, seconds: float = 8.0) -> Run:
-    _start_at(rig, start)
+def _home(rig: Rig, method: int, start: float | None, seconds: float = 8.0) -> Run:
+    """Home with ``method`` from ``start`` rad (None: where the motor stands)."""
+    if start is not None:
+        _start_at(rig, start)
     node = rig.node()
     node.sdo[0x6098].raw = method
     node.sdo[0x6099][1].raw = 30000  # 300 RPM towards the switch
@@ -210,16 +212,39 @@ def test_index_pulse_methods(rig: Rig, method: int, start: float, index: float,
 
 
 @pytest.mark.statements("mis:11.5.6:4")
-@pytest.mark.parametrize(("method", "index"), [(3, TWO_PI), (19, None), (4, TWO_PI),
-                                               (20, None)])
-def test_table_methods_with_and_without_index(rig: Rig, method: int,
+@pytest.mark.parametrize(("method", "start", "first", "edge", "approach", "index"), [
+    (3, 11.0, -1, HIGH, -1, TWO_PI), (19, 11.0, -1, HIGH, -1, None),
+    (4, 1.0, 1, LOW, 1, TWO_PI), (20, 1.0, 1, LOW, 1, None),
+    (5, 11.0, -1, HIGH, 1, 2 * TWO_PI), (21, 11.0, -1, HIGH, 1, None),
+    (6, 1.0, 1, LOW, -1, 0.0), (22, 1.0, 1, LOW, -1, None)])
+def test_table_methods_with_and_without_index(rig: Rig, method: int, start: float, first: int,
+                                              edge: float, approach: int,
                                               index: float | None) -> None:
-    """§11.5.6's table: 3 "rising edge homing switch, negative direction", 4 the same positive;
-    19, 20 "same as 3, 4 without index": the zero is the edge met, with 3 and 4 the next
-    index after it."""
-    start, edge, direction = (11.0, HIGH, -1) if method in (3, 19) else (1.0, LOW, 1)
+    """§11.5.6's table: 3, 4 "rising edge homing switch", negative / positive direction, the
+    zero where the switch becomes active; 5, 6 "falling edge", the zero where it is released
+    after reversing onto it; 3-6 then on to the next index; 19-22 "same as 3-6 without
+    index"."""
     run = _home(rig, method, start)
     _attained(run)
-    assert run.first == direction
-    assert run.edges[0][:2] == (pytest.approx(edge, abs=TOL), direction)
+    assert run.first == first
+    theta, direction, active = run.edges[-1]
+    assert theta == pytest.approx(edge, abs=TOL)
+    assert (direction, active) == (approach, method in (3, 4, 19, 20))
     assert run.zero == pytest.approx(edge if index is None else index, abs=TOL)
+
+
+@pytest.mark.statements("mis:11.5.6:4", "mis:11.5.6:5")
+@pytest.mark.parametrize(("method", "limit", "index"), [
+    (1, NEG_LIMIT, 0.0), (17, NEG_LIMIT, None), (2, POS_LIMIT, 4 * math.pi), (18, POS_LIMIT, None)])
+def test_limit_switch_methods(rig: Rig, method: int, limit: float, index: float | None) -> None:
+    """1, 2 (and 17, 18 without index) with the limit switch as the home input (§11.5.6,
+    "Homing on limit switch"): onto the limit switch, off it at the crawl velocity, the zero
+    where it is released (or the next index after it); the limit raises no error."""
+    _start_at(rig, 1.0)
+    rig.m.write("HOME_MASK", NL if limit < 0 else PL)
+    run = _home(rig, method, None)
+    _attained(run)
+    assert run.first == (-1 if limit < 0 else 1)
+    assert int(rig.m.read("ERR_BITS")[0]) == 0
+    zero = limit if index is None else index
+    assert run.zero == pytest.approx(zero, abs=TOL)

@@ -7,9 +7,11 @@ searches (MIS manual §6.5, ZERO_SEARCH_BITS §8.2.67).
 Every method is carried out with the motor's zero search, which finds a switch edge at the
 crawl velocity and, with ZERO_SEARCH_BITS bit 0, goes on to the encoder index:
 
-* 1–6 as the table names them (1, 2: type 1 towards the limit switch; 3, 4: type 1, the
-  rising edge of the home switch in the negative / positive direction; 5, 6: type 2, its
-  falling edge after reversing), then on to the index; 17–22 the same without the index.
+* 1–6 as the table names them (1, 2: type 2 onto the negative / positive limit switch, which
+  is also the home input (§11.5.6, "Homing on limit switch"), and off it at the crawl velocity,
+  as the standard's 1, 2; 3, 4: type 1, the rising edge of the home switch in the negative /
+  positive direction; 5, 6: type 2, its falling edge after reversing), then on to the index;
+  17–22 the same without the index.
 * 7–14 (CiA 402: home switch between the limit switches, initial motion positive for 7–10,
   negative for 11–14) and 23–30 (the same without index): when the home switch is not active
   at the start, a first search in the initial direction, turning at a limit switch
@@ -85,7 +87,7 @@ def _table() -> dict[int, Method]:
         33: Method(Search(False, -1, ignore_switch=True), True),
         34: Method(Search(False, 1, ignore_switch=True), True),
     }
-    table_1_6 = {1: Search(False, -1), 2: Search(False, 1), 3: Search(False, -1),
+    table_1_6 = {1: Search(True, -1), 2: Search(True, 1), 3: Search(False, -1),
                  4: Search(False, 1), 5: Search(True, -1), 6: Search(True, 1)}
     for n, search in table_1_6.items():
         t[n] = Method(search, True, user_options=True)
