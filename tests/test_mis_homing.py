@@ -76,6 +76,7 @@ def _home(rig: Rig, method: int, start: float | None, seconds: float = 8.0) -> R
     if start is not None:
         _start_at(rig, start)
     node = rig.node()
+    rig.m.write("ZERO_SEARCH_BITS", 1 << 5)  # the user's (no time-out): kept, and restored
     node.sdo[0x6098].raw = method
     node.sdo[0x6099][1].raw = 30000  # 300 RPM towards the switch
     node.sdo[0x6099][2].raw = 3000  # 30 RPM for the zero
@@ -105,6 +106,7 @@ def _home(rig: Rig, method: int, start: float | None, seconds: float = 8.0) -> R
                 and abs(float(m.speed_rad_s[0])) < 1e-3):
             break
     rig.advance(0.05)
+    assert int(m.read("ZERO_SEARCH_BITS")[0]) == 1 << 5
     sw = node.sdo[0x6041].raw
     zero = float(m.position_rad[0]) - int(node.sdo[0x6064].raw) * TWO_PI / REV
     return Run(first, lowest, edges, zero, sw)

@@ -435,13 +435,13 @@ class Drive:
         self.homing_seeking = bool(plan.seek) and not on_switch
         if self.homing_seeking:
             # on to the home switch, turning at a limit switch; the zero found is passing
-            self._search(Search(False, plan.seek), self.f.zs_turn_at_limit, 0)
+            kept = (self.user_zs_bits or 0) & self.f.zs_no_time_out
+            self._search(Search(False, plan.seek), self.f.zs_turn_at_limit | kept, 0)
         else:
-            self._final_search()
+            self._final_search(plan)
 
-    def _final_search(self) -> None:
-        plan = self.homing_plan
-        assert plan is not None
+    def _final_search(self, plan: Method) -> None:
+        """The method's last search: the switch edge, then (with the index) on to it."""
         final = plan.final
         if final.torque:
             self._w(self.f.home_mask, 0)
@@ -523,9 +523,9 @@ class Drive:
         elif self.mode == _HM and self.homing == "running":
             if self._r(self.f.mode) not in (self.f.zero_search_1, self.f.zero_search_2):
                 ok = not err and bool(self._r(self.f.statusbits) & self.f.st_zero_search_done)
-                if ok and self.homing_seeking:
+                if ok and self.homing_seeking and self.homing_plan is not None:
                     self.homing_seeking = False
-                    self._final_search()
+                    self._final_search(self.homing_plan)
                 else:
                     self._end_homing("attained" if ok else "error")
         elif self.mode == _PT:
