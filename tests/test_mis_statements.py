@@ -1825,8 +1825,9 @@ def test_canopen_402_velocity_halt(rig402) -> None:  # type: ignore[no-untyped-d
 
 @pytest.mark.statements("mis:11.5.6:1", "mis:11.5.6:2", "mis:11.5.6:3")
 def test_canopen_402_homing_methods() -> None:
-    """§11.5.6: methods 1–6, −3, −4 supported, −2, −1 not; method 3 (home switch, negative)
-    ends at the switch with the home offset 607Ch as its position, homing attained."""
+    """§11.5.6: methods 1–6, −3, −4 supported, −2, −1, 35 not; method 19 (as 3, home switch,
+    negative, without index) ends at the switch with the home offset 607Ch as its position,
+    homing attained."""
     import canopen
     from canopen.profiles.p402 import BaseNode402
 
@@ -1837,11 +1838,11 @@ def test_canopen_402_homing_methods() -> None:
         node = _node402(rig)
         for method in (1, 2, 3, 4, 5, 6, -3, -4):
             node.sdo[0x6098].raw = method
-        for method in (-2, -1, 7, 35):
+        for method in (-2, -1, 35):
             with pytest.raises(canopen.SdoAbortedError):
                 node.sdo[0x6098].raw = method
         node.sdo[0x2012][132].raw = 8
-        node.sdo[0x6098].raw = 3
+        node.sdo[0x6098].raw = 19
         node.sdo[0x6099][1].raw = 5000
         node.sdo[0x607C].raw = 1000
         assert node.homing(timeout=30)

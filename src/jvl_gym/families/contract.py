@@ -220,6 +220,12 @@ class CanopenSpec:
     eds : Path or None
         The family's EDS file (the object dictionary the slave serves, as a file for a
         master), or None.
+    zero_search_bits : str, int or None
+        The zero search's option register (None: the family has none; the DSP-402 homing
+        methods that need its options are then refused).
+    zs_use_index, zs_turn_at_limit, zs_opposite_side, zs_ignore_switch, zs_no_time_out : int
+        Its option bits: on to the encoder index, turn at a limit input, the sensor's far
+        side, no sensor, no time-out.
     """
 
     node_id: str | int
@@ -274,6 +280,12 @@ class CanopenSpec:
     motor_name: str
     product_name: str
     eds: Path | None = None
+    zero_search_bits: str | int | None = None
+    zs_use_index: int = 0
+    zs_turn_at_limit: int = 0
+    zs_opposite_side: int = 0
+    zs_ignore_switch: int = 0
+    zs_no_time_out: int = 0
 
     #: the attributes that name registers
     REGISTER_FIELDS: ClassVar[tuple[str, ...]] = (
@@ -281,6 +293,8 @@ class CanopenSpec:
         "flwerr", "flwerrmax", "err_bits", "statusbits", "command", "inputs", "outputs",
         "setup_bits", "run_current", "home_mask", "nl_mask", "pl_mask", "v_home",
         "v_home_crawl", "p_home", "t_home", "motor_type", "serial", "version", "hardware")
+    #: the attributes that name registers a family may lack (None)
+    OPTIONAL_REGISTER_FIELDS: ClassVar[tuple[str, ...]] = ("zero_search_bits",)
 
     def numbered(self, table: RegisterTable) -> CanopenSpec:
         """This record with every register name replaced by its number in ``table``.
@@ -293,8 +307,10 @@ class CanopenSpec:
         from ..registers import RegisterError
 
         numbers = {}
-        for name in self.REGISTER_FIELDS:
+        for name in self.REGISTER_FIELDS + self.OPTIONAL_REGISTER_FIELDS:
             key = getattr(self, name)
+            if key is None:
+                continue
             try:
                 numbers[name] = table.lookup(key).number
             except RegisterError:

@@ -51,4 +51,8 @@ CANOPEN = CanopenSpec(
     counts_per_rev=COUNTS_PER_REV,
     # JVL's vendor id 0x117, device type 0x40192, 1008h "JVL A/S" (§11.4.1); 6402h "MIS"
     vendor_id=0x117, device_type=0x40192, device_name="JVL A/S", motor_name="MIS",
-    product_name="MIS/SMC integrated step motor (simulated)", eds=EDS)
+    product_name="MIS/SMC integrated step motor (simulated)", eds=EDS,
+    # ZERO_SEARCH_BITS and its bits 0, 1, 2, 4, 5 (§8.2.67): the DSP-402 homing methods
+    zero_search_bits="ZERO_SEARCH_BITS", zs_use_index=c.ZS_USE_INDEX,
+    zs_turn_at_limit=c.ZS_TURN_AT_LIMIT, zs_opposite_side=c.ZS_OPPOSITE_SIDE,
+    zs_ignore_switch=c.ZS_IGNORE_SWITCH, zs_no_time_out=c.ZS_NO_TIME_OUT)

@@ -27,8 +27,9 @@ homing to profile position once the homing is done):
        §11.5.5                status 10 velocity reached, 12 velocity zero
 4      profile torque         as 3, with RUN_CURRENT = its value at the start × min(6071h,
        §11.5.7                6072h)/1000, ramped at 6087h ‰/s
-6      homing §11.5.6         bit 4 start: methods 1–6, −3, −4 as the motor's zero search;
-                              status 12 homing attained, 13 homing error, 10 target reached
+6      homing §11.5.6         bit 4 start: the methods of :mod:`.homing` as the motor's
+                              zero searches; status 12 homing attained, 13 homing error,
+                              10 target reached
 7      interpolated position  bit 4 enable IP; at each SYNC to 60C1h sub 1 (absolute, or
        §11.5.8                relative when sub 2 = 1) within the period 60C2h; status 10
 8      cyclic sync position   bit 4 enable CSP, 6 relative; every target 607Ah written (an
@@ -62,6 +63,7 @@ from typing import Any
 from canopen.sdo import SdoAbortedError
 
 from . import emcy
+from .homing import METHODS, Method, Search
 from .objects import HOMING_METHODS, SUPPORTED_MODES
 from .sdo import ABORT
 
@@ -105,6 +107,9 @@ class Drive:
         self.target_reached = True
         self.queued: int | None = None
         self.homing: str | None = None  # None, "running", "attained", "error"
+        self.homing_plan: Method | None = None  # the method under way
+        self.homing_seeking = False  # its first search onto the home switch is under way
+        self.user_zs_bits: int | None = None  # ZERO_SEARCH_BITS as the user left it
         self.halted = False
         self.base_current = 0
         self.current = 0.0
@@ -213,7 +218,7 @@ class Drive:
         self.homing = None
 
     def write_homing_method(self, method: int) -> None:
-        """6098h: the methods of §11.5.6's table that say "Yes"; 0 = none."""
+        """6098h: the methods of :mod:`.homing`; 0 = none."""
         if method != 0 and method not in HOMING_METHODS:
             raise SdoAbortedError(ABORT["range"])
 
@@ -289,6 +294,8 @@ class Drive:
 
     def _disable(self, state: State) -> None:
         self.state = state
+        if self.homing == "running":  # interrupted
+            self._end_homing("error")
         self.ip_enabled = False
         self.queued = None
         self.ack = False
@@ -388,9 +395,7 @@ class Drive:
             if rising & 0x10:
                 self._start_homing()
             elif halt and self.homing == "running":
-                self.homing = "error"
-                self._w(self.f.mode, self.f.position)
-                self._w(self.f.p_soll, self._r(self.f.p_ist))
+                self._end_homing("error")
         elif m in (_IP, _CSP):
             enabled = bool(cw & 0x10)
             if enabled and not self.ip_enabled:
@@ -410,21 +415,69 @@ class Drive:
         self._w(self.f.p_soll, goal)
 
     def _start_homing(self) -> None:
+        """Bit 4 rising in homing mode: the method's first search (onto the home switch,
+        when it has one and the switch is not active) or its final search (:mod:`.homing`)."""
         method = self._v(0x6098)
-        if method not in HOMING_METHODS:
+        plan = METHODS.get(method)
+        if plan is None:
             self.homing = "error"
             self.node.emergency(emcy.HOMING_PROFILE)
             return
-        direction = 1 if method in (2, 4, 6, -4) else -1
-        self._w(self.f.v_home, direction * max(1, abs(self.velocity(self._v(0x6099, 1)))))
         self._w(self.f.v_home_crawl, abs(self.velocity(self._v(0x6099, 2))))
+        # the homing acceleration 609Ah for the starts and the stops of the searches
         self._w(self.f.a_soll, self.acceleration(self._v(0x609A)))
-        self._w(self.f.p_home, self.counts(self._v(0x607C)))
-        if method in (-3, -4):
-            self._w(self.f.home_mask, 0)
+        self._w(self.f.d_soll, self.acceleration(self._v(0x609A)))
+        if self.f.zero_search_bits is not None and self.user_zs_bits is None:
+            self.user_zs_bits = self._r(self.f.zero_search_bits)
+        self.homing_plan = plan
         self.homing = "running"
-        self._w(self.f.mode, self.f.zero_search_2 if method in (5, 6)
-                else self.f.zero_search_1)
+        on_switch = bool(self._r(self.f.inputs) & self._r(self.f.home_mask))
+        self.homing_seeking = bool(plan.seek) and not on_switch
+        if self.homing_seeking:
+            # on to the home switch, turning at a limit switch; the zero found is passing
+            kept = (self.user_zs_bits or 0) & self.f.zs_no_time_out
+            self._search(Search(False, plan.seek), self.f.zs_turn_at_limit | kept, 0)
+        else:
+            self._final_search(plan)
+
+    def _final_search(self, plan: Method) -> None:
+        """The method's last search: the switch edge, then (with the index) on to it."""
+        final = plan.final
+        if final.torque:
+            self._w(self.f.home_mask, 0)
+        options = 0
+        if self.user_zs_bits is not None:
+            f = self.f
+            kept = f.zs_no_time_out | (f.zs_turn_at_limit | f.zs_opposite_side
+                                       if plan.user_options else 0)
+            options = self.user_zs_bits & kept
+            options |= f.zs_use_index if plan.index else 0
+            options |= f.zs_opposite_side if final.opposite else 0
+            options |= f.zs_ignore_switch if final.ignore_switch else 0
+        self._search(final, options, self.counts(self._v(0x607C)))
+
+    def _search(self, search: Search, options: int, p_home: int) -> None:
+        """Start the motor's zero search ``search`` with ZERO_SEARCH_BITS ``options`` and
+        the zero at ``p_home`` counts."""
+        self._w(self.f.v_home,
+                search.direction * max(1, abs(self.velocity(self._v(0x6099, 1)))))
+        self._w(self.f.p_home, p_home)
+        if self.f.zero_search_bits is not None:
+            self._w(self.f.zero_search_bits, options)
+        self._w(self.f.mode, self.f.zero_search_2 if search.type2 else self.f.zero_search_1)
+
+    def _end_homing(self, outcome: str) -> None:
+        """The homing ends (``outcome``: "attained" or "error"): the motor holds its position
+        in position mode and ZERO_SEARCH_BITS is the user's again."""
+        self.homing = outcome
+        self.homing_plan = None
+        self.homing_seeking = False
+        if self.user_zs_bits is not None:
+            self._w(self.f.zero_search_bits, self.user_zs_bits)
+            self.user_zs_bits = None
+        if self.state == State.OPERATION_ENABLED:
+            self._w(self.f.p_soll, self._r(self.f.p_ist))
+            self._w(self.f.mode, self.f.position)
 
     def _cyclic_move(self, counts: int, relative: bool) -> None:
         """Reach ``counts`` (or that much further) within one interpolation period."""
@@ -453,7 +506,7 @@ class Drive:
             self.state = State.FAULT_REACTION_ACTIVE
             self._disable(State.FAULT)
             if self.homing == "running":
-                self.homing = "error"
+                self._end_homing("error")
             return
         if self.state == State.QUICK_STOP_ACTIVE:
             if self._r(self.f.v_ist) == 0 and self._v(0x605A) in (1, 2, 3):
@@ -470,9 +523,11 @@ class Drive:
         elif self.mode == _HM and self.homing == "running":
             if self._r(self.f.mode) not in (self.f.zero_search_1, self.f.zero_search_2):
                 ok = not err and bool(self._r(self.f.statusbits) & self.f.st_zero_search_done)
-                self.homing = "attained" if ok else "error"
-                self._w(self.f.p_soll, self._r(self.f.p_ist))
-                self._w(self.f.mode, self.f.position)
+                if ok and self.homing_seeking and self.homing_plan is not None:
+                    self.homing_seeking = False
+                    self._final_search(self.homing_plan)
+                else:
+                    self._end_homing("attained" if ok else "error")
         elif self.mode == _PT:
             goal = self._torque_current()
             step = self._v(0x6087) * self.base_current / 1000.0 * dt_ms / 1000.0

@@ -33,6 +33,7 @@ from canopen.objectdictionary import datatypes as dt
 
 from ...registers.table import Access
 from .facts import CanopenFacts
+from .homing import HOMING_METHODS as _HOMING_METHODS
 
 __all__ = ["build_dictionary", "RPDOS", "TPDOS", "DEFAULT_RPDO_MAP", "DEFAULT_TPDO_MAP",
            "BECKHOFF_RPDO_MAP", "BECKHOFF_TPDO_MAP", "REGISTER_OBJECTS", "STORABLE_402",
@@ -85,8 +86,8 @@ SAVE, LOAD = 0x65766173, 0x64616F6C
 #: modes of operation the drive carries out (§11.5.1), as bits of 6502h (DSP-402)
 SUPPORTED_MODES = {1: 1 << 0, 3: 1 << 2, 4: 1 << 3, 6: 1 << 5, 7: 1 << 6, 8: 1 << 7,
                    9: 1 << 8, 10: 1 << 9}
-#: the homing methods §11.5.6's table marks "Yes" (docs/protocol.md: the decision)
-HOMING_METHODS = (-4, -3, 1, 2, 3, 4, 5, 6)
+#: the homing methods 6098h takes (:mod:`.homing`; docs/protocol.md: the decision)
+HOMING_METHODS = _HOMING_METHODS
 
 
 def _var(name: str, index: int, sub: int, dtype: int, access: str, default: Any = None,

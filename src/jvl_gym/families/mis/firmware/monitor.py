@@ -26,7 +26,9 @@ status bits (MIS manual §8.2.15, §8.2.18–19, §8.2.24, §8.2.31–32, §5.9,
   stays active (§5.9.5). In position and gear mode the move itself ends at a software limit,
   braking with the normal deceleration (``outer``), so P_IST never passes it. With SETUP_BITS
   bit 28 (limits without memory, §5.9.6) a has-been-active warning clears when the motor moves
-  away from its limit and the limit is no longer active.
+  away from its limit and the limit is no longer active. During a zero search a limit input
+  that is also the home input (HOME_MASK) is the search's switch, not a limit: "the limit
+  switch will not raise an error when activated during home sequence" (§11.5.6).
 - An error (ERR_BITS ≠ 0) in an active mode stops the motor with ACC_EMERG and then makes it
   passive (§8.2.28, §8.2.31: "will not move until all the errors have been cleared"), except
   the zero-search time-out (bit 16), which sets the motor back in its previous mode, where it
@@ -140,6 +142,9 @@ def check_errors(regs, s, p, u, active: bool, has_encoder: bool,
     lo, hi = regs[R.MIN_P_IST], regs[R.MAX_P_IST]
     soft = (lo != 0 or hi != 0) and not tt
     inputs = regs[R.INPUTS]
+    mode = regs[R.MODE_REG]
+    if mode == c.ZERO_SEARCH_1 or mode == c.ZERO_SEARCH_2:
+        inputs &= ~regs[R.HOME_MASK]  # a limit switch used as the home switch (§11.5.6)
     soft_pos = soft and regs[R.P_IST] >= hi
     soft_neg = soft and regs[R.P_IST] <= lo
     pos_hit = (inputs & regs[R.PL_MASK]) != 0 or soft_pos
@@ -154,7 +159,6 @@ def check_errors(regs, s, p, u, active: bool, has_encoder: bool,
             warn &= ~c.WARN_POS_LIMIT_SEEN
         if v > 0.0 and not neg_hit:
             warn &= ~c.WARN_NEG_LIMIT_SEEN
-    mode = regs[R.MODE_REG]
     # the way the motor is asked to move: to P_SOLL, or at V_SOLL (0: nowhere)
     ahead = wrap32(regs[R.P_SOLL] - regs[R.P_IST]) if (
         mode == c.POSITION or mode == c.GEAR) else (regs[R.V_SOLL] if mode == c.VELOCITY
