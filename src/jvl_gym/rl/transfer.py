@@ -85,8 +85,9 @@ def measure_transfer(env_id: str, model: str | Path, link: str, *, motor_type: s
     """The returns of the policy ``model`` on ``episodes`` episodes from ``seed`` three ways
     (module docstring); deployed to ``url`` (a ``jvl-gym serve --line ENV_ID --seed SEED``)
     or, by default, to a twin served here in real time (:func:`served_twin`)."""
+    from ..envs.link import parse_link
     from ..envs.registration import vector_class
-    from .deploy import deploy, load_policy, loop_period
+    from .deploy import deploy, holds_latency, link_latency, load_policy, loop_period
     from .evaluate import run_episodes
 
     cls = vector_class(env_id)
@@ -94,6 +95,8 @@ def measure_transfer(env_id: str, model: str | Path, link: str, *, motor_type: s
                          cls.step_seconds(motor_type))
     kwargs = {"motor_type": motor_type}
     period = loop_period(env_id, link, motor_type)
+    hold = link_latency(env_id, link, motor_type) if holds_latency(link) else 0.0
+    max_step = parse_link(link).max_step or 2.0  # the link model's rate limit (2: none)
     out = Transfer(env_id, link, seed, period)
     out.sim = run_episodes(env_id, policy, seed, episodes, kwargs).returns.tolist()
     out.link_model = run_episodes(env_id, policy, seed, episodes, kwargs,
@@ -105,10 +108,12 @@ def measure_transfer(env_id: str, model: str | Path, link: str, *, motor_type: s
         with TwinServer(twin, tcp=("127.0.0.1", 0), speed=1.0) as server:
             report = deploy(env_id, policy, server.endpoint("mactalk", "tcp").url, address,
                             motor_type, period=period, episodes=episodes, seed=seed,
-                            trace=trace)
+                            trace=trace, hold=hold,
+                            max_step=max_step)
     else:
         report = deploy(env_id, policy, url, address, motor_type, period=period,
-                        episodes=episodes, seed=seed, trace=trace)
+                        episodes=episodes, seed=seed, trace=trace, hold=hold,
+                            max_step=max_step)
     out.deployed = list(report.returns)
     out.reason = report.reason
     out.rate_hz, out.latency_mean, out.latency_max = (report.rate_hz, report.latency_mean,
