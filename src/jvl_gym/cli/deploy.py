@@ -17,8 +17,8 @@ from typing import Annotated
 
 import typer
 
-from ..rl.deploy import holds_latency, link_latency, loop_period
 from ..envs.link import parse_link
+from ..rl.deploy import holds_latency, link_latency, loop_period
 from .app import CliError
 
 #: the supervisor's rate limit when neither --max-step nor the link states one

@@ -113,18 +113,19 @@ def deployed_trace(env_id: str, policy: Callable[[np.ndarray], Any], link: str,
 
 
 def link_trace(env_id: str, policy: Callable[[np.ndarray], Any], link: str, motor_type: str,
-               seed: int, periods: int) -> dict[str, np.ndarray]:
+               seed: int, periods: int, **env_kwargs: Any) -> dict[str, np.ndarray]:
     """The same policy's episode from ``seed`` on the env behind ``link``: rows ``obs``,
     ``action`` (as the link carries it: rate-limited, quantised), ``registers`` (the link model's register
     command of the action, when it has one; else empty rows) and ``reward``, one per
-    period."""
+    period. ``env_kwargs`` go to the env (GearSync's line has no load cell noise:
+    ``loadcell_noise=0.0``)."""
     import gymnasium as gym
 
     import jvl_gym  # noqa: F401
 
     from ..envs.link import LinkEnv
 
-    env = LinkEnv(gym.make(env_id, motor_type=motor_type), link)
+    env = LinkEnv(gym.make(env_id, motor_type=motor_type, **env_kwargs), link)
     command = env.core.command
     obs, _ = env.reset(seed=seed)
     rows = _rows()
