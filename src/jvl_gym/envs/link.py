@@ -310,7 +310,10 @@ class TorqueLimitCommand:
     """Positioning's torque action over MacTalk's registers: velocity mode (MAC050–141 manual
     4.4.2) with the speed command V_SOLL at the speed limit in the action's direction and the
     torque limit T_SOLL = |action| × its full scale. The velocity loop saturates at T_SOLL, so
-    the torque follows the action while the motor is below the speed limit.
+    the torque follows the action while the motor is below the speed limit. The acceleration
+    A_SOLL is set to its largest value at the start: velocity mode ramps its speed reference at
+    A_SOLL, and at the default (160) the ramp, not T_SOLL, would set the torque (a reversal
+    of the action would take the ramp's time to reverse the torque).
 
     Parameters
     ----------
@@ -327,6 +330,7 @@ class TorqueLimitCommand:
         self.mode = int(fam.task.VELOCITY_MODE)
         self.passive = int(fam.twin.passive_mode)
         self.bounds = raw_bounds(fam.table, self.writes)
+        self.a_max = int(raw_bounds(fam.table, ("A_SOLL",))["A_SOLL"][1])
         lo, hi = self.bounds["V_SOLL"]
         self.v_limit = int(min(abs(round(fam.task.rpm_to_v_soll(speed_limit))), hi, -lo))
         self.t_full = int(self.bounds["T_SOLL"][1])
@@ -338,11 +342,16 @@ class TorqueLimitCommand:
         return {"T_SOLL": np.round(np.abs(a) * self.t_full).astype(np.int64),
                 "V_SOLL": np.where(a >= 0, self.v_limit, -self.v_limit).astype(np.int64)}
 
+    def start_registers(self) -> dict[str, int]:
+        """The registers an episode starts with: no torque, no speed, the largest
+        acceleration (class docstring)."""
+        return {"T_SOLL": 0, "V_SOLL": 0, "A_SOLL": self.a_max}
+
     def start(self, motors: Any, idx: np.ndarray) -> None:
         """Begin an episode of the motors ``idx`` as the deployment does: passive (the
-        family's passive mode, reached through a stop), no torque, no speed."""
-        motors.write_raw_many({"T_SOLL": 0, "V_SOLL": 0}, index=idx)
+        family's passive mode, reached through a stop), then :meth:`start_registers`."""
         motors.write("MODE_REG", self.passive, index=idx)
+        motors.write_raw_many(self.start_registers(), index=idx)
 
     def write(self, motors: Any, idx: np.ndarray, actions: np.ndarray) -> None:
         """Command the motors ``idx`` with ``actions`` (N, 1): the registers, and velocity

@@ -144,10 +144,11 @@ class PositioningBridge:
 
     def start(self, link: BusLink, core: Any) -> None:
         """Begin a move to the target the env drew (``core.target``, counts) from here:
-        passive, P_IST = 0, no torque, then velocity mode."""
+        passive, P_IST = 0, the command's start registers (no torque, the largest
+        acceleration), then velocity mode."""
         target = int(core.target[0])
         link.settle_passive()
-        link.write_raws({"P_IST": 0, "T_SOLL": 0, "V_SOLL": 0})
+        link.write_raws({"P_IST": 0, **self.command.start_registers()})
         link.client.write("MODE_REG", self.command.mode)
         self.target = target
         self.direction = 1.0 if target >= 0 else -1.0
