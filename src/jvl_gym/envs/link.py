@@ -64,7 +64,8 @@ import numpy as np
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 __all__ = ["Link", "LinkVectorEnv", "LinkEnv", "parse_link", "make_link_vec", "KINDS",
-           "TorqueLimitCommand", "BUS_COMMANDS", "bus_command", "SPEED_LIMIT_RPM"]
+           "TorqueLimitCommand", "BUS_COMMANDS", "bus_command", "SPEED_LIMIT_RPM",
+           "LoadCellObserver", "BUS_OBSERVERS", "bus_observer", "LOADCELL_FULL_SCALE"]
 
 #: the link kinds: serial register links, CANopen PDOs, an analogue input through a DAC
 KINDS = ("mactalk", "mactalk32", "mactalk-tcp", "modbus", "canopen", "dac")
@@ -363,8 +364,93 @@ class TorqueLimitCommand:
             motors.write("MODE_REG", self.mode, index=off)
 
 
+#: the load cell's force at +10 V on the analogue input [N] (GearSync's references are
+#: 10–25 N and a web breaks at 3 × its reference: 75 N at most)
+LOADCELL_FULL_SCALE = 100.0
+#: the analogue input's counts at +10 V (ANINP, MAC050–141 manual 3.2.122)
+ANINP_FULL = 1023
+
+
+class LoadCellObserver:
+    """GearSync's tension channels as a controller over MacTalk computes them: from the load
+    cell on the analogue input, read as ANINP (1023 counts for :data:`LOADCELL_FULL_SCALE`,
+    0.1 N a count), once a period: the tension error, its rate since the last read and the
+    leaky integral of the error, kept by the controller (the env computes them every step
+    from the load cell's unquantised reading). The deployment's bridge and the link model
+    observe through it alike.
+
+    Parameters
+    ----------
+    n : int
+        Copies.
+    tau : float
+        The leaky integral's time constant [s] (the env's).
+    """
+
+    env_id = "jvl_gym/GearSync-v0"
+
+    def __init__(self, n: int, tau: float) -> None:
+        self.tau = float(tau)
+        self.previous = np.full(n, np.nan)
+        self.integral = np.zeros(n)
+
+    @staticmethod
+    def tension_of(aninp: np.ndarray) -> np.ndarray:
+        """The tension [N] of an ANINP reading."""
+        return np.asarray(aninp, dtype=np.float64) / ANINP_FULL * LOADCELL_FULL_SCALE
+
+    @staticmethod
+    def aninp_of(tension: np.ndarray) -> np.ndarray:
+        """The ANINP reading of a tension [N] (the load cell on 0..10 V)."""
+        volts = np.clip(np.asarray(tension, dtype=np.float64) / LOADCELL_FULL_SCALE, -1.0, 1.0)
+        return np.round(volts * ANINP_FULL)
+
+    def reset(self, idx: np.ndarray) -> None:
+        """A new episode of the copies ``idx``: no reading before, no integral."""
+        self.previous[idx] = np.nan
+        self.integral[idx] = 0.0
+
+    def observe(self, idx: np.ndarray, tension: np.ndarray, ref: np.ndarray, period: float
+                ) -> np.ndarray:
+        """The channels (M, 3) of the copies ``idx`` at a read of ``tension`` [N] (the
+        quantised reading), against the references ``ref`` [N], ``period`` s after the last
+        read: the error, the rate (0.1 s of its change), the integral × 10 (as the env
+        scales them)."""
+        tension = np.asarray(tension, dtype=np.float64)
+        before = np.where(np.isnan(self.previous[idx]), tension, self.previous[idx])
+        self.previous[idx] = tension
+        e = (tension - ref) / ref
+        self.integral[idx] += period * (e - self.integral[idx] / self.tau)
+        return np.stack([e, (tension - before) / ref * (0.1 / period),
+                         self.integral[idx] * 10.0], axis=1)
+
+    def link_observation(self, env: Any, idx: np.ndarray, obs: np.ndarray, period: float
+                         ) -> None:
+        """Replace the tension channels of ``obs`` rows ``idx`` (the env's, from the load
+        cell's unquantised reading) by those read through ANINP (in place)."""
+        from .compiled import OBS_BOUND
+
+        ref = np.asarray(env.tension_ref, dtype=np.float64)[idx]
+        measured = ref * (1.0 + obs[idx, 0].astype(np.float64))
+        chans = self.observe(idx, self.tension_of(self.aninp_of(measured)), ref, period)
+        obs[idx, 0:3] = np.clip(chans, -OBS_BOUND, OBS_BOUND)
+
+
 #: the register command of each env whose action has no register of its own, on MacTalk
 BUS_COMMANDS: dict[str, Any] = {TorqueLimitCommand.env_id: TorqueLimitCommand}
+
+
+#: the observers of an env whose observation a controller computes from what it reads
+BUS_OBSERVERS: dict[str, Any] = {LoadCellObserver.env_id: LoadCellObserver}
+
+
+def bus_observer(env_id: str, link: Link, n: int) -> Any:
+    """The observer of ``env_id`` on ``link`` (:data:`BUS_OBSERVERS`), or None."""
+    if link.kind not in MACTALK_KINDS or env_id not in BUS_OBSERVERS:
+        return None
+    from . import gear_sync as gs
+
+    return BUS_OBSERVERS[env_id](n, gs._INTEGRAL_TAU)
 
 
 def bus_command(env_id: str, link: Link, fam: Any) -> Any:
@@ -415,6 +501,8 @@ class LinkVectorEnv(VectorEnv):
             command = bus_command(_env_id(env), self.link, env.fam)
         #: the register command of the held action, or None (the env's own action)
         self.command = command
+        #: the observer of what the controller reads, or None (the env's own observation)
+        self.observer = bus_observer(_env_id(env), self.link, env.num_envs)
         self.num_envs = env.num_envs
         self.single_observation_space = env.single_observation_space
         self.single_action_space = env.single_action_space
@@ -517,6 +605,10 @@ class LinkVectorEnv(VectorEnv):
         read = np.array([rng.random() >= self.link.drop if self.link.drop else True
                          for rng in self._rngs])
         got = read | ended | fresh
+        if self.observer is not None:
+            # (a copy reset at the period's end was observed by its reset)
+            self.observer.link_observation(self.env, np.flatnonzero(got & ~fresh), obs,
+                                           self.period_steps * self.step_seconds)
         self._seen[got] = obs[got]
         if self.autoreset_mode == AutoresetMode.SAME_STEP and ended.any():
             info.update({"final_obs": final, "_final_obs": ended.copy(),
@@ -550,6 +642,11 @@ class LinkVectorEnv(VectorEnv):
         self._due[idx] = np.iinfo(np.int64).max
         if not keep_clock:
             self._clock[idx] = 0
+        if self.observer is not None and len(idx):
+            idx = np.asarray(idx)
+            self.observer.reset(idx)
+            self.observer.link_observation(self.env, idx, obs,
+                                           self.period_steps * self.step_seconds)
         self._seen[idx] = obs[idx]
 
     def _send(self, actions: np.ndarray, mask: np.ndarray) -> None:

@@ -208,7 +208,7 @@ class GearSyncBridge:
     read at the start of each episode; the task's bounds on GEARF1 follow from them.
 
     The analogue input is then free for the load cell (:mod:`jvl_gym.rl.lines`): the
-    tension is ANINP/1023 × :data:`~jvl_gym.rl.lines.LOADCELL_FULL_SCALE` (manual 3.2.122);
+    tension is ANINP/1023 × :data:`~jvl_gym.envs.link.LOADCELL_FULL_SCALE` (manual 3.2.122);
     the master's speed is the pulse input V_EXT (3.2.120); V_IST, FLWERR and FNCERR are read
     as the env observes them. The tension's rate is the change since the last period and the
     leaky integral is kept by the controller, both as the env computes them per step, over
@@ -230,8 +230,6 @@ class GearSyncBridge:
 
     def __init__(self, fam: Any) -> None:
         from ..envs import gear_sync as gs
-        from .lines import LOADCELL_FULL_SCALE
-
         gear_mode = getattr(fam.task, "GEAR_MODE", None)
         ag = getattr(fam.task, "ag_factor", None)
         if gear_mode is None or ag is None:
@@ -243,7 +241,7 @@ class GearSyncBridge:
         self.dt = float(k.OUTER_DT)
         self.v_norm = gs._NORM_RPM / 60.0 * k.COUNTS_PER_REV / k.OUTER_HZ
         self.tau = float(gs._INTEGRAL_TAU)
-        self.full_scale = float(LOADCELL_FULL_SCALE)
+        self.full_scale = float(link_model.LOADCELL_FULL_SCALE)
         self.aninp_full = 1023.0  # ±10 V (manual 3.2.122)
 
         def factor(a: float) -> float:
@@ -257,8 +255,8 @@ class GearSyncBridge:
         self._reset_state()
 
     def _reset_state(self) -> None:
-        self.previous_tension: float | None = None
-        self.integral = 0.0
+        #: the tension channels from the load cell (the link model's own)
+        self.load_cell = link_model.LoadCellObserver(1, self.tau)
         self.last_action = 0.0
         self.tension = self.ref
 
@@ -300,15 +298,12 @@ class GearSyncBridge:
         """The env's observation (1, 8) from the registers and the controller's own state."""
         from ..envs.compiled import OBS_BOUND
 
-        ref = self.ref
-        tension = raws["ANINP"] / self.aninp_full * self.full_scale
-        before = tension if self.previous_tension is None else self.previous_tension
-        self.previous_tension = self.tension = tension
-        e = (tension - ref) / ref
-        self.integral += period * (e - self.integral / self.tau)
-        self.error = e
-        obs = np.array([e, (tension - before) / ref * (0.1 / period), self.integral * 10.0,
-                        raws["V_EXT"] / self.master_counts, raws["V_IST"] / self.v_norm,
+        one = np.zeros(1, dtype=np.int64)
+        tension = self.load_cell.tension_of(np.array([raws["ANINP"]]))
+        self.tension = float(tension[0])
+        chans = self.load_cell.observe(one, tension, np.array([self.ref]), period)[0]
+        self.error = float(chans[0])
+        obs = np.array([*chans, raws["V_EXT"] / self.master_counts, raws["V_IST"] / self.v_norm,
                         raws["FLWERR"] / 100.0, raws["FNCERR"] / 10000.0, float(previous[0])],
                        dtype=np.float32)
         return np.clip(obs, -OBS_BOUND, OBS_BOUND)[None]

@@ -34,12 +34,11 @@ from typing import Any
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
+from ..envs.link import LOADCELL_FULL_SCALE
+
 __all__ = ["EnvMachine", "PositioningLoad", "GearSyncLine", "LOADCELL_FULL_SCALE", "LINES",
            "make_line"]
 
-#: the load cell's force at +10 V on the analogue input [N] (the env's references are 10–25 N
-#: and a web breaks at 3 × its reference: 75 N at most)
-LOADCELL_FULL_SCALE = 100.0
 #: outer samples a line's episode may last (the line never ends by time while served)
 _LINE_SAMPLES = 10_000_000
 

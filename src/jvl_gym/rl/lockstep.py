@@ -115,10 +115,10 @@ def deployed_trace(env_id: str, policy: Callable[[np.ndarray], Any], link: str,
 def link_trace(env_id: str, policy: Callable[[np.ndarray], Any], link: str, motor_type: str,
                seed: int, periods: int, **env_kwargs: Any) -> dict[str, np.ndarray]:
     """The same policy's episode from ``seed`` on the env behind ``link``: rows ``obs``,
-    ``action`` (as the link carries it: rate-limited, quantised), ``registers`` (the link model's register
-    command of the action, when it has one; else empty rows) and ``reward``, one per
-    period. ``env_kwargs`` go to the env (GearSync's line has no load cell noise:
-    ``loadcell_noise=0.0``)."""
+    ``action`` (as the link carries it: rate-limited, quantised), ``registers`` (the link
+    model's register command of the action, when it has one; else empty rows) and
+    ``reward``, one per period. ``env_kwargs`` go to the env (GearSync's line has no load
+    cell noise: ``loadcell_noise=0.0``)."""
     import gymnasium as gym
 
     import jvl_gym  # noqa: F401
