@@ -68,3 +68,16 @@ def test_positioning_behind_mactalk_commands_the_bridges_registers():
         assert {name: int(m.read_raw(name)[i]) for name in want} == want
     # a DAC drives the env's own analogue torque
     assert make_link_vec("jvl_gym/Positioning-v0", 1, "dac:12").command is None
+
+
+def test_gear_sync_behind_mactalk_reads_the_tension_through_the_load_cell():
+    env = make_link_vec("jvl_gym/GearSync-v0", 2, LINK)
+    obs, _ = env.reset(seed=5)
+    for _ in range(4):
+        obs, *_ = env.step(np.zeros((2, 1)))
+    ref = env.env.tension_ref
+    # the tension the controller sees is a whole ANINP count (0.1 N), as the bridge reads it
+    counts = ref * (1.0 + obs[:, 0].astype(np.float64)) / 100.0 * 1023
+    np.testing.assert_allclose(counts, np.round(counts), atol=1e-3)
+    # its rate is the change of those readings over the period
+    assert make_link_vec("jvl_gym/GearSync-v0", 1, "dac:12").observer is None
