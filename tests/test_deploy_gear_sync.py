@@ -113,11 +113,12 @@ def test_a_deployed_gear_sync_episode_reports_its_return_and_metrics(tmp_path):
     assert abs(float(rows[-1]["tension_error"])) < 0.5
     assert float(rows[-1]["master_speed"]) > 0.0
     assert mode != int(FAM.constants.GP_MODE)  # stopped at the end
-    # the reward of a period: the env's per step, over the period's env steps
+    # the reward of a period: the env's per step, over the period's env steps, linear between
+    # the reads that begin and end it (the action held: no rate penalty)
     steps = period / (2 * FAM.constants.OUTER_DT)
     r = float(rows[3]["reward"])
-    e = float(rows[3]["load_cell_error"])
-    assert r == pytest.approx(steps * (1 - min(abs(e) / 0.1, 2.0)), abs=1e-6)
+    begin, end = (1 - min(abs(float(rows[k]["load_cell_error"])) / 0.1, 2.0) for k in (3, 4))
+    assert r == pytest.approx(0.5 * (steps - 1) * begin + 0.5 * (steps + 1) * end, abs=1e-6)
 
 
 def test_a_web_that_goes_slack_ends_the_episode_with_the_penalty():

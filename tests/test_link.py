@@ -271,3 +271,27 @@ def test_next_step_autoreset_of_some_copies_starts_them_afresh() -> None:
     assert not (term | trunc)[0]
     _, _, term, trunc, _ = env.step(np.zeros((2, 1)))
     assert trunc[0]  # 8 steps of its own: the whole episode
+
+
+def test_mactalk_over_tcp_states_its_period_and_latency() -> None:
+    link = parse_link("mactalk-tcp:10ms")
+    assert link.times(1, 3, 0.00192) == (0.010, 0.004)
+    assert parse_link("mactalk-tcp:0.02,latency=5ms").times(1, 3, 0.00192) == (0.02, 0.005)
+    assert str(parse_link("mactalk-tcp:10ms,max_step=0.5")) == "mactalk-tcp:10ms,max_step=0.5"
+    env = make_link_vec(ENV, 1, "mactalk-tcp:10ms", max_episode_steps=60)
+    assert (env.period_steps, env.latency_steps) == (6, 2)  # 11.52 ms, 3.84 ms
+    with pytest.raises(ValueError, match="shorter than the period") as err:
+        parse_link("mactalk-tcp:4ms,latency=5ms")
+    assert "\n" not in str(err.value)
+
+
+def test_the_rate_limit_moves_the_action_at_most_max_step_a_period() -> None:
+    env = make_link_vec(ENV, 1, "canopen:1.92ms,max_step=0.5", max_episode_steps=60)
+    seen = _spy(env)
+    env.reset(seed=0)
+    for a in (1.0, 1.0, -1.0, -1.0, -1.0):
+        env.step(np.full((1, 1), a))
+    got = [float(x[0, 0]) for x in seen]
+    q = Link("canopen").quantise(np.array([0.5, 1.0, 0.5, 0.0, -0.5]))
+    # one period late (canopen): the held command steps by 0.5 at most
+    assert got == [0.0, *q[:4].tolist()]

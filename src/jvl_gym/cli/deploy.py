@@ -17,8 +17,12 @@ from typing import Annotated
 
 import typer
 
-from ..rl.deploy import link_latency, loop_period
+from ..envs.link import parse_link
+from ..rl.deploy import holds_latency, link_latency, loop_period
 from .app import CliError
+
+#: the supervisor's rate limit when neither --max-step nor the link states one
+DEFAULT_MAX_STEP = 0.5
 
 __all__ = ["deploy", "loop_period"]
 
@@ -40,8 +44,9 @@ def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-
                help="time the policy has for an action [s] (default: the period)")] = None,
            episodes: Annotated[int, typer.Option(min=1)] = 1,
            seed: Annotated[int, typer.Option(help="seed of the first episode")] = 0,
-           max_step: Annotated[float, typer.Option(
-               help="rate limit: largest change of the command per period")] = 0.5,
+           max_step: Annotated[float | None, typer.Option(
+               help="rate limit: largest change of the command per period (default: the "
+               "link's max_step, else 0.5)")] = None,
            watchdog_timeout: Annotated[float, typer.Option(
                help="seconds without a heartbeat before the watchdog stops the motor")] = 0.25,
            watchdog_url: Annotated[str | None, typer.Option(
@@ -51,7 +56,8 @@ def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-
            trace: Annotated[Path | None, typer.Option(help="CSV of every period")] = None,
            line_time: Annotated[bool, typer.Option(
                "--line-time", help="hold each write until the link model's latency after the "
-               "read: the serial line's time, which a twin over TCP does not take")] = False
+               "read: the serial line's time, which a twin over TCP does not take (always on "
+               "a mactalk-tcp link: its stated latency)")] = False
            ) -> None:
     """Run POLICY on the motor in real time, bounded and watched by the safety supervisor;
     print the episodes' return and metrics, the loop's rate and latency, and why it stopped."""
@@ -75,6 +81,8 @@ def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-
     motor_type = motor or cls._default_type()
     try:
         step = period if period is not None else loop_period(env_id, link, motor_type)
+        if max_step is None:
+            max_step = parse_link(link).max_step or DEFAULT_MAX_STEP
         pol = load_policy(policy, env_id, len(cls.act_labels), cls.step_seconds(motor_type))
     except (ValueError, FileNotFoundError) as exc:
         raise CliError(str(exc)) from None
@@ -83,7 +91,8 @@ def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-
                      episodes=episodes, seed=seed, max_step=max_step,
                      watchdog_url=watchdog_url, watchdog_timeout=watchdog_timeout,
                      timeout=timeout, trace=trace,
-                     hold=link_latency(env_id, link, motor_type) if line_time else 0.0)
+                     hold=link_latency(env_id, link, motor_type)
+                     if line_time or holds_latency(link) else 0.0)
     except ValueError as exc:  # a bridge that does not run on the motor's family
         raise CliError(str(exc)) from None
     typer.echo(f"period {1e3 * step:.2f} ms ({'--period' if period is not None else link})")

@@ -34,11 +34,18 @@ from typing import Any
 
 import numpy as np
 
+from ..envs import link as link_model
 from .metrics import engineering_metrics
 from .supervisor import Limits, PolicyRunner, Stopped, Supervisor, Watchdog, register_bounds
 
 __all__ = ["PositioningBridge", "GearSyncBridge", "BusLink", "DeployReport", "deploy", "BRIDGES",
-           "load_policy", "loop_period", "link_latency"]
+           "load_policy", "loop_period", "link_latency", "holds_latency", "PeriodReward"]
+
+
+#: the longest wait for a motor to reach the passive mode at an episode's start [s], and the
+#: time between two reads of its mode [s]
+SETTLE_TIMEOUT = 2.0
+SETTLE_POLL = 0.002
 
 
 class BusLink:
@@ -70,10 +77,25 @@ class BusLink:
         """MODE_REG = the passive mode."""
         self.client.write("MODE_REG", self.passive_mode)
 
+    def settle_passive(self, timeout: float = SETTLE_TIMEOUT) -> None:
+        """MODE_REG = the passive mode, and wait until the motor reads it: a running motor
+        stops on its way to passive (MAC050–141 manual 4.4.1), and a mode written before the
+        stop is done starts another stop instead of the mode (the mode would be lost).
+        Raises TimeoutError when the motor is not passive within ``timeout`` seconds."""
+        self.passive()
+        pause = getattr(self.client, "pause", time.sleep)
+        waited = 0.0
+        while int(self.client.read_raw("MODE_REG")) != self.passive_mode:
+            if waited > timeout:
+                raise TimeoutError(f"the motor did not reach the passive mode within "
+                                   f"{timeout:g} s")
+            pause(SETTLE_POLL)
+            waited += SETTLE_POLL
 
-#: the speed limit of a deployed Positioning policy [rpm]: the scale of the env's speed
-#: observation and the speed of its firmware baseline
-SPEED_LIMIT_RPM = 3000.0
+
+#: the speed limit of a deployed Positioning policy [rpm] (:class:`~jvl_gym.envs.link.
+#: TorqueLimitCommand`)
+SPEED_LIMIT_RPM = link_model.SPEED_LIMIT_RPM
 
 
 class PositioningBridge:
@@ -105,9 +127,10 @@ class PositioningBridge:
         self.cpr = float(k.COUNTS_PER_REV)
         self.fine = pos._FINE_TURNS * k.COUNTS_PER_REV
         self.v_norm = pos._NORM_RPM / 60.0 * k.COUNTS_PER_REV / k.OUTER_HZ
+        #: the action's registers: the link model's own (one definition for both)
+        self.command = link_model.TorqueLimitCommand(fam, speed_limit)
         self.bounds = register_bounds(fam.table, self.writes)
-        lo, hi = self.bounds["V_SOLL"]
-        self.v_limit = int(min(abs(round(fam.task.rpm_to_v_soll(speed_limit))), hi, -lo))
+        self.v_limit = self.command.v_limit
         self.w_over, self.w_effort = float(overshoot_weight), float(effort_weight)
         self.target = 0
         self.direction = 1.0
@@ -121,22 +144,21 @@ class PositioningBridge:
 
     def start(self, link: BusLink, core: Any) -> None:
         """Begin a move to the target the env drew (``core.target``, counts) from here:
-        passive, P_IST = 0, no torque, then velocity mode."""
+        passive, P_IST = 0, the command's start registers (no torque, the largest
+        acceleration), then velocity mode."""
         target = int(core.target[0])
-        link.passive()
-        link.write_raws({"P_IST": 0, "T_SOLL": 0, "V_SOLL": 0})
-        link.client.write("MODE_REG", int(self.fam.task.VELOCITY_MODE))
+        link.settle_passive()
+        link.write_raws({"P_IST": 0, **self.command.start_registers()})
+        link.client.write("MODE_REG", self.command.mode)
         self.target = target
         self.direction = 1.0 if target >= 0 else -1.0
         self.overshoot = 0.0
 
     def to_registers(self, action: np.ndarray) -> dict[str, int]:
         """Torque limit |a| of full scale, speed command at the speed limit in a's
-        direction."""
-        a = float(action[0])
-        t_full = self.bounds["T_SOLL"][1]
-        return {"T_SOLL": int(round(abs(a) * t_full)),
-                "V_SOLL": self.v_limit if a >= 0 else -self.v_limit}
+        direction (:meth:`~jvl_gym.envs.link.TorqueLimitCommand.registers`)."""
+        raws = self.command.registers(np.asarray(action, dtype=np.float64).reshape(1, -1))
+        return {name: int(v[0]) for name, v in raws.items()}
 
     def observe(self, raws: Mapping[str, int], previous: np.ndarray, period: float
                 ) -> np.ndarray:
@@ -149,12 +171,16 @@ class PositioningBridge:
         self.error = e / self.cpr
         return np.clip(obs, -OBS_BOUND, OBS_BOUND)[None]
 
-    def reward(self, action: np.ndarray, steps: float) -> float:
-        """The env's reward over ``steps`` env steps at this error and command."""
+    def rate(self, action: np.ndarray) -> float:
+        """The env's reward of one env step at this error under the command ``action``."""
         error_turns, a = self.error, float(action[0])
         past = max(-self.direction * error_turns, 0.0)
         self.overshoot = max(self.overshoot, past)
-        return steps * (-abs(error_turns) - self.w_over * past - self.w_effort * a * a)
+        return -abs(error_turns) - self.w_over * past - self.w_effort * a * a
+
+    def penalty(self, action: np.ndarray) -> float:
+        """The reward of a new command once (none: Positioning's reward is per step)."""
+        return 0.0
 
     def failure(self) -> str:
         """Why the episode ends early: never (the motor's error bits stop it on its own)."""
@@ -182,7 +208,7 @@ class GearSyncBridge:
     read at the start of each episode; the task's bounds on GEARF1 follow from them.
 
     The analogue input is then free for the load cell (:mod:`jvl_gym.rl.lines`): the
-    tension is ANINP/1023 × :data:`~jvl_gym.rl.lines.LOADCELL_FULL_SCALE` (manual 3.2.122);
+    tension is ANINP/1023 × :data:`~jvl_gym.envs.link.LOADCELL_FULL_SCALE` (manual 3.2.122);
     the master's speed is the pulse input V_EXT (3.2.120); V_IST, FLWERR and FNCERR are read
     as the env observes them. The tension's rate is the change since the last period and the
     leaky integral is kept by the controller, both as the env computes them per step, over
@@ -204,8 +230,6 @@ class GearSyncBridge:
 
     def __init__(self, fam: Any) -> None:
         from ..envs import gear_sync as gs
-        from .lines import LOADCELL_FULL_SCALE
-
         gear_mode = getattr(fam.task, "GEAR_MODE", None)
         ag = getattr(fam.task, "ag_factor", None)
         if gear_mode is None or ag is None:
@@ -217,7 +241,7 @@ class GearSyncBridge:
         self.dt = float(k.OUTER_DT)
         self.v_norm = gs._NORM_RPM / 60.0 * k.COUNTS_PER_REV / k.OUTER_HZ
         self.tau = float(gs._INTEGRAL_TAU)
-        self.full_scale = float(LOADCELL_FULL_SCALE)
+        self.full_scale = float(link_model.LOADCELL_FULL_SCALE)
         self.aninp_full = 1023.0  # ±10 V (manual 3.2.122)
 
         def factor(a: float) -> float:
@@ -231,8 +255,8 @@ class GearSyncBridge:
         self._reset_state()
 
     def _reset_state(self) -> None:
-        self.previous_tension: float | None = None
-        self.integral = 0.0
+        #: the tension channels from the load cell (the link model's own)
+        self.load_cell = link_model.LoadCellObserver(1, self.tau)
         self.last_action = 0.0
         self.tension = self.ref
 
@@ -244,7 +268,7 @@ class GearSyncBridge:
         tension, weights: ``core``), the nominal gear read, GEARF1 at the action 0, the speed
         limit V_SOLL the env sets (the family's rated speed), then GP_MODE (GEARF2 is the
         line's, as set up)."""
-        link.passive()
+        link.settle_passive()
         self.ref = float(core.tension_ref[0])
         self.tolerance = float(core.tension_tolerance)
         self.rate_weight = float(core.action_rate_weight)
@@ -274,26 +298,26 @@ class GearSyncBridge:
         """The env's observation (1, 8) from the registers and the controller's own state."""
         from ..envs.compiled import OBS_BOUND
 
-        ref = self.ref
-        tension = raws["ANINP"] / self.aninp_full * self.full_scale
-        before = tension if self.previous_tension is None else self.previous_tension
-        self.previous_tension = self.tension = tension
-        e = (tension - ref) / ref
-        self.integral += period * (e - self.integral / self.tau)
-        self.error = e
-        obs = np.array([e, (tension - before) / ref * (0.1 / period), self.integral * 10.0,
-                        raws["V_EXT"] / self.master_counts, raws["V_IST"] / self.v_norm,
+        one = np.zeros(1, dtype=np.int64)
+        tension = self.load_cell.tension_of(np.array([raws["ANINP"]]))
+        self.tension = float(tension[0])
+        chans = self.load_cell.observe(one, tension, np.array([self.ref]), period)[0]
+        self.error = float(chans[0])
+        obs = np.array([*chans, raws["V_EXT"] / self.master_counts, raws["V_IST"] / self.v_norm,
                         raws["FLWERR"] / 100.0, raws["FNCERR"] / 10000.0, float(previous[0])],
                        dtype=np.float32)
         return np.clip(obs, -OBS_BOUND, OBS_BOUND)[None]
 
-    def reward(self, action: np.ndarray, steps: float) -> float:
-        """The env's reward over ``steps`` env steps at this tension, the action's change
-        counted once (the command changes once a period)."""
+    def rate(self, action: np.ndarray) -> float:
+        """The env's reward of one env step at this tension."""
+        return 1.0 - min(abs(self.error) / self.tolerance, 2.0)
+
+    def penalty(self, action: np.ndarray) -> float:
+        """The env's reward of the action's change, counted once (the command changes once
+        a period)."""
         a = float(action[0])
         da, self.last_action = a - self.last_action, a
-        return (steps * (1.0 - min(abs(self.error) / self.tolerance, 2.0))
-                - self.rate_weight * da * da)
+        return -self.rate_weight * da * da
 
     def failure(self) -> str:
         """A web break or slack seen by the load cell, or ""."""
@@ -310,6 +334,48 @@ class GearSyncBridge:
     def metrics(self, cols: Mapping[str, np.ndarray]) -> dict[str, float]:
         """The episode's engineering metrics from its trace."""
         return engineering_metrics(self.env_id, cols)
+
+
+class PeriodReward:
+    """The env's reward of a period of ``steps`` env steps, from the bridge's per-step
+    reward at the reads that begin and end it: the env sums its reward after each step, which
+    the controller does not see; between its two reads the per-step reward is taken as linear,
+    so the period's is ``(steps − 1)/2 · r_begin + (steps + 1)/2 · r_end`` (the steps' sum of a
+    linear change), plus the bridge's penalty of the new command, and the failure penalty when
+    the read that ends the period finds the task failed (the env's last step).
+
+    Parameters
+    ----------
+    bridge : object
+        The task's bridge (:data:`BRIDGES`).
+    steps : float
+        Env steps a period.
+    """
+
+    def __init__(self, bridge: Any, steps: float) -> None:
+        self.bridge = bridge
+        self.steps = float(steps)
+        self.begun = 0.0
+        self.action = np.zeros(1)
+        self.extra = 0.0
+        self.open = False
+
+    def begin(self, action: np.ndarray) -> None:
+        """A period begins under the command ``action`` (after the read that begins it)."""
+        self.action = np.asarray(action, dtype=np.float64).copy()
+        self.begun = self.bridge.rate(self.action)
+        self.extra = self.bridge.penalty(self.action)
+        self.open = True
+
+    def close(self) -> tuple[float, str]:
+        """The period's reward at the read that ends it, and the task's failure, or ""."""
+        end = self.bridge.rate(self.action)
+        r = 0.5 * (self.steps - 1.0) * self.begun + 0.5 * (self.steps + 1.0) * end + self.extra
+        failed = self.bridge.failure()
+        if failed:
+            r -= self.bridge.failure_penalty
+        self.open = False
+        return r, failed
 
 
 BRIDGES: dict[str, Callable[..., Any]] = {PositioningBridge.env_id: PositioningBridge,
@@ -363,14 +429,25 @@ def loop_period(env_id: str, link: str, motor_type: str | None) -> float:
 
 
 def link_latency(env_id: str, link: str, motor_type: str | None) -> float:
-    """The link model's latency [s] of ``link`` on ``env_id`` (:mod:`jvl_gym.envs.link`): from
-    the answer to the read to the end of the write, on the serial line."""
+    """The link model's latency [s] of ``link`` on ``env_id`` (:mod:`jvl_gym.envs.link`), in
+    whole env steps as the model lands the action: from the answer to the read to the end of
+    the write (a serial line's time, or MacTalk over TCP's stated latency)."""
     from ..envs.link import observed_registers, parse_link
     from ..envs.registration import vector_class
 
     cls = vector_class(env_id)
-    return parse_link(link).times(len(cls.act_labels), observed_registers(cls.obs_labels),
-                                  cls.step_seconds(motor_type))[1]
+    step = cls.step_seconds(motor_type)
+    latency = parse_link(link).times(len(cls.act_labels), observed_registers(cls.obs_labels),
+                                     step)[1]
+    return round(latency / step) * step
+
+
+def holds_latency(link: str) -> bool:
+    """Whether a deployment over ``link`` holds each write to the link model's latency by
+    default: MacTalk over TCP, whose stated latency is that hold."""
+    from ..envs.link import parse_link
+
+    return parse_link(link).kind == "mactalk-tcp"
 
 
 def load_policy(text: str, env_id: str, act_dim: int, step_seconds: float
@@ -507,13 +584,23 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
             supervisor.last = np.zeros(act_dim)
             ret, t0, length = 0.0, time.monotonic(), 0
             cols: dict[str, list[float]] = {"t": []}
-            for k in range(n_periods):
+            rewards = PeriodReward(bridge, period / step_seconds)
+            for k in range(n_periods + 1):  # the read after the last period closes it
                 if stop is not None and stop.is_set():
                     raise KeyboardInterrupt
                 start = t0 + k * period
                 raws = link.read_raws(bridge.reads)
                 t_read = time.monotonic()
                 obs = bridge.observe(raws, supervisor.last, period)
+                if rewards.open:
+                    r, failed = rewards.close()
+                    ret += r
+                    rows[-1][-2] = r
+                    if failed:
+                        report.ended.append(failed)
+                        break
+                if k == n_periods:
+                    break
                 action = runner(obs, deadline)
                 if hold > 0.0:  # the write is to end ``hold`` after the read: it starts
                     # the last write's duration earlier
@@ -525,21 +612,14 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
                 write_time = t_written - t_write
                 watchdog.beat()
                 latencies.append(t_written - t_read)
-                r = bridge.reward(a, period / step_seconds)
-                failed = bridge.failure()
-                if failed:
-                    r -= bridge.failure_penalty
-                ret += r
+                rewards.begin(a)
                 cols["t"].append(start - t0)
                 for key, value in bridge.columns().items():
                     cols.setdefault(key, []).append(value)
                 rows.append([ep, k, start - t_first, bridge.error, *obs[0].tolist(),
-                             float(a[0]), *written.values(), r, t_written - t_read])
+                             float(a[0]), *written.values(), float("nan"), t_written - t_read])
                 report.periods += 1
                 length += 1
-                if failed:
-                    report.ended.append(failed)
-                    break
                 late = time.monotonic() - (start + period)
                 if late > period:
                     raise Stopped(f"loop overrun: period {k} ended {late * 1e3:.1f} ms late "

@@ -34,12 +34,11 @@ from typing import Any
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
+from ..envs.link import LOADCELL_FULL_SCALE
+
 __all__ = ["EnvMachine", "PositioningLoad", "GearSyncLine", "LOADCELL_FULL_SCALE", "LINES",
            "make_line"]
 
-#: the load cell's force at +10 V on the analogue input [N] (the env's references are 10–25 N
-#: and a web breaks at 3 × its reference: 75 N at most)
-LOADCELL_FULL_SCALE = 100.0
 #: outer samples a line's episode may last (the line never ends by time while served)
 _LINE_SAMPLES = 10_000_000
 
@@ -175,8 +174,14 @@ class GearSyncLine(EnvMachine):
         self.m.step(1)  # the registers read the line's inputs (ANINP: the load cell) at once
 
     def _started(self) -> None:
+        """The winder engaged: it takes the web's load as the env's winder starts, its speed
+        regulator already holding it (``start_under_load``, where the family has it)."""
         env = self.env
-        self.m.set_input(0, load_torque=float(env.radius[0] * env.force[0] / env.gear_ratio))
+        load = float(env.radius[0] * env.force[0] / env.gear_ratio)
+        if hasattr(self.m, "start_under_load"):
+            self.m.start_under_load(load, 0)
+        else:
+            self.m.set_input(0, load_torque=load)
 
     def step(self, n_outer: int = 1) -> None:
         """``n_outer`` outer samples of the line and its motor (the motor alone while the line
