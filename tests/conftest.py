@@ -19,6 +19,23 @@ except ImportError:  # hypothesis is a test extra; the tests that use it import 
     pass
 
 
+#: the browser of the Chromium tests: Debian's package (playwright cannot download its own here)
+CHROMIUM = "/usr/bin/chromium"
+#: a web site's name that the test browser resolves to this machine, as DNS rebinding would
+FOREIGN_HOST = "evil.example"
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update",
+                 "--disable-sync", f"--host-resolver-rules=MAP {FOREIGN_HOST} 127.0.0.1"]
+
+
+@pytest.fixture(scope="session")
+def browser_type_launch_args(browser_type_launch_args: dict) -> dict:
+    """How every Chromium test's browser starts. pytest-playwright launches one browser per test
+    process and keeps it for the session, so whichever module asks first fixes the arguments for
+    all: they are stated here once, for every module alike."""
+    return {**browser_type_launch_args, "executable_path": CHROMIUM, "args": CHROMIUM_ARGS}
+
+
 @pytest.fixture(scope="session")
 def local_ray() -> Iterator[None]:
     """A local Ray of 2 CPUs, started by the first test that asks for it and shared by every

@@ -19,15 +19,10 @@ from pathlib import Path
 
 import pytest
 
+from conftest import CHROMIUM, FOREIGN_HOST
 from test_studio_lock import Studio, start_twin, twin_registers
 
-CHROMIUM = "/usr/bin/chromium"
-FOREIGN = "evil.example"  #: a web site's name that Chromium resolves to 127.0.0.1
 ROOT = Path(__file__).resolve().parents[1]
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync",
-        # a foreign name that leads to this machine, as DNS rebinding would make it
-        f"--host-resolver-rules=MAP {FOREIGN} 127.0.0.1"]
 
 pytestmark = pytest.mark.skipif(not Path(CHROMIUM).exists(),
                                 reason=f"Debian's Chromium ({CHROMIUM}) is not installed")
@@ -44,11 +39,6 @@ def _patient_page(page) -> None:
     """Every action on the page (click, fill, goto) waits up to :data:`PAGE_TIMEOUT_MS`."""
     page.set_default_timeout(PAGE_TIMEOUT_MS)
     page.set_default_navigation_timeout(PAGE_TIMEOUT_MS)
-
-
-@pytest.fixture(scope="session")
-def browser_type_launch_args(browser_type_launch_args: dict) -> dict:
-    return {**browser_type_launch_args, "executable_path": CHROMIUM, "args": ARGS}
 
 
 @pytest.fixture(scope="session")
@@ -305,9 +295,9 @@ def test_a_foreign_host_name_is_refused_and_changes_nothing(page, on_twin):
     twin's registers are unchanged."""
     studio, twin = on_twin
     before = twin_registers(twin)
-    response = page.goto(f"http://{FOREIGN}:{studio.port}/?token={studio.token}")
+    response = page.goto(f"http://{FOREIGN_HOST}:{studio.port}/?token={studio.token}")
     assert response is not None and response.status == 403
-    expect(page.locator("body")).to_contain_text(f"refused: Host '{FOREIGN}:{studio.port}'")
+    expect(page.locator("body")).to_contain_text(f"refused: Host '{FOREIGN_HOST}:{studio.port}'")
     status = page.evaluate("""async () => (await fetch('/_nicegui/client/x/upload/1',
         {method: 'POST', body: 'registers: {A_SOLL: 5}'})).status""")
     assert status == 403

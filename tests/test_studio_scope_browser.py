@@ -11,11 +11,9 @@ from pathlib import Path
 
 import pytest
 
+from conftest import CHROMIUM
 from test_studio_lock import Studio
 
-CHROMIUM = "/usr/bin/chromium"
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
 WIDTH, HEIGHT = 1280, 720
 #: generous: the machine may be busy with other work
 SLOW = 60000
@@ -26,11 +24,6 @@ expect = pytest.importorskip("playwright.sync_api").expect
 
 #: the ECharts instance of the element of a test id, in the page
 CHART = "(id) => getElement(document.querySelector(`[data-testid='${id}']`)).chart"
-
-
-@pytest.fixture(scope="session")
-def browser_type_launch_args(browser_type_launch_args: dict) -> dict:
-    return {**browser_type_launch_args, "executable_path": CHROMIUM, "args": ARGS}
 
 
 @pytest.fixture(scope="session")

@@ -23,12 +23,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from test_studio_browser import (  # noqa: F401 - the shared fixtures
-    CHROMIUM,
-    artefacts,
-    browser_type_launch_args,
-    shoot,
-)
+from conftest import CHROMIUM
+from test_studio_browser import artefacts, shoot  # noqa: F401 - the shared fixture
 from test_studio_lock import ROOT, Studio, _env, free_port
 
 pytestmark = pytest.mark.skipif(not Path(CHROMIUM).exists(),
