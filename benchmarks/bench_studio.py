@@ -86,21 +86,20 @@ def _update_number(text: str) -> int:
 
 
 def _pick_channels(page) -> None:
-    """Add the channels of :data:`CHANNELS` the chart does not show yet (typed into the
-    channel picker's search field, the option clicked) and wait for the chart to draw them."""
+    """Add the channels of :data:`CHANNELS` the chart does not show yet as an engineer does
+    (a click in the channel picker, the name typed, the option clicked: the picker's list
+    closes on the choice) and wait for the chart to draw them."""
     field = page.get_by_test_id("channels")
     drawn = f"""(name) => {CHART}.getOption().series.some(
         (s) => s.name === name || s.name.startsWith(name + ' ['))"""
     for name in CHANNELS:
         if page.evaluate(drawn, name):
             continue
-        field.fill(name)
-        page.get_by_role("option", name=name, exact=True).dispatch_event("click")
+        field.click()
+        page.keyboard.type(name)
+        page.get_by_role("option", name=name, exact=True).click()
+        page.locator(".q-menu").wait_for(state="detached", timeout=60000)
         page.wait_for_function(drawn, arg=name, timeout=60000)
-    field.fill("")
-    page.keyboard.press("Tab")  # the picker's menu closes (Escape would be STOP) ...
-    page.mouse.click(2, 400)  # ... or a click beside it, in the page's margin
-    page.locator(".q-menu").wait_for(state="hidden", timeout=60000)
 
 
 def _frames(page, seconds: float) -> tuple[float, float]:

@@ -156,3 +156,34 @@ def test_a_chart_update_waits_until_the_browser_has_drawn_the_one_before(page, s
     assert page.evaluate("() => window.__updates") <= 2
     # the text lines still follow the motor meanwhile
     expect(page.get_by_test_id("scope-count")).to_contain_text("update", timeout=SLOW)
+
+
+def test_channels_picked_one_after_another_leave_the_trigger_in_reach(page, studio):
+    """Four channels added to the scope's four, one after another as an engineer adds them
+    (a click in the picker, the name typed, the option clicked; or the next name typed
+    straight away): each choice closes the picker's list and clears the typed name, so the
+    list covers neither the chart nor the trigger, and the trigger is then set on a new
+    channel."""
+    open_scope(page, studio)
+    field = page.get_by_test_id("channels")
+    menu = page.locator(".q-menu")
+    for n, name in enumerate(("P_IST", "FLWERR", "torque", "phase currents A")):
+        if n != 1:  # the second typed straight after the first choice: the field has the focus
+            field.click()
+        page.keyboard.type(name)
+        page.get_by_role("option", name=name, exact=True).click()
+        expect(menu).to_have_count(0, timeout=SLOW)
+        expect(field).to_have_value("")
+    page.wait_for_function(f"""() => ({CHART})('scope-chart').getOption().series.length === 8
+        """, timeout=SLOW)
+    assert "FLWERR [1/16 count]" in chart_rects(page, "scope-chart")["names"]
+    page.get_by_test_id("trigger").click()
+    expect(page.get_by_test_id("trigger")).to_have_attribute("aria-checked", "true",
+                                                             timeout=SLOW)
+    page.get_by_test_id("trigger-channel").click()
+    page.get_by_role("option", name="FLWERR [1/16 count]", exact=True).click()
+    expect(page.get_by_test_id("trigger-channel")).to_contain_text("FLWERR", timeout=SLOW)
+    page.get_by_test_id("trigger-level").fill("1e9")  # a following error never reaches
+    page.get_by_test_id("trigger-mode").get_by_text("normal").click()
+    expect(page.get_by_test_id("scope-count")).to_contain_text("waiting for the trigger",
+                                                                timeout=SLOW)

@@ -23,7 +23,7 @@ from ..scope import Scope, channel_choices, series_csv, series_png
 from ..session import Session
 from ..stored import StoredTraceError, stored_label
 from ..trigger import TIME, Recorder, Trigger, TriggerMode, cursors, scaled, window
-from .common import Page, frame, tid
+from .common import Page, frame, multiple_picker, tid
 from .motion_panel import motion_panel
 from .notice import compile_notice
 
@@ -283,9 +283,8 @@ def _scope_block(page: Page) -> None:
         return [sc.label(c) for c in sc.channels]
 
     with ui.row().classes("items-center gap-4 w-full no-wrap"):
-        pick = ui.select(choices, value=start, multiple=True, label="channels",
-                         with_input=True).props("use-chips dense " + tid("channels")
-                                                ).classes("grow min-w-[28rem]")
+        pick = multiple_picker(choices, start, "channels", "channels").classes(
+            "grow min-w-[28rem]")
         live = ui.switch("live", value=True).props(tid("live"))
 
         def set_live(e: Any) -> None:
@@ -421,10 +420,8 @@ def _buffer_block(page: Page) -> None:
     ui.label("Sample buffer").classes("text-lg mt-4")
     result: dict[str, Any] = {}
     with ui.row().classes("items-center gap-4"):
-        pick = ui.select(regs, value=[r for r in ("V_IST", "P_IST") if r in regs],
-                         multiple=True, label="registers (up to 4)", with_input=True
-                         ).props("use-chips dense " + tid("buffer-registers")
-                                 ).classes("min-w-[24rem]")
+        pick = multiple_picker(regs, [r for r in ("V_IST", "P_IST") if r in regs],
+                               "registers (up to 4)", "buffer-registers").classes("min-w-[24rem]")
         samples = ui.number("samples", value=200, min=1, precision=0).props(
             "dense " + tid("buffer-samples")).classes("w-28")
 
