@@ -10,10 +10,11 @@ latency, and the register view's refresh of a twin.
   encode them as the JSON the browser receives. The rate is the best of equal windows
   (``best_rate.py``);
 * **the same in the browser**: with Debian's Chromium present, the studio is started on a free
-  port, a headless Chromium opens the Scope page, picks the 8 channels and counts for 5 s the
-  frames the chart draws (ECharts' ``finished`` event: an update received, laid out and
-  painted) and the updates the page's timer sends (``studio.ui.scope_page.PERIOD_S`` bounds
-  both);
+  port, a headless Chromium opens the Scope page, picks the 8 channels as an engineer does and
+  counts for 5 s the samples the page's timer takes (``studio.ui.scope_page.PERIOD_S`` bounds
+  them), the chart updates with new data the page receives, and the frames the chart draws
+  with new data (ECharts' ``finished`` event after an update whose trace ends later than the
+  one before: an update received, laid out and painted, what a person sees move);
 * **trigger latency**: on the same page the scope is armed in single mode on V_SOLL rising
   through the value of 150 rpm; a click on the motion panel's ``run`` at 300 rpm (from 10 rpm)
   writes V_SOLL across the level in the motor, and the time from the click to the page showing
@@ -102,16 +103,29 @@ def _pick_channels(page) -> None:
         page.wait_for_function(drawn, arg=name, timeout=60000)
 
 
-def _frames(page, seconds: float) -> tuple[float, float]:
-    """Frames the chart draws and updates the timer sends, per second, over ``seconds``."""
+def _frames(page, seconds: float) -> tuple[float, float, float]:
+    """Per second over ``seconds``: frames the chart draws with new data (what a person
+    sees move), chart updates with new data the page receives, and samples the page's timer
+    takes (its updates)."""
     counter = page.get_by_test_id("scope-count")
     first = _update_number(counter.inner_text())
-    page.evaluate(f"""() => {{ window.__frames = 0;
-        {CHART}.on('finished', () => window.__frames++); }}""")
+    # an update is new when its first trace ends at a later time than the one before; a frame
+    # is drawn when ECharts reports it finished (laid out and painted) after a new update
+    page.evaluate(f"""() => {{ const chart = {CHART};
+        window.__frames = 0; window.__received = 0;
+        let last = null, fresh = false;
+        const set = chart.setOption.bind(chart);
+        chart.setOption = (option, ...rest) => {{
+            const data = option?.series?.[0]?.data;
+            const t = data && data.length ? data[data.length - 1][0] : null;
+            if (t !== null && t !== last) {{ last = t; fresh = true; window.__received++; }}
+            return set(option, ...rest); }};
+        chart.on('finished', () => {{ if (fresh) {{ fresh = false; window.__frames++; }} }});
+        }}""")
     time.sleep(seconds)
-    frames = page.evaluate("() => window.__frames")
-    sent = _update_number(counter.inner_text()) - first
-    return frames / seconds, sent / seconds
+    frames, received = page.evaluate("() => [window.__frames, window.__received]")
+    ticks = _update_number(counter.inner_text()) - first
+    return frames / seconds, received / seconds, ticks / seconds
 
 
 def _trigger_latency(page, repeats: int) -> list[float]:
@@ -155,9 +169,10 @@ def _trigger_latency(page, repeats: int) -> list[float]:
     return out
 
 
-def browser_rate(seconds: float = 5.0) -> tuple[float, float, list[float]] | None:
-    """Frames per second the chart draws in headless Chromium with 8 channels, updates per
-    second the page's timer sends, and the trigger latencies [s]; None without Chromium."""
+def browser_rate(seconds: float = 5.0) -> tuple[float, float, float, list[float]] | None:
+    """Per second in headless Chromium with 8 channels: frames the chart draws with new
+    data, chart updates with new data the page receives, samples the page's timer takes; and
+    the trigger latencies [s]; None without Chromium."""
     if not Path(CHROMIUM).exists():
         return None
     from playwright.sync_api import sync_playwright
@@ -199,10 +214,10 @@ def browser_rate(seconds: float = 5.0) -> tuple[float, float, list[float]] | Non
                 '[data-testid="scope-count"]').innerText.includes('update')""", timeout=300000)
             _pick_channels(page)
             time.sleep(1.0)  # the new channels' first points
-            frames, sent = _frames(page, seconds)
+            frames, received, ticks = _frames(page, seconds)
             latencies = _trigger_latency(page, TRIGGERS)
             ctx.close()
-        return frames, sent, latencies
+        return frames, received, ticks, latencies
     finally:
         proc.terminate()
         proc.wait(10)
@@ -241,15 +256,20 @@ def main() -> int:
     seconds, count = refresh_seconds("MAC140")
     seconds32, count32 = refresh_seconds("MIS232")
     none = "no Chromium"
-    frames, sent, latencies = browser if browser is not None else (None, None, [])
+    frames, received, ticks, latencies = (browser if browser is not None
+                                          else (None, None, None, []))
     latencies = sorted(latencies)
     median = latencies[len(latencies) // 2] if latencies else None
     rows = [["scope updates/s, 8 channels, MAC140 in real time (server side)",
              f"{rate:.0f}", "≥ 30"],
-            ["scope updates/s sent by the Scope page's timer, 8 channels",
-             none if sent is None else f"{sent:.1f}", "≥ 30"],
-            ["scope frames/s drawn in headless Chromium, 8 channels",
+            ["scope samples/s taken by the Scope page's timer, 8 channels",
+             none if ticks is None else f"{ticks:.1f}", "≥ 30"],
+            ["chart updates/s with new data received by headless Chromium, 8 channels",
+             none if received is None else f"{received:.1f}", "≥ 30"],
+            ["scope frames/s drawn with new data in headless Chromium, 8 channels",
              none if frames is None else f"{frames:.1f}", "≥ 30"],
+            ["frames drawn per sample taken",
+             none if frames is None else f"{frames / max(ticks, 1e-9):.2f}", "1"],
             [f"trigger latency, level crossing in the motor → trigger shown (median of "
              f"{len(latencies) or TRIGGERS})",
              none if median is None else f"{median * 1e3:.0f} ms", "< 100 ms"],

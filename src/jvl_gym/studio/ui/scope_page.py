@@ -10,6 +10,7 @@ The chart comes right below the channels, so at 1280×720 it is in view without 
 from __future__ import annotations
 
 import time
+from collections import deque
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -32,6 +33,10 @@ PERIOD_S = 0.03
 #: seconds after which a chart update the browser has not reported drawn counts as lost (the
 #: next one is sent anyway)
 DRAWN_WITHIN_S = 2.0
+#: chart updates on their way to the browser or being drawn at one time: when the browser has
+#: drawn one, the next is already there, so a frame does not wait for the report's trip to the
+#: server and the update's trip back; a busy browser still has at most this many queued
+IN_FLIGHT = 2
 #: seconds between two updates of the scope's text lines while no chart update is sent (a
 #: trigger awaited): a person reads no faster, and a busy browser is not flooded
 LABELS_S = 0.1
@@ -273,9 +278,9 @@ def _scope_block(page: Page) -> None:
     motor = page.motor
     choices = channel_choices(motor)
     start = [c for c in DEFAULT_CHANNELS if c in choices]
-    # "sent": when the chart update the browser has not drawn yet was sent (None: drawn)
+    # "sent": when each chart update the browser has not reported drawn yet was sent
     state: dict[str, Any] = {"scope": Scope(motor, start, DEPTH), "live": True, "updates": 0,
-                             "recorder": None, "shown": None, "drawn": None, "sent": None,
+                             "recorder": None, "shown": None, "drawn": None, "sent": deque(),
                              "labelled": 0.0}
 
     def labels() -> list[str]:
@@ -326,7 +331,8 @@ def _scope_block(page: Page) -> None:
         shown = state["shown"]
         if shown is None:
             return
-        state["drawn"], state["sent"] = shown, time.monotonic()
+        state["drawn"] = shown
+        state["sent"].append(time.monotonic())
         show_text()
         over = overlay.drawn()
         marks = tools.show_cursors(shown, over, overlay.name)
@@ -342,13 +348,17 @@ def _scope_block(page: Page) -> None:
         w.on_value_change(page.guard(draw))  # the cursors move on a stopped scope too
 
     def browser_busy() -> bool:
-        """The browser has not drawn the last update yet: a new one would queue behind it
-        (on a busy machine the chart would fall ever further behind the motor)."""
+        """:data:`IN_FLIGHT` updates are on their way or being drawn (those sent more than
+        :data:`DRAWN_WITHIN_S` ago count as lost): a new one would queue behind them (on a
+        busy machine the chart would fall ever further behind the motor)."""
         sent = state["sent"]
-        return sent is not None and time.monotonic() - sent < DRAWN_WITHIN_S
+        while sent and time.monotonic() - sent[0] >= DRAWN_WITHIN_S:
+            sent.popleft()
+        return len(sent) >= IN_FLIGHT
 
     def drawn(_e: Any = None) -> None:
-        state["sent"] = None
+        if state["sent"]:
+            state["sent"].popleft()
         if state["shown"] is not None and state["drawn"] is not state["shown"]:
             draw()  # the newest window, which waited for this one
     chart.on("chart:finished", page.guard(drawn), args=[])
