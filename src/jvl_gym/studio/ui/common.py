@@ -18,7 +18,7 @@ from ..motor import StudioMotor
 from ..session import Session
 
 __all__ = ["VIEWS", "WITHOUT_MOTOR", "Page", "frame", "tid", "stop_button", "STOP_KEY",
-           "multiple_picker"]
+           "multiple_picker", "redrawn_alone"]
 
 #: the views: path → title
 VIEWS = {"/connections": "Connections", "/": "Motors", "/registers": "Registers",
@@ -38,6 +38,18 @@ OK_CLASS, ERROR_CLASS = "text-green-300", "text-red-300 font-bold"
 def tid(name: str) -> str:
     """The props that name an element for the browser tests (``data-testid``)."""
     return f'data-testid="{name}"'
+
+
+def redrawn_alone() -> Any:
+    """A container whose content the browser redraws alone when it changes.
+
+    The browser draws a NiceGUI page as one tree of Vue components; a change of a plain
+    element (a label's text) redraws the nearest component around it with everything inside
+    that, up to the whole page with its selects and chart. Quasar's ``q-no-ssr`` (in a browser
+    no more than a ``div`` around its content) is such a component: a label that changes many
+    times a second inside one redraws only itself.
+    """
+    return ui.element("q-no-ssr")
 
 
 def multiple_picker(options: list[str], value: list[str], label: str, test_id: str) -> Any:

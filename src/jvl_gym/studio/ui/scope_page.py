@@ -24,7 +24,7 @@ from ..scope import Scope, channel_choices, series_csv, series_png
 from ..session import Session
 from ..stored import StoredTraceError, stored_label
 from ..trigger import TIME, Recorder, Trigger, TriggerMode, cursors, scaled, window
-from .common import Page, frame, multiple_picker, tid
+from .common import Page, frame, multiple_picker, redrawn_alone, tid
 from .motion_panel import motion_panel
 from .notice import compile_notice
 
@@ -308,10 +308,12 @@ def _scope_block(page: Page) -> None:
             ui.download.content(series_png(state["shown"] or state["scope"].series(),
                                            motor.label), "scope.png", "image/png")
         ui.button("PNG", on_click=page.guard(export_png)).props("dense " + tid("scope-png"))
-        counter = ui.label("").classes("text-sm w-72 shrink-0").props(tid("scope-count"))
+        with redrawn_alone().classes("w-72 shrink-0"):  # updated with every chart update
+            counter = ui.label("").classes("text-sm").props(tid("scope-count"))
     chart = ui.echart(chart_options(state["scope"].series())).classes(
         "w-full h-[52vh] min-h-[16rem]").props(tid("scope-chart"))
-    last = ui.label("").classes("text-sm").props(tid("scope-last"))
+    with redrawn_alone():
+        last = ui.label("").classes("text-sm").props(tid("scope-last"))
     tools = _Tools(page, "", labels(), live=True)
 
     def set_channels() -> None:
