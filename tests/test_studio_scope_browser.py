@@ -143,9 +143,9 @@ def test_a_capture_saved_and_overlaid_at_the_trigger(page, studio, tmp_path):
 
 def test_a_chart_update_waits_until_the_browser_has_drawn_the_one_before(page, studio):
     """Once the page stops reporting frames drawn (ECharts' ``finished``), the studio sends
-    at most the update in flight and one more after ``DRAWN_WITHIN_S`` (2 s), instead of an
-    update every tick (about 45 in 1.5 s) that a busy browser would queue ever further behind
-    the motor."""
+    at most ``IN_FLIGHT`` (2) updates not reported drawn, and more only after
+    ``DRAWN_WITHIN_S`` (2 s), instead of an update every tick (about 45 in 1.5 s) that a busy
+    browser would queue ever further behind the motor."""
     open_scope(page, studio)
     page.evaluate(f"""() => {{ const chart = ({CHART})('scope-chart');
         window.__updates = 0;

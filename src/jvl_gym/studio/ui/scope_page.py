@@ -37,8 +37,9 @@ DRAWN_WITHIN_S = 2.0
 #: drawn one, the next is already there, so a frame does not wait for the report's trip to the
 #: server and the update's trip back; a busy browser still has at most this many queued
 IN_FLIGHT = 2
-#: seconds between two updates of the scope's text lines while no chart update is sent (a
-#: trigger awaited): a person reads no faster, and a busy browser is not flooded
+#: seconds between two updates of the scope's text lines (with a chart update, or without one
+#: while a trigger is awaited): a person reads no faster, and every change of the page's text
+#: costs the browser time the chart's frames need
 LABELS_S = 0.1
 #: points the live scope keeps per channel (about 10 s at the page's rate; the time base
 #: shows up to that)
@@ -335,7 +336,8 @@ def _scope_block(page: Page) -> None:
             return
         state["drawn"] = shown
         state["sent"].append(time.monotonic())
-        show_text()
+        if time.monotonic() - state["labelled"] >= LABELS_S:
+            show_text()
         over = overlay.drawn()
         marks = tools.show_cursors(shown, over, overlay.name)
         # straight to the chart's setOption: the element's options are reactive in the
@@ -411,14 +413,14 @@ def _scope_block(page: Page) -> None:
             state["shown"] = shown
         waiting = trig is not None and window(series, trig, span, TriggerMode.NORMAL) is None
         # a window is drawn when there is a new one (waiting for a trigger sends nothing) and
-        # the browser has drawn the one before (else when it reports it drawn)
+        # fewer than IN_FLIGHT are on their way (else when the browser reports one drawn)
         state["text"] = (f"update {state['updates']}: {len(sc.t)} points, t = {sc.t[-1]:.2f} s"
                          + (" · waiting for the trigger" if waiting else ""),
                          "; ".join(f"{sc.label(c)} = {b[-1]:.6g}"
                                    for c, b in zip(sc.channels, sc.values)))
         fresh = state["shown"] is not None and state["drawn"] is not state["shown"]
         if fresh and not browser_busy():
-            draw()  # the text lines with it
+            draw()  # the text lines with it, at most every LABELS_S
         elif not browser_busy() and time.monotonic() - state["labelled"] >= LABELS_S:
             show_text()
     page.every(PERIOD_S, page.guard(tick))
