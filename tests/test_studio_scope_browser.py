@@ -143,7 +143,7 @@ def test_a_capture_saved_and_overlaid_at_the_trigger(page, studio, tmp_path):
 
 def test_a_chart_update_waits_until_the_browser_has_drawn_the_one_before(page, studio):
     """Once the page stops reporting frames drawn (ECharts' ``finished``), the studio sends
-    at most ``IN_FLIGHT`` (2) updates not reported drawn, and more only after
+    at most ``IN_FLIGHT`` (3) updates not reported drawn, and more only after
     ``DRAWN_WITHIN_S`` (2 s), instead of an update every tick (about 45 in 1.5 s) that a busy
     browser would queue ever further behind the motor."""
     from jvl_gym.studio.ui.scope_page import DRAWN_WITHIN_S, IN_FLIGHT, PERIOD_S

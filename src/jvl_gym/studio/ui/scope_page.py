@@ -35,8 +35,9 @@ PERIOD_S = 0.03
 DRAWN_WITHIN_S = 2.0
 #: chart updates on their way to the browser or being drawn at one time: when the browser has
 #: drawn one, the next is already there, so a frame does not wait for the report's trip to the
-#: server and the update's trip back; a busy browser still has at most this many queued
-IN_FLIGHT = 2
+#: server and the update's trip back (on a loaded machine that trip takes longer than two
+#: frames); a busy browser still has at most this many queued (0.1 s at 30 frames a second)
+IN_FLIGHT = 3
 #: seconds between two updates of the scope's text lines (with a chart update, or without one
 #: while a trigger is awaited): a person reads no faster, and every change of the page's text
 #: costs the browser time the chart's frames need
