@@ -10,16 +10,19 @@ latency, and the register view's refresh of a twin.
   encode them as the JSON the browser receives. The rate is the best of equal windows
   (``best_rate.py``);
 * **the same in the browser**: with Debian's Chromium present, the studio is started on a free
-  port, a headless Chromium opens the Scope page, picks the 8 channels and counts for 5 s the
-  frames the chart draws (ECharts' ``finished`` event: an update received, laid out and
-  painted) and the updates the page's timer sends (``studio.ui.scope_page.PERIOD_S`` bounds
-  both);
+  port, a headless Chromium opens the Scope page, picks the 8 channels as an engineer does and
+  counts for 5 s the samples the page's timer takes (``studio.ui.scope_page.PERIOD_S`` bounds
+  them), the chart updates with new data the page receives, and the frames the chart draws
+  with new data (ECharts' ``finished`` event after an update whose trace ends later than the
+  one before: an update received, laid out and painted, what a person sees move);
 * **trigger latency**: on the same page the scope is armed in single mode on V_SOLL rising
   through the value of 150 rpm; a click on the motion panel's ``run`` at 300 rpm (from 10 rpm)
   writes V_SOLL across the level in the motor, and the time from the click to the page showing
-  ``single: triggered`` is taken in the browser (``performance.now()``): the write's trip to
-  the motor, the scope's next sample, the trigger found, the message shown. The median and the
-  largest of :data:`TRIGGERS` runs;
+  ``single: triggered`` is taken in the browser (``performance.now()``), less the sweep a
+  single window holds after its crossing (:data:`SWEEP_S`: single mode shows a whole window,
+  :func:`jvl_gym.studio.trigger.window`): the write's trip to the motor, the scope's next
+  sample, the trigger found, the message shown (within a sample of the scope). The median and
+  the largest of :data:`TRIGGERS` runs;
 * **refresh of all registers of a twin motor over TCP**: a ``jvl-gym serve`` twin of one MAC140
   (16-bit MacTalk) and one of an MIS232 (32-bit MacTalk) on a free TCP port, the register
   view's read of every register it shows (:meth:`jvl_gym.studio.line.LineMotor.read_raws`),
@@ -56,6 +59,10 @@ CHANNELS = ["V_SOLL", "V_IST", "shaft speed", "MODE_REG", "P_IST", "FLWERR", "to
             "phase currents A"]
 #: runs of the trigger latency
 TRIGGERS = 7
+#: the trigger's time base [s] and the page's pre-trigger share of it (its default, 20 %)
+TIME_BASE_S, PRE = 1.0, 0.2
+#: what a single window records after its crossing before it is shown [s]
+SWEEP_S = (1.0 - PRE) * TIME_BASE_S
 #: the ECharts instance of the element of a test id, in the page
 CHART = "getElement(document.querySelector('[data-testid=\"scope-chart\"]')).chart"
 
@@ -86,38 +93,50 @@ def _update_number(text: str) -> int:
 
 
 def _pick_channels(page) -> None:
-    """Add the channels of :data:`CHANNELS` the chart does not show yet (typed into the
-    channel picker's search field, the option clicked) and wait for the chart to draw them."""
+    """Add the channels of :data:`CHANNELS` the chart does not show yet as an engineer does
+    (a click in the channel picker, the name typed, the option clicked: the picker's list
+    closes on the choice) and wait for the chart to draw them."""
     field = page.get_by_test_id("channels")
     drawn = f"""(name) => {CHART}.getOption().series.some(
         (s) => s.name === name || s.name.startsWith(name + ' ['))"""
     for name in CHANNELS:
         if page.evaluate(drawn, name):
             continue
-        field.fill(name)
-        page.get_by_role("option", name=name, exact=True).dispatch_event("click")
+        field.click()
+        page.keyboard.type(name)
+        page.get_by_role("option", name=name, exact=True).click()
+        page.locator(".q-menu").wait_for(state="detached", timeout=60000)
         page.wait_for_function(drawn, arg=name, timeout=60000)
-    field.fill("")
-    page.keyboard.press("Tab")  # the picker's menu closes (Escape would be STOP) ...
-    page.mouse.click(2, 400)  # ... or a click beside it, in the page's margin
-    page.locator(".q-menu").wait_for(state="hidden", timeout=60000)
 
 
-def _frames(page, seconds: float) -> tuple[float, float]:
-    """Frames the chart draws and updates the timer sends, per second, over ``seconds``."""
+def _frames(page, seconds: float) -> tuple[float, float, float]:
+    """Per second over ``seconds``: frames the chart draws with new data (what a person
+    sees move), chart updates with new data the page receives, and samples the page's timer
+    takes (its updates)."""
     counter = page.get_by_test_id("scope-count")
     first = _update_number(counter.inner_text())
-    page.evaluate(f"""() => {{ window.__frames = 0;
-        {CHART}.on('finished', () => window.__frames++); }}""")
+    # an update is new when its first trace ends at a later time than the one before; a frame
+    # is drawn when ECharts reports it finished (laid out and painted) after a new update
+    page.evaluate(f"""() => {{ const chart = {CHART};
+        window.__frames = 0; window.__received = 0;
+        let last = null, fresh = false;
+        const set = chart.setOption.bind(chart);
+        chart.setOption = (option, ...rest) => {{
+            const data = option?.series?.[0]?.data;
+            const t = data && data.length ? data[data.length - 1][0] : null;
+            if (t !== null && t !== last) {{ last = t; fresh = true; window.__received++; }}
+            return set(option, ...rest); }};
+        chart.on('finished', () => {{ if (fresh) {{ fresh = false; window.__frames++; }} }});
+        }}""")
     time.sleep(seconds)
-    frames = page.evaluate("() => window.__frames")
-    sent = _update_number(counter.inner_text()) - first
-    return frames / seconds, sent / seconds
+    frames, received = page.evaluate("() => [window.__frames, window.__received]")
+    ticks = _update_number(counter.inner_text()) - first
+    return frames / seconds, received / seconds, ticks / seconds
 
 
 def _trigger_latency(page, repeats: int) -> list[float]:
     """Seconds from the click that writes V_SOLL across the trigger's level to the page
-    showing the trigger, ``repeats`` times."""
+    showing the trigger, less :data:`SWEEP_S`, ``repeats`` times."""
     from jvl_gym.families import family_of_motor
 
     level = 150.0 / family_of_motor("MAC140").units.v_soll_to_rpm(1.0)
@@ -125,7 +144,8 @@ def _trigger_latency(page, repeats: int) -> list[float]:
     page.get_by_test_id("trigger-channel").click()
     page.get_by_role("option", name="V_SOLL [1/16 count/sample]", exact=True).click()
     page.get_by_test_id("trigger-level").fill(f"{level:.6g}")
-    page.get_by_test_id("time-base").fill("1")
+    page.get_by_test_id("trigger-pre").fill(f"{PRE * 100:g}")
+    page.get_by_test_id("time-base").fill(f"{TIME_BASE_S:g}")
     page.get_by_test_id("trigger-mode").get_by_text("single").click()
     out = []
     for _ in range(repeats):
@@ -151,14 +171,15 @@ def _trigger_latency(page, repeats: int) -> list[float]:
             window.__click = performance.now();
             document.querySelector('[data-testid="run-0"]').click(); }""")
         page.wait_for_function("() => window.__shown !== null", timeout=60000)
-        out.append(page.evaluate("() => (window.__shown - window.__click) / 1000"))
+        out.append(page.evaluate("() => (window.__shown - window.__click) / 1000") - SWEEP_S)
     page.get_by_test_id("passive-0").click()
     return out
 
 
-def browser_rate(seconds: float = 5.0) -> tuple[float, float, list[float]] | None:
-    """Frames per second the chart draws in headless Chromium with 8 channels, updates per
-    second the page's timer sends, and the trigger latencies [s]; None without Chromium."""
+def browser_rate(seconds: float = 5.0) -> tuple[float, float, float, list[float]] | None:
+    """Per second in headless Chromium with 8 channels: frames the chart draws with new
+    data, chart updates with new data the page receives, samples the page's timer takes; and
+    the trigger latencies [s]; None without Chromium."""
     if not Path(CHROMIUM).exists():
         return None
     from playwright.sync_api import sync_playwright
@@ -200,10 +221,10 @@ def browser_rate(seconds: float = 5.0) -> tuple[float, float, list[float]] | Non
                 '[data-testid="scope-count"]').innerText.includes('update')""", timeout=300000)
             _pick_channels(page)
             time.sleep(1.0)  # the new channels' first points
-            frames, sent = _frames(page, seconds)
+            frames, received, ticks = _frames(page, seconds)
             latencies = _trigger_latency(page, TRIGGERS)
             ctx.close()
-        return frames, sent, latencies
+        return frames, received, ticks, latencies
     finally:
         proc.terminate()
         proc.wait(10)
@@ -242,17 +263,22 @@ def main() -> int:
     seconds, count = refresh_seconds("MAC140")
     seconds32, count32 = refresh_seconds("MIS232")
     none = "no Chromium"
-    frames, sent, latencies = browser if browser is not None else (None, None, [])
+    frames, received, ticks, latencies = (browser if browser is not None
+                                          else (None, None, None, []))
     latencies = sorted(latencies)
     median = latencies[len(latencies) // 2] if latencies else None
     rows = [["scope updates/s, 8 channels, MAC140 in real time (server side)",
              f"{rate:.0f}", "≥ 30"],
-            ["scope updates/s sent by the Scope page's timer, 8 channels",
-             none if sent is None else f"{sent:.1f}", "≥ 30"],
-            ["scope frames/s drawn in headless Chromium, 8 channels",
+            ["scope samples/s taken by the Scope page's timer, 8 channels",
+             none if ticks is None else f"{ticks:.1f}", "≥ 30"],
+            ["chart updates/s with new data received by headless Chromium, 8 channels",
+             none if received is None else f"{received:.1f}", "≥ 30"],
+            ["scope frames/s drawn with new data in headless Chromium, 8 channels",
              none if frames is None else f"{frames:.1f}", "≥ 30"],
-            [f"trigger latency, level crossing in the motor → trigger shown (median of "
-             f"{len(latencies) or TRIGGERS})",
+            ["frames drawn per sample taken",
+             none if frames is None else f"{frames / max(ticks, 1e-9):.2f}", "1"],
+            [f"trigger latency, level crossing in the motor → trigger shown, less the "
+             f"{SWEEP_S:g} s sweep of the window (median of {len(latencies) or TRIGGERS})",
              none if median is None else f"{median * 1e3:.0f} ms", "< 100 ms"],
             ["trigger latency, largest",
              none if median is None else f"{latencies[-1] * 1e3:.0f} ms", "< 100 ms"],

@@ -17,7 +17,8 @@ from ...cli.app import one_line
 from ..motor import StudioMotor
 from ..session import Session
 
-__all__ = ["VIEWS", "WITHOUT_MOTOR", "Page", "frame", "tid", "stop_button", "STOP_KEY"]
+__all__ = ["VIEWS", "WITHOUT_MOTOR", "Page", "frame", "tid", "stop_button", "STOP_KEY",
+           "multiple_picker", "redrawn_alone"]
 
 #: the views: path → title
 VIEWS = {"/connections": "Connections", "/": "Motors", "/registers": "Registers",
@@ -37,6 +38,39 @@ OK_CLASS, ERROR_CLASS = "text-green-300", "text-red-300 font-bold"
 def tid(name: str) -> str:
     """The props that name an element for the browser tests (``data-testid``)."""
     return f'data-testid="{name}"'
+
+
+def redrawn_alone() -> Any:
+    """A container whose content the browser redraws alone when it changes.
+
+    The browser draws a NiceGUI page as one tree of Vue components; a change of a plain
+    element (a label's text) redraws the nearest component around it with everything inside
+    that, up to the whole page with its selects and chart. Quasar's ``q-no-ssr`` (in a browser
+    no more than a ``div`` around its content) is such a component: a label that changes many
+    times a second inside one redraws only itself.
+    """
+    return ui.element("q-no-ssr")
+
+
+def multiple_picker(options: list[str], value: list[str], label: str, test_id: str) -> Any:
+    """A select of several of ``options`` with a search field, shown as chips, whose list
+    closes on each choice with the typed search cleared.
+
+    Quasar's multiple select keeps its list open after a choice, over what lies below it (the
+    scope's chart and trigger), with the typed text still in the field, so the next name
+    typed after a click in the field is appended to the last; and the key that closes a list,
+    Escape, is the studio's STOP (:data:`STOP_KEY`). Here a choice adds its chip and closes
+    the list in the browser at once; the field keeps the focus, so typing the next name opens
+    the list again, filtered.
+    """
+    pick = ui.select(options, value=value, multiple=True, label=label, with_input=True).props(
+        "use-chips dense " + tid(test_id))
+    # in the browser, without the trip to the server: no filtering (it would open the list
+    # again), then the list closed
+    pick.on("update:model-value", js_handler=f"""() => {{
+        const q = getElement({pick.id})?.$refs.qRef;
+        if (q) {{ q.updateInputValue('', true); q.hidePopup(); }} }}""")
+    return pick
 
 
 class Page:

@@ -10,6 +10,7 @@ The chart comes right below the channels, so at 1280×720 it is in view without 
 from __future__ import annotations
 
 import time
+from collections import deque
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -23,7 +24,7 @@ from ..scope import Scope, channel_choices, series_csv, series_png
 from ..session import Session
 from ..stored import StoredTraceError, stored_label
 from ..trigger import TIME, Recorder, Trigger, TriggerMode, cursors, scaled, window
-from .common import Page, frame, tid
+from .common import Page, frame, multiple_picker, redrawn_alone, tid
 from .motion_panel import motion_panel
 from .notice import compile_notice
 
@@ -32,8 +33,14 @@ PERIOD_S = 0.03
 #: seconds after which a chart update the browser has not reported drawn counts as lost (the
 #: next one is sent anyway)
 DRAWN_WITHIN_S = 2.0
-#: seconds between two updates of the scope's text lines while no chart update is sent (a
-#: trigger awaited): a person reads no faster, and a busy browser is not flooded
+#: chart updates on their way to the browser or being drawn at one time: when the browser has
+#: drawn one, the next is already there, so a frame does not wait for the report's trip to the
+#: server and the update's trip back (on a loaded machine that trip takes longer than two
+#: frames); a busy browser still has at most this many queued (0.1 s at 30 frames a second)
+IN_FLIGHT = 3
+#: seconds between two updates of the scope's text lines (with a chart update, or without one
+#: while a trigger is awaited): a person reads no faster, and every change of the page's text
+#: costs the browser time the chart's frames need
 LABELS_S = 0.1
 #: points the live scope keeps per channel (about 10 s at the page's rate; the time base
 #: shows up to that)
@@ -273,9 +280,9 @@ def _scope_block(page: Page) -> None:
     motor = page.motor
     choices = channel_choices(motor)
     start = [c for c in DEFAULT_CHANNELS if c in choices]
-    # "sent": when the chart update the browser has not drawn yet was sent (None: drawn)
+    # "sent": when each chart update the browser has not reported drawn yet was sent
     state: dict[str, Any] = {"scope": Scope(motor, start, DEPTH), "live": True, "updates": 0,
-                             "recorder": None, "shown": None, "drawn": None, "sent": None,
+                             "recorder": None, "shown": None, "drawn": None, "sent": deque(),
                              "labelled": 0.0}
 
     def labels() -> list[str]:
@@ -283,9 +290,8 @@ def _scope_block(page: Page) -> None:
         return [sc.label(c) for c in sc.channels]
 
     with ui.row().classes("items-center gap-4 w-full no-wrap"):
-        pick = ui.select(choices, value=start, multiple=True, label="channels",
-                         with_input=True).props("use-chips dense " + tid("channels")
-                                                ).classes("grow min-w-[28rem]")
+        pick = multiple_picker(choices, start, "channels", "channels").classes(
+            "grow min-w-[28rem]")
         live = ui.switch("live", value=True).props(tid("live"))
 
         def set_live(e: Any) -> None:
@@ -304,10 +310,12 @@ def _scope_block(page: Page) -> None:
             ui.download.content(series_png(state["shown"] or state["scope"].series(),
                                            motor.label), "scope.png", "image/png")
         ui.button("PNG", on_click=page.guard(export_png)).props("dense " + tid("scope-png"))
-        counter = ui.label("").classes("text-sm w-72 shrink-0").props(tid("scope-count"))
+        with redrawn_alone().classes("w-72 shrink-0"):  # updated with every chart update
+            counter = ui.label("").classes("text-sm").props(tid("scope-count"))
     chart = ui.echart(chart_options(state["scope"].series())).classes(
         "w-full h-[52vh] min-h-[16rem]").props(tid("scope-chart"))
-    last = ui.label("").classes("text-sm").props(tid("scope-last"))
+    with redrawn_alone():
+        last = ui.label("").classes("text-sm").props(tid("scope-last"))
     tools = _Tools(page, "", labels(), live=True)
 
     def set_channels() -> None:
@@ -327,8 +335,10 @@ def _scope_block(page: Page) -> None:
         shown = state["shown"]
         if shown is None:
             return
-        state["drawn"], state["sent"] = shown, time.monotonic()
-        show_text()
+        state["drawn"] = shown
+        state["sent"].append(time.monotonic())
+        if time.monotonic() - state["labelled"] >= LABELS_S:
+            show_text()
         over = overlay.drawn()
         marks = tools.show_cursors(shown, over, overlay.name)
         # straight to the chart's setOption: the element's options are reactive in the
@@ -343,13 +353,17 @@ def _scope_block(page: Page) -> None:
         w.on_value_change(page.guard(draw))  # the cursors move on a stopped scope too
 
     def browser_busy() -> bool:
-        """The browser has not drawn the last update yet: a new one would queue behind it
-        (on a busy machine the chart would fall ever further behind the motor)."""
+        """:data:`IN_FLIGHT` updates are on their way or being drawn (those sent more than
+        :data:`DRAWN_WITHIN_S` ago count as lost): a new one would queue behind them (on a
+        busy machine the chart would fall ever further behind the motor)."""
         sent = state["sent"]
-        return sent is not None and time.monotonic() - sent < DRAWN_WITHIN_S
+        while sent and time.monotonic() - sent[0] >= DRAWN_WITHIN_S:
+            sent.popleft()
+        return len(sent) >= IN_FLIGHT
 
     def drawn(_e: Any = None) -> None:
-        state["sent"] = None
+        if state["sent"]:
+            state["sent"].popleft()
         if state["shown"] is not None and state["drawn"] is not state["shown"]:
             draw()  # the newest window, which waited for this one
     chart.on("chart:finished", page.guard(drawn), args=[])
@@ -400,14 +414,14 @@ def _scope_block(page: Page) -> None:
             state["shown"] = shown
         waiting = trig is not None and window(series, trig, span, TriggerMode.NORMAL) is None
         # a window is drawn when there is a new one (waiting for a trigger sends nothing) and
-        # the browser has drawn the one before (else when it reports it drawn)
+        # fewer than IN_FLIGHT are on their way (else when the browser reports one drawn)
         state["text"] = (f"update {state['updates']}: {len(sc.t)} points, t = {sc.t[-1]:.2f} s"
                          + (" · waiting for the trigger" if waiting else ""),
                          "; ".join(f"{sc.label(c)} = {b[-1]:.6g}"
                                    for c, b in zip(sc.channels, sc.values)))
         fresh = state["shown"] is not None and state["drawn"] is not state["shown"]
         if fresh and not browser_busy():
-            draw()  # the text lines with it
+            draw()  # the text lines with it, at most every LABELS_S
         elif not browser_busy() and time.monotonic() - state["labelled"] >= LABELS_S:
             show_text()
     page.every(PERIOD_S, page.guard(tick))
@@ -421,10 +435,8 @@ def _buffer_block(page: Page) -> None:
     ui.label("Sample buffer").classes("text-lg mt-4")
     result: dict[str, Any] = {}
     with ui.row().classes("items-center gap-4"):
-        pick = ui.select(regs, value=[r for r in ("V_IST", "P_IST") if r in regs],
-                         multiple=True, label="registers (up to 4)", with_input=True
-                         ).props("use-chips dense " + tid("buffer-registers")
-                                 ).classes("min-w-[24rem]")
+        pick = multiple_picker(regs, [r for r in ("V_IST", "P_IST") if r in regs],
+                               "registers (up to 4)", "buffer-registers").classes("min-w-[24rem]")
         samples = ui.number("samples", value=200, min=1, precision=0).props(
             "dense " + tid("buffer-samples")).classes("w-28")
 
