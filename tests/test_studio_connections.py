@@ -22,7 +22,7 @@ from jvl_gym.studio.connections import (
     identify,
     version_text,
 )
-from jvl_gym.studio.line import LineDown, LineMotor
+from jvl_gym.studio.line import ANSWER_TIMEOUT_S, LineDown, LineMotor
 from jvl_gym.studio.motor import SimMotor
 from jvl_gym.studio.session import Session
 
@@ -122,6 +122,21 @@ def test_scan_names_the_motors_and_adds_them_to_a_running_studio(twin, session):
     assert twin_raw(url, 1, "A_SOLL") == 41
     said = conn.disconnect(url)
     assert len(said) == 2 and session.motors == [] and session.lines == {}
+
+
+def test_a_line_waits_the_studios_answer_timeout(twin, session):
+    """A line the Connections view opens waits the session's answer timeout for each reply
+    (``jvl-gym studio --answer-timeout``); a timeout that is not a positive number of seconds
+    is refused."""
+    _, url = twin
+    assert Connections(session).connect(url).timeout == ANSWER_TIMEOUT_S
+    session.drop_line(url)
+    patient = Session(answer_timeout=2.5)
+    assert Connections(patient).connect(url).timeout == 2.5
+    patient.drop_line(url)
+    for bad in (0.0, -1.0, float("nan"), float("inf")):
+        with pytest.raises(ValueError, match="answer timeout"):
+            Session(answer_timeout=bad)
 
 
 def test_bad_input_is_one_line_and_changes_nothing(twin, session):

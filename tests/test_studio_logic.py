@@ -695,6 +695,8 @@ def test_cli_speed_reaches_a_line_and_must_be_finite(monkeypatch, capsys):
     for bad in ("inf", "nan", "0", "-2"):
         code, line = _cli(["--speed", bad, "--no-browser", "--port", port], capsys)
         assert code == 2 and "--speed" in line
+        code, line = _cli(["--answer-timeout", bad, "--no-browser", "--port", port], capsys)
+        assert code == 2 and "--answer-timeout" in line
 
 
 def _cli(args, capsys):

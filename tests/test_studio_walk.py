@@ -104,7 +104,9 @@ def twins(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Twins]:
 
 @pytest.fixture(scope="module")
 def studio() -> Iterator[Studio]:
-    s = Studio()  # no motor: the studio opens on the Connections view
+    # no motor: the studio opens on the Connections view; the twins share the two cores with
+    # the rest of the suite, so the line waits for their answers as docs/studio.md advises
+    s = Studio("--answer-timeout", "3")
     yield s
     s.stop()
 

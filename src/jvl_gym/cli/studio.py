@@ -127,6 +127,10 @@ def studio(
     toolkit: Annotated[str | None, typer.Option(
         help="The tuning toolkit, MODULE[:OBJECT] (default: the one installed as the entry "
         "point jvl_gym.toolkits).")] = None,
+    answer_timeout: Annotated[float | None, typer.Option(
+        help="Seconds to wait for each reply on a line (--connect and the Connections view; "
+        "default: the line's own, a few hundred ms); raise it for a twin on a busy computer or "
+        "a slow gateway.")] = None,
 ) -> None:
     """Open the motor workbench in the browser: motors, registers, scope, tuning, episodes.
 
@@ -147,6 +151,9 @@ def studio(
         raise typer.BadParameter("--scan needs --connect (a line to scan)")
     if not 0 < speed < float("inf"):
         raise typer.BadParameter(f"--speed must be a finite number > 0, got {speed}")
+    if answer_timeout is not None and not 0 < answer_timeout < float("inf"):
+        raise typer.BadParameter(
+            f"--answer-timeout must be a finite number of seconds > 0, got {answer_timeout}")
     check_host(host)
     _port_free(host, port)
     try:
@@ -154,16 +161,17 @@ def studio(
     except (ValueError, TypeError) as exc:
         raise CliError(str(exc)) from None
     access = Access(new_token(), port, allowed_hosts(host))
+    timeout = {} if answer_timeout is None else {"answer_timeout": answer_timeout}
     try:
         if connect is None and not motor and not address:
-            session = Session(speed=speed, toolkit=kit)
+            session = Session(speed=speed, toolkit=kit, **timeout)
         elif connect is None:
             session = Session.simulated(motor or [], address or [], seed=seed, speed=speed,
-                                        toolkit=kit)
+                                        toolkit=kit, **timeout)
         else:
             session = Session.on_line(connect, motor or [], address or [],
                                       parse_range(scan) if scan else None, toolkit=kit,
-                                      speed=speed)
+                                      speed=speed, **timeout)
     except (ValueError, ConnectionError) as exc:
         raise CliError(str(exc)) from None
     if not is_loopback(host):

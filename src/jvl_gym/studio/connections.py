@@ -202,13 +202,16 @@ class Connections:
     ----------
     session : Session
         The studio's motors and lines.
-    line_factory : callable
-        Makes a :class:`~.line.Line` of a port (default :class:`~.line.Line`).
+    line_factory : callable, optional
+        Makes a :class:`~.line.Line` of a port (default: a :class:`~.line.Line` that waits the
+        session's ``answer_timeout`` for each reply).
     """
 
-    def __init__(self, session: Session, line_factory: Callable[[str], Line] = Line) -> None:
+    def __init__(self, session: Session,
+                 line_factory: Callable[[str], Line] | None = None) -> None:
         self.session = session
-        self.line_factory = line_factory
+        self.line_factory = line_factory or (
+            lambda port: Line(port, timeout=session.answer_timeout))
         #: port → the motors its last scan found
         self.found: dict[str, list[Found]] = {}
 

@@ -26,6 +26,11 @@ from .motor import ACTIONS, StudioMotor
 __all__ = ["Line", "LineMotor", "LineDown", "RefusedByMotor", "scan"]
 
 
+#: seconds a line waits for each reply by default: a motor answers a MacTalk request within a
+#: few milliseconds, and a slow baud rate or a gateway stays well inside this
+ANSWER_TIMEOUT_S = 0.3
+
+
 class LineDown(ConnectionError):
     """The line cannot be reached now (one line: what, where, what to do)."""
 
@@ -50,7 +55,11 @@ class Line:
         Extra attempts after a timeout.
     """
 
-    def __init__(self, port: str, *, timeout: float = 0.3, retries: int = 1) -> None:
+    def __init__(self, port: str, *, timeout: float = ANSWER_TIMEOUT_S, retries: int = 1
+                 ) -> None:
+        if not 0 < timeout < float("inf"):
+            raise ValueError(f"the answer timeout must be a finite number of seconds > 0, "
+                             f"got {timeout}")
         self.port = port
         self.timeout = timeout
         self.retries = retries

@@ -19,7 +19,7 @@ import threading
 import time
 from collections.abc import Mapping, Sequence
 
-from .line import Line, LineMotor, scan
+from .line import ANSWER_TIMEOUT_S, Line, LineMotor, scan
 from .motor import SimMotor, StudioMotor
 from .toolkit import TuningToolkit, find_toolkit
 
@@ -105,11 +105,18 @@ class Session:
     toolkit : TuningToolkit, optional
         The tuning toolkit of the tuning page (default: the installed one,
         :func:`~jvl_gym.studio.toolkit.find_toolkit`; None if there is none).
+    answer_timeout : float
+        Seconds each line opened later (the Connections view) waits for a reply.
     """
 
     def __init__(self, motors: list[StudioMotor] | None = None, speed: float = 1.0,
-                 line: Line | None = None, toolkit: TuningToolkit | None = None) -> None:
+                 line: Line | None = None, toolkit: TuningToolkit | None = None,
+                 answer_timeout: float = ANSWER_TIMEOUT_S) -> None:
         _check_speed(speed)
+        if not 0 < answer_timeout < float("inf"):
+            raise ValueError(f"the answer timeout must be a finite number of seconds > 0, "
+                             f"got {answer_timeout}")
+        self.answer_timeout = float(answer_timeout)
         #: the motors, in the order the pages list them (a new list after every change)
         self.motors: list[StudioMotor] = []
         #: the open lines, by port (a new dict after every change)
@@ -128,22 +135,25 @@ class Session:
 
     @classmethod
     def simulated(cls, motors: Sequence[str], addresses: Sequence[int] = (), seed: int = 0,
-                  speed: float = 1.0, toolkit: TuningToolkit | None = None) -> Session:
+                  speed: float = 1.0, toolkit: TuningToolkit | None = None,
+                  answer_timeout: float = ANSWER_TIMEOUT_S) -> Session:
         """Simulated motors of the given types (any families), one MotorArray each."""
         plan = plan_motors(motors, addresses, DEFAULT_MOTOR)
         return cls([SimMotor(t, a, seed=seed + k) for k, (t, a) in enumerate(plan)], speed,
-                   toolkit=toolkit)
+                   toolkit=toolkit, answer_timeout=answer_timeout)
 
     @classmethod
     def on_line(cls, port: str, motors: Sequence[str], addresses: Sequence[int] = (),
                 scan_range: Sequence[int] | None = None,
-                toolkit: TuningToolkit | None = None, speed: float = 1.0) -> Session:
+                toolkit: TuningToolkit | None = None, speed: float = 1.0,
+                answer_timeout: float = ANSWER_TIMEOUT_S) -> Session:
         """Motors on the line at ``port``: the ``addresses`` given, or those of ``scan_range``
         that answer, each of the ``motors`` type whose family speaks the dialect its reply
         is in (:func:`pair_scanned`); ``speed``: the other end's simulated seconds per
-        wall-clock second (a twin's ``--speed``; 1 for real motors)."""
+        wall-clock second (a twin's ``--speed``; 1 for real motors); ``answer_timeout``: the
+        seconds the line waits for each reply."""
         _check_speed(speed)
-        line = Line(port)
+        line = Line(port, timeout=answer_timeout)
         if scan_range is not None and not addresses:
             found = scan(line, scan_range)
             if not found:
@@ -152,7 +162,8 @@ class Session:
             plan = pair_scanned(found, motors)
         else:
             plan = plan_motors(motors, addresses, DEFAULT_MOTOR)
-        return cls([LineMotor(line, t, a) for t, a in plan], speed, line=line, toolkit=toolkit)
+        return cls([LineMotor(line, t, a) for t, a in plan], speed, line=line, toolkit=toolkit,
+                   answer_timeout=answer_timeout)
 
     # ------------------------------------------------------------------ lines and motors
     @property
