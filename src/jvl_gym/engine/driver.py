@@ -234,12 +234,16 @@ class MotorDriver:
         :class:`EngineView` as a plain tuple, ``MotorArray.engine_view()``); ``serial``: in
         this thread whatever the number of motors (for a caller that steps one outer sample
         at a time, where starting the threads would cost more than the sample)."""
+        self.runner(arrays, serial)(*arrays, n_outer)
+
+    def runner(self, arrays: tuple, serial: bool = False) -> Any:
+        """The compiled driver for the motors ``arrays`` (the fields of an
+        :class:`EngineView`): threaded from :data:`PARALLEL_MIN` motors unless ``serial``,
+        taken with the arguments of :meth:`run` spread, ``(*arrays, n_outer)``."""
         if not self._prepared:
             self.family.compiled.prepare(arrays)
             self._prepared = True
-        threaded = not serial and arrays[0].shape[0] >= PARALLEL_MIN
-        run = self.parallel if threaded else self.serial
-        run(*arrays, n_outer)
+        return self.parallel if not serial and arrays[0].shape[0] >= PARALLEL_MIN else self.serial
 
 
 class TaskDriver:

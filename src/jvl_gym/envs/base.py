@@ -16,7 +16,7 @@ in a part of its own:
 A task is a subclass with a :class:`~jvl_gym.envs.task.Task` (``task``: the capabilities it
 needs, its named state, its compiled hooks), its labels and ranges, :meth:`_build` (allocate
 the state), :meth:`_motor_params` and :meth:`_task_reset`. The step of every copy runs in one
-numba call (:meth:`_step_copies`: action, motor kernel, process, reward, termination, noisy
+compiled call (:meth:`_step_copies`: action, motor kernel, process, reward, termination, noisy
 clipped observation, :mod:`jvl_gym.envs.compiled`), the observation after a reset likewise
 (:meth:`_observe_copies`). Observations are normalised, noisy (counter-based noise) and clipped
 into finite Box spaces.
@@ -33,6 +33,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from ..engine.entry import entry_point
 from ..families import Capability, Family, family
 from .compiled import OBS_BOUND
 from .randomisation import Randomisation
@@ -220,8 +221,8 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         """Reset copies ``idx``: motors (already powered on), process state, registers."""
 
     def _step_copies(self, actions: np.ndarray) -> bool:
-        """One step of every copy with the (N, A) float64 ``actions`` (not yet clipped): the
-        task's compiled step on the env's family.
+        """One step of every copy with the (N, A) float64, C-contiguous ``actions`` (not yet
+        clipped): the task's compiled step on the env's family.
 
         Returns False, changing nothing, when an action is not finite. Otherwise fills
         ``self._obs`` (noisy, clipped), ``self._reward``, ``self._terminated`` and
@@ -229,10 +230,22 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         ``self._prev_action``.
         """
         view = self.motors.engine_view()
-        run = self._run
-        if run is None:
-            run = self._run = self._driver.runner(view)
-        return run(*view, *self._episode, self._task_args, actions, self.decimation)
+        if view is not self._step_view:  # the first step, or the motors' arrays bound anew
+            return self._bind_step(view, actions)
+        return self._run(*self._step_head, actions, self.decimation)
+
+    def _bind_step(self, view: tuple, actions: np.ndarray) -> bool:
+        """:meth:`_step_copies` through the driver's compiled step for ``view`` (the motors'
+        :meth:`~jvl_gym.MotorArray.engine_view`), which it compiles or loads on the first
+        step; then keep the step's own entry for the types of these arguments, which stay
+        (``jvl_gym.engine.entry``), with the arguments before the actions."""
+        compiled = self._driver.runner(view)
+        head = (*view, *self._episode, self._task_args)
+        done = compiled(*head, actions, self.decimation)
+        self._run = entry_point(compiled, (*head, actions, self.decimation))
+        self._step_head = head
+        self._step_view = view
+        return done
 
     def _observe_copies(self, idx: np.ndarray) -> None:
         """Fill ``self._obs[idx]`` (noisy, clipped) after a reset of copies ``idx``."""
@@ -290,7 +303,8 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         if not self.task.compiled:
             return {}
         args = () if self.state is None else tuple(self.state)
-        return {"_driver": self.task.driver(self.family_key), "_task_args": args, "_run": None}
+        return {"_driver": self.task.driver(self.family_key), "_task_args": args, "_run": None,
+                "_step_head": (), "_step_view": None}
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()

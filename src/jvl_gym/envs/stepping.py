@@ -58,15 +58,16 @@ class Stepping:
         a = actions if type(actions) is np.ndarray else np.asarray(actions)
         if a.shape != self._action_shape or a.dtype.kind not in "fiu":
             self._refuse_action(a)
-        if a.dtype is not _FLOAT64:
-            a = a.astype(np.float64)
+        if a.dtype is not _FLOAT64 or not a.flags.c_contiguous:  # as the compiled step takes it
+            a = np.ascontiguousarray(a, dtype=np.float64)
         self._step_actions(a)
         return self._obs, self._reward, self._terminated, self._truncated
 
     def _step_actions(self, actions: np.ndarray) -> None:
         """One step of every copy, without autoreset, with checked ``actions`` ((N, A)
-        float64): raises RuntimeError before the first reset, ValueError (nothing stepped)
-        when an action is not finite; fills the (obs, reward, terminated, truncated) buffers."""
+        float64, C-contiguous): raises RuntimeError before the first reset, ValueError
+        (nothing stepped) when an action is not finite; fills the (obs, reward, terminated,
+        truncated) buffers."""
         if not self._has_reset:
             raise RuntimeError("call reset() before step()")
         if not self._step_copies(actions):

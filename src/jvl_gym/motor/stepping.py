@@ -13,10 +13,16 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..engine import MotorDriver
+from ..engine.entry import entry_point
 from ..families import family
 from .arguments import MotorIndex, as_index, outer_count
 
 __all__ = ["Stepping", "driver"]
+
+#: the attributes that make up :meth:`Stepping.engine_view`: binding any of them anew (the
+#: sample buffer at the first recording) makes the view and the compiled entry be taken again
+_VIEW_FIELDS = frozenset({"regs", "state", "params", "inputs", "keys", "_buf", "_buf_allocated",
+                          "_fmt", "_no_schedule", "_scratch"})
 
 
 @functools.cache
@@ -43,29 +49,71 @@ class Stepping:
     _fmt: np.ndarray
     _no_schedule: np.ndarray
     _scratch: np.ndarray
+    #: :meth:`engine_view` without a plan, taken on first use (None: to be taken)
+    _view: tuple | None = None
+    #: the compiled driver's entry for :attr:`_view` with inputs held (None: to be taken)
+    _run_held: Any = None
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        object.__setattr__(self, name, value)
+        if name in _VIEW_FIELDS:  # an array of the view bound anew: take view and entry again
+            object.__setattr__(self, "_view", None)
+            object.__setattr__(self, "_run_held", None)
+
+    def __getstate__(self) -> dict[str, Any]:
+        state = self.__dict__.copy()
+        state.pop("_view", None)
+        state.pop("_run_held", None)  # machine code: taken again after unpickling
+        return state
 
     def step(self, n_outer: int = 1) -> None:
         """Advance all motors by ``n_outer`` outer samples (:attr:`OUTER_HZ`)."""
-        n_outer = outer_count(n_outer, "step")
+        if type(n_outer) is not int or n_outer < 0:
+            n_outer = outer_count(n_outer, "step")
         if n_outer == 0:
             return
-        plan = self._no_schedule if self.world is None else self.world.schedule(self, n_outer)
-        driver(self.FAMILY_KEY).run(self.engine_view(plan), int(n_outer))
+        if self.world is not None:
+            plan = self.world.schedule(self, n_outer)
+            driver(self.FAMILY_KEY).run(self.engine_view(plan), n_outer)
+            return
+        run = self._run_held
+        if run is None:
+            run = self._held_runner()
+        run(*self._view, n_outer)  # type: ignore[misc]
+
+    def _held_runner(self) -> Any:
+        """The compiled driver of the motors with their inputs held (no world schedule),
+        threaded from ``PARALLEL_MIN`` motors: its machine code's own entry for the types of
+        :meth:`engine_view`, which do not change while the arrays are the motors' (taken again
+        when one is bound anew), so that a call skips the dispatcher's look-up by type."""
+        view = self.engine_view()
+        compiled = driver(self.FAMILY_KEY).runner(view)
+        compiled(*view, 0)  # compile or load from the cache, advancing nothing
+        run = entry_point(compiled, (*view, 0))
+        object.__setattr__(self, "_run_held", run)
+        return run
 
     def engine_view(self, plan: np.ndarray | None = None) -> tuple:
         """The arrays of the motors as the engine's compiled drivers take them (the arrays
         themselves, not copies): the fields of a :class:`~jvl_gym.engine.EngineView`, in its
-        order, as a plain tuple. A driver passes them as separate arguments (numba dispatches
-        fastest on plain arrays) and builds the named view of them per block.
+        order, as a plain tuple. A driver passes them as separate arguments (the compiled
+        dispatcher is fastest on plain arrays) and builds the named view of them per block.
+        Without ``plan`` the tuple is the same object from call to call while the motors keep
+        their arrays.
 
         A task that advances the motors itself (``jvl_gym.engine.TaskDriver``) holds the
         inputs over each outer sample and sets them between samples; the :attr:`world`
         schedule applies to :meth:`step` only. ``plan`` (T, N, inputs): world inputs per outer
         sample, default none (inputs held).
         """
-        return (self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
-                self._buf_allocated, self._fmt, self._no_schedule if plan is None else plan,
-                self._scratch)
+        view = self._view
+        if view is None:
+            view = (self.regs, self.state, self.params, self.inputs, self.keys, self._buf,
+                    self._buf_allocated, self._fmt, self._no_schedule, self._scratch)
+            object.__setattr__(self, "_view", view)
+        if plan is None:
+            return view
+        return (*view[:8], plan, view[9])
 
     def reseed(self, keys: np.ndarray, index: MotorIndex = None) -> None:
         """Give the motors ``index`` new noise keys (one uint64 per motor, as the ``seed``

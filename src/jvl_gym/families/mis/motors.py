@@ -11,6 +11,7 @@ world inputs and the physical truth of the plant.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from typing import Any, ClassVar
 
 import numpy as np
@@ -88,6 +89,20 @@ _MEMBERS: dict[int, tuple[frozenset[int], str]] = {
 BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
 #: the plant's state and the electronics' temperature, which a reset of the electronics leaves
 #: alone
+#: the zero-search modes (§6.5.9) and the modes with the bridge off (§5.11.2, §8.2.3)
+_SEARCHES = (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2)
+_OFF = (c.PASSIVE, c.SAFE)
+
+
+def _among(values: np.ndarray, members: Iterable[int]) -> np.ndarray:
+    """``np.isin(values, members)`` for the few whole numbers ``members``, as comparisons (on
+    a few motors ``np.isin`` costs many times more)."""
+    out = np.zeros(values.shape, dtype=np.bool_)
+    for m in members:
+        out |= values == m
+    return out
+
+
 _PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD, L.S_TEMP_RISE]
 
 
@@ -231,7 +246,7 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         half = COUNTS_PER_REV // 2
         stored = self._position_backup[idx]
         near = stored + np.mod(turn - stored + half, COUNTS_PER_REV) - half
-        single_turn_encoder = np.isin(code, (1, 3, 4))
+        single_turn_encoder = _among(code, (1, 3, 4))
         pos = np.zeros(idx.size, dtype=np.int64)
         pos = np.where(single & single_turn_encoder, turn, pos)
         pos = np.where(multi & (code == 0), stored, pos)
@@ -271,8 +286,8 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         s[idx, L.S_CMD] = s[idx, L.S_CMD_PREV] = 0.0
         home = regs[idx, R.HOMEMODE]
         start = regs[idx, R.STARTMODE]
-        start = np.where(np.isin(start, list(c.START_MODES)), start, c.PASSIVE)
-        regs[idx, R.MODE_REG] = np.where(np.isin(home, (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2)),
+        start = np.where(_among(start, c.START_MODES), start, c.PASSIVE)
+        regs[idx, R.MODE_REG] = np.where(_among(home, _SEARCHES),
                                          home, start)
         # a power-on zero search that times out goes on in STARTMODE (§6.5.9, §7.2.19)
         s[idx, L.S_HOME_PREV] = start
@@ -337,24 +352,24 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         if num == R.MODE_REG:
             self._check_modes(idx, raw)
             changed = regs[idx, R.MODE_REG] != raw
-            enter_home = changed & np.isin(raw, (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2))
+            enter_home = changed & _among(raw, _SEARCHES)
             s[idx[enter_home], L.S_HOME_PHASE] = 0.0
             s[idx[enter_home], L.S_HOME_MS] = 0.0
             # the mode a time-out sets back (§7.2.19): the one before the search started
-            searching = np.isin(regs[idx, R.MODE_REG], (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2))
+            searching = _among(regs[idx, R.MODE_REG], _SEARCHES)
             first = enter_home & ~searching
             s[idx[first], L.S_HOME_PREV] = regs[idx[first], R.MODE_REG]
             off = raw == c.PASSIVE
             # §5.11.2: "When changing to Passive mode the motor goes into Stop mode to
             # decelerate according to the 'Deceleration'-ramp" (an error stop keeps its own)
-            running = off & (s[idx, L.S_VEL] != 0.0) & (s[idx, L.S_EMERGENCY] == 0.0) & ~np.isin(
-                regs[idx, R.MODE_REG], (c.PASSIVE, c.SAFE))
+            running = off & (s[idx, L.S_VEL] != 0.0) & (s[idx, L.S_EMERGENCY] == 0.0) & ~_among(
+                regs[idx, R.MODE_REG], _OFF)
             halt = off & ~running
             s[idx[halt], L.S_VEL] = 0.0
             s[idx[halt], L.S_EMERGENCY] = 0.0
             # SETUP_BITS bit 5 (§8.2.68): "Synchronize encoder position to P_IST after change
             # to active mode. Follow error = 0"
-            was_off = np.isin(regs[idx, R.MODE_REG], (c.PASSIVE, c.SAFE))
+            was_off = _among(regs[idx, R.MODE_REG], _OFF)
             sync = was_off & ~off & ((regs[idx, R.SETUP_BITS] & c.SETUP_SYNC_ENCODER) != 0)
             for i in idx[sync].tolist():
                 self._set_encoder(i, int(regs[i, R.P_IST]))
