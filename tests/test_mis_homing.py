@@ -139,19 +139,28 @@ SWITCH_METHODS = {
 }
 
 
-@pytest.mark.statements("mis:11.5.6:2")
-@pytest.mark.parametrize("method", sorted(SWITCH_METHODS))
-def test_home_switch_methods_without_index(rig: Rig, method: int) -> None:
-    """23–30 (7–14 without index): from below the switch the search starts in the method's
-    direction (turning at the negative limit switch for 27–30); the zero is the method's edge,
-    crossed last in the method's direction, entering or leaving the switch."""
-    first, edge, approach, entering = SWITCH_METHODS[method]
+def _switch_search(rig: Rig, method: int, expected: tuple | None = None):
+    """Home with ``method`` from 1 rad (below the switch) and check the search's first
+    direction and the last switch edge crossed (where, which way, entering or leaving) against
+    ``expected`` (default ``SWITCH_METHODS[method]``); the run."""
+    first, edge, approach, entering = expected or SWITCH_METHODS[method]
     run = _home(rig, method, 1.0)
     _attained(run)
     assert run.first == first
     theta, direction, active = run.edges[-1]
     assert theta == pytest.approx(edge, abs=TOL)
     assert (direction, active) == (approach, entering)
+    return run
+
+
+@pytest.mark.statements("mis:11.5.6:2")
+@pytest.mark.parametrize("method", sorted(SWITCH_METHODS))
+def test_home_switch_methods_without_index(rig: Rig, method: int) -> None:
+    """23–30 (7–14 without index): from below the switch the search starts in the method's
+    direction (turning at the negative limit switch for 27–30); the zero is the method's edge,
+    crossed last in the method's direction, entering or leaving the switch."""
+    run = _switch_search(rig, method)
+    first, edge, _, _ = SWITCH_METHODS[method]
     assert run.zero == pytest.approx(edge, abs=TOL)
     if first == -1:  # it went to the negative limit and turned there
         assert run.lowest <= NEG_LIMIT
@@ -168,14 +177,8 @@ INDEX_METHODS = {7: (0.0, -1), 8: (TWO_PI, 1), 9: (TWO_PI, -1), 10: (2 * TWO_PI,
 def test_home_switch_methods_with_index(rig: Rig, method: int) -> None:
     """7–14: as 23–30, then on in the approach direction to the encoder's next index, which
     is the zero; the last switch edge crossed is the method's."""
-    first, edge, approach, entering = SWITCH_METHODS[method + 16]
+    run = _switch_search(rig, method, SWITCH_METHODS[method + 16])
     index, _ = INDEX_METHODS[method]
-    run = _home(rig, method, 1.0)
-    _attained(run)
-    assert run.first == first
-    theta, direction, active = run.edges[-1]
-    assert theta == pytest.approx(edge, abs=TOL)
-    assert (direction, active) == (approach, entering)
     assert run.zero == pytest.approx(index, abs=TOL)
 
 

@@ -65,7 +65,8 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 
 __all__ = ["Link", "LinkVectorEnv", "LinkEnv", "parse_link", "make_link_vec", "KINDS",
            "TorqueLimitCommand", "BUS_COMMANDS", "bus_command", "SPEED_LIMIT_RPM",
-           "LoadCellObserver", "BUS_OBSERVERS", "bus_observer", "LOADCELL_FULL_SCALE"]
+           "LoadCellObserver", "BUS_OBSERVERS", "bus_observer", "LOADCELL_FULL_SCALE",
+           "register_bounds"]
 
 #: the link kinds: serial register links, CANopen PDOs, an analogue input through a DAC
 KINDS = ("mactalk", "mactalk32", "mactalk-tcp", "modbus", "canopen", "dac")
@@ -297,8 +298,9 @@ def parse_link(text: str | Link) -> Link:
 SPEED_LIMIT_RPM = 3000.0
 
 
-def raw_bounds(table: Any, names: Sequence[str]) -> dict[str, tuple[int, int]]:
-    """Raw (stored integer) range of each register of ``names`` in ``table``."""
+def register_bounds(table: Any, names: Sequence[str]) -> dict[str, tuple[int, int]]:
+    """Raw (stored integer) range of each register of ``names`` in ``table``: the bounds the
+    link model and the deployment's supervisor hold every command within."""
     out = {}
     for name in names:
         reg = table.lookup(name)
@@ -330,8 +332,8 @@ class TorqueLimitCommand:
     def __init__(self, fam: Any, speed_limit: float = SPEED_LIMIT_RPM) -> None:
         self.mode = int(fam.task.VELOCITY_MODE)
         self.passive = int(fam.twin.passive_mode)
-        self.bounds = raw_bounds(fam.table, self.writes)
-        self.a_max = int(raw_bounds(fam.table, ("A_SOLL",))["A_SOLL"][1])
+        self.bounds = register_bounds(fam.table, self.writes)
+        self.a_max = int(register_bounds(fam.table, ("A_SOLL",))["A_SOLL"][1])
         lo, hi = self.bounds["V_SOLL"]
         self.v_limit = int(min(abs(round(fam.task.rpm_to_v_soll(speed_limit))), hi, -lo))
         self.t_full = int(self.bounds["T_SOLL"][1])

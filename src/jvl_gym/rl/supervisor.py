@@ -45,6 +45,8 @@ from typing import Any, Protocol
 
 import numpy as np
 
+from ..envs.link import register_bounds
+
 __all__ = ["Limits", "MotorLink", "Supervisor", "Stopped", "PolicyRunner", "Watchdog",
            "register_bounds"]
 
@@ -88,16 +90,6 @@ class Limits:
                              "low <= high")
         if not self.max_step > 0:
             raise ValueError(f"limits: max_step must be > 0, got {self.max_step}")
-
-
-def register_bounds(table: Any, names: tuple[str, ...]) -> dict[str, tuple[int, int]]:
-    """Raw (stored integer) range of each register of ``names`` in ``table``."""
-    out = {}
-    for name in names:
-        reg = table.lookup(name)
-        out[name] = (int(np.ceil(reg.minimum * reg.scale - 1e-9)),
-                     int(np.floor(reg.maximum * reg.scale + 1e-9)))
-    return out
 
 
 class Supervisor:
