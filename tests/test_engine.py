@@ -197,15 +197,21 @@ def test_stale_caches_under_numba_cache_dir_are_dropped_too(tmp_path, monkeypatc
 
 def test_task_driver_runner_is_its_step_for_the_number_of_copies() -> None:
     """An env keeps the driver's compiled step (``TaskDriver.runner``): the serial one below
-    ``PARALLEL_MIN`` copies, the threaded one from there, the same as ``step`` calls."""
+    ``PARALLEL_MIN`` copies, the threaded one from there, the same as ``step`` calls, by its
+    machine code's own entry (``jvl_gym.engine.entry``)."""
     import gymnasium as gym
 
     from jvl_gym.engine.driver import PARALLEL_MIN
+    from jvl_gym.engine.entry import entry_point
 
     for n, attr in ((1, "serial"), (PARALLEL_MIN, "parallel")):
         core = gym.make_vec("jvl_gym/Positioning-v0", num_envs=n,
                             vectorization_mode="vector_entry_point").unwrapped
         core.reset(seed=0)
         assert core._driver.runner(core.motors.engine_view()) is getattr(core._driver, attr)
-        core.step(np.zeros((n, 1), dtype=np.float32))
-        assert core._run is getattr(core._driver, attr)
+        actions = np.zeros((n, 1), dtype=np.float32)
+        core.step(actions)
+        step = getattr(core._driver, attr)
+        entry = entry_point(step, (*core._step_head, actions.astype(np.float64), core.decimation))
+        assert entry is not step  # the machine code's own entry, found once
+        assert core._run is entry
