@@ -41,7 +41,8 @@ def local_ray() -> Iterator[None]:
     """A local Ray of 2 CPUs, started by the first test that asks for it and shared by every
     later one in the same process (the Ray tests of several modules)."""
     ray = pytest.importorskip("ray")
-    ray.init(num_cpus=2, include_dashboard=False, log_to_driver=False,
-             object_store_memory=256 * 1024 * 1024)
+    from jvl_gym.scale.ray_session import connect
+
+    connect(num_cpus=2)  # as the commands start theirs
     yield
     ray.shutdown()

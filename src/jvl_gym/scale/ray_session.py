@@ -4,7 +4,8 @@
 ``address="auto"`` joins the cluster this machine belongs to (``ray start --head`` /
 ``ray start --address``), ``address="ray://host:10001"`` connects through Ray Client. The
 workers get ``MPLBACKEND=Agg`` and, on a local Ray, this process's ``PYTHONPATH`` (so a source
-checkout on the path is what they import; a cluster's nodes use their own installation).
+checkout on the path is what they import; a cluster's nodes use their own installation) and the
+priority of any other process (:data:`LOCAL_WORKER_ENV`).
 """
 
 from __future__ import annotations
@@ -16,10 +17,14 @@ from typing import Any
 from .errors import UserError
 from .extra import require_ray
 
-__all__ = ["connect", "LOCAL_OBJECT_STORE_BYTES"]
+__all__ = ["connect", "LOCAL_OBJECT_STORE_BYTES", "LOCAL_WORKER_ENV"]
 
 #: Object store of a local Ray [bytes]: the commands move small results only.
 LOCAL_OBJECT_STORE_BYTES = 256 * 1024 * 1024
+#: The environment of a local Ray's workers beside the rest: Ray starts its workers at nice 15,
+#: which on a machine busy with other work (a compile, a test run) leaves a trial a few percent
+#: of a core; the command's own process only waits for them, so they run at normal priority.
+LOCAL_WORKER_ENV = {"RAY_worker_niceness": "0"}
 
 
 def connect(address: str | None = None, num_cpus: int | None = None,
@@ -45,8 +50,10 @@ def connect(address: str | None = None, num_cpus: int | None = None,
     if ray.is_initialized():
         return ray
     env_vars = {"MPLBACKEND": "Agg"}
-    if address is None and os.environ.get("PYTHONPATH"):
-        env_vars["PYTHONPATH"] = os.environ["PYTHONPATH"]
+    if address is None:
+        env_vars.update(LOCAL_WORKER_ENV)
+        if os.environ.get("PYTHONPATH"):
+            env_vars["PYTHONPATH"] = os.environ["PYTHONPATH"]
     kwargs: dict[str, Any] = {"runtime_env": {"env_vars": env_vars},
                               "log_to_driver": log_to_driver, "logging_level": logging.WARNING,
                               "configure_logging": True}
