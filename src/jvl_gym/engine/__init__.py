@@ -10,12 +10,16 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
+from .threads import set_wait_policy
+
 __all__ = ["PARALLEL_MIN", "MotorDriver", "TaskDriver", "noop_hook", "noop_step_hook",
            "EngineView", "Episode"]
 
 _WHERE = {"PARALLEL_MIN": "driver", "MotorDriver": "driver", "TaskDriver": "driver",
           "noop_hook": "driver", "noop_step_hook": "driver", "EngineView": "view",
           "Episode": "view"}
+
+set_wait_policy()  # before any threaded step loads the thread pool (jvl_gym.engine.threads)
 
 
 def __getattr__(name: str) -> Any:
