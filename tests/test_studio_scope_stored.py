@@ -142,5 +142,5 @@ def test_the_studio_page_points_at_the_studio_benchmark_section():
     page = (docs / "benchmarks.md").read_text()
     section = page.split("<!-- bench:studio begin -->")[1].split("<!-- bench:studio end -->")[0]
     assert re.search(r"^## studio$", section, re.M | re.I)
-    assert "scope frames/s drawn in headless Chromium, 8 channels" in section
+    assert "scope frames/s drawn with new data in headless Chromium, 8 channels" in section
     assert "trigger latency" in section
