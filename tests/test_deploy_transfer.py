@@ -55,7 +55,7 @@ def test_a_shipped_link_policy_deploys_over_a_twin_and_reports(env_id, tmp_path)
         period = max(loop_period(env_id, link, MOTOR), margin)
         report = deploy(env_id, policy, url, 3, MOTOR, period=period, episodes=1, seed=7,
                         max_seconds=4 * period, trace=tmp_path / "trace.csv",
-                        **_loop_limits(margin))
+                        **{**_loop_limits(margin), "timeout": max(1.0, 5 * margin)})
     assert report.reason == "done" and len(report.returns) == 1
     assert report.lengths == [4] and report.ended == [""]
     assert np.isfinite(report.returns[0])
