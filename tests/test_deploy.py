@@ -255,7 +255,8 @@ def test_a_cut_link_puts_the_motor_passive_after_the_clients_time_out(twin_url):
     assert out["report"].reason.startswith("link")
 
 
-def _deploy_process(url: str, obs: Observer, *extra: str) -> subprocess.Popen:
+def _deploy_process(url: str, obs: Observer, *extra: str, preexec_fn=None
+                    ) -> subprocess.Popen:
     """``jvl-gym deploy`` in a process of its own, with the time-outs of the measured margin
     (:func:`_loop_limits`): on a busy machine (load average 25 on two cores) the loop's
     heartbeats came more than 0.2 s apart, a watchdog of 0.2 s then stopped the motor and
@@ -268,7 +269,7 @@ def _deploy_process(url: str, obs: Observer, *extra: str) -> subprocess.Popen:
          "--address", str(ADDRESS), "--motor", MOTOR, "--period", "0.2", "--episodes", "50",
          "--watchdog-timeout", f"{limits['watchdog_timeout']:.3f}",
          "--timeout", f"{limits['timeout']:.3f}", *extra],
-        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+        env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, preexec_fn=preexec_fn)
 
 
 def test_killing_the_loops_process_puts_the_motor_passive(twin_url):
@@ -304,6 +305,28 @@ def test_sigterm_and_ctrl_c_stop_the_loop_and_the_motor(twin_url, sig, reason):
         proc.kill()
     assert seen is not None and seen - t_term <= obs.margin + 0.03
     assert proc.returncode == 1 and reason in out
+
+
+def _ignore_ctrl_c() -> None:
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def test_ctrl_c_stops_a_loop_started_with_ctrl_c_ignored(twin_url):
+    """A process started with SIGINT ignored (a shell's background job, or a parent that
+    ignores it) would never see Ctrl-C: the loop installs its own handler, so Ctrl-C stops it
+    and the motor all the same."""
+    obs = Observer(twin_url)
+    proc = _deploy_process(twin_url, obs, preexec_fn=_ignore_ctrl_c)
+    try:
+        assert obs.wait_mode(obs.running, 120) is not None
+        t_term = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        seen = obs.wait_stop(30)
+        out, _ = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert seen is not None and seen - t_term <= obs.margin + 0.03
+    assert proc.returncode == 1 and b"interrupted (Ctrl-C)" in out
 
 
 class FakeLink:

@@ -563,12 +563,15 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
     report = DeployReport(trace=None if trace is None else Path(trace))
     rows: list[list[float]] = []
     latencies: list[float] = []
-    old_term = None
+    old_term = old_int = None
     if threading.current_thread() is threading.main_thread():
         def on_term(signum: int, frame: Any) -> None:
             raise _Terminate()
 
         old_term = signal.signal(signal.SIGTERM, on_term)
+        # Ctrl-C stops the loop even in a process started with SIGINT ignored (a shell's
+        # background job, a parent that ignores it), which Python would otherwise keep
+        old_int = signal.signal(signal.SIGINT, signal.default_int_handler)
     t_first = time.monotonic()
     loop_time, t0, write_time = 0.0, t_first, 0.0
     try:
@@ -650,6 +653,8 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
     finally:
         if old_term is not None:
             signal.signal(signal.SIGTERM, old_term)
+        if old_int is not None:
+            signal.signal(signal.SIGINT, old_int)
         report.reason = supervisor.reason
         watchdog.close()
         with_client_closed(client)
