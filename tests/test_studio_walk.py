@@ -25,7 +25,7 @@ import pytest
 
 from conftest import CHROMIUM
 from test_studio_browser import artefacts, shoot  # noqa: F401 - the shared fixture
-from test_studio_lock import ROOT, Studio, _env, free_port
+from test_studio_lock import ROOT, Studio, _env, free_port, stop_process
 
 pytestmark = pytest.mark.skipif(not Path(CHROMIUM).exists(),
                                 reason=f"Debian's Chromium ({CHROMIUM}) is not installed")
@@ -87,12 +87,7 @@ class Twins:
             time.sleep(0.2)
 
     def stop(self) -> None:
-        self.proc.terminate()
-        try:
-            self.proc.wait(10)
-        except subprocess.TimeoutExpired:
-            self.proc.kill()
-            self.proc.wait()
+        stop_process(self.proc)
 
 
 @pytest.fixture(scope="module")
