@@ -34,7 +34,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-__all__ = ["Identified", "IdentificationError", "read_identification", "identification_of",
+__all__ = ["Identified", "IdentificationError", "read_identification", "parse_report",
+           "identification_of",
            "env_kwargs_from_identification", "REPORT_FILE", "SETUP_FILE"]
 
 #: the files ``jvl-tune autotune --out DIR`` writes that an identified env is built from
