@@ -35,8 +35,7 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["Identified", "IdentificationError", "read_identification", "parse_report",
-           "identification_of",
-           "env_kwargs_from_identification", "REPORT_FILE", "SETUP_FILE"]
+           "identification_of", "env_kwargs_from_identification", "REPORT_FILE", "SETUP_FILE"]
 
 #: the files ``jvl-tune autotune --out DIR`` writes that an identified env is built from
 REPORT_FILE = "report.txt"
