@@ -189,6 +189,21 @@ def test_cli_trains_on_the_identified_env_and_refuses_a_bad_file(autotuned: Path
     assert (runs / "Positioning-v0-mac050_141-ppo.zip").is_file()
 
 
+def test_cli_evaluates_on_the_identified_env(autotuned: Path, tmp_path: Path) -> None:
+    # no model in --runs: the shipped policy, against the baseline on the identified env
+    scored = subprocess.run([sys.executable, "-m", "jvl_gym.cli", "evaluate", POS, "--runs",
+                             str(tmp_path), "--seeds", "1", "--episodes", "2", "--identified",
+                             str(autotuned)], env=_env(), capture_output=True, text=True,
+                            timeout=300)
+    assert scored.returncode == 0, scored.stderr[-2000:]
+    assert "| jvl_gym/Positioning-v0 |" in scored.stdout
+    bad = subprocess.run([sys.executable, "-m", "jvl_gym.cli", "evaluate", POS, "--runs",
+                          str(tmp_path), "--identified", str(tmp_path)], env=_env(),
+                         capture_output=True, text=True, timeout=300)
+    assert bad.returncode != 0 and len(bad.stderr.strip().splitlines()) == 1
+    assert "no report.txt" in bad.stderr
+
+
 def test_deploy_option_refuses_another_motor_type(autotuned: Path) -> None:
     from jvl_gym.cli.main import app
 
