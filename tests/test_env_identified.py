@@ -210,3 +210,34 @@ def test_deploy_option_refuses_another_motor_type(autotuned: Path) -> None:
     res = CliRunner().invoke(app, ["deploy", POS, "--identified", str(autotuned),
                                    "--motor", "MAC050"])
     assert res.exit_code != 0 and "is a MAC140, not --motor MAC050" in str(res.exception)
+
+
+def test_a_result_in_memory_gives_the_env_its_files_give(autotuned: Path) -> None:
+    from types import SimpleNamespace
+
+    from jvl_gym.envs.identified import identification_of
+
+    read = read_identification(autotuned)
+    (j, *ci_j), (b, *ci_b), (tc, *ci_tc) = read.inertia, read.viscous, read.coulomb
+    mech = SimpleNamespace(J=j, viscous=b, coulomb=tc,
+                           ci={"J": tuple(ci_j), "viscous": tuple(ci_b), "coulomb": tuple(ci_tc)})
+    result = SimpleNamespace(ident=SimpleNamespace(motor=SimpleNamespace(name="MAC140"),
+                                                   mechanics=mech),
+                             chosen=SimpleNamespace(registers=read.registers))
+    assert (env_kwargs_from_identification(result, POS)
+            == env_kwargs_from_identification(autotuned, POS))
+    assert identification_of(result).registers == read.registers
+    with pytest.raises(IdentificationError, match="not an identification"):
+        identification_of(SimpleNamespace(motor=SimpleNamespace(name="MAC140")))
+
+
+def test_a_mac800_setup_gives_a_mac800_env(autotuned: Path, tmp_path: Path) -> None:
+    d = _copy(autotuned, tmp_path / "out")
+    (d / "setup.yaml").write_text("motor: MAC800\nregisters:\n  KVOUT: 2.0\n")
+    kwargs = env_kwargs_from_identification(d, POS)
+    assert kwargs["motor_type"] == "MAC800"
+    assert kwargs["setup"]["registers"]["KVOUT"] == 2.0
+    env = vector_class(POS)(2, **kwargs)
+    assert env.family_key == "mac800"
+    with pytest.raises(IdentificationError, match="does not run on the MAC800"):
+        env_kwargs_from_identification(d, "jvl_gym/CoilWinding-v0")

@@ -312,7 +312,7 @@ def env_kwargs_from_identification(source: Identified | Any | str | os.PathLike[
     if ident.resonance is not None:
         ranges["resonance_hz"] = _nonnegative(ident.resonance[1], ident.resonance[2])
         ranges["coupling_damping_ratio"] = (ident.damping_ratio, ident.damping_ratio)
-    default = load_setup(cfg.setup, fam.array_class.SETUPS_DIR).registers
+    default = load_setup(fam.config.setup_path(cfg.setup)).registers
     registers = {**default, **ident.registers}
     return {"motor_type": ident.motor_type, "randomization": ranges,
             "setup": {"motor": ident.motor_type, "registers": registers}}
