@@ -112,12 +112,13 @@ print(f"true inertia_ratio {truth['load_inertia'] / J_m:.4g}, "
 # bounds it.
 
 # %%
+from jvl_gym.envs.registration import vector_class  # noqa: E402
 from jvl_gym.rl.deploy import load_policy  # noqa: E402
 from jvl_gym.rl.train import train  # noqa: E402
 
 model = train(ENV_ID, out / "runs", total_timesteps=4096 if FAST else 300_000, seed=0,
               progress_bar=False, link=LINK, variant="link", env_kwargs=kwargs)
-policy = load_policy(str(model), ENV_ID, 1, 0.00192)
+policy = load_policy(str(model), ENV_ID, 1, vector_class(ENV_ID).step_seconds("MAC140"))
 
 # %% [markdown]
 # ## 4 · Deploy to the twin in real time, beside the link model

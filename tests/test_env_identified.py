@@ -241,3 +241,12 @@ def test_a_mac800_setup_gives_a_mac800_env(autotuned: Path, tmp_path: Path) -> N
     assert env.family_key == "mac800"
     with pytest.raises(IdentificationError, match="does not run on the MAC800"):
         env_kwargs_from_identification(d, "jvl_gym/CoilWinding-v0")
+
+
+def test_deploy_draws_its_episodes_from_the_identified_env_of_that_motor(autotuned: Path) -> None:
+    from jvl_gym.rl.deploy import deploy
+
+    kwargs = env_kwargs_from_identification(autotuned, POS)
+    with pytest.raises(ValueError, match="not the motor's"):  # before any connection
+        deploy(POS, lambda obs: obs[:, :1] * 0, "socket://127.0.0.1:9", 1, "MAC050",
+               period=0.01, env_kwargs=kwargs)
