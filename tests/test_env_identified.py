@@ -250,3 +250,28 @@ def test_deploy_draws_its_episodes_from_the_identified_env_of_that_motor(autotun
     with pytest.raises(ValueError, match="not the motor's"):  # before any connection
         deploy(POS, lambda obs: obs[:, :1] * 0, "socket://127.0.0.1:9", 1, "MAC050",
                period=0.01, env_kwargs=kwargs)
+
+
+#: the two-mass section of ``jvl-tune autotune --resonance`` (a MAC140 with 5e-5 kg·m² behind
+#: a coupling of 20 N·m/rad: 198.5 Hz)
+TWO_MASS = ("\nTwo-mass load (tuning.identify_resonance, tuning.resonance_design)\n"
+            "  resonance 198.4 Hz (95 % 195.1 .. 201.7), anti-resonance 100.5 Hz, load ratio "
+            "J_l/J_m 2.89, damping ratio 0.067, detected {detected}\n"
+            "  as recorded under the current loop: 194.9 Hz, damping ratio 0.084\n")
+
+
+def test_a_detected_two_mass_resonance_puts_the_load_behind_its_coupling(autotuned: Path,
+                                                                         tmp_path: Path) -> None:
+    d = _copy(autotuned, tmp_path / "out")
+    report = (d / "report.txt").read_text()
+    (d / "report.txt").write_text(report + TWO_MASS.format(detected=True))
+    kwargs = env_kwargs_from_identification(d, POS)
+    assert kwargs["randomization"]["resonance_hz"] == (195.1, 201.7)
+    assert kwargs["randomization"]["coupling_damping_ratio"] == (0.067, 0.067)
+    env = vector_class(POS)(8, **kwargs)
+    env.reset(seed=0)
+    p = env.motors.parameters
+    f = np.sqrt(p["coupling_stiffness"] * (1 / J_M + 1 / p["load_inertia"])) / (2 * np.pi)
+    assert np.all((f > 195.1 - 1e-6) & (f < 201.7 + 1e-6))
+    (d / "report.txt").write_text(report + TWO_MASS.format(detected=False))
+    assert "resonance_hz" not in env_kwargs_from_identification(d, POS)["randomization"]
