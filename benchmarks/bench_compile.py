@@ -65,7 +65,7 @@ TIMED = """
 import time
 t0 = time.perf_counter()
 {code}
-print(time.perf_counter() - t0)
+print(time.perf_counter() - t0, time.process_time())
 """
 
 
@@ -79,10 +79,13 @@ def _last_line(args: list[str], tree: Path, cache_dir: str) -> str:
     return out.stdout.strip().splitlines()[-1]
 
 
-def seconds(code: str, tree: Path, cache_dir: str) -> float:
-    """Wall time [s] of ``code`` in a new Python process importing jvl_gym from ``tree`` with
-    numba's cache in ``cache_dir``."""
-    return float(_last_line(["-c", TIMED.format(code=code)], tree, cache_dir))
+def seconds(code: str, tree: Path, cache_dir: str) -> tuple[float, float]:
+    """Wall time [s] of ``code`` and the CPU time [s] of the whole process (imports included)
+    in a new Python process importing jvl_gym from ``tree`` with numba's cache in
+    ``cache_dir``. The CPU seconds depend much less on the machine's load than the wall
+    seconds (a process waiting for a core spends none)."""
+    wall, cpu = _last_line(["-c", TIMED.format(code=code)], tree, cache_dir).split()
+    return float(wall), float(cpu)
 
 
 FAMILY_TYPES = ("from jvl_gym.families import families, family\n"
@@ -129,14 +132,16 @@ def print_profile(label: str, profiles: dict[str, dict]) -> None:
         print(f"  front-end seconds by pass owner (inlined copies included): {shown or '-'}")
 
 
-def measure(tree: Path) -> list[float]:
-    """Wall times [s] of :data:`CASES`, then of :data:`AFTER_PRECOMPILE` (NaN where the tree
-    has no ``jvl_gym.cli.precompile``), for the source tree ``tree``, each list in one cache."""
+def measure(tree: Path, precompile: bool = True) -> list[tuple[float, float]]:
+    """(wall, CPU) seconds of :data:`CASES`, then of :data:`AFTER_PRECOMPILE` (NaN where the
+    tree has no ``jvl_gym.cli.precompile`` or ``precompile`` is False), for the source tree
+    ``tree``, each list in one cache."""
     with tempfile.TemporaryDirectory(prefix="jvl-numba-") as cache_dir:
         times = [seconds(code, tree, cache_dir) for _, code in CASES]
     package = tree / "src" / "jvl_gym"
-    if not any((package / p).exists() for p in ("cli/precompile.py", "precompile.py")):
-        return times + [math.nan] * len(AFTER_PRECOMPILE)
+    if not precompile or not any((package / p).exists()
+                                 for p in ("cli/precompile.py", "precompile.py")):
+        return times + [(math.nan, math.nan)] * len(AFTER_PRECOMPILE)
     with tempfile.TemporaryDirectory(prefix="jvl-numba-") as cache_dir:
         return times + [seconds(code, tree, cache_dir) for _, code in AFTER_PRECOMPILE]
 
@@ -146,6 +151,8 @@ def main() -> None:
     parser.add_argument("--baseline", help="git revision to measure beside this tree")
     parser.add_argument("--profile-only", action="store_true",
                         help="only the per-family compile breakdown (step 5)")
+    parser.add_argument("--no-precompile", action="store_true",
+                        help="leave out step 4 (jvl-gym compile, minutes of both cores)")
     args = parser.parse_args()
     columns = [("this tree", ROOT)]
     with tempfile.TemporaryDirectory(prefix="jvl-baseline-") as base:
@@ -154,7 +161,8 @@ def main() -> None:
                             args.baseline], check=True)
             columns.insert(0, (args.baseline[:10], Path(base)))
         try:
-            results = [] if args.profile_only else [measure(tree) for _, tree in columns]
+            results = [] if args.profile_only else [measure(tree, not args.no_precompile)
+                                                    for _, tree in columns]
             profiles = [profile(tree) for _, tree in columns]
         finally:
             if args.baseline:
@@ -165,10 +173,10 @@ def main() -> None:
     if not results:
         return
     print(f"\n{'first use, empty numba cache [s]':40s}"
-          + "".join(f"{label:>14s}" for label, _ in columns))
+          + "".join(f"{label + ' wall':>16s}{'CPU':>7s}" for label, _ in columns))
     for k, (name, _) in enumerate([*CASES, *AFTER_PRECOMPILE]):
-        print(f"{name:40s}" + "".join(f"{r[k]:14.1f}" if r[k] == r[k] else f"{'—':>14s}"
-                                      for r in results))
+        print(f"{name:40s}" + "".join(f"{r[k][0]:16.1f}{r[k][1]:7.1f}" if r[k][0] == r[k][0]
+                                      else f"{'—':>16s}{'—':>7s}" for r in results))
 
 
 if __name__ == "__main__":

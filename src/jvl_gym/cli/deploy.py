@@ -20,6 +20,8 @@ import typer
 from ..envs.link import parse_link
 from ..rl.deploy import holds_latency, link_latency, loop_period
 from .app import CliError
+from .identified import HELP as IDENTIFIED_HELP
+from .identified import identified_kwargs
 
 #: the supervisor's rate limit when neither --max-step nor the link states one
 DEFAULT_MAX_STEP = 0.5
@@ -57,7 +59,9 @@ def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-
            line_time: Annotated[bool, typer.Option(
                "--line-time", help="hold each write until the link model's latency after the "
                "read: the serial line's time, which a twin over TCP does not take (always on "
-               "a mactalk-tcp link: its stated latency)")] = False
+               "a mactalk-tcp link: its stated latency)")] = False,
+           identified: Annotated[Path | None, typer.Option(
+               help=IDENTIFIED_HELP + "; the motor type is that motor's")] = None
            ) -> None:
     """Run POLICY on the motor in real time, bounded and watched by the safety supervisor;
     print the episodes' return and metrics, the loop's rate and latency, and why it stopped."""
@@ -78,7 +82,12 @@ def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-
     from ..envs.registration import vector_class
 
     cls = vector_class(env_id)
-    motor_type = motor or cls._default_type()
+    env_kwargs, _ = identified_kwargs(identified, env_id)
+    if env_kwargs is not None and motor is not None and motor != env_kwargs["motor_type"]:
+        raise CliError(f"--identified: {identified} is a {env_kwargs['motor_type']}, not "
+                       f"--motor {motor}")
+    motor_type = (env_kwargs["motor_type"] if env_kwargs is not None
+                  else motor or cls._default_type())
     try:
         step = period if period is not None else loop_period(env_id, link, motor_type)
         if max_step is None:
@@ -92,7 +101,7 @@ def deploy(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/Positioning-
                      watchdog_url=watchdog_url, watchdog_timeout=watchdog_timeout,
                      timeout=timeout, trace=trace,
                      hold=link_latency(env_id, link, motor_type)
-                     if line_time or holds_latency(link) else 0.0)
+                     if line_time or holds_latency(link) else 0.0, env_kwargs=env_kwargs)
     except ValueError as exc:  # a bridge that does not run on the motor's family
         raise CliError(str(exc)) from None
     typer.echo(f"period {1e3 * step:.2f} ms ({'--period' if period is not None else link})")

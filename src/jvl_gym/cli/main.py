@@ -15,6 +15,8 @@ from typing import Annotated
 import typer
 
 from .app import RL_EXTRA_HINT, App, CliError, writable_dir
+from .identified import HELP as IDENTIFIED_HELP
+from .identified import identified_kwargs
 from .program import program_app
 
 app = App(prog="jvl-gym",
@@ -83,12 +85,14 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
                    "canopen:2ms, dac:12 (then ,jitter=S ,drop=P)")] = None,
           variant: Annotated[str | None, typer.Option(
               help="train a variant of the config (its variants: e.g. link, nolink; "
-                   "OUT/<Env>-<family>-<variant>-<algo>.zip)")] = None
+                   "OUT/<Env>-<family>-<variant>-<algo>.zip)")] = None,
+          identified: Annotated[Path | None, typer.Option(help=IDENTIFIED_HELP)] = None
           ) -> None:
     """Train the configured algorithm (configs/rl/*.yml) on ENV_ID and save the model
     (OUT/<Env>-<family>-<algo>.zip, its training log beside it)."""
     _check_env_id(env_id)
     _check_family(env_id, family)
+    env_kwargs, family = identified_kwargs(identified, env_id, family)
     _need_rl_extra("jvl-gym train")
     from ..rl.config import rl_config
     from ..rl.train import train as run
@@ -102,7 +106,7 @@ def train(env_id: Annotated[str, typer.Argument(help="e.g. jvl_gym/GearSync-v0")
         _check_link(link)
     run(env_id, out, timesteps, seed, progress_bar=True, threads=threads,
         config_dir=config_dir, family=family, algo=algo, checkpoint_every=checkpoint_every,
-        link=link, variant=variant)
+        link=link, variant=variant, env_kwargs=env_kwargs)
 
 
 @app.command()
@@ -127,7 +131,8 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
              max_steps: Annotated[int | None, typer.Option(
                  help="cut the episodes at this many steps", min=1)] = None,
              link: Annotated[str | None, typer.Option(
-                 help="evaluate behind a link (as train --link): mactalk:19200 …")] = None
+                 help="evaluate behind a link (as train --link): mactalk:19200 …")] = None,
+             identified: Annotated[Path | None, typer.Option(help=IDENTIFIED_HELP)] = None
              ) -> None:
     """Print policy vs baseline (mean ± std over held-out seeds) for each ENV_ID, or with
     --all write the results page (OUT/results.md).
@@ -137,9 +142,9 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
     on stderr (exit status 1) after the table, which then shows the baseline only.
     """
     if all_:
-        if env_ids or family is not None or link is not None:
+        if env_ids or family is not None or link is not None or identified is not None:
             raise typer.BadParameter("--all evaluates every env and family: give no ENV_IDS, "
-                                     "no --family and no --link")
+                                     "no --family, no --link and no --identified")
         if out is None:
             raise typer.BadParameter("--all needs --out DIR (the directory for results.md)")
         _need_rl_extra("jvl-gym evaluate --all")
@@ -161,9 +166,12 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
     from ..rl import evaluate as ev
     from ..rl.train import model_path, shipped_model
 
+    kwargs_of = {}
     for env_id in env_ids:
         _check_env_id(env_id)
         _check_family(env_id, family)
+        kwargs_of[env_id], fam = identified_kwargs(identified, env_id, family)
+    family = fam
     paths = {env_id: model_path(runs, env_id, family, algo) for env_id in env_ids}
     for env_id, path in paths.items():
         shipped = None if path.exists() else shipped_model(env_id, family, algo)
@@ -176,7 +184,8 @@ def evaluate(env_ids: Annotated[list[str] | None, typer.Argument(
     results = {}
     for env_id, path in paths.items():
         results[env_id] = ev.evaluate(env_id, path if path.exists() else None, seeds, episodes,
-                                      config_dir=config_dir, family=family, link=link)
+                                      config_dir=config_dir, family=family, link=link,
+                                      env_kwargs=kwargs_of[env_id])
     typer.echo(ev.format_table(results))
     missing = [env_id for env_id, path in paths.items() if not path.exists()]
     if missing:

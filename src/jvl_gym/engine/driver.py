@@ -197,11 +197,12 @@ def _task_observe(idx, regs, state, params, inputs, keys, buf, rec, fmt, plan, s
 
 _MOTOR_TEMPLATES = {"_advance_block": _advance_block, "_run_serial": _run_serial,
                     "_run_parallel": _run_parallel}
-_MOTOR_OPTIONS = {"_advance_block": KERNEL,
+#: a block's step is called, not copied, by the serial and threaded drivers (engine.apart)
+_MOTOR_OPTIONS = {"_advance_block": {**KERNEL, "apart": True},
                   "_run_serial": KERNEL, "_run_parallel": KERNEL_PARALLEL}
 _TASK_TEMPLATES = {"_task_block": _task_block, "_task_serial": _task_serial,
                    "_task_parallel": _task_parallel, "_task_observe": _task_observe}
-_TASK_OPTIONS = {"_task_block": KERNEL, "_task_serial": KERNEL,
+_TASK_OPTIONS = {"_task_block": {**KERNEL, "apart": True}, "_task_serial": KERNEL,
                  "_task_parallel": KERNEL_PARALLEL, "_task_observe": KERNEL}
 
 

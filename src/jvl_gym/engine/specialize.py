@@ -20,6 +20,8 @@ from typing import Any
 
 from numba import njit
 
+from .apart import apart
+
 __all__ = ["specialise"]
 
 
@@ -40,7 +42,8 @@ def specialise(templates: Mapping[str, Callable[..., Any]], bindings: Mapping[st
     source : str
         Path of the Python file whose edits must invalidate the cached specialisations.
     options : mapping of str to mapping
-        ``numba.njit`` keyword arguments per template name.
+        ``numba.njit`` keyword arguments per template name; ``apart=True`` among them makes
+        the specialisation :func:`jvl_gym.engine.apart.apart` (its callers call it, not a copy).
 
     Returns
     -------
@@ -58,6 +61,10 @@ def specialise(templates: Mapping[str, Callable[..., Any]], bindings: Mapping[st
         copy.__qualname__ = qualname
         copy.__module__ = fn.__module__
         copy.__doc__ = fn.__doc__
-        compiled[name] = njit(**options[name])(copy)
+        njit_options = dict(options[name])
+        separate = njit_options.pop("apart", False)
+        compiled[name] = njit(**njit_options)(copy)
+        if separate:
+            apart(compiled[name])
         namespace[name] = compiled[name]
     return compiled

@@ -91,6 +91,11 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         ``"rgb_array"`` records a scope history and draws it on :meth:`render`.
     autoreset_mode : AutoresetMode or str
         ``NEXT_STEP`` (default), ``SAME_STEP`` or ``DISABLED``.
+    setup : str, path or mapping, optional
+        The register set the motors power on with at every reset (``MotorArray``'s
+        ``setup``: over the register table's defaults), e.g. a tuned setup
+        (:func:`jvl_gym.envs.identified.env_kwargs_from_identification`); default: each motor
+        type's own. What the task writes at its reset comes after.
 
     Notes
     -----
@@ -140,7 +145,7 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
                  decimation: int | None = None, obs_noise: float = 0.0,
                  max_episode_steps: int | None = None, render_mode: str | None = None,
                  autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP,
-                 **unknown: Any) -> None:
+                 setup: str | Mapping[str, Any] | None = None, **unknown: Any) -> None:
         from ..motor.array import MotorArray  # lazy: building an env compiles/loads the kernel
 
         if unknown:
@@ -182,7 +187,9 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         self.observation_space = batch_space(self.single_observation_space, n)
         self.action_space = batch_space(self.single_action_space, n)
 
-        self.motors = MotorArray(self.motor_types[0], n=n, seed=0)
+        self.setup = None if setup is None else (dict(setup) if isinstance(setup, Mapping)
+                                                  else str(setup))
+        self.motors = MotorArray(self.motor_types[0], n=n, seed=0, setup=self.setup)
         self._configs: dict[str, Any] = {}
         self._type_names = np.full(n, self.motor_types[0], dtype=object)
         self._rngs = [None] * n

@@ -491,7 +491,7 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
            max_step: float = 0.5, watchdog_url: str | None = None,
            watchdog_timeout: float = 0.25, timeout: float = 0.1, retries: int = 1,
            trace: str | Path | None = None, stop: threading.Event | None = None,
-           hold: float = 0.0) -> DeployReport:
+           hold: float = 0.0, env_kwargs: Mapping[str, Any] | None = None) -> DeployReport:
     """Run ``policy`` on the motor at ``address`` of ``url`` for ``episodes`` episodes.
 
     Parameters
@@ -529,6 +529,10 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
         the write starts the last write's duration before): the line time a serial link at the
         link model's baud rate takes (:func:`link_latency`), which a twin over TCP does not,
         so that the action lands as late as the link model has it.
+    env_kwargs : mapping, optional
+        Arguments of the env that draws the episodes (an identified motor's,
+        :func:`jvl_gym.envs.identified.env_kwargs_from_identification`; its ``motor_type``
+        must be ``motor_type``).
     """
     import gymnasium as gym
 
@@ -544,7 +548,11 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
     fam = family_of_motor(motor_type)
     deadline = period if deadline is None else float(deadline)
     bridge = BRIDGES[env_id](fam)
-    env = gym.make(env_id, motor_type=motor_type).unwrapped
+    env_kwargs = dict(env_kwargs or {})
+    if env_kwargs.setdefault("motor_type", motor_type) != motor_type:
+        raise ValueError(f"the env's motor type {env_kwargs['motor_type']!r} is not the "
+                         f"motor's, {motor_type!r}")
+    env = gym.make(env_id, **env_kwargs).unwrapped
     step_seconds = env.core.decimation * fam.constants.OUTER_DT
     horizon = env.core.max_episode_steps * step_seconds if max_seconds is None else max_seconds
     n_periods = max(1, int(math.ceil(horizon / period - 1e-9)))

@@ -179,11 +179,14 @@ def evaluate_controllers(env_id: str, models: dict[str, str | Path], *,
                          episodes_per_seed: int | None = None,
                          max_episode_steps: int | None = None, random_policy: bool = True,
                          config_dir: str | Path | None = None, progress_bar: bool = False,
-                         link: str | None = None) -> dict[str, ControllerResult]:
+                         link: str | None = None, env_kwargs: dict[str, Any] | None = None
+                         ) -> dict[str, ControllerResult]:
     """The baseline, each model of ``models`` (label -> file) and (``random_policy``) uniform
     random actions on the held-out seeds of ``env_id`` on ``family`` (behind ``link`` if
     given, :func:`run_episodes`).
 
+    ``env_kwargs`` go over the config's (an identified motor's,
+    :func:`jvl_gym.envs.identified.env_kwargs_from_identification`).
     ``max_episode_steps`` shortens the episodes (never lengthens them). Keys of the result:
     ``"baseline"``, the labels of ``models``, ``"random"``.
     """
@@ -196,7 +199,7 @@ def evaluate_controllers(env_id: str, models: dict[str, str | Path], *,
     ev = cfg["eval"]
     n_ep = int(episodes_per_seed or ev["episodes_per_seed"])
     seeds = held_out_seeds(ev["seed_offset"], int(n_seeds or ev["n_seeds"]))
-    kwargs = dict(cfg["env_kwargs"])
+    kwargs = {**cfg["env_kwargs"], **(env_kwargs or {})}
     limit = gym.spec(env_id).max_episode_steps
     if max_episode_steps is not None and (limit is None or max_episode_steps < limit):
         kwargs["max_episode_steps"] = int(max_episode_steps)
@@ -227,14 +230,16 @@ def evaluate_controllers(env_id: str, models: dict[str, str | Path], *,
 def evaluate(env_id: str, model_file: str | Path | None, n_seeds: int | None = None,
              episodes_per_seed: int | None = None, progress_bar: bool = True,
              config_dir: str | Path | None = None, family: str | None = None,
-             link: str | None = None) -> dict[str, tuple[float, float]]:
+             link: str | None = None, env_kwargs: dict[str, Any] | None = None
+             ) -> dict[str, tuple[float, float]]:
     """Mean ± std (over seeds) of the per-seed mean return of the policy and the baseline
-    (behind ``link`` if given), and ``seeds_won``: (seeds where the policy's mean beats the
-    baseline's, seeds)."""
+    (behind ``link`` if given, on the env of ``env_kwargs`` over the config's), and
+    ``seeds_won``: (seeds where the policy's mean beats the baseline's, seeds)."""
     models = {} if model_file is None else {"policy": model_file}
     res = evaluate_controllers(env_id, models, family=family, n_seeds=n_seeds,
                                episodes_per_seed=episodes_per_seed, random_policy=False,
-                               config_dir=config_dir, progress_bar=progress_bar, link=link)
+                               config_dir=config_dir, progress_bar=progress_bar, link=link,
+                               env_kwargs=env_kwargs)
     out = {k: v.mean_std for k, v in res.items()}
     if "policy" in res:
         out["seeds_won"] = (float(res["policy"].seeds_won(res["baseline"])),

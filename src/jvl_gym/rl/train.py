@@ -97,7 +97,8 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
           seed: int | None = None, progress_bar: bool = True, threads: int = 1,
           config_dir: str | Path | None = None, family: str | None = None,
           algo: str | None = None, checkpoint_every: int | None = None,
-          link: str | None = None, variant: str | None = None) -> Path:
+          link: str | None = None, variant: str | None = None,
+          env_kwargs: dict[str, Any] | None = None) -> Path:
     """Train the configured algorithm on ``env_id`` and save it (:func:`model_path`, with the
     training log beside it, :func:`log_path`); returns the model path.
 
@@ -125,6 +126,9 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
         ``"canopen:2ms"``, ``"dac:12"`` …; default: the config's ``link``).
     variant : str, optional
         Train a variant of the config (:func:`~.config.rl_config`; its own model name).
+    env_kwargs : dict, optional
+        Env arguments over the config's ``env_kwargs`` (an identified motor's,
+        :func:`jvl_gym.envs.identified.env_kwargs_from_identification`).
     """
     import numba
     import torch
@@ -142,7 +146,8 @@ def train(env_id: str, out_dir: str | Path = "runs", total_timesteps: int | None
     numba.set_num_threads(min(int(threads), numba.config.NUMBA_NUM_THREADS))
     seed = int(cfg["seed"] if seed is None else seed)
     steps = int(cfg["total_timesteps"] if total_timesteps is None else total_timesteps)
-    venv = VecMonitor(make_sb3_env(env_id, int(cfg["n_envs"]), link, **cfg["env_kwargs"]),
+    venv = VecMonitor(make_sb3_env(env_id, int(cfg["n_envs"]), link,
+                                    **{**cfg["env_kwargs"], **(env_kwargs or {})}),
                       filename=str(log_path(path)))
     hyper: dict[str, Any] = dict(cfg["hyperparams"])
     if cfg.get("init") is not None:  # a fine-tuning of the shipped policy

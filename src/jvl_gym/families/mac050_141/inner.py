@@ -36,6 +36,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...engine.apart import apart
 from ...engine.jit import KERNEL, LANE_KERNEL
 from ...motor.noise import gauss
 from ...physics.coil import vector_to_phases
@@ -398,6 +399,7 @@ def inner_sample(sc: np.ndarray, j: int, k: int, last: bool, full: bool, rigid: 
     sc[LANE_BASE[L.S_PREG_SUM] + j] = sc[LANE_BASE[L.S_PREG_SUM] + j] + max(-p_el, 0.0)
 
 
+@apart
 @njit(**LANE_KERNEL)
 def inner_samples_one(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray,
                       key: np.uint64, buf: np.ndarray, rec: bool, fmt: np.ndarray,

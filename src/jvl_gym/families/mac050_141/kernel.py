@@ -26,6 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ...engine.apart import apart
 from ...engine.jit import KERNEL, LANE_KERNEL
 from ...motor.noise import gauss
 from ...physics.bus import bus_constants, bus_step_prepared
@@ -130,6 +131,7 @@ def _finish_pending(r: np.ndarray, s: np.ndarray) -> None:
     enter_mode(r, s, int(pend) if pend >= 0.0 else c.INIT_MODE)
 
 
+@apart
 @njit(**KERNEL)
 def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
                    buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:

@@ -21,6 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...engine.apart import apart
 from ...engine.jit import LANE_KERNEL
 from ...engine.specialize import specialise
 from . import constants as c
@@ -64,14 +65,17 @@ def _lane_samples(scratch, m, r0, s0, p0, u0, key0, b0, rec, fmt):  # pragma: no
                      b0, rec, fmt)
 
 
+#: compiled apart: :func:`inner_samples` calls the machine code (``engine.apart``)
+_OPTIONS = {"_lane_samples": {**LANE_KERNEL, "apart": True}}
 #: :func:`_lane_samples` of lanes whose motors all have a rigid shaft
 lane_samples_rigid = specialise({"_lane_samples": _lane_samples}, {"RIGID": True}, "rigid",
-                                __file__, {"_lane_samples": LANE_KERNEL})["_lane_samples"]
+                                __file__, _OPTIONS)["_lane_samples"]
 #: :func:`_lane_samples` of lanes with an elastically coupled motor among them
 lane_samples_coupled = specialise({"_lane_samples": _lane_samples}, {"RIGID": False}, "coupled",
-                                  __file__, {"_lane_samples": LANE_KERNEL})["_lane_samples"]
+                                  __file__, _OPTIONS)["_lane_samples"]
 
 
+@apart
 @njit(**LANE_KERNEL)
 def inner_samples(regs, state, params, inputs, keys, buf, rec, fmt, i0, n, scratch):
     """The 15 inner samples (step 4, ``mac050_141.kernel``) of motors ``i0 .. i0 + n - 1``

@@ -34,6 +34,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ...engine.apart import apart
 from ...engine.jit import KERNEL, LANE_KERNEL
 from ...physics.bus import bus_step_prepared
 from ...physics.coil import coil_step_prepared, phase_to_vector, vector_to_phases
@@ -313,6 +314,7 @@ def _records_inner(r: np.ndarray) -> bool:
     return (cb & c.RECORDBIT) != 0 and (cb & c.RECINNERBIT) != 0
 
 
+@apart
 @njit(**LANE_KERNEL)
 def inner_samples(regs, state, params, inputs, buf, rec, i0, n, scratch):
     """The current-loop samples of one servo sample of motors ``i0 … i0 + n − 1`` (one

@@ -17,6 +17,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ...engine.apart import apart
 from ...engine.jit import KERNEL
 from ...motor.noise import gauss
 from ...physics.bus import bus_constants
@@ -131,6 +132,7 @@ def _after_search(r: np.ndarray, s: np.ndarray) -> None:
         go_passive(r, s)
 
 
+@apart
 @njit(**KERNEL)
 def outer_firmware(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
                    buf: np.ndarray, rec: bool) -> None:

@@ -40,6 +40,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ...engine.apart import apart
 from ...physics.fixed import wrap32
 from . import constants as c
 from . import layout as L
@@ -195,6 +196,7 @@ def _advance(regs, s, v: float, arrive: bool, tt: bool) -> None:  # pragma: no c
     s[L.S_STILL_MS] = 0.0 if steps != 0 or v != 0.0 else s[L.S_STILL_MS] + 1.0
 
 
+@apart
 @njit(cache=True)
 def outer_firmware(regs, s, p, u, buf, rec: bool) -> None:  # pragma: no cover - compiled
     """One outer sample of one motor (module docstring); rows of the engine's arrays."""

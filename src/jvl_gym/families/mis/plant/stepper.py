@@ -64,6 +64,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ....engine.apart import apart
 from ....engine.jit import LANE_KERNEL
 from ....physics.trig import sincos
 from .. import constants as c
@@ -146,6 +147,7 @@ def prepare_lane(sc, j: int, s, p, u) -> None:  # pragma: no cover - compiled
     sc[F_STOP_D * k + j] = 2.0 * STOP_DAMPING * STOP_STIFFNESS ** 0.5 * inertia / _H
 
 
+@apart
 @njit(**LANE_KERNEL)
 def inner_samples(state, i0: int, n: int, sc) -> None:  # pragma: no cover - compiled
     """The inner samples of motors ``i0 … i0 + n − 1`` in lanes (module docstring)."""
