@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from functools import lru_cache
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -16,15 +17,16 @@ from .task import ERROR_BITS, R, Task, c, record, reg, set_analog_volts
 
 COPPER_COLUMN = 0  # bound per family: the motors' state column of the copper energy account
 
-__all__ = ["PositioningEnv", "PositioningVectorEnv", "PositioningState"]
+__all__ = ["PositioningEnv", "PositioningVectorEnv", "PositioningState", "REWARD_WEIGHTS",
+           "step_reward", "full_torque_copper_power"]
 
 _FINE_TURNS = 200.0 / 4096  #: turns: scale of the fine position-error channel
 _NORM_RPM = 3000.0  #: rpm: scale of the speed channel
 _BASELINE_RPM = 3000.0
 
 #: the reward's weights (the env docstring, "Rewards"): name -> (default, unit)
-REWARD_WEIGHTS = {"overshoot_weight": (2.0, "1/turn"), "fine_weight": (0.02, "1"),
-                  "window_bonus": (0.4, "1"), "copper_weight": (8.0, "1/J")}
+REWARD_WEIGHTS = {"overshoot_weight": (10.0, "1/turn"), "fine_weight": (0.02, "1"),
+                  "window_bonus": (1.0, "1"), "copper_weight": (8.0, "1/J")}
 
 #: the env's constants of the compiled step (the reward's weights: :data:`REWARD_WEIGHTS`)
 CONSTS = record(noise=float, max_steps=float, decimation=float, overshoot_weight=float,
@@ -230,6 +232,30 @@ class PositioningVectorEnv(MotorVectorEnv):
                          self._prev_action[:, 0]], axis=1)
 
 
+@lru_cache(maxsize=None)
+def full_torque_copper_power(motor_type: str) -> float:
+    """The copper loss of a ``motor_type`` motor under the full torque command (action 1) [W],
+    as the motor model accounts it: a copy at rest under the full command for 12 steps, loaded
+    with 10 × the rotor's inertia and no friction (far below the speed where the supply
+    voltage limits the current), its copper account over the last 10 steps. The copper loss
+    of a command ``a`` is this times ``a²``: where the copper account cannot be read (a
+    deployed motor), the reward's copper term is estimated from the command with it."""
+    env = PositioningVectorEnv(1, motor_type=motor_type, randomization={
+        "inertia_ratio": (10.0, 10.0), "viscous_friction": (0.0, 0.0),
+        "coulomb_ratio": (0.0, 0.0)})
+    idx = np.zeros(1, dtype=np.int64)
+    full = np.ones((1, 1), dtype=np.float32)
+    env.reset(seed=0)
+    for _ in range(2):
+        env.step(full)
+    start = float(env.copper_loss(idx)[0])
+    for _ in range(10):
+        env.step(full)
+    energy = float(env.copper_loss(idx)[0]) - start
+    env.close()
+    return energy / (10 * env.step_seconds(motor_type, env.decimation))
+
+
 class PositioningEnv(MotorEnv):
     """Point-to-point moves of a MAC motor commanded in torque (AT_MODE).
 
@@ -260,18 +286,17 @@ class PositioningEnv(MotorEnv):
 
     Each term pays one of the task's engineering metrics (see "Episode End"):
 
-    * settle time: ``window_bonus`` (0.4) every step that ends inside INPOSWIN, so settling
-      0.1 s earlier earns some 52 steps × 0.4 ≈ 21 at decimation 1 (and ``−|e|`` pays a fast
-      approach);
-    * final error: ``−|e|`` [turns] and the logarithmic term (``fine_weight`` 0.02), which still
-      pays the last counts: from 50 counts off to the window's edge it rises by
-      0.02·(ln 6 − ln 2) ≈ 0.022 a step, three times what ``−|e|`` pays;
-    * overshoot: ``overshoot_weight`` (2.0 per turn) every step the motor is past the target;
+    * settle time: ``window_bonus`` (1.0) every step that ends inside INPOSWIN, so settling
+      0.1 s earlier earns some 52 at decimation 1 on the MAC050–141 (77 on the MAC800); the
+      ``−|e|`` term [turns] pays a fast approach;
+    * final error: ``−|e|`` and the logarithmic term (``fine_weight`` 0.02), which still pays
+      the last counts: from 50 counts off to the window's edge it gains 0.02·ln 3 ≈ 0.022 a
+      step, more than twice what ``−|e|`` pays (0.0098) on the MAC050–141;
+    * overshoot: ``overshoot_weight`` (10 per turn) every step the motor is past the target;
     * copper loss: ``ΔE`` is the step's increment of the account the ``copper_loss`` statistic
       reads (the motor model's ∫ R·i² dt over the windings), so an episode's energy term is
-      exactly ``copper_weight`` (8 per J) × its copper loss: the firmware's some 3.5 J cost 28,
-      the 50 J of a policy that holds the shaft with full torque cost 400, far more than any
-      settle time gains.
+      exactly ``copper_weight`` (8 per J) × its copper loss: the firmware's some 4 J cost 31,
+      50 J cost 400, far more than any settle time gains.
 
     The weights are the constructor's arguments (:data:`REWARD_WEIGHTS`); the reward is
     :func:`step_reward` of each step, the same for the firmware baseline.
@@ -301,7 +326,7 @@ class PositioningEnv(MotorEnv):
     ``motor_type`` (str or list of types drawn per episode), ``randomization`` (overrides of the
     ranges above), ``decimation`` (outer samples per step, default 1 = 520.8 Hz),
     ``obs_noise``, ``max_episode_steps``, ``render_mode`` (``"rgb_array"``: scope plot),
-    ``overshoot_weight`` (2.0 per turn), ``fine_weight`` (0.02), ``window_bonus`` (0.4 per
+    ``overshoot_weight`` (10 per turn), ``fine_weight`` (0.02), ``window_bonus`` (1.0 per
     step), ``copper_weight`` (8 per J) (see "Rewards"), ``baseline`` (True: the firmware's
     P_MODE moves to the target with the default setup, V_SOLL = 3000 rpm and A_SOLL from the
     setup; the action is ignored). Reset options: ``randomization``, ``motor_type``.
