@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -232,7 +232,7 @@ class PositioningVectorEnv(MotorVectorEnv):
                          self._prev_action[:, 0]], axis=1)
 
 
-@lru_cache(maxsize=None)
+@cache
 def full_torque_copper_power(motor_type: str) -> float:
     """The copper loss of a ``motor_type`` motor under the full torque command (action 1) [W],
     as the motor model accounts it: a copy at rest under the full command for 12 steps, loaded
