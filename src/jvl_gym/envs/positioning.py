@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from functools import cache
 from typing import Any, NamedTuple
 
 import numpy as np
@@ -14,18 +15,27 @@ from .compiled import action, end_step, put_obs
 from .single import MotorEnv
 from .task import ERROR_BITS, R, Task, c, record, reg, set_analog_volts
 
-__all__ = ["PositioningEnv", "PositioningVectorEnv", "PositioningState"]
+COPPER_COLUMN = 0  # bound per family: the motors' state column of the copper energy account
+
+__all__ = ["PositioningEnv", "PositioningVectorEnv", "PositioningState", "REWARD_WEIGHTS",
+           "step_reward", "full_torque_copper_power"]
 
 _FINE_TURNS = 200.0 / 4096  #: turns: scale of the fine position-error channel
 _NORM_RPM = 3000.0  #: rpm: scale of the speed channel
 _BASELINE_RPM = 3000.0
 
-#: the env's constants of the compiled step
+#: the reward's weights (the env docstring, "Rewards"): name -> (default, unit)
+REWARD_WEIGHTS = {"overshoot_weight": (10.0, "1/turn"), "fine_weight": (0.02, "1"),
+                  "window_bonus": (1.0, "1"), "copper_weight": (8.0, "1/J")}
+
+#: the env's constants of the compiled step (the reward's weights: :data:`REWARD_WEIGHTS`)
 CONSTS = record(noise=float, max_steps=float, decimation=float, overshoot_weight=float,
-                effort_weight=float, baseline=float)
+                fine_weight=float, window_bonus=float, copper_weight=float, baseline=float)
 #: a copy's move: the target [counts], the direction of the move (+1 or −1), the last step
-#: that ended outside the in-position window, the largest overshoot past the target [turns]
-COPY = record(target=np.int64, direction=float, unsettled=np.int64, overshoot=float)
+#: that ended outside the in-position window, the largest overshoot past the target [turns],
+#: the motor's copper energy account at the end of the last step [J]
+COPY = record(target=np.int64, direction=float, unsettled=np.int64, overshoot=float,
+              copper=float)
 
 
 class PositioningState(NamedTuple):
@@ -65,6 +75,35 @@ def _step_begin(i, view, episode, s, actions):  # pragma: no cover - compiled
         set_analog_volts(view, i, c.ANINP_VOLTS * a)
 
 
+@njit(cache=True, inline="always")
+def step_reward(error_counts: float, window: float, counts_per_rev: float, overshoot: float,
+                copper: float, overshoot_weight: float, fine_weight: float, window_bonus: float,
+                copper_weight: float) -> float:  # pragma: no cover - compiled
+    """The reward of one env step (the env docstring, "Rewards").
+
+    Parameters
+    ----------
+    error_counts : float
+        The position error at the step's end [counts].
+    window : float
+        The in-position window INPOSWIN [counts].
+    counts_per_rev : float
+        Counts per turn.
+    overshoot : float
+        How far the motor is past the target at the step's end [turns] (≥ 0).
+    copper : float
+        The motor's copper loss during the step [J].
+    overshoot_weight, fine_weight, window_bonus, copper_weight : float
+        The weights (:data:`REWARD_WEIGHTS`).
+    """
+    e = abs(error_counts)
+    r = (-e / counts_per_rev - fine_weight * np.log1p(e / max(window, 1.0))
+         - overshoot_weight * overshoot - copper_weight * copper)
+    if e <= window:
+        r += window_bonus
+    return r
+
+
 def _step_end(i, view, episode, s, actions):  # pragma: no cover - compiled
     """End of an env step of copy ``i``: reward, termination, observation (the action is
     clipped again: a pure function of ``actions``)."""
@@ -72,23 +111,26 @@ def _step_end(i, view, episode, s, actions):  # pragma: no cover - compiled
     row = s.copies[i]
     t = episode.t
     a = action(actions, i, 0)
-    baseline = k.baseline > 0.5
     t[i] += 1
     e_counts = row.target - reg(view, i, R.P_IST)
-    if abs(e_counts) > reg(view, i, R.INPOSWIN):
+    window = reg(view, i, R.INPOSWIN)
+    if abs(e_counts) > window:
         row.unsettled = t[i]
-    e = e_counts / c.COUNTS_PER_REV
-    overshoot = max(-e * row.direction, 0.0)
+    overshoot = max(-e_counts / c.COUNTS_PER_REV * row.direction, 0.0)
     row.overshoot = max(row.overshoot, overshoot)
-    effort = a * a if not baseline else (reg(view, i, R.VF_OUT) / c.VF_FULL) ** 2
-    episode.reward[i] = -abs(e) - k.overshoot_weight * overshoot - k.effort_weight * effort
+    copper = view.state[i, COPPER_COLUMN]
+    episode.reward[i] = step_reward(float(e_counts), float(window), float(c.COUNTS_PER_REV),
+                                    overshoot, copper - row.copper, k.overshoot_weight,
+                                    k.fine_weight, k.window_bonus, k.copper_weight)
+    row.copper = copper
     end_step(i, (reg(view, i, R.ERR_STAT) & ERROR_BITS) != 0, t, int(k.max_steps),
              episode.terminated, episode.truncated)
     episode.prev_action[i, 0] = a
     _observe_row(i, view, episode, s)
 
 
-TASK = Task("positioning", __file__, needs={Capability.ANALOG_TORQUE}, state=PositioningState,
+TASK = Task("positioning", __file__, needs={Capability.ANALOG_TORQUE, Capability.ENERGY},
+            state=PositioningState,
             figures=_figures, begin=_step_begin, end=_step_end, observe=_observe_row)
 
 
@@ -112,6 +154,7 @@ class PositioningVectorEnv(MotorVectorEnv):
     direction = Field()  #: the direction of the move (+1 or −1)
     unsettled = Field()  #: the last step that ended outside the in-position window
     overshoot = Field()  #: the largest overshoot past the target [turns]
+    copper = Field()  #: the copper energy account at the end of the last step [J]
 
     obs_labels = ("position_error", "position_error_fine", "speed", "previous_action")
     act_labels = ("torque",)
@@ -128,17 +171,24 @@ class PositioningVectorEnv(MotorVectorEnv):
     episode_stats = {"settle_time": "settle time [s]", "final_error": "final error (abs.) [turns]",
                      "overshoot": "overshoot [turns]", "copper_loss": "copper loss [J]"}
 
-    def __init__(self, num_envs: int = 1, *, baseline: bool = False, overshoot_weight: float = 2.0,
-                 effort_weight: float = 0.01, **kwargs: Any) -> None:
+    def __init__(self, num_envs: int = 1, *, baseline: bool = False,
+                 overshoot_weight: float = REWARD_WEIGHTS["overshoot_weight"][0],
+                 fine_weight: float = REWARD_WEIGHTS["fine_weight"][0],
+                 window_bonus: float = REWARD_WEIGHTS["window_bonus"][0],
+                 copper_weight: float = REWARD_WEIGHTS["copper_weight"][0],
+                 **kwargs: Any) -> None:
         self.baseline = bool(baseline)
         self.overshoot_weight = float(overshoot_weight)
-        self.effort_weight = float(effort_weight)
+        self.fine_weight = float(fine_weight)
+        self.window_bonus = float(window_bonus)
+        self.copper_weight = float(copper_weight)
         super().__init__(num_envs, **kwargs)
 
     def _build(self) -> None:
         consts = np.zeros(1, dtype=CONSTS)
         consts[0] = (self.obs_noise, self.max_episode_steps, self.decimation,
-                     self.overshoot_weight, self.effort_weight, float(self.baseline))
+                     self.overshoot_weight, self.fine_weight, self.window_bonus,
+                     self.copper_weight, float(self.baseline))
         copies = np.zeros(self.num_envs, dtype=COPY)
         copies["direction"] = 1.0
         self.state = PositioningState(consts, copies)
@@ -157,6 +207,7 @@ class PositioningVectorEnv(MotorVectorEnv):
                     fam.constants.COUNTS_PER_REV)
         self.unsettled[idx] = 0
         self.overshoot[idx] = 0.0
+        self.copper[idx] = self.copper_loss(idx)
         if self.baseline:
             self.motors.write_many({"V_SOLL": round(fam.task.rpm_to_v_soll(_BASELINE_RPM)),
                                      "P_SOLL": self.target[idx],
@@ -181,6 +232,30 @@ class PositioningVectorEnv(MotorVectorEnv):
                          self._prev_action[:, 0]], axis=1)
 
 
+@cache
+def full_torque_copper_power(motor_type: str) -> float:
+    """The copper loss of a ``motor_type`` motor under the full torque command (action 1) [W],
+    as the motor model accounts it: a copy at rest under the full command for 12 steps, loaded
+    with 10 × the rotor's inertia and no friction (far below the speed where the supply
+    voltage limits the current), its copper account over the last 10 steps. The copper loss
+    of a command ``a`` is this times ``a²``: where the copper account cannot be read (a
+    deployed motor), the reward's copper term is estimated from the command with it."""
+    env = PositioningVectorEnv(1, motor_type=motor_type, randomization={
+        "inertia_ratio": (10.0, 10.0), "viscous_friction": (0.0, 0.0),
+        "coulomb_ratio": (0.0, 0.0)})
+    idx = np.zeros(1, dtype=np.int64)
+    full = np.ones((1, 1), dtype=np.float32)
+    env.reset(seed=0)
+    for _ in range(2):
+        env.step(full)
+    start = float(env.copper_loss(idx)[0])
+    for _ in range(10):
+        env.step(full)
+    energy = float(env.copper_loss(idx)[0]) - start
+    env.close()
+    return energy / (10 * env.step_seconds(motor_type, env.decimation))
+
+
 class PositioningEnv(MotorEnv):
     """Point-to-point moves of a MAC motor commanded in torque (AT_MODE).
 
@@ -202,8 +277,29 @@ class PositioningEnv(MotorEnv):
     clipping.
 
     ## Rewards
-    Per step: ``−|e| − overshoot_weight·overshoot − effort_weight·a²`` with the position
-    error ``e`` and the overshoot past the target in turns and the torque command ``a``.
+    Per step, with the position error ``e`` [counts] and the in-position window ``W``
+    (INPOSWIN) at the step's end, how far the motor is past the target ``o`` [turns] and the
+    motor's copper loss during the step ``ΔE`` [J]::
+
+        r = −|e|/counts_per_rev − fine_weight·ln(1 + |e|/W) − overshoot_weight·o
+            − copper_weight·ΔE + window_bonus·[|e| ≤ W]
+
+    Each term pays one of the task's engineering metrics (see "Episode End"):
+
+    * settle time: ``window_bonus`` (1.0) every step that ends inside INPOSWIN, so settling
+      0.1 s earlier earns some 52 at decimation 1 on the MAC050–141 (77 on the MAC800); the
+      ``−|e|`` term [turns] pays a fast approach;
+    * final error: ``−|e|`` and the logarithmic term (``fine_weight`` 0.02), which still pays
+      the last counts: from 50 counts off to the window's edge it gains 0.02·ln 3 ≈ 0.022 a
+      step, more than twice what ``−|e|`` pays (0.0098) on the MAC050–141;
+    * overshoot: ``overshoot_weight`` (10 per turn) every step the motor is past the target;
+    * copper loss: ``ΔE`` is the step's increment of the account the ``copper_loss`` statistic
+      reads (the motor model's ∫ R·i² dt over the windings), so an episode's energy term is
+      exactly ``copper_weight`` (8 per J) × its copper loss: the firmware's some 4 J cost 31,
+      50 J cost 400, far more than any settle time gains.
+
+    The weights are the constructor's arguments (:data:`REWARD_WEIGHTS`); the reward is
+    :func:`step_reward` of each step, the same for the firmware baseline.
 
     ## Starting State
     The motor powers on at rest with P_IST = 0 and the default register set; the target is
@@ -230,12 +326,15 @@ class PositioningEnv(MotorEnv):
     ``motor_type`` (str or list of types drawn per episode), ``randomization`` (overrides of the
     ranges above), ``decimation`` (outer samples per step, default 1 = 520.8 Hz),
     ``obs_noise``, ``max_episode_steps``, ``render_mode`` (``"rgb_array"``: scope plot),
-    ``overshoot_weight`` (2.0), ``effort_weight`` (0.01), ``baseline`` (True: the firmware's
+    ``overshoot_weight`` (10 per turn), ``fine_weight`` (0.02), ``window_bonus`` (1.0 per
+    step), ``copper_weight`` (8 per J) (see "Rewards"), ``baseline`` (True: the firmware's
     P_MODE moves to the target with the default setup, V_SOLL = 3000 rpm and A_SOLL from the
     setup; the action is ignored). Reset options: ``randomization``, ``motor_type``.
 
     ## Version History
-    * v0: initial version.
+    * v0: initial version; the reward pays settling into INPOSWIN and copper loss (the
+      in-window bonus, the logarithmic error term and the copper loss replaced a torque² effort
+      term weighted 0.01).
     """
 
     vector_class = PositioningVectorEnv

@@ -105,8 +105,9 @@ class PositioningBridge:
     ----------
     fam : Family
         The motor's family.
-    overshoot_weight, effort_weight : float
-        The env's reward weights.
+    weights : float
+        The env's reward weights (``jvl_gym.envs.positioning.REWARD_WEIGHTS``: overshoot_weight,
+        fine_weight, window_bonus, copper_weight; default theirs).
     speed_limit : float
         The speed command's magnitude [rpm]: the velocity loop holds the motor below it.
     """
@@ -118,8 +119,7 @@ class PositioningBridge:
     error_label = "error_turns"
     failure_penalty = 0.0
 
-    def __init__(self, fam: Any, overshoot_weight: float = 2.0, effort_weight: float = 0.01,
-                 speed_limit: float = SPEED_LIMIT_RPM) -> None:
+    def __init__(self, fam: Any, speed_limit: float = SPEED_LIMIT_RPM, **weights: float) -> None:
         from ..envs import positioning as pos
 
         k = fam.constants
@@ -131,16 +131,27 @@ class PositioningBridge:
         self.command = link_model.TorqueLimitCommand(fam, speed_limit)
         self.bounds = register_bounds(fam.table, self.writes)
         self.v_limit = self.command.v_limit
-        self.w_over, self.w_effort = float(overshoot_weight), float(effort_weight)
+        self.weights = {name: float(weights.pop(name, w)) for name, (w, _) in
+                        pos.REWARD_WEIGHTS.items()}
+        if weights:
+            raise TypeError(f"unknown reward weights {sorted(weights)}; known: "
+                            f"{', '.join(pos.REWARD_WEIGHTS)}")
+        #: the copper loss of an env step under the full torque command [J]: the copper
+        #: account is not read from the motor, its step's share is estimated from the command
+        self.full_copper = (pos.full_torque_copper_power(fam.task.DEFAULT_MOTOR_TYPE)
+                            * k.OUTER_DT)
         self.target = 0
         self.direction = 1.0
         self.overshoot = 0.0
         self.error = 0.0
         self.window: float | None = None
+        self.window_counts = 10.0  # INPOSWIN [counts] of the default setups, read by prepare
+        self.running = 0.0  # the command of the last rated read
 
     def prepare(self, link: BusLink) -> None:
         """Once before the episodes: the in-position window INPOSWIN (for the metrics)."""
-        self.window = float(link.client.read_raw("INPOSWIN")) / self.cpr
+        self.window_counts = float(link.client.read_raw("INPOSWIN"))
+        self.window = self.window_counts / self.cpr
 
     def start(self, link: BusLink, core: Any) -> None:
         """Begin a move to the target the env drew (``core.target``, counts) from here:
@@ -153,6 +164,7 @@ class PositioningBridge:
         self.target = target
         self.direction = 1.0 if target >= 0 else -1.0
         self.overshoot = 0.0
+        self.running = 0.0
 
     def to_registers(self, action: np.ndarray) -> dict[str, int]:
         """Torque limit |a| of full scale, speed command at the speed limit in a's
@@ -173,10 +185,18 @@ class PositioningBridge:
 
     def rate(self, action: np.ndarray) -> float:
         """The env's reward of one env step at this error under the command ``action``."""
+        from ..envs.positioning import step_reward
+
         error_turns, a = self.error, float(action[0])
         past = max(-self.direction * error_turns, 0.0)
         self.overshoot = max(self.overshoot, past)
-        return -abs(error_turns) - self.w_over * past - self.w_effort * a * a
+        w = self.weights
+        # the copper loss of the command the motor ran up to this read: at a period's first
+        # read the previous period's (the new one lands a latency later), at its last this one
+        running, self.running = self.running, a
+        return step_reward(error_turns * self.cpr, self.window_counts, self.cpr, past,
+                           self.full_copper * running * running, w["overshoot_weight"],
+                           w["fine_weight"], w["window_bonus"], w["copper_weight"])
 
     def penalty(self, action: np.ndarray) -> float:
         """The reward of a new command once (none: Positioning's reward is per step)."""
