@@ -114,7 +114,9 @@ class PositioningBridge:
 
     env_id = "jvl_gym/Positioning-v0"
     writes = ("T_SOLL", "V_SOLL")
-    reads = ("P_IST", "V_IST")
+    #: VF_OUT: the torque command the velocity loop gives under the torque limit (MAC050–141
+    #: manual 3.2.121), which the copper loss follows
+    reads = ("P_IST", "V_IST", "VF_OUT")
     #: the trace's error column and its unit
     error_label = "error_turns"
     failure_penalty = 0.0
@@ -137,16 +139,18 @@ class PositioningBridge:
             raise TypeError(f"unknown reward weights {sorted(weights)}; known: "
                             f"{', '.join(pos.REWARD_WEIGHTS)}")
         #: the copper loss of an env step under the full torque command [J]: the copper
-        #: account is not read from the motor, its step's share is estimated from the command
+        #: account is not read from the motor, its step's share is estimated from the torque
+        #: command VF_OUT read with the observation (the command the current follows)
         self.full_copper = (pos.full_torque_copper_power(fam.task.DEFAULT_MOTOR_TYPE)
                             * k.OUTER_DT)
+        self.vf_full = float(k.VF_FULL)
         self.target = 0
         self.direction = 1.0
         self.overshoot = 0.0
         self.error = 0.0
         self.window: float | None = None
         self.window_counts = 10.0  # INPOSWIN [counts] of the default setups, read by prepare
-        self.running = 0.0  # the command of the last rated read
+        self.torque = 0.0  # VF_OUT of the last read, of full scale
 
     def prepare(self, link: BusLink) -> None:
         """Once before the episodes: the in-position window INPOSWIN (for the metrics)."""
@@ -164,7 +168,7 @@ class PositioningBridge:
         self.target = target
         self.direction = 1.0 if target >= 0 else -1.0
         self.overshoot = 0.0
-        self.running = 0.0
+        self.torque = 0.0
 
     def to_registers(self, action: np.ndarray) -> dict[str, int]:
         """Torque limit |a| of full scale, speed command at the speed limit in a's
@@ -181,21 +185,21 @@ class PositioningBridge:
         obs = np.array([e / (2.0 * self.cpr), e / self.fine, raws["V_IST"] / self.v_norm,
                         float(previous[0])], dtype=np.float32)
         self.error = e / self.cpr
+        self.torque = raws["VF_OUT"] / self.vf_full
         return np.clip(obs, -OBS_BOUND, OBS_BOUND)[None]
 
     def rate(self, action: np.ndarray) -> float:
         """The env's reward of one env step at this error under the command ``action``."""
         from ..envs.positioning import step_reward
 
-        error_turns, a = self.error, float(action[0])
+        error_turns = self.error
         past = max(-self.direction * error_turns, 0.0)
         self.overshoot = max(self.overshoot, past)
         w = self.weights
-        # the copper loss of the command the motor ran up to this read: at a period's first
-        # read the previous period's (the new one lands a latency later), at its last this one
-        running, self.running = self.running, a
+        # the copper loss at this read's torque command (the velocity loop's, below the limit
+        # the action set wherever the motor needs less)
         return step_reward(error_turns * self.cpr, self.window_counts, self.cpr, past,
-                           self.full_copper * running * running, w["overshoot_weight"],
+                           self.full_copper * self.torque * self.torque, w["overshoot_weight"],
                            w["fine_weight"], w["window_bonus"], w["copper_weight"])
 
     def penalty(self, action: np.ndarray) -> float:
