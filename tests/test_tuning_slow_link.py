@@ -200,3 +200,36 @@ def test_a_motor_still_in_at_mode_after_the_brake_is_refused_not_recorded():
 
     with pytest.raises(RecordError, match="did not leave AT_MODE after the brake"):
         _brake_and_rest(Coasting(), np.ones(1), 0.01, 1.92e-3)
+
+
+@pytest.mark.parametrize("nth", [12, 15, 24])
+def test_a_sample_answered_late_is_not_lost_from_the_record(nth):
+    # one READ SAMPLE BUFFER reply comes after the client gave up waiting and asked again
+    # (MAC050–141 manual 5.1: the motor answers each request with the next sample): the
+    # record read out is still the motor's whole record, sample for sample
+    from tuning.records import acquire_testu
+    from tuning.serial_source import SerialMotor
+
+    from jvl_gym.protocol import MacTalkClient
+    from jvl_gym.protocol.mactalk import codec16 as mt
+
+    m = MotorArray("MAC140", n=1, seed=0)  # the firmware's record of 11 samples
+    server = TwinServer(Twin(m, [19]), tcp=("127.0.0.1", 0), run_clock=False).start()
+    ep = server.endpoint("mactalk", "tcp")
+    link = DelayingLink((ep.host, ep.port))
+    client = MacTalkClient(link.url, address=19, timeout=0.2)
+    sm = SerialMotor(client, "MAC140", clock=server.twin.advance)
+    try:
+        # the read-out drains to the end of the buffer (12 requests), then reads it (12
+        # more): the reply to the end of the drain, to a sample or to the end of the record
+        # comes two timeouts late
+        link.hold_reply(mt.encode_read_sample_buffer(19), 2 * client.timeout, nth=nth)
+        rec = acquire_testu(sm, 100, 11, align=False)[0]
+        assert link.held == 1 and client.retried >= 1
+        want = m.sample_buffer(0)
+        np.testing.assert_array_equal(rec.input, want["UA_VAL"])
+        np.testing.assert_array_equal(rec.output, want["IC_IST"])
+    finally:
+        client.close()
+        link.close()
+        server.stop()
