@@ -233,3 +233,61 @@ def test_a_sample_answered_late_is_not_lost_from_the_record(nth):
         client.close()
         link.close()
         server.stop()
+
+
+@pytest.fixture()
+def linked_twin():
+    """A MAC140 twin at address 19 on a simulated clock behind a :class:`DelayingLink`."""
+    m = MotorArray("MAC140", n=1, seed=0)
+    server = TwinServer(Twin(m, [19]), tcp=("127.0.0.1", 0), run_clock=False).start()
+    ep = server.endpoint("mactalk", "tcp")
+    link = DelayingLink((ep.host, ep.port))
+    try:
+        yield m, server, link
+    finally:
+        link.close()
+        server.stop()
+
+
+def test_an_answer_that_came_on_a_second_send_leaves_no_answer_behind(linked_twin):
+    # the read's first answer comes after the client sent the read again; the answer to the
+    # second send must not be taken for the answer to the next request (a MacTalk answer does
+    # not say which request it answers, MAC050–141 manual 5.1)
+    from jvl_gym.protocol import MacTalkClient
+    from jvl_gym.protocol.mactalk import codec16 as mt
+
+    m, _, link = linked_twin
+    link.delay = 0.05
+    with MacTalkClient(link.url, address=19, timeout=1.0) as client:
+        number = client.table.lookup("MODE_REG").number
+        link.hold_reply(mt.encode_read(19, number), 1.5 * client.timeout)
+        assert client.read("MODE_REG") == 0
+        assert link.held == 1 and client.retried == 1
+        client.write("T_SOLL", 500)  # answered by its own accept
+        assert client.read("T_SOLL") == 500 and m.read("T_SOLL")[0] == 500
+
+
+def test_a_request_over_a_measured_slow_link_waits_as_the_link_needs(linked_twin):
+    # the link answers in 0.25 s; one write's accept comes 2 s later still: longer than the
+    # client's own timeout and its retries (3 × 0.5 s), but within the round trips of the
+    # measured link the run waits (tuning.link.reply_timeout: 20 round trips, 5 s here)
+    from tuning.serial_source import SerialMotor
+
+    from jvl_gym.protocol import MacTalkClient
+    from jvl_gym.protocol.mactalk import codec16 as mt
+
+    m, server, link = linked_twin
+    link.delay = 0.25
+    client = MacTalkClient(link.url, address=19)
+    sm = SerialMotor(client, "MAC140", clock=server.twin.advance)
+    try:
+        timing = sm.measure_link()
+        assert timing.wall_s >= link.delay
+        late = 2.0
+        assert (client.retries + 1) * 0.5 < late + link.delay  # the client's own: 0.5 s
+        reg = client.table.lookup("T_SOLL")
+        link.hold_reply(mt.encode_write_word(19, reg.number, 700), late)
+        sm.write("T_SOLL", 700)
+        assert link.held == 1 and m.read("T_SOLL")[0] == 700
+    finally:
+        client.close()

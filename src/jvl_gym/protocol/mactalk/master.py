@@ -125,7 +125,9 @@ class SerialMaster(ABC):
         """Send ``request`` and return the decoded reply (``expect`` = "data", "accept" or
         "none"), with retries; raise :class:`NoAnswerError` if nothing valid comes back.
         A reply for which ``stale(frame)`` is true (the late answer to an earlier request) is
-        passed over and the next one awaited."""
+        passed over and the next one awaited. When the answer came only after the request was
+        sent again, the answers still due to the earlier sends are awaited and dropped
+        (:meth:`_pass_over_late`)."""
         self.requests += 1
         problems: list[str] = []
         for attempt in range(self.retries + 1):
@@ -151,6 +153,8 @@ class SerialMaster(ABC):
                 if stale is not None and stale(frame):
                     continue
                 if self._kind(frame) == expect:
+                    if attempt:
+                        self._pass_over_late(attempt)
                     return frame
                 wanted = "an accept" if expect == "accept" else "a data reply"
                 raise UnexpectedReplyError(f"{what}: expected {wanted}, got {echo(frame)}")
@@ -160,6 +164,17 @@ class SerialMaster(ABC):
             "Check the port and baud rate, the address (MYADDR), that the motor is powered, "
             "and whether it refused the request: a write that is out of range or not allowed "
             "in the present mode gets no accept (MAC050–141 manual 5.1, MIS manual §18.2).")
+
+    def _pass_over_late(self, n: int) -> None:
+        """After an answer that came only when the request had been sent again: read and drop
+        the up to ``n`` answers still due to the earlier sends (waiting one timeout at most),
+        so that the next request is not given one of them as its answer (a MacTalk answer
+        does not say which request it answers, MAC050–141 manual 5.1)."""
+        deadline = time.monotonic() + self.timeout
+        for _ in range(n):
+            if not self._read_reply(deadline):
+                break
+        self.ser.reset_input_buffer()
 
     def answer_within(self, seconds: float) -> Any:
         """The reply frame that arrives within ``seconds`` after a request sent with
