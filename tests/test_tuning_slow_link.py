@@ -291,3 +291,21 @@ def test_a_request_over_a_measured_slow_link_waits_as_the_link_needs(linked_twin
         assert link.held == 1 and m.read("T_SOLL")[0] == 700
     finally:
         client.close()
+
+
+def test_a_run_whose_write_is_never_answered_in_time_leaves_the_motor_passive(linked_twin):
+    # the motor carries out the write to position mode but its accept comes after the client
+    # gave up: the run fails with the motor moving, and the stop still leaves it passive
+    from jvl_gym.protocol.errors import NoAnswerError
+    from jvl_gym.protocol.mactalk import codec16 as mt
+
+    m, server, link = linked_twin
+    number = m.table.lookup("MODE_REG").number
+    link.hold_reply(mt.encode_write_word(19, number, 2), 4.0)
+    said: list[str] = []
+    with pytest.raises(NoAnswerError, match=f"did not answer WRITE {number} = 0x0002"):
+        autotune_over_serial(link.url, "MAC140", address=19, progress=said.append,
+                             clock=server.twin.advance)
+    assert link.held == 1
+    assert m.read("MODE_REG")[0] == PASSIVE
+    assert said[-1] == "the motor is passive (MODE_REG read back)"
