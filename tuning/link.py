@@ -12,9 +12,9 @@ motor time of a round trip with what its timing allows, refusing in one line
 
 The measured round trip also sets how long a request waits for its answer
 (:func:`reply_timeout`): :data:`TIMEOUT_ROUND_TRIPS` round trips, never less than the client's
-own timeout. Over a slow link a fixed timeout sends requests again whose answers are only late;
-each answer sent again costs the link once more, and a MacTalk answer does not say which request
-it answers (manual 5.1).
+own timeout. Over a slow link a fixed timeout sends requests again whose answers are only late:
+each request sent again costs the link once more, and a MacTalk answer does not say which request
+it answers (MAC050–141 manual 5.1).
 """
 
 from __future__ import annotations
