@@ -2,7 +2,9 @@
 
 Every reply of the twin is held ``delay`` seconds before it is passed on (a slow line: the round
 trip of a request grows by ``delay``); :meth:`DelayingLink.drop_after` closes the connection
-that is open after a number of replies (a broken line; new connections are served again).
+that is open after a number of replies (a broken line; new connections are served again);
+:meth:`DelayingLink.hold_reply` holds the reply to one chosen request longer (a line or a motor
+that answers one request late, after its master has given up waiting and sent it again).
 """
 
 from __future__ import annotations
@@ -32,6 +34,9 @@ class DelayingLink:
         self.replies = 0
         self.dropped = 0
         self._drop_at: int | None = None
+        self._hold: tuple[bytes, int, float] | None = None  # request, how many more, seconds
+        self._held = 0.0  # extra seconds the next reply is held
+        self.held = 0
         self._stop = threading.Event()
         self._lock = threading.Lock()
         self._conns: list[socket.socket] = []
@@ -45,6 +50,12 @@ class DelayingLink:
         """Close the open connection once ``replies`` more replies have been passed on."""
         with self._lock:
             self._drop_at = self.replies + int(replies)
+
+    def hold_reply(self, request: bytes, seconds: float, nth: int = 1) -> None:
+        """Hold the reply to the ``nth`` request (counted from now) whose bytes are
+        ``request`` ``seconds`` longer than the others."""
+        with self._lock:
+            self._hold = (bytes(request), int(nth), float(seconds))
 
     def close(self) -> None:
         self._stop.set()
@@ -88,8 +99,12 @@ class DelayingLink:
                 data = src.recv(4096)
                 if not data:
                     break
-                if slow:
-                    time.sleep(self.delay)
+                if not slow:
+                    self._count_request(data)
+                else:
+                    with self._lock:
+                        extra, self._held = self._held, 0.0
+                    time.sleep(self.delay + extra)
                 dst.sendall(data)
                 if slow:
                     with self._lock:
@@ -107,6 +122,21 @@ class DelayingLink:
                 s.shutdown(socket.SHUT_RDWR)
             with contextlib.suppress(OSError):
                 s.close()
+
+
+    def _count_request(self, data: bytes) -> None:
+        """Arm the hold of :meth:`hold_reply` when its request passes (before it is sent on,
+        so that its reply finds it armed)."""
+        with self._lock:
+            if self._hold is None or data != self._hold[0]:
+                return
+            request, left, seconds = self._hold
+            if left > 1:
+                self._hold = (request, left - 1, seconds)
+                return
+            self._hold = None
+            self._held = seconds
+            self.held += 1
 
 
 def loopback_round_trip(url: str, address: int, reads: int = 20) -> float:

@@ -200,3 +200,112 @@ def test_a_motor_still_in_at_mode_after_the_brake_is_refused_not_recorded():
 
     with pytest.raises(RecordError, match="did not leave AT_MODE after the brake"):
         _brake_and_rest(Coasting(), np.ones(1), 0.01, 1.92e-3)
+
+
+@pytest.mark.parametrize("nth", [12, 15, 24])
+def test_a_sample_answered_late_is_not_lost_from_the_record(nth):
+    # one READ SAMPLE BUFFER reply comes after the client gave up waiting and asked again
+    # (MAC050–141 manual 5.1: the motor answers each request with the next sample): the
+    # record read out is still the motor's whole record, sample for sample
+    from tuning.records import acquire_testu
+    from tuning.serial_source import SerialMotor
+
+    from jvl_gym.protocol import MacTalkClient
+    from jvl_gym.protocol.mactalk import codec16 as mt
+
+    m = MotorArray("MAC140", n=1, seed=0)  # the firmware's record of 11 samples
+    server = TwinServer(Twin(m, [19]), tcp=("127.0.0.1", 0), run_clock=False).start()
+    ep = server.endpoint("mactalk", "tcp")
+    link = DelayingLink((ep.host, ep.port))
+    client = MacTalkClient(link.url, address=19, timeout=0.2)
+    sm = SerialMotor(client, "MAC140", clock=server.twin.advance)
+    try:
+        # the read-out drains to the end of the buffer (12 requests), then reads it (12
+        # more): the reply to the end of the drain, to a sample or to the end of the record
+        # comes two timeouts late
+        link.hold_reply(mt.encode_read_sample_buffer(19), 2 * client.timeout, nth=nth)
+        rec = acquire_testu(sm, 100, 11, align=False)[0]
+        assert link.held == 1 and client.retried >= 1
+        want = m.sample_buffer(0)
+        np.testing.assert_array_equal(rec.input, want["UA_VAL"])
+        np.testing.assert_array_equal(rec.output, want["IC_IST"])
+    finally:
+        client.close()
+        link.close()
+        server.stop()
+
+
+@pytest.fixture()
+def linked_twin():
+    """A MAC140 twin at address 19 on a simulated clock behind a :class:`DelayingLink`."""
+    m = MotorArray("MAC140", n=1, seed=0)
+    server = TwinServer(Twin(m, [19]), tcp=("127.0.0.1", 0), run_clock=False).start()
+    ep = server.endpoint("mactalk", "tcp")
+    link = DelayingLink((ep.host, ep.port))
+    try:
+        yield m, server, link
+    finally:
+        link.close()
+        server.stop()
+
+
+def test_an_answer_that_came_on_a_second_send_leaves_no_answer_behind(linked_twin):
+    # the read's first answer comes after the client sent the read again; the answer to the
+    # second send must not be taken for the answer to the next request (a MacTalk answer does
+    # not say which request it answers, MAC050–141 manual 5.1)
+    from jvl_gym.protocol import MacTalkClient
+    from jvl_gym.protocol.mactalk import codec16 as mt
+
+    m, _, link = linked_twin
+    link.delay = 0.05
+    with MacTalkClient(link.url, address=19, timeout=1.0) as client:
+        number = client.table.lookup("MODE_REG").number
+        link.hold_reply(mt.encode_read(19, number), 1.5 * client.timeout)
+        assert client.read("MODE_REG") == 0
+        assert link.held == 1 and client.retried == 1
+        client.write("T_SOLL", 500)  # answered by its own accept
+        assert client.read("T_SOLL") == 500 and m.read("T_SOLL")[0] == 500
+
+
+def test_a_request_over_a_measured_slow_link_waits_as_the_link_needs(linked_twin):
+    # the link answers in 0.25 s; one write's accept comes 2 s later still: longer than the
+    # client's own timeout and its retries (3 × 0.5 s), but within the round trips of the
+    # measured link the run waits (tuning.link.reply_timeout: 20 round trips, 5 s here)
+    from tuning.serial_source import SerialMotor
+
+    from jvl_gym.protocol import MacTalkClient
+    from jvl_gym.protocol.mactalk import codec16 as mt
+
+    m, server, link = linked_twin
+    link.delay = 0.25
+    client = MacTalkClient(link.url, address=19)
+    sm = SerialMotor(client, "MAC140", clock=server.twin.advance)
+    try:
+        timing = sm.measure_link()
+        assert timing.wall_s >= link.delay
+        late = 2.0
+        assert (client.retries + 1) * 0.5 < late + link.delay  # the client's own: 0.5 s
+        reg = client.table.lookup("T_SOLL")
+        link.hold_reply(mt.encode_write_word(19, reg.number, 700), late)
+        sm.write("T_SOLL", 700)
+        assert link.held == 1 and m.read("T_SOLL")[0] == 700
+    finally:
+        client.close()
+
+
+def test_a_run_whose_write_is_never_answered_in_time_leaves_the_motor_passive(linked_twin):
+    # the motor carries out the write to position mode but its accept comes after the client
+    # gave up: the run fails with the motor moving, and the stop still leaves it passive
+    from jvl_gym.protocol.errors import NoAnswerError
+    from jvl_gym.protocol.mactalk import codec16 as mt
+
+    m, server, link = linked_twin
+    number = m.table.lookup("MODE_REG").number
+    link.hold_reply(mt.encode_write_word(19, number, 2), 4.0)
+    said: list[str] = []
+    with pytest.raises(NoAnswerError, match=f"did not answer WRITE {number} = 0x0002"):
+        autotune_over_serial(link.url, "MAC140", address=19, progress=said.append,
+                             clock=server.twin.advance)
+    assert link.held == 1
+    assert m.read("MODE_REG")[0] == PASSIVE
+    assert said[-1] == "the motor is passive (MODE_REG read back)"

@@ -9,6 +9,12 @@ wall-clock second, so there a round trip costs S times its wall-clock time. The 
 by timing a few register reads just before the step that needs it, and the step compares the
 motor time of a round trip with what its timing allows, refusing in one line
 (:class:`LinkTooSlow`) rather than reporting what it did not measure.
+
+The measured round trip also sets how long a request waits for its answer
+(:func:`reply_timeout`): :data:`TIMEOUT_ROUND_TRIPS` round trips, never less than the client's
+own timeout. Over a slow link a fixed timeout sends requests again whose answers are only late:
+each request sent again costs the link once more, and a MacTalk answer does not say which request
+it answers (MAC050–141 manual 5.1).
 """
 
 from __future__ import annotations
@@ -19,10 +25,13 @@ from typing import Any
 
 from .records import RecordError
 
-__all__ = ["LinkTiming", "LinkTooSlow", "measure_link", "LINK_READS"]
+__all__ = ["LinkTiming", "LinkTooSlow", "measure_link", "reply_timeout", "LINK_READS",
+           "TIMEOUT_ROUND_TRIPS"]
 
 #: register reads timed per measurement
 LINK_READS: int = 8
+#: measured round trips a request waits for its answer before it is sent again
+TIMEOUT_ROUND_TRIPS: float = 20.0
 
 
 class LinkTooSlow(RecordError):
@@ -68,3 +77,9 @@ def measure_link(m: Any, reads: int = LINK_READS, register: str = "MODE_REG") ->
     wall = times[-2]
     to_motor = getattr(m, "motor_seconds", None)
     return LinkTiming(wall, times[len(times) // 2], 0.0 if to_motor is None else to_motor(wall))
+
+
+def reply_timeout(timing: LinkTiming, floor: float) -> float:
+    """Seconds a request waits for its answer over the measured link: :data:`TIMEOUT_ROUND_TRIPS`
+    round trips (``timing.wall_s``), at least ``floor`` (the client's own timeout)."""
+    return max(float(floor), TIMEOUT_ROUND_TRIPS * timing.wall_s)

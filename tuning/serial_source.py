@@ -9,9 +9,12 @@ twin's ``time_scale``), and the sample buffer is read out with the MacTalk sampl
 A twin whose clock the caller runs (``TwinServer(run_clock=False)``) is stepped instead through
 ``clock``: then the motor's time passes only when the procedure waits, and the link costs none.
 
-A run over a port measures the link first (:mod:`tuning.link`) and, whatever ends it (the end,
-an error, a broken link, Ctrl-C), leaves the motor in its family's passive mode, confirmed by
-reading MODE_REG back (:mod:`tuning.motor_stop`).
+A run over a port measures the link first (:mod:`tuning.link`): a request then waits for its
+answer as many round trips of the measured link as :func:`tuning.link.reply_timeout` says (at
+least the client's own timeout), and each later measurement sets it again. Whatever ends the
+run (the end, an error, a broken link, Ctrl-C), the motor is left in its family's passive mode,
+confirmed by reading MODE_REG back (:mod:`tuning.motor_stop`), on a new connection with the same
+timeout if the old one broke.
 
 The record length of TESTU/TESTA is the motor's: the manual's firmware records 11 samples; the
 twin records what ``jvl-gym serve --record-length N`` sets. Asking for more than the motor
@@ -27,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from .family import tuned_family
-from .link import measure_link
+from .link import measure_link, reply_timeout
 from .motor_stop import stop_motor
 from .records import RecordError
 from .testmode_facts import record_facts_of
@@ -63,6 +66,8 @@ class SerialMotor:
         self.time_scale = float(time_scale)
         self.clock = clock
         self._wanted = 0
+        #: the client's own timeout, the least a measured link sets
+        self.least_timeout = float(client.timeout) if hasattr(client, "timeout") else 0.0
 
     def motor_seconds(self, wall_s: float) -> float:
         """Motor time that passes in ``wall_s`` wall-clock seconds (0 on a simulated clock)."""
@@ -80,8 +85,12 @@ class SerialMotor:
             time.sleep(motor_s / self.time_scale)
 
     def measure_link(self) -> Any:
-        """The link's round trip now (:func:`tuning.link.measure_link`)."""
-        return measure_link(self)
+        """The link's round trip now (:func:`tuning.link.measure_link`); the client's timeout
+        becomes :func:`tuning.link.reply_timeout` of it."""
+        timing = measure_link(self)
+        if hasattr(self.client, "timeout"):
+            self.client.timeout = reply_timeout(timing, self.least_timeout)
+        return timing
 
     @property
     def motor_configs(self) -> list[Any]:
@@ -219,7 +228,8 @@ def _stop(m: SerialMotor, port: str, address: int, say: Callable[[str], None]) -
     what happened; the reason when the passive mode was not confirmed."""
     from jvl_gym.protocol import MacTalkClient
 
-    why = stop_motor(m, reconnect=lambda: MacTalkClient(port, address=address))
+    timeout = m.client.timeout  # the measured link's (a broken link's new connection too)
+    why = stop_motor(m, reconnect=lambda: MacTalkClient(port, address=address, timeout=timeout))
     if why is None:
         say("the motor is passive (MODE_REG read back)")
     else:

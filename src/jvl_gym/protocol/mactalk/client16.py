@@ -26,7 +26,10 @@ from ..errors import RefusedError, UnexpectedReplyError
 from . import codec16 as mt
 from .master import DEFAULT_BAUDRATE, RegisterMaster
 
-__all__ = ["MacTalkClient", "DEFAULT_BAUDRATE"]
+__all__ = ["MacTalkClient", "DEFAULT_BAUDRATE", "SAMPLE_BYTES"]
+
+#: data bytes of a sample (SAMPLE1..4, 4 bytes each) in a read-sample-buffer reply (manual 5.1)
+SAMPLE_BYTES = 16
 
 def _default_table() -> RegisterTable:
     """The register table of the first registered family that speaks this client's MacTalk
@@ -81,8 +84,10 @@ class MacTalkClient(RegisterMaster):
 
     # ------------------------------------------------------------------ raw access
     def read_words(self, register: int) -> tuple[int, int]:
-        """Words of registers N and N+1 (a read always returns four bytes, manual 5.1)."""
-        rep = self.transact(mt.encode_read(self.address, register), f"READ {register}")
+        """Words of registers N and N+1 (a read always returns four bytes, manual 5.1; a data
+        reply of another length is the late answer to an earlier request, passed over)."""
+        rep = self.transact(mt.encode_read(self.address, register), f"READ {register}",
+                            stale=lambda f: isinstance(f, mt.DataReply) and len(f.data) != 4)
         assert isinstance(rep, mt.DataReply)
         if len(rep.data) != 4:
             raise UnexpectedReplyError(f"READ {register}: expected 4 data bytes, got "
@@ -196,8 +201,11 @@ class MacTalkClient(RegisterMaster):
         time.sleep(settle)
 
     def read_sample(self) -> bytes:
-        """One read-sample-buffer request: 16 bytes of a sample, or b"" at the end."""
-        rep = self.transact(mt.encode_read_sample_buffer(self.address), "READ SAMPLE BUFFER")
+        """One read-sample-buffer request: 16 bytes of a sample, or b"" at the end (a data
+        reply of another length is the late answer to an earlier read, passed over)."""
+        rep = self.transact(mt.encode_read_sample_buffer(self.address), "READ SAMPLE BUFFER",
+                            stale=lambda f: isinstance(f, mt.DataReply)
+                            and len(f.data) not in (0, SAMPLE_BYTES))
         assert isinstance(rep, mt.DataReply)
         return rep.data
 

@@ -22,7 +22,11 @@ from ...compat import renamed_method
 from ...registers.errors import echo
 from ..errors import FrameError, NoAnswerError, UnexpectedReplyError
 
-__all__ = ["SerialMaster", "RegisterMaster", "DEFAULT_BAUDRATE", "open_port"]
+__all__ = ["SerialMaster", "RegisterMaster", "DEFAULT_BAUDRATE", "open_port",
+           "READOUT_ATTEMPTS"]
+
+#: read-outs of the sample buffer tried before :meth:`RegisterMaster.sample_buffer_raw` gives up
+READOUT_ATTEMPTS = 3
 
 #: the motors' serial speed (MAC800 quick guide: 19200 baud, 8 data bits, no parity)
 DEFAULT_BAUDRATE = 19200
@@ -121,7 +125,9 @@ class SerialMaster(ABC):
         """Send ``request`` and return the decoded reply (``expect`` = "data", "accept" or
         "none"), with retries; raise :class:`NoAnswerError` if nothing valid comes back.
         A reply for which ``stale(frame)`` is true (the late answer to an earlier request) is
-        passed over and the next one awaited."""
+        passed over and the next one awaited. When the answer came only after the request was
+        sent again, the answers still due to the earlier sends are awaited and dropped
+        (:meth:`_pass_over_late`)."""
         self.requests += 1
         problems: list[str] = []
         for attempt in range(self.retries + 1):
@@ -147,6 +153,8 @@ class SerialMaster(ABC):
                 if stale is not None and stale(frame):
                     continue
                 if self._kind(frame) == expect:
+                    if attempt:
+                        self._pass_over_late(attempt)
                     return frame
                 wanted = "an accept" if expect == "accept" else "a data reply"
                 raise UnexpectedReplyError(f"{what}: expected {wanted}, got {echo(frame)}")
@@ -156,6 +164,17 @@ class SerialMaster(ABC):
             "Check the port and baud rate, the address (MYADDR), that the motor is powered, "
             "and whether it refused the request: a write that is out of range or not allowed "
             "in the present mode gets no accept (MAC050–141 manual 5.1, MIS manual §18.2).")
+
+    def _pass_over_late(self, n: int) -> None:
+        """After an answer that came only when the request had been sent again: read and drop
+        the up to ``n`` answers still due to the earlier sends (waiting one timeout at most),
+        so that the next request is not given one of them as its answer (a MacTalk answer
+        does not say which request it answers, MAC050–141 manual 5.1)."""
+        deadline = time.monotonic() + self.timeout
+        for _ in range(n):
+            if not self._read_reply(deadline):
+                break
+        self.ser.reset_input_buffer()
 
     def answer_within(self, seconds: float) -> Any:
         """The reply frame that arrives within ``seconds`` after a request sent with
@@ -241,17 +260,44 @@ class RegisterMaster(SerialMaster):
                     raise UnexpectedReplyError(f"{name}: read back differs from {value}")
 
     def sample_buffer_raw(self) -> np.ndarray:
-        """All recorded samples (at most REC_CNT) as raw signed values, shape (samples, 4) for
+        """All recorded samples (REC_CNT of them) as raw signed values, shape (samples, 4) for
         SAMPLE1..4, each channel 4 bytes low byte first.
 
         The buffer is read sample by sample until the empty reply that marks its end; a
         partial read-out left over from an earlier call is drained first, so that the result
-        always starts at the first sample.
+        always starts at the first sample. A read-sample request moves the motor's read
+        position on (MAC050–141 manual 5.1), so a request sent again after its answer came
+        late skips a sample, and the answers carry no sample number: a read-out during which
+        a request was sent again, or that does not end right after REC_CNT samples, is read
+        again from the first sample (:data:`READOUT_ATTEMPTS` times at most).
+
+        Raises
+        ------
+        UnexpectedReplyError
+            No read-out gave REC_CNT samples followed by the end of the buffer.
         """
-        count = int(self.read("REC_CNT"))
+        why = ""
+        for _ in range(READOUT_ATTEMPTS):
+            count = int(self.read("REC_CNT"))
+            retried = self.retried
+            rows, why = self._read_out(count)
+            if rows is not None and self.retried != retried:
+                rows, why = None, "a request was sent again"
+            if rows is not None:
+                return np.asarray(rows, dtype=np.int64).reshape(-1, 4)
+        raise UnexpectedReplyError(
+            f"the sample buffer of the motor at address {self.address} on {self.port} could "
+            f"not be read out whole in {READOUT_ATTEMPTS} attempts ({why}): check the link, "
+            "and that no other master reads the buffer meanwhile")
+
+    def _read_out(self, count: int) -> tuple[list[list[int]] | None, str]:
+        """One read-out of ``count`` samples: drain to the end marker, then read the samples
+        and the end marker; (rows, "") or (None, what went wrong)."""
         for _ in range(count + 1):  # drain to the end marker, pointer back at the first
             if self.read_sample() == b"":
                 break
+        else:
+            return None, f"no end of the buffer within {count + 1} samples"
         rows = []
         for _ in range(count + 1):
             d = self.read_sample()
@@ -259,4 +305,6 @@ class RegisterMaster(SerialMaster):
                 break
             rows.append([int.from_bytes(d[4 * k:4 * k + 4], "little", signed=True)
                          for k in range(4)])
-        return np.asarray(rows, dtype=np.int64).reshape(-1, 4)
+        if len(rows) != count or d != b"":
+            return None, f"{len(rows)} samples read where REC_CNT = {count}"
+        return rows, ""
