@@ -29,11 +29,8 @@
 #    beside the link model's trace of the same episode.
 #
 # `JVL_FAST=1` runs a few thousand training steps (the policy is poor, the pipeline is whole);
-# without it the link variant's budget (`configs/rl/positioning.yml`: 300 000 steps, under two
-# minutes of training on two shared cores) trains a policy that beats the firmware's own
-# positioning behind the link, which the last cell checks (measured: −43.8 ± 6.2 against the
-# baseline's −341 ± 57 over 5 held-out seeds of 8 episodes, 5 seeds of 5 won; the deployed
-# episode −77.2 against the link model's −76.1, final error 0.004 turns).
+# without it the link variant's budget (`configs/rl/positioning.yml`) trains the policy the
+# last cell compares with the firmware's own positioning behind the link.
 
 # %%
 import os
@@ -116,7 +113,7 @@ from jvl_gym.envs.registration import vector_class  # noqa: E402
 from jvl_gym.rl.deploy import load_policy  # noqa: E402
 from jvl_gym.rl.train import train  # noqa: E402
 
-model = train(ENV_ID, out / "runs", total_timesteps=4096 if FAST else 300_000, seed=0,
+model = train(ENV_ID, out / "runs", total_timesteps=4096 if FAST else None, seed=0,
               progress_bar=False, link=LINK, variant="link", env_kwargs=kwargs)
 policy = load_policy(str(model), ENV_ID, 1, vector_class(ENV_ID).step_seconds("MAC140"))
 
