@@ -103,6 +103,23 @@ def test_bad_files_are_refused_in_one_line(autotuned: Path, tmp_path: Path, dama
     assert "\n" not in text and words in text
 
 
+def test_a_report_larger_than_any_autotune_report_is_refused_by_its_size(
+        autotuned: Path, tmp_path: Path, monkeypatch) -> None:
+    from jvl_gym.envs import identified
+
+    d = _copy(autotuned, tmp_path / "out")
+    report = d / "report.txt"
+    with report.open("ab") as f:  # a sparse tail: the size without the writing
+        f.truncate(identified.MAX_REPORT_BYTES + 1)
+    read = []
+    monkeypatch.setattr(Path, "read_text", lambda self, *a, **k: read.append(self) or "")
+    with pytest.raises(IdentificationError) as err:
+        read_identification(d)
+    text = str(err.value)
+    assert "\n" not in text and f"{identified.MAX_REPORT_BYTES + 1} bytes" in text
+    assert read == []  # refused unread
+
+
 def test_a_missing_path_and_another_file_are_refused(tmp_path: Path) -> None:
     with pytest.raises(IdentificationError, match="not found"):
         read_identification(tmp_path / "nowhere")

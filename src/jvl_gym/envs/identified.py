@@ -35,11 +35,14 @@ from pathlib import Path
 from typing import Any
 
 __all__ = ["Identified", "IdentificationError", "read_identification", "parse_report",
-           "identification_of", "env_kwargs_from_identification", "REPORT_FILE", "SETUP_FILE"]
+           "identification_of", "env_kwargs_from_identification", "REPORT_FILE", "SETUP_FILE",
+           "MAX_REPORT_BYTES"]
 
 #: the files ``jvl-tune autotune --out DIR`` writes that an identified env is built from
 REPORT_FILE = "report.txt"
 SETUP_FILE = "setup.yaml"
+#: the largest report read [bytes] (one is a few kB): a larger file is refused by its size, unread
+MAX_REPORT_BYTES = 1 << 20
 
 #: the rows of the report's identification table (``tuning.report.identification_table``)
 #: read, label → field
@@ -111,6 +114,11 @@ def _files(path: str | os.PathLike[str]) -> tuple[Path, Path]:
 
 def _text(path: Path) -> str:
     try:
+        size = path.stat().st_size
+        if size > MAX_REPORT_BYTES:
+            raise IdentificationError(f"{path}: {size} bytes is more than an autotune report "
+                                      f"has ({MAX_REPORT_BYTES} bytes at most); give the "
+                                      "folder `jvl-tune autotune --out` wrote")
         return path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
         raise IdentificationError(f"{path}: not UTF-8 text ({exc.reason} at byte "
