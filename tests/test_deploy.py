@@ -461,3 +461,34 @@ def test_a_deployed_episode_writes_its_trace_and_statistics(tmp_path, motor):
     assert int(rows[0]["T_SOLL"]) == round(0.2 * 1023)
     fam = family_of_motor(motor)
     assert mode != int(fam.task.VELOCITY_MODE)  # stopped at the end (passive, or on its way)
+
+
+def test_the_loop_runs_with_the_heap_frozen_and_thaws_it_after():
+    """A full collection of the loaded simulator, numba and torch takes many periods: the loop
+    runs with the heap frozen (``heap_frozen``) and leaves it as it found it."""
+    import gc
+
+    from jvl_gym.cli.serve import build_line
+
+    frozen_during: list[int] = []
+
+    def policy(obs):
+        frozen_during.append(gc.get_freeze_count())
+        return np.zeros((1, 1))
+
+    twin, _ = build_line([MOTOR], [7])
+    twin.advance(0.01)
+    with TwinServer(twin, tcp=("127.0.0.1", 0), speed=0.25) as server:
+        url = server.endpoint("mactalk", "tcp").url
+        from jvl_gym.rl.watchdog import passive_client
+
+        probe = passive_client(url, 7, MOTOR, timeout=2.0)
+        limits = _loop_limits(_margin(lambda: probe.read("MODE_REG")))
+        before = gc.get_freeze_count()
+        report = deploy(ENV, policy, url, 7, MOTOR, period=0.05, episodes=1,
+                        max_seconds=0.1, **limits)
+    assert report.reason == "done" and report.lengths == [2]
+    # the warm-up call comes before the freeze; every call in the loop is inside it
+    assert len(frozen_during) == 3 and all(c > 10_000 for c in frozen_during[1:])
+    assert gc.get_freeze_count() == before == 0
+

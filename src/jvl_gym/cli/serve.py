@@ -40,6 +40,7 @@ from typing import Annotated, Any
 
 import typer
 
+from ..protocol.serving.realtime import heap_frozen
 from ..registers.errors import echo
 from .app import App
 
@@ -412,7 +413,8 @@ def serve(
             typer.echo(f"canopen {can_interface}:{can_channel}: motor {k} node id {s.node_id}")
     typer.echo(f"running at speed {speed}; Ctrl-C to stop")
     try:
-        done.wait()
+        with heap_frozen():  # no full collection of the loaded code stalls the clock
+            done.wait()
     finally:
         if can_server is not None:
             can_server.stop()

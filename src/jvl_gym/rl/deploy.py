@@ -7,7 +7,9 @@ writes it to the motor's registers (:class:`~jvl_gym.rl.supervisor.Supervisor`),
 watchdog's heartbeat and waits for the next period. Every period is a row of the trace (CSV);
 each episode's return, length and engineering metrics (:mod:`jvl_gym.rl.metrics`) are those
 ``jvl-gym evaluate`` reports; the loop's achieved rate and its latency (from the read of the
-observation to the end of the write of the action) are measured.
+observation to the end of the write of the action) are measured. The loop runs with the heap
+frozen (:func:`~jvl_gym.protocol.serving.realtime.heap_frozen`): no full collection of the
+loaded simulator, numba and torch stalls a period.
 
 A task reaches the motor through a bridge (:class:`PositioningBridge`, :class:`GearSyncBridge`):
 the registers it reads and writes, the observation from them, the reward, and a failure that
@@ -35,6 +37,7 @@ from typing import Any
 import numpy as np
 
 from ..envs import link as link_model
+from ..protocol.serving.realtime import heap_frozen
 from .metrics import engineering_metrics
 from .supervisor import Limits, PolicyRunner, Stopped, Supervisor, Watchdog, register_bounds
 
@@ -604,6 +607,9 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
         # Ctrl-C stops the loop even in a process started with SIGINT ignored (a shell's
         # background job, a parent that ignores it), which Python would otherwise keep
         old_int = signal.signal(signal.SIGINT, signal.default_int_handler)
+    # full collections of the heap made so far would take many periods (.realtime)
+    frozen = heap_frozen()
+    frozen.__enter__()
     t_first = time.monotonic()
     loop_time, t0, write_time = 0.0, t_first, 0.0
     try:
@@ -683,6 +689,7 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
         supervisor.stop(f"error: {type(exc).__name__}: {exc}")
         raise
     finally:
+        frozen.__exit__(None, None, None)
         if old_term is not None:
             signal.signal(signal.SIGTERM, old_term)
         if old_int is not None:
