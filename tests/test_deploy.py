@@ -492,3 +492,26 @@ def test_the_loop_runs_with_the_heap_frozen_and_thaws_it_after():
     assert len(frozen_during) == 3 and all(c > 10_000 for c in frozen_during[1:])
     assert gc.get_freeze_count() == before == 0
 
+
+def test_the_rewards_compiled_code_is_ready_before_the_loop():
+    """On a fresh install numba compiles Positioning's step reward at its first call, 100 ms
+    and more: a deployment whose first period made that call overran it and stopped the
+    motor. ``prepare`` (once, before the episodes) makes it ready; in a new process, so that
+    nothing else has compiled it first."""
+    code = (
+        "from jvl_gym.families import family_of_motor\n"
+        "from jvl_gym.envs.positioning import step_reward\n"
+        "from jvl_gym.rl.deploy import PositioningBridge\n"
+        "class Client:\n"
+        "    def read_raw(self, name):\n"
+        "        return 10\n"
+        "class Link:\n"
+        "    client = Client()\n"
+        "bridge = PositioningBridge(family_of_motor('MAC140'))\n"
+        "before = len(step_reward.signatures)\n"
+        "bridge.prepare(Link())\n"
+        "print(before, len(step_reward.signatures), bridge.window_counts, bridge.overshoot)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, cwd=ROOT)
+    assert out.stdout.split() == ["0", "1", "10.0", "0.0"]
+

@@ -156,9 +156,12 @@ class PositioningBridge:
         self.torque = 0.0  # VF_OUT of the last read, of full scale
 
     def prepare(self, link: BusLink) -> None:
-        """Once before the episodes: the in-position window INPOSWIN (for the metrics)."""
+        """Once before the episodes: the in-position window INPOSWIN (for the metrics), and the
+        reward's compiled code made ready (on a fresh install numba compiles it, 100 ms and
+        more: inside the loop, an overrun of the first period)."""
         self.window_counts = float(link.client.read_raw("INPOSWIN"))
         self.window = self.window_counts / self.cpr
+        self.rate(np.zeros(1))
 
     def start(self, link: BusLink, core: Any) -> None:
         """Begin a move to the target the env drew (``core.target``, counts) from here:
