@@ -464,8 +464,9 @@ def test_a_deployed_episode_writes_its_trace_and_statistics(tmp_path, motor):
 
 
 def test_the_loop_runs_with_the_heap_frozen_and_thaws_it_after():
-    """A full collection of the loaded simulator, numba and torch takes many periods: the loop
-    runs with the heap frozen (``heap_frozen``) and leaves it as it found it."""
+    """A full collection of the loaded simulator, numba and torch takes many periods: a
+    deployment runs with the heap frozen (``heap_frozen``), from before its watchdog starts,
+    and leaves it as it found it."""
     import gc
 
     from jvl_gym.cli.serve import build_line
@@ -485,11 +486,12 @@ def test_the_loop_runs_with_the_heap_frozen_and_thaws_it_after():
         probe = passive_client(url, 7, MOTOR, timeout=2.0)
         limits = _loop_limits(_margin(lambda: probe.read("MODE_REG")))
         before = gc.get_freeze_count()
-        report = deploy(ENV, policy, url, 7, MOTOR, period=0.05, episodes=1,
+        # the test is about the heap, not the timing: a deadline no busy machine misses
+        report = deploy(ENV, policy, url, 7, MOTOR, period=0.05, deadline=5.0, episodes=1,
                         max_seconds=0.1, **limits)
     assert report.reason == "done" and report.lengths == [2]
-    # the warm-up call comes before the freeze; every call in the loop is inside it
-    assert len(frozen_during) == 3 and all(c > 10_000 for c in frozen_during[1:])
+    # the warm-up call and every call in the loop see the heap frozen
+    assert len(frozen_during) == 3 and all(c > 10_000 for c in frozen_during)
     assert gc.get_freeze_count() == before == 0
 
 

@@ -404,18 +404,23 @@ def serve(
     # before the ready line: a Ctrl-C or SIGTERM right after it stops serve cleanly
     previous = {sig: signal.signal(sig, lambda *_: done.set())
                 for sig in (signal.SIGINT, signal.SIGTERM)}
-    for text in banner([types[k] for k in order], line, [address[k] for k in order]):
-        typer.echo(text)
-    for e in server.endpoints if server is not None else []:
-        typer.echo(f"{e.what} {e.kind}: {e.url}", err=False)
-    if can_server is not None:
-        for k, s in enumerate(can_server.slaves):
-            typer.echo(f"canopen {can_interface}:{can_channel}: motor {k} node id {s.node_id}")
-    typer.echo(f"running at speed {speed}; Ctrl-C to stop")
+    # the heap frozen before the ready line: the one full collection comes before any client,
+    # and none of the loaded code stalls the clock after it (protocol.serving.realtime)
+    frozen = heap_frozen()
+    frozen.__enter__()
     try:
-        with heap_frozen():  # no full collection of the loaded code stalls the clock
-            done.wait()
+        for text in banner([types[k] for k in order], line, [address[k] for k in order]):
+            typer.echo(text)
+        for e in server.endpoints if server is not None else []:
+            typer.echo(f"{e.what} {e.kind}: {e.url}", err=False)
+        if can_server is not None:
+            for k, s in enumerate(can_server.slaves):
+                typer.echo(f"canopen {can_interface}:{can_channel}: motor {k} node id "
+                           f"{s.node_id}")
+        typer.echo(f"running at speed {speed}; Ctrl-C to stop")
+        done.wait()
     finally:
+        frozen.__exit__(None, None, None)
         if can_server is not None:
             can_server.stop()
         if server is not None:

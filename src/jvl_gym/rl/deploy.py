@@ -564,6 +564,24 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
         :func:`jvl_gym.envs.identified.env_kwargs_from_identification`; its ``motor_type``
         must be ``motor_type``).
     """
+    # the heap frozen before the watchdog starts and the loop runs: the one full collection
+    # (100 ms and more) comes first, and none stalls a period after it (protocol.serving.realtime)
+    with heap_frozen():
+        return _deploy(env_id, policy, url, address, motor_type, period=period,
+                       deadline=deadline, episodes=episodes, seed=seed,
+                       max_seconds=max_seconds, max_step=max_step, watchdog_url=watchdog_url,
+                       watchdog_timeout=watchdog_timeout, timeout=timeout, retries=retries,
+                       trace=trace, stop=stop, hold=hold, env_kwargs=env_kwargs)
+
+
+def _deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: int,
+           motor_type: str, *, period: float, deadline: float | None = None,
+           episodes: int = 1, seed: int = 0, max_seconds: float | None = None,
+           max_step: float = 0.5, watchdog_url: str | None = None,
+           watchdog_timeout: float = 0.25, timeout: float = 0.1, retries: int = 1,
+           trace: str | Path | None = None, stop: threading.Event | None = None,
+           hold: float = 0.0, env_kwargs: Mapping[str, Any] | None = None) -> DeployReport:
+    """:func:`deploy` with the heap frozen."""
     import gymnasium as gym
 
     import jvl_gym  # noqa: F401
@@ -610,9 +628,6 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
         # Ctrl-C stops the loop even in a process started with SIGINT ignored (a shell's
         # background job, a parent that ignores it), which Python would otherwise keep
         old_int = signal.signal(signal.SIGINT, signal.default_int_handler)
-    # full collections of the heap made so far would take many periods (.realtime)
-    frozen = heap_frozen()
-    frozen.__enter__()
     t_first = time.monotonic()
     loop_time, t0, write_time = 0.0, t_first, 0.0
     try:
@@ -692,7 +707,6 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
         supervisor.stop(f"error: {type(exc).__name__}: {exc}")
         raise
     finally:
-        frozen.__exit__(None, None, None)
         if old_term is not None:
             signal.signal(signal.SIGTERM, old_term)
         if old_int is not None:
