@@ -434,20 +434,26 @@ def test_gear_sync_metrics_from_a_tension_trace():
     assert got == {"tension_error": 1.5, "tension_error_max": 3.0, "copper_loss": 2.5}
 
 
-@pytest.mark.parametrize("motor", ["MAC140", "MAC800"])
-def test_a_deployed_episode_writes_its_trace_and_statistics(tmp_path, motor):
-    import csv
-
+@contextlib.contextmanager
+def _served_motor(motor: str):
+    """A motor of type ``motor`` at address 7 served over TCP on a quarter-speed clock: its URL,
+    a probe connection of the test's own and the loop's limits from the measured margin."""
     from jvl_gym.cli.serve import build_line
+    from jvl_gym.rl.watchdog import passive_client
 
     twin, _ = build_line([motor], [7])
     twin.advance(0.01)
     with TwinServer(twin, tcp=("127.0.0.1", 0), speed=0.25) as server:
         url = server.endpoint("mactalk", "tcp").url
-        from jvl_gym.rl.watchdog import passive_client
-
         probe = passive_client(url, 7, motor, timeout=2.0)
-        limits = _loop_limits(_margin(lambda: probe.read("MODE_REG")))
+        yield url, probe, _loop_limits(_margin(lambda: probe.read("MODE_REG")))
+
+
+@pytest.mark.parametrize("motor", ["MAC140", "MAC800"])
+def test_a_deployed_episode_writes_its_trace_and_statistics(tmp_path, motor):
+    import csv
+
+    with _served_motor(motor) as (url, probe, limits):
         report = deploy(ENV, lambda o: np.full((1, 1), 0.2), url, 7, motor, period=0.05,
                         episodes=2, max_seconds=0.2, trace=tmp_path / "trace.csv", **limits)
         mode = int(probe.read("MODE_REG"))
@@ -469,26 +475,18 @@ def test_the_loop_runs_with_the_heap_frozen_and_thaws_it_after():
     and leaves it as it found it."""
     import gc
 
-    from jvl_gym.cli.serve import build_line
-
     frozen_during: list[int] = []
 
     def policy(obs):
         frozen_during.append(gc.get_freeze_count())
         return np.zeros((1, 1))
 
-    twin, _ = build_line([MOTOR], [7])
-    twin.advance(0.01)
-    with TwinServer(twin, tcp=("127.0.0.1", 0), speed=0.25) as server:
-        url = server.endpoint("mactalk", "tcp").url
-        from jvl_gym.rl.watchdog import passive_client
-
-        probe = passive_client(url, 7, MOTOR, timeout=2.0)
-        limits = _loop_limits(_margin(lambda: probe.read("MODE_REG")))
+    with _served_motor(MOTOR) as (url, _, limits):
         before = gc.get_freeze_count()
-        # the test is about the heap, not the timing: a deadline no busy machine misses
-        report = deploy(ENV, policy, url, 7, MOTOR, period=0.05, deadline=5.0, episodes=1,
-                        max_seconds=0.1, **limits)
+        # gc.get_freeze_count walks the frozen heap (tens of ms in a test process): periods
+        # and a deadline that it does not overrun
+        report = deploy(ENV, policy, url, 7, MOTOR, period=0.5, deadline=5.0, episodes=1,
+                        max_seconds=1.0, **limits)
     assert report.reason == "done" and report.lengths == [2]
     # the warm-up call and every call in the loop see the heap frozen
     assert len(frozen_during) == 3 and all(c > 10_000 for c in frozen_during)

@@ -515,6 +515,9 @@ class _Terminate(BaseException):
     """SIGTERM, raised in the loop's thread."""
 
 
+# the heap frozen before the client, the watchdog and the loop start: the one full collection
+# (100 ms and more) comes first, and none stalls a period after it (protocol.serving.realtime)
+@heap_frozen()
 def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: int,
            motor_type: str, *, period: float, deadline: float | None = None,
            episodes: int = 1, seed: int = 0, max_seconds: float | None = None,
@@ -564,24 +567,6 @@ def deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: 
         :func:`jvl_gym.envs.identified.env_kwargs_from_identification`; its ``motor_type``
         must be ``motor_type``).
     """
-    # the heap frozen before the watchdog starts and the loop runs: the one full collection
-    # (100 ms and more) comes first, and none stalls a period after it (protocol.serving.realtime)
-    with heap_frozen():
-        return _deploy(env_id, policy, url, address, motor_type, period=period,
-                       deadline=deadline, episodes=episodes, seed=seed,
-                       max_seconds=max_seconds, max_step=max_step, watchdog_url=watchdog_url,
-                       watchdog_timeout=watchdog_timeout, timeout=timeout, retries=retries,
-                       trace=trace, stop=stop, hold=hold, env_kwargs=env_kwargs)
-
-
-def _deploy(env_id: str, policy: Callable[[np.ndarray], Any], url: str, address: int,
-           motor_type: str, *, period: float, deadline: float | None = None,
-           episodes: int = 1, seed: int = 0, max_seconds: float | None = None,
-           max_step: float = 0.5, watchdog_url: str | None = None,
-           watchdog_timeout: float = 0.25, timeout: float = 0.1, retries: int = 1,
-           trace: str | Path | None = None, stop: threading.Event | None = None,
-           hold: float = 0.0, env_kwargs: Mapping[str, Any] | None = None) -> DeployReport:
-    """:func:`deploy` with the heap frozen."""
     import gymnasium as gym
 
     import jvl_gym  # noqa: F401

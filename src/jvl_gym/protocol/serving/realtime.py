@@ -30,7 +30,8 @@ _depth = 0
 @contextlib.contextmanager
 def heap_frozen() -> Iterator[None]:
     """Keep full collections short for the block (module docstring); blocks may nest, from any
-    thread: the heap is unfrozen when the last one ends."""
+    thread: the heap is unfrozen when the last one ends. ``@heap_frozen()`` runs a function
+    so."""
     global _depth
     with _lock:
         if _depth == 0:
