@@ -296,11 +296,12 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
             return np.full(idx.size, np.nan)
         return self.motors.state[idx, self.fam.task.COPPER_COLUMN]
 
-    def _kvout_for_load(self, idx: np.ndarray, inertia_ratio: np.ndarray) -> None:
-        """Set KVOUT = 1 + ``inertia_ratio`` (J_load/J_m, (M,)) of copies ``idx`` when the
-        family's task interface says its tasks do (``KVOUT_FROM_LOAD``)."""
-        if self.fam.task.KVOUT_FROM_LOAD:
-            self.motors.write("KVOUT", 1.0 + inertia_ratio, index=idx)
+    def _load_writes(self, inertia_ratio: np.ndarray) -> dict[str, np.ndarray]:
+        """The register writes that match the motors' speed loop to their load: KVOUT = 1 +
+        ``inertia_ratio`` (J_load/J_m, (M,)) when the family's task interface says its tasks
+        set it (``KVOUT_FROM_LOAD``), else none; a task puts them first in the transaction of
+        its reset's writes."""
+        return {"KVOUT": 1.0 + inertia_ratio} if self.fam.task.KVOUT_FROM_LOAD else {}
 
     # ------------------------------------------------------------------ pickling
     def _transient(self) -> dict[str, Any]:

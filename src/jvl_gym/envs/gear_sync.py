@@ -321,9 +321,8 @@ class GearSyncVectorEnv(MotorVectorEnv):
                     draws["r0"], draws["span"], draws["tension_ref"], self.master_radius,
                     self.gear_ratio, self.master_counts_per_rev, fam.constants.COUNTS_PER_REV,
                     fam.task.AG_CENTRE_FACTOR, gearf1, load)
-        self._kvout_for_load(idx, draws["inertia_ratio"])
         num, den = fam.task.GEARF
-        m.write_many({num: gearf1, den: _GEARF2,
+        m.write_many({**self._load_writes(draws["inertia_ratio"]), num: gearf1, den: _GEARF2,
                       "V_SOLL": round(fam.task.rpm_to_v_soll(self.rated_rpm)),
                       "MODE_REG": fam.task.ANALOG_GEAR_MODE}, idx)
         if hasattr(m, "start_under_load"):  # the speed regulator already holds the load

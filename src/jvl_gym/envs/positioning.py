@@ -202,18 +202,19 @@ class PositioningVectorEnv(MotorVectorEnv):
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
         fam = self.fam
-        self._kvout_for_load(idx, draws["inertia_ratio"])
         _reset_rows(idx, draws["target_turns"], self.target, self.direction,
                     fam.constants.COUNTS_PER_REV)
         self.unsettled[idx] = 0
         self.overshoot[idx] = 0.0
         self.copper[idx] = self.copper_loss(idx)
         if self.baseline:
-            self.motors.write_many({"V_SOLL": round(fam.task.rpm_to_v_soll(_BASELINE_RPM)),
-                                     "P_SOLL": self.target[idx],
-                                     "MODE_REG": fam.task.POSITION_MODE}, idx)
+            self.motors.write_many({**self._load_writes(draws["inertia_ratio"]),
+                                    "V_SOLL": round(fam.task.rpm_to_v_soll(_BASELINE_RPM)),
+                                    "P_SOLL": self.target[idx],
+                                    "MODE_REG": fam.task.POSITION_MODE}, idx)
         else:
-            self.motors.write("MODE_REG", fam.task.ANALOG_TORQUE_MODE, index=idx)
+            self.motors.write_many({**self._load_writes(draws["inertia_ratio"]),
+                                    "MODE_REG": fam.task.ANALOG_TORQUE_MODE}, idx)
 
     def _episode_stats(self, idx: np.ndarray) -> dict[str, np.ndarray]:
         """Settle time (steps until the error stays within INPOSWIN, the episode's length when

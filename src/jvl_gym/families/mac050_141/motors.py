@@ -160,7 +160,8 @@ class MacMotorArray(MotorArray, layout=L):
         p = self._type_params[self._type_of[idx]].copy()
         for q in np.flatnonzero(~to_state):
             p[:, cols[q]] = values[q]
-        for j, row in enumerate(p):
+        for j in np.flatnonzero(p[:, L.P_K_COUPLING] > 0.0).tolist():  # rigid shafts pass
+            row = p[j]
             problem = coupling_problem(row[L.P_J_MOTOR], row[L.P_J_LOAD], row[L.P_K_COUPLING],
                                        row[L.P_D_COUPLING], c.INNER_DT)
             if problem is not None:
