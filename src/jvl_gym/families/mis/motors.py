@@ -28,6 +28,7 @@ from . import layout as L
 from .config import MisMotorConfig, load_motor
 from .filter_setup import READ_INDEX_VALUES, FilterSetup
 from .firmware import regs as R
+from .firmware.start import start_rows
 from .multifunction_port import MultifunctionOutput
 from .plant.torque_curve import pull_out_torque
 from .program.api import ProgramMixin
@@ -36,8 +37,6 @@ from .table import CONFORMANCE, TABLE
 from .units import (
     COUNTS_PER_REV,
     CURRENT_AMPS_PER_UNIT,
-    CVI_VOLTS_PER_UNIT,
-    TEMP_CELSIUS_PER_UNIT,
 )
 from .user_commands import UserCommands
 
@@ -87,8 +86,6 @@ _MEMBERS: dict[int, tuple[frozenset[int], str]] = {
     R.TURNTABLE_MODE: (frozenset(range(6)), "§5.12.3: >5 is illegal"),
     R.AFZUP_READINDEX: (READ_INDEX_VALUES, "§8.2.51: 0, 1-8, 32768-32775")}
 BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
-#: the plant's state and the electronics' temperature, which a reset of the electronics leaves
-#: alone
 #: the zero-search modes (§6.5.9) and the modes with the bridge off (§5.11.2, §8.2.3)
 _SEARCHES = (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2)
 _OFF = (c.PASSIVE, c.SAFE)
@@ -111,27 +108,16 @@ def _among(values: np.ndarray, table: np.ndarray) -> np.ndarray:
     return table[np.minimum(np.asarray(values, np.int64).view(np.uint64), table.size - 1)]
 
 
-#: lookup tables (:func:`_member_table`) of the mode sets above and of the start modes
+#: lookup tables (:func:`_member_table`) of the mode sets above and of the writable modes
 _IS_SEARCH = _member_table(_SEARCHES)
 _IS_OFF = _member_table(_OFF)
-_IS_START_MODE = _member_table(c.START_MODES)
 _IS_WRITABLE_MODE = _member_table(c.WRITABLE_MODES)
-#: per ENCODER_TYPE code (§8.2.49): the encoder's counts per revolution (0: none), the motor
-#: counts per encoder count (1 without an encoder) and whether it is an H2 or H4 (a
-#: single-turn position at power-up, §5.4.3)
-_CPR = np.array([c.ENCODER_CPR[k] for k in range(len(c.ENCODER_CPR))], dtype=np.int64)
-_PER = np.where(_CPR > 0, COUNTS_PER_REV // np.maximum(_CPR, 1), 1)
-_SINGLE_TURN_ENCODER = np.isin(np.arange(_CPR.size), (1, 3, 4))
-#: the registers a power-on clears: positions, counters, NOTSAVED (§8.2.96), error bits
-_CLEARED_AT_POWER_ON = np.array([
-    R.P_IST, R.P_SOLL, R.V_IST, R.ENCODER_POS, R.FLWERR, R.ERR_BITS, R.WARN_BITS, R.STATUSBITS,
-    R.TURNTAB_COUNT, R.COMMAND, R.S_CONTROL, R.ACTUAL_TORQUE, R.TICKS, R.MOTOR_REV,
-    R.NOTSAVED], dtype=np.int64)
 #: the factory limits a power-on takes from ROM (flash holds the writable registers only)
 _FACTORY = np.array([R.MAX_VOLTAGE, R.TEMP_LIMITS], dtype=np.int64)
 #: the ends of a turn table's range (§5.12.1)
 _TURN_TABLE_ENDS = np.array([R.MIN_P_IST, R.MAX_P_IST], dtype=np.int64)
-
+#: the plant's state and the electronics' temperature, which a reset of the electronics leaves
+#: alone
 _PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD, L.S_TEMP_RISE]
 
 
@@ -270,12 +256,16 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
 
     def _memory_rows(self, idx: np.ndarray) -> np.ndarray:
         """The registers motors ``idx`` start with: their flash image where they have one,
-        else their type's ROM image, (M, registers) int64 (a new array)."""
-        rows = self._rom[self._type_of[idx]]
+        else their type's ROM image, (M, registers) int64 (a new array); MAX_VOLTAGE and
+        TEMP_LIMITS hold the factory values from ROM (flash holds the writable registers
+        only, §8.2.93)."""
+        types = self._type_of[idx]
+        rows = self._rom[types]
         if self._flash is not None:
             flashed = self._has_flash[idx]
             if flashed.any():
                 rows[flashed] = self._flash[idx[flashed]]
+                rows[:, _FACTORY] = self._rom[types[:, None], _FACTORY]
         return rows
 
     def _store_position_backup(self, idx: np.ndarray) -> None:
@@ -285,111 +275,37 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
             self._position_backup = np.zeros(self.n, dtype=np.int64)
         self._position_backup[idx] = self.regs[idx, R.P_IST]
 
-    def _power_up_position(self, idx: np.ndarray, setup: np.ndarray, code: np.ndarray,
-                           q: np.ndarray, preset: np.ndarray) -> np.ndarray:
-        """P_IST after power-up by SETUP_BITS bits 10/11 and the encoder option (§5.4.3's
-        table; bit 11 wins when both are set): 0 by default; bit 10 the single-turn position
-        (0 … 409599) with an H2 or H4, 0 otherwise (H3: "not available"); bit 11 the H3's full
-        multi-turn position, the stored position (:meth:`_store_position_backup`) without an
-        encoder, and with an H2 or H4 the stored position corrected by the single-turn
-        encoder to within half a revolution. Per motor of ``idx``: ``setup`` SETUP_BITS,
-        ``code`` the ENCODER_TYPE code, ``q`` the quantised rotor angle in counts, ``preset``
-        the H3's preset offset (``P_H3_PRESET``)."""
-        multi = (setup & c.SETUP_MULTI_TURN_AT_POWER_UP) != 0
-        single = ((setup & c.SETUP_SINGLE_TURN_AT_POWER_UP) != 0) & ~multi
-        q = q.astype(np.int64)
-        turn = np.mod(q, COUNTS_PER_REV)
-        half = COUNTS_PER_REV // 2
-        stored = self._position_backup[idx]
-        near = stored + np.mod(turn - stored + half, COUNTS_PER_REV) - half
-        single_turn_encoder = _SINGLE_TURN_ENCODER[code]
-        pos = np.zeros(idx.size, dtype=np.int64)
-        pos = np.where(single & single_turn_encoder, turn, pos)
-        pos = np.where(multi & (code == 0), stored, pos)
-        pos = np.where(multi & single_turn_encoder, near, pos)
-        pos = np.where(multi & (code == 2), q + preset, pos)
-        return np.mod(pos + 2**31, 2**32) - 2**31
-
     def _power_on(self, idx: np.ndarray) -> None:
-        """Firmware start of motors ``idx`` from their registers, state and parameters as they
-        are (:meth:`_start`)."""
-        self._start(idx, self.regs[idx], self.state[idx], self.params[idx])
+        """Firmware start of motors ``idx`` from their registers (the factory limits from ROM),
+        state and parameters as they are (:meth:`_start`)."""
+        regs = self.regs[idx]
+        regs[:, _FACTORY] = self._rom[self._type_of[idx][:, None], _FACTORY]
+        self._start(idx, regs, self.state[idx], self.params[idx])
 
     def _start(self, idx: np.ndarray, regs: np.ndarray, s: np.ndarray, p: np.ndarray) -> None:
-        """Firmware start of motors ``idx`` whose registers, state and parameters before it are
-        the (M, ·) blocks ``regs``, ``s`` and ``p`` (worked on in place, then stored in their
-        rows): positions, counters, NOTSAVED (§8.2.96) and error bits cleared (P_IST = P_SOLL
-        = ENCODER_POS = 0, or the position SETUP_BITS bits 10/11 take from the encoder or the
-        position back-up, :meth:`_power_up_position`; P_SOLL = P_IST, so a saved P_SOLL makes
-        no move at power-on), EXT_ENCODER too unless SETUP_BITS bit 12 keeps it, the mode from
-        HOMEMODE or else STARTMODE (§8.2.33, §8.2.37)."""
-        regs[:, _CLEARED_AT_POWER_ON] = 0
-        setup = regs[:, R.SETUP_BITS]
-        # SETUP_BITS bit 12 KeepExtEncoder: "Do not zero the external encoder count on startup"
-        regs[:, R.EXT_ENCODER] = np.where(setup & c.SETUP_KEEP_EXT_ENCODER,
-                                          regs[:, R.EXT_ENCODER], 0)
-        s[:, L.S_CUR_SCALE] = 2047.0
-        code = p[:, L.P_ENCODER].astype(np.int64)
-        regs[:, R.ENCODER_TYPE] = code
-        cpr = _CPR[code]
-        per = _PER[code]
-        theta = s[:, L.S_THETA]
-        angle = np.where(setup & c.SETUP_INVERT_DIRECTION, -theta, theta)  # _firmware_angle
-        q = np.floor(angle * COUNTS_PER_REV / (2 * math.pi) / per) * per
+        """Firmware start of motors ``idx`` whose registers (MAX_VOLTAGE and TEMP_LIMITS the
+        factory values), state (0 but for the plant's) and parameters before it are the (M, ·)
+        blocks ``regs``, ``s`` and ``p`` (worked on in place, then stored in their rows):
+        positions, counters, NOTSAVED (§8.2.96) and error bits cleared (P_IST = P_SOLL =
+        ENCODER_POS = 0, or the position SETUP_BITS bits 10/11 take from the encoder or the
+        position back-up of §5.4.2–5.4.3; P_SOLL = P_IST, so a saved P_SOLL makes no move at
+        power-on), EXT_ENCODER too unless SETUP_BITS bit 12 keeps it, the mode from HOMEMODE
+        or else STARTMODE (§8.2.33, §8.2.37), the hardware supervision's start (CVI_VOLT,
+        TEMP, the brake, the faults only a start sees, §7.2.13, §7.2.16, §8.2.79–80): the
+        compiled :func:`.firmware.start.start_rows`; then the user commands' flags, the
+        analogue filter settings, the SSI port, a stored program and the multifunction
+        output start."""
         if getattr(self, "_position_backup", None) is None:  # (P_IST is 0 here)
             self._position_backup = np.zeros(self.n, dtype=np.int64)
-        pos = self._power_up_position(idx, setup, code, q, p[:, L.P_H3_PRESET])
-        regs[:, R.P_IST] = regs[:, R.P_SOLL] = pos
-        s[:, L.S_SEEN_PSOLL] = pos
-        encoder = cpr > 0
-        regs[:, R.ENCODER_POS] = np.where(encoder, pos, 0)
-        s[:, L.S_ENC_OFFSET] = np.where(encoder, pos - q, 0.0)
-        s[:, L.S_ENC_PREV] = regs[:, R.ENCODER_POS]
-        s[:, L.S_CMD] = s[:, L.S_CMD_PREV] = 0.0
-        home = regs[:, R.HOMEMODE]
-        start = regs[:, R.STARTMODE]
-        start = np.where(_among(start, _IS_START_MODE), start, c.PASSIVE)
-        regs[:, R.MODE_REG] = np.where(_among(home, _IS_SEARCH), home, start)
-        # a power-on zero search that times out goes on in STARTMODE (§6.5.9, §7.2.19)
-        s[:, L.S_HOME_PREV] = start
+        start_rows(regs, s, p, self.inputs[idx], self._position_backup[idx])
         self._commands_power_on(idx)
         self._afzup_power_on(regs, p)
         self._ssi_power_on(idx, regs)
-        self._supervision_power_on(idx, regs, s, p)
         self.regs[idx] = regs
         self.state[idx] = s
         self.params[idx] = p
         self._program_power_on(idx)
         self._mf_power_on(idx, s)
-
-    def _supervision_power_on(self, idx: np.ndarray, regs: np.ndarray, s: np.ndarray,
-                              p: np.ndarray) -> None:
-        """The hardware supervision at the start (``firmware.supervision``) of motors ``idx``,
-        on their (M, ·) blocks of registers, state and parameters (:meth:`_start`): CVI_VOLT,
-        TEMP and TEMP_HIGHRES at the ambient temperature; the program starts at once when the
-        control voltage is above ACCEPT_VOLTAGE, and otherwise waits until it has been
-        measured there ACCEPT_COUNT times (§8.2.79–80); MAX_VOLTAGE and TEMP_LIMITS hold the
-        factory values; the brake holds; an encoder COM fault (H3/H4) and an external memory
-        fault set ERR_BITS bits 10 and 13, which only the start sets (§7.2.13, §7.2.16)."""
-        u = self.inputs[idx]
-        # the factory limits from ROM: flash holds the writable registers only
-        regs[:, _FACTORY] = self._rom[self._type_of[idx][:, None], _FACTORY]
-        cvi = np.clip(np.floor(u[:, L.I_CONTROL_VOLTS] / CVI_VOLTS_PER_UNIT + 0.5), 0, 4095)
-        regs[:, R.CVI_VOLT] = cvi.astype(np.int64)
-        s[:, L.S_CVI_WAIT] = (regs[:, R.CVI_VOLT] <= regs[:, R.ACCEPT_VOLTAGE]) & (
-            regs[:, R.ACCEPT_COUNT] > 0)
-        s[:, L.S_CVI_N] = 0.0
-        celsius = u[:, L.I_AMBIENT] + s[:, L.S_TEMP_RISE]
-        regs[:, R.TEMP_HIGHRES] = np.floor(celsius * 1000.0 + 0.5).astype(np.int64)
-        regs[:, R.TEMP] = np.clip(np.floor(celsius / TEMP_CELSIUS_PER_UNIT + 0.5), 0,
-                                  127).astype(np.int64)
-        s[:, L.S_BRAKE_HELD] = s[:, L.S_BRAKE_CMD] = 1.0
-        s[:, L.S_BRAKE_MS] = 0.0
-        s[:, L.S_BRAKE_EXT] = (regs[:, R.BRAKE] & 0xFF) != 0
-        fitted = (p[:, L.P_BRAKE_TORQUE] > 0.0) | (s[:, L.S_BRAKE_EXT] != 0.0)
-        regs[:, R.STATUSBITS] |= np.where(fitted, c.ST_BRAKE_ACTIVE, 0)
-        found = u[:, L.I_FAULTS].astype(np.int64) & c.FAULTS_AT_START
-        regs[:, R.ERR_BITS] |= np.where(found != 0, found | c.ERR_GENERAL, 0)
 
     @property
     def time(self) -> np.ndarray:
