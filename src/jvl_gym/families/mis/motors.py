@@ -108,10 +108,41 @@ def _among(values: np.ndarray, table: np.ndarray) -> np.ndarray:
     return table[np.minimum(np.asarray(values, np.int64).view(np.uint64), table.size - 1)]
 
 
-#: lookup tables (:func:`_member_table`) of the mode sets above and of the writable modes
+#: lookup tables (:func:`_member_table`) of the mode sets above
 _IS_SEARCH = _member_table(_SEARCHES)
 _IS_OFF = _member_table(_OFF)
-_IS_WRITABLE_MODE = _member_table(c.WRITABLE_MODES)
+#: MODE_REG values 0 … 15 stand for themselves in :data:`_MODE_CHANGES`, any other for 16
+_OTHER_MODE = 16
+#: bits of :data:`_MODE_CHANGES`: the change is allowed; allowed with ERR_BITS ≠ 0 too; it
+#: requests a zero search; it is one to an active mode from passive or safe
+_ALLOWED, _ALLOWED_WITH_ERRORS, _TO_SEARCH, _ACTIVATED = 1, 2, 4, 8
+
+
+def _mode_changes() -> np.ndarray:
+    """What writing MODE_REG := ``new`` means to a motor in mode ``old``, as bits by
+    ``[old, new]`` (17 × 17 uint8; :data:`_OTHER_MODE` any other value): allowed unless it
+    leaves or enters safe mode (by command only) or is no writable mode (§8.2.3); allowed with
+    errors only to passive (§8.2.31: an active mode is refused while ERR_BITS ≠ 0); a zero
+    search; an active mode from passive or safe (SETUP_BITS bit 5, §8.2.68)."""
+    out = np.zeros((_OTHER_MODE + 1, _OTHER_MODE + 1), dtype=np.uint8)
+    for old in range(_OTHER_MODE + 1):
+        for new in range(_OTHER_MODE + 1):
+            allowed = new == c.SAFE if old == c.SAFE else new in c.WRITABLE_MODES
+            out[old, new] = (_ALLOWED * allowed
+                             | _ALLOWED_WITH_ERRORS * (allowed and new == c.PASSIVE)
+                             | _TO_SEARCH * (new in _SEARCHES)
+                             | _ACTIVATED * (old in _OFF and new != c.PASSIVE))
+    return out
+
+
+_MODE_CHANGES = _mode_changes()
+
+
+def _mode_index(values: np.ndarray) -> np.ndarray:
+    """MODE_REG values as indices of :data:`_MODE_CHANGES` (a negative value, seen as a large
+    unsigned one, or one above 15: :data:`_OTHER_MODE`)."""
+    return np.minimum(np.asarray(values, np.int64).view(np.uint64), _OTHER_MODE)
+
 #: the factory limits a power-on takes from ROM (flash holds the writable registers only)
 _FACTORY = np.array([R.MAX_VOLTAGE, R.TEMP_LIMITS], dtype=np.int64)
 #: the ends of a turn table's range (§5.12.1)
@@ -331,35 +362,7 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         num = reg.number
         regs, s = self.regs, self.state
         if num == R.MODE_REG:
-            mode = regs[idx, R.MODE_REG]
-            self._check_modes(idx, raw, mode)
-            enter_home = (mode != raw) & _among(raw, _IS_SEARCH)
-            if enter_home.any():
-                entering = idx[enter_home]
-                s[entering, L.S_HOME_PHASE] = 0.0
-                s[entering, L.S_HOME_MS] = 0.0
-                # the mode a time-out sets back (§7.2.19): the one before the search started
-                first = enter_home & ~_among(mode, _IS_SEARCH)
-                s[idx[first], L.S_HOME_PREV] = mode[first]
-            off = raw == c.PASSIVE
-            was_off = _among(mode, _IS_OFF)
-            new = raw
-            if off.any():
-                # §5.11.2: "When changing to Passive mode the motor goes into Stop mode to
-                # decelerate according to the 'Deceleration'-ramp" (an error stop keeps its
-                # own)
-                running = off & (s[idx, L.S_VEL] != 0.0) & (s[idx, L.S_EMERGENCY] == 0.0) & ~was_off
-                halt = idx[off & ~running]
-                s[halt, L.S_VEL] = 0.0
-                s[halt, L.S_EMERGENCY] = 0.0
-                new = np.where(running, c.STOP, raw)
-            # SETUP_BITS bit 5 (§8.2.68): "Synchronize encoder position to P_IST after change
-            # to active mode. Follow error = 0"
-            sync = was_off & ~off & ((regs[idx, R.SETUP_BITS] & c.SETUP_SYNC_ENCODER) != 0)
-            for i in idx[sync].tolist():
-                self._set_encoder(i, int(regs[i, R.P_IST]))
-                regs[i, R.FLWERR] = 0
-            regs[idx, R.MODE_REG] = new
+            self._store_mode(idx, raw)
         elif num == R.AFZUP_READINDEX:
             self._check_member(reg, raw, *_MEMBERS[num])
             self._afzup_read_index(idx, raw)
@@ -446,22 +449,53 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
             raise ModeError(f"{what} needs safe mode (§8.2.3); motor {int(bad[0])} is in "
                             f"{c.MODE_NAMES.get(int(self.regs[bad[0], R.MODE_REG]), '?')}")
 
-    def _check_modes(self, idx: np.ndarray, raw: np.ndarray, mode: np.ndarray) -> None:
-        """Refuse MODE_REG := ``raw`` for motors ``idx`` (now in ``mode``) where the firmware
-        does (§8.2.3, §8.2.31): safe mode is left and entered by command only, a value must
-        be a writable mode, an active mode needs ERR_BITS = 0. Raises for the first motor
-        refused."""
-        in_safe = mode == c.SAFE
-        to_safe = raw == c.SAFE
-        bad = ((in_safe & ~to_safe) | (~_among(raw, _IS_WRITABLE_MODE) & ~(to_safe & in_safe))
-               | ((raw != c.PASSIVE) & (self.regs[idx, R.ERR_BITS] != 0)))
-        if bad.any():
-            j = int(np.argmax(bad))
+    def _store_mode(self, idx: np.ndarray, raw: np.ndarray) -> None:
+        """MODE_REG := ``raw`` for motors ``idx`` by the firmware's rules (§8.2.3, §8.2.31;
+        :data:`_MODE_CHANGES`), refused for all if one is refused: safe mode is left and
+        entered by command only, a value must be a writable mode, an active mode needs ERR_BITS
+        = 0. A zero search entered starts afresh; passive requested of a running motor stops
+        it on its deceleration ramp first; an active mode entered from passive or safe with
+        SETUP_BITS bit 5 sets the encoder to P_IST."""
+        regs, s = self.regs, self.state
+        mode = regs[idx, R.MODE_REG]
+        change = _MODE_CHANGES[_mode_index(mode), _mode_index(raw)]
+        refused = (change & np.where(regs[idx, R.ERR_BITS] != 0, _ALLOWED_WITH_ERRORS,
+                                     _ALLOWED)) == 0
+        if refused.any():
+            j = int(np.argmax(refused))
             self._refuse_mode(int(idx[j]), int(raw[j]))
+        if (change & _TO_SEARCH).any():
+            enter_home = ((change & _TO_SEARCH) != 0) & (mode != raw)
+            entering = idx[enter_home]
+            s[entering, L.S_HOME_PHASE] = 0.0
+            s[entering, L.S_HOME_MS] = 0.0
+            # the mode a time-out sets back (§7.2.19): the one before the search started
+            first = enter_home & ~_among(mode, _IS_SEARCH)
+            s[idx[first], L.S_HOME_PREV] = mode[first]
+        off = raw == c.PASSIVE
+        new = raw
+        if off.any():
+            # §5.11.2: "When changing to Passive mode the motor goes into Stop mode to
+            # decelerate according to the 'Deceleration'-ramp" (an error stop keeps its own)
+            running = (off & (s[idx, L.S_VEL] != 0.0) & (s[idx, L.S_EMERGENCY] == 0.0)
+                       & ~_among(mode, _IS_OFF))
+            halt = idx[off & ~running]
+            s[halt, L.S_VEL] = 0.0
+            s[halt, L.S_EMERGENCY] = 0.0
+            new = np.where(running, c.STOP, raw)
+        activated = change & _ACTIVATED
+        if activated.any():
+            # SETUP_BITS bit 5 (§8.2.68): "Synchronize encoder position to P_IST after change
+            # to active mode. Follow error = 0"
+            sync = (activated != 0) & ((regs[idx, R.SETUP_BITS] & c.SETUP_SYNC_ENCODER) != 0)
+            for i in idx[sync].tolist():
+                self._set_encoder(i, int(regs[i, R.P_IST]))
+                regs[i, R.FLWERR] = 0
+        regs[idx, R.MODE_REG] = new
 
     def _refuse_mode(self, i: int, value: int) -> None:
         """Raise the ModeError of MODE_REG := ``value`` refused for motor ``i``
-        (:meth:`_check_modes`)."""
+        (:meth:`_store_mode`)."""
         if self.regs[i, R.MODE_REG] == c.SAFE and value != c.SAFE:
             raise ModeError(f"MODE_REG = {value} refused for motor {i}: safe mode is left "
                             "by command only (exit_safe_mode, §8.2.3). Nothing was changed.")
