@@ -238,11 +238,11 @@ class StepperIndexingVectorEnv(MotorVectorEnv):
                 "copper_loss": self.copper_loss(idx)}
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
-        lost = self.motors.lost_steps[idx]
+        lost = self.motors.lost_steps[idx].tolist()
         errors = self._error_reasons(idx)
-        return ["all moves done" if self.moves_left[i] == 0 and not lost[j] and not errors[j]
-                else (f"lost {abs(int(lost[j]))} full steps" if lost[j] else errors[j])
-                for j, i in enumerate(idx.tolist())]
+        return ["all moves done" if left == 0 and not n and not error
+                else (f"lost {abs(n)} full steps" if n else error)
+                for left, n, error in zip(self.moves_left[idx].tolist(), lost, errors)]
 
     def _scope_values(self) -> np.ndarray:
         k = self.fam.constants
