@@ -10,6 +10,7 @@ world inputs and the physical truth of the plant.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable
 from typing import Any, ClassVar
@@ -113,25 +114,29 @@ _IS_SEARCH = _member_table(_SEARCHES)
 _IS_OFF = _member_table(_OFF)
 #: MODE_REG values 0 … 15 stand for themselves in :data:`_MODE_CHANGES`, any other for 16
 _OTHER_MODE = 16
-#: bits of :data:`_MODE_CHANGES`: the change is allowed; allowed with ERR_BITS ≠ 0 too; it
-#: requests a zero search; it is one to an active mode from passive or safe
-_ALLOWED, _ALLOWED_WITH_ERRORS, _TO_SEARCH, _ACTIVATED = 1, 2, 4, 8
+#: the registers the rules of a MODE_REG write read (:meth:`MisMotorArray._store_mode`)
+_MODE_RULE_REGISTERS = np.array([R.MODE_REG, R.ERR_BITS, R.SETUP_BITS], dtype=np.int64)
+#: bits of :data:`_MODE_CHANGES`: the change is refused; it requests a zero search; it requests
+#: passive; it enters an active mode from passive or safe with SETUP_BITS bit 5 set
+_REFUSED, _TO_SEARCH, _TO_PASSIVE, _SYNC = 1, 2, 4, 8
 
 
 def _mode_changes() -> np.ndarray:
-    """What writing MODE_REG := ``new`` means to a motor in mode ``old``, as bits by
-    ``[old, new]`` (17 × 17 uint8; :data:`_OTHER_MODE` any other value): allowed unless it
-    leaves or enters safe mode (by command only) or is no writable mode (§8.2.3); allowed with
-    errors only to passive (§8.2.31: an active mode is refused while ERR_BITS ≠ 0); a zero
-    search; an active mode from passive or safe (SETUP_BITS bit 5, §8.2.68)."""
-    out = np.zeros((_OTHER_MODE + 1, _OTHER_MODE + 1), dtype=np.uint8)
-    for old in range(_OTHER_MODE + 1):
-        for new in range(_OTHER_MODE + 1):
-            allowed = new == c.SAFE if old == c.SAFE else new in c.WRITABLE_MODES
-            out[old, new] = (_ALLOWED * allowed
-                             | _ALLOWED_WITH_ERRORS * (allowed and new == c.PASSIVE)
-                             | _TO_SEARCH * (new in _SEARCHES)
-                             | _ACTIVATED * (old in _OFF and new != c.PASSIVE))
+    """What writing MODE_REG := ``new`` means to a motor in mode ``old``, as bits by ``[old,
+    new, errors, sync]`` (17 × 17 × 2 × 2 uint8; :data:`_OTHER_MODE` any other value;
+    ``errors``: ERR_BITS ≠ 0; ``sync``: SETUP_BITS bit 5): refused when it leaves or enters
+    safe mode (by command only) or is no writable mode (§8.2.3), or is an active mode while
+    ERR_BITS ≠ 0 (§8.2.31); a zero search; passive; the encoder synchronised to P_IST
+    (SETUP_BITS bit 5, §8.2.68)."""
+    out = np.zeros((_OTHER_MODE + 1, _OTHER_MODE + 1, 2, 2), dtype=np.uint8)
+    for old, new, errors, sync in itertools.product(range(_OTHER_MODE + 1),
+                                                    range(_OTHER_MODE + 1), (0, 1), (0, 1)):
+        allowed = new == c.SAFE if old == c.SAFE else new in c.WRITABLE_MODES
+        refused = not allowed or (errors and new != c.PASSIVE)
+        out[old, new, errors, sync] = (
+            _REFUSED * refused | _TO_SEARCH * (new in _SEARCHES)
+            | _TO_PASSIVE * (new == c.PASSIVE)
+            | _SYNC * (sync and old in _OFF and new != c.PASSIVE))
     return out
 
 
@@ -457,38 +462,39 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         it on its deceleration ramp first; an active mode entered from passive or safe with
         SETUP_BITS bit 5 sets the encoder to P_IST."""
         regs, s = self.regs, self.state
-        mode = regs[idx, R.MODE_REG]
-        change = _MODE_CHANGES[_mode_index(mode), _mode_index(raw)]
-        refused = (change & np.where(regs[idx, R.ERR_BITS] != 0, _ALLOWED_WITH_ERRORS,
-                                     _ALLOWED)) == 0
-        if refused.any():
-            j = int(np.argmax(refused))
-            self._refuse_mode(int(idx[j]), int(raw[j]))
-        if (change & _TO_SEARCH).any():
-            enter_home = ((change & _TO_SEARCH) != 0) & (mode != raw)
-            entering = idx[enter_home]
-            s[entering, L.S_HOME_PHASE] = 0.0
-            s[entering, L.S_HOME_MS] = 0.0
-            # the mode a time-out sets back (§7.2.19): the one before the search started
-            first = enter_home & ~_among(mode, _IS_SEARCH)
-            s[idx[first], L.S_HOME_PREV] = mode[first]
-        off = raw == c.PASSIVE
+        rows = regs[idx[:, None], _MODE_RULE_REGISTERS]
+        mode = rows[:, 0]
+        change = _MODE_CHANGES[_mode_index(mode), _mode_index(raw),
+                               (rows[:, 1] != 0).view(np.uint8),
+                               ((rows[:, 2] & c.SETUP_SYNC_ENCODER) != 0).view(np.uint8)]
         new = raw
-        if off.any():
-            # §5.11.2: "When changing to Passive mode the motor goes into Stop mode to
-            # decelerate according to the 'Deceleration'-ramp" (an error stop keeps its own)
-            running = (off & (s[idx, L.S_VEL] != 0.0) & (s[idx, L.S_EMERGENCY] == 0.0)
-                       & ~_among(mode, _IS_OFF))
-            halt = idx[off & ~running]
-            s[halt, L.S_VEL] = 0.0
-            s[halt, L.S_EMERGENCY] = 0.0
-            new = np.where(running, c.STOP, raw)
-        activated = change & _ACTIVATED
-        if activated.any():
+        if change.any():
+            refused = (change & _REFUSED) != 0
+            if refused.any():
+                j = int(np.argmax(refused))
+                self._refuse_mode(int(idx[j]), int(raw[j]))
+            enter_home = ((change & _TO_SEARCH) != 0) & (mode != raw)
+            if enter_home.any():
+                entering = idx[enter_home]
+                s[entering, L.S_HOME_PHASE] = 0.0
+                s[entering, L.S_HOME_MS] = 0.0
+                # the mode a time-out sets back (§7.2.19): the one before the search started
+                first = enter_home & ~_among(mode, _IS_SEARCH)
+                s[idx[first], L.S_HOME_PREV] = mode[first]
+            off = (change & _TO_PASSIVE) != 0
+            if off.any():
+                # §5.11.2: "When changing to Passive mode the motor goes into Stop mode to
+                # decelerate according to the 'Deceleration'-ramp" (an error stop keeps its
+                # own)
+                running = (off & (s[idx, L.S_VEL] != 0.0) & (s[idx, L.S_EMERGENCY] == 0.0)
+                           & ~_among(mode, _IS_OFF))
+                halt = idx[off & ~running]
+                s[halt, L.S_VEL] = 0.0
+                s[halt, L.S_EMERGENCY] = 0.0
+                new = np.where(running, c.STOP, raw)
             # SETUP_BITS bit 5 (§8.2.68): "Synchronize encoder position to P_IST after change
             # to active mode. Follow error = 0"
-            sync = (activated != 0) & ((regs[idx, R.SETUP_BITS] & c.SETUP_SYNC_ENCODER) != 0)
-            for i in idx[sync].tolist():
+            for i in idx[(change & _SYNC) != 0].tolist():
                 self._set_encoder(i, int(regs[i, R.P_IST]))
                 regs[i, R.FLWERR] = 0
         regs[idx, R.MODE_REG] = new
