@@ -210,9 +210,6 @@ class StepperIndexingVectorEnv(MotorVectorEnv):
             rows = [known[name] for name in names]
         return np.array(rows).reshape(idx.size, len(_FIGURES))
 
-    def _holding_torque(self, idx: np.ndarray) -> np.ndarray:
-        return self._type_figures(idx)[:, 1]
-
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
         figures = self._type_figures(idx)

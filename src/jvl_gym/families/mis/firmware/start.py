@@ -33,6 +33,7 @@ from .. import constants as c
 from .. import layout as L
 from ..units import COUNTS_PER_REV, CVI_VOLTS_PER_UNIT, TEMP_CELSIUS_PER_UNIT
 from . import regs as R
+from .monitor import encoder_cpr, firmware_angle
 
 __all__ = ["start_rows", "power_up_position"]
 
@@ -41,10 +42,8 @@ CLEARED = np.array([
     R.P_IST, R.P_SOLL, R.V_IST, R.ENCODER_POS, R.FLWERR, R.ERR_BITS, R.WARN_BITS, R.STATUSBITS,
     R.TURNTAB_COUNT, R.COMMAND, R.S_CONTROL, R.ACTUAL_TORQUE, R.TICKS, R.MOTOR_REV,
     R.NOTSAVED], dtype=np.int64)
-#: encoder counts per revolution by ENCODER_TYPE code (0: none; §8.2.49)
-_CPR = np.array([c.ENCODER_CPR[k] for k in range(len(c.ENCODER_CPR))], dtype=np.int64)
 #: the ENCODER_TYPE codes of the H2 and H4, whose single-turn position a power-up can take
-_SINGLE_TURN = np.array([k in (1, 3, 4) for k in range(_CPR.size)], dtype=np.bool_)
+_SINGLE_TURN = np.array([k in (1, 3, 4) for k in range(len(c.ENCODER_CPR))], dtype=np.bool_)
 _HALF_TURN = COUNTS_PER_REV // 2
 _WRAP = 2**31  #: P_IST wraps at ±2³¹ (a 32-bit register)
 
@@ -91,13 +90,10 @@ def start(regs, s, p, u, stored: int) -> None:  # pragma: no cover - compiled
     s[L.S_CUR_SCALE] = 2047.0
     code = int(p[L.P_ENCODER])
     regs[R.ENCODER_TYPE] = code
-    cpr = _CPR[code]
+    cpr = encoder_cpr(p)
     per = COUNTS_PER_REV // cpr if cpr > 0 else 1
-    # the rotor angle in the firmware's direction (mirrored by SETUP_BITS bit 0), quantised to
-    # the encoder's counts
-    theta = s[L.S_THETA]
-    angle = -theta if setup & c.SETUP_INVERT_DIRECTION else theta
-    q = np.floor(angle * COUNTS_PER_REV / (2 * math.pi) / per) * per
+    # the rotor angle in the firmware's direction, quantised to the encoder's counts
+    q = np.floor(firmware_angle(regs, s) * COUNTS_PER_REV / (2 * math.pi) / per) * per
     pos = power_up_position(setup, code, q, stored, p[L.P_H3_PRESET])
     regs[R.P_IST] = regs[R.P_SOLL] = int(pos)
     s[L.S_SEEN_PSOLL] = pos
