@@ -148,6 +148,7 @@ def _mode_index(values: np.ndarray) -> np.ndarray:
     unsigned one, or one above 15: :data:`_OTHER_MODE`)."""
     return np.minimum(np.asarray(values, np.int64).view(np.uint64), _OTHER_MODE)
 
+
 #: the factory limits a power-on takes from ROM (flash holds the writable registers only)
 _FACTORY = np.array([R.MAX_VOLTAGE, R.TEMP_LIMITS], dtype=np.int64)
 #: the ends of a turn table's range (§5.12.1)
@@ -313,15 +314,17 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
 
     def _power_on(self, idx: np.ndarray) -> None:
         """Firmware start of motors ``idx`` from their registers (the factory limits from ROM),
-        state and parameters as they are (:meth:`_start`)."""
+        state and parameters as they are (:meth:`_start`; a reset and a software reset start
+        from flash or ROM, :meth:`_reset_rows`, :meth:`software_reset`)."""
         regs = self.regs[idx]
         regs[:, _FACTORY] = self._rom[self._type_of[idx][:, None], _FACTORY]
         self._start(idx, regs, self.state[idx], self.params[idx])
 
     def _start(self, idx: np.ndarray, regs: np.ndarray, s: np.ndarray, p: np.ndarray) -> None:
         """Firmware start of motors ``idx`` whose registers (MAX_VOLTAGE and TEMP_LIMITS the
-        factory values), state (0 but for the plant's) and parameters before it are the (M, ·)
-        blocks ``regs``, ``s`` and ``p`` (worked on in place, then stored in their rows):
+        factory values), state (at a reset 0 but for the plant's) and parameters before it are
+        the (M, ·) blocks ``regs``, ``s`` and ``p`` (worked on in place, then stored in their
+        rows):
         positions, counters, NOTSAVED (§8.2.96) and error bits cleared (P_IST = P_SOLL =
         ENCODER_POS = 0, or the position SETUP_BITS bits 10/11 take from the encoder or the
         position back-up of §5.4.2–5.4.3; P_SOLL = P_IST, so a saved P_SOLL makes no move at
