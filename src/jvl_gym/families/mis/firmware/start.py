@@ -38,12 +38,14 @@ from .monitor import encoder_cpr, firmware_angle
 __all__ = ["start_rows", "power_up_position"]
 
 #: the registers the start clears: positions, counters, NOTSAVED (§8.2.96), error bits
-CLEARED = np.array([
+_CLEARED = np.array([
     R.P_IST, R.P_SOLL, R.V_IST, R.ENCODER_POS, R.FLWERR, R.ERR_BITS, R.WARN_BITS, R.STATUSBITS,
     R.TURNTAB_COUNT, R.COMMAND, R.S_CONTROL, R.ACTUAL_TORQUE, R.TICKS, R.MOTOR_REV,
     R.NOTSAVED], dtype=np.int64)
 #: the ENCODER_TYPE codes of the H2 and H4, whose single-turn position a power-up can take
 _SINGLE_TURN = np.array([k in (1, 3, 4) for k in range(len(c.ENCODER_CPR))], dtype=np.bool_)
+#: the start modes (§8.2.33) among the MODE_REG values 0 … 15
+_START_MODE = np.array([k in c.START_MODES for k in range(16)], dtype=np.bool_)
 _HALF_TURN = COUNTS_PER_REV // 2
 _WRAP = 2**31  #: P_IST wraps at ±2³¹ (a 32-bit register)
 
@@ -78,10 +80,10 @@ def power_up_position(setup: int, code: int, q: float, stored: int,
 
 @njit(cache=True, inline="always")
 def start(regs, s, p, u, stored: int) -> None:  # pragma: no cover - compiled
-    """The start of one motor from its registers ``regs`` (flash or ROM), state ``s`` (0 but
-    for the plant's), parameters ``p`` and world inputs ``u``; ``stored``: its position
-    back-up (module docstring)."""
-    for num in CLEARED:
+    """The start of one motor from its registers ``regs`` (flash or ROM), state ``s`` (at a
+    reset 0 but for the plant's), parameters ``p`` and world inputs ``u``; ``stored``: its
+    position back-up (module docstring)."""
+    for num in _CLEARED:
         regs[num] = 0
     setup = regs[R.SETUP_BITS]
     # SETUP_BITS bit 12 KeepExtEncoder: "Do not zero the external encoder count on startup"
@@ -103,8 +105,8 @@ def start(regs, s, p, u, stored: int) -> None:  # pragma: no cover - compiled
     s[L.S_CMD] = s[L.S_CMD_PREV] = 0.0
     home = regs[R.HOMEMODE]
     mode = regs[R.STARTMODE]
-    if not (mode == c.PASSIVE or mode == c.VELOCITY or mode == c.POSITION or mode == c.GEAR):
-        mode = c.PASSIVE  # (c.START_MODES)
+    if not (0 <= mode < _START_MODE.size and _START_MODE[mode]):
+        mode = c.PASSIVE
     regs[R.MODE_REG] = home if home == c.ZERO_SEARCH_1 or home == c.ZERO_SEARCH_2 else mode
     # a power-on zero search that times out goes on in STARTMODE (§6.5.9, §7.2.19)
     s[L.S_HOME_PREV] = mode
