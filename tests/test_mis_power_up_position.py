@@ -83,3 +83,18 @@ def test_command_354_presets_encoder_p_ist_and_p_soll() -> None:
     m.step(50)
     assert m.read("ERR_BITS")[0] == 0 and abs(m.read("FLWERR")[0]) <= 100
     assert m.read("COMMAND")[0] == 0
+
+
+def test_a_refused_reset_changes_nothing_the_position_backup_neither() -> None:
+    """A reset refused for an encoder_type that is no ENCODER_TYPE code (§8.2.49) leaves every
+    motor as it was: registers, state, parameters, inputs and the position back-up that a
+    power-up with SETUP_BITS bit 11 restores (§5.4.2)."""
+    m = MotorArray("MIS232", n=3, seed=0, setup={"SETUP_BITS": MULTI}, encoder_type=0)
+    m.write_many({"V_SOLL": 60000, "A_SOLL": 20000, "MODE_REG": c.POSITION})
+    m.write("P_SOLL", REV // 2)
+    m.step(200)
+    before = [a.copy() for a in (m.regs, m.state, m.params, m.inputs, m._position_backup)]
+    with pytest.raises(ValueError, match="encoder_type"):
+        m.reset(index=[0, 2], encoder_type=[1, 1.5])
+    after = (m.regs, m.state, m.params, m.inputs, m._position_backup)
+    assert all(np.array_equal(a, b) for a, b in zip(before, after))

@@ -45,6 +45,10 @@ CONSTS = record(noise=float, max_steps=float, time_weight=float, copper_weight=f
 COPY = record(target=np.int64, move=np.int64, moves_left=np.int64, i_max=float, energy=float)
 
 
+#: the figures of a motor type a reset reads (``StepperIndexingVectorEnv._type_figures``)
+_FIGURES = ("rotor_inertia", "holding_torque", "run_current_max")
+
+
 class StepperIndexingState(NamedTuple):
     """The task's state (:mod:`jvl_gym.envs.task`)."""
 
@@ -124,16 +128,20 @@ TASK = Task("stepper_indexing", __file__, needs={Capability.STEP_INDEXING},
 
 
 @njit(**KERNEL)
-def _reset_rows(idx: np.ndarray, move_turns: np.ndarray, n_moves: int, copies: np.ndarray,
-                counts_per_rev: int) -> None:  # pragma: no cover - compiled
-    """Moves [counts] of copies ``idx`` from the (M,) draws [turns]: the first target, the
-    moves left, the copper energy counted from power-on (0)."""
+def _reset_rows(idx: np.ndarray, move_turns: np.ndarray, n_moves: int, i_max: np.ndarray,
+                copies: np.ndarray, counts_per_rev: int,
+                targets: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Moves [counts] of copies ``idx`` from the (M,) draws [turns]: the first target (also
+    into ``targets`` (M,)), the moves left, the type's largest RUN_CURRENT setting ``i_max``
+    (M,), the copper energy counted from power-on (0)."""
     for j in range(idx.shape[0]):
         row = copies[idx[j]]
         row.move = max(int(np.round(move_turns[j] * counts_per_rev)), 1)
         row.target = row.move
         row.moves_left = n_moves
+        row.i_max = i_max[j]
         row.energy = 0.0
+        targets[j] = row.target
 
 
 class StepperIndexingVectorEnv(MotorVectorEnv):
@@ -186,25 +194,38 @@ class StepperIndexingVectorEnv(MotorVectorEnv):
         copies = np.zeros(self.num_envs, dtype=COPY)
         copies["move"] = 1
         self.state = StepperIndexingState(consts, copies)
+        self._figures_of_type: dict[str, tuple[float, ...]] = {}
 
-    def _holding_torque(self, idx: np.ndarray) -> np.ndarray:
-        return np.array([cfg.holding_torque for cfg in self._type_configs(idx)])
+    def _type_figures(self, idx: np.ndarray) -> np.ndarray:
+        """The rotor inertia [kg·m²], the holding torque at the largest current [N·m] and the
+        largest RUN_CURRENT setting of the motor types of copies ``idx`` (set at their reset),
+        (M, 3) (:data:`_FIGURES`, kept per type name)."""
+        known = self._figures_of_type
+        names = self._type_names[idx].tolist()
+        try:
+            rows = [known[name] for name in names]
+        except KeyError:  # a type's first reset
+            for name, cfg in zip(names, self._type_configs(idx)):
+                known[name] = tuple(float(getattr(cfg, figure)) for figure in _FIGURES)
+            rows = [known[name] for name in names]
+        return np.array(rows).reshape(idx.size, len(_FIGURES))
 
     def _motor_params(self, idx: np.ndarray, draws: dict[str, np.ndarray]
                       ) -> dict[str, np.ndarray]:
-        return {"load_inertia": draws["inertia_ratio"] * self.rotor_inertia(idx),
-                "coulomb_friction": draws["coulomb_ratio"] * self._holding_torque(idx)}
+        figures = self._type_figures(idx)
+        return {"load_inertia": draws["inertia_ratio"] * figures[:, 0],
+                "coulomb_friction": draws["coulomb_ratio"] * figures[:, 1]}
 
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
-        _reset_rows(idx, draws["move_turns"], self.n_moves, self.state.copies,
-                    self.fam.constants.COUNTS_PER_REV)
-        self.state.copies["i_max"][idx] = [cfg.run_current_max for cfg in self._type_configs(idx)]
-        self.motors.set_input(idx, load_torque=draws["load_torque_ratio"]
-                              * self._holding_torque(idx))
+        figures = self._type_figures(idx)
+        targets = np.empty(idx.size, dtype=np.int64)
+        _reset_rows(idx, draws["move_turns"], self.n_moves, figures[:, 2], self.state.copies,
+                    self.fam.constants.COUNTS_PER_REV, targets)
+        self.motors.set_input(idx, load_torque=draws["load_torque_ratio"] * figures[:, 1])
         # D_SOLL = 0: the profile decelerates with A_SOLL too (MIS manual §8.2.1, D_SOLL), so
         # the agent's acceleration shapes the whole trapezoid
-        self.motors.write_many({"D_SOLL": 0, "P_SOLL": self.target[idx],
+        self.motors.write_many({"D_SOLL": 0, "P_SOLL": targets,
                                 "MODE_REG": self.fam.constants.POSITION}, idx)
 
     def _episode_stats(self, idx: np.ndarray) -> dict[str, np.ndarray]:
@@ -214,11 +235,11 @@ class StepperIndexingVectorEnv(MotorVectorEnv):
                 "copper_loss": self.copper_loss(idx)}
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
-        lost = self.motors.lost_steps[idx]
+        lost = self.motors.lost_steps[idx].tolist()
         errors = self._error_reasons(idx)
-        return ["all moves done" if self.moves_left[i] == 0 and not lost[j] and not errors[j]
-                else (f"lost {abs(int(lost[j]))} full steps" if lost[j] else errors[j])
-                for j, i in enumerate(idx.tolist())]
+        return ["all moves done" if left == 0 and not n and not error
+                else (f"lost {abs(n)} full steps" if n else error)
+                for left, n, error in zip(self.moves_left[idx].tolist(), lost, errors)]
 
     def _scope_values(self) -> np.ndarray:
         k = self.fam.constants

@@ -29,6 +29,12 @@ READ_INDEX_VALUES = frozenset({0, *range(1, 9), *range(_DONE, _DONE + 9)})
 _SETTINGS = (R.AFZUP_CONFMIN, R.AFZUP_CONFMAX, R.AFZUP_MAXSLOPE, R.AFZUP_FILTER)
 
 
+#: the ``params`` columns of every input's settings (input 0's four first), and the
+#: registers each of them takes at power-up
+_ALL_INPUTS = slice(L.P_AF0, L.P_AF0 + 8 * L.AF_SETTINGS)
+_SETTINGS_OF_ALL_INPUTS = np.array(_SETTINGS * 8, dtype=np.int64)
+
+
 def _columns(k: int) -> list[int]:
     """The ``params`` columns of input ``k`` (0 … 7)'s settings."""
     return [L.P_AF0 + L.AF_SETTINGS * k + col for col in range(L.AF_SETTINGS)]
@@ -60,7 +66,9 @@ class FilterSetup:
                 value |= _DONE
             self.regs[i, R.AFZUP_READINDEX] = value
 
-    def _afzup_power_on(self, idx: np.ndarray) -> None:
-        """Power-up of motors ``idx``: every input takes the registers 102-105."""
-        for k in range(8):
-            self.params[np.ix_(idx, _columns(k))] = self.regs[np.ix_(idx, list(_SETTINGS))]
+    @staticmethod
+    def _afzup_power_on(regs: np.ndarray, params: np.ndarray) -> None:
+        """Power-up of motors whose registers and parameters are the (M, ·) blocks ``regs``
+        and ``params`` (``params`` changed in place): every input takes the registers
+        102-105."""
+        params[:, _ALL_INPUTS] = regs[:, _SETTINGS_OF_ALL_INPUTS]

@@ -10,6 +10,7 @@ world inputs and the physical truth of the plant.
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable
 from typing import Any, ClassVar
@@ -28,6 +29,7 @@ from . import layout as L
 from .config import MisMotorConfig, load_motor
 from .filter_setup import READ_INDEX_VALUES, FilterSetup
 from .firmware import regs as R
+from .firmware.start import start_rows
 from .multifunction_port import MultifunctionOutput
 from .plant.torque_curve import pull_out_torque
 from .program.api import ProgramMixin
@@ -36,8 +38,6 @@ from .table import CONFORMANCE, TABLE
 from .units import (
     COUNTS_PER_REV,
     CURRENT_AMPS_PER_UNIT,
-    CVI_VOLTS_PER_UNIT,
-    TEMP_CELSIUS_PER_UNIT,
 )
 from .user_commands import UserCommands
 
@@ -87,22 +87,74 @@ _MEMBERS: dict[int, tuple[frozenset[int], str]] = {
     R.TURNTABLE_MODE: (frozenset(range(6)), "§5.12.3: >5 is illegal"),
     R.AFZUP_READINDEX: (READ_INDEX_VALUES, "§8.2.51: 0, 1-8, 32768-32775")}
 BUFFER_DEPTH = 1024  #: BUF_SIZE (§8.2.64)
-#: the plant's state and the electronics' temperature, which a reset of the electronics leaves
-#: alone
 #: the zero-search modes (§6.5.9) and the modes with the bridge off (§5.11.2, §8.2.3)
 _SEARCHES = (c.ZERO_SEARCH_1, c.ZERO_SEARCH_2)
 _OFF = (c.PASSIVE, c.SAFE)
 
 
-def _among(values: np.ndarray, members: Iterable[int]) -> np.ndarray:
-    """``np.isin(values, members)`` for the few whole numbers ``members``, as comparisons (on
-    a few motors ``np.isin`` costs many times more)."""
-    out = np.zeros(values.shape, dtype=np.bool_)
-    for m in members:
-        out |= values == m
+def _member_table(members: Iterable[int]) -> np.ndarray:
+    """A lookup table of the whole numbers ``members`` (≥ 0) for :func:`_among`: True at each
+    member, False elsewhere and in its last entry (where larger values land)."""
+    members = sorted(members)
+    table = np.zeros(members[-1] + 2, dtype=np.bool_)
+    table[members] = True
+    return table
+
+
+def _among(values: np.ndarray, table: np.ndarray) -> np.ndarray:
+    """``np.isin(values, members)`` for whole numbers ``values`` and the members of ``table``
+    (:func:`_member_table`), as one lookup (on a few motors ``np.isin`` costs many times
+    more): a negative value, seen as a large unsigned one, and a value past the table land
+    on its last entry."""
+    return table[np.minimum(np.asarray(values, np.int64).view(np.uint64), table.size - 1)]
+
+
+#: lookup tables (:func:`_member_table`) of the mode sets above
+_IS_SEARCH = _member_table(_SEARCHES)
+_IS_OFF = _member_table(_OFF)
+#: MODE_REG values 0 … 15 stand for themselves in :data:`_MODE_CHANGES`, any other for 16
+_OTHER_MODE = 16
+#: the registers the rules of a MODE_REG write read (:meth:`MisMotorArray._store_mode`)
+_MODE_RULE_REGISTERS = np.array([R.MODE_REG, R.ERR_BITS, R.SETUP_BITS], dtype=np.int64)
+#: bits of :data:`_MODE_CHANGES`: the change is refused; it requests a zero search; it requests
+#: passive; it enters an active mode from passive or safe with SETUP_BITS bit 5 set
+_REFUSED, _TO_SEARCH, _TO_PASSIVE, _SYNC = 1, 2, 4, 8
+
+
+def _mode_changes() -> np.ndarray:
+    """What writing MODE_REG := ``new`` means to a motor in mode ``old``, as bits by ``[old,
+    new, errors, sync]`` (17 × 17 × 2 × 2 uint8; :data:`_OTHER_MODE` any other value;
+    ``errors``: ERR_BITS ≠ 0; ``sync``: SETUP_BITS bit 5): refused when it leaves or enters
+    safe mode (by command only) or is no writable mode (§8.2.3), or is an active mode while
+    ERR_BITS ≠ 0 (§8.2.31); a zero search; passive; the encoder synchronised to P_IST
+    (SETUP_BITS bit 5, §8.2.68)."""
+    out = np.zeros((_OTHER_MODE + 1, _OTHER_MODE + 1, 2, 2), dtype=np.uint8)
+    for old, new, errors, sync in itertools.product(range(_OTHER_MODE + 1),
+                                                    range(_OTHER_MODE + 1), (0, 1), (0, 1)):
+        allowed = new == c.SAFE if old == c.SAFE else new in c.WRITABLE_MODES
+        refused = not allowed or (errors and new != c.PASSIVE)
+        out[old, new, errors, sync] = (
+            _REFUSED * refused | _TO_SEARCH * (new in _SEARCHES)
+            | _TO_PASSIVE * (new == c.PASSIVE)
+            | _SYNC * (sync and old in _OFF and new != c.PASSIVE))
     return out
 
 
+_MODE_CHANGES = _mode_changes()
+
+
+def _mode_index(values: np.ndarray) -> np.ndarray:
+    """MODE_REG values as indices of :data:`_MODE_CHANGES` (a negative value, seen as a large
+    unsigned one, or one above 15: :data:`_OTHER_MODE`)."""
+    return np.minimum(np.asarray(values, np.int64).view(np.uint64), _OTHER_MODE)
+
+
+#: the factory limits a power-on takes from ROM (flash holds the writable registers only)
+_FACTORY = np.array([R.MAX_VOLTAGE, R.TEMP_LIMITS], dtype=np.int64)
+#: the ends of a turn table's range (§5.12.1)
+_TURN_TABLE_ENDS = np.array([R.MIN_P_IST, R.MAX_P_IST], dtype=np.int64)
+#: the plant's state and the electronics' temperature, which a reset of the electronics leaves
+#: alone
 _PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD, L.S_TEMP_RISE]
 
 
@@ -215,14 +267,43 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
 
     def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
                     values: np.ndarray) -> None:
-        self._store_position_backup(idx)
+        """Power on motors ``idx`` (``MotorArray._reset_rows``, here on (M, ·) blocks of the
+        motors' rows): the registers from flash or ROM, the state 0, the type pool's parameters
+        and inputs, the reset keywords' ``values`` (P, M) into columns ``cols`` (P,) of
+        ``params`` or, where ``to_state``, of ``state``, then the firmware's start. An
+        encoder_type that is no ENCODER_TYPE code (§8.2.49) is refused before anything
+        changes."""
         codes = set(c.ENCODER_CPR)
         for q in range(cols.size):
             if not to_state[q] and cols[q] == L.P_ENCODER and not set(
                     values[q].tolist()) <= codes:
                 raise ValueError(f"encoder_type must be one of {sorted(codes)} (§8.2.49), got "
                                  f"{values[q].tolist()}")
-        super()._reset_rows(idx, cols, to_state, values)
+        self._store_position_backup(idx)
+        types = self._type_of[idx]
+        state = np.zeros((idx.size, L.N_STATE))
+        if type(self)._initial_state is not MotorArray._initial_state:
+            for row in state:
+                self._initial_state(row)
+        params = self._type_params[types]
+        for q in range(cols.size):
+            (state if to_state[q] else params)[:, cols[q]] = values[q]
+        self.inputs[idx] = self._type_inputs[types]
+        self._start(idx, self._memory_rows(idx), state, params)
+
+    def _memory_rows(self, idx: np.ndarray) -> np.ndarray:
+        """The registers motors ``idx`` start with: their flash image where they have one,
+        else their type's ROM image, (M, registers) int64 (a new array); MAX_VOLTAGE and
+        TEMP_LIMITS hold the factory values from ROM (flash holds the writable registers
+        only, §8.2.93)."""
+        types = self._type_of[idx]
+        rows = self._rom[types]
+        if self._flash is not None:
+            flashed = self._has_flash[idx]
+            if flashed.any():
+                rows[flashed] = self._flash[idx[flashed]]
+                rows[:, _FACTORY] = self._rom[types[:, None], _FACTORY]
+        return rows
 
     def _store_position_backup(self, idx: np.ndarray) -> None:
         """The position back-up of §5.4.2: P_IST as the motors ``idx`` leave it at a power-down
@@ -231,100 +312,39 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
             self._position_backup = np.zeros(self.n, dtype=np.int64)
         self._position_backup[idx] = self.regs[idx, R.P_IST]
 
-    def _power_up_position(self, idx: np.ndarray, code: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """P_IST after power-up by SETUP_BITS bits 10/11 and the encoder option (§5.4.3's
-        table; bit 11 wins when both are set): 0 by default; bit 10 the single-turn position
-        (0 … 409599) with an H2 or H4, 0 otherwise (H3: "not available"); bit 11 the H3's full
-        multi-turn position, the stored position (:meth:`_store_position_backup`) without an
-        encoder, and with an H2 or H4 the stored position corrected by the single-turn
-        encoder to within half a revolution. ``q``: the quantised rotor angle in counts."""
-        setup = self.regs[idx, R.SETUP_BITS]
-        multi = (setup & c.SETUP_MULTI_TURN_AT_POWER_UP) != 0
-        single = ((setup & c.SETUP_SINGLE_TURN_AT_POWER_UP) != 0) & ~multi
-        q = q.astype(np.int64)
-        turn = np.mod(q, COUNTS_PER_REV)
-        half = COUNTS_PER_REV // 2
-        stored = self._position_backup[idx]
-        near = stored + np.mod(turn - stored + half, COUNTS_PER_REV) - half
-        single_turn_encoder = _among(code, (1, 3, 4))
-        pos = np.zeros(idx.size, dtype=np.int64)
-        pos = np.where(single & single_turn_encoder, turn, pos)
-        pos = np.where(multi & (code == 0), stored, pos)
-        pos = np.where(multi & single_turn_encoder, near, pos)
-        pos = np.where(multi & (code == 2), q + self.params[idx, L.P_H3_PRESET], pos)
-        return np.mod(pos + 2**31, 2**32) - 2**31
-
     def _power_on(self, idx: np.ndarray) -> None:
-        """Firmware start: positions, counters, NOTSAVED (§8.2.96) and error bits cleared
-        (P_IST = P_SOLL = ENCODER_POS = 0, or the position SETUP_BITS bits 10/11 take from the
-        encoder or the position back-up, :meth:`_power_up_position`; P_SOLL = P_IST, so a saved
-        P_SOLL makes no move at power-on), EXT_ENCODER too unless SETUP_BITS bit 12 keeps it,
-        the mode from HOMEMODE or else STARTMODE (§8.2.33, §8.2.37)."""
-        s, regs = self.state, self.regs
-        for num in (R.P_IST, R.P_SOLL, R.V_IST, R.ENCODER_POS, R.FLWERR, R.ERR_BITS,
-                    R.WARN_BITS, R.STATUSBITS, R.TURNTAB_COUNT, R.COMMAND,
-                    R.S_CONTROL, R.ACTUAL_TORQUE, R.TICKS, R.MOTOR_REV, R.NOTSAVED):
-            regs[idx, num] = 0
-        # SETUP_BITS bit 12 KeepExtEncoder: "Do not zero the external encoder count on startup"
-        keep = (regs[idx, R.SETUP_BITS] & c.SETUP_KEEP_EXT_ENCODER) != 0
-        regs[idx[~keep], R.EXT_ENCODER] = 0
-        s[idx, L.S_CUR_SCALE] = 2047.0
-        s[idx, L.S_SEEN_PSOLL] = regs[idx, R.P_SOLL]
-        code = self.params[idx, L.P_ENCODER].astype(np.int64)
-        regs[idx, R.ENCODER_TYPE] = code
-        cpr = np.array([c.ENCODER_CPR[k] for k in code.tolist()], dtype=np.int64)
-        per = np.where(cpr > 0, COUNTS_PER_REV // np.maximum(cpr, 1), 1)
-        q = np.floor(self._firmware_angle(idx) * COUNTS_PER_REV / (2 * math.pi) / per) * per
-        if getattr(self, "_position_backup", None) is None:
-            self._store_position_backup(idx)
-        pos = self._power_up_position(idx, code, q)
-        regs[idx, R.P_IST] = regs[idx, R.P_SOLL] = pos
-        s[idx, L.S_SEEN_PSOLL] = pos
-        regs[idx, R.ENCODER_POS] = np.where(cpr > 0, pos, 0)
-        s[idx, L.S_ENC_OFFSET] = np.where(cpr > 0, pos - q, 0.0)
-        s[idx, L.S_ENC_PREV] = regs[idx, R.ENCODER_POS]
-        s[idx, L.S_CMD] = s[idx, L.S_CMD_PREV] = 0.0
-        home = regs[idx, R.HOMEMODE]
-        start = regs[idx, R.STARTMODE]
-        start = np.where(_among(start, c.START_MODES), start, c.PASSIVE)
-        regs[idx, R.MODE_REG] = np.where(_among(home, _SEARCHES),
-                                         home, start)
-        # a power-on zero search that times out goes on in STARTMODE (§6.5.9, §7.2.19)
-        s[idx, L.S_HOME_PREV] = start
-        self._commands_power_on(idx)
-        self._afzup_power_on(idx)
-        self._ssi_power_on(idx)
-        self._supervision_power_on(idx)
-        self._program_power_on(idx)
-        self._mf_power_on(idx)
+        """Firmware start of motors ``idx`` from their registers (the factory limits from ROM),
+        state and parameters as they are (:meth:`_start`; a reset and a software reset start
+        from flash or ROM, :meth:`_reset_rows`, :meth:`software_reset`)."""
+        regs = self.regs[idx]
+        regs[:, _FACTORY] = self._rom[self._type_of[idx][:, None], _FACTORY]
+        self._start(idx, regs, self.state[idx], self.params[idx])
 
-    def _supervision_power_on(self, idx: np.ndarray) -> None:
-        """The hardware supervision at the start (``firmware.supervision``): CVI_VOLT, TEMP and
-        TEMP_HIGHRES at the ambient temperature; the program starts at once when the control
-        voltage is above ACCEPT_VOLTAGE, and otherwise waits until it has been measured there
-        ACCEPT_COUNT times (§8.2.79–80); MAX_VOLTAGE and TEMP_LIMITS hold the factory values;
-        the brake holds; an encoder COM fault (H3/H4) and an external memory fault set ERR_BITS
-        bits 10 and 13, which only the start sets (§7.2.13, §7.2.16)."""
-        s, regs, u = self.state, self.regs, self.inputs
-        # the factory limits from ROM: flash holds the writable registers only
-        for num in (R.MAX_VOLTAGE, R.TEMP_LIMITS):
-            regs[idx, num] = self._rom[self._type_of[idx], num]
-        cvi = np.clip(np.floor(u[idx, L.I_CONTROL_VOLTS] / CVI_VOLTS_PER_UNIT + 0.5), 0, 4095)
-        regs[idx, R.CVI_VOLT] = cvi.astype(np.int64)
-        s[idx, L.S_CVI_WAIT] = (regs[idx, R.CVI_VOLT] <= regs[idx, R.ACCEPT_VOLTAGE]) & (
-            regs[idx, R.ACCEPT_COUNT] > 0)
-        s[idx, L.S_CVI_N] = 0.0
-        celsius = u[idx, L.I_AMBIENT] + s[idx, L.S_TEMP_RISE]
-        regs[idx, R.TEMP_HIGHRES] = np.floor(celsius * 1000.0 + 0.5).astype(np.int64)
-        regs[idx, R.TEMP] = np.clip(np.floor(celsius / TEMP_CELSIUS_PER_UNIT + 0.5), 0,
-                                    127).astype(np.int64)
-        s[idx, L.S_BRAKE_HELD] = s[idx, L.S_BRAKE_CMD] = 1.0
-        s[idx, L.S_BRAKE_MS] = 0.0
-        s[idx, L.S_BRAKE_EXT] = (regs[idx, R.BRAKE] & 0xFF) != 0
-        fitted = (self.params[idx, L.P_BRAKE_TORQUE] > 0.0) | (s[idx, L.S_BRAKE_EXT] != 0.0)
-        regs[idx[fitted], R.STATUSBITS] |= c.ST_BRAKE_ACTIVE
-        found = u[idx, L.I_FAULTS].astype(np.int64) & c.FAULTS_AT_START
-        regs[idx, R.ERR_BITS] |= np.where(found != 0, found | c.ERR_GENERAL, 0)
+    def _start(self, idx: np.ndarray, regs: np.ndarray, s: np.ndarray, p: np.ndarray) -> None:
+        """Firmware start of motors ``idx`` whose registers (MAX_VOLTAGE and TEMP_LIMITS the
+        factory values), state (at a reset 0 but for the plant's) and parameters before it are
+        the (M, ·) blocks ``regs``, ``s`` and ``p`` (worked on in place, then stored in their
+        rows):
+        positions, counters, NOTSAVED (§8.2.96) and error bits cleared (P_IST = P_SOLL =
+        ENCODER_POS = 0, or the position SETUP_BITS bits 10/11 take from the encoder or the
+        position back-up of §5.4.2–5.4.3; P_SOLL = P_IST, so a saved P_SOLL makes no move at
+        power-on), EXT_ENCODER too unless SETUP_BITS bit 12 keeps it, the mode from HOMEMODE
+        or else STARTMODE (§8.2.33, §8.2.37), the hardware supervision's start (CVI_VOLT,
+        TEMP, the brake, the faults only a start sees, §7.2.13, §7.2.16, §8.2.79–80): the
+        compiled :func:`.firmware.start.start_rows`; then the user commands' flags, the
+        analogue filter settings, the SSI port, a stored program and the multifunction
+        output start."""
+        if getattr(self, "_position_backup", None) is None:  # (P_IST is 0 here)
+            self._position_backup = np.zeros(self.n, dtype=np.int64)
+        start_rows(regs, s, p, self.inputs[idx], self._position_backup[idx])
+        self._commands_power_on(idx)
+        self._afzup_power_on(regs, p)
+        self._ssi_power_on(idx, regs)
+        self.regs[idx] = regs
+        self.state[idx] = s
+        self.params[idx] = p
+        self._program_power_on(idx)
+        self._mf_power_on(idx, s)
 
     @property
     def time(self) -> np.ndarray:
@@ -350,31 +370,7 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         num = reg.number
         regs, s = self.regs, self.state
         if num == R.MODE_REG:
-            self._check_modes(idx, raw)
-            changed = regs[idx, R.MODE_REG] != raw
-            enter_home = changed & _among(raw, _SEARCHES)
-            s[idx[enter_home], L.S_HOME_PHASE] = 0.0
-            s[idx[enter_home], L.S_HOME_MS] = 0.0
-            # the mode a time-out sets back (§7.2.19): the one before the search started
-            searching = _among(regs[idx, R.MODE_REG], _SEARCHES)
-            first = enter_home & ~searching
-            s[idx[first], L.S_HOME_PREV] = regs[idx[first], R.MODE_REG]
-            off = raw == c.PASSIVE
-            # §5.11.2: "When changing to Passive mode the motor goes into Stop mode to
-            # decelerate according to the 'Deceleration'-ramp" (an error stop keeps its own)
-            running = off & (s[idx, L.S_VEL] != 0.0) & (s[idx, L.S_EMERGENCY] == 0.0) & ~_among(
-                regs[idx, R.MODE_REG], _OFF)
-            halt = off & ~running
-            s[idx[halt], L.S_VEL] = 0.0
-            s[idx[halt], L.S_EMERGENCY] = 0.0
-            # SETUP_BITS bit 5 (§8.2.68): "Synchronize encoder position to P_IST after change
-            # to active mode. Follow error = 0"
-            was_off = _among(regs[idx, R.MODE_REG], _OFF)
-            sync = was_off & ~off & ((regs[idx, R.SETUP_BITS] & c.SETUP_SYNC_ENCODER) != 0)
-            for i in idx[sync].tolist():
-                self._set_encoder(i, int(regs[i, R.P_IST]))
-                regs[i, R.FLWERR] = 0
-            regs[idx, R.MODE_REG] = np.where(running, c.STOP, raw)
+            self._store_mode(idx, raw)
         elif num == R.AFZUP_READINDEX:
             self._check_member(reg, raw, *_MEMBERS[num])
             self._afzup_read_index(idx, raw)
@@ -445,14 +441,10 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         and the drive restarts with its commanded position at the rotor (no jump)."""
         idx = as_index(index, self.n)
         self._store_position_backup(idx)
-        keep = self.state[np.ix_(idx, _PLANT_STATE)].copy()
-        ssi = self.regs[idx, R.EXTENCODER2].copy()
-        memory = self._rom if self._flash is None else self._flash
-        for i in idx.tolist():
-            self.regs[i] = memory[i] if self._has_flash[i] else self._rom[self._type_of[i]]
-        self.state[idx] = 0.0
-        self.state[np.ix_(idx, _PLANT_STATE)] = keep
-        self._power_on(idx)
+        ssi = self.regs[idx, R.EXTENCODER2]
+        state = np.zeros((idx.size, L.N_STATE))
+        state[:, _PLANT_STATE] = self.state[idx][:, _PLANT_STATE]
+        self._start(idx, self._memory_rows(idx), state, self.params[idx])
         self._ssi_keep(idx, ssi)
         rotor = self.state[idx, L.S_THETA] * COUNTS_PER_REV / (2.0 * math.pi)
         for col in (L.S_CMD, L.S_CMD_PREV, L.S_FIELD):
@@ -465,41 +457,89 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
             raise ModeError(f"{what} needs safe mode (§8.2.3); motor {int(bad[0])} is in "
                             f"{c.MODE_NAMES.get(int(self.regs[bad[0], R.MODE_REG]), '?')}")
 
-    def _check_modes(self, idx: np.ndarray, raw: np.ndarray) -> None:
-        for i, value in zip(idx.tolist(), raw.tolist()):
-            if self.regs[i, R.MODE_REG] == c.SAFE and value != c.SAFE:
-                raise ModeError(f"MODE_REG = {value} refused for motor {i}: safe mode is left "
-                                "by command only (exit_safe_mode, §8.2.3). Nothing was changed.")
-            if value not in c.WRITABLE_MODES and not (
-                    value == c.SAFE and self.regs[i, R.MODE_REG] == c.SAFE):
-                why = ("safe mode is entered by command only" if value == c.SAFE
-                       else f"allowed {sorted(c.WRITABLE_MODES)}")
-                raise ModeError(f"MODE_REG = {value} refused for motor {i}: {why} (MIS manual "
-                                "§8.2.3). Nothing was changed.")
-            if value != c.PASSIVE and self.regs[i, R.ERR_BITS] != 0:
-                raise ModeError(f"MODE_REG = {value} refused for motor {i}: ERR_BITS = "
-                                f"{int(self.regs[i, R.ERR_BITS])}; clear the errors first "
-                                "(§8.2.31). Nothing was changed.")
+    def _store_mode(self, idx: np.ndarray, raw: np.ndarray) -> None:
+        """MODE_REG := ``raw`` for motors ``idx`` by the firmware's rules (§8.2.3, §8.2.31;
+        :data:`_MODE_CHANGES`), refused for all if one is refused: safe mode is left and
+        entered by command only, a value must be a writable mode, an active mode needs ERR_BITS
+        = 0. A zero search entered starts afresh; passive requested of a running motor stops
+        it on its deceleration ramp first; an active mode entered from passive or safe with
+        SETUP_BITS bit 5 sets the encoder to P_IST."""
+        regs, s = self.regs, self.state
+        rows = regs[idx[:, None], _MODE_RULE_REGISTERS]
+        mode = rows[:, 0]
+        change = _MODE_CHANGES[_mode_index(mode), _mode_index(raw),
+                               (rows[:, 1] != 0).view(np.uint8),
+                               ((rows[:, 2] & c.SETUP_SYNC_ENCODER) != 0).view(np.uint8)]
+        new = raw
+        if change.any():
+            refused = (change & _REFUSED) != 0
+            if refused.any():
+                j = int(np.argmax(refused))
+                self._refuse_mode(int(idx[j]), int(raw[j]))
+            enter_home = ((change & _TO_SEARCH) != 0) & (mode != raw)
+            if enter_home.any():
+                entering = idx[enter_home]
+                s[entering, L.S_HOME_PHASE] = 0.0
+                s[entering, L.S_HOME_MS] = 0.0
+                # the mode a time-out sets back (§7.2.19): the one before the search started
+                first = enter_home & ~_among(mode, _IS_SEARCH)
+                s[idx[first], L.S_HOME_PREV] = mode[first]
+            off = (change & _TO_PASSIVE) != 0
+            if off.any():
+                # §5.11.2: "When changing to Passive mode the motor goes into Stop mode to
+                # decelerate according to the 'Deceleration'-ramp" (an error stop keeps its
+                # own)
+                running = (off & (s[idx, L.S_VEL] != 0.0) & (s[idx, L.S_EMERGENCY] == 0.0)
+                           & ~_among(mode, _IS_OFF))
+                halt = idx[off & ~running]
+                s[halt, L.S_VEL] = 0.0
+                s[halt, L.S_EMERGENCY] = 0.0
+                new = np.where(running, c.STOP, raw)
+            # SETUP_BITS bit 5 (§8.2.68): "Synchronize encoder position to P_IST after change
+            # to active mode. Follow error = 0"
+            for i in idx[(change & _SYNC) != 0].tolist():
+                self._set_encoder(i, int(regs[i, R.P_IST]))
+                regs[i, R.FLWERR] = 0
+        regs[idx, R.MODE_REG] = new
+
+    def _refuse_mode(self, i: int, value: int) -> None:
+        """Raise the ModeError of MODE_REG := ``value`` refused for motor ``i``
+        (:meth:`_store_mode`)."""
+        if self.regs[i, R.MODE_REG] == c.SAFE and value != c.SAFE:
+            raise ModeError(f"MODE_REG = {value} refused for motor {i}: safe mode is left "
+                            "by command only (exit_safe_mode, §8.2.3). Nothing was changed.")
+        if value not in c.WRITABLE_MODES and not (
+                value == c.SAFE and self.regs[i, R.MODE_REG] == c.SAFE):
+            why = ("safe mode is entered by command only" if value == c.SAFE
+                   else f"allowed {sorted(c.WRITABLE_MODES)}")
+            raise ModeError(f"MODE_REG = {value} refused for motor {i}: {why} (MIS manual "
+                            "§8.2.3). Nothing was changed.")
+        raise ModeError(f"MODE_REG = {value} refused for motor {i}: ERR_BITS = "
+                        f"{int(self.regs[i, R.ERR_BITS])}; clear the errors first "
+                        "(§8.2.31). Nothing was changed.")
 
     def _store_p_soll(self, idx: np.ndarray, raw: np.ndarray) -> None:
-        """P_SOLL, limited or reduced into a turn table's range (§5.12.1)."""
+        """P_SOLL := ``raw`` for motors ``idx``, limited or reduced into a turn table's range
+        (§5.12.1): kept inside [min, max] of MIN_P_IST and MAX_P_IST (and always without a turn
+        table or with max ≤ min), reduced modulo the range past its end in the direction of a
+        multi-turn mode (the travel beyond P_IST kept for the profile), otherwise limited to
+        the range."""
         regs, s = self.regs, self.state
-        for i, value in zip(idx.tolist(), raw.tolist()):
-            mode = int(regs[i, R.TURNTABLE_MODE])
-            lo, hi = sorted((int(regs[i, R.MIN_P_IST]), int(regs[i, R.MAX_P_IST])))
-            s[i, L.S_TT_TRAVEL] = 0.0
-            if mode == c.TT_OFF or hi <= lo:
-                regs[i, R.P_SOLL] = value
-                continue
-            size = hi - lo + 1
-            if lo <= value <= hi:
-                regs[i, R.P_SOLL] = value
-            elif (mode == c.TT_MULTI_CW and value > hi) or (
-                    mode == c.TT_MULTI_CCW and value < lo):
-                regs[i, R.P_SOLL] = lo + (value - lo) % size
-                s[i, L.S_TT_TRAVEL] = float(value - int(regs[i, R.P_IST]))
-            else:
-                regs[i, R.P_SOLL] = min(max(value, lo), hi)
+        s[idx, L.S_TT_TRAVEL] = 0.0
+        mode = regs[idx, R.TURNTABLE_MODE]
+        if not mode.any():  # TT_OFF everywhere
+            regs[idx, R.P_SOLL] = raw
+            return
+        ends = regs[idx[:, None], _TURN_TABLE_ENDS]
+        lo, hi = ends.min(axis=1), ends.max(axis=1)
+        inside = (mode == c.TT_OFF) | (hi <= lo) | ((lo <= raw) & (raw <= hi))
+        wrap = ~inside & (((mode == c.TT_MULTI_CW) & (raw > hi))
+                          | ((mode == c.TT_MULTI_CCW) & (raw < lo)))
+        size = np.where(wrap, hi - lo + 1, 1)
+        regs[idx, R.P_SOLL] = np.where(inside, raw, np.where(
+            wrap, lo + np.mod(raw - lo, size), np.minimum(np.maximum(raw, lo), hi)))
+        if wrap.any():
+            s[idx[wrap], L.S_TT_TRAVEL] = (raw - regs[idx, R.P_IST])[wrap].astype(np.float64)
 
     def _firmware_angle(self, idx: np.ndarray) -> np.ndarray:
         """Rotor angles [rad] in the firmware's direction (``firmware.monitor.firmware_angle``:

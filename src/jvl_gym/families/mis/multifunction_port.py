@@ -138,12 +138,13 @@ class MultifunctionOutput:
             self._mf_total = np.zeros(self.n, np.int64)
             self._mf_quiet = False
 
-    def _mf_power_on(self, idx: np.ndarray) -> None:
-        """Power-on or reset of motors ``idx``: the sources taken from here, no counts, the
-        sum 0 (the jump of the commanded position a reset makes emits nothing)."""
+    def _mf_power_on(self, idx: np.ndarray, state: np.ndarray | None = None) -> None:
+        """Power-on or reset of motors ``idx`` (``state``: their rows of ``state`` when the
+        caller holds them, (M, N_STATE)): the sources taken from here, no counts, the sum 0
+        (the jump of the commanded position a reset makes emits nothing)."""
         self._mf_arrays()
         self._mf_route_cache = self._mf_base = None
-        self._mf_at[idx] = self.state[np.ix_(idx, _SOURCES)]
+        self._mf_at[idx] = (self.state[idx] if state is None else state)[:, _SOURCES]
         self._mf_counts[idx] = 0
         self._mf_total[idx] = 0
 

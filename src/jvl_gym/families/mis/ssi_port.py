@@ -67,15 +67,17 @@ class SsiPort:
                               gray=cmd == CMD_SSI_READ_GRAY or setup.gray)
         self._ssi_serve()
 
-    def _ssi_power_on(self, idx: np.ndarray) -> None:
-        """Power-on of motors ``idx``: no SSI set-up, no reading; EXTENCODER2 = 0 unless
-        SETUP_BITS bit 13 (§8.2.68)."""
+    def _ssi_power_on(self, idx: np.ndarray, regs: np.ndarray) -> None:
+        """Power-on of motors ``idx`` whose registers are the (M, ·) block ``regs`` (changed in
+        place): no SSI set-up, no reading; EXTENCODER2 = 0 unless SETUP_BITS bit 13
+        (§8.2.68)."""
         ready, reads = self._ssi()
-        for i in idx.tolist():
-            ready.discard(i)
-            reads.pop(i, None)
-        keep = (self.regs[idx, R.SETUP_BITS] & SETUP_KEEP_SSI) != 0
-        self.regs[idx[~keep], R.EXTENCODER2] = 0
+        if ready or reads:
+            for i in idx.tolist():
+                ready.discard(i)
+                reads.pop(i, None)
+        regs[:, R.EXTENCODER2] = np.where(regs[:, R.SETUP_BITS] & SETUP_KEEP_SSI,
+                                          regs[:, R.EXTENCODER2], 0)
 
     def _ssi_keep(self, idx: np.ndarray, before: np.ndarray) -> None:
         """After a reset of motors ``idx``: EXTENCODER2 back to ``before`` (its values before

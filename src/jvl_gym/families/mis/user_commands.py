@@ -70,16 +70,18 @@ class UserCommands:
         armed[idx] = False
 
     def _snapshot(self, idx: np.ndarray) -> tuple[Any, ...]:
-        """What a register transaction may change (``RegisterBank._snapshot``) and this
-        module's state (a refused transaction takes its commands back)."""
-        saved = tuple(a.copy() for a in self._command_state())
-        return super()._snapshot(idx), saved  # type: ignore[misc]
+        """What a register transaction on motors ``idx`` may change
+        (``RegisterBank._snapshot``) and this module's state of those motors (a refused
+        transaction takes their commands back; a command changes its own motor's only)."""
+        flag, armed, kflash = self._command_state()
+        return super()._snapshot(idx), (flag[idx], armed[idx], kflash[idx])  # type: ignore[misc]
 
     def _restore(self, idx: np.ndarray, saved: tuple[Any, ...]) -> None:
         """Put back what :meth:`_snapshot` saved."""
         rows, (flag, armed, kflash) = saved
         super()._restore(idx, rows)  # type: ignore[misc]
-        self._relative_flag, self._armed, self._kphase_flash = flag, armed, kflash
+        state = self._command_state()
+        state[0][idx], state[1][idx], state[2][idx] = flag, armed, kflash
 
     def _user_command(self, i: int, cmd: int) -> bool:
         """Take the arming of motor ``i`` and run ``cmd`` if it is one of this module's; False
