@@ -98,3 +98,16 @@ def test_a_refused_reset_changes_nothing_the_position_backup_neither() -> None:
         m.reset(index=[0, 2], encoder_type=[1, 1.5])
     after = (m.regs, m.state, m.params, m.inputs, m._position_backup)
     assert all(np.array_equal(a, b) for a, b in zip(before, after))
+
+
+def test_a_refused_reset_to_another_motor_type_keeps_the_motors_types() -> None:
+    """A reset that names new motor types and is refused for its encoder_type leaves the
+    motors of their old types (the type pool may have learnt the new type; no motor is of it)."""
+    m = MotorArray("MIS232", n=3, seed=0)
+    m.step(5)
+    before = [a.copy() for a in (m.regs, m.state, m.params, m._type_of)]
+    with pytest.raises(ValueError, match="encoder_type"):
+        m.reset(index=[0, 2], motor_type="MIS171", encoder_type=1.5)
+    after = (m.regs, m.state, m.params, m._type_of)
+    assert all(np.array_equal(a, b) for a, b in zip(before, after))
+    assert [cfg.name for cfg in m.motor_configs] == ["MIS232"] * 3

@@ -344,17 +344,27 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         rest. Other motors are untouched.
         ``motor_type`` (one name, or one per motor of ``index``) first replaces the motors by
         motors of that type (its parameters and ROM defaults; the type joins the array's pool).
+        A value the family refuses (a keyword out of its range, a coupling the inner step cannot
+        carry, an unknown encoder option) raises and changes nothing, the motors' types
+        included.
         """
         idx = as_index(index, self.n)
         names, values = self._check_params(params, idx.size)
+        types = None
         if motor_type is not None:
             names_of = [motor_type] * idx.size if isinstance(motor_type, str) else list(motor_type)
             if len(names_of) != idx.size:
                 raise ValueError(f"got {len(names_of)} motor types for {idx.size} motors")
             codes = np.array([self._type_code(name) for name in names_of], dtype=np.int64)
+            types = self._type_of[idx]
             self._type_of[idx] = codes
         cols, to_state, _ = self._keyword_plan(names)
-        self._reset_rows(idx, cols, to_state, values)
+        try:
+            self._reset_rows(idx, cols, to_state, values)
+        except (TypeError, ValueError):  # a value the family refuses: the motors' types stay
+            if types is not None:
+                self._type_of[idx] = types
+            raise
 
     def _check_params(self, params: dict[str, Any], size: int
                       ) -> tuple[tuple[str, ...], np.ndarray]:

@@ -10,7 +10,6 @@ Description"), motor parameters from the motor configs (docs/model.md §15), pow
 from __future__ import annotations
 
 import os
-from collections.abc import Sequence
 from typing import Any, ClassVar
 
 import numpy as np
@@ -134,19 +133,11 @@ class MacMotorArray(MotorArray, layout=L):
         self._latched_cntrl = np.zeros(self.n, dtype=np.int64)
         self.set_record_length(self._record_length)
 
-    def reset(self, index: MotorIndex = None, motor_type: str | Sequence[str] | None = None,
-              **params: Any) -> None:
-        """:meth:`jvl_gym.MotorArray.reset`; also refuses an elastic coupling the inner step
-        cannot carry (``jvl_gym.physics.mechanics.coupling_problem``), changing nothing."""
-        types = self._type_of.copy()
-        try:
-            super().reset(index, motor_type, **params)
-        except (TypeError, ValueError):
-            self._type_of[:] = types
-            raise
-
     def _reset_rows(self, idx: np.ndarray, cols: np.ndarray, to_state: np.ndarray,
                     values: np.ndarray) -> None:
+        """The power-on of :meth:`jvl_gym.MotorArray._reset_rows`, compiled
+        (:func:`.power_on.reset_rows`); first refuses, changing nothing, an elastic coupling the
+        inner step cannot carry (:meth:`_check_coupling`)."""
         self._check_coupling(idx, cols, to_state, values)
         reset_rows(self.regs, self.state, self.params, self.inputs, self._latched_cntrl, idx,
                    self._type_of[idx], self._rom, self._type_params, self._type_inputs,
