@@ -8,7 +8,10 @@ from numba import njit
 
 from jvl_gym import MotorArray
 from jvl_gym.engine import TaskDriver
+from jvl_gym.engine.view import EngineView
 from jvl_gym.families import family
+from jvl_gym.families.mis import constants as c
+from jvl_gym.families.mis import layout as L
 from jvl_gym.families.mis import task as T
 
 
@@ -52,3 +55,26 @@ def test_a_task_driver_runs_the_family_with_hooks() -> None:
     for _ in range(30):
         driver.step(one.engine_view(), ep1, (np.zeros(1),), actions[n - 1:], 50)
     np.testing.assert_array_equal(one.state[0], m.state[n - 1])  # serial 1 = threaded copy
+
+
+@njit(cache=True)
+def _compiled_lost_steps(regs, state, params, inputs, keys, buf, rec, fmt, plan,
+                         scratch):  # pragma: no cover - compiled
+    view = EngineView(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch)
+    out = np.empty(regs.shape[0], dtype=np.int64)
+    for i in range(regs.shape[0]):
+        out[i] = T.lost_steps(view, i)
+    return out
+
+
+def test_the_lost_steps_reported_are_the_ones_the_compiled_step_counts() -> None:
+    """MisMotorArray.lost_steps (what an env reports) equals the compiled task's lost_steps
+    (what ends its episode) at lags of exact half electrical turns, where rounding half to
+    even and half up part."""
+    m = MotorArray(T.DEFAULT_MOTOR_TYPE, n=9, seed=0)
+    halves = np.arange(-4, 5) * 0.5
+    m.state[:, L.S_THETA] = 0.0
+    m.state[:, L.S_CMD] = halves * c.COUNTS_PER_ELECTRICAL_TURN
+    compiled = _compiled_lost_steps(*m.engine_view())
+    np.testing.assert_array_equal(m.lost_steps, compiled)
+    np.testing.assert_array_equal(compiled, 4 * np.floor(halves + 0.5).astype(np.int64))

@@ -36,6 +36,7 @@ from .program.api import ProgramMixin
 from .ssi_port import SSI_COMMANDS, SsiPort
 from .table import CONFORMANCE, TABLE
 from .units import (
+    COUNTS_PER_RAD,
     COUNTS_PER_REV,
     CURRENT_AMPS_PER_UNIT,
 )
@@ -706,9 +707,12 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
     @property
     def lost_steps(self) -> np.ndarray:
         """Full steps the rotor has lost against the commanded position (positive: behind),
-        whole electrical turns of 4 full steps, (N,) int64."""
-        lag = (self.state[:, L.S_CMD] - self.rotor_counts) / c.COUNTS_PER_ELECTRICAL_TURN
-        return 4 * np.round(lag).astype(np.int64)
+        whole electrical turns of 4 full steps, (N,) int64: the lag rounded half up, in the
+        arithmetic of the compiled step's ``lost_steps`` (:mod:`.task`), so that the count an
+        env reports is the one its termination saw."""
+        lag = (self.state[:, L.S_CMD] - self.state[:, L.S_THETA] * COUNTS_PER_RAD) / (
+            c.COUNTS_PER_ELECTRICAL_TURN)
+        return 4 * np.floor(lag + 0.5).astype(np.int64)
 
     @property
     def current_amplitude(self) -> np.ndarray:

@@ -9,8 +9,6 @@ torque and inertia, supply, gear pulses, I/O), and the physical truth an indexin
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numba import njit
 
@@ -20,7 +18,7 @@ from . import constants as _c
 from . import layout as _L
 from .firmware import regs as R
 from .table import TABLE as _TABLE
-from .units import COUNTS_PER_REV as _CPR
+from .units import COUNTS_PER_RAD as _COUNTS_PER_RAD
 
 __all__ = ["R", "FAMILY_KEY", "DEFAULT_MOTOR_TYPE", "TERMINAL_ERRORS", "ERROR_BITS", "reg",
            "set_reg", "rotor_angle", "rotor_speed", "lost_steps", "copper_energy",
@@ -45,7 +43,6 @@ COPPER_COLUMN = _L.S_E_COPPER
 reg, set_reg, rotor_angle, set_load_torque, set_pulse_counts = task_accessors(
     FAMILY_KEY, __file__, _TABLE, R.MODE_REG, _L, ("reg", "set_reg", "shaft_angle",
                                                   "set_load_torque", "set_pulse_counts"))
-_COUNTS_PER_RAD = _CPR / (2.0 * math.pi)
 
 
 @njit(cache=True, inline="always")

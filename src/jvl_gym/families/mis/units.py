@@ -16,12 +16,14 @@ inputs (§8.2.46); :data:`OUTER_DT` = 1 ms is the simulator's decision built on 
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 from ...registers.scaling import linear_units
 
 __all__ = [
     "COUNTS_PER_REV",
+    "COUNTS_PER_RAD",
     "FULL_STEPS_PER_REV",
     "COUNTS_PER_FULL_STEP",
     "OUTER_DT",
@@ -56,6 +58,7 @@ __all__ = [
 
 # --- resolution (§8.2.4, §5.3.3) ------------------------------------------------------------
 COUNTS_PER_REV = 409600  #: motor counts (positions, P_IST, GEAR1 default) per revolution
+COUNTS_PER_RAD = COUNTS_PER_REV / (2.0 * math.pi)  #: motor counts per radian of the rotor
 FULL_STEPS_PER_REV = 200  #: two-phase hybrid stepper, 1.8° per full step
 COUNTS_PER_FULL_STEP = COUNTS_PER_REV // FULL_STEPS_PER_REV  #: 2048 microsteps per full step
 
