@@ -64,12 +64,13 @@ def staged_inputs(values: Mapping[str, InputValue], columns: Mapping[str, int],
         arr = real_array(name, value, allow_bool=rule.allow_bool)
         if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != count):
             raise ValueError(f"{name}: expected a scalar or shape ({count},), got {arr.shape}")
-        if not np.all(np.isfinite(arr)):
+        if not np.isfinite(arr).all():
             raise ValueError(f"{name}: values must be finite, got {value!r}")
         unit = f" {rule.unit}" if rule.unit else ""
-        if rule.whole and np.any(arr != np.round(arr)):
+        if rule.whole and (arr != np.round(arr)).any():
             raise ValueError(f"{name} must be whole{unit}")
-        if np.any((arr < rule.low) | (arr > rule.high)):
+        bounded = rule.low > -math.inf or rule.high < math.inf
+        if bounded and ((arr < rule.low) | (arr > rule.high)).any():
             raise ValueError(f"{name} must be within {rule.low:g}..{rule.high:g}{unit}")
-        staged.append((columns[name], np.broadcast_to(arr, (count,))))
+        staged.append((columns[name], arr if arr.ndim == 1 else np.broadcast_to(arr, (count,))))
     return staged
