@@ -62,16 +62,21 @@ class MotorEnv(gym.Env):
             core._refuse_action(a, self._action_shape)
         self._action[0] = a
         core._step_actions(self._action)
+        if core._terminated[0] or core._truncated[0]:
+            return self._end_of_episode(core)
+        return core._obs[0].copy(), core._reward.item(), False, False, {}
+
+    def _end_of_episode(self, core: MotorVectorEnv) -> tuple[np.ndarray, float, bool, bool,
+                                                             dict[str, Any]]:
+        """What :meth:`step` returns for the step that ended the episode (the episode marked
+        ended): the info holds why it ended and the task's episode statistics."""
+        self._ended = True
         terminated = core._terminated.item()
-        truncated = core._truncated.item()
-        info: dict[str, Any] = {}
-        if terminated or truncated:
-            self._ended = True
-            end = core._end_info(np.ones(1, dtype=np.bool_), core._terminated)
-            info["termination_reason"] = str(end.pop("termination_reason")[0])
-            info.update({name: float(values[0]) for name, values in end.items()
-                         if not name.startswith("_")})
-        return core._obs[0].copy(), core._reward.item(), terminated, truncated, info
+        end = core._end_info(np.ones(1, dtype=np.bool_), core._terminated)
+        info: dict[str, Any] = {"termination_reason": str(end.pop("termination_reason")[0])}
+        info.update({name: float(values[0]) for name, values in end.items()
+                     if not name.startswith("_")})
+        return core._obs[0].copy(), core._reward.item(), terminated, core._truncated.item(), info
 
     def render(self) -> np.ndarray | None:
         """The scope plot as an (H, W, 3) uint8 image when ``render_mode="rgb_array"``."""

@@ -31,8 +31,9 @@ MotorSpec: TypeAlias = "str | os.PathLike[str] | Any | Sequence[str | os.PathLik
 #: a world input's value: a real number (broadcast), one per selected motor, or None (unchanged)
 InputValue: TypeAlias = "float | int | bool | np.ndarray | Sequence[float] | None"
 
-#: up to this many int64 indices are checked with Python ints (``as_index``)
-_FEW = 8
+#: up to this many int64 indices are checked with Python ints (``as_index``): the copies a
+#: 1024-copy env resets in a step, 17 in 1.4 µs where numpy's reductions take 6 µs
+_FEW = 32
 
 
 def _bad_index(index: Any, n: int, why: str) -> RegisterShapeError:
