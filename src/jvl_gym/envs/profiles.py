@@ -31,10 +31,11 @@ __all__ = ["SpeedProfile", "row_speed"]
 _WALK_SCALE = math.sqrt(2.0 / 3.0)
 
 
-@njit(cache=True, inline="always")
+@njit(**KERNEL, forceinline=True)
 def row_speed(p: np.ndarray, t: float, theta: float,
               t_change: float) -> float:  # pragma: no cover - compiled
-    """Speed of one copy from its parameter row ``p`` (compiled callers)."""
+    """Speed of one copy from its parameter row ``p`` (compiled callers: compiled once, and
+    LLVM inlines it into each)."""
     ramp = min(t / p[T_RAMP], 1.0)
     change = p[STEP] * min(max((t - p[T_STEP]) / t_change, 0.0), 1.0)
     # sines by jvl_gym.physics.trig (no library call, which the compiled step cannot inline), and

@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from ..engine import TaskDriver
+from ..engine.jit import KERNEL
 from ..engine.specialize import specialise
 from ..families import Capability, Family, UnsupportedOperation, families, family
 
@@ -59,6 +60,11 @@ lost_steps: Any = None
 ERROR_BITS: int = 0
 
 _HOOK_OPTIONS = {"cache": True, "inline": "always"}
+#: the observation hook is compiled once, as a function of its own that the step's end hook
+#: and the observation after a reset both call, and that LLVM inlines into each (forceinline):
+#: inlined at numba's IR level it was compiled twice, once into each caller; a plain call
+#: would pass every array of the view, the episode and the state per copy
+_OBSERVE_OPTIONS = {**KERNEL, "forceinline": True}
 _HOOKS = ("begin", "before", "after", "end", "observe")
 
 
@@ -158,6 +164,8 @@ class Task:
             figures = self.figures(fam) if self.figures is not None else {}
             templates = {**self.helpers, **{fn.__name__: fn for fn in self.hooks.values()}}
             options: dict[str, Mapping[str, Any]] = {name: _HOOK_OPTIONS for name in templates}
+            if "observe" in self.hooks:
+                options[self.hooks["observe"].__name__] = _OBSERVE_OPTIONS
             bound_names = {**self.names(key), **figures}
             if self.state is not None:
                 templates["_as_state"] = _as_state  # after the hooks: their module's globals
