@@ -14,6 +14,8 @@ from __future__ import annotations
 
 from typing import Any
 
+from numba.core import types
+
 #: keyword arguments of ``numba.njit`` for kernel functions (``@njit(**KERNEL)``)
 KERNEL: dict[str, Any] = {"cache": True, "_nrt": False}
 #: the same for the multi-threaded drivers
@@ -25,3 +27,21 @@ KERNEL_PARALLEL: dict[str, Any] = {**KERNEL, "parallel": True}
 #: (A lane's divisors are parameters validated on the Python side and the bus voltage, which
 #: the plant only divides by above 1 V.)
 LANE_KERNEL: dict[str, Any] = {**KERNEL, "error_model": "numpy"}
+
+
+def plain_arguments(dispatcher: Any) -> Any:
+    """Make a compiled function (a numba dispatcher) compile once per plain argument types, not
+    once per constant its compiled callers pass: numba types a constant argument (``True``,
+    ``0``) as a literal and compiles the callee anew for each value, each time in full. With
+    the callers' constants typed as plain bools and integers, one compiled body serves every
+    call; a ``forceinline`` callee still gets the caller's constants, as LLVM inlines it and
+    folds the branches on them. Returns ``dispatcher``, so that it decorates a function
+    (``@plain_arguments`` above ``@njit``)."""
+    resolve = dispatcher.get_call_template
+
+    def get_call_template(args: tuple, kws: dict) -> Any:
+        return resolve(tuple(types.unliteral(a) for a in args),
+                       {k: types.unliteral(v) for k, v in kws.items()})
+
+    dispatcher.get_call_template = get_call_template
+    return dispatcher

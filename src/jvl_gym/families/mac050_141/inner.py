@@ -9,9 +9,11 @@ or MANI's stator field (3.2.128); inner-rate recording (3.2.112–3.2.116); then
 (after ``pwm_delay_samples``) drives the coil, the mechanics and the DC bus for 128 µs
 (docs/model.md §5) and the energy accounts.
 
-:func:`inner_sample` is the one implementation. It works on a lane of the block's scratch
-(:mod:`mac050_141.scratch`) and takes a compile-time flag ``full`` (a literal at each call,
-which the compiler folds), so one source gives two specialisations:
+:func:`inner_sample` is the one implementation, compiled once as a function of its own that
+LLVM inlines into each caller (``forceinline``). It works on a lane of the block's scratch
+(:mod:`mac050_141.scratch`) and takes a flag ``full``, a constant at each call: numba compiles
+the sample once for plain bools (``engine.jit.plain_arguments``), and LLVM, having inlined it,
+folds the branches on the caller's constant, so one source gives two specialisations:
 
 - ``full`` False: the sample of a motor that :func:`mac050_141.lanes.in_lanes` admits, with no
   branch the compiler cannot turn into a select, so that the loop over the lanes of a block
@@ -22,9 +24,7 @@ which the compiler folds), so one source gives two specialisations:
   registers of every sample), one motor at a time (:func:`inner_samples_one`). These features
   are compiled functions of their own (:func:`_angle`, :func:`_measure`, :func:`_regulate`,
   :func:`_record_inner`, :func:`_torque_noise`), one call each from a single ``if full``
-  block: numba's inliner copies the caller's scope for every block of an inlined function,
-  so each block the flag removes would still cost compile time at every inlined copy of the
-  sample.
+  block, which the lanes' code does not contain once LLVM has folded it.
 
 Both specialisations do the same arithmetic in the same order on the same values, so a motor
 gives the same bits on either path and an N-motor array is bit-for-bit equal to N one-motor
@@ -37,7 +37,7 @@ import numpy as np
 from numba import njit
 
 from ...engine.apart import apart
-from ...engine.jit import KERNEL, LANE_KERNEL
+from ...engine.jit import KERNEL, LANE_KERNEL, plain_arguments
 from ...motor.noise import gauss
 from ...physics.coil import vector_to_phases
 from . import constants as c
@@ -121,7 +121,9 @@ _H = c.INNER_DT
 # The stages of a sample below, and the commutation, ADC, plant, encoder and hall functions
 # they and inner_sample call, are compiled once, as functions of their own, with forceinline:
 # LLVM inlines them into each caller (into the lane loops too, which it still vectorises);
-# numba's IR inliner would copy each of them into every inlined copy of the sample.
+# numba's IR inliner would type and lower a copy of each at every call. Those called with a
+# constant (a phase 0, 1, 2) take plain arguments: one compiled body, not one per constant.
+@plain_arguments
 @njit(**LANE_KERNEL, forceinline=True)
 def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float) -> float:
     """Phase ``k``'s current loop in lane ``j`` (4.3.1, :func:`current_loop.phase_step`):
@@ -139,6 +141,7 @@ def _phase(sc: np.ndarray, j: int, k: int, i_soll: float, i_ist: float) -> float
     return u
 
 
+@plain_arguments
 @njit(**LANE_KERNEL, forceinline=True)
 def _at_rest(sc: np.ndarray, j: int, k: int, i_ist: float) -> None:
     """Phase ``k``'s loop held at rest while the current regulator is passive (4.4.1, 4.4.9):
@@ -149,6 +152,7 @@ def _at_rest(sc: np.ndarray, j: int, k: int, i_ist: float) -> None:
     sc[LANE_BASE[L.S_IIST1_A + k] + j] = i_ist
 
 
+@plain_arguments
 @njit(**LANE_KERNEL, forceinline=True)
 def _pwm(sc: np.ndarray, j: int, k: int, u: float) -> float:
     """PWM value applied in phase ``k`` of lane ``j``: ``u`` itself, or the value computed one
@@ -293,14 +297,16 @@ def _torque_noise(p: np.ndarray, key: np.uint64, tick: float) -> float:
     return p[L.P_TORQUE_NOISE] * gauss(key, tick, 4) if p[L.P_TORQUE_NOISE] > 0.0 else 0.0
 
 
-@njit(cache=True, inline="always")
+@plain_arguments
+@njit(**LANE_KERNEL, forceinline=True)
 def inner_sample(sc: np.ndarray, j: int, k: int, last: bool, full: bool, rigid: bool,
                  r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray, key: np.uint64,
                  buf: np.ndarray, rec: bool, fmt: np.ndarray) -> None:
     """Inner sample ``k`` (0 … 14) of an outer sample for the motor in lane ``j`` of the
     scratch row ``sc`` (module docstring).
 
-    ``last``, ``full`` and ``rigid`` are constants at each call. ``last``: the sample stores its
+    ``last``, ``full`` and ``rigid`` are constants at each call, which LLVM folds once it has
+    inlined the sample (module docstring). ``last``: the sample stores its
     registers into the lane's fields (``full`` False; the earlier samples' registers would be
     overwritten unread). ``full``: the per-motor features, with the motor's rows ``r``, ``s``,
     ``p``, ``u``, its noise ``key`` and the sample buffer ``buf``, ``rec``, ``fmt``; the
@@ -408,10 +414,9 @@ def inner_samples_one(r: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray
     (:func:`inner_sample` with ``full``), in lane ``j`` of the scratch row ``sc``: the path of
     the motors :func:`mac050_141.lanes.inner_samples` cannot put into SIMD lanes.
 
-    A function of its own, not inlined into ``inner_samples``: numba's inliner copies the
-    whole scope of the caller for every block of an inlined function, so inlining this loop
-    beside the two inlined lane samples would multiply ``inner_samples``' compile time. The
-    call costs one argument transfer per motor and outer sample, on this path only.
+    A function of its own, compiled apart and called from ``inner_samples``, so that its loop
+    is not optimised again inside every caller. The call costs one argument transfer per motor
+    and outer sample, on this path only.
     """
     gather(sc, j, 0, r, s, p, u)
     for k in range(c.INNER_PER_OUTER):

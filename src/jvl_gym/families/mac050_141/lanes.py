@@ -13,7 +13,8 @@ leaves the elastic coupling's terms out of the plant (exact zeros for such a mot
 bits without their arithmetic); a block with a coupled motor in its lanes runs
 :func:`lane_samples_coupled`. Both are one template, :func:`_lane_samples`, compiled once for
 each value of ``RIGID`` (:func:`jvl_gym.engine.specialize.specialise`) as functions of their
-own, so that numba's inliner copies the sample into each of them once.
+own. Each calls the one compiled sample, which LLVM inlines into its lane loops and
+vectorises there with the caller's constants folded (:mod:`mac050_141.inner`).
 """
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ import numpy as np
 from numba import njit
 
 from ...engine.apart import apart
-from ...engine.jit import LANE_KERNEL
+from ...engine.jit import LANE_KERNEL, plain_arguments
 from ...engine.specialize import specialise
 from . import constants as c
 from . import layout as L
@@ -68,11 +69,13 @@ def _lane_samples(scratch, m, r0, s0, p0, u0, key0, b0, rec, fmt):  # pragma: no
 #: compiled apart: :func:`inner_samples` calls the machine code (``engine.apart``)
 _OPTIONS = {"_lane_samples": {**LANE_KERNEL, "apart": True}}
 #: :func:`_lane_samples` of lanes whose motors all have a rigid shaft
-lane_samples_rigid = specialise({"_lane_samples": _lane_samples}, {"RIGID": True}, "rigid",
-                                __file__, _OPTIONS)["_lane_samples"]
+lane_samples_rigid = plain_arguments(specialise(
+    {"_lane_samples": _lane_samples}, {"RIGID": True}, "rigid", __file__,
+    _OPTIONS)["_lane_samples"])
 #: :func:`_lane_samples` of lanes with an elastically coupled motor among them
-lane_samples_coupled = specialise({"_lane_samples": _lane_samples}, {"RIGID": False}, "coupled",
-                                  __file__, _OPTIONS)["_lane_samples"]
+lane_samples_coupled = plain_arguments(specialise(
+    {"_lane_samples": _lane_samples}, {"RIGID": False}, "coupled", __file__,
+    _OPTIONS)["_lane_samples"])
 
 
 @apart

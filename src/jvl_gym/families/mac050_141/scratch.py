@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from ...engine.jit import LANE_KERNEL, plain_arguments
 from ...physics.fixed import fx4, fx8
 from ...physics.mechanics import shaft_inertia
 from . import constants as c
@@ -61,10 +62,14 @@ def lane_scratch(n_motors: int) -> np.ndarray:
     return np.zeros((-(-int(n_motors) // LANES), N_FIELDS * LANES))
 
 
-@njit(cache=True, inline="always")
+@plain_arguments
+@njit(**LANE_KERNEL, forceinline=True)
 def gather(sc: np.ndarray, j: int, i: int, r: np.ndarray, s: np.ndarray, p: np.ndarray,
            u: np.ndarray) -> None:
-    """Copy what the inner samples of motor ``i`` read into lane ``j``."""
+    """Copy what the inner samples of motor ``i`` read into lane ``j``.
+
+    Compiled once (the lanes' loop and the one-motor path both call it, the latter with lane
+    0), and inlined by LLVM into each caller (``forceinline``)."""
     for q in range(N_LANE_STATE):
         sc[q * LANES + j] = s[_LANE_COLS[q]]
     sc[F_IX_ERR * LANES + j] = 0.0
@@ -141,7 +146,8 @@ def _lane_constants(sc: np.ndarray, j: int, p: np.ndarray) -> None:
     sc[F_SRC_D_COUPLING * LANES + j] = p[L.P_D_COUPLING]
 
 
-@njit(cache=True, inline="always")
+@plain_arguments
+@njit(**LANE_KERNEL, forceinline=True)
 def scatter_state(sc: np.ndarray, j: int, s: np.ndarray) -> None:
     """Store lane ``j``'s state back into its motor's state row, 15 inner samples on."""
     for q in range(N_LANE_STATE):

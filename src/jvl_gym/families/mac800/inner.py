@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit
 
 from ...engine.apart import apart
-from ...engine.jit import KERNEL, LANE_KERNEL
+from ...engine.jit import KERNEL, LANE_KERNEL, plain_arguments
 from ...physics.bus import bus_step_prepared
 from ...physics.coil import coil_step_prepared, phase_to_vector, vector_to_phases
 from ...physics.fixed import clamp, rnd
@@ -206,10 +206,15 @@ def _adc(x: float) -> float:
     return clamp(rnd(x), -1023.0, 1023.0) + 0.0
 
 
-@njit(cache=True, inline="always")
+@plain_arguments
+@njit(**LANE_KERNEL, forceinline=True)
 def _sample(sc: np.ndarray, j: int, last: bool) -> None:
     """One current-loop sample of lane ``j`` (module docstring); ``last`` (a constant at each
-    call) also keeps the sample's registers."""
+    call) also keeps the sample's registers.
+
+    Compiled once, for a plain bool ``last`` (``engine.jit.plain_arguments``), as a function of
+    its own that LLVM inlines into each lane loop (``forceinline``), folds ``last`` there and
+    vectorises; numba's IR inliner would type and lower the whole sample once per call."""
     theta = _get(sc, _sf(L.S_THETA), j)
     omega = _get(sc, _sf(L.S_OMEGA), j)
     pp = _get(sc, _pf(L.P_POLE_PAIRS), j)
@@ -320,9 +325,11 @@ def inner_samples(regs, state, params, inputs, buf, rec, i0, n, scratch):
     """The current-loop samples of one servo sample of motors ``i0 … i0 + n − 1`` (one
     block, ``n ≤ LANES``); ``scratch`` is the block's row of :func:`lane_scratch`.
 
-    The sample is written out twice, as a lane loop that keeps no registers and one that keeps
-    them (the last sample, or every sample while a motor of the block records at the
-    current-loop rate): each copy is inlined whole into the lane loop, which LLVM vectorises."""
+    The sample runs in two lane loops, one that keeps no registers and one that keeps them (the
+    last sample, or every sample while a motor of the block records at the current-loop rate):
+    LLVM inlines the one compiled sample into each, with ``last`` folded, and vectorises it.
+    (:func:`_phase` and :func:`_pwm` keep numba's specialisation on their literal phase index:
+    with a plain index LLVM no longer vectorised these loops.)"""
     inner_rec = False
     for j in range(n):
         i = i0 + j

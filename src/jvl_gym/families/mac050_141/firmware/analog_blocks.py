@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ....engine.jit import KERNEL
+from ....engine.jit import KERNEL, plain_arguments
 from ....physics.fixed import wrap32
 from ....physics.levels import hysteresis_level
 from .. import constants as c
@@ -45,6 +45,7 @@ def vat_torque_limit(r: np.ndarray) -> float:
     return abs(r[R.ANINP] * float(r[R.T_SOLL]) / 1024.0)
 
 
+@plain_arguments
 @njit(**KERNEL)
 def a2pos_update(r: np.ndarray, s: np.ndarray, entering: bool) -> None:
     """A2POS: analogue input as a logic input with hysteresis 5.4 V / 4.4 V (4.1.10).

@@ -20,7 +20,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ....engine.jit import KERNEL
+from ....engine.jit import KERNEL, plain_arguments
 from ....registers.fill import fill
 from .. import constants as c
 from .. import layout as L
@@ -114,6 +114,7 @@ def reset_speed_loop(r: np.ndarray, s: np.ndarray) -> None:
     fill(r, _ERRORS, 0)
 
 
+@plain_arguments
 @njit(**KERNEL)
 def start_test_record(r: np.ndarray, s: np.ndarray, inner: bool) -> None:
     """Start a test mode's record into the sample buffer (4.4.9, 4.4.10): REC_CNT = 0,
@@ -175,6 +176,7 @@ def enter_mode(r: np.ndarray, s: np.ndarray, new: int) -> None:
         r[R.FNCERR] = 0
 
 
+@plain_arguments
 @njit(**KERNEL)
 def stop_to(r: np.ndarray, s: np.ndarray, final: int, emergency: bool) -> None:
     """Bring a motor to ``final`` (INIT or SAFE) the protective way of manual 4.4.1/4.4.5/4.4.12."""
