@@ -16,7 +16,7 @@ from jvl_gym.families.mac050_141.inner import inner_samples_one
 from jvl_gym.families.mac050_141.kernel import outer_firmware
 from jvl_gym.families.mac050_141.lanes import LANES, in_lanes, lane_scratch
 from jvl_gym.motor.array import driver
-from jvl_gym.physics.trig import fma, sincos
+from jvl_gym.physics.trig import fma, sincos, sine
 
 
 @njit(**KERNEL)
@@ -122,6 +122,20 @@ def _sincos_all(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     for i in range(x.size):
         s[i], co[i] = sincos(x[i])
     return s, co
+
+
+@njit(cache=True)
+def _sine_all(x: np.ndarray) -> np.ndarray:
+    out = np.empty_like(x)
+    for i in range(x.size):
+        out[i] = sine(x[i])
+    return out
+
+
+def test_sine_is_the_sine_of_sincos_bit_for_bit() -> None:
+    x = np.random.default_rng(1).uniform(-1e4, 1e4, 10_000)
+    x[:3] = [0.0, -0.0, np.pi]
+    np.testing.assert_array_equal(_sine_all(x), _sincos_all(x)[0])
 
 
 def test_sincos_is_within_two_units_in_the_last_place() -> None:

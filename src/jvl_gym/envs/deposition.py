@@ -26,7 +26,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..engine.jit import KERNEL
+from ..engine.jit import KERNEL, plain_arguments
 
 __all__ = ["bin_centres", "lay_turn_row", "profile_summary_row", "flatness_row", "lay_turns",
            "profile_summary", "layer_flatness"]
@@ -38,11 +38,13 @@ def bin_centres(width: float, bin_width: float) -> np.ndarray:
     return (np.arange(n) + 0.5) * bin_width
 
 
-@njit(cache=True, inline="always")
+@plain_arguments
+@njit(**KERNEL, forceinline=True)
 def _count_below(centres: np.ndarray, v: float, or_equal: bool) -> int:  # pragma: no cover
     """Number of ``centres`` < ``v`` (``<= v`` with ``or_equal``): ``np.searchsorted(centres,
     v, side="left" / "right")`` for finite ``v``, found from the uniform spacing (a guess,
-    then corrected by comparisons, so the result is exact) instead of a binary search."""
+    then corrected by comparisons, so the result is exact) instead of a binary search.
+    Compiled once (its callers pass ``or_equal`` as a constant) and inlined by LLVM."""
     n = centres.size
     if not v == v:
         return n  # NaN sorts last

@@ -22,7 +22,7 @@ import numpy as np
 from numba import njit
 
 from ..engine.jit import KERNEL
-from ..physics.trig import sincos
+from ..physics.trig import sine
 
 __all__ = ["SpeedProfile", "row_speed"]
 
@@ -42,12 +42,12 @@ def row_speed(p: np.ndarray, t: float, theta: float,
     # none for a zero amplitude (the factor 1 + (±0) is 1 either way)
     w = 0.0
     if p[WALK] != 0.0:
-        w = p[WALK] * _WALK_SCALE * (sincos(2.0 * math.pi * p[F0] * t + p[Q0])[0]
-                                     + sincos(2.0 * math.pi * p[F1] * t + p[Q1])[0]
-                                     + sincos(2.0 * math.pi * p[F2] * t + p[Q2])[0])
+        w = p[WALK] * _WALK_SCALE * (sine(2.0 * math.pi * p[F0] * t + p[Q0])
+                                     + sine(2.0 * math.pi * p[F1] * t + p[Q1])
+                                     + sine(2.0 * math.pi * p[F2] * t + p[Q2]))
     r = 0.0
     if p[RIPPLE] != 0.0:
-        r = p[RIPPLE] * sincos(theta + p[PHASE])[0]
+        r = p[RIPPLE] * sine(theta + p[PHASE])
     return max(p[V_NOM] * ramp * (1.0 + change) * (1.0 + w) * (1.0 + r), 0.0)
 
 

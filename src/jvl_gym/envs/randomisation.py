@@ -74,7 +74,9 @@ class Randomisation:
         keys = np.array([rng.bit_generator.random_raw(2) for rng in rngs],
                         dtype=np.uint64).reshape(idx.size, 2)
         low, span = self._range_arrays(ranges)
-        draws = dict(zip(names, low[:, None] + u[:, :-1].T * span[:, None]))
+        # rows of a C-ordered (R, M) array: contiguous for one copy and for many, so that a
+        # compiled reset taking draws compiles once for both
+        draws = dict(zip(names, np.ascontiguousarray(low[:, None] + u[:, :-1].T * span[:, None])))
         type_names = [types[min(int(x * len(types)), len(types) - 1)] for x in u[:, -1].tolist()]
         self._type_names[idx] = type_names
         params = self._motor_params(idx, draws)

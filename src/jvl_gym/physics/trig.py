@@ -23,6 +23,8 @@ import numpy as np
 from numba import njit, types
 from numba.extending import intrinsic
 
+from ..engine.jit import KERNEL
+
 
 @intrinsic
 def fma(typingctx, a, b, c):  # pragma: no cover - compiled
@@ -72,3 +74,11 @@ def sincos(x: float) -> tuple[float, float]:
     s = sin_r if q == 0.0 else (cos_r if q == 1.0 else (-sin_r if q == 2.0 else -cos_r))
     co = cos_r if q == 0.0 else (-sin_r if q == 1.0 else (-cos_r if q == 2.0 else sin_r))
     return s, co
+
+
+@njit(**KERNEL, forceinline=True)
+def sine(x: float) -> float:
+    """``sin x`` for a finite angle ``x`` [rad]: :func:`sincos`'s sine, compiled once as a
+    function of its own that LLVM inlines into each caller, so that a caller with several sines
+    types and lowers one copy of :func:`sincos`, not one per call."""
+    return sincos(x)[0]
