@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..engine.jit import KERNEL
+from ..engine.jit import KERNEL, plain_arguments
 from ..motor.noise import normal
 
 __all__ = ["OBS_BOUND", "action", "put_obs", "end_step", "reset_counters"]
@@ -28,10 +28,12 @@ def action(actions: np.ndarray, i: int, k: int) -> float:  # pragma: no cover - 
     return min(max(actions[i, k], -1.0), 1.0)
 
 
+@plain_arguments
 @njit(**KERNEL)
 def obs_normal(key: np.uint64, counter: int, k: int, n: int) -> float:  # pragma: no cover
     """:func:`jvl_gym.motor.noise.normal` compiled once, as a function of its own: numba's IR
-    inliner would copy it (and the generator it inlines) into each observation component's store."""
+    inliner would copy it (and the generator it inlines) into each observation component's
+    store, and a literal component index would compile it once per component."""
     return normal(key, counter, k, n)
 
 
@@ -39,8 +41,8 @@ def obs_normal(key: np.uint64, counter: int, k: int, n: int) -> float:  # pragma
 def put_obs(obs: np.ndarray, i: int, k: int, x: float, key: np.uint64, counter: int,
             noise: float) -> None:  # pragma: no cover - compiled
     """Store observation component ``k`` of copy ``i``: add noise, clip to ±OBS_BOUND."""
-    if noise > 0.0:  # ``k`` as int64: one compile for every component, not one per literal
-        x += noise * obs_normal(key, counter, np.int64(k), obs.shape[1])
+    if noise > 0.0:
+        x += noise * obs_normal(key, counter, k, obs.shape[1])
     obs[i, k] = min(max(x, -OBS_BOUND), OBS_BOUND)
 
 

@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ....engine.jit import KERNEL
+from ....engine.jit import KERNEL, plain_arguments
 from .. import constants as c
 from . import regs as R
 from .modes import GEAR_MODES
@@ -54,6 +54,7 @@ def _gear_mode(mode: int) -> bool:  # pragma: no cover - compiled
     return 0 <= mode < GEAR_MODES.size and GEAR_MODES[mode]
 
 
+@plain_arguments
 @njit(**KERNEL)
 def coil_rules_hold(r: np.ndarray, num: int, raw: int) -> bool:  # pragma: no cover - compiled
     """P1 ≤ P2 ≤ P3 ≤ P4, P1 ≤ P5 ≤ P4, P6 = ±1 (manual 4.4.20) for the P1..P6 of register row

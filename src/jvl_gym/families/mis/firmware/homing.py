@@ -50,6 +50,7 @@ import math
 
 from numba import njit
 
+from ....engine.jit import plain_arguments
 from ....physics.fixed import wrap32
 from .. import constants as c
 from .. import layout as L
@@ -66,6 +67,7 @@ from .monitor import (
 from .profile import position_step, velocity_step
 
 
+@plain_arguments
 @njit(cache=True)
 def _set_zero(regs, s, p, at_rotor: bool) -> None:  # pragma: no cover - compiled
     """P_IST and ENCODER_POS := P_HOME here; ``at_rotor``: the commanded position (and the
