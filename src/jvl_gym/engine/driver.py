@@ -38,6 +38,7 @@ from typing import Any
 import numpy as np
 from numba import njit, prange
 
+from . import two_cores
 from .jit import KERNEL, KERNEL_PARALLEL
 from .specialize import specialise
 from .view import EngineView, Episode
@@ -242,7 +243,7 @@ class MotorDriver:
         :class:`EngineView`): threaded from :data:`PARALLEL_MIN` motors unless ``serial``,
         taken with the arguments of :meth:`run` spread, ``(*arrays, n_outer)``."""
         if not self._prepared:
-            self.family.compiled.prepare(arrays)
+            two_cores.prepare(self.family.compiled, arrays)
             self._prepared = True
         return self.parallel if not serial and arrays[0].shape[0] >= PARALLEL_MIN else self.serial
 
@@ -304,7 +305,7 @@ class TaskDriver:
         :meth:`step` spread, ``(*arrays, *episode, task, actions, decimation)``. An env keeps
         it (its number of copies does not change) and calls it without :meth:`step`'s frame."""
         if not self._prepared:
-            self.family.compiled.prepare(arrays)
+            two_cores.prepare(self.family.compiled, arrays)
             self._prepared = True
         return self.parallel if arrays[0].shape[0] >= PARALLEL_MIN else self.serial
 

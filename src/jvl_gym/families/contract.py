@@ -331,7 +331,8 @@ class Family:
         Human name (``"MAC050–141 integrated servo motors"``).
     compiled : module
         The compiled step: ``outer_sample``, ``inner_block``, ``LANES``, ``prepare``,
-        ``scratch`` (see :mod:`jvl_gym.engine.driver`).
+        ``scratch`` (see :mod:`jvl_gym.engine.driver`), optionally ``compile_split``
+        (:mod:`jvl_gym.engine.two_cores`).
     array_class : type
         The family's :class:`~jvl_gym.MotorArray` subclass.
     table : RegisterTable

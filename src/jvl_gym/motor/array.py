@@ -30,6 +30,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from ..compat import renamed_method
+from ..engine import two_cores
 from ..families import Capability, Family, UnsupportedOperation, family, family_of_motor
 from ..families.capability import motors_of
 from ..registers import Register, RegisterError, RegisterTable
@@ -190,6 +191,8 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         self._fmt = self.table.fmt_code_array
         #: register numbers whose not-modelled warning has been given (``_note_not_modelled``)
         self._not_modelled_warned: set[int] = set()
+        # on a cold start, a second process compiles the family's inner samples meanwhile
+        two_cores.start(self.family.compiled, self.engine_view())
         self._before_reset()
         self.reset(**params)
 

@@ -1,12 +1,15 @@
 """The MAC050–141 family's compiled step, as the engine's driver calls it.
 
 :func:`outer_sample` and :func:`inner_block` are bound into the templates of
-:mod:`jvl_gym.engine.driver`; :func:`prepare` compiles the block's inner samples on their own
-before a driver that calls them is compiled (compiled inside a caller's compilation, numba
-takes several times as long).
+:mod:`jvl_gym.engine.driver`; :func:`prepare` compiles the block's inner samples and the outer
+firmware on their own before a driver that calls them is compiled (compiled inside a caller's
+compilation, numba takes several times as long), and :func:`compile_split` lists them in two
+independent halves that a cold start compiles on two cores (``jvl_gym.engine.two_cores``).
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 from numba import njit, typeof, types
@@ -16,7 +19,7 @@ from .inner import inner_samples_one
 from .kernel import outer_firmware
 from .lanes import LANES, inner_samples, lane_samples_coupled, lane_samples_rigid, lane_scratch
 
-__all__ = ["LANES", "outer_sample", "inner_block", "prepare", "scratch"]
+__all__ = ["LANES", "outer_sample", "inner_block", "compile_split", "prepare", "scratch"]
 
 
 @njit(cache=True, inline="always")
@@ -45,25 +48,35 @@ def scratch(n_motors: int) -> np.ndarray:
 _prepared: list[bool] = []
 
 
-def prepare(arrays: tuple) -> None:
-    """Compile (or load from numba's cache) the inner samples for the types of ``arrays``
-    (the fields of an :class:`EngineView`, whose types do not vary) on their own, once per
-    process, before a driver that calls them is compiled."""
-    if _prepared:
-        return
+def compile_split(arrays: tuple) -> tuple[list[tuple[Any, tuple]], list[tuple[Any, tuple]]]:
+    """The large compiled functions a driver calls, with their argument types for ``arrays``
+    (the fields of an :class:`EngineView`), in two independent lists ``(inner, outer)``: the
+    inner samples (the one-motor path, the two lane loops, the block's samples, in the order
+    they are compiled) and the outer firmware (``jvl_gym.engine.two_cores``)."""
     view = EngineView(*arrays)
     rec = types.boolean
-    inner_samples_one.compile((typeof(view.regs[0]), typeof(view.state[0]),
-                               typeof(view.params[0]), typeof(view.inputs[0]),
-                               typeof(view.keys[0]), typeof(view.buf[0]), rec,
-                               typeof(view.fmt), typeof(view.scratch[0]), types.int64))
-    for lane_samples in (lane_samples_rigid, lane_samples_coupled):
-        lane_samples.compile((typeof(view.scratch[0]), types.int64, typeof(view.regs[0]),
-                              typeof(view.state[0]), typeof(view.params[0]),
-                              typeof(view.inputs[0]), typeof(view.keys[0]),
-                              typeof(view.buf[0]), rec, typeof(view.fmt)))
-    inner_samples.compile((typeof(view.regs), typeof(view.state), typeof(view.params),
-                           typeof(view.inputs), typeof(view.keys), typeof(view.buf), rec,
-                           typeof(view.fmt), types.int64, types.int64,
-                           typeof(view.scratch[0])))
+    regs, state, params = typeof(view.regs[0]), typeof(view.state[0]), typeof(view.params[0])
+    inputs, key, buf, fmt = (typeof(view.inputs[0]), typeof(view.keys[0]),
+                             typeof(view.buf[0]), typeof(view.fmt))
+    row = typeof(view.scratch[0])
+    inner = [(inner_samples_one, (regs, state, params, inputs, key, buf, rec, fmt, row,
+                                  types.int64)),
+             *[(lanes, (row, types.int64, regs, state, params, inputs, key, buf, rec, fmt))
+               for lanes in (lane_samples_rigid, lane_samples_coupled)],
+             (inner_samples, (typeof(view.regs), typeof(view.state), typeof(view.params),
+                              typeof(view.inputs), typeof(view.keys), typeof(view.buf), rec,
+                              fmt, types.int64, types.int64, row))]
+    return inner, [(outer_firmware, (regs, state, params, inputs, key, buf, rec, fmt))]
+
+
+def prepare(arrays: tuple) -> None:
+    """Compile (or load from numba's cache) the inner samples and the outer firmware for the
+    types of ``arrays`` (the fields of an :class:`EngineView`, whose types do not vary) on
+    their own, once per process, before a driver that calls them is compiled
+    (:func:`compile_split`)."""
+    if _prepared:
+        return
+    inner, outer = compile_split(arrays)
+    for dispatcher, sig in (*inner, *outer):
+        dispatcher.compile(sig)
     _prepared.append(True)

@@ -4,6 +4,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit, typeof, types
 
@@ -11,7 +13,7 @@ from ...engine.view import EngineView, record_rows, take_planned_inputs
 from .inner import LANES, inner_samples, lane_scratch
 from .kernel import outer_firmware
 
-__all__ = ["LANES", "outer_sample", "inner_block", "prepare", "scratch"]
+__all__ = ["LANES", "outer_sample", "inner_block", "compile_split", "prepare", "scratch"]
 
 
 @njit(cache=True, inline="always")
@@ -40,18 +42,28 @@ def scratch(n_motors: int) -> np.ndarray:
 _prepared: list[bool] = []
 
 
+def compile_split(arrays: tuple) -> tuple[list[tuple[Any, tuple]], list[tuple[Any, tuple]]]:
+    """The large compiled functions a driver calls, with their argument types for ``arrays``
+    (the fields of an :class:`EngineView`), in two independent lists: the current-loop samples
+    and the servo sample's firmware (``jvl_gym.engine.two_cores``)."""
+    view = EngineView(*arrays)
+    inner = [(inner_samples, (typeof(view.regs), typeof(view.state), typeof(view.params),
+                              typeof(view.inputs), typeof(view.buf), types.boolean, types.int64,
+                              types.int64, typeof(view.scratch[0])))]
+    outer = [(outer_firmware, (typeof(view.regs[0]), typeof(view.state[0]),
+                               typeof(view.params[0]), typeof(view.inputs[0]),
+                               typeof(view.keys[0]), typeof(view.buf[0]), types.boolean))]
+    return inner, outer
+
+
 def prepare(arrays: tuple) -> None:
     """Compile (or load from numba's cache) the current-loop samples and the servo sample for
     the types of ``arrays`` (the fields of an :class:`EngineView`) on their own, once per
     process, before a driver that calls them is compiled: compiled inside a caller's
-    compilation, numba takes several times as long."""
+    compilation, numba takes several times as long (:func:`compile_split`)."""
     if _prepared:
         return
-    view = EngineView(*arrays)
-    inner_samples.compile((typeof(view.regs), typeof(view.state), typeof(view.params),
-                           typeof(view.inputs), typeof(view.buf), types.boolean, types.int64,
-                           types.int64, typeof(view.scratch[0])))
-    outer_firmware.compile((typeof(view.regs[0]), typeof(view.state[0]),
-                            typeof(view.params[0]), typeof(view.inputs[0]),
-                            typeof(view.keys[0]), typeof(view.buf[0]), types.boolean))
+    inner, outer = compile_split(arrays)
+    for dispatcher, sig in (*inner, *outer):
+        dispatcher.compile(sig)
     _prepared.append(True)

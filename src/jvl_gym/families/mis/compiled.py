@@ -7,6 +7,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numba import njit, typeof, types
 
@@ -14,7 +16,7 @@ from ...engine.view import EngineView, record_rows, take_planned_inputs
 from .kernel import outer_firmware
 from .plant.stepper import LANES, inner_samples, lane_scratch, prepare_lane
 
-__all__ = ["LANES", "outer_sample", "inner_block", "prepare", "scratch"]
+__all__ = ["LANES", "outer_sample", "inner_block", "compile_split", "prepare", "scratch"]
 
 
 @njit(cache=True, inline="always")
@@ -43,15 +45,25 @@ def scratch(n_motors: int) -> np.ndarray:
 _prepared: list[bool] = []
 
 
+def compile_split(arrays: tuple) -> tuple[list[tuple[Any, tuple]], list[tuple[Any, tuple]]]:
+    """The large compiled functions a driver calls, with their argument types for ``arrays``
+    (the fields of an :class:`EngineView`), in two independent lists: the plant's inner
+    samples and the firmware (``jvl_gym.engine.two_cores``)."""
+    view = EngineView(*arrays)
+    inner = [(inner_samples, (typeof(view.state), types.int64, types.int64,
+                              typeof(view.scratch[0])))]
+    outer = [(outer_firmware, (typeof(view.regs[0]), typeof(view.state[0]),
+                               typeof(view.params[0]), typeof(view.inputs[0]),
+                               typeof(view.buf[0]), types.boolean))]
+    return inner, outer
+
+
 def prepare(arrays: tuple) -> None:
     """Compile (or load from numba's cache) the firmware and the plant on their own, once per
-    process, before a driver that calls them is compiled."""
+    process, before a driver that calls them is compiled (:func:`compile_split`)."""
     if _prepared:
         return
-    view = EngineView(*arrays)
-    outer_firmware.compile((typeof(view.regs[0]), typeof(view.state[0]),
-                            typeof(view.params[0]), typeof(view.inputs[0]),
-                            typeof(view.buf[0]), types.boolean))
-    inner_samples.compile((typeof(view.state), types.int64, types.int64,
-                           typeof(view.scratch[0])))
+    inner, outer = compile_split(arrays)
+    for dispatcher, sig in (*outer, *inner):
+        dispatcher.compile(sig)
     _prepared.append(True)
