@@ -3,7 +3,8 @@
 numba compiles in one thread. Before a driver's first compile, a family compiles the large
 functions the driver calls (its ``prepare``). A family may split them into two independent
 lists (``compile_split(arrays) -> (beside, here)``, each a list of ``(dispatcher, argument
-types)`` of functions compiled apart, :mod:`jvl_gym.engine.apart`): when the first of
+types)`` of functions that numba caches on their own, such as those compiled apart,
+:mod:`jvl_gym.engine.apart`): when the first of
 ``beside`` is not in numba's on-disk cache yet, a second Python process compiles ``beside``
 into the cache while this one compiles ``here``; then the family's ``prepare`` loads what the
 other process cached. The machine code is the same either way (each function is compiled on its
