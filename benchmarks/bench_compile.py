@@ -83,7 +83,9 @@ def seconds(code: str, tree: Path, cache_dir: str) -> tuple[float, float]:
     """Wall time [s] of ``code`` and the CPU time [s] of the whole process (imports included)
     in a new Python process importing jvl_gym from ``tree`` with numba's cache in
     ``cache_dir``. The CPU seconds depend much less on the machine's load than the wall
-    seconds (a process waiting for a core spends none)."""
+    seconds (a process waiting for a core spends none); they are that process's own, without
+    the second process a cold start compiles a family's inner samples in
+    (``jvl_gym.engine.two_cores``), which the family profiles count."""
     wall, cpu = _last_line(["-c", TIMED.format(code=code)], tree, cache_dir).split()
     return float(wall), float(cpu)
 

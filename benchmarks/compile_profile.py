@@ -16,7 +16,8 @@ that a loaded machine gives the figures of a quiet one:
 - ``other``: the remaining passes of numba's front end (IR building, rewrites, analyses)
   and the dispatcher's own work around them.
 
-``python compile_profile.py CODE`` runs ``CODE`` under the listener and prints the totals as
+``python compile_profile.py CODE`` runs ``CODE`` (in this process alone: ``JVL_COMPILE_ALONE``)
+under the listener and prints the totals as
 JSON on its last line: ``{function: {stage: seconds}}``, plus ``"__inlined__"``: the front-end
 seconds spent in the passes of each function by qualified name (inlined callees included).
 """
@@ -24,6 +25,7 @@ seconds spent in the passes of each function by qualified name (inlined callees 
 from __future__ import annotations
 
 import json
+import os
 import sys
 import time
 from collections import defaultdict
@@ -96,4 +98,7 @@ def run(code: str) -> dict:
 
 
 if __name__ == "__main__":
+    # the events are this process's: compile everything here, none of it in a second process
+    # (``jvl_gym.engine.two_cores``)
+    os.environ["JVL_COMPILE_ALONE"] = "1"
     print(json.dumps(run(sys.argv[1])))
