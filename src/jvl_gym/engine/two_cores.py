@@ -71,14 +71,8 @@ def start(compiled: Any, arrays: tuple) -> None:
     """Start the second process on the ``beside`` half of the family's ``compile_split``
     when its cache is cold (once per process and family; nothing without ``compile_split``).
     A motor array calls it as soon as its arrays exist, so that the other process works while
-    this one compiles the power-on; :func:`prepare` starts it otherwise.
-
-    Parameters
-    ----------
-    compiled : module
-        The family's compiled-step module (``Family.compiled``).
-    arrays : tuple
-        The fields of the motors' engine view.
+    this one compiles the power-on; :func:`prepare` starts it otherwise. The parameters are
+    :func:`prepare`'s.
     """
     split = getattr(compiled, "compile_split", None)
     if split is None or compiled.__name__ in _started:
