@@ -11,7 +11,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
-#: a stand-in for a family's compiled module: two independent pieces and a prepare
+#: a stand-in for a family's compiled module: two independent pieces
 PROBE = '''
 import os
 from numba import njit, types
@@ -32,11 +32,6 @@ def outer(x):
 
 def compile_split(arrays):
     return [(inner, (types.float64,))], [(outer, (types.float64,))]
-
-
-def prepare(arrays):
-    inner.compile((types.float64,))
-    outer.compile((types.float64,))
 '''
 
 RUN = """

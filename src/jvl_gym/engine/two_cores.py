@@ -1,14 +1,15 @@
 """A family's first compile on two cores: part of it in a second process (:func:`prepare`).
 
-numba compiles in one thread. Before a driver's first compile, a family compiles the large
-functions the driver calls (its ``prepare``). A family may split them into two independent
-lists (``compile_split(arrays) -> (beside, here)``, each a list of ``(dispatcher, argument
-types)`` of functions that numba caches on their own, such as those compiled apart,
-:mod:`jvl_gym.engine.apart`): when the first of
-``beside`` is not in numba's on-disk cache yet, a second Python process compiles ``beside``
-into the cache while this one compiles ``here``; then the family's ``prepare`` loads what the
-other process cached. The machine code is the same either way (each function is compiled on its
-own, for the same types); only the wall time of a cold start changes.
+numba compiles in one thread. Before a driver's first compile, the engine compiles the large
+functions the driver calls, which a family lists in two independent halves
+(``compile_split(arrays) -> (beside, here)``, each a list of ``(dispatcher, argument types)``
+of functions that numba caches on their own, such as those compiled apart,
+:mod:`jvl_gym.engine.apart`). When the first of ``beside`` is not in numba's on-disk cache
+yet, a second Python process compiles ``beside`` into the cache while this one compiles
+``here``; then this one loads what the other process cached. The machine code is the same
+either way (each function is compiled on its own, for the same types); only the wall time of a
+cold start changes. A family without ``compile_split`` compiles them in its own
+``prepare(arrays)``.
 
 The second process is not started when the cache is warm, on a machine with one CPU, when
 numba keeps no on-disk cache, inside such a second process, or with ``JVL_COMPILE_ALONE=1``.
@@ -36,6 +37,8 @@ ALONE = "JVL_COMPILE_ALONE"
 #: the families (compiled modules) whose second process was considered, and those running
 _started: set[str] = set()
 _children: dict[str, subprocess.Popen] = {}
+#: the families (compiled modules) whose functions :func:`prepare` compiled or loaded
+_prepared: set[str] = set()
 
 
 def _cold(dispatcher: Any) -> bool:
@@ -85,9 +88,10 @@ def start(compiled: Any, arrays: tuple) -> None:
 
 def prepare(compiled: Any, arrays: tuple) -> None:
     """Compile (or load) the family's large compiled functions for ``arrays`` (the fields of
-    an :class:`~jvl_gym.engine.view.EngineView`) before a driver's first compile: the family's
-    ``prepare(arrays)``, after compiling the ``here`` half of its ``compile_split`` while the
-    second process (:func:`start`) compiles the other, when the cache was cold.
+    an :class:`~jvl_gym.engine.view.EngineView`) before a driver's first compile, once per
+    process: both halves of its ``compile_split``, the ``here`` half while the second process
+    (:func:`start`) compiles the other when the cache was cold; a family without
+    ``compile_split`` runs its own ``prepare(arrays)``.
 
     Parameters
     ----------
@@ -96,17 +100,26 @@ def prepare(compiled: Any, arrays: tuple) -> None:
     arrays : tuple
         The fields of the motors' engine view.
     """
+    split = getattr(compiled, "compile_split", None)
+    if split is None:
+        compiled.prepare(arrays)
+        return
+    if compiled.__name__ in _prepared:
+        return
     start(compiled, arrays)
+    beside, here = split(arrays)
     child = _children.pop(compiled.__name__, None)
     if child is not None:
-        for dispatcher, sig in compiled.compile_split(arrays)[1]:
+        for dispatcher, sig in here:
             dispatcher.compile(sig)
         try:
             child.wait(TIMEOUT)
         except subprocess.TimeoutExpired:
             child.kill()
             child.wait()
-    compiled.prepare(arrays)
+    for dispatcher, sig in (*beside, *here):  # loads what the other process cached
+        dispatcher.compile(sig)
+    _prepared.add(compiled.__name__)
 
 
 def _compile_job(module: str, job: list[tuple[str, str, tuple]]) -> None:

@@ -330,8 +330,8 @@ class Family:
     title : str
         Human name (``"MAC050–141 integrated servo motors"``).
     compiled : module
-        The compiled step: ``outer_sample``, ``inner_block``, ``LANES``, ``prepare``,
-        ``scratch`` (see :mod:`jvl_gym.engine.driver`), optionally ``compile_split``
+        The compiled step: ``outer_sample``, ``inner_block``, ``LANES``, ``scratch`` (see
+        :mod:`jvl_gym.engine.driver`) and ``compile_split`` or ``prepare``
         (:mod:`jvl_gym.engine.two_cores`).
     array_class : type
         The family's :class:`~jvl_gym.MotorArray` subclass.

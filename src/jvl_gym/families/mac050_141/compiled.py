@@ -1,10 +1,10 @@
 """The MAC050–141 family's compiled step, as the engine's driver calls it.
 
 :func:`outer_sample` and :func:`inner_block` are bound into the templates of
-:mod:`jvl_gym.engine.driver`; :func:`prepare` compiles the block's inner samples and the outer
-firmware on their own before a driver that calls them is compiled (compiled inside a caller's
-compilation, numba takes several times as long), and :func:`compile_split` lists them in two
-independent halves that a cold start compiles on two cores (``jvl_gym.engine.two_cores``).
+:mod:`jvl_gym.engine.driver`; :func:`compile_split` lists the block's inner samples and the
+outer firmware, which the engine compiles on their own before a driver that calls them is
+compiled (compiled inside a caller's compilation, numba takes several times as long), the two
+halves on two cores on a cold start (``jvl_gym.engine.two_cores``).
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from .inner import inner_samples_one
 from .kernel import outer_firmware
 from .lanes import LANES, inner_samples, lane_samples_coupled, lane_samples_rigid, lane_scratch
 
-__all__ = ["LANES", "outer_sample", "inner_block", "compile_split", "prepare", "scratch"]
+__all__ = ["LANES", "outer_sample", "inner_block", "compile_split", "scratch"]
 
 
 @njit(cache=True, inline="always")
@@ -45,9 +45,6 @@ def scratch(n_motors: int) -> np.ndarray:
     return lane_scratch(n_motors)
 
 
-_prepared: list[bool] = []
-
-
 def compile_split(arrays: tuple) -> tuple[list[tuple[Any, tuple]], list[tuple[Any, tuple]]]:
     """The large compiled functions a driver calls, with their argument types for ``arrays``
     (the fields of an :class:`EngineView`), in two independent lists ``(inner, outer)``: the
@@ -68,15 +65,3 @@ def compile_split(arrays: tuple) -> tuple[list[tuple[Any, tuple]], list[tuple[An
                               fmt, types.int64, types.int64, row))]
     return inner, [(outer_firmware, (regs, state, params, inputs, key, buf, rec, fmt))]
 
-
-def prepare(arrays: tuple) -> None:
-    """Compile (or load from numba's cache) the inner samples and the outer firmware for the
-    types of ``arrays`` (the fields of an :class:`EngineView`, whose types do not vary) on
-    their own, once per process, before a driver that calls them is compiled
-    (:func:`compile_split`)."""
-    if _prepared:
-        return
-    inner, outer = compile_split(arrays)
-    for dispatcher, sig in (*inner, *outer):
-        dispatcher.compile(sig)
-    _prepared.append(True)

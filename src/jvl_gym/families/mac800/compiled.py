@@ -13,7 +13,7 @@ from ...engine.view import EngineView, record_rows, take_planned_inputs
 from .inner import LANES, inner_samples, lane_scratch
 from .kernel import outer_firmware
 
-__all__ = ["LANES", "outer_sample", "inner_block", "compile_split", "prepare", "scratch"]
+__all__ = ["LANES", "outer_sample", "inner_block", "compile_split", "scratch"]
 
 
 @njit(cache=True, inline="always")
@@ -39,9 +39,6 @@ def scratch(n_motors: int) -> np.ndarray:
     return lane_scratch(n_motors)
 
 
-_prepared: list[bool] = []
-
-
 def compile_split(arrays: tuple) -> tuple[list[tuple[Any, tuple]], list[tuple[Any, tuple]]]:
     """The large compiled functions a driver calls, with their argument types for ``arrays``
     (the fields of an :class:`EngineView`), in two independent lists: the current-loop samples
@@ -55,15 +52,3 @@ def compile_split(arrays: tuple) -> tuple[list[tuple[Any, tuple]], list[tuple[An
                                typeof(view.keys[0]), typeof(view.buf[0]), types.boolean))]
     return inner, outer
 
-
-def prepare(arrays: tuple) -> None:
-    """Compile (or load from numba's cache) the current-loop samples and the servo sample for
-    the types of ``arrays`` (the fields of an :class:`EngineView`) on their own, once per
-    process, before a driver that calls them is compiled: compiled inside a caller's
-    compilation, numba takes several times as long (:func:`compile_split`)."""
-    if _prepared:
-        return
-    inner, outer = compile_split(arrays)
-    for dispatcher, sig in (*inner, *outer):
-        dispatcher.compile(sig)
-    _prepared.append(True)

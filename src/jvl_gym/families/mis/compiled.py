@@ -16,7 +16,7 @@ from ...engine.view import EngineView, record_rows, take_planned_inputs
 from .kernel import outer_firmware
 from .plant.stepper import LANES, inner_samples, lane_scratch, prepare_lane
 
-__all__ = ["LANES", "outer_sample", "inner_block", "compile_split", "prepare", "scratch"]
+__all__ = ["LANES", "outer_sample", "inner_block", "compile_split", "scratch"]
 
 
 @njit(cache=True, inline="always")
@@ -42,9 +42,6 @@ def scratch(n_motors: int) -> np.ndarray:
     return lane_scratch(n_motors)
 
 
-_prepared: list[bool] = []
-
-
 def compile_split(arrays: tuple) -> tuple[list[tuple[Any, tuple]], list[tuple[Any, tuple]]]:
     """The large compiled functions a driver calls, with their argument types for ``arrays``
     (the fields of an :class:`EngineView`), in two independent lists: the plant's inner
@@ -57,13 +54,3 @@ def compile_split(arrays: tuple) -> tuple[list[tuple[Any, tuple]], list[tuple[An
                                typeof(view.buf[0]), types.boolean))]
     return inner, outer
 
-
-def prepare(arrays: tuple) -> None:
-    """Compile (or load from numba's cache) the firmware and the plant on their own, once per
-    process, before a driver that calls them is compiled (:func:`compile_split`)."""
-    if _prepared:
-        return
-    inner, outer = compile_split(arrays)
-    for dispatcher, sig in (*outer, *inner):
-        dispatcher.compile(sig)
-    _prepared.append(True)
