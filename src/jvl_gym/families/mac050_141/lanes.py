@@ -23,7 +23,7 @@ import numpy as np
 from numba import njit
 
 from ...engine.apart import apart
-from ...engine.jit import LANE_KERNEL, plain_arguments
+from ...engine.jit import LANE_KERNEL, plain_arguments, widest_vectors
 from ...engine.specialize import specialise
 from . import constants as c
 from . import layout as L
@@ -69,13 +69,13 @@ def _lane_samples(scratch, m, r0, s0, p0, u0, key0, b0, rec, fmt):  # pragma: no
 #: compiled apart: :func:`inner_samples` calls the machine code (``engine.apart``)
 _OPTIONS = {"_lane_samples": {**LANE_KERNEL, "apart": True}}
 #: :func:`_lane_samples` of lanes whose motors all have a rigid shaft
-lane_samples_rigid = plain_arguments(specialise(
+lane_samples_rigid = plain_arguments(widest_vectors(specialise(
     {"_lane_samples": _lane_samples}, {"RIGID": True}, "rigid", __file__,
-    _OPTIONS)["_lane_samples"])
+    _OPTIONS)["_lane_samples"]))
 #: :func:`_lane_samples` of lanes with an elastically coupled motor among them
-lane_samples_coupled = plain_arguments(specialise(
+lane_samples_coupled = plain_arguments(widest_vectors(specialise(
     {"_lane_samples": _lane_samples}, {"RIGID": False}, "coupled", __file__,
-    _OPTIONS)["_lane_samples"])
+    _OPTIONS)["_lane_samples"]))
 
 
 @apart

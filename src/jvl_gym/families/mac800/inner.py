@@ -35,7 +35,7 @@ import numpy as np
 from numba import njit
 
 from ...engine.apart import apart
-from ...engine.jit import KERNEL, LANE_KERNEL, plain_arguments
+from ...engine.jit import KERNEL, LANE_KERNEL, plain_arguments, widest_vectors
 from ...physics.bus import bus_step_prepared
 from ...physics.coil import coil_step_prepared, phase_to_vector, vector_to_phases
 from ...physics.fixed import clamp, rnd
@@ -320,6 +320,7 @@ def _records_inner(r: np.ndarray) -> bool:
 
 
 @apart
+@widest_vectors
 @njit(**LANE_KERNEL)
 def inner_samples(regs, state, params, inputs, buf, rec, i0, n, scratch):
     """The current-loop samples of one servo sample of motors ``i0 … i0 + n − 1`` (one

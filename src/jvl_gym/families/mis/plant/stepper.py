@@ -65,7 +65,7 @@ import numpy as np
 from numba import njit
 
 from ....engine.apart import apart
-from ....engine.jit import LANE_KERNEL
+from ....engine.jit import LANE_KERNEL, widest_vectors
 from ....physics.trig import sincos
 from .. import constants as c
 from .. import layout as L
@@ -148,6 +148,7 @@ def prepare_lane(sc, j: int, s, p, u) -> None:  # pragma: no cover - compiled
 
 
 @apart
+@widest_vectors
 @njit(**LANE_KERNEL)
 def inner_samples(state, i0: int, n: int, sc) -> None:  # pragma: no cover - compiled
     """The inner samples of motors ``i0 … i0 + n − 1`` in lanes (module docstring)."""
