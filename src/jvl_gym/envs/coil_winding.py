@@ -8,6 +8,7 @@ from typing import Any, NamedTuple
 import numpy as np
 from numba import njit
 
+from ..engine.apart import apart
 from ..engine.jit import KERNEL
 from ..families import Capability, Family
 from . import deposition as dep
@@ -76,11 +77,13 @@ def _figures(fam: Family) -> dict[str, float]:
 _DT = _V_TRAVERSE_NORM = 1.0  # bound per family by ``_figures``
 
 
+@apart
 @njit(**KERNEL)
 def _lay_turn(x, t, h, centres, w, k):  # pragma: no cover - compiled
     """Lay a copy's turn at traverse position ``x`` [m] and time ``t`` [s] on its heights ``h``
     (its coil record ``w``, the env's constants ``k``): once per spindle revolution, so a
-    function of its own, called from the step."""
+    function of its own, compiled apart (``engine.apart``): the step calls its machine
+    code."""
     d = w.d_mean * (1.0 + w.d_var * math.sin(
         2.0 * math.pi * w.d_freq * t + w.d_phase))
     base, void, x_laid = lay_turn_row(h, centres, x, d, k.width, k.nest > 0.5)
@@ -148,10 +151,12 @@ def _track_layer(i, view, w, h):  # pragma: no cover - compiled
     return _close_layer(w, h)
 
 
+@apart
 @njit(**KERNEL)
 def _close_layer(w, h):  # pragma: no cover - compiled
     """Book and score the flatness of the layer closed on the heights ``h`` (coil record
-    ``w``): once per layer, so a function of its own, called from the step."""
+    ``w``): once per layer, so a function of its own, compiled apart (``engine.apart``): the
+    step calls its machine code."""
     std, _, _ = flatness_row(h, w.d0)
     w.last_std = std
     w.floor = h.mean()
@@ -173,6 +178,7 @@ def _observe_row(i, view, episode, s):  # pragma: no cover - compiled
                      2000.0 / 60.0 * k.spindle_cpr * _DT)
 
 
+@apart
 @njit(**KERNEL)
 def _put_observation(obs, prev, i, counter, key, k, w, h, summary, position, speed,
                      spindle_norm):  # pragma: no cover - compiled
@@ -180,8 +186,9 @@ def _put_observation(obs, prev, i, counter, key, k, w, h, summary, position, spe
     and clipping: the normalised traverse ``position`` and ``speed``, the spindle speed (its
     pulses per step over ``spindle_norm``), the coil record ``w`` and profile summary
     ``summary`` (groups,) of the heights ``h`` (recomputed when a turn was laid), the
-    previous action ``prev[i]`` (env constants ``k``). Compiled once and called from the end
-    of a step and after a reset."""
+    previous action ``prev[i]`` (env constants ``k``). Compiled once, apart
+    (``engine.apart``): the end of a step and the observation after a reset call its machine
+    code, instead of each optimising a copy of it again."""
     noise = k.noise
     head = (position, speed, w.pulses / k.decimation / spindle_norm, w.layer / k.n_layers,
             w.direction)
