@@ -63,17 +63,16 @@ def widest_vectors(dispatcher: Any) -> Any:
     LLVM's tuning for recent Intel cores with AVX-512 (Skylake-X to Emerald Rapids) prefers
     256-bit vectors in loops, so numba's code of a lane loop uses 4 of its 8 float64 lanes.
     The lane loops of the motor families step 16 motors of a block in the same arithmetic:
-    with 512-bit vectors a MAC140 array of 1024 motors ran 27 % more inner samples per
-    second, on one thread and on two (2026-12-07, the 2-core Emerald Rapids machine). The
-    results are the same bits: each lane's operations are the same IEEE operations in the same
-    order, whatever the width (no fast-math flag, :data:`KERNEL`).
+    on the 2-core Emerald Rapids machine, with 512-bit vectors, a MAC140 array of 1024 motors
+    runs about a third more inner samples per second on one thread (docs/envs.md, "SIMD
+    lanes"). The results are the same bits: each lane's operations are the same IEEE
+    operations in the same order, whatever the width (no fast-math flag, :data:`KERNEL`).
 
     numba has no option for it: the function's LLVM definition gets LLVM's
     ``"prefer-vector-width"`` attribute (:data:`WIDEST_VECTOR_BITS`) where numba declares
-    it (``BaseContext.declare_function``), for this function only; a caller that inlines it
-    keeps its own width. The attribute is part of the compiled code, not of numba's cache key:
-    the function's module, which its decorator is in, is what a change must edit (numba
-    compiles again when a function's file changes).
+    it (``BaseContext.declare_function``), for this function only. The attribute is part of
+    the compiled code, not of numba's cache key: numba compiles the function again when its
+    file changes, and the decorator is in that file.
     """
     if dispatcher.overloads:
         raise ValueError(f"{dispatcher.py_func.__qualname__} is compiled already")
