@@ -16,11 +16,13 @@ from .base import Field, MotorVectorEnv
 from .compiled import action, end_step, put_obs
 from .deposition import flatness_row, lay_turn_row, profile_summary_row
 from .profiles import SpeedProfile, row_speed
+from .randomisation import uniform_rows
 from .single import MotorEnv
 from .task import (
     ERROR_BITS,
     R,
     Task,
+    clear_records,
     coil_direction,
     record,
     reg,
@@ -380,13 +382,13 @@ class CoilWindingVectorEnv(MotorVectorEnv):
 
     def _task_reset(self, idx: np.ndarray, draws: dict[str, np.ndarray],
                     rngs: list[np.random.Generator]) -> None:
-        u = np.array([rng.random(2) for rng in rngs]).reshape(idx.size, 2)
+        u = uniform_rows(rngs, 2)
         self.profile.reset(idx, rngs, draws["spindle_rpm"] / 60.0, draws["ramp_time"],
                            draws["speed_step"], draws["step_time"], draws["walk"],
                            np.zeros(idx.size))
         gearf1, a_soll = np.empty(idx.size), np.empty(idx.size)
         half = np.empty(idx.size, dtype=np.int64)
-        self.state.coil[idx] = 0
+        clear_records(self.state.coil, idx)
         self.h[idx] = 0.0
         _reset_rows(idx, self.state.coil, self.h, draws["wire_diameter"], draws["diameter_bias"],
                     draws["diameter_variation"], draws["a_soll"], u, self._counts_per_m,

@@ -19,6 +19,7 @@ from .task import (
     ERROR_BITS,
     R,
     Task,
+    clear_records,
     record,
     reg,
     set_analog_volts,
@@ -316,7 +317,7 @@ class GearSyncVectorEnv(MotorVectorEnv):
         m = self.motors
         fam = self.fam
         gearf1, load = np.empty(idx.size), np.empty(idx.size)
-        self.state.line[idx] = 0
+        clear_records(self.state.line, idx)
         _reset_rows(idx, self.state.line, self.gear, draws["ea"], draws["thickness"],
                     draws["r0"], draws["span"], draws["tension_ref"], self.master_radius,
                     self.gear_ratio, self.master_counts_per_rev, fam.constants.COUNTS_PER_REV,

@@ -23,6 +23,7 @@ from numba import njit
 
 from ..engine.jit import KERNEL
 from ..physics.trig import sine
+from .randomisation import uniform_rows
 
 __all__ = ["SpeedProfile", "row_speed"]
 
@@ -85,7 +86,7 @@ class SpeedProfile:
               ripple: np.ndarray) -> None:
         """New profiles for copies ``idx``; the sines' frequencies and phases come from
         ``rngs`` (one generator per copy, in the order of ``idx``)."""
-        u = np.array([rng.random(7) for rng in rngs]).reshape(idx.size, 7)
+        u = uniform_rows(rngs, 7)
         _reset_rows(self.params, idx, v_nom, t_ramp, step, t_step, walk, ripple, u)
 
     def speed(self, t: np.ndarray, theta: np.ndarray) -> np.ndarray:

@@ -19,7 +19,7 @@ import numpy as np
 from ..physics.coupling import coupling_for
 from .compiled import reset_counters
 
-__all__ = ["Randomisation", "seed_list"]
+__all__ = ["Randomisation", "seed_list", "uniform_rows"]
 
 
 def seed_list(seed: int | Sequence[int | None] | None, n: int) -> list[int | None]:
@@ -32,6 +32,15 @@ def seed_list(seed: int | Sequence[int | None] | None, n: int) -> list[int | Non
     if len(seeds) != n:
         raise ValueError(f"expected {n} seeds, got {len(seeds)}")
     return seeds
+
+
+def uniform_rows(rngs: Sequence[np.random.Generator], width: int) -> np.ndarray:
+    """Uniform numbers in [0, 1), (len(rngs), width): row ``j`` is what ``rngs[j].random(width)``
+    returns (filled in place, without a new array per copy)."""
+    u = np.empty((len(rngs), width))
+    for row, rng in zip(u, rngs):
+        rng.random(out=row)
+    return u
 
 
 class Randomisation:
@@ -70,26 +79,32 @@ class Randomisation:
         # two full-range uint64 noise keys: what rng.integers(0, 2**64 - 1, size=2,
         # dtype=np.uint64, endpoint=True) returns (raw draws), without its per-call overhead
         width = len(names) + 1
-        u = np.array([rng.random(width) for rng in rngs]).reshape(idx.size, width)
-        keys = np.array([rng.bit_generator.random_raw(2) for rng in rngs],
-                        dtype=np.uint64).reshape(idx.size, 2)
+        u = uniform_rows(rngs, width)
+        keys = np.empty((idx.size, 2), dtype=np.uint64)
+        for row, rng in zip(keys, rngs):
+            row[:] = rng.bit_generator.random_raw(2)
         low, span = self._range_arrays(ranges)
         # rows of a C-ordered (R, M) array: contiguous for one copy and for many, so that a
         # compiled reset taking draws compiles once for both
         draws = dict(zip(names, np.ascontiguousarray(low[:, None] + u[:, :-1].T * span[:, None])))
-        type_names = [types[min(int(x * len(types)), len(types) - 1)] for x in u[:, -1].tolist()]
-        self._type_names[idx] = type_names
+        if len(types) == 1:  # one type: every copy's (its draw is made all the same)
+            motor_type: str | list[str] = types[0]
+            self._type_names[idx] = motor_type
+        else:
+            motor_type = [types[min(int(x * len(types)), len(types) - 1)]
+                          for x in u[:, -1].tolist()]
+            self._type_names[idx] = motor_type
         params = self._motor_params(idx, draws)
         if ranges["resonance_hz"][1] > 0.0:  # then each copy's resonance and damping ratio
             (f_lo, f_hi), (z_lo, z_hi) = ranges["resonance_hz"], ranges["coupling_damping_ratio"]
-            c = np.array([rng.random(2) for rng in rngs]).reshape(idx.size, 2)
+            c = uniform_rows(rngs, 2)
             k, d = coupling_for(self.rotor_inertia(idx), params.get("load_inertia", 0.0),
                                 f_lo + c[:, 0] * (f_hi - f_lo), z_lo + c[:, 1] * (z_hi - z_lo))
             params.update(coupling_stiffness=k, coupling_damping=d)
         reset_counters(idx, keys, self._noise_key, self._t, self._prev_action,
                        self._scope_count)
         self.motors.reseed(keys[:, 0], idx)
-        self.motors.reset(index=idx, motor_type=type_names, **params)
+        self.motors.reset(index=idx, motor_type=motor_type, **params)
         self._task_reset(idx, draws, rngs)
         self._observe_copies(idx)
 

@@ -113,7 +113,7 @@ class Stepping:
             if ended.any():
                 infos.update(self._end_info(ended, terminated))
         if self.autoreset_mode == AutoresetMode.NEXT_STEP and done_before.any():
-            idx = np.flatnonzero(done_before)
+            idx = done_before.nonzero()[0]
             self._reset_envs(idx, [None] * idx.size, None)
             reward[idx] = 0.0
             terminated[idx] = False
@@ -121,7 +121,7 @@ class Stepping:
             done[idx] = False
         elif self.autoreset_mode == AutoresetMode.SAME_STEP:
             if any_done:
-                idx = np.flatnonzero(done)
+                idx = done.nonzero()[0]
                 final = np.full(self.num_envs, None, dtype=object)
                 for i in idx:
                     final[i] = obs[i].copy()
@@ -165,11 +165,13 @@ class Stepping:
         float64 (0 for copies that did not end), with its mask ``info["_" + name]``."""
         reasons = np.empty(self.num_envs, dtype=object)
         reasons.fill("")
-        idx = np.flatnonzero(ended)
-        term = idx[terminated[idx]]
+        idx = ended.nonzero()[0]
+        by_task = terminated[idx]
+        term = idx[by_task]
         if term.size:
             reasons[term] = self._termination_reasons(term)
-        reasons[idx[~terminated[idx]]] = TIME_LIMIT
+        if term.size < idx.size:
+            reasons[idx[~by_task]] = TIME_LIMIT
         out = {"termination_reason": reasons, "_termination_reason": ended.copy()}
         for name, values in self._episode_stats(idx).items():
             column = np.zeros(self.num_envs)

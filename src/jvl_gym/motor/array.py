@@ -355,10 +355,13 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         names, values = self._check_params(params, idx.size)
         types = None
         if motor_type is not None:
-            names_of = [motor_type] * idx.size if isinstance(motor_type, str) else list(motor_type)
-            if len(names_of) != idx.size:
-                raise ValueError(f"got {len(names_of)} motor types for {idx.size} motors")
-            codes = np.array([self._type_code(name) for name in names_of], dtype=np.int64)
+            if isinstance(motor_type, str):
+                codes = np.full(idx.size, self._type_code(motor_type), dtype=np.int64)
+            else:
+                names_of = list(motor_type)
+                if len(names_of) != idx.size:
+                    raise ValueError(f"got {len(names_of)} motor types for {idx.size} motors")
+                codes = np.array([self._type_code(name) for name in names_of], dtype=np.int64)
             types = self._type_of[idx]
             self._type_of[idx] = codes
         cols, to_state, _ = self._keyword_plan(names)
@@ -376,6 +379,10 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         names = tuple(params)
         values = np.empty((len(names), size))
         for q, (name, val) in enumerate(params.items()):
+            if (type(val) is np.ndarray and val.dtype == np.float64 and val.shape == (size,)
+                    and (name in self.PARAMETER_KEYWORDS or name in self.STATE_KEYWORDS)):
+                values[q] = val  # a keyword's (size,) floats: the rules are checked below
+                continue
             try:
                 if name not in self.PARAMETER_KEYWORDS and name not in self.STATE_KEYWORDS:
                     known = ", ".join(sorted([*self.PARAMETER_KEYWORDS, *self.STATE_KEYWORDS]))

@@ -309,7 +309,7 @@ class RegisterBank(ABC):
         :attr:`TRANSACTION_ARRAYS` and the motors' flash (a user command or a SAFE_MODE
         request saves to flash and resets)."""
         flash = self._flash
-        return (tuple(getattr(self, name)[idx] for name in self.TRANSACTION_ARRAYS),
+        return ([getattr(self, name)[idx] for name in self.TRANSACTION_ARRAYS],
                 flash is None, None if flash is None else flash[idx])
 
     def _restore(self, idx: np.ndarray, saved: tuple[Any, ...]) -> None:

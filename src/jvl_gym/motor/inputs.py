@@ -42,6 +42,10 @@ class InputRule:
     unit: str = ""
 
 
+#: the rule of an input the family gives none: any finite real number
+_ANY_REAL = InputRule()
+
+
 def staged_inputs(values: Mapping[str, InputValue], columns: Mapping[str, int],
                   rules: Mapping[str, InputRule], count: int) -> list[tuple[int, np.ndarray]]:
     """The checked ``(column, (count,) values)`` of every input given (None: not given).
@@ -60,7 +64,7 @@ def staged_inputs(values: Mapping[str, InputValue], columns: Mapping[str, int],
             raise TypeError(f"unknown input {name!r}; known: {', '.join(columns)}")
         if value is None:
             continue
-        rule = rules.get(name, InputRule())
+        rule = rules.get(name) or _ANY_REAL
         arr = real_array(name, value, allow_bool=rule.allow_bool)
         if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != count):
             raise ValueError(f"{name}: expected a scalar or shape ({count},), got {arr.shape}")
@@ -72,5 +76,5 @@ def staged_inputs(values: Mapping[str, InputValue], columns: Mapping[str, int],
         bounded = rule.low > -math.inf or rule.high < math.inf
         if bounded and ((arr < rule.low) | (arr > rule.high)).any():
             raise ValueError(f"{name} must be within {rule.low:g}..{rule.high:g}{unit}")
-        staged.append((columns[name], arr if arr.ndim == 1 else np.broadcast_to(arr, (count,))))
+        staged.append((columns[name], arr if arr.ndim == 1 else np.full(count, arr)))
     return staged

@@ -148,10 +148,14 @@ class MacMotorArray(MotorArray, layout=L):
                         values: np.ndarray) -> None:
         """Raise ValueError naming the parameter when a motor's coupling to its load is one the
         inner step cannot integrate (docs/model.md §5.2)."""
-        p = self._type_params[self._type_of[idx]].copy()
-        for q in np.flatnonzero(~to_state):
-            p[:, cols[q]] = values[q]
-        for j in np.flatnonzero(p[:, L.P_K_COUPLING] > 0.0).tolist():  # rigid shafts pass
+        p = self._type_params[self._type_of[idx]]  # (a new array)
+        for q, col in enumerate(cols.tolist()):
+            if not to_state[q]:
+                p[:, col] = values[q]
+        coupled = p[:, L.P_K_COUPLING] > 0.0
+        if not coupled.any():  # rigid shafts pass
+            return
+        for j in np.flatnonzero(coupled).tolist():
             row = p[j]
             problem = coupling_problem(row[L.P_J_MOTOR], row[L.P_J_LOAD], row[L.P_K_COUPLING],
                                        row[L.P_D_COUPLING], c.INNER_DT)
@@ -268,10 +272,11 @@ class MacMotorArray(MotorArray, layout=L):
         arr = real_array("torque", torque)
         if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != idx.size):
             raise ValueError(f"torque: expected a scalar or shape ({idx.size},), got {arr.shape}")
-        if not np.all(np.isfinite(arr)):
+        if not np.isfinite(arr).all():
             raise ValueError(f"torque must be finite, got {torque!r}")
         start_loaded_rows(self.regs, self.state, self.inputs, idx,
-                          np.broadcast_to(arr, (idx.size,)), self._type_peak[self._type_of[idx]])
+                          arr if arr.ndim else np.full(idx.size, arr),
+                          self._type_peak[self._type_of[idx]])
 
     def _add_type(self, cfg: MotorConfig) -> None:
         super()._add_type(cfg)

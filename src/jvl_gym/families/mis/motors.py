@@ -16,6 +16,7 @@ from collections.abc import Iterable
 from typing import Any, ClassVar
 
 import numpy as np
+from numba import njit
 
 from ...motor.arguments import InputValue, MotorIndex, as_index
 from ...motor.array import ModeError, MotorArray
@@ -115,8 +116,6 @@ _IS_SEARCH = _member_table(_SEARCHES)
 _IS_OFF = _member_table(_OFF)
 #: MODE_REG values 0 … 15 stand for themselves in :data:`_MODE_CHANGES`, any other for 16
 _OTHER_MODE = 16
-#: the registers the rules of a MODE_REG write read (:meth:`MisMotorArray._store_mode`)
-_MODE_RULE_REGISTERS = np.array([R.MODE_REG, R.ERR_BITS, R.SETUP_BITS], dtype=np.int64)
 #: bits of :data:`_MODE_CHANGES`: the change is refused; it requests a zero search; it requests
 #: passive; it enters an active mode from passive or safe with SETUP_BITS bit 5 set
 _REFUSED, _TO_SEARCH, _TO_PASSIVE, _SYNC = 1, 2, 4, 8
@@ -144,10 +143,21 @@ def _mode_changes() -> np.ndarray:
 _MODE_CHANGES = _mode_changes()
 
 
-def _mode_index(values: np.ndarray) -> np.ndarray:
-    """MODE_REG values as indices of :data:`_MODE_CHANGES` (a negative value, seen as a large
-    unsigned one, or one above 15: :data:`_OTHER_MODE`)."""
-    return np.minimum(np.asarray(values, np.int64).view(np.uint64), _OTHER_MODE)
+@njit(cache=True)
+def _mode_change_bits(regs: np.ndarray, idx: np.ndarray, raw: np.ndarray,
+                      changes: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
+    """The bits of ``changes`` (:data:`_MODE_CHANGES`) of MODE_REG := ``raw[j]`` for motor
+    ``idx[j]``, (M,) uint8: by its MODE_REG now and the new value (0 … 15 themselves, any
+    other value :data:`_OTHER_MODE`), ERR_BITS ≠ 0 and SETUP_BITS bit 5."""
+    out = np.empty(idx.size, dtype=np.uint8)
+    for j in range(idx.size):
+        i = idx[j]
+        old, new = regs[i, R.MODE_REG], raw[j]
+        out[j] = changes[old if 0 <= old < _OTHER_MODE else _OTHER_MODE,
+                         new if 0 <= new < _OTHER_MODE else _OTHER_MODE,
+                         1 if regs[i, R.ERR_BITS] != 0 else 0,
+                         1 if regs[i, R.SETUP_BITS] & c.SETUP_SYNC_ENCODER else 0]
+    return out
 
 
 #: the factory limits a power-on takes from ROM (flash holds the writable registers only)
@@ -466,13 +476,10 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         it on its deceleration ramp first; an active mode entered from passive or safe with
         SETUP_BITS bit 5 sets the encoder to P_IST."""
         regs, s = self.regs, self.state
-        rows = regs[idx[:, None], _MODE_RULE_REGISTERS]
-        mode = rows[:, 0]
-        change = _MODE_CHANGES[_mode_index(mode), _mode_index(raw),
-                               (rows[:, 1] != 0).view(np.uint8),
-                               ((rows[:, 2] & c.SETUP_SYNC_ENCODER) != 0).view(np.uint8)]
+        change = _mode_change_bits(regs, idx, raw, _MODE_CHANGES)
         new = raw
         if change.any():
+            mode = regs[idx, R.MODE_REG]
             refused = (change & _REFUSED) != 0
             if refused.any():
                 j = int(np.argmax(refused))

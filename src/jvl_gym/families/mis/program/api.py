@@ -221,16 +221,17 @@ class ProgramMixin:
         (:meth:`~jvl_gym.motor.bank.RegisterBank._snapshot`) and their stored programs: COMMAND 342
         erases a program and a reset (267, 268) restarts it, each by replacing the motor's
         runner, so the runners as they are now are what a refused transaction puts back."""
-        runners = None if self._runners is None else list(self._runners)
-        return super()._snapshot(idx), runners  # type: ignore[misc]
+        runners = self._runners
+        kept = None if runners is None else [runners[i] for i in idx.tolist()]
+        return super()._snapshot(idx), kept  # type: ignore[misc]
 
     def _restore(self, idx: np.ndarray, saved: tuple[Any, ...]) -> None:
         """Put back what :meth:`_snapshot` saved, the stored programs of motors ``idx`` too."""
         rows, runners = saved
         super()._restore(idx, rows)  # type: ignore[misc]
         if runners is not None and self._runners is not None:
-            for i in idx.tolist():
-                self._runners[i] = runners[i]
+            for i, runner in zip(idx.tolist(), runners):
+                self._runners[i] = runner
 
     def _program_power_on(self, idx: np.ndarray) -> None:
         """Power-on of the motors ``idx``: a stored program restarts from line 1 in position
