@@ -60,23 +60,24 @@ class MotorEnv(gym.Env):
         core = self.core
         if a.shape != self._action_shape or a.dtype.kind not in "fiu":
             core._refuse_action(a, self._action_shape)
-        self._action[0] = a
+        self._action[...] = a
         core._step_actions(self._action)
-        if core._terminated[0] or core._truncated[0]:
+        if core._terminated.item() or core._truncated.item():
             return self._end_of_episode(core)
-        return core._obs[0].copy(), core._reward.item(), False, False, {}
+        return core._obs.ravel().copy(), core._reward.item(), False, False, {}
 
     def _end_of_episode(self, core: MotorVectorEnv) -> tuple[np.ndarray, float, bool, bool,
                                                              dict[str, Any]]:
         """What :meth:`step` returns for the step that ended the episode (the episode marked
         ended): the info holds why it ended and the task's episode statistics."""
         self._ended = True
-        terminated = core._terminated.item()
-        end = core._end_info(np.ones(1, dtype=np.bool_), core._terminated)
-        info: dict[str, Any] = {"termination_reason": str(end.pop("termination_reason")[0])}
-        info.update({name: float(values[0]) for name, values in end.items()
-                     if not name.startswith("_")})
-        return core._obs[0].copy(), core._reward.item(), terminated, core._truncated.item(), info
+        first = np.zeros(1, dtype=np.int64)
+        info: dict[str, Any] = {"termination_reason": core._end_reasons(first,
+                                                                        core._terminated)[0]}
+        info.update({name: float(values[0])
+                     for name, values in core._episode_stats(first).items()})
+        return (core._obs.ravel().copy(), core._reward.item(), core._terminated.item(),
+                core._truncated.item(), info)
 
     def render(self) -> np.ndarray | None:
         """The scope plot as an (H, W, 3) uint8 image when ``render_mode="rgb_array"``."""

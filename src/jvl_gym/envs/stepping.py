@@ -151,6 +151,16 @@ class Stepping:
             text = texts[bits] = f"motor error {names} ({self.error_register})" if bits else ""
         return text
 
+    def _end_reasons(self, idx: np.ndarray, by_task: np.ndarray) -> list[str]:
+        """Why the episode of each of the copies ``idx`` ended with the last step: the task's
+        reason (:meth:`_termination_reasons`) where ``by_task`` ((M,) bool: terminated),
+        :data:`TIME_LIMIT` where not (truncated)."""
+        flags = by_task.tolist()
+        if not any(flags):
+            return [TIME_LIMIT] * idx.size
+        task = iter(self._termination_reasons(idx[by_task]))
+        return [next(task) if flag else TIME_LIMIT for flag in flags]
+
     def _episode_stats(self, idx: np.ndarray) -> dict[str, np.ndarray]:
         """The statistics (:attr:`episode_stats`) of the episodes of copies ``idx`` that ended
         with the last step, name -> (M,) float64; read before the copies are reset. Here:
@@ -166,12 +176,7 @@ class Stepping:
         reasons = np.empty(self.num_envs, dtype=object)
         reasons.fill("")
         idx = ended.nonzero()[0]
-        by_task = terminated[idx]
-        term = idx[by_task]
-        if term.size:
-            reasons[term] = self._termination_reasons(term)
-        if term.size < idx.size:
-            reasons[idx[~by_task]] = TIME_LIMIT
+        reasons[idx] = self._end_reasons(idx, terminated[idx])
         out = {"termination_reason": reasons, "_termination_reason": ended.copy()}
         for name, values in self._episode_stats(idx).items():
             column = np.zeros(self.num_envs)

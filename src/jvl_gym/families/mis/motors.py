@@ -218,7 +218,6 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
                           "lost_steps", "multifunction_output",
                           "multifunction_output_total"})
     SHAFT_ANGLE, SHAFT_SPEED = L.S_THETA, L.S_OMEGA
-    ONE_BY_ONE = _SPECIAL
 
     @staticmethod
     def load_motor(motor: Any) -> MisMotorConfig:
