@@ -87,13 +87,11 @@ class Randomisation:
         # rows of a C-ordered (R, M) array: contiguous for one copy and for many, so that a
         # compiled reset taking draws compiles once for both
         draws = dict(zip(names, np.ascontiguousarray(low[:, None] + u[:, :-1].T * span[:, None])))
-        if len(types) == 1:  # one type: every copy's (its draw is made all the same)
-            motor_type: str | list[str] = types[0]
-            self._type_names[idx] = motor_type
-        else:
-            motor_type = [types[min(int(x * len(types)), len(types) - 1)]
-                          for x in u[:, -1].tolist()]
-            self._type_names[idx] = motor_type
+        # one type: every copy's, given once (its draw is made all the same)
+        motor_type: str | list[str] = (
+            types[0] if len(types) == 1 else
+            [types[min(int(x * len(types)), len(types) - 1)] for x in u[:, -1].tolist()])
+        self._type_names[idx] = motor_type
         params = self._motor_params(idx, draws)
         if ranges["resonance_hz"][1] > 0.0:  # then each copy's resonance and damping ratio
             (f_lo, f_hi), (z_lo, z_hi) = ranges["resonance_hz"], ranges["coupling_damping_ratio"]
