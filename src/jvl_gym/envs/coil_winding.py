@@ -11,10 +11,11 @@ from numba import njit
 from ..engine.apart import apart
 from ..engine.jit import KERNEL
 from ..families import Capability, Family
+from ..physics.fixed import rint
 from . import deposition as dep
 from .base import Field, MotorVectorEnv
 from .compiled import action, end_step, put_obs
-from .deposition import flatness_row, lay_turn_row, profile_summary_row
+from .deposition import flatness_row, lay_turn_row, mean_height, profile_summary_row
 from .profiles import SpeedProfile, row_speed
 from .randomisation import uniform_rows
 from .single import MotorEnv
@@ -161,7 +162,7 @@ def _close_layer(w, h):  # pragma: no cover - compiled
     step calls its machine code."""
     std, _, _ = flatness_row(h, w.d0)
     w.last_std = std
-    w.floor = h.mean()
+    w.floor = mean_height(h)
     w.layer += 1.0
     w.layer_void = 0.0
     w.layer_piles = 0.0
@@ -280,9 +281,9 @@ def _reset_rows(idx: np.ndarray, w: np.ndarray, h: np.ndarray, d0: np.ndarray,
         gear = d0[j] * counts_per_m / spindle_cpr
         r.gear0 = gear
         r.half_d_counts = 0.5 * d0[j] * counts_per_m
-        gearf1[j] = np.round(gear * _GEARF2)
-        half[j] = int(np.round(r.half_d_counts))
-        a_soll_raw[j] = np.round(a_soll[j])
+        gearf1[j] = rint(gear * _GEARF2)
+        half[j] = int(rint(r.half_d_counts))
+        a_soll_raw[j] = rint(a_soll[j])
 
 
 class CoilWindingVectorEnv(MotorVectorEnv):

@@ -28,8 +28,8 @@ from numba import njit
 
 from ..engine.jit import KERNEL, plain_arguments
 
-__all__ = ["bin_centres", "lay_turn_row", "profile_summary_row", "flatness_row", "lay_turns",
-           "profile_summary", "layer_flatness"]
+__all__ = ["bin_centres", "mean_height", "lay_turn_row", "profile_summary_row", "flatness_row",
+           "lay_turns", "profile_summary", "layer_flatness"]
 
 
 def bin_centres(width: float, bin_width: float) -> np.ndarray:
@@ -179,11 +179,24 @@ def _sum4(h: np.ndarray, lo: int, hi: int) -> float:  # pragma: no cover - compi
     return (a0 + a1) + (a2 + a3)
 
 
+@njit(cache=True, inline="always")
+def mean_height(h: np.ndarray) -> float:  # pragma: no cover - compiled
+    """The mean of the heights ``h`` (B,): numba's ``h.mean()`` (the sum from 0.0 in bin order
+    over the number of bins; NaN for no bin), written as the loop it runs, which compiles in
+    a fraction of the time of ``mean``'s array iterator."""
+    if h.size == 0:
+        return math.nan
+    total = 0.0
+    for b in range(h.size):
+        total += h[b]
+    return total / h.size
+
+
 @njit(**KERNEL)
 def flatness_row(h: np.ndarray, d: float) -> tuple[float, float, float]:  # pragma: no cover
     """Flatness of a profile: std of the height / d, and the fractions of the width more than
     d/2 below (gaps) and above (pile-up) the mean height."""
-    mean = h.mean()
+    mean = mean_height(h)
     var = 0.0
     gaps = 0
     piles = 0

@@ -11,6 +11,7 @@ from numba import njit
 from ..engine.jit import KERNEL
 from ..families import Capability, Family
 from ..motor.noise import normal
+from ..physics.fixed import rint
 from .base import Field, MotorVectorEnv
 from .compiled import action, end_step, put_obs
 from .profiles import SpeedProfile, row_speed
@@ -207,7 +208,7 @@ def _reset_rows(idx: np.ndarray, line: np.ndarray, gear: np.ndarray, ea: np.ndar
         motor_per_master = (master_radius / r0[j] * gear_ratio / (1.0 - strain_ref)
                             / ag_centre)
         ratio = motor_per_master * counts_per_rev / master_counts_per_rev
-        gearf1[j] = np.round(ratio * _GEARF2)
+        gearf1[j] = rint(ratio * _GEARF2)
         gear[i] = gearf1[j] / _GEARF2
         load[j] = r0[j] * tension_ref[j] / gear_ratio
 

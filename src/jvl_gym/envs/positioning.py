@@ -10,6 +10,7 @@ from numba import njit
 
 from ..engine.jit import KERNEL
 from ..families import Capability, Family
+from ..physics.fixed import rint
 from .base import Field, MotorVectorEnv
 from .compiled import action, end_step, put_obs
 from .single import MotorEnv
@@ -141,7 +142,7 @@ def _reset_rows(idx: np.ndarray, target_turns: np.ndarray, target: np.ndarray,
     direction of the move (N,) (+1 or −1)."""
     for j in range(idx.shape[0]):
         i = idx[j]
-        target[i] = int(np.round(target_turns[j] * counts_per_rev))
+        target[i] = int(rint(target_turns[j] * counts_per_rev))
         direction[i] = 1.0 if target[i] >= 0 else -1.0
 
 

@@ -10,6 +10,7 @@ from numba import njit
 
 from ..engine.jit import KERNEL
 from ..families import Capability, Family
+from ..physics.fixed import rint
 from .base import Field, MotorVectorEnv
 from .compiled import action, end_step, put_obs
 from .single import MotorEnv
@@ -136,7 +137,7 @@ def _reset_rows(idx: np.ndarray, move_turns: np.ndarray, n_moves: int, i_max: np
     (M,), the copper energy counted from power-on (0)."""
     for j in range(idx.shape[0]):
         row = copies[idx[j]]
-        row.move = max(int(np.round(move_turns[j] * counts_per_rev)), 1)
+        row.move = max(int(rint(move_turns[j] * counts_per_rev)), 1)
         row.target = row.move
         row.moves_left = n_moves
         row.i_max = i_max[j]

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from numba import njit
 
-from ..engine.jit import KERNEL
+from ..engine.jit import KERNEL, LANE_KERNEL
 
 
 @njit(cache=True, inline="always")
@@ -35,10 +35,15 @@ def bus_step(u: float, p_motor: float, u_src: float, c_bus: float, r_src: float,
                              bus_constants(c_bus, r_src, r_dump, h))
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def bus_step_prepared(u: float, p_motor: float, u_src: float, u_dump: float, dump_on: float,
                       h: float, kc: tuple[float, float, float, float, float, float, float]):
-    """:func:`bus_step` given ``kc = bus_constants(c_bus, r_src, r_dump, h)``; same returns."""
+    """:func:`bus_step` given ``kc = bus_constants(c_bus, r_src, r_dump, h)``; same returns.
+
+    Compiled once, as a function of its own that LLVM inlines into each caller
+    (``forceinline``; numba's own inlining typed and lowered a copy in every caller), with
+    numpy's error model (``LANE_KERNEL``: no zero-divisor branch in the lanes' SIMD loops).
+    """
     k, g_src_on, g_dump_on, inv_den_00, inv_den_10, inv_den_01, inv_den_11 = kc
     if dump_on > 0.5:
         if u < u_dump - 1.0:

@@ -20,7 +20,7 @@ import math
 
 from numba import njit
 
-from ..engine.jit import KERNEL
+from ..engine.jit import KERNEL, LANE_KERNEL
 from .trig import fma, sincos
 
 SQRT3 = math.sqrt(3.0)
@@ -117,11 +117,16 @@ def coil_step(s0: complex, s_u: complex, theta_e: float, omega_e: float, r: floa
                               coil_constants(r, ell, lam, h))
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def coil_step_prepared(s0: complex, s_u: complex, theta_e: float, omega_e: float, r: float,
                        lam: float, pole_pairs: float, h: float,
                        k: tuple[float, float, float, float]):
-    """:func:`coil_step` given ``k = coil_constants(r, ell, lam, h)``; same returns."""
+    """:func:`coil_step` given ``k = coil_constants(r, ell, lam, h)``; same returns.
+
+    Compiled once, as a function of its own that LLVM inlines into each caller
+    (``forceinline``; numba's own inlining typed and lowered a copy in every caller), with
+    numpy's error model (``LANE_KERNEL``: no zero-divisor branch in the lanes' SIMD loops).
+    """
     a_h, inv_r, inv_tau, lam_over_l = k
     sin_e, cos_e = sincos(theta_e)
     e0 = complex(cos_e, sin_e)

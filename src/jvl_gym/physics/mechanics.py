@@ -26,7 +26,7 @@ import math
 
 from numba import njit
 
-from ..engine.jit import KERNEL
+from ..engine.jit import KERNEL, LANE_KERNEL, plain_arguments
 
 #: largest ``ω_n·h`` of the coupling (ω_n = √(k (1/J_m + 1/J_l)), h the inner step): the
 #: implicit midpoint rule's frequency ``(2/h)·atan(ω_n h/2)`` is then within 2.1 % of ω_n
@@ -36,7 +36,7 @@ MAX_COUPLING_OMEGA_H = 0.5
 MAX_COUPLING_DAMPING_H = 1.0
 
 
-@njit(cache=True, inline="always")
+@njit(**LANE_KERNEL, forceinline=True)
 def end_stop_torque(theta: float, omega: float, lo: float, hi: float, k: float, d: float) -> float:
     """Torque of stiff spring-damper end stops at ``lo`` and ``hi`` [rad]; none if ``lo >= hi``.
 
@@ -44,6 +44,10 @@ def end_stop_torque(theta: float, omega: float, lo: float, hi: float, k: float, 
     ``max(−k·(θ − lo) − d·ω, 0)``. Written as selects of one spring-damper term (the minimum
     and maximum in the form of the processor's instructions), not as branches: the SIMD
     lanes of ``jvl_gym.families.mac050_141.lanes`` compute every branch otherwise.
+
+    Compiled once, as a function of its own that LLVM inlines into each caller
+    (``forceinline``; numba's own inlining typed and lowered a copy in every caller), with
+    numpy's error model (``LANE_KERNEL``: no zero-divisor branch in the lanes' SIMD loops).
     """
     above = theta > hi
     t = -k * (theta - (hi if above else lo)) - d * omega
@@ -103,7 +107,8 @@ def two_mass_step(theta: float, omega: float, theta_l: float, omega_l: float, dr
                               mech_constants(j_m, j_l, b, k, d, h))
 
 
-@njit(cache=True, inline="always")
+@plain_arguments
+@njit(**LANE_KERNEL, forceinline=True)
 def mech_step_prepared(theta: float, omega: float, theta_l: float, omega_l: float, drive: float,
                        load_l: float, j: float, tc: float, h: float, k: tuple,
                        rigid: bool = False):
@@ -117,7 +122,12 @@ def mech_step_prepared(theta: float, omega: float, theta_l: float, omega_l: floa
     ``rigid`` (a constant at the call, which the compiler folds) says that the shaft is rigid
     (``k`` of a rigid shaft, ``theta_l, omega_l = theta, omega``, ``load_l = 0``): the coupling
     terms, exact zeros then, are left out, with the same results but for the sign of a zero
-    loss (which the energy accounts sum to the same value).
+    loss (which the energy accounts sum to the same value). ``rigid`` is typed as a plain bool
+    (``plain_arguments``): one compiled body, whose branch LLVM folds once it has inlined it.
+
+    Compiled once, as a function of its own that LLVM inlines into each caller
+    (``forceinline``; numba's own inlining typed and lowered a copy in every caller), with
+    numpy's error model (``LANE_KERNEL``: no zero-divisor branch in the lanes' SIMD loops).
     """
     # the branches are selects (the SIMD lanes of mac050_141.lanes compute both sides anyway)
     h_j, inv_den, kk, cc, gl, jl = k

@@ -4,7 +4,10 @@
 :mod:`jvl_gym.engine.driver`; :func:`compile_split` lists the block's inner samples and the
 outer firmware, which the engine compiles on their own before a driver that calls them is
 compiled (compiled inside a caller's compilation, numba takes several times as long), the two
-halves on two cores on a cold start (``jvl_gym.engine.two_cores``).
+halves on two cores on a cold start (``jvl_gym.engine.two_cores``). The inner half also holds
+the compiled register store of a batched write (``store.store_rows`` and the conversion
+``raws_of_rows``), which an env's first reset needs: the second process has time for it while
+this one compiles the outer firmware.
 """
 
 from __future__ import annotations
@@ -15,9 +18,11 @@ import numpy as np
 from numba import njit, typeof, types
 
 from ...engine.view import EngineView, record_rows, take_planned_inputs
+from ...registers.formats import raws_of_rows
 from .inner import inner_samples_one
 from .kernel import outer_firmware
 from .lanes import LANES, inner_samples, lane_samples_coupled, lane_samples_rigid, lane_scratch
+from .store import store_rows
 
 __all__ = ["LANES", "outer_sample", "inner_block", "compile_split", "scratch"]
 
@@ -49,7 +54,8 @@ def compile_split(arrays: tuple) -> tuple[list[tuple[Any, tuple]], list[tuple[An
     """The large compiled functions a driver calls, with their argument types for ``arrays``
     (the fields of an :class:`EngineView`), in two independent lists ``(inner, outer)``: the
     inner samples (the one-motor path, the two lane loops, the block's samples, in the order
-    they are compiled) and the outer firmware (``jvl_gym.engine.two_cores``)."""
+    they are compiled) and the register store of a batched write (module docstring), and the
+    outer firmware (``jvl_gym.engine.two_cores``)."""
     view = EngineView(*arrays)
     rec = types.boolean
     regs, state, params = typeof(view.regs[0]), typeof(view.state[0]), typeof(view.params[0])
@@ -62,6 +68,16 @@ def compile_split(arrays: tuple) -> tuple[list[tuple[Any, tuple]], list[tuple[An
                for lanes in (lane_samples_rigid, lane_samples_coupled)],
              (inner_samples, (typeof(view.regs), typeof(view.state), typeof(view.params),
                               typeof(view.inputs), typeof(view.keys), typeof(view.buf), rec,
-                              fmt, types.int64, types.int64, row))]
+                              fmt, types.int64, types.int64, row)),
+             *_store_functions(view)]
     return inner, [(outer_firmware, (regs, state, params, inputs, key, buf, rec, fmt))]
 
+
+
+def _store_functions(view: EngineView) -> list[tuple[Any, tuple]]:
+    """The compiled register store of ``MotorArray.write_many`` with its argument types: the
+    conversion of (K, M) values and the store of (K, M) integers into motor rows ``idx``."""
+    index, flags = typeof(np.empty(1, dtype=np.int64)), typeof(np.empty(1, dtype=np.bool_))
+    table, raws = typeof(np.empty((1, 1))), typeof(np.empty((1, 1), dtype=np.int64))
+    return [(raws_of_rows, (table, table, raws)),
+            (store_rows, (typeof(view.regs), typeof(view.state), index, index, flags, raws))]
