@@ -11,32 +11,25 @@ from numba import njit, types
 from numba.extending import intrinsic
 
 
+def _double_intrinsic(builder, name: str, args):  # pragma: no cover - compiled
+    """A call of LLVM's intrinsic ``name`` on a double, in the code an intrinsic emits."""
+    double = llvm_ir.DoubleType()
+    fn = builder.module.declare_intrinsic(name, [double], llvm_ir.FunctionType(double, [double]))
+    return builder.call(fn, args)
+
+
 @intrinsic
 def _round(typingctx, x):  # pragma: no cover - compiled
     """LLVM's ``llvm.round.f64``: C's ``round``, half away from zero, exact for every double."""
-    sig = types.float64(types.float64)
-
-    def codegen(context, builder, signature, args):
-        double = llvm_ir.DoubleType()
-        fn = builder.module.declare_intrinsic("llvm.round", [double],
-                                              llvm_ir.FunctionType(double, [double]))
-        return builder.call(fn, args)
-
-    return sig, codegen
+    return types.float64(types.float64), lambda context, builder, signature, args: (
+        _double_intrinsic(builder, "llvm.round", args))
 
 
 @intrinsic
 def _rint(typingctx, x):  # pragma: no cover - compiled
     """LLVM's ``llvm.rint.f64``: round half to even (the default rounding mode)."""
-    sig = types.float64(types.float64)
-
-    def codegen(context, builder, signature, args):
-        double = llvm_ir.DoubleType()
-        fn = builder.module.declare_intrinsic("llvm.rint", [double],
-                                              llvm_ir.FunctionType(double, [double]))
-        return builder.call(fn, args)
-
-    return sig, codegen
+    return types.float64(types.float64), lambda context, builder, signature, args: (
+        _double_intrinsic(builder, "llvm.rint", args))
 
 
 @njit(cache=True, inline="always")
