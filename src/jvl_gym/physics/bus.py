@@ -40,9 +40,8 @@ def bus_step_prepared(u: float, p_motor: float, u_src: float, u_dump: float, dum
                       h: float, kc: tuple[float, float, float, float, float, float, float]):
     """:func:`bus_step` given ``kc = bus_constants(c_bus, r_src, r_dump, h)``; same returns.
 
-    Compiled once, as a function of its own that LLVM inlines into each caller
-    (``forceinline``; numba's own inlining typed and lowered a copy in every caller), with
-    numpy's error model (``LANE_KERNEL``: no zero-divisor branch in the lanes' SIMD loops).
+    Compiled once and inlined by LLVM into each caller, with numpy's error model
+    (``engine.jit.LANE_KERNEL``; docs/architecture.md, "First use and numba's cache").
     """
     k, g_src_on, g_dump_on, inv_den_00, inv_den_10, inv_den_01, inv_den_11 = kc
     if dump_on > 0.5:

@@ -123,9 +123,8 @@ def coil_step_prepared(s0: complex, s_u: complex, theta_e: float, omega_e: float
                        k: tuple[float, float, float, float]):
     """:func:`coil_step` given ``k = coil_constants(r, ell, lam, h)``; same returns.
 
-    Compiled once, as a function of its own that LLVM inlines into each caller
-    (``forceinline``; numba's own inlining typed and lowered a copy in every caller), with
-    numpy's error model (``LANE_KERNEL``: no zero-divisor branch in the lanes' SIMD loops).
+    Compiled once and inlined by LLVM into each caller, with numpy's error model
+    (``engine.jit.LANE_KERNEL``; docs/architecture.md, "First use and numba's cache").
     """
     a_h, inv_r, inv_tau, lam_over_l = k
     sin_e, cos_e = sincos(theta_e)

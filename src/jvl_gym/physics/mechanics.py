@@ -45,9 +45,8 @@ def end_stop_torque(theta: float, omega: float, lo: float, hi: float, k: float, 
     and maximum in the form of the processor's instructions), not as branches: the SIMD
     lanes of ``jvl_gym.families.mac050_141.lanes`` compute every branch otherwise.
 
-    Compiled once, as a function of its own that LLVM inlines into each caller
-    (``forceinline``; numba's own inlining typed and lowered a copy in every caller), with
-    numpy's error model (``LANE_KERNEL``: no zero-divisor branch in the lanes' SIMD loops).
+    Compiled once and inlined by LLVM into each caller, with numpy's error model
+    (``engine.jit.LANE_KERNEL``; docs/architecture.md, "First use and numba's cache").
     """
     above = theta > hi
     t = -k * (theta - (hi if above else lo)) - d * omega
@@ -125,9 +124,8 @@ def mech_step_prepared(theta: float, omega: float, theta_l: float, omega_l: floa
     loss (which the energy accounts sum to the same value). ``rigid`` is typed as a plain bool
     (``plain_arguments``): one compiled body, whose branch LLVM folds once it has inlined it.
 
-    Compiled once, as a function of its own that LLVM inlines into each caller
-    (``forceinline``; numba's own inlining typed and lowered a copy in every caller), with
-    numpy's error model (``LANE_KERNEL``: no zero-divisor branch in the lanes' SIMD loops).
+    Compiled once and inlined by LLVM into each caller, with numpy's error model
+    (``engine.jit.LANE_KERNEL``; docs/architecture.md, "First use and numba's cache").
     """
     # the branches are selects (the SIMD lanes of mac050_141.lanes compute both sides anyway)
     h_j, inv_den, kk, cc, gl, jl = k

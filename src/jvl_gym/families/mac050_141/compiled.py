@@ -73,7 +73,6 @@ def compile_split(arrays: tuple) -> tuple[list[tuple[Any, tuple]], list[tuple[An
     return inner, [(outer_firmware, (regs, state, params, inputs, key, buf, rec, fmt))]
 
 
-
 def _store_functions(view: EngineView) -> list[tuple[Any, tuple]]:
     """The compiled register store of ``MotorArray.write_many`` with its argument types: the
     conversion of (K, M) values and the store of (K, M) integers into motor rows ``idx``."""
