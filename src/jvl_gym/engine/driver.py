@@ -40,6 +40,7 @@ from numba import njit, prange
 
 from . import two_cores
 from .jit import KERNEL, KERNEL_PARALLEL
+from .packed import PackedArguments, unpack
 from .specialize import specialise
 from .view import EngineView, Episode
 
@@ -157,14 +158,14 @@ def _task_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scr
         task_end(i, view, episode, hooks_task, actions)
 
 
-def _task_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
-                 prev_action, t, noise_key, obs, reward, terminated, truncated, task,
-                 actions, decimation):  # pragma: no cover - compiled
-    """One env step of every copy in one thread (the fields of an :class:`EngineView` and of
-    an :class:`Episode`, the task's tuple, the actions, the decimation); False (nothing
-    changed) if an action is not finite."""
+def _task_serial(packed, actions, decimation):  # pragma: no cover - compiled
+    """One env step of every copy in one thread (``packed``: the fields of an
+    :class:`EngineView` and of an :class:`Episode` and the task's tuple, packed; the actions;
+    the decimation); False (nothing changed) if an action is not finite."""
     if not all_finite(actions):
         return False
+    (regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, prev_action, t,
+     noise_key, obs, reward, terminated, truncated, task) = unpack(packed)
     for blk in range(scratch.shape[0]):
         _task_block(blk, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
                     prev_action, t, noise_key, obs, reward, terminated, truncated, task,
@@ -172,12 +173,12 @@ def _task_serial(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch
     return True
 
 
-def _task_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
-                   prev_action, t, noise_key, obs, reward, terminated, truncated, task,
-                   actions, decimation):  # pragma: no cover - compiled
+def _task_parallel(packed, actions, decimation):  # pragma: no cover - compiled
     """:func:`_task_serial` with the blocks spread over threads."""
     if not all_finite(actions):
         return False
+    (regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, prev_action, t,
+     noise_key, obs, reward, terminated, truncated, task) = unpack(packed)
     for blk in prange(scratch.shape[0]):
         _task_block(block_index(blk), regs, state, params, inputs, keys, buf, rec, fmt, plan,
                     scratch, prev_action, t, noise_key, obs, reward, terminated, truncated,
@@ -185,10 +186,11 @@ def _task_parallel(regs, state, params, inputs, keys, buf, rec, fmt, plan, scrat
     return True
 
 
-def _task_observe(idx, regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch,
-                  prev_action, t, noise_key, obs, reward, terminated, truncated,
-                  task):  # pragma: no cover - compiled
-    """The task's observation hook for copies ``idx`` (after their reset)."""
+def _task_observe(idx, packed):  # pragma: no cover - compiled
+    """The task's observation hook for copies ``idx`` (after their reset; ``packed`` as
+    :func:`_task_serial` takes it)."""
+    (regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch, prev_action, t,
+     noise_key, obs, reward, terminated, truncated, task) = unpack(packed)
     view = EngineView(regs, state, params, inputs, keys, buf, rec, fmt, plan, scratch)
     episode = Episode(prev_action, t, noise_key, obs, reward, terminated, truncated)
     hooks_task = task_state(task)
@@ -278,37 +280,45 @@ class TaskDriver:
         fns = specialise(_TASK_TEMPLATES, bindings, f"{tag}__{family.key}", source,
                          _TASK_OPTIONS)
         self._prepared = False
-        #: the compiled steps, ``(*arrays, *episode, task, actions, decimation)``: one thread,
+        #: the compiled steps, ``(packed, actions, decimation)`` (:meth:`pack`): one thread,
         #: and blocks over threads
         self.serial = fns["_task_serial"]
         self.parallel = fns["_task_parallel"]
         self._observe = fns["_task_observe"]
 
+    @staticmethod
+    def pack(arrays: tuple, episode: tuple, task: tuple) -> PackedArguments:
+        """The arguments of an env step before the actions, packed for the compiled step
+        (:mod:`jvl_gym.engine.packed`: converted once, not at every call): ``arrays`` and
+        ``episode`` are the fields of an :class:`EngineView` and an :class:`Episode` as plain
+        tuples, ``task`` the plain tuple of the task's arrays (``task_state`` makes the hooks'
+        state of it). An env packs its arrays once and passes the result to every step while
+        the motors keep their arrays."""
+        return PackedArguments((*arrays, *episode, task))
+
     def step(self, arrays: tuple, episode: tuple, task: tuple, actions: np.ndarray,
              decimation: int) -> bool:
-        """One env step of every copy (one motor each) with ``actions`` (N, A) float64.
-
-        ``arrays`` and ``episode`` are the fields of an :class:`EngineView` and an
-        :class:`Episode` as plain tuples; ``task`` is the plain tuple of the task's arrays
-        (``task_state`` makes the hooks' state of it).
+        """One env step of every copy (one motor each) with ``actions`` (N, A) float64; the
+        other arguments as :meth:`pack` takes them.
 
         Returns
         -------
         bool
             False, with nothing changed, when an action is not finite.
         """
-        return self.runner(arrays)(*arrays, *episode, task, actions, decimation)
+        return self.runner(arrays)(self.pack(arrays, episode, task), actions, decimation)
 
     def runner(self, arrays: tuple) -> Any:
         """The compiled step for the motors ``arrays`` (the fields of an :class:`EngineView`):
-        threaded from :data:`PARALLEL_MIN` copies, else serial; taken with the arguments of
-        :meth:`step` spread, ``(*arrays, *episode, task, actions, decimation)``. An env keeps
-        it (its number of copies does not change) and calls it without :meth:`step`'s frame."""
+        threaded from :data:`PARALLEL_MIN` copies, else serial; taken with the arguments
+        ``(packed, actions, decimation)``, ``packed`` from :meth:`pack`. An env keeps it (its
+        number of copies does not change) and calls it without :meth:`step`'s frame."""
         if not self._prepared:
             two_cores.prepare(self.family.compiled, arrays)
             self._prepared = True
         return self.parallel if arrays[0].shape[0] >= PARALLEL_MIN else self.serial
 
-    def observe(self, arrays: tuple, episode: tuple, task: tuple, idx: np.ndarray) -> None:
-        """The task's observation of copies ``idx`` (M,) int64 after their reset."""
-        self._observe(idx, *arrays, *episode, task)
+    def observe(self, packed: PackedArguments, idx: np.ndarray) -> None:
+        """The task's observation of copies ``idx`` (M,) int64 after their reset (``packed``
+        from :meth:`pack`)."""
+        self._observe(idx, packed)

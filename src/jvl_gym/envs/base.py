@@ -34,6 +34,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
 from ..engine.entry import entry_point
+from ..engine.packed import PackedArguments
 from ..families import Capability, Family, family
 from .compiled import OBS_BOUND
 from .randomisation import Randomisation
@@ -245,18 +246,27 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         """:meth:`_step_copies` through the driver's compiled step for ``view`` (the motors'
         :meth:`~jvl_gym.MotorArray.engine_view`), which it compiles or loads on the first
         step; then keep the step's own entry for the types of these arguments, which stay
-        (``jvl_gym.engine.entry``), with the arguments before the actions."""
+        (``jvl_gym.engine.entry``), with the arguments before the actions: the motors',
+        episode's and task's arrays packed once (``TaskDriver.pack``)."""
         compiled = self._driver.runner(view)
-        head = (*view, *self._episode, self._task_args)
+        head = (self._packed(view),)
         done = compiled(*head, actions, self.decimation)
         self._run = entry_point(compiled, (*head, actions, self.decimation))
         self._step_head = head
         self._step_view = view
         return done
 
+    def _packed(self, view: tuple) -> PackedArguments:
+        """The arguments of the compiled step and observation before the actions for the
+        motors' arrays ``view``, packed once per ``view`` (``TaskDriver.pack``)."""
+        if view is not self._packed_view:
+            self._packed_args = self._driver.pack(view, self._episode, self._task_args)
+            self._packed_view = view
+        return self._packed_args
+
     def _observe_copies(self, idx: np.ndarray) -> None:
         """Fill ``self._obs[idx]`` (noisy, clipped) after a reset of copies ``idx``."""
-        self._driver.observe(self.motors.engine_view(), self._episode, self._task_args, idx)
+        self._driver.observe(self._packed(self.motors.engine_view()), idx)
 
     # ------------------------------------------------------------------ helpers for tasks
     @property
@@ -312,7 +322,8 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
             return {}
         args = () if self.state is None else tuple(self.state)
         return {"_driver": self.task.driver(self.family_key), "_task_args": args, "_run": None,
-                "_step_head": (), "_step_view": None}
+                "_step_head": (), "_step_view": None, "_packed_args": None,
+                "_packed_view": None}
 
     def __getstate__(self) -> dict[str, Any]:
         state = self.__dict__.copy()
