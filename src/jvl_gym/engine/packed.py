@@ -49,7 +49,7 @@ def _words(value: Any, kind: types.Type) -> list[int]:
     if isinstance(kind, types.Array):
         return [value.ctypes.data, *value.shape, *value.strides]
     if isinstance(kind, (types.Integer, types.Boolean)):
-        return [int(value)]
+        return [(int(value) + 2**63) % 2**64 - 2**63]  # the 64 bits, as a signed word
     raise TypeError(f"PackedArguments takes arrays, integers, bools and tuples of them, not "
                     f"{kind}")
 
@@ -66,12 +66,22 @@ class PackedArguments:
 
     def __init__(self, args: tuple) -> None:
         self.args = tuple(args)
-        members = typeof(self.args)
+        try:
+            members = typeof(self.args)
+        except ValueError:  # numba has no type for one of them
+            members = None
+        if not isinstance(members, types.BaseTuple):
+            raise TypeError("PackedArguments takes arrays, integers, bools and tuples of them, "
+                            f"not {[type(a).__name__ for a in self.args]}")
         #: the numba type the compiled code sees (:class:`PackedType`)
         self.numba_type = PackedType(members)
         self._table = np.array(_words(self.args, members), dtype=np.int64)
         #: the table's address, read by the compiled call's argument conversion
         self.address = self._table.ctypes.data
+
+    def __reduce__(self) -> tuple:
+        # a copy packs its own arrays (a copied table would point at the original's)
+        return (PackedArguments, (self.args,))
 
 
 @typeof_impl.register(PackedArguments)
@@ -117,8 +127,9 @@ def unpack(typingctx: Any, packed: PackedType) -> Any:  # pragma: no cover - com
                 shape = [word() for _ in range(kind.ndim)]
                 strides = [word() for _ in range(kind.ndim)]
                 itemsize = context.get_abi_sizeof(context.get_data_type(kind.dtype))
-                populate_array(array, data=data, shape=cgutils.pack_array(builder, shape),
-                               strides=cgutils.pack_array(builder, strides),
+                populate_array(array, data=data,
+                               shape=cgutils.pack_array(builder, shape, ty=word_type),
+                               strides=cgutils.pack_array(builder, strides, ty=word_type),
                                itemsize=context.get_constant(types.intp, itemsize),
                                meminfo=None)
                 return array._getvalue()
