@@ -122,17 +122,17 @@ def unpack(typingctx: Any, packed: PackedType) -> Any:  # pragma: no cover - com
             if isinstance(kind, types.BaseTuple):
                 return context.make_tuple(builder, kind, [build(k) for k in kind])
             if isinstance(kind, types.Array):
-                array = context.make_array(kind)(context, builder)
-                data = builder.inttoptr(word(), array.data.type)
+                struct = context.make_array(kind)(context, builder)  # numba's array struct
+                data = builder.inttoptr(word(), struct.data.type)
                 shape = [word() for _ in range(kind.ndim)]
                 strides = [word() for _ in range(kind.ndim)]
                 itemsize = context.get_abi_sizeof(context.get_data_type(kind.dtype))
-                populate_array(array, data=data,
+                populate_array(struct, data=data,
                                shape=cgutils.pack_array(builder, shape, ty=word_type),
                                strides=cgutils.pack_array(builder, strides, ty=word_type),
                                itemsize=context.get_constant(types.intp, itemsize),
                                meminfo=None)
-                return array._getvalue()
+                return struct._getvalue()
             value = word()
             if isinstance(kind, types.Boolean):
                 return builder.icmp_unsigned("!=", value, ir.Constant(word_type, 0))
