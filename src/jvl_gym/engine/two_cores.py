@@ -28,7 +28,7 @@ from typing import Any
 
 from .apart import _APART
 
-__all__ = ["start", "prepare", "TIMEOUT"]
+__all__ = ["start", "prepare", "start_beside", "finish_beside", "TIMEOUT"]
 
 #: the second process's time limit [s]: this process compiles the rest itself after it
 TIMEOUT = 600.0
@@ -112,14 +112,46 @@ def prepare(compiled: Any, arrays: tuple) -> None:
     if child is not None:
         for dispatcher, sig in here:
             dispatcher.compile(sig)
-        try:
-            child.wait(TIMEOUT)
-        except subprocess.TimeoutExpired:
-            child.kill()
-            child.wait()
+        _wait(child)
     for dispatcher, sig in (*beside, *here):  # loads what the other process cached
         dispatcher.compile(sig)
     _prepared.add(compiled.__name__)
+
+
+def _wait(child: subprocess.Popen) -> None:
+    """Wait for a second process, at most :data:`TIMEOUT` (then it is stopped)."""
+    try:
+        child.wait(TIMEOUT)
+    except subprocess.TimeoutExpired:
+        child.kill()
+        child.wait()
+
+
+def start_beside(name: str, module: str, beside: list[tuple[Any, tuple]]) -> None:
+    """Start a second process on ``beside`` (``(dispatcher, argument types)`` of functions
+    numba caches on their own, defined once ``module`` is imported) when the first of them is
+    not in the cache yet, once per process and ``name``: an environment's own functions its
+    step calls, compiled there while this process compiles what the environment's first reset
+    needs. :func:`finish_beside` waits for it."""
+    if name in _started:
+        return
+    _started.add(name)
+    child = _start(module, beside)
+    if child is not None:
+        _children[name] = child
+
+
+def finish_beside(name: str, beside: list[tuple[Any, tuple]]) -> None:
+    """Wait for the second process :func:`start_beside` started for ``name``, if any, then
+    compile or load ``beside`` here (from the cache it filled)."""
+    if name in _prepared:
+        return
+    child = _children.pop(name, None)
+    if child is not None:
+        _wait(child)
+    for dispatcher, sig in beside:
+        dispatcher.compile(sig)
+    _prepared.add(name)
 
 
 def _compile_job(module: str, job: list[tuple[str, str, tuple]]) -> None:

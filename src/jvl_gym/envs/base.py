@@ -33,6 +33,7 @@ from gymnasium import spaces
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 
+from ..engine import two_cores
 from ..engine.entry import entry_point
 from ..engine.packed import PackedArguments
 from ..families import Capability, Family, family
@@ -213,6 +214,8 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         self._error_texts: dict[int, str] = {}
         self._build()
         self._set_transient()
+        if self.task.beside is not None:  # on a cold cache, compiled beside the first reset
+            two_cores.start_beside(self.task.tag, *self._beside())
 
     # ------------------------------------------------------------------ the task's parts
     def _build(self) -> None:
@@ -248,6 +251,8 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         step; then keep the step's own entry for the types of these arguments, which stay
         (``jvl_gym.engine.entry``), with the arguments before the actions: the motors',
         episode's and task's arrays packed once (``TaskDriver.pack``)."""
+        if self.task.beside is not None:
+            two_cores.finish_beside(self.task.tag, self._beside()[1])
         compiled = self._driver.runner(view)
         head = (self._packed(view),)
         done = compiled(*head, actions, self.decimation)
@@ -255,6 +260,12 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         self._step_head = head
         self._step_view = view
         return done
+
+    def _beside(self) -> tuple[str, list[tuple[Any, tuple]]]:
+        """The module to import and the task's functions with argument types (``Task.beside``)
+        a second process may compile at a cold start."""
+        beside = self.task.beside(self)
+        return beside[0][0].py_func.__module__, beside
 
     def _packed(self, view: tuple) -> PackedArguments:
         """The arguments of the compiled step and observation before the actions for the

@@ -6,7 +6,7 @@ import math
 from typing import Any, NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, typeof, types
 
 from ..engine.jit import KERNEL
 from ..families import Capability, Family
@@ -174,9 +174,18 @@ def _step_end(i, view, episode, s, actions):  # pragma: no cover - compiled
     _observe_row(i, view, episode, s)
 
 
+def _beside(env: Any) -> list[tuple[Any, tuple]]:
+    """The master's speed and the web's steps (called by the step only, each compiled on its
+    own), with their argument types for ``env``'s state (``Task.beside``)."""
+    f8 = types.float64
+    return [(row_speed, (typeof(env.state.profile[0]), f8, f8, f8)),
+            (span_step_s, (f8,) * 5), (winder_radius_s, (f8,) * 3), (tension_s, (f8,) * 2),
+            (load_cell_s, (f8,) * 3)]
+
+
 TASK = Task("gear_sync", __file__, needs={Capability.ANALOG_GEAR}, state=GearSyncState,
             figures=_figures, begin=_step_begin, before=_line_before, after=_line_after,
-            end=_step_end, observe=_observe_row)
+            end=_step_end, observe=_observe_row, beside=_beside)
 
 
 @njit(**KERNEL)

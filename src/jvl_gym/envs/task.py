@@ -113,12 +113,19 @@ class Task:
     begin, before, after, end, observe : function, optional
         The compiled hooks as plain Python functions (``None``: the engine's no-op hook); a
         task with none steps in numpy.
+    beside : callable, optional
+        ``beside(env) -> list of (dispatcher, argument types)``: compiled functions of the
+        task's own (no family names; numba caches each on its own, e.g. compiled apart) that
+        its step calls and its first reset does not, with their argument types for ``env``.
+        On a cold cache a second process compiles them while this one compiles the env's first
+        reset (:func:`jvl_gym.engine.two_cores.start_beside`).
     """
 
     def __init__(self, tag: str, source: str, *, needs: Iterable[Capability] = (),
                  state: type | None = None,
                  figures: Callable[[Family], dict[str, Any]] | None = None,
                  helpers: Mapping[str, Callable[..., Any]] | None = None,
+                 beside: Callable[[Any], list[tuple[Any, tuple]]] | None = None,
                  **hooks: Callable[..., Any] | None) -> None:
         unknown = set(hooks) - set(_HOOKS)
         if unknown:
@@ -129,6 +136,7 @@ class Task:
         self.state = state
         self.figures = figures
         self.helpers = dict(helpers or {})
+        self.beside = beside
         self.hooks = {name: fn for name, fn in hooks.items() if fn is not None}
         self._drivers: dict[str, TaskDriver] = {}
 
