@@ -82,9 +82,9 @@ import json, probe_two_cores as m
 from numba import types
 from jvl_gym.engine import two_cores
 beside = [(m.inner, (types.float64,))]
-two_cores.start_beside("probe", "probe_two_cores", beside)
+two_cores.start_beside("probe", lambda: beside)
 m.outer(3.0)  # what this process compiles meanwhile
-two_cores.finish_beside("probe", beside)
+two_cores.finish_beside("probe", lambda: beside)
 print(json.dumps({"inner_loaded": sum(m.inner._cache_hits.values()),
                   "outer_loaded": sum(m.outer._cache_hits.values()),
                   "value": m.inner(3.0) + m.outer(3.0)}))

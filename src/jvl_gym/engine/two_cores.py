@@ -24,6 +24,7 @@ import os
 import pickle
 import subprocess
 import sys
+from collections.abc import Callable
 from typing import Any
 
 from .apart import _APART
@@ -127,29 +128,31 @@ def _wait(child: subprocess.Popen) -> None:
         child.wait()
 
 
-def start_beside(name: str, module: str, beside: list[tuple[Any, tuple]]) -> None:
-    """Start a second process on ``beside`` (``(dispatcher, argument types)`` of functions
-    numba caches on their own, defined once ``module`` is imported) when the first of them is
-    not in the cache yet, once per process and ``name``: an environment's own functions its
-    step calls, compiled there while this process compiles what the environment's first reset
-    needs. :func:`finish_beside` waits for it."""
+def start_beside(name: str, listing: Callable[[], list[tuple[Any, tuple]]]) -> None:
+    """Start a second process on ``listing()`` (``(dispatcher, argument types)`` of functions
+    numba caches on their own) when the first of them is not in the cache yet, once per
+    process and ``name``: an environment's own functions its step calls, compiled there while
+    this process compiles what the environment's first reset needs. :func:`finish_beside`
+    waits for it. ``listing`` is called only the first time."""
     if name in _started:
         return
     _started.add(name)
-    child = _start(module, beside)
+    beside = listing()
+    child = _start(beside[0][0].py_func.__module__, beside)
     if child is not None:
         _children[name] = child
 
 
-def finish_beside(name: str, beside: list[tuple[Any, tuple]]) -> None:
+def finish_beside(name: str, listing: Callable[[], list[tuple[Any, tuple]]]) -> None:
     """Wait for the second process :func:`start_beside` started for ``name``, if any, then
-    compile or load ``beside`` here (from the cache it filled)."""
+    compile or load ``listing()`` here (from the cache it filled); once per process and
+    ``name``."""
     if name in _prepared:
         return
     child = _children.pop(name, None)
     if child is not None:
         _wait(child)
-    for dispatcher, sig in beside:
+    for dispatcher, sig in listing():
         dispatcher.compile(sig)
     _prepared.add(name)
 

@@ -215,7 +215,7 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         self._build()
         self._set_transient()
         if self.task.beside is not None:  # on a cold cache, compiled beside the first reset
-            two_cores.start_beside(self.task.tag, *self._beside())
+            two_cores.start_beside(self.task.tag, self._beside)
 
     # ------------------------------------------------------------------ the task's parts
     def _build(self) -> None:
@@ -252,7 +252,7 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         (``jvl_gym.engine.entry``), with the arguments before the actions: the motors',
         episode's and task's arrays packed once (``TaskDriver.pack``)."""
         if self.task.beside is not None:
-            two_cores.finish_beside(self.task.tag, self._beside()[1])
+            two_cores.finish_beside(self.task.tag, self._beside)
         compiled = self._driver.runner(view)
         head = (self._packed(view),)
         done = compiled(*head, actions, self.decimation)
@@ -261,11 +261,10 @@ class MotorVectorEnv(Validation, Randomisation, Stepping, Rendering, VectorEnv, 
         self._step_view = view
         return done
 
-    def _beside(self) -> tuple[str, list[tuple[Any, tuple]]]:
-        """The module to import and the task's functions with argument types (``Task.beside``)
-        a second process may compile at a cold start."""
-        beside = self.task.beside(self)
-        return beside[0][0].py_func.__module__, beside
+    def _beside(self) -> list[tuple[Any, tuple]]:
+        """The task's functions with argument types (``Task.beside``) a second process may
+        compile at a cold start."""
+        return self.task.beside(self)
 
     def _packed(self, view: tuple) -> PackedArguments:
         """The arguments of the compiled step and observation before the actions for the
