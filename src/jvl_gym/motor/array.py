@@ -356,7 +356,7 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         types = None
         if motor_type is not None:
             if isinstance(motor_type, str):
-                codes = np.full(idx.size, self._type_code(motor_type), dtype=np.int64)
+                codes = self._type_code(motor_type)  # one code for every motor of idx
             else:
                 names_of = list(motor_type)
                 if len(names_of) != idx.size:

@@ -170,11 +170,11 @@ class RegisterBank(ABC):
         conf = self.CONFORMANCE
         if conf is None or not conf.warn_rules:
             return
-        warned = self._not_modelled_warned
-        for reg, raw in zip(regs, raws):
+        rules, warned = conf.warn_rules, self._not_modelled_warned
+        for k, reg in enumerate(regs):
             num = reg.number
-            if num in conf.warn_rules and num not in warned and conf.not_modelled_change(
-                    num, reg.default_raw, raw):
+            if num in rules and num not in warned and conf.not_modelled_change(
+                    num, reg.default_raw, raws[k]):
                 warned.add(num)
                 entry = conf.entries[num]
                 what = (f"{reg.name} (register {num})" if entry.status == "not modelled" else

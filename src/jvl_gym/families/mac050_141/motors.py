@@ -14,10 +14,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ...motor.arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index, real_array
+from ...motor.arguments import InputValue, MotorIndex, MotorSpec, Seed, as_index
 from ...motor.array import ModeError, MotorArray
 from ...motor.bank import StorePlan
-from ...motor.inputs import InputRule
+from ...motor.inputs import InputRule, staged_inputs
 from ...motor.keywords import BINARY, FINITE, NONNEGATIVE, POSITIVE
 from ...physics.mechanics import coupling_problem
 from ...registers import Format, Register, RegisterError
@@ -148,6 +148,9 @@ class MacMotorArray(MotorArray, layout=L):
                         values: np.ndarray) -> None:
         """Raise ValueError naming the parameter when a motor's coupling to its load is one the
         inner step cannot integrate (docs/model.md §5.2)."""
+        if (L.P_K_COUPLING not in cols.tolist()
+                and not self._type_params[:, L.P_K_COUPLING].any()):
+            return  # no stiffness given and every type of the pool rigid: rigid shafts pass
         p = self._type_params[self._type_of[idx]]  # (a new array)
         for q, col in enumerate(cols.tolist()):
             if not to_state[q]:
@@ -269,13 +272,9 @@ class MacMotorArray(MotorArray, layout=L):
             The motors (default all).
         """
         idx = as_index(index, self.n)
-        arr = real_array("torque", torque)
-        if arr.ndim > 1 or (arr.ndim == 1 and arr.shape[0] != idx.size):
-            raise ValueError(f"torque: expected a scalar or shape ({idx.size},), got {arr.shape}")
-        if not np.isfinite(arr).all():
-            raise ValueError(f"torque must be finite, got {torque!r}")
-        start_loaded_rows(self.regs, self.state, self.inputs, idx,
-                          arr if arr.ndim else np.full(idx.size, arr),
+        [(_, load)] = staged_inputs({"load_torque": torque}, self.INPUTS, self.INPUT_RULES,
+                                    idx.size)  # checked as set_input checks it
+        start_loaded_rows(self.regs, self.state, self.inputs, idx, load,
                           self._type_peak[self._type_of[idx]])
 
     def _add_type(self, cfg: MotorConfig) -> None:
