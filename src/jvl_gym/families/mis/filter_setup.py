@@ -10,7 +10,7 @@ AFZUP_READINDEX loads that input's settings into the four registers and sets bit
 register then reads 32768 + n, its documented range 32768–32775). A write of the four
 registers alone changes no input's filter. At power-up every input takes the four registers'
 values (the firmware's start-up copy is not described; ``docs/families/mis-sim.md``, "Analogue
-filter settings per input").
+filter settings per input"; the copy is part of the compiled start, :mod:`.firmware.start`).
 """
 
 from __future__ import annotations
@@ -27,12 +27,6 @@ _DONE = 1 << 15  #: bit 15: the firmware has copied / loaded the settings
 READ_INDEX_VALUES = frozenset({0, *range(1, 9), *range(_DONE, _DONE + 9)})
 #: the registers 102-105 in the order of the settings' columns (layout.AF_CONFMIN …)
 _SETTINGS = (R.AFZUP_CONFMIN, R.AFZUP_CONFMAX, R.AFZUP_MAXSLOPE, R.AFZUP_FILTER)
-
-
-#: the ``params`` columns of every input's settings (input 0's four first), and the
-#: registers each of them takes at power-up
-_ALL_INPUTS = slice(L.P_AF0, L.P_AF0 + 8 * L.AF_SETTINGS)
-_SETTINGS_OF_ALL_INPUTS = np.array(_SETTINGS * 8, dtype=np.int64)
 
 
 def _columns(k: int) -> list[int]:
@@ -65,10 +59,3 @@ class FilterSetup:
                 self.regs[i, list(_SETTINGS)] = self.params[i, _columns(value - 1)]
                 value |= _DONE
             self.regs[i, R.AFZUP_READINDEX] = value
-
-    @staticmethod
-    def _afzup_power_on(regs: np.ndarray, params: np.ndarray) -> None:
-        """Power-up of motors whose registers and parameters are the (M, ·) blocks ``regs``
-        and ``params`` (``params`` changed in place): every input takes the registers
-        102-105."""
-        params[:, _ALL_INPUTS] = regs[:, _SETTINGS_OF_ALL_INPUTS]

@@ -148,8 +148,11 @@ def _mode_change_bits(regs: np.ndarray, idx: np.ndarray, raw: np.ndarray,
                       changes: np.ndarray) -> np.ndarray:  # pragma: no cover - compiled
     """The bits of ``changes`` (:data:`_MODE_CHANGES`) of MODE_REG := ``raw[j]`` for motor
     ``idx[j]``, (M,) uint8: by its MODE_REG now and the new value (0 … 15 themselves, any
-    other value :data:`_OTHER_MODE`), ERR_BITS ≠ 0 and SETUP_BITS bit 5."""
+    other value :data:`_OTHER_MODE`), ERR_BITS ≠ 0 and SETUP_BITS bit 5. Where no change has
+    any bit (a plain change of mode for every motor), MODE_REG := ``raw`` is stored here and
+    the result is empty, (0,)."""
     out = np.empty(idx.size, dtype=np.uint8)
+    plain = True
     for j in range(idx.size):
         i = idx[j]
         old, new = regs[i, R.MODE_REG], raw[j]
@@ -157,7 +160,13 @@ def _mode_change_bits(regs: np.ndarray, idx: np.ndarray, raw: np.ndarray,
                          new if 0 <= new < _OTHER_MODE else _OTHER_MODE,
                          1 if regs[i, R.ERR_BITS] != 0 else 0,
                          1 if regs[i, R.SETUP_BITS] & c.SETUP_SYNC_ENCODER else 0]
-    return out
+        if out[j] != 0:
+            plain = False
+    if not plain:
+        return out
+    for j in range(idx.size):
+        regs[idx[j], R.MODE_REG] = raw[j]
+    return out[:0]
 
 
 #: the factory limits a power-on takes from ROM (flash holds the writable registers only)
@@ -167,6 +176,8 @@ _TURN_TABLE_ENDS = np.array([R.MIN_P_IST, R.MAX_P_IST], dtype=np.int64)
 #: the plant's state and the electronics' temperature, which a reset of the electronics leaves
 #: alone
 _PLANT_STATE = [L.S_THETA, L.S_OMEGA, L.S_ID, L.S_IQ, L.S_E_COPPER, L.S_E_LOAD, L.S_TEMP_RISE]
+#: the ENCODER_TYPE codes (§8.2.49)
+_ENCODER_CODES = frozenset(c.ENCODER_CPR)
 
 
 class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, ProgramMixin,
@@ -218,6 +229,13 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
                           "lost_steps", "multifunction_output",
                           "multifunction_output_total"})
     SHAFT_ANGLE, SHAFT_SPEED = L.S_THETA, L.S_OMEGA
+    #: the arrays a register write may change (``RegisterBank.TRANSACTION_ARRAYS``): the
+    #: registers, the state, the parameters (AFZUP_WRITEBITS, command 316) and which motors
+    #: hold a flash image (commands 268, 269); no write changes the world inputs
+    TRANSACTION_ARRAYS: ClassVar[tuple[str, ...]] = ("regs", "state", "params", "_has_flash")
+    #: P_IST of each motor at its last power-down or reset (§5.4.2), (N,) int64; None until
+    #: the first power-on
+    _position_backup: np.ndarray | None = None
 
     @staticmethod
     def load_motor(motor: Any) -> MisMotorConfig:
@@ -283,30 +301,30 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         ``params`` or, where ``to_state``, of ``state``, then the firmware's start. An
         encoder_type that is no ENCODER_TYPE code (§8.2.49) is refused before anything
         changes."""
-        codes = set(c.ENCODER_CPR)
-        for q in range(cols.size):
-            if not to_state[q] and cols[q] == L.P_ENCODER and not set(
-                    values[q].tolist()) <= codes:
-                raise ValueError(f"encoder_type must be one of {sorted(codes)} (§8.2.49), got "
-                                 f"{values[q].tolist()}")
-        self._store_position_backup(idx)
+        col_list = cols.tolist()
+        for q, col in enumerate(col_list):
+            if col == L.P_ENCODER and not to_state[q] and not set(
+                    values[q].tolist()) <= _ENCODER_CODES:
+                raise ValueError(f"encoder_type must be one of {sorted(_ENCODER_CODES)} "
+                                 f"(§8.2.49), got {values[q].tolist()}")
         types = self._type_of[idx]
         state = np.zeros((idx.size, L.N_STATE))
         if type(self)._initial_state is not MotorArray._initial_state:
             for row in state:
                 self._initial_state(row)
         params = self._type_params[types]
-        for q in range(cols.size):
-            (state if to_state[q] else params)[:, cols[q]] = values[q]
+        for q, col in enumerate(col_list):
+            (state if to_state[q] else params)[:, col] = values[q]
         self.inputs[idx] = self._type_inputs[types]
-        self._start(idx, self._memory_rows(idx), state, params)
+        self._start(idx, self._memory_rows(idx, types), state, params, take_backup=True)
 
-    def _memory_rows(self, idx: np.ndarray) -> np.ndarray:
-        """The registers motors ``idx`` start with: their flash image where they have one,
-        else their type's ROM image, (M, registers) int64 (a new array); MAX_VOLTAGE and
-        TEMP_LIMITS hold the factory values from ROM (flash holds the writable registers
-        only, §8.2.93)."""
-        types = self._type_of[idx]
+    def _memory_rows(self, idx: np.ndarray, types: np.ndarray | None = None) -> np.ndarray:
+        """The registers motors ``idx`` (of types ``types``, by default their own) start with:
+        their flash image where they have one, else their type's ROM image, (M, registers)
+        int64 (a new array); MAX_VOLTAGE and TEMP_LIMITS hold the factory values from ROM
+        (flash holds the writable registers only, §8.2.93)."""
+        if types is None:
+            types = self._type_of[idx]
         rows = self._rom[types]
         if self._flash is not None:
             flashed = self._has_flash[idx]
@@ -314,13 +332,6 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
                 rows[flashed] = self._flash[idx[flashed]]
                 rows[:, _FACTORY] = self._rom[types[:, None], _FACTORY]
         return rows
-
-    def _store_position_backup(self, idx: np.ndarray) -> None:
-        """The position back-up of §5.4.2: P_IST as the motors ``idx`` leave it at a power-down
-        or reset (the flash copy a later power-up with SETUP_BITS bit 11 restores)."""
-        if getattr(self, "_position_backup", None) is None:
-            self._position_backup = np.zeros(self.n, dtype=np.int64)
-        self._position_backup[idx] = self.regs[idx, R.P_IST]
 
     def _power_on(self, idx: np.ndarray) -> None:
         """Firmware start of motors ``idx`` from their registers (the factory limits from ROM),
@@ -330,7 +341,8 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         regs[:, _FACTORY] = self._rom[self._type_of[idx][:, None], _FACTORY]
         self._start(idx, regs, self.state[idx], self.params[idx])
 
-    def _start(self, idx: np.ndarray, regs: np.ndarray, s: np.ndarray, p: np.ndarray) -> None:
+    def _start(self, idx: np.ndarray, regs: np.ndarray, s: np.ndarray, p: np.ndarray,
+               take_backup: bool = False) -> None:
         """Firmware start of motors ``idx`` whose registers (MAX_VOLTAGE and TEMP_LIMITS the
         factory values), state (at a reset 0 but for the plant's) and parameters before it are
         the (M, ·) blocks ``regs``, ``s`` and ``p`` (worked on in place, then stored in their
@@ -340,19 +352,19 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         position back-up of §5.4.2–5.4.3; P_SOLL = P_IST, so a saved P_SOLL makes no move at
         power-on), EXT_ENCODER too unless SETUP_BITS bit 12 keeps it, the mode from HOMEMODE
         or else STARTMODE (§8.2.33, §8.2.37), the hardware supervision's start (CVI_VOLT,
-        TEMP, the brake, the faults only a start sees, §7.2.13, §7.2.16, §8.2.79–80): the
-        compiled :func:`.firmware.start.start_rows`; then the user commands' flags, the
-        analogue filter settings, the SSI port, a stored program and the multifunction
-        output start."""
-        if getattr(self, "_position_backup", None) is None:  # (P_IST is 0 here)
+        TEMP, the brake, the faults only a start sees, §7.2.13, §7.2.16, §8.2.79–80), the
+        analogue filter settings (§8.2.50–55) and EXTENCODER2 (§8.2.68): the compiled
+        :func:`.firmware.start.start_rows`, which stores the blocks in the motors' rows (with
+        ``take_backup``, after it has taken P_IST as the position back-up of §5.4.2: the
+        position a power-down or reset leaves, which a later power-up with SETUP_BITS bit 11
+        restores); then the user commands' flags, the SSI port, a stored program and the
+        multifunction output start."""
+        if self._position_backup is None:  # (P_IST is 0 here)
             self._position_backup = np.zeros(self.n, dtype=np.int64)
-        start_rows(regs, s, p, self.inputs[idx], self._position_backup[idx])
+        start_rows(idx, regs, s, p, self.regs, self.state, self.params, self.inputs,
+                   self._position_backup, take_backup)
         self._commands_power_on(idx)
-        self._afzup_power_on(regs, p)
-        self._ssi_power_on(idx, regs)
-        self.regs[idx] = regs
-        self.state[idx] = s
-        self.params[idx] = p
+        self._ssi_power_on(idx)
         self._program_power_on(idx)
         self._mf_power_on(idx, s)
 
@@ -364,10 +376,15 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
     # ------------------------------------------------------------------ write rules
     def _store_rows(self, plan: StorePlan, idx: np.ndarray, raws: np.ndarray) -> None:
         for k, reg in enumerate(plan.regs):
-            if reg.number in _SPECIAL:
-                self._store_one(reg, idx, raws[k])
+            num = reg.number
+            if num not in _SPECIAL:
+                self.regs[idx, num] = raws[k]
+            elif num == R.P_SOLL:
+                self._store_p_soll(idx, raws[k])
+            elif num == R.MODE_REG:
+                self._store_mode(idx, raws[k])
             else:
-                self.regs[idx, reg.number] = raws[k]
+                self._store_one(reg, idx, raws[k])
 
     def _store_special(self, reg: Register, idx: np.ndarray, raw: np.ndarray) -> bool:
         if reg.number in _SPECIAL:
@@ -450,11 +467,10 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         the power-on of the firmware (:meth:`_power_on`); the rotor keeps its angle and speed,
         and the drive restarts with its commanded position at the rotor (no jump)."""
         idx = as_index(index, self.n)
-        self._store_position_backup(idx)
         ssi = self.regs[idx, R.EXTENCODER2]
         state = np.zeros((idx.size, L.N_STATE))
         state[:, _PLANT_STATE] = self.state[idx][:, _PLANT_STATE]
-        self._start(idx, self._memory_rows(idx), state, self.params[idx])
+        self._start(idx, self._memory_rows(idx), state, self.params[idx], take_backup=True)
         self._ssi_keep(idx, ssi)
         rotor = self.state[idx, L.S_THETA] * COUNTS_PER_REV / (2.0 * math.pi)
         for col in (L.S_CMD, L.S_CMD_PREV, L.S_FIELD):
@@ -476,37 +492,38 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         SETUP_BITS bit 5 sets the encoder to P_IST."""
         regs, s = self.regs, self.state
         change = _mode_change_bits(regs, idx, raw, _MODE_CHANGES)
+        if not change.size:  # stored there: no motor's change has a rule to follow
+            return
         new = raw
-        if change.any():
-            mode = regs[idx, R.MODE_REG]
-            refused = (change & _REFUSED) != 0
-            if refused.any():
-                j = int(np.argmax(refused))
-                self._refuse_mode(int(idx[j]), int(raw[j]))
-            enter_home = ((change & _TO_SEARCH) != 0) & (mode != raw)
-            if enter_home.any():
-                entering = idx[enter_home]
-                s[entering, L.S_HOME_PHASE] = 0.0
-                s[entering, L.S_HOME_MS] = 0.0
-                # the mode a time-out sets back (§7.2.19): the one before the search started
-                first = enter_home & ~_among(mode, _IS_SEARCH)
-                s[idx[first], L.S_HOME_PREV] = mode[first]
-            off = (change & _TO_PASSIVE) != 0
-            if off.any():
-                # §5.11.2: "When changing to Passive mode the motor goes into Stop mode to
-                # decelerate according to the 'Deceleration'-ramp" (an error stop keeps its
-                # own)
-                running = (off & (s[idx, L.S_VEL] != 0.0) & (s[idx, L.S_EMERGENCY] == 0.0)
-                           & ~_among(mode, _IS_OFF))
-                halt = idx[off & ~running]
-                s[halt, L.S_VEL] = 0.0
-                s[halt, L.S_EMERGENCY] = 0.0
-                new = np.where(running, c.STOP, raw)
-            # SETUP_BITS bit 5 (§8.2.68): "Synchronize encoder position to P_IST after change
-            # to active mode. Follow error = 0"
-            for i in idx[(change & _SYNC) != 0].tolist():
-                self._set_encoder(i, int(regs[i, R.P_IST]))
-                regs[i, R.FLWERR] = 0
+        mode = regs[idx, R.MODE_REG]
+        refused = (change & _REFUSED) != 0
+        if refused.any():
+            j = int(np.argmax(refused))
+            self._refuse_mode(int(idx[j]), int(raw[j]))
+        enter_home = ((change & _TO_SEARCH) != 0) & (mode != raw)
+        if enter_home.any():
+            entering = idx[enter_home]
+            s[entering, L.S_HOME_PHASE] = 0.0
+            s[entering, L.S_HOME_MS] = 0.0
+            # the mode a time-out sets back (§7.2.19): the one before the search started
+            first = enter_home & ~_among(mode, _IS_SEARCH)
+            s[idx[first], L.S_HOME_PREV] = mode[first]
+        off = (change & _TO_PASSIVE) != 0
+        if off.any():
+            # §5.11.2: "When changing to Passive mode the motor goes into Stop mode to
+            # decelerate according to the 'Deceleration'-ramp" (an error stop keeps its
+            # own)
+            running = (off & (s[idx, L.S_VEL] != 0.0) & (s[idx, L.S_EMERGENCY] == 0.0)
+                       & ~_among(mode, _IS_OFF))
+            halt = idx[off & ~running]
+            s[halt, L.S_VEL] = 0.0
+            s[halt, L.S_EMERGENCY] = 0.0
+            new = np.where(running, c.STOP, raw)
+        # SETUP_BITS bit 5 (§8.2.68): "Synchronize encoder position to P_IST after change
+        # to active mode. Follow error = 0"
+        for i in idx[(change & _SYNC) != 0].tolist():
+            self._set_encoder(i, int(regs[i, R.P_IST]))
+            regs[i, R.FLWERR] = 0
         regs[idx, R.MODE_REG] = new
 
     def _refuse_mode(self, i: int, value: int) -> None:
@@ -532,6 +549,12 @@ class MisMotorArray(MultifunctionOutput, SsiPort, UserCommands, FilterSetup, Pro
         multi-turn mode (the travel beyond P_IST kept for the profile), otherwise limited to
         the range."""
         regs, s = self.regs, self.state
+        if idx.size == 1:  # (one motor: scalar indexing costs a fraction of numpy's fancy one)
+            i = idx[0]
+            s[i, L.S_TT_TRAVEL] = 0.0
+            if regs[i, R.TURNTABLE_MODE] == c.TT_OFF:
+                regs[i, R.P_SOLL] = raw[0]
+                return
         s[idx, L.S_TT_TRAVEL] = 0.0
         mode = regs[idx, R.TURNTABLE_MODE]
         if not mode.any():  # TT_OFF everywhere

@@ -73,13 +73,20 @@ class MultifunctionOutput:
     regs: np.ndarray
     state: np.ndarray
     params: np.ndarray
+    #: the registers the routing was last computed from and the routing (:meth:`_mf_routes`;
+    #: None: to be computed)
+    _mf_route_cache: tuple[np.ndarray, np.ndarray] | None = None
+    #: the floors of ``_mf_at`` (None: to be computed); the last sample's counts (None: the
+    #: output's arrays are not created yet, :meth:`_mf_arrays`)
+    _mf_base: np.ndarray | None = None
+    _mf_counts: np.ndarray | None = None
 
     # ------------------------------------------------------------------ the routing
     def _mf_routes(self) -> np.ndarray:
         """The routing code of each motor from its registers now, (N,) int (kept while
         XFIELD_ADDR, XFIELD_DATA and SETUP_BITS stay as they are; a power-on clears it)."""
         key = self.regs[:, _ROUTING_REGISTERS]
-        cached = getattr(self, "_mf_route_cache", None)
+        cached = self._mf_route_cache
         if cached is not None and np.array_equal(cached[0], key):
             return cached[1]
         route = self._mf_route_of()
@@ -131,9 +138,9 @@ class MultifunctionOutput:
         at the last settling (and their whole counts), the last sample's counts, the sum, and
         whether the last settling found nothing routed (then a settling with no XFIELD_DATA
         set only moves the positions on)."""
-        if getattr(self, "_mf_counts", None) is None:
+        if self._mf_counts is None:
             self._mf_at = self.state[:, _SOURCES]
-            self._mf_base: np.ndarray | None = None  # the floors of _mf_at, when known
+            self._mf_base = None
             self._mf_counts = np.zeros(self.n, np.int64)
             self._mf_total = np.zeros(self.n, np.int64)
             self._mf_quiet = False
@@ -141,11 +148,19 @@ class MultifunctionOutput:
     def _mf_power_on(self, idx: np.ndarray, state: np.ndarray | None = None) -> None:
         """Power-on or reset of motors ``idx`` (``state``: their rows of ``state`` when the
         caller holds them, (M, N_STATE)): the sources taken from here, no counts, the sum 0
-        (the jump of the commanded position a reset makes emits nothing)."""
-        self._mf_arrays()
-        self._mf_route_cache = self._mf_base = None
-        self._mf_at[idx] = (self.state[idx] if state is None else state)[:, _SOURCES]
-        self._mf_counts[idx] = 0
+        (the jump of the commanded position a reset makes emits nothing). (Attributes are
+        bound only where they change: binding one costs the motor array's ``__setattr__``.)"""
+        if self._mf_counts is None:
+            self._mf_arrays()
+        if self._mf_route_cache is not None:
+            self._mf_route_cache = None
+        if self._mf_base is not None:
+            self._mf_base = None
+        rows = self.state[idx] if state is None else state
+        at = self._mf_at
+        at[idx, 0] = rows[:, _SOURCES[0]]
+        at[idx, 1] = rows[:, _SOURCES[1]]
+        self._mf_counts[idx] = 0  # type: ignore[index]
         self._mf_total[idx] = 0
 
     def _mf_settle(self) -> None:

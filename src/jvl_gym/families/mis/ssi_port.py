@@ -44,12 +44,17 @@ class SsiPort:
     regs: np.ndarray
     state: np.ndarray
     inputs: np.ndarray
+    #: the motors whose RS422 is set up for SSI and the readings under way (:meth:`_ssi`); None
+    #: while no SSI command has run (none set up, none under way)
+    _ssi_ready: set[int] | None = None
+    _ssi_reads: dict[int, SsiReading] | None = None
 
     def _ssi(self) -> tuple[set[int], dict[int, SsiReading]]:
-        """The motors whose RS422 is set up for SSI (command 320) and the readings under way."""
-        if getattr(self, "_ssi_ready", None) is None:
-            self._ssi_ready: set[int] = set()
-            self._ssi_reads: dict[int, SsiReading] = {}
+        """The motors whose RS422 is set up for SSI (command 320) and the readings under way
+        (created on first use)."""
+        if self._ssi_ready is None or self._ssi_reads is None:
+            self._ssi_ready = set()
+            self._ssi_reads = {}
         return self._ssi_ready, self._ssi_reads
 
     def _ssi_command(self, i: int, cmd: int) -> None:
@@ -67,17 +72,14 @@ class SsiPort:
                               gray=cmd == CMD_SSI_READ_GRAY or setup.gray)
         self._ssi_serve()
 
-    def _ssi_power_on(self, idx: np.ndarray, regs: np.ndarray) -> None:
-        """Power-on of motors ``idx`` whose registers are the (M, ·) block ``regs`` (changed in
-        place): no SSI set-up, no reading; EXTENCODER2 = 0 unless SETUP_BITS bit 13
-        (§8.2.68)."""
-        ready, reads = self._ssi()
-        if ready or reads:
+    def _ssi_power_on(self, idx: np.ndarray) -> None:
+        """Power-on of motors ``idx``: no SSI set-up, no reading (EXTENCODER2 = 0 unless
+        SETUP_BITS bit 13, §8.2.68, is the firmware's start: ``firmware.start``)."""
+        if self._ssi_ready or self._ssi_reads:
+            ready, reads = self._ssi()
             for i in idx.tolist():
                 ready.discard(i)
                 reads.pop(i, None)
-        regs[:, R.EXTENCODER2] = np.where(regs[:, R.SETUP_BITS] & SETUP_KEEP_SSI,
-                                          regs[:, R.EXTENCODER2], 0)
 
     def _ssi_keep(self, idx: np.ndarray, before: np.ndarray) -> None:
         """After a reset of motors ``idx``: EXTENCODER2 back to ``before`` (its values before
@@ -146,9 +148,11 @@ class SsiPort:
 
     def _snapshot(self, idx: np.ndarray) -> tuple[Any, ...]:
         """What a register transaction may change (``RegisterBank._snapshot``) and the SSI
-        port's set-up and readings (a refused transaction takes a command 320–322 back)."""
-        ready, reads = self._ssi()
-        return super()._snapshot(idx), set(ready), dict(reads)  # type: ignore[misc]
+        port's set-up and readings (a refused transaction takes a command 320–322 back; None
+        while no SSI command has run)."""
+        ready, reads = self._ssi_ready, self._ssi_reads
+        return (super()._snapshot(idx),  # type: ignore[misc]
+                None if ready is None else set(ready), None if reads is None else dict(reads))
 
     def _restore(self, idx: np.ndarray, saved: tuple[Any, ...]) -> None:
         """Put back what :meth:`_snapshot` saved."""

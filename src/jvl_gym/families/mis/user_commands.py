@@ -42,15 +42,22 @@ class UserCommands:
 
     n: int
     regs: np.ndarray
+    #: per motor the RelativeMove flag, armed by 999, the K-phase flash (:meth:`_command_state`);
+    #: None while no command has used them (every flag clear, nothing armed, the K-phase flash
+    #: KPHASE's default)
+    _relative_flag: np.ndarray | None = None
+    _armed: np.ndarray | None = None
+    _kphase_flash: np.ndarray | None = None
 
     def _command_state(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Per motor: RelativeMove flag, armed by 999, the K-phase flash."""
-        if getattr(self, "_relative_flag", None) is None:
+        """Per motor: RelativeMove flag, armed by 999, the K-phase flash (created on first
+        use)."""
+        if self._relative_flag is None:
             self._relative_flag = np.zeros(self.n, dtype=bool)
             self._armed = np.zeros(self.n, dtype=bool)
             self._kphase_flash = np.full(self.n, int(self.table.lookup("KPHASE").default),
                                          dtype=np.int64)
-        return self._relative_flag, self._armed, self._kphase_flash
+        return self._relative_flag, self._armed, self._kphase_flash  # type: ignore[return-value]
 
     @property
     def relative_move(self) -> np.ndarray:
@@ -64,24 +71,32 @@ class UserCommands:
 
     def _commands_power_on(self, idx: np.ndarray) -> None:
         """Power-on of motors ``idx``: the flag clear and nothing armed; the K-phase flash
-        kept."""
-        flag, armed, _ = self._command_state()
+        kept (nothing to do before a command has used them)."""
+        flag, armed = self._relative_flag, self._armed
+        if flag is None or armed is None:
+            return
         flag[idx] = False
         armed[idx] = False
 
     def _snapshot(self, idx: np.ndarray) -> tuple[Any, ...]:
         """What a register transaction on motors ``idx`` may change
         (``RegisterBank._snapshot``) and this module's state of those motors (a refused
-        transaction takes their commands back; a command changes its own motor's only)."""
-        flag, armed, kflash = self._command_state()
-        return super()._snapshot(idx), (flag[idx], armed[idx], kflash[idx])  # type: ignore[misc]
+        transaction takes their commands back; a command changes its own motor's only; None
+        while no command has used it)."""
+        flag, armed, kflash = self._relative_flag, self._armed, self._kphase_flash
+        kept = None if flag is None or armed is None or kflash is None else (
+            flag[idx], armed[idx], kflash[idx])
+        return super()._snapshot(idx), kept  # type: ignore[misc]
 
     def _restore(self, idx: np.ndarray, saved: tuple[Any, ...]) -> None:
-        """Put back what :meth:`_snapshot` saved."""
-        rows, (flag, armed, kflash) = saved
+        """Put back what :meth:`_snapshot` saved (the state unused again where it was)."""
+        rows, kept = saved
         super()._restore(idx, rows)  # type: ignore[misc]
+        if kept is None:
+            self._relative_flag = self._armed = self._kphase_flash = None
+            return
         state = self._command_state()
-        state[0][idx], state[1][idx], state[2][idx] = flag, armed, kflash
+        state[0][idx], state[1][idx], state[2][idx] = kept
 
     def _user_command(self, i: int, cmd: int) -> bool:
         """Take the arming of motor ``i`` and run ``cmd`` if it is one of this module's; False

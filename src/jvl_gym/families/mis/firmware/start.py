@@ -16,9 +16,12 @@
   ERR_BITS bits 10 and 13, which only the start sets (§7.2.13, §7.2.16). MAX_VOLTAGE and
   TEMP_LIMITS hold the factory values (§8.2.93: the registers a motor starts from carry them,
   ``MisMotorArray._memory_rows``).
+- Every analogue input's filter takes the registers AFZUP_CONFMIN … AFZUP_FILTER (102–105)
+  at power-up (:mod:`..filter_setup`, §8.2.50–55); EXTENCODER2 is zeroed unless SETUP_BITS bit
+  13 keeps it (§8.2.68, :mod:`..ssi_port`).
 
 Compiled, per motor: a reset of a few copies of an env costs a call, not a numpy operation per
-rule.
+rule; the call also takes the position back-up and stores the motors' rows.
 """
 
 from __future__ import annotations
@@ -34,6 +37,7 @@ from .. import layout as L
 from ..units import COUNTS_PER_REV, CVI_VOLTS_PER_UNIT, TEMP_CELSIUS_PER_UNIT
 from . import regs as R
 from .monitor import encoder_cpr, firmware_angle
+from .ssi import SETUP_KEEP_SSI
 
 __all__ = ["start_rows", "power_up_position"]
 
@@ -46,6 +50,10 @@ _CLEARED = np.array([
 _SINGLE_TURN = np.array([k in (1, 3, 4) for k in range(len(c.ENCODER_CPR))], dtype=np.bool_)
 #: the start modes (§8.2.33) among the MODE_REG values 0 … 15
 _START_MODE = np.array([k in c.START_MODES for k in range(16)], dtype=np.bool_)
+#: the registers 102–105 (AFZUP_CONFMIN, AFZUP_CONFMAX, AFZUP_MAXSLOPE, AFZUP_FILTER) in the
+#: order of an input's filter settings in ``params`` (layout.AF_CONFMIN …)
+_FILTER_SETTINGS = np.array([R.AFZUP_CONFMIN, R.AFZUP_CONFMAX, R.AFZUP_MAXSLOPE,
+                             R.AFZUP_FILTER], dtype=np.int64)
 _HALF_TURN = COUNTS_PER_REV // 2
 _WRAP = 2**31  #: P_IST wraps at ±2³¹ (a 32-bit register)
 
@@ -127,12 +135,36 @@ def start(regs, s, p, u, stored: int) -> None:  # pragma: no cover - compiled
     found = int(u[L.I_FAULTS]) & c.FAULTS_AT_START
     if found != 0:
         regs[R.ERR_BITS] |= found | c.ERR_GENERAL
+    # every input's filter takes the registers 102-105 at power-up (§8.2.50-55, ..filter_setup)
+    for k in range(8):
+        for col in range(L.AF_SETTINGS):
+            p[L.P_AF0 + L.AF_SETTINGS * k + col] = regs[_FILTER_SETTINGS[col]]
+    # SETUP_BITS bit 13: "do not zero the SSI data register at start-up" (§8.2.68)
+    if not setup & SETUP_KEEP_SSI:
+        regs[R.EXTENCODER2] = 0
 
 
 @njit(**KERNEL)
-def start_rows(regs: np.ndarray, s: np.ndarray, p: np.ndarray, u: np.ndarray,
-               stored: np.ndarray) -> None:  # pragma: no cover - compiled
-    """:func:`start` of each motor whose rows are those of the (M, ·) blocks ``regs``, ``s``,
-    ``p`` and ``u`` (changed in place), with its position back-up ``stored`` (M,)."""
-    for j in range(regs.shape[0]):
-        start(regs[j], s[j], p[j], u[j], stored[j])
+def start_rows(idx: np.ndarray, regs: np.ndarray, s: np.ndarray, p: np.ndarray,
+               all_regs: np.ndarray, all_state: np.ndarray, all_params: np.ndarray,
+               inputs: np.ndarray, backup: np.ndarray,
+               take_backup: bool) -> None:  # pragma: no cover - compiled
+    """:func:`start` of motors ``idx`` (M,) (distinct) whose registers, state and parameters
+    before it are the rows of the (M, ·) blocks ``regs``, ``s`` and ``p`` (changed in place),
+    with their world inputs (rows ``idx`` of ``inputs``) and position back-up (``backup``
+    (N,)); then the blocks are stored in rows ``idx`` of ``all_regs``, ``all_state`` and
+    ``all_params``. ``take_backup``: first set ``backup`` to the motors' P_IST in
+    ``all_regs`` (the position a reset or power-down leaves, §5.4.2)."""
+    for j in range(idx.size):
+        i = idx[j]
+        if take_backup:
+            backup[i] = all_regs[i, R.P_IST]
+        start(regs[j], s[j], p[j], inputs[i], backup[i])
+    for j in range(idx.size):
+        i = idx[j]
+        for k in range(regs.shape[1]):
+            all_regs[i, k] = regs[j, k]
+        for k in range(s.shape[1]):
+            all_state[i, k] = s[j, k]
+        for k in range(p.shape[1]):
+            all_params[i, k] = p[j, k]
