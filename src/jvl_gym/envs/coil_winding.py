@@ -19,6 +19,7 @@ from .deposition import flatness_row, lay_turn_row, mean_height, profile_summary
 from .profiles import SpeedProfile, row_speed
 from .randomisation import uniform_rows
 from .single import MotorEnv
+from .stepping import TERMINATED
 from .task import (
     ERROR_BITS,
     R,
@@ -402,17 +403,26 @@ class CoilWindingVectorEnv(MotorVectorEnv):
 
     def _episode_stats(self, idx: np.ndarray) -> dict[str, np.ndarray]:
         """Layers wound, flatness of the final surface, voids, copper loss (see "Episode
-        End")."""
-        flat = np.array([dep.flatness_row(self.h[i], self.d0[i])[0] for i in idx.tolist()])
-        return {"layers": self.layer[idx].copy(), "flatness": flat.reshape(idx.size),
-                "voids": self.voids[idx].copy(), "copper_loss": self.copper_loss(idx)}
+        End") of the copies ``idx`` ((M,) int), each (M,)."""
+        h, flatness_row = self.h, dep.flatness_row
+        flat = np.array([flatness_row(h[i], d)[0]
+                         for i, d in zip(idx.tolist(), self.d0[idx].tolist())])
+        return {"layers": self.layer[idx], "flatness": flat.reshape(idx.size),
+                "voids": self.voids[idx], "copper_loss": self.copper_loss(idx)}
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
-        """The coil is complete (all layers wound) or a motor error bit is set."""
-        complete = (self.layer[idx] >= self.n_layers).tolist()
-        done = f"coil complete: {self.n_layers} layers wound"
-        return ["; ".join(t for t in ((done if c else ""), error) if t) or "terminated by the task"
-                for c, error in zip(complete, self._error_reasons(idx))]
+        """The coil is complete (all layers wound) or a motor error bit is set: per copy of
+        ``idx`` ((M,) int) the key of :meth:`_reason_text`, its text kept per key."""
+        complete = self.layer[idx] >= self.n_layers
+        keys = zip(complete.tolist(), self._error_bits_of(idx).tolist())
+        return self._kept_texts(list(keys), self._reason_text, (self.n_layers,))
+
+    def _reason_text(self, key: tuple[bool, int]) -> str:
+        """The termination reason of ``key``: (the coil complete, error bits
+        (:meth:`~jvl_gym.envs.stepping.Stepping.error_bits`)), '; ' between them."""
+        complete, bits = key
+        done = f"coil complete: {self.n_layers} layers wound" if complete else ""
+        return "; ".join(t for t in (done, self._error_text(bits)) if t) or TERMINATED
 
     def traverse_position(self) -> np.ndarray:
         """Traverse position from the lower flange [m], (N,)."""

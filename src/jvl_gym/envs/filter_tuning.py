@@ -205,10 +205,17 @@ class FilterTuningVectorEnv(NumpyTaskEnv):
                         "speed_ripple": ripple, "fncerr": fnc_end, "unstable": unstable}
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
-        """Every episode is one commissioning trial; say whether the design was unstable."""
-        unstable = self.metrics["unstable"][idx].tolist()
-        return ["trial done" + (": unstable design" if u else "") + (f" ({e})" if e else "")
-                for u, e in zip(unstable, self._error_reasons(idx))]
+        """Every episode is one commissioning trial; say whether the design was unstable: per
+        copy of ``idx`` ((M,) int) the code of :meth:`_reason_text`, its text kept per code."""
+        codes = (self._error_bits_of(idx) << 1) | self.metrics["unstable"][idx]
+        return self._kept_texts(codes.tolist(), self._reason_text, ())
+
+    def _reason_text(self, code: int) -> str:
+        """The termination reason of ``code``: bit 0 an unstable design, the bits from 1 up
+        the error bits (:meth:`~jvl_gym.envs.stepping.Stepping.error_bits`)."""
+        error = self._error_text(code >> 1)
+        return ("trial done" + (": unstable design" if code & 1 else "")
+                + (f" ({error})" if error else ""))
 
     def _reward_termination(self, action: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         mt = self.metrics

@@ -16,6 +16,7 @@ from .base import Field, MotorVectorEnv
 from .compiled import action, end_step, put_obs
 from .profiles import SpeedProfile, row_speed
 from .single import MotorEnv
+from .stepping import TERMINATED
 from .task import (
     ERROR_BITS,
     R,
@@ -343,24 +344,35 @@ class GearSyncVectorEnv(MotorVectorEnv):
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
         """Web break (tension above ``break_ratio`` × reference), slack longer than
-        ``slack_time``, or the motor error bits, as the compiled step decides."""
-        ref = self.tension_ref[idx]
-        broke = (self.force[idx] > self.break_ratio * ref).tolist()
-        slack = (self.slack_count[idx] >= self.slack_samples).tolist()
-        web_break = f"web break: tension above {self.break_ratio:g} × the reference"
-        web_slack = f"web slack for {self.slack_samples} outer samples"
-        out = []
-        for b, s, error in zip(broke, slack, self._error_reasons(idx)):
-            why = [text for flag, text in ((b, web_break), (s, web_slack), (error, error))
-                   if flag]
-            out.append("; ".join(why) or "terminated by the task")
-        return out
+        ``slack_time``, or the motor error bits, as the compiled step decides: per copy of
+        ``idx`` ((M,) int) the key of :meth:`_reason_text`, its text kept per key."""
+        line = self.state.line  # the fields' table, read once
+        broke = line["force"][idx] > self.break_ratio * line["tension_ref"][idx]
+        slack = line["slack_count"][idx] >= self.slack_samples
+        keys = zip(broke.tolist(), slack.tolist(), self._error_bits_of(idx).tolist())
+        return self._kept_texts(list(keys), self._reason_text,
+                                (self.break_ratio, self.slack_samples))
+
+    def _reason_text(self, key: tuple[bool, bool, int]) -> str:
+        """The termination reason of ``key``: (web break, web slack, error bits
+        (:meth:`~jvl_gym.envs.stepping.Stepping.error_bits`)), '; ' between the reasons."""
+        broke, slack, bits = key
+        why = []
+        if broke:
+            why.append(f"web break: tension above {self.break_ratio:g} × the reference")
+        if slack:
+            why.append(f"web slack for {self.slack_samples} outer samples")
+        error = self._error_text(bits)
+        if error:
+            why.append(error)
+        return "; ".join(why) or TERMINATED
 
     def _episode_stats(self, idx: np.ndarray) -> dict[str, np.ndarray]:
         """Mean and largest |tension error| over the episode's steps in % of the reference,
         copper loss (see "Episode End")."""
-        return {"tension_error": 100.0 * self.error_sum[idx] / np.maximum(self._t[idx], 1),
-                "tension_error_max": 100.0 * self.error_max[idx],
+        line = self.state.line  # the fields' table, read once
+        return {"tension_error": 100.0 * line["error_sum"][idx] / np.maximum(self._t[idx], 1),
+                "tension_error_max": 100.0 * line["error_max"][idx],
                 "copper_loss": self.copper_loss(idx)}
 
     def _scope_values(self) -> np.ndarray:

@@ -236,11 +236,19 @@ class StepperIndexingVectorEnv(MotorVectorEnv):
                 "copper_loss": self.copper_loss(idx)}
 
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
-        lost = self.motors.lost_steps[idx].tolist()
-        errors = self._error_reasons(idx)
-        return ["all moves done" if left == 0 and not n and not error
-                else (f"lost {abs(n)} full steps" if n else error)
-                for left, n, error in zip(self.moves_left[idx].tolist(), lost, errors)]
+        """All moves done, full steps lost or a motor error bit set: per copy of ``idx`` ((M,)
+        int) the key of :meth:`_reason_text`, its text kept per key."""
+        keys = zip((self.moves_left[idx] == 0).tolist(), self.motors.lost_steps[idx].tolist(),
+                   self._error_bits_of(idx).tolist())
+        return self._kept_texts(list(keys), self._reason_text, ())
+
+    def _reason_text(self, key: tuple[bool, int, int]) -> str:
+        """The termination reason of ``key``: (no move left, full steps lost, error bits
+        (:meth:`~jvl_gym.envs.stepping.Stepping.error_bits`)); steps lost before an error."""
+        done, lost, bits = key
+        error = self._error_text(bits)
+        return ("all moves done" if done and not lost and not error
+                else (f"lost {abs(lost)} full steps" if lost else error))
 
     def _scope_values(self) -> np.ndarray:
         k = self.fam.constants

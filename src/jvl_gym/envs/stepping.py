@@ -12,18 +12,24 @@ task's state and the motors when the episode ends.
 
 from __future__ import annotations
 
+from collections.abc import Callable, Hashable
 from typing import Any
 
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
+from ..registers import Format
 from .validation import env_name
 
-__all__ = ["Stepping", "TIME_LIMIT"]
+__all__ = ["Stepping", "TERMINATED", "TIME_LIMIT"]
 
 _FLOAT64 = np.dtype(np.float64)
 #: ``info["termination_reason"]`` of a copy truncated at its horizon
 TIME_LIMIT = "time limit: max_episode_steps reached (truncated)"
+#: the reason of a copy terminated by its task for none of the reasons the task names
+TERMINATED = "terminated by the task"
+#: the distinct texts :meth:`Stepping._kept_texts` keeps per kind before it starts anew
+_KEPT_TEXTS = 4096
 
 
 class Stepping:
@@ -133,13 +139,22 @@ class Stepping:
 
     # ------------------------------------------------------------------ why episodes end
     def _termination_reasons(self, idx: np.ndarray) -> list[str]:
-        """Why each of the copies ``idx``, terminated by the last step, ended (one text per
-        copy). Here: the motor error bits; a task adds its own reasons."""
-        return [text or "terminated by the task" for text in self._error_reasons(idx)]
+        """Why each of the copies ``idx`` ((M,) int), terminated by the last step, ended (one
+        text per copy). Here: the motor error bits; a task adds its own reasons."""
+        return self._kept_texts(self._error_bits_of(idx).tolist(), self._error_or_task, ())
+
+    def _error_or_task(self, bits: int) -> str:
+        """The reason of a copy terminated with the error bits ``bits``: their text, or "by the
+        task" when none is set."""
+        return self._error_text(bits) or TERMINATED
 
     def _error_reasons(self, idx: np.ndarray) -> list[str]:
-        """The error bits that end an episode of each copy of ``idx``, as text ('' if none)."""
-        return [self._error_text(bits) for bits in self.error_bits()[idx].tolist()]
+        """The error bits that end an episode of each copy of ``idx`` ((M,) int), as text (''
+        if none)."""
+        texts = self._error_texts
+        error_text = self._error_text
+        return [texts[bits] if bits in texts else error_text(bits)
+                for bits in self._error_bits_of(idx).tolist()]
 
     def _error_text(self, bits: int) -> str:
         """``bits`` of :attr:`error_register` as text (kept per value: a step may end many
@@ -151,45 +166,136 @@ class Stepping:
             text = texts[bits] = f"motor error {names} ({self.error_register})" if bits else ""
         return text
 
+    def _kept_texts(self, codes: list[Hashable], make: Callable[[Any], str],
+                    key: tuple[Any, ...]) -> list[str]:
+        """The text ``make(code)`` of each of ``codes`` (one per copy), made once per distinct
+        code and then looked up.
+
+        The texts are kept per ``make`` (a named method or function: its name tells the kinds of
+        text apart) and ``key``: ``key`` holds the values of the attributes besides the code that
+        a text is made of (e.g. a threshold it names), so that a text made before such an
+        attribute changes is not reused after.
+        """
+        every = self.__dict__.get("_texts_kept")
+        if every is None:
+            every = self._texts_kept = {}
+        kept = every.get((make.__name__, *key))
+        if kept is None:
+            kept = every[(make.__name__, *key)] = {}
+        try:
+            return [kept[code] for code in codes]
+        except KeyError:  # a code's first time
+            if len(kept) > _KEPT_TEXTS:  # e.g. a count in the texts: keep the dict bounded
+                kept.clear()
+            for code in codes:
+                if code not in kept:
+                    kept[code] = make(code)
+            return [kept[code] for code in codes]
+
     def _end_reasons(self, idx: np.ndarray, by_task: np.ndarray) -> list[str]:
-        """Why the episode of each of the copies ``idx`` ended with the last step: the task's
-        reason (:meth:`_termination_reasons`) where ``by_task`` ((M,) bool: terminated),
-        :data:`TIME_LIMIT` where not (truncated)."""
+        """Why the episode of each of the copies ``idx`` ((M,) int) ended with the last step:
+        the task's reason (:meth:`_termination_reasons`) where ``by_task`` ((M,) bool:
+        terminated), :data:`TIME_LIMIT` where not (truncated)."""
         flags = by_task.tolist()
         if not any(flags):
             return [TIME_LIMIT] * idx.size
+        if all(flags):
+            return self._termination_reasons(idx)
         task = iter(self._termination_reasons(idx[by_task]))
         return [next(task) if flag else TIME_LIMIT for flag in flags]
 
     def _episode_stats(self, idx: np.ndarray) -> dict[str, np.ndarray]:
-        """The statistics (:attr:`episode_stats`) of the episodes of copies ``idx`` that ended
-        with the last step, name -> (M,) float64; read before the copies are reset. Here:
-        none; a task reports its own."""
+        """The statistics (:attr:`episode_stats`) of the episodes of copies ``idx`` ((M,) int)
+        that ended with the last step, name -> (M,) float64; read before the copies are reset.
+        Here: none; a task reports its own."""
         return {}
 
     def _end_info(self, ended: np.ndarray, terminated: np.ndarray) -> dict[str, np.ndarray]:
         """``{"termination_reason": (N,) object array, "_termination_reason": ended}`` for the
         copies ``ended`` (bool (N,)) whose episode ended with the last step: the task's reason
-        when terminated (:meth:`_termination_reasons`), :data:`TIME_LIMIT` when truncated;
-        and per episode statistic ``name`` (:meth:`_episode_stats`) ``info[name]``, (N,)
-        float64 (0 for copies that did not end), with its mask ``info["_" + name]``."""
-        reasons = np.empty(self.num_envs, dtype=object)
-        reasons.fill("")
+        when terminated (:meth:`_termination_reasons`), :data:`TIME_LIMIT` when truncated, ''
+        for the other copies; and per episode statistic ``name`` (:meth:`_episode_stats`)
+        ``info[name]``, (N,) float64 (0 for copies that did not end), with its mask
+        ``info["_" + name]``. Every mask is an array of its own (a copy of ``ended``)."""
+        n = self.num_envs
         idx = ended.nonzero()[0]
-        reasons[idx] = self._end_reasons(idx, terminated[idx])
+        task = idx[terminated[idx]]  # the copies the task terminated
+        reasons = np.empty(n, dtype=object)
+        if task.size == idx.size:
+            reasons.fill("")
+            reasons.put(idx, self._termination_reasons(idx))
+        else:  # TIME_LIMIT for every ended copy, then the task's reasons over it
+            if idx.size == n:
+                reasons.fill(TIME_LIMIT)
+            else:
+                reasons.fill("")
+                reasons.put(idx, TIME_LIMIT)
+            if task.size:
+                reasons.put(task, self._termination_reasons(task))
         out = {"termination_reason": reasons, "_termination_reason": ended.copy()}
+        every = idx.size == n
         for name, values in self._episode_stats(idx).items():
-            column = np.zeros(self.num_envs)
-            column[idx] = values
+            if every:  # idx is 0 … N-1
+                column = np.empty(n)
+                column[:] = values
+            else:
+                column = np.zeros(n)
+                column[idx] = values
             out[name], out["_" + name] = column, ended.copy()
         return out
 
     def error_bits(self) -> np.ndarray:
         """The error bits that end an episode (:attr:`terminal_errors` of
         :attr:`error_register`), (N,) int64 (0 when none is set)."""
-        if not self.terminal_errors:
+        mask = self._error_read()[1]
+        if not mask:
             return np.zeros(self.num_envs, dtype=np.int64)
-        mask = 0
-        for _, bit in self.terminal_errors:
-            mask |= bit
         return self.motors.read_raw(self.error_register) & mask
+
+    def _error_bits_of(self, idx: np.ndarray) -> np.ndarray:
+        """:meth:`error_bits` of the copies ``idx`` ((M,) int) alone, (M,) int64: read from
+        the register's column of the motors' registers (``motors.regs``, (N, registers)) for
+        these copies (``read_raw`` copies the column of every motor)."""
+        column, mask = self._error_read()
+        if not mask:
+            return np.zeros(idx.size, dtype=np.int64)
+        if column < 0:  # a LongInt's high word: as read_raw reads it
+            return self.motors.read_raw(self.error_register)[idx] & mask
+        return self.motors.regs[:, column][idx] & mask
+
+    def _error_read(self) -> tuple[int, np.int64]:
+        """The column of :attr:`error_register` in the motors' registers
+        (:func:`_register_column`) and the mask of the bits of :attr:`terminal_errors` (an
+        int64 scalar: the cheaper operand of ``&`` with an int64 array; no column is looked up
+        when it is 0), kept while both attributes hold the same objects."""
+        register, errors = self.error_register, self.terminal_errors
+        kept = self.__dict__.get("_error_read_kept")
+        if kept is None or kept[0] is not register or kept[1] is not errors:
+            mask = 0
+            for _, bit in errors or ():
+                mask |= bit
+            column = _register_column(self.motors, register) if mask else -1
+            kept = self._error_read_kept = (register, errors, column, np.int64(mask))
+        return kept[2], kept[3]
+
+    def _raw_of(self, key: str, idx: np.ndarray) -> np.ndarray:
+        """``motors.read_raw(key)[idx]``, the stored integers of register ``key`` of the copies
+        ``idx`` ((M,) int), (M,) int64, without copying the register of every motor: read from
+        its column of the motors' registers (:func:`_register_column`, kept per key)."""
+        columns = self.__dict__.get("_raw_columns")
+        if columns is None:
+            columns = self._raw_columns = {}
+        column = columns.get(key)
+        if column is None:
+            column = columns[key] = _register_column(self.motors, key)
+        if column < 0:
+            return self.motors.read_raw(key)[idx]
+        return self.motors.regs[:, column][idx]
+
+
+def _register_column(motors: Any, key: str) -> int:
+    """The column of register ``key`` in ``motors.regs`` ((N, registers) int64, what
+    ``motors.read_raw`` reads), -1 for a LongInt's high word (``read_raw`` reads it from the
+    LongInt's column: read it through ``read_raw``)."""
+    reg = motors.table.lookup(key)
+    return -1 if reg.format == Format.LONGINT_HIGH else reg.number
