@@ -27,6 +27,23 @@ def test_read_by_name_and_number_agree(m):
     assert m.read("KVOUT")[0] == 1.0
 
 
+def test_reads_of_some_motors_are_those_motors_of_the_full_read(m):
+    m.write_many({"V_SOLL": np.array([100, 200, 300]), "P_SOLL": np.array([-1, 70000, 5])})
+    for key in ("V_SOLL", "P_SOLL", 4, "KVOUT"):  # 4: P_SOLL's high word
+        for index in ([2, 0], 1, slice(1, None), np.array([True, False, True])):
+            full = m.read_raw(key)
+            np.testing.assert_array_equal(m.read_raw(key, index),
+                                          full[np.arange(3)[index]].reshape(-1))
+            np.testing.assert_array_equal(m.read(key, index),
+                                          m.read(key)[np.arange(3)[index]].reshape(-1))
+    assert m.read_raw(4, [1]).tolist() == [70000 >> 16]
+    with pytest.raises(RegisterError, match="index"):
+        m.read_raw("V_SOLL", [0, 0])
+    kept = m.read_raw("V_SOLL", [0])
+    kept[0] = 7  # a copy: the motor keeps its register
+    assert m.read_raw("V_SOLL", [0]).tolist() == [100]
+
+
 @pytest.mark.parametrize(
     ("key", "value", "exc", "needle"),
     [

@@ -221,7 +221,7 @@ class PositioningVectorEnv(MotorVectorEnv):
         """Settle time (steps until the error stays within INPOSWIN, the episode's length when
         it ends outside), final |error|, largest overshoot, copper loss (see "Episode End")."""
         k = self.fam.constants
-        error = (self.target[idx] - self._raw_of("P_IST", idx)).astype(np.float64)
+        error = (self.target[idx] - self.motors.read_raw("P_IST", idx)).astype(np.float64)
         return {"settle_time": self.unsettled[idx] * self.decimation * k.OUTER_DT,
                 "final_error": np.abs(error) / k.COUNTS_PER_REV,
                 "overshoot": self.overshoot[idx], "copper_loss": self.copper_loss(idx)}

@@ -18,7 +18,6 @@ from typing import Any
 import numpy as np
 from gymnasium.vector import AutoresetMode
 
-from ..registers import Format
 from .validation import env_name
 
 __all__ = ["Stepping", "TERMINATED", "TIME_LIMIT"]
@@ -247,55 +246,26 @@ class Stepping:
     def error_bits(self) -> np.ndarray:
         """The error bits that end an episode (:attr:`terminal_errors` of
         :attr:`error_register`), (N,) int64 (0 when none is set)."""
-        mask = self._error_read()[1]
+        mask = self._error_mask()
         if not mask:
             return np.zeros(self.num_envs, dtype=np.int64)
         return self.motors.read_raw(self.error_register) & mask
 
     def _error_bits_of(self, idx: np.ndarray) -> np.ndarray:
-        """:meth:`error_bits` of the copies ``idx`` ((M,) int) alone, (M,) int64: read from
-        the register's column of the motors' registers (``motors.regs``, (N, registers)) for
-        these copies (``read_raw`` copies the column of every motor)."""
-        column, mask = self._error_read()
+        """:meth:`error_bits` of the copies ``idx`` ((M,) int) alone, (M,) int64."""
+        mask = self._error_mask()
         if not mask:
             return np.zeros(idx.size, dtype=np.int64)
-        if column < 0:  # a LongInt's high word: as read_raw reads it
-            return self.motors.read_raw(self.error_register)[idx] & mask
-        return self.motors.regs[:, column][idx] & mask
+        return self.motors.read_raw(self.error_register, idx) & mask
 
-    def _error_read(self) -> tuple[int, np.int64]:
-        """The column of :attr:`error_register` in the motors' registers
-        (:func:`_register_column`) and the mask of the bits of :attr:`terminal_errors` (an
-        int64 scalar: the cheaper operand of ``&`` with an int64 array; no column is looked up
-        when it is 0), kept while both attributes hold the same objects."""
-        register, errors = self.error_register, self.terminal_errors
-        kept = self.__dict__.get("_error_read_kept")
-        if kept is None or kept[0] is not register or kept[1] is not errors:
+    def _error_mask(self) -> np.int64:
+        """The mask of the bits of :attr:`terminal_errors` (an int64 scalar: the cheaper operand
+        of ``&`` with an int64 array), kept while the attribute holds the same object."""
+        errors = self.terminal_errors
+        kept = self.__dict__.get("_error_mask_kept")
+        if kept is None or kept[0] is not errors:
             mask = 0
             for _, bit in errors or ():
                 mask |= bit
-            column = _register_column(self.motors, register) if mask else -1
-            kept = self._error_read_kept = (register, errors, column, np.int64(mask))
-        return kept[2], kept[3]
-
-    def _raw_of(self, key: str, idx: np.ndarray) -> np.ndarray:
-        """``motors.read_raw(key)[idx]``, the stored integers of register ``key`` of the copies
-        ``idx`` ((M,) int), (M,) int64, without copying the register of every motor: read from
-        its column of the motors' registers (:func:`_register_column`, kept per key)."""
-        columns = self.__dict__.get("_raw_columns")
-        if columns is None:
-            columns = self._raw_columns = {}
-        column = columns.get(key)
-        if column is None:
-            column = columns[key] = _register_column(self.motors, key)
-        if column < 0:
-            return self.motors.read_raw(key)[idx]
-        return self.motors.regs[:, column][idx]
-
-
-def _register_column(motors: Any, key: str) -> int:
-    """The column of register ``key`` in ``motors.regs`` ((N, registers) int64, what
-    ``motors.read_raw`` reads), -1 for a LongInt's high word (``read_raw`` reads it from the
-    LongInt's column: read it through ``read_raw``)."""
-    reg = motors.table.lookup(key)
-    return -1 if reg.format == Format.LONGINT_HIGH else reg.number
+            kept = self._error_mask_kept = (errors, np.int64(mask))
+        return kept[1]

@@ -103,17 +103,23 @@ class RegisterBank(ABC):
             raise RegisterError(f"register key must be a name or number, got {key!r}")
         return self.table.lookup(int(key) if isinstance(key, np.integer) else key)
 
-    def read_raw(self, key: RegisterKey) -> np.ndarray:
-        """Stored integers of a register, (N,) int64 (a LongInt's full 32-bit value)."""
+    def read_raw(self, key: RegisterKey, index: MotorIndex = None) -> np.ndarray:
+        """Stored integers of a register, (M,) int64 (a LongInt's full 32-bit value), of the
+        motors ``index`` (as :meth:`write` selects them; default all, M = N)."""
         reg = self._lookup(key)
-        if reg.format == Format.LONGINT_HIGH:
-            return (self.regs[:, reg.number - 1] >> 16) & 0xFFFF
-        return self.regs[:, reg.number].copy()
+        if index is None:
+            column = self.regs[:, reg.number - 1 if reg.format == Format.LONGINT_HIGH
+                               else reg.number].copy()
+        else:
+            column = self.regs[as_index(index, self.n), reg.number - 1
+                               if reg.format == Format.LONGINT_HIGH else reg.number]
+        return (column >> 16) & 0xFFFF if reg.format == Format.LONGINT_HIGH else column
 
-    def read(self, key: RegisterKey) -> np.ndarray:
-        """Register value in user units, (N,): Fixed formats as float, others as int64."""
+    def read(self, key: RegisterKey, index: MotorIndex = None) -> np.ndarray:
+        """Register value in user units, (M,), of the motors ``index`` (default all): Fixed
+        formats as float, others as int64."""
         reg = self._lookup(key)
-        return from_raw(reg, self.read_raw(reg.number))
+        return from_raw(reg, self.read_raw(reg.number, index))
 
     def write(self, key: RegisterKey, value: RegisterValue, index: MotorIndex = None) -> None:
         """Write a register by name or number, in user units (manual 3.2).
