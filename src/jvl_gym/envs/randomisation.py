@@ -19,7 +19,7 @@ import numpy as np
 from ..physics.coupling import coupling_for
 from .compiled import reset_counters
 
-__all__ = ["Randomisation", "raw_rows", "seed_list", "uniform_rows", "uniforms_of"]
+__all__ = ["Randomisation", "seed_list", "uniform_rows"]
 
 
 def seed_list(seed: int | Sequence[int | None] | None, n: int) -> list[int | None]:
@@ -41,32 +41,6 @@ def uniform_rows(rngs: Sequence[np.random.Generator], width: int) -> np.ndarray:
     for row, rng in zip(u, rngs):
         rng.random(out=row)
     return u
-
-
-#: ``Generator.random()`` of numpy's default bit generator (PCG64): a raw 64-bit draw's top 53
-#: bits times 2⁻⁵³
-_DOUBLE_SHIFT = np.uint64(11)
-_DOUBLE_UNIT = 1.0 / 9007199254740992.0
-
-
-def raw_rows(rngs: Sequence[np.random.Generator], width: int) -> np.ndarray:
-    """Raw 64-bit draws, (len(rngs), width) uint64: row ``j`` is what
-    ``rngs[j].bit_generator.random_raw(width)`` returns, one call per generator.
-
-    For numpy's default generator (PCG64) a raw draw is what one uniform number
-    (:func:`uniforms_of`) or one full-range integer (``integers(0, 2**64 - 1, dtype=np.uint64,
-    endpoint=True)``) consumes, so one call draws both in the order they would be drawn one by
-    one, without the per-call overhead of each."""
-    raw = np.empty((len(rngs), width), dtype=np.uint64)
-    for row, rng in zip(raw, rngs):
-        row[:] = rng.bit_generator.random_raw(width)
-    return raw
-
-
-def uniforms_of(raw: np.ndarray) -> np.ndarray:
-    """The uniform numbers in [0, 1) that ``Generator.random`` makes of the raw PCG64 draws
-    ``raw`` (uint64, any shape): the same float64 values, same shape."""
-    return (raw >> _DOUBLE_SHIFT) * _DOUBLE_UNIT
 
 
 class Randomisation:
@@ -102,11 +76,13 @@ class Randomisation:
         rngs = [self._rng(i, seed) for i, seed in zip(idx.tolist(), seeds)]
         names = self._range_names
         # per copy: the ranges' uniform numbers and the motor type's (the last column), then
-        # two full-range uint64 noise keys, from one call per copy (:func:`raw_rows`)
+        # two full-range uint64 noise keys: what rng.integers(0, 2**64 - 1, size=2,
+        # dtype=np.uint64, endpoint=True) returns (raw draws), without its per-call overhead
         width = len(names) + 1
-        raw = raw_rows(rngs, width + 2)
-        u = uniforms_of(raw[:, :width])
-        keys = np.ascontiguousarray(raw[:, width:])
+        u = uniform_rows(rngs, width)
+        keys = np.empty((idx.size, 2), dtype=np.uint64)
+        for row, rng in zip(keys, rngs):
+            row[:] = rng.bit_generator.random_raw(2)
         low, span = self._range_arrays(ranges)
         # rows of a C-ordered (R, M) array: contiguous for one copy and for many, so that a
         # compiled reset taking draws compiles once for both

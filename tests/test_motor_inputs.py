@@ -1,6 +1,5 @@
-"""The draws of an env's reset and the checks of world inputs: the fast paths give what the
-plain numpy calls give (``envs.randomisation.raw_rows``/``uniforms_of``,
-``motor.inputs.staged_inputs`` on a few values and on many)."""
+"""The checks of world inputs (``motor.inputs.staged_inputs``): a few values, checked as Python
+floats, get the verdict many values get from numpy."""
 
 from __future__ import annotations
 
@@ -11,32 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from jvl_gym.envs.randomisation import raw_rows, uniform_rows, uniforms_of
 from jvl_gym.motor.inputs import InputRule, staged_inputs
-
-
-@given(seeds=st.lists(st.integers(0, 2**63), min_size=1, max_size=6),
-       width=st.integers(1, 20), keys=st.integers(0, 3))
-@settings(max_examples=60, deadline=None)
-def test_one_raw_call_draws_what_the_uniforms_and_keys_draw_one_by_one(
-        seeds: list[int], width: int, keys: int) -> None:
-    one_by_one = [np.random.default_rng(s) for s in seeds]
-    at_once = [np.random.default_rng(s) for s in seeds]
-    u = uniform_rows(one_by_one, width)
-    k = np.array([rng.integers(0, 2**64 - 1, size=keys, dtype=np.uint64, endpoint=True)
-                  for rng in one_by_one]).reshape(len(seeds), keys)
-    raw = raw_rows(at_once, width + keys)
-    assert raw.dtype == np.uint64 and raw.shape == (len(seeds), width + keys)
-    np.testing.assert_array_equal(uniforms_of(raw[:, :width]), u)
-    np.testing.assert_array_equal(raw[:, width:], k)
-    # and both generators go on with the same stream
-    assert [rng.random() for rng in one_by_one] == [rng.random() for rng in at_once]
-
-
-def test_uniforms_of_spans_zero_to_just_below_one() -> None:
-    raw = np.array([0, 2**64 - 1], dtype=np.uint64)
-    np.testing.assert_array_equal(uniforms_of(raw), [0.0, 1.0 - 2.0**-53])
-
 
 _RULES = {"free": InputRule(), "volts": InputRule(0.0, 60.0, unit="V"),
           "counts": InputRule(whole=True, unit="counts"),
