@@ -96,11 +96,14 @@ class Stepping:
                                           dict[str, Any]]:
         """Step every copy; finished copies are reset as ``autoreset_mode`` says."""
         done_before = self._autoreset.copy()
-        if self.autoreset_mode == AutoresetMode.DISABLED and done_before.any():
+        # counted, not reduced with any()/all(): a count of 1024 flags is a third of the time
+        n_before = np.count_nonzero(done_before)
+        mode = self.autoreset_mode
+        if mode == AutoresetMode.DISABLED and n_before:
             raise RuntimeError("AutoresetMode.DISABLED: reset the finished copies (reset_mask) "
                                "before stepping")
         infos: dict[str, Any] = {}
-        if self.autoreset_mode == AutoresetMode.NEXT_STEP and done_before.all():
+        if mode == AutoresetMode.NEXT_STEP and n_before == self.num_envs:
             # every copy starts a new episode: nothing to step (the actions are ignored)
             self._reset_envs(np.arange(self.num_envs), [None] * self.num_envs, None)
             self._autoreset[:] = False
@@ -112,20 +115,20 @@ class Stepping:
         terminated = terminated.copy()
         truncated = truncated.copy()
         done = terminated | truncated
-        any_done = done.any()
-        if any_done:
-            ended = done & ~done_before
-            if ended.any():
+        n_done = np.count_nonzero(done)
+        if n_done:
+            ended = done & ~done_before if n_before else done
+            if not n_before or np.count_nonzero(ended):
                 infos.update(self._end_info(ended, terminated))
-        if self.autoreset_mode == AutoresetMode.NEXT_STEP and done_before.any():
+        if mode == AutoresetMode.NEXT_STEP and n_before:
             idx = done_before.nonzero()[0]
             self._reset_envs(idx, [None] * idx.size, None)
             reward[idx] = 0.0
             terminated[idx] = False
             truncated[idx] = False
             done[idx] = False
-        elif self.autoreset_mode == AutoresetMode.SAME_STEP:
-            if any_done:
+        elif mode == AutoresetMode.SAME_STEP:
+            if n_done:
                 idx = done.nonzero()[0]
                 final = np.full(self.num_envs, None, dtype=object)
                 for i in idx:
