@@ -221,13 +221,15 @@ class PositioningVectorEnv(MotorVectorEnv):
         """Settle time (steps until the error stays within INPOSWIN, the episode's length when
         it ends outside), final |error|, largest overshoot, copper loss (see "Episode End")."""
         k = self.fam.constants
-        error = (self.target[idx] - self.motors.read_raw("P_IST", idx)).astype(np.float64)
         return {"settle_time": self.unsettled[idx] * self.decimation * k.OUTER_DT,
-                "final_error": np.abs(error) / k.COUNTS_PER_REV,
+                "final_error": np.abs(self._error_counts(idx)) / k.COUNTS_PER_REV,
                 "overshoot": self.overshoot[idx], "copper_loss": self.copper_loss(idx)}
 
-    def _error_counts(self) -> np.ndarray:
-        return (self.target - self.motors.read_raw("P_IST")).astype(np.float64)
+    def _error_counts(self, idx: np.ndarray | None = None) -> np.ndarray:
+        """Position error (target − P_IST) [counts] of the copies ``idx`` (M,) (default all),
+        float64."""
+        target = self.target if idx is None else self.target[idx]
+        return (target - self.motors.read_raw("P_IST", idx)).astype(np.float64)
 
     def _scope_values(self) -> np.ndarray:
         return np.stack([self._error_counts() / self.fam.constants.COUNTS_PER_REV,
