@@ -5,6 +5,8 @@ kept per key follow the attributes they name."""
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import pytest
 
@@ -45,15 +47,22 @@ def _check_layout(info: dict, ended: np.ndarray, names: tuple[str, ...]) -> None
     assert all(text == "" for text in info["termination_reason"][~ended])
 
 
+def _stepped(cls: type, n: int) -> Any:
+    """A vector env of class ``cls`` with ``n`` copies after one step of zero actions, with no
+    motor error bit set (its :attr:`error_register` cleared)."""
+    env = cls(num_envs=n)
+    env.reset(seed=0)
+    env.step(np.zeros(env.action_space.shape, dtype=np.float32))
+    env.motors.regs[:, env.motors.table.lookup(env.error_register).number] = 0
+    return env
+
+
 def _gear_sync(n: int = 8) -> GearSyncVectorEnv:
     """A stepped GearSync env whose copies have no break, slack or error bit, episode step
     counts 10, error sums 0.5·(i+1), largest errors 0.01·i, copper accounts 1.25·i [J]."""
-    env = GearSyncVectorEnv(num_envs=n)
-    env.reset(seed=0)
-    env.step(np.zeros((n, 1), dtype=np.float32))
+    env = _stepped(GearSyncVectorEnv, n)
     env.force[:] = env.tension_ref
     env.slack_count[:] = 0
-    env.motors.regs[:, R.ERR_STAT] = 0
     i = np.arange(n)
     env._t[:] = 10
     env.error_sum[:] = 0.5 * (i + 1)
@@ -124,10 +133,7 @@ def test_gear_sync_all_copies_truncated_or_terminated_at_once():
 
 def test_coil_winding_end_info():
     n = 5
-    env = CoilWindingVectorEnv(num_envs=n)
-    env.reset(seed=0)
-    env.step(np.zeros((n, 3), dtype=np.float32))
-    env.motors.regs[:, R.ERR_STAT] = 0
+    env = _stepped(CoilWindingVectorEnv, n)
     assert env.n_layers == 4
     env.layer[:] = [4.0, 4.0, 2.0, 1.0, 3.0]
     env.voids[:] = [0.5, 0.0, 1.5, 2.0, 0.25]
@@ -159,10 +165,7 @@ def test_coil_winding_end_info():
 
 def test_filter_tuning_reasons():
     n = 4
-    env = FilterTuningVectorEnv(num_envs=n)
-    env.reset(seed=0)
-    env.step(np.zeros((n, 3), dtype=np.float32))
-    env.motors.regs[:, R.ERR_STAT] = 0
+    env = _stepped(FilterTuningVectorEnv, n)
     env.metrics["unstable"][:] = [False, True, False, True]
     env.motors.regs[2, R.ERR_STAT] = c.FLW_ERR
     env.motors.regs[3, R.ERR_STAT] = c.FLW_ERR | c.PLIM_ERR
@@ -181,11 +184,8 @@ def test_stepper_indexing_reasons(lag_turns: int):
     from jvl_gym.families.mis.units import COUNTS_PER_RAD
 
     n = 4
-    env = StepperIndexingVectorEnv(num_envs=n)
-    env.reset(seed=0)
-    env.step(np.zeros((n, 3), dtype=np.float32))
+    env = _stepped(StepperIndexingVectorEnv, n)
     reg = env.motors.table.lookup("ERR_BITS").number
-    env.motors.regs[:, reg] = 0
     env.motors.state[:, L.S_CMD] = env.motors.state[:, L.S_THETA] * COUNTS_PER_RAD
     env.moves_left[:] = [0, 0, 2, 0]
     env.motors.state[1, L.S_CMD] += lag_turns * mc.COUNTS_PER_ELECTRICAL_TURN
