@@ -19,14 +19,13 @@ import numpy as np
 
 from . import layout as L
 from .firmware import regs as R
+from .firmware.start import FILTER_SETTINGS
 
 __all__ = ["FilterSetup", "READ_INDEX_VALUES"]
 
 _DONE = 1 << 15  #: bit 15: the firmware has copied / loaded the settings
 #: AFZUP_READINDEX's documented values: 0, 1-8, 32768-32775 (§8.2.51)
 READ_INDEX_VALUES = frozenset({0, *range(1, 9), *range(_DONE, _DONE + 9)})
-#: the registers 102-105 in the order of the settings' columns (layout.AF_CONFMIN …)
-_SETTINGS = (R.AFZUP_CONFMIN, R.AFZUP_CONFMAX, R.AFZUP_MAXSLOPE, R.AFZUP_FILTER)
 
 
 def _columns(k: int) -> list[int]:
@@ -48,7 +47,7 @@ class FilterSetup:
             chosen = value & 0xFF
             for k in range(8):
                 if chosen & (1 << k):
-                    self.params[i, _columns(k)] = self.regs[i, list(_SETTINGS)]
+                    self.params[i, _columns(k)] = self.regs[i, FILTER_SETTINGS]
             self.regs[i, R.AFZUP_WRITEBITS] = value | _DONE if chosen else value
 
     def _afzup_read_index(self, idx: np.ndarray, raw: np.ndarray) -> None:
@@ -56,6 +55,6 @@ class FilterSetup:
         settings into the registers 102-105 and set bit 15."""
         for i, value in zip(idx.tolist(), raw.tolist()):
             if 1 <= value <= 8:
-                self.regs[i, list(_SETTINGS)] = self.params[i, _columns(value - 1)]
+                self.regs[i, FILTER_SETTINGS] = self.params[i, _columns(value - 1)]
                 value |= _DONE
             self.regs[i, R.AFZUP_READINDEX] = value

@@ -39,7 +39,7 @@ from . import regs as R
 from .monitor import encoder_cpr, firmware_angle
 from .ssi import SETUP_KEEP_SSI
 
-__all__ = ["start_rows", "power_up_position"]
+__all__ = ["FILTER_SETTINGS", "start_rows", "power_up_position"]
 
 #: the registers the start clears: positions, counters, NOTSAVED (§8.2.96), error bits
 _CLEARED = np.array([
@@ -51,8 +51,8 @@ _SINGLE_TURN = np.array([k in (1, 3, 4) for k in range(len(c.ENCODER_CPR))], dty
 #: the start modes (§8.2.33) among the MODE_REG values 0 … 15
 _START_MODE = np.array([k in c.START_MODES for k in range(16)], dtype=np.bool_)
 #: the registers 102–105 (AFZUP_CONFMIN, AFZUP_CONFMAX, AFZUP_MAXSLOPE, AFZUP_FILTER) in the
-#: order of an input's filter settings in ``params`` (layout.AF_CONFMIN …)
-_FILTER_SETTINGS = np.array([R.AFZUP_CONFMIN, R.AFZUP_CONFMAX, R.AFZUP_MAXSLOPE,
+#: order of an input's filter settings in ``params`` (layout.AF_CONFMIN …; §8.2.50–55)
+FILTER_SETTINGS = np.array([R.AFZUP_CONFMIN, R.AFZUP_CONFMAX, R.AFZUP_MAXSLOPE,
                              R.AFZUP_FILTER], dtype=np.int64)
 _HALF_TURN = COUNTS_PER_REV // 2
 _WRAP = 2**31  #: P_IST wraps at ±2³¹ (a 32-bit register)
@@ -138,7 +138,7 @@ def start(regs, s, p, u, stored: int) -> None:  # pragma: no cover - compiled
     # every input's filter takes the registers 102-105 at power-up (§8.2.50-55, ..filter_setup)
     for k in range(8):
         for col in range(L.AF_SETTINGS):
-            p[L.P_AF0 + L.AF_SETTINGS * k + col] = regs[_FILTER_SETTINGS[col]]
+            p[L.P_AF0 + L.AF_SETTINGS * k + col] = regs[FILTER_SETTINGS[col]]
     # SETUP_BITS bit 13: "do not zero the SSI data register at start-up" (§8.2.68)
     if not setup & SETUP_KEEP_SSI:
         regs[R.EXTENCODER2] = 0
