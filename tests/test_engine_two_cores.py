@@ -127,4 +127,4 @@ def test_an_env_s_step_uses_the_types_its_task_compiles_beside() -> None:
             assert len(dispatcher.overloads) == 1, (env_id, dispatcher,
                                                     list(dispatcher.overloads))
         checked += 1
-    assert checked >= 1  # GearSync lists its speed profile and web steps
+    assert checked >= 2  # GearSync: its speed profile and web steps; CoilWinding: turn, layer

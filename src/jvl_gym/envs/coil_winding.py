@@ -6,7 +6,7 @@ import math
 from typing import Any, NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, typeof, types
 
 from ..engine.apart import apart
 from ..engine.jit import KERNEL
@@ -249,10 +249,19 @@ def _step_end(i, view, episode, s, actions):  # pragma: no cover - compiled
     _observe_row(i, view, episode, s)
 
 
+def _beside(env: Any) -> list[tuple[Any, tuple]]:
+    """The turn and the layer's end (called by the step only, each compiled apart), with
+    their argument types for ``env``'s state (``Task.beside``)."""
+    s = env.state
+    h, coil, k = typeof(s.h[0]), typeof(s.coil[0]), typeof(s.consts[0])
+    f8 = types.float64
+    return [(_lay_turn, (f8, f8, h, typeof(s.centres), coil, k)), (_close_layer, (coil, h))]
+
+
 TASK = Task("coil_winding", __file__, needs={Capability.COIL_MODE}, state=CoilWindingState,
             figures=_figures, helpers={"_track_layer": _track_layer},
             begin=_step_begin, before=_spindle_before, after=_spindle_after, end=_step_end,
-            observe=_observe_row)
+            observe=_observe_row, beside=_beside)
 
 
 @njit(**KERNEL)
