@@ -150,14 +150,6 @@ class Stepping:
         task" when none is set."""
         return self._error_text(bits) or TERMINATED
 
-    def _error_reasons(self, idx: np.ndarray) -> list[str]:
-        """The error bits that end an episode of each copy of ``idx`` ((M,) int), as text (''
-        if none)."""
-        texts = self._error_texts
-        error_text = self._error_text
-        return [texts[bits] if bits in texts else error_text(bits)
-                for bits in self._error_bits_of(idx).tolist()]
-
     def _error_text(self, bits: int) -> str:
         """``bits`` of :attr:`error_register` as text (kept per value: a step may end many
         copies)."""
