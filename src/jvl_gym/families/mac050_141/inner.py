@@ -387,8 +387,9 @@ def inner_sample(sc: np.ndarray, j: int, k: int, last: bool, full: bool, rigid: 
          sc[F_KB4 * LANES + j], sc[F_KB5 * LANES + j], sc[F_KB6 * LANES + j]), rigid)
     sc[LANE_BASE[L.S_THETA] + j] = theta1
     sc[LANE_BASE[L.S_OMEGA] + j] = omega1
-    sc[LANE_BASE[L.S_LOAD_THETA] + j] = theta_l1
-    sc[LANE_BASE[L.S_LOAD_OMEGA] + j] = omega_l1
+    if not rigid:  # a rigid shaft's load follows the motor: set after the samples
+        sc[LANE_BASE[L.S_LOAD_THETA] + j] = theta_l1
+        sc[LANE_BASE[L.S_LOAD_OMEGA] + j] = omega_l1
     sc[LANE_BASE[L.S_ACC] + j] = (omega1 - omega) * c.INNER_HZ
     sc[LANE_BASE[L.S_I_RE] + j] = i_re1
     sc[LANE_BASE[L.S_I_IM] + j] = i_im1

@@ -31,7 +31,7 @@ from .firmware import regs as R
 from .firmware.mode_table import N_MODES
 from .firmware.modes import COMMUTATED
 from .inner import inner_sample, inner_samples_one
-from .scratch import F_MOTOR, LANES, gather, lane_scratch, scatter_state, store_registers
+from .scratch import F_MOTOR, LANE_BASE, LANES, gather, lane_scratch, scatter_state, store_registers
 
 __all__ = ["LANES", "in_lanes", "inner_samples", "lane_samples_coupled", "lane_samples_rigid",
            "lane_scratch"]
@@ -64,6 +64,10 @@ def _lane_samples(scratch, m, r0, s0, p0, u0, key0, b0, rec, fmt):  # pragma: no
     for j in range(m):
         inner_sample(scratch, j, c.INNER_PER_OUTER - 1, True, False, RIGID, r0, s0, p0, u0, key0,
                      b0, rec, fmt)
+    if RIGID:  # the load of a rigid shaft is where the motor is (mechanics.mech_step_prepared)
+        for j in range(m):
+            scratch[LANE_BASE[L.S_LOAD_THETA] + j] = scratch[LANE_BASE[L.S_THETA] + j]
+            scratch[LANE_BASE[L.S_LOAD_OMEGA] + j] = scratch[LANE_BASE[L.S_OMEGA] + j]
 
 
 #: compiled apart: :func:`inner_samples` calls the machine code (``engine.apart``)
