@@ -16,8 +16,8 @@ from . import deposition as dep
 from .base import Field, MotorVectorEnv
 from .compiled import action, end_step, put_obs
 from .deposition import flatness_row, lay_turn_row, mean_height, profile_summary_row
+from .generator_draws import uniform_rows
 from .profiles import SpeedProfile, row_speed
-from .randomisation import uniform_rows
 from .single import MotorEnv
 from .stepping import TERMINATED
 from .task import (

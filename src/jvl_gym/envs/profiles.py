@@ -23,7 +23,7 @@ from numba import njit
 
 from ..engine.jit import KERNEL
 from ..physics.trig import sine
-from .randomisation import uniform_rows
+from .generator_draws import uniform_rows
 
 __all__ = ["SpeedProfile", "row_speed"]
 

@@ -18,8 +18,9 @@ import numpy as np
 
 from ..physics.coupling import coupling_for
 from .compiled import reset_counters
+from .generator_draws import raw_rows, uniform_rows
 
-__all__ = ["Randomisation", "seed_list", "uniform_rows"]
+__all__ = ["Randomisation", "seed_list"]
 
 
 def seed_list(seed: int | Sequence[int | None] | None, n: int) -> list[int | None]:
@@ -32,15 +33,6 @@ def seed_list(seed: int | Sequence[int | None] | None, n: int) -> list[int | Non
     if len(seeds) != n:
         raise ValueError(f"expected {n} seeds, got {len(seeds)}")
     return seeds
-
-
-def uniform_rows(rngs: Sequence[np.random.Generator], width: int) -> np.ndarray:
-    """Uniform numbers in [0, 1), (len(rngs), width): row ``j`` is what ``rngs[j].random(width)``
-    returns (filled in place, without a new array per copy)."""
-    u = np.empty((len(rngs), width))
-    for row, rng in zip(u, rngs):
-        rng.random(out=row)
-    return u
 
 
 class Randomisation:
@@ -78,11 +70,8 @@ class Randomisation:
         # per copy: the ranges' uniform numbers and the motor type's (the last column), then
         # two full-range uint64 noise keys: what rng.integers(0, 2**64 - 1, size=2,
         # dtype=np.uint64, endpoint=True) returns (raw draws), without its per-call overhead
-        width = len(names) + 1
-        u = uniform_rows(rngs, width)
-        keys = np.empty((idx.size, 2), dtype=np.uint64)
-        for row, rng in zip(keys, rngs):
-            row[:] = rng.bit_generator.random_raw(2)
+        u = uniform_rows(rngs, len(names) + 1)
+        keys = raw_rows(rngs, 2)
         low, span = self._range_arrays(ranges)
         # rows of a C-ordered (R, M) array: contiguous for one copy and for many, so that a
         # compiled reset taking draws compiles once for both
