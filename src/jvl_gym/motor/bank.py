@@ -97,6 +97,9 @@ class RegisterBank(ABC):
     #: flash (:meth:`_snapshot`); a family whose writes change further arrays names them
     TRANSACTION_ARRAYS: ClassVar[tuple[str, ...]] = ("regs", "state", "params", "inputs",
                                                      "_has_flash")
+    #: the arrays :meth:`_store_rows` may change, when a family knows they are fewer than a
+    #: whole transaction's (:meth:`_snapshot`): a refused store puts back their rows alone
+    ROWS_STORE_ARRAYS: ClassVar[tuple[str, ...] | None] = None
 
     def _lookup(self, key: RegisterKey) -> Register:
         if isinstance(key, (bool, np.bool_)) or not isinstance(key, (str, int, np.integer)):
@@ -298,15 +301,24 @@ class RegisterBank(ABC):
     def _store_many(self, plan: StorePlan, idx: np.ndarray, raws: np.ndarray) -> None:
         """Check and store the (K, M) validated stored integers ``raws`` of the registers of
         ``plan`` (in order) in motors ``idx``; if one is refused, the motors are restored."""
-        saved = self._snapshot(idx) if len(plan.regs) > 1 else None
+        one_by_one = plan.one_by_one or any(self._special_request(raws[k])
+                                            for k in plan.mode_rows)
+        # what a refusal puts back: the rows _store_rows may change, or the whole transaction's
+        rows = None if one_by_one else self.ROWS_STORE_ARRAYS
+        saved = (None if len(plan.regs) == 1 else self._snapshot(idx) if rows is None
+                 else [getattr(self, name)[idx] for name in rows])
         try:
-            if plan.one_by_one or any(self._special_request(raws[k]) for k in plan.mode_rows):
+            if one_by_one:
                 for reg, raw in zip(plan.regs, raws):
                     self._store(reg, idx, raw)
             else:
                 self._store_rows(plan, idx, raws)
         except RegisterError:
-            if saved is not None:  # (one register is checked for every motor before it is stored)
+            # (one register is checked for every motor before it is stored)
+            if saved is not None and rows is not None:
+                for name, row in zip(rows, saved):
+                    getattr(self, name)[idx] = row
+            elif saved is not None:
                 self._restore(idx, saved)
             raise
 

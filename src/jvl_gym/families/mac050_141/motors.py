@@ -116,6 +116,8 @@ class MacMotorArray(MotorArray, layout=L):
     ONE_BY_ONE = frozenset(W.POINTERS) | {R.CNTRL_BITS}
     #: the control bits latched at power-on change when a SAFE_MODE request resets a motor
     TRANSACTION_ARRAYS = (*MotorArray.TRANSACTION_ARRAYS, "_latched_cntrl")
+    #: the compiled store (:meth:`_store_rows`) changes register and state rows only
+    ROWS_STORE_ARRAYS = ("regs", "state")
 
     def __init__(self, motor: MotorSpec = "MAC140", n: int = 1, seed: Seed = None,
                  setup: str | os.PathLike[str] | dict[str, Any] | None = None,
