@@ -164,6 +164,8 @@ class MotorArray(RegisterBank, FlashStorage, Stepping, ABC):
         self._type_inputs = np.zeros((0, self.N_INPUT))
         #: store plans by register-name tuple (``write_many``) and by number (``_store``)
         self._plans: dict[Any, StorePlan] = {}
+        #: register column and LongInt high word by name (``read_raw``)
+        self._read_columns: dict[str, tuple[int, bool]] = {}
         for cfg in configs.values():
             self._add_type(cfg)
         if isinstance(seed, (list, tuple, np.ndarray)):

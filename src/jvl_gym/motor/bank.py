@@ -87,6 +87,7 @@ class RegisterBank(ABC):
     _flash: np.ndarray | None
     _has_flash: np.ndarray
     _plans: dict[Any, StorePlan]
+    _read_columns: dict[str, tuple[int, bool]]
     _mode_number: int
     #: registers stored one at a time through :meth:`_store_special` (numbers)
     ONE_BY_ONE: ClassVar[frozenset[int]] = frozenset()
@@ -109,14 +110,19 @@ class RegisterBank(ABC):
     def read_raw(self, key: RegisterKey, index: MotorIndex = None) -> np.ndarray:
         """Stored integers of a register, (M,) int64 (a LongInt's full 32-bit value), of the
         motors ``index`` (as :meth:`write` selects them; default all, M = N)."""
-        reg = self._lookup(key)
+        where = self._read_columns.get(key) if type(key) is str else None
+        if where is None:  # the column and whether it is a LongInt's high word
+            reg = self._lookup(key)
+            high = reg.format == Format.LONGINT_HIGH
+            where = (reg.number - 1 if high else reg.number, high)
+            if type(key) is str and len(self._read_columns) < _PLAN_CACHE_SIZE:
+                self._read_columns[key] = where
+        number, high = where
         if index is None:
-            column = self.regs[:, reg.number - 1 if reg.format == Format.LONGINT_HIGH
-                               else reg.number].copy()
+            column = self.regs[:, number].copy()
         else:
-            column = self.regs[as_index(index, self.n), reg.number - 1
-                               if reg.format == Format.LONGINT_HIGH else reg.number]
-        return (column >> 16) & 0xFFFF if reg.format == Format.LONGINT_HIGH else column
+            column = self.regs[as_index(index, self.n), number]
+        return (column >> 16) & 0xFFFF if high else column
 
     def read(self, key: RegisterKey, index: MotorIndex = None) -> np.ndarray:
         """Register value in user units, (M,), of the motors ``index`` (default all): Fixed
