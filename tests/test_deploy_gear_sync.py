@@ -93,8 +93,10 @@ def test_a_deployed_gear_sync_episode_reports_its_return_and_metrics(tmp_path):
     period = 0.1
     with TwinServer(twin, tcp=("127.0.0.1", 0), speed=0.25) as server:
         url = server.endpoint("mactalk", "tcp").url
+        # a deadline of ten periods: the policy's thread may wait for the GIL on a busy machine
         report = deploy(ENV, lambda o: np.full((1, 1), 0.05), url, 9, MOTOR, period=period,
-                        episodes=2, seed=5, max_seconds=1.0, trace=tmp_path / "t.csv")
+                        deadline=10 * period, episodes=2, seed=5, max_seconds=1.0,
+                        trace=tmp_path / "t.csv")
         mode = int(line.m.read_raw("MODE_REG")[0])
     assert report.reason == "done" and report.lengths == [10, 10]
     assert report.ended == ["", ""]
