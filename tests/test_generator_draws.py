@@ -6,7 +6,7 @@ import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from jvl_gym.envs.generator_draws import raw_rows, uniform_rows
+from jvl_gym.envs.generator_draws import draw_rows, raw_rows, uniform_rows
 
 seeds = st.lists(st.integers(0, 2**63), min_size=0, max_size=6)
 
@@ -19,8 +19,11 @@ def test_draws_are_the_numpy_calls_and_leave_the_same_states(seeds, width, raws,
     for a, b in zip(ours, theirs):  # generators part-way through their streams
         a.random(skip)
         b.random(skip)
-    u = uniform_rows(ours, width)
-    k = raw_rows(ours, raws)
+    if skip % 2:  # both kinds in one call, or one call each
+        u, k = draw_rows(ours, width, raws)
+    else:
+        u = uniform_rows(ours, width)
+        k = raw_rows(ours, raws)
     assert u.shape == (len(seeds), width) and u.dtype == np.float64
     assert k.shape == (len(seeds), raws) and k.dtype == np.uint64
     for j, rng in enumerate(theirs):
@@ -35,8 +38,7 @@ def test_draws_are_the_numpy_calls_and_leave_the_same_states(seeds, width, raws,
 def test_generators_of_another_kind_are_drawn_by_numpy():
     ours = [np.random.default_rng(1), np.random.Generator(np.random.Philox(2))]
     theirs = [np.random.default_rng(1), np.random.Generator(np.random.Philox(2))]
-    u = uniform_rows(ours, 3)
-    k = raw_rows(ours, 2)
+    u, k = draw_rows(ours, 3, 2)
     for j, rng in enumerate(theirs):
         np.testing.assert_array_equal(u[j], rng.random(3))
         np.testing.assert_array_equal(k[j], rng.bit_generator.random_raw(2))

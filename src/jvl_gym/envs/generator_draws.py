@@ -3,14 +3,15 @@ words of an env's reset, one generator per copy.
 
 An env keeps one ``numpy.random.Generator`` per copy (``envs.randomisation``), and a reset of M
 copies draws from each of them. Calling ``Generator.random`` and ``BitGenerator.random_raw``
-once per copy costs a Python call each; :func:`uniform_rows` and :func:`raw_rows` make the same
-draws in one compiled loop instead. The loop calls numpy's own C functions, through the
-addresses its bit generators publish (``BitGenerator.ctypes``: ``next_double``,
-``next_uint64`` and the state): ``Generator.random`` fills an array with ``next_double`` and
-``random_raw`` with the generator's raw output, which is ``next_uint64`` for PCG64 (the
-bit generator of ``numpy.random.default_rng``). The numbers and the generators' states are
-therefore those of the numpy calls, bit for bit, and a generator may go on with numpy calls
-after a compiled draw. A generator of another kind is drawn from by the numpy calls themselves.
+once per copy costs a Python call each; :func:`draw_rows` (and :func:`uniform_rows`,
+:func:`raw_rows`) make the same draws in one compiled loop instead. The loop calls numpy's own
+C functions, through the addresses its bit generators publish (``BitGenerator.ctypes``:
+``next_double``, ``next_uint64`` and the state): ``Generator.random`` fills an array with
+``next_double`` and ``random_raw`` with the generator's raw output, which is ``next_uint64``
+for PCG64 (the bit generator of ``numpy.random.default_rng``). The numbers and the generators'
+states are therefore those of the numpy calls, bit for bit, and a generator may go on with
+numpy calls after a compiled draw. A generator of another kind is drawn from by the numpy calls
+themselves.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import numpy as np
 from numba import njit, types
 from numba.extending import intrinsic
 
-__all__ = ["raw_rows", "uniform_rows"]
+__all__ = ["draw_rows", "raw_rows", "uniform_rows"]
 
 
 def _call_state_function(builder, result, fn, state):  # pragma: no cover - compiled
@@ -49,23 +50,17 @@ def _next_uint64(typingctx, fn, state):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _fill_uniform(fn: int, states: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
-    """Row ``j`` of ``out`` ((M, W) float64) from the generator whose state is at
-    ``states[j]``, in order, as ``Generator.random(out=row)`` fills it."""
-    for j in range(out.shape[0]):
+def _fill(next_double: int, next_uint64: int, states: np.ndarray, uniform: np.ndarray,
+          raw: np.ndarray) -> None:  # pragma: no cover - compiled
+    """Row ``j`` of ``uniform`` ((M, W) float64), then row ``j`` of ``raw`` ((M, V) uint64),
+    from the generator whose state is at ``states[j]``: what ``Generator.random(out=row)``
+    and then ``BitGenerator.random_raw(V)`` (PCG64) give."""
+    for j in range(states.shape[0]):
         state = states[j]
-        for k in range(out.shape[1]):
-            out[j, k] = _next_double(fn, state)
-
-
-@njit(cache=True)
-def _fill_raw(fn: int, states: np.ndarray, out: np.ndarray) -> None:  # pragma: no cover
-    """Row ``j`` of ``out`` ((M, W) uint64) from the generator whose state is at ``states[j]``,
-    as ``BitGenerator.random_raw(W)`` returns it for PCG64."""
-    for j in range(out.shape[0]):
-        state = states[j]
-        for k in range(out.shape[1]):
-            out[j, k] = _next_uint64(fn, state)
+        for k in range(uniform.shape[1]):
+            uniform[j, k] = _next_double(next_double, state)
+        for k in range(raw.shape[1]):
+            raw[j, k] = _next_uint64(next_uint64, state)
 
 
 def _address(fn: ctypes._CFuncPtr) -> int:
@@ -91,28 +86,32 @@ def _states(rngs: Sequence[np.random.Generator]) -> np.ndarray | None:
     return np.array(addresses, dtype=np.intp)
 
 
-def uniform_rows(rngs: Sequence[np.random.Generator], width: int) -> np.ndarray:
-    """Uniform numbers in [0, 1), (len(rngs), width) float64: row ``j`` is what
-    ``rngs[j].random(width)`` returns, and each generator moves on as it would."""
-    u = np.empty((len(rngs), width))
+def draw_rows(rngs: Sequence[np.random.Generator], width: int, raw_width: int
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Per generator of ``rngs``, ``width`` uniform numbers in [0, 1) and then ``raw_width``
+    raw 64-bit words: ``(uniform, raw)``, (len(rngs), width) float64 and (len(rngs),
+    raw_width) uint64, row ``j`` what ``rngs[j].random(width)`` and then
+    ``rngs[j].bit_generator.random_raw(raw_width)`` return; each generator moves on as it
+    would."""
+    uniform = np.empty((len(rngs), width))
+    raw = np.empty((len(rngs), raw_width), dtype=np.uint64)
     states = _states(rngs)
     if states is None:
-        for row, rng in zip(u, rngs):
-            rng.random(out=row)
+        for j, rng in enumerate(rngs):
+            rng.random(out=uniform[j])
+            raw[j] = rng.bit_generator.random_raw(raw_width)
     else:
-        _fill_uniform(_NEXT_DOUBLE, states, u)
-    return u
+        _fill(_NEXT_DOUBLE, _NEXT_UINT64, states, uniform, raw)
+    return uniform, raw
+
+
+def uniform_rows(rngs: Sequence[np.random.Generator], width: int) -> np.ndarray:
+    """Uniform numbers in [0, 1), (len(rngs), width) float64: row ``j`` is what
+    ``rngs[j].random(width)`` returns (:func:`draw_rows`)."""
+    return draw_rows(rngs, width, 0)[0]
 
 
 def raw_rows(rngs: Sequence[np.random.Generator], width: int) -> np.ndarray:
     """Raw 64-bit words, (len(rngs), width) uint64: row ``j`` is what
-    ``rngs[j].bit_generator.random_raw(width)`` returns, and each generator moves on as it
-    would."""
-    out = np.empty((len(rngs), width), dtype=np.uint64)
-    states = _states(rngs)
-    if states is None:
-        for row, rng in zip(out, rngs):
-            row[:] = rng.bit_generator.random_raw(width)
-    else:
-        _fill_raw(_NEXT_UINT64, states, out)
-    return out
+    ``rngs[j].bit_generator.random_raw(width)`` returns (:func:`draw_rows`)."""
+    return draw_rows(rngs, 0, width)[1]

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..physics.coupling import coupling_for
 from .compiled import reset_counters
-from .generator_draws import raw_rows, uniform_rows
+from .generator_draws import draw_rows, uniform_rows
 
 __all__ = ["Randomisation", "seed_list"]
 
@@ -70,8 +70,7 @@ class Randomisation:
         # per copy: the ranges' uniform numbers and the motor type's (the last column), then
         # two full-range uint64 noise keys: what rng.integers(0, 2**64 - 1, size=2,
         # dtype=np.uint64, endpoint=True) returns (raw draws), without its per-call overhead
-        u = uniform_rows(rngs, len(names) + 1)
-        keys = raw_rows(rngs, 2)
+        u, keys = draw_rows(rngs, len(names) + 1, 2)
         low, span = self._range_arrays(ranges)
         # rows of a C-ordered (R, M) array: contiguous for one copy and for many, so that a
         # compiled reset taking draws compiles once for both
