@@ -3,8 +3,8 @@ words of an env's reset, one generator per copy.
 
 An env keeps one ``numpy.random.Generator`` per copy (``envs.randomisation``), and a reset of M
 copies draws from each of them. Calling ``Generator.random`` and ``BitGenerator.random_raw``
-once per copy costs a Python call each; :func:`draw_rows` (and :func:`uniform_rows`,
-:func:`raw_rows`) make the same draws in one compiled loop instead. The loop calls numpy's own
+once per copy costs a Python call each; :func:`draw_rows` (and :func:`uniform_rows`, its
+uniform half) make the same draws in one compiled loop instead. The loop calls numpy's own
 C functions, through the addresses its bit generators publish (``BitGenerator.ctypes``:
 ``next_double``, ``next_uint64`` and the state): ``Generator.random`` fills an array with
 ``next_double`` and ``random_raw`` with the generator's raw output, which is ``next_uint64``
@@ -24,7 +24,7 @@ import numpy as np
 from numba import njit, types
 from numba.extending import intrinsic
 
-__all__ = ["draw_rows", "raw_rows", "uniform_rows"]
+__all__ = ["draw_rows", "uniform_rows"]
 
 
 def _call_state_function(builder, result, fn, state):  # pragma: no cover - compiled
@@ -109,9 +109,3 @@ def uniform_rows(rngs: Sequence[np.random.Generator], width: int) -> np.ndarray:
     """Uniform numbers in [0, 1), (len(rngs), width) float64: row ``j`` is what
     ``rngs[j].random(width)`` returns (:func:`draw_rows`)."""
     return draw_rows(rngs, width, 0)[0]
-
-
-def raw_rows(rngs: Sequence[np.random.Generator], width: int) -> np.ndarray:
-    """Raw 64-bit words, (len(rngs), width) uint64: row ``j`` is what
-    ``rngs[j].bit_generator.random_raw(width)`` returns (:func:`draw_rows`)."""
-    return draw_rows(rngs, 0, width)[1]
