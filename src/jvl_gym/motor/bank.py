@@ -320,12 +320,12 @@ class RegisterBank(ABC):
             else:
                 self._store_rows(plan, idx, raws)
         except RegisterError:
-            # (one register is checked for every motor before it is stored)
-            if saved is not None and rows is not None:
-                for name, row in zip(rows, saved):
-                    getattr(self, name)[idx] = row
-            elif saved is not None:
-                self._restore(idx, saved)
+            if saved is not None:  # (one register is checked for every motor before it is stored)
+                if rows is None:
+                    self._restore(idx, saved)
+                else:
+                    for name, row in zip(rows, saved):
+                        getattr(self, name)[idx] = row
             raise
 
     def _snapshot(self, idx: np.ndarray) -> tuple[Any, ...]:
